@@ -1,0 +1,31 @@
+import sbt._
+
+/** Every version of the build, pinned in one place. */
+object Dependencies {
+  object V {
+    val scala = "2.13.18"
+    val akka = "2.8.8"
+    val scalapb: String = _root_.scalapb.compiler.Version.scalapbVersion
+    val jeromq = "0.6.0"
+    val logback = "1.2.13"
+    val scalatest = "3.2.19"
+    val scalacheck = "1.18.1"
+    val scalatestPlusScalacheck = "3.2.19.0"
+  }
+
+  val scalapbRuntime = "com.thesamet.scalapb" %% "scalapb-runtime" % V.scalapb
+  val akkaActorTyped = "com.typesafe.akka" %% "akka-actor-typed" % V.akka
+  val akkaStream = "com.typesafe.akka" %% "akka-stream" % V.akka
+  val akkaSlf4j = "com.typesafe.akka" %% "akka-slf4j" % V.akka
+  val jeromq = "org.zeromq" % "jeromq" % V.jeromq
+  val logback = "ch.qos.logback" % "logback-classic" % V.logback
+
+  val akkaTestkit = "com.typesafe.akka" %% "akka-actor-testkit-typed" % V.akka % Test
+  val akkaStreamTestkit = "com.typesafe.akka" %% "akka-stream-testkit" % V.akka % Test
+  val scalatest = "org.scalatest" %% "scalatest" % V.scalatest % Test
+  val scalacheck = "org.scalacheck" %% "scalacheck" % V.scalacheck % Test
+  val scalatestPlusScalacheck = "org.scalatestplus" %% "scalacheck-1-18" % V.scalatestPlusScalacheck % Test
+
+  val testLibs: Seq[ModuleID] = Seq(scalatest, scalacheck, scalatestPlusScalacheck)
+  val akkaTestLibs: Seq[ModuleID] = Seq(akkaTestkit, akkaStreamTestkit)
+}

@@ -1,0 +1,3 @@
+addSbtPlugin("com.thesamet" % "sbt-protoc" % "1.0.8")
+
+libraryDependencies += "com.thesamet.scalapb" %% "compilerplugin" % "0.11.20"
