@@ -2,6 +2,8 @@ package naogateway.wire
 
 import scala.util.control.NonFatal
 
+import com.google.protobuf.{CodedInputStream, CodedOutputStream, WireFormat}
+
 import naogateway.proto._
 
 /** The known extensions of one `Message`, read once and checked, so no caller meets a lazily failing parse. */
@@ -16,6 +18,38 @@ final case class MessageContents(
     rpcResponse: Option[Response] = None,
     unknownExtensions: Vector[Int] = Vector.empty
 ) {
+
+  /** The protobuf bytes of `toMessage`, written in one pass (robotID, then extensions by ascending number). */
+  def toProtobuf: Array[Byte] = {
+    val parts = Array[(Int, Option[scalapb.GeneratedMessage])](
+      MessageContents.StatusField -> status,
+      MessageContents.DebuggingCommandsField -> debuggingCommands,
+      MessageContents.DebugDataField -> debugData,
+      MessageContents.HavimoRegionsField -> havimoRegions,
+      MessageContents.HavimoGridField -> havimoGrid,
+      MessageContents.RpcRequestField -> rpcRequest,
+      MessageContents.RpcResponseField -> rpcResponse
+    )
+    var size = CodedOutputStream.computeInt32Size(1, robotId)
+    parts.foreach { case (field, part) =>
+      part.foreach { m =>
+        val n = m.serializedSize
+        size += CodedOutputStream.computeTagSize(field) + CodedOutputStream.computeUInt32SizeNoTag(n) + n
+      }
+    }
+    val bytes = new Array[Byte](size)
+    val out = CodedOutputStream.newInstance(bytes)
+    out.writeInt32(1, robotId)
+    parts.foreach { case (field, part) =>
+      part.foreach { m =>
+        out.writeTag(field, WireFormat.WIRETYPE_LENGTH_DELIMITED)
+        out.writeUInt32NoTag(m.serializedSize)
+        m.writeTo(out)
+      }
+    }
+    out.checkNoSpaceLeft()
+    bytes
+  }
 
   /** The `Message` carrying exactly these contents (unknown extensions are not carried over). */
   def toMessage: Message = {
@@ -71,7 +105,67 @@ object MessageContents {
 
   /** Decodes a datagram all the way to its contents. */
   def decodeFrame(bytes: Array[Byte]): Either[FrameError, (FrameHeader, MessageContents)] =
-    FumanoidsFrame.decode(bytes).flatMap(frame => of(frame.message).map(frame.header -> _))
+    FumanoidsFrame.decodeHeader(bytes).flatMap { header =>
+      if (header.gzip) FumanoidsFrame.decodeRaw(bytes).flatMap(raw => parse(raw.protobuf).map(header -> _))
+      else parse(bytes, header.form.headerBytes, header.payloadLength).map(header -> _)
+    }
+
+  /** Parses the protobuf bytes of a `Message` in one pass, reading known extensions in place. */
+  def parse(bytes: Array[Byte]): Either[FrameError.BadProtobuf, MessageContents] = parse(bytes, 0, bytes.length)
+
+  /** Parses `length` protobuf bytes from `offset`; same result as `of(Message.parseFrom(...))`, without the detour. */
+  def parse(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
+    try {
+      val in = CodedInputStream.newInstance(bytes, offset, length)
+      var robotId = 0
+      var seenRobotId = false
+      var c = MessageContents(0)
+      var unknown = Vector.empty[Int]
+      var repeated = false
+      var done = false
+      while (!done) {
+        val tag = in.readTag()
+        val field = WireFormat.getTagFieldNumber(tag)
+        val wireType = WireFormat.getTagWireType(tag)
+        if (tag == 0) done = true
+        else if (field == 1 && wireType == WireFormat.WIRETYPE_VARINT) {
+          robotId = in.readInt32(); seenRobotId = true
+        } else if (wireType == WireFormat.WIRETYPE_LENGTH_DELIMITED && known(field)) {
+          field match {
+            case StatusField            => repeated ||= c.status.isDefined; c = c.copy(status = Some(nested(in, Status)))
+            case DebuggingCommandsField =>
+              repeated ||= c.debuggingCommands.isDefined
+              c = c.copy(debuggingCommands = Some(nested(in, DebuggingCommands)))
+            case DebugDataField => repeated ||= c.debugData.isDefined; c = c.copy(debugData = Some(nested(in, DebugData)))
+            case HavimoRegionsField =>
+              repeated ||= c.havimoRegions.isDefined; c = c.copy(havimoRegions = Some(nested(in, HaViMoRegionFrame)))
+            case HavimoGridField =>
+              repeated ||= c.havimoGrid.isDefined; c = c.copy(havimoGrid = Some(nested(in, HaViMoGridFrame)))
+            case RpcRequestField =>
+              repeated ||= c.rpcRequest.isDefined; c = c.copy(rpcRequest = Some(nested(in, Request)))
+            case _ => repeated ||= c.rpcResponse.isDefined; c = c.copy(rpcResponse = Some(nested(in, Response)))
+          }
+        } else {
+          if (!unknown.contains(field)) unknown = unknown :+ field
+          if (!in.skipField(tag)) done = true
+        }
+      }
+      // Protobuf merges a message field that occurs twice; rare enough to take the general path for it.
+      if (repeated) slowParse(bytes, offset, length)
+      else if (!seenRobotId) Left(FrameError.BadProtobuf("Message is missing the required robotID"))
+      else Right(c.copy(robotId = robotId, unknownExtensions = unknown.sorted))
+    } catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
+
+  private def slowParse(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
+    try of(Message.parseFrom(CodedInputStream.newInstance(bytes, offset, length)))
+    catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
+
+  private def nested[A <: scalapb.GeneratedMessage](in: CodedInputStream, companion: scalapb.GeneratedMessageCompanion[A]): A = {
+    val limit = in.pushLimit(in.readRawVarint32())
+    val message = companion.parseFrom(in)
+    in.popLimit(limit)
+    message
+  }
 
   /** Encodes contents as a frame for the wire. */
   def encodeFrame(
@@ -79,5 +173,5 @@ object MessageContents {
       form: HeaderForm = HeaderForm.Legacy,
       gzip: Boolean = false
   ): Either[FrameError.Oversize, Array[Byte]] =
-    FumanoidsFrame.encode(contents.toMessage, form, gzip)
+    FumanoidsFrame.encodeProtobuf(contents.toProtobuf, form, gzip)
 }

@@ -136,3 +136,56 @@ class FumanoidsFrameSpec extends AnyWordSpec with Matchers with ScalaCheckProper
     }
   }
 }
+
+class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
+  import MessageGenerators._
+
+  implicit override val generatorDrivenConfig: PropertyCheckConfiguration =
+    PropertyCheckConfiguration(minSuccessful = 300)
+
+  "MessageContents.parse" should {
+    "agree with the general ScalaPB path for every message" in {
+      forAll(contents) { c =>
+        val bytes = c.toMessage.toByteArray
+        MessageContents.parse(bytes) shouldBe MessageContents.of(Message.parseFrom(bytes))
+        MessageContents.parse(bytes) shouldBe Right(c)
+      }
+    }
+    "merge an extension that occurs twice, as protobuf does" in {
+      val first = Message(robotID = 4).withExtension(naogateway.proto.MessageProto.status)(Some(Status(teamID = Some(3))))
+      val second = Message(robotID = 4).withExtension(naogateway.proto.MessageProto.status)(
+        Some(Status(activeRole = Some("striker")))
+      )
+      val merged = MessageContents.parse(first.toByteArray ++ second.toByteArray)
+      merged.map(_.status) shouldBe Right(Some(Status(teamID = Some(3), activeRole = Some("striker"))))
+    }
+    "agree with the general path on arbitrary bytes" in {
+      forAll(anyBytes) { bytes =>
+        val general =
+          try MessageContents.of(Message.parseFrom(bytes)).isRight
+          catch { case _: Exception => false }
+        MessageContents.parse(bytes).isRight shouldBe general
+      }
+    }
+  }
+}
+
+class MessageContentsEncodingSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
+  import MessageGenerators._
+
+  "MessageContents.toProtobuf" should {
+    "write a Message equal to ScalaPB's for every message, fields in ascending order" in {
+      forAll(contents) { c =>
+        val bytes = c.toProtobuf
+        Message.parseFrom(bytes) shouldBe c.toMessage
+        val fields = Iterator
+          .unfold(com.google.protobuf.CodedInputStream.newInstance(bytes)) { in =>
+            val tag = in.readTag()
+            if (tag == 0) None else { in.skipField(tag); Some((tag >>> 3, in)) }
+          }
+          .toVector
+        fields shouldBe fields.sorted
+      }
+    }
+  }
+}
