@@ -10,6 +10,7 @@ import naogateway.proto._
 final case class MessageContents(
     robotId: Int,
     status: Option[Status] = None,
+    robotHealth: Option[RobotHealth] = None,
     debuggingCommands: Option[DebuggingCommands] = None,
     debugData: Option[DebugData] = None,
     havimoRegions: Option[HaViMoRegionFrame] = None,
@@ -27,6 +28,7 @@ final case class MessageContents(
       MessageContents.DebugDataField -> debugData,
       MessageContents.HavimoRegionsField -> havimoRegions,
       MessageContents.HavimoGridField -> havimoGrid,
+      MessageContents.RobotHealthField -> robotHealth,
       MessageContents.RpcRequestField -> rpcRequest,
       MessageContents.RpcResponseField -> rpcResponse
     )
@@ -55,6 +57,7 @@ final case class MessageContents(
   def toMessage: Message = {
     var message = Message(robotID = robotId)
     status.foreach(s => message = message.withExtension(MessageProto.status)(Some(s)))
+    robotHealth.foreach(h => message = message.withExtension(MessageProto.robotHealth)(Some(h)))
     debuggingCommands.foreach(c => message = message.withExtension(DebuggingProto.debuggingCommands)(Some(c)))
     debugData.foreach(d => message = message.withExtension(DebuggingProto.debugData)(Some(d)))
     havimoRegions.foreach(r => message = message.withExtension(HavimoProto.havimoRegions)(Some(r)))
@@ -78,11 +81,12 @@ object MessageContents {
   val DebugDataField: Int = 7102
   val HavimoRegionsField: Int = 7103
   val HavimoGridField: Int = 7104
+  val RobotHealthField: Int = 7105
   val RpcRequestField: Int = 7110
   val RpcResponseField: Int = 7111
 
   private val known =
-    Set(StatusField, DebuggingCommandsField, DebugDataField, HavimoRegionsField, HavimoGridField, RpcRequestField,
+    Set(StatusField, RobotHealthField, DebuggingCommandsField, DebugDataField, HavimoRegionsField, HavimoGridField, RpcRequestField,
       RpcResponseField)
 
   /** Parses every known extension of `message`; a malformed one is a typed error, unknown ones are listed. */
@@ -92,6 +96,7 @@ object MessageContents {
         MessageContents(
           robotId = message.robotID,
           status = message.extension(MessageProto.status),
+          robotHealth = message.extension(MessageProto.robotHealth),
           debuggingCommands = message.extension(DebuggingProto.debuggingCommands),
           debugData = message.extension(DebuggingProto.debugData),
           havimoRegions = message.extension(HavimoProto.havimoRegions),
@@ -133,6 +138,8 @@ object MessageContents {
         } else if (wireType == WireFormat.WIRETYPE_LENGTH_DELIMITED && known(field)) {
           field match {
             case StatusField            => repeated ||= c.status.isDefined; c = c.copy(status = Some(nested(in, Status)))
+            case RobotHealthField =>
+              repeated ||= c.robotHealth.isDefined; c = c.copy(robotHealth = Some(nested(in, RobotHealth)))
             case DebuggingCommandsField =>
               repeated ||= c.debuggingCommands.isDefined
               c = c.copy(debuggingCommands = Some(nested(in, DebuggingCommands)))

@@ -31,6 +31,13 @@ object MessageGenerators {
     state <- Gen.option(shortText)
   } yield Status(timestamp, team, online, pos, belief, agent, role, state)
 
+  val robotHealth: Gen[RobotHealth] = for {
+    battery <- Gen.option(Gen.choose(9.0f, 12.6f))
+    posture <- Gen.option(Gen.oneOf("sit", "stand", "crouch", "walking", "moving"))
+    uptime <- Gen.option(uint32)
+    boot <- Gen.option(uint32)
+  } yield RobotHealth(battery, posture, uptime, boot)
+
   val debuggingOption: Gen[DebuggingOption] = for {
     name <- shortText
     kind <- Gen.option(Gen.oneOf(DebuggingOptionType.values))
@@ -146,13 +153,14 @@ object MessageGenerators {
   val contents: Gen[MessageContents] = for {
     robotId <- Arbitrary.arbitrary[Int]
     s <- Gen.option(status)
+    h <- Gen.option(robotHealth)
     dc <- Gen.option(debuggingCommands)
     dd <- Gen.option(debugData)
     hr <- Gen.option(regionFrame)
     hg <- Gen.option(gridFrame)
     rq <- Gen.option(request)
     rs <- Gen.option(response)
-  } yield MessageContents(robotId, s, dc, dd, hr, hg, rq, rs)
+  } yield MessageContents(robotId, s, h, dc, dd, hr, hg, rq, rs)
 
   val headerForm: Gen[HeaderForm] = Gen.oneOf(HeaderForm.Legacy, HeaderForm.Compact)
 
