@@ -1,0 +1,38 @@
+package naogateway.wire.gamecontroller
+
+/** What a robot tells the GameController in an `RGrt` return packet. */
+sealed trait ReturnMessage extends Product with Serializable {
+
+  /** The value on the wire. */
+  def code: Int
+}
+
+/** Messages of return-packet version 2. */
+object ReturnMessage {
+
+  /** The robot penalised itself (e.g. its button was pressed). */
+  case object ManualPenalise extends ReturnMessage { val code: Int = 0 }
+
+  /** The robot lifted its own manual penalty. */
+  case object ManualUnpenalise extends ReturnMessage { val code: Int = 1 }
+
+  /** The robot is alive and receiving control packets. */
+  case object Alive extends ReturnMessage { val code: Int = 2 }
+
+  /** A value outside the known set; decoding produces it only for codes no known message has. */
+  final case class Unknown(code: Int) extends ReturnMessage
+
+  /** The known messages, in code order. */
+  val known: Seq[ReturnMessage] = Seq(ManualPenalise, ManualUnpenalise, Alive)
+
+  /** The message with this wire value, or `Unknown(code)`. */
+  def fromCode(code: Int): ReturnMessage = known.find(_.code == code).getOrElse(Unknown(code))
+}
+
+/**
+ * The content of an `RGrt` return packet (version 2, 8 bytes).
+ *
+ * @param team   the robot's team number
+ * @param player the robot's player number, counted from 1
+ */
+final case class ReturnData(team: Int, player: Int, message: ReturnMessage)
