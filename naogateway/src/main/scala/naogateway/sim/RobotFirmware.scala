@@ -1,0 +1,450 @@
+package naogateway.sim
+
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration._
+
+import com.google.protobuf.ByteString
+
+import naogateway.proto._
+import naogateway.wire._
+import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec, ReturnData, ReturnMessage}
+
+/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. */
+final case class FirmwareSettings(
+    robotId: Int,
+    teamId: Int = 1,
+    playerNumber: Int = 1,
+    role: String = "striker",
+    agent: String = "SimAgent",
+    keepAliveInterval: FiniteDuration = 200.millis,
+    walkLease: FiniteDuration = 500.millis,
+    debugInterval: FiniteDuration = 100.millis,
+    cameraInterval: FiniteDuration = 60.millis,
+    standUpTime: FiniteDuration = 1500.millis,
+    sitDownTime: FiniteDuration = 1000.millis,
+    crouchTime: FiniteDuration = 600.millis,
+    initialBattery: Double = 12.4,
+    idleDrainPerSecond: Double = 0.0002,
+    walkDrainPerSecond: Double = 0.004,
+    postureChangeDrain: Double = 0.005,
+    maxSpeed: Double = 0.3,
+    maxTurn: Double = 1.0,
+    startPose: Pose = Pose(-1.0, 0.0, 0.0),
+    scene: Scene = Scene(0.5, 0.3),
+    headerForm: HeaderForm = HeaderForm.Legacy
+) {
+  require(robotId >= 0, s"robotId must not be negative, got $robotId")
+  require(keepAliveInterval > Duration.Zero, "keepAliveInterval must be positive")
+  require(walkLease > Duration.Zero, "walkLease must be positive")
+  require(cameraInterval.toNanos >= 1000000000L / HaViMo.MaxFramesPerSecond,
+    s"the HaViMo2 delivers at most ${HaViMo.MaxFramesPerSecond} frames/s")
+}
+
+/** The robot's postures as it reports them (`motion.getPosture`, RobotHealth.posture, Status.currentState). */
+sealed abstract class Posture(val name: String) extends Product with Serializable
+
+/** Every posture a simulated robot can be in. */
+object Posture {
+  case object Sit extends Posture("sit")
+  case object Stand extends Posture("stand")
+  case object Crouch extends Posture("crouch")
+  case object Walking extends Posture("walking")
+  case object Moving extends Posture("moving")
+
+  /** Postures a `motion.posture` call may ask for. */
+  val targets: Map[String, Posture] = Map("sit" -> Sit, "stand" -> Stand, "crouch" -> Crouch)
+}
+
+/** Where the firmware sends a datagram. */
+sealed trait Destination extends Product with Serializable
+
+/** The destinations a firmware knows. */
+object Destination {
+
+  /** The configured base station (the robot's keep-alive and debug target, port 11011). */
+  case object Gateway extends Destination
+
+  /** Back to the sender of the datagram being answered. */
+  final case class ReplyTo(address: InetSocketAddress) extends Destination
+}
+
+/** A datagram the firmware wants on the air. */
+final case class Outgoing(bytes: Array[Byte], to: Destination)
+
+/** Counters of what a simulated firmware saw; tests read them. */
+final case class FirmwareCounters(
+    datagramsIn: Long = 0,
+    datagramsOut: Long = 0,
+    rpcCalls: Long = 0,
+    gameControllerPackets: Long = 0,
+    rejected: Long = 0
+)
+
+/** A call whose reply waits until a motion ends. */
+private[sim] final case class PendingReply(callId: Option[Long], to: Destination, form: HeaderForm)
+
+/** A posture change under way. */
+private[sim] final case class PostureChange(target: Posture, doneAt: Long, reply: PendingReply)
+
+/** A walk command and the moment its lease runs out. */
+private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseUntil: Long)
+
+/** The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`. */
+final case class FirmwareState(
+    settings: FirmwareSettings,
+    bootId: Int,
+    bootedAt: Long,
+    now: Long,
+    battery: Double,
+    posture: Posture,
+    change: Option[PostureChange],
+    walk: Option[Walk],
+    pose: Pose,
+    head: (Double, Double),
+    arms: Vector[Double],
+    debugEnabled: Set[String],
+    nextKeepAliveAt: Long,
+    nextDebugAt: Long,
+    nextCameraAt: Long,
+    frame: Int,
+    said: Vector[String],
+    game: Option[GameControlData],
+    counters: FirmwareCounters
+) {
+
+  /** Milliseconds since the firmware booted. */
+  def uptimeMillis: Long = math.max(0L, (now - bootedAt) / 1000000L)
+
+  /** The next moment `RobotFirmware.advance` has something to do. */
+  def nextWakeUp: Long = {
+    val lease = walk.map(_.leaseUntil).getOrElse(Long.MaxValue)
+    val motion = change.map(_.doneAt).getOrElse(Long.MaxValue)
+    val debug = if (debugEnabled.isEmpty) Long.MaxValue else math.min(nextDebugAt, nextCameraAt)
+    Seq(nextKeepAliveAt, lease, motion, debug).min
+  }
+
+  /** The options the firmware offers, with their current switch. */
+  def debugOptions: Vector[DebuggingOption] =
+    RobotFirmware.OptionCatalogue.map { case (name, kind, text) =>
+      DebuggingOption(name, Some(kind), Some(debugEnabled(name)), Some(text))
+    }
+}
+
+/** The simulated CM-530 firmware as pure functions of state, input and time (nanoseconds). */
+object RobotFirmware {
+
+  /** The module `motion` (walk, stop, head, arms, posture, getPosture). */
+  val Motion = "motion"
+
+  /** The module `speech` (say). */
+  val Speech = "speech"
+
+  /** The module `system` (battery, ping, reset). */
+  val System = "system"
+
+  /** Head limits, radians. */
+  val PanLimit: Double = 2.0
+  val TiltMin: Double = -0.6
+  val TiltMax: Double = 0.5
+
+  /** The debug options this firmware offers (name, type, description); short names keep the list under 1400 bytes. */
+  val OptionCatalogue: Vector[(String, DebuggingOptionType, String)] = Vector(
+    ("status.text", DebuggingOptionType.TEXT, "state changes as text"),
+    ("status.table", DebuggingOptionType.TABLE, "battery, posture, uptime"),
+    ("motion.plot", DebuggingOptionType.PLOTTER, "walk velocity"),
+    ("world.field", DebuggingOptionType.DRAWING_FIELD, "robot and ball on the field"),
+    ("world.relative", DebuggingOptionType.DRAWING_RELATIVE, "ball relative to the robot"),
+    ("camera.image", DebuggingOptionType.DRAWING_CAMERA, "colour classes with regions"),
+    ("havimo.regions", DebuggingOptionType.HAVIMO_REGIONS, "HaViMo2 regions"),
+    ("havimo.grid", DebuggingOptionType.HAVIMO_GRID, "HaViMo2 grid")
+  )
+
+  private val CameraOptions = Set("havimo.regions", "havimo.grid", "camera.image")
+
+  /** A freshly booted firmware: sitting, nothing enabled, first keep-alive due at once. */
+  def boot(settings: FirmwareSettings, now: Long, bootId: Int = 1): FirmwareState =
+    FirmwareState(
+      settings = settings,
+      bootId = bootId,
+      bootedAt = now,
+      now = now,
+      battery = settings.initialBattery,
+      posture = Posture.Sit,
+      change = None,
+      walk = None,
+      pose = settings.startPose,
+      head = (0.0, 0.0),
+      arms = Vector.fill(4)(0.0),
+      debugEnabled = Set.empty,
+      nextKeepAliveAt = now,
+      nextDebugAt = now,
+      nextCameraAt = now,
+      frame = 0,
+      said = Vector.empty,
+      game = None,
+      counters = FirmwareCounters()
+    )
+
+  /** The firmware after a restart: same settings and battery, fresh session, debug options off. */
+  def restart(state: FirmwareState, now: Long): FirmwareState =
+    boot(state.settings.copy(initialBattery = state.battery, startPose = state.pose), now, state.bootId + 1)
+
+  /** Moves time forward to `now`: motion, battery, leases, keep-alives and debug output. */
+  def advance(state: FirmwareState, now: Long): (FirmwareState, Vector[Outgoing]) = {
+    var s = integrate(state, now)
+    val out = Vector.newBuilder[Outgoing]
+    s.change.filter(_.doneAt <= now).foreach { c =>
+      s = s.copy(posture = c.target, change = None, battery = s.battery - s.settings.postureChangeDrain)
+      out += reply(s, c.reply, Right(Some(RpcValue.Text(c.target.name))))
+    }
+    s.walk.filter(_.leaseUntil <= now).foreach { _ =>
+      // The lease ran out without a refresh: a lost link never leaves the robot walking.
+      s = s.copy(walk = None, posture = Posture.Stand)
+    }
+    if (s.nextKeepAliveAt <= now) {
+      out += Outgoing(encode(s, keepAlive(s)), Destination.Gateway)
+      s = s.copy(nextKeepAliveAt = nextSlot(s.nextKeepAliveAt, s.settings.keepAliveInterval, now))
+    }
+    if (s.debugEnabled.exists(o => !CameraOptions(o)) && s.nextDebugAt <= now) {
+      debugData(s).foreach(d => out += Outgoing(encode(s, MessageContents(s.settings.robotId, debugData = Some(d))), Destination.Gateway))
+      s = s.copy(nextDebugAt = nextSlot(s.nextDebugAt, s.settings.debugInterval, now))
+    }
+    if (s.debugEnabled.exists(CameraOptions) && s.nextCameraAt <= now) {
+      val (next, frames) = cameraFrames(s)
+      frames.foreach(f => out += Outgoing(f, Destination.Gateway))
+      s = next.copy(nextCameraAt = nextSlot(s.nextCameraAt, s.settings.cameraInterval, now))
+    }
+    val sent = out.result()
+    (s.copy(counters = s.counters.copy(datagramsOut = s.counters.datagramsOut + sent.length)), sent)
+  }
+
+  /** Handles one datagram from `from` at `now` (after advancing to `now`). */
+  def receive(state: FirmwareState, bytes: Array[Byte], from: InetSocketAddress, now: Long)
+      : (FirmwareState, Vector[Outgoing]) = {
+    val (advanced, due) = advance(state, now)
+    val s = advanced.copy(counters = advanced.counters.copy(datagramsIn = advanced.counters.datagramsIn + 1))
+    val (next, replies) = Datagram.classify(bytes) match {
+      case Datagram.FuRemoteFrame(b) =>
+        MessageContents.decodeFrame(b) match {
+          case Right((header, contents)) => onMessage(s, header.form, contents, Destination.ReplyTo(from))
+          case Left(_)                   => (rejected(s), Vector.empty)
+        }
+      case Datagram.GameControllerControl(b) =>
+        GameControllerCodec.decodeControl(b) match {
+          case Right(data) => onGameController(s, data, from)
+          case Left(_)     => (rejected(s), Vector.empty)
+        }
+      case _ => (rejected(s), Vector.empty)
+    }
+    (next.copy(counters = next.counters.copy(datagramsOut = next.counters.datagramsOut + replies.length)), due ++ replies)
+  }
+
+  /** Handles one decoded message: RPC calls and debug option commands; anything else is ignored. */
+  def onMessage(state: FirmwareState, form: HeaderForm, contents: MessageContents, replyTo: Destination)
+      : (FirmwareState, Vector[Outgoing]) = {
+    val afterDebug = contents.debuggingCommands.fold((state, Vector.empty[Outgoing])) { c =>
+      onDebuggingCommands(state, c, form, replyTo)
+    }
+    contents.rpcRequest.fold(afterDebug) { request =>
+      val (s, out) = onCall(afterDebug._1, RpcCall.fromProto(request), PendingReply(request.callId.map(_ & 0xffffffffL), replyTo, form))
+      (s, afterDebug._2 ++ out)
+    }
+  }
+
+  private def onGameController(s: FirmwareState, data: GameControlData, from: InetSocketAddress)
+      : (FirmwareState, Vector[Outgoing]) = {
+    val counted = s.copy(game = Some(data), counters = s.counters.copy(gameControllerPackets = s.counters.gameControllerPackets + 1))
+    // Robots answer each valid packet for their team with an "alive" return packet to the GameController, port 3838.
+    if (data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
+    else {
+      val alive = GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive))
+      val to = new InetSocketAddress(from.getAddress, 3838)
+      (counted, alive.toOption.map(b => Outgoing(b, Destination.ReplyTo(to))).toVector)
+    }
+  }
+
+  private def onDebuggingCommands(s: FirmwareState, c: DebuggingCommands, form: HeaderForm, replyTo: Destination)
+      : (FirmwareState, Vector[Outgoing]) = {
+    def matching(names: Seq[String]) =
+      OptionCatalogue.map(_._1).filter(o => names.exists(n => o == n || o.startsWith(n + ".")))
+    val enabled = c.optionEnable.fold(s.debugEnabled)(e => s.debugEnabled ++ matching(e.options))
+    val next = s.copy(debugEnabled = c.optionDisable.fold(enabled)(d => enabled -- matching(d.options)))
+    val changed = c.optionEnable.isDefined || c.optionDisable.isDefined
+    if (c.optionPull.contains(true) || changed) {
+      val list = DebuggingCommands(optionPush = Some(DebuggingOptionList(next.debugOptions)))
+      val bytes = MessageContents.encodeFrame(MessageContents(s.settings.robotId, debuggingCommands = Some(list)), form)
+      (next, bytes.toOption.map(Outgoing(_, replyTo)).toVector)
+    } else (next, Vector.empty)
+  }
+
+  private def floats(params: Vector[RpcValue], n: Int): Either[String, Vector[Double]] = {
+    val numbers = params.collect {
+      case RpcValue.Number(f) => f.toDouble
+      case RpcValue.UInt(i)   => i.toDouble
+    }
+    if (params.length != n || numbers.length != n)
+      Left(RpcReply.badParameters(s"expected $n numbers, got ${params.length} parameter(s)"))
+    else if (numbers.exists(d => d.isNaN || d.isInfinite)) Left(RpcReply.badParameters("numbers must be finite"))
+    else Right(numbers)
+  }
+
+  private def onCall(s0: FirmwareState, call: RpcCall, pending: PendingReply): (FirmwareState, Vector[Outgoing]) = {
+    val s = s0.copy(counters = s0.counters.copy(rpcCalls = s0.counters.rpcCalls + 1))
+    def answer(result: Either[String, Option[RpcValue]], next: FirmwareState = s) =
+      (next, Vector(reply(next, pending, result)))
+    val ok = Right(Some(RpcValue.Flag(true)))
+    (call.module, call.method) match {
+      case (Motion, "walk") =>
+        floats(call.params, 3) match {
+          case Left(e) => answer(Left(e))
+          case Right(Vector(vx, vy, omega)) =>
+            if (s.change.isDefined) answer(Left("busy: posture change in progress"))
+            else if (s.posture != Posture.Stand && s.posture != Posture.Walking)
+              answer(Left(s"cannot walk from posture ${s.posture.name}"))
+            else {
+              val clamp = (v: Double, limit: Double) => math.max(-limit, math.min(limit, v))
+              val walk = Walk(clamp(vx, s.settings.maxSpeed), clamp(vy, s.settings.maxSpeed), clamp(omega, s.settings.maxTurn),
+                s.now + s.settings.walkLease.toNanos)
+              val standing = walk.vx == 0 && walk.vy == 0 && walk.omega == 0
+              answer(ok, if (standing) s.copy(walk = None, posture = Posture.Stand) else s.copy(walk = Some(walk), posture = Posture.Walking))
+            }
+          case Right(_) => answer(Left(RpcReply.badParameters("walk takes vx, vy, omega")))
+        }
+      case (Motion, "stop") =>
+        if (call.params.nonEmpty) answer(Left(RpcReply.badParameters("stop takes no parameters")))
+        else answer(ok, s.copy(walk = None, posture = if (s.posture == Posture.Walking) Posture.Stand else s.posture))
+      case (Motion, "head") =>
+        floats(call.params, 2) match {
+          case Left(e) => answer(Left(e))
+          case Right(Vector(pan, tilt)) =>
+            if (math.abs(pan) > PanLimit || tilt < TiltMin || tilt > TiltMax)
+              answer(Left(f"out of range: pan $pan%.3f (±$PanLimit), tilt $tilt%.3f ($TiltMin..$TiltMax)"))
+            else answer(ok, s.copy(head = (pan, tilt)))
+          case Right(_) => answer(Left(RpcReply.badParameters("head takes pan, tilt")))
+        }
+      case (Motion, "arms") =>
+        floats(call.params, 4).fold(e => answer(Left(e)), a => answer(ok, s.copy(arms = a)))
+      case (Motion, "posture") =>
+        call.params match {
+          case Vector(RpcValue.Text(name)) =>
+            Posture.targets.get(name) match {
+              case None => answer(Left(RpcReply.badParameters(s"unknown posture '$name' (sit, stand, crouch)")))
+              case Some(target) if s.change.isDefined =>
+                answer(Left(s"busy: posture change to ${s.change.get.target.name} in progress, cannot go to ${target.name}"))
+              case Some(target) if target == s.posture => answer(Right(Some(RpcValue.Text(target.name))))
+              case Some(target) =>
+                val duration = target match {
+                  case Posture.Stand  => s.settings.standUpTime
+                  case Posture.Sit    => s.settings.sitDownTime
+                  case _              => s.settings.crouchTime
+                }
+                // The reply comes when the motion ends (advance), not now.
+                (s.copy(walk = None, posture = Posture.Moving, change = Some(PostureChange(target, s.now + duration.toNanos, pending))),
+                  Vector.empty)
+            }
+          case _ => answer(Left(RpcReply.badParameters("posture takes one text: sit, stand or crouch")))
+        }
+      case (Motion, "getPosture") => answer(Right(Some(RpcValue.Text(s.posture.name))))
+      case (Speech, "say") =>
+        call.params match {
+          case Vector(RpcValue.Text(text)) => answer(ok, s.copy(said = s.said :+ text))
+          case _                           => answer(Left(RpcReply.badParameters("say takes one text")))
+        }
+      case (System, "battery") => answer(Right(Some(RpcValue.Number(s.battery.toFloat))))
+      case (System, "ping")    => answer(Right(Some(RpcValue.UInt(s.uptimeMillis & 0xffffffffL))))
+      case (System, "reset") =>
+        // Reply first, then come back as a new session (fresh uptime and sequence numbers, options off).
+        val (_, out) = answer(ok)
+        (restart(s, s.now), out)
+      case _ => answer(Left(RpcReply.unknownMethod(call.module, call.method)))
+    }
+  }
+
+  private def reply(s: FirmwareState, pending: PendingReply, result: Either[String, Option[RpcValue]]): Outgoing = {
+    val contents = MessageContents(s.settings.robotId, rpcResponse = Some(RpcReply(result, pending.callId).toProto))
+    Outgoing(encode(contents, pending.form), pending.to)
+  }
+
+  private def rejected(s: FirmwareState): FirmwareState = s.copy(counters = s.counters.copy(rejected = s.counters.rejected + 1))
+
+  private def nextSlot(previous: Long, interval: FiniteDuration, now: Long): Long = {
+    val next = previous + interval.toNanos
+    if (next > now) next else now + interval.toNanos
+  }
+
+  /** Motion and battery between `state.now` and `now`. */
+  private def integrate(state: FirmwareState, now: Long): FirmwareState =
+    if (now <= state.now) state
+    else {
+      val seconds = (now - state.now) / 1e9
+      val walkingFor = state.walk.fold(0.0)(w => math.max(0L, math.min(now, w.leaseUntil) - state.now).toDouble / 1e9)
+      val pose = state.walk.fold(state.pose)(w => state.pose.moved(w.vx, w.vy, w.omega, walkingFor))
+      val drain = state.settings.idleDrainPerSecond * seconds + state.settings.walkDrainPerSecond * walkingFor
+      state.copy(now = now, pose = pose, battery = math.max(0.0, state.battery - drain))
+    }
+
+  private def encode(s: FirmwareState, contents: MessageContents): Array[Byte] = encode(contents, s.settings.headerForm)
+
+  // The firmware only builds messages it knows fit into 1400 bytes; one that does not is a bug in the simulator.
+  private def encode(contents: MessageContents, form: HeaderForm): Array[Byte] =
+    MessageContents.encodeFrame(contents, form).fold(e => throw new IllegalStateException(e.describe), identity)
+
+  /** The keep-alive: Status as FU-Remote expects it, plus this project's RobotHealth. */
+  def keepAlive(s: FirmwareState): MessageContents = {
+    val status = Status(
+      timestamp = Some(s.now / 1000000L),
+      teamID = Some(s.settings.teamId),
+      timeOnline = Some((s.uptimeMillis / 1000L).toInt),
+      robotPosition = Some(Position(Some((s.pose.x * 1000).round.toInt), Some((s.pose.y * 1000).round.toInt), Some(s.pose.theta.toFloat))),
+      activeAgent = Some(s.settings.agent),
+      activeRole = Some(s.settings.role),
+      currentState = Some(s.posture.name)
+    )
+    val health = RobotHealth(Some(s.battery.toFloat), Some(s.posture.name), Some((s.uptimeMillis & 0xffffffffL).toInt), Some(s.bootId))
+    MessageContents(s.settings.robotId, status = Some(status), robotHealth = Some(health))
+  }
+
+  private def debugData(s: FirmwareState): Vector[DebugData] = {
+    val ts = Some(s.now / 1000000L)
+    val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
+    s.debugEnabled.toVector.sorted.collect {
+      case o @ "status.text" => DebugData(o, ts, DebugData.Data.Text(DebugText(s"posture ${s.posture.name}, battery ${"%.2f".format(s.battery)} V")))
+      case o @ "status.table" =>
+        DebugData(o, ts, DebugData.Data.Table(DebugTable(Seq(
+          DebugTable.Row("battery", "%.2f".format(s.battery)),
+          DebugTable.Row("posture", s.posture.name),
+          DebugTable.Row("uptime", s"${s.uptimeMillis} ms")))))
+      case o @ "motion.plot" =>
+        val w = s.walk.getOrElse(Walk(0, 0, 0, 0))
+        DebugData(o, ts, DebugData.Data.Plot(DebugPlot(Seq(
+          DebugPlot.Sample("vx", w.vx.toFloat), DebugPlot.Sample("vy", w.vy.toFloat), DebugPlot.Sample("omega", w.omega.toFloat)))))
+      case o @ "world.field" =>
+        DebugData(o, ts, DebugData.Data.FieldDrawing(DebugFieldDrawing(Seq(
+          Shape(Shape.Kind.CIRCLE, (s.pose.x * 1000).toInt, (s.pose.y * 1000).toInt, radius = Some(150), label = Some("robot")),
+          Shape(Shape.Kind.CIRCLE, (s.settings.scene.ballX * 1000).toInt, (s.settings.scene.ballY * 1000).toInt, radius = Some(50), label = Some("ball"))))))
+      case o @ "world.relative" =>
+        DebugData(o, ts, DebugData.Data.RelativePosition(DebugRelativePosition(Seq(
+          DebugRelativePosition.RelativeObject("ball", (math.hypot(ahead, left) * 1000).toInt, math.atan2(left, ahead).toFloat)))))
+    }
+  }
+
+  private def cameraFrames(s: FirmwareState): (FirmwareState, Vector[Array[Byte]]) = {
+    val regions = Scene.regions(s.settings.scene, s.pose, s.head._1, s.head._2)
+    val frame = s.frame + 1
+    val ts = Some(s.now / 1000000L)
+    val out = Vector.newBuilder[Array[Byte]]
+    if (s.debugEnabled("havimo.regions")) {
+      val records = HaViMo.encodeRegions(regions).toOption.get
+      out += encode(s, MessageContents(s.settings.robotId, havimoRegions = Some(HaViMoRegionFrame(frame, ts, Some(ByteString.copyFrom(records))))))
+    }
+    if (s.debugEnabled("havimo.grid"))
+      out += encode(s, MessageContents(s.settings.robotId, havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(Scene.grid(regions))))))
+    if (s.debugEnabled("camera.image")) {
+      val shapes = regions.map(r => Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY), label = Some(s"colour ${r.colour}")))
+      val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES), Some(ByteString.copyFrom(Scene.grid(regions).map(b => (b & 0x0f).toByte))), shapes)
+      out += encode(s, MessageContents(s.settings.robotId, debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
+    }
+    (s.copy(frame = frame), out.result())
+  }
+}

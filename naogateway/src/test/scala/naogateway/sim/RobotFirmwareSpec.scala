@@ -1,0 +1,150 @@
+package naogateway.sim
+
+import java.net.InetSocketAddress
+
+import org.scalatest.EitherValues
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.proto._
+import naogateway.wire._
+
+class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
+
+  private val ms = 1000000L
+  private val gateway = new InetSocketAddress("127.0.0.1", 11011)
+  private val settings = FirmwareSettings(robotId = 7, teamId = 12, role = "keeper")
+
+  private def frames(out: Seq[Outgoing]): Seq[MessageContents] =
+    out.map(o => MessageContents.decodeFrame(o.bytes).value._2)
+
+  private def call(state: FirmwareState, module: String, method: String, params: Vector[RpcValue], id: Long, at: Long)
+      : (FirmwareState, Vector[RpcReply]) = {
+    val request = MessageContents(0, rpcRequest = Some(RpcCall(module, method, params, Some(id)).toProto))
+    val (s, out) = RobotFirmware.receive(state, MessageContents.encodeFrame(request).value, gateway, at)
+    (s, frames(out).flatMap(_.rpcResponse).map(RpcReply.fromProto).toVector)
+  }
+
+  private def stand(at: Long): FirmwareState = {
+    val (s, _) = call(RobotFirmware.boot(settings, 0), "motion", "posture", Vector(RpcValue.Text("stand")), 1, at)
+    RobotFirmware.advance(s, at + settings.standUpTime.toNanos)._1
+  }
+
+  "The simulated firmware" should {
+    "send a keep-alive every 200 ms that decodes into the expected Status" in {
+      var s = RobotFirmware.boot(settings, 0)
+      val keepAlives = (0 to 1000 by 10).flatMap { t =>
+        val (next, out) = RobotFirmware.advance(s, t * ms)
+        s = next
+        frames(out).filter(_.status.isDefined).map(t -> _)
+      }
+      keepAlives.map(_._1) shouldBe (0 to 1000 by 200)
+      val (_, first) = keepAlives.head
+      first.robotId shouldBe 7
+      val status = first.status.get
+      status.teamID shouldBe Some(12)
+      status.activeRole shouldBe Some("keeper")
+      status.activeAgent shouldBe Some("SimAgent")
+      status.currentState shouldBe Some("sit")
+      status.robotPosition.flatMap(_.x) shouldBe Some(-1000)
+      first.robotHealth.flatMap(_.batteryVoltage) shouldBe Some(12.4f)
+      first.robotHealth.flatMap(_.bootId) shouldBe Some(1)
+    }
+    "answer every documented call and an unknown method with an error" in {
+      val s0 = RobotFirmware.boot(settings, 0)
+      call(s0, "system", "battery", Vector.empty, 5, 1 * ms)._2 shouldBe Vector(RpcReply(Right(Some(RpcValue.Number(12.4f))), Some(5)))
+      call(s0, "system", "ping", Vector.empty, 6, 1500 * ms)._2 shouldBe Vector(RpcReply(Right(Some(RpcValue.UInt(1500))), Some(6)))
+      call(s0, "motion", "getPosture", Vector.empty, 7, ms)._2 shouldBe Vector(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(7)))
+      call(s0, "speech", "say", Vector(RpcValue.Text("hello")), 8, ms)._1.said shouldBe Vector("hello")
+      call(s0, "nothing", "here", Vector.empty, 9, ms)._2 shouldBe Vector(RpcReply(Left("unknown method: nothing.here"), Some(9)))
+      call(s0, "motion", "head", Vector(RpcValue.Text("x")), 10, ms)._2.head.result.left.value should startWith("bad parameters")
+      call(s0, "motion", "head", Vector(RpcValue.Number(3f), RpcValue.Number(0f)), 11, ms)._2.head.result.left.value should startWith("out of range")
+      val (headed, ok) = call(s0, "motion", "head", Vector(RpcValue.Number(0.5f), RpcValue.Number(-0.2f)), 12, ms)
+      ok shouldBe Vector(RpcReply(Right(Some(RpcValue.Flag(true))), Some(12)))
+      headed.head._1 shouldBe 0.5 +- 1e-6
+    }
+    "take realistic time to stand up, and reply when the motion ends" in {
+      val s0 = RobotFirmware.boot(settings, 0)
+      val (moving, immediate) = call(s0, "motion", "posture", Vector(RpcValue.Text("stand")), 3, 10 * ms)
+      immediate shouldBe empty
+      moving.posture shouldBe Posture.Moving
+      call(moving, "motion", "posture", Vector(RpcValue.Text("sit")), 4, 20 * ms)._2.head.result.left.value should startWith("busy")
+      val (early, none) = RobotFirmware.advance(moving, 1000 * ms)
+      frames(none).flatMap(_.rpcResponse) shouldBe empty
+      early.posture shouldBe Posture.Moving
+      val (stood, out) = RobotFirmware.advance(early, 1510 * ms)
+      frames(out).flatMap(_.rpcResponse).map(RpcReply.fromProto) shouldBe Vector(RpcReply(Right(Some(RpcValue.Text("stand"))), Some(3)))
+      stood.posture shouldBe Posture.Stand
+    }
+    "refuse to walk while sitting" in {
+      val s0 = RobotFirmware.boot(settings, 0)
+      call(s0, "motion", "walk", Vector(RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)), 1, ms)._2.head.result.left.value should include("sit")
+    }
+    "stop walking by itself when the walk lease is not refreshed" in {
+      val standing = stand(0)
+      val t0 = standing.now
+      val walkParams = Vector(RpcValue.Number(0.2f), RpcValue.Number(0f), RpcValue.Number(0f))
+      val (walking, _) = call(standing, "motion", "walk", walkParams, 2, t0)
+      walking.posture shouldBe Posture.Walking
+      val (refreshed, _) = call(RobotFirmware.advance(walking, t0 + 400 * ms)._1, "motion", "walk", walkParams, 3, t0 + 400 * ms)
+      RobotFirmware.advance(refreshed, t0 + 800 * ms)._1.posture shouldBe Posture.Walking
+      val stopped = RobotFirmware.advance(refreshed, t0 + 901 * ms)._1
+      stopped.posture shouldBe Posture.Stand
+      // 0.2 m/s for 0.9 s of leased walking, and not a step more.
+      (stopped.pose.x - standing.pose.x) shouldBe 0.18 +- 0.001
+      RobotFirmware.advance(stopped, t0 + 5000 * ms)._1.pose.x shouldBe stopped.pose.x
+    }
+    "drain the battery faster while walking" in {
+      val standing = stand(0)
+      val idle = RobotFirmware.advance(standing, standing.now + 10000 * ms)._1
+      var walking = standing
+      (0 until 25).foreach { i =>
+        walking = call(walking, "motion", "walk", Vector(RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)), i.toLong,
+          standing.now + i * 400 * ms)._1
+      }
+      walking = RobotFirmware.advance(walking, standing.now + 10000 * ms)._1
+      (standing.battery - walking.battery) should be > 5 * (standing.battery - idle.battery)
+    }
+    "offer its debug option list in under 1400 bytes and switch options by prefix" in {
+      val s0 = RobotFirmware.boot(settings, 0)
+      val pull = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionPull = Some(true))))
+      val (_, out) = RobotFirmware.receive(s0, MessageContents.encodeFrame(pull).value, gateway, ms)
+      val list = out.filter(o => frames(Seq(o)).head.debuggingCommands.isDefined)
+      list should have size 1
+      list.head.bytes.length should be <= WireLimits.MaxDatagramBytes
+      frames(list).head.debuggingCommands.get.optionPush.get.options.map(_.name) shouldBe RobotFirmware.OptionCatalogue.map(_._1)
+
+      val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("havimo"))))))
+      val (on, _) = RobotFirmware.receive(s0, MessageContents.encodeFrame(enable).value, gateway, 2 * ms)
+      on.debugEnabled shouldBe Set("havimo.regions", "havimo.grid")
+      val (_, camera) = RobotFirmware.advance(on, 100 * ms)
+      val kinds = frames(camera)
+      kinds.exists(_.havimoRegions.isDefined) shouldBe true
+      kinds.exists(_.havimoGrid.isDefined) shouldBe true
+      camera.foreach(_.bytes.length should be <= WireLimits.MaxDatagramBytes)
+    }
+    "come back from a reset as a new session with its debug options off" in {
+      val s0 = RobotFirmware.boot(settings, 0)
+      val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))
+      val (on, _) = RobotFirmware.receive(s0, MessageContents.encodeFrame(enable).value, gateway, 5000 * ms)
+      val (reset, replies) = call(on, "system", "reset", Vector.empty, 1, 6000 * ms)
+      replies shouldBe Vector(RpcReply(Right(Some(RpcValue.Flag(true))), Some(1)))
+      reset.bootId shouldBe 2
+      reset.uptimeMillis shouldBe 0
+      reset.debugEnabled shouldBe empty
+    }
+    "see the ball ahead in the middle of the image and lose it when looking away" in {
+      val pose = Pose(0, 0, 0)
+      val ahead = Scene.regions(Scene(1.0, 0.0), pose, 0, -0.3)
+      val ball = ahead.find(_.colour == Scene.BallColour).get
+      ball.centreX shouldBe 80.0 +- 2.0
+      Scene.regions(Scene(1.0, 0.0), pose, 1.5, -0.3).exists(_.colour == Scene.BallColour) shouldBe false
+      val left = Scene.regions(Scene(1.0, 0.3), pose, 0, -0.3).find(_.colour == Scene.BallColour).get
+      left.centreX should be < ball.centreX
+      for (r <- ahead) {
+        r.maxX should be < HaViMo.ImageWidth
+        r.maxY should be < HaViMo.ImageHeight
+      }
+    }
+  }
+}
