@@ -50,7 +50,7 @@ lazy val naogateway = (project in file("naogateway"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
-    libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaSlf4j, jeromq, logback) ++ testLibs ++ akkaTestLibs
+    libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j, jeromq, logback) ++ testLibs ++ akkaTestLibs
   )
 
 lazy val robotmiddleware = (project in file("robotmiddleware"))

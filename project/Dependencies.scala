@@ -16,6 +16,7 @@ object Dependencies {
   val scalapbRuntime = "com.thesamet.scalapb" %% "scalapb-runtime" % V.scalapb
   val akkaActorTyped = "com.typesafe.akka" %% "akka-actor-typed" % V.akka
   val akkaStream = "com.typesafe.akka" %% "akka-stream" % V.akka
+  val akkaStreamTyped = "com.typesafe.akka" %% "akka-stream-typed" % V.akka
   val akkaSlf4j = "com.typesafe.akka" %% "akka-slf4j" % V.akka
   val jeromq = "org.zeromq" % "jeromq" % V.jeromq
   val logback = "ch.qos.logback" % "logback-classic" % V.logback

@@ -1,0 +1,205 @@
+package naogateway
+
+import java.net.InetSocketAddress
+
+import scala.collection.immutable.Queue
+import scala.concurrent.duration._
+
+import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
+import akka.actor.typed.{ActorRef, Behavior}
+
+import naogateway.link.UdpLink
+import naogateway.wire.gamecontroller.GameState
+
+/** The last gate before the air: the competition rule, the team's traffic budget and the priority classes. */
+object Outbox {
+
+  /** What the outbox accepts. */
+  sealed trait Command
+
+  /** Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns whether the datagram was accepted. */
+  final case class Send(
+      robotId: Int,
+      to: InetSocketAddress,
+      bytes: Array[Byte],
+      priority: Priority,
+      replyTo: Option[ActorRef[Outcome]] = None
+  ) extends Command
+
+  /** Counts a datagram received from the team, for the two-way traffic figures. */
+  final case class Inbound(robotId: Int, bytes: Int) extends Command
+
+  /** The GameController's latest game state. */
+  final case class GameStateChanged(state: GameState) extends Command
+
+  /** Asks for the traffic figures. */
+  final case class GetStats(replyTo: ActorRef[TrafficStats]) extends Command
+
+  private case object Drain extends Command
+  private case object DrainTimer
+
+  /** Whether a datagram was taken. */
+  sealed trait Outcome extends Product with Serializable
+
+  /** Sent, or queued behind the budget. */
+  case object Accepted extends Outcome
+
+  /** Not sent because a competition rule forbids it now. */
+  final case class RefusedByRule(rule: String) extends Outcome
+
+  /** Not sent because its class's queue is full. */
+  final case class Dropped(reason: String) extends Outcome
+
+  /** The rule that closes the gate, in words for errors and logs. */
+  val NoSendingWhileGameRuns: String =
+    "competition rule: the base station must not send to robots while the game is running (READY, SET or PLAYING)"
+
+  /** The team's traffic: bytes in the last second each way, the budget, queues and counters. */
+  final case class TrafficStats(
+      outBytesLastSecond: Long,
+      inBytesLastSecond: Long,
+      budgetBytesPerSecond: Int,
+      queued: Map[String, Int],
+      datagramsOut: Long,
+      datagramsIn: Long,
+      refusedByRule: Long,
+      dropped: Long,
+      gameRunning: Boolean
+  ) {
+
+    /** Two-way traffic as a share of the budget. */
+    def teamLoad: Double = (outBytesLastSecond + inBytesLastSecond).toDouble / budgetBytesPerSecond
+  }
+
+  /** Datagrams of one class that may wait before the oldest is dropped. */
+  val QueueCapacity: Int = 1024
+
+  private val Second = 1000000000L
+
+  /** An outbox sending through `link` under `budget`, closing in competition mode while the game runs. */
+  def apply(link: ActorRef[UdpLink.Command], budget: BudgetSettings, competition: Boolean): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        new Outbox(link, budget, competition, timers, context.log).behavior()
+      }
+    }
+
+  /** Whether a game state counts as "the game is running". */
+  def gameRunning(state: GameState): Boolean =
+    state == GameState.Ready || state == GameState.Set || state == GameState.Playing
+}
+
+private final class Outbox(
+    link: ActorRef[UdpLink.Command],
+    budget: BudgetSettings,
+    competition: Boolean,
+    timers: TimerScheduler[Outbox.Command],
+    log: org.slf4j.Logger
+) {
+  import Outbox._
+
+  private val out = new TrafficMeter(Second)
+  private val in = new TrafficMeter(Second)
+  private val perRobot = scala.collection.mutable.Map.empty[Int, TrafficMeter]
+  private var queues: Vector[Queue[Send]] = Vector.fill(Priority.all.size)(Queue.empty)
+  private var gameIsRunning = false
+  private var refused = 0L
+  private var dropped = 0L
+  private var lastWarning = Long.MinValue
+
+  private def robotMeter(robotId: Int) = perRobot.getOrElseUpdate(robotId, new TrafficMeter(Second))
+
+  private def allowed(now: Long, s: Send): Boolean =
+    s.priority == Priority.Safety || (out.fits(now, s.bytes.length, budget.teamBytesPerSecond.toLong) &&
+      (budget.robotBytesPerSecond == 0 || robotMeter(s.robotId).fits(now, s.bytes.length, budget.robotBytesPerSecond.toLong)))
+
+  private def transmit(now: Long, s: Send): Unit = {
+    out.record(now, s.bytes.length)
+    robotMeter(s.robotId).record(now, s.bytes.length)
+    link ! UdpLink.Send(s.bytes, s.to)
+    warnIfLoaded(now)
+  }
+
+  private def warnIfLoaded(now: Long): Unit = {
+    val load = (out.inWindow(now) + in.inWindow(now)).toDouble / budget.teamBytesPerSecond
+    if (load >= budget.warnAt && now - lastWarning > 10 * Second) {
+      lastWarning = now
+      log.warn("Team traffic at {}% of the {} B/s budget", (load * 100).round, budget.teamBytesPerSecond)
+    }
+  }
+
+  /** Sends what the budget allows, most urgent class first, and sets a timer for the rest. */
+  private def drain(now: Long): Unit = {
+    var blocked = false
+    var rank = 0
+    while (rank < queues.size && !blocked) {
+      var q = queues(rank)
+      while (q.nonEmpty && !blocked) {
+        val (s, rest) = q.dequeue
+        if (allowed(now, s)) { transmit(now, s); q = rest }
+        else blocked = true
+      }
+      queues = queues.updated(rank, q)
+      rank += 1
+    }
+    queues.find(_.nonEmpty).map(_.head).foreach { head =>
+      val team = out.fitsAt(now, head.bytes.length, budget.teamBytesPerSecond.toLong)
+      val robot =
+        if (budget.robotBytesPerSecond == 0) now
+        else robotMeter(head.robotId).fitsAt(now, head.bytes.length, budget.robotBytesPerSecond.toLong)
+      val wait = math.max(1000000L, math.max(team, robot) - now)
+      timers.startSingleTimer(DrainTimer, Drain, wait.nanos)
+    }
+  }
+
+  def behavior(): Behavior[Command] = Behaviors.receiveMessage {
+    case s: Send =>
+      val now = System.nanoTime()
+      if (competition && gameIsRunning) {
+        refused += 1
+        s.replyTo.foreach(_ ! RefusedByRule(NoSendingWhileGameRuns))
+      } else {
+        val rank = s.priority.rank
+        if (queues.forall(_.isEmpty) && allowed(now, s)) {
+          transmit(now, s)
+          s.replyTo.foreach(_ ! Accepted)
+        } else if (queues(rank).size >= QueueCapacity) {
+          dropped += 1
+          s.replyTo.foreach(_ ! Dropped(s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
+          if (dropped % 100 == 1) log.warn("Outbox dropped {} datagram(s) so far: {} queue full", dropped, s.priority.name)
+        } else {
+          queues = queues.updated(rank, queues(rank).enqueue(s))
+          s.replyTo.foreach(_ ! Accepted)
+          // Safety must not wait for the timer; other classes drain when the budget frees.
+          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer)) drain(now)
+        }
+      }
+      Behaviors.same
+    case Drain =>
+      drain(System.nanoTime())
+      Behaviors.same
+    case Inbound(_, bytes) =>
+      in.record(System.nanoTime(), bytes)
+      Behaviors.same
+    case GameStateChanged(state) =>
+      val nowRunning = gameRunning(state)
+      if (competition && nowRunning != gameIsRunning)
+        log.info("Game state {}: sending to robots {}", state, if (nowRunning) "closed" else "open again")
+      gameIsRunning = nowRunning
+      if (competition && gameIsRunning) {
+        // Nothing queued before kick-off may leak out during the game.
+        val held = queues.map(_.size).sum
+        if (held > 0) log.info("Discarding {} queued datagram(s) at game start", held)
+        queues.foreach(_.foreach(_.replyTo.foreach(_ ! RefusedByRule(NoSendingWhileGameRuns))))
+        refused += held
+        queues = Vector.fill(Priority.all.size)(Queue.empty)
+      }
+      Behaviors.same
+    case GetStats(replyTo) =>
+      val now = System.nanoTime()
+      replyTo ! TrafficStats(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
+        Priority.all.map(p => p.name -> queues(p.rank).size).toMap, out.totalDatagrams, in.totalDatagrams, refused,
+        dropped, gameIsRunning)
+      Behaviors.same
+  }
+}

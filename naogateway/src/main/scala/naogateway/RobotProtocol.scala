@@ -1,0 +1,127 @@
+package naogateway
+
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration.FiniteDuration
+
+import naogateway.wire.RpcValue
+import naogateway.wire.gamecontroller.GameControlData
+
+/** How well a robot's link works, with hysteresis so a lossy link does not flap. */
+sealed abstract class LinkQuality(val name: String) extends Product with Serializable
+
+/** The three link qualities. */
+object LinkQuality {
+  case object Good extends LinkQuality("good")
+  case object Degraded extends LinkQuality("degraded")
+  case object Offline extends LinkQuality("offline")
+}
+
+/** What the gateway last heard from a robot's keep-alive. */
+final case class RobotSnapshot(
+    robotId: Int,
+    address: InetSocketAddress,
+    teamId: Option[Int] = None,
+    role: Option[String] = None,
+    agent: Option[String] = None,
+    posture: Option[String] = None,
+    batteryVoltage: Option[Double] = None,
+    uptimeMillis: Option[Long] = None,
+    bootId: Option[Int] = None,
+    position: Option[(Int, Int, Double)] = None,
+    online: Boolean = false,
+    quality: LinkQuality = LinkQuality.Offline,
+    receivedAtNanos: Long = 0L
+)
+
+/** Link figures of one robot. */
+final case class LinkStats(
+    robotId: Int,
+    datagramsIn: Long,
+    datagramsOut: Long,
+    bytesIn: Long,
+    bytesOut: Long,
+    rttMillis: Option[Double],
+    lossEstimate: Double,
+    retransmissions: Long,
+    rejected: Map[String, Long]
+)
+
+/** Something that happened to a robot or the game, for subscribers. */
+sealed trait GatewayEvent extends Product with Serializable
+
+/** Events about one robot. */
+sealed trait RobotEvent extends GatewayEvent {
+
+  /** The robot concerned. */
+  def robotId: Int
+}
+
+/** The robot is reachable (first keep-alive, or back after being offline). */
+final case class RobotOnline(robotId: Int, address: InetSocketAddress) extends RobotEvent
+
+/** The robot missed its chances: unreachable until it speaks again or someone asks. */
+final case class RobotOffline(robotId: Int, reason: String) extends RobotEvent
+
+/** The link quality changed. */
+final case class LinkQualityChanged(robotId: Int, quality: LinkQuality) extends RobotEvent
+
+/** A keep-alive arrived. */
+final case class RobotStatusUpdated(snapshot: RobotSnapshot) extends RobotEvent {
+  def robotId: Int = snapshot.robotId
+}
+
+/** The robot came back with a fresh session; the gateway has re-synced it. */
+final case class RobotRestarted(robotId: Int, bootId: Option[Int], resynced: Vector[String]) extends RobotEvent
+
+/** The GameController's latest packet. */
+final case class GameStateUpdated(data: GameControlData) extends GatewayEvent
+
+/** Why a call did not return a value. */
+sealed trait CallError extends Product with Serializable {
+
+  /** A sentence for logs and error replies. */
+  def describe: String
+}
+
+/** The ways a call can fail. */
+object CallError {
+
+  /** The robot answered with an error text. */
+  final case class RobotError(robotId: Int, message: String) extends CallError {
+    def describe: String = s"robot $robotId: $message"
+  }
+
+  /** The robot is offline; nothing was sent. */
+  final case class RobotOffline(robotId: Int) extends CallError {
+    def describe: String = s"robot $robotId is offline"
+  }
+
+  /** No robot with this id is known. */
+  final case class UnknownRobot(robotId: Int) extends CallError {
+    def describe: String = s"no robot $robotId is known"
+  }
+
+  /** No reply came in time (after the retries allowed). */
+  final case class Timeout(robotId: Int, call: String, after: FiniteDuration) extends CallError {
+    def describe: String = s"robot $robotId did not answer $call within ${after.toMillis} ms"
+  }
+
+  /** A competition rule forbids sending now. */
+  final case class RuleGate(rule: String) extends CallError {
+    def describe: String = rule
+  }
+
+  /** Too many calls wait already. */
+  final case class Overloaded(robotId: Int, detail: String) extends CallError {
+    def describe: String = s"robot $robotId is overloaded: $detail"
+  }
+
+  /** The actor handling the call restarted before the reply came. */
+  final case class Interrupted(robotId: Int, call: String) extends CallError {
+    def describe: String = s"call $call to robot $robotId was interrupted by a restart of its handler"
+  }
+}
+
+/** The one answer every call gets. */
+final case class CallResult(robotId: Int, call: String, result: Either[CallError, Option[RpcValue]])
