@@ -1,0 +1,628 @@
+package naogateway.wire
+
+import java.nio.charset.StandardCharsets.{US_ASCII, UTF_8}
+import java.nio.file.{Files, Path, Paths}
+
+import scala.collection.immutable.ListMap
+import scala.collection.mutable
+import scala.jdk.CollectionConverters._
+
+import com.google.protobuf.ByteString
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.proto._
+
+/**
+ * Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every
+ * `<!-- table: tag -->` offset table in the document is checked here: FU-Remote frames against the codecs (decode to
+ * the expected contents, re-encode to the identical bytes), GameController bytes and tables against the real packets
+ * in shared/vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules.
+ */
+class ProtocolDocSpec extends AnyWordSpec with Matchers {
+  import ProtocolDocSpec._
+
+  private lazy val doc: ProtocolDoc = ProtocolDoc.load().fold(problem => fail(problem), identity)
+
+  private def bytes(tag: String): Array[Byte] = doc.block(tag).fold(problem => fail(problem), _.bytes)
+  private def lines(tag: String): Vector[Array[Byte]] = doc.block(tag).fold(problem => fail(problem), _.lines)
+  private def table(tag: String): Table = doc.table(tag).fold(problem => fail(problem), identity)
+
+  private def contents(tag: String): MessageContents = {
+    val decoded = MessageContents.decodeFrame(bytes(tag))
+    withClue(s"example $tag: ") { decoded.isRight shouldBe true }
+    decoded.toOption.get._2
+  }
+
+  "docs/protocol.md" should {
+    "hold exactly the tagged examples and tables this spec checks, each once" in {
+      doc.blocks.map(_.tag).diff(doc.blocks.map(_.tag).distinct) shouldBe empty
+      doc.tables.map(_.tag).diff(doc.tables.map(_.tag).distinct) shouldBe empty
+      doc.blocks.filter(_.kind == "example").map(_.tag).toSet shouldBe ExampleTags
+      doc.blocks.filter(_.kind == "datagrams").map(_.tag).toSet shouldBe DatagramTags
+      doc.tables.map(_.tag).toSet shouldBe TableTags
+    }
+    "keep every datagram within the 1400-byte limit" in {
+      for (block <- doc.blocks; datagram <- if (block.kind == "datagrams") block.lines else Vector(block.bytes))
+        if (!block.tag.startsWith("serial-")) withClue(block.tag) { datagram.length should be <= WireLimits.MaxDatagramBytes }
+    }
+  }
+
+  "The byte tables below the examples" should {
+    "exist for every example but the bare pure ACK, the stream RPC segment and the RGrt packet" in {
+      doc.blocks.filter(b => b.annotation.exists(isByteTable)).map(_.tag).toSet shouldBe
+        (ExampleTags ++ DatagramTags -- Set("stream-pure-ack", "stream-data-rpc", "gc-return-alive"))
+    }
+    "give every byte of each example at its offset, in order, without gaps" in {
+      for (block <- doc.blocks; table <- block.annotation if isByteTable(table)) withClue(s"${block.tag}: ") {
+        val header = table.head
+        val bytesColumn = header.indexOf("bytes")
+        if (block.kind == "datagrams") {
+          table.tail.map(row => parseHex(row(bytesColumn)).map(_.toVector)) shouldBe
+            block.lines.map(line => Right(line.toVector))
+        } else {
+          val datagram = block.bytes
+          val end = table.tail.zipWithIndex.foldLeft(0) { case (offset, (row, i)) =>
+            withClue(s"row ${row.mkString(" | ")}: ") {
+              row(0).toInt shouldBe offset
+              val cell = row(bytesColumn)
+              val abbreviated = cell.endsWith("\u2026")
+              val shown = parseHex(cell.stripSuffix("\u2026").trim)
+              shown.isRight shouldBe true
+              val quoted = shown.toOption.get
+              datagram.slice(offset, offset + quoted.length).toVector shouldBe quoted.toVector
+              if (abbreviated) { i shouldBe table.length - 2; datagram.length } else offset + quoted.length
+            }
+          }
+          end shouldBe datagram.length
+        }
+      }
+    }
+  }
+
+  "Every FU-Remote frame example" should {
+    FrameExamples.foreach { case (tag, expected) =>
+      s"decode to its contents and re-encode to the identical bytes: $tag" in {
+        val framed = bytes(tag)
+        MessageContents.decodeFrame(framed) shouldBe Right(
+          FrameHeader(expected.form, expected.gzip, framed.length - expected.form.headerBytes) -> expected.contents
+        )
+        MessageContents.encodeFrame(expected.contents, expected.form, expected.gzip).map(_.toVector) shouldBe
+          Right(framed.toVector)
+        classify(framed) shouldBe FuRemote
+      }
+    }
+  }
+
+  "The frame examples" should {
+    "show the same protobuf bytes in the legacy, compact and gzip forms" in {
+      val protobuf = bytes("status-legacy").drop(HeaderForm.Legacy.headerBytes).toVector
+      bytes("status-compact").drop(HeaderForm.Compact.headerBytes).toVector shouldBe protobuf
+      FumanoidsFrame.decodeRaw(bytes("status-gzip")).map(_.protobuf.toVector) shouldBe Right(protobuf)
+    }
+    "pair each RPC response with its request's callId" in {
+      val walk = contents("rpc-request-walk").rpcRequest.get
+      contents("rpc-response-walk").rpcResponse.get.callId shouldBe walk.callId
+      val probe = contents("rpc-request-probe").rpcRequest.get
+      val error = contents("rpc-response-unknown").rpcResponse.get
+      error.callId shouldBe probe.callId
+      error.error shouldBe Some(s"unknown method: ${probe.module}.${probe.method}")
+    }
+    "carry a region whose centre is (80, 60)" in {
+      val records = contents("havimo-regions").havimoRegions.get.records.get.toByteArray
+      val regions = HaViMo.decodeRegions(records).toOption.get
+      regions should have size 1
+      val region = regions.head
+      (region.centreX, region.centreY) shouldBe ((80.0, 60.0))
+    }
+  }
+
+  "The extension tables" should {
+    val extensions = Seq(MessageProto, DebuggingProto, HavimoProto, RpcProto)
+      .flatMap(_.javaDescriptor.getExtensions.asScala)
+      .map(f => (f.getNumber, f.getName, f.getMessageType.getName, Paths.get(f.getFile.getName).getFileName.toString))
+    "list exactly the extensions of the .proto files, with their numbers, messages and files" in {
+      table("extension-numbers").rows.map(r => (r(0).toInt, r(1), r(2), r(3))).toSet shouldBe extensions.toSet
+    }
+    "keep this project's numbers in 7100-7199 and agree with MessageContents" in {
+      val byName = extensions.map(e => e._2 -> e._1).toMap
+      byName("status") shouldBe MessageContents.StatusField
+      byName("debuggingCommands") shouldBe MessageContents.DebuggingCommandsField
+      byName("debugData") shouldBe MessageContents.DebugDataField
+      byName("havimoRegions") shouldBe MessageContents.HavimoRegionsField
+      byName("havimoGrid") shouldBe MessageContents.HavimoGridField
+      byName("rpcRequest") shouldBe MessageContents.RpcRequestField
+      byName("rpcResponse") shouldBe MessageContents.RpcResponseField
+      all((byName - "status").values) should (be >= MessageContents.ProjectRange.start and
+        be <= MessageContents.ProjectRange.end)
+    }
+    "give each extension's key bytes correctly" in {
+      val rows = table("extension-keys").rows
+      rows.map(_(0)).toSet shouldBe extensions.map(_._2).toSet
+      rows.foreach { r =>
+        withClue(r(0)) {
+          r(1).toInt shouldBe extensions.find(_._2 == r(0)).get._1
+          parseHex(r(2)).map(_.toVector) shouldBe Right(varint((r(1).toLong << 3) | 2).toVector)
+        }
+      }
+    }
+  }
+
+  "The GameController examples and tables" should {
+    lazy val v8 = vector("v8-playing.bin")
+    lazy val v7 = vector("v7-playing.bin")
+
+    "quote the first bytes of the real packets" in {
+      bytes("gc-v8-header").toVector shouldBe v8.take(18).toVector
+      bytes("gc-v7-header").toVector shouldBe v7.take(20).toVector
+      classify(v8) shouldBe GameController
+    }
+    "give version 8 offsets that add up to 158 bytes and read the real packet right" in {
+      val packet = table("gc-v8")
+      val team = table("gc-v8-team")
+      v8.length shouldBe 158
+      contiguous(packet, offsetColumn = 0, sizeColumn = 1) shouldBe 158
+      contiguous(team, offsetColumn = 0, sizeColumn = 3) shouldBe 70
+      teamOffsetsAgree(packet, team, fieldColumn = 2)
+      val read = reader(v8, packet, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
+      new String(v8.slice(0, 4), US_ASCII) shouldBe "RGme"
+      read("version") shouldBe 8
+      read("packetNumber") shouldBe 4
+      read("playersPerTeam") shouldBe 6
+      read("gameState") shouldBe 3
+      read("firstHalf") shouldBe 1
+      read("kickOffTeam") shouldBe 1
+      read("secGameState") shouldBe 0
+      read("dropInTime") shouldBe -1
+      read("secsRemaining") shouldBe 587
+      read("secondaryTime") shouldBe 0
+      val team0 = reader(v8, team, offsetColumn = 1, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      val team1 = reader(v8, team, offsetColumn = 2, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      (team0("teamNumber"), team0("teamColor"), team0("score")) shouldBe ((12, 0, 2))
+      (team1("teamNumber"), team1("teamColor"), team1("score")) shouldBe ((7, 1, 1))
+      val player3 = offsetOf(team, "player[0..10]", 1) + 2 * (3 - 1)
+      (v8(player3), v8(player3 + 1)) shouldBe ((1.toByte, 25.toByte))
+    }
+    "give version 7 offsets that add up to 116 bytes and read the real packet right" in {
+      val packet = table("gc-v7")
+      val team = table("gc-v7-team")
+      v7.length shouldBe 116
+      contiguous(packet, offsetColumn = 0, sizeColumn = 1) shouldBe 116
+      contiguous(team, offsetColumn = 0, sizeColumn = 3) shouldBe 48
+      teamOffsetsAgree(packet, team, fieldColumn = 2)
+      val read = reader(v7, packet, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
+      read("version") shouldBe 7
+      read("playersPerTeam") shouldBe 6
+      read("gameState") shouldBe 3
+      read("firstHalf") shouldBe 1
+      read("kickOffTeam") shouldBe 1
+      read("dropInTime") shouldBe -1
+      read("secsRemaining") shouldBe 587
+      val team0 = reader(v7, team, offsetColumn = 1, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      val team1 = reader(v7, team, offsetColumn = 2, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      (team0("teamNumber"), team0("teamColor"), team0("score")) shouldBe ((12, 0, 2))
+      (team1("teamNumber"), team1("teamColor"), team1("score")) shouldBe ((7, 1, 1))
+      val player3 = offsetOf(team, "player[0..10]", 1) + 4 * (3 - 1)
+      littleEndian(v7, player3, 2) shouldBe 1
+      littleEndian(v7, player3 + 2, 2) shouldBe 25
+    }
+    "build the RGrt return packet as its table says" in {
+      val packet = bytes("gc-return-alive")
+      packet.toVector shouldBe ("RGrt".getBytes(US_ASCII) ++ Array[Byte](2, 12, 3, 2)).toVector
+      val layout = table("gc-return")
+      contiguous(layout, offsetColumn = 0, sizeColumn = 1) shouldBe packet.length
+      val read = reader(packet, layout, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
+      (read("version"), read("team"), read("player"), read("message")) shouldBe ((2, 12, 3, 2))
+      classify(packet) shouldBe GameController
+    }
+  }
+
+  "The secure-stream examples" should {
+    "show a data segment and a pure ACK" in {
+      bytes("stream-data").toVector shouldBe (Array[Byte](3, 5) ++ "Lorem".getBytes(US_ASCII)).toVector
+      bytes("stream-pure-ack").toVector shouldBe Vector[Byte](6, 9)
+      classify(bytes("stream-data")) shouldBe Segment
+      classify(bytes("stream-pure-ack")) shouldBe Segment
+    }
+    "carry a whole FU-Remote frame as the payload of an RPC segment" in {
+      val segment = bytes("stream-data-rpc")
+      segment.take(2).toVector shouldBe Vector[Byte](0, 20)
+      segment.drop(2).toVector shouldBe bytes("rpc-request-walk").toVector
+      classify(segment) shouldBe Segment
+    }
+    "follow the stop-and-wait rules in the thesis sequence (W = 1, maxSeq 20)" in {
+      val gateway = new Endpoint(maxSeq = 20, window = 1, next = 0, last = 20)
+      val robot = new Endpoint(maxSeq = 20, window = 1, next = 0, last = 20)
+      val hops = Vector(
+        Hop(G, New("Lo")),
+        Hop(R, Ack),
+        Hop(G, New("re"), lost = true),
+        Hop(G, Resend(Timeout)),
+        Hop(R, Ack, lost = true),
+        Hop(G, Resend(Timeout)),
+        Hop(R, Ack),
+        Hop(G, New("m")),
+        Hop(R, New("OK")),
+        Hop(G, Ack),
+        Hop(R, IdleAck),
+        Hop(G, IdleAck)
+      )
+      replay(lines("stream-window1"), hops, gateway, robot)
+      robot.delivered.mkString shouldBe "Lorem"
+      gateway.delivered.mkString shouldBe "OK"
+      (gateway.inFlight, robot.inFlight) shouldBe ((0, 0))
+    }
+    "follow the selective-repeat rules in the window-4 sequence" in {
+      val gateway = new Endpoint(maxSeq = 20, window = 4, next = 5, last = 20)
+      val robot = new Endpoint(maxSeq = 20, window = 4, next = 0, last = 4)
+      val hops = Vector(
+        Hop(G, New("a")),
+        Hop(G, New("b"), lost = true),
+        Hop(G, New("c")),
+        Hop(G, New("d"), lost = true),
+        Hop(R, Ack),
+        Hop(R, Ack),
+        Hop(G, New("e")),
+        Hop(R, Ack),
+        Hop(G, Resend(DuplicateAcks)),
+        Hop(R, Ack),
+        Hop(G, Resend(PartialAck)),
+        Hop(R, Ack)
+      )
+      replay(lines("stream-window4"), hops, gateway, robot)
+      robot.delivered.mkString shouldBe "abcde"
+      gateway.inFlight shouldBe 0
+    }
+  }
+
+  "The GS1500M serial examples" should {
+    "frame the thesis Status as ESC Z cid len4 data" in {
+      val serial = bytes("serial-send-status")
+      new String(serial.take(7), US_ASCII) shouldBe "\u001bZ00030"
+      serial.drop(7).toVector shouldBe bytes("status-legacy").toVector
+    }
+    "frame a UDP-server datagram as ESC y cid ip SPACE port TAB len4 data" in {
+      val serial = bytes("serial-receive-udp-server")
+      val tab = serial.indexOf('\t'.toByte)
+      new String(serial.take(tab + 5), US_ASCII) shouldBe "\u001by0192.168.1.10 11011\t0020"
+      val data = serial.drop(tab + 5)
+      data.length shouldBe 20
+      data.toVector shouldBe bytes("debug-option-pull").toVector
+    }
+  }
+
+  private def replay(docLines: Vector[Array[Byte]], hops: Vector[Hop], gateway: Endpoint, robot: Endpoint): Unit = {
+    docLines.length shouldBe hops.length
+    hops.zip(docLines).zipWithIndex.foreach { case ((hop, line), i) =>
+      val (from, to) = if (hop.from == G) (gateway, robot) else (robot, gateway)
+      val segment = hop.action match {
+        case New(payload) => from.sendNew(payload)
+        case Resend(cause) => from.resend(cause)
+        case Ack => from.ack(idle = false)
+        case IdleAck => from.ack(idle = true)
+      }
+      withClue(s"datagram ${i + 1} (${hop.from} ${hop.action}): ") {
+        line.toVector shouldBe segment.toVector
+        classify(line) shouldBe Segment
+      }
+      if (!hop.lost) to.receive(segment)
+    }
+  }
+
+  private def vector(name: String): Array[Byte] = {
+    val candidates = sys.props.get("naogateway.shared.dir").map(Paths.get(_)).toSeq ++
+      Seq(Paths.get("../../shared"), Paths.get("../shared"))
+    candidates.map(_.resolve("vectors/gamecontroller").resolve(name)).find(Files.isRegularFile(_)) match {
+      case Some(path) => Files.readAllBytes(path)
+      case None => fail(s"GameController vector $name not found under ${candidates.mkString(", ")}")
+    }
+  }
+
+  /** Checks that the rows' offsets follow each other without gap or overlap from 0; returns the total size. */
+  private def contiguous(t: Table, offsetColumn: Int, sizeColumn: Int): Int =
+    t.rows.foldLeft(0) { (expected, row) =>
+      withClue(s"table ${t.tag}, row ${row.mkString(" | ")}: ") { row(offsetColumn).toInt shouldBe expected }
+      expected + row(sizeColumn).toInt
+    }
+
+  /** The absolute columns of a TeamInfo table must be the team's offset in the packet plus the relative offset. */
+  private def teamOffsetsAgree(packet: Table, team: Table, fieldColumn: Int): Unit = {
+    val base0 = offsetOf(packet, "team[0]", 0, fieldColumn)
+    val base1 = offsetOf(packet, "team[1]", 0, fieldColumn)
+    team.rows.foreach { row =>
+      withClue(s"table ${team.tag}, row ${row.mkString(" | ")}: ") {
+        row(1).toInt shouldBe base0 + row(0).toInt
+        row(2).toInt shouldBe base1 + row(0).toInt
+      }
+    }
+    packet.rows.find(_(fieldColumn) == "team[0]").get.apply(1).toInt shouldBe team.rows.map(_(3).toInt).sum
+  }
+
+  private def offsetOf(t: Table, field: String, offsetColumn: Int, fieldColumn: Int = 4): Int =
+    t.rows.find(_(fieldColumn) == field).getOrElse(fail(s"table ${t.tag} has no field $field"))(offsetColumn).toInt
+
+  /** Reads a named little-endian field of `packet` at the offset and size its table row gives. */
+  private def reader(packet: Array[Byte], t: Table, offsetColumn: Int, sizeColumn: Int, typeColumn: Int,
+      fieldColumn: Int): String => Int = field => {
+    val row = t.rows.find(_(fieldColumn) == field).getOrElse(fail(s"table ${t.tag} has no field $field"))
+    val value = littleEndian(packet, row(offsetColumn).toInt, row(sizeColumn).toInt)
+    if (row(typeColumn).startsWith("i") && value >= (1 << (8 * row(sizeColumn).toInt - 1)))
+      value - (1 << (8 * row(sizeColumn).toInt))
+    else value
+  }
+}
+
+object ProtocolDocSpec {
+
+  final case class FrameExample(contents: MessageContents, form: HeaderForm = HeaderForm.Legacy, gzip: Boolean = false)
+
+  private val workedStatus =
+    MessageContents(robotId = 1, status = Some(Status(teamID = Some(1), activeAgent = Some("AgentTest"))))
+
+  private def float(value: Float) = MixedValue(float = Some(value))
+
+  /** The region of the HaViMo example: colour class 2, 50 pixels, centre (80, 60). */
+  val exampleRegion: HaViMoRegion = HaViMoRegion(index = 1, colour = 2, pixels = 50, sumX = 4000, sumY = 3000,
+    maxX = 84, minX = 76, maxY = 64, minY = 56)
+
+  /** What each FU-Remote frame example of the document must decode to. */
+  val FrameExamples: ListMap[String, FrameExample] = ListMap(
+    "status-legacy" -> FrameExample(workedStatus),
+    "status-compact" -> FrameExample(workedStatus, HeaderForm.Compact),
+    "status-gzip" -> FrameExample(workedStatus, gzip = true),
+    "rpc-request-walk" -> FrameExample(MessageContents(robotId = 1, rpcRequest = Some(
+      Request("motion", "walk", Seq(float(0.2f), float(0.0f), float(0.5f)), callId = Some(7))
+    ))),
+    "rpc-response-walk" -> FrameExample(MessageContents(robotId = 1, rpcResponse = Some(
+      Response(returnval = Some(MixedValue(bool = Some(true))), callId = Some(7))
+    ))),
+    "rpc-request-probe" -> FrameExample(MessageContents(robotId = 1, rpcRequest = Some(
+      Request("heartbeat", "probe", callId = Some(8))
+    ))),
+    "rpc-response-unknown" -> FrameExample(MessageContents(robotId = 1, rpcResponse = Some(
+      Response(error = Some("unknown method: heartbeat.probe"), callId = Some(8))
+    ))),
+    "debug-option-pull" -> FrameExample(MessageContents(robotId = 1, debuggingCommands = Some(
+      DebuggingCommands(optionPull = Some(true))
+    ))),
+    "debug-option-push" -> FrameExample(MessageContents(robotId = 1, debuggingCommands = Some(
+      DebuggingCommands(optionPush = Some(DebuggingOptionList(Seq(
+        DebuggingOption("havimo.regions", Some(DebuggingOptionType.HAVIMO_REGIONS), Some(true)),
+        DebuggingOption("havimo.grid", Some(DebuggingOptionType.HAVIMO_GRID), Some(false)),
+        DebuggingOption("text", Some(DebuggingOptionType.TEXT), Some(false))
+      ))))
+    ))),
+    "debug-option-enable" -> FrameExample(MessageContents(robotId = 1, debuggingCommands = Some(
+      DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("havimo"))))
+    ))),
+    "debug-data-text" -> FrameExample(MessageContents(robotId = 1, debugData = Some(
+      DebugData("text", Some(5000L), DebugData.Data.Text(DebugText("ready")))
+    ))),
+    "havimo-regions" -> FrameExample(MessageContents(robotId = 1, havimoRegions = Some(
+      HaViMoRegionFrame(42, Some(5000L), Some(ByteString.copyFrom(HaViMo.encodeRegions(Seq(exampleRegion)).toOption.get)))
+    )))
+  )
+
+  val ExampleTags: Set[String] = FrameExamples.keySet ++ Set(
+    "gc-v8-header", "gc-v7-header", "gc-return-alive",
+    "stream-data", "stream-pure-ack", "stream-data-rpc",
+    "serial-send-status", "serial-receive-udp-server"
+  )
+  val DatagramTags: Set[String] = Set("stream-window1", "stream-window4")
+  val TableTags: Set[String] =
+    Set("extension-keys", "extension-numbers", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return")
+
+  // ---- reading the document ----
+
+  /**
+   * A hex block: `example` blocks are one datagram over any number of lines, `datagrams` blocks one per line.
+   * `annotation` is the table right below the block (before the next heading or marker), header row included.
+   */
+  final case class HexBlock(kind: String, tag: String, lines: Vector[Array[Byte]], lineNumber: Int,
+      annotation: Option[Vector[Vector[String]]]) {
+    def bytes: Array[Byte] = lines.flatten.toArray
+  }
+
+  /** A markdown table's body rows, cells trimmed and without backticks. */
+  final case class Table(tag: String, rows: Vector[Vector[String]], lineNumber: Int)
+
+  final class ProtocolDoc(val path: Path, val blocks: Vector[HexBlock], val tables: Vector[Table]) {
+    def block(tag: String): Either[String, HexBlock] =
+      blocks.find(_.tag == tag).toRight(s"$path has no block tagged $tag")
+    def table(tag: String): Either[String, Table] =
+      tables.find(_.tag == tag).toRight(s"$path has no table tagged $tag")
+  }
+
+  object ProtocolDoc {
+
+    /** Forked tests run in the module folder (naogateway/), an sbt shell in the checkout. */
+    val Candidates: Seq[Path] = Seq(Paths.get("../docs/protocol.md"), Paths.get("docs/protocol.md"))
+
+    private val Marker = """^<!--\s*(example|datagrams|table):\s*([a-z0-9-]+)\s*-->\s*$""".r
+
+    def load(): Either[String, ProtocolDoc] =
+      Candidates.find(Files.isRegularFile(_)) match {
+        case None =>
+          Left(s"docs/protocol.md not found; looked at ${Candidates.map(_.toAbsolutePath.normalize).mkString(", ")}")
+        case Some(path) => parse(path, Files.readAllLines(path, UTF_8).asScala.toVector)
+      }
+
+    def parse(path: Path, text: Vector[String]): Either[String, ProtocolDoc] = {
+      val blocks = Vector.newBuilder[HexBlock]
+      val tables = Vector.newBuilder[Table]
+      val problems = Vector.newBuilder[String]
+      text.zipWithIndex.foreach {
+        case (Marker(kind, tag), at) =>
+          val start = text.indexWhere(_.trim.nonEmpty, at + 1)
+          if (kind == "table") {
+            val rows = text.drop(start).takeWhile(_.trim.startsWith("|"))
+            if (start < 0 || rows.length < 3) problems += s"line ${at + 1}: table $tag has no rows"
+            else tables += Table(tag, rows.drop(2).map(cells), at + 1)
+          } else if (start < 0 || text(start).trim != "```hex") problems += s"line ${at + 1}: $tag is not followed by ```hex"
+          else {
+            val body = text.drop(start + 1).takeWhile(_.trim != "```")
+            if (start + 1 + body.length >= text.length) problems += s"line ${at + 1}: $tag's hex block is not closed"
+            else {
+              val parsed = body.zipWithIndex.filter(_._1.trim.nonEmpty).map { case (line, i) =>
+                parseHex(line).left.map(p => s"line ${start + 2 + i}: $p")
+              }
+              parsed.collect { case Left(p) => p }.foreach(problems += _)
+              val after = start + 2 + body.length
+              val next = text.indexWhere(l => l.startsWith("|") || l.startsWith("#") || l.startsWith("<!--"), after)
+              val annotation =
+                if (next < 0 || !text(next).startsWith("|")) None
+                else Some(text.drop(next).takeWhile(_.startsWith("|")).map(cells)).map(t => t.take(1) ++ t.drop(2))
+              blocks += HexBlock(kind, tag, parsed.collect { case Right(b) => b }, at + 1, annotation)
+            }
+          }
+        case (line, at) if line.trim.startsWith("<!--") && Seq("example", "datagrams", "table").exists(line.contains) =>
+          problems += s"line ${at + 1}: malformed marker: $line"
+        case _ => ()
+      }
+      val found = problems.result()
+      if (found.nonEmpty) Left(s"$path: ${found.mkString("; ")}")
+      else Right(new ProtocolDoc(path, blocks.result(), tables.result()))
+    }
+
+    private def cells(row: String): Vector[String] =
+      row.trim.stripPrefix("|").stripSuffix("|").split('|').toVector.map(_.trim.replace("`", ""))
+  }
+
+  /** Space-separated bytes of two upper-case hex digits each. */
+  def parseHex(line: String): Either[String, Array[Byte]] = {
+    val tokens = line.trim.split("\\s+").toVector
+    tokens.find(t => !t.matches("[0-9A-F]{2}")) match {
+      case Some(bad) => Left(s"'$bad' is not a byte of two upper-case hex digits")
+      case None => Right(tokens.map(Integer.parseInt(_, 16).toByte).toArray)
+    }
+  }
+
+  /** An annotation table with a column of bytes: `offset | bytes | …` or `# | from → to | bytes | …`. */
+  def isByteTable(table: Vector[Vector[String]]): Boolean =
+    table.headOption.exists(h => h.headOption.contains("offset") && h.lift(1).contains("bytes") || h.lift(2).contains("bytes"))
+
+  def varint(value: Long): Array[Byte] = {
+    val out = Array.newBuilder[Byte]
+    var rest = value
+    while (rest >= 0x80) { out += ((rest & 0x7f) | 0x80).toByte; rest >>>= 7 }
+    out += rest.toByte
+    out.result()
+  }
+
+  def littleEndian(bytes: Array[Byte], at: Int, size: Int): Int =
+    (0 until size).map(i => (bytes(at + i) & 0xff) << (8 * i)).sum
+
+  // ---- datagram classes of section 3 ----
+
+  sealed trait DatagramClass
+  case object FuRemote extends DatagramClass
+  case object GameController extends DatagramClass
+  case object Segment extends DatagramClass
+  case object Rejected extends DatagramClass
+
+  def classify(d: Array[Byte]): DatagramClass = {
+    def u(i: Int) = d(i) & 0xff
+    if (d.length < 2 || d.length > WireLimits.MaxDatagramBytes) Rejected
+    else if (u(0) == 0 && u(1) == WireLimits.FumanoidsOperation) FuRemote
+    else if (d.length >= 4 && Set("RGme", "RGrt").contains(new String(d.take(4), US_ASCII))) GameController
+    else if (u(0) < WireLimits.StreamSequenceLimit && u(1) < WireLimits.StreamSequenceLimit) Segment
+    else Rejected
+  }
+
+  // ---- a reference model of the secure stream (section 11), without deadlines ----
+
+  sealed trait Side
+  case object G extends Side
+  case object R extends Side
+
+  sealed trait Cause
+  case object Timeout extends Cause
+  case object DuplicateAcks extends Cause
+  case object PartialAck extends Cause
+
+  sealed trait Action
+  final case class New(payload: String) extends Action
+  final case class Resend(cause: Cause) extends Action
+  case object Ack extends Action
+  case object IdleAck extends Action
+
+  final case class Hop(from: Side, action: Action, lost: Boolean = false)
+
+  /** One end of a stream: sender state (base, next, recovery) and receiver state (last in order, kept segments). */
+  final class Endpoint(maxSeq: Int, window: Int, next: Int, last: Int) {
+    private val m = maxSeq + 1
+    require(2 * window <= m)
+    private var nextSeq = next
+    private var base = next
+    private var lastInOrder = last
+    private val outstanding = mutable.Map.empty[Int, Array[Byte]]
+    private val kept = mutable.Map.empty[Int, Array[Byte]]
+    private var owedAcks = 0
+    private var duplicateAcks = 0
+    private var recoveryPoint: Option[Int] = None
+    private var fastRetransmitDone = false
+    private var partialAckPending = false
+    val delivered: mutable.ArrayBuffer[String] = mutable.ArrayBuffer.empty
+
+    private def mod(x: Int) = ((x % m) + m) % m
+    def inFlight: Int = mod(nextSeq - base)
+    def settled: Int = mod(base - 1)
+    private def header(first: Int): Array[Byte] = Array(first.toByte, lastInOrder.toByte)
+
+    def sendNew(payload: String): Array[Byte] = {
+      require(inFlight < window, s"window full: $inFlight in flight")
+      val bytes = payload.getBytes(US_ASCII)
+      outstanding(nextSeq) = bytes
+      val segment = header(nextSeq) ++ bytes
+      nextSeq = mod(nextSeq + 1)
+      owedAcks = 0 // the ACK byte is piggybacked
+      segment
+    }
+
+    def resend(cause: Cause): Array[Byte] = {
+      require(inFlight > 0, "nothing to resend")
+      cause match {
+        case Timeout => ()
+        case DuplicateAcks =>
+          require(duplicateAcks >= 2 && !fastRetransmitDone, s"$duplicateAcks duplicate ACKs do not allow a resend")
+          fastRetransmitDone = true
+        case PartialAck => require(partialAckPending, "no partial ACK to answer")
+      }
+      partialAckPending = false
+      if (recoveryPoint.isEmpty) recoveryPoint = Some(mod(nextSeq - 1))
+      owedAcks = 0
+      header(base) ++ outstanding(base)
+    }
+
+    def ack(idle: Boolean): Array[Byte] = {
+      require(idle || owedAcks > 0, "no data segment to acknowledge")
+      if (!idle) owedAcks -= 1
+      header(settled)
+    }
+
+    def receive(segment: Array[Byte]): Unit = {
+      val ackByte = segment(1) & 0xff
+      val acked = mod(ackByte - base)
+      if (inFlight > 0 && acked < inFlight) {
+        val covered = recoveryPoint.exists(rp => mod(rp - base) <= acked)
+        (0 to acked).foreach(i => outstanding.remove(mod(base + i)))
+        base = mod(ackByte + 1)
+        duplicateAcks = 0
+        if (covered) { recoveryPoint = None; fastRetransmitDone = false; partialAckPending = false }
+        else if (recoveryPoint.isDefined) partialAckPending = true
+      } else if (segment.length == 2 && inFlight > 0 && ackByte == mod(base - 1)) duplicateAcks += 1
+      if (segment.length > 2) {
+        val seq = segment(0) & 0xff
+        val ahead = mod(seq - mod(lastInOrder + 1))
+        if (ahead <= window - 1) {
+          kept.getOrElseUpdate(seq, segment.drop(2))
+          while (kept.contains(mod(lastInOrder + 1))) {
+            lastInOrder = mod(lastInOrder + 1)
+            delivered += new String(kept.remove(lastInOrder).get, US_ASCII)
+          }
+          owedAcks += 1
+        } else if (ahead >= m - window) owedAcks += 1 // a duplicate: re-acknowledge, do not deliver
+      }
+    }
+  }
+}
