@@ -8,7 +8,7 @@ import com.google.protobuf.ByteString
 
 import naogateway.proto._
 import naogateway.wire._
-import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec, ReturnData, ReturnMessage}
+import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec, ReturnData, ReturnMessage}
 
 /** Settings of one simulated CM-530 firmware; every figure can be changed per robot. */
 final case class FirmwareSettings(
@@ -255,8 +255,9 @@ object RobotFirmware {
   private def onGameController(s: FirmwareState, data: GameControlData, from: InetSocketAddress)
       : (FirmwareState, Vector[Outgoing]) = {
     val counted = s.copy(game = Some(data), counters = s.counters.copy(gameControllerPackets = s.counters.gameControllerPackets + 1))
-    // Robots answer each valid packet for their team with an "alive" return packet to the GameController, port 3838.
-    if (data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
+    // Robots answer each round's version-8 packet for their team with an "alive" return packet to port 3838;
+    // the version-7 copy of the same round needs no second answer.
+    if (data.version != GameControlVersion.V8 || data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
     else {
       val alive = GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive))
       val to = new InetSocketAddress(from.getAddress, 3838)
@@ -299,9 +300,9 @@ object RobotFirmware {
         floats(call.params, 3) match {
           case Left(e) => answer(Left(e))
           case Right(Vector(vx, vy, omega)) =>
-            if (s.change.isDefined) answer(Left("busy: posture change in progress"))
+            if (s.change.isDefined) answer(Left(s"not standing: ${Posture.Moving.name}"))
             else if (s.posture != Posture.Stand && s.posture != Posture.Walking)
-              answer(Left(s"cannot walk from posture ${s.posture.name}"))
+              answer(Left(s"not standing: ${s.posture.name}"))
             else {
               val clamp = (v: Double, limit: Double) => math.max(-limit, math.min(limit, v))
               val walk = Walk(clamp(vx, s.settings.maxSpeed), clamp(vy, s.settings.maxSpeed), clamp(omega, s.settings.maxTurn),
@@ -330,8 +331,7 @@ object RobotFirmware {
           case Vector(RpcValue.Text(name)) =>
             Posture.targets.get(name) match {
               case None => answer(Left(RpcReply.badParameters(s"unknown posture '$name' (sit, stand, crouch)")))
-              case Some(target) if s.change.isDefined =>
-                answer(Left(s"busy: posture change to ${s.change.get.target.name} in progress, cannot go to ${target.name}"))
+              case Some(_) if s.change.isDefined => answer(Left(s"busy: ${Posture.Moving.name}"))
               case Some(target) if target == s.posture => answer(Right(Some(RpcValue.Text(target.name))))
               case Some(target) =>
                 val duration = target match {
@@ -393,7 +393,7 @@ object RobotFirmware {
   /** The keep-alive: Status as FU-Remote expects it, plus this project's RobotHealth. */
   def keepAlive(s: FirmwareState): MessageContents = {
     val status = Status(
-      timestamp = Some(s.now / 1000000L),
+      timestamp = Some(s.uptimeMillis),
       teamID = Some(s.settings.teamId),
       timeOnline = Some((s.uptimeMillis / 1000L).toInt),
       robotPosition = Some(Position(Some((s.pose.x * 1000).round.toInt), Some((s.pose.y * 1000).round.toInt), Some(s.pose.theta.toFloat))),
@@ -406,7 +406,7 @@ object RobotFirmware {
   }
 
   private def debugData(s: FirmwareState): Vector[DebugData] = {
-    val ts = Some(s.now / 1000000L)
+    val ts = Some(s.uptimeMillis)
     val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
     s.debugEnabled.toVector.sorted.collect {
       case o @ "status.text" => DebugData(o, ts, DebugData.Data.Text(DebugText(s"posture ${s.posture.name}, battery ${"%.2f".format(s.battery)} V")))
@@ -432,7 +432,7 @@ object RobotFirmware {
   private def cameraFrames(s: FirmwareState): (FirmwareState, Vector[Array[Byte]]) = {
     val regions = Scene.regions(s.settings.scene, s.pose, s.head._1, s.head._2)
     val frame = s.frame + 1
-    val ts = Some(s.now / 1000000L)
+    val ts = Some(s.uptimeMillis)
     val out = Vector.newBuilder[Array[Byte]]
     if (s.debugEnabled("havimo.regions")) {
       val records = HaViMo.encodeRegions(regions).toOption.get
