@@ -1,0 +1,427 @@
+package naogateway.sim.gs1500m
+
+import scala.collection.immutable.ArraySeq
+
+/** A UDP datagram reaching the module from the air, on connection `cid`; `remote` is the sender when the connection
+  * is a UDP server (the module then frames it `ESC 'y'`), `None` for a direct connection (`ESC 'Z'`).
+  */
+final case class Datagram(cid: Int, remote: Option[Remote], payload: ArraySeq[Byte])
+
+/** Settings of the GS1500M model.
+  *
+  * @param bufferBytes
+  *   the one buffer shared by incoming and outgoing data (thesis §6.1: "only a 1400-byte buffer")
+  * @param baud
+  *   the serial line to the CM-530 (thesis §7: 460800 in every test)
+  * @param bitsPerByte
+  *   8N1 framing: start bit, 8 data bits, stop bit, so 460800 baud carry 46080 bytes/s
+  * @param overwriteProbability
+  *   when a datagram does not fit, the chance that the module overwrites the oldest unread bytes to make room instead
+  *   of dropping the new datagram (the thesis saw both: "Verlust von Paketen und teilweise überschriebenen Paketen")
+  * @param acknowledgeSends
+  *   whether the module answers each packet it sent with `ESC 'O'` on the serial line
+  * @param timeScale
+  *   multiplies the serial line's durations, like [[Cm530Costs.timeScale]]
+  */
+final case class Gs1500mConfig(
+    bufferBytes: Int = Gs1500mSerial.MaxPayload,
+    baud: Int = 460800,
+    bitsPerByte: Int = 10,
+    overwriteProbability: Double = 0.5,
+    acknowledgeSends: Boolean = true,
+    timeScale: Double = 1.0
+) {
+  require(bufferBytes > 0 && baud > 0 && bitsPerByte > 0, "buffer, baud and bits per byte must be positive")
+  require(overwriteProbability >= 0.0 && overwriteProbability <= 1.0, "overwriteProbability must be in [0, 1]")
+  require(timeScale > 0.0 && !timeScale.isInfinite, s"timeScale must be positive, is $timeScale")
+
+  /** The serial line's rate in bytes per second (46080 at the defaults). */
+  def bytesPerSecond: Double = baud.toDouble / bitsPerByte
+
+  /** Simulated nanoseconds `bytes` take on the serial line, rounded up. */
+  def lineNanos(bytes: Int): Long =
+    if (bytes <= 0) 0L
+    else math.ceil(bytes.toDouble * bitsPerByte * 1e9 / baud * timeScale - 1e-6).toLong
+}
+
+/** One thing queued in the module for the serial line towards the CM-530. */
+sealed trait RxEntry extends Product with Serializable {
+
+  /** Space it takes in the module's data buffer. */
+  def bufferBytes: Int
+
+  /** What the CM-530 reads for it. */
+  def serialBytes: ArraySeq[Byte]
+}
+
+/** The kinds of queued entries. */
+object RxEntry {
+
+  /** A received datagram; `overwritten` bytes of its beginning are gone, and with them its header. */
+  final case class Frame(id: Long, datagram: Datagram, header: ArraySeq[Byte], arrivedAt: Long, overwritten: Int)
+      extends RxEntry {
+
+    /** Payload bytes still in the buffer. */
+    def remaining: Int = datagram.payload.length - overwritten
+
+    def bufferBytes: Int = remaining
+
+    def serialBytes: ArraySeq[Byte] =
+      if (overwritten == 0) header ++ datagram.payload else datagram.payload.drop(overwritten)
+  }
+
+  /** A two-byte reply about a sent packet; the module makes these, they take no data buffer. */
+  final case class ReplyEntry(reply: SerialEvent.Reply) extends RxEntry {
+    def bufferBytes: Int = 0
+    def serialBytes: ArraySeq[Byte] = ArraySeq(Gs1500mSerial.Esc, reply.letter.toByte)
+  }
+
+  /** A text status line (with its CR LF); the module makes these, they take no data buffer. */
+  final case class StatusEntry(text: String, serialBytes: ArraySeq[Byte]) extends RxEntry {
+    def bufferBytes: Int = 0
+  }
+}
+
+/** Incoming payload crossing the serial line to the CM-530: its buffer space frees evenly between start and end. */
+final case class Drain(payloadBytes: Int, startsAt: Long, endsAt: Long) {
+
+  /** Payload bytes of this read still in the module at `t`. */
+  def remainingAt(t: Long): Int =
+    if (t <= startsAt) payloadBytes
+    else if (t >= endsAt) 0
+    else math.ceil(payloadBytes.toDouble * (endsAt - t) / (endsAt - startsAt)).toInt
+}
+
+/** A packet the CM-530 hands to the module: it holds buffer space until its last byte has crossed the serial line at
+  * `endsAt`, when it goes on air.
+  */
+final case class TxEntry(cid: Int, data: ArraySeq[Byte], startsAt: Long, endsAt: Long)
+
+/** Why the module dropped an arriving datagram. */
+sealed trait LossReason extends Product with Serializable
+
+/** The reasons for a loss. */
+object LossReason {
+
+  /** Not enough free buffer, and the module did not (or could not) overwrite older data. */
+  case object BufferFull extends LossReason
+
+  /** Larger than the whole buffer. */
+  case object Oversize extends LossReason
+}
+
+/** Something that happened in the module, at simulated time `at`. */
+sealed trait ModuleEvent extends Product with Serializable {
+
+  /** When it happened (nanoseconds). */
+  def at: Long
+}
+
+/** What the module reports. */
+object ModuleEvent {
+
+  /** Datagram `id` entered the buffer. */
+  final case class Buffered(id: Long, at: Long, bytes: Int) extends ModuleEvent
+
+  /** Datagram `id` was dropped on arrival. */
+  final case class Lost(id: Long, at: Long, reason: LossReason) extends ModuleEvent
+
+  /** `bytes` more of the beginning of datagram `id` were overwritten; `remaining` of it are left. */
+  final case class Overwritten(id: Long, at: Long, bytes: Int, remaining: Int) extends ModuleEvent
+
+  /** Datagram `id` was read by the CM-530; `intact` unless its beginning had been overwritten. */
+  final case class ReadOut(id: Long, at: Long, intact: Boolean) extends ModuleEvent
+
+  /** Serial bytes crossing to the CM-530 between `at` and `until`. */
+  final case class ToFirmware(bytes: ArraySeq[Byte], at: Long, until: Long) extends ModuleEvent
+
+  /** A packet from the CM-530 left the module on air. */
+  final case class OnAir(cid: Int, data: ArraySeq[Byte], at: Long) extends ModuleEvent
+
+  /** A packet from the CM-530 found no room in the buffer and was lost. */
+  final case class SendLost(cid: Int, bytes: Int, at: Long) extends ModuleEvent
+
+  /** An input the module cannot represent at all (bad connection number, unframeable sender, bad status text). */
+  final case class Refused(reason: String, at: Long) extends ModuleEvent
+}
+
+/** Running totals of the module.
+  *
+  * @param arrived datagrams that reached the module (each is then buffered, lost or refused)
+  * @param buffered datagrams that entered the buffer
+  * @param lost datagrams dropped on arrival, oversize ones included
+  * @param lostOversize datagrams dropped for being larger than the buffer
+  * @param overwritten buffered datagrams that lost (at least) their beginning to a later arrival or send
+  * @param overwrittenBytes payload bytes overwritten
+  * @param readIntact datagrams the CM-530 read whole, header included
+  * @param readDamaged datagrams the CM-530 read only the tail of
+  * @param sends packets the CM-530 handed over, refused ones included
+  * @param onAir packets that went on air
+  * @param sendsLost packets that found no room
+  * @param refused inputs the module cannot represent
+  * @param bytesToFirmware serial bytes read by the CM-530
+  * @param bytesOnAir payload bytes that went on air
+  * @param peakBuffered the most buffer bytes ever in use
+  */
+final case class Gs1500mCounters(
+    arrived: Long = 0,
+    buffered: Long = 0,
+    lost: Long = 0,
+    lostOversize: Long = 0,
+    overwritten: Long = 0,
+    overwrittenBytes: Long = 0,
+    readIntact: Long = 0,
+    readDamaged: Long = 0,
+    sends: Long = 0,
+    onAir: Long = 0,
+    sendsLost: Long = 0,
+    refused: Long = 0,
+    bytesToFirmware: Long = 0,
+    bytesOnAir: Long = 0,
+    peakBuffered: Int = 0
+)
+
+/** The result of an input to the module: its next state and what happened. */
+final case class ModuleStep(module: Gs1500mModule, events: Vector[ModuleEvent])
+
+/** The result of a CM-530 read: the bytes it gets, when the last of them has arrived, and what happened. */
+final case class ReadStep(module: Gs1500mModule, bytes: ArraySeq[Byte], doneAt: Long, events: Vector[ModuleEvent])
+
+/** A pure model of the robot's GainSpan GS1500M WiFi module in bulk data mode, as the thesis observed it (§6.1).
+  *
+  * '''One shared buffer.''' Incoming and outgoing payload share [[Gs1500mConfig.bufferBytes]] (1400) bytes. Only
+  * payload counts: the module keeps each datagram's serial header with it as bookkeeping, so a 1400-byte datagram
+  * fits an empty buffer, as the module's 1400-byte datagram limit requires. Replies and status lines come from the
+  * module's command processor and take no data buffer.
+  *
+  * '''The serial line is the bottleneck.''' The radio moves data far faster than 46080 bytes/s (thesis §6.1: a PC
+  * sends several MB/s, and "the serial interface for reading the buffer is not fast enough to empty it"), so the
+  * model gives the radio no time at all: an arriving datagram is in the buffer at once, and an outgoing packet
+  * goes on air the moment its last byte has crossed the serial line. Outgoing payload is reserved in full when the
+  * CM-530 starts sending it and freed when it goes on air; that errs towards a fuller buffer by at most one packet's
+  * transfer time.
+  *
+  * '''The CM-530 reads only when it polls.''' Incoming data stay in the module until [[firmwareRead]]; a read takes
+  * everything queued at that instant over the line at the line rate (the thesis's `recvWlanData` reads until the
+  * input is empty), freeing its buffer space evenly while it crosses. Bytes arriving during a read wait for the next.
+  *
+  * '''Overflow.''' When a datagram does not fit into the free space, a seeded coin decides: with probability
+  * [[Gs1500mConfig.overwriteProbability]] the module behaves like an overrunning ring buffer and writes the new
+  * datagram over the oldest unread bytes, so the oldest queued datagram(s) lose their beginning (and with it the
+  * receive header; the CM-530 then reads a headerless tail, the thesis's "incomplete receive header"); otherwise,
+  * and whenever the unread bytes could not make enough room (bytes already crossing the line cannot be taken back),
+  * the new datagram is lost. An outgoing packet that does not fit overwrites unread incoming data the same way (the
+  * serial input has no flow control), or is lost if even that is not enough.
+  *
+  * Every input takes the current simulated time in nanoseconds; time never runs backwards (an earlier time is taken
+  * as the module's clock).
+  */
+final case class Gs1500mModule(
+    config: Gs1500mConfig,
+    clock: Long,
+    rxQueue: Vector[RxEntry],
+    drains: Vector[Drain],
+    tx: Vector[TxEntry],
+    rxLineFreeAt: Long,
+    txLineFreeAt: Long,
+    random: SeededRandom,
+    nextId: Long,
+    counters: Gs1500mCounters
+) {
+  import ModuleEvent._
+
+  /** Payload bytes queued for the CM-530 and not yet being read. */
+  def queuedBytes: Int = rxQueue.iterator.map(_.bufferBytes).sum
+
+  /** Bytes of the buffer in use at `t` (at or after [[clock]]). */
+  def bufferedAt(t: Long): Int =
+    queuedBytes + drains.iterator.map(_.remainingAt(t)).sum + tx.iterator.filter(_.endsAt > t).map(_.data.length).sum
+
+  /** Bytes of the buffer in use now. */
+  def buffered: Int = bufferedAt(clock)
+
+  /** Free buffer bytes now. */
+  def free: Int = config.bufferBytes - buffered
+
+  /** When the next outgoing packet goes on air, if one is on the line (a driver may [[advance]] to it). */
+  def nextOnAirAt: Option[Long] = tx.headOption.map(_.endsAt)
+
+  /** Lets time pass to `now`: outgoing packets whose transfer is complete go on air (and are acknowledged). */
+  def advance(now: Long): ModuleStep = {
+    val t = math.max(now, clock)
+    val (done, pending) = tx.partition(_.endsAt <= t)
+    val replies: Vector[RxEntry] =
+      if (config.acknowledgeSends) done.map(_ => RxEntry.ReplyEntry(SerialEvent.Ack)) else Vector.empty
+    val next = copy(
+      clock = t,
+      tx = pending,
+      drains = drains.filter(_.endsAt > t),
+      rxQueue = rxQueue ++ replies,
+      counters = counters.copy(
+        onAir = counters.onAir + done.size,
+        bytesOnAir = counters.bytesOnAir + done.iterator.map(_.data.length.toLong).sum
+      )
+    )
+    ModuleStep(next, done.map(e => OnAir(e.cid, e.data, e.endsAt)))
+  }
+
+  /** A datagram reaches the module from the air at `now`. */
+  def arrive(datagram: Datagram, now: Long): ModuleStep = {
+    val ModuleStep(m, early) = advance(now)
+    val t = m.clock
+    val id = m.nextId
+    val length = datagram.payload.length
+    val counted = m.copy(nextId = id + 1, counters = m.counters.copy(arrived = m.counters.arrived + 1))
+    def lose(reason: LossReason, random: SeededRandom) = {
+      val c = counted.counters
+      val c2 =
+        if (reason == LossReason.Oversize) c.copy(lost = c.lost + 1, lostOversize = c.lostOversize + 1)
+        else c.copy(lost = c.lost + 1)
+      ModuleStep(counted.copy(random = random, counters = c2), early :+ Lost(id, t, reason))
+    }
+    if (length > config.bufferBytes || length > Gs1500mSerial.MaxPayload) lose(LossReason.Oversize, m.random)
+    else
+      Gs1500mSerial.headerBytes(datagram.cid, datagram.remote, length) match {
+        case Left(error) =>
+          val c = counted.counters
+          ModuleStep(counted.copy(counters = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, t))
+        case Right(header) =>
+          val frame = RxEntry.Frame(id, datagram, header, t, 0)
+          val deficit = length - (config.bufferBytes - m.bufferedAt(t))
+          if (deficit <= 0) counted.enqueue(frame, early, Vector.empty)
+          else {
+            val (coin, random) = m.random.nextDouble
+            if (coin < config.overwriteProbability && m.queuedBytes >= deficit) {
+              val (queue, overwrites, newly) = overwrite(m.rxQueue, deficit, t)
+              val c = counted.counters
+              counted
+                .copy(
+                  rxQueue = queue,
+                  random = random,
+                  counters = c.copy(
+                    overwritten = c.overwritten + newly,
+                    overwrittenBytes = c.overwrittenBytes + deficit
+                  )
+                )
+                .enqueue(frame, early, overwrites)
+            } else lose(LossReason.BufferFull, random)
+          }
+      }
+  }
+
+  /** The CM-530 polls the serial port at `now` and reads everything queued; the bytes have all arrived at `doneAt`. */
+  def firmwareRead(now: Long): ReadStep = {
+    val ModuleStep(m, early) = advance(now)
+    val t = m.clock
+    if (m.rxQueue.isEmpty) ReadStep(m, ArraySeq.empty[Byte], t, early)
+    else {
+      val bytes = ArraySeq.unsafeWrapArray(m.rxQueue.iterator.flatMap(_.serialBytes).toArray)
+      val start = math.max(t, m.rxLineFreeAt)
+      val end = start + config.lineNanos(bytes.length)
+      val frames = m.rxQueue.collect { case f: RxEntry.Frame => f }
+      val intact = frames.count(_.overwritten == 0)
+      val c = m.counters
+      val next = m.copy(
+        rxQueue = Vector.empty,
+        drains = if (m.queuedBytes > 0) m.drains :+ Drain(m.queuedBytes, start, end) else m.drains,
+        rxLineFreeAt = end,
+        counters = c.copy(
+          readIntact = c.readIntact + intact,
+          readDamaged = c.readDamaged + (frames.size - intact),
+          bytesToFirmware = c.bytesToFirmware + bytes.length
+        )
+      )
+      val reads = frames.map(f => ReadOut(f.id, end, f.overwritten == 0))
+      ReadStep(next, bytes, end, (early ++ reads) :+ ToFirmware(bytes, start, end))
+    }
+  }
+
+  /** The CM-530 starts handing `data` for connection `cid` to the module at `now`, as `ESC 'Z'` bulk data.
+    *
+    * `transferNanos` is how long the CM-530 takes to push the frame out (its measured send cost is about eleven
+    * times the line time); the packet goes on air when that or the line time, whichever is longer, has passed after
+    * the line is free.
+    */
+  def firmwareSend(cid: Int, data: ArraySeq[Byte], now: Long, transferNanos: Long = 0L): ModuleStep = {
+    val ModuleStep(m, early) = advance(now)
+    val t = m.clock
+    val c = m.counters.copy(sends = m.counters.sends + 1)
+    Gs1500mSerial.bulkHeader(cid, data.length) match {
+      case Right(header) if data.length <= config.bufferBytes =>
+        val start = math.max(t, m.txLineFreeAt)
+        val end = start + math.max(config.lineNanos(header.length + data.length), transferNanos)
+        val entry = TxEntry(cid, data, start, end)
+        val deficit = data.length - (config.bufferBytes - m.bufferedAt(t))
+        if (deficit <= 0) m.copy(tx = m.tx :+ entry, txLineFreeAt = end, counters = c).withPeak(early)
+        else if (m.queuedBytes >= deficit) {
+          val (queue, overwrites, newly) = overwrite(m.rxQueue, deficit, t)
+          m.copy(
+            rxQueue = queue,
+            tx = m.tx :+ entry,
+            txLineFreeAt = end,
+            counters = c.copy(overwritten = c.overwritten + newly, overwrittenBytes = c.overwrittenBytes + deficit)
+          ).withPeak(early ++ overwrites)
+        } else {
+          // The module acknowledges the loss as soon as it gives up; the bytes still occupy the line.
+          val fail: Vector[RxEntry] =
+            if (config.acknowledgeSends) Vector(RxEntry.ReplyEntry(SerialEvent.Fail)) else Vector.empty
+          ModuleStep(
+            m.copy(rxQueue = m.rxQueue ++ fail, txLineFreeAt = end, counters = c.copy(sendsLost = c.sendsLost + 1)),
+            early :+ SendLost(cid, data.length, t)
+          )
+        }
+      case Right(_) =>
+        val refused = Refused(s"${data.length} bytes exceed the buffer", t)
+        ModuleStep(m.copy(counters = c.copy(refused = c.refused + 1)), early :+ refused)
+      case Left(error) =>
+        ModuleStep(m.copy(counters = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, t))
+    }
+  }
+
+  /** The module writes a text status line (e.g. `DISCONNECT 0`) for the CM-530 at `now`. */
+  def statusLine(text: String, now: Long): ModuleStep = {
+    val ModuleStep(m, early) = advance(now)
+    Gs1500mSerial.encode(SerialEvent.StatusLine(text)) match {
+      case Right(bytes) => ModuleStep(m.copy(rxQueue = m.rxQueue :+ RxEntry.StatusEntry(text, bytes)), early)
+      case Left(error) =>
+        val c = m.counters
+        ModuleStep(m.copy(counters = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, m.clock))
+    }
+  }
+
+  private def enqueue(frame: RxEntry.Frame, early: Vector[ModuleEvent], overwrites: Vector[ModuleEvent]): ModuleStep =
+    copy(rxQueue = rxQueue :+ frame, counters = counters.copy(buffered = counters.buffered + 1))
+      .withPeak(early ++ overwrites :+ Buffered(frame.id, frame.arrivedAt, frame.datagram.payload.length))
+
+  private def withPeak(events: Vector[ModuleEvent]): ModuleStep =
+    ModuleStep(copy(counters = counters.copy(peakBuffered = math.max(counters.peakBuffered, buffered))), events)
+
+  // Overwrites `deficit` bytes from the front of the unread queue, oldest first; returns the new queue, the events
+  // and how many datagrams lost their beginning for the first time.
+  private def overwrite(queue: Vector[RxEntry], deficit: Int, at: Long): (Vector[RxEntry], Vector[ModuleEvent], Int) = {
+    var left = deficit
+    var newly = 0
+    val kept = Vector.newBuilder[RxEntry]
+    val events = Vector.newBuilder[ModuleEvent]
+    queue.foreach {
+      case f: RxEntry.Frame if left > 0 && f.remaining > 0 =>
+        val k = math.min(left, f.remaining)
+        left -= k
+        if (f.overwritten == 0) newly += 1
+        val g = f.copy(overwritten = f.overwritten + k)
+        events += Overwritten(f.id, at, k, g.remaining)
+        if (g.remaining > 0) kept += g
+      case other => kept += other
+    }
+    (kept.result(), events.result(), newly)
+  }
+}
+
+/** Where a module model starts. */
+object Gs1500mModule {
+
+  /** An empty module at time `start`, its overflow coin seeded with `seed`. */
+  def apply(config: Gs1500mConfig = Gs1500mConfig(), seed: Long = 1L, start: Long = 0L): Gs1500mModule =
+    Gs1500mModule(config, start, Vector.empty, Vector.empty, Vector.empty, start, start, SeededRandom(seed), 0L,
+      Gs1500mCounters())
+}
