@@ -17,13 +17,14 @@ object Outbox {
   /** What the outbox accepts. */
   sealed trait Command
 
-  /** Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns whether the datagram was accepted. */
+  /** Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns the outcome, marked with `tag`. */
   final case class Send(
       robotId: Int,
       to: InetSocketAddress,
       bytes: Array[Byte],
       priority: Priority,
-      replyTo: Option[ActorRef[Outcome]] = None
+      replyTo: Option[ActorRef[Outcome]] = None,
+      tag: Long = 0L
   ) extends Command
 
   /** Counts a datagram received from the team, for the two-way traffic figures. */
@@ -38,17 +39,19 @@ object Outbox {
   private case object Drain extends Command
   private case object DrainTimer
 
-  /** Whether a datagram was taken. */
-  sealed trait Outcome extends Product with Serializable
+  /** Whether a datagram was taken; `tag` is the sender's mark from `Send`. */
+  sealed trait Outcome extends Product with Serializable {
+    def tag: Long
+  }
 
   /** Sent, or queued behind the budget. */
-  case object Accepted extends Outcome
+  final case class Accepted(tag: Long) extends Outcome
 
   /** Not sent because a competition rule forbids it now. */
-  final case class RefusedByRule(rule: String) extends Outcome
+  final case class RefusedByRule(tag: Long, rule: String) extends Outcome
 
   /** Not sent because its class's queue is full. */
-  final case class Dropped(reason: String) extends Outcome
+  final case class Dropped(tag: Long, reason: String) extends Outcome
 
   /** The rule that closes the gate, in words for errors and logs. */
   val NoSendingWhileGameRuns: String =
@@ -157,19 +160,19 @@ private final class Outbox(
       val now = System.nanoTime()
       if (competition && gameIsRunning) {
         refused += 1
-        s.replyTo.foreach(_ ! RefusedByRule(NoSendingWhileGameRuns))
+        s.replyTo.foreach(_ ! RefusedByRule(s.tag, NoSendingWhileGameRuns))
       } else {
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {
           transmit(now, s)
-          s.replyTo.foreach(_ ! Accepted)
+          s.replyTo.foreach(_ ! Accepted(s.tag))
         } else if (queues(rank).size >= QueueCapacity) {
           dropped += 1
-          s.replyTo.foreach(_ ! Dropped(s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
+          s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
           if (dropped % 100 == 1) log.warn("Outbox dropped {} datagram(s) so far: {} queue full", dropped, s.priority.name)
         } else {
           queues = queues.updated(rank, queues(rank).enqueue(s))
-          s.replyTo.foreach(_ ! Accepted)
+          s.replyTo.foreach(_ ! Accepted(s.tag))
           // Safety must not wait for the timer; other classes drain when the budget frees.
           if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer)) drain(now)
         }
@@ -190,7 +193,7 @@ private final class Outbox(
         // Nothing queued before kick-off may leak out during the game.
         val held = queues.map(_.size).sum
         if (held > 0) log.info("Discarding {} queued datagram(s) at game start", held)
-        queues.foreach(_.foreach(_.replyTo.foreach(_ ! RefusedByRule(NoSendingWhileGameRuns))))
+        queues.foreach(_.foreach(q => q.replyTo.foreach(_ ! RefusedByRule(q.tag, NoSendingWhileGameRuns))))
         refused += held
         queues = Vector.fill(Priority.all.size)(Queue.empty)
       }

@@ -117,6 +117,11 @@ object CallError {
     def describe: String = s"robot $robotId is overloaded: $detail"
   }
 
+  /** A newer command of the same kind replaced this one before it was sent (latest wins). */
+  final case class Superseded(robotId: Int, call: String) extends CallError {
+    def describe: String = s"$call to robot $robotId was replaced by a newer $call before it was sent"
+  }
+
   /** The actor handling the call restarted before the reply came. */
   final case class Interrupted(robotId: Int, call: String) extends CallError {
     def describe: String = s"call $call to robot $robotId was interrupted by a restart of its handler"

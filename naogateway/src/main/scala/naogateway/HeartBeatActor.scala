@@ -1,0 +1,174 @@
+package naogateway
+
+import scala.collection.immutable.Queue
+
+import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
+import akka.actor.typed.{ActorRef, Behavior}
+
+import naogateway.wire.RpcCall
+
+/** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. */
+object HeartBeatActor {
+
+  /** What the heartbeat accepts. */
+  sealed trait Command
+
+  /** A keep-alive of the robot arrived. */
+  case object KeepAliveSeen extends Command
+
+  /** Any reply with one of this heartbeat's call ids arrived (the probe's error reply proves the robot is there). */
+  final case class ProbeAnswered(callId: Long) extends Command
+
+  /** Someone wants the robot: probe at once, even when it is offline. */
+  case object ProbeNow extends Command
+
+  private case object QuietCheck extends Command
+  private case object ProbeTimeout extends Command
+  private case object QualityTick extends Command
+
+  /** What the heartbeat tells its robot actor. */
+  sealed trait Report
+
+  /** The robot answered or spoke after being offline (or at first contact). */
+  case object CameOnline extends Report
+
+  /** The robot missed every chance. */
+  final case class WentOffline(reason: String) extends Report
+
+  /** The link quality crossed a threshold. */
+  final case class QualityChanged(quality: LinkQuality) extends Report
+
+  /** A probe's round trip, for the link statistics. */
+  final case class ProbeRoundTrip(nanos: Long) extends Report
+
+  /** Send this probe to the robot. */
+  final case class SendProbe(call: RpcCall) extends Report
+
+  /** The call that no robot serves: the robot's error reply proves it is there. */
+  val ProbeModule: String = "heartbeat"
+  val ProbeMethod: String = "probe"
+
+  /** Call ids of the heartbeat carry this tag in their two top bits. */
+  val CallIdTag: Long = 2L << 30
+
+  /** Keep-alives per tick over the quality window, and the quality last reported. */
+  private final case class Quality(ticks: Queue[Int], current: Int, reported: LinkQuality) {
+    def seen: Quality = copy(current = current + 1)
+
+    def tick(settings: HeartbeatSettings, report: ActorRef[Report]): Quality = {
+      val windowTicks = math.max(2, (settings.qualityWindow / settings.keepAliveInterval).toInt)
+      val shifted = ticks.enqueue(current)
+      val trimmed = if (shifted.size > windowTicks) shifted.dequeue._2 else shifted
+      val ratio = trimmed.sum.toDouble / windowTicks
+      // Judged only over a full window, and with a gap between the two thresholds, so the quality does not flap.
+      val next =
+        if (trimmed.size < windowTicks || reported == LinkQuality.Offline) reported
+        else if (reported == LinkQuality.Good && ratio < settings.degradedBelow) LinkQuality.Degraded
+        else if (reported == LinkQuality.Degraded && ratio > settings.goodAbove) LinkQuality.Good
+        else reported
+      if (next != reported) report ! QualityChanged(next)
+      Quality(trimmed, 0, next)
+    }
+
+    def online: Quality = if (reported == LinkQuality.Offline) copy(reported = LinkQuality.Good) else this
+  }
+
+  private object Quality {
+    val initial: Quality = Quality(Queue.empty, 0, LinkQuality.Offline)
+  }
+
+  private case object QuietKey
+  private case object ProbeKey
+  private case object QualityKey
+
+  /** A heartbeat reporting to `report`; `online` says whether the robot has just been heard. */
+  def apply(settings: HeartbeatSettings, report: ActorRef[Report], online: Boolean): Behavior[Command] =
+    Behaviors.setup { _ =>
+      Behaviors.withTimers { timers =>
+        val h = new HeartBeat(settings, report, timers)
+        timers.startTimerWithFixedDelay(QualityKey, QualityTick, settings.keepAliveInterval)
+        if (online) {
+          report ! CameOnline
+          h.online(Quality.initial)
+        } else h.probe(chance = 1, wasOnline = false, Quality.initial)
+      }
+    }
+
+  private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report], timers: TimerScheduler[Command]) {
+    private var nextProbeId = 0L
+    private var probeSentAt = 0L
+    private var probeId = -1L
+
+    private def armQuietCheck(): Unit = timers.startSingleTimer(QuietKey, QuietCheck, settings.quietAfter)
+
+    def online(q: Quality): Behavior[Command] = {
+      armQuietCheck()
+      val quality = q.online
+      onlineLoop(quality)
+    }
+
+    private def onlineLoop(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
+      case KeepAliveSeen =>
+        armQuietCheck()
+        onlineLoop(q.seen)
+      case QualityTick     => onlineLoop(q.tick(settings, report))
+      case QuietCheck      => probe(chance = 1, wasOnline = true, q)
+      case ProbeNow        => Behaviors.same
+      case ProbeAnswered(id) =>
+        answered(id)
+        Behaviors.same
+      case ProbeTimeout => Behaviors.same
+    }
+
+    private def sendProbe(): Unit = {
+      nextProbeId = (nextProbeId + 1) & 0x3fffffffL
+      probeId = CallIdTag | nextProbeId
+      probeSentAt = System.nanoTime()
+      report ! SendProbe(RpcCall(ProbeModule, ProbeMethod, Vector.empty, Some(probeId)))
+      timers.startSingleTimer(ProbeKey, ProbeTimeout, settings.probeTimeout)
+    }
+
+    private def answered(id: Long): Boolean =
+      if (id == probeId) {
+        report ! ProbeRoundTrip(System.nanoTime() - probeSentAt)
+        probeId = -1L
+        true
+      } else false
+
+    def probe(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = {
+      sendProbe()
+      probing(chance, wasOnline, q)
+    }
+
+    private def backOnline(wasOnline: Boolean, q: Quality): Behavior[Command] = {
+      timers.cancel(ProbeKey)
+      if (!wasOnline) report ! CameOnline
+      online(q)
+    }
+
+    private def probing(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = Behaviors.receiveMessage {
+      case KeepAliveSeen => backOnline(wasOnline, q.seen)
+      case ProbeAnswered(id) =>
+        if (answered(id)) backOnline(wasOnline, q) else Behaviors.same
+      case ProbeTimeout =>
+        if (chance < settings.chances) probe(chance + 1, wasOnline, q)
+        else {
+          if (wasOnline) {
+            report ! WentOffline(s"no keep-alive for ${settings.quietAfter.toMillis} ms and ${settings.chances} unanswered probes")
+          }
+          offline(q.copy(reported = LinkQuality.Offline, ticks = Queue.empty, current = 0))
+        }
+      case QualityTick => probing(chance, wasOnline, q.tick(settings, report))
+      case QuietCheck | ProbeNow => Behaviors.same
+    }
+
+    // Offline: the heartbeat stops probing; the next keep-alive or someone's request starts it again.
+    private def offline(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
+      case KeepAliveSeen => backOnline(wasOnline = false, q.seen)
+      case ProbeNow      => probe(chance = 1, wasOnline = false, q)
+      case ProbeAnswered(id) =>
+        if (answered(id)) backOnline(wasOnline = false, q) else Behaviors.same
+      case QualityTick | QuietCheck | ProbeTimeout => Behaviors.same
+    }
+  }
+}

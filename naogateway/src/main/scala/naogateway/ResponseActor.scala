@@ -1,0 +1,172 @@
+package naogateway
+
+import scala.concurrent.duration._
+
+import akka.actor.typed.scaladsl.{Behaviors, StashBuffer, TimerScheduler}
+import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
+
+import naogateway.wire.{RpcCall, RpcReply}
+
+/** Request-reply with one robot: correlation ids, per-call timeouts, retries of idempotent calls, one answer per call. */
+object ResponseActor {
+
+  /** What the response actor accepts. */
+  sealed trait Command
+
+  /** Calls the robot; `replyTo` gets exactly one `CallResult`. `timeout` overrides the configured one. */
+  final case class Call(
+      call: RpcCall,
+      replyTo: ActorRef[CallResult],
+      priority: Priority = Priority.Command,
+      timeout: Option[FiniteDuration] = None,
+      idempotent: Option[Boolean] = None
+  ) extends Command
+
+  /** A reply with one of this actor's call ids arrived. */
+  final case class ReplyReceived(reply: RpcReply) extends Command
+
+  /** The robot's reachability changed. */
+  final case class Reachability(online: Boolean) extends Command
+
+  private final case class SendOutcome(outcome: Outbox.Outcome) extends Command
+  private final case class AttemptTimedOut(callId: Long, attempt: Int) extends Command
+
+  /** Call ids of this actor carry this tag in their two top bits. */
+  val CallIdTag: Long = 0L
+
+  /** Calls that may be sent again when no reply came: reads, and commands that set an absolute target. */
+  val IdempotentCalls: Set[String] =
+    Set("system.battery", "system.ping", "motion.getPosture", "motion.head", "motion.arms", "motion.stop", "motion.walk")
+
+  /** Calls in flight at once; more wait in the stash so the robot's 1400-byte module buffer is not flooded. */
+  val MaxInFlight: Int = 4
+
+  private final case class Pending(
+      call: RpcCall,
+      replyTo: ActorRef[CallResult],
+      attempts: Int,
+      maxAttempts: Int,
+      attemptTimeout: FiniteDuration,
+      total: FiniteDuration,
+      sentAt: Long
+  )
+
+  /** A response actor for robot `robotId`, sending through `robot`. */
+  def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild], online: Boolean): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        Behaviors.withStash(settings.stashCapacity) { stash =>
+          val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
+          new Responder(robotId, settings, robot, outcomes, timers, stash).running(Map.empty, online, 0L)
+        }
+      }
+    }
+
+  private final class Responder(
+      robotId: Int,
+      settings: CallSettings,
+      robot: ActorRef[RobotActor.FromChild],
+      outcomes: ActorRef[Outbox.Outcome],
+      timers: TimerScheduler[Command],
+      stash: StashBuffer[Command]
+  ) {
+
+    private def answer(p: Pending, result: Either[CallError, Option[naogateway.wire.RpcValue]]): Unit =
+      p.replyTo ! CallResult(robotId, p.call.name, result)
+
+    private def transmit(id: Long, p: Pending, priority: Priority): Unit = {
+      robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(p.call.copy(callId = Some(id))), priority, Some(outcomes), id)
+      timers.startSingleTimer(id, AttemptTimedOut(id, p.attempts), p.attemptTimeout)
+    }
+
+    private def failAll(pending: Map[Long, Pending], error: CallError): Unit =
+      pending.foreach { case (id, p) =>
+        timers.cancel(id)
+        answer(p, Left(error))
+      }
+
+    def running(pending: Map[Long, Pending], online: Boolean, lastId: Long): Behavior[Command] =
+      Behaviors
+        .receiveMessage[Command] {
+          case c: Call if !online =>
+            c.replyTo ! CallResult(robotId, c.call.name, Left(CallError.RobotOffline(robotId)))
+            robot ! RobotActor.Wanted
+            Behaviors.same
+          case c: Call if pending.size >= MaxInFlight =>
+            if (stash.isFull)
+              c.replyTo ! CallResult(robotId, c.call.name,
+                Left(CallError.Overloaded(robotId, s"${pending.size} calls in flight and ${stash.size} waiting")))
+            else stash.stash(c)
+            Behaviors.same
+          case Call(call, replyTo, priority, timeout, idempotent) =>
+            val id = CallIdTag | ((lastId + 1) & 0x3fffffffL)
+            val total = timeout.getOrElse(settings.timeout)
+            val retries = if (idempotent.getOrElse(IdempotentCalls(call.name))) settings.idempotentRetries else 0
+            val p = Pending(call, replyTo, 1, retries + 1, total / (retries + 1).toLong, total, System.nanoTime())
+            transmit(id, p, priority)
+            running(pending.updated(id, p), online, id & 0x3fffffffL)
+          case ReplyReceived(reply) =>
+            reply.callId.flatMap(pending.get) match {
+              case None => Behaviors.same // a late or duplicate reply: the call was answered already
+              case Some(p) =>
+                val id = reply.callId.get
+                timers.cancel(id)
+                // Karn's rule: only a call sent once gives a clean round-trip sample.
+                if (p.attempts == 1) robot ! RobotActor.RoundTrip(System.nanoTime() - p.sentAt)
+                answer(p, reply.result.left.map(CallError.RobotError(robotId, _)))
+                stash.unstash(running(pending - id, online, lastId), 1, identity)
+            }
+          case AttemptTimedOut(id, attempt) =>
+            pending.get(id) match {
+              case Some(p) if p.attempts == attempt && p.attempts < p.maxAttempts =>
+                val again = p.copy(attempts = p.attempts + 1)
+                robot ! RobotActor.Retransmitted
+                transmit(id, again, Priority.Command)
+                running(pending.updated(id, again), online, lastId)
+              case Some(p) if p.attempts == attempt =>
+                answer(p, Left(CallError.Timeout(robotId, p.call.name, p.total)))
+                stash.unstash(running(pending - id, online, lastId), 1, identity)
+              case _ => Behaviors.same
+            }
+          case SendOutcome(Outbox.RefusedByRule(id, rule)) =>
+            pending.get(id) match {
+              case Some(p) =>
+                timers.cancel(id)
+                answer(p, Left(CallError.RuleGate(rule)))
+                stash.unstash(running(pending - id, online, lastId), 1, identity)
+              case None => Behaviors.same
+            }
+          case SendOutcome(Outbox.Dropped(id, reason)) =>
+            pending.get(id) match {
+              case Some(p) =>
+                timers.cancel(id)
+                answer(p, Left(CallError.Overloaded(robotId, reason)))
+                stash.unstash(running(pending - id, online, lastId), 1, identity)
+              case None => Behaviors.same
+            }
+          case SendOutcome(Outbox.Accepted(_)) => Behaviors.same
+          case Reachability(nowOnline) =>
+            if (!nowOnline) {
+              failAll(pending, CallError.RobotOffline(robotId))
+              // Waiting calls fail fast too: they meet the offline state when unstashed.
+              stash.unstashAll(running(Map.empty, online = false, lastId))
+            } else running(pending, online = true, lastId)
+        }
+        .receiveSignal {
+          case (_, PreRestart) =>
+            failAll(pending, CallError.Interrupted(robotId, "pending call"))
+            stash.foreach {
+              case c: Call => c.replyTo ! CallResult(robotId, c.call.name, Left(CallError.Interrupted(robotId, c.call.name)))
+              case _       => ()
+            }
+            Behaviors.same
+          case (_, PostStop) =>
+            failAll(pending, CallError.RobotOffline(robotId))
+            stash.foreach {
+              case c: Call => c.replyTo ! CallResult(robotId, c.call.name, Left(CallError.RobotOffline(robotId)))
+              case _       => ()
+            }
+            Behaviors.same
+        }
+  }
+}

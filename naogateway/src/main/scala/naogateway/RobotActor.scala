@@ -1,0 +1,351 @@
+package naogateway
+
+import java.net.InetSocketAddress
+
+import scala.collection.immutable.Queue
+import scala.concurrent.duration._
+
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
+import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
+
+import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
+import naogateway.wire._
+
+/** The supervisor of one robot: owns its address, liveness, children and link figures, and re-syncs it after restarts. */
+object RobotActor {
+
+  /** What a robot actor accepts. */
+  sealed trait Command
+
+  /** A decoded FU-Remote frame from this robot (`size` bytes on the wire). */
+  final case class FrameReceived(contents: MessageContents, form: HeaderForm, size: Int) extends Command
+
+  /** A secure-stream segment from this robot's address. */
+  final case class SegmentReceived(bytes: Array[Byte]) extends Command
+
+  /** A datagram from this robot's address was refused, with the reason. */
+  final case class DatagramRejected(reason: String) extends Command
+
+  /** The robot was re-bound to a new address. */
+  final case class Rebound(address: InetSocketAddress) extends Command
+
+  /** Answers with the children's refs once the robot is reachable (probing it first if needed). */
+  final case class Connect(replyTo: ActorRef[Connected]) extends Command
+
+  /** Answers with the latest keep-alive contents and liveness. */
+  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Command
+
+  /** Answers with the link figures. */
+  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Command
+
+  /** Messages from the robot's own children. */
+  sealed trait FromChild extends Command
+
+  /** Sends `out` to the robot; the outbox's outcome goes to `outcome`, marked with `tag`. */
+  final case class Transmit(out: Outbound, priority: Priority, outcome: Option[ActorRef[Outbox.Outcome]], tag: Long = 0L)
+      extends FromChild
+
+  /** A caller wants the robot while it is offline: probe it now. */
+  case object Wanted extends FromChild
+
+  /** A clean round-trip sample. */
+  final case class RoundTrip(nanos: Long) extends FromChild
+
+  /** A call was sent again. */
+  case object Retransmitted extends FromChild
+
+  private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
+
+  /** What can be sent to a robot. */
+  sealed trait Outbound extends Product with Serializable
+
+  /** The kinds of outbound traffic. */
+  object Outbound {
+
+    /** An RPC call (with its call id set). */
+    final case class CallOut(call: RpcCall) extends Outbound
+
+    /** Debug option management. */
+    final case class DebugOut(commands: DebuggingCommands) extends Outbound
+
+    /** A ready secure-stream segment. */
+    final case class SegmentOut(bytes: Array[Byte]) extends Outbound
+  }
+
+  /** The robot's children, for callers that talk to it directly. */
+  final case class Connected(
+      robotId: Int,
+      response: ActorRef[ResponseActor.Command],
+      noResponse: ActorRef[NoResponseActor.Command],
+      vision: ActorRef[VisionActor.Command]
+  )
+
+  private final case class Children(
+      heartbeat: ActorRef[HeartBeatActor.Command],
+      response: ActorRef[ResponseActor.Command],
+      noResponse: ActorRef[NoResponseActor.Command],
+      vision: ActorRef[VisionActor.Command]
+  ) {
+    def connected(robotId: Int): Connected = Connected(robotId, response, noResponse, vision)
+  }
+
+  private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
+
+  /** A robot actor for `robotId` at `address`; `heard` says whether it was discovered from its own keep-alive. */
+  def apply(
+      robotId: Int,
+      address: InetSocketAddress,
+      settings: GatewaySettings,
+      outbox: ActorRef[Outbox.Command],
+      events: ActorRef[GatewayEvent],
+      heard: Boolean
+  ): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withStash(64) { stash =>
+        new Robot(robotId, settings, outbox, events, context, stash).start(address, heard)
+      }
+    }
+
+  private final class Robot(
+      robotId: Int,
+      settings: GatewaySettings,
+      outbox: ActorRef[Outbox.Command],
+      events: ActorRef[GatewayEvent],
+      context: ActorContext[Command],
+      stash: StashBuffer[Command]
+  ) {
+    private val heartbeatReports = context.messageAdapter[HeartBeatActor.Report](HeartbeatReport.apply)
+
+    // Link figures: mutable counters owned by this actor alone.
+    private var address: InetSocketAddress = null
+    private var form: HeaderForm = HeaderForm.Legacy
+    private var datagramsIn, datagramsOut, bytesIn, bytesOut, retransmissions = 0L
+    private var rejected = Map.empty[String, Long]
+    private var rttNanos: Option[Double] = None
+    private var keepAliveTimes = Queue.empty[Long]
+    private var snapshot: RobotSnapshot = null
+    // Debug options switched on through the gateway, re-enabled after a robot restart.
+    private var activeOptions = Set.empty[String]
+
+    def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
+      address = at
+      snapshot = RobotSnapshot(robotId, at)
+      val heartbeat = context.spawn(
+        Behaviors.supervise(HeartBeatActor(settings.heartbeat, heartbeatReports, online = false)).onFailure(ChildRestarts),
+        "heartbeat"
+      )
+      // A discovered robot has spoken already: its keep-alive counts as the first sign of life.
+      if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
+      unreached(heartbeat)
+    }
+
+    private def spawnChildren(heartbeat: ActorRef[HeartBeatActor.Command]): Children = {
+      val self = context.self
+      Children(
+        heartbeat,
+        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response"),
+        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "no-response"),
+        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision")
+      )
+    }
+
+    /** Not reached yet: Connect waits (stashed) until the heartbeat says the robot is there. */
+    private def unreached(heartbeat: ActorRef[HeartBeatActor.Command]): Behavior[Command] = Behaviors.receiveMessage {
+      case HeartbeatReport(HeartBeatActor.CameOnline) =>
+        val children = spawnChildren(heartbeat)
+        wentOnline()
+        stash.unstashAll(running(children, online = true))
+      case c: Connect =>
+        if (stash.isFull) context.log.warn("Robot [{}]: too many connects waiting", robotId) else stash.stash(c)
+        heartbeat ! HeartBeatActor.ProbeNow
+        Behaviors.same
+      case Wanted =>
+        heartbeat ! HeartBeatActor.ProbeNow
+        Behaviors.same
+      case other => common(other, None, heartbeat)
+    }
+
+    private def running(children: Children, online: Boolean): Behavior[Command] = Behaviors.receiveMessage {
+      case Connect(replyTo) =>
+        replyTo ! children.connected(robotId)
+        if (!online) children.heartbeat ! HeartBeatActor.ProbeNow
+        Behaviors.same
+      case Wanted =>
+        if (!online) children.heartbeat ! HeartBeatActor.ProbeNow
+        Behaviors.same
+      case HeartbeatReport(HeartBeatActor.CameOnline) =>
+        if (!online) {
+          wentOnline()
+          children.response ! ResponseActor.Reachability(true)
+          children.noResponse ! NoResponseActor.Reachability(true)
+        }
+        running(children, online = true)
+      case HeartbeatReport(HeartBeatActor.WentOffline(reason)) =>
+        context.log.info("Robot [{}] offline: {}", robotId, reason)
+        snapshot = snapshot.copy(online = false, quality = LinkQuality.Offline)
+        events ! RobotOffline(robotId, reason)
+        children.response ! ResponseActor.Reachability(false)
+        children.noResponse ! NoResponseActor.Reachability(false)
+        running(children, online = false)
+      case other => common(other, Some(children), children.heartbeat)
+    }
+
+    private def wentOnline(): Unit = {
+      context.log.info("Robot [{}] online at {}", robotId, address)
+      snapshot = snapshot.copy(online = true, quality = LinkQuality.Good)
+      events ! RobotOnline(robotId, address)
+    }
+
+    /** Messages handled the same way in every state. */
+    private def common(
+        message: Command,
+        children: Option[Children],
+        heartbeat: ActorRef[HeartBeatActor.Command]
+    ): Behavior[Command] = message match {
+      case FrameReceived(contents, frameForm, size) =>
+        datagramsIn += 1
+        bytesIn += size
+        form = frameForm
+        contents.status.foreach(_ => keepAlive(contents, children, heartbeat))
+        contents.rpcResponse.foreach { response =>
+          val reply = RpcReply.fromProto(response)
+          reply.callId.foreach { id =>
+            (id >>> 30) match {
+              case 0 => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
+              case 1 => children.foreach(_.noResponse ! NoResponseActor.ReplyReceived(reply))
+              case 2 => heartbeat ! HeartBeatActor.ProbeAnswered(id)
+              case _ => count("unknown call id")
+            }
+          }
+        }
+        contents.havimoRegions.foreach { f =>
+          HaViMo.decodeRegions(f.records.map(_.toByteArray).getOrElse(Array.emptyByteArray)) match {
+            case Right(regions) =>
+              children.foreach(_.vision ! VisionActor.FrameReceived(
+                VisionFrame.Regions(robotId, f.frame & 0xffffffffL, f.timestamp, regions)))
+            case Left(e) => count(s"havimo regions: ${e.describe}")
+          }
+        }
+        contents.havimoGrid.foreach { f =>
+          HaViMo.decodeGrid(f.cells.toByteArray) match {
+            case Right(grid) =>
+              children.foreach(_.vision ! VisionActor.FrameReceived(VisionFrame.Grid(robotId, f.frame & 0xffffffffL, f.timestamp, grid)))
+            case Left(e) => count(s"havimo grid: ${e.describe}")
+          }
+        }
+        Behaviors.same
+      case SegmentReceived(bytes) =>
+        datagramsIn += 1
+        bytesIn += bytes.length
+        Behaviors.same
+      case DatagramRejected(reason) =>
+        count(reason)
+        Behaviors.same
+      case Rebound(newAddress) =>
+        context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
+        address = newAddress
+        snapshot = snapshot.copy(address = newAddress)
+        Behaviors.same
+      case Transmit(out, priority, outcome, tag) =>
+        encode(out) match {
+          case Right(bytes) =>
+            datagramsOut += 1
+            bytesOut += bytes.length
+            outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
+          case Left(error) =>
+            outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
+        }
+        Behaviors.same
+      case RoundTrip(nanos) =>
+        rttNanos = Some(rttNanos.fold(nanos.toDouble)(r => r * 0.875 + nanos * 0.125))
+        Behaviors.same
+      case Retransmitted =>
+        retransmissions += 1
+        Behaviors.same
+      case HeartbeatReport(HeartBeatActor.SendProbe(call)) =>
+        context.self ! Transmit(Outbound.CallOut(call), Priority.Heartbeat, None)
+        Behaviors.same
+      case HeartbeatReport(HeartBeatActor.ProbeRoundTrip(nanos)) =>
+        context.self ! RoundTrip(nanos)
+        Behaviors.same
+      case HeartbeatReport(HeartBeatActor.QualityChanged(quality)) =>
+        context.log.info("Robot [{}] link quality {}", robotId, quality.name)
+        snapshot = snapshot.copy(quality = quality)
+        events ! LinkQualityChanged(robotId, quality)
+        Behaviors.same
+      case GetSnapshot(replyTo) =>
+        replyTo ! snapshot
+        Behaviors.same
+      case GetLinkStats(replyTo) =>
+        replyTo ! LinkStats(robotId, datagramsIn, datagramsOut, bytesIn, bytesOut, rttNanos.map(_ / 1e6), lossEstimate(),
+          retransmissions, rejected)
+        Behaviors.same
+      case HeartbeatReport(HeartBeatActor.CameOnline | HeartBeatActor.WentOffline(_)) | Connect(_) | Wanted =>
+        Behaviors.unhandled
+    }
+
+    private def count(reason: String): Unit = {
+      val n = rejected.getOrElse(reason, 0L) + 1
+      rejected = rejected.updated(reason, n)
+      // Logged at 1, 10, 100, ... so a flood of bad datagrams cannot flood the log.
+      if (java.lang.Long.bitCount(n) == 1 && (n == 1 || math.log10(n.toDouble) % 1 == 0 || n % 1000 == 0))
+        context.log.warn("Robot [{}]: rejected datagram ({}), {} so far", robotId, reason, n)
+    }
+
+    private def lossEstimate(): Double = {
+      val now = System.nanoTime()
+      val window = settings.heartbeat.qualityWindow.toNanos
+      keepAliveTimes = keepAliveTimes.dropWhile(_ < now - window)
+      val expected = window.toDouble / settings.heartbeat.keepAliveInterval.toNanos
+      if (datagramsIn == 0) 1.0 else math.max(0.0, 1.0 - keepAliveTimes.size / expected)
+    }
+
+    private def keepAlive(contents: MessageContents, children: Option[Children], heartbeat: ActorRef[HeartBeatActor.Command]): Unit = {
+      heartbeat ! HeartBeatActor.KeepAliveSeen
+      val now = System.nanoTime()
+      keepAliveTimes = keepAliveTimes.enqueue(now)
+      if (keepAliveTimes.size > 256) keepAliveTimes = keepAliveTimes.dequeue._2
+      val status = contents.status.get
+      val health = contents.robotHealth
+      val previous = snapshot
+      snapshot = snapshot.copy(
+        teamId = status.teamID.map(_.toInt).orElse(previous.teamId),
+        role = status.activeRole.orElse(previous.role),
+        agent = status.activeAgent.orElse(previous.agent),
+        posture = health.flatMap(_.posture).orElse(status.currentState).orElse(previous.posture),
+        batteryVoltage = health.flatMap(_.batteryVoltage).map(_.toDouble).orElse(previous.batteryVoltage),
+        uptimeMillis = health.flatMap(_.uptimeMs).map(_ & 0xffffffffL).orElse(status.timestamp),
+        bootId = health.flatMap(_.bootId).orElse(previous.bootId),
+        position = status.robotPosition.map(p => (p.getX, p.getY, p.getRotation.toDouble)).orElse(previous.position),
+        receivedAtNanos = now
+      )
+      val restarted = (previous.bootId.isDefined && snapshot.bootId != previous.bootId) ||
+        (for (before <- previous.uptimeMillis; after <- snapshot.uptimeMillis) yield after + 1000 < before).getOrElse(false)
+      if (restarted) resync(children)
+      events ! RobotStatusUpdated(snapshot)
+    }
+
+    /** A fresh session on the robot: switch back on what was active, and tell subscribers. */
+    private def resync(children: Option[Children]): Unit = {
+      context.log.info("Robot [{}] restarted (boot {}); re-enabling {}", robotId, snapshot.bootId, activeOptions.mkString(","))
+      val options = activeOptions.toVector.sorted
+      if (options.nonEmpty)
+        context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options)))),
+          Priority.Debug, None)
+      children.foreach(_.vision ! VisionActor.Resync)
+      events ! RobotRestarted(robotId, snapshot.bootId, options)
+    }
+
+    private def encode(out: Outbound): Either[FrameError, Array[Byte]] = out match {
+      case Outbound.CallOut(call) =>
+        MessageContents.encodeFrame(MessageContents(robotId, rpcRequest = Some(call.toProto)), form)
+      case Outbound.DebugOut(commands) =>
+        commands.optionEnable.foreach(e => activeOptions ++= e.options)
+        commands.optionDisable.foreach(d => activeOptions = activeOptions.filterNot(o => d.options.exists(n => o == n || o.startsWith(n + "."))))
+        MessageContents.encodeFrame(MessageContents(robotId, debuggingCommands = Some(commands)), form)
+      case Outbound.SegmentOut(bytes) =>
+        if (bytes.length > WireLimits.MaxDatagramBytes) Left(FrameError.Oversize(bytes.length, WireLimits.MaxDatagramBytes))
+        else Right(bytes)
+    }
+  }
+}

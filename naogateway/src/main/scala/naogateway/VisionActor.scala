@@ -1,0 +1,105 @@
+package naogateway
+
+import akka.NotUsed
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior}
+import akka.stream.OverflowStrategy
+import akka.stream.scaladsl.Source
+import akka.stream.typed.scaladsl.ActorSource
+
+import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
+import naogateway.wire.{HaViMoGrid, HaViMoRegion}
+
+/** One HaViMo2 result of one robot. */
+sealed trait VisionFrame extends Product with Serializable {
+  def robotId: Int
+  def frame: Long
+}
+
+/** The kinds of HaViMo2 results. */
+object VisionFrame {
+
+  /** The regions of one camera frame. */
+  final case class Regions(robotId: Int, frame: Long, timestampMs: Option[Long], regions: Vector[HaViMoRegion])
+      extends VisionFrame
+
+  /** The 32 × 24 grid of one camera frame. */
+  final case class Grid(robotId: Int, frame: Long, timestampMs: Option[Long], grid: HaViMoGrid) extends VisionFrame
+}
+
+/** HaViMo2 frames of one robot, fanned out newest-only to any number of stream subscribers. */
+object VisionActor {
+
+  /** What the vision actor accepts. */
+  sealed trait Command
+
+  /** A frame arrived from the robot. */
+  final case class FrameReceived(frame: VisionFrame) extends Command
+
+  /** Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). */
+  final case class Register(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+
+  /** The robot restarted: switch the camera options on again if anyone is watching. */
+  case object Resync extends Command
+
+  private final case class Unregister(subscriber: ActorRef[VisionFrame]) extends Command
+
+  val RegionsOption: String = "havimo.regions"
+  val GridOption: String = "havimo.grid"
+
+  /**
+   * A source of this robot's frames. Each materialization registers one subscriber; a slow subscriber only ever
+   * gets the newest frame (buffer 1, the older one dropped), because old camera frames are worthless.
+   */
+  def frames(vision: ActorRef[Command], grid: Boolean = false): Source[VisionFrame, NotUsed] =
+    ActorSource
+      .actorRef[VisionFrame](PartialFunction.empty, PartialFunction.empty, 1, OverflowStrategy.dropHead)
+      .mapMaterializedValue { ref =>
+        vision ! Register(ref, grid)
+        NotUsed
+      }
+
+  /** A vision actor for robot `robotId`, switching camera options through `robot`. */
+  def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
+    Behaviors.setup { context =>
+      def options(subscribers: Map[ActorRef[VisionFrame], Boolean]): Set[String] =
+        if (subscribers.isEmpty) Set.empty
+        else Set(RegionsOption) ++ (if (subscribers.values.exists(identity)) Set(GridOption) else Set.empty)
+
+      def switch(from: Set[String], to: Set[String]): Unit = {
+        val on = to -- from
+        val off = from -- to
+        if (on.nonEmpty || off.nonEmpty) {
+          context.log.info("Robot [{}]: camera options on {} off {}", robotId, on.mkString(","), off.mkString(","))
+          val cmd = DebuggingCommands(
+            optionEnable = if (on.isEmpty) None else Some(DebuggingOptionNames(on.toSeq.sorted)),
+            optionDisable = if (off.isEmpty) None else Some(DebuggingOptionNames(off.toSeq.sorted))
+          )
+          robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(cmd), Priority.Debug, None)
+        }
+      }
+
+      def running(subscribers: Map[ActorRef[VisionFrame], Boolean]): Behavior[Command] = Behaviors.receiveMessage {
+        case FrameReceived(frame) =>
+          frame match {
+            case _: VisionFrame.Regions => subscribers.keys.foreach(_ ! frame)
+            case _: VisionFrame.Grid    => subscribers.foreach { case (s, grid) => if (grid) s ! frame }
+          }
+          Behaviors.same
+        case Register(subscriber, grid) =>
+          context.watchWith(subscriber, Unregister(subscriber))
+          val next = subscribers.updated(subscriber, grid)
+          switch(options(subscribers), options(next))
+          running(next)
+        case Unregister(subscriber) =>
+          val next = subscribers - subscriber
+          switch(options(subscribers), options(next))
+          running(next)
+        case Resync =>
+          switch(Set.empty, options(subscribers))
+          Behaviors.same
+      }
+
+      running(Map.empty)
+    }
+}
