@@ -1,0 +1,508 @@
+package naogateway.sim.network
+
+import java.io.IOException
+import java.net.{InetAddress, InetSocketAddress, StandardProtocolFamily, StandardSocketOptions}
+import java.nio.ByteBuffer
+import java.nio.channels.{DatagramChannel, SelectionKey, Selector}
+import java.util.concurrent.{CompletableFuture, ConcurrentLinkedQueue, ExecutionException, TimeUnit, TimeoutException}
+import java.util.concurrent.atomic.AtomicInteger
+
+import scala.collection.mutable
+import scala.concurrent.duration._
+import scala.util.control.NonFatal
+
+import org.slf4j.LoggerFactory
+
+/** Handle of one proxy of a [[LossyNetwork]].
+  *
+  * @param id the proxy's creation index within its network (it also selects the proxy's random streams)
+  * @param gateway where the proxy forwards the robot's datagrams
+  * @param clientSide the address the robot must send to
+  * @param upstream the address the gateway sees as the robot's source, and where its replies must go
+  */
+final case class Proxy(
+    id: Int,
+    gateway: InetSocketAddress,
+    clientSide: InetSocketAddress,
+    upstream: InetSocketAddress
+)
+
+/** What one direction of one proxy did with its datagrams.
+  *
+  * `received == forwarded + droppedLoss + droppedPartition + undeliverable` always holds. `duplicated` counts the
+  * extra copies, `reordered` the forwarded datagrams that were held back, and `sendFailures` the copies the operating
+  * system refused (full socket buffer or an I/O error).
+  */
+final case class LinkCounters(
+    received: Long = 0,
+    forwarded: Long = 0,
+    droppedLoss: Long = 0,
+    droppedPartition: Long = 0,
+    duplicated: Long = 0,
+    reordered: Long = 0,
+    undeliverable: Long = 0,
+    sendFailures: Long = 0
+) {
+
+  /** Datagrams dropped on purpose (loss and partition). */
+  def dropped: Long = droppedLoss + droppedPartition
+}
+
+/** Counters of both directions of one proxy. */
+final case class ProxyCounters(uplink: LinkCounters, downlink: LinkCounters) {
+
+  /** The counters of one direction. */
+  def apply(direction: Direction): LinkCounters = direction match {
+    case Direction.Uplink   => uplink
+    case Direction.Downlink => downlink
+  }
+}
+
+/** A seeded, impaired UDP network on loopback between a gateway and simulated robots.
+  *
+  * Each proxy owns two sockets on 127.0.0.1: the client side P, which the robot sends to, and the upstream socket U,
+  * which forwards the robot's datagrams to the gateway, so the gateway sees a distinct source per robot. Datagrams
+  * the gateway sends to U go back to the robot (the source of its latest datagram, or the address given at
+  * creation). Each direction passes through [[ImpairmentModel]] with its own [[Rng]] derived from the seed.
+  *
+  * Design: java.nio with a single thread that owns one `Selector`, every socket and a deadline queue of delayed
+  * copies. That thread handles every datagram of every proxy in arrival order, so each direction's decisions come
+  * strictly in sequence (which makes them reproducible), delays need no timer per datagram, and any number of
+  * proxies costs one thread. Akka IO would add two classic actors per proxy and asynchronous bind/unbind handshakes,
+  * and its threads belong to an `ActorSystem`'s dispatchers, so releasing every thread would mean terminating that
+  * system; here `stop()` closes every socket and joins the one thread before it returns.
+  *
+  * Thread safety: every method may be called from any thread. Sockets and state are touched only by the network
+  * thread; a method hands it a task and waits for the answer (at most a few seconds), so when it returns its change
+  * applies to every later datagram. Methods block briefly, so an actor should not call them from its message handler.
+  * After `stop()` every method except `counters`, `stop` and `isRunning` throws `IllegalStateException`.
+  */
+final class LossyNetwork private (val seed: Long, val name: String) {
+  import LossyNetwork._
+
+  private val selector = Selector.open()
+  private val tasks = new ConcurrentLinkedQueue[Task[_]]()
+  // Guards the check-then-enqueue of tasks against stop(), so no task is left behind unanswered.
+  private val lifecycle = new Object
+  @volatile private var accepting = true
+  private val thread = new Thread(() => run(), name)
+  thread.setDaemon(true)
+
+  // Owned by the network thread, read by others only after it has ended.
+  private val proxies = mutable.LongMap.empty[ProxyState]
+  private var nextProxyIndex = 0
+  private var networkPartitioned = false
+  private val pending = mutable.PriorityQueue.empty[PendingCopy](PendingCopy.earliestFirst)
+  private var copySequence = 0L
+  private val buffer = ByteBuffer.allocate(MaxDatagram)
+
+  /** Starts a proxy that forwards to `gateway`; `robot` is where replies go until the robot's first datagram. */
+  def addProxy(
+      gateway: InetSocketAddress,
+      robot: Option[InetSocketAddress] = None,
+      uplink: Impairment = Impairment.Off,
+      downlink: Impairment = Impairment.Off
+  ): Proxy = {
+    require(!gateway.isUnresolved, s"gateway address $gateway is unresolved")
+    robot.foreach(r => require(!r.isUnresolved, s"robot address $r is unresolved"))
+    onNetworkThread(openProxy(gateway, robot, uplink, downlink))
+  }
+
+  /** Closes a proxy's sockets, forgets copies still waiting, and returns its final counters. */
+  def removeProxy(proxy: Proxy): ProxyCounters = onNetworkThread {
+    val state = stateOf(proxy)
+    state.close()
+    proxies.remove(proxy.id.toLong)
+    // A registered channel keeps its port until the selector drops its key, which happens at the next select.
+    selector.selectNow()
+    handleSelected()
+    state.counters
+  }
+
+  /** The settings of one direction of a proxy. */
+  def impairment(proxy: Proxy, direction: Direction): Impairment =
+    onNetworkThread(stateOf(proxy).link(direction).impairment)
+
+  /** Replaces the settings of one direction of a proxy; they apply from the next datagram on. */
+  def setImpairment(proxy: Proxy, direction: Direction, impairment: Impairment): Unit =
+    onNetworkThread { stateOf(proxy).link(direction).impairment = impairment }
+
+  /** Switches the partition of both directions of one proxy. */
+  def partition(proxy: Proxy, on: Boolean): Unit = onNetworkThread {
+    val state = stateOf(proxy)
+    Direction.both.foreach { direction =>
+      val link = state.link(direction)
+      link.impairment = link.impairment.withPartition(on)
+    }
+  }
+
+  /** Switches a partition of every proxy, both directions, on top of each proxy's own settings. */
+  def partitionNetwork(on: Boolean): Unit = onNetworkThread { networkPartitioned = on }
+
+  /** A consistent snapshot of a proxy's counters; after `stop()` the final ones. */
+  def counters(proxy: Proxy): ProxyCounters =
+    tryOnNetworkThread(stateOf(proxy).counters).getOrElse {
+      thread.join()
+      stateOf(proxy).counters
+    }
+
+  /** Whether the network thread still serves requests. */
+  def isRunning: Boolean = accepting && thread.isAlive
+
+  /** Closes every socket and ends the network thread; returns once both are done. Calling it again does nothing. */
+  def stop(): Unit = {
+    lifecycle.synchronized { accepting = false }
+    selector.wakeup()
+    if (Thread.currentThread() ne thread) thread.join()
+  }
+
+  private def start(): Unit = thread.start()
+
+  private def onNetworkThread[A](body: => A): A =
+    tryOnNetworkThread(body).getOrElse(throw new IllegalStateException(s"lossy network [$name] is stopped"))
+
+  private def tryOnNetworkThread[A](body: => A): Option[A] =
+    if (Thread.currentThread() eq thread) Some(body)
+    else {
+      val task = new Task(() => body)
+      val accepted = lifecycle.synchronized {
+        if (accepting) tasks.add(task)
+        accepting
+      }
+      if (!accepted) None
+      else {
+        selector.wakeup()
+        try Some(task.result.get(CallTimeout.toMillis, TimeUnit.MILLISECONDS))
+        catch {
+          case e: ExecutionException => throw e.getCause
+          case _: TimeoutException =>
+            throw new IllegalStateException(s"lossy network [$name] did not answer within $CallTimeout")
+        }
+      }
+    }
+
+  private def stateOf(proxy: Proxy): ProxyState =
+    proxies.get(proxy.id.toLong).filter(_.handle == proxy).getOrElse {
+      throw new IllegalArgumentException(
+        s"proxy ${proxy.id} (${proxy.clientSide}) is not part of lossy network [$name]"
+      )
+    }
+
+  private def openProxy(
+      gateway: InetSocketAddress,
+      robot: Option[InetSocketAddress],
+      uplink: Impairment,
+      downlink: Impairment
+  ): Proxy = {
+    val clientChannel = openChannel()
+    val upstreamChannel =
+      try openChannel()
+      catch {
+        case NonFatal(e) =>
+          clientChannel.close()
+          throw e
+      }
+    try {
+      val index = nextProxyIndex
+      val handle = Proxy(index, gateway, localAddress(clientChannel), localAddress(upstreamChannel))
+      val state = new ProxyState(
+        handle,
+        clientChannel,
+        upstreamChannel,
+        new LinkState(uplink, Rng.derive(seed, index, Direction.Uplink)),
+        new LinkState(downlink, Rng.derive(seed, index, Direction.Downlink)),
+        robot
+      )
+      clientChannel.register(selector, SelectionKey.OP_READ, Endpoint(state, Direction.Uplink))
+      upstreamChannel.register(selector, SelectionKey.OP_READ, Endpoint(state, Direction.Downlink))
+      nextProxyIndex += 1
+      proxies.update(index.toLong, state)
+      handle
+    } catch {
+      case NonFatal(e) =>
+        clientChannel.close()
+        upstreamChannel.close()
+        throw e
+    }
+  }
+
+  private def openChannel(): DatagramChannel = {
+    val channel = DatagramChannel.open(StandardProtocolFamily.INET)
+    try {
+      channel.setOption[Integer](StandardSocketOptions.SO_RCVBUF, SocketBuffer)
+      channel.setOption[Integer](StandardSocketOptions.SO_SNDBUF, SocketBuffer)
+      channel.bind(new InetSocketAddress(Loopback, 0))
+      channel.configureBlocking(false)
+      channel
+    } catch {
+      case NonFatal(e) =>
+        channel.close()
+        throw e
+    }
+  }
+
+  private def localAddress(channel: DatagramChannel): InetSocketAddress =
+    channel.getLocalAddress match {
+      case address: InetSocketAddress => address
+      case other                      => throw new IOException(s"unexpected local address $other")
+    }
+
+  private def run(): Unit =
+    try {
+      while (accepting) {
+        runTasks()
+        awaitWork()
+        handleSelected()
+        sendDueCopies()
+      }
+    } catch {
+      case NonFatal(e) => log.error("Lossy network [{}] failed and stops", name, e)
+    } finally {
+      lifecycle.synchronized { accepting = false }
+      closeEverything()
+      abandonTasks()
+    }
+
+  private def runTasks(): Unit = {
+    var task = tasks.poll()
+    while (task ne null) {
+      task.run()
+      task = tasks.poll()
+    }
+  }
+
+  private def abandonTasks(): Unit = {
+    var task = tasks.poll()
+    while (task ne null) {
+      task.abandon(new IllegalStateException(s"lossy network [$name] is stopped"))
+      task = tasks.poll()
+    }
+  }
+
+  // The earliest deadline bounds the wait, so delayed copies leave on time without polling and an idle network sleeps.
+  private def awaitWork(): Unit =
+    if (!tasks.isEmpty || !accepting) selector.selectNow()
+    else
+      pending.headOption match {
+        case None => selector.select()
+        case Some(copy) =>
+          val waitNanos = copy.dueNanos - System.nanoTime()
+          if (waitNanos <= 0) selector.selectNow()
+          else selector.select(math.max(1L, TimeUnit.NANOSECONDS.toMillis(waitNanos + 999999L)))
+      }
+
+  private def handleSelected(): Unit = {
+    val keys = selector.selectedKeys().iterator()
+    while (keys.hasNext) {
+      val key = keys.next()
+      keys.remove()
+      if (key.isValid && key.isReadable) key.attachment() match {
+        case Endpoint(state, direction) => readFrom(state, direction)
+        case _                          => ()
+      }
+    }
+  }
+
+  // Reads a bounded batch so one flooded socket cannot starve the others or the delayed copies.
+  private def readFrom(state: ProxyState, direction: Direction): Unit = {
+    val channel = state.receivingChannel(direction)
+    var remaining = MaxReadsPerWakeup
+    while (remaining > 0 && state.open) {
+      buffer.clear()
+      val source =
+        try channel.receive(buffer)
+        catch {
+          case e: IOException =>
+            log.debug("Proxy [{}] could not read its {} socket", Int.box(state.handle.id), direction, e)
+            null
+        }
+      source match {
+        case from: InetSocketAddress =>
+          buffer.flip()
+          val bytes = new Array[Byte](buffer.remaining())
+          buffer.get(bytes)
+          handleDatagram(state, direction, from, bytes)
+          remaining -= 1
+        case _ => remaining = 0
+      }
+    }
+  }
+
+  private def handleDatagram(
+      state: ProxyState,
+      direction: Direction,
+      from: InetSocketAddress,
+      bytes: Array[Byte]
+  ): Unit = {
+    val link = state.link(direction)
+    link.received += 1
+    val target = direction match {
+      case Direction.Uplink =>
+        state.robot = Some(from)
+        Some(state.handle.gateway)
+      case Direction.Downlink => state.robot
+    }
+    target match {
+      case None => link.undeliverable += 1
+      case Some(to) =>
+        val settings =
+          if (networkPartitioned && !link.impairment.partitioned) link.impairment.withPartition(true)
+          else link.impairment
+        val (decision, next) = ImpairmentModel.decide(settings, link.rng)
+        link.rng = next
+        decision match {
+          case Decision.Drop(DropCause.Loss)      => link.droppedLoss += 1
+          case Decision.Drop(DropCause.Partition) => link.droppedPartition += 1
+          case deliver: Decision.Deliver =>
+            link.forwarded += 1
+            if (deliver.duplicated) link.duplicated += 1
+            if (deliver.reordered) link.reordered += 1
+            val now = System.nanoTime()
+            deliver.delays.foreach { delay =>
+              if (delay == Duration.Zero) transmit(state, direction, bytes, to)
+              else {
+                pending.enqueue(PendingCopy(now + delay.toNanos, copySequence, state, direction, bytes, to))
+                copySequence += 1
+              }
+            }
+        }
+    }
+  }
+
+  private def sendDueCopies(): Unit = {
+    val now = System.nanoTime()
+    while (pending.nonEmpty && pending.head.dueNanos - now <= 0) {
+      val copy = pending.dequeue()
+      if (copy.state.open) transmit(copy.state, copy.direction, copy.bytes, copy.to)
+    }
+  }
+
+  private def transmit(state: ProxyState, direction: Direction, bytes: Array[Byte], to: InetSocketAddress): Unit = {
+    val link = state.link(direction)
+    try {
+      if (state.sendingChannel(direction).send(ByteBuffer.wrap(bytes), to) == 0) link.sendFailures += 1
+    } catch {
+      case e: IOException =>
+        link.sendFailures += 1
+        log.debug("Proxy [{}] could not send {} to {}", Int.box(state.handle.id), direction, to, e)
+    }
+  }
+
+  private def closeEverything(): Unit = {
+    proxies.valuesIterator.foreach(_.close())
+    pending.clear()
+    // Closing the selector drops every key, which is what finally releases the channels' ports.
+    try selector.close()
+    catch { case e: IOException => log.warn("Lossy network [{}] could not close its selector", name, e) }
+  }
+}
+
+/** Starting a [[LossyNetwork]]. */
+object LossyNetwork {
+  private val log = LoggerFactory.getLogger(classOf[LossyNetwork])
+  private val instances = new AtomicInteger(0)
+
+  private val Loopback = InetAddress.getLoopbackAddress
+  private val MaxDatagram = 65536
+  private val SocketBuffer: Integer = 1 << 20
+  private val MaxReadsPerWakeup = 64
+  private val CallTimeout = 5.seconds
+
+  /** Starts a network with no proxies; `seed` determines every random decision of every proxy. */
+  def start(seed: Long): LossyNetwork = {
+    val network = new LossyNetwork(seed, s"lossy-network-${instances.incrementAndGet()}")
+    network.start()
+    network
+  }
+
+  private final class Task[A](body: () => A) {
+    val result = new CompletableFuture[A]()
+
+    def run(): Unit =
+      try result.complete(body())
+      catch { case NonFatal(e) => result.completeExceptionally(e) }
+
+    def abandon(reason: Throwable): Unit = result.completeExceptionally(reason)
+  }
+
+  private final class LinkState(var impairment: Impairment, var rng: Rng) {
+    var received = 0L
+    var forwarded = 0L
+    var droppedLoss = 0L
+    var droppedPartition = 0L
+    var duplicated = 0L
+    var reordered = 0L
+    var undeliverable = 0L
+    var sendFailures = 0L
+
+    def counters: LinkCounters =
+      LinkCounters(
+        received,
+        forwarded,
+        droppedLoss,
+        droppedPartition,
+        duplicated,
+        reordered,
+        undeliverable,
+        sendFailures
+      )
+  }
+
+  private final class ProxyState(
+      val handle: Proxy,
+      clientChannel: DatagramChannel,
+      upstreamChannel: DatagramChannel,
+      uplink: LinkState,
+      downlink: LinkState,
+      var robot: Option[InetSocketAddress]
+  ) {
+    var open = true
+
+    def link(direction: Direction): LinkState = direction match {
+      case Direction.Uplink   => uplink
+      case Direction.Downlink => downlink
+    }
+
+    def receivingChannel(direction: Direction): DatagramChannel = direction match {
+      case Direction.Uplink   => clientChannel
+      case Direction.Downlink => upstreamChannel
+    }
+
+    def sendingChannel(direction: Direction): DatagramChannel = direction match {
+      case Direction.Uplink   => upstreamChannel
+      case Direction.Downlink => clientChannel
+    }
+
+    def counters: ProxyCounters = ProxyCounters(uplink.counters, downlink.counters)
+
+    def close(): Unit = {
+      open = false
+      List(clientChannel, upstreamChannel).foreach { channel =>
+        try channel.close()
+        catch { case e: IOException => log.warn("Proxy [{}] could not close a socket", Int.box(handle.id), e) }
+      }
+    }
+  }
+
+  private final case class Endpoint(state: ProxyState, direction: Direction)
+
+  private final case class PendingCopy(
+      dueNanos: Long,
+      sequence: Long,
+      state: ProxyState,
+      direction: Direction,
+      bytes: Array[Byte],
+      to: InetSocketAddress
+  )
+
+  private object PendingCopy {
+    // PriorityQueue dequeues its largest element, hence the reversal. Deadlines from nanoTime are compared by their
+    // difference, as its values may be negative; the sequence keeps copies due at the same instant in arrival order.
+    val earliestFirst: Ordering[PendingCopy] = new Ordering[PendingCopy] {
+      def compare(a: PendingCopy, b: PendingCopy): Int = {
+        val byDue = java.lang.Long.signum(b.dueNanos - a.dueNanos)
+        if (byDue != 0) byDue else java.lang.Long.compare(b.sequence, a.sequence)
+      }
+    }
+  }
+}

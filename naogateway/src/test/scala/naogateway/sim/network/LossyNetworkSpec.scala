@@ -1,0 +1,309 @@
+package naogateway.sim.network
+
+import java.net.{DatagramSocket, InetSocketAddress}
+import java.nio.ByteBuffer
+
+import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
+import scala.util.Random
+
+import org.scalatest.concurrent.Eventually
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.time.{Millis, Seconds, Span}
+import org.scalatest.wordspec.AnyWordSpec
+
+/** The lossy network over real UDP on loopback. */
+class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
+
+  implicit override val patienceConfig: PatienceConfig =
+    PatienceConfig(timeout = Span(10, Seconds), interval = Span(5, Millis))
+
+  private def withNetwork[A](seed: Long)(body: LossyNetwork => A): A = {
+    val network = LossyNetwork.start(seed)
+    try body(network)
+    finally network.stop()
+  }
+
+  private def withPeers[A](robots: Int)(body: (UdpPeer, IndexedSeq[UdpPeer]) => A): A = {
+    val peers = new UdpPeer("gateway") +: (0 until robots).map(i => new UdpPeer(s"robot-$i"))
+    try body(peers.head, peers.tail)
+    finally peers.foreach(_.close())
+  }
+
+  private def withGatewayAndRobot[A](body: (UdpPeer, UdpPeer) => A): A =
+    withPeers(1)((gateway, robots) => body(gateway, robots.head))
+
+  private def numbered(i: Int, size: Int = 16): Array[Byte] = {
+    val bytes = ByteBuffer.allocate(size).putInt(i).array()
+    java.util.Arrays.fill(bytes, 4, size, i.toByte)
+    bytes
+  }
+
+  private def numberOf(r: Received): Int = ByteBuffer.wrap(r.bytes.toArray).getInt
+
+  // Bursts of ten with a pause let the receiving buffers drain even on a loaded machine.
+  private def sendPaced(from: UdpPeer, to: InetSocketAddress, n: Int): Unit =
+    (0 until n).foreach { i =>
+      from.send(numbered(i), to)
+      if (i % 10 == 9) Thread.sleep(2)
+    }
+
+  /** One datagram each way through `proxy`, checked byte for byte and by source address. */
+  private def roundTrip(proxy: Proxy, robot: UdpPeer, gateway: UdpPeer, up: Array[Byte], down: Array[Byte]): Unit = {
+    robot.send(up, proxy.clientSide)
+    val atGateway = gateway.receive().getOrElse(fail("uplink datagram did not arrive"))
+    atGateway.bytes shouldBe up.toVector
+    atGateway.from shouldBe proxy.upstream
+    gateway.send(down, atGateway.from)
+    val atRobot = robot.receive().getOrElse(fail("downlink datagram did not arrive"))
+    atRobot.bytes shouldBe down.toVector
+    atRobot.from shouldBe proxy.clientSide
+  }
+
+  private def canBind(address: InetSocketAddress): Boolean =
+    try {
+      new DatagramSocket(address).close()
+      true
+    } catch { case _: java.net.SocketException => false }
+
+  "LossyNetwork" should {
+    "forward every datagram byte-identical in both directions on a perfect link" in withNetwork(1L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address)
+        proxy.clientSide.getAddress.isLoopbackAddress shouldBe true
+        proxy.upstream.getAddress.isLoopbackAddress shouldBe true
+        val random = new Random(5)
+        (0 until 50).foreach { i =>
+          val up = random.nextBytes(1 + random.nextInt(1400))
+          val down = random.nextBytes(1 + random.nextInt(1400))
+          withClue(s"round trip $i: ")(roundTrip(proxy, robot, gateway, up, down))
+        }
+        val counters = network.counters(proxy)
+        counters.uplink shouldBe LinkCounters(received = 50, forwarded = 50)
+        counters.downlink shouldBe LinkCounters(received = 50, forwarded = 50)
+      }
+    }
+
+    "send replies to the robot given at creation before the robot has sent anything" in withNetwork(2L) { network =>
+      withPeers(2) { (gateway, robots) =>
+        val robot = robots(0)
+        val other = robots(1)
+        val known = network.addProxy(gateway.address, robot = Some(robot.address))
+        gateway.send(numbered(7), known.upstream)
+        val atRobot = robot.receive().getOrElse(fail("downlink datagram did not arrive"))
+        atRobot.bytes shouldBe numbered(7).toVector
+        atRobot.from shouldBe known.clientSide
+
+        val unknown = network.addProxy(gateway.address)
+        gateway.send(numbered(8), unknown.upstream)
+        eventually(network.counters(unknown).downlink.received shouldBe 1)
+        network.counters(unknown).downlink shouldBe LinkCounters(received = 1, undeliverable = 1)
+
+        // The robot's latest datagram decides where replies go.
+        other.send(numbered(9), known.clientSide)
+        gateway.receive().map(_.from) shouldBe Some(known.upstream)
+        gateway.send(numbered(10), known.upstream)
+        other.receive().map(r => numberOf(r)) shouldBe Some(10)
+      }
+    }
+
+    "lose about 30 % of the uplink and account for every datagram" in withNetwork(3L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address, uplink = Impairment(loss = 0.3))
+        val n = 400
+        sendPaced(robot, proxy.clientSide, n)
+        eventually(network.counters(proxy).uplink.received shouldBe n)
+        val uplink = network.counters(proxy).uplink
+        uplink.received shouldBe uplink.forwarded + uplink.droppedLoss
+        uplink.droppedPartition shouldBe 0
+        uplink.forwarded.toDouble / n shouldBe 0.7 +- 0.1
+
+        val arrived = gateway.receiveUpTo(uplink.forwarded.toInt, 10.seconds)
+        arrived.size.toLong should be <= uplink.forwarded
+        arrived.size.toDouble / n shouldBe 0.7 +- 0.15
+        arrived.map(numberOf).distinct should have size arrived.size.toLong
+        all(arrived.map(_.from)) shouldBe proxy.upstream
+      }
+    }
+
+    "drop everything while partitioned and let traffic flow again afterwards" in withNetwork(4L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address)
+        roundTrip(proxy, robot, gateway, numbered(1), numbered(2))
+
+        network.partition(proxy, on = true)
+        network.impairment(proxy, Direction.Uplink).partitioned shouldBe true
+        network.impairment(proxy, Direction.Downlink).partitioned shouldBe true
+        (0 until 10).foreach { i =>
+          robot.send(numbered(i), proxy.clientSide)
+          gateway.send(numbered(i), proxy.upstream)
+        }
+        eventually {
+          val counters = network.counters(proxy)
+          counters.uplink.received shouldBe 11
+          counters.downlink.received shouldBe 11
+        }
+        gateway.collectFor(300.millis) shouldBe empty
+        robot.collectFor(300.millis) shouldBe empty
+        val counters = network.counters(proxy)
+        counters.uplink.droppedPartition shouldBe 10
+        counters.downlink.droppedPartition shouldBe 10
+
+        network.partition(proxy, on = false)
+        roundTrip(proxy, robot, gateway, numbered(3), numbered(4))
+      }
+    }
+
+    "partition the whole network without touching each proxy's settings" in withNetwork(5L) { network =>
+      withPeers(2) { (gateway, robots) =>
+        val robotA = robots(0)
+        val robotB = robots(1)
+        val a = network.addProxy(gateway.address)
+        val b = network.addProxy(gateway.address)
+        network.partitionNetwork(on = true)
+        robotA.send(numbered(1), a.clientSide)
+        robotB.send(numbered(2), b.clientSide)
+        eventually {
+          network.counters(a).uplink.droppedPartition shouldBe 1
+          network.counters(b).uplink.droppedPartition shouldBe 1
+        }
+        gateway.collectFor(300.millis) shouldBe empty
+        network.impairment(a, Direction.Uplink).partitioned shouldBe false
+
+        network.partitionNetwork(on = false)
+        roundTrip(a, robotA, gateway, numbered(3), numbered(4))
+        roundTrip(b, robotB, gateway, numbered(5), numbered(6))
+      }
+    }
+
+    "apply changed settings to the next datagram" in withNetwork(6L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address)
+        network.setImpairment(proxy, Direction.Downlink, Impairment(loss = 1.0))
+        robot.send(numbered(1), proxy.clientSide)
+        gateway.receive().map(numberOf) shouldBe Some(1)
+        gateway.send(numbered(2), proxy.upstream)
+        eventually(network.counters(proxy).downlink.droppedLoss shouldBe 1)
+        robot.collectFor(200.millis) shouldBe empty
+
+        network.setImpairment(proxy, Direction.Downlink, Impairment.Off)
+        roundTrip(proxy, robot, gateway, numbered(3), numbered(4))
+      }
+    }
+
+    "reorder datagrams when some are held back" in withNetwork(7L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val held = Impairment(reordering = 0.5, reorderMaxDelay = 40.millis)
+        val proxy = network.addProxy(gateway.address, uplink = held)
+        val n = 200
+        sendPaced(robot, proxy.clientSide, n)
+        val order = gateway.receiveUpTo(n, 10.seconds).map(numberOf)
+        order.size should be > n / 2
+        order.distinct should have size order.size.toLong
+        all(order) should (be >= 0 and be < n)
+        order should not be order.sorted
+        network.counters(proxy).uplink.reordered should be > 0L
+      }
+    }
+
+    "send duplicated datagrams twice" in withNetwork(8L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address, uplink = Impairment(duplication = 1.0))
+        (0 until 20).foreach(i => robot.send(numbered(i), proxy.clientSide))
+        val arrived = gateway.receiveUpTo(40, 10.seconds).map(numberOf)
+        arrived.groupBy(identity).map { case (i, copies) => i -> copies.size } shouldBe (0 until 20).map(_ -> 2).toMap
+        val uplink = network.counters(proxy).uplink
+        uplink.forwarded shouldBe 20
+        uplink.duplicated shouldBe 20
+      }
+    }
+
+    "hold every datagram back for at least the base delay" in withNetwork(9L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy =
+          network.addProxy(gateway.address, robot = Some(robot.address), downlink = Impairment(delay = 150.millis))
+        val sent = System.nanoTime()
+        gateway.send(numbered(1), proxy.upstream)
+        robot.receive().map(numberOf) shouldBe Some(1)
+        (System.nanoTime() - sent).nanos should be >= 150.millis
+      }
+    }
+
+    "keep ten robots apart behind one gateway" in withNetwork(10L) { network =>
+      withPeers(10) { (gateway, robots) =>
+        val proxies = robots.map(_ => network.addProxy(gateway.address))
+        robots.zip(proxies).zipWithIndex.foreach { case ((robot, proxy), i) =>
+          robot.send(numbered(i), proxy.clientSide)
+        }
+        val arrived = gateway.receiveUpTo(10, 10.seconds)
+        val expectedSources = proxies.zipWithIndex.map { case (p, i) => i -> p.upstream }.toMap
+        arrived.map(r => numberOf(r) -> r.from).toMap shouldBe expectedSources
+        arrived.foreach(r => gateway.send(numbered(100 + numberOf(r)), r.from))
+        robots.zipWithIndex.foreach { case (robot, i) => robot.receive().map(numberOf) shouldBe Some(100 + i) }
+      }
+    }
+
+    "make the same decisions for the same seed and datagram sequence" in {
+      val settings = Impairment(loss = 0.5, duplication = 0.3)
+      val n = 40
+      def run(seed: Long): Vector[(Long, Long)] = withNetwork(seed) { network =>
+        withGatewayAndRobot { (gateway, robot) =>
+          val proxy = network.addProxy(gateway.address, uplink = settings)
+          (1 to n).map { i =>
+            robot.send(numbered(i), proxy.clientSide)
+            eventually(network.counters(proxy).uplink.received shouldBe i)
+            val uplink = network.counters(proxy).uplink
+            (uplink.forwarded, uplink.duplicated)
+          }.toVector
+        }
+      }
+      val expected = Iterator
+        .iterate((0L, 0L, Rng.derive(11L, 0, Direction.Uplink))) { case (forwarded, duplicated, rng) =>
+          ImpairmentModel.decide(settings, rng) match {
+            case (d: Decision.Deliver, next) => (forwarded + 1, duplicated + (if (d.duplicated) 1 else 0), next)
+            case (_, next)                   => (forwarded, duplicated, next)
+          }
+        }
+        .slice(1, n + 1)
+        .map { case (f, d, _) => (f, d) }
+        .toVector
+      val first = run(11L)
+      first shouldBe expected
+      run(11L) shouldBe first
+      run(12L) should not be first
+    }
+
+    "release its ports when a proxy is removed" in withNetwork(13L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address)
+        roundTrip(proxy, robot, gateway, numbered(1), numbered(2))
+        val last = network.removeProxy(proxy)
+        last.uplink.forwarded shouldBe 1
+        last.downlink.forwarded shouldBe 1
+        canBind(proxy.clientSide) shouldBe true
+        canBind(proxy.upstream) shouldBe true
+        an[IllegalArgumentException] should be thrownBy network.counters(proxy)
+        an[IllegalArgumentException] should be thrownBy network.partition(proxy, on = true)
+      }
+    }
+
+    "release every port and its thread on stop, and stop only once" in withNetwork(14L) { network =>
+      val proxies = withGatewayAndRobot { (gateway, robot) =>
+        val started = (0 until 3).map(_ => network.addProxy(gateway.address, uplink = Impairment(delay = 1.second)))
+        // A copy still waiting must not keep anything alive.
+        robot.send(numbered(1), started.head.clientSide)
+        eventually(network.counters(started.head).uplink.forwarded shouldBe 1)
+        started
+      }
+      network.isRunning shouldBe true
+      network.stop()
+      network.stop()
+      network.isRunning shouldBe false
+      Thread.getAllStackTraces.keySet.asScala.filter(t => t.getName == network.name && t.isAlive) shouldBe empty
+      all(proxies.flatMap(p => List(p.clientSide, p.upstream)).map(canBind)) shouldBe true
+      network.counters(proxies.head).uplink.forwarded shouldBe 1
+      an[IllegalStateException] should be thrownBy network.addProxy(proxies.head.gateway)
+      an[IllegalStateException] should be thrownBy network.partitionNetwork(on = true)
+    }
+  }
+}
