@@ -12,12 +12,14 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.proto._
+import naogateway.sim.{Destination, FirmwareSettings, FirmwareState, Outgoing, RobotFirmware}
 
 /**
  * Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every
  * `<!-- table: tag -->` offset table in the document is checked here: FU-Remote frames against the codecs (decode to
  * the expected contents, re-encode to the identical bytes), GameController bytes and tables against the real packets
- * in shared/vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules.
+ * in shared/vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules. The
+ * keep-alive example and the debug option catalogue are checked against the simulated firmware as well.
  */
 class ProtocolDocSpec extends AnyWordSpec with Matchers {
   import ProtocolDocSpec._
@@ -108,6 +110,13 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       error.callId shouldBe probe.callId
       error.error shouldBe Some(s"unknown method: ${probe.module}.${probe.method}")
     }
+    "show the keep-alive exactly as the simulated firmware sends it 5000 ms after power-up" in {
+      val (state, sent) = keepAliveAt5000
+      val keepAlives = sent.filter(_.to == Destination.Gateway).map(_.bytes)
+        .filter(b => MessageContents.decodeFrame(b).exists(_._2.status.isDefined))
+      keepAlives.map(_.toVector) shouldBe Vector(bytes("keep-alive").toVector)
+      MessageContents.encodeFrame(RobotFirmware.keepAlive(state)).map(_.toVector) shouldBe Right(bytes("keep-alive").toVector)
+    }
     "carry a region whose centre is (80, 60)" in {
       val records = contents("havimo-regions").havimoRegions.get.records.get.toByteArray
       val regions = HaViMo.decodeRegions(records).toOption.get
@@ -131,6 +140,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       byName("debugData") shouldBe MessageContents.DebugDataField
       byName("havimoRegions") shouldBe MessageContents.HavimoRegionsField
       byName("havimoGrid") shouldBe MessageContents.HavimoGridField
+      byName("robotHealth") shouldBe MessageContents.RobotHealthField
       byName("rpcRequest") shouldBe MessageContents.RpcRequestField
       byName("rpcResponse") shouldBe MessageContents.RpcResponseField
       all((byName - "status").values) should (be >= MessageContents.ProjectRange.start and
@@ -145,6 +155,13 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
           parseHex(r(2)).map(_.toVector) shouldBe Right(varint((r(1).toLong << 3) | 2).toVector)
         }
       }
+    }
+  }
+
+  "The debug option catalogue of section 8" should {
+    "list exactly the simulated firmware's options, in its order, with their types" in {
+      table("debug-options").rows.map(r => (r(0), r(1))) shouldBe
+        RobotFirmware.OptionCatalogue.map { case (name, kind, _) => (name, s"${kind.name} (${kind.value})") }
     }
   }
 
@@ -309,6 +326,12 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     }
   }
 
+  /** The simulated robot 1 with default settings, booted at 0 and advanced in 200 ms steps up to 5000 ms. */
+  private def keepAliveAt5000: (FirmwareState, Vector[Outgoing]) =
+    (0 to 5000 by 200).foldLeft((RobotFirmware.boot(FirmwareSettings(robotId = 1), 0L), Vector.empty[Outgoing])) {
+      case ((state, _), millis) => RobotFirmware.advance(state, millis * 1000000L)
+    }
+
   private def vector(name: String): Array[Byte] = {
     val candidates = sys.props.get("naogateway.shared.dir").map(Paths.get(_)).toSeq ++
       Seq(Paths.get("../../shared"), Paths.get("../shared"))
@@ -398,6 +421,13 @@ object ProtocolDocSpec {
     "debug-data-text" -> FrameExample(MessageContents(robotId = 1, debugData = Some(
       DebugData("text", Some(5000L), DebugData.Data.Text(DebugText("ready")))
     ))),
+    "keep-alive" -> FrameExample(MessageContents(robotId = 1,
+      status = Some(Status(timestamp = Some(5000L), teamID = Some(1), timeOnline = Some(5),
+        robotPosition = Some(Position(x = Some(-1000), y = Some(0), rotation = Some(0.0f))),
+        activeAgent = Some("SimAgent"), activeRole = Some("striker"), currentState = Some("sit"))),
+      robotHealth = Some(RobotHealth(batteryVoltage = Some(12.399f), posture = Some("sit"), uptimeMs = Some(5000),
+        bootId = Some(1)))
+    )),
     "havimo-regions" -> FrameExample(MessageContents(robotId = 1, havimoRegions = Some(
       HaViMoRegionFrame(42, Some(5000L), Some(ByteString.copyFrom(HaViMo.encodeRegions(Seq(exampleRegion)).toOption.get)))
     )))
@@ -410,7 +440,7 @@ object ProtocolDocSpec {
   )
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4")
   val TableTags: Set[String] =
-    Set("extension-keys", "extension-numbers", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return")
+    Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return")
 
   // ---- reading the document ----
 
