@@ -1,0 +1,103 @@
+package naogateway.actors
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit}
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway._
+import naogateway.HeartBeatActor._
+
+class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
+  private val manualTime = ManualTime()
+  private val settings = HeartbeatSettings(200.millis, 400.millis, 150.millis, 3, 2.seconds, 0.8, 0.9)
+
+  private def probeId(r: Report): Long = r match {
+    case SendProbe(call) => call.callId.get
+    case other           => fail(s"expected a probe, got $other")
+  }
+
+  "HeartBeatActor" must {
+    "probe a quiet robot three times and then report it offline" in {
+      val reports = createTestProbe[Report]()
+      spawn(HeartBeatActor(settings, reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      manualTime.timePasses(399.millis)
+      reports.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(1.milli)
+      val first = probeId(reports.receiveMessage())
+      (first >>> 30) shouldBe 2
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(149.millis)
+      reports.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(1.milli)
+      reports.receiveMessage() shouldBe a[WentOffline]
+      // Offline: no more probes until someone asks or the robot speaks.
+      manualTime.timePasses(2.seconds)
+      reports.expectNoMessage(Duration.Zero)
+    }
+    "stay online while keep-alives arrive, and recover when a probe is answered" in {
+      val reports = createTestProbe[Report]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      (1 to 10).foreach { _ =>
+        manualTime.timePasses(200.millis)
+        heartbeat ! KeepAliveSeen
+      }
+      reports.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(400.millis)
+      val id = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(id)
+      reports.receiveMessage() shouldBe a[ProbeRoundTrip]
+      manualTime.timePasses(399.millis)
+      reports.expectNoMessage(Duration.Zero)
+    }
+    "come back online on the next keep-alive, and probe on demand when offline" in {
+      val reports = createTestProbe[Report]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = false))
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      manualTime.timePasses(1.second)
+      reports.expectNoMessage(Duration.Zero)
+      heartbeat ! ProbeNow
+      val id = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(id)
+      reports.receiveMessage() shouldBe a[ProbeRoundTrip]
+      reports.expectMessage(CameOnline)
+    }
+    "ignore answers to probes it did not send" in {
+      val reports = createTestProbe[Report]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      manualTime.timePasses(400.millis)
+      val id = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(id + 1)
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+    }
+    "report a degraded link with hysteresis instead of flapping" in {
+      val reports = createTestProbe[Report]()
+      val heartbeat = spawn(HeartBeatActor(settings.copy(quietAfter = 1.second), reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      // Every keep-alive for a full window: good, nothing reported.
+      (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectNoMessage(Duration.Zero)
+      // Every second keep-alive lost: 50 % over the window -> degraded once.
+      (1 to 20).foreach { i => if (i % 2 == 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectMessage(QualityChanged(LinkQuality.Degraded))
+      reports.expectNoMessage(Duration.Zero)
+      // 85 % is above the degraded threshold but not above the good one: still degraded.
+      (1 to 20).foreach { i => if (i % 7 != 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectNoMessage(Duration.Zero)
+      (1 to 12).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectMessage(QualityChanged(LinkQuality.Good))
+    }
+  }
+}
