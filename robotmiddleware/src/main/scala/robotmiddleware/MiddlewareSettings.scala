@@ -1,0 +1,42 @@
+package robotmiddleware
+
+import scala.concurrent.duration._
+import scala.jdk.DurationConverters._
+
+import akka.actor.typed.ActorSystem
+import com.typesafe.config.Config
+
+/** Settings of the middleware (`robotmiddleware { ... }`). */
+final case class MiddlewareSettings(
+    lowBattery: Double,
+    batteryOk: Double,
+    walkRefresh: FiniteDuration,
+    callTimeout: FiniteDuration,
+    postureTimeout: FiniteDuration,
+    linkStatsInterval: FiniteDuration,
+    pendingLimit: Int
+) {
+  require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
+  require(walkRefresh > Duration.Zero && walkRefresh < 500.millis, "walk-refresh must be inside the robot's 500 ms walk lease")
+  require(callTimeout > Duration.Zero && postureTimeout >= callTimeout, "need 0 < call-timeout <= posture-timeout")
+  require(linkStatsInterval > Duration.Zero, "link-stats-interval must be positive")
+  require(pendingLimit >= 1, "pending-limit must be at least 1")
+}
+
+/** Reading the settings. */
+object MiddlewareSettings {
+
+  /** The settings of this system's configuration. */
+  def apply(system: ActorSystem[_]): MiddlewareSettings = fromConfig(system.settings.config.getConfig("robotmiddleware"))
+
+  /** The settings of a `robotmiddleware` block. */
+  def fromConfig(c: Config): MiddlewareSettings = MiddlewareSettings(
+    c.getDouble("safety.low-battery"),
+    c.getDouble("safety.battery-ok"),
+    c.getDuration("walk-refresh").toScala,
+    c.getDuration("call-timeout").toScala,
+    c.getDuration("posture-timeout").toScala,
+    c.getDuration("link-stats-interval").toScala,
+    c.getInt("pending-limit")
+  )
+}

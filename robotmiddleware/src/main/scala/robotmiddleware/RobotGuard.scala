@@ -1,0 +1,286 @@
+package robotmiddleware
+
+import scala.concurrent.duration._
+import scala.util.{Failure, Success}
+
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
+import akka.actor.typed.{ActorRef, Behavior}
+import akka.util.Timeout
+
+import naogateway._
+import naogateway.wire.{RpcCall, RpcValue}
+
+/** An app as the middleware knows it: its event ref (its identity), name and priority. */
+final case class AppInfo(events: ActorRef[AppEvent], name: String, priority: Int)
+
+/** The middleware's decisions for one robot: leases per actuator group, safety, and the walk kept alive. */
+private[robotmiddleware] object RobotGuard {
+
+  /** What a guard accepts. */
+  sealed trait Command
+
+  final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult]) extends Command
+  final case class Acquire(app: AppInfo, group: ActuatorGroup, replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
+  final case class Release(app: ActorRef[AppEvent], group: ActuatorGroup) extends Command
+  final case class AppGone(app: ActorRef[AppEvent]) extends Command
+  final case class RobotEventReceived(event: RobotEvent) extends Command
+  final case class WatchVision(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+  final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
+
+  private final case class ChildrenReady(children: RobotActor.Connected) extends Command
+  private final case class OperationDone(
+      replyTo: ActorRef[RobotMiddleware.OperationResult],
+      operation: Operation,
+      result: Either[RobotFailure, Option[RpcValue]]
+  ) extends Command
+  private case object WalkRefresh extends Command
+  private case object StatsTick extends Command
+  private final case class StatsReceived(stats: LinkStats) extends Command
+  private final case class StatsWatcherGone(subscriber: ActorRef[LinkStats]) extends Command
+  private final case class SafetyStepDone(step: String, result: CallResult) extends Command
+
+  private case object WalkKey
+  private case object StatsKey
+
+  /** A guard for `robotId`, whose robot actor is `robot`. */
+  def apply(robotId: Int, robot: ActorRef[RobotActor.Command], settings: MiddlewareSettings, online: Boolean): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        Behaviors.withStash(settings.pendingLimit) { stash =>
+          robot ! RobotActor.Connect(context.messageAdapter(ChildrenReady.apply))
+          new Guard(robotId, robot, settings, context, timers, stash).connecting(online)
+        }
+      }
+    }
+
+  /** The lease table: holder per group. */
+  private type Leases = Map[ActuatorGroup, AppInfo]
+
+  private final class Guard(
+      robotId: Int,
+      robot: ActorRef[RobotActor.Command],
+      settings: MiddlewareSettings,
+      context: ActorContext[Command],
+      timers: TimerScheduler[Command],
+      stash: StashBuffer[Command]
+  ) {
+    private var leases: Leases = Map.empty
+    private var walking: Option[(Operation.Walk, AppInfo)] = None
+    private var safety: Option[String] = None
+    private var online = false
+    private var statsWatchers = Set.empty[ActorRef[LinkStats]]
+
+    private def failure(error: CallError): RobotFailure = error match {
+      case CallError.RobotError(_, message)   => RobotFailure.RobotError(robotId, message)
+      case CallError.RobotOffline(_)          => RobotFailure.RobotOffline(robotId)
+      case CallError.UnknownRobot(_)          => RobotFailure.UnknownRobot(robotId)
+      case CallError.Timeout(_, call, after)  => RobotFailure.Timeout(robotId, call, after.toMillis)
+      case CallError.RuleGate(rule)           => RobotFailure.RuleGate(rule)
+      case CallError.Overloaded(_, detail)    => RobotFailure.Overloaded(robotId, detail)
+      case CallError.Superseded(_, call)      => RobotFailure.Overloaded(robotId, s"$call replaced by a newer one")
+      case CallError.Interrupted(_, call)     => RobotFailure.Overloaded(robotId, s"$call interrupted, try again")
+    }
+
+    def connecting(initiallyOnline: Boolean): Behavior[Command] = {
+      online = initiallyOnline
+      Behaviors.receiveMessage {
+        case ChildrenReady(children) => stash.unstashAll(ready(children))
+        case e: Execute if !online =>
+          e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
+          Behaviors.same
+        case RobotEventReceived(event) =>
+          common(event)
+          Behaviors.same
+        case other =>
+          if (stash.isFull) other match {
+            case e: Execute =>
+              e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
+                Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
+            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.group.name, Left(RobotFailure.Overloaded(robotId, "busy")))
+            case _          => ()
+          }
+          else stash.stash(other)
+          Behaviors.same
+      }
+    }
+
+    /** Events that change the guard's view in any state. */
+    private def common(event: RobotEvent): Unit = event match {
+      case RobotOnline(_, _)  => online = true
+      case RobotOffline(_, _) =>
+        online = false
+        // The robot's own walk lease stops it; the middleware forgets the walk so it is not resumed by surprise.
+        if (walking.isDefined) {
+          timers.cancel(WalkKey)
+          walking = None
+        }
+      case _ => ()
+    }
+
+    private def ready(c: RobotActor.Connected): Behavior[Command] = Behaviors.receiveMessage {
+      case Execute(app, operation, replyTo) =>
+        val group = operation.group
+        val held = group.forall(g => leases.get(g).exists(_.events == app.events))
+        if (!online) reply(replyTo, operation, Left(RobotFailure.RobotOffline(robotId)))
+        else if (!held)
+          reply(replyTo, operation, Left(RobotFailure.LeaseNotHeld(robotId, group.get.name, group.flatMap(leases.get).map(_.name))))
+        else if (safety.isDefined && refusedWhenUnsafe(operation))
+          reply(replyTo, operation, Left(RobotFailure.SafetyHold(robotId, safety.get)))
+        else run(c, app, operation, replyTo)
+        Behaviors.same
+      case Acquire(app, group, replyTo) =>
+        leases.get(group) match {
+          case Some(holder) if holder.events == app.events =>
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name, Right(()))
+          case Some(holder) if holder.priority >= app.priority =>
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name,
+              Left(RobotFailure.LeaseNotHeld(robotId, group.name, Some(holder.name))))
+          case previous =>
+            previous.foreach { holder =>
+              context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name, holder.name, app.name)
+              holder.events ! AppEvent.LeasePreempted(robotId, group.name, app.name)
+              if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
+            }
+            leases = leases.updated(group, app)
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name, Right(()))
+        }
+        Behaviors.same
+      case Release(app, group) =>
+        if (leases.get(group).exists(_.events == app)) {
+          leases -= group
+          if (group == ActuatorGroup.Walk) stopWalking(c, "lease released")
+        }
+        Behaviors.same
+      case AppGone(app) =>
+        val held = leases.collect { case (g, holder) if holder.events == app => g }
+        if (held.nonEmpty) {
+          context.log.info("Robot [{}]: app gone, releasing {}", robotId, held.map(_.name).mkString(","))
+          leases --= held
+          if (held.exists(_ == ActuatorGroup.Walk)) stopWalking(c, "app gone")
+        }
+        Behaviors.same
+      case OperationDone(replyTo, operation, result) =>
+        replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
+        // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
+        if (result.isLeft && operation.isInstanceOf[Operation.Posture] && online) stopWalking(c, s"${operation.name} failed")
+        Behaviors.same
+      case WalkRefresh =>
+        walking.foreach { case (w, _) => c.noResponse ! NoResponseActor.Send(walkCall(w)) }
+        Behaviors.same
+      case RobotEventReceived(event) =>
+        common(event)
+        event match {
+          case RobotStatusUpdated(snapshot) => checkBattery(c, snapshot)
+          case RobotOnline(_, _) =>
+            // Back from a lost link: put the robot in a defined state before anyone moves it again.
+            c.response ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), safetyAdapter("stop after reconnect"), Priority.Safety)
+          case _ => ()
+        }
+        Behaviors.same
+      case SafetyStepDone(step, result) =>
+        result.result match {
+          case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step, error.describe)
+          case Right(_) =>
+            if (step == "stop" && safety.isDefined)
+              c.response ! ResponseActor.Call(RpcCall("motion", "posture", Vector(RpcValue.Text("sit"))), safetyAdapter("sit"),
+                Priority.Safety, Some(settings.postureTimeout))
+        }
+        Behaviors.same
+      case WatchVision(subscriber, grid) =>
+        c.vision ! VisionActor.Register(subscriber, grid)
+        Behaviors.same
+      case WatchLinkStats(subscriber) =>
+        context.watchWith(subscriber, StatsWatcherGone(subscriber))
+        statsWatchers += subscriber
+        if (!timers.isTimerActive(StatsKey)) timers.startTimerWithFixedDelay(StatsKey, StatsTick, settings.linkStatsInterval)
+        Behaviors.same
+      case StatsWatcherGone(subscriber) =>
+        statsWatchers -= subscriber
+        if (statsWatchers.isEmpty) timers.cancel(StatsKey)
+        Behaviors.same
+      case StatsTick =>
+        robot ! RobotActor.GetLinkStats(statsAdapter)
+        Behaviors.same
+      case StatsReceived(stats) =>
+        statsWatchers.foreach(_ ! stats)
+        Behaviors.same
+      case ChildrenReady(_) => Behaviors.same
+    }
+
+    private lazy val statsAdapter = context.messageAdapter[LinkStats](StatsReceived.apply)
+
+
+    private def safetyAdapter(step: String): ActorRef[CallResult] =
+      context.messageAdapter[CallResult](r => SafetyStepDone(step, r))
+
+    private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
+      case _: Operation.Walk | _: Operation.Arms => true
+      case Operation.Posture(p)                  => p != "sit"
+      case r: Operation.RawCall                  => r.group.contains(ActuatorGroup.Walk) && r.method != "stop"
+      case _                                     => false
+    }
+
+    private def checkBattery(c: RobotActor.Connected, snapshot: RobotSnapshot): Unit =
+      snapshot.batteryVoltage.foreach { volts =>
+        if (safety.isEmpty && volts < settings.lowBattery) {
+          val reason = f"battery low: $volts%.2f V (below ${settings.lowBattery}%.2f V)"
+          context.log.warn("Robot [{}]: {}; stopping and sitting down", robotId, reason)
+          safety = Some(reason)
+          leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))
+          stopWalking(c, reason, thenSit = true)
+        } else if (safety.isDefined && volts > settings.batteryOk) {
+          context.log.info("Robot [{}]: battery back at {} V; motion allowed again", robotId, volts)
+          safety = None
+          leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyCleared(robotId))
+        }
+      }
+
+    private def stopWalking(c: RobotActor.Connected, why: String, thenSit: Boolean = false): Unit = {
+      if (walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
+      timers.cancel(WalkKey)
+      walking = None
+      c.response ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), safetyAdapter(if (thenSit) "stop" else "stop only"),
+        Priority.Safety)
+    }
+
+    private def walkCall(w: Operation.Walk): RpcCall =
+      RpcCall("motion", "walk", Vector(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat), RpcValue.Number(w.omega.toFloat)))
+
+    private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation, result: Either[RobotFailure, Option[RpcValue]])
+        : Unit = replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
+
+    private def call(c: RobotActor.Connected, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
+        priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
+      implicit val askTimeout: Timeout = timeout + 1.second
+      context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
+        case Success(result) => OperationDone(replyTo, operation, result.result.left.map(failure))
+        case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
+      }
+    }
+
+    private def run(c: RobotActor.Connected, app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult])
+        : Unit = operation match {
+      case w: Operation.Walk =>
+        // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.
+        walking = Some(w -> app)
+        timers.startTimerWithFixedDelay(WalkKey, WalkRefresh, settings.walkRefresh)
+        call(c, walkCall(w), operation, replyTo)
+      case Operation.Stop() =>
+        timers.cancel(WalkKey)
+        walking = None
+        call(c, RpcCall("motion", "stop", Vector.empty), operation, replyTo, Priority.Safety)
+      case Operation.Head(pan, tilt) =>
+        call(c, RpcCall("motion", "head", Vector(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat))), operation, replyTo)
+      case Operation.Arms(ls, le, rs, re) =>
+        call(c, RpcCall("motion", "arms", Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat))), operation, replyTo)
+      case Operation.Posture(p) =>
+        timers.cancel(WalkKey)
+        walking = None
+        call(c, RpcCall("motion", "posture", Vector(RpcValue.Text(p))), operation, replyTo, timeout = settings.postureTimeout)
+      case Operation.Say(text) => call(c, RpcCall("speech", "say", Vector(RpcValue.Text(text))), operation, replyTo)
+      case r: Operation.RawCall =>
+        val timeout = if (r.name == "motion.posture") settings.postureTimeout else settings.callTimeout
+        call(c, RpcCall(r.module, r.method, r.params), operation, replyTo, timeout = timeout)
+    }
+  }
+}

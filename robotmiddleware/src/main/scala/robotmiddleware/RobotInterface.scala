@@ -1,0 +1,209 @@
+package robotmiddleware
+
+import scala.concurrent.duration._
+import scala.concurrent.{ExecutionContext, Future}
+
+import akka.actor.typed.receptionist.Receptionist
+import akka.actor.typed.scaladsl.AskPattern._
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, ActorSystem, Behavior, Terminated}
+import akka.stream.OverflowStrategy
+import akka.stream.scaladsl.Source
+import akka.stream.typed.scaladsl.ActorSource
+import akka.util.Timeout
+import akka.{Done, NotUsed}
+
+import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.wire.RpcValue
+import naogateway.wire.gamecontroller.GameControlData
+
+/** What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor. */
+trait RobotInterface {
+
+  /** This app's name, as other apps and logs see it. */
+  def appName: String
+
+  /** Every known robot's latest snapshot. */
+  def robots(): Future[Vector[RobotSnapshot]]
+
+  /** Takes the leases of `groups` on a robot; fails with `LeaseNotHeld` when a holder of equal or higher priority has one. */
+  def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done]
+
+  /** Gives leases back (releasing `walk` stops the robot). */
+  def release(robotId: Int, groups: ActuatorGroup*): Unit
+
+  /** Walks with these velocities (m/s, m/s, rad/s) until changed or stopped; needs the `walk` lease. */
+  def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done]
+
+  /** Stops walking; needs the `walk` lease. */
+  def stop(robotId: Int): Future[Done]
+
+  /** Turns the head (radians); needs the `head` lease. */
+  def head(robotId: Int, pan: Double, tilt: Double): Future[Done]
+
+  /** Sets the arm joints (radians); needs the `arms` lease. */
+  def arms(robotId: Int, leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double): Future[Done]
+
+  /** Goes to "sit", "stand" or "crouch"; completes with the posture reached when the motion has ended; needs `walk`. */
+  def posture(robotId: Int, posture: String): Future[String]
+
+  /** Says a text; needs the `speech` lease. */
+  def say(robotId: Int, text: String): Future[Done]
+
+  /** Any call of the robot's RPC interface (motion and speech calls need their lease). */
+  def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]]
+
+  /** The robot's keep-alive snapshots, starting with the latest known. */
+  def status(robotId: Int): Source[RobotSnapshot, NotUsed]
+
+  /** Snapshots of every robot. */
+  def allStatus: Source[RobotSnapshot, NotUsed]
+
+  /** HaViMo2 frames of a robot, newest only; `grid` adds the (large) grid frames. */
+  def vision(robotId: Int, grid: Boolean = false): Source[VisionFrame, NotUsed]
+
+  /** A robot's link figures, about once a second. */
+  def linkStats(robotId: Int): Source[LinkStats, NotUsed]
+
+  /** GameController packets as they arrive. */
+  def gameState: Source[GameControlData, NotUsed]
+
+  /** Robots going online, offline, restarting, changing link quality. */
+  def robotEvents: Source[RobotEvent, NotUsed]
+
+  /** What the middleware tells this app: preempted leases, safety stops. */
+  def appEvents: Source[AppEvent, NotUsed]
+
+  /** Ends this app's session: its leases are released and its walking robots stopped. */
+  def close(): Unit
+}
+
+/** Connecting an app to the middleware, in the app's own actor system. */
+object RobotClient {
+
+  /** Finds the middleware through the receptionist (local, or cluster-wide when the system is a cluster node). */
+  def find(system: ActorSystem[_], within: FiniteDuration = 10.seconds): Future[ActorRef[RobotMiddleware.Command]] = {
+    implicit val ec: ExecutionContext = system.executionContext
+    val deadline = within.fromNow
+    def attempt(): Future[ActorRef[RobotMiddleware.Command]] =
+      system.receptionist.ask[Receptionist.Listing](Receptionist.Find(RobotMiddleware.ServiceKey, _))(Timeout(within), system.scheduler)
+        .flatMap { listing =>
+          listing.serviceInstances(RobotMiddleware.ServiceKey).headOption match {
+            case Some(ref) => Future.successful(ref)
+            case None if deadline.hasTimeLeft() =>
+              akka.pattern.after(200.millis)(attempt())(system)
+            case None => Future.failed(new NoSuchElementException(s"no robot middleware found within $within"))
+          }
+        }
+    attempt()
+  }
+
+  /** Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. */
+  def connect(system: ActorSystem[_], middleware: ActorRef[RobotMiddleware.Command], appName: String, priority: Int = 0,
+      timeout: FiniteDuration = 10.seconds): Future[RobotInterface] = {
+    implicit val s: ActorSystem[_] = system
+    implicit val t: Timeout = Timeout(timeout)
+    implicit val ec: ExecutionContext = system.executionContext
+    val session = system.systemActorOf(AppSessionActor(), s"app-${java.net.URLEncoder.encode(appName, "UTF-8")}-${System.nanoTime()}")
+    middleware
+      .ask[RobotMiddleware.AppRegistered](RobotMiddleware.RegisterApp(appName, priority, session, _))
+      .map(_ => new ClientImpl(system, middleware, session, appName, timeout))
+  }
+
+  /** `find` then `connect`. */
+  def apply(system: ActorSystem[_], appName: String, priority: Int = 0): Future[RobotInterface] =
+    find(system).flatMap(connect(system, _, appName, priority))(system.executionContext)
+
+  private final class ClientImpl(
+      system: ActorSystem[_],
+      middleware: ActorRef[RobotMiddleware.Command],
+      session: ActorRef[SessionMessage],
+      val appName: String,
+      timeout: FiniteDuration
+  ) extends RobotInterface {
+    private implicit val s: ActorSystem[_] = system
+    // Posture changes take seconds on the robot; the ask outlives the middleware's own timeouts.
+    private implicit val askTimeout: Timeout = Timeout(timeout + 5.seconds)
+    private implicit val ec: ExecutionContext = system.executionContext
+
+    private def execute(robotId: Int, operation: Operation): Future[Option[RpcValue]] =
+      middleware.ask[RobotMiddleware.OperationResult](RobotMiddleware.Execute(session, robotId, operation, _)).flatMap { r =>
+        r.result.fold(Future.failed, Future.successful)
+      }
+
+    private def done(f: Future[Option[RpcValue]]): Future[Done] = f.map(_ => Done)
+
+    def robots(): Future[Vector[RobotSnapshot]] = middleware.ask(RobotMiddleware.ListRobots(_))
+
+    def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] =
+      Future
+        .traverse(groups.distinct) { g =>
+          middleware.ask[RobotMiddleware.LeaseResult](RobotMiddleware.Acquire(session, robotId, g, _)).flatMap { r =>
+            r.result.fold(Future.failed, _ => Future.successful(Done))
+          }
+        }
+        .map(_ => Done)
+
+    def release(robotId: Int, groups: ActuatorGroup*): Unit =
+      groups.foreach(g => middleware ! RobotMiddleware.Release(session, robotId, g))
+
+    def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] =
+      done(execute(robotId, Operation.Walk(vx, vy, omega)))
+    def stop(robotId: Int): Future[Done] = done(execute(robotId, Operation.Stop()))
+    def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done(execute(robotId, Operation.Head(pan, tilt)))
+    def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] =
+      done(execute(robotId, Operation.Arms(ls, le, rs, re)))
+    def posture(robotId: Int, posture: String): Future[String] =
+      Future(Operation.Posture(posture)).flatMap(execute(robotId, _)).map {
+        case Some(RpcValue.Text(reached)) => reached
+        case other                        => other.fold(posture)(_.toString)
+      }
+    def say(robotId: Int, text: String): Future[Done] = done(execute(robotId, Operation.Say(text)))
+    def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
+      execute(robotId, Operation.RawCall(module, method, params.toVector))
+
+    private def source[T](buffer: Int)(register: ActorRef[T] => Unit): Source[T, NotUsed] =
+      ActorSource
+        .actorRef[T](PartialFunction.empty, PartialFunction.empty, buffer, OverflowStrategy.dropHead)
+        .mapMaterializedValue { ref => register(ref); NotUsed }
+
+    def status(robotId: Int): Source[RobotSnapshot, NotUsed] =
+      source[RobotSnapshot](16)(ref => middleware ! RobotMiddleware.WatchStatus(Some(robotId), ref))
+    def allStatus: Source[RobotSnapshot, NotUsed] =
+      source[RobotSnapshot](256)(ref => middleware ! RobotMiddleware.WatchStatus(None, ref))
+    def vision(robotId: Int, grid: Boolean): Source[VisionFrame, NotUsed] =
+      source[VisionFrame](1)(ref => middleware ! RobotMiddleware.WatchVision(robotId, ref, grid))
+    def linkStats(robotId: Int): Source[LinkStats, NotUsed] =
+      source[LinkStats](4)(ref => middleware ! RobotMiddleware.WatchLinkStats(robotId, ref))
+    def gameState: Source[GameControlData, NotUsed] =
+      source[GameControlData](4)(ref => middleware ! RobotMiddleware.WatchGame(ref))
+    def robotEvents: Source[RobotEvent, NotUsed] =
+      source[RobotEvent](64)(ref => middleware ! RobotMiddleware.WatchEvents(ref))
+    def appEvents: Source[AppEvent, NotUsed] =
+      source[AppEvent](64)(ref => session ! SessionMessage.SubscribeAppEvents(ref))
+
+    def close(): Unit = session ! SessionMessage.Close
+  }
+}
+
+/** An app's session: its identity at the middleware, and the fan-out of the middleware's events to local streams. */
+object AppSessionActor {
+
+  /** A session with no subscribers yet. */
+  def apply(): Behavior[SessionMessage] = running(Set.empty)
+
+  private def running(subscribers: Set[ActorRef[AppEvent]]): Behavior[SessionMessage] =
+    Behaviors
+      .receive[SessionMessage] {
+        case (context, SessionMessage.SubscribeAppEvents(subscriber)) =>
+          context.watch(subscriber)
+          running(subscribers + subscriber)
+        case (_, SessionMessage.Close) => Behaviors.stopped
+        case (_, event: AppEvent) =>
+          subscribers.foreach(_ ! event)
+          Behaviors.same
+      }
+      .receiveSignal { case (_, Terminated(ref)) =>
+        running(subscribers.filterNot(_ == ref))
+      }
+}

@@ -1,0 +1,191 @@
+package robotmiddleware
+
+import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
+import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
+import scala.concurrent.duration._
+
+import naogateway._
+import naogateway.wire.RpcValue
+import naogateway.wire.gamecontroller.GameControlData
+
+/** The one middleware per gateway: apps register here, and every decision about a robot is taken by its guard. */
+object RobotMiddleware {
+
+  /** Where apps find the middleware through the receptionist. */
+  val ServiceKey: ServiceKey[Command] = akka.actor.typed.receptionist.ServiceKey[Command]("robot-middleware")
+
+  /** What the middleware accepts. */
+  sealed trait Command
+
+  /** An app introduces itself; its leases live as long as `events` does. */
+  final case class RegisterApp(name: String, priority: Int, events: ActorRef[AppEvent], replyTo: ActorRef[AppRegistered])
+      extends Command
+
+  /** Runs `operation` on robot `robotId` for the app whose event ref is `app`. */
+  final case class Execute(app: ActorRef[AppEvent], robotId: Int, operation: Operation, replyTo: ActorRef[OperationResult])
+      extends Command
+
+  /** Asks for the lease of `group` on robot `robotId`, preempting a lower-priority holder. */
+  final case class Acquire(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup, replyTo: ActorRef[LeaseResult])
+      extends Command
+
+  /** Gives a lease back. */
+  final case class Release(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup) extends Command
+
+  /** Answers with every known robot's latest snapshot. */
+  final case class ListRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Command
+
+  /** Streams snapshots of one robot (or all) to `subscriber` until it stops. */
+  final case class WatchStatus(robotId: Option[Int], subscriber: ActorRef[RobotSnapshot]) extends Command
+
+  /** Streams HaViMo2 frames of a robot to `subscriber` (newest only). */
+  final case class WatchVision(robotId: Int, subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+
+  /** Streams a robot's link figures to `subscriber` at the configured interval. */
+  final case class WatchLinkStats(robotId: Int, subscriber: ActorRef[LinkStats]) extends Command
+
+  /** Streams GameController packets to `subscriber`. */
+  final case class WatchGame(subscriber: ActorRef[GameControlData]) extends Command
+
+  /** Streams robot events (online, offline, restarts, quality) to `subscriber`. */
+  final case class WatchEvents(subscriber: ActorRef[RobotEvent]) extends Command
+
+  private final case class GatewayEventReceived(event: GatewayEvent) extends Command
+  private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
+  private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
+  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]], retry: Command) extends Command
+
+  /** The answer to `RegisterApp`. */
+  final case class AppRegistered(name: String)
+
+  /** The one answer every `Execute` gets. */
+  final case class OperationResult(robotId: Int, operation: String, result: Either[RobotFailure, Option[RpcValue]])
+
+  /** The answer to `Acquire`. */
+  final case class LeaseResult(robotId: Int, group: String, result: Either[RobotFailure, Unit])
+
+  /** The middleware in front of `gateway`, registered with the receptionist. */
+  def apply(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings): Behavior[Command] =
+    Behaviors.setup { context =>
+      context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
+      gateway ! Gateway.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
+      new Middleware(gateway, settings, context).running()
+    }
+
+  private final class Middleware(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings, context: ActorContext[Command]) {
+    private var apps = Map.empty[ActorRef[AppEvent], AppInfo]
+    private var guards = Map.empty[Int, ActorRef[RobotGuard.Command]]
+    private var online = Map.empty[Int, Boolean]
+    private var snapshots = Map.empty[Int, RobotSnapshot]
+    private var statusWatchers = Map.empty[ActorRef[RobotSnapshot], Option[Int]]
+    private var gameWatchers = Set.empty[ActorRef[GameControlData]]
+    private var eventWatchers = Set.empty[ActorRef[RobotEvent]]
+
+    private def guard(robotId: Int, robot: ActorRef[RobotActor.Command]): ActorRef[RobotGuard.Command] =
+      guards.getOrElse(robotId, {
+        val g = context.spawn(
+          Behaviors.supervise(RobotGuard(robotId, robot, settings, online.getOrElse(robotId, false)))
+            .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)),
+          s"guard-$robotId"
+        )
+        guards = guards.updated(robotId, g)
+        g
+      })
+
+    private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(3.seconds)
+
+    /** Hands `command` to the robot's guard, first finding the robot at the gateway when there is no guard yet. */
+    private def withGuard(robotId: Int, command: Command)(use: ActorRef[RobotGuard.Command] => Unit): Unit =
+      guards.get(robotId) match {
+        case Some(g) => use(g)
+        case None =>
+          context.ask(gateway, (ref: ActorRef[Option[ActorRef[RobotActor.Command]]]) => Gateway.GetRobot(robotId, ref)) {
+            case scala.util.Success(found) => RobotFound(robotId, found, command)
+            case scala.util.Failure(_)     => RobotFound(robotId, None, command)
+          }
+      }
+
+    private def unknownApp(app: ActorRef[AppEvent]): AppInfo = AppInfo(app, s"unregistered app ${app.path.name}", 0)
+
+    def running(): Behavior[Command] = Behaviors.receiveMessage {
+      case RegisterApp(name, priority, events, replyTo) =>
+        context.log.info("App [{}] registered with priority {}", name, priority)
+        context.watchWith(events, AppTerminated(events))
+        apps = apps.updated(events, AppInfo(events, name, priority))
+        replyTo ! AppRegistered(name)
+        Behaviors.same
+      case c @ Execute(app, robotId, operation, replyTo) =>
+        withGuard(robotId, c)(_ ! RobotGuard.Execute(apps.getOrElse(app, unknownApp(app)), operation, replyTo))
+        Behaviors.same
+      case c @ Acquire(app, robotId, group, replyTo) =>
+        withGuard(robotId, c)(_ ! RobotGuard.Acquire(apps.getOrElse(app, unknownApp(app)), group, replyTo))
+        Behaviors.same
+      case Release(app, robotId, group) =>
+        guards.get(robotId).foreach(_ ! RobotGuard.Release(app, group))
+        Behaviors.same
+      case c @ WatchVision(robotId, subscriber, grid) =>
+        withGuard(robotId, c)(_ ! RobotGuard.WatchVision(subscriber, grid))
+        Behaviors.same
+      case c @ WatchLinkStats(robotId, subscriber) =>
+        withGuard(robotId, c)(_ ! RobotGuard.WatchLinkStats(subscriber))
+        Behaviors.same
+      case RobotFound(robotId, Some(robot), command) =>
+        guard(robotId, robot)
+        context.self ! command
+        Behaviors.same
+      case RobotFound(robotId, None, command) =>
+        command match {
+          case Execute(_, _, operation, replyTo) =>
+            replyTo ! OperationResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
+          case Acquire(_, _, group, replyTo) => replyTo ! LeaseResult(robotId, group.name, Left(RobotFailure.UnknownRobot(robotId)))
+          case _                             => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
+        }
+        Behaviors.same
+      case ListRobots(replyTo) =>
+        replyTo ! snapshots.values.toVector.sortBy(_.robotId)
+        Behaviors.same
+      case WatchStatus(robotId, subscriber) =>
+        context.watchWith(subscriber, WatcherGone(subscriber))
+        statusWatchers = statusWatchers.updated(subscriber, robotId)
+        snapshots.values.filter(s => robotId.forall(_ == s.robotId)).foreach(subscriber ! _)
+        Behaviors.same
+      case WatchGame(subscriber) =>
+        context.watchWith(subscriber, WatcherGone(subscriber))
+        gameWatchers += subscriber
+        Behaviors.same
+      case WatchEvents(subscriber) =>
+        context.watchWith(subscriber, WatcherGone(subscriber))
+        eventWatchers += subscriber
+        Behaviors.same
+      case WatcherGone(subscriber) =>
+        statusWatchers = statusWatchers.filterNot(_._1 == subscriber)
+        gameWatchers = gameWatchers.filterNot(_ == subscriber)
+        eventWatchers = eventWatchers.filterNot(_ == subscriber)
+        Behaviors.same
+      case AppTerminated(app) =>
+        context.log.info("App [{}] is gone: releasing its leases and stopping its robots", apps.get(app).map(_.name).getOrElse("?"))
+        apps -= app
+        guards.values.foreach(_ ! RobotGuard.AppGone(app))
+        Behaviors.same
+      case GatewayEventReceived(event) =>
+        event match {
+          case e: RobotEvent =>
+            e match {
+              case RobotStatusUpdated(s) =>
+                snapshots = snapshots.updated(s.robotId, s)
+                statusWatchers.foreach { case (w, filter) => if (filter.forall(_ == s.robotId)) w ! s }
+              case RobotOnline(id, _)  => online = online.updated(id, true)
+              case RobotOffline(id, _) =>
+                online = online.updated(id, false)
+                snapshots.get(id).foreach(s => snapshots = snapshots.updated(id, s.copy(online = false, quality = LinkQuality.Offline)))
+              case _ => ()
+            }
+            guards.get(e.robotId).foreach(_ ! RobotGuard.RobotEventReceived(e))
+            if (!e.isInstanceOf[RobotStatusUpdated]) eventWatchers.foreach(_ ! e)
+          case GameStateUpdated(data) => gameWatchers.foreach(_ ! data)
+        }
+        Behaviors.same
+    }
+  }
+}
