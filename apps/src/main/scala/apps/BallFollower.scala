@@ -1,0 +1,85 @@
+package apps
+
+import scala.concurrent.duration._
+import scala.util.{Failure, Success}
+
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior}
+import akka.stream.scaladsl.Sink
+
+import naogateway.VisionFrame
+import robotmiddleware.{ActuatorGroup, AppEvent, RobotInterface}
+
+/** The ball follower app: tracks the ball with the head from HaViMo2 regions and walks to it. */
+object BallFollower {
+
+  /** What the follower accepts. */
+  sealed trait Command
+
+  /** Answers whether the ball has been reached. */
+  final case class GetProgress(replyTo: ActorRef[Progress]) extends Command
+
+  private final case class Frame(frame: VisionFrame.Regions) extends Command
+  private final case class Leased(result: scala.util.Try[akka.Done]) extends Command
+  private final case class Preempted(event: AppEvent) extends Command
+  private case object Retry extends Command
+
+  /** How far the follower is. */
+  final case class Progress(reached: Boolean, lastDistance: Option[Double], frames: Long)
+
+  /** A follower steering robot `robotId` through `robot`. */
+  def apply(robot: RobotInterface, robotId: Int): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        implicit val system: akka.actor.typed.ActorSystem[_] = context.system
+
+        def acquire(): Unit =
+          context.pipeToSelf(robot.acquire(robotId, ActuatorGroup.Walk, ActuatorGroup.Head))(Leased.apply)
+
+        def following(state: BallFollowerControl.State, progress: Progress, lastWalk: (Double, Double)): Behavior[Command] =
+          Behaviors.receiveMessage {
+            case Frame(frame) =>
+              val (next, t) = BallFollowerControl.step(state, frame.regions)
+              robot.head(robotId, t.pan, t.tilt)
+              // Only changed velocities go out; the middleware keeps the current walk alive.
+              val walk = (t.vx, t.omega)
+              if (math.abs(walk._1 - lastWalk._1) > 0.02 || math.abs(walk._2 - lastWalk._2) > 0.05) {
+                if (walk == ((0.0, 0.0))) robot.stop(robotId) else robot.walk(robotId, t.vx, 0.0, t.omega)
+              }
+              if (next.reached && !state.reached) context.log.info("Robot [{}] reached the ball", robotId)
+              following(next, Progress(next.reached, t.ballDistance.orElse(progress.lastDistance), progress.frames + 1), walk)
+            case GetProgress(replyTo) =>
+              replyTo ! progress
+              Behaviors.same
+            case Preempted(event) =>
+              context.log.info("Ball follower on robot [{}]: {}", robotId, event)
+              timers.startSingleTimer(Retry, 2.seconds)
+              waiting(progress)
+            case Leased(_) | Retry => Behaviors.same
+          }
+
+        def waiting(progress: Progress): Behavior[Command] = Behaviors.receiveMessage {
+          case Retry =>
+            acquire()
+            Behaviors.same
+          case Leased(Success(_)) =>
+            context.log.info("Ball follower has robot [{}]", robotId)
+            context.pipeToSelf(robot.posture(robotId, "stand"))(_ => Retry)
+            following(BallFollowerControl.initial, progress, (0.0, 0.0))
+          case Leased(Failure(e)) =>
+            context.log.info("Ball follower waits for robot [{}]: {}", robotId, e.getMessage)
+            timers.startSingleTimer(Retry, 2.seconds)
+            Behaviors.same
+          case GetProgress(replyTo) =>
+            replyTo ! progress
+            Behaviors.same
+          case Frame(_) | Preempted(_) => Behaviors.same
+        }
+
+        robot.vision(robotId).collect { case r: VisionFrame.Regions => Frame(r) }.runWith(Sink.foreach(context.self ! _))
+        robot.appEvents.runWith(Sink.foreach(e => context.self ! Preempted(e)))
+        acquire()
+        waiting(Progress(reached = false, None, 0))
+      }
+    }
+}
