@@ -18,10 +18,10 @@ object BallFollowerControl {
   val ReachedDistance: Double = 0.25
 
   /** What the follower currently wants. */
-  final case class State(pan: Double, tilt: Double, lostFrames: Int, scanDirection: Double, reached: Boolean)
+  final case class State(pan: Double, tilt: Double, lostFrames: Int, scanDirection: Double, turn: Double, reached: Boolean)
 
   /** Head straight, looking slightly down. */
-  val initial: State = State(0.0, -0.3, 0, 1.0, reached = false)
+  val initial: State = State(0.0, -0.3, 0, 1.0, 1.0, reached = false)
 
   /** The commands for one frame. */
   final case class Targets(pan: Double, tilt: Double, vx: Double, omega: Double, ballDistance: Option[Double])
@@ -50,13 +50,13 @@ object BallFollowerControl {
         val reached = state.reached || distance < ReachedDistance
         val omega = if (reached) 0.0 else clamp(1.5 * bearing, -1.0, 1.0)
         val vx = if (reached) 0.0 else if (math.abs(bearing) > 0.6) 0.0 else clamp(0.6 * (distance - ReachedDistance + 0.1), 0.05, 0.3)
-        (State(pan, tilt, 0, state.scanDirection, reached), Targets(pan, tilt, vx, omega, Some(distance)))
+        (State(pan, tilt, 0, state.scanDirection, if (bearing < 0) -1.0 else 1.0, reached), Targets(pan, tilt, vx, omega, Some(distance)))
       case None =>
-        // Lost: sweep the head and turn slowly, so the ball comes back into view.
+        // Lost: sweep the head, and turn the body steadily towards where the ball was last seen.
         val lost = state.lostFrames + 1
         val next = state.pan + 0.15 * state.scanDirection
         val direction = if (math.abs(next) > 1.6) -state.scanDirection else state.scanDirection
-        val s = State(clamp(next, -1.6, 1.6), -0.3, lost, direction, state.reached && lost < 10)
-        (s, Targets(s.pan, s.tilt, 0.0, if (lost > 5 && !s.reached) 0.4 * direction else 0.0, None))
+        val s = State(clamp(next, -1.6, 1.6), -0.3, lost, direction, state.turn, state.reached && lost < 10)
+        (s, Targets(s.pan, s.tilt, 0.0, if (lost > 5 && !s.reached) 0.5 * state.turn else 0.0, None))
     }
 }
