@@ -10,6 +10,7 @@ import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
 import naogateway.wire._
+import naogateway.wire.stream.StreamSettings
 
 /** The supervisor of one robot: owns its address, liveness, children and link figures, and re-syncs it after restarts. */
 object RobotActor {
@@ -77,16 +78,18 @@ object RobotActor {
       robotId: Int,
       response: ActorRef[ResponseActor.Command],
       noResponse: ActorRef[NoResponseActor.Command],
-      vision: ActorRef[VisionActor.Command]
+      vision: ActorRef[VisionActor.Command],
+      stream: ActorRef[StreamActor.Command]
   )
 
   private final case class Children(
       heartbeat: ActorRef[HeartBeatActor.Command],
       response: ActorRef[ResponseActor.Command],
       noResponse: ActorRef[NoResponseActor.Command],
-      vision: ActorRef[VisionActor.Command]
+      vision: ActorRef[VisionActor.Command],
+      stream: ActorRef[StreamActor.Command]
   ) {
-    def connected(robotId: Int): Connected = Connected(robotId, response, noResponse, vision)
+    def connected(robotId: Int): Connected = Connected(robotId, response, noResponse, vision, stream)
   }
 
   private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
@@ -115,6 +118,7 @@ object RobotActor {
       stash: StashBuffer[Command]
   ) {
     private val heartbeatReports = context.messageAdapter[HeartBeatActor.Report](HeartbeatReport.apply)
+    private val streamSettings = StreamSettings(window = settings.streamWindow, maxSeq = settings.streamMaxSeq)
 
     // Link figures: mutable counters owned by this actor alone.
     private var address: InetSocketAddress = null
@@ -145,7 +149,8 @@ object RobotActor {
         heartbeat,
         context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response"),
         context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "no-response"),
-        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision")
+        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision"),
+        context.spawn(Behaviors.supervise(StreamActor(robotId, streamSettings, self)).onFailure(ChildRestarts), "stream")
       )
     }
 
@@ -237,6 +242,7 @@ object RobotActor {
       case SegmentReceived(bytes) =>
         datagramsIn += 1
         bytesIn += bytes.length
+        children.foreach(_.stream ! StreamActor.SegmentReceived(bytes))
         Behaviors.same
       case DatagramRejected(reason) =>
         count(reason)
@@ -332,7 +338,10 @@ object RobotActor {
       if (options.nonEmpty)
         context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options)))),
           Priority.Debug, None)
-      children.foreach(_.vision ! VisionActor.Resync)
+      children.foreach { c =>
+        c.vision ! VisionActor.Resync
+        c.stream ! StreamActor.Reset
+      }
       events ! RobotRestarted(robotId, snapshot.bootId, options)
     }
 
