@@ -1,0 +1,175 @@
+package robotmiddleware
+
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit, TestProbe}
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior}
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway._
+import naogateway.wire.{RpcCall, RpcValue}
+
+class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
+  private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 16)
+  private val robotAddress = new InetSocketAddress("127.0.0.1", 3838)
+
+  /** A gateway that knows robot 1 and hands out probes as the robot's children. */
+  private final class Fixture {
+    val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
+    val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
+    val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
+    val stream: TestProbe[StreamActor.Command] = createTestProbe[StreamActor.Command]()
+    val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
+
+    private val robot: Behavior[RobotActor.Command] = Behaviors.receiveMessage {
+      case RobotActor.Connect(replyTo) =>
+        replyTo ! RobotActor.Connected(1, response.ref, noResponse.ref, vision.ref, stream.ref)
+        Behaviors.same
+      case _ => Behaviors.same
+    }
+    private val robotRef = spawn(robot)
+    private val gateway: Behavior[Gateway.Command] = Behaviors.receiveMessage {
+      case Gateway.Subscribe(subscriber) =>
+        events.ref ! subscriber
+        Behaviors.same
+      case Gateway.GetRobot(id, replyTo) =>
+        replyTo ! (if (id == 1) Some(robotRef) else None)
+        Behaviors.same
+      case _ => Behaviors.same
+    }
+    val middleware: ActorRef[RobotMiddleware.Command] = spawn(RobotMiddleware(spawn(gateway), settings))
+    val publish: ActorRef[GatewayEvent] = events.receiveMessage()
+    publish ! RobotOnline(1, robotAddress)
+
+    def app(name: String, priority: Int): (ActorRef[SessionMessage], TestProbe[AppEvent]) = {
+      val appEvents = createTestProbe[AppEvent]()
+      val session = spawn(AppSessionActor())
+      session ! SessionMessage.SubscribeAppEvents(appEvents.ref)
+      val registered = createTestProbe[RobotMiddleware.AppRegistered]()
+      middleware ! RobotMiddleware.RegisterApp(name, priority, session, registered.ref)
+      registered.expectMessage(RobotMiddleware.AppRegistered(name))
+      (session, appEvents)
+    }
+
+    def acquire(session: ActorRef[SessionMessage], group: ActuatorGroup): RobotMiddleware.LeaseResult = {
+      val result = createTestProbe[RobotMiddleware.LeaseResult]()
+      middleware ! RobotMiddleware.Acquire(session, 1, group, result.ref)
+      result.receiveMessage()
+    }
+
+    def execute(session: ActorRef[SessionMessage], operation: Operation): TestProbe[RobotMiddleware.OperationResult] = {
+      val result = createTestProbe[RobotMiddleware.OperationResult]()
+      middleware ! RobotMiddleware.Execute(session, 1, operation, result.ref)
+      result
+    }
+
+    def expectCall(name: String): ResponseActor.Call = {
+      val call = response.fishForMessage(3.seconds) {
+        case c: ResponseActor.Call if c.call.name == name => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                                            => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+      }
+      call.last.asInstanceOf[ResponseActor.Call]
+    }
+  }
+
+  "The middleware" must {
+    "refuse an operation without the lease it needs, and run it once the lease is held" in {
+      val f = new Fixture
+      val (app, _) = f.app("teleop", 1)
+      f.execute(app, Operation.Head(0.3, 0.0)).expectMessageType[RobotMiddleware.OperationResult].result shouldBe
+        Left(RobotFailure.LeaseNotHeld(1, "head", None))
+      f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
+      val result = f.execute(app, Operation.Head(0.3, 0.0))
+      val call = f.expectCall("motion.head")
+      call.call.params shouldBe Vector(RpcValue.Number(0.3f), RpcValue.Number(0f))
+      call.replyTo ! CallResult(1, "motion.head", Right(Some(RpcValue.Flag(true))))
+      result.expectMessage(RobotMiddleware.OperationResult(1, "motion.head", Right(Some(RpcValue.Flag(true)))))
+    }
+    "let different apps hold different groups of one robot" in {
+      val f = new Fixture
+      val (walker, _) = f.app("walker", 1)
+      val (looker, _) = f.app("looker", 1)
+      f.acquire(walker, ActuatorGroup.Walk).result shouldBe Right(())
+      f.acquire(looker, ActuatorGroup.Head).result shouldBe Right(())
+      f.execute(looker, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe
+        Left(RobotFailure.LeaseNotHeld(1, "walk", Some("walker")))
+    }
+    "let a higher priority preempt a lease, tell the loser, and refuse equal priority" in {
+      val f = new Fixture
+      val (low, lowEvents) = f.app("follower", 1)
+      val (equal, _) = f.app("other", 1)
+      val (high, _) = f.app("referee", 5)
+      f.acquire(low, ActuatorGroup.Walk).result shouldBe Right(())
+      f.acquire(equal, ActuatorGroup.Walk).result shouldBe Left(RobotFailure.LeaseNotHeld(1, "walk", Some("follower")))
+      f.acquire(high, ActuatorGroup.Walk).result shouldBe Right(())
+      lowEvents.expectMessage(AppEvent.LeasePreempted(1, "walk", "referee"))
+      f.execute(low, Operation.Stop()).receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1, "walk", Some("referee")))
+    }
+    "keep a walk alive inside the robot's lease, and stop the robot when its app dies, freeing the lease" in {
+      val f = new Fixture
+      val (app, _) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      f.execute(app, Operation.Walk(0.2, 0, 0))
+      f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(Some(RpcValue.Flag(true))))
+      // Refreshes go the ordered fire-and-forget way, every 200 ms.
+      val refreshes = f.noResponse.receiveMessages(3, 3.seconds)
+      refreshes.foreach(_.asInstanceOf[NoResponseActor.Send].call.name shouldBe "motion.walk")
+      testKit.stop(app)
+      val stop = f.expectCall("motion.stop")
+      stop.priority shouldBe Priority.Safety
+      val (next, _) = f.app("next", 0)
+      f.acquire(next, ActuatorGroup.Walk).result shouldBe Right(())
+    }
+    "stop and sit a robot whose battery runs low, refuse motion until it recovers, and tell the lease holders" in {
+      val f = new Fixture
+      val (app, events) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
+      f.execute(app, Operation.Walk(0.2, 0, 0)) // established a guard and a walk
+      f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(None))
+      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true))
+      events.expectMessageType[AppEvent.SafetyStop].reason should include("battery low")
+      f.expectCall("motion.stop").replyTo ! CallResult(1, "motion.stop", Right(None))
+      f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
+      f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
+      f.execute(app, Operation.Posture("stand")).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
+      f.execute(app, Operation.Head(0.1, 0.0))
+      f.expectCall("motion.head")
+      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true))
+      events.expectMessage(AppEvent.SafetyCleared(1))
+      f.execute(app, Operation.Walk(0.1, 0, 0))
+      f.expectCall("motion.walk")
+    }
+    "fail operations fast while the robot is offline, and stop it when it comes back" in {
+      val f = new Fixture
+      val (app, _) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      f.publish ! RobotOffline(1, "test")
+      f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe Left(RobotFailure.RobotOffline(1))
+      f.publish ! RobotOnline(1, robotAddress)
+      f.expectCall("motion.stop").priority shouldBe Priority.Safety
+    }
+    "answer for robots the gateway does not know" in {
+      val f = new Fixture
+      val (app, _) = f.app("x", 1)
+      val result = createTestProbe[RobotMiddleware.OperationResult]()
+      f.middleware ! RobotMiddleware.Execute(app, 99, Operation.Say("hi"), result.ref)
+      result.receiveMessage().result shouldBe Left(RobotFailure.UnknownRobot(99))
+    }
+    "map call failures to typed robot failures" in {
+      val f = new Fixture
+      val (app, _) = f.app("x", 1)
+      f.acquire(app, ActuatorGroup.Speech).result shouldBe Right(())
+      val result = f.execute(app, Operation.Say("hi"))
+      f.expectCall("speech.say").replyTo ! CallResult(1, "speech.say", Left(CallError.RuleGate("rule")))
+      result.receiveMessage().result shouldBe Left(RobotFailure.RuleGate("rule"))
+      val raw = f.execute(app, Operation.RawCall("system", "battery", Vector.empty))
+      f.expectCall("system.battery").replyTo ! CallResult(1, "system.battery", Left(CallError.RobotError(1, "flat")))
+      raw.receiveMessage().result shouldBe Left(RobotFailure.RobotError(1, "flat"))
+      RpcCall("system", "battery", Vector.empty).name shouldBe "system.battery"
+    }
+  }
+}
