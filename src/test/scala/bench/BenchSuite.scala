@@ -29,10 +29,22 @@ object BenchSuite {
     }
     val out = Paths.get("target", "bench", "results.json")
     Files.createDirectories(out.getParent)
-    Files.write(out, toJson(results).getBytes(StandardCharsets.UTF_8))
+    // A run of some groups keeps the figures of the others from the previous run.
+    val merged = if (args.isEmpty) results else previous(out) ++ results
+    Files.write(out, toJson(merged).getBytes(StandardCharsets.UTF_8))
     println(table(results))
     println(s"written to ${out.toAbsolutePath}")
   }
+
+  private val Entry = """\s*"([^"]+)"\s*:\s*(-?[0-9.eE+-]+|null)\s*,?\s*""".r
+
+  /** The figures of an earlier results file, if there is one. */
+  def previous(file: java.nio.file.Path): ListMap[String, Double] =
+    if (!Files.exists(file)) ListMap.empty
+    else
+      ListMap.from(new String(Files.readAllBytes(file), StandardCharsets.UTF_8).linesIterator.collect {
+        case Entry(k, v) if v != "null" => k -> v.toDouble
+      })
 
   /** A flat JSON object, figure name to number. */
   def toJson(results: ListMap[String, Double]): String =

@@ -1,0 +1,86 @@
+package apps
+
+import java.io.{InputStream, PrintStream}
+
+import scala.concurrent.{ExecutionContext, Future}
+
+import robotmiddleware.{ActuatorGroup, RobotInterface}
+
+/** Keyboard teleoperation of one robot: keys become walk, head and posture commands through `RobotInterface`. */
+object Teleop {
+
+  /** What one key asks for. */
+  sealed trait Action extends Product with Serializable
+
+  /** The actions of the keyboard map. */
+  object Action {
+    final case class Walk(vx: Double, vy: Double, omega: Double) extends Action
+    case object Stop extends Action
+    final case class HeadBy(dPan: Double, dTilt: Double) extends Action
+    final case class Posture(name: String) extends Action
+    case object Quit extends Action
+  }
+
+  /** The keyboard map, shown by `help`. */
+  val keys: Vector[(Char, String, Action)] = Vector(
+    ('w', "walk forward", Action.Walk(0.2, 0.0, 0.0)),
+    ('s', "walk backward", Action.Walk(-0.1, 0.0, 0.0)),
+    ('a', "turn left", Action.Walk(0.0, 0.0, 0.6)),
+    ('d', "turn right", Action.Walk(0.0, 0.0, -0.6)),
+    ('q', "step left", Action.Walk(0.0, 0.1, 0.0)),
+    ('e', "step right", Action.Walk(0.0, -0.1, 0.0)),
+    (' ', "stop", Action.Stop),
+    ('h', "head left", Action.HeadBy(0.2, 0.0)),
+    ('l', "head right", Action.HeadBy(-0.2, 0.0)),
+    ('k', "head up", Action.HeadBy(0.0, 0.1)),
+    ('j', "head down", Action.HeadBy(0.0, -0.1)),
+    ('1', "sit", Action.Posture("sit")),
+    ('2', "stand", Action.Posture("stand")),
+    ('3', "crouch", Action.Posture("crouch")),
+    ('x', "quit", Action.Quit)
+  )
+
+  private val byKey: Map[Char, Action] = keys.map(k => k._1 -> k._3).toMap
+
+  /** The action of a key, if the key has one. */
+  def action(key: Char): Option[Action] = byKey.get(key.toLower)
+
+  /** The key map as text. */
+  def help: String = keys.map { case (k, text, _) => s"  ${if (k == ' ') "space" else k.toString}  $text" }.mkString("\n")
+
+  /**
+   * Reads keys from `in` until `x` or the end of input, steering `robotId`; every outcome is printed, no failure ends
+   * the session. Reads block: run it on a thread of its own, never inside an actor.
+   */
+  def run(robot: RobotInterface, robotId: Int, in: InputStream, out: PrintStream)(implicit ec: ExecutionContext): Unit = {
+    // Outcomes are printed when they arrive; the key loop never waits for the robot.
+    def report(what: String, f: Future[_]): Unit =
+      f.onComplete {
+        case scala.util.Success(_) => out.println(s"robot $robotId: $what")
+        case scala.util.Failure(e) => out.println(s"robot $robotId: $what failed: ${e.getMessage}")
+      }
+
+    report("leases taken", robot.acquire(robotId, ActuatorGroup.Walk, ActuatorGroup.Head))
+    out.println(help)
+    var pan = 0.0
+    var tilt = 0.0
+    var running = true
+    while (running) {
+      val c = in.read()
+      if (c < 0) running = false
+      else
+        action(c.toChar).foreach {
+          case Action.Quit => running = false
+          case Action.Walk(vx, vy, omega) => report(f"walk $vx%.1f $vy%.1f $omega%.1f", robot.walk(robotId, vx, vy, omega))
+          case Action.Stop                => report("stop", robot.stop(robotId))
+          case Action.HeadBy(dp, dt) =>
+            pan = math.max(-2.0, math.min(2.0, pan + dp))
+            tilt = math.max(-0.6, math.min(0.5, tilt + dt))
+            report(f"head $pan%.1f $tilt%.1f", robot.head(robotId, pan, tilt))
+          case Action.Posture(name) => report(s"posture $name", robot.posture(robotId, name))
+        }
+    }
+    report("stop", robot.stop(robotId))
+    robot.release(robotId, ActuatorGroup.Walk, ActuatorGroup.Head)
+  }
+}
