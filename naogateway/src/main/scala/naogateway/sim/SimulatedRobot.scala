@@ -1,0 +1,586 @@
+package naogateway.sim
+
+import java.net.{InetAddress, InetSocketAddress}
+
+import scala.concurrent.duration._
+
+import akka.Done
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
+import akka.actor.typed.{ActorRef, Behavior}
+
+import naogateway.link.UdpLink
+import naogateway.sim.gs1500m.{Cm530Config, Cm530Stats, Gs1500mConfig, Gs1500mCounters}
+import naogateway.wire.{Datagram, WireLimits}
+
+/** Settings of one simulated robot on a real UDP socket.
+  *
+  * @param firmware the simulated CM-530 firmware (robot id, team, role, timings, battery, scene, …)
+  * @param gateway where keep-alives, debug output and secure-stream segments go (the gateway's robot port; 11011 in
+  *   production)
+  * @param bindAddress the robot's own socket, where requests, GameController packets and segments arrive
+  * @param faithfulLink `true`: every datagram passes the GS1500M module and CM-530 models ([[FaithfulLink]]);
+  *   `false`: datagrams go straight between socket and firmware, the cheap mode for big fleets
+  * @param timeScale multiplies the modelled module and CM-530 durations (1.0 = the measured times)
+  * @param resetBootDelay how long the robot is silent after a `system.reset` call while its module boots
+  * @param module the GS1500M model; its own `timeScale` is replaced by `timeScale`
+  * @param cpu the CM-530 main-loop model; its costs are replaced by `timeScale`, its keep-alive is switched off
+  * @param seed the module's overflow coin and the main loop's random work
+  * @param receiveBufferBytes the socket's receive buffer in the operating system
+  * @param stream the robot's secure-stream endpoint, built afresh at every boot; `None`: segments are counted and
+  *   ignored
+  * @param keepAlivePhase the first keep-alive goes out this long after the start (at once after a power cycle), so
+  *   a fleet's keep-alives need not all leave in the same instant
+  */
+final case class SimulatedRobotSettings(
+    firmware: FirmwareSettings,
+    gateway: InetSocketAddress,
+    bindAddress: InetSocketAddress = SimulatedRobotSettings.AnyLoopbackPort,
+    faithfulLink: Boolean = true,
+    timeScale: Double = SimulatedRobotSettings.DefaultTimeScale,
+    resetBootDelay: FiniteDuration = SimulatedRobot.ModuleBootDelay,
+    module: Gs1500mConfig = Gs1500mConfig(),
+    cpu: Cm530Config = Cm530Config(),
+    seed: Long = 1L,
+    receiveBufferBytes: Int = SimulatedRobotSettings.DefaultReceiveBufferBytes,
+    stream: Option[RobotStream.Factory] = None,
+    keepAlivePhase: FiniteDuration = Duration.Zero
+) {
+  require(timeScale > 0.0 && !timeScale.isInfinite, s"timeScale must be positive, is $timeScale")
+  require(resetBootDelay >= Duration.Zero, "resetBootDelay must not be negative")
+  require(receiveBufferBytes > 0, "receiveBufferBytes must be positive")
+  require(keepAlivePhase >= Duration.Zero, "keepAlivePhase must not be negative")
+}
+
+/** Defaults of [[SimulatedRobotSettings]]. */
+object SimulatedRobotSettings {
+
+  /** Port 0 on 127.0.0.1: the operating system picks a free port. */
+  val AnyLoopbackPort: InetSocketAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, 0)
+
+  /** Modelled CM-530 and module times at 5 %: fast enough for tests, and the model still shapes every datagram. */
+  val DefaultTimeScale: Double = 0.05
+
+  /** Room for bursts in the operating system; the module model, not this buffer, is meant to be the bottleneck. */
+  val DefaultReceiveBufferBytes: Int = 256 * 1024
+}
+
+/** What a simulated robot counted on its socket, over its whole life (power cycles included). */
+final case class RobotCounters(
+    received: Long = 0,
+    sent: Long = 0,
+    droppedWhileOff: Long = 0,
+    streamSegments: Long = 0,
+    oversizeDropped: Long = 0,
+    powerCycles: Long = 0
+)
+
+/** A snapshot of one simulated robot, for tests and tools.
+  *
+  * @param online `false` while the robot is powered off or its module boots (it neither sends nor answers)
+  * @param onlineAgainIn while offline, the time left until the module answers again
+  * @param uptimeMillis since the last power-up (or reset)
+  * @param module counters of the GS1500M model since the last power-up (`None` without the faithful link)
+  * @param cpu counters of the CM-530 main loop since the last power-up (`None` without the faithful link)
+  */
+final case class RobotView(
+    robotId: Int,
+    teamId: Int,
+    role: String,
+    address: InetSocketAddress,
+    online: Boolean,
+    onlineAgainIn: Option[FiniteDuration],
+    bootId: Int,
+    uptimeMillis: Long,
+    posture: Posture,
+    battery: Double,
+    pose: Pose,
+    head: (Double, Double),
+    ball: (Double, Double),
+    debugEnabled: Set[String],
+    said: Vector[String],
+    firmware: FirmwareCounters,
+    counters: RobotCounters,
+    module: Option[Gs1500mCounters],
+    cpu: Option[Cm530Stats]
+)
+
+/** One simulated CM-530 robot on a real UDP socket: [[RobotFirmware]] in real time, behind the GS1500M and CM-530
+  * models ([[FaithfulLink]]) or straight on the socket.
+  *
+  * The robot sends keep-alives and debug output to the configured gateway address and answers each request to its
+  * sender. Time is `System.nanoTime` relative to the robot's start; the pure models run in that clock, and the actor
+  * wakes up with one keyed timer at the earliest moment any of them has something to do. Timers fire on the
+  * scheduler's tick (10 ms by default), so a datagram may leave up to one tick after the model put it on air; the
+  * models' own time order is unaffected, because every wake-up first catches them up to the present.
+  */
+object SimulatedRobot {
+
+  /** The GS1500M needs about 4 s after power-up before it answers (SPEC §7). */
+  val ModuleBootDelay: FiniteDuration = 4.seconds
+
+  /** What a simulated robot accepts. */
+  sealed trait Command
+
+  /** Asks for a snapshot of the robot. */
+  final case class GetState(replyTo: ActorRef[RobotView]) extends Command
+
+  /** Cuts the power: the robot falls silent at once, its firmware restarts (new boot id, uptime from now, debug options
+    * off, fresh stream), and its module answers again after `bootDelay`.
+    */
+  final case class PowerCycle(bootDelay: FiniteDuration = ModuleBootDelay) extends Command
+
+  /** Sets the battery voltage (e.g. an empty battery for a safety test). */
+  final case class SetBattery(volts: Double) extends Command
+
+  /** Moves the ball to field coordinates (metres); the camera sees the new scene from the next frame on. */
+  final case class MoveBall(x: Double, y: Double) extends Command
+
+  /** Closes the robot's socket and stops the robot; `Done` once the port is free. */
+  final case class Stop(replyTo: ActorRef[Done]) extends Command
+
+  private case object WakeUp extends Command
+  private case object ModuleUp extends Command
+  private case object StopTimedOut extends Command
+  private case object SocketGone extends Command
+  private final case class FromSocket(event: UdpLink.Event) extends Command
+
+  /** What a robot reports once its socket is bound, or could not be. */
+  sealed trait StartResult
+
+  /** The robot is running and receives at `address`. */
+  final case class Started(robotId: Int, robot: ActorRef[Command], address: InetSocketAddress) extends StartResult
+
+  /** The socket could not be bound; the robot has stopped. */
+  final case class StartFailed(robotId: Int, reason: String) extends StartResult
+
+  private case object WakeUpKey
+  private case object ModuleUpKey
+  private case object StopKey
+
+  // Commands that arrive before the socket is bound wait; more than this many means something is wrong.
+  private val StashCapacity = 1000
+  private val StopTimeout = 5.seconds
+  private val MinStreamTickNanos = 1000000L
+  private val MaxRounds = 8
+
+  /** A robot with `settings`; `reportTo` learns its bound address (or the failure). */
+  def apply(settings: SimulatedRobotSettings, reportTo: Option[ActorRef[StartResult]] = None): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        Behaviors.withStash(StashCapacity) { stash =>
+          val id = settings.firmware.robotId
+          val fromSocket = context.messageAdapter[UdpLink.Event](FromSocket.apply)
+          val options = UdpLink.Options(receiveBufferBytes = settings.receiveBufferBytes)
+          val socket = context.spawn(UdpLink(settings.bindAddress, fromSocket, options), "udp")
+          context.watchWith(socket, SocketGone)
+          val origin = System.nanoTime()
+
+          Behaviors.receiveMessage {
+            case FromSocket(UdpLink.Bound(_, local)) =>
+              context.log.debug("Simulated robot [{}] listens on {}", id, local)
+              reportTo.foreach(_ ! Started(id, context.self, local))
+              val robot = new SimulatedRobot(settings, context, timers, socket, local, origin)
+              stash.unstashAll(robot.start())
+            case FromSocket(UdpLink.BindFailed(address, reason)) =>
+              context.log.warn("Simulated robot [{}] cannot bind {}: {}", id, address, reason)
+              reportTo.foreach(_ ! StartFailed(id, reason))
+              Behaviors.stopped
+            case FromSocket(UdpLink.Received(_, _)) =>
+              Behaviors.same
+            case SocketGone =>
+              reportTo.foreach(_ ! StartFailed(id, "the socket stopped before it was bound"))
+              Behaviors.stopped
+            case Stop(replyTo) =>
+              socket ! UdpLink.Unbind
+              stoppingWithoutSocket(id, Vector(replyTo), timers, context)
+            case other =>
+              stashOrDrop(stash, other, context, id)
+          }
+        }
+      }
+    }
+
+  // Stop before the socket was bound: the link stops at once, taking its half-open socket with it.
+  private def stoppingWithoutSocket(
+      id: Int,
+      waiting: Vector[ActorRef[Done]],
+      timers: TimerScheduler[Command],
+      context: ActorContext[Command]
+  ): Behavior[Command] = {
+    timers.startSingleTimer(StopKey, StopTimedOut, StopTimeout)
+    Behaviors.receiveMessage {
+      case SocketGone | StopTimedOut =>
+        context.log.debug("Simulated robot [{}] stopped before it was bound", id)
+        waiting.foreach(_ ! Done)
+        Behaviors.stopped
+      case Stop(replyTo) => stoppingWithoutSocket(id, waiting :+ replyTo, timers, context)
+      case GetState(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
+        Behaviors.same
+    }
+  }
+
+  private def stashOrDrop(
+      stash: StashBuffer[Command],
+      command: Command,
+      context: ActorContext[Command],
+      id: Int
+  ): Behavior[Command] = {
+    if (stash.isFull) context.log.warn("Simulated robot [{}] dropped {} while binding its socket", id, command)
+    else stash.stash(command)
+    Behaviors.same
+  }
+
+  /** The robot's route back to a request that came through the secure stream. */
+  private val ThroughStream: InetSocketAddress = InetSocketAddress.createUnresolved("secure-stream", 0)
+
+  private final case class Out(bytes: Array[Byte], to: InetSocketAddress)
+
+  /** Everything that changes while the robot runs. `armedAt` is the wake-up timer's target (`Long.MinValue`: none). */
+  private final case class Robot(
+      firmware: FirmwareState,
+      link: Option[FaithfulLink],
+      stream: Option[RobotStream],
+      counters: RobotCounters,
+      armedAt: Long
+  )
+}
+
+private final class SimulatedRobot(
+    settings: SimulatedRobotSettings,
+    context: ActorContext[SimulatedRobot.Command],
+    timers: TimerScheduler[SimulatedRobot.Command],
+    socket: ActorRef[UdpLink.Command],
+    address: InetSocketAddress,
+    origin: Long
+) {
+  import SimulatedRobot._
+
+  private val id = settings.firmware.robotId
+  private val gateway = settings.gateway
+
+  private def now(): Long = System.nanoTime() - origin
+
+  def start(): Behavior[Command] = {
+    val t = now()
+    val booted = RobotFirmware.boot(settings.firmware, t)
+    val firmware = booted.copy(nextKeepAliveAt = t + settings.keepAlivePhase.toNanos)
+    val robot = Robot(firmware, freshLink(t), settings.stream.map(_(t)), RobotCounters(), Long.MinValue)
+    online(proceed(robot, t, None))
+  }
+
+  private def freshLink(t: Long): Option[FaithfulLink] =
+    if (settings.faithfulLink) Some(FaithfulLink(settings.module, settings.cpu, settings.timeScale, settings.seed, t))
+    else None
+
+  // Powered and on the air.
+  private def online(robot: Robot): Behavior[Command] =
+    Behaviors.receiveMessage {
+      case WakeUp =>
+        after(robot.copy(armedAt = Long.MinValue), None)
+      case FromSocket(UdpLink.Received(bytes, from)) =>
+        val counted = robot.copy(counters = robot.counters.copy(received = robot.counters.received + 1))
+        after(counted, Some(bytes -> from))
+      case GetState(replyTo) =>
+        val t = now()
+        val (next, reset) = run(robot, t, None)
+        replyTo ! view(next, t, online = true, upAt = None)
+        continue(next, t, reset)
+      case PowerCycle(bootDelay) =>
+        powerOff(robot, bootDelay, "power cycle")
+      case SetBattery(volts) =>
+        online(robot.copy(firmware = robot.firmware.copy(battery = math.max(0.0, volts))))
+      case MoveBall(x, y) =>
+        online(robot.copy(firmware = movedBall(robot.firmware, x, y)))
+      case Stop(replyTo) =>
+        stopping(Vector(replyTo))
+      case SocketGone =>
+        context.log.error("Simulated robot [{}] lost its socket {} and stops", id, address)
+        Behaviors.stopped
+      case FromSocket(_) | ModuleUp | StopTimedOut =>
+        Behaviors.same
+    }
+
+  private def after(robot: Robot, arrival: Option[(Array[Byte], InetSocketAddress)]): Behavior[Command] = {
+    val t = now()
+    val (next, reset) = run(robot, t, arrival)
+    continue(next, t, reset)
+  }
+
+  private def continue(robot: Robot, t: Long, reset: Boolean): Behavior[Command] =
+    if (!reset) online(arm(robot, t))
+    else {
+      context.log.info("Simulated robot [{}] restarts on request (boot {})", id, robot.firmware.bootId)
+      flushing(robot.copy(counters = robot.counters.copy(powerCycles = robot.counters.powerCycles + 1)))
+    }
+
+  // After `system.reset`: the reply must still cross the module before the robot restarts and falls silent.
+  private def flushing(robot: Robot): Behavior[Command] = {
+    val t = now()
+    val drained = robot.link.map(_.advance(t)).fold(robot) { step =>
+      val sent = send(robot.counters, step.transmitted.map(tx => Out(tx.bytes, tx.to)))
+      robot.copy(link = Some(step.link), counters = sent)
+    }
+    val pending = drained.link.exists(l => l.queued.nonEmpty || l.onLine.nonEmpty)
+    if (!pending) goOffline(drained, settings.resetBootDelay, t)
+    else {
+      drained.link.flatMap(_.nextWakeUp).foreach(at => timers.startSingleTimer(WakeUpKey, WakeUp, delay(at, t)))
+      Behaviors.receiveMessage {
+        case WakeUp => flushing(drained)
+        case FromSocket(UdpLink.Received(_, _)) =>
+          flushingCounted(drained)
+        case GetState(replyTo) =>
+          val at = now()
+          replyTo ! view(drained, at, online = false, upAt = Some(at + settings.resetBootDelay.toNanos))
+          Behaviors.same
+        case PowerCycle(bootDelay) => powerOff(drained, bootDelay, "power cycle")
+        case SetBattery(volts) => flushing(drained.copy(firmware = drained.firmware.copy(battery = math.max(0.0, volts))))
+        case MoveBall(x, y) => flushing(drained.copy(firmware = movedBall(drained.firmware, x, y)))
+        case Stop(replyTo) => stopping(Vector(replyTo))
+        case SocketGone =>
+          context.log.error("Simulated robot [{}] lost its socket {} and stops", id, address)
+          Behaviors.stopped
+        case FromSocket(_) | ModuleUp | StopTimedOut => Behaviors.same
+      }
+    }
+  }
+
+  private def flushingCounted(robot: Robot): Behavior[Command] =
+    flushing(robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1)))
+
+  private def powerOff(robot: Robot, bootDelay: FiniteDuration, why: String): Behavior[Command] = {
+    val t = now()
+    // Battery and pose run up to the moment the power goes; whatever was due then is lost with it.
+    val restarted = RobotFirmware.restart(RobotFirmware.advance(robot.firmware, t)._1, t)
+    context.log.info("Simulated robot [{}] {}: silent for {} (boot {})", id, why, bootDelay, restarted.bootId)
+    val counters = robot.counters.copy(powerCycles = robot.counters.powerCycles + 1)
+    goOffline(robot.copy(firmware = restarted, counters = counters), bootDelay, t)
+  }
+
+  private def goOffline(robot: Robot, bootDelay: FiniteDuration, t: Long): Behavior[Command] = {
+    timers.cancel(WakeUpKey)
+    timers.startSingleTimer(ModuleUpKey, ModuleUp, bootDelay)
+    // The module's buffer and the stream's state do not survive the power cut.
+    offline(robot.copy(link = None, stream = None, armedAt = Long.MinValue), t + bootDelay.toNanos)
+  }
+
+  // Powered off, or the module is still booting: nothing goes out, nothing is answered.
+  private def offline(robot: Robot, upAt: Long): Behavior[Command] =
+    Behaviors.receiveMessage {
+      case ModuleUp =>
+        val t = now()
+        context.log.info("Simulated robot [{}] is back (boot {})", id, robot.firmware.bootId)
+        val up = robot.copy(link = freshLink(t), stream = settings.stream.map(_(t)))
+        online(proceed(up, t, None))
+      case FromSocket(UdpLink.Received(_, _)) =>
+        offline(robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1)), upAt)
+      case GetState(replyTo) =>
+        replyTo ! view(robot, now(), online = false, upAt = Some(upAt))
+        Behaviors.same
+      case PowerCycle(bootDelay) =>
+        powerOff(robot, bootDelay, "power cycle while off")
+      case SetBattery(volts) =>
+        offline(robot.copy(firmware = robot.firmware.copy(battery = math.max(0.0, volts))), upAt)
+      case MoveBall(x, y) =>
+        offline(robot.copy(firmware = movedBall(robot.firmware, x, y)), upAt)
+      case Stop(replyTo) =>
+        stopping(Vector(replyTo))
+      case SocketGone =>
+        context.log.error("Simulated robot [{}] lost its socket {} and stops", id, address)
+        Behaviors.stopped
+      case FromSocket(_) | WakeUp | StopTimedOut =>
+        Behaviors.same
+    }
+
+  private def stopping(waiting: Vector[ActorRef[Done]]): Behavior[Command] = {
+    timers.cancel(WakeUpKey)
+    timers.cancel(ModuleUpKey)
+    timers.startSingleTimer(StopKey, StopTimedOut, StopTimeout)
+    socket ! UdpLink.Unbind
+    waitForSocket(waiting)
+  }
+
+  private def waitForSocket(waiting: Vector[ActorRef[Done]]): Behavior[Command] =
+    Behaviors.receiveMessage {
+      case SocketGone =>
+        context.log.debug("Simulated robot [{}] closed {}", id, address)
+        waiting.foreach(_ ! Done)
+        Behaviors.stopped
+      case StopTimedOut =>
+        // Stopping this actor stops the link and its socket adapter, which closes the port soon after.
+        context.log.warn("Simulated robot [{}] did not see {} close within {}; stopping anyway", id, address, StopTimeout)
+        waiting.foreach(_ ! Done)
+        Behaviors.stopped
+      case Stop(replyTo) => waitForSocket(waiting :+ replyTo)
+      case GetState(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
+        Behaviors.same
+    }
+
+  // Runs the robot up to `t`, puts what is due on the socket and re-arms the wake-up timer.
+  private def proceed(robot: Robot, t: Long, arrival: Option[(Array[Byte], InetSocketAddress)]): Robot =
+    arm(run(robot, t, arrival)._1, t)
+
+  private def arm(robot: Robot, t: Long): Robot = {
+    // A stream endpoint that keeps asking for the present would otherwise spin the robot on zero-delay timers.
+    val streamAt = robot.stream.flatMap(_.nextTimerAt).map(math.max(_, t + MinStreamTickNanos))
+    val next = (robot.firmware.nextWakeUp +: (robot.link.flatMap(_.nextWakeUp) ++ streamAt).toVector).min
+    if (next == robot.armedAt) robot
+    else {
+      timers.startSingleTimer(WakeUpKey, WakeUp, delay(next, t))
+      robot.copy(armedAt = next)
+    }
+  }
+
+  private def delay(at: Long, t: Long): FiniteDuration = math.max(0L, at - t).nanos
+
+  /** Everything due up to `t`, and the arrival if any; `true` when the firmware restarted on request. */
+  private def run(robot0: Robot, t: Long, arrival: Option[(Array[Byte], InetSocketAddress)]): (Robot, Boolean) = {
+    var robot = robot0
+    val out = Vector.newBuilder[Out]
+
+    def linkStep(step: FaithfulLink.Step): Vector[FaithfulLink.Delivery] = {
+      robot = robot.copy(link = Some(step.link))
+      out ++= step.transmitted.map(tx => Out(tx.bytes, tx.to))
+      step.delivered
+    }
+
+    // Inbound: through the module and the CM-530's read and handling, or straight to the firmware.
+    var deliveries: Vector[FaithfulLink.Delivery] = (robot.link, arrival) match {
+      case (Some(link), Some((bytes, from))) => linkStep(link.arrive(bytes, from, t))
+      case (Some(link), None)                => linkStep(link.advance(t))
+      case (None, Some((bytes, from)))       => Vector(FaithfulLink.Delivery(bytes, Some(from), t))
+      case (None, None)                      => Vector.empty
+    }
+
+    val bootId = robot.firmware.bootId
+    var reset = false
+    var rounds = 0
+    // A reply queued now may let the CM-530 loop act again before `t`; a few rounds settle it.
+    while (deliveries.nonEmpty || rounds == 0) {
+      rounds += 1
+      val app = Vector.newBuilder[Outgoing]
+      // Stream segments the robot sends; like everything it sends, they take the radio path below.
+      val segments = Vector.newBuilder[Out]
+      deliveries.foreach { d =>
+        if (reset) robot = robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1))
+        else {
+          val at = math.max(d.at, robot.firmware.now)
+          handle(robot, d.bytes, d.from.getOrElse(gateway), at) match {
+            case (next, transmit, frames) =>
+              robot = next
+              segments ++= transmit
+              app ++= frames
+          }
+          reset = robot.firmware.bootId != bootId
+        }
+      }
+      if (!reset && rounds == 1) {
+        val (advanced, due) = RobotFirmware.advance(robot.firmware, t)
+        robot = robot.copy(firmware = advanced)
+        app ++= due
+        robot.stream.filter(_.nextTimerAt.exists(_ <= t)).foreach { s =>
+          val step = s.tick(t)
+          robot = robot.copy(stream = Some(step.stream))
+          segments ++= step.transmit.map(Out(_, gateway))
+        }
+      }
+      val (routed, replies) = route(robot, app.result(), t)
+      robot = routed
+      val plain = segments.result() ++ replies
+      deliveries = Vector.empty
+      robot.link match {
+        case Some(link) =>
+          val queued = plain.foldLeft(FaithfulLink.Step(link, Vector.empty, Vector.empty)) { (acc, o) =>
+            val step = acc.link.send(o.bytes, o.to, t)
+            FaithfulLink.Step(step.link, acc.transmitted ++ step.transmitted, acc.delivered ++ step.delivered)
+          }
+          val settled = queued.link.advance(t)
+          deliveries = linkStep(FaithfulLink.Step(settled.link, queued.transmitted ++ settled.transmitted,
+            queued.delivered ++ settled.delivered))
+        case None =>
+          out ++= plain
+      }
+      if (rounds >= MaxRounds && deliveries.nonEmpty) {
+        // Only modelled costs that round to zero can make handling end at the instant of its read, round after round.
+        context.log.warn("Simulated robot [{}] dropped {} datagram(s) handled at the same instant", id, deliveries.size)
+        deliveries = Vector.empty
+      }
+    }
+    robot = robot.copy(counters = send(robot.counters, out.result()))
+    (robot, reset)
+  }
+
+  /** One datagram the firmware has read: a stream segment goes to the stream, anything else to the firmware. */
+  private def handle(robot: Robot, bytes: Array[Byte], from: InetSocketAddress, at: Long): (Robot, Vector[Out], Vector[Outgoing]) =
+    Datagram.classify(bytes) match {
+      case Datagram.StreamSegment(segment) =>
+        val counted = robot.copy(counters = robot.counters.copy(streamSegments = robot.counters.streamSegments + 1))
+        counted.stream.fold((counted, Vector.empty[Out], Vector.empty[Outgoing])) { stream =>
+          val step = stream.receive(segment, at)
+          var next = counted.copy(stream = Some(step.stream))
+          val app = Vector.newBuilder[Outgoing]
+          // Each delivered payload is one frame from the gateway; its replies go back through the stream.
+          step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
+            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now))
+            next = next.copy(firmware = firmware)
+            app ++= out
+          }
+          (next, step.transmit.map(Out(_, gateway)), app.result())
+        }
+      case _ =>
+        val (firmware, out) = RobotFirmware.receive(robot.firmware, bytes, from, at)
+        (robot.copy(firmware = firmware), Vector.empty, out)
+    }
+
+  /** Where the firmware's datagrams go: replies to stream requests into the stream, everything else on the air. */
+  private def route(robot: Robot, outgoing: Vector[Outgoing], t: Long): (Robot, Vector[Out]) = {
+    var next = robot
+    val plain = Vector.newBuilder[Out]
+    outgoing.foreach {
+      case Outgoing(bytes, Destination.Gateway) => plain += Out(bytes, gateway)
+      case Outgoing(bytes, Destination.ReplyTo(ThroughStream)) =>
+        next.stream.foreach { s =>
+          val step = s.send(bytes, t)
+          next = next.copy(stream = Some(step.stream))
+          plain ++= step.transmit.map(Out(_, gateway))
+        }
+      case Outgoing(bytes, Destination.ReplyTo(to)) => plain += Out(bytes, to)
+    }
+    (next, plain.result())
+  }
+
+  /** Puts datagrams on the socket; nothing larger than the module's 1400 bytes ever leaves a robot. */
+  private def send(counters: RobotCounters, out: Vector[Out]): RobotCounters = {
+    val (fit, oversize) = out.partition(_.bytes.length <= WireLimits.MaxDatagramBytes)
+    fit.foreach(o => socket ! UdpLink.Send(o.bytes, o.to))
+    if (oversize.nonEmpty) context.log.warn("Simulated robot [{}] dropped {} oversize datagram(s)", id, oversize.size)
+    counters.copy(sent = counters.sent + fit.size, oversizeDropped = counters.oversizeDropped + oversize.size)
+  }
+
+  private def movedBall(firmware: FirmwareState, x: Double, y: Double): FirmwareState =
+    firmware.copy(settings = firmware.settings.copy(scene = firmware.settings.scene.copy(ballX = x, ballY = y)))
+
+  private def view(robot: Robot, t: Long, online: Boolean, upAt: Option[Long]): RobotView = {
+    val f = robot.firmware
+    RobotView(
+      robotId = id,
+      teamId = f.settings.teamId,
+      role = f.settings.role,
+      address = address,
+      online = online,
+      onlineAgainIn = upAt.map(at => math.max(0L, at - t).nanos),
+      bootId = f.bootId,
+      uptimeMillis = math.max(0L, t - f.bootedAt) / 1000000L,
+      posture = f.posture,
+      battery = f.battery,
+      pose = f.pose,
+      head = f.head,
+      ball = (f.settings.scene.ballX, f.settings.scene.ballY),
+      debugEnabled = f.debugEnabled,
+      said = f.said,
+      firmware = f.counters,
+      counters = robot.counters,
+      module = robot.link.map(_.module.counters),
+      cpu = robot.link.map(_.cpu.stats)
+    )
+  }
+}
