@@ -90,9 +90,18 @@ object Gateway {
         )
         settings.robots.foreach(r => spawnRobot(r.robotId, r.address, outbox, heard = false))
         if (settings.gameControllerEnabled) {
+          // Akka keeps one message adapter per message class, and the robot link's adapter already takes
+          // UdpLink.Event; the GameController link reports through a forwarder of its own instead.
+          val self = context.self
+          val gcEvents = context.spawn(
+            Behaviors.receiveMessage[UdpLink.Event] { event =>
+              self ! GameControllerEvent(event)
+              Behaviors.same
+            },
+            "game-controller-events"
+          )
           context.spawn(
-            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
-              context.messageAdapter(GameControllerEvent.apply),
+            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort), gcEvents,
               UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true)),
             "game-controller-link"
           )
@@ -181,12 +190,13 @@ object Gateway {
             case Right(data) =>
               gcPackets += 1
               val changed = !game.exists(_.gameState == data.gameState)
+              // The gate closes before anyone hears of kick-off, so no subscriber can act in between.
+              if (changed) outbox ! Outbox.GameStateChanged(data.gameState)
               // Both versions arrive each round; the version-8 packet is the richer one to keep.
               if (data.version == GameControlVersion.V8 || game.forall(_.version != GameControlVersion.V8) || changed) {
                 game = Some(data)
                 publish(GameStateUpdated(data))
               }
-              if (changed) outbox ! Outbox.GameStateChanged(data.gameState)
             case Left(error) =>
               if (!Datagram.isGameControllerReturn(bytes)) reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
           }

@@ -1,0 +1,84 @@
+package naogateway.integration
+
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{ActorTestKit, TestProbe}
+import akka.actor.typed.ActorRef
+import com.typesafe.config.ConfigFactory
+
+import naogateway._
+import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
+
+/** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only. */
+final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
+  private val config = ConfigFactory
+    .parseString(s"""
+      |link.bind-address = "127.0.0.1"
+      |link.robot-port = 0
+      |game-controller.bind-address = "127.0.0.1"
+      |game-controller.port = 0
+      |$overrides
+      |""".stripMargin)
+    .withFallback(ConfigFactory.load().getConfig("naogateway"))
+
+  val settings: GatewaySettings = GatewaySettings.fromConfig(config)
+  val gateway: ActorRef[Gateway.Command] = testKit.spawn(Gateway(settings))
+  val addresses: Gateway.Addresses = {
+    val probe = testKit.createTestProbe[Gateway.Addresses]()
+    gateway ! Gateway.GetAddresses(probe.ref)
+    probe.receiveMessage(10.seconds)
+  }
+  val events: TestProbe[GatewayEvent] = testKit.createTestProbe[GatewayEvent]()
+  gateway ! Gateway.Subscribe(events.ref)
+
+  /** Starts robot `robotId` sending to `to` (the gateway unless a proxy is given). */
+  def robot(robotId: Int, to: InetSocketAddress = addresses.robots, faithful: Boolean = false,
+      firmware: FirmwareSettings => FirmwareSettings = identity): (ActorRef[SimulatedRobot.Command], InetSocketAddress) = {
+    val started = testKit.createTestProbe[SimulatedRobot.StartResult]()
+    testKit.spawn(
+      SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(robotId)), to, faithfulLink = faithful), Some(started.ref)),
+      s"sim-robot-$robotId-${System.nanoTime()}"
+    )
+    started.receiveMessage(10.seconds) match {
+      case SimulatedRobot.Started(_, ref, address) => ref -> address
+      case other                                   => throw new IllegalStateException(s"robot $robotId did not start: $other")
+    }
+  }
+
+  /** Waits for an event matching `pf`, skipping others (status updates arrive five times a second per robot). */
+  def awaitEvent[T](within: FiniteDuration)(pf: PartialFunction[GatewayEvent, T]): T = {
+    val deadline = within.fromNow
+    var found: Option[T] = None
+    while (found.isEmpty) {
+      val e = events.receiveMessage(deadline.timeLeft.max(1.milli))
+      found = pf.lift(e)
+    }
+    found.get
+  }
+
+  def robotActor(robotId: Int): ActorRef[RobotActor.Command] = {
+    val probe = testKit.createTestProbe[Option[ActorRef[RobotActor.Command]]]()
+    gateway ! Gateway.GetRobot(robotId, probe.ref)
+    probe.receiveMessage().getOrElse(throw new NoSuchElementException(s"robot $robotId unknown"))
+  }
+
+  def connect(robotId: Int): RobotActor.Connected = {
+    val probe = testKit.createTestProbe[RobotActor.Connected]()
+    robotActor(robotId) ! RobotActor.Connect(probe.ref)
+    probe.receiveMessage(10.seconds)
+  }
+
+  def stats(): Gateway.GatewayStats = {
+    val probe = testKit.createTestProbe[Gateway.GatewayStats]()
+    gateway ! Gateway.GetStats(probe.ref)
+    probe.receiveMessage()
+  }
+
+  def view(robot: ActorRef[SimulatedRobot.Command]): naogateway.sim.RobotView = {
+    val probe = testKit.createTestProbe[naogateway.sim.RobotView]()
+    robot ! SimulatedRobot.GetState(probe.ref)
+    probe.receiveMessage()
+  }
+}
