@@ -290,6 +290,49 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       robot.delivered.mkString shouldBe "abcde"
       gateway.inFlight shouldBe 0
     }
+    "announce two expired segments one per round trip in the skip-notice sequence (W = 4)" in {
+      val gateway = new Endpoint(maxSeq = 20, window = 4, next = 0, last = 20)
+      val robot = new Endpoint(maxSeq = 20, window = 4, next = 0, last = 20)
+      val hops = Vector(
+        Hop(G, New("a"), lost = true),
+        Hop(G, New("b"), lost = true),
+        Hop(G, New("c")),
+        Hop(R, Ack),
+        Hop(G, Expire(0, 1)),
+        Hop(R, Ack),
+        Hop(G, Resend(ExpiredHead)),
+        Hop(R, Ack)
+      )
+      replay(lines("stream-skip"), hops, gateway, robot)
+      robot.delivered.mkString shouldBe "c"
+      robot.skipped shouldBe 2
+      gateway.inFlight shouldBe 0
+    }
+    "give the skip-notice sequence exactly as the gateway's SecureStream sends it" in {
+      import naogateway.wire.stream.{SecureStream, StreamSettings}
+      def ms(n: Long): Long = n * 1000000L
+      def sent(step: SecureStream.Step): Vector[Vector[Byte]] =
+        step.outputs.collect { case SecureStream.Transmit(d) => d.toVector }
+      def ok(r: Either[SecureStream.SendRefused, SecureStream.Step]): SecureStream.Step = r.fold(e => fail(e.describe), identity)
+      val settings = StreamSettings(window = 4, maxSeq = 20)
+      val a = ok(SecureStream.initial(settings, 0L).send("a".getBytes(US_ASCII), 1L, Some(ms(100)), 0L))
+      val b = ok(a.state.send("b".getBytes(US_ASCII), 2L, Some(ms(100)), 0L))
+      val c = ok(b.state.send("c".getBytes(US_ASCII), 3L, None, 0L))
+      val keep = SecureStream.initial(settings, 0L).receive(sent(c).head.toArray, ms(5))
+      val dup = c.state.receive(sent(keep).head.toArray, ms(10))
+      val expiry = dup.state.tick(ms(100))
+      val skip0 = keep.state.receive(sent(expiry).head.toArray, ms(105))
+      val notice1 = expiry.state.receive(sent(skip0).head.toArray, ms(110))
+      val skip1 = skip0.state.receive(sent(notice1).head.toArray, ms(115))
+      val done = notice1.state.receive(sent(skip1).head.toArray, ms(120))
+      (sent(a) ++ sent(b) ++ sent(c) ++ sent(keep) ++ sent(dup) ++ sent(expiry) ++ sent(skip0) ++ sent(notice1) ++
+        sent(skip1)) shouldBe lines("stream-skip").map(_.toVector)
+      expiry.outputs.collect { case SecureStream.Expired(id) => id } shouldBe Vector(1L, 2L)
+      skip1.outputs.collect { case SecureStream.Deliver(p) => new String(p, US_ASCII) } shouldBe Vector("c")
+      skip1.state.counters.skipped shouldBe 2
+      done.outputs.collect { case SecureStream.Acknowledged(id) => id } shouldBe Vector(3L)
+      done.state.inFlight shouldBe 0
+    }
   }
 
   "The GS1500M serial examples" should {
@@ -315,6 +358,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       val segment = hop.action match {
         case New(payload) => from.sendNew(payload)
         case Resend(cause) => from.resend(cause)
+        case Expire(seqs @ _*) => from.expire(seqs)
         case Ack => from.ack(idle = false)
         case IdleAck => from.ack(idle = true)
       }
@@ -438,7 +482,7 @@ object ProtocolDocSpec {
     "stream-data", "stream-pure-ack", "stream-data-rpc",
     "serial-send-status", "serial-receive-udp-server"
   )
-  val DatagramTags: Set[String] = Set("stream-window1", "stream-window4")
+  val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =
     Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return")
 
@@ -559,26 +603,38 @@ object ProtocolDocSpec {
     else Rejected
   }
 
-  // ---- a reference model of the secure stream (section 11), without deadlines ----
+  // ---- a reference model of the secure stream (section 11) ----
+  //
+  // It has no clock: timers are hops of the replay (Resend(Timeout), Expire), and the sequence-reuse rule (11.8) is
+  // checked more strictly than it reads, against every retransmission in the replay rather than those of the last
+  // round trip, so an example that passes does not depend on timing. Round-trip samples and the RTO are not modelled.
 
   sealed trait Side
   case object G extends Side
   case object R extends Side
 
+  /** Why a sender sends its oldest unacknowledged segment again (or, if it has expired, a skip notice). */
   sealed trait Cause
   case object Timeout extends Cause
   case object DuplicateAcks extends Cause
   case object PartialAck extends Cause
+  /** An ACK advanced base onto an expired segment: the skip notice for it goes out at once. */
+  case object ExpiredHead extends Cause
 
   sealed trait Action
   final case class New(payload: String) extends Action
   final case class Resend(cause: Cause) extends Action
+  /** The deadlines of these in-flight sequence numbers pass; the oldest is among them, so a skip notice goes out. */
+  final case class Expire(seqs: Int*) extends Action
   case object Ack extends Action
   case object IdleAck extends Action
 
   final case class Hop(from: Side, action: Action, lost: Boolean = false)
 
-  /** One end of a stream: sender state (base, next, recovery) and receiver state (last in order, kept segments). */
+  /**
+   * One end of a stream: sender state (base, next, recovery, expired segments) and receiver state (last in order,
+   * kept segments). Skip notices are honoured, as by the gateway's endpoint.
+   */
   final class Endpoint(maxSeq: Int, window: Int, next: Int, last: Int) {
     private val m = maxSeq + 1
     require(2 * window <= m)
@@ -586,22 +642,30 @@ object ProtocolDocSpec {
     private var base = next
     private var lastInOrder = last
     private val outstanding = mutable.Map.empty[Int, Array[Byte]]
+    private val expired = mutable.Set.empty[Int]
+    private val resent = mutable.Set.empty[Int]
     private val kept = mutable.Map.empty[Int, Array[Byte]]
     private var owedAcks = 0
     private var duplicateAcks = 0
     private var recoveryPoint: Option[Int] = None
     private var fastRetransmitDone = false
     private var partialAckPending = false
+    private var noticeOwed = false
     val delivered: mutable.ArrayBuffer[String] = mutable.ArrayBuffer.empty
+    var skipped: Int = 0
 
     private def mod(x: Int) = ((x % m) + m) % m
     def inFlight: Int = mod(nextSeq - base)
-    def settled: Int = mod(base - 1)
+    private def headExpired: Boolean = inFlight > 0 && expired(base)
+    /** Byte 0 of a pure ACK: the last ACK received, or one past it when the oldest segment has expired (11.7). */
+    def announced: Int = if (headExpired) base else mod(base - 1)
     private def header(first: Int): Array[Byte] = Array(first.toByte, lastInOrder.toByte)
 
     def sendNew(payload: String): Array[Byte] = {
       require(inFlight < window, s"window full: $inFlight in flight")
+      require(!resent(mod(nextSeq + window)), s"sequence-reuse rule: ${mod(nextSeq + window)} was resent")
       val bytes = payload.getBytes(US_ASCII)
+      require(bytes.length >= 1 && bytes.length <= 1398, s"payload of ${bytes.length} bytes")
       outstanding(nextSeq) = bytes
       val segment = header(nextSeq) ++ bytes
       nextSeq = mod(nextSeq + 1)
@@ -617,41 +681,68 @@ object ProtocolDocSpec {
           require(duplicateAcks >= 2 && !fastRetransmitDone, s"$duplicateAcks duplicate ACKs do not allow a resend")
           fastRetransmitDone = true
         case PartialAck => require(partialAckPending, "no partial ACK to answer")
+        case ExpiredHead => require(noticeOwed, "no ACK advanced onto an expired segment")
       }
       partialAckPending = false
-      if (recoveryPoint.isEmpty) recoveryPoint = Some(mod(nextSeq - 1))
+      noticeOwed = false
+      if (cause != ExpiredHead && recoveryPoint.isEmpty) recoveryPoint = Some(mod(nextSeq - 1))
       owedAcks = 0
-      header(base) ++ outstanding(base)
+      if (headExpired) header(announced) // an expired segment's data is never sent again: a skip notice instead
+      else {
+        resent += base
+        header(base) ++ outstanding(base)
+      }
+    }
+
+    def expire(seqs: Seq[Int]): Array[Byte] = {
+      require(!headExpired, "the oldest segment has expired already")
+      seqs.foreach(s => require(mod(s - base) < inFlight && !expired(s), s"$s is not an unexpired segment in flight"))
+      expired ++= seqs
+      require(headExpired, "the oldest segment did not expire: no skip notice goes out")
+      header(announced)
     }
 
     def ack(idle: Boolean): Array[Byte] = {
-      require(idle || owedAcks > 0, "no data segment to acknowledge")
+      require(idle || owedAcks > 0, "nothing received that is answered")
       if (!idle) owedAcks -= 1
-      header(settled)
+      header(announced)
     }
 
+    private def deliverKept(): Unit =
+      while (kept.contains(mod(lastInOrder + 1))) {
+        lastInOrder = mod(lastInOrder + 1)
+        delivered += new String(kept.remove(lastInOrder).get, US_ASCII)
+      }
+
     def receive(segment: Array[Byte]): Unit = {
+      val first = segment(0) & 0xff
       val ackByte = segment(1) & 0xff
       val acked = mod(ackByte - base)
       if (inFlight > 0 && acked < inFlight) {
         val covered = recoveryPoint.exists(rp => mod(rp - base) <= acked)
-        (0 to acked).foreach(i => outstanding.remove(mod(base + i)))
+        (0 to acked).foreach { i => outstanding.remove(mod(base + i)); expired -= mod(base + i) }
         base = mod(ackByte + 1)
         duplicateAcks = 0
         if (covered) { recoveryPoint = None; fastRetransmitDone = false; partialAckPending = false }
         else if (recoveryPoint.isDefined) partialAckPending = true
+        noticeOwed = headExpired
       } else if (segment.length == 2 && inFlight > 0 && ackByte == mod(base - 1)) duplicateAcks += 1
       if (segment.length > 2) {
-        val seq = segment(0) & 0xff
-        val ahead = mod(seq - mod(lastInOrder + 1))
+        val ahead = mod(first - mod(lastInOrder + 1))
         if (ahead <= window - 1) {
-          kept.getOrElseUpdate(seq, segment.drop(2))
-          while (kept.contains(mod(lastInOrder + 1))) {
-            lastInOrder = mod(lastInOrder + 1)
-            delivered += new String(kept.remove(lastInOrder).get, US_ASCII)
-          }
+          kept.getOrElseUpdate(first, segment.drop(2))
+          deliverKept()
           owedAcks += 1
         } else if (ahead >= m - window) owedAcks += 1 // a duplicate: re-acknowledge, do not deliver
+      } else if (first == mod(lastInOrder + 1)) {
+        // A skip notice for exactly the next expected number: that segment expired at its sender.
+        lastInOrder = first
+        kept.remove(first) match {
+          case Some(payload) => delivered += new String(payload, US_ASCII)
+          case None          => skipped += 1
+        }
+        deliverKept()
+        owedAcks += 1
       }
     }
   }
