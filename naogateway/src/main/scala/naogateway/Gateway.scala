@@ -145,11 +145,9 @@ object Gateway {
       val n = rejected.getOrElse(reason, 0L) + 1
       rejected = rejected.updated(reason, n)
       // Logged at the 1st, 10th, 100th, ... of each reason: a flood of bad datagrams cannot flood the log.
-      if (n == 1 || (n < 1000000000L && isPowerOfTen(n)))
+      if (RateLimitedLog.due(n))
         context.log.warn("Rejected datagram from {}: {} ({} so far)", from, reason, n)
     }
-
-    private def isPowerOfTen(n: Long): Boolean = { var m = n; while (m % 10 == 0 && m > 1) m /= 10; m == 1 }
 
     private def rejectFor(robotId: Option[Int], reason: String, from: InetSocketAddress): Unit = {
       reject(reason, from)
@@ -190,8 +188,9 @@ object Gateway {
             case Right(data) =>
               gcPackets += 1
               val changed = !game.exists(_.gameState == data.gameState)
-              // The gate closes before anyone hears of kick-off, so no subscriber can act in between.
-              if (changed) outbox ! Outbox.GameStateChanged(data.gameState)
+              // Every packet, not only changes: a restarted outbox learns the game state within one round. And the gate
+              // closes before anyone hears of kick-off, so no subscriber can act in between.
+              outbox ! Outbox.GameStateChanged(data.gameState)
               // Both versions arrive each round; the version-8 packet is the richer one to keep.
               if (data.version == GameControlVersion.V8 || game.forall(_.version != GameControlVersion.V8) || changed) {
                 game = Some(data)

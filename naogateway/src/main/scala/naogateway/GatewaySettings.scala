@@ -9,6 +9,8 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
+import naogateway.wire.stream.StreamSettings
+
 /** A robot known from configuration: its id and where it receives. */
 final case class StaticRobot(robotId: Int, address: InetSocketAddress)
 
@@ -63,8 +65,7 @@ final case class GatewaySettings(
     calls: CallSettings,
     budget: BudgetSettings,
     competition: Boolean,
-    streamWindow: Int,
-    streamMaxSeq: Int
+    stream: StreamSettings
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
@@ -117,8 +118,11 @@ object GatewaySettings {
       budget = BudgetSettings(budget.getInt("team-bytes-per-second"), budget.getInt("robot-bytes-per-second"),
         budget.getDouble("warn-at")),
       competition = c.getBoolean("competition.enabled"),
-      streamWindow = stream.getInt("window"),
-      streamMaxSeq = stream.getInt("max-seq")
+      stream = StreamSettings(
+        window = stream.getInt("window"),
+        maxSeq = stream.getInt("max-seq"),
+        honourSkipNotices = stream.getBoolean("honour-skip-notices")
+      )
     )
   }
 }

@@ -44,7 +44,9 @@ object NoResponseActor {
         Behaviors.withStash(settings.stashCapacity) { stash =>
           val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
           val actor = new Lockstep(robotId, settings.timeout, robot, outcomes, timers, stash, context.log)
-          if (online) actor.communicating(0L, Map.empty) else actor.offline(0L)
+          // Call ids start at a random point per incarnation, so a late reply from before a restart matches nothing new.
+          val firstId = java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL)
+          if (online) actor.communicating(firstId, Map.empty) else actor.offline(firstId)
         }
       }
     }
@@ -79,7 +81,7 @@ object NoResponseActor {
         case Reachability(false) => toOffline(lastId, newest)
         case Reachability(true) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same
       }
-      .receiveSignal(signals(None))
+      .receiveSignal(signals(None, newest))
 
     /** One command in flight: everything new waits in the stash, in order. */
     private def waiting(id: Long, current: Send, lastId: Long, newest: Newest): Behavior[Command] = Behaviors
@@ -127,7 +129,7 @@ object NoResponseActor {
           toOffline(lastId, newest)
         case Reachability(true) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same
       }
-      .receiveSignal(signals(Some(current)))
+      .receiveSignal(signals(Some(current), newest))
 
     private def toOffline(lastId: Long, newest: Newest): Behavior[Command] = {
       failWaiting(newest, CallError.RobotOffline(robotId))
@@ -152,14 +154,14 @@ object NoResponseActor {
       }
     }
 
-    private def signals(current: Option[Send]): PartialFunction[(akka.actor.typed.scaladsl.ActorContext[Command], akka.actor.typed.Signal), Behavior[Command]] = {
+    private def signals(current: Option[Send], newest: Newest): PartialFunction[(akka.actor.typed.scaladsl.ActorContext[Command], akka.actor.typed.Signal), Behavior[Command]] = {
       case (_, PreRestart) =>
         current.foreach(c => finish(c, Left(CallError.Interrupted(robotId, c.call.name))))
-        failWaiting(Map.empty, CallError.Interrupted(robotId, "waiting command"))
+        failWaiting(newest, CallError.Interrupted(robotId, "waiting command"))
         Behaviors.same
       case (_, PostStop) =>
         current.foreach(c => finish(c, Left(CallError.RobotOffline(robotId))))
-        failWaiting(Map.empty, CallError.RobotOffline(robotId))
+        failWaiting(newest, CallError.RobotOffline(robotId))
         Behaviors.same
     }
   }

@@ -57,7 +57,8 @@ object ResponseActor {
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>
           val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
-          new Responder(robotId, settings, robot, outcomes, timers, stash).running(Map.empty, online, 0L)
+          new Responder(robotId, settings, robot, outcomes, timers, stash)
+            .running(Map.empty, online, java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL))
         }
       }
     }

@@ -10,7 +10,6 @@ import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
 import naogateway.wire._
-import naogateway.wire.stream.StreamSettings
 
 /** The supervisor of one robot: owns its address, liveness, children and link figures, and re-syncs it after restarts. */
 object RobotActor {
@@ -118,7 +117,6 @@ object RobotActor {
       stash: StashBuffer[Command]
   ) {
     private val heartbeatReports = context.messageAdapter[HeartBeatActor.Report](HeartbeatReport.apply)
-    private val streamSettings = StreamSettings(window = settings.streamWindow, maxSeq = settings.streamMaxSeq)
 
     // Link figures: mutable counters owned by this actor alone.
     private var address: InetSocketAddress = null
@@ -150,7 +148,7 @@ object RobotActor {
         context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response"),
         context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "no-response"),
         context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision"),
-        context.spawn(Behaviors.supervise(StreamActor(robotId, streamSettings, self)).onFailure(ChildRestarts), "stream")
+        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream")
       )
     }
 
@@ -294,7 +292,7 @@ object RobotActor {
       val n = rejected.getOrElse(reason, 0L) + 1
       rejected = rejected.updated(reason, n)
       // Logged at 1, 10, 100, ... so a flood of bad datagrams cannot flood the log.
-      if (java.lang.Long.bitCount(n) == 1 && (n == 1 || math.log10(n.toDouble) % 1 == 0 || n % 1000 == 0))
+      if (RateLimitedLog.due(n))
         context.log.warn("Robot [{}]: rejected datagram ({}), {} so far", robotId, reason, n)
     }
 

@@ -85,7 +85,7 @@ object StreamActor {
     }
 
     def running(stream: SecureStream, lastId: Long, waiting: Map[Long, ActorRef[SendResult]], subscribers: Set[ActorRef[Received]])
-        : Behavior[Command] = Behaviors.receiveMessage {
+        : Behavior[Command] = Behaviors.receiveMessage[Command] {
       case Send(payload, deadline, replyTo) =>
         val now = System.nanoTime()
         val id = lastId + 1
@@ -114,6 +114,11 @@ object StreamActor {
         running(stream, lastId, waiting, subscribers - subscriber)
       case GetCounters(replyTo) =>
         replyTo ! stream.counters
+        Behaviors.same
+    }.receiveSignal {
+      case (_, akka.actor.typed.PreRestart | akka.actor.typed.PostStop) =>
+        // Nothing is forgotten: senders still waiting learn that their payload's fate is unknown.
+        waiting.values.foreach(_ ! Refused("stream endpoint restarted before the robot acknowledged"))
         Behaviors.same
     }
   }

@@ -163,6 +163,11 @@ private[robotmiddleware] object RobotGuard {
         replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
         if (result.isLeft && operation.isInstanceOf[Operation.Posture] && online) stopWalking(c, s"${operation.name} failed")
+        // A walk the robot refused is not refreshed.
+        if (result.isLeft && operation.isInstanceOf[Operation.Walk] && walking.exists(_._1 == operation)) {
+          timers.cancel(WalkKey)
+          walking = None
+        }
         Behaviors.same
       case WalkRefresh =>
         walking.foreach { case (w, _) => c.noResponse ! NoResponseActor.Send(walkCall(w)) }
@@ -216,7 +221,9 @@ private[robotmiddleware] object RobotGuard {
     private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
       case _: Operation.Walk | _: Operation.Arms => true
       case Operation.Posture(p)                  => p != "sit"
-      case r: Operation.RawCall                  => r.group.contains(ActuatorGroup.Walk) && r.method != "stop"
+      case r: Operation.RawCall =>
+        (r.group.contains(ActuatorGroup.Walk) && r.method != "stop" && !(r.method == "posture" && r.params == Vector(RpcValue.Text("sit")))) ||
+          r.group.contains(ActuatorGroup.Arms)
       case _                                     => false
     }
 

@@ -143,6 +143,27 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.execute(app, Operation.Walk(0.1, 0, 0))
       f.expectCall("motion.walk")
     }
+    "not keep refreshing a walk the robot refused" in {
+      val f = new Fixture
+      val (app, _) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      val result = f.execute(app, Operation.Walk(0.2, 0, 0))
+      f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Left(CallError.RobotError(1, "not standing: sit")))
+      result.receiveMessage().result shouldBe Left(RobotFailure.RobotError(1, "not standing: sit"))
+      f.noResponse.expectNoMessage(1.second)
+    }
+    "refuse raw arm and walk calls under a safety hold too" in {
+      val f = new Fixture
+      val (app, events) = f.app("x", 1)
+      f.acquire(app, ActuatorGroup.Arms).result shouldBe Right(())
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.0), online = true))
+      events.expectMessageType[AppEvent.SafetyStop]
+      val arms = Operation.RawCall("motion", "arms", Vector.fill(4)(RpcValue.Number(0f)))
+      f.execute(app, arms).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
+      f.execute(app, Operation.RawCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0f)))).receiveMessage()
+        .result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
+    }
     "fail operations fast while the robot is offline, and stop it when it comes back" in {
       val f = new Fixture
       val (app, _) = f.app("walker", 1)

@@ -56,6 +56,21 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       replies.expectMessage(CallResult(4, "motion.walk", Right(Some(RpcValue.Flag(true)))))
       sent(robot).params shouldBe Vector(RpcValue.Text("between"))
     }
+    "answer each waiting command exactly once when stopped, the newest replacement instead of the replaced one" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val replies = createTestProbe[CallResult]()
+      val actor = spawn(NoResponseActor(4, settings, robot.ref, online = true))
+      actor ! NoResponseActor.Send(say("busy"), Some(replies.ref))
+      sent(robot)
+      actor ! NoResponseActor.Send(walk(0.1f), Some(replies.ref))
+      actor ! NoResponseActor.Send(walk(0.2f), Some(replies.ref))
+      replies.expectMessage(CallResult(4, "motion.walk", Left(CallError.Superseded(4, "motion.walk"))))
+      testKit.stop(actor)
+      val last = replies.receiveMessages(2)
+      last.map(_.call).sorted shouldBe Seq("motion.walk", "speech.say")
+      last.foreach(_.result shouldBe Left(CallError.RobotOffline(4)))
+      replies.expectNoMessage(200.millis)
+    }
     "answer an overflow with an error instead of dropping silently" in {
       val robot = createTestProbe[RobotActor.FromChild]()
       val replies = createTestProbe[CallResult]()

@@ -79,3 +79,11 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
     }
   }
 }
+
+class RateLimitedLogSpec extends org.scalatest.wordspec.AnyWordSpec with org.scalatest.matchers.should.Matchers {
+  "RateLimitedLog" should {
+    "log the 1st, 10th, 100th ... occurrence and nothing in between" in {
+      (1L to 100000L).filter(naogateway.RateLimitedLog.due) shouldBe Seq(1L, 10L, 100L, 1000L, 10000L, 100000L)
+    }
+  }
+}

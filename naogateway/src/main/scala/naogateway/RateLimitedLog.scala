@@ -1,0 +1,12 @@
+package naogateway
+
+/** When a counted event deserves a log line: at the 1st, 10th, 100th, ... occurrence, so floods cannot flood the log. */
+object RateLimitedLog {
+
+  /** Whether the `n`-th occurrence (counting from 1) is logged. */
+  def due(n: Long): Boolean = {
+    var m = n
+    while (m >= 10 && m % 10 == 0) m /= 10
+    m == 1
+  }
+}
