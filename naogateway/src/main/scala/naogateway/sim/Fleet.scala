@@ -14,6 +14,8 @@ import akka.actor.typed.{ActorRef, ActorSystem, Behavior}
 import akka.pattern.StatusReply
 import akka.util.Timeout
 
+import naogateway.wire.stream.StreamSettings
+
 /** One robot of a fleet: its id, where it receives, and its actor. */
 final case class FleetRobot(robotId: Int, address: InetSocketAddress, robot: ActorRef[SimulatedRobot.Command])
 
@@ -44,6 +46,12 @@ final case class FleetSettings(
   require(robotIds.nonEmpty, "a fleet needs at least one robot")
   require(robotIds.distinct.size == robotIds.size, s"robot ids must be distinct: ${robotIds.diff(robotIds.distinct)}")
   require(robotIds.forall(_ >= 0), "robot ids must not be negative")
+
+  /** These settings with every robot taking part in the secure stream (see [[SimulatedRobotSettings.withStream]]),
+    * after whatever `customize` already does.
+    */
+  def withStream(settings: StreamSettings = StreamSettings.thesis): FleetSettings =
+    copy(customize = customize.andThen(_.withStream(settings)))
 }
 
 /** Shorthands for [[FleetSettings]]. */

@@ -11,6 +11,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import naogateway.link.UdpLink
 import naogateway.sim.gs1500m.{Cm530Config, Cm530Stats, Gs1500mConfig, Gs1500mCounters}
 import naogateway.wire.{Datagram, WireLimits}
+import naogateway.wire.stream.StreamSettings
 
 /** Settings of one simulated robot on a real UDP socket.
   *
@@ -49,6 +50,12 @@ final case class SimulatedRobotSettings(
   require(resetBootDelay >= Duration.Zero, "resetBootDelay must not be negative")
   require(receiveBufferBytes > 0, "receiveBufferBytes must be positive")
   require(keepAlivePhase >= Duration.Zero, "keepAlivePhase must not be negative")
+
+  /** These settings with the robot taking part in the secure stream: a fresh [[SecureStreamRobotStream]] with
+    * `settings` at every boot (default: the thesis firmware's window 1, sequence numbers 0..20).
+    */
+  def withStream(settings: StreamSettings = StreamSettings.thesis): SimulatedRobotSettings =
+    copy(stream = Some(SecureStreamRobotStream.factory(settings)))
 }
 
 /** Defaults of [[SimulatedRobotSettings]]. */
