@@ -58,7 +58,7 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",
-    libraryDependencies ++= testLibs ++ akkaTestLibs
+    libraryDependencies ++= Seq(akkaClusterTyped, scalaReflect) ++ testLibs ++ akkaTestLibs
   )
 
 lazy val apps = (project in file("apps"))

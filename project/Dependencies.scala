@@ -18,11 +18,13 @@ object Dependencies {
   val akkaStream = "com.typesafe.akka" %% "akka-stream" % V.akka
   val akkaStreamTyped = "com.typesafe.akka" %% "akka-stream-typed" % V.akka
   val akkaSlf4j = "com.typesafe.akka" %% "akka-slf4j" % V.akka
+  val akkaClusterTyped = "com.typesafe.akka" %% "akka-cluster-typed" % V.akka
   val jeromq = "org.zeromq" % "jeromq" % V.jeromq
   val logback = "ch.qos.logback" % "logback-classic" % V.logback
 
   val akkaTestkit = "com.typesafe.akka" %% "akka-actor-testkit-typed" % V.akka % Test
   val akkaStreamTestkit = "com.typesafe.akka" %% "akka-stream-testkit" % V.akka % Test
+  val scalaReflect = "org.scala-lang" % "scala-reflect" % V.scala % Test
   val scalatest = "org.scalatest" %% "scalatest" % V.scalatest % Test
   val scalacheck = "org.scalacheck" %% "scalacheck" % V.scalacheck % Test
   val scalatestPlusScalacheck = "org.scalatestplus" %% "scalacheck-1-18" % V.scalatestPlusScalacheck % Test

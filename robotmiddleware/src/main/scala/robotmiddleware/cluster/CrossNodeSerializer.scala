@@ -1,0 +1,390 @@
+package robotmiddleware.cluster
+
+import java.io.NotSerializableException
+import java.net.{InetAddress, InetSocketAddress}
+
+import akka.actor.ExtendedActorSystem
+import akka.actor.typed.scaladsl.adapter._
+import akka.actor.typed.{ActorRef, ActorRefResolver}
+import akka.serialization.SerializerWithStringManifest
+import com.google.protobuf.ByteString
+import scalapb.GeneratedMessage
+
+import naogateway._
+import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
+import naogateway.wire.{HaViMoGrid, HaViMoRegion, RpcValue}
+import robotmiddleware._
+import robotmiddleware.cluster.{proto => pb}
+
+/**
+ * Akka serializer of every message that crosses the nodes of a robot cluster: protobuf through the
+ * ScalaPB classes of `robotmiddleware/cluster/proto/cluster.proto`, one manifest per message class.
+ * The bindings are in this module's `reference.conf`.
+ *
+ * GameController packets travel as their `RGme` bytes, the codec the gateway already has.
+ * A `RobotFailure` arrives as the same case class without the sender's stack trace.
+ */
+final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerWithStringManifest {
+  import CrossNodeSerializer.{Manifest => M}
+
+  // Akka reserves 0-40 for itself; every node must use the same number, so it never changes.
+  override def identifier: Int = 5301
+
+  // Lazy: Akka builds serializers while the actor system is still starting.
+  private lazy val resolver = ActorRefResolver(system.toTyped)
+
+  private def refText(ref: ActorRef[_]): String = resolver.toSerializationFormat(ref)
+  private def ref[T](text: String): ActorRef[T] = resolver.resolveActorRef[T](text)
+
+  override def manifest(o: AnyRef): String = o match {
+    case _: RobotMiddleware.RegisterApp    => M.RegisterApp
+    case _: RobotMiddleware.Execute        => M.Execute
+    case _: RobotMiddleware.Acquire        => M.Acquire
+    case _: RobotMiddleware.Release        => M.Release
+    case _: RobotMiddleware.ListRobots     => M.ListRobots
+    case _: RobotMiddleware.WatchStatus    => M.WatchStatus
+    case _: RobotMiddleware.WatchVision    => M.WatchVision
+    case _: RobotMiddleware.WatchLinkStats => M.WatchLinkStats
+    case _: RobotMiddleware.WatchGame      => M.WatchGame
+    case _: RobotMiddleware.WatchEvents    => M.WatchEvents
+    case _: RobotMiddleware.AppRegistered  => M.AppRegistered
+    case _: RobotMiddleware.OperationResult => M.OperationResult
+    case _: RobotMiddleware.LeaseResult    => M.LeaseResult
+    case v: Vector[_] if v.forall(_.isInstanceOf[RobotSnapshot]) => M.RobotSnapshots
+    case _: Operation                      => M.Operation
+    case _: RobotFailure                   => M.RobotFailure
+    case _: SessionMessage.SubscribeAppEvents => M.SubscribeAppEvents
+    case SessionMessage.Close              => M.Close
+    case _: AppEvent.LeasePreempted        => M.LeasePreempted
+    case _: AppEvent.SafetyStop            => M.SafetyStop
+    case _: AppEvent.SafetyCleared         => M.SafetyCleared
+    case _: RobotSnapshot                  => M.RobotSnapshot
+    case _: LinkStats                      => M.LinkStats
+    case _: VisionFrame.Regions            => M.VisionRegions
+    case _: VisionFrame.Grid               => M.VisionGrid
+    case _: RobotOnline                    => M.RobotOnline
+    case _: RobotOffline                   => M.RobotOffline
+    case _: LinkQualityChanged             => M.LinkQualityChanged
+    case _: RobotStatusUpdated             => M.RobotStatusUpdated
+    case _: RobotRestarted                 => M.RobotRestarted
+    case _: GameStateUpdated               => M.GameStateUpdated
+    case _: GameControlData                => M.GameControlData
+    case _: RpcValue                       => M.RpcValue
+    case other                             => throw unknown(other)
+  }
+
+  override def toBinary(o: AnyRef): Array[Byte] = o match {
+    case RobotMiddleware.RegisterApp(name, priority, events, replyTo) =>
+      bytes(pb.RegisterApp(name, priority, refText(events), refText(replyTo)))
+    case RobotMiddleware.Execute(app, robotId, operation, replyTo) =>
+      bytes(pb.Execute(refText(app), robotId, toProto(operation), refText(replyTo)))
+    case RobotMiddleware.Acquire(app, robotId, group, replyTo) =>
+      bytes(pb.Acquire(refText(app), robotId, group.name, refText(replyTo)))
+    case RobotMiddleware.Release(app, robotId, group) => bytes(pb.Release(refText(app), robotId, group.name))
+    case RobotMiddleware.ListRobots(replyTo)          => bytes(pb.ListRobots(refText(replyTo)))
+    case RobotMiddleware.WatchStatus(robotId, subscriber) => bytes(pb.WatchStatus(robotId, refText(subscriber)))
+    case RobotMiddleware.WatchVision(robotId, subscriber, grid) =>
+      bytes(pb.WatchVision(robotId, refText(subscriber), grid))
+    case RobotMiddleware.WatchLinkStats(robotId, subscriber) => bytes(pb.WatchLinkStats(robotId, refText(subscriber)))
+    case RobotMiddleware.WatchGame(subscriber)   => bytes(pb.Watch(refText(subscriber)))
+    case RobotMiddleware.WatchEvents(subscriber) => bytes(pb.Watch(refText(subscriber)))
+    case RobotMiddleware.AppRegistered(name)     => bytes(pb.AppRegistered(name))
+    case RobotMiddleware.OperationResult(robotId, operation, result) =>
+      val r = result.fold(
+        f => pb.OperationResult.Result.Failure(toProto(f)),
+        v => pb.OperationResult.Result.Returned(pb.Returned(v.map(_.toProto)))
+      )
+      bytes(pb.OperationResult(robotId, operation, r))
+    case RobotMiddleware.LeaseResult(robotId, group, result) =>
+      bytes(pb.LeaseResult(robotId, group, result.left.toOption.map(f => toProto(f))))
+    case v: Vector[_] if v.forall(_.isInstanceOf[RobotSnapshot]) =>
+      bytes(pb.RobotSnapshots(v.collect { case s: RobotSnapshot => toProto(s) }))
+    case o: Operation                           => bytes(toProto(o))
+    case f: RobotFailure                        => bytes(toProto(f))
+    case SessionMessage.SubscribeAppEvents(subscriber) => bytes(pb.SubscribeAppEvents(refText(subscriber)))
+    case SessionMessage.Close                   => Array.emptyByteArray
+    case AppEvent.LeasePreempted(robotId, group, byApp) => bytes(pb.LeasePreempted(robotId, group, byApp))
+    case AppEvent.SafetyStop(robotId, reason)   => bytes(pb.SafetyStop(robotId, reason))
+    case AppEvent.SafetyCleared(robotId)        => bytes(pb.SafetyCleared(robotId))
+    case s: RobotSnapshot                       => bytes(toProto(s))
+    case s: LinkStats =>
+      bytes(pb.LinkStats(s.robotId, s.datagramsIn, s.datagramsOut, s.bytesIn, s.bytesOut, s.rttMillis, s.lossEstimate,
+        s.retransmissions, s.rejected))
+    case VisionFrame.Regions(robotId, frame, timestampMs, regions) =>
+      bytes(pb.VisionRegions(robotId, frame, timestampMs, regions.map(r => toProto(r))))
+    case VisionFrame.Grid(robotId, frame, timestampMs, grid) =>
+      bytes(pb.VisionGrid(robotId, frame, timestampMs, ByteString.copyFrom(grid.cells.toArray)))
+    case RobotOnline(robotId, address)          => bytes(pb.RobotOnline(robotId, toProto(address)))
+    case RobotOffline(robotId, reason)          => bytes(pb.RobotOffline(robotId, reason))
+    case LinkQualityChanged(robotId, quality)   => bytes(pb.LinkQualityChanged(robotId, toProto(quality)))
+    case RobotStatusUpdated(snapshot)           => bytes(toProto(snapshot))
+    case RobotRestarted(robotId, bootId, resynced) => bytes(pb.RobotRestarted(robotId, bootId, resynced))
+    case GameStateUpdated(data)                 => gamePacket(data)
+    case data: GameControlData                  => gamePacket(data)
+    case v: RpcValue                            => bytes(v.toProto)
+    case other                                  => throw unknown(other)
+  }
+
+  override def fromBinary(bytes: Array[Byte], manifest: String): AnyRef = manifest match {
+    case M.RegisterApp =>
+      val m = pb.RegisterApp.parseFrom(bytes)
+      RobotMiddleware.RegisterApp(m.name, m.priority, ref(m.events), ref(m.replyTo))
+    case M.Execute =>
+      val m = pb.Execute.parseFrom(bytes)
+      RobotMiddleware.Execute(ref(m.app), m.robotId, fromProto(m.operation), ref(m.replyTo))
+    case M.Acquire =>
+      val m = pb.Acquire.parseFrom(bytes)
+      RobotMiddleware.Acquire(ref(m.app), m.robotId, ActuatorGroup(m.group), ref(m.replyTo))
+    case M.Release =>
+      val m = pb.Release.parseFrom(bytes)
+      RobotMiddleware.Release(ref(m.app), m.robotId, ActuatorGroup(m.group))
+    case M.ListRobots => RobotMiddleware.ListRobots(ref(pb.ListRobots.parseFrom(bytes).replyTo))
+    case M.WatchStatus =>
+      val m = pb.WatchStatus.parseFrom(bytes)
+      RobotMiddleware.WatchStatus(m.robotId, ref(m.subscriber))
+    case M.WatchVision =>
+      val m = pb.WatchVision.parseFrom(bytes)
+      RobotMiddleware.WatchVision(m.robotId, ref(m.subscriber), m.grid)
+    case M.WatchLinkStats =>
+      val m = pb.WatchLinkStats.parseFrom(bytes)
+      RobotMiddleware.WatchLinkStats(m.robotId, ref(m.subscriber))
+    case M.WatchGame     => RobotMiddleware.WatchGame(ref(pb.Watch.parseFrom(bytes).subscriber))
+    case M.WatchEvents   => RobotMiddleware.WatchEvents(ref(pb.Watch.parseFrom(bytes).subscriber))
+    case M.AppRegistered => RobotMiddleware.AppRegistered(pb.AppRegistered.parseFrom(bytes).name)
+    case M.OperationResult =>
+      val m = pb.OperationResult.parseFrom(bytes)
+      val result = m.result match {
+        case pb.OperationResult.Result.Failure(f)  => Left(fromProto(f))
+        case pb.OperationResult.Result.Returned(r) => Right(r.value.map(naogateway.wire.RpcValue.fromProto))
+        case pb.OperationResult.Result.Empty       => throw corrupt(manifest, "neither failure nor result")
+      }
+      RobotMiddleware.OperationResult(m.robotId, m.operation, result)
+    case M.LeaseResult =>
+      val m = pb.LeaseResult.parseFrom(bytes)
+      RobotMiddleware.LeaseResult(m.robotId, m.group, m.failure.map(f => fromProto(f)).toLeft(()))
+    case M.RobotSnapshots => pb.RobotSnapshots.parseFrom(bytes).robots.iterator.map(s => fromProto(s)).toVector
+    case M.Operation      => fromProto(pb.Operation.parseFrom(bytes))
+    case M.RobotFailure   => fromProto(pb.RobotFailure.parseFrom(bytes))
+    case M.SubscribeAppEvents =>
+      SessionMessage.SubscribeAppEvents(ref(pb.SubscribeAppEvents.parseFrom(bytes).subscriber))
+    case M.Close          => SessionMessage.Close
+    case M.LeasePreempted =>
+      val m = pb.LeasePreempted.parseFrom(bytes)
+      AppEvent.LeasePreempted(m.robotId, m.group, m.byApp)
+    case M.SafetyStop =>
+      val m = pb.SafetyStop.parseFrom(bytes)
+      AppEvent.SafetyStop(m.robotId, m.reason)
+    case M.SafetyCleared => AppEvent.SafetyCleared(pb.SafetyCleared.parseFrom(bytes).robotId)
+    case M.RobotSnapshot => fromProto(pb.RobotSnapshot.parseFrom(bytes))
+    case M.LinkStats =>
+      val m = pb.LinkStats.parseFrom(bytes)
+      naogateway.LinkStats(m.robotId, m.datagramsIn, m.datagramsOut, m.bytesIn, m.bytesOut, m.rttMillis, m.lossEstimate,
+        m.retransmissions, m.rejected)
+    case M.VisionRegions =>
+      val m = pb.VisionRegions.parseFrom(bytes)
+      VisionFrame.Regions(m.robotId, m.frame, m.timestampMs, m.regions.iterator.map(r => fromProto(r)).toVector)
+    case M.VisionGrid =>
+      val m = pb.VisionGrid.parseFrom(bytes)
+      VisionFrame.Grid(m.robotId, m.frame, m.timestampMs, HaViMoGrid(m.cells.toByteArray.toVector))
+    case M.RobotOnline =>
+      val m = pb.RobotOnline.parseFrom(bytes)
+      naogateway.RobotOnline(m.robotId, fromProto(m.address))
+    case M.RobotOffline =>
+      val m = pb.RobotOffline.parseFrom(bytes)
+      naogateway.RobotOffline(m.robotId, m.reason)
+    case M.LinkQualityChanged =>
+      val m = pb.LinkQualityChanged.parseFrom(bytes)
+      naogateway.LinkQualityChanged(m.robotId, fromProto(m.quality))
+    case M.RobotStatusUpdated => naogateway.RobotStatusUpdated(fromProto(pb.RobotSnapshot.parseFrom(bytes)))
+    case M.RobotRestarted =>
+      val m = pb.RobotRestarted.parseFrom(bytes)
+      naogateway.RobotRestarted(m.robotId, m.bootId, m.resynced.toVector)
+    case M.GameStateUpdated => naogateway.GameStateUpdated(gameData(bytes))
+    case M.GameControlData  => gameData(bytes)
+    case M.RpcValue         => naogateway.wire.RpcValue.fromProto(naogateway.proto.MixedValue.parseFrom(bytes))
+    case other =>
+      throw new NotSerializableException(s"CrossNodeSerializer has no message with manifest [$other]")
+  }
+
+  private def bytes(m: GeneratedMessage): Array[Byte] = m.toByteArray
+
+  private def unknown(o: AnyRef): IllegalArgumentException =
+    new IllegalArgumentException(s"CrossNodeSerializer cannot serialize [${o.getClass.getName}]; see docs/cluster.md")
+
+  private def corrupt(manifest: String, detail: String): NotSerializableException =
+    new NotSerializableException(s"CrossNodeSerializer: corrupt [$manifest]: $detail")
+
+  private def gamePacket(data: GameControlData): Array[Byte] =
+    GameControllerCodec.encodeControl(data).fold(e => throw unfitGame(e.describe), identity)
+
+  private def unfitGame(detail: String): IllegalArgumentException =
+    new IllegalArgumentException(s"CrossNodeSerializer: GameControlData does not fit its RGme layout: $detail")
+
+  private def gameData(bytes: Array[Byte]): GameControlData =
+    GameControllerCodec.decodeControl(bytes).fold(e => throw corrupt(M.GameControlData, e.describe), identity)
+
+  private def toProto(o: Operation): pb.Operation = {
+    import pb.Operation.Kind
+    pb.Operation(o match {
+      case robotmiddleware.Operation.Walk(vx, vy, omega)  => Kind.Walk(pb.Operation.Walk(vx, vy, omega))
+      case robotmiddleware.Operation.Stop()               => Kind.Stop(pb.Operation.Stop())
+      case robotmiddleware.Operation.Head(pan, tilt)      => Kind.Head(pb.Operation.Head(pan, tilt))
+      case robotmiddleware.Operation.Arms(ls, le, rs, re) => Kind.Arms(pb.Operation.Arms(ls, le, rs, re))
+      case robotmiddleware.Operation.Posture(posture)     => Kind.Posture(pb.Operation.Posture(posture))
+      case robotmiddleware.Operation.Say(text)            => Kind.Say(pb.Operation.Say(text))
+      case robotmiddleware.Operation.RawCall(module, method, params) =>
+        Kind.RawCall(pb.Operation.RawCall(module, method, params.map(_.toProto)))
+    })
+  }
+
+  private def fromProto(o: pb.Operation): Operation = {
+    import pb.Operation.Kind
+    o.kind match {
+      case Kind.Walk(w)    => robotmiddleware.Operation.Walk(w.vx, w.vy, w.omega)
+      case Kind.Stop(_)    => robotmiddleware.Operation.Stop()
+      case Kind.Head(h)    => robotmiddleware.Operation.Head(h.pan, h.tilt)
+      case Kind.Arms(a)    => robotmiddleware.Operation.Arms(a.leftShoulder, a.leftElbow, a.rightShoulder, a.rightElbow)
+      case Kind.Posture(p) => robotmiddleware.Operation.Posture(p.posture)
+      case Kind.Say(s)     => robotmiddleware.Operation.Say(s.text)
+      case Kind.RawCall(r) =>
+        val params = r.params.iterator.map(naogateway.wire.RpcValue.fromProto).toVector
+        robotmiddleware.Operation.RawCall(r.module, r.method, params)
+      case Kind.Empty => throw corrupt(M.Operation, "no operation")
+    }
+  }
+
+  private def toProto(f: RobotFailure): pb.RobotFailure = {
+    import pb.RobotFailure.Kind
+    import robotmiddleware.{RobotFailure => F}
+    pb.RobotFailure(f match {
+      case F.RobotOffline(robotId)                => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
+      case F.UnknownRobot(robotId)                => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
+      case F.LeaseNotHeld(robotId, group, holder) =>
+        Kind.LeaseNotHeld(pb.RobotFailure.LeaseNotHeld(robotId, group, holder))
+      case F.RuleGate(rule)                       => Kind.RuleGate(pb.RobotFailure.RuleGate(rule))
+      case F.Timeout(robotId, operation, millis)  => Kind.Timeout(pb.RobotFailure.Timeout(robotId, operation, millis))
+      case F.RobotError(robotId, error)           => Kind.RobotError(pb.RobotFailure.RobotError(robotId, error))
+      case F.SafetyHold(robotId, reason)          => Kind.SafetyHold(pb.RobotFailure.SafetyHold(robotId, reason))
+      case F.Overloaded(robotId, detail)          => Kind.Overloaded(pb.RobotFailure.Overloaded(robotId, detail))
+    })
+  }
+
+  private def fromProto(f: pb.RobotFailure): RobotFailure = {
+    import pb.RobotFailure.Kind
+    import robotmiddleware.{RobotFailure => F}
+    f.kind match {
+      case Kind.RobotOffline(m) => F.RobotOffline(m.robotId)
+      case Kind.UnknownRobot(m) => F.UnknownRobot(m.robotId)
+      case Kind.LeaseNotHeld(m) => F.LeaseNotHeld(m.robotId, m.group, m.holder)
+      case Kind.RuleGate(m)     => F.RuleGate(m.rule)
+      case Kind.Timeout(m)      => F.Timeout(m.robotId, m.operation, m.millis)
+      case Kind.RobotError(m)   => F.RobotError(m.robotId, m.error)
+      case Kind.SafetyHold(m)   => F.SafetyHold(m.robotId, m.reason)
+      case Kind.Overloaded(m)   => F.Overloaded(m.robotId, m.detail)
+      case Kind.Empty           => throw corrupt(M.RobotFailure, "no failure")
+    }
+  }
+
+  private def toProto(a: InetSocketAddress): pb.SocketAddress =
+    pb.SocketAddress(Option(a.getAddress).map(ip => ByteString.copyFrom(ip.getAddress)), a.getHostString, a.getPort)
+
+  // getByAddress with the host string never asks a name server, and InetSocketAddress equality holds.
+  private def fromProto(a: pb.SocketAddress): InetSocketAddress = a.ip match {
+    case Some(ip) => new InetSocketAddress(InetAddress.getByAddress(a.host, ip.toByteArray), a.port)
+    case None     => InetSocketAddress.createUnresolved(a.host, a.port)
+  }
+
+  private def toProto(q: LinkQuality): pb.LinkQuality = q match {
+    case LinkQuality.Good     => pb.LinkQuality.GOOD
+    case LinkQuality.Degraded => pb.LinkQuality.DEGRADED
+    case LinkQuality.Offline  => pb.LinkQuality.OFFLINE
+  }
+
+  private def fromProto(q: pb.LinkQuality): LinkQuality = q match {
+    case pb.LinkQuality.GOOD            => LinkQuality.Good
+    case pb.LinkQuality.DEGRADED        => LinkQuality.Degraded
+    case pb.LinkQuality.OFFLINE         => LinkQuality.Offline
+    case pb.LinkQuality.Unrecognized(v) => throw corrupt("LinkQuality", s"unknown value $v")
+  }
+
+  private def toProto(s: RobotSnapshot): pb.RobotSnapshot =
+    pb.RobotSnapshot(
+      robotId = s.robotId,
+      address = toProto(s.address),
+      teamId = s.teamId,
+      role = s.role,
+      agent = s.agent,
+      posture = s.posture,
+      batteryVoltage = s.batteryVoltage,
+      uptimeMillis = s.uptimeMillis,
+      bootId = s.bootId,
+      position = s.position.map { case (x, y, heading) => pb.Position(x, y, heading) },
+      online = s.online,
+      quality = toProto(s.quality),
+      receivedAtNanos = s.receivedAtNanos
+    )
+
+  private def fromProto(s: pb.RobotSnapshot): RobotSnapshot =
+    naogateway.RobotSnapshot(
+      robotId = s.robotId,
+      address = fromProto(s.address),
+      teamId = s.teamId,
+      role = s.role,
+      agent = s.agent,
+      posture = s.posture,
+      batteryVoltage = s.batteryVoltage,
+      uptimeMillis = s.uptimeMillis,
+      bootId = s.bootId,
+      position = s.position.map(p => (p.x, p.y, p.heading)),
+      online = s.online,
+      quality = fromProto(s.quality),
+      receivedAtNanos = s.receivedAtNanos
+    )
+
+  private def toProto(r: HaViMoRegion): pb.HaViMoRegion =
+    pb.HaViMoRegion(r.index, r.colour, r.pixels, r.sumX, r.sumY, r.maxX, r.minX, r.maxY, r.minY)
+
+  private def fromProto(r: pb.HaViMoRegion): HaViMoRegion =
+    HaViMoRegion(r.index, r.colour, r.pixels, r.sumX, r.sumY, r.maxX, r.minX, r.maxY, r.minY)
+}
+
+/** The manifests of `CrossNodeSerializer`: short, stable names that stay valid when classes move. */
+object CrossNodeSerializer {
+
+  /** One name per message kind; renaming one breaks rolling updates between nodes of different versions. */
+  object Manifest {
+    val RegisterApp = "RegisterApp"
+    val Execute = "Execute"
+    val Acquire = "Acquire"
+    val Release = "Release"
+    val ListRobots = "ListRobots"
+    val WatchStatus = "WatchStatus"
+    val WatchVision = "WatchVision"
+    val WatchLinkStats = "WatchLinkStats"
+    val WatchGame = "WatchGame"
+    val WatchEvents = "WatchEvents"
+    val AppRegistered = "AppRegistered"
+    val OperationResult = "OperationResult"
+    val LeaseResult = "LeaseResult"
+    val RobotSnapshots = "RobotSnapshots"
+    val Operation = "Operation"
+    val RobotFailure = "RobotFailure"
+    val SubscribeAppEvents = "SubscribeAppEvents"
+    val Close = "Close"
+    val LeasePreempted = "LeasePreempted"
+    val SafetyStop = "SafetyStop"
+    val SafetyCleared = "SafetyCleared"
+    val RobotSnapshot = "RobotSnapshot"
+    val LinkStats = "LinkStats"
+    val VisionRegions = "VisionRegions"
+    val VisionGrid = "VisionGrid"
+    val RobotOnline = "RobotOnline"
+    val RobotOffline = "RobotOffline"
+    val LinkQualityChanged = "LinkQualityChanged"
+    val RobotStatusUpdated = "RobotStatusUpdated"
+    val RobotRestarted = "RobotRestarted"
+    val GameStateUpdated = "GameStateUpdated"
+    val GameControlData = "GameControlData"
+    val RpcValue = "RpcValue"
+  }
+}

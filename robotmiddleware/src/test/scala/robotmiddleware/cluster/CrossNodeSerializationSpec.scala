@@ -1,0 +1,235 @@
+package robotmiddleware.cluster
+
+import java.io.NotSerializableException
+import java.net.{InetAddress, InetSocketAddress}
+
+import scala.reflect.runtime.{universe => ru}
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.actor.typed.ActorRef
+import akka.serialization.{SerializationExtension, SerializerWithStringManifest}
+import com.typesafe.config.ConfigFactory
+import org.scalacheck.Gen
+import org.scalacheck.rng.Seed
+import org.scalatest.wordspec.AnyWordSpecLike
+import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
+
+import naogateway._
+import naogateway.wire.gamecontroller.{GameControlData, GameControllerGenerators}
+import naogateway.wire.{HaViMoGrid, HaViMoRegion, RpcValue}
+import robotmiddleware._
+
+/** Every message that crosses nodes survives the protobuf serializer unchanged, and nothing falls back to Java. */
+class CrossNodeSerializationSpec
+    extends ScalaTestWithActorTestKit(CrossNodeSerializationSpec.config)
+    with AnyWordSpecLike
+    with ScalaCheckPropertyChecks
+    with LogCapturing {
+  import CrossNodeSerializationSpec._
+
+  private val serialization = SerializationExtension(system)
+  private val probe = createTestProbe[Any]()
+  private val all = samples(probe.ref)
+
+  /** Public leaf classes of a sealed hierarchy, found in the compiled signatures so a new message cannot be missed. */
+  private def publicLeaves(tpe: ru.Type): Set[Class[_]] = {
+    val mirror = ru.runtimeMirror(getClass.getClassLoader)
+    def walk(symbol: ru.ClassSymbol): Set[Class[_]] =
+      if (symbol.isSealed)
+        symbol.knownDirectSubclasses.filter(_.isClass).map(_.asClass).filterNot(_.isPrivate).flatMap(walk)
+      else Set(mirror.runtimeClass(symbol))
+    walk(tpe.typeSymbol.asClass)
+  }
+
+  "CrossNodeSerializer" must {
+    "have a sample of every public message of each hierarchy bound to it" in {
+      val hierarchies = Seq(
+        ru.typeOf[RobotMiddleware.Command],
+        ru.typeOf[Operation],
+        ru.typeOf[RobotFailure],
+        ru.typeOf[SessionMessage],
+        ru.typeOf[GatewayEvent],
+        ru.typeOf[VisionFrame],
+        ru.typeOf[RpcValue]
+      )
+      val leaves = hierarchies.flatMap(publicLeaves)
+      leaves.size should be > 30
+      leaves.foreach(leaf => withClue(leaf.getName)(all.exists(leaf.isInstance) shouldBe true))
+      def manifest(m: AnyRef): String =
+        serialization.findSerializerFor(m).asInstanceOf[SerializerWithStringManifest].manifest(m)
+      all.map(manifest).toSet shouldBe manifests
+    }
+
+    "be the serializer of every cross-node message, with Java serialization off" in {
+      system.classicSystem.settings.AllowJavaSerialization shouldBe false
+      all.foreach(m => withClue(m)(serialization.findSerializerFor(m) shouldBe a[CrossNodeSerializer]))
+    }
+
+    "round-trip every cross-node message to an equal one" in {
+      all.foreach(m => withClue(m)(serializationTestKit.verifySerialization(m)))
+    }
+
+    "round-trip every valid GameController packet of both versions" in {
+      forAll(GameControllerGenerators.control) { data =>
+        serializationTestKit.verifySerialization(data)
+        serializationTestKit.verifySerialization(GameStateUpdated(data))
+      }
+    }
+
+    "deliver deserialized copies when every local message is serialized (serialize-messages = on)" in {
+      all.foreach { m =>
+        probe.ref ! m
+        val delivered = probe.receiveMessage()
+        withClue(m) {
+          delivered shouldBe m
+          m match {
+            case p: Product if p.productArity > 0 => delivered.asInstanceOf[AnyRef] should not be theSameInstanceAs(m)
+            case _                                => ()
+          }
+        }
+      }
+    }
+
+    "refuse what it cannot carry with an error, not a wrong message" in {
+      serialization.serialize(Vector("not a snapshot")).failed.get shouldBe an[IllegalArgumentException]
+      val serializer = serialization.findSerializerFor(AppEvent.SafetyCleared(1)).asInstanceOf[CrossNodeSerializer]
+      a[NotSerializableException] should be thrownBy serializer.fromBinary(Array.emptyByteArray, "NoSuchMessage")
+    }
+  }
+}
+
+/** Samples of every cross-node message, shared with the cluster spec. */
+object CrossNodeSerializationSpec {
+
+  /** Every message sent to a local actor goes through serialization, as if it crossed nodes. */
+  val config = ConfigFactory.parseString("akka.actor.serialize-messages = on")
+
+  /** Every manifest of CrossNodeSerializer: the samples must use all of them. */
+  val manifests: Set[String] = Set(
+    "RegisterApp", "Execute", "Acquire", "Release", "ListRobots", "WatchStatus", "WatchVision", "WatchLinkStats",
+    "WatchGame", "WatchEvents", "AppRegistered", "OperationResult", "LeaseResult", "RobotSnapshots", "Operation",
+    "RobotFailure", "SubscribeAppEvents", "Close", "LeasePreempted", "SafetyStop", "SafetyCleared", "RobotSnapshot",
+    "LinkStats", "VisionRegions", "VisionGrid", "RobotOnline", "RobotOffline", "LinkQualityChanged",
+    "RobotStatusUpdated", "RobotRestarted", "GameStateUpdated", "GameControlData", "RpcValue"
+  )
+
+  val ipv4: InetSocketAddress = new InetSocketAddress(InetAddress.getByAddress(Array[Byte](127, 0, 0, 7)), 11011)
+  val named: InetSocketAddress =
+    new InetSocketAddress(InetAddress.getByAddress("robot7", Array[Byte](127, 0, 0, 7)), 11011)
+  val ipv6: InetSocketAddress =
+    new InetSocketAddress(InetAddress.getByAddress(Array.fill[Byte](15)(0) :+ 1.toByte), 3838)
+  val unresolved: InetSocketAddress = InetSocketAddress.createUnresolved("robot7.local", 11011)
+
+  val snapshot: RobotSnapshot = RobotSnapshot(
+    robotId = 7,
+    address = ipv4,
+    teamId = Some(12),
+    role = Some("striker"),
+    agent = Some("ballfollower"),
+    posture = Some("stand"),
+    batteryVoltage = Some(11.7),
+    uptimeMillis = Some(123456L),
+    bootId = Some(3),
+    position = Some((1200, -300, 1.57)),
+    online = true,
+    quality = LinkQuality.Good,
+    receivedAtNanos = 987654321L
+  )
+
+  val rpcValues: Vector[RpcValue] = Vector(
+    RpcValue.Text("ok"),
+    RpcValue.Text(""),
+    RpcValue.UInt(0xffffffffL),
+    RpcValue.Number(-1.5f),
+    RpcValue.Binary(Vector[Byte](0, 1, -1)),
+    RpcValue.Flag(true),
+    RpcValue.Items(Vector(RpcValue.Items(Vector.empty), RpcValue.Text("nested")))
+  )
+
+  val operations: Vector[Operation] = Vector(
+    Operation.Walk(0.2, -0.1, 0.5),
+    Operation.Stop(),
+    Operation.Head(1.0, -0.3),
+    Operation.Arms(0.1, 0.2, -0.3, -0.4),
+    Operation.Posture("stand"),
+    Operation.Say("hello"),
+    Operation.RawCall("system", "echo", rpcValues)
+  )
+
+  val failures: Vector[RobotFailure] = Vector(
+    RobotFailure.RobotOffline(7),
+    RobotFailure.UnknownRobot(8),
+    RobotFailure.LeaseNotHeld(7, "walk", Some("teleop")),
+    RobotFailure.LeaseNotHeld(7, "head", None),
+    RobotFailure.RuleGate("no sending while the game is playing"),
+    RobotFailure.Timeout(7, "motion.posture", 5000L),
+    RobotFailure.RobotError(7, "unknown method: motion.fly"),
+    RobotFailure.SafetyHold(7, "battery low"),
+    RobotFailure.Overloaded(7, "too many operations wait for the robot")
+  )
+
+  val regions: VisionFrame.Regions = VisionFrame.Regions(
+    7,
+    frame = 4242L,
+    timestampMs = Some(1234L),
+    regions = Vector(HaViMoRegion(1, 2, 300, 12345L, 6789L, 90, 10, 80, 20), HaViMoRegion(0, 0, 0, 0L, 0L, 0, 0, 0, 0))
+  )
+
+  val grid: VisionFrame.Grid = VisionFrame.Grid(7, 4243L, None, HaViMoGrid(Vector.tabulate(768)(i => (i * 37).toByte)))
+
+  val linkStats: LinkStats =
+    LinkStats(7, 100L, 90L, 12000L, 8000L, Some(3.5), 0.02, 4L, Map("garbage" -> 2L, "unknown-robot" -> 1L))
+
+  /** A GameController packet from the codec's generators, fixed by its seed. */
+  val gameData: GameControlData = GameControllerGenerators.control.pureApply(Gen.Parameters.default, Seed(530L))
+
+  /** One or more samples of every message that crosses nodes, with actor refs pointing at `ref`. */
+  def samples(ref: ActorRef[Any]): Vector[AnyRef] =
+    Vector[AnyRef](
+      RobotMiddleware.RegisterApp("teleop", 3, ref, ref),
+      RobotMiddleware.Acquire(ref, 7, ActuatorGroup.Head, ref),
+      RobotMiddleware.Release(ref, 7, ActuatorGroup.Speech),
+      RobotMiddleware.ListRobots(ref),
+      RobotMiddleware.WatchStatus(Some(7), ref),
+      RobotMiddleware.WatchStatus(None, ref),
+      RobotMiddleware.WatchVision(7, ref, grid = true),
+      RobotMiddleware.WatchLinkStats(7, ref),
+      RobotMiddleware.WatchGame(ref),
+      RobotMiddleware.WatchEvents(ref),
+      RobotMiddleware.AppRegistered("teleop"),
+      RobotMiddleware.OperationResult(7, "motion.walk", Right(None)),
+      RobotMiddleware.OperationResult(7, "system.echo", Right(Some(rpcValues.last))),
+      RobotMiddleware.LeaseResult(7, "walk", Right(())),
+      Vector(snapshot, snapshot.copy(robotId = 8, address = ipv6)),
+      Vector.empty[RobotSnapshot],
+      SessionMessage.SubscribeAppEvents(ref),
+      SessionMessage.Close,
+      AppEvent.LeasePreempted(7, "walk", "referee"),
+      AppEvent.SafetyStop(7, "battery low"),
+      AppEvent.SafetyCleared(7),
+      snapshot,
+      snapshot.copy(address = named, quality = LinkQuality.Degraded),
+      RobotSnapshot(9, unresolved),
+      linkStats,
+      linkStats.copy(rttMillis = None, rejected = Map.empty),
+      regions,
+      regions.copy(timestampMs = None, regions = Vector.empty),
+      grid,
+      RobotOnline(7, ipv4),
+      RobotOffline(7, "no keep-alive for 3 probes"),
+      LinkQualityChanged(7, LinkQuality.Good),
+      LinkQualityChanged(7, LinkQuality.Degraded),
+      LinkQualityChanged(7, LinkQuality.Offline),
+      RobotStatusUpdated(snapshot),
+      RobotRestarted(7, Some(4), Vector("havimo.regions", "havimo.grid")),
+      RobotRestarted(7, None, Vector.empty),
+      GameStateUpdated(gameData),
+      gameData
+    ) ++
+      operations.map(o => RobotMiddleware.Execute(ref, 7, o, ref)) ++
+      operations ++
+      failures.map(f => RobotMiddleware.OperationResult(7, "motion.walk", Left(f))) ++
+      failures.map(f => RobotMiddleware.LeaseResult(7, "walk", Left(f))) ++
+      failures ++
+      rpcValues
+}
