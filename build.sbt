@@ -67,7 +67,10 @@ lazy val apps = (project in file("apps"))
   .settings(
     name := "apps",
     libraryDependencies ++= testLibs ++ akkaTestLibs,
-    Compile / mainClass := Some("apps.Launcher")
+    Compile / mainClass := Some("apps.Launcher"),
+    run / fork := true,
+    run / connectInput := true,
+    run / outputStrategy := Some(StdoutOutput)
   )
 
 lazy val root = (project in file("."))
@@ -80,9 +83,13 @@ lazy val root = (project in file("."))
     Compile / mainClass := (apps / Compile / mainClass).value,
     run / fork := true,
     run / connectInput := true,
+    run / outputStrategy := Some(StdoutOutput),
     Test / run / fork := true,
     Test / run / javaOptions ++= Seq("-Xmx2g")
   )
+
+// ./sbt "robotctl status": the command-line client that joins a running gateway.
+addCommandAlias("robotctl", "apps/runMain apps.RobotCtl")
 
 // ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table.
 addCommandAlias("bench", "root/Test/runMain bench.BenchSuite")

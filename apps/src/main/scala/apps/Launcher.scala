@@ -1,7 +1,155 @@
 package apps
 
-/** Entry point behind `./sbt run`. */
+import java.io.File
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration._
+import scala.jdk.DurationConverters._
+import scala.util.{Failure, Success}
+
+import akka.actor.CoordinatedShutdown
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, ActorSystem, Behavior}
+import com.typesafe.config.{Config, ConfigFactory}
+
+import naogateway._
+import naogateway.sim.{Fleet, FleetSettings}
+import robotmiddleware.cluster.MiddlewareCluster
+import robotmiddleware.{MiddlewareSettings, RobotClient, RobotMiddleware}
+
+/** `./sbt run`: gateway, middleware, simulated robots and the ball follower, with a live status view. */
 object Launcher {
-  def main(args: Array[String]): Unit =
-    println("naogateway launcher")
+
+  /** The launcher's settings (`apps.launcher`). */
+  final case class Settings(simulatedRobots: Int, ballFollowerRobot: Int, refresh: FiniteDuration) {
+    require(simulatedRobots >= 0 && simulatedRobots <= 1000, "apps.launcher.simulated-robots must be 0 to 1000")
+    require(refresh >= 50.millis, "apps.launcher.refresh must be at least 50 ms")
+  }
+
+  /** The settings of an `apps.launcher` block. */
+  def settings(c: Config): Settings =
+    Settings(c.getInt("simulated-robots"), c.getInt("ball-follower-robot"), c.getDuration("refresh").toScala)
+
+  /** The launcher's config: a file given as argument, then application.conf, then launcher.conf and the references. */
+  def config(args: Seq[String]): Config = {
+    val file = args.headOption.map { path =>
+      val f = new File(path)
+      require(f.isFile, s"config file $path does not exist")
+      ConfigFactory.parseFile(f)
+    }
+    file.getOrElse(ConfigFactory.empty()).withFallback(ConfigFactory.parseResources("launcher.conf"))
+  }
+
+  def main(args: Array[String]): Unit = {
+    val overrides = config(args.toSeq)
+    val gatewayNode = MiddlewareCluster.start(Root(), MiddlewareCluster.GatewayRole, overrides)
+    // Ctrl-C (or a TERM) runs the JVM shutdown hooks: both actor systems leave and stop within the phase timeouts.
+    CoordinatedShutdown(gatewayNode.classicSystem).addJvmShutdownHook(println("naogateway stopped"))
+  }
+
+  /** What the root of the gateway node accepts. */
+  sealed trait Command
+  private final case class Addresses(addresses: Gateway.Addresses) extends Command
+  private final case class FleetStarted(result: scala.util.Try[naogateway.sim.FleetHandle]) extends Command
+
+  /** The gateway node's root: gateway, middleware, simulated robots, status view, and the app node. */
+  def Root(): Behavior[Command] = Behaviors.setup { context =>
+    val config = context.system.settings.config
+    val launcher = settings(config.getConfig("apps.launcher"))
+    val gateway = context.spawn(Gateway(GatewaySettings(context.system)), "gateway")
+    context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
+    context.spawn(StatusPrinter(gateway, launcher.refresh, interactive = System.console() != null), "status")
+    gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
+
+    Behaviors.receiveMessage {
+      case Addresses(addresses) =>
+        if (launcher.simulatedRobots > 0) {
+          val robots = addresses.robots
+          val target = if (robots.getAddress.isAnyLocalAddress) new InetSocketAddress("127.0.0.1", robots.getPort) else robots
+          context.pipeToSelf(Fleet.start(context.system,
+            FleetSettings(target, (1 to launcher.simulatedRobots).toVector, faithfulLink = launcher.simulatedRobots <= 20)))(FleetStarted.apply)
+        }
+        if (launcher.ballFollowerRobot > 0) startBallFollower(context.system, launcher.ballFollowerRobot)
+        Behaviors.same
+      case FleetStarted(Success(fleet)) =>
+        context.log.info("Started {} simulated robots", fleet.robots.size)
+        Behaviors.same
+      case FleetStarted(Failure(e)) =>
+        context.log.error("Simulated robots did not start", e)
+        Behaviors.same
+    }
+  }
+
+  /** The ball follower runs in an actor system of its own, a cluster node with role "app", as every app does. */
+  private def startBallFollower(gatewayNode: ActorSystem[_], robotId: Int): Unit = {
+    val appNode = MiddlewareCluster.start(Behaviors.setup[BallFollowerNode] { context =>
+      context.pipeToSelf(RobotClient(context.system, "ball-follower", priority = 1))(BallFollowerNode.apply)
+      Behaviors.receiveMessage {
+        case BallFollowerNode(Success(robot)) =>
+          context.spawn(BallFollower(robot, robotId), "ball-follower")
+          Behaviors.same
+        case BallFollowerNode(Failure(e)) =>
+          context.log.error("Ball follower found no middleware", e)
+          Behaviors.stopped
+      }
+    }, MiddlewareCluster.AppRole)
+    // The app node lives and dies with the gateway node.
+    CoordinatedShutdown(gatewayNode.classicSystem).addTask(CoordinatedShutdown.PhaseBeforeServiceUnbind, "stop-apps") { () =>
+      appNode.terminate()
+      appNode.whenTerminated
+    }
+  }
+
+  private final case class BallFollowerNode(robot: scala.util.Try[robotmiddleware.RobotInterface])
+}
+
+/** Prints the status: a redrawn screen on a terminal, plain change lines otherwise. */
+object StatusPrinter {
+
+  /** What the printer accepts. */
+  sealed trait Command
+  private case object Refresh extends Command
+  private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
+  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private final case class Game(game: Option[naogateway.wire.gamecontroller.GameControlData]) extends Command
+  private final case class Link(stats: LinkStats) extends Command
+  private final case class RobotRef(robot: Option[ActorRef[RobotActor.Command]]) extends Command
+
+  /** A printer polling `gateway` every `refresh`. */
+  def apply(gateway: ActorRef[Gateway.Command], refresh: FiniteDuration, interactive: Boolean): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        timers.startTimerWithFixedDelay(Refresh, refresh)
+        val robotsAdapter = context.messageAdapter(Robots.apply)
+        val trafficAdapter = context.messageAdapter(Traffic.apply)
+        val gameAdapter = context.messageAdapter(Game.apply)
+        val linkAdapter = context.messageAdapter(Link.apply)
+        val robotRefAdapter = context.messageAdapter(RobotRef.apply)
+
+        def running(model: StatusModel, shown: StatusModel): Behavior[Command] = Behaviors.receiveMessage {
+          case Refresh =>
+            gateway ! Gateway.GetRobots(robotsAdapter)
+            gateway ! Gateway.GetTraffic(trafficAdapter)
+            gateway ! Gateway.GetGameState(gameAdapter)
+            model.robots.foreach(r => gateway ! Gateway.GetRobot(r.robotId, robotRefAdapter))
+            if (interactive) {
+              print("\u001b[H\u001b[2J" + StatusView.render(model).mkString("\n") + "\n")
+              running(model, model)
+            } else {
+              StatusView.changes(shown, model).foreach(println)
+              running(model, model)
+            }
+          case Robots(robots)  => running(model.copy(robots = robots), shown)
+          case Traffic(stats)  => running(model.copy(traffic = Some(stats)), shown)
+          case Game(game)      => running(model.copy(game = game), shown)
+          case Link(stats)     => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown)
+          case RobotRef(robot) =>
+            robot.foreach(_ ! RobotActor.GetLinkStats(linkAdapter))
+            Behaviors.same
+        }
+
+        val empty = StatusModel(Vector.empty, Map.empty, None, None)
+        running(empty, empty)
+      }
+    }
 }

@@ -300,7 +300,9 @@ object RobotActor {
       val now = System.nanoTime()
       val window = settings.heartbeat.qualityWindow.toNanos
       keepAliveTimes = keepAliveTimes.dropWhile(_ < now - window)
-      val expected = window.toDouble / settings.heartbeat.keepAliveInterval.toNanos
+      // Over the window, or over the time since the first keep-alive when the robot is younger than that.
+      val observed = keepAliveTimes.headOption.fold(window)(first => math.min(window, now - first + settings.heartbeat.keepAliveInterval.toNanos))
+      val expected = observed.toDouble / settings.heartbeat.keepAliveInterval.toNanos
       if (datagramsIn == 0) 1.0 else math.max(0.0, 1.0 - keepAliveTimes.size / expected)
     }
 

@@ -54,6 +54,7 @@ object RobotMiddleware {
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
+  private final case class NodeUnreachable(address: akka.actor.Address) extends Command
   private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]], retry: Command) extends Command
 
   /** The answer to `RegisterApp`. */
@@ -70,6 +71,13 @@ object RobotMiddleware {
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
       gateway ! Gateway.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
+      // In a cluster, an app whose node becomes unreachable loses its robots at once, not only when the node is
+      // downed seconds later: a blind app must not keep a robot walking.
+      if (context.system.settings.config.getString("akka.actor.provider") == "cluster") {
+        val unreachable = context.messageAdapter[akka.cluster.ClusterEvent.UnreachableMember](e => NodeUnreachable(e.member.address))
+        akka.cluster.typed.Cluster(context.system).subscriptions !
+          akka.cluster.typed.Subscribe(unreachable, classOf[akka.cluster.ClusterEvent.UnreachableMember])
+      }
       new Middleware(gateway, settings, context).running()
     }
 
@@ -162,6 +170,14 @@ object RobotMiddleware {
         statusWatchers = statusWatchers.filterNot(_._1 == subscriber)
         gameWatchers = gameWatchers.filterNot(_ == subscriber)
         eventWatchers = eventWatchers.filterNot(_ == subscriber)
+        Behaviors.same
+      case NodeUnreachable(address) =>
+        val gone = apps.keys.filter(_.path.address == address)
+        gone.foreach { app =>
+          context.log.warn("App [{}] is unreachable: releasing its leases and stopping its robots", apps(app).name)
+          apps -= app
+          guards.values.foreach(_ ! RobotGuard.AppGone(app))
+        }
         Behaviors.same
       case AppTerminated(app) =>
         context.log.info("App [{}] is gone: releasing its leases and stopping its robots", apps.get(app).map(_.name).getOrElse("?"))

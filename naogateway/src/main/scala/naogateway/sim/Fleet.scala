@@ -3,7 +3,7 @@ package naogateway.sim
 import java.net.{InetAddress, InetSocketAddress}
 import java.util.concurrent.atomic.AtomicLong
 
-import scala.concurrent.Future
+import scala.concurrent.{Future, Promise}
 import scala.concurrent.duration._
 import scala.util.{Failure, Success, Try}
 
@@ -147,8 +147,8 @@ object Fleet {
     }
   }
 
-  /** A fleet with `settings`; its robots start at once. */
-  def apply(settings: FleetSettings): Behavior[Command] =
+  /** A fleet with `settings`; its robots start at once, and `reportTo` learns whether they all did. */
+  def apply(settings: FleetSettings, reportTo: Option[ActorRef[StatusReply[Vector[FleetRobot]]]] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(StashCapacity) { stash =>
         val started = context.messageAdapter[SimulatedRobot.StartResult](RobotStarted.apply)
@@ -158,17 +158,28 @@ object Fleet {
           context.watchWith(robot, RobotStopped(id))
           id -> robot
         }
-        new Fleet(settings, context, stash, robots).starting(Map.empty)
+        new Fleet(settings, context, stash, robots, reportTo).starting(Map.empty)
       }
     }
 
-  /** Starts a fleet as a system actor; the handle comes once every robot is bound. */
+  /** Starts a fleet as a system actor; the handle comes once every robot is bound, or the reason it failed. */
   def start(system: ActorSystem[_], settings: FleetSettings): Future[FleetHandle] = {
-    val fleet = system.systemActorOf(Fleet(settings), s"simulated-fleet-${fleetNames.incrementAndGet()}")
-    implicit val timeout: Timeout = Timeout(settings.startTimeout)
-    implicit val scheduler: akka.actor.typed.Scheduler = system.scheduler
-    fleet
-      .askWithStatus[Vector[FleetRobot]](GetRobots(_))
+    val outcome = Promise[Vector[FleetRobot]]()
+    val n = fleetNames.incrementAndGet()
+    // The reporter exists before the fleet, so a start that fails at once cannot lose its reason.
+    val reporter = system.systemActorOf(
+      Behaviors.receiveMessage[StatusReply[Vector[FleetRobot]]] { reply =>
+        outcome.tryComplete(if (reply.isSuccess) Success(reply.getValue) else Failure(reply.getError))
+        Behaviors.stopped
+      },
+      s"simulated-fleet-$n-start"
+    )
+    val fleet = system.systemActorOf(Fleet(settings, Some(reporter)), s"simulated-fleet-$n")
+    val timer = akka.pattern.after(settings.startTimeout)(
+      Future.failed[Vector[FleetRobot]](new java.util.concurrent.TimeoutException(s"fleet did not start within ${settings.startTimeout}"))
+    )(system)
+    Future
+      .firstCompletedOf(Seq(outcome.future, timer))(system.executionContext)
       .transform {
         case Success(members) => Success(new FleetHandle(fleet, members, settings)(system))
         case Failure(e) =>
@@ -183,7 +194,8 @@ private final class Fleet(
     settings: FleetSettings,
     context: ActorContext[Fleet.Command],
     stash: StashBuffer[Fleet.Command],
-    robots: Vector[(Int, ActorRef[SimulatedRobot.Command])]
+    robots: Vector[(Int, ActorRef[SimulatedRobot.Command])],
+    reportTo: Option[ActorRef[StatusReply[Vector[FleetRobot]]]]
 ) {
   import Fleet._
 
@@ -199,6 +211,7 @@ private final class Fleet(
           val members = next.values.toVector.sortBy(m => order(m.robotId))
           context.log.info("Fleet of {} simulated robots of team {} is up, sending to {}", members.size, settings.teamId,
             settings.gateway)
+          reportTo.foreach(_ ! StatusReply.Success(members))
           stash.unstashAll(running(members))
         }
       case RobotStarted(SimulatedRobot.StartFailed(id, reason)) =>
@@ -214,6 +227,7 @@ private final class Fleet(
   private def failed(reason: String, alive: Set[Int]): Behavior[Command] = {
     context.log.warn("Fleet cannot start: {}", reason)
     val error = StatusReply.Error[Nothing](reason)
+    reportTo.foreach(_ ! error)
     val waiting = Vector.newBuilder[ActorRef[Done]]
     stash.foreach {
       case GetRobots(replyTo)        => replyTo ! error

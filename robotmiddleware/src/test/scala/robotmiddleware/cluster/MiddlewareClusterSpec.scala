@@ -50,9 +50,10 @@ class MiddlewareClusterSpec
   private val response = nodeA.createTestProbe[ResponseActor.Command]()
   private val noResponse = nodeA.createTestProbe[NoResponseActor.Command]()
   private val vision = nodeA.createTestProbe[VisionActor.Command]()
+  private val stream = nodeA.createTestProbe[StreamActor.Command]()
   private val subscriptions = nodeA.createTestProbe[ActorRef[GatewayEvent]]()
   private val robot =
-    nodeA.spawn(fakeRobot(RobotActor.Connected(7, response.ref, noResponse.ref, vision.ref)), "robot-7")
+    nodeA.spawn(fakeRobot(RobotActor.Connected(7, response.ref, noResponse.ref, vision.ref, stream.ref)), "robot-7")
   private val gateway = nodeA.spawn(fakeGateway(robot, subscriptions.ref), "gateway")
   private val middleware = nodeA.spawn(RobotMiddleware(gateway, MiddlewareSettings(nodeA.system)), "middleware")
   private val gatewayEvents = subscriptions.receiveMessage()
