@@ -45,7 +45,10 @@ final class ZmqLoop(val name: String, pollTimeout: FiniteDuration) extends Runna
   def start(executor: java.util.concurrent.Executor): Unit =
     if (started.compareAndSet(false, true)) executor.execute(this)
 
-  /** Asks the loop to close its sockets and its context and to end; completes when it has. */
+  /**
+   * Asks the loop to end: operations submitted before still run (so last replies go out), then the sockets and the
+   * context are closed. Completes when the thread has left the loop.
+   */
   def stop(): Future[Done] = {
     stopping = true
     if (started.compareAndSet(false, true)) {
@@ -118,7 +121,12 @@ final class ZmqLoop(val name: String, pollTimeout: FiniteDuration) extends Runna
       case NonFatal(e) => log.error("ZeroMQ loop [{}] failed; closing its sockets", name, e)
     } finally {
       stopping = true
-      operations.clear()
+      var operation = operations.poll()
+      while (operation != null) {
+        try operation(sockets)
+        catch { case NonFatal(e) => log.warn("ZeroMQ loop [{}]: an operation failed while stopping", name, e) }
+        operation = operations.poll()
+      }
       try {
         if (poller != null) poller.close()
         context.close()
