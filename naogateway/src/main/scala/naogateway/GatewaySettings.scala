@@ -71,11 +71,13 @@ final case class ZmqLinkSettings(
     statusTimeout: FiniteDuration,
     sendQueue: Int,
     pollTimeout: FiniteDuration,
+    handshakeTimeout: FiniteDuration,
     heartbeat: HeartbeatSettings
 ) {
   require(statusInterval > Duration.Zero, "zeromq.status-interval must be positive")
   require(statusTimeout > statusInterval, "zeromq.status-timeout must be longer than zeromq.status-interval")
   require(sendQueue >= 1, "zeromq.send-queue must be at least 1")
+  require(handshakeTimeout >= 10.millis, "zeromq.handshake-timeout must be at least 10 ms")
   require(pollTimeout >= 1.milli && pollTimeout <= 1.second, "zeromq.poll-timeout must be between 1 ms and 1 s")
   require(robots.map(_.robotId).distinct.size == robots.size, "zeromq.robots: every robot id may appear only once")
 }
@@ -164,6 +166,7 @@ object GatewaySettings {
         statusTimeout = duration(zmq, "status-timeout"),
         sendQueue = zmq.getInt("send-queue"),
         pollTimeout = duration(zmq, "poll-timeout"),
+        handshakeTimeout = duration(zmq, "handshake-timeout"),
         // A REP robot answers one call at a time, so a posture motion holds back probes and status polls:
         // its liveness timing is its own, and the keep-alive it is judged by is the status poll.
         heartbeat = heartbeat.copy(

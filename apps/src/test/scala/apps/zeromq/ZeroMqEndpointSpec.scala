@@ -24,6 +24,12 @@ import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
 /** Requests and replies as a client sees them. */
 object EndpointClient {
 
+  /**
+   * Readies a jeromq client socket: jeromq 0.6.0 clients stall in the ZeroMQ handshake after about 1 in 100
+   * connects (libzmq clients, e.g. pyzmq, do not); a short handshake interval makes them connect again.
+   */
+  def readyClient(socket: ZMQ.Socket): Unit = { socket.setHandshakeIvl(300); () }
+
   /** The body of a request for `module.method(params)` on `robotId` with `callId`. */
   def request(robotId: Int, module: String, method: String, params: Vector[RpcValue] = Vector.empty, callId: Long = 1L): Array[Byte] =
     MessageContents(robotId, rpcRequest = Some(RpcCall(module, method, params, Some(callId)).toProto)).toProtobuf
@@ -83,6 +89,7 @@ class ZeroMqEndpointSpec
   private def dealer(): ZMQ.Socket = {
     val s = zmq.createSocket(SocketType.DEALER)
     s.setLinger(0)
+    readyClient(s)
     s.connect(addresses.requests)
     s
   }
@@ -161,6 +168,7 @@ class ZeroMqEndpointSpec
         Future {
           val s = zmq.createSocket(SocketType.REQ)
           s.setLinger(0)
+          readyClient(s)
           s.setReceiveTimeOut(10000)
           s.connect(addresses.requests)
           try {
@@ -286,6 +294,7 @@ class ZeroMqEndpointSpec
     "publish status and game always, and a robot's vision only while someone subscribes to it" in {
       val sub = zmq.createSocket(SocketType.SUB)
       sub.setLinger(0)
+      readyClient(sub)
       sub.connect(addresses.publish)
       try {
         sub.subscribe("status.7".getBytes(StandardCharsets.UTF_8))

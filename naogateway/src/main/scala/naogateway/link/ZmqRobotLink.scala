@@ -71,6 +71,8 @@ object ZmqRobotLink {
           // ZMQ_IMMEDIATE: false here means "attach the pipe only once connected".
           socket.setImmediate(false)
           socket.setSndHWM(settings.sendQueue)
+          // A jeromq client now and then stalls in the handshake after connecting: drop such a connection soon.
+          socket.setHandshakeIvl(settings.handshakeTimeout.toMillis.toInt)
           socket.connect(endpoint)
           sockets.onReadable(socket) { s =>
             val message = ZMsg.recvMsg(s, ZMQ.DONTWAIT)
