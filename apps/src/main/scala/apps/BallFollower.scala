@@ -76,8 +76,10 @@ object BallFollower {
           case Frame(_) | Preempted(_) => Behaviors.same
         }
 
-        robot.vision(robotId).collect { case r: VisionFrame.Regions => Frame(r) }.runWith(Sink.foreach(context.self ! _))
-        robot.appEvents.runWith(Sink.foreach(e => context.self ! Preempted(e)))
+        // The streams run on other threads: they may only use the ref, never the context.
+        val self = context.self
+        robot.vision(robotId).collect { case r: VisionFrame.Regions => Frame(r) }.runWith(Sink.foreach(self ! _))
+        robot.appEvents.runWith(Sink.foreach(e => self ! Preempted(e)))
         acquire()
         waiting(Progress(reached = false, None, 0))
       }

@@ -57,7 +57,8 @@ object Launcher {
     val config = context.system.settings.config
     val launcher = settings(config.getConfig("apps.launcher"))
     val gateway = context.spawn(Gateway(GatewaySettings(context.system)), "gateway")
-    context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
+    val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
+    apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     context.spawn(StatusPrinter(gateway, launcher.refresh, interactive = System.console() != null), "status")
     gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
 

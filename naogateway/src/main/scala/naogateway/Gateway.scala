@@ -55,7 +55,7 @@ object Gateway {
   /** The gateway's own figures: datagrams seen, relayed, refused by reason. */
   final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int)
 
-  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, heard: Boolean)
+  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, heard: Boolean, zeromq: Boolean = false)
 
   /** The gateway with `settings`. */
   def apply(settings: GatewaySettings): Behavior[Command] =
@@ -89,6 +89,7 @@ object Gateway {
           "outbox"
         )
         settings.robots.foreach(r => spawnRobot(r.robotId, r.address, outbox, heard = false))
+        settings.zeromq.robots.foreach(r => spawnZmqRobot(r, outbox))
         if (settings.gameControllerEnabled) {
           // Akka keeps one message adapter per message class, and the robot link's adapter already takes
           // UdpLink.Event; the GameController link reports through a forwarder of its own instead.
@@ -139,6 +140,19 @@ object Gateway {
       byAddress = byAddress.updated(address, robotId)
       snapshots = snapshots.updated(robotId, RobotSnapshot(robotId, address))
       entry
+    }
+
+    /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
+    private def spawnZmqRobot(robot: ZmqRobot, outbox: ActorRef[Outbox.Command]): Unit = {
+      val actor = context.spawn(
+        Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, publisher, heard = false,
+          RobotActor.Transport.ZeroMq(robot.endpoint)))
+          .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
+        s"robot-${robot.robotId}"
+      )
+      context.watchWith(actor, RobotStopped(robot.robotId))
+      byId = byId.updated(robot.robotId, Entry(actor, robot.address, heard = false, zeromq = true))
+      snapshots = snapshots.updated(robot.robotId, RobotSnapshot(robot.robotId, robot.address))
     }
 
     private def reject(reason: String, from: InetSocketAddress): Unit = {
@@ -196,6 +210,7 @@ object Gateway {
                 game = Some(data)
                 publish(GameStateUpdated(data))
               }
+              byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(data.gameState))
             case Left(error) =>
               if (!Datagram.isGameControllerReturn(bytes)) reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
           }
@@ -245,7 +260,7 @@ object Gateway {
           replyTo ! game
           Behaviors.same
         case RobotStopped(robotId) =>
-          byId.get(robotId).foreach(e => byAddress -= e.address)
+          byId.get(robotId).filterNot(_.zeromq).foreach(e => byAddress -= e.address)
           byId -= robotId
           Behaviors.same
       }
@@ -258,6 +273,8 @@ object Gateway {
       val robotId = contents.robotId
       def deliver(entry: Entry): Unit = entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
       byId.get(robotId) match {
+        case Some(entry) if entry.zeromq =>
+          rejectFor(Some(robotId), s"robot id $robotId belongs to a ZeroMQ robot", from)
         case Some(entry) if entry.address == from => deliver(entry)
         case Some(entry) if rebindable(robotId) || (!entry.heard && entry.address.getAddress == from.getAddress) =>
           // An explicit re-bind, or a configured robot speaking for the first time from its own host.

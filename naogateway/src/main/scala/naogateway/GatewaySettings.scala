@@ -49,6 +49,41 @@ final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: In
   require(warnAt > 0 && warnAt <= 1, "budget.warn-at must be in (0, 1]")
 }
 
+/** A robot that serves the RPC over a ZeroMQ REP socket at `endpoint`, e.g. `tcp://127.0.0.1:5600`. */
+final case class ZmqRobot(robotId: Int, endpoint: String) {
+  require(robotId >= 0, s"zeromq.robots: robot id $robotId must not be negative")
+
+  /** The endpoint's host and port, for snapshots and events. */
+  val address: InetSocketAddress = endpoint match {
+    case ZmqRobot.TcpEndpoint(host, port) if port.toInt > 0 && port.toInt <= 65535 => new InetSocketAddress(host, port.toInt)
+    case _ =>
+      throw new IllegalArgumentException(s"zeromq.robots: robot $robotId: '$endpoint' is not tcp://<host>:<port>")
+  }
+}
+
+/** Reading endpoints. */
+object ZmqRobot {
+  private val TcpEndpoint = "tcp://([^:/]+):([0-9]{1,5})".r
+}
+
+/** The links to ZeroMQ robots: which robots, how often their status is polled, and their own liveness timing. */
+final case class ZmqLinkSettings(
+    robots: Vector[ZmqRobot],
+    statusInterval: FiniteDuration,
+    statusTimeout: FiniteDuration,
+    sendQueue: Int,
+    pollTimeout: FiniteDuration,
+    handshakeTimeout: FiniteDuration,
+    heartbeat: HeartbeatSettings
+) {
+  require(statusInterval > Duration.Zero, "zeromq.status-interval must be positive")
+  require(statusTimeout > statusInterval, "zeromq.status-timeout must be longer than zeromq.status-interval")
+  require(sendQueue >= 1, "zeromq.send-queue must be at least 1")
+  require(handshakeTimeout >= 10.millis, "zeromq.handshake-timeout must be at least 10 ms")
+  require(pollTimeout >= 1.milli && pollTimeout <= 1.second, "zeromq.poll-timeout must be between 1 ms and 1 s")
+  require(robots.map(_.robotId).distinct.size == robots.size, "zeromq.robots: every robot id may appear only once")
+}
+
 /** Everything the gateway reads from `naogateway { ... }`. */
 final case class GatewaySettings(
     bindAddress: String,
@@ -65,12 +100,15 @@ final case class GatewaySettings(
     calls: CallSettings,
     budget: BudgetSettings,
     competition: Boolean,
-    stream: StreamSettings
+    stream: StreamSettings,
+    zeromq: ZmqLinkSettings
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
   require(gameControllerPort >= 0 && gameControllerPort <= 65535, s"game-controller.port $gameControllerPort is not a UDP port")
   require(robots.map(_.robotId).distinct.size == robots.size, "robots: every robot id may appear only once")
+  require(robots.map(_.robotId).intersect(zeromq.robots.map(_.robotId)).isEmpty,
+    "a robot id may be a UDP robot (robots) or a ZeroMQ robot (zeromq.robots), not both")
 }
 
 /** Reading and validating the settings. */
@@ -88,7 +126,18 @@ object GatewaySettings {
     val calls = c.getConfig("calls")
     val budget = c.getConfig("budget")
     val stream = c.getConfig("stream")
+    val zmq = c.getConfig("zeromq")
     def duration(cfg: Config, key: String): FiniteDuration = cfg.getDuration(key).toScala
+    val heartbeat = HeartbeatSettings(
+      duration(hb, "keep-alive-interval"),
+      duration(hb, "quiet-after"),
+      duration(hb, "probe-timeout"),
+      hb.getInt("chances"),
+      duration(hb, "quality-window"),
+      hb.getDouble("degraded-below"),
+      hb.getDouble("good-above")
+    )
+    val zmqHeartbeat = zmq.getConfig("heartbeat")
     GatewaySettings(
       bindAddress = link.getString("bind-address"),
       robotPort = link.getInt("robot-port"),
@@ -105,15 +154,7 @@ object GatewaySettings {
         StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port))
       },
       discoverFromKeepAlive = c.getBoolean("discover-from-keep-alive"),
-      heartbeat = HeartbeatSettings(
-        duration(hb, "keep-alive-interval"),
-        duration(hb, "quiet-after"),
-        duration(hb, "probe-timeout"),
-        hb.getInt("chances"),
-        duration(hb, "quality-window"),
-        hb.getDouble("degraded-below"),
-        hb.getDouble("good-above")
-      ),
+      heartbeat = heartbeat,
       calls = CallSettings(duration(calls, "timeout"), calls.getInt("idempotent-retries"), calls.getInt("stash-capacity")),
       budget = BudgetSettings(budget.getInt("team-bytes-per-second"), budget.getInt("robot-bytes-per-second"),
         budget.getDouble("warn-at")),
@@ -122,6 +163,22 @@ object GatewaySettings {
         window = stream.getInt("window"),
         maxSeq = stream.getInt("max-seq"),
         honourSkipNotices = stream.getBoolean("honour-skip-notices")
+      ),
+      zeromq = ZmqLinkSettings(
+        robots = zmq.getConfigList("robots").asScala.toVector.map(r => ZmqRobot(r.getInt("id"), r.getString("endpoint"))),
+        statusInterval = duration(zmq, "status-interval"),
+        statusTimeout = duration(zmq, "status-timeout"),
+        sendQueue = zmq.getInt("send-queue"),
+        pollTimeout = duration(zmq, "poll-timeout"),
+        handshakeTimeout = duration(zmq, "handshake-timeout"),
+        // A REP robot answers one call at a time, so a posture motion holds back probes and status polls:
+        // its liveness timing is its own, and the keep-alive it is judged by is the status poll.
+        heartbeat = heartbeat.copy(
+          keepAliveInterval = duration(zmq, "status-interval"),
+          quietAfter = duration(zmqHeartbeat, "quiet-after"),
+          probeTimeout = duration(zmqHeartbeat, "probe-timeout"),
+          chances = zmqHeartbeat.getInt("chances")
+        )
       )
     )
   }

@@ -8,8 +8,10 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 
+import naogateway.link.ZmqRobotLink
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
 import naogateway.wire._
+import naogateway.wire.gamecontroller.GameState
 
 /** The supervisor of one robot: owns its address, liveness, children and link figures, and re-syncs it after restarts. */
 object RobotActor {
@@ -38,6 +40,9 @@ object RobotActor {
   /** Answers with the link figures. */
   final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Command
 
+  /** The GameController's game state changed (a ZeroMQ robot's link applies the competition rule itself). */
+  final case class GameStateChanged(state: GameState) extends Command
+
   /** Messages from the robot's own children. */
   sealed trait FromChild extends Command
 
@@ -55,6 +60,20 @@ object RobotActor {
   case object Retransmitted extends FromChild
 
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
+  private final case class ZmqLinkEvent(event: ZmqRobotLink.Event) extends Command
+
+  /** How a robot is reached. */
+  sealed trait Transport extends Product with Serializable
+
+  /** The two kinds of robot. */
+  object Transport {
+
+    /** FU-Remote frames in UDP datagrams through the gateway's outbox: the CM-530. */
+    case object Datagrams extends Transport
+
+    /** Serialized `Message`s to a ZeroMQ REP socket at `endpoint`: the original naogateway's robots. */
+    final case class ZeroMq(endpoint: String) extends Transport
+  }
 
   /** What can be sent to a robot. */
   sealed trait Outbound extends Product with Serializable
@@ -93,18 +112,22 @@ object RobotActor {
 
   private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
 
-  /** A robot actor for `robotId` at `address`; `heard` says whether it was discovered from its own keep-alive. */
+  /**
+   * A robot actor for `robotId` at `address`; `heard` says whether it was discovered from its own keep-alive.
+   * `transport` says how it is reached; everything above the transport is the same for both kinds.
+   */
   def apply(
       robotId: Int,
       address: InetSocketAddress,
       settings: GatewaySettings,
       outbox: ActorRef[Outbox.Command],
       events: ActorRef[GatewayEvent],
-      heard: Boolean
+      heard: Boolean,
+      transport: Transport = Transport.Datagrams
   ): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(64) { stash =>
-        new Robot(robotId, settings, outbox, events, context, stash).start(address, heard)
+        new Robot(robotId, settings, outbox, events, transport, context, stash).start(address, heard)
       }
     }
 
@@ -113,10 +136,16 @@ object RobotActor {
       settings: GatewaySettings,
       outbox: ActorRef[Outbox.Command],
       events: ActorRef[GatewayEvent],
+      transport: Transport,
       context: ActorContext[Command],
       stash: StashBuffer[Command]
   ) {
     private val heartbeatReports = context.messageAdapter[HeartBeatActor.Report](HeartbeatReport.apply)
+    private val heartbeatSettings = transport match {
+      case Transport.Datagrams => settings.heartbeat
+      case _: Transport.ZeroMq => settings.zeromq.heartbeat
+    }
+    private var zmqLink: Option[ActorRef[ZmqRobotLink.Command]] = None
 
     // Link figures: mutable counters owned by this actor alone.
     private var address: InetSocketAddress = null
@@ -132,8 +161,18 @@ object RobotActor {
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       address = at
       snapshot = RobotSnapshot(robotId, at)
+      transport match {
+        case Transport.ZeroMq(endpoint) =>
+          val loop = ZmqRobotLink.SharedLoop(context.system).loop
+          zmqLink = Some(context.spawn(
+            Behaviors.supervise(ZmqRobotLink(robotId, endpoint, settings.zeromq, settings.competition,
+              context.messageAdapter(ZmqLinkEvent.apply), loop)).onFailure(ChildRestarts),
+            "zeromq-link"
+          ))
+        case Transport.Datagrams => ()
+      }
       val heartbeat = context.spawn(
-        Behaviors.supervise(HeartBeatActor(settings.heartbeat, heartbeatReports, online = false)).onFailure(ChildRestarts),
+        Behaviors.supervise(HeartBeatActor(heartbeatSettings, heartbeatReports, online = false)).onFailure(ChildRestarts),
         "heartbeat"
       )
       // A discovered robot has spoken already: its keep-alive counts as the first sign of life.
@@ -251,14 +290,35 @@ object RobotActor {
         snapshot = snapshot.copy(address = newAddress)
         Behaviors.same
       case Transmit(out, priority, outcome, tag) =>
-        encode(out) match {
-          case Right(bytes) =>
-            datagramsOut += 1
-            bytesOut += bytes.length
-            outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
-          case Left(error) =>
-            outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
+        zmqLink match {
+          case None =>
+            encode(out) match {
+              case Right(bytes) =>
+                datagramsOut += 1
+                bytesOut += bytes.length
+                outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
+              case Left(error) =>
+                outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
+            }
+          case Some(link) =>
+            // No FU-Remote header over ZeroMQ: a ZeroMQ message carries exactly one serialized Message.
+            contentsOf(out) match {
+              case Some(contents) =>
+                val bytes = contents.toProtobuf
+                datagramsOut += 1
+                bytesOut += bytes.length
+                link ! ZmqRobotLink.Send(bytes, outcome, tag)
+              case None => outcome.foreach(_ ! Outbox.Dropped(tag, "the secure stream does not run over ZeroMQ"))
+            }
         }
+        Behaviors.same
+      case GameStateChanged(state) =>
+        zmqLink.foreach(_ ! ZmqRobotLink.GameStateChanged(state))
+        Behaviors.same
+      case ZmqLinkEvent(ZmqRobotLink.MessageReceived(contents, size)) =>
+        common(FrameReceived(contents, HeaderForm.Legacy, size), children, heartbeat)
+      case ZmqLinkEvent(ZmqRobotLink.MessageRejected(reason)) =>
+        count(reason)
         Behaviors.same
       case RoundTrip(nanos) =>
         rttNanos = Some(rttNanos.fold(nanos.toDouble)(r => r * 0.875 + nanos * 0.125))
@@ -298,11 +358,11 @@ object RobotActor {
 
     private def lossEstimate(): Double = {
       val now = System.nanoTime()
-      val window = settings.heartbeat.qualityWindow.toNanos
+      val window = heartbeatSettings.qualityWindow.toNanos
       keepAliveTimes = keepAliveTimes.dropWhile(_ < now - window)
       // Over the window, or over the time since the first keep-alive when the robot is younger than that.
-      val observed = keepAliveTimes.headOption.fold(window)(first => math.min(window, now - first + settings.heartbeat.keepAliveInterval.toNanos))
-      val expected = observed.toDouble / settings.heartbeat.keepAliveInterval.toNanos
+      val observed = keepAliveTimes.headOption.fold(window)(first => math.min(window, now - first + heartbeatSettings.keepAliveInterval.toNanos))
+      val expected = observed.toDouble / heartbeatSettings.keepAliveInterval.toNanos
       if (datagramsIn == 0) 1.0 else math.max(0.0, 1.0 - keepAliveTimes.size / expected)
     }
 
@@ -345,12 +405,24 @@ object RobotActor {
       events ! RobotRestarted(robotId, snapshot.bootId, options)
     }
 
+    private def contentsOf(out: Outbound): Option[MessageContents] = out match {
+      case Outbound.CallOut(call) => Some(MessageContents(robotId, rpcRequest = Some(call.toProto)))
+      case Outbound.DebugOut(commands) =>
+        noteOptions(commands)
+        Some(MessageContents(robotId, debuggingCommands = Some(commands)))
+      case Outbound.SegmentOut(_) => None
+    }
+
+    private def noteOptions(commands: DebuggingCommands): Unit = {
+      commands.optionEnable.foreach(e => activeOptions ++= e.options)
+      commands.optionDisable.foreach(d => activeOptions = activeOptions.filterNot(o => d.options.exists(n => o == n || o.startsWith(n + "."))))
+    }
+
     private def encode(out: Outbound): Either[FrameError, Array[Byte]] = out match {
       case Outbound.CallOut(call) =>
         MessageContents.encodeFrame(MessageContents(robotId, rpcRequest = Some(call.toProto)), form)
       case Outbound.DebugOut(commands) =>
-        commands.optionEnable.foreach(e => activeOptions ++= e.options)
-        commands.optionDisable.foreach(d => activeOptions = activeOptions.filterNot(o => d.options.exists(n => o == n || o.startsWith(n + "."))))
+        noteOptions(commands)
         MessageContents.encodeFrame(MessageContents(robotId, debuggingCommands = Some(commands)), form)
       case Outbound.SegmentOut(bytes) =>
         if (bytes.length > WireLimits.MaxDatagramBytes) Left(FrameError.Oversize(bytes.length, WireLimits.MaxDatagramBytes))

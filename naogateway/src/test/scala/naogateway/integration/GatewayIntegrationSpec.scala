@@ -11,7 +11,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
 import naogateway.sim.SimulatedRobot
-import naogateway.sim.network.{Direction, Impairment, LossyNetwork}
+import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.wire.{MessageContents, RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
 
@@ -19,8 +19,8 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
 
   private def call(c: RobotActor.Connected, name: String, params: RpcValue*): CallResult = {
     val probe = createTestProbe[CallResult]()
-    val Array(module, method) = name.split('.')
-    c.response ! ResponseActor.Call(RpcCall(module, method, params.toVector), probe.ref)
+    val (module, method) = name.span(_ != '.')
+    c.response ! ResponseActor.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
     probe.receiveMessage(10.seconds)
   }
 
@@ -89,7 +89,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         f.awaitEvent(10.seconds) { case RobotOnline(5, _) => () }
         val connected = f.connect(5)
         val answers = createTestProbe[CallResult]()
-        (1 to 40).foreach(i => connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), answers.ref))
+        (1 to 40).foreach(_ => connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), answers.ref))
         val results = answers.receiveMessages(40, 60.seconds)
         answers.expectNoMessage(3.seconds)
         results.count(_.result.isRight) should be > 20

@@ -1,0 +1,216 @@
+"""A client of the naogateway ZeroMQ endpoint (docs/zeromq.md).
+
+Requests go to the endpoint's ROUTER socket from a DEALER socket: one serialized naogateway.proto.Message with an
+rpcRequest per ZeroMQ message, answered with a Message carrying the rpcResponse with the same callId. Robot data
+comes from the endpoint's publish socket on the topics status.<robotId>, vision.<robotId> and game.
+
+The protobuf classes are generated from the repository's proto/ folder with grpcio-tools' protoc; see
+`load_protos`.
+"""
+
+import importlib
+import itertools
+import os
+import sys
+import tempfile
+import time
+
+import zmq
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_PROTO_DIR = os.path.join(_HERE, "..", "..", "proto", "src", "main", "protobuf")
+_PROTO_FILES = ["message.proto", "rpc.proto", "havimo.proto", "debugging.proto"]
+
+message_pb2 = None
+rpc_pb2 = None
+havimo_pb2 = None
+
+
+def load_protos(out_dir=None, proto_dir=_PROTO_DIR):
+    """Imports the generated protobuf modules, generating them into out_dir first when they are not importable.
+
+    out_dir defaults to $NAOGATEWAY_PY_GEN, else a fresh temporary folder.
+    """
+    global message_pb2, rpc_pb2, havimo_pb2
+    out_dir = out_dir or os.environ.get("NAOGATEWAY_PY_GEN") or tempfile.mkdtemp(prefix="naogateway-pb2-")
+    if out_dir not in sys.path:
+        sys.path.insert(0, out_dir)
+    try:
+        importlib.import_module("naogateway.proto.rpc_pb2")
+    except ImportError:
+        from grpc_tools import protoc  # only needed to generate
+
+        os.makedirs(out_dir, exist_ok=True)
+        args = ["protoc", "-I" + proto_dir, "--python_out=" + out_dir]
+        args += ["naogateway/proto/" + f for f in _PROTO_FILES]
+        if protoc.main(args) != 0:
+            raise RuntimeError("protoc failed on " + proto_dir)
+        importlib.invalidate_caches()
+    message_pb2 = importlib.import_module("naogateway.proto.message_pb2")
+    rpc_pb2 = importlib.import_module("naogateway.proto.rpc_pb2")
+    havimo_pb2 = importlib.import_module("naogateway.proto.havimo_pb2")
+
+
+class GatewayError(Exception):
+    """The endpoint answered with an error; `text` starts with its category, e.g. "lease: " or "offline: "."""
+
+    def __init__(self, text):
+        super().__init__(text)
+        self.text = text
+        self.category = text.split(":", 1)[0]
+
+
+def to_mixed(value, mixed):
+    """Fills a MixedValue: bool, non-negative int, float (and negative int), str, bytes, list."""
+    if isinstance(value, bool):
+        mixed.bool = value
+    elif isinstance(value, int) and 0 <= value <= 0xFFFFFFFF:
+        mixed.int = value
+    elif isinstance(value, (int, float)):
+        mixed.float = float(value)
+    elif isinstance(value, str):
+        mixed.string = value
+    elif isinstance(value, (bytes, bytearray)):
+        mixed.binary = bytes(value)
+    elif isinstance(value, (list, tuple)):
+        for item in value:
+            to_mixed(item, mixed.array.add())
+    else:
+        raise TypeError("cannot send %r" % (value,))
+    return mixed
+
+
+def from_mixed(mixed):
+    """The Python value of a MixedValue (an empty one is an empty list)."""
+    for field in ("string", "int", "float", "binary", "bool"):
+        if mixed.HasField(field):
+            return getattr(mixed, field)
+    return [from_mixed(m) for m in mixed.array]
+
+
+def snapshot_of(message, link=None):
+    """A dict of a Message with status and robotHealth: robot, battery, posture, uptime_ms, ..."""
+    status = message.Extensions[message_pb2.status]
+    health = message.Extensions[message_pb2.robotHealth]
+    return {
+        "robot": message.robotID,
+        "battery": health.batteryVoltage if health.HasField("batteryVoltage") else None,
+        "posture": health.posture if health.HasField("posture") else (status.currentState or None),
+        "uptime_ms": health.uptimeMs if health.HasField("uptimeMs") else None,
+        "role": status.activeRole or None,
+        "link": link,
+    }
+
+
+class GatewayClient:
+    """Calls the endpoint's methods and robot calls; reads the published topics."""
+
+    def __init__(self, endpoint="tcp://127.0.0.1:5555", publish="tcp://127.0.0.1:5556", timeout=10.0):
+        if rpc_pb2 is None:
+            load_protos()
+        self.timeout = timeout
+        self._context = zmq.Context()
+        self._dealer = self._context.socket(zmq.DEALER)
+        self._dealer.setsockopt(zmq.LINGER, 0)
+        self._dealer.connect(endpoint)
+        self._publish = publish
+        self._sub = None
+        self._ids = itertools.count(1)
+
+    def call(self, robot_id, module, method, *params):
+        """Calls module.method on robot robot_id; returns the value or raises GatewayError."""
+        call_id = next(self._ids) & 0xFFFFFFFF
+        message = message_pb2.Message(robotID=robot_id)
+        request = message.Extensions[rpc_pb2.rpcRequest]
+        request.module = module
+        request.method = method
+        request.callId = call_id
+        for p in params:
+            to_mixed(p, request.params.add())
+        self._dealer.send_multipart([b"", message.SerializeToString()])
+        deadline = time.monotonic() + self.timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not self._dealer.poll(int(left * 1000)):
+                raise GatewayError("timeout: no reply to %s.%s within %.1f s" % (module, method, self.timeout))
+            frames = self._dealer.recv_multipart()
+            reply = message_pb2.Message()
+            reply.ParseFromString(frames[-1])
+            response = reply.Extensions[rpc_pb2.rpcResponse]
+            if response.callId != call_id:
+                continue  # the late reply of an earlier call that timed out here
+            if response.HasField("error"):
+                raise GatewayError(response.error)
+            self.last_reply = reply
+            return from_mixed(response.returnval) if response.HasField("returnval") else None
+
+    # The endpoint's own methods.
+    def robots(self):
+        return self.call(-1, "gateway", "robots")
+
+    def status(self, robot_id):
+        """The robot's latest keep-alive as a dict (online: whether the robot is reachable)."""
+        online = self.call(robot_id, "gateway", "status")
+        snapshot = snapshot_of(self.last_reply)
+        snapshot["online"] = online
+        return snapshot
+
+    def acquire(self, robot_id, *groups):
+        return self.call(robot_id, "gateway", "acquire", *groups)
+
+    def release(self, robot_id, *groups):
+        return self.call(robot_id, "gateway", "release", *groups)
+
+    # RobotInterface calls; the endpoint takes the lease each needs on the clients' behalf.
+    def walk(self, robot_id, vx, vy, omega):
+        return self.call(robot_id, "motion", "walk", float(vx), float(vy), float(omega))
+
+    def stop(self, robot_id):
+        return self.call(robot_id, "motion", "stop")
+
+    def head(self, robot_id, pan, tilt):
+        return self.call(robot_id, "motion", "head", float(pan), float(tilt))
+
+    def arms(self, robot_id, left_shoulder, left_elbow, right_shoulder, right_elbow):
+        values = [float(v) for v in (left_shoulder, left_elbow, right_shoulder, right_elbow)]
+        return self.call(robot_id, "motion", "arms", *values)
+
+    def posture(self, robot_id, name):
+        return self.call(robot_id, "motion", "posture", name)
+
+    def say(self, robot_id, text):
+        return self.call(robot_id, "speech", "say", text)
+
+    # Published data.
+    def subscribe(self, *topics):
+        """Subscribes to topics (prefixes), e.g. "status.20", "vision.20", "game"."""
+        if self._sub is None:
+            self._sub = self._context.socket(zmq.SUB)
+            self._sub.setsockopt(zmq.LINGER, 0)
+            self._sub.connect(self._publish)
+        for topic in topics:
+            self._sub.setsockopt(zmq.SUBSCRIBE, topic.encode())
+
+    def next_status(self, robot_id, timeout=5.0, where=lambda s: True):
+        """The next published status of robot_id that satisfies `where`, as a dict; None after timeout seconds."""
+        topic = "status.%d" % robot_id
+        self.subscribe(topic)
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not self._sub.poll(int(left * 1000)):
+                return None
+            frames = self._sub.recv_multipart()
+            if frames[0].decode() != topic:
+                continue
+            message = message_pb2.Message()
+            message.ParseFromString(frames[1])
+            snapshot = snapshot_of(message, frames[2].decode() if len(frames) > 2 else None)
+            if where(snapshot):
+                return snapshot
+
+    def close(self):
+        self._dealer.close()
+        if self._sub is not None:
+            self._sub.close()
+        self._context.term()

@@ -1,0 +1,244 @@
+package apps.zeromq
+
+import java.nio.charset.StandardCharsets
+
+import scala.util.control.NonFatal
+
+import com.google.protobuf.{ByteString, CodedInputStream, WireFormat}
+
+import naogateway.proto.{HaViMoRegionFrame, Position, RobotHealth, Status}
+import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
+import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
+import naogateway.{RobotSnapshot, VisionFrame}
+import robotmiddleware.{ActuatorGroup, Operation, RobotFailure}
+
+/** A request as the endpoint read it: the addressed robot and the call, with the client's `callId`. */
+final case class EndpointRequest(robotId: Int, call: RpcCall)
+
+/** A request the endpoint could not read, with what could be salvaged for the error reply. */
+final case class Unreadable(robotId: Int, callId: Option[Long], error: String)
+
+/** What a request asks the endpoint to do. */
+sealed trait Route extends Product with Serializable
+
+/** The requests the endpoint serves. */
+object Route {
+
+  /** `gateway.robots`: the ids of the known robots. */
+  case object Robots extends Route
+
+  /** `gateway.status`: the robot's latest keep-alive. */
+  final case class Status(robotId: Int) extends Route
+
+  /** `gateway.acquire`: take leases for the ZeroMQ clients. */
+  final case class Acquire(robotId: Int, groups: Vector[ActuatorGroup]) extends Route
+
+  /** `gateway.release`: give leases back. */
+  final case class Release(robotId: Int, groups: Vector[ActuatorGroup]) extends Route
+
+  /** A robot call: a `RobotInterface` operation, its lease taken on the clients' behalf. */
+  final case class Execute(robotId: Int, operation: Operation) extends Route
+}
+
+/** A successful answer: the return value, and for `gateway.status` the snapshot sent along. */
+final case class Answer(value: Option[RpcValue], snapshot: Option[RobotSnapshot] = None)
+
+/** The endpoint's wire format, pure: reading requests, routing them, writing replies and publications. */
+object EndpointProtocol {
+
+  /** The module of the endpoint's own methods. */
+  val GatewayModule: String = "gateway"
+
+  /** The topic of robot `robotId`'s keep-alive snapshots. */
+  def statusTopic(robotId: Int): String = s"status.$robotId"
+
+  /** The topic of robot `robotId`'s HaViMo2 regions. */
+  def visionTopic(robotId: Int): String = s"vision.$robotId"
+
+  /** The topic of GameController packets. */
+  val GameTopic: String = "game"
+
+  /** The prefix every error text of a request the endpoint could not read starts with. */
+  val Malformed: String = "malformed request: "
+
+  /** Reads one request body: a serialized `Message` carrying an `rpcRequest`. */
+  def parse(body: Array[Byte]): Either[Unreadable, EndpointRequest] =
+    MessageContents.parse(body) match {
+      case Left(error) =>
+        val (robotId, callId) = salvage(body)
+        Left(Unreadable(robotId, callId, s"${Malformed}not a protobuf Message with robotID and a complete rpcRequest (${error.describe})"))
+      case Right(contents) =>
+        contents.rpcRequest match {
+          case None =>
+            Left(Unreadable(contents.robotId, None, s"${Malformed}the Message carries no rpcRequest (extension 7110)"))
+          case Some(request) => Right(EndpointRequest(contents.robotId, RpcCall.fromProto(request)))
+        }
+    }
+
+  /**
+   * The robot id and call id of a body that did not parse, as far as they can be read, so that even the error
+   * reply carries the client's call id (e.g. a `Request` without its `method`).
+   */
+  def salvage(body: Array[Byte]): (Int, Option[Long]) = {
+    var robotId = -1
+    var callId = Option.empty[Long]
+    try {
+      val in = CodedInputStream.newInstance(body)
+      var done = false
+      while (!done) {
+        val tag = in.readTag()
+        if (tag == 0) done = true
+        else if (is(tag, 1, WireFormat.WIRETYPE_VARINT)) robotId = in.readInt32()
+        else if (is(tag, MessageContents.RpcRequestField, WireFormat.WIRETYPE_LENGTH_DELIMITED)) {
+          val inner = CodedInputStream.newInstance(in.readByteArray())
+          var innerDone = false
+          while (!innerDone) {
+            val t = inner.readTag()
+            if (t == 0) innerDone = true
+            else if (is(t, 15, WireFormat.WIRETYPE_VARINT)) callId = Some(inner.readUInt32() & 0xffffffffL)
+            else if (!inner.skipField(t)) innerDone = true
+          }
+        } else if (!in.skipField(tag)) done = true
+      }
+    } catch { case NonFatal(_) => () } // what was read before the damage is kept
+    (robotId, callId)
+  }
+
+  private def is(tag: Int, field: Int, wireType: Int): Boolean =
+    WireFormat.getTagFieldNumber(tag) == field && WireFormat.getTagWireType(tag) == wireType
+
+  private def numbers(call: RpcCall, names: String*): Either[String, Vector[Double]] = {
+    val values = call.params.collect {
+      case RpcValue.Number(f) => f.toDouble
+      case RpcValue.UInt(i)   => i.toDouble
+    }
+    if (call.params.length != names.length || values.length != names.length)
+      Left(s"$Malformed${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got ${describe(call.params)}")
+    else if (values.exists(v => v.isNaN || v.isInfinite)) Left(s"$Malformed${call.name}: numbers must be finite")
+    else Right(values)
+  }
+
+  private def texts(call: RpcCall): Vector[String] = call.params.collect { case RpcValue.Text(t) => t }
+
+  private def describe(params: Vector[RpcValue]): String =
+    if (params.isEmpty) "none" else params.map(_.productPrefix.toLowerCase).mkString("(", ", ", ")")
+
+  private def groups(call: RpcCall)(route: Vector[ActuatorGroup] => Route): Either[String, Route] = {
+    val names = texts(call)
+    if (names.isEmpty || names.length != call.params.length)
+      Left(s"$Malformed${call.name} takes one or more group names (${ActuatorGroup.names.toVector.sorted.mkString(", ")})")
+    else
+      names.find(n => !ActuatorGroup.names(n)) match {
+        case Some(unknown) =>
+          Left(s"${Malformed}unknown actuator group '$unknown' (${ActuatorGroup.names.toVector.sorted.mkString(", ")})")
+        case None => Right(route(names.distinct.map(ActuatorGroup(_))))
+      }
+  }
+
+  /** What `request` asks for, or the error text of a call whose parameters cannot be right. */
+  def route(request: EndpointRequest): Either[String, Route] = {
+    val EndpointRequest(robotId, call) = request
+    def noParams(route: => Either[String, Route]): Either[String, Route] =
+      if (call.params.isEmpty) route else Left(s"$Malformed${call.name} takes no parameters, got ${describe(call.params)}")
+    def execute(operation: => Operation): Either[String, Route] =
+      try Right(Route.Execute(robotId, operation))
+      catch { case e: IllegalArgumentException => Left(Malformed + e.getMessage.stripPrefix("requirement failed: ")) }
+    (call.module, call.method) match {
+      case (GatewayModule, "robots")  => noParams(Right(Route.Robots))
+      case (GatewayModule, "status")  => noParams(Right(Route.Status(robotId)))
+      case (GatewayModule, "acquire") => groups(call)(Route.Acquire(robotId, _))
+      case (GatewayModule, "release") => groups(call)(Route.Release(robotId, _))
+      case (GatewayModule, _)         => Left(RpcReply.unknownMethod(call.module, call.method))
+      case ("motion", "walk") =>
+        numbers(call, "vx", "vy", "omega").flatMap(v => execute(Operation.Walk(v(0), v(1), v(2))))
+      case ("motion", "stop") => noParams(execute(Operation.Stop()))
+      case ("motion", "head") => numbers(call, "pan", "tilt").flatMap(v => execute(Operation.Head(v(0), v(1))))
+      case ("motion", "arms") =>
+        numbers(call, "leftShoulder", "leftElbow", "rightShoulder", "rightElbow")
+          .flatMap(v => execute(Operation.Arms(v(0), v(1), v(2), v(3))))
+      case ("motion", "posture") =>
+        call.params match {
+          case Vector(RpcValue.Text(name)) => execute(Operation.Posture(name))
+          case other => Left(s"${Malformed}motion.posture takes one text (sit, stand or crouch), got ${describe(other)}")
+        }
+      case ("speech", "say") =>
+        call.params match {
+          case Vector(RpcValue.Text(text)) => execute(Operation.Say(text))
+          case other                       => Left(s"${Malformed}speech.say takes one text, got ${describe(other)}")
+        }
+      case (module, method) => execute(Operation.RawCall(module, method, call.params))
+    }
+  }
+
+  /** The error text of a failed request: a category prefix (docs/zeromq.md), then the cause. */
+  def errorText(failure: Throwable): String = failure match {
+    case f: RobotFailure.UnknownRobot          => s"unknown robot: ${f.getMessage}"
+    case f: RobotFailure.RobotOffline          => s"offline: ${f.getMessage}"
+    case f: RobotFailure.LeaseNotHeld          => s"lease: ${f.getMessage}"
+    case f: RobotFailure.RuleGate              => s"rule: ${f.getMessage}"
+    case f: RobotFailure.Timeout               => s"timeout: ${f.getMessage}"
+    case RobotFailure.RobotError(_, error)     => s"robot error: $error"
+    case f: RobotFailure.SafetyHold            => s"safety: ${f.getMessage}"
+    case f: RobotFailure.Overloaded            => s"overloaded: ${f.getMessage}"
+    case e: java.util.concurrent.TimeoutException => s"timeout: the middleware did not answer in time (${e.getMessage})"
+    case e: IllegalArgumentException          => Malformed + String.valueOf(e.getMessage).stripPrefix("requirement failed: ")
+    case e                                    => s"endpoint error: ${e.getClass.getSimpleName}: ${e.getMessage}"
+  }
+
+  /** The reply to a request: a `Message` for `robotId` with the `rpcResponse` (and the snapshot for `gateway.status`). */
+  def reply(robotId: Int, callId: Option[Long], result: Either[String, Answer]): Array[Byte] = {
+    val snapshot = result.toOption.flatMap(_.snapshot)
+    MessageContents(
+      robotId,
+      status = snapshot.map(status),
+      robotHealth = snapshot.map(health),
+      rpcResponse = Some(RpcReply(result.map(_.value), callId).toProto)
+    ).toProtobuf
+  }
+
+  private def status(s: RobotSnapshot): Status = Status(
+    timestamp = s.uptimeMillis,
+    teamID = s.teamId,
+    timeOnline = s.uptimeMillis.map(ms => (ms / 1000L).toInt),
+    robotPosition = s.position.map { case (x, y, r) => Position(Some(x), Some(y), Some(r.toFloat)) },
+    activeAgent = s.agent,
+    activeRole = s.role,
+    currentState = s.posture
+  )
+
+  private def health(s: RobotSnapshot): RobotHealth = RobotHealth(
+    batteryVoltage = s.batteryVoltage.map(_.toFloat),
+    posture = s.posture,
+    uptimeMs = s.uptimeMillis.map(_.toInt),
+    bootId = s.bootId
+  )
+
+  /** The frames of a status publication: topic, the keep-alive as `Message` with `status` and `robotHealth`, link quality. */
+  def statusFrames(s: RobotSnapshot): Vector[Array[Byte]] =
+    Vector(
+      utf8(statusTopic(s.robotId)),
+      MessageContents(s.robotId, status = Some(status(s)), robotHealth = Some(health(s))).toProtobuf,
+      utf8(s.quality.name)
+    )
+
+  /** The frames of a vision publication: topic and a `Message` with `havimoRegions`; grids are not published. */
+  def visionFrames(frame: VisionFrame): Option[Vector[Array[Byte]]] = frame match {
+    case VisionFrame.Regions(robotId, number, timestamp, regions) =>
+      HaViMo.encodeRegions(regions).toOption.map { records =>
+        val contents = MessageContents(robotId,
+          havimoRegions = Some(HaViMoRegionFrame(number.toInt, timestamp, Some(ByteString.copyFrom(records)))))
+        Vector(utf8(visionTopic(robotId)), contents.toProtobuf)
+      }
+    case _: VisionFrame.Grid => None
+  }
+
+  /** The frames of a game publication: topic and the GameController's control packet, byte for byte (docs/protocol.md 10). */
+  def gameFrames(data: GameControlData): Option[Vector[Array[Byte]]] =
+    GameControllerCodec.encodeControl(data).toOption.map(packet => Vector(utf8(GameTopic), packet))
+
+  /** Whether a subscription prefix asks for robot `robotId`'s vision; only prefixes naming the vision topics count. */
+  def wantsVision(prefixes: Set[String], robotId: Int): Boolean =
+    prefixes.exists(p => p.startsWith("vision") && visionTopic(robotId).startsWith(p))
+
+  private def utf8(s: String): Array[Byte] = s.getBytes(StandardCharsets.UTF_8)
+}

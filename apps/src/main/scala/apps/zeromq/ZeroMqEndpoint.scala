@@ -1,0 +1,393 @@
+package apps.zeromq
+
+import java.nio.charset.StandardCharsets
+
+import scala.concurrent.duration._
+import scala.concurrent.{ExecutionContext, Future}
+import scala.jdk.CollectionConverters._
+import scala.util.control.NonFatal
+import scala.util.{Failure, Success}
+
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
+import akka.actor.typed.{ActorRef, ActorSystem, Behavior, DispatcherSelector, PostStop, Signal}
+import akka.actor.{Cancellable, CoordinatedShutdown}
+import akka.stream.scaladsl.Keep
+import akka.stream.typed.scaladsl.ActorSink
+import akka.stream.{KillSwitches, SharedKillSwitch, UniqueKillSwitch}
+import org.zeromq.{SocketType, ZMQ, ZMsg}
+
+import naogateway.link.ZmqLoop
+import naogateway.wire.RpcValue
+import naogateway.wire.gamecontroller.GameControlData
+import naogateway.{RobotSnapshot, VisionFrame}
+import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
+
+/**
+ * The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket
+ * (docs/zeromq.md). The sockets live on a `ZmqLoop` on the endpoint's own dispatcher; this actor hands requests to
+ * the `RobotInterface` and replies go back to the loop, so no actor ever blocks.
+ */
+object ZeroMqEndpoint {
+
+  /** What the endpoint accepts. */
+  sealed trait Command
+
+  /** Answers with the bound endpoints (the real ports when `*` was configured), once bound. */
+  final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Command
+
+  /** Where the endpoint listens: requests (ROUTER) and publications (XPUB). */
+  final case class Addresses(requests: String, publish: String)
+
+  private final case class Connected(robots: RobotInterface) extends Command
+  private final case class ConnectFailed(reason: Throwable) extends Command
+  private final case class Bound(addresses: Addresses) extends Command
+  private final case class BindFailed(reason: String) extends Command
+  private final case class RequestReceived(frames: Vector[Array[Byte]]) extends Command
+  private final case class SubscriptionChanged(prefix: String, subscribed: Boolean) extends Command
+  private final case class Answered(requestId: Long, result: Either[String, Answer]) extends Command
+  private final case class RequestTimedOut(requestId: Long) extends Command
+  private final case class StatusSeen(snapshot: RobotSnapshot) extends Command
+  private final case class GameSeen(data: GameControlData) extends Command
+  private final case class VisionSeen(frame: VisionFrame) extends Command
+  private final case class StreamEnded(stream: String, failure: Option[Throwable]) extends Command
+  private case object LoopEnded extends Command
+  private case object BindTimedOut extends Command
+  private case object BindKey
+
+  /** The loop thread's name suffix (tests look for it to see that the thread has ended). */
+  val LoopName: String = "zeromq-endpoint"
+
+  // Replies still queued when the endpoint stops get this long to reach their clients.
+  private val FlushOnCloseMillis = 200
+  private val BindTimeout = 10.seconds
+  // A request is a few hundred bytes; a client sending more is broken or hostile and is disconnected.
+  private val MaxRequestBytes = 1024L * 1024L
+
+  /** The endpoint for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
+  def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ZeroMqSettings): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withStash(64) { stash =>
+        context.pipeToSelf(RobotClient.connect(context.system, middleware, settings.appName, settings.priority)) {
+          case Success(robots) => Connected(robots)
+          case Failure(e)      => ConnectFailed(e)
+        }
+        Behaviors.receiveMessage {
+          case Connected(robots) => stash.unstashAll(serving(robots, settings, ownsInterface = true))
+          case ConnectFailed(e)  => throw new IllegalStateException(s"ZeroMQ endpoint cannot register with the middleware: $e", e)
+          case other =>
+            if (stash.isFull) context.log.warn("ZeroMQ endpoint: message dropped while registering") else stash.stash(other)
+            Behaviors.same
+        }
+      }
+    }
+
+  /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` is on (it is off in competition). */
+  def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command]): Option[ActorRef[Command]] = {
+    val settings = ZeroMqSettings(context.system)
+    if (settings.enabled) Some(context.spawn(apply(middleware, settings), "zeromq-endpoint")) else None
+  }
+
+  /** The endpoint in front of `robots`, which the caller owns (and closes). */
+  def withInterface(robots: RobotInterface, settings: ZeroMqSettings): Behavior[Command] =
+    serving(robots, settings, ownsInterface = false)
+
+  private def serving(robots: RobotInterface, settings: ZeroMqSettings, ownsInterface: Boolean): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        Behaviors.withStash(64) { stash =>
+          new Endpoint(robots, settings, ownsInterface, context, timers, stash).start()
+        }
+      }
+    }
+
+  /** The sockets; created, used and closed only on the loop's thread. */
+  private final class Io {
+    var router: ZMQ.Socket = null
+    var publisher: ZMQ.Socket = null
+
+    def send(socket: ZMQ.Socket, frames: Vector[Array[Byte]]): Unit =
+      if (socket != null && frames.nonEmpty) {
+        // Neither ROUTER nor XPUB blocks: a message for a gone or too slow peer is dropped.
+        frames.init.foreach(f => socket.send(f, ZMQ.SNDMORE | ZMQ.DONTWAIT))
+        socket.send(frames.last, ZMQ.DONTWAIT)
+      }
+  }
+
+  /** A request being worked on: where its reply goes and what it must echo. */
+  private final case class Pending(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], name: String)
+
+  private final class Endpoint(
+      robots: RobotInterface,
+      settings: ZeroMqSettings,
+      ownsInterface: Boolean,
+      context: ActorContext[Command],
+      timers: TimerScheduler[Command],
+      stash: StashBuffer[Command]
+  ) {
+    private implicit val system: ActorSystem[_] = context.system
+    // Only for composing the interface's futures; none of their callbacks touches the actor's state.
+    private implicit val ec: ExecutionContext = context.executionContext
+    private val loop = new ZmqLoop(LoopName, settings.pollTimeout)
+    private val io = new Io
+    private val streams: SharedKillSwitch = KillSwitches.shared("zeromq-endpoint")
+    private var visionStreams = Map.empty[Int, UniqueKillSwitch]
+    private var pending = Map.empty[Long, Pending]
+    private var nextRequestId = 0L
+    private var prefixes = Set.empty[String]
+    private var knownRobots = Set.empty[Int]
+    private var shutdownTask: Option[Cancellable] = None
+
+    def start(): Behavior[Command] = {
+      loop.start(context.system.dispatchers.lookup(DispatcherSelector.fromConfig(settings.dispatcher)))
+      context.pipeToSelf(loop.terminated)(_ => LoopEnded)
+      // The sockets close early in a coordinated shutdown, before the actors are stopped.
+      shutdownTask = Some(CoordinatedShutdown(context.system).addCancellableTask(CoordinatedShutdown.PhaseServiceUnbind, LoopName) {
+        () => loop.stop()
+      })
+      bind()
+      // The loop needs a thread of its own: with every thread of the dispatcher taken by other loops it never starts.
+      timers.startSingleTimer(BindKey, BindTimedOut, BindTimeout)
+      binding
+    }
+
+    private def bind(): Unit = {
+      val self = context.self
+      loop.submit { sockets =>
+        var opened = List.empty[ZMQ.Socket]
+        try {
+          val router = sockets.socket(SocketType.ROUTER)
+          opened ::= router
+          router.setLinger(FlushOnCloseMillis)
+          router.setMaxMsgSize(MaxRequestBytes)
+          router.bind(settings.bind)
+          val publisher = sockets.socket(SocketType.XPUB)
+          opened ::= publisher
+          publisher.bind(settings.publish)
+          io.router = router
+          io.publisher = publisher
+          sockets.onReadable(router) { s =>
+            val message = ZMsg.recvMsg(s, ZMQ.DONTWAIT)
+            if (message == null) false
+            else {
+              self ! RequestReceived(message.asScala.map(_.getData).toVector)
+              message.destroy()
+              true
+            }
+          }
+          sockets.onReadable(publisher) { s =>
+            val frame = s.recv(ZMQ.DONTWAIT)
+            if (frame == null) false
+            else {
+              // XPUB hands up each new subscription (1 + prefix) and each last unsubscription (0 + prefix).
+              if (frame.nonEmpty && (frame(0) == 0 || frame(0) == 1))
+                self ! SubscriptionChanged(new String(frame, 1, frame.length - 1, StandardCharsets.UTF_8), frame(0) == 1)
+              true
+            }
+          }
+          self ! Bound(Addresses(router.getLastEndpoint, publisher.getLastEndpoint))
+        } catch {
+          case NonFatal(e) =>
+            opened.foreach(sockets.close)
+            self ! BindFailed(s"$e")
+        }
+      }
+      ()
+    }
+
+    private val cleanUp: PartialFunction[(ActorContext[Command], Signal), Behavior[Command]] = { case (_, PostStop) =>
+      stopEverything()
+      Behaviors.same
+    }
+
+    private def binding: Behavior[Command] = Behaviors.receiveMessage[Command] {
+      case Bound(addresses) =>
+        timers.cancel(BindKey)
+        context.log.info("ZeroMQ endpoint serving requests on {} and publishing on {}", addresses.requests, addresses.publish)
+        startStreams()
+        stash.unstashAll(running(addresses))
+      case BindFailed(reason) =>
+        context.log.error("ZeroMQ endpoint cannot bind {} / {}: {}", settings.bind, settings.publish, reason)
+        Behaviors.stopped
+      case LoopEnded =>
+        context.log.error("ZeroMQ endpoint: the socket loop ended before binding")
+        Behaviors.stopped
+      case BindTimedOut =>
+        context.log.error("ZeroMQ endpoint: the socket loop did not start within {}; does dispatcher {} have a free thread?",
+          BindTimeout, settings.dispatcher)
+        Behaviors.stopped
+      case other =>
+        if (stash.isFull) context.log.warn("ZeroMQ endpoint: message dropped while binding") else stash.stash(other)
+        Behaviors.same
+    }.receiveSignal(cleanUp)
+
+    private def startStreams(): Unit = {
+      def sink(name: String) =
+        ActorSink.actorRef[Command](context.self, StreamEnded(name, None), (e: Throwable) => StreamEnded(name, Some(e)))
+      robots.allStatus.via(streams.flow).map[Command](StatusSeen.apply).runWith(sink("status"))
+      robots.gameState.via(streams.flow).map[Command](GameSeen.apply).runWith(sink("game"))
+      ()
+    }
+
+    /** Vision costs the robots' bandwidth, so a robot's camera stream runs only while someone subscribes to it. */
+    private def reconcileVision(): Unit =
+      knownRobots.foreach { robotId =>
+        (EndpointProtocol.wantsVision(prefixes, robotId), visionStreams.get(robotId)) match {
+          case (true, None) =>
+            context.log.info("ZeroMQ endpoint: vision of robot [{}] subscribed", robotId)
+            val killSwitch = robots
+              .vision(robotId)
+              .viaMat(KillSwitches.single)(Keep.right)
+              .map[Command](VisionSeen.apply)
+              .to(ActorSink.actorRef[Command](context.self, StreamEnded(s"vision-$robotId", None),
+                (e: Throwable) => StreamEnded(s"vision-$robotId", Some(e))))
+              .run()
+            visionStreams = visionStreams.updated(robotId, killSwitch)
+          case (false, Some(killSwitch)) =>
+            context.log.info("ZeroMQ endpoint: vision of robot [{}] no longer subscribed", robotId)
+            killSwitch.shutdown()
+            visionStreams -= robotId
+          case _ => ()
+        }
+      }
+
+    private def send(frames: Vector[Array[Byte]], toRouter: Boolean): Unit = {
+      loop.submit(_ => io.send(if (toRouter) io.router else io.publisher, frames))
+      ()
+    }
+
+    private def reply(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], result: Either[String, Answer]): Unit =
+      send(envelope :+ EndpointProtocol.reply(robotId, callId, result), toRouter = true)
+
+    /** The envelope (routing id, and the empty delimiter of REQ clients) and the one body frame. */
+    private def split(frames: Vector[Array[Byte]]): (Vector[Array[Byte]], Either[String, Array[Byte]]) = {
+      val delimiter = frames.indexWhere(_.isEmpty)
+      val (envelope, rest) = if (delimiter >= 0) frames.splitAt(delimiter + 1) else frames.splitAt(1)
+      rest match {
+        case Vector(body) => envelope -> Right(body)
+        case Vector()     => envelope -> Left(s"${EndpointProtocol.Malformed}no body frame")
+        case more         => envelope -> Left(s"${EndpointProtocol.Malformed}expected one body frame, got ${more.size}")
+      }
+    }
+
+    private def execute(route: Route): Future[Answer] = {
+      val done = Answer(Some(RpcValue.Flag(true)))
+      def leased(robotId: Int, group: Option[robotmiddleware.ActuatorGroup])(f: => Future[Answer]): Future[Answer] =
+        group.fold(f)(g => robots.acquire(robotId, g).flatMap(_ => f))
+      try route match {
+        case Route.Robots =>
+          robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
+        case Route.Status(robotId) =>
+          robots.robots().flatMap(_.find(_.robotId == robotId) match {
+            case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
+            case None    => Future.failed(robotmiddleware.RobotFailure.UnknownRobot(robotId))
+          })
+        case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
+        case Route.Release(robotId, groups) =>
+          robots.release(robotId, groups: _*)
+          Future.successful(done)
+        case Route.Execute(robotId, operation) =>
+          import robotmiddleware.Operation._
+          leased(robotId, operation.group) {
+            operation match {
+              case Walk(vx, vy, omega)    => robots.walk(robotId, vx, vy, omega).map(_ => done)
+              case Stop()                 => robots.stop(robotId).map(_ => done)
+              case Head(pan, tilt)        => robots.head(robotId, pan, tilt).map(_ => done)
+              case Arms(ls, le, rs, re)   => robots.arms(robotId, ls, le, rs, re).map(_ => done)
+              case Posture(p)             => robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached))))
+              case Say(text)              => robots.say(robotId, text).map(_ => done)
+              case RawCall(module, method, params) => robots.call(robotId, module, method, params: _*).map(Answer(_))
+            }
+          }
+      } catch { case NonFatal(e) => Future.failed(e) }
+    }
+
+    private def running(addresses: Addresses): Behavior[Command] = Behaviors.receiveMessage[Command] {
+      case RequestReceived(frames) =>
+        val (envelope, body) = split(frames)
+        body match {
+          case Left(error) => reply(envelope, -1, None, Left(error))
+          case Right(bytes) =>
+            EndpointProtocol.parse(bytes) match {
+              case Left(unreadable) => reply(envelope, unreadable.robotId, unreadable.callId, Left(unreadable.error))
+              case Right(request) =>
+                val callId = request.call.callId
+                if (pending.size >= settings.maxInFlight)
+                  reply(envelope, request.robotId, callId, Left(s"overloaded: ${pending.size} requests are in progress at the endpoint"))
+                else
+                  EndpointProtocol.route(request) match {
+                    case Left(error) => reply(envelope, request.robotId, callId, Left(error))
+                    case Right(route) =>
+                      val id = nextRequestId
+                      nextRequestId += 1
+                      pending = pending.updated(id, Pending(envelope, request.robotId, callId, request.call.name))
+                      timers.startSingleTimer(id, RequestTimedOut(id), settings.requestTimeout)
+                      if (context.log.isDebugEnabled) context.log.debug("ZeroMQ request [{}]: {}", id, request.call)
+                      context.pipeToSelf(execute(route)) {
+                        case Success(answer) => Answered(id, Right(answer))
+                        case Failure(e)      => Answered(id, Left(EndpointProtocol.errorText(e)))
+                      }
+                  }
+            }
+        }
+        Behaviors.same
+      case Answered(id, result) =>
+        pending.get(id).foreach { p =>
+          timers.cancel(id)
+          pending -= id
+          reply(p.envelope, p.robotId, p.callId, result)
+        }
+        Behaviors.same
+      case RequestTimedOut(id) =>
+        pending.get(id).foreach { p =>
+          pending -= id
+          // The late answer, if it ever comes, finds no pending request: each request is answered once.
+          reply(p.envelope, p.robotId, p.callId,
+            Left(s"timeout: no answer to ${p.name} within ${settings.requestTimeout.toMillis} ms at the endpoint"))
+        }
+        Behaviors.same
+      case StatusSeen(snapshot) =>
+        send(EndpointProtocol.statusFrames(snapshot), toRouter = false)
+        if (!knownRobots(snapshot.robotId)) {
+          knownRobots += snapshot.robotId
+          reconcileVision()
+        }
+        Behaviors.same
+      case GameSeen(data) =>
+        EndpointProtocol.gameFrames(data).foreach(send(_, toRouter = false))
+        Behaviors.same
+      case VisionSeen(frame) =>
+        EndpointProtocol.visionFrames(frame).foreach(send(_, toRouter = false))
+        Behaviors.same
+      case SubscriptionChanged(prefix, subscribed) =>
+        context.log.debug("ZeroMQ endpoint: subscription [{}] {}", prefix, if (subscribed) "on" else "off")
+        prefixes = if (subscribed) prefixes + prefix else prefixes - prefix
+        reconcileVision()
+        Behaviors.same
+      case StreamEnded(stream, failure) =>
+        failure match {
+          case Some(e) => context.log.warn("ZeroMQ endpoint: stream {} failed", stream, e)
+          case None    => context.log.debug("ZeroMQ endpoint: stream {} ended", stream)
+        }
+        Behaviors.same
+      case GetAddresses(replyTo) =>
+        replyTo ! addresses
+        Behaviors.same
+      case LoopEnded =>
+        context.log.info("ZeroMQ endpoint: socket loop ended; the endpoint stops")
+        Behaviors.stopped
+      case Bound(_) | BindFailed(_) | Connected(_) | ConnectFailed(_) | BindTimedOut => Behaviors.unhandled
+    }.receiveSignal(cleanUp)
+
+    private def stopEverything(): Unit = {
+      // Requests still being worked on get an answer while the socket is still there to carry it.
+      pending.values.foreach(p => reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down")))
+      pending = Map.empty
+      streams.shutdown()
+      visionStreams.values.foreach(_.shutdown())
+      loop.stop()
+      shutdownTask.foreach(_.cancel())
+      if (ownsInterface) robots.close()
+      context.log.info("ZeroMQ endpoint stopped")
+    }
+  }
+}

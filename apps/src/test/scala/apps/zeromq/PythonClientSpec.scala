@@ -1,0 +1,136 @@
+package apps.zeromq
+
+import java.io.File
+import java.net.ServerSocket
+import java.nio.charset.StandardCharsets
+import java.nio.file.{Files, Path}
+import java.util.concurrent.TimeUnit
+
+import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
+import scala.util.Try
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import org.scalatest.Assertions
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway.sim.{FirmwareSettings, ZmqSimulatedRobot}
+import naogateway.{Gateway, GatewaySettings}
+import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
+
+/** A Python virtual environment under target/ with the client's pinned packages, made once and reused. */
+object PythonEnv extends Assertions {
+
+  /** The checkout's root: the folder that holds apps/python (tests may run in the root or in apps/). */
+  lazy val root: File =
+    Iterator.iterate(new File(".").getAbsoluteFile)(_.getParentFile).takeWhile(_ != null)
+      .find(d => new File(d, "apps/python/example_walk.py").isFile)
+      .getOrElse(fail("cannot find apps/python from " + new File(".").getAbsolutePath))
+
+  private def run(command: Seq[String], within: FiniteDuration, log: File, env: Map[String, String] = Map.empty): (Int, String) = {
+    val builder = new ProcessBuilder(command.asJava).directory(root).redirectErrorStream(true).redirectOutput(log)
+    env.foreach { case (k, v) => builder.environment().put(k, v) }
+    val process = builder.start()
+    if (!process.waitFor(within.toSeconds, TimeUnit.SECONDS)) {
+      process.destroyForcibly()
+      fail(s"${command.mkString(" ")} did not finish within $within")
+    }
+    process.exitValue() -> new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)
+  }
+
+  /** The venv's python; cancels the test (visibly) when python3, venv or pip cannot provide it. */
+  def python(): File = synchronized {
+    val target = new File(root, "apps/target")
+    target.mkdirs()
+    val log = new File(target, "python-setup.log")
+    val found = Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption
+    if (!found.exists(_._1 == 0)) cancel("python3 is not available: the Python client test cannot run")
+    val venv = new File(target, "python-venv")
+    val python = new File(venv, "bin/python")
+    val requirements = new File(root, "apps/python/requirements.txt")
+    val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
+    val stamp = new File(venv, "requirements.installed")
+    val current = Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption
+    if (!python.isFile || !current.contains(wanted)) {
+      deleteTree(venv.toPath)
+      val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
+      if (venvCode != 0) cancel(s"python3 -m venv failed (is the venv module installed?):\n$venvOut")
+      val (pipCode, pipOut) =
+        run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r", requirements.getPath), 8.minutes, log)
+      if (pipCode != 0) cancel(s"pip could not install apps/python/requirements.txt:\n${pipOut.takeRight(3000)}")
+      Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
+    }
+    python
+  }
+
+  /** Runs a script of apps/python with `args`; its exit code and everything it printed. */
+  def script(name: String, args: Seq[String], within: FiniteDuration): (Int, String) = {
+    val py = python()
+    val gen = new File(root, "apps/target/python-gen")
+    // Generated afresh each run, so the classes always match proto/.
+    deleteTree(gen.toPath)
+    run(py.getPath +: "-u" +: new File(root, s"apps/python/$name").getPath +: args, within, new File(root, s"apps/target/$name.log"),
+      Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(root, "apps/python").getPath, "PYTHONDONTWRITEBYTECODE" -> "1"))
+  }
+
+  private def deleteTree(path: Path): Unit =
+    if (Files.exists(path)) Files.walk(path).iterator().asScala.toVector.reverse.foreach(p => Files.delete(p))
+}
+
+object PythonClientSpec {
+  val robotPort: Int = {
+    val s = new ServerSocket(0)
+    try s.getLocalPort
+    finally s.close()
+  }
+
+  val config: String =
+    s"""naogateway {
+       |  link { bind-address = "127.0.0.1", robot-port = 0 }
+       |  game-controller.enabled = off
+       |  zeromq.robots = [{ id = 20, endpoint = "tcp://127.0.0.1:$robotPort" }]
+       |}
+       |apps.zeromq { enabled = on, bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*" }
+       |""".stripMargin
+}
+
+class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config) with AnyWordSpecLike with LogCapturing {
+  import PythonClientSpec._
+
+  "The Python example" must {
+    "stand a simulated ZeroMQ robot up, walk it, stop it and print its status, through the endpoint" in {
+      PythonEnv.python() // cancels here when Python is missing, before anything is started
+      val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 20), s"tcp://127.0.0.1:$robotPort")
+      robot.start()
+      try {
+        val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
+        val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
+        val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq")
+        val probe = createTestProbe[ZeroMqEndpoint.Addresses]()
+        endpoint ! ZeroMqEndpoint.GetAddresses(probe.ref)
+        val addresses = probe.receiveMessage(10.seconds)
+        val startX = robot.firmware.get.pose.x
+
+        val (code, output) = PythonEnv.script("example_walk.py",
+          Seq("--endpoint", addresses.requests, "--publish", addresses.publish, "--robot", "20"), 90.seconds)
+        withClue(output) {
+          code shouldBe 0
+          val lines = output.linesIterator.toVector
+          lines should contain("robots: [20]")
+          lines should contain("posture: stand")
+          lines should contain("stopped")
+          val Status = """status of robot 20: battery (\d+\.\d\d) V, posture (\w+), link (\w+)""".r
+          val status = lines.collectFirst { case Status(battery, posture, link) => (battery.toDouble, posture, link) }
+          status shouldBe defined
+          status.get._1 shouldBe 12.4 +- 0.2
+          status.get._2 shouldBe "stand"
+          // The posture motion held the robot's socket for 1.5 s without a keep-alive: the quality may show it.
+          Set("good", "degraded") should contain(status.get._3)
+        }
+        // The simulated robot really walked: about 0.1 m/s for about a second.
+        robot.firmware.get.pose.x - startX should be > 0.05
+        robot.firmware.get.posture.name shouldBe "stand"
+      } finally robot.stop()
+    }
+  }
+}

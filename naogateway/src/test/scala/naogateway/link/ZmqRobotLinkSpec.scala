@@ -1,0 +1,194 @@
+package naogateway.link
+
+import java.net.ServerSocket
+
+import scala.concurrent.Await
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.FishingOutcome
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit, TestProbe}
+import org.scalatest.wordspec.AnyWordSpecLike
+import org.zeromq.{SocketType, ZContext}
+
+import naogateway._
+import naogateway.sim.{FirmwareSettings, ZmqSimulatedRobot}
+import naogateway.wire.gamecontroller.GameState
+import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
+
+object ZmqRobotLinkSpec {
+
+  /** A free loopback TCP port (taken and released at once; the race is acceptable in tests). */
+  def freePort(): Int = {
+    val s = new ServerSocket(0)
+    try s.getLocalPort
+    finally s.close()
+  }
+
+  val robotPort: Int = freePort()
+
+  val config: String =
+    s"""naogateway {
+       |  link { bind-address = "127.0.0.1", robot-port = 0 }
+       |  game-controller.enabled = off
+       |  zeromq {
+       |    robots = [{ id = 20, endpoint = "tcp://127.0.0.1:$robotPort" }]
+       |    status-interval = 100ms
+       |    status-timeout = 2s
+       |    heartbeat { quiet-after = 600ms, probe-timeout = 500ms, chances = 3 }
+       |  }
+       |}
+       |""".stripMargin
+}
+
+class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config) with AnyWordSpecLike with LogCapturing {
+  import ZmqRobotLinkSpec._
+
+  private val endpoint = s"tcp://127.0.0.1:$robotPort"
+
+  private def call(connected: RobotActor.Connected, module: String, method: String, params: RpcValue*): CallResult = {
+    val results = createTestProbe[CallResult]()
+    connected.response ! ResponseActor.Call(RpcCall(module, method, params.toVector), results.ref, timeout = Some(4.seconds))
+    results.receiveMessage(6.seconds)
+  }
+
+  private def expectEvent[T](events: TestProbe[GatewayEvent], within: FiniteDuration)(pf: PartialFunction[GatewayEvent, T]): T =
+    events.fishForMessagePF(within) {
+      case e if pf.isDefinedAt(e) => FishingOutcome.Complete
+      case _                      => FishingOutcome.ContinueAndIgnore
+    }.collectFirst(pf).get
+
+  "ZmqLoop" must {
+    "end its thread and terminate its context promptly when stopped, and refuse work afterwards" in {
+      val loop = new ZmqLoop("spec-loop", 100.millis)
+      val executor = java.util.concurrent.Executors.newSingleThreadExecutor()
+      try {
+        loop.start(executor)
+        val port = freePort()
+        val bound = scala.concurrent.Promise[String]()
+        loop.submit { sockets =>
+          val rep = sockets.socket(SocketType.REP)
+          rep.bind(s"tcp://127.0.0.1:$port")
+          bound.success(rep.getLastEndpoint)
+        }
+        Await.result(bound.future, 3.seconds) should include(port.toString)
+        val started = System.nanoTime()
+        Await.result(loop.stop(), 3.seconds)
+        (System.nanoTime() - started).nanos should be < 1.second
+        loop.submit(_ => ()) shouldBe false
+        // The socket is closed: the port can be bound again.
+        val again = new ZContext()
+        try again.createSocket(SocketType.REP).bind(s"tcp://127.0.0.1:$port") shouldBe true
+        finally again.close()
+      } finally executor.shutdownNow()
+    }
+  }
+
+  "ZmqSimulatedRobot" must {
+    "answer the firmware's RPC over REP, the heartbeat's probe with the unknown-method error, and hold posture calls" in {
+      val port = freePort()
+      val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 31), s"tcp://127.0.0.1:$port")
+      robot.start()
+      val context = new ZContext()
+      try {
+        val req = context.createSocket(SocketType.REQ)
+        // jeromq clients now and then stall in the handshake; connect again soon rather than after 30 s.
+        req.setHandshakeIvl(300)
+        req.setReceiveTimeOut(5000)
+        req.connect(s"tcp://127.0.0.1:$port")
+        def ask(module: String, method: String, params: RpcValue*): RpcReply = {
+          req.send(MessageContents(31, rpcRequest = Some(RpcCall(module, method, params.toVector, Some(9L)).toProto)).toProtobuf, 0)
+          val reply = MessageContents.parse(req.recv(0)).fold(e => fail(e.describe), identity)
+          reply.robotId shouldBe 31
+          RpcReply.fromProto(reply.rpcResponse.get)
+        }
+        ask("heartbeat", "probe") shouldBe RpcReply(Left(RpcReply.unknownMethod("heartbeat", "probe")), Some(9L))
+        ask("motion", "getPosture").result shouldBe Right(Some(RpcValue.Text("sit")))
+        val t0 = System.nanoTime()
+        ask("motion", "posture", RpcValue.Text("stand")).result shouldBe Right(Some(RpcValue.Text("stand")))
+        (System.nanoTime() - t0).nanos should be >= 1400.millis
+        ask("motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)).result shouldBe
+          Right(Some(RpcValue.Flag(true)))
+        // Junk is answered too: a REP socket must answer every request to take the next.
+        req.send(Array[Byte](1, 2, 3), 0)
+        MessageContents.parse(req.recv(0)).toOption.flatMap(_.rpcResponse).flatMap(_.error).get should startWith("bad parameters")
+      } finally {
+        context.close()
+        robot.stop()
+      }
+      robot.isRunning shouldBe false
+    }
+  }
+
+  "A ZeroMQ robot behind the gateway" must {
+    "come online, serve calls and the heartbeat through the link, go offline when stopped and come back when restarted" in {
+      val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 20), endpoint)
+      robot.start()
+      try {
+        val events = createTestProbe[GatewayEvent]()
+        val gateway = spawn(Gateway(GatewaySettings(system)))
+        gateway ! Gateway.Subscribe(events.ref)
+        expectEvent(events, 5.seconds) { case RobotOnline(20, _) => () }
+        val snapshot = expectEvent(events, 3.seconds) { case RobotStatusUpdated(s) if s.robotId == 20 => s }
+        snapshot.posture shouldBe Some("sit")
+        snapshot.batteryVoltage.get shouldBe 12.4 +- 0.1
+
+        val found = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
+        gateway ! Gateway.GetRobot(20, found.ref)
+        val robotActor = found.receiveMessage().get
+        val connects = createTestProbe[RobotActor.Connected]()
+        robotActor ! RobotActor.Connect(connects.ref)
+        val connected = connects.receiveMessage(3.seconds)
+
+        // A posture motion holds the REP socket for 1.5 s; the heartbeat must not take that for a lost robot.
+        call(connected, "motion", "posture", RpcValue.Text("stand")).result shouldBe Right(Some(RpcValue.Text("stand")))
+        call(connected, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)).result shouldBe
+          Right(Some(RpcValue.Flag(true)))
+        call(connected, "heartbeat", "probe").result shouldBe
+          Left(CallError.RobotError(20, RpcReply.unknownMethod("heartbeat", "probe")))
+        expectEvent(events, 2.seconds) { case RobotStatusUpdated(s) if s.posture.contains("stand") || s.posture.contains("walking") => () }
+
+        val stoppedAt = System.nanoTime()
+        robot.stop()
+        val offline = expectEvent(events, 5.seconds) { case RobotOffline(20, reason) => reason }
+        offline should include("unanswered probes")
+        // quiet-after + 3 probes = 2.1 s after the last keep-alive; the rest is slack for a loaded machine.
+        (System.nanoTime() - stoppedAt).nanos should be < 4.seconds
+        call(connected, "motion", "getPosture").result shouldBe Left(CallError.RobotOffline(20))
+
+        robot.start()
+        // Back online, and the status poll saw the uptime go back: a new session (reported in either order).
+        var seen = Set.empty[String]
+        events.fishForMessage(5.seconds) {
+          case RobotOnline(20, _) =>
+            seen += "online"
+            if (seen.size == 2) FishingOutcome.Complete else FishingOutcome.Continue
+          case RobotRestarted(20, _, _) =>
+            seen += "restarted"
+            if (seen.size == 2) FishingOutcome.Complete else FishingOutcome.Continue
+          case _ => FishingOutcome.ContinueAndIgnore
+        }
+        call(connected, "motion", "getPosture").result shouldBe Right(Some(RpcValue.Text("sit")))
+        testKit.stop(gateway)
+      } finally robot.stop()
+    }
+  }
+
+  "The ZeroMQ robot link" must {
+    "refuse to send while the game runs in competition mode" in {
+      val port = freePort()
+      val settings = GatewaySettings(system).zeromq
+      val owner = createTestProbe[ZmqRobotLink.Event]()
+      val outcomes = createTestProbe[Outbox.Outcome]()
+      val link = spawn(ZmqRobotLink(21, s"tcp://127.0.0.1:$port", settings, competition = true, owner.ref,
+        ZmqRobotLink.SharedLoop(system).loop))
+      link ! ZmqRobotLink.GameStateChanged(GameState.Playing)
+      link ! ZmqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 5L)
+      outcomes.expectMessage(Outbox.RefusedByRule(5L, Outbox.NoSendingWhileGameRuns))
+      link ! ZmqRobotLink.GameStateChanged(GameState.Finished)
+      // Nobody listens on the port: with immediate queueing the request is dropped, not kept for later.
+      link ! ZmqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 6L)
+      outcomes.expectMessageType[Outbox.Dropped].tag shouldBe 6L
+      testKit.stop(link)
+    }
+  }
+}

@@ -1,0 +1,211 @@
+package integration
+
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{ActorTestKit, LogCapturing}
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, ActorSystem}
+import akka.cluster.typed.{Cluster, Join}
+import akka.stream.scaladsl.Sink
+import com.typesafe.config.{Config, ConfigFactory}
+import org.scalatest.BeforeAndAfterAll
+import org.scalatest.concurrent.{Eventually, ScalaFutures}
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import apps.BallFollower
+import naogateway._
+import naogateway.sim._
+import naogateway.sim.network.LossyNetwork
+import robotmiddleware._
+import robotmiddleware.cluster.MiddlewareCluster
+
+/**
+ * The whole stack as users meet it: a gateway node (gateway, middleware, simulated robots on loopback UDP) and
+ * apps in actor systems of their own that reach it only through the cluster and `RobotInterface`.
+ */
+class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Eventually with BeforeAndAfterAll with LogCapturing {
+
+  implicit override val patienceConfig: PatienceConfig = PatienceConfig(30.seconds, 100.millis)
+
+  private val common: Config = ConfigFactory.parseString("""
+      |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
+      |akka.cluster.split-brain-resolver.stable-after = 1s
+      |naogateway.link.bind-address = "127.0.0.1"
+      |naogateway.link.robot-port = 0
+      |naogateway.game-controller.enabled = off
+      |""".stripMargin)
+
+  private val gatewayNode = ActorTestKit(
+    MiddlewareCluster.start(Behaviors.empty, MiddlewareCluster.GatewayRole,
+      ConfigFactory.parseString("robotmiddleware.cluster.gateway-port = 0\nakka.cluster.seed-nodes = []").withFallback(common))
+  )
+  private val cluster = Cluster(gatewayNode.system)
+  cluster.manager ! Join(cluster.selfMember.address)
+  private val gatewayPort = cluster.selfMember.address.port.get
+
+  private val gateway = gatewayNode.spawn(Gateway(GatewaySettings(gatewayNode.system)), "gateway")
+  gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
+  private val robotPort: InetSocketAddress = {
+    val probe = gatewayNode.createTestProbe[Gateway.Addresses]()
+    gateway ! Gateway.GetAddresses(probe.ref)
+    probe.receiveMessage(10.seconds).robots
+  }
+  private var appNodes = List.empty[ActorSystem[_]]
+
+  override def afterAll(): Unit = {
+    appNodes.foreach(_.terminate())
+    gatewayNode.shutdownTestKit()
+  }
+
+  private def appNode(): ActorSystem[Nothing] = {
+    val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole,
+      ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort").withFallback(common))
+    appNodes ::= node
+    node
+  }
+
+  private def connect(node: ActorSystem[_], name: String, priority: Int): RobotInterface =
+    RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, name, priority))(node.executionContext).futureValue
+
+  private var robotsById = Map.empty[Int, ActorRef[SimulatedRobot.Command]]
+  private def started(id: Int, ref: ActorRef[SimulatedRobot.Command]): Unit = robotsById += id -> ref
+
+  private def spawnRobot(id: Int, to: InetSocketAddress = robotPort, firmware: FirmwareSettings => FirmwareSettings = identity)
+      : ActorRef[SimulatedRobot.Command] = {
+    val probe = gatewayNode.createTestProbe[SimulatedRobot.StartResult]()
+    gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to, faithfulLink = false), Some(probe.ref)),
+      s"robot-$id")
+    probe.receiveMessage(10.seconds) match {
+      case SimulatedRobot.Started(_, ref, _) => started(id, ref); ref
+      case other                             => fail(s"robot $id did not start: $other")
+    }
+  }
+
+  private def view(robot: ActorRef[SimulatedRobot.Command]): RobotView = {
+    val probe = gatewayNode.createTestProbe[RobotView]()
+    robot ! SimulatedRobot.GetState(probe.ref)
+    probe.receiveMessage()
+  }
+
+  private def online(id: Int): Unit = eventually {
+    val probe = gatewayNode.createTestProbe[Vector[RobotSnapshot]]()
+    gateway ! Gateway.GetRobots(probe.ref)
+    probe.receiveMessage().exists(r => r.robotId == id && r.online) shouldBe true
+  }
+
+  "An app in its own actor system" must {
+    "command a simulated robot through the middleware and read its status stream" in {
+      val sim = spawnRobot(11)
+      online(11)
+      val node = appNode()
+      val app = connect(node, "walker", 1)
+      implicit val system: ActorSystem[_] = node
+      app.acquire(11, ActuatorGroup.Walk).futureValue
+      app.posture(11, "stand").futureValue shouldBe "stand"
+      app.walk(11, 0.2, 0.0, 0.0).futureValue
+      val walking = app.status(11).filter(_.posture.contains("walking")).runWith(Sink.head)
+      walking.futureValue.robotId shouldBe 11
+      // The middleware keeps the walk alive past the robot's 500 ms lease.
+      Thread.sleep(1500)
+      view(sim).posture shouldBe Posture.Walking
+      app.stop(11).futureValue
+      eventually(view(sim).posture shouldBe Posture.Stand)
+    }
+
+    "stop its robot and free its lease when the app's system dies, so another app gets it" in {
+      val sim = spawnRobot(12)
+      online(12)
+      val doomed = appNode()
+      val first = connect(doomed, "doomed", 1)
+      first.acquire(12, ActuatorGroup.Walk).futureValue
+      first.posture(12, "stand").futureValue
+      first.walk(12, 0.2, 0.0, 0.0).futureValue
+      val second = connect(appNode(), "patient", 1)
+      second.acquire(12, ActuatorGroup.Walk).failed.futureValue shouldBe a[RobotFailure.LeaseNotHeld]
+      doomed.terminate()
+      doomed.whenTerminated.futureValue
+      eventually(view(sim).posture shouldBe Posture.Stand)
+      eventually(second.acquire(12, ActuatorGroup.Walk).futureValue)
+    }
+
+    "see its robot stopped and sat down when the battery runs low, and motion refused" in {
+      val sim = spawnRobot(13)
+      online(13)
+      val node = appNode()
+      val app = connect(node, "walker", 1)
+      implicit val system: ActorSystem[_] = node
+      val safetyStop = app.appEvents.collect { case e: AppEvent.SafetyStop => e }.runWith(Sink.head)
+      app.acquire(13, ActuatorGroup.Walk).futureValue
+      app.posture(13, "stand").futureValue
+      app.walk(13, 0.1, 0.0, 0.0).futureValue
+      sim ! SimulatedRobot.SetBattery(10.4)
+      eventually(view(sim).posture shouldBe Posture.Sit)
+      app.walk(13, 0.1, 0.0, 0.0).failed.futureValue shouldBe a[RobotFailure.SafetyHold]
+      app.posture(13, "stand").failed.futureValue shouldBe a[RobotFailure.SafetyHold]
+      safetyStop.futureValue.robotId shouldBe 13
+      app.close()
+    }
+
+    "get fast robot-offline failures when the link is lost, while the robot stops its interrupted walk itself" in {
+      val network = LossyNetwork.start(seed = 4)
+      try {
+        val proxy = network.addProxy(robotPort)
+        val sim = spawnRobot(14, to = proxy.clientSide)
+        online(14)
+        val app = connect(appNode(), "walker", 1)
+        app.acquire(14, ActuatorGroup.Walk).futureValue
+        app.posture(14, "stand").futureValue
+        app.walk(14, 0.2, 0.0, 0.0).futureValue
+        network.partition(proxy, on = true)
+        eventually {
+          val begin = System.nanoTime()
+          app.call(14, "system", "ping").failed.futureValue shouldBe RobotFailure.RobotOffline(14)
+          (System.nanoTime() - begin).nanos should be < 1.second
+        }
+        eventually(view(sim).posture shouldBe Posture.Stand)
+        network.partition(proxy, on = false)
+        online(14)
+        app.call(14, "system", "ping").futureValue.isDefined shouldBe true
+      } finally network.stop()
+    }
+
+    "lose a lease to a higher-priority app and be told so" in {
+      spawnRobot(15)
+      online(15)
+      val node = appNode()
+      val low = connect(node, "follower", 1)
+      val high = connect(appNode(), "referee", 9)
+      implicit val system: ActorSystem[_] = node
+      val lowEvents = low.appEvents.takeWithin(20.seconds).runWith(Sink.head)
+      low.acquire(15, ActuatorGroup.Walk).futureValue
+      high.acquire(15, ActuatorGroup.Walk).futureValue
+      lowEvents.futureValue shouldBe AppEvent.LeasePreempted(15, "walk", "referee")
+      low.stop(15).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(15, "walk", Some("referee"))
+      high.stop(15).futureValue
+    }
+  }
+
+  "The ball follower" must {
+    "reach the simulated ball within a bounded time" in {
+      val sim = spawnRobot(16, firmware = _.copy(startPose = Pose(-1.0, 0.0, 0.0), scene = Scene(0.5, 0.3)))
+      online(16)
+      val node = appNode()
+      val robotInterface = connect(node, "ball-follower", 1)
+      val follower = gatewayNode.spawn(BallFollower(robotInterface, 16), "follower-16")
+      val progress = gatewayNode.createTestProbe[BallFollower.Progress]()
+      val deadline = 60.seconds.fromNow
+      var reached = false
+      while (!reached && deadline.hasTimeLeft()) {
+        follower ! BallFollower.GetProgress(progress.ref)
+        reached = progress.receiveMessage(5.seconds).reached
+        if (!reached) Thread.sleep(250)
+      }
+      reached shouldBe true
+      val v = view(sim)
+      math.hypot(v.pose.x - 0.5, v.pose.y - 0.3) should be < 0.5
+    }
+  }
+}
