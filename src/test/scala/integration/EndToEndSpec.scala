@@ -5,6 +5,7 @@ import java.net.InetSocketAddress
 import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{ActorTestKit, LogCapturing}
+import akka.actor.typed.scaladsl.AskPattern._
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, ActorSystem}
 import akka.cluster.typed.{Cluster, Join}
@@ -194,13 +195,12 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       online(16)
       val node = appNode()
       val robotInterface = connect(node, "ball-follower", 1)
-      val follower = gatewayNode.spawn(BallFollower(robotInterface, 16), "follower-16")
-      val progress = gatewayNode.createTestProbe[BallFollower.Progress]()
+      // The follower lives in the app's own actor system, next to its RobotInterface.
+      val follower = node.systemActorOf(BallFollower(robotInterface, 16), "follower-16")
       val deadline = 60.seconds.fromNow
       var reached = false
       while (!reached && deadline.hasTimeLeft()) {
-        follower ! BallFollower.GetProgress(progress.ref)
-        reached = progress.receiveMessage(5.seconds).reached
+        reached = follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue.reached
         if (!reached) Thread.sleep(250)
       }
       reached shouldBe true

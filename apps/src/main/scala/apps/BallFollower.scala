@@ -21,6 +21,8 @@ object BallFollower {
 
   private final case class Frame(frame: VisionFrame.Regions) extends Command
   private final case class Leased(result: scala.util.Try[akka.Done]) extends Command
+  private final case class Stood(result: scala.util.Try[String]) extends Command
+  private final case class WalkDone(result: scala.util.Try[akka.Done]) extends Command
   private final case class Preempted(event: AppEvent) extends Command
   private case object Retry extends Command
 
@@ -43,11 +45,16 @@ object BallFollower {
               robot.head(robotId, t.pan, t.tilt)
               // Only changed velocities go out; the middleware keeps the current walk alive.
               val walk = (t.vx, t.omega)
-              if (math.abs(walk._1 - lastWalk._1) > 0.02 || math.abs(walk._2 - lastWalk._2) > 0.05) {
-                if (walk == ((0.0, 0.0))) robot.stop(robotId) else robot.walk(robotId, t.vx, 0.0, t.omega)
+              if (math.abs(walk._1 - lastWalk._1) > 0.02 || math.abs(walk._2 - lastWalk._2) > 0.05 || lastWalk._1.isNaN) {
+                val sent = if (walk == ((0.0, 0.0))) robot.stop(robotId) else robot.walk(robotId, t.vx, 0.0, t.omega)
+                context.pipeToSelf(sent)(WalkDone.apply)
               }
               if (next.reached && !state.reached) context.log.info("Robot [{}] reached the ball", robotId)
               following(next, Progress(next.reached, t.ballDistance.orElse(progress.lastDistance), progress.frames + 1), walk)
+            case WalkDone(Failure(e)) =>
+              // The robot refused or missed it: send the current target again with the next frame.
+              context.log.debug("Ball follower walk on robot [{}] failed: {}", robotId, e.getMessage)
+              following(state, progress, (Double.NaN, Double.NaN))
             case GetProgress(replyTo) =>
               replyTo ! progress
               Behaviors.same
@@ -55,8 +62,28 @@ object BallFollower {
               context.log.info("Ball follower on robot [{}]: {}", robotId, event)
               timers.startSingleTimer(Retry, 2.seconds)
               waiting(progress)
-            case Leased(_) | Retry => Behaviors.same
+            case Leased(_) | Retry | Stood(_) | WalkDone(_) => Behaviors.same
           }
+
+        def standingUp(progress: Progress): Behavior[Command] = Behaviors.receiveMessage {
+          case Stood(Success(_)) =>
+            context.log.info("Ball follower has robot [{}] standing", robotId)
+            following(BallFollowerControl.initial, progress, (Double.NaN, Double.NaN))
+          case Stood(Failure(e)) =>
+            context.log.info("Robot [{}] did not stand up: {}; trying again", robotId, e.getMessage)
+            timers.startSingleTimer(Retry, 1.second)
+            Behaviors.same
+          case Retry =>
+            context.pipeToSelf(robot.posture(robotId, "stand"))(Stood.apply)
+            Behaviors.same
+          case GetProgress(replyTo) =>
+            replyTo ! progress
+            Behaviors.same
+          case Preempted(_) =>
+            timers.startSingleTimer(Retry, 2.seconds)
+            waiting(progress)
+          case Frame(_) | Leased(_) | WalkDone(_) => Behaviors.same
+        }
 
         def waiting(progress: Progress): Behavior[Command] = Behaviors.receiveMessage {
           case Retry =>
@@ -64,8 +91,8 @@ object BallFollower {
             Behaviors.same
           case Leased(Success(_)) =>
             context.log.info("Ball follower has robot [{}]", robotId)
-            context.pipeToSelf(robot.posture(robotId, "stand"))(_ => Retry)
-            following(BallFollowerControl.initial, progress, (0.0, 0.0))
+            context.pipeToSelf(robot.posture(robotId, "stand"))(Stood.apply)
+            standingUp(progress)
           case Leased(Failure(e)) =>
             context.log.info("Ball follower waits for robot [{}]: {}", robotId, e.getMessage)
             timers.startSingleTimer(Retry, 2.seconds)
@@ -73,7 +100,7 @@ object BallFollower {
           case GetProgress(replyTo) =>
             replyTo ! progress
             Behaviors.same
-          case Frame(_) | Preempted(_) => Behaviors.same
+          case Frame(_) | Preempted(_) | Stood(_) | WalkDone(_) => Behaviors.same
         }
 
         // The streams run on other threads: they may only use the ref, never the context.
