@@ -369,8 +369,8 @@ object RobotActor {
     private def keepAlive(contents: MessageContents, children: Option[Children], heartbeat: ActorRef[HeartBeatActor.Command]): Unit = {
       heartbeat ! HeartBeatActor.KeepAliveSeen
       val now = System.nanoTime()
-      keepAliveTimes = keepAliveTimes.enqueue(now)
-      if (keepAliveTimes.size > 256) keepAliveTimes = keepAliveTimes.dequeue._2
+      // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
+      keepAliveTimes = keepAliveTimes.enqueue(now).dropWhile(_ < now - settings.heartbeat.qualityWindow.toNanos)
       val status = contents.status.get
       val health = contents.robotHealth
       val previous = snapshot
