@@ -28,7 +28,8 @@ launcher="$m2/org/scala-sbt/sbt-launch/$sbt_version/sbt-launch-$sbt_version.jar"
 if [ ! -f "$launcher" ]; then
   command -v mvn >/dev/null 2>&1 || { echo "./sbt: neither sbt nor mvn is installed; install a JDK and Maven" >&2; exit 1; }
   echo "./sbt: fetching the sbt $sbt_version launcher with Maven (first run only)" >&2
-  mvn -q -B dependency:get -Dtransitive=false "-Dartifact=org.scala-sbt:sbt-launch:$sbt_version" >&2
+  # Maven's own default follows Java's user.home, which need not be $HOME: name the repository explicitly.
+  mvn -q -B dependency:get -Dtransitive=false "-Dmaven.repo.local=$m2" "-Dartifact=org.scala-sbt:sbt-launch:$sbt_version" >&2
 fi
 [ -f "$launcher" ] || { echo "./sbt: the sbt launcher is still missing at $launcher" >&2; exit 1; }
 
