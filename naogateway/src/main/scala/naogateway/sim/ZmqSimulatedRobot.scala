@@ -17,6 +17,7 @@ import naogateway.wire.{HeaderForm, MessageContents, RpcReply}
  * socket. A REP socket answers one request at a time, so a posture call holds the socket until its motion has ended,
  * exactly as a robot whose calls block would. It has its own thread (it stands for a separate machine), can be
  * stopped and started again (a power cycle: a new session, battery and position kept), and binds `endpoint`.
+ * `start` and `stop` block until the socket is bound or closed: call them from tests or tools, never from an actor.
  */
 final class ZmqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) {
   private val log = LoggerFactory.getLogger(classOf[ZmqSimulatedRobot])
