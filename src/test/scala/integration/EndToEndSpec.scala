@@ -116,6 +116,20 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       eventually(view(sim).posture shouldBe Posture.Stand)
     }
 
+    "serve robotctl: one status line per robot, and calls" in {
+      spawnRobot(17)
+      online(17)
+      val node = appNode()
+      val ctl = connect(node, "robotctl", 0)
+      implicit val system: ActorSystem[_] = node
+      val status = apps.RobotCtl.run(ctl, apps.RobotCtl.Request.Status).futureValue
+      val line = status.linesIterator.find(_.startsWith("17 ")).getOrElse(fail(status))
+      Seq("127.0.0.1:", "online", "V", "sit", "striker").foreach(line should include(_))
+      apps.RobotCtl.run(ctl, apps.RobotCtl.Request.Call(17, "motion", "getPosture", Vector.empty)).futureValue shouldBe
+        "robot 17: motion.getPosture -> Text(sit)"
+      ctl.close()
+    }
+
     "stop its robot and free its lease when the app's system dies, so another app gets it" in {
       val sim = spawnRobot(12)
       online(12)

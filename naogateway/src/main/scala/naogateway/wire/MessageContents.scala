@@ -153,8 +153,11 @@ object MessageContents {
             case _ => repeated ||= c.rpcResponse.isDefined; c = c.copy(rpcResponse = Some(nested(in, Response)))
           }
         } else {
+          // No FU-Remote or project message uses groups, and the general (ScalaPB) path refuses them: so does this one.
+          if (wireType == WireFormat.WIRETYPE_START_GROUP || wireType == WireFormat.WIRETYPE_END_GROUP)
+            throw new com.google.protobuf.InvalidProtocolBufferException(s"group wire type $wireType in field $field")
           if (!unknown.contains(field)) unknown = unknown :+ field
-          if (!in.skipField(tag)) done = true
+          in.skipField(tag)
         }
       }
       // Protobuf merges a message field that occurs twice; rare enough to take the general path for it.

@@ -141,7 +141,7 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
   import MessageGenerators._
 
   implicit override val generatorDrivenConfig: PropertyCheckConfiguration =
-    PropertyCheckConfiguration(minSuccessful = 300)
+    PropertyCheckConfiguration(minSuccessful = 2000)
 
   "MessageContents.parse" should {
     "agree with the general ScalaPB path for every message" in {
@@ -158,6 +158,21 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       )
       val merged = MessageContents.parse(first.toByteArray ++ second.toByteArray)
       merged.map(_.status) shouldBe Right(Some(Status(teamID = Some(3), activeRole = Some("striker"))))
+    }
+    "refuse group wire types, as the general path does" in {
+      // robotID 4, then field 11 with wire type 4 (end group) and no group open.
+      MessageContents.parse(Array[Byte](0x08, 0x04, 0x5c)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+      // robotID 1, then an empty group in field 5.
+      MessageContents.parse(Array[Byte](0x08, 0x01, 0x2b, 0x2c)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+    }
+    "agree with the general path on arbitrary bytes after a valid robot id" in {
+      forAll(anyBytes) { tail =>
+        val bytes = Array[Byte](0x08, 0x01) ++ tail.take(60)
+        val general =
+          try MessageContents.of(Message.parseFrom(bytes)).isRight
+          catch { case _: Exception => false }
+        MessageContents.parse(bytes).isRight shouldBe general
+      }
     }
     "agree with the general path on arbitrary bytes" in {
       forAll(anyBytes) { bytes =>
