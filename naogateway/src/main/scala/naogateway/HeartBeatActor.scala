@@ -51,8 +51,8 @@ object HeartBeatActor {
   /** Call ids of the heartbeat carry this tag in their two top bits. */
   val CallIdTag: Long = 2L << 30
 
-  /** Keep-alives per tick over the quality window, and the quality last reported. */
-  private final case class Quality(ticks: Queue[Int], current: Int, reported: LinkQuality) {
+  /** Keep-alives per tick over the quality window, the quality last reported, and how long it has looked good. */
+  private final case class Quality(ticks: Queue[Int], current: Int, reported: LinkQuality, goodTicks: Int = 0) {
     def seen: Quality = copy(current = current + 1)
 
     def tick(settings: HeartbeatSettings, report: ActorRef[Report]): Quality = {
@@ -60,14 +60,16 @@ object HeartBeatActor {
       val shifted = ticks.enqueue(current)
       val trimmed = if (shifted.size > windowTicks) shifted.dequeue._2 else shifted
       val ratio = trimmed.sum.toDouble / windowTicks
-      // Judged only over a full window, and with a gap between the two thresholds, so the quality does not flap.
+      val good = if (ratio > settings.goodAbove) goodTicks + 1 else 0
+      // Judged only over a full window, with a gap between the two thresholds, and back to good only after a whole
+      // window above the upper one: a link that hovers at the lower threshold stays degraded instead of flapping.
       val next =
         if (trimmed.size < windowTicks || reported == LinkQuality.Offline) reported
         else if (reported == LinkQuality.Good && ratio < settings.degradedBelow) LinkQuality.Degraded
-        else if (reported == LinkQuality.Degraded && ratio > settings.goodAbove) LinkQuality.Good
+        else if (reported == LinkQuality.Degraded && good >= windowTicks) LinkQuality.Good
         else reported
       if (next != reported) report ! QualityChanged(next)
-      Quality(trimmed, 0, next)
+      Quality(trimmed, 0, next, good)
     }
 
     def online: Quality = if (reported == LinkQuality.Offline) copy(reported = LinkQuality.Good) else this

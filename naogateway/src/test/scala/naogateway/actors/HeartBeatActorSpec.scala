@@ -96,7 +96,10 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       // 85 % is above the degraded threshold but not above the good one: still degraded.
       (1 to 20).foreach { i => if (i % 7 != 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
       reports.expectNoMessage(Duration.Zero)
-      (1 to 12).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      // Back to good only after a whole window (10 ticks here) above 90 %: not after 10 ticks, but before 25.
+      (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectNoMessage(Duration.Zero)
+      (1 to 15).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
       reports.expectMessage(QualityChanged(LinkQuality.Good))
     }
   }
