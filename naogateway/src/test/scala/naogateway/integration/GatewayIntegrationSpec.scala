@@ -37,7 +37,8 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       }
       val robotsProbe = createTestProbe[Vector[RobotSnapshot]]()
       f.gateway ! Gateway.GetRobots(robotsProbe.ref)
-      robotsProbe.receiveMessage().map(s => s.robotId -> s.online) shouldBe Vector(1 -> true, 2 -> true, 3 -> true)
+      robotsProbe.receiveMessage().map(s => (s.robotId, s.online, s.quality)) shouldBe
+        Vector((1, true, LinkQuality.Good), (2, true, LinkQuality.Good), (3, true, LinkQuality.Good))
     }
 
     "take a partitioned robot offline within its three chances and back online when the partition heals" in {
