@@ -3,6 +3,11 @@ package apps
 import java.io.{InputStream, PrintStream}
 
 import scala.concurrent.{ExecutionContext, Future}
+import scala.util.{Failure, Success, Try}
+
+import akka.actor.typed.scaladsl.Behaviors
+import robotmiddleware.RobotClient
+import robotmiddleware.cluster.MiddlewareCluster
 
 import robotmiddleware.{ActuatorGroup, RobotInterface}
 
@@ -82,5 +87,41 @@ object Teleop {
     }
     report("stop", robot.stop(robotId))
     robot.release(robotId, ActuatorGroup.Walk, ActuatorGroup.Head)
+  }
+
+  /**
+   * `./sbt "apps/runMain apps.Teleop <robotId>"`: joins a running gateway as an app with priority 5 and steers the
+   * robot from the keyboard until `x`. On a terminal the keys act at once (raw mode); through sbt, end keys with Enter.
+   */
+  def main(args: Array[String]): Unit = {
+    val robotId = args.headOption.flatMap(_.toIntOption).getOrElse {
+      System.err.println("usage: teleop <robotId>")
+      sys.exit(2)
+    }
+    val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole)
+    implicit val ec: ExecutionContext = node.executionContext
+    val raw = System.console() != null && Try(stty("-icanon -echo min 1")).isSuccess
+    RobotClient(node, "teleop", priority = 5).onComplete {
+      case Success(robot) =>
+        // The key loop blocks on stdin: it gets a thread of its own, never an actor's.
+        val loop = new Thread(() => {
+          try run(robot, robotId, System.in, System.out)
+          finally {
+            if (raw) Try(stty("sane"))
+            robot.close()
+            node.terminate()
+          }
+        }, "teleop-keys")
+        loop.start()
+      case Failure(e) =>
+        System.err.println(s"teleop: ${e.getMessage}")
+        if (raw) Try(stty("sane"))
+        node.terminate()
+    }
+  }
+
+  private def stty(mode: String): Unit = {
+    val process = new ProcessBuilder("sh", "-c", s"stty $mode < /dev/tty").inheritIO().start()
+    if (process.waitFor() != 0) throw new IllegalStateException("stty failed")
   }
 }
