@@ -1,0 +1,70 @@
+package naogateway.actors
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, LoggingTestKit, ScalaTestWithActorTestKit}
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, TypedActorContext}
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway._
+import naogateway.wire.{RpcCall, RpcValue}
+
+/** A child that really crashes, under the supervision the robot actor gives it, still answers its callers. */
+class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
+
+  private val settings = CallSettings(5.seconds, idempotentRetries = 0, stashCapacity = 4)
+
+  /** Throws when it sees `Reachability(true)` while the actor is already online: a stand-in for any bug. */
+  private final class CrashOn[T: scala.reflect.ClassTag](crash: T => Boolean) extends BehaviorInterceptor[T, T] {
+    def aroundReceive(ctx: TypedActorContext[T], msg: T, target: BehaviorInterceptor.ReceiveTarget[T]): Behavior[T] =
+      if (crash(msg)) throw new IllegalStateException("injected failure") else target(ctx, msg)
+  }
+
+  private val restart = SupervisorStrategy.restartWithBackoff(50.millis, 200.millis, 0.0)
+
+  "A crashing response actor" must {
+    "answer its pending and waiting calls with Interrupted, and serve new calls after the restart" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val caller = createTestProbe[CallResult]()
+      val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(true) => true; case _ => false })
+      val responder = spawn(
+        Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
+      )
+      (1 to 5).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      robot.receiveMessages(4) // four in flight, one waiting in the stash
+      LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
+        responder ! ResponseActor.Reachability(true)
+      }
+      val answers = caller.receiveMessages(5)
+      answers.foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
+      // After the back-off the restarted actor takes calls again, with new call ids.
+      eventually {
+        responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
+        robot.expectMessageType[RobotActor.Transmit](1.second)
+      }
+    }
+  }
+
+  "A crashing no-response actor" must {
+    "answer the command in flight and the waiting ones, then take commands again" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val caller = createTestProbe[CallResult]()
+      val crash = new CrashOn[NoResponseActor.Command]({ case NoResponseActor.Reachability(true) => true; case _ => false })
+      val actor = spawn(
+        Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
+      )
+      (1 to 3).foreach(i => actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
+      robot.expectMessageType[RobotActor.Transmit]
+      LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
+        actor ! NoResponseActor.Reachability(true)
+      }
+      caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
+      caller.expectNoMessage(200.millis)
+      eventually {
+        actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
+        robot.expectMessageType[RobotActor.Transmit](1.second)
+      }
+    }
+  }
+}
