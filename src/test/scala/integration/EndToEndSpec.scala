@@ -71,16 +71,13 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
   private def connect(node: ActorSystem[_], name: String, priority: Int): RobotInterface =
     RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, name, priority))(node.executionContext).futureValue
 
-  private var robotsById = Map.empty[Int, ActorRef[SimulatedRobot.Command]]
-  private def started(id: Int, ref: ActorRef[SimulatedRobot.Command]): Unit = robotsById += id -> ref
-
   private def spawnRobot(id: Int, to: InetSocketAddress = robotPort, firmware: FirmwareSettings => FirmwareSettings = identity)
       : ActorRef[SimulatedRobot.Command] = {
     val probe = gatewayNode.createTestProbe[SimulatedRobot.StartResult]()
     gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to, faithfulLink = false), Some(probe.ref)),
       s"robot-$id")
     probe.receiveMessage(10.seconds) match {
-      case SimulatedRobot.Started(_, ref, _) => started(id, ref); ref
+      case SimulatedRobot.Started(_, ref, _) => ref
       case other                             => fail(s"robot $id did not start: $other")
     }
   }

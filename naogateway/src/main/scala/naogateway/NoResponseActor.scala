@@ -5,7 +5,7 @@ import scala.concurrent.duration.FiniteDuration
 import akka.actor.typed.scaladsl.{Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
-import naogateway.wire.{RpcCall, RpcReply}
+import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
 /**
  * Ordered fire-and-forget commands that still honour the link's request-reply lockstep: one command in flight,
@@ -62,7 +62,7 @@ object NoResponseActor {
   ) {
     private var overflowed = 0L
 
-    private def finish(s: Send, result: Either[CallError, Option[naogateway.wire.RpcValue]]): Unit =
+    private def finish(s: Send, result: Either[CallError, Option[RpcValue]]): Unit =
       s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, result))
 
     /** Newest replacement of a stashed latest-wins command, by call name. */
@@ -109,20 +109,11 @@ object NoResponseActor {
             Behaviors.same
           }
         case ReplyReceived(reply) if reply.callId.contains(id) =>
-          timers.cancel(AnswerKey)
-          finish(current, reply.result.left.map(CallError.RobotError(robotId, _)))
-          stash.unstash(communicating(lastId, newest), 1, identity)
+          next(current, reply.result.left.map(CallError.RobotError(robotId, _)), lastId, newest)
         case AnswerTimedOut(timedOut) if timedOut == id =>
-          finish(current, Left(CallError.Timeout(robotId, current.call.name, timeout)))
-          stash.unstash(communicating(lastId, newest), 1, identity)
-        case SendOutcome(Outbox.RefusedByRule(tag, rule)) if tag == id =>
-          timers.cancel(AnswerKey)
-          finish(current, Left(CallError.RuleGate(rule)))
-          stash.unstash(communicating(lastId, newest), 1, identity)
-        case SendOutcome(Outbox.Dropped(tag, reason)) if tag == id =>
-          timers.cancel(AnswerKey)
-          finish(current, Left(CallError.Overloaded(robotId, reason)))
-          stash.unstash(communicating(lastId, newest), 1, identity)
+          next(current, Left(CallError.Timeout(robotId, current.call.name, timeout)), lastId, newest)
+        case SendOutcome(outcome) if outcome.tag == id =>
+          CallError.ofOutcome(robotId, outcome).fold(Behaviors.same[Command])(e => next(current, Left(e), lastId, newest))
         case Reachability(false) =>
           timers.cancel(AnswerKey)
           finish(current, Left(CallError.RobotOffline(robotId)))
@@ -130,6 +121,14 @@ object NoResponseActor {
         case Reachability(true) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same
       }
       .receiveSignal(signals(Some(current), newest))
+
+    /** Ends the command in flight with `result` and sends the next waiting one. */
+    private def next(current: Send, result: Either[CallError, Option[RpcValue]], lastId: Long, newest: Newest)
+        : Behavior[Command] = {
+      timers.cancel(AnswerKey)
+      finish(current, result)
+      stash.unstash(communicating(lastId, newest), 1, identity)
+    }
 
     private def toOffline(lastId: Long, newest: Newest): Behavior[Command] = {
       failWaiting(newest, CallError.RobotOffline(robotId))

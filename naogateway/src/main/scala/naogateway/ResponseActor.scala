@@ -5,7 +5,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
-import naogateway.wire.{RpcCall, RpcReply}
+import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
 /** Request-reply with one robot: correlation ids, per-call timeouts, retries of idempotent calls, one answer per call. */
 object ResponseActor {
@@ -72,7 +72,7 @@ object ResponseActor {
       stash: StashBuffer[Command]
   ) {
 
-    private def answer(p: Pending, result: Either[CallError, Option[naogateway.wire.RpcValue]]): Unit =
+    private def answer(p: Pending, result: Either[CallError, Option[RpcValue]]): Unit =
       p.replyTo ! CallResult(robotId, p.call.name, result)
 
     private def transmit(id: Long, p: Pending, priority: Priority): Unit = {
@@ -85,6 +85,14 @@ object ResponseActor {
         timers.cancel(id)
         answer(p, Left(error))
       }
+
+    /** Answers call `id`, forgets it, and lets the next waiting call in. */
+    private def settle(pending: Map[Long, Pending], id: Long, p: Pending, result: Either[CallError, Option[RpcValue]],
+        online: Boolean, lastId: Long): Behavior[Command] = {
+      timers.cancel(id)
+      answer(p, result)
+      stash.unstash(running(pending - id, online, lastId), 1, identity)
+    }
 
     def running(pending: Map[Long, Pending], online: Boolean, lastId: Long): Behavior[Command] =
       Behaviors
@@ -110,12 +118,9 @@ object ResponseActor {
             reply.callId.flatMap(pending.get) match {
               case None => Behaviors.same // a late or duplicate reply: the call was answered already
               case Some(p) =>
-                val id = reply.callId.get
-                timers.cancel(id)
                 // Karn's rule: only a call sent once gives a clean round-trip sample.
                 if (p.attempts == 1) robot ! RobotActor.RoundTrip(System.nanoTime() - p.sentAt)
-                answer(p, reply.result.left.map(CallError.RobotError(robotId, _)))
-                stash.unstash(running(pending - id, online, lastId), 1, identity)
+                settle(pending, reply.callId.get, p, reply.result.left.map(CallError.RobotError(robotId, _)), online, lastId)
             }
           case AttemptTimedOut(id, attempt) =>
             pending.get(id) match {
@@ -125,27 +130,14 @@ object ResponseActor {
                 transmit(id, again, Priority.Command)
                 running(pending.updated(id, again), online, lastId)
               case Some(p) if p.attempts == attempt =>
-                answer(p, Left(CallError.Timeout(robotId, p.call.name, p.total)))
-                stash.unstash(running(pending - id, online, lastId), 1, identity)
+                settle(pending, id, p, Left(CallError.Timeout(robotId, p.call.name, p.total)), online, lastId)
               case _ => Behaviors.same
             }
-          case SendOutcome(Outbox.RefusedByRule(id, rule)) =>
-            pending.get(id) match {
-              case Some(p) =>
-                timers.cancel(id)
-                answer(p, Left(CallError.RuleGate(rule)))
-                stash.unstash(running(pending - id, online, lastId), 1, identity)
-              case None => Behaviors.same
+          case SendOutcome(outcome) =>
+            (CallError.ofOutcome(robotId, outcome), pending.get(outcome.tag)) match {
+              case (Some(error), Some(p)) => settle(pending, outcome.tag, p, Left(error), online, lastId)
+              case _                      => Behaviors.same
             }
-          case SendOutcome(Outbox.Dropped(id, reason)) =>
-            pending.get(id) match {
-              case Some(p) =>
-                timers.cancel(id)
-                answer(p, Left(CallError.Overloaded(robotId, reason)))
-                stash.unstash(running(pending - id, online, lastId), 1, identity)
-              case None => Behaviors.same
-            }
-          case SendOutcome(Outbox.Accepted(_)) => Behaviors.same
           case Reachability(nowOnline) =>
             if (!nowOnline) {
               failAll(pending, CallError.RobotOffline(robotId))

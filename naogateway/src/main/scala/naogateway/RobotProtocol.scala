@@ -87,6 +87,13 @@ sealed trait CallError extends Product with Serializable {
 /** The ways a call can fail. */
 object CallError {
 
+  /** The error an outbox outcome means for the call it carried, if any (`Accepted` is none). */
+  def ofOutcome(robotId: Int, outcome: Outbox.Outcome): Option[CallError] = outcome match {
+    case Outbox.Accepted(_)            => None
+    case Outbox.RefusedByRule(_, rule) => Some(RuleGate(rule))
+    case Outbox.Dropped(_, reason)     => Some(Overloaded(robotId, reason))
+  }
+
   /** The robot answered with an error text. */
   final case class RobotError(robotId: Int, message: String) extends CallError {
     def describe: String = s"robot $robotId: $message"
