@@ -217,17 +217,18 @@ object RobotActor {
         Behaviors.same
       case HeartbeatReport(HeartBeatActor.CameOnline) =>
         if (!online) {
-          wentOnline()
+          // Children first: a subscriber that calls the moment it hears RobotOnline must find them online.
           children.response ! ResponseActor.Reachability(true)
           children.noResponse ! NoResponseActor.Reachability(true)
+          wentOnline()
         }
         running(children, online = true)
       case HeartbeatReport(HeartBeatActor.WentOffline(reason)) =>
         context.log.info("Robot [{}] offline: {}", robotId, reason)
         snapshot = snapshot.copy(online = false, quality = LinkQuality.Offline)
-        events ! RobotOffline(robotId, reason)
         children.response ! ResponseActor.Reachability(false)
         children.noResponse ! NoResponseActor.Reachability(false)
+        events ! RobotOffline(robotId, reason)
         running(children, online = false)
       case other => common(other, Some(children), children.heartbeat)
     }
