@@ -43,6 +43,7 @@ object NoResponseActor {
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>
           val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
+          robot ! RobotActor.ReachabilityWanted(context.messageAdapter[Boolean](Reachability.apply))
           val actor = new Lockstep(robotId, settings.timeout, robot, outcomes, timers, stash, context.log)
           // Call ids start at a random point per incarnation, so a late reply from before a restart matches nothing new.
           val firstId = java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL)

@@ -57,6 +57,7 @@ object ResponseActor {
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>
           val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
+          robot ! RobotActor.ReachabilityWanted(context.messageAdapter[Boolean](Reachability.apply))
           new Responder(robotId, settings, robot, outcomes, timers, stash)
             .running(Map.empty, online, java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL))
         }

@@ -59,6 +59,9 @@ object RobotActor {
   /** A call was sent again. */
   case object Retransmitted extends FromChild
 
+  /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
+  final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
+
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
   private final case class ZmqLinkEvent(event: ZmqRobotLink.Event) extends Command
 
@@ -284,6 +287,9 @@ object RobotActor {
         Behaviors.same
       case DatagramRejected(reason) =>
         count(reason)
+        Behaviors.same
+      case ReachabilityWanted(replyTo) =>
+        replyTo ! snapshot.online
         Behaviors.same
       case Rebound(newAddress) =>
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)

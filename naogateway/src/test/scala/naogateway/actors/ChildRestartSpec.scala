@@ -2,7 +2,7 @@ package naogateway.actors
 
 import scala.concurrent.duration._
 
-import akka.actor.testkit.typed.scaladsl.{LogCapturing, LoggingTestKit, ScalaTestWithActorTestKit}
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, LoggingTestKit, ScalaTestWithActorTestKit, TestProbe}
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, TypedActorContext}
 import org.scalatest.wordspec.AnyWordSpecLike
@@ -15,11 +15,20 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
 
   private val settings = CallSettings(5.seconds, idempotentRetries = 0, stashCapacity = 4)
 
-  /** Throws when it sees `Reachability(true)` while the actor is already online: a stand-in for any bug. */
+  /** Once armed, throws on the first message `crash` picks: a stand-in for any bug. */
   private final class CrashOn[T: scala.reflect.ClassTag](crash: T => Boolean) extends BehaviorInterceptor[T, T] {
+    @volatile private var armed = false
+    def arm(): Unit = armed = true
     def aroundReceive(ctx: TypedActorContext[T], msg: T, target: BehaviorInterceptor.ReceiveTarget[T]): Behavior[T] =
-      if (crash(msg)) throw new IllegalStateException("injected failure") else target(ctx, msg)
+      if (armed && crash(msg)) {
+        armed = false
+        throw new IllegalStateException("injected failure")
+      } else target(ctx, msg)
   }
+
+  /** Answers the actor's start-up question about the robot's reachability. */
+  private def reachable(robot: TestProbe[RobotActor.FromChild], online: Boolean): Unit =
+    robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! online
 
   private val restart = SupervisorStrategy.restartWithBackoff(50.millis, 200.millis, 0.0)
 
@@ -31,18 +40,38 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val responder = spawn(
         Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
       )
+      reachable(robot, online = true)
       (1 to 5).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       robot.receiveMessages(4) // four in flight, one waiting in the stash
+      crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         responder ! ResponseActor.Reachability(true)
       }
       val answers = caller.receiveMessages(5)
       answers.foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
-      // After the back-off the restarted actor takes calls again, with new call ids.
-      eventually {
-        responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-        robot.expectMessageType[RobotActor.Transmit](1.second)
+      // After the back-off the restarted actor asks again whether the robot is reachable, then takes calls.
+      reachable(robot, online = true)
+      responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
+      robot.expectMessageType[RobotActor.Transmit]
+    }
+
+    "still know after a restart that the robot is offline, and fail calls at once" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val caller = createTestProbe[CallResult]()
+      val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(false) => true; case _ => false })
+      val responder = spawn(
+        Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
+      )
+      reachable(robot, online = true)
+      crash.arm()
+      LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
+        responder ! ResponseActor.Reachability(false)
       }
+      // The restarted actor starts from its spawn-time assumption (online) until the robot actor answers.
+      reachable(robot, online = false)
+      responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
+      caller.expectMessageType[CallResult].result shouldBe Left(CallError.RobotOffline(2))
+      robot.expectMessage(RobotActor.Wanted)
     }
   }
 
@@ -54,17 +83,36 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val actor = spawn(
         Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
       )
+      reachable(robot, online = true)
       (1 to 3).foreach(i => actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
       robot.expectMessageType[RobotActor.Transmit]
+      crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         actor ! NoResponseActor.Reachability(true)
       }
       caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
       caller.expectNoMessage(200.millis)
-      eventually {
-        actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
-        robot.expectMessageType[RobotActor.Transmit](1.second)
+      reachable(robot, online = true)
+      actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
+      robot.expectMessageType[RobotActor.Transmit]
+    }
+
+    "still know after a restart that the robot is offline, and fail commands at once" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val caller = createTestProbe[CallResult]()
+      val crash = new CrashOn[NoResponseActor.Command]({ case NoResponseActor.Reachability(false) => true; case _ => false })
+      val actor = spawn(
+        Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
+      )
+      reachable(robot, online = true)
+      crash.arm()
+      LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
+        actor ! NoResponseActor.Reachability(false)
       }
+      reachable(robot, online = false)
+      actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("lost"))), Some(caller.ref))
+      caller.expectMessageType[CallResult].result shouldBe Left(CallError.RobotOffline(2))
+      robot.expectMessage(RobotActor.Wanted)
     }
   }
 }

@@ -12,6 +12,10 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
   private val manualTime = ManualTime()
   private val settings = CallSettings(1.second, idempotentRetries = 0, stashCapacity = 3)
 
+  /** Answers the actor's start-up question: the robot is reachable. */
+  private def reachable(robot: TestProbe[RobotActor.FromChild]): Unit =
+    robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! true
+
   private def sent(robot: TestProbe[RobotActor.FromChild]): RpcCall =
     robot.expectMessageType[RobotActor.Transmit].out match {
       case RobotActor.Outbound.CallOut(call) => call
@@ -25,6 +29,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
     "send one command at a time, in order, each after the previous one's answer" in {
       val robot = createTestProbe[RobotActor.FromChild]()
       val actor = spawn(NoResponseActor(4, settings, robot.ref, online = true))
+      reachable(robot)
       Seq("a", "b", "c").foreach(t => actor ! NoResponseActor.Send(say(t)))
       val a = sent(robot)
       a.params shouldBe Vector(RpcValue.Text("a"))
@@ -41,6 +46,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val robot = createTestProbe[RobotActor.FromChild]()
       val replies = createTestProbe[CallResult]()
       val actor = spawn(NoResponseActor(4, settings, robot.ref, online = true))
+      reachable(robot)
       actor ! NoResponseActor.Send(say("first"))
       val first = sent(robot)
       actor ! NoResponseActor.Send(walk(0.1f), Some(replies.ref))
@@ -60,6 +66,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val robot = createTestProbe[RobotActor.FromChild]()
       val replies = createTestProbe[CallResult]()
       val actor = spawn(NoResponseActor(4, settings, robot.ref, online = true))
+      reachable(robot)
       actor ! NoResponseActor.Send(say("busy"), Some(replies.ref))
       sent(robot)
       actor ! NoResponseActor.Send(walk(0.1f), Some(replies.ref))
@@ -75,6 +82,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val robot = createTestProbe[RobotActor.FromChild]()
       val replies = createTestProbe[CallResult]()
       val actor = spawn(NoResponseActor(4, settings, robot.ref, online = true))
+      reachable(robot)
       (1 to 5).foreach(i => actor ! NoResponseActor.Send(say(s"$i"), Some(replies.ref)))
       sent(robot)
       replies.expectMessageType[CallResult].result.left.toOption.get shouldBe a[CallError.Overloaded]
@@ -83,6 +91,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val robot = createTestProbe[RobotActor.FromChild]()
       val replies = createTestProbe[CallResult]()
       val actor = spawn(NoResponseActor(4, settings, robot.ref, online = true))
+      reachable(robot)
       actor ! NoResponseActor.Send(say("1"), Some(replies.ref))
       actor ! NoResponseActor.Send(say("2"), Some(replies.ref))
       sent(robot)

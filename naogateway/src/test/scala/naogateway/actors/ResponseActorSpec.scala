@@ -12,6 +12,10 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
   private val manualTime = ManualTime()
   private val settings = CallSettings(2.seconds, idempotentRetries = 2, stashCapacity = 2)
 
+  /** Answers the actor's start-up question: the robot is reachable. */
+  private def reachable(robot: TestProbe[RobotActor.FromChild]): Unit =
+    robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! true
+
   private def transmitted(robot: TestProbe[RobotActor.FromChild]): (Long, RobotActor.Transmit) =
     robot.expectMessageType[RobotActor.Transmit] match {
       case t @ RobotActor.Transmit(RobotActor.Outbound.CallOut(call), _, _, _) => (call.callId.get, t)
@@ -23,6 +27,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
       responder ! ResponseActor.Call(RpcCall("system", "battery", Vector.empty), caller.ref)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       val (first, _) = transmitted(robot)
@@ -41,6 +46,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
       responder ! ResponseActor.Call(RpcCall("motion", "getPosture", Vector.empty), caller.ref)
       val (id, _) = transmitted(robot)
       manualTime.timePasses(667.millis)
@@ -57,6 +63,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
       responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text("hi"))), caller.ref)
       transmitted(robot)
       manualTime.timePasses(2.seconds)
@@ -67,6 +74,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       transmitted(robot)
       responder ! ResponseActor.Reachability(false)
@@ -79,6 +87,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
       (1 to 7).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val ids = (1 to 4).map(_ => transmitted(robot)._1)
       caller.expectMessageType[CallResult].result shouldBe Left(CallError.Overloaded(3, "4 calls in flight and 2 waiting"))
@@ -92,6 +101,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       val (id, t) = transmitted(robot)
       t.outcome.get ! Outbox.RefusedByRule(id, Outbox.NoSendingWhileGameRuns)
