@@ -7,10 +7,11 @@ import java.nio.channels.DatagramChannel
 import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.actor.typed.scaladsl.Behaviors
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.sim.SimulatedRobot
+import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZmqSimulatedRobot}
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.wire.{MessageContents, RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
@@ -142,6 +143,39 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           call(connected, "system.ping").result.isRight shouldBe true
         } finally gc.close()
       }
+
+    "close a ZeroMQ robot's gate before any subscriber hears of kick-off" in {
+      val zmqRobot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 25), "tcp://127.0.0.1:*")
+      zmqRobot.start()
+      try {
+        val endpoint = zmqRobot.boundEndpoint.get
+        withGateway(s"""competition.enabled = on
+            |zeromq.robots = [{ id = 25, endpoint = "$endpoint" }]""".stripMargin) { f =>
+          f.awaitEvent(15.seconds) { case RobotOnline(25, _) => () }
+          val connected = f.connect(25)
+          call(connected, "system.ping").result.isRight shouldBe true
+          // A subscriber that calls the robot in the very message that tells it of kick-off.
+          val results = createTestProbe[CallResult]()
+          val eager = spawn(Behaviors.receiveMessage[GatewayEvent] {
+            case GameStateUpdated(d) if d.gameState == GameState.Playing =>
+              connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), results.ref)
+              Behaviors.stopped
+            case _ => Behaviors.same
+          })
+          // Subscribed before the packet is sent, so the gateway knows the subscriber when kick-off arrives.
+          f.gateway ! Gateway.Subscribe(eager)
+          val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+          try {
+            sendGameState(gc, f, GameState.Playing)
+            results.receiveMessage(10.seconds).result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
+            sendGameState(gc, f, GameState.Finished)
+            f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
+            // Without status polls during the game the robot may have been taken offline; a call brings it back.
+            eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
+          } finally gc.close()
+        }
+      } finally zmqRobot.stop()
+    }
 
     "relay every robot datagram byte-identical to FU-Remote and reject spoofed robot ids" in {
       val fuRemote = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
