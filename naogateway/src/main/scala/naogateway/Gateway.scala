@@ -202,15 +202,16 @@ object Gateway {
             case Right(data) =>
               gcPackets += 1
               val changed = !game.exists(_.gameState == data.gameState)
-              // Every packet, not only changes: a restarted outbox learns the game state within one round. And the gate
-              // closes before anyone hears of kick-off, so no subscriber can act in between.
+              // Every packet, not only changes: a restarted outbox or ZeroMQ link learns the game state within one round.
+              // Every gate (the outbox's, each ZeroMQ robot's) hears of it before any subscriber does, so a subscriber
+              // reacting to kick-off finds them closed.
               outbox ! Outbox.GameStateChanged(data.gameState)
+              byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(data.gameState))
               // Both versions arrive each round; the version-8 packet is the richer one to keep.
               if (data.version == GameControlVersion.V8 || game.forall(_.version != GameControlVersion.V8) || changed) {
                 game = Some(data)
                 publish(GameStateUpdated(data))
               }
-              byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(data.gameState))
             case Left(error) =>
               if (!Datagram.isGameControllerReturn(bytes)) reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
           }

@@ -90,12 +90,15 @@ object HeartBeatActor {
         val h = new HeartBeat(settings, report, timers)
         timers.startTimerWithFixedDelay(QualityKey, QualityTick, settings.keepAliveInterval)
         if (online) {
+          val running = h.online(Quality.initial)
           report ! CameOnline
-          h.online(Quality.initial)
+          running
         } else h.probe(chance = 1, wasOnline = false, Quality.initial)
       }
     }
 
+  // Every step arms its timers before it reports: whoever reacts to a report (a test that then moves manual time,
+  // say) finds the timers running already, so no timer starts late by the time that reaction took.
   private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report], timers: TimerScheduler[Command]) {
     private var nextProbeId = 0L
     private var probeSentAt = 0L
@@ -117,7 +120,7 @@ object HeartBeatActor {
       case QuietCheck      => probe(chance = 1, wasOnline = true, q)
       case ProbeNow        => Behaviors.same
       case ProbeAnswered(id) =>
-        answered(id)
+        if (isAwaited(id)) reportRoundTrip()
         Behaviors.same
       case ProbeTimeout => Behaviors.same
     }
@@ -126,32 +129,34 @@ object HeartBeatActor {
       nextProbeId = (nextProbeId + 1) & 0x3fffffffL
       probeId = CallIdTag | nextProbeId
       probeSentAt = System.nanoTime()
-      report ! SendProbe(RpcCall(ProbeModule, ProbeMethod, Vector.empty, Some(probeId)))
       timers.startSingleTimer(ProbeKey, ProbeTimeout, settings.probeTimeout)
+      report ! SendProbe(RpcCall(ProbeModule, ProbeMethod, Vector.empty, Some(probeId)))
     }
 
-    private def answered(id: Long): Boolean =
-      if (id == probeId) {
-        report ! ProbeRoundTrip(System.nanoTime() - probeSentAt)
-        probeId = -1L
-        true
-      } else false
+    private def isAwaited(id: Long): Boolean = id == probeId
+
+    private def reportRoundTrip(): Unit = {
+      report ! ProbeRoundTrip(System.nanoTime() - probeSentAt)
+      probeId = -1L
+    }
 
     def probe(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = {
       sendProbe()
       probing(chance, wasOnline, q)
     }
 
-    private def backOnline(wasOnline: Boolean, q: Quality): Behavior[Command] = {
+    private def backOnline(wasOnline: Boolean, q: Quality, probeAnswered: Boolean): Behavior[Command] = {
       timers.cancel(ProbeKey)
+      val next = online(q)
+      if (probeAnswered) reportRoundTrip()
       if (!wasOnline) report ! CameOnline
-      online(q)
+      next
     }
 
     private def probing(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = Behaviors.receiveMessage {
-      case KeepAliveSeen => backOnline(wasOnline, q.seen)
+      case KeepAliveSeen => backOnline(wasOnline, q.seen, probeAnswered = false)
       case ProbeAnswered(id) =>
-        if (answered(id)) backOnline(wasOnline, q) else Behaviors.same
+        if (isAwaited(id)) backOnline(wasOnline, q, probeAnswered = true) else Behaviors.same
       case ProbeTimeout =>
         if (chance < settings.chances) probe(chance + 1, wasOnline, q)
         else {
@@ -166,10 +171,10 @@ object HeartBeatActor {
 
     // Offline: the heartbeat stops probing; the next keep-alive or someone's request starts it again.
     private def offline(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
-      case KeepAliveSeen => backOnline(wasOnline = false, q.seen)
+      case KeepAliveSeen => backOnline(wasOnline = false, q.seen, probeAnswered = false)
       case ProbeNow      => probe(chance = 1, wasOnline = false, q)
       case ProbeAnswered(id) =>
-        if (answered(id)) backOnline(wasOnline = false, q) else Behaviors.same
+        if (isAwaited(id)) backOnline(wasOnline = false, q, probeAnswered = true) else Behaviors.same
       case QualityTick | QuietCheck | ProbeTimeout => Behaviors.same
     }
   }

@@ -76,8 +76,9 @@ object NoResponseActor {
           // A stashed latest-wins command is swapped for its newest replacement when its turn comes.
           val s = newest.getOrElse(s0.call.name, s0)
           val id = CallIdTag | ((lastId + 1) & 0x3fffffffL)
-          robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(s.call.copy(callId = Some(id))), s.priority, Some(outcomes), id)
+          // The answer's timer runs before anyone can react to the command going out.
           timers.startSingleTimer(AnswerKey, AnswerTimedOut(id), timeout)
+          robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(s.call.copy(callId = Some(id))), s.priority, Some(outcomes), id)
           waiting(id, s, (lastId + 1) & 0x3fffffffL, newest - s0.call.name)
         case Reachability(false) => toOffline(lastId, newest)
         case Reachability(true) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same

@@ -76,9 +76,10 @@ object ResponseActor {
     private def answer(p: Pending, result: Either[CallError, Option[RpcValue]]): Unit =
       p.replyTo ! CallResult(robotId, p.call.name, result)
 
+    // The attempt's timer runs before anyone can react to the call going out.
     private def transmit(id: Long, p: Pending, priority: Priority): Unit = {
-      robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(p.call.copy(callId = Some(id))), priority, Some(outcomes), id)
       timers.startSingleTimer(id, AttemptTimedOut(id, p.attempts), p.attemptTimeout)
+      robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(p.call.copy(callId = Some(id))), priority, Some(outcomes), id)
     }
 
     private def failAll(pending: Map[Long, Pending], error: CallError): Unit =

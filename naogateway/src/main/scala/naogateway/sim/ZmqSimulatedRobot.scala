@@ -16,7 +16,9 @@ import naogateway.wire.{HeaderForm, MessageContents, RpcReply}
  * A simulated robot of the original naogateway kind: the simulated CM-530 firmware's RPC modules behind a ZeroMQ REP
  * socket. A REP socket answers one request at a time, so a posture call holds the socket until its motion has ended,
  * exactly as a robot whose calls block would. It has its own thread (it stands for a separate machine), can be
- * stopped and started again (a power cycle: a new session, battery and position kept), and binds `endpoint`.
+ * stopped and started again (a power cycle: a new session, battery and position kept), and binds `endpoint`; with a
+ * port of `*` the system picks one at the first start ([[boundEndpoint]]), and every later start binds that one again,
+ * as a power-cycled robot keeps its address.
  * `start` and `stop` block until the socket is bound or closed: call them from tests or tools, never from an actor.
  */
 final class ZmqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) {
@@ -28,10 +30,14 @@ final class ZmqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) 
 
   @volatile private var state: Option[FirmwareState] = None
   @volatile private var running = false
+  @volatile private var bound: Option[String] = None
   private var thread: Option[Thread] = None
 
   /** The firmware's state (for tests); `None` before the first start. */
   def firmware: Option[FirmwareState] = state
+
+  /** The endpoint the socket is bound to, with the real port; `None` before the first start. */
+  def boundEndpoint: Option[String] = bound
 
   /** Whether the robot is serving. */
   def isRunning: Boolean = running
@@ -67,15 +73,16 @@ final class ZmqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) 
     thread = None
   }
 
-  private def serve(bound: Promise[Unit]): Unit = {
+  private def serve(started: Promise[Unit]): Unit = {
     val context = new ZContext(1)
     context.setLinger(0)
     try {
       val socket = context.createSocket(SocketType.REP)
       socket.setLinger(0)
-      socket.bind(endpoint)
-      bound.success(())
-      log.info("Simulated ZeroMQ robot [{}] serving on {}", settings.robotId, endpoint)
+      socket.bind(bound.getOrElse(endpoint))
+      bound = Some(socket.getLastEndpoint)
+      started.success(())
+      log.info("Simulated ZeroMQ robot [{}] serving on {}", settings.robotId, socket.getLastEndpoint)
       val poller = context.createPoller(1)
       poller.register(socket, ZMQ.Poller.POLLIN)
       while (running) {
@@ -95,7 +102,7 @@ final class ZmqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) 
       poller.close()
     } catch {
       case NonFatal(e) =>
-        if (!bound.tryFailure(e)) log.error("Simulated ZeroMQ robot [{}] failed", settings.robotId, e)
+        if (!started.tryFailure(e)) log.error("Simulated ZeroMQ robot [{}] failed", settings.robotId, e)
     } finally {
       context.close()
       log.info("Simulated ZeroMQ robot [{}] stopped", settings.robotId)

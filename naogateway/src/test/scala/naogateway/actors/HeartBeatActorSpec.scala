@@ -2,7 +2,9 @@ package naogateway.actors
 
 import scala.concurrent.duration._
 
-import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit}
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit, TestProbe}
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior, BehaviorInterceptor, TypedActorContext}
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
@@ -11,6 +13,23 @@ import naogateway.HeartBeatActor._
 class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
   private val manualTime = ManualTime()
   private val settings = HeartbeatSettings(200.millis, 400.millis, 150.millis, 3, 2.seconds, 0.8, 0.9)
+
+  /** Tells `handled` of each keep-alive once the heartbeat has handled it, timers included. */
+  private final class AckKeepAlives(handled: ActorRef[Command]) extends BehaviorInterceptor[Command, Command] {
+    def aroundReceive(ctx: TypedActorContext[Command], msg: Command, target: BehaviorInterceptor.ReceiveTarget[Command])
+        : Behavior[Command] = {
+      val next = target(ctx, msg)
+      if (msg == KeepAliveSeen) handled ! msg
+      next
+    }
+  }
+
+  /** A heartbeat whose keep-alives are acknowledged to the returned probe. */
+  private def acknowledging(reports: TestProbe[Report], online: Boolean): (ActorRef[Command], TestProbe[Command]) = {
+    val handled = createTestProbe[Command]()
+    val heartbeat = spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, online)))
+    heartbeat -> handled
+  }
 
   private def probeId(r: Report): Long = r match {
     case SendProbe(call) => call.callId.get
@@ -41,11 +60,13 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     }
     "stay online while keep-alives arrive, and recover when a probe is answered" in {
       val reports = createTestProbe[Report]()
-      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = true))
+      val (heartbeat, handled) = acknowledging(reports, online = true)
       reports.expectMessage(CameOnline)
+      // Time moves only once the keep-alive has re-armed the quiet check; the silence is measured from there.
       (1 to 10).foreach { _ =>
         manualTime.timePasses(200.millis)
         heartbeat ! KeepAliveSeen
+        handled.expectMessage(KeepAliveSeen)
       }
       reports.expectNoMessage(Duration.Zero)
       manualTime.timePasses(400.millis)

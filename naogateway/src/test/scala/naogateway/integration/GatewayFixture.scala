@@ -11,7 +11,9 @@ import com.typesafe.config.ConfigFactory
 import naogateway._
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
 
-/** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only. */
+/** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only.
+  * Call `stop()` at the end of each test: a fixture left running (robots streaming to their gateway) loads the next.
+  */
 final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
   private val config = ConfigFactory
     .parseString(s"""
@@ -32,6 +34,7 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
   }
   val events: TestProbe[GatewayEvent] = testKit.createTestProbe[GatewayEvent]()
   gateway ! Gateway.Subscribe(events.ref)
+  private var robots = Vector.empty[ActorRef[SimulatedRobot.Command]]
 
   /** Starts robot `robotId` sending to `to` (the gateway unless a proxy is given). */
   def robot(robotId: Int, to: InetSocketAddress = addresses.robots, faithful: Boolean = false,
@@ -42,7 +45,9 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
       s"sim-robot-$robotId-${System.nanoTime()}"
     )
     started.receiveMessage(10.seconds) match {
-      case SimulatedRobot.Started(_, ref, address) => ref -> address
+      case SimulatedRobot.Started(_, ref, address) =>
+        robots :+= ref
+        ref -> address
       case other                                   => throw new IllegalStateException(s"robot $robotId did not start: $other")
     }
   }
@@ -74,6 +79,24 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     val probe = testKit.createTestProbe[Gateway.GatewayStats]()
     gateway ! Gateway.GetStats(probe.ref)
     probe.receiveMessage()
+  }
+
+  /** The outbox's traffic figures, asked through the gateway. */
+  def traffic(): Outbox.TrafficStats = {
+    val probe = testKit.createTestProbe[Outbox.TrafficStats]()
+    gateway ! Gateway.GetTraffic(probe.ref)
+    probe.receiveMessage(10.seconds)
+  }
+
+  /** Stops every robot started here, then the gateway; returns once all of them have terminated. */
+  def stop(): Unit = {
+    val watcher = testKit.createTestProbe[Any]()
+    robots.foreach(_ ! SimulatedRobot.Stop(testKit.system.ignoreRef))
+    // A robot terminates once its socket is closed (or its own stop timeout has passed); one that stopped on its own
+    // counts as terminated at once.
+    robots.foreach(watcher.expectTerminated(_, 15.seconds))
+    robots = Vector.empty
+    testKit.stop(gateway, 15.seconds)
   }
 
   def view(robot: ActorRef[SimulatedRobot.Command]): naogateway.sim.RobotView = {

@@ -7,10 +7,11 @@ import java.nio.channels.DatagramChannel
 import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.actor.typed.scaladsl.Behaviors
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.sim.SimulatedRobot
+import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZmqSimulatedRobot}
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.wire.{MessageContents, RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
@@ -24,9 +25,21 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
     probe.receiveMessage(10.seconds)
   }
 
+  /** Runs `test` against a fresh fixture and stops its gateway and robots afterwards, whatever the outcome. */
+  private def withGateway[A](overrides: String = "")(test: GatewayFixture => A): A = {
+    val f = new GatewayFixture(testKit, overrides)
+    try test(f)
+    finally f.stop()
+  }
+
+  private def sendGameState(gc: DatagramChannel, f: GatewayFixture, state: GameState): Unit = {
+    val data = GameControllerCodecSupport.playing(teamNumber = 1).copy(gameState = state)
+    gc.send(ByteBuffer.wrap(GameControllerCodec.encodeControl(data).toOption.get), f.addresses.gameController.get)
+    ()
+  }
+
   "The gateway" must {
-    "discover several robots from their keep-alives and answer calls to each" in {
-      val f = new GatewayFixture(testKit)
+    "discover several robots from their keep-alives and answer calls to each" in withGateway() { f =>
       val robots = (1 to 3).map(id => id -> f.robot(id))
       val online = (1 to 3).map(_ => f.awaitEvent(10.seconds) { case RobotOnline(id, address) => id -> address }).toMap
       online.keySet shouldBe Set(1, 2, 3)
@@ -41,8 +54,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         Vector((1, true, LinkQuality.Good), (2, true, LinkQuality.Good), (3, true, LinkQuality.Good))
     }
 
-    "take a partitioned robot offline within its three chances and back online when the partition heals" in {
-      val f = new GatewayFixture(testKit)
+    "take a partitioned robot offline within its three chances and back online when the partition heals" in withGateway() { f =>
       val network = LossyNetwork.start(seed = 3)
       try {
         val proxy = network.addProxy(f.addresses.robots)
@@ -50,11 +62,8 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
         val connected = f.connect(7)
         network.partition(proxy, on = true)
-        val cut = System.nanoTime()
+        // The three chances themselves, in manual time, are HeartBeatActorSpec's; here the reason names them.
         f.awaitEvent(10.seconds) { case RobotOffline(7, reason) => reason should include("3 unanswered probes") }
-        val detection = (System.nanoTime() - cut).nanos
-        // Silence (400 ms) plus three probe timeouts (3 x 150 ms), with room for a loaded machine.
-        detection should be >= 800.millis
         call(connected, "system.ping").result shouldBe Left(CallError.RobotOffline(7))
         network.partition(proxy, on = false)
         f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
@@ -62,8 +71,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       } finally network.stop()
     }
 
-    "re-sync a power-cycled robot by itself: same address, new session, debug options enabled again" in {
-      val f = new GatewayFixture(testKit)
+    "re-sync a power-cycled robot by itself: same address, new session, debug options enabled again" in withGateway() { f =>
       val (robot, _) = f.robot(4)
       f.awaitEvent(10.seconds) { case RobotOnline(4, _) => () }
       val connected = f.connect(4)
@@ -80,8 +88,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       }
     }
 
-    "answer every call exactly once at 20 % loss each way, and keep fire-and-forget commands in order" in {
-      val f = new GatewayFixture(testKit)
+    "answer every call exactly once at 20 % loss each way, and keep fire-and-forget commands in order" in withGateway() { f =>
       val network = LossyNetwork.start(seed = 11)
       try {
         val lossy = Impairment(loss = 0.2)
@@ -105,69 +112,109 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       } finally network.stop()
     }
 
-    "send nothing to a robot while the game runs in competition mode, and fail calls at once naming the rule" in {
-      val f = new GatewayFixture(testKit, "competition.enabled = on")
-      val (robot, _) = f.robot(6)
-      f.awaitEvent(10.seconds) { case RobotOnline(6, _) => () }
-      val connected = f.connect(6)
-      call(connected, "system.ping").result.isRight shouldBe true
-      val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
-      try {
-        val packet = GameControllerCodec.encodeControl(GameControllerCodecSupport.playing(teamNumber = 1)).toOption.get
-        gc.send(ByteBuffer.wrap(packet), f.addresses.gameController.get)
-        f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Playing => () }
-        val before = f.view(robot).counters.received
-        (1 to 5).foreach { _ =>
-          call(connected, "system.ping").result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
-        }
-        // Two seconds of heartbeat probing, status traffic and calls: nothing may reach the robot.
-        Thread.sleep(2000)
-        f.view(robot).counters.received shouldBe before
-        val finished = GameControllerCodecSupport.playing(teamNumber = 1).copy(gameState = GameState.Finished)
-        gc.send(ByteBuffer.wrap(GameControllerCodec.encodeControl(finished).toOption.get), f.addresses.gameController.get)
-        f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
+    "send nothing to a robot while the game runs in competition mode, and fail calls at once naming the rule" in
+      withGateway("competition.enabled = on") { f =>
+        val (robot, _) = f.robot(6)
+        f.awaitEvent(10.seconds) { case RobotOnline(6, _) => () }
+        val connected = f.connect(6)
         call(connected, "system.ping").result.isRight shouldBe true
-      } finally gc.close()
+        val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+        try {
+          sendGameState(gc, f, GameState.Playing)
+          f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Playing => () }
+          // The gateway told the outbox before it published kick-off, so this question reaches the outbox after the
+          // gate closed: the count is final, and robot 6 is the only one the outbox ever sent to.
+          val atKickOff = f.traffic()
+          atKickOff.gameRunning shouldBe true
+          // Datagrams sent just before kick-off may still be on their way; once the robot has counted every one of
+          // them, nothing is in flight any more.
+          eventually(timeout(10.seconds)) { f.view(robot).counters.received shouldBe atKickOff.datagramsOut }
+          (1 to 5).foreach { _ =>
+            call(connected, "system.ping").result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
+          }
+          // Two seconds of heartbeat probing, status traffic and calls: nothing may leave the outbox or reach the robot.
+          Thread.sleep(2000)
+          val during = f.traffic()
+          during.datagramsOut shouldBe atKickOff.datagramsOut
+          during.refusedByRule should be >= atKickOff.refusedByRule + 5
+          f.view(robot).counters.received shouldBe atKickOff.datagramsOut
+          sendGameState(gc, f, GameState.Finished)
+          f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
+          call(connected, "system.ping").result.isRight shouldBe true
+        } finally gc.close()
+      }
+
+    "close a ZeroMQ robot's gate before any subscriber hears of kick-off" in {
+      val zmqRobot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 25), "tcp://127.0.0.1:*")
+      zmqRobot.start()
+      try {
+        val endpoint = zmqRobot.boundEndpoint.get
+        withGateway(s"""competition.enabled = on
+            |zeromq.robots = [{ id = 25, endpoint = "$endpoint" }]""".stripMargin) { f =>
+          f.awaitEvent(15.seconds) { case RobotOnline(25, _) => () }
+          val connected = f.connect(25)
+          call(connected, "system.ping").result.isRight shouldBe true
+          // A subscriber that calls the robot in the very message that tells it of kick-off.
+          val results = createTestProbe[CallResult]()
+          val eager = spawn(Behaviors.receiveMessage[GatewayEvent] {
+            case GameStateUpdated(d) if d.gameState == GameState.Playing =>
+              connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), results.ref)
+              Behaviors.stopped
+            case _ => Behaviors.same
+          })
+          // Subscribed before the packet is sent, so the gateway knows the subscriber when kick-off arrives.
+          f.gateway ! Gateway.Subscribe(eager)
+          val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+          try {
+            sendGameState(gc, f, GameState.Playing)
+            results.receiveMessage(10.seconds).result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
+            sendGameState(gc, f, GameState.Finished)
+            f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
+            // Without status polls during the game the robot may have been taken offline; a call brings it back.
+            eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
+          } finally gc.close()
+        }
+      } finally zmqRobot.stop()
     }
 
     "relay every robot datagram byte-identical to FU-Remote and reject spoofed robot ids" in {
       val fuRemote = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
       fuRemote.configureBlocking(true)
-      fuRemote.socket().setSoTimeout(5000)
       try {
         val port = fuRemote.getLocalAddress.asInstanceOf[InetSocketAddress].getPort
-        val f = new GatewayFixture(testKit, s"""fu-remote-relay { enabled = on, address = "127.0.0.1", port = $port }""")
-        f.robot(8)
-        f.awaitEvent(10.seconds) { case RobotOnline(8, _) => () }
-        val spoofer = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
-        try {
-          val keepAlive = MessageContents
-            .encodeFrame(MessageContents(8, status = Some(naogateway.proto.Status(teamID = Some(1)))))
-            .toOption
-            .get
-          spoofer.send(ByteBuffer.wrap(keepAlive), f.addresses.robots)
-          // The relay forwards what it receives, spoofed or not, unchanged.
-          val copies = Iterator
-            .continually {
-              val buffer = ByteBuffer.allocate(2048)
+        withGateway(s"""fu-remote-relay { enabled = on, address = "127.0.0.1", port = $port }""") { f =>
+          f.robot(8)
+          f.awaitEvent(10.seconds) { case RobotOnline(8, _) => () }
+          val spoofer = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+          try {
+            val keepAlive = MessageContents
+              .encodeFrame(MessageContents(8, status = Some(naogateway.proto.Status(teamID = Some(1)))))
+              .toOption
+              .get
+            spoofer.send(ByteBuffer.wrap(keepAlive), f.addresses.robots)
+            // The relay forwards what it receives, spoofed or not, unchanged; the robot's own traffic comes in between.
+            val deadline = 10.seconds.fromNow
+            var copies = Vector.empty[Array[Byte]]
+            while (!copies.exists(_.sameElements(keepAlive)) && deadline.hasTimeLeft()) {
               val socket = fuRemote.socket()
-              val packet = new java.net.DatagramPacket(buffer.array(), buffer.capacity())
-              socket.receive(packet)
-              java.util.Arrays.copyOf(packet.getData, packet.getLength)
+              socket.setSoTimeout(math.max(1L, deadline.timeLeft.toMillis).toInt)
+              val packet = new java.net.DatagramPacket(new Array[Byte](2048), 2048)
+              try {
+                socket.receive(packet)
+                copies :+= java.util.Arrays.copyOf(packet.getData, packet.getLength)
+              } catch { case _: java.net.SocketTimeoutException => () }
             }
-            .take(15)
-            .toVector
-          copies.exists(_.sameElements(keepAlive)) shouldBe true
-          copies.forall(c => MessageContents.decodeFrame(c).isRight) shouldBe true
-          eventually(timeout(5.seconds)) {
-            f.stats().rejected.keys.exists(_.contains("robot id 8 claimed from another address")) shouldBe true
-          }
-        } finally spoofer.close()
+            copies.exists(_.sameElements(keepAlive)) shouldBe true
+            copies.forall(c => MessageContents.decodeFrame(c).isRight) shouldBe true
+            eventually(timeout(5.seconds)) {
+              f.stats().rejected.keys.exists(_.contains("robot id 8 claimed from another address")) shouldBe true
+            }
+          } finally spoofer.close()
+        }
       } finally fuRemote.close()
     }
 
-    "keep every robot's session working while arbitrary bytes are sprayed at its port" in {
-      val f = new GatewayFixture(testKit)
+    "keep every robot's session working while arbitrary bytes are sprayed at its port" in withGateway() { f =>
       (1 to 2).foreach(id => f.robot(id))
       (1 to 2).foreach(_ => f.awaitEvent(10.seconds) { case RobotOnline(_, _) => () })
       val sprayer = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))

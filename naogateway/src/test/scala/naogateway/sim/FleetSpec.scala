@@ -80,7 +80,10 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
         a[Exception] should be thrownBy Await.result(fleet.powerCycle(99, 1.second), 10.seconds)
 
         Await.result(fleet.stop(), 30.seconds) shouldBe Done
-        fleet.robots.foreach { case (_, address) => canBind(address) shouldBe true }
+        // A closed port may stay taken until the socket layer has let go of it; a port never closed stays taken.
+        eventually(timeout(15.seconds)) {
+          fleet.robots.foreach { case (_, address) => canBind(address) shouldBe true }
+        }
         gateway.drain()
         gateway.collectFor(500.millis) shouldBe empty
       } finally gateway.close()
@@ -96,10 +99,11 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
         )
         val failure = Try(Await.result(Fleet.start(system, settings), 30.seconds)).failed.get
         failure.getMessage should include("robot 2")
-        // The two robots that did start are stopped again: nothing keeps sending.
-        gateway.collectFor(500.millis)
-        gateway.drain()
-        gateway.collectFor(500.millis) shouldBe empty
+        // The two robots that did start are stopped again: the keep-alives (five a second each) end for good.
+        eventually(timeout(20.seconds), interval(100.millis)) {
+          gateway.drain()
+          gateway.collectFor(1.second) shouldBe empty
+        }
       } finally {
         taken.close()
         gateway.close()
