@@ -7,12 +7,13 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit, TestProbe}
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
+import org.scalatest.LoneElement
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
 import naogateway.wire.{RpcCall, RpcValue}
 
-class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
+class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing with LoneElement {
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 16)
   private val robotAddress = new InetSocketAddress("127.0.0.1", 3838)
 
@@ -200,6 +201,25 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       guardConnect ! f.connected
       f.expectCall("motion.stop").priority shouldBe Priority.Safety
       lease.receiveMessage().result shouldBe Right(())
+    }
+    "show a robot online in its snapshot as soon as it comes online, not only from its next keep-alive" in {
+      val f = new Fixture
+      val robots = createTestProbe[Vector[RobotSnapshot]]()
+      def listed(): RobotSnapshot = {
+        f.middleware ! RobotMiddleware.ListRobots(robots.ref)
+        robots.receiveMessage().loneElement
+      }
+      // A newly discovered robot's first keep-alive arrives before the robot counts as online.
+      val first = RobotSnapshot(1, robotAddress, batteryVoltage = Some(12.1), online = false, quality = LinkQuality.Offline)
+      f.publish ! RobotStatusUpdated(first)
+      f.publish ! RobotOnline(1, robotAddress)
+      listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
+      f.publish ! LinkQualityChanged(1, LinkQuality.Degraded)
+      listed() shouldBe first.copy(online = true, quality = LinkQuality.Degraded)
+      f.publish ! RobotOffline(1, "test")
+      listed() shouldBe first.copy(online = false, quality = LinkQuality.Offline)
+      f.publish ! RobotOnline(1, robotAddress)
+      listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
     }
     "answer for robots the gateway does not know" in {
       val f = new Fixture
