@@ -31,9 +31,11 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
 
   implicit override val patienceConfig: PatienceConfig = PatienceConfig(30.seconds, 100.millis)
 
+  // Heartbeats may pause 10 s: a JVM stalled on a loaded machine must not make a node unreachable mid-test.
   private val common: Config = ConfigFactory.parseString("""
       |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
       |akka.cluster.split-brain-resolver.stable-after = 1s
+      |akka.cluster.failure-detector.acceptable-heartbeat-pause = 10s
       |naogateway.link.bind-address = "127.0.0.1"
       |naogateway.link.robot-port = 0
       |naogateway.game-controller.enabled = off
