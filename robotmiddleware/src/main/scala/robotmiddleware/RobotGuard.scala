@@ -68,6 +68,8 @@ private[robotmiddleware] object RobotGuard {
     private var walking: Option[(Operation.Walk, AppInfo)] = None
     private var safety: Option[String] = None
     private var online = false
+    // A robot that came back while the guard was still connecting gets its reconnect stop once the guard is ready.
+    private var reconnectedWhileConnecting = false
     private var statsWatchers = Set.empty[ActorRef[LinkStats]]
 
     private def failure(error: CallError): RobotFailure = error match {
@@ -84,12 +86,20 @@ private[robotmiddleware] object RobotGuard {
     def connecting(initiallyOnline: Boolean): Behavior[Command] = {
       online = initiallyOnline
       Behaviors.receiveMessage {
-        case ChildrenReady(children) => stash.unstashAll(ready(children))
+        case ChildrenReady(children) =>
+          if (reconnectedWhileConnecting) stopAfterReconnect(children)
+          stash.unstashAll(ready(children))
         case e: Execute if !online =>
           e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
         case RobotEventReceived(event) =>
           common(event)
+          event match {
+            case RobotOnline(_, _)  => reconnectedWhileConnecting = true
+            // Offline again before the guard is ready: the next RobotOnline, in ready, brings the stop.
+            case RobotOffline(_, _) => reconnectedWhileConnecting = false
+            case _                  => ()
+          }
           Behaviors.same
         case other =>
           if (stash.isFull) other match {
@@ -163,10 +173,15 @@ private[robotmiddleware] object RobotGuard {
         replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
         if (result.isLeft && operation.isInstanceOf[Operation.Posture] && online) stopWalking(c, s"${operation.name} failed")
-        // A walk the robot refused is not refreshed.
-        if (result.isLeft && operation.isInstanceOf[Operation.Walk] && walking.exists(_._1 == operation)) {
-          timers.cancel(WalkKey)
-          walking = None
+        operation match {
+          case w: Operation.Walk if walking.exists(_._1 == w) =>
+            // Refreshing starts only once the robot has confirmed the walk: a refused walk is never sent again.
+            if (result.isRight) timers.startTimerWithFixedDelay(WalkKey, WalkRefresh, settings.walkRefresh)
+            else {
+              timers.cancel(WalkKey)
+              walking = None
+            }
+          case _ => ()
         }
         Behaviors.same
       case WalkRefresh =>
@@ -176,10 +191,8 @@ private[robotmiddleware] object RobotGuard {
         common(event)
         event match {
           case RobotStatusUpdated(snapshot) => checkBattery(c, snapshot)
-          case RobotOnline(_, _) =>
-            // Back from a lost link: put the robot in a defined state before anyone moves it again.
-            c.response ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), safetyAdapter("stop after reconnect"), Priority.Safety)
-          case _ => ()
+          case RobotOnline(_, _) => stopAfterReconnect(c)
+          case _                 => ()
         }
         Behaviors.same
       case SafetyStepDone(step, result) =>
@@ -210,6 +223,12 @@ private[robotmiddleware] object RobotGuard {
         statsWatchers.foreach(_ ! stats)
         Behaviors.same
       case ChildrenReady(_) => Behaviors.same
+    }
+
+    /** Back from a lost link: puts the robot in a defined state before anyone moves it again. */
+    private def stopAfterReconnect(c: RobotActor.Connected): Unit = {
+      reconnectedWhileConnecting = false
+      c.response ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), safetyAdapter("stop after reconnect"), Priority.Safety)
     }
 
     private lazy val statsAdapter = context.messageAdapter[LinkStats](StatsReceived.apply)
@@ -269,8 +288,9 @@ private[robotmiddleware] object RobotGuard {
         : Unit = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.
+        // Until then nothing is refreshed: neither this walk, unconfirmed, nor the one it replaces.
         walking = Some(w -> app)
-        timers.startTimerWithFixedDelay(WalkKey, WalkRefresh, settings.walkRefresh)
+        timers.cancel(WalkKey)
         call(c, walkCall(w), operation, replyTo)
       case Operation.Stop() =>
         timers.cancel(WalkKey)

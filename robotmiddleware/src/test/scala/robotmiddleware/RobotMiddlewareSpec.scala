@@ -7,26 +7,32 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit, TestProbe}
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
+import org.scalatest.LoneElement
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
 import naogateway.wire.{RpcCall, RpcValue}
 
-class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
+class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing with LoneElement {
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 16)
   private val robotAddress = new InetSocketAddress("127.0.0.1", 3838)
 
-  /** A gateway that knows robot 1 and hands out probes as the robot's children. */
-  private final class Fixture {
+  /**
+   * A gateway that knows robot 1 and hands out probes as the robot's children. With `holdConnect` the robot does not
+   * answer a guard's `Connect` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
+   */
+  private final class Fixture(holdConnect: Boolean = false) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
     val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
     val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
     val stream: TestProbe[StreamActor.Command] = createTestProbe[StreamActor.Command]()
     val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
+    val connects: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
+    val connected: RobotActor.Connected = RobotActor.Connected(1, response.ref, noResponse.ref, vision.ref, stream.ref)
 
     private val robot: Behavior[RobotActor.Command] = Behaviors.receiveMessage {
       case RobotActor.Connect(replyTo) =>
-        replyTo ! RobotActor.Connected(1, response.ref, noResponse.ref, vision.ref, stream.ref)
+        if (holdConnect) connects.ref ! replyTo else replyTo ! connected
         Behaviors.same
       case _ => Behaviors.same
     }
@@ -143,13 +149,17 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.execute(app, Operation.Walk(0.1, 0, 0))
       f.expectCall("motion.walk")
     }
-    "not keep refreshing a walk the robot refused" in {
+    "refresh a walk only once the robot has confirmed it, so a walk the robot refuses is never sent again" in {
       val f = new Fixture
       val (app, _) = f.app("walker", 1)
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
       val result = f.execute(app, Operation.Walk(0.2, 0, 0))
-      f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Left(CallError.RobotError(1, "not standing: sit")))
+      val walk = f.expectCall("motion.walk")
+      // The robot takes several refresh periods to answer: a refresh sent meanwhile would repeat a walk it may refuse.
+      f.noResponse.expectNoMessage(settings.walkRefresh * 3)
+      walk.replyTo ! CallResult(1, "motion.walk", Left(CallError.RobotError(1, "not standing: sit")))
       result.receiveMessage().result shouldBe Left(RobotFailure.RobotError(1, "not standing: sit"))
+      // The guard has handled the refusal (it answered above), so from here on only a refresh timer could send.
       f.noResponse.expectNoMessage(1.second)
     }
     "refuse raw arm and walk calls under a safety hold too" in {
@@ -172,6 +182,44 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe Left(RobotFailure.RobotOffline(1))
       f.publish ! RobotOnline(1, robotAddress)
       f.expectCall("motion.stop").priority shouldBe Priority.Safety
+    }
+    "stop a robot that came back while its guard was still connecting, once the guard is ready" in {
+      val f = new Fixture(holdConnect = true)
+      val (app, _) = f.app("walker", 1)
+      val robotEvents = createTestProbe[RobotEvent]()
+      f.middleware ! RobotMiddleware.WatchEvents(robotEvents.ref)
+      f.publish ! RobotOffline(1, "test")
+      val lease = createTestProbe[RobotMiddleware.LeaseResult]()
+      f.middleware ! RobotMiddleware.Acquire(app, 1, ActuatorGroup.Walk, lease.ref)
+      // The guard exists (it asked for the robot's children) and waits for them.
+      val guardConnect = f.connects.receiveMessage()
+      f.publish ! RobotOnline(1, robotAddress)
+      // The middleware tells the guard before it tells the watchers: once the watcher has RobotOnline, the guard's
+      // mailbox holds it ahead of the children sent next.
+      robotEvents.expectMessage(RobotOffline(1, "test"))
+      robotEvents.expectMessage(RobotOnline(1, robotAddress))
+      guardConnect ! f.connected
+      f.expectCall("motion.stop").priority shouldBe Priority.Safety
+      lease.receiveMessage().result shouldBe Right(())
+    }
+    "show a robot online in its snapshot as soon as it comes online, not only from its next keep-alive" in {
+      val f = new Fixture
+      val robots = createTestProbe[Vector[RobotSnapshot]]()
+      def listed(): RobotSnapshot = {
+        f.middleware ! RobotMiddleware.ListRobots(robots.ref)
+        robots.receiveMessage().loneElement
+      }
+      // A newly discovered robot's first keep-alive arrives before the robot counts as online.
+      val first = RobotSnapshot(1, robotAddress, batteryVoltage = Some(12.1), online = false, quality = LinkQuality.Offline)
+      f.publish ! RobotStatusUpdated(first)
+      f.publish ! RobotOnline(1, robotAddress)
+      listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
+      f.publish ! LinkQualityChanged(1, LinkQuality.Degraded)
+      listed() shouldBe first.copy(online = true, quality = LinkQuality.Degraded)
+      f.publish ! RobotOffline(1, "test")
+      listed() shouldBe first.copy(online = false, quality = LinkQuality.Offline)
+      f.publish ! RobotOnline(1, robotAddress)
+      listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
     }
     "answer for robots the gateway does not know" in {
       val f = new Fixture

@@ -8,14 +8,16 @@ import java.util.concurrent.TimeUnit
 
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
-import scala.util.Try
+import scala.annotation.tailrec
+import scala.util.{Failure, Success, Try}
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.Assertions
 import org.scalatest.wordspec.AnyWordSpecLike
+import org.zeromq.{ZMQ, ZMQException}
 
 import naogateway.sim.{FirmwareSettings, ZmqSimulatedRobot}
-import naogateway.{Gateway, GatewaySettings}
+import naogateway.{Gateway, GatewaySettings, ZmqRobot}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** A Python virtual environment under target/ with the client's pinned packages, made once and reused. */
@@ -78,20 +80,32 @@ object PythonEnv extends Assertions {
 }
 
 object PythonClientSpec {
-  val robotPort: Int = {
-    val s = new ServerSocket(0)
-    try s.getLocalPort
-    finally s.close()
-  }
-
   val config: String =
-    s"""naogateway {
-       |  link { bind-address = "127.0.0.1", robot-port = 0 }
-       |  game-controller.enabled = off
-       |  zeromq.robots = [{ id = 20, endpoint = "tcp://127.0.0.1:$robotPort" }]
-       |}
-       |apps.zeromq { enabled = on, bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*" }
-       |""".stripMargin
+    """naogateway {
+      |  link { bind-address = "127.0.0.1", robot-port = 0 }
+      |  game-controller.enabled = off
+      |}
+      |apps.zeromq { enabled = on, bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*" }
+      |""".stripMargin
+
+  /**
+   * The simulated robot, started on a free port. It binds the endpoint it is given and cannot tell a port it picked
+   * itself, so the port is picked here; one that another process takes before the robot binds it is picked again.
+   */
+  @tailrec def startRobot(attempts: Int = 5): ZmqSimulatedRobot = {
+    val port = {
+      val s = new ServerSocket(0)
+      try s.getLocalPort
+      finally s.close()
+    }
+    val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 20), s"tcp://127.0.0.1:$port")
+    val started = Try(robot.start())
+    started match {
+      case Success(_) => robot
+      case Failure(e: ZMQException) if e.getErrorCode == ZMQ.Error.EADDRINUSE.getCode && attempts > 1 => startRobot(attempts - 1)
+      case Failure(e) => throw e
+    }
+  }
 }
 
 class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config) with AnyWordSpecLike with LogCapturing {
@@ -100,10 +114,11 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
   "The Python example" must {
     "stand a simulated ZeroMQ robot up, walk it, stop it and print its status, through the endpoint" in {
       PythonEnv.python() // cancels here when Python is missing, before anything is started
-      val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 20), s"tcp://127.0.0.1:$robotPort")
-      robot.start()
+      val robot = startRobot()
       try {
-        val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
+        val configured = GatewaySettings(system)
+        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZmqRobot(20, robot.endpoint))))),
+          "gateway")
         val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
         val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq")
         val probe = createTestProbe[ZeroMqEndpoint.Addresses]()

@@ -5,7 +5,7 @@ import java.util.concurrent.ConcurrentLinkedQueue
 import java.util.concurrent.atomic.AtomicInteger
 
 import scala.concurrent.duration._
-import scala.concurrent.{ExecutionContext, Future}
+import scala.concurrent.{ExecutionContext, Future, Promise}
 import scala.jdk.CollectionConverters._
 
 import akka.actor.typed.ActorSystem
@@ -27,6 +27,9 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
 
   /** Everything asked of the stub, in order: "acquire 7 walk", "walk 7 0.1 0.0 0.2", ... */
   val calls = new ConcurrentLinkedQueue[String]()
+
+  /** Robot 14 answers only once this is completed: later than any endpoint timeout a test sets. */
+  val robot14Answers: Promise[Unit] = Promise[Unit]()
 
   /** How often a vision stream was started, and how often one ended. */
   val visionStarted = new AtomicInteger
@@ -50,7 +53,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
     calls.add(s"$operation $robotId")
     failure(robotId, operation) match {
       case Some(e)            => Future.failed(e)
-      case None if robotId == 14 => akka.pattern.after(1500.millis)(Future.successful(value))(system) // answers too late
+      case None if robotId == 14 => robot14Answers.future.map(_ => value)
       case None => akka.pattern.after(random.synchronized(random.nextInt(15)).millis)(Future.successful(value))(system)
     }
   }

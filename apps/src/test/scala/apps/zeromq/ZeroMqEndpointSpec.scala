@@ -1,6 +1,5 @@
 package apps.zeromq
 
-import java.net.ServerSocket
 import java.nio.charset.StandardCharsets
 import java.util.concurrent.Executors
 
@@ -59,8 +58,10 @@ object EndpointClient {
 class ZeroMqEndpointSpec
     extends ScalaTestWithActorTestKit(
       ConfigFactory
-        // Two threads: the spec's endpoint and the one a test starts and stops beside it (one loop each).
-        .parseString("apps.zeromq { request-timeout = 1s, dispatcher.thread-pool-executor.fixed-pool-size = 2 }")
+        // Two threads: the spec's endpoint and the one a test starts and stops beside it (one loop each). The request
+        // timeout is generous: on a loaded machine a request of the concurrency test may wait seconds for its turn, and
+        // the timeout test brings an endpoint of its own with a short one.
+        .parseString("apps.zeromq { request-timeout = 10s, dispatcher.thread-pool-executor.fixed-pool-size = 2 }")
         .withFallback(ConfigFactory.load())
     )
     with AnyWordSpecLike
@@ -110,10 +111,18 @@ class ZeroMqEndpointSpec
     Thread.getAllStackTraces.keySet.asScala.filter(t => t.isAlive && t.getName.startsWith(prefix) &&
       t.getName.endsWith(ZeroMqEndpoint.LoopName)).map(_.getName).toSet
 
-  private def freePort(): Int = {
-    val s = new ServerSocket(0)
-    try s.getLocalPort
-    finally s.close()
+  private def port(endpoint: String): Int = {
+    endpoint should fullyMatch regex """tcp://127\.0\.0\.1:[0-9]+"""
+    endpoint.substring(endpoint.lastIndexOf(':') + 1).toInt
+  }
+
+  /** An endpoint of the test's own, on free ports, with `settings` changed by `change`; its addresses. */
+  private def ownEndpoint(robots: robotmiddleware.RobotInterface, change: ZeroMqSettings => ZeroMqSettings = identity)
+      : (ActorRef[ZeroMqEndpoint.Command], ZeroMqEndpoint.Addresses) = {
+    val own = spawn(ZeroMqEndpoint.withInterface(robots, change(settings)))
+    val probe = createTestProbe[ZeroMqEndpoint.Addresses]()
+    own ! ZeroMqEndpoint.GetAddresses(probe.ref)
+    own -> probe.receiveMessage(10.seconds)
   }
 
   "EndpointProtocol" must {
@@ -281,14 +290,25 @@ class ZeroMqEndpointSpec
       walkError(11) should startWith("timeout: robot 11 did not answer")
       walkError(12) shouldBe "robot error: not standing: sit"
       walkError(13) should startWith("safety: robot 13 is held safe: battery low")
-      // No answer within the endpoint's own timeout: answered once with a timeout, the late answer is dropped.
-      val s = dealer()
+    }
+
+    "answer a request the robots do not answer in time once, with a timeout, and drop the late answer" in {
+      // Robot 14 answers only when the test lets it, after the timeout reply: the order does not depend on timing.
+      val (own, addresses) = ownEndpoint(stub, _.copy(requestTimeout = 300.millis))
+      val s = zmq.createSocket(SocketType.DEALER)
+      s.setLinger(0)
+      readyClient(s)
+      s.connect(addresses.requests)
       try {
-        val (_, reply) = ask(s, request(14, "motion", "stop", callId = 3))
-        reply shouldBe RpcReply(Left("timeout: no answer to motion.stop within 1000 ms at the endpoint"), Some(3L))
+        val (_, reply) = ask(s, request(14, "motion", "stop", callId = 3), within = 10.seconds)
+        reply shouldBe RpcReply(Left("timeout: no answer to motion.stop within 300 ms at the endpoint"), Some(3L))
+        stub.robot14Answers.success(())
         s.setReceiveTimeOut(1000)
         s.recv(0) shouldBe null
-      } finally s.close()
+      } finally {
+        s.close()
+        testKit.stop(own, 5.seconds)
+      }
     }
 
     "publish status and game always, and a robot's vision only while someone subscribes to it" in {
@@ -332,35 +352,31 @@ class ZeroMqEndpointSpec
     }
 
     "close its sockets and end its thread when it stops" in {
-      val port = freePort()
-      val pubPort = freePort()
-      val own = spawn(ZeroMqEndpoint.withInterface(new StubRobots(system),
-        settings.copy(bind = s"tcp://127.0.0.1:$port", publish = s"tcp://127.0.0.1:$pubPort")))
-      val probe = createTestProbe[ZeroMqEndpoint.Addresses]()
-      own ! ZeroMqEndpoint.GetAddresses(probe.ref)
-      probe.receiveMessage(5.seconds).requests shouldBe s"tcp://127.0.0.1:$port"
+      // Free ports the endpoint picks itself: one picked here and bound later could be taken by another process.
+      val (own, addresses) = ownEndpoint(new StubRobots(system))
+      val requestPort = port(addresses.requests)
+      val publishPort = port(addresses.publish)
       testKit.stop(own, 5.seconds)
       eventually(loopThreads(system.name).size shouldBe 1) // only the spec's shared endpoint is left
       val again = new ZContext()
       try {
-        again.createSocket(SocketType.ROUTER).bind(s"tcp://127.0.0.1:$port") shouldBe true
-        again.createSocket(SocketType.XPUB).bind(s"tcp://127.0.0.1:$pubPort") shouldBe true
+        again.createSocket(SocketType.ROUTER).bind(s"tcp://127.0.0.1:$requestPort") shouldBe true
+        again.createSocket(SocketType.XPUB).bind(s"tcp://127.0.0.1:$publishPort") shouldBe true
       } finally again.close()
     }
 
     "close its sockets and end its thread when the actor system terminates" in {
-      val port = freePort()
       val other = ActorSystem[Nothing](Behaviors.empty, "EndpointShutdown", system.settings.config)
       val endpointRef: ActorRef[ZeroMqEndpoint.Command] =
-        other.systemActorOf(ZeroMqEndpoint.withInterface(new StubRobots(other), settings.copy(bind = s"tcp://127.0.0.1:$port")), "endpoint")
-      val replies = Await.result(endpointRef.ask(ZeroMqEndpoint.GetAddresses(_))(akka.util.Timeout(5.seconds), other.scheduler), 5.seconds)
-      replies.requests shouldBe s"tcp://127.0.0.1:$port"
+        other.systemActorOf(ZeroMqEndpoint.withInterface(new StubRobots(other), settings), "endpoint")
+      val replies = Await.result(endpointRef.ask(ZeroMqEndpoint.GetAddresses(_))(akka.util.Timeout(10.seconds), other.scheduler), 10.seconds)
+      val requestPort = port(replies.requests)
       loopThreads("EndpointShutdown").size shouldBe 1
       other.terminate()
       Await.result(other.whenTerminated, 10.seconds)
       loopThreads("EndpointShutdown") shouldBe empty
       val again = new ZContext()
-      try again.createSocket(SocketType.ROUTER).bind(s"tcp://127.0.0.1:$port") shouldBe true
+      try again.createSocket(SocketType.ROUTER).bind(s"tcp://127.0.0.1:$requestPort") shouldBe true
       finally again.close()
     }
   }

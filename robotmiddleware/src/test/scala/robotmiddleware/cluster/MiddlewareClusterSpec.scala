@@ -223,9 +223,12 @@ class MiddlewareClusterSpec
 /** The nodes' test settings and the fake gateway side behind the middleware. */
 object MiddlewareClusterSpec {
 
+  // Heartbeats may pause 10 s: a JVM stalled on a loaded machine must not make a node unreachable mid-test. The test
+  // of a crashed node waits that long for its unreachability, well inside its 30 s deadlines.
   private val common: Config = ConfigFactory.parseString(
     """akka.cluster.jmx.multi-mbeans-in-same-jvm = on
       |akka.cluster.split-brain-resolver.stable-after = 1s
+      |akka.cluster.failure-detector.acceptable-heartbeat-pause = 10s
       |robotmiddleware.link-stats-interval = 300ms
       |""".stripMargin
   )
