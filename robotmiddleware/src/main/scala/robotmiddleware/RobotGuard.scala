@@ -28,6 +28,7 @@ private[robotmiddleware] object RobotGuard {
   final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
 
   private final case class ChildrenReady(children: RobotActor.Connected) extends Command
+  private final case class SnapshotReceived(snapshot: RobotSnapshot) extends Command
   private final case class OperationDone(
       replyTo: ActorRef[RobotMiddleware.OperationResult],
       operation: Operation,
@@ -47,6 +48,8 @@ private[robotmiddleware] object RobotGuard {
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.pendingLimit) { stash =>
+          // `online` was right when the guard was first created; after a restart only the robot actor knows.
+          robot ! RobotActor.GetSnapshot(context.messageAdapter(SnapshotReceived.apply))
           robot ! RobotActor.Connect(context.messageAdapter(ChildrenReady.apply))
           new Guard(robotId, robot, settings, context, timers, stash).connecting(online)
         }
@@ -92,6 +95,9 @@ private[robotmiddleware] object RobotGuard {
         case e: Execute if !online =>
           e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
+        case SnapshotReceived(snapshot) =>
+          online = snapshot.online
+          Behaviors.same
         case RobotEventReceived(event) =>
           common(event)
           event match {
@@ -128,6 +134,10 @@ private[robotmiddleware] object RobotGuard {
     }
 
     private def ready(c: RobotActor.Connected): Behavior[Command] = Behaviors.receiveMessage {
+      case SnapshotReceived(snapshot) =>
+        // Any event that reached the guard before this answer is older than it, and later ones follow it.
+        online = snapshot.online
+        Behaviors.same
       case Execute(app, operation, replyTo) =>
         val group = operation.group
         val held = group.forall(g => leases.get(g).exists(_.events == app.events))

@@ -20,8 +20,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
   /**
    * A gateway that knows robot 1 and hands out probes as the robot's children. With `holdConnect` the robot does not
    * answer a guard's `Connect` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
+   * With `snapshotOnline` the robot answers `GetSnapshot` with that online state; without, it does not answer.
    */
-  private final class Fixture(holdConnect: Boolean = false) {
+  private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = None) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
     val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
     val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
@@ -33,6 +34,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     private val robot: Behavior[RobotActor.Command] = Behaviors.receiveMessage {
       case RobotActor.Connect(replyTo) =>
         if (holdConnect) connects.ref ! replyTo else replyTo ! connected
+        Behaviors.same
+      case RobotActor.GetSnapshot(replyTo) =>
+        snapshotOnline.foreach(online => replyTo ! RobotSnapshot(1, robotAddress, online = online))
         Behaviors.same
       case _ => Behaviors.same
     }
@@ -182,6 +186,15 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe Left(RobotFailure.RobotOffline(1))
       f.publish ! RobotOnline(1, robotAddress)
       f.expectCall("motion.stop").priority shouldBe Priority.Safety
+    }
+    "take the robot actor's word on reachability over the one it was created with (a restarted guard's)" in {
+      // The middleware heard RobotOnline, so the guard is created online; the robot actor knows better.
+      val f = new Fixture(snapshotOnline = Some(false))
+      val (app, _) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe Left(RobotFailure.RobotOffline(1))
+      f.response.expectNoMessage(200.millis)
+      f.noResponse.expectNoMessage(200.millis)
     }
     "stop a robot that came back while its guard was still connecting, once the guard is ready" in {
       val f = new Fixture(holdConnect = true)
