@@ -21,8 +21,11 @@ object RobotCtl {
 
   /** The parsed command lines. */
   object Request {
+    /** One line per robot. */
     case object Status extends Request
+    /** One RPC call to a robot. */
     final case class Call(robotId: Int, module: String, method: String, params: Vector[RpcValue]) extends Request
+    /** Prints a robot's status stream for a while. */
     final case class Watch(robotId: Int, seconds: Int) extends Request
   }
 

@@ -19,10 +19,15 @@ object Teleop {
 
   /** The actions of the keyboard map. */
   object Action {
+    /** Walk at this velocity (m/s, m/s, rad/s). */
     final case class Walk(vx: Double, vy: Double, omega: Double) extends Action
+    /** Stop walking. */
     case object Stop extends Action
+    /** Turn the head by these angles (rad). */
     final case class HeadBy(dPan: Double, dTilt: Double) extends Action
+    /** Take the named posture. */
     final case class Posture(name: String) extends Action
+    /** Stop the robot and leave. */
     case object Quit extends Action
   }
 

@@ -19,12 +19,19 @@ private[robotmiddleware] object RobotGuard {
   /** What a guard accepts. */
   sealed trait Command
 
+  /** Runs an app's operation if the app holds its lease, the robot is online and no safety hold forbids it. */
   final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult]) extends Command
+  /** Asks for the lease of one actuator group at the app's priority. */
   final case class Acquire(app: AppInfo, group: ActuatorGroup, replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
+  /** Gives a lease back. */
   final case class Release(app: ActorRef[AppEvent], group: ActuatorGroup) extends Command
+  /** The app's system is gone: release its leases and stop what it left moving. */
   final case class AppGone(app: ActorRef[AppEvent]) extends Command
+  /** An online, offline, quality or restart event of this robot. */
   final case class RobotEventReceived(event: RobotEvent) extends Command
+  /** Sends the robot's camera frames to `subscriber` (no lease needed). */
   final case class WatchVision(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+  /** Sends the robot's link figures to `subscriber` every `link-stats-interval` (no lease needed). */
   final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
 
   private final case class ChildrenReady(children: RobotActor.Connected) extends Command
