@@ -218,18 +218,7 @@ object Gateway {
           Behaviors.same
         case RobotLinkEvent(_) | GameControllerEvent(_) => Behaviors.same
         case Publish(event) =>
-          event match {
-            case RobotStatusUpdated(s) => snapshots = snapshots.updated(s.robotId, s)
-            case RobotOnline(id, _) =>
-              snapshots.get(id).foreach { s =>
-                val quality = if (s.quality == LinkQuality.Offline) LinkQuality.Good else s.quality
-                snapshots = snapshots.updated(id, s.copy(online = true, quality = quality))
-              }
-            case RobotOffline(id, _) =>
-              snapshots.get(id).foreach(s => snapshots = snapshots.updated(id, s.copy(online = false, quality = LinkQuality.Offline)))
-            case LinkQualityChanged(id, q) => snapshots.get(id).foreach(s => snapshots = snapshots.updated(id, s.copy(quality = q)))
-            case _                         => ()
-          }
+          snapshots = RobotSnapshot.following(snapshots, event)
           publish(event)
           Behaviors.same
         case Subscribe(subscriber) =>

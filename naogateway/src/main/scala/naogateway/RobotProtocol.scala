@@ -34,6 +34,27 @@ final case class RobotSnapshot(
     receivedAtNanos: Long = 0L
 )
 
+/** Keeping copies of robot snapshots in step with the gateway's events. */
+object RobotSnapshot {
+
+  /**
+   * `snapshots` after `event`: a keep-alive replaces the robot's snapshot, and online, offline and quality events
+   * change it at once, so whoever reads the copy after hearing RobotOnline does not see the robot offline until its
+   * next keep-alive. Robots without a snapshot yet are left out.
+   */
+  def following(snapshots: Map[Int, RobotSnapshot], event: GatewayEvent): Map[Int, RobotSnapshot] = {
+    def change(id: Int)(f: RobotSnapshot => RobotSnapshot) = snapshots.get(id).fold(snapshots)(s => snapshots.updated(id, f(s)))
+    event match {
+      case RobotStatusUpdated(s) => snapshots.updated(s.robotId, s)
+      case RobotOnline(id, _) =>
+        change(id)(s => s.copy(online = true, quality = if (s.quality == LinkQuality.Offline) LinkQuality.Good else s.quality))
+      case RobotOffline(id, _)       => change(id)(_.copy(online = false, quality = LinkQuality.Offline))
+      case LinkQualityChanged(id, q) => change(id)(_.copy(quality = q))
+      case _                         => snapshots
+    }
+  }
+}
+
 /** Link figures of one robot. */
 final case class LinkStats(
     robotId: Int,

@@ -187,23 +187,12 @@ object RobotMiddleware {
       case GatewayEventReceived(event) =>
         event match {
           case e: RobotEvent =>
+            snapshots = RobotSnapshot.following(snapshots, e)
             e match {
-              case RobotStatusUpdated(s) =>
-                snapshots = snapshots.updated(s.robotId, s)
-                statusWatchers.foreach { case (w, filter) => if (filter.forall(_ == s.robotId)) w ! s }
-              // The snapshots follow the events at once, as the gateway's do: an app that hears RobotOnline and then
-              // asks for the robots must not see the robot offline until its next keep-alive.
-              case RobotOnline(id, _) =>
-                online = online.updated(id, true)
-                snapshots.get(id).foreach { s =>
-                  val quality = if (s.quality == LinkQuality.Offline) LinkQuality.Good else s.quality
-                  snapshots = snapshots.updated(id, s.copy(online = true, quality = quality))
-                }
-              case RobotOffline(id, _) =>
-                online = online.updated(id, false)
-                snapshots.get(id).foreach(s => snapshots = snapshots.updated(id, s.copy(online = false, quality = LinkQuality.Offline)))
-              case LinkQualityChanged(id, q) => snapshots.get(id).foreach(s => snapshots = snapshots.updated(id, s.copy(quality = q)))
-              case _ => ()
+              case RobotStatusUpdated(s) => statusWatchers.foreach { case (w, filter) => if (filter.forall(_ == s.robotId)) w ! s }
+              case RobotOnline(id, _)    => online = online.updated(id, true)
+              case RobotOffline(id, _)   => online = online.updated(id, false)
+              case _                     => ()
             }
             guards.get(e.robotId).foreach(_ ! RobotGuard.RobotEventReceived(e))
             if (!e.isInstanceOf[RobotStatusUpdated]) eventWatchers.foreach(_ ! e)

@@ -2,12 +2,13 @@ package naogateway.actors
 
 import scala.concurrent.duration._
 
-import akka.actor.testkit.typed.scaladsl.{LogCapturing, LoggingTestKit, ScalaTestWithActorTestKit, TestProbe}
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, LoggingTestKit, ScalaTestWithActorTestKit}
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, TypedActorContext}
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
+import naogateway.actors.RobotStandIn.reachable
 import naogateway.wire.{RpcCall, RpcValue}
 
 /** A child that really crashes, under the supervision the robot actor gives it, still answers its callers. */
@@ -25,10 +26,6 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         throw new IllegalStateException("injected failure")
       } else target(ctx, msg)
   }
-
-  /** Answers the actor's start-up question about the robot's reachability. */
-  private def reachable(robot: TestProbe[RobotActor.FromChild], online: Boolean): Unit =
-    robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! online
 
   private val restart = SupervisorStrategy.restartWithBackoff(50.millis, 200.millis, 0.0)
 

@@ -6,15 +6,12 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWit
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
+import naogateway.actors.RobotStandIn.reachable
 import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
 class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
   private val manualTime = ManualTime()
   private val settings = CallSettings(1.second, idempotentRetries = 0, stashCapacity = 3)
-
-  /** Answers the actor's start-up question: the robot is reachable. */
-  private def reachable(robot: TestProbe[RobotActor.FromChild]): Unit =
-    robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! true
 
   private def sent(robot: TestProbe[RobotActor.FromChild]): RpcCall =
     robot.expectMessageType[RobotActor.Transmit].out match {
