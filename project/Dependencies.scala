@@ -4,7 +4,7 @@ import sbt._
 object Dependencies {
   object V {
     val scala = "2.13.18"
-    val akka = "2.8.8"
+    val akka = "2.6.21"
     val scalapb: String = _root_.scalapb.compiler.Version.scalapbVersion
     val jeromq = "0.6.0"
     val logback = "1.2.13"
