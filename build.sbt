@@ -20,7 +20,10 @@ lazy val strictScalac = Seq(
     "-Xfatal-warnings",
     "-Wconf:src=src_managed/.*:s"
   ),
-  Test / scalacOptions ~= (_.filterNot(_ == "-Xfatal-warnings"))
+  Test / scalacOptions ~= (_.filterNot(_ == "-Xfatal-warnings")),
+  // The package carries no API docs; scaladoc's own lint must not break `./sbt dist`.
+  Compile / doc / scalacOptions ~= (_.filterNot(_ == "-Xfatal-warnings")),
+  Compile / packageDoc / publishArtifact := false
 )
 
 lazy val testSettings = Seq(
@@ -63,11 +66,23 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
 
 lazy val apps = (project in file("apps"))
   .dependsOn(robotmiddleware % "compile->compile;test->test")
+  .enablePlugins(JavaAppPackaging)
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
     libraryDependencies ++= testLibs ++ akkaTestLibs,
     Compile / mainClass := Some("apps.Launcher"),
+    // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
+    Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),
+    executableScriptName := "naogateway",
+    Universal / packageName := s"naogateway-${version.value}",
+    Universal / mappings := (Universal / mappings).value.map {
+      case (file, "bin/robot-ctl")     => file -> "bin/robotctl"
+      case (file, "bin/robot-ctl.bat") => file -> "bin/robotctl.bat"
+      case other                       => other
+    },
+    // Logs beside the installation, not in the directory the operator happens to start from.
+    bashScriptExtraDefines += """addJava "-Dnaogateway.log.dir=${app_home}/../logs"""",
     run / fork := true,
     run / connectInput := true,
     run / outputStrategy := Some(StdoutOutput)
@@ -87,6 +102,14 @@ lazy val root = (project in file("."))
     Test / run / fork := true,
     Test / run / javaOptions ++= Seq("-Xmx2g")
   )
+
+// ./sbt dist: the installable package, one .tgz archive; its path is printed.
+dist / aggregate := false
+dist := {
+  val archive = (apps / Universal / packageZipTarball).value
+  println(s"package: ${archive.getAbsolutePath}")
+  archive
+}
 
 // ./sbt "robotctl status": the command-line client that joins a running gateway.
 addCommandAlias("robotctl", "apps/runMain apps.RobotCtl")
