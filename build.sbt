@@ -114,5 +114,6 @@ dist := {
 // ./sbt "robotctl status": the command-line client that joins a running gateway.
 addCommandAlias("robotctl", "apps/runMain apps.RobotCtl")
 
-// ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table.
-addCommandAlias("bench", "root/Test/runMain bench.BenchSuite")
+// ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table. It stages the package
+// first, because the soak (./sbt "bench soak [minutes]") runs the packaged gateway.
+addCommandAlias("bench", "apps/stage; root/Test/runMain bench.BenchSuite")

@@ -21,8 +21,13 @@ object BenchSuite {
   /** Every benchmark, in the order they run. */
   val benchmarks: Vector[Benchmark] = Vector(CodecBench, StreamBench, SimBench, GatewayBench)
 
+  /** Run only when named: `./sbt "bench soak [minutes]"`. */
+  val onRequest: Vector[Benchmark] = Vector(Soak)
+
   def main(args: Array[String]): Unit = {
-    val selected = if (args.isEmpty) benchmarks else benchmarks.filter(b => args.contains(b.name))
+    args.flatMap(_.toDoubleOption).headOption.foreach(m => Soak.minutes = m)
+    val names = args.filter(_.toDoubleOption.isEmpty)
+    val selected = if (names.isEmpty) benchmarks else (benchmarks ++ onRequest).filter(b => names.contains(b.name))
     val results = selected.foldLeft(ListMap.empty[String, Double]) { (acc, b) =>
       println(s"running ${b.name} ...")
       acc ++ b.run()
@@ -30,7 +35,7 @@ object BenchSuite {
     val out = Paths.get("target", "bench", "results.json")
     Files.createDirectories(out.getParent)
     // A run of some groups keeps the figures of the others from the previous run.
-    val merged = if (args.isEmpty) results else previous(out) ++ results
+    val merged = if (names.isEmpty) results else previous(out) ++ results
     Files.write(out, toJson(merged).getBytes(StandardCharsets.UTF_8))
     println(table(results))
     println(s"written to ${out.toAbsolutePath}")
