@@ -36,6 +36,10 @@ lazy val testSettings = Seq(
   Test / parallelExecution := false
 )
 
+// The forked run's stdout is a pipe to sbt, so the launcher cannot see a terminal itself: sbt tells it
+// whether its own console is one (apps.StatusPrinter reads this).
+lazy val terminalEnv = run / envVars += "NAOGATEWAY_TERMINAL" -> (System.console() != null).toString
+
 lazy val proto = (project in file("proto"))
   .settings(
     name := "naogateway-proto",
@@ -70,7 +74,7 @@ lazy val apps = (project in file("apps"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
-    libraryDependencies ++= testLibs ++ akkaTestLibs,
+    libraryDependencies ++= Seq(jline) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := Some("apps.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
     Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),
@@ -83,6 +87,7 @@ lazy val apps = (project in file("apps"))
     },
     // Logs beside the installation, not in the directory the operator happens to start from.
     bashScriptExtraDefines += """addJava "-Dnaogateway.log.dir=${app_home}/../logs"""",
+    terminalEnv,
     run / fork := true,
     run / connectInput := true,
     run / outputStrategy := Some(StdoutOutput)
@@ -96,6 +101,7 @@ lazy val root = (project in file("."))
     name := "naogateway-root",
     libraryDependencies ++= testLibs ++ akkaTestLibs,
     Compile / mainClass := (apps / Compile / mainClass).value,
+    terminalEnv,
     run / fork := true,
     run / connectInput := true,
     run / outputStrategy := Some(StdoutOutput),

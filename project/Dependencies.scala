@@ -8,6 +8,7 @@ object Dependencies {
     val scalapb: String = _root_.scalapb.compiler.Version.scalapbVersion
     val jeromq = "0.6.0"
     val logback = "1.2.13"
+    val jline = "3.29.0"
     val scalatest = "3.2.19"
     val scalacheck = "1.18.1"
     val scalatestPlusScalacheck = "3.2.19.0"
@@ -21,6 +22,7 @@ object Dependencies {
   val akkaClusterTyped = "com.typesafe.akka" %% "akka-cluster-typed" % V.akka
   val jeromq = "org.zeromq" % "jeromq" % V.jeromq
   val logback = "ch.qos.logback" % "logback-classic" % V.logback
+  val jline = "org.jline" % "jline" % V.jline
 
   val akkaTestkit = "com.typesafe.akka" %% "akka-actor-testkit-typed" % V.akka % Test
   val akkaStreamTestkit = "com.typesafe.akka" %% "akka-stream-testkit" % V.akka % Test

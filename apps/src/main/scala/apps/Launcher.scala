@@ -9,7 +9,7 @@ import scala.util.{Failure, Success}
 
 import akka.actor.CoordinatedShutdown
 import akka.actor.typed.scaladsl.Behaviors
-import akka.actor.typed.{ActorRef, ActorSystem, Behavior}
+import akka.actor.typed.{ActorSystem, Behavior}
 import com.typesafe.config.{Config, ConfigFactory}
 
 import naogateway._
@@ -59,7 +59,7 @@ object Launcher {
     val gateway = context.spawn(Gateway(GatewaySettings(context.system)), "gateway")
     val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
-    context.spawn(StatusPrinter(gateway, launcher.refresh, interactive = System.console() != null), "status")
+    context.spawn(StatusPrinter.fromConfig(gateway, config.getConfig("apps.launcher")), "status")
     gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
 
     Behaviors.receiveMessage {
@@ -102,55 +102,4 @@ object Launcher {
   }
 
   private final case class BallFollowerNode(robot: scala.util.Try[robotmiddleware.RobotInterface])
-}
-
-/** Prints the status: a redrawn screen on a terminal, plain change lines otherwise. */
-object StatusPrinter {
-
-  /** What the printer accepts. */
-  sealed trait Command
-  private case object Refresh extends Command
-  private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
-  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
-  private final case class Game(game: Option[naogateway.wire.gamecontroller.GameControlData]) extends Command
-  private final case class Link(stats: LinkStats) extends Command
-  private final case class RobotRef(robot: Option[ActorRef[RobotActor.Command]]) extends Command
-
-  /** A printer polling `gateway` every `refresh`. */
-  def apply(gateway: ActorRef[Gateway.Command], refresh: FiniteDuration, interactive: Boolean): Behavior[Command] =
-    Behaviors.setup { context =>
-      Behaviors.withTimers { timers =>
-        timers.startTimerWithFixedDelay(Refresh, refresh)
-        val robotsAdapter = context.messageAdapter(Robots.apply)
-        val trafficAdapter = context.messageAdapter(Traffic.apply)
-        val gameAdapter = context.messageAdapter(Game.apply)
-        val linkAdapter = context.messageAdapter(Link.apply)
-        val robotRefAdapter = context.messageAdapter(RobotRef.apply)
-
-        def running(model: StatusModel, shown: StatusModel): Behavior[Command] = Behaviors.receiveMessage {
-          case Refresh =>
-            gateway ! Gateway.GetRobots(robotsAdapter)
-            gateway ! Gateway.GetTraffic(trafficAdapter)
-            gateway ! Gateway.GetGameState(gameAdapter)
-            model.robots.foreach(r => gateway ! Gateway.GetRobot(r.robotId, robotRefAdapter))
-            if (interactive) {
-              print("\u001b[H\u001b[2J" + StatusView.render(model).mkString("\n") + "\n")
-              running(model, model)
-            } else {
-              StatusView.changes(shown, model).foreach(println)
-              running(model, model)
-            }
-          case Robots(robots)  => running(model.copy(robots = robots), shown)
-          case Traffic(stats)  => running(model.copy(traffic = Some(stats)), shown)
-          case Game(game)      => running(model.copy(game = game), shown)
-          case Link(stats)     => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown)
-          case RobotRef(robot) =>
-            robot.foreach(_ ! RobotActor.GetLinkStats(linkAdapter))
-            Behaviors.same
-        }
-
-        val empty = StatusModel(Vector.empty, Map.empty, None, None)
-        running(empty, empty)
-      }
-    }
 }

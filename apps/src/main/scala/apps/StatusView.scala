@@ -1,9 +1,9 @@
 package apps
 
 import naogateway.{LinkStats, Outbox, RobotSnapshot}
-import naogateway.wire.gamecontroller.GameControlData
+import naogateway.wire.gamecontroller.{GameControlData, GameState, SecondaryGameState}
 
-/** What the launcher shows: robots, their links, the team's traffic and the game. */
+/** What the launcher shows: robots, their links, the team's traffic with the competition gate, and the game. */
 final case class StatusModel(
     robots: Vector[RobotSnapshot],
     links: Map[Int, LinkStats],
@@ -11,41 +11,102 @@ final case class StatusModel(
     game: Option[GameControlData]
 )
 
-/** Rendering of the live status: a table for terminals, and plain change lines for logs and pipes. */
+/** Constructors of status models. */
+object StatusModel {
+
+  /** Nothing heard yet. */
+  val empty: StatusModel = StatusModel(Vector.empty, Map.empty, None, None)
+}
+
+/**
+ * Rendering of the live status: a screen for terminals, and plain change lines for logs and pipes. Every function
+ * here is total: whatever a model holds, it renders (a value it cannot show becomes "-"), so the printer never dies
+ * on a packet it did not expect.
+ */
 object StatusView {
 
   private def opt[A](a: Option[A])(f: A => String): String = a.fold("-")(f)
 
-  /** One line describing a robot, as both the table and the plain lines use it. */
+  /** A number that is not finite shows as "-" rather than as "NaN" or "Infinity". */
+  private def finite(d: Double)(f: Double => String): String = if (d.isNaN || d.isInfinite) "-" else f(d)
+
+  private def address(r: RobotSnapshot): String =
+    Option(r.address).fold("-")(a => s"${Option(a.getHostString).getOrElse("-")}:${a.getPort}")
+
+  /** One line describing a robot, as both the screen and the plain lines use it. */
   def robotLine(r: RobotSnapshot, link: Option[LinkStats]): String = {
     val rtt = link.flatMap(_.rttMillis)
     val loss = link.map(_.lossEstimate)
-    f"robot ${r.robotId}%-3d ${if (r.online) "online " else "offline"} ${r.quality.name}%-8s " +
-      f"battery ${opt(r.batteryVoltage)(v => f"$v%.2f V")}%-8s posture ${opt(r.posture)(identity)}%-8s " +
-      f"role ${opt(r.role)(identity)}%-9s rtt ${opt(rtt)(v => f"$v%.1f ms")}%-9s loss ${opt(loss)(v => f"${v * 100}%.0f %%")}%-5s " +
-      s"${r.address.getAddress.getHostAddress}:${r.address.getPort}"
+    val quality = Option(r.quality).fold("-")(_.name)
+    f"robot ${r.robotId}%-3d ${if (r.online) "online " else "offline"} $quality%-8s " +
+      f"battery ${opt(r.batteryVoltage)(finite(_)(v => f"$v%.2f V"))}%-8s posture ${opt(r.posture)(identity)}%-8s " +
+      f"role ${opt(r.role)(identity)}%-9s rtt ${opt(rtt)(finite(_)(v => f"$v%.1f ms"))}%-9s " +
+      f"loss ${opt(loss)(finite(_)(v => f"${v * 100}%.0f %%"))}%-5s " + address(r)
+  }
+
+  /** The game state as the GameController's display names it: PLAYING, READY, ... */
+  def stateName(state: GameState): String = state match {
+    case GameState.Unknown(code) => s"UNKNOWN($code)"
+    case known                   => known.toString.toUpperCase
+  }
+
+  /** The game in one line: state, half, seconds remaining, secondary clock where it counts, score. */
+  def gameLine(game: Option[GameControlData]): String = game.fold("game: no GameController heard") { g =>
+    val secondaryState = g.secondaryGameState match {
+      case SecondaryGameState.Normal => ""
+      case other                     => s" (${other.toString.toLowerCase})"
+    }
+    // The secondary clock counts the ready phase, a time-out, a penalty shot...; 0 means it is not running.
+    val secondary = g.secondaryTime.filter(_ > 0).fold("")(t => s", secondary $t s")
+    s"game: ${stateName(g.gameState)}$secondaryState, ${if (g.firstHalf) "first" else "second"} half, " +
+      s"${g.secsRemaining} s left$secondary, score ${g.team0.score} : ${g.team1.score} " +
+      s"(team ${g.team0.teamNumber} : team ${g.team1.teamNumber})"
+  }
+
+  /** The competition gate in one line. */
+  def gateLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("competition gate: -") { t =>
+    if (!t.competition) "competition gate: open (competition rule off)"
+    else if (t.gateOpen) "competition gate: open"
+    else "competition gate: CLOSED while the game runs: nothing is sent to the robots"
+  }
+
+  /** The team's traffic against the budget in one line. */
+  def trafficLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("team traffic: -") { t =>
+    val load = if (t.budgetBytesPerSecond > 0) finite(t.teamLoad * 100)(v => f"$v%.0f %%") else "-"
+    f"team traffic: out ${t.outBytesLastSecond / 1000.0}%.1f kB/s, in ${t.inBytesLastSecond / 1000.0}%.1f kB/s, " +
+      f"$load of the ${t.budgetBytesPerSecond / 1000.0}%.1f kB/s budget" +
+      (if (t.refusedByRule > 0) s", ${t.refusedByRule} refused by the competition rule" else "") +
+      (if (t.dropped > 0) s", ${t.dropped} dropped" else "")
   }
 
   /** The full screen for a terminal. */
   def render(model: StatusModel): Vector[String] = {
-    val traffic = model.traffic.fold("team traffic: -") { t =>
-      f"team traffic: out ${t.outBytesLastSecond / 1000.0}%.1f kB/s, in ${t.inBytesLastSecond / 1000.0}%.1f kB/s, " +
-        f"${t.teamLoad * 100}%.0f %% of ${t.budgetBytesPerSecond / 1000} kB/s" +
-        (if (t.refusedByRule > 0) s", ${t.refusedByRule} refused by the competition rule" else "")
-    }
-    val game = model.game.fold("game: no GameController heard") { g =>
-      s"game: ${g.gameState} (${if (g.firstHalf) "first" else "second"} half, ${g.secsRemaining} s left, " +
-        s"${g.team0.teamNumber} ${g.team0.score} : ${g.team1.score} ${g.team1.teamNumber})"
-    }
     val online = model.robots.count(_.online)
-    Vector(s"naogateway - ${model.robots.size} robot(s), $online online", traffic, game, "") ++
+    Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game), gateLine(model.traffic),
+      trafficLine(model.traffic), "") ++
       model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ Vector("", "Ctrl-C stops everything.")
   }
 
-  /** Plain lines for what changed between two models: a robot's online state or posture. */
+  /**
+   * `lines` cut to a screen of `columns` × `rows`: long lines are cut (a wrapped line would shift the redrawn
+   * screen), and when rows run out the last one says how many lines are not shown.
+   */
+  def fit(lines: Vector[String], columns: Int, rows: Int): Vector[String] = {
+    val cols = math.max(columns, 1)
+    val shown =
+      if (rows <= 0) Vector.empty
+      else if (lines.size <= rows) lines
+      else lines.take(rows - 1) :+ s"... ${lines.size - rows + 1} more line(s); a taller terminal shows them"
+    shown.map(l => if (l.length > cols) l.take(cols) else l)
+  }
+
+  /**
+   * Plain lines for what changed between two models: a robot's online state or posture, the game state (not every
+   * packet), and the competition gate.
+   */
   def changes(before: StatusModel, after: StatusModel): Vector[String] = {
     val old = before.robots.map(r => r.robotId -> r).toMap
-    after.robots.flatMap { r =>
+    val robots = after.robots.flatMap { r =>
       old.get(r.robotId) match {
         case Some(o) if o.online == r.online && o.posture == r.posture => None
         case Some(o) if o.online == r.online && !r.online               => None
@@ -53,5 +114,16 @@ object StatusView {
         case _                                                           => Some(robotLine(r, after.links.get(r.robotId)))
       }
     }
+    val game =
+      if (after.game.map(g => (g.gameState, g.secondaryGameState, g.firstHalf)) ==
+          before.game.map(g => (g.gameState, g.secondaryGameState, g.firstHalf))) None
+      else after.game.map(g => gameLine(Some(g)))
+    // The first figures say nothing new unless the rule is on; after that, only a change of the gate is news.
+    val gate = (before.traffic, after.traffic) match {
+      case (None, Some(t)) if t.competition                 => Some(gateLine(after.traffic))
+      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen   => Some(gateLine(after.traffic))
+      case _                                                => None
+    }
+    robots ++ game ++ gate
   }
 }

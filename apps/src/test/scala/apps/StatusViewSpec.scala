@@ -1,37 +1,163 @@
 package apps
 
 import java.net.InetSocketAddress
+import java.nio.file.{Files, Path, Paths}
 
+import org.scalacheck.{Arbitrary, Gen}
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
+import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway.{LinkQuality, LinkStats, RobotSnapshot}
+import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec, GameState, SecondaryGameState}
+import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot}
 
-class StatusViewSpec extends AnyWordSpec with Matchers {
+class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
+  import StatusViewSpec._
+
   private val address = new InetSocketAddress("127.0.0.1", 40000)
   private val sitting = RobotSnapshot(1, address, role = Some("keeper"), posture = Some("sit"), batteryVoltage = Some(12.4),
     online = true, quality = LinkQuality.Good)
   private val link = LinkStats(1, 10, 10, 300, 300, Some(0.4), 0.0, 0, Map.empty)
+  private val traffic = Outbox.TrafficStats(1500, 500, 125000, Map.empty, 10, 10, 0, 0, gameRunning = false, competition = false)
+
+  private def game(file: String): GameControlData =
+    GameControllerCodec.decodeControl(vector(file)).fold(e => fail(s"$file does not decode: ${e.describe}"), identity)
 
   "The status view" should {
-    "show each robot's id, online state, battery, posture, role, round-trip time and address" in {
-      val line = StatusView.robotLine(sitting, Some(link))
-      Seq("robot 1", "online", "12.40 V", "sit", "keeper", "0.4 ms", "127.0.0.1:40000").foreach(line should include(_))
+    "show each robot's id, online state, link quality, battery, posture, role, round-trip time, loss and address" in {
+      val line = StatusView.robotLine(sitting, Some(link.copy(lossEstimate = 0.25)))
+      Seq("robot 1", "online", "good", "12.40 V", "sit", "keeper", "0.4 ms", "25 %", "127.0.0.1:40000").foreach(line should include(_))
     }
     "print one plain line per robot and change of online state or posture, and nothing when nothing changed" in {
-      val none = StatusModel(Vector.empty, Map.empty, None, None)
       val first = StatusModel(Vector(sitting), Map(1 -> link), None, None)
-      StatusView.changes(none, first).map(_.take(20)) shouldBe Vector("robot 1   online  go")
+      StatusView.changes(StatusModel.empty, first).map(_.take(20)) shouldBe Vector("robot 1   online  go")
       StatusView.changes(first, first) shouldBe empty
       val standing = first.copy(robots = Vector(sitting.copy(posture = Some("stand"))))
       StatusView.changes(first, standing).head should include("stand")
       val offline = first.copy(robots = Vector(sitting.copy(online = false)))
       StatusView.changes(first, offline).head should include("offline")
     }
-    "render a screen with the team's traffic and the game" in {
-      val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, None, None))
+    "render a screen with the game, the competition gate and the team's traffic against the budget" in {
+      val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, Some(traffic), None))
       screen.head shouldBe "naogateway - 1 robot(s), 1 online"
-      screen.exists(_.contains("no GameController")) shouldBe true
+      screen should contain("game: no GameController heard")
+      screen should contain("competition gate: open (competition rule off)")
+      screen should contain("team traffic: out 1.5 kB/s, in 0.5 kB/s, 2 % of the 125.0 kB/s budget")
+      screen.exists(_.startsWith("robot 1")) shouldBe true
+    }
+    "render each real GameController packet on the screen: state, half, seconds left, secondary clock, score" in {
+      def gameLine(file: String) = StatusView.render(StatusModel(Vector.empty, Map.empty, None, Some(game(file))))(1)
+      gameLine("v8-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"
+      gameLine("v7-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"
+      gameLine("v8-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 30 s, score 0 : 0 (team 12 : team 7)"
+      gameLine("v8-set.bin") should startWith("game: SET, first half, 600 s left, score")
+      gameLine("v8-initial.bin") should startWith("game: INITIAL, first half, 600 s left")
+      gameLine("v7-initial.bin") should startWith("game: INITIAL, first half, 600 s left")
+      gameLine("v8-finished.bin") shouldBe "game: FINISHED, second half, 587 s left, score 2 : 1 (team 12 : team 7)"
+    }
+    "print a line for each change of game state from the real packets, and none for a repeated state" in {
+      val files = Seq("v8-initial.bin", "v7-initial.bin", "v8-ready.bin", "v8-set.bin", "v8-playing.bin", "v7-playing.bin",
+        "v8-finished.bin")
+      val models = StatusModel.empty +: files.map(f => StatusModel.empty.copy(game = Some(game(f))))
+      val lines = models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) }
+      lines.map(_.takeWhile(_ != ',')) shouldBe Vector("game: INITIAL", "game: READY", "game: SET", "game: PLAYING", "game: FINISHED")
+      lines(3) should include("587 s left, score 2 : 1")
+    }
+    "show the competition gate closing while the game runs, and print a line when it closes and opens" in {
+      val open = traffic.copy(competition = true)
+      val closed = open.copy(gameRunning = true)
+      StatusView.gateLine(Some(closed)) should include("CLOSED")
+      StatusView.gateLine(Some(open)) shouldBe "competition gate: open"
+      val models = Seq(None, Some(open), Some(open), Some(closed), Some(closed), Some(open)).map(t => StatusModel.empty.copy(traffic = t))
+      models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe
+        Vector(StatusView.gateLine(Some(open)), StatusView.gateLine(Some(closed)), StatusView.gateLine(Some(open)))
+      // Without the rule the gate never closes, and the piped view says nothing about it.
+      val off = Seq(None, Some(traffic), Some(traffic.copy(gameRunning = true))).map(t => StatusModel.empty.copy(traffic = t))
+      off.zip(off.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe empty
+    }
+    "fit a screen into the terminal: lines cut to its width, the rows that do not fit counted" in {
+      val lines = Vector("a" * 10, "b", "c", "d")
+      StatusView.fit(lines, 4, 10) shouldBe Vector("aaaa", "b", "c", "d")
+      StatusView.fit(lines, 80, 3) shouldBe Vector("a" * 10, "b", "... 2 more line(s); a taller terminal shows them")
+      StatusView.fit(lines, 0, 0) shouldBe empty
+    }
+    "render, list changes and fit any model without throwing" in {
+      forAll(genModel, genModel, Gen.choose(-5, 300), Gen.choose(-5, 100)) { (a, b, columns, rows) =>
+        val screen = StatusView.render(b)
+        screen.size shouldBe b.robots.size + 7
+        StatusView.fit(screen, columns, rows).size should be <= math.max(rows, 0)
+        StatusView.changes(a, b).size should be <= b.robots.size + 2
+      }
     }
   }
+}
+
+object StatusViewSpec {
+
+  /** The real GameController packet `file` of the shared folder. */
+  def vector(file: String): Array[Byte] = {
+    val dir: Path = Paths.get(sys.props.getOrElse("naogateway.shared.dir", "../shared"), "vectors", "gamecontroller")
+    Files.readAllBytes(dir.resolve(file))
+  }
+
+  private val vectors = Seq("v8-initial.bin", "v7-initial.bin", "v8-ready.bin", "v8-set.bin", "v8-playing.bin",
+    "v7-playing.bin", "v8-finished.bin")
+
+  private val genDouble: Gen[Double] =
+    Gen.oneOf(Gen.choose(-1e9, 1e9), Gen.oneOf(Double.NaN, Double.PositiveInfinity, Double.NegativeInfinity, 0.0))
+
+  private val genAddress: Gen[InetSocketAddress] = Gen.oneOf(
+    Gen.choose(0, 65535).map(new InetSocketAddress("127.0.0.1", _)),
+    Gen.choose(0, 65535).map(InetSocketAddress.createUnresolved("robot.invalid", _)),
+    Gen.const(null)
+  )
+
+  private val genRobot: Gen[RobotSnapshot] = for {
+    id <- Arbitrary.arbitrary[Int]
+    address <- genAddress
+    role <- Gen.option(Arbitrary.arbitrary[String])
+    posture <- Gen.option(Arbitrary.arbitrary[String])
+    battery <- Gen.option(genDouble)
+    online <- Arbitrary.arbitrary[Boolean]
+    quality <- Gen.oneOf(LinkQuality.Good, LinkQuality.Degraded, LinkQuality.Offline)
+  } yield RobotSnapshot(id, address, role = role, posture = posture, batteryVoltage = battery, online = online, quality = quality)
+
+  private def genLink(robotId: Int): Gen[LinkStats] = for {
+    rtt <- Gen.option(genDouble)
+    loss <- genDouble
+  } yield LinkStats(robotId, 0, 0, 0, 0, rtt, loss, 0, Map.empty)
+
+  private val genTraffic: Gen[Outbox.TrafficStats] = for {
+    out <- Arbitrary.arbitrary[Long]
+    in <- Arbitrary.arbitrary[Long]
+    budget <- Gen.oneOf(Gen.const(0), Arbitrary.arbitrary[Int])
+    refused <- Arbitrary.arbitrary[Long]
+    dropped <- Arbitrary.arbitrary[Long]
+    running <- Arbitrary.arbitrary[Boolean]
+    competition <- Arbitrary.arbitrary[Boolean]
+  } yield Outbox.TrafficStats(out, in, budget, Map.empty, 0, 0, refused, dropped, running, competition)
+
+  /** A real packet with arbitrary values in the fields the view shows. */
+  private val genGame: Gen[GameControlData] = for {
+    file <- Gen.oneOf(vectors)
+    state <- Gen.choose(0, 255)
+    secondaryState <- Gen.choose(0, 255)
+    secs <- Arbitrary.arbitrary[Long]
+    secondary <- Gen.option(Arbitrary.arbitrary[Int])
+    firstHalf <- Arbitrary.arbitrary[Boolean]
+    score0 <- Arbitrary.arbitrary[Int]
+    score1 <- Arbitrary.arbitrary[Int]
+  } yield {
+    val g = GameControllerCodec.decodeControl(vector(file)).fold(e => throw new IllegalStateException(e.describe), identity)
+    g.copy(gameState = GameState.fromCode(state), secondaryGameState = SecondaryGameState.fromCode(secondaryState),
+      secsRemaining = secs, secondaryTime = secondary, firstHalf = firstHalf, team0 = g.team0.copy(score = score0),
+      team1 = g.team1.copy(score = score1))
+  }
+
+  val genModel: Gen[StatusModel] = for {
+    robots <- Gen.choose(0, 12).flatMap(Gen.listOfN(_, genRobot))
+    links <- Gen.sequence[List[LinkStats], LinkStats](robots.take(6).map(r => genLink(r.robotId)))
+    traffic <- Gen.option(genTraffic)
+    game <- Gen.option(genGame)
+  } yield StatusModel(robots.toVector, links.map(l => l.robotId -> l).toMap, traffic, game)
 }

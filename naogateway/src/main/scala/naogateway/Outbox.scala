@@ -57,7 +57,12 @@ object Outbox {
   val NoSendingWhileGameRuns: String =
     "competition rule: the base station must not send to robots while the game is running (READY, SET or PLAYING)"
 
-  /** The team's traffic: bytes in the last second each way, the budget, queues and counters. */
+  /**
+   * The team's traffic: bytes in the last second each way, the budget, queues and counters, and the competition gate.
+   *
+   * @param gameRunning whether the GameController last said READY, SET or PLAYING
+   * @param competition whether the competition rule applies (`naogateway.competition.enabled`)
+   */
   final case class TrafficStats(
       outBytesLastSecond: Long,
       inBytesLastSecond: Long,
@@ -67,8 +72,12 @@ object Outbox {
       datagramsIn: Long,
       refusedByRule: Long,
       dropped: Long,
-      gameRunning: Boolean
+      gameRunning: Boolean,
+      competition: Boolean
   ) {
+
+    /** Whether the outbox sends to robots now: closed only in competition mode while the game runs. */
+    def gateOpen: Boolean = !(competition && gameRunning)
 
     /** Two-way traffic as a share of the budget. */
     def teamLoad: Double = (outBytesLastSecond + inBytesLastSecond).toDouble / budgetBytesPerSecond
@@ -202,7 +211,7 @@ private final class Outbox(
       val now = System.nanoTime()
       replyTo ! TrafficStats(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
         Priority.all.map(p => p.name -> queues(p.rank).size).toMap, out.totalDatagrams, in.totalDatagrams, refused,
-        dropped, gameIsRunning)
+        dropped, gameIsRunning, competition)
       Behaviors.same
   }
 }

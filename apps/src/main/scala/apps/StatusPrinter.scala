@@ -1,0 +1,163 @@
+package apps
+
+import scala.concurrent.duration._
+import scala.util.{Failure, Success}
+
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior, PostStop, SupervisorStrategy}
+import akka.util.Timeout
+import com.typesafe.config.Config
+
+import naogateway.wire.gamecontroller.GameControlData
+import naogateway.{Gateway, LinkStats, Outbox, RobotActor, RobotSnapshot}
+
+/** Prints the launcher's status: a redrawn screen on a terminal, one line per change otherwise. */
+object StatusPrinter {
+
+  /** What the printer accepts. */
+  sealed trait Command
+  private case object Refresh extends Command
+  private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
+  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private final case class Game(game: Option[GameControlData]) extends Command
+  private final case class Link(stats: LinkStats) extends Command
+  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]]) extends Command
+  private final case class RobotGone(robotId: Int) extends Command
+
+  /** How the status is shown: chosen from the terminal (`Auto`), or forced. */
+  sealed trait ViewMode extends Product with Serializable
+
+  /** The choices of `apps.launcher.view`. */
+  object ViewMode {
+
+    /** A screen on a terminal, lines otherwise. */
+    case object Auto extends ViewMode
+
+    /** Always the redrawn screen. */
+    case object Screen extends ViewMode
+
+    /** Always one line per change. */
+    case object Lines extends ViewMode
+
+    /** The mode named `name` (auto, screen or lines). */
+    def parse(name: String): ViewMode = name.trim.toLowerCase match {
+      case "auto"   => Auto
+      case "screen" => Screen
+      case "lines"  => Lines
+      case other    => throw new IllegalArgumentException(s"apps.launcher.view must be auto, screen or lines, not '$other'")
+    }
+  }
+
+  /** Where the printer writes. */
+  sealed trait Output
+
+  /** Lines appended one after the other, to a pipe or a log. */
+  final case class LineOutput(writeLine: String => Unit) extends Output
+
+  /** A screen the printer redraws as a whole. */
+  trait ScreenOutput extends Output {
+
+    /** Replaces what the screen shows with `lines` (fitted to the screen's size by the implementation). */
+    def draw(lines: Vector[String]): Unit
+
+    /** Gives the terminal back: the cursor below the screen, resources released. */
+    def close(): Unit
+  }
+
+  /** The printer's settings (`apps.launcher`). */
+  final case class Settings(refresh: FiniteDuration, view: ViewMode) {
+    require(refresh >= 50.millis, "apps.launcher.refresh must be at least 50 ms")
+  }
+
+  /** The settings of an `apps.launcher` block. */
+  def settings(c: Config): Settings =
+    Settings(c.getDuration("refresh").toNanos.nanos, ViewMode.parse(c.getString("view")))
+
+  /** The printer of the `apps.launcher` block `c`, writing where its `view` says. */
+  def fromConfig(gateway: ActorRef[Gateway.Command], c: Config): Behavior[Command] = {
+    val s = settings(c)
+    apply(gateway, s.refresh, output(s.view))
+  }
+
+  /**
+   * Whether stdout is a terminal: `System.console()` in a JVM started on one, or what sbt says through
+   * `NAOGATEWAY_TERMINAL` when it forks the launcher with its stdout as a pipe.
+   */
+  def onTerminal(env: String => Option[String] = sys.env.get): Boolean =
+    System.console() != null || env("NAOGATEWAY_TERMINAL").exists(_.trim.equalsIgnoreCase("true"))
+
+  /** The output `mode` asks for: a JLine screen on a terminal, `println` lines otherwise. */
+  def output(mode: ViewMode): Output = {
+    val screen = mode match {
+      case ViewMode.Screen => true
+      case ViewMode.Lines  => false
+      case ViewMode.Auto   => onTerminal()
+    }
+    if (screen) TerminalScreen.open() else LineOutput(line => println(line))
+  }
+
+  /**
+   * A printer polling `gateway` every `refresh` and writing to `output`. It restarts (after a back-off, so a
+   * failure repeating every refresh cannot flood the log) on any failure.
+   */
+  def apply(gateway: ActorRef[Gateway.Command], refresh: FiniteDuration, output: Output): Behavior[Command] =
+    Behaviors.supervise(printer(gateway, refresh, output)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
+
+  private def printer(gateway: ActorRef[Gateway.Command], refresh: FiniteDuration, output: Output): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        timers.startTimerWithFixedDelay(Refresh, refresh)
+        // One adapter per reply class: Akka keeps one adapter per message class, so a second adapter for Option
+        // would replace the first. The game state's Option[GameControlData] has the Option adapter; GetRobot's
+        // Option[ActorRef] reply comes back through ask, which maps each reply on its own.
+        val robotsAdapter = context.messageAdapter(Robots.apply)
+        val trafficAdapter = context.messageAdapter(Traffic.apply)
+        val gameAdapter = context.messageAdapter(Game.apply)
+        val linkAdapter = context.messageAdapter(Link.apply)
+        implicit val askTimeout: Timeout = Timeout(refresh.max(1.second))
+
+        def show(shown: StatusModel, model: StatusModel): Unit = output match {
+          case screen: ScreenOutput => screen.draw(StatusView.render(model))
+          case LineOutput(write)    => StatusView.changes(shown, model).foreach(write)
+        }
+
+        // `refs`: the robot actors found so far, asked for their link figures each refresh; a robot actor is
+        // looked up once, and forgotten when it stops.
+        def running(model: StatusModel, shown: StatusModel, refs: Map[Int, ActorRef[RobotActor.Command]],
+            asked: Set[Int]): Behavior[Command] =
+          Behaviors.receiveMessage[Command] {
+            case Refresh =>
+              gateway ! Gateway.GetRobots(robotsAdapter)
+              gateway ! Gateway.GetTraffic(trafficAdapter)
+              gateway ! Gateway.GetGameState(gameAdapter)
+              refs.values.foreach(_ ! RobotActor.GetLinkStats(linkAdapter))
+              val toFind = model.robots.map(_.robotId).filterNot(id => refs.contains(id) || asked(id))
+              toFind.foreach { id =>
+                context.ask(gateway, (ref: ActorRef[Option[ActorRef[RobotActor.Command]]]) => Gateway.GetRobot(id, ref)) {
+                  case Success(robot) => RobotFound(id, robot)
+                  case Failure(_)     => RobotFound(id, None)
+                }
+              }
+              show(shown, model)
+              running(model, model, refs, asked ++ toFind)
+            case Robots(robots) => running(model.copy(robots = robots), shown, refs, asked)
+            case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown, refs, asked)
+            case Game(game)     => running(model.copy(game = game), shown, refs, asked)
+            case Link(stats)    => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown, refs, asked)
+            case RobotFound(id, Some(robot)) =>
+              context.watchWith(robot, RobotGone(id))
+              running(model, shown, refs.updated(id, robot), asked - id)
+            case RobotFound(id, None) => running(model, shown, refs, asked - id)
+            case RobotGone(id)        => running(model.copy(links = model.links - id), shown, refs - id, asked)
+          }.receiveSignal { case (_, PostStop) =>
+            output match {
+              case screen: ScreenOutput => screen.close()
+              case _: LineOutput        => ()
+            }
+            Behaviors.same
+          }
+
+        running(StatusModel.empty, StatusModel.empty, Map.empty, Set.empty)
+      }
+    }
+}

@@ -1,0 +1,88 @@
+package apps
+
+import java.io.{ByteArrayInputStream, OutputStream}
+import java.nio.charset.StandardCharsets
+import java.util.{Timer, TimerTask}
+
+import scala.jdk.CollectionConverters._
+import scala.sys.process._
+import scala.util.Try
+
+import org.jline.terminal.impl.DumbTerminal
+import org.jline.terminal.{Size, Terminal, TerminalBuilder}
+import org.jline.utils.{AttributedString, Display, InfoCmp}
+
+/**
+ * The status screen on a terminal, redrawn with JLine's `Display`, which rewrites only what changed (no flicker).
+ * Lines are fitted to the terminal's size, which is followed when the terminal is resized.
+ */
+final class TerminalScreen private (terminal: Terminal, size: () => Size, stop: () => Unit) extends StatusPrinter.ScreenOutput {
+  private val display = new Display(terminal, true)
+  private var drawn: Option[Size] = None
+
+  def draw(lines: Vector[String]): Unit = synchronized {
+    val now = size()
+    val columns = if (now.getColumns > 0) now.getColumns else TerminalScreen.DefaultSize.getColumns
+    val rows = if (now.getRows > 0) now.getRows else TerminalScreen.DefaultSize.getRows
+    if (!drawn.contains(now)) {
+      // First draw or a resized terminal: clear it and draw everything anew.
+      display.clear()
+      display.resize(rows, columns)
+      drawn = Some(now)
+    }
+    // One row stays free for the cursor, so the screen never scrolls.
+    val fitted = StatusView.fit(lines, columns, rows - 1)
+    val cursor = new Size(columns, rows).cursorPos(fitted.size, 0)
+    display.update(fitted.map(new AttributedString(_)).asJava, cursor, true)
+  }
+
+  def close(): Unit = synchronized {
+    stop()
+    terminal.flush()
+  }
+}
+
+/** Opening the status screen on the terminal the launcher writes to. */
+object TerminalScreen {
+
+  /** The size assumed when a terminal does not tell its own. */
+  val DefaultSize: Size = new Size(120, 40)
+
+  /**
+   * A screen on the launcher's terminal. Started on a terminal, JLine's system terminal, whose size follows
+   * resizes (WINCH). Forked by sbt, stdout is a pipe that sbt copies to its terminal: a terminal of type `TERM`
+   * over stdout, whose size is read from the controlling terminal every two seconds.
+   */
+  def open(): TerminalScreen =
+    if (System.console() != null) {
+      val terminal = TerminalBuilder.builder().system(true).build()
+      new TerminalScreen(terminal, () => terminal.getSize, () => ())
+    } else over(System.out, sys.env.get("TERM"), fixedSize = None)
+
+  /**
+   * A screen over `out` for a terminal of type `term` (xterm-256color when unknown), of `fixedSize`, or else of the
+   * controlling terminal's size.
+   */
+  def over(out: OutputStream, term: Option[String], fixedSize: Option[Size]): TerminalScreen = {
+    val terminalType = term.map(_.trim).filter(t => t.nonEmpty && t != "dumb").getOrElse("xterm-256color")
+    // A terminal of that type writing straight to `out`: no pty of its own, no threads, nothing read from stdin.
+    def build(tpe: String): Terminal =
+      new DumbTerminal("naogateway", tpe, new ByteArrayInputStream(Array.emptyByteArray), out, StandardCharsets.UTF_8)
+    // A TERM neither JLine nor infocmp describes falls back to xterm's, which every terminal emulator in use understands.
+    val known = Try(InfoCmp.getInfoCmp(terminalType)).toOption.exists(_.nonEmpty)
+    val terminal = build(if (known) terminalType else "xterm-256color")
+    @volatile var size = fixedSize.orElse(controllingTerminalSize()).getOrElse(DefaultSize)
+    val timer = if (fixedSize.isEmpty) {
+      val t = new Timer("status-screen-size", true)
+      t.schedule(new TimerTask { def run(): Unit = controllingTerminalSize().foreach(size = _) }, 2000L, 2000L)
+      Some(t)
+    } else None
+    new TerminalScreen(terminal, () => size, () => timer.foreach(_.cancel()))
+  }
+
+  /** The size of the controlling terminal (`stty size` on /dev/tty), if there is one. */
+  private def controllingTerminalSize(): Option[Size] =
+    Try(Seq("sh", "-c", "stty size < /dev/tty").!!(ProcessLogger(_ => ()))).toOption
+      .flatMap(out => Try(out.trim.split("\\s+").map(_.toInt)).toOption)
+      .collect { case Array(rows, cols) if rows > 0 && cols > 0 => new Size(cols, rows) }
+}

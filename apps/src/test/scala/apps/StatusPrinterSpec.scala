@@ -1,0 +1,132 @@
+package apps
+
+import java.io.ByteArrayOutputStream
+import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress}
+import java.nio.charset.StandardCharsets
+import java.util.concurrent.ConcurrentLinkedQueue
+import java.util.concurrent.atomic.{AtomicInteger, AtomicReference}
+
+import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
+import scala.util.Using
+
+import akka.actor.testkit.typed.scaladsl.ScalaTestWithActorTestKit
+import org.jline.terminal.Size
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway.integration.GatewayFixture
+
+/** The status printer against a real gateway, fed the real GameController packets over loopback UDP. */
+class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
+
+  /** A screen that keeps the last frame drawn. */
+  private final class RecordingScreen extends StatusPrinter.ScreenOutput {
+    val frame = new AtomicReference[Vector[String]](Vector.empty)
+    val draws = new AtomicInteger()
+    def draw(lines: Vector[String]): Unit = { frame.set(lines); draws.incrementAndGet() }
+    def close(): Unit = ()
+  }
+
+  /** Sends the packet `file` to `to` until `seen` holds (at most 20 s, every 200 ms); fails if it never does. */
+  private def sendUntil(to: InetSocketAddress, file: String)(seen: => Boolean): Unit = {
+    val bytes = StatusViewSpec.vector(file)
+    Using.resource(new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))) { socket =>
+      val deadline = 20.seconds.fromNow
+      var ok = seen
+      while (!ok && deadline.hasTimeLeft()) {
+        socket.send(new DatagramPacket(bytes, bytes.length, to))
+        Thread.sleep(200)
+        ok = seen
+      }
+      withClue(s"after sending $file: ")(assert(ok))
+    }
+  }
+
+  private def awaitTrue(what: String)(cond: => Boolean): Unit = {
+    val deadline = 20.seconds.fromNow
+    while (!cond && deadline.hasTimeLeft()) Thread.sleep(100)
+    withClue(what)(assert(cond))
+  }
+
+  "The status printer" should {
+    "print one line per change when piped: the robot, each game state of the real packets, and the competition gate" in {
+      val fixture = new GatewayFixture(testKit, "competition.enabled = on")
+      try {
+        val lines = new ConcurrentLinkedQueue[String]()
+        spawn(StatusPrinter(fixture.gateway, 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
+        fixture.robot(1)
+        def printed = lines.asScala.toVector
+        awaitTrue("robot 1 online")(printed.exists(l => l.startsWith("robot 1") && l.contains("online")))
+        val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
+        sendUntil(gc, "v8-initial.bin")(printed.exists(_.startsWith("game: INITIAL")))
+        awaitTrue("gate open")(printed.contains("competition gate: open"))
+        sendUntil(gc, "v8-ready.bin")(printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
+        awaitTrue("gate closed")(printed.exists(_.startsWith("competition gate: CLOSED")))
+        sendUntil(gc, "v8-set.bin")(printed.exists(_.startsWith("game: SET")))
+        sendUntil(gc, "v8-playing.bin")(printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"))
+        sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 5)
+        sendUntil(gc, "v8-finished.bin")(printed.exists(_.startsWith("game: FINISHED, second half")))
+        awaitTrue("gate open again")(printed.count(_ == "competition gate: open") == 2)
+        // One line per change, not per packet: each packet above was sent at least once, some many times.
+        printed.count(_.startsWith("game: PLAYING")) shouldBe 1
+        printed.count(_.startsWith("competition gate: CLOSED")) shouldBe 1
+      } finally fixture.stop()
+    }
+
+    "redraw a screen showing the robot with its link figures, the game of the real packets, the gate and the traffic" in {
+      val fixture = new GatewayFixture(testKit, "competition.enabled = on")
+      try {
+        val screen = new RecordingScreen
+        spawn(StatusPrinter(fixture.gateway, 100.millis, screen))
+        fixture.robot(1)
+        def frame = screen.frame.get
+        // "loss" shows a figure only once the robot actor, found with GetRobot, answered with its link figures.
+        awaitTrue("robot 1 with link figures")(frame.exists(l => l.startsWith("robot 1") && l.contains("online") &&
+          l.matches(".*loss \\d+ %.*")))
+        val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
+        sendUntil(gc, "v8-playing.bin")(frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"))
+        awaitTrue("gate closed")(frame.exists(_.startsWith("competition gate: CLOSED")))
+        frame.exists(_.matches("team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
+        sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 2)
+        sendUntil(gc, "v8-finished.bin")(frame.exists(_.startsWith("game: FINISHED")))
+        awaitTrue("gate open")(frame.contains("competition gate: open"))
+        frame.head shouldBe "naogateway - 1 robot(s), 1 online"
+      } finally fixture.stop()
+    }
+
+    "restart after its output failed, and go on drawing" in {
+      val fixture = new GatewayFixture(testKit)
+      try {
+        val draws = new AtomicInteger()
+        val screen = new StatusPrinter.ScreenOutput {
+          def draw(lines: Vector[String]): Unit =
+            if (draws.incrementAndGet() == 1) throw new IllegalStateException("the terminal went away")
+          def close(): Unit = ()
+        }
+        spawn(StatusPrinter(fixture.gateway, 100.millis, screen))
+        awaitTrue("drawn after the restart")(draws.get >= 3)
+      } finally fixture.stop()
+    }
+  }
+
+  "The terminal screen" should {
+    "draw the lines with JLine, rewrite only what changed, and nothing when nothing changed" in {
+      val out = new ByteArrayOutputStream()
+      val screen = TerminalScreen.over(out, Some("xterm-256color"), Some(new Size(100, 20)))
+      val frame = Vector("naogateway - 1 robot(s), 1 online", "game: PLAYING, first half, 587 s left, score 2 : 1", "robot 1 online")
+      screen.draw(frame)
+      val first = out.toString(StandardCharsets.UTF_8)
+      frame.foreach(first should include(_))
+      out.reset()
+      screen.draw(frame)
+      out.size shouldBe 0
+      screen.draw(frame.updated(2, "robot 1 offline"))
+      val second = out.toString(StandardCharsets.UTF_8)
+      // "online" became "offline": the cursor moves to the change and writes "ffline", nothing else.
+      second should include("ffline")
+      second should not include "robot 1"
+      second should not include "game"
+      screen.close()
+    }
+  }
+}
