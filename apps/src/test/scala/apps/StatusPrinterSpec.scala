@@ -109,6 +109,19 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     }
   }
 
+  "The choice of view" should {
+    "take sbt's word that its console is a terminal when the JVM itself has none, and honour the override" in {
+      assume(System.console() == null, "the test JVM runs on a terminal of its own")
+      StatusPrinter.onTerminal(Map("NAOGATEWAY_TERMINAL" -> "true").get) shouldBe true
+      StatusPrinter.onTerminal(Map("NAOGATEWAY_TERMINAL" -> "false").get) shouldBe false
+      StatusPrinter.onTerminal(Map.empty[String, String].get) shouldBe false
+      StatusPrinter.output(StatusPrinter.ViewMode.Lines) shouldBe a[StatusPrinter.LineOutput]
+      Seq("auto", "Screen", " lines ").map(StatusPrinter.ViewMode.parse) shouldBe
+        Seq(StatusPrinter.ViewMode.Auto, StatusPrinter.ViewMode.Screen, StatusPrinter.ViewMode.Lines)
+      an[IllegalArgumentException] should be thrownBy StatusPrinter.ViewMode.parse("fancy")
+    }
+  }
+
   "The terminal screen" should {
     "draw the lines with JLine, rewrite only what changed, and nothing when nothing changed" in {
       val out = new ByteArrayOutputStream()
@@ -121,7 +134,8 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       screen.draw(frame)
       out.size shouldBe 0
       screen.draw(frame.updated(2, "robot 1 offline"))
-      val second = out.toString(StandardCharsets.UTF_8)
+      // The text written, without the terminal's control sequences (cursor moves, attributes).
+      val second = out.toString(StandardCharsets.UTF_8).replaceAll("\u001b\\[[0-9;?]*[A-Za-z]", "")
       // "online" became "offline": the cursor moves to the change and writes "ffline", nothing else.
       second should include("ffline")
       second should not include "robot 1"
