@@ -56,12 +56,15 @@ object TerminalScreen {
   def open(): TerminalScreen =
     if (System.console() != null) {
       val terminal = TerminalBuilder.builder().system(true).build()
-      new TerminalScreen(terminal, () => terminal.getSize, () => ())
+      // Read once and again on each resize (WINCH), not at every redraw: some JLine providers ask `stty` for it.
+      @volatile var size = terminal.getSize
+      terminal.handle(Terminal.Signal.WINCH, _ => size = terminal.getSize)
+      new TerminalScreen(terminal, () => size, () => ())
     } else over(System.out, sys.env.get("TERM"), fixedSize = None)
 
   /**
    * A screen over `out` for a terminal of type `term` (xterm-256color when unknown), of `fixedSize`, or else of the
-   * controlling terminal's size.
+   * controlling terminal's size, read again every two seconds (one `stty` process each time).
    */
   def over(out: OutputStream, term: Option[String], fixedSize: Option[Size]): TerminalScreen = {
     val terminalType = term.map(_.trim).filter(t => t.nonEmpty && t != "dumb").getOrElse("xterm-256color")
@@ -71,8 +74,10 @@ object TerminalScreen {
     // A TERM neither JLine nor infocmp describes falls back to xterm's, which every terminal emulator in use understands.
     val known = Try(InfoCmp.getInfoCmp(terminalType)).toOption.exists(_.nonEmpty)
     val terminal = build(if (known) terminalType else "xterm-256color")
-    @volatile var size = fixedSize.orElse(controllingTerminalSize()).getOrElse(DefaultSize)
-    val timer = if (fixedSize.isEmpty) {
+    val controlling = if (fixedSize.isEmpty) controllingTerminalSize() else None
+    @volatile var size = fixedSize.orElse(controlling).getOrElse(DefaultSize)
+    // Followed only where it could be read at all: without a controlling terminal the size stays as it is.
+    val timer = if (controlling.isDefined) {
       val t = new Timer("status-screen-size", true)
       t.schedule(new TimerTask { def run(): Unit = controllingTerminalSize().foreach(size = _) }, 2000L, 2000L)
       Some(t)
