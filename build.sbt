@@ -88,7 +88,7 @@ lazy val root = (project in file("."))
     Test / run / javaOptions ++= Seq("-Xmx2g")
   )
 
-// ./sbt "robotctl status": the command-line client that joins a running gateway.
+// ./sbt "robotctl status": the command-line client of a running gateway's control port.
 addCommandAlias("robotctl", "apps/runMain apps.RobotCtl")
 
 // ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table.
