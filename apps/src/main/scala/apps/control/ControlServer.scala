@@ -12,7 +12,7 @@ import scala.util.{Failure, Success}
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, ActorSystem, Behavior, PostStop}
-import akka.stream.scaladsl.{Flow, Framing, Sink, Source, Tcp}
+import akka.stream.scaladsl.{Flow, Sink, Source, Tcp}
 import akka.stream.Materializer
 import akka.util.ByteString
 import akka.{Done, NotUsed}
@@ -75,18 +75,31 @@ object ControlServer {
         implicit val system: ActorSystem[_] = context.system
         // Touched by the connections' stream callbacks, never by the actor's state.
         val open = new AtomicInteger
-        val handler = answering(robots, settings)
-        val busy = Flow.fromSinkAndSourceCoupled(Sink.ignore,
-          Source.single(line(Answer.Error(s"busy: ${settings.maxConnections} robotctl commands are being served; try again"))))
+        val handler = answering(settings)(answer(robots, settings, _))
+        // A client told it is busy has its request line read first: closing a socket with unread input resets the
+        // connection, and the client would see "connection reset" instead of the reason.
+        val busyAnswer = Answer.Error(s"busy: ${settings.maxConnections} robotctl commands are being served; try again")
+        val busy = answering(settings)(_ => Source.single(busyAnswer))
+        val turnedAway = new AtomicInteger
         val binding = Tcp(system)
-          .bind(settings.host, settings.port)
+          // Half-close on: once the request line is read, the read side is cancelled, and with half-close off that
+          // would close the connection before the answer is written. Completing the answer closes it.
+          .bind(settings.host, settings.port, halfClose = true)
           .to(Sink.foreach { connection =>
-            if (open.incrementAndGet() > settings.maxConnections) {
-              open.decrementAndGet()
-              connection.handleWith(busy)
-            } else
+            if (open.incrementAndGet() <= settings.maxConnections)
               connection.handleWith(handler.watchTermination()((_, done) => done))
                 .onComplete(_ => open.decrementAndGet())(ExecutionContext.parasitic)
+            else {
+              open.decrementAndGet()
+              // As many again are told why; beyond that a flood of connections is closed at once.
+              if (turnedAway.incrementAndGet() <= settings.maxConnections)
+                connection.handleWith(busy.watchTermination()((_, done) => done))
+                  .onComplete(_ => turnedAway.decrementAndGet())(ExecutionContext.parasitic)
+              else {
+                turnedAway.decrementAndGet()
+                connection.handleWith(Flow.fromSinkAndSource(Sink.cancelled[ByteString], Source.empty[ByteString]))
+              }
+            }
           })
           .run()
         context.pipeToSelf(binding) {
@@ -128,26 +141,75 @@ object ControlServer {
   private def line(answer: Answer): ByteString = ByteString(ControlProtocol.render(answer) + "\n", StandardCharsets.UTF_8)
 
   /**
-   * One connection: reads one request line (bounded; it must come within `request-timeout`), then streams its
-   * answer and completes, which closes the connection. Bad input gets an error line, never more.
+   * One connection: reads one request line (bounded; it must come within `request-timeout`), then streams the
+   * answer `respond` gives and completes, which closes the connection. Bad input gets an error line, never more.
    */
-  def answering(robots: RobotInterface, settings: ControlSettings)(implicit system: ActorSystem[_]): Flow[ByteString, ByteString, NotUsed] =
+  def answering(settings: ControlSettings)(respond: Request => Source[Answer, NotUsed]): Flow[ByteString, ByteString, NotUsed] =
     Flow[ByteString]
-      // +1: a terminal client's \r before the \n.
-      .via(Framing.delimiter(ByteString("\n"), ControlProtocol.MaxRequestBytes + 1, allowTruncation = true))
-      .take(1)
-      .initialTimeout(settings.requestTimeout)
-      .map[Either[String, Request]](bytes => ControlProtocol.readRequest(bytes.decodeString(StandardCharsets.UTF_8)))
-      .orElse(Source.single(Left("no request line")))
-      .recover {
-        case _: Framing.FramingException => Left(s"request line longer than ${ControlProtocol.MaxRequestBytes} bytes")
-        case _: TimeoutException => Left(s"no request line within ${settings.requestTimeout.toSeconds} s")
+      .map[Input](Input.Chunk(_))
+      .concat(Source.single(Input.End))
+      .merge(Source.single(Input.TimedOut).initialDelay(settings.requestTimeout))
+      .statefulMapConcat { () =>
+        val reader = new LineReader(settings.requestTimeout)
+        input => reader.next(input)
       }
+      // Nothing on this side fails: a failure would cancel the read side with an error, and the connection would be
+      // reset (the client seeing no answer) instead of closed after the answer.
+      .take(1)
       .flatMapConcat {
         case Left(error)    => Source.single(Answer.Error(error))
-        case Right(request) => answer(robots, settings, request)
+        case Right(request) => respond(request)
       }
       .map(line(_))
+
+  /** What the line reader sees of a connection. */
+  private sealed trait Input
+  private object Input {
+    final case class Chunk(bytes: ByteString) extends Input
+    case object End extends Input
+    case object TimedOut extends Input
+  }
+
+  /**
+   * Finds the request line in a connection's input: at most [[ControlProtocol.MaxRequestBytes]] are kept; an overlong
+   * line is read to its end and dropped, so the client's input is consumed before it is answered.
+   */
+  private final class LineReader(requestTimeout: FiniteDuration) {
+    // +1: a terminal client's \r before the \n.
+    private val max = ControlProtocol.MaxRequestBytes + 1
+    private var kept = ByteString.empty
+    private var overlong = false
+    private var answered = false
+
+    def next(input: Input): List[Either[String, Request]] =
+      if (answered) Nil
+      else
+        input match {
+          case Input.Chunk(bytes) =>
+            val newline = bytes.indexOf('\n'.toByte)
+            val part = if (newline < 0) bytes else bytes.take(newline)
+            if (!overlong) {
+              if (kept.length + part.length > max) { overlong = true; kept = ByteString.empty }
+              else kept ++= part
+            }
+            if (newline < 0) Nil else finish(input)
+          case Input.End | Input.TimedOut => finish(input)
+        }
+
+    private def finish(ending: Input): List[Either[String, Request]] = {
+      answered = true
+      val request =
+        if (overlong) Left(s"request line longer than ${ControlProtocol.MaxRequestBytes} bytes")
+        else
+          ending match {
+            case Input.TimedOut            => Left(s"no request line within ${requestTimeout.toSeconds} s")
+            case Input.End if kept.isEmpty => Left("no request line")
+            // The line up to its \n, or a last line without one when the client ended its input.
+            case _ => ControlProtocol.readRequest(kept.decodeString(StandardCharsets.UTF_8))
+          }
+      List(request)
+    }
+  }
 
   /** The answer to `request`: output lines, then exactly one `Ok` or `Error`, within the request's time limit. */
   def answer(robots: RobotInterface, settings: ControlSettings, request: Request)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
