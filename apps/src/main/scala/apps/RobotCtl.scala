@@ -33,6 +33,7 @@ object RobotCtl {
   /** Longest silence while waiting for the answer, above the server's own answer-timeout (a watch adds its seconds). */
   val ReadTimeoutMillis = 30000
 
+  /** The command line's help. */
   val usage: String = ControlProtocol.usage
 
   /** Reads a parameter: a number, a truth value or a text. */

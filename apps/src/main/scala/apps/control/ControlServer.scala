@@ -161,6 +161,9 @@ object ControlServer {
         case Right(request) => respond(request)
       }
       .map(line(_))
+      // A client that stops reading would hold its connection for ever (its answer waits for TCP to take it): past
+      // the longest any exchange may take, the connection is aborted.
+      .completionTimeout(settings.requestTimeout + settings.answerTimeout + settings.maxWatch + 10.seconds)
 
   /** What the line reader sees of a connection. */
   private sealed trait Input
