@@ -50,7 +50,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
   private val gatewayPort = cluster.selfMember.address.port.get
 
   private val gateway = gatewayNode.spawn(Gateway(GatewaySettings(gatewayNode.system)), "gateway")
-  gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
+  private val middleware = gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
   private val robotPort: InetSocketAddress = {
     val probe = gatewayNode.createTestProbe[Gateway.Addresses]()
     gateway ! Gateway.GetAddresses(probe.ref)
@@ -116,18 +116,27 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       eventually(view(sim).posture shouldBe Posture.Stand)
     }
 
-    "serve robotctl: one status line per robot, and calls" in {
+    "serve robotctl through the gateway node's control port: one status line per robot, and calls" in {
       spawnRobot(17)
       online(17)
-      val node = appNode()
-      val ctl = connect(node, "robotctl", 0)
-      implicit val system: ActorSystem[_] = node
-      val status = apps.RobotCtl.run(ctl, apps.RobotCtl.Request.Status).futureValue
-      val line = status.linesIterator.find(_.startsWith("17 ")).getOrElse(fail(status))
-      Seq("127.0.0.1:", "online", "V", "sit", "striker").foreach(line should include(_))
-      apps.RobotCtl.run(ctl, apps.RobotCtl.Request.Call(17, "motion", "getPosture", Vector.empty)).futureValue shouldBe
-        "robot 17: motion.getPosture -> Text(sit)"
-      ctl.close()
+      val control = gatewayNode.spawn(apps.control.ControlServer(middleware,
+        apps.control.ControlSettings(gatewayNode.system).copy(host = "127.0.0.1", port = 0)), "control")
+      val probe = gatewayNode.createTestProbe[InetSocketAddress]()
+      control ! apps.control.ControlServer.GetAddress(probe.ref)
+      val address = s"127.0.0.1:${probe.receiveMessage(10.seconds).getPort}"
+      def robotctl(args: String*): (Int, Vector[String], Vector[String]) = {
+        val out = Vector.newBuilder[String]
+        val err = Vector.newBuilder[String]
+        val code = apps.RobotCtl.run("--control" +: address +: args, _ => None, out += _, err += _)
+        (code, out.result(), err.result())
+      }
+      val (code, status, errors) = robotctl("status")
+      withClue(errors) { code shouldBe 0 }
+      val line = status.find(_.startsWith("17 ")).getOrElse(fail(status.mkString("\n")))
+      Seq("127.0.0.1:", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
+      robotctl("call", "17", "motion", "getPosture") shouldBe ((0, Vector("robot 17: motion.getPosture -> Text(sit)"), Vector.empty))
+      robotctl("call", "4711", "motion", "getPosture") shouldBe ((1, Vector.empty, Vector("robotctl: no robot 4711 is known")))
+      gatewayNode.stop(control)
     }
 
     "stop its robot and free its lease when the app's system dies, so another app gets it" in {

@@ -27,6 +27,9 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     reader.start()
   }
 
+  // The launcher's control port, for robotctl; picked like the cluster port.
+  private val controlPort = freePort()
+
   private def launch(): Launched = {
     val javaBin = s"${System.getProperty("java.home")}/bin/java"
     val command = Seq(javaBin, "-Xmx768m", "-cp", System.getProperty("java.class.path"), "apps.Launcher")
@@ -40,6 +43,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     builder.environment().put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
     builder.environment().put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
     builder.environment().put("NAOGATEWAY_LOG_FILE", "target/launcher-spec.log")
+    builder.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
     new Launched(builder.start())
   }
 
@@ -70,6 +74,13 @@ class LauncherSpec extends AnyWordSpec with Matchers {
       val process = launched.process
       try {
         withClue(seen.mkString("\n")) { online shouldBe Set("1", "2", "3") }
+
+        // robotctl reaches the running launcher through its control port.
+        val out = Vector.newBuilder[String]
+        val err = Vector.newBuilder[String]
+        val code = apps.RobotCtl.run(Seq("status"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get, out += _, err += _)
+        withClue(err.result().mkString("\n")) { code shouldBe 0 }
+        out.result().count(_.matches("[123] .* online .*")) shouldBe 3
 
         val signalled = System.nanoTime()
         new ProcessBuilder("kill", "-INT", process.pid().toString).start().waitFor()

@@ -1,106 +1,150 @@
 package apps
 
-import scala.concurrent.duration._
-import scala.concurrent.{ExecutionContext, Future}
-import scala.util.{Failure, Success}
+import java.io.{BufferedInputStream, ByteArrayOutputStream, IOException, InputStream}
+import java.net.{ConnectException, InetSocketAddress, Socket, SocketTimeoutException, UnknownHostException}
+import java.nio.charset.StandardCharsets
 
-import akka.actor.typed.ActorSystem
-import akka.actor.typed.scaladsl.Behaviors
-import akka.stream.scaladsl.Sink
+import scala.util.control.NonFatal
 
-import naogateway.RobotSnapshot
+import apps.control.ControlProtocol
+import apps.control.ControlProtocol.Answer
 import naogateway.wire.RpcValue
-import robotmiddleware.cluster.MiddlewareCluster
-import robotmiddleware.{RobotClient, RobotInterface}
 
-/** `./sbt "robotctl status"`: a command-line client that joins a running gateway's cluster as an app. */
+/**
+ * `bin/robotctl` (or `./sbt "robotctl status"`): a command-line client of a running gateway's control port
+ * (apps.control.ControlServer). It starts no actor system and loads no Akka, so it answers within about a second.
+ */
 object RobotCtl {
 
   /** What robotctl was asked to do. */
-  sealed trait Request extends Product with Serializable
+  type Request = ControlProtocol.Request
 
   /** The parsed command lines. */
-  object Request {
-    /** One line per robot. */
-    case object Status extends Request
-    /** One RPC call to a robot. */
-    final case class Call(robotId: Int, module: String, method: String, params: Vector[RpcValue]) extends Request
-    /** Prints a robot's status stream for a while. */
-    final case class Watch(robotId: Int, seconds: Int) extends Request
-  }
+  val Request: ControlProtocol.Request.type = ControlProtocol.Request
 
-  val usage: String =
-    """usage: robotctl status
-      |       robotctl call <robotId> <module> <method> [param ...]   (numbers become floats, true/false flags, else text)
-      |       robotctl watch <robotId> [seconds]                      (prints the robot's status stream; default 10 s)""".stripMargin
+  /** The exit codes: done, failed (the gateway said no, or is not there), and a wrong command line. */
+  val ExitOk = 0
+  val ExitFailed = 1
+  val ExitUsage = 2
+
+  /** Time to reach the control port; it is on this machine, so a gateway that is there answers at once. */
+  val ConnectTimeoutMillis = 2000
+
+  /** Longest silence while waiting for the answer, above the server's own answer-timeout (a watch adds its seconds). */
+  val ReadTimeoutMillis = 30000
+
+  /** The command line's help. */
+  val usage: String = ControlProtocol.usage
 
   /** Reads a parameter: a number, a truth value or a text. */
-  def param(text: String): RpcValue =
-    text.toFloatOption.map(RpcValue.Number(_): RpcValue)
-      .orElse(text.toBooleanOption.map(RpcValue.Flag(_)))
-      .getOrElse(RpcValue.Text(text))
+  def param(text: String): RpcValue = ControlProtocol.param(text)
 
-  /** Parses the command line; a clear message when it is wrong. */
-  def parse(args: Seq[String]): Either[String, Request] = args.toList match {
-    case "status" :: Nil => Right(Request.Status)
-    case "call" :: id :: module :: method :: params =>
-      id.toIntOption.toRight(s"robot id '$id' is not a number").map(Request.Call(_, module, method, params.map(param).toVector))
-    case "watch" :: id :: rest =>
-      for {
-        robotId <- id.toIntOption.toRight(s"robot id '$id' is not a number")
-        seconds <- rest.headOption.fold[Either[String, Int]](Right(10))(s => s.toIntOption.filter(_ > 0).toRight(s"'$s' is not a number of seconds"))
-      } yield Request.Watch(robotId, seconds)
-    case _ => Left(usage)
-  }
+  /** Parses the command (without `--control`); a clear message when it is wrong. */
+  def parse(args: Seq[String]): Either[String, Request] = ControlProtocol.parse(args)
 
-  /** One line per robot: id, address, online/offline, battery, posture, role, round-trip time. */
-  def statusLine(r: RobotSnapshot, rttMillis: Option[Double]): String =
-    f"${r.robotId}%-4d ${r.address.getAddress.getHostAddress + ":" + r.address.getPort}%-22s ${if (r.online) "online" else "offline"}%-8s " +
-      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.getOrElse("-")}%-8s ${r.role.getOrElse("-")}%-9s " +
-      s"${rttMillis.fold("-")(v => f"$v%.1f ms")}"
-
-  /** Runs `request` against the middleware; the text to print, or a failure. */
-  def run(robot: RobotInterface, request: Request)(implicit system: ActorSystem[_]): Future[String] = {
-    implicit val ec: ExecutionContext = system.executionContext
-    request match {
-      case Request.Status =>
-        robot.robots().flatMap { robots =>
-          Future.traverse(robots) { r =>
-            robot.linkStats(r.robotId).map(_.rttMillis).runWith(Sink.headOption).map(_.flatten)
-              .recover { case _ => None }
-              .map(statusLine(r, _))
-          }
-        }.map(lines => ("id   address                status   battery  posture  role      rtt" +: lines).mkString("\n"))
-      case Request.Call(id, module, method, params) =>
-        val needs = robotmiddleware.Operation.RawCall(module, method, params).group
-        needs.fold(Future.successful(akka.Done: Any))(g => robot.acquire(id, g))
-          .flatMap(_ => robot.call(id, module, method, params: _*))
-          .map(v => s"robot $id: $module.$method -> ${v.fold("(no value)")(_.toString)}")
-          .andThen { case _ => needs.foreach(g => robot.release(id, g)) }
-      case Request.Watch(id, seconds) =>
-        robot.status(id).takeWithin(seconds.seconds)
-          .runWith(Sink.foreach(s => println(statusLine(s, None))))
-          .map(_ => s"watched robot $id for $seconds s")
+  /** The control port's `host:port` (from `--control`, else `env(NAOGATEWAY_CONTROL)`, else the default) and the request. */
+  def invocation(args: Seq[String], env: String => Option[String]): Either[String, (String, Request)] = {
+    val (address, rest) = args.toList match {
+      case "--control" :: a :: more => (Some(a), more)
+      case "--control" :: Nil       => (Some(""), Nil)
+      case first :: more if first.startsWith("--control=") => (Some(first.stripPrefix("--control=")), more)
+      case other                    => (None, other)
     }
+    parse(rest).map(address.orElse(env(ControlProtocol.AddressVariable)).getOrElse(ControlProtocol.DefaultAddress) -> _)
   }
 
-  def main(args: Array[String]): Unit =
-    parse(args.toSeq) match {
+  /**
+   * Runs one command: sends it to the control port and hands each output line to `out` as it arrives, and errors to
+   * `err`. Returns the exit code.
+   */
+  def run(args: Seq[String], env: String => Option[String], out: String => Unit, err: String => Unit): Int =
+    invocation(args, env) match {
       case Left(message) =>
-        System.err.println(message)
-        System.exit(2)
-      case Right(request) =>
-        val node = MiddlewareCluster.start[Nothing](Behaviors.empty[Nothing], MiddlewareCluster.AppRole)
-        implicit val system: ActorSystem[_] = node
-        implicit val ec: ExecutionContext = system.executionContext
-        val done = RobotClient(node, "robotctl", priority = 0).flatMap(robot => run(robot, request).andThen { case _ => robot.close() })
-        done.onComplete { result =>
-          val code = result match {
-            case Success(text) => println(text); 0
-            case Failure(e)    => System.err.println(s"robotctl: ${e.getMessage}"); 1
-          }
-          node.terminate()
-          node.whenTerminated.onComplete(_ => System.exit(code))(ExecutionContext.global)
+        err(message)
+        ExitUsage
+      case Right((address, request)) =>
+        ControlProtocol.address(address) match {
+          case Left(message) =>
+            err(s"robotctl: --control / ${ControlProtocol.AddressVariable}: $message")
+            ExitUsage
+          case Right((host, port)) =>
+            val line = ControlProtocol.render(request)
+            if (ControlProtocol.utf8Length(line) > ControlProtocol.MaxRequestBytes) {
+              err(s"robotctl: the command is longer than ${ControlProtocol.MaxRequestBytes} bytes")
+              ExitUsage
+            } else {
+              val readTimeout = request match {
+                case ControlProtocol.Request.Watch(_, seconds) => ReadTimeoutMillis + seconds.toLong * 1000
+                case _                                         => ReadTimeoutMillis.toLong
+              }
+              exchange(host, port, line, math.min(readTimeout, Int.MaxValue.toLong).toInt, out, err)
+            }
         }
     }
+
+  private def exchange(host: String, port: Int, request: String, readTimeout: Int, out: String => Unit, err: String => Unit): Int = {
+    val where = s"$host:$port"
+    val socket = new Socket()
+    try {
+      socket.connect(new InetSocketAddress(host, port), ConnectTimeoutMillis)
+      socket.setSoTimeout(readTimeout)
+      socket.getOutputStream.write((request + "\n").getBytes(StandardCharsets.UTF_8))
+      socket.getOutputStream.flush()
+      val in = new BufferedInputStream(socket.getInputStream)
+      def next(): Int =
+        readLine(in) match {
+          case None => err(s"robotctl: the gateway at $where closed the connection without an answer"); ExitFailed
+          case Some(Left(problem)) => err(s"robotctl: $problem"); ExitFailed
+          case Some(Right(text)) =>
+            ControlProtocol.readAnswer(text) match {
+              case Right(Answer.Line(l))  => out(l); next()
+              case Right(Answer.Ok(t))    => if (t.nonEmpty) out(t); ExitOk
+              case Right(Answer.Error(t)) => err(s"robotctl: $t"); ExitFailed
+              case Left(problem)          => err(s"robotctl: the gateway at $where answered oddly: $problem"); ExitFailed
+            }
+        }
+      next()
+    } catch {
+      case _: ConnectException | _: SocketTimeoutException if !socket.isConnected =>
+        err(s"no gateway at $where: is naogateway running?")
+        ExitFailed
+      case _: SocketTimeoutException =>
+        err(s"robotctl: no answer from the gateway at $where within ${readTimeout / 1000} s")
+        ExitFailed
+      case e: UnknownHostException =>
+        err(s"robotctl: unknown host ${e.getMessage}")
+        ExitFailed
+      case e: IOException =>
+        err(s"robotctl: connection to the gateway at $where failed: ${e.getMessage}")
+        ExitFailed
+    } finally {
+      try socket.close()
+      catch { case NonFatal(_) => () }
+    }
+  }
+
+  /**
+   * The next line of `in` (without its `\n`), None at the end of the stream; a line longer than the protocol allows
+   * is refused rather than read into memory without bound.
+   */
+  private def readLine(in: InputStream): Option[Either[String, String]] = {
+    val buffer = new ByteArrayOutputStream(128)
+    var b = in.read()
+    if (b < 0) None
+    else {
+      while (b >= 0 && b != '\n' && buffer.size() <= ControlProtocol.MaxAnswerBytes) {
+        buffer.write(b)
+        b = in.read()
+      }
+      if (buffer.size() > ControlProtocol.MaxAnswerBytes) Some(Left(s"an answer line is longer than ${ControlProtocol.MaxAnswerBytes} bytes"))
+      else if (b < 0) None
+      else Some(Right(new String(buffer.toByteArray, StandardCharsets.UTF_8)))
+    }
+  }
+
+  def main(args: Array[String]): Unit = {
+    val code = run(args.toSeq, name => Option(System.getenv(name)), line => System.out.println(line), line => System.err.println(line))
+    System.out.flush()
+    System.exit(code)
+  }
 }

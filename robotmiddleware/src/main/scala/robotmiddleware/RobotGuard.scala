@@ -31,7 +31,7 @@ private[robotmiddleware] object RobotGuard {
   final case class RobotEventReceived(event: RobotEvent) extends Command
   /** Sends the robot's camera frames to `subscriber` (no lease needed). */
   final case class WatchVision(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
-  /** Sends the robot's link figures to `subscriber` every `link-stats-interval` (no lease needed). */
+  /** Sends the robot's link figures to `subscriber` at once and then every `link-stats-interval` (no lease needed). */
   final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
 
   private final case class ChildrenReady(children: RobotActor.Connected) extends Command
@@ -228,6 +228,8 @@ private[robotmiddleware] object RobotGuard {
         context.watchWith(subscriber, StatsWatcherGone(subscriber))
         statsWatchers += subscriber
         if (!timers.isTimerActive(StatsKey)) timers.startTimerWithFixedDelay(StatsKey, StatsTick, settings.linkStatsInterval)
+        // The first figures at once, not one interval later: robotctl status waits for them.
+        robot ! RobotActor.GetLinkStats(statsAdapter)
         Behaviors.same
       case StatsWatcherGone(subscriber) =>
         statsWatchers -= subscriber

@@ -62,7 +62,7 @@ trait RobotInterface {
   /** HaViMo2 frames of a robot, newest only; `grid` adds the (large) grid frames. */
   def vision(robotId: Int, grid: Boolean = false): Source[VisionFrame, NotUsed]
 
-  /** A robot's link figures, about once a second. */
+  /** A robot's link figures: the current ones at once, then about once a second. */
   def linkStats(robotId: Int): Source[LinkStats, NotUsed]
 
   /** GameController packets as they arrive. */

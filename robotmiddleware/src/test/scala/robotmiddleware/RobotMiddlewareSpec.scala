@@ -22,7 +22,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
    * answer a guard's `Connect` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
    * With `snapshotOnline` the robot answers `GetSnapshot` with that online state; without, it does not answer.
    */
-  private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = None) {
+  private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = None,
+      middlewareSettings: MiddlewareSettings = settings) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
     val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
     val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
@@ -38,6 +39,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       case RobotActor.GetSnapshot(replyTo) =>
         snapshotOnline.foreach(online => replyTo ! RobotSnapshot(1, robotAddress, online = online))
         Behaviors.same
+      case RobotActor.GetLinkStats(replyTo) =>
+        replyTo ! linkStats
+        Behaviors.same
       case _ => Behaviors.same
     }
     private val robotRef = spawn(robot)
@@ -50,7 +54,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
         Behaviors.same
       case _ => Behaviors.same
     }
-    val middleware: ActorRef[RobotMiddleware.Command] = spawn(RobotMiddleware(spawn(gateway), settings))
+    val middleware: ActorRef[RobotMiddleware.Command] = spawn(RobotMiddleware(spawn(gateway), middlewareSettings))
     val publish: ActorRef[GatewayEvent] = events.receiveMessage()
     publish ! RobotOnline(1, robotAddress)
 
@@ -85,7 +89,15 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     }
   }
 
+  private val linkStats = LinkStats(1, 10, 9, 400, 300, Some(2.5), 0.1, 0, Map.empty)
+
   "The middleware" must {
+    "send a new link-figures watcher the current figures at once, not one interval later" in {
+      val f = new Fixture(middlewareSettings = settings.copy(linkStatsInterval = 1.hour))
+      val watcher = createTestProbe[LinkStats]()
+      f.middleware ! RobotMiddleware.WatchLinkStats(1, watcher.ref)
+      watcher.expectMessage(linkStats)
+    }
     "refuse an operation without the lease it needs, and run it once the lease is held" in {
       val f = new Fixture
       val (app, _) = f.app("teleop", 1)

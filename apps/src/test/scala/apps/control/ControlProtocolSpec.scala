@@ -1,0 +1,134 @@
+package apps.control
+
+import com.typesafe.config.ConfigFactory
+import org.scalacheck.Gen
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
+
+import apps.control.ControlProtocol.{Answer, Request}
+import naogateway.wire.RpcValue
+
+class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
+
+  implicit override val generatorDrivenConfig: PropertyCheckConfiguration = PropertyCheckConfiguration(minSuccessful = 500)
+
+  // Any string, lone surrogates and control characters included, and now and then a long one.
+  private val anyText: Gen[String] = Gen.frequency(
+    10 -> Gen.asciiStr,
+    10 -> Gen.stringOf(Gen.oneOf(Gen.choose(Char.MinValue, Char.MaxValue), Gen.oneOf(' ', '\\', '\n', '\r', '\t', 'u', 's'))),
+    1 -> Gen.choose(1000, 3000).flatMap(n => Gen.listOfN(n, Gen.alphaNumChar).map(_.mkString))
+  )
+
+  private val anyParam: Gen[RpcValue] = Gen.oneOf(
+    Gen.choose(-1e30f, 1e30f).map(RpcValue.Number(_)),
+    Gen.oneOf(Float.MinPositiveValue, Float.MaxValue, Float.PositiveInfinity, Float.NegativeInfinity, -0.0f).map(RpcValue.Number(_)),
+    Gen.oneOf(true, false).map(RpcValue.Flag(_)),
+    anyText.map(RpcValue.Text(_))
+  )
+
+  private val anyRequest: Gen[Request] = Gen.oneOf(
+    Gen.const(Request.Status),
+    for { id <- Gen.choose(Int.MinValue, Int.MaxValue); s <- Gen.choose(1, Int.MaxValue) } yield Request.Watch(id, s),
+    for {
+      id <- Gen.choose(Int.MinValue, Int.MaxValue)
+      module <- anyText
+      method <- anyText
+      params <- Gen.listOf(anyParam).map(_.take(6).toVector)
+    } yield Request.Call(id, module, method, params)
+  )
+
+  private val anyAnswer: Gen[Answer] = anyText.flatMap(t => Gen.oneOf(Answer.Line(t), Answer.Ok(t), Answer.Error(t)))
+
+  "A request line" should {
+    "read back as the request it renders, or be refused as too long, and never hold a raw line break" in {
+      forAll(anyRequest) { request =>
+        val line = ControlProtocol.render(request)
+        line.exists(c => c == '\n' || c == '\r') shouldBe false
+        if (ControlProtocol.utf8Length(line) <= ControlProtocol.MaxRequestBytes) ControlProtocol.readRequest(line) shouldBe Right(request)
+        else ControlProtocol.readRequest(line) shouldBe Left(s"request line longer than ${ControlProtocol.MaxRequestBytes} bytes")
+      }
+    }
+
+    "be read or refused with a message, whatever it holds" in {
+      val words = Gen.oneOf(Gen.oneOf("status", "call", "watch", "1", "n:1.0", "t:a\\sb", "f:true", "\\", "\\u12", ""), anyText)
+      forAll(Gen.oneOf(anyText, Gen.listOf(words).map(_.mkString(" ")))) { line =>
+        ControlProtocol.readRequest(line) match {
+          case Right(request) => ControlProtocol.readRequest(ControlProtocol.render(request)) shouldBe Right(request)
+          case Left(message)  => message should not be empty
+        }
+      }
+    }
+
+    "refuse overlong lines, broken escapes and bad words with a clear message" in {
+      ControlProtocol.readRequest("call 1 m f t:" + "x" * 5000) shouldBe Left("request line longer than 4096 bytes")
+      ControlProtocol.readRequest("dance") shouldBe Left("unknown request 'dance'")
+      ControlProtocol.readRequest("call x motion getPosture") shouldBe Left("robot id 'x' is not a number")
+      ControlProtocol.readRequest("call 1 motion getPosture t:\\q") shouldBe Left("unknown escape \\q")
+      ControlProtocol.readRequest("call 1 motion getPosture n:0x10") shouldBe Left("'n:0x10' is not a number parameter")
+      ControlProtocol.readRequest("call 1 motion getPosture 3") shouldBe Left("parameter '3' is not n:, f: or t:")
+      ControlProtocol.readRequest("watch 1 0") shouldBe Left("'0' is not a number of seconds")
+      ControlProtocol.readRequest("status\r") shouldBe Right(Request.Status)
+    }
+
+    "keep spaces, backslashes and empty words of the command line" in {
+      val request = Request.Call(2, "speech", "", Vector(RpcValue.Text("hello world \\s"), RpcValue.Text(""), RpcValue.Number(0.5f)))
+      ControlProtocol.render(request) shouldBe "call 2 speech  t:hello\\sworld\\s\\\\s t: n:0.5"
+      ControlProtocol.readRequest(ControlProtocol.render(request)) shouldBe Right(request)
+    }
+  }
+
+  "An answer line" should {
+    "read back as the answer it renders when it fits a line" in {
+      forAll(anyAnswer) { answer =>
+        val line = ControlProtocol.render(answer)
+        line.exists(c => c == '\n' || c == '\r') shouldBe false
+        if (ControlProtocol.utf8Length(line) <= ControlProtocol.MaxAnswerBytes) ControlProtocol.readAnswer(line) shouldBe Right(answer)
+        else ControlProtocol.readAnswer(line).isLeft shouldBe true
+      }
+    }
+
+    "be read or refused with a message, whatever it holds" in {
+      forAll(Gen.oneOf(anyText, anyText.map(". " + _), anyText.map("error " + _))) { line =>
+        ControlProtocol.readAnswer(line) match {
+          case Right(answer) => ControlProtocol.readAnswer(ControlProtocol.render(answer)) shouldBe Right(answer)
+          case Left(message) => message should not be empty
+        }
+      }
+    }
+
+    "come out of any output text as lines that each fit, and give the text back" in {
+      forAll(Gen.oneOf(anyText, Gen.choose(5000, 30000).flatMap(n => Gen.listOfN(n, Gen.oneOf('a', '\u0001', '\ud83d', '\ude00')).map(_.mkString)))) {
+        text =>
+          val lines = ControlProtocol.lines(text)
+          lines.foreach(l => ControlProtocol.utf8Length(ControlProtocol.render(l)) should be <= ControlProtocol.MaxAnswerBytes)
+          lines.map(_.text).mkString shouldBe text.replaceAll("\r?\n", "")
+      }
+    }
+  }
+
+  "The command line" should {
+    "parse into requests, with the usage when it is not a command" in {
+      ControlProtocol.parse(Seq("status")) shouldBe Right(Request.Status)
+      ControlProtocol.parse(Seq("watch", "3", "5", "6")) shouldBe Left(ControlProtocol.usage)
+      ControlProtocol.parse(Seq("call", "2", "motion")) shouldBe Left(ControlProtocol.usage)
+    }
+  }
+
+  "An address" should {
+    "be host:port, with brackets for IPv6 literals" in {
+      ControlProtocol.address("127.0.0.1:11019") shouldBe Right("127.0.0.1" -> 11019)
+      ControlProtocol.address("[::1]:7") shouldBe Right("::1" -> 7)
+      ControlProtocol.address("localhost") shouldBe Left("'localhost' is not host:port")
+      ControlProtocol.address(":80") shouldBe Left("':80' is not host:port")
+      ControlProtocol.address("h:99999") shouldBe Left("'h:99999' is not host:port")
+    }
+
+    "default to where the gateway binds by default" in {
+      assume(sys.env.get(ControlProtocol.AddressVariable).isEmpty, "NAOGATEWAY_CONTROL overrides the default here")
+      val settings = ControlSettings.fromConfig(ConfigFactory.defaultReference().getConfig(ControlSettings.ConfigPath))
+      s"${settings.host}:${settings.port}" shouldBe ControlProtocol.DefaultAddress
+      settings.enabled shouldBe true
+    }
+  }
+}

@@ -1,0 +1,117 @@
+package apps.control
+
+import java.io.{BufferedReader, InputStreamReader}
+import java.net.{InetSocketAddress, Socket}
+import java.nio.charset.StandardCharsets
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.actor.typed.ActorRef
+import com.typesafe.config.ConfigFactory
+import org.scalatest.wordspec.AnyWordSpecLike
+
+/** The control port as any TCP client sees it: one request line in, lines out, then the connection closes. */
+class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with AnyWordSpecLike with LogCapturing {
+
+  private val settings = ControlSettings(system).copy(host = "127.0.0.1", port = 0)
+  private val fleet = new FleetStub(1000)
+  private lazy val server = spawn(ControlServer.withInterface(fleet, settings), "control")
+  private lazy val port = address(server).getPort
+
+  private def address(server: ActorRef[ControlServer.Command]): InetSocketAddress = {
+    val probe = createTestProbe[InetSocketAddress]()
+    server ! ControlServer.GetAddress(probe.ref)
+    probe.receiveMessage(10.seconds)
+  }
+
+  private def connect(port: Int): Socket = {
+    val socket = new Socket()
+    socket.connect(new InetSocketAddress("127.0.0.1", port), 5000)
+    socket.setSoTimeout(30000)
+    socket
+  }
+
+  /** Everything the server sends until it closes. */
+  private def linesOf(socket: Socket): Vector[String] = {
+    val in = new BufferedReader(new InputStreamReader(socket.getInputStream, StandardCharsets.UTF_8))
+    try Iterator.continually(in.readLine()).takeWhile(_ != null).toVector
+    finally socket.close()
+  }
+
+  /** The lines answering `request` (sent as bytes, so anything can be sent). */
+  private def send(request: Array[Byte], serverPort: Int, thenClose: Boolean = false): Vector[String] = {
+    val socket = connect(serverPort)
+    socket.getOutputStream.write(request)
+    socket.getOutputStream.flush()
+    if (thenClose) socket.shutdownOutput()
+    linesOf(socket)
+  }
+
+  private def exchange(line: String, serverPort: Int = port): Vector[String] = send((line + "\n").getBytes(StandardCharsets.UTF_8), serverPort)
+
+  "The control port" should {
+    "stream a status of 1,000 robots as one short line per robot, then ok" in {
+      val lines = exchange("status")
+      lines.size shouldBe 1 + 1000 + 1
+      lines.head should startWith(". id   address")
+      lines.last shouldBe "ok"
+      val robots = lines.slice(1, 1001)
+      robots.map(_.drop(2).split("\\s+")(0).toInt) shouldBe (1 to 1000)
+      robots.foreach(l => l.length should be < 200)
+      robots.head.split("\\s+").toList shouldBe List(".", "1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%")
+      robots(9) should include("offline  offline")
+    }
+
+    "take the lease a motion call needs and give it back; calls that need none take none" in {
+      exchange("call 2 motion walk n:0.2 n:0.0 n:0.0") shouldBe Vector(". robot 2: motion.walk -> Text(motion.walk(Number(0.2),Number(0.0),Number(0.0)))", "ok")
+      exchange("call 3 system ping") shouldBe Vector(". robot 3: system.ping -> Text(system.ping())", "ok")
+      fleet.history should contain inOrderElementsOf Vector("acquire 2 walk", "call 2 motion.walk", "release 2 walk", "call 3 system.ping")
+      fleet.history should not contain "acquire 3 system"
+    }
+
+    "answer a failing call, an unknown robot and a bad request with one error line" in {
+      exchange("call 5 system ping") shouldBe Vector("error robot 5: no such method")
+      exchange("call 5000 system ping") shouldBe Vector("error no robot 5000 is known")
+      exchange("watch 5000 2") shouldBe Vector("error no robot 5000 is known")
+      exchange("hello gateway") shouldBe Vector("error unknown request 'hello gateway'")
+      exchange("watch 1 7200") shouldBe Vector("error a watch lasts at most 3600 s")
+      send(Array[Byte](0, -1, -2, 10), port) shouldBe Vector("error unknown request '\\\\u0000\ufffd\ufffd'")
+    }
+
+    "refuse an overlong request line, and an empty one" in {
+      // One write, so that the whole line is read before the refusal: a client that goes on sending after it
+      // may see its connection reset instead, as TCP does when a socket closes with input unread.
+      send(Array.fill[Byte](5000)('x'.toByte) :+ '\n'.toByte, port) shouldBe Vector("error request line longer than 4096 bytes")
+      send(Array.emptyByteArray, port, thenClose = true) shouldBe Vector("error no request line")
+      send("status".getBytes(StandardCharsets.UTF_8), port, thenClose = true).last shouldBe "ok"
+    }
+
+    "stream a watch and end it with ok" in {
+      val lines = exchange("watch 4 1")
+      lines.head should startWith(". id")
+      lines.slice(1, lines.size - 1).foreach(_ should startWith(". 4 "))
+      lines.last shouldBe "ok watched robot 4 for 1 s"
+    }
+
+    "serve at most max-connections at once, tell the others it is busy, and time out a silent client" in {
+      val small = spawn(ControlServer.withInterface(fleet, settings.copy(maxConnections = 1, requestTimeout = 3.seconds)))
+      val smallPort = address(small).getPort
+      val silent = connect(smallPort)
+      // The silent client holds the one slot until its request timeout (3 s, far longer than a local connect takes).
+      exchange("status", smallPort) shouldBe Vector("error busy: 1 robotctl commands are being served; try again")
+      linesOf(silent) shouldBe Vector("error no request line within 3 s")
+      // The slot is free again.
+      eventually(exchange("status", smallPort).last shouldBe "ok")
+      testKit.stop(small)
+    }
+
+    "close the interface it owns only, and survive clients that vanish mid-answer" in {
+      val socket = connect(port)
+      socket.getOutputStream.write("status\n".getBytes(StandardCharsets.UTF_8))
+      socket.close()
+      exchange("status").last shouldBe "ok"
+      fleet.history should not contain "close"
+    }
+  }
+}
