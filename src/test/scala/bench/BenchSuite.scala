@@ -19,7 +19,7 @@ trait Benchmark {
 object BenchSuite {
 
   /** Every benchmark, in the order they run. */
-  val benchmarks: Vector[Benchmark] = Vector(CodecBench, StreamBench, SimBench, GatewayBench)
+  val benchmarks: Vector[Benchmark] = Vector(CodecBench, StreamBench, SimBench, GatewayBench, IdleCpuBench)
 
   def main(args: Array[String]): Unit = {
     val selected = if (args.isEmpty) benchmarks else benchmarks.filter(b => args.contains(b.name))
