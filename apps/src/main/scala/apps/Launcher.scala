@@ -82,12 +82,13 @@ object Launcher {
     }
   }
 
-  /** The demo's simulated GameController (`apps.launcher.game-controller`), sending to the gateway's GameController
-    * port on loopback when the gateway listens on every address.
+  /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the
+    * gateway's GameController port, on loopback when the gateway listens on every address.
     */
   private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command], addresses: Gateway.Addresses): Unit = {
     val c = context.system.settings.config.getConfig("apps.launcher")
-    for (gc <- addresses.gameController if c.getBoolean("game-controller")) {
+    // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
+    for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
       val target = if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
       context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target)), "game-controller")
     }
