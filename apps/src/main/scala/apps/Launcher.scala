@@ -72,6 +72,7 @@ object Launcher {
             FleetSettings(target, (1 to launcher.simulatedRobots).toVector, faithfulLink = launcher.simulatedRobots <= 20)))(FleetStarted.apply)
         }
         if (launcher.ballFollowerRobot > 0) startBallFollower(context.system, launcher.ballFollowerRobot)
+        startGameController(context, addresses)
         Behaviors.same
       case FleetStarted(Success(fleet)) =>
         context.log.info("Started {} simulated robots", fleet.robots.size)
@@ -79,6 +80,18 @@ object Launcher {
       case FleetStarted(Failure(e)) =>
         context.log.error("Simulated robots did not start", e)
         Behaviors.same
+    }
+  }
+
+  /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the
+    * gateway's GameController port, on loopback when the gateway listens on every address.
+    */
+  private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command], addresses: Gateway.Addresses): Unit = {
+    val c = context.system.settings.config.getConfig("apps.launcher")
+    // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
+    for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
+      val target = if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
+      context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target)), "game-controller")
     }
   }
 

@@ -120,8 +120,11 @@ final case class FirmwareState(
   def nextWakeUp: Long = {
     val lease = walk.map(_.leaseUntil).getOrElse(Long.MaxValue)
     val motion = change.map(_.doneAt).getOrElse(Long.MaxValue)
-    val debug = if (debugEnabled.isEmpty) Long.MaxValue else math.min(nextDebugAt, nextCameraAt)
-    Seq(nextKeepAliveAt, lease, motion, debug).min
+    // Each debug clock counts only while one of its options is on: `advance` moves a clock on only then, so a clock
+    // whose options are all off stays in the past and would otherwise call for a wake-up at once, again and again.
+    val debug = if (debugEnabled.exists(o => !RobotFirmware.isCameraOption(o))) nextDebugAt else Long.MaxValue
+    val camera = if (debugEnabled.exists(RobotFirmware.isCameraOption)) nextCameraAt else Long.MaxValue
+    math.min(math.min(nextKeepAliveAt, lease), math.min(motion, math.min(debug, camera)))
   }
 
   /** The options the firmware offers, with their current switch. */
@@ -161,6 +164,9 @@ object RobotFirmware {
   )
 
   private val CameraOptions = Set("havimo.regions", "havimo.grid", "camera.image")
+
+  /** Whether debug option `name` is one of the camera's, which send on the camera's own clock. */
+  private[sim] def isCameraOption(name: String): Boolean = CameraOptions(name)
 
   /** A freshly booted firmware: sitting, nothing enabled, first keep-alive due at once. */
   def boot(settings: FirmwareSettings, now: Long, bootId: Int = 1): FirmwareState =

@@ -123,6 +123,20 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       kinds.exists(_.havimoGrid.isDefined) shouldBe true
       camera.foreach(_.bytes.length should be <= WireLimits.MaxDatagramBytes)
     }
+    "ask to be woken only when something is due, whichever debug options are on" in {
+      // A wake-up in the past after `advance` would make its driver spin on zero-delay timers.
+      def enabled(prefix: String, at: Long): FirmwareState = {
+        val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq(prefix))))))
+        RobotFirmware.receive(RobotFirmware.boot(settings, 0), MessageContents.encodeFrame(enable).value, gateway, at)._1
+      }
+      for (prefix <- Seq("havimo", "camera", "status", "world", "motion")) {
+        var s = enabled(prefix, 5000 * ms)
+        (5000 to 7000 by 7).foreach { t =>
+          s = RobotFirmware.advance(s, t * ms)._1
+          withClue(s"$prefix at $t ms: ")(s.nextWakeUp should be > t * ms)
+        }
+      }
+    }
     "come back from a reset as a new session with its debug options off" in {
       val s0 = RobotFirmware.boot(settings, 0)
       val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))

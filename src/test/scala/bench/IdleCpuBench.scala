@@ -1,0 +1,136 @@
+package bench
+
+import java.lang.management.ManagementFactory
+import java.net.{DatagramSocket, InetAddress, InetSocketAddress, ServerSocket, StandardProtocolFamily}
+import java.nio.ByteBuffer
+import java.nio.channels.{AsynchronousCloseException, DatagramChannel}
+import java.nio.charset.StandardCharsets
+import java.nio.file.{Files, Path, Paths}
+import java.util.concurrent.TimeUnit
+
+import scala.collection.immutable.ListMap
+import scala.concurrent.Await
+import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
+import scala.jdk.OptionConverters._
+import scala.util.Try
+
+import akka.actor.typed.ActorSystem
+import akka.actor.typed.scaladsl.Behaviors
+import com.typesafe.config.ConfigFactory
+
+import naogateway.sim.{Fleet, FleetSettings}
+
+/**
+ * What doing nothing costs, in percent of one core of this machine:
+ *
+ *  - `demo_idle_cpu_pct`: `./sbt run` as a user starts it, in a JVM of its own forked with this classpath (the
+ *    launcher's `main`: gateway, middleware, three simulated robots with the faithful link, the ball follower in its
+ *    own actor system, the simulated GameController and the status printer, output piped). Once the launcher's log
+ *    shows the three robots online, [[DemoSettle]] lets the JIT calm down, then the process's CPU time
+ *    (user + system, from the operating system) is taken over [[Window]]. The ball follower keeps robot 1's camera on
+ *    and steers it the whole time, so this is the demo's steady state rather than a process with nothing to do.
+ *  - `sim_idle_cpu_pct_per_robot`: [[SimRobots]] simulated robots with the faithful link (the demo's mode) in an actor
+ *    system of this JVM, sending their 5 Hz keep-alives to a sink (one thread reading and discarding), nothing else
+ *    asked of them. The JVM's process CPU time over [[Window]] after [[SimSettle]], divided by the robots; the JVM's
+ *    own share (GC, JIT, Akka's scheduler tick, the sink thread) is in it, so the figure errs high.
+ */
+object IdleCpuBench extends Benchmark {
+  val name = "idle"
+
+  private val Window = 30.seconds
+  private val DemoSettle = 45.seconds
+  private val SimSettle = 10.seconds
+  private val SimRobots = 20
+  private val OnlineTimeout = 120.seconds
+
+  def run(): ListMap[String, Double] =
+    ListMap("demo_idle_cpu_pct" -> demoIdle(), "sim_idle_cpu_pct_per_robot" -> simIdlePerRobot())
+
+  private def progress(line: String): Unit = println(s"  idle: $line")
+
+  private def freeTcpPort(): Int = { val s = new ServerSocket(0); try s.getLocalPort finally s.close() }
+  private def freeUdpPort(): Int = { val s = new DatagramSocket(0); try s.getLocalPort finally s.close() }
+
+  private def demoIdle(): Double = {
+    val log = Paths.get("target", "bench", "demo-idle.log").toAbsolutePath
+    Files.createDirectories(log.getParent)
+    Files.deleteIfExists(log)
+    val javaBin = s"${System.getProperty("java.home")}/bin/java"
+    // The launcher's own logging (INFO to a file), not the tests' logback-test.xml that this classpath also holds.
+    val logging = Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
+    val command = Seq(javaBin) ++ logging ++ Seq("-cp", System.getProperty("java.class.path"), "apps.Launcher")
+    val builder = new ProcessBuilder(command.asJava)
+      .redirectErrorStream(true)
+      .redirectOutput(ProcessBuilder.Redirect.DISCARD)
+    // Ports of their own, so a demo or test running beside the bench is neither disturbed nor counted.
+    val env = builder.environment()
+    env.put("ROBOTS_GATEWAY_PORT", freeTcpPort().toString)
+    env.put("NAOGATEWAY_GAMECONTROLLER_PORT", freeUdpPort().toString)
+    env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_LOG_FILE", log.toString)
+    val process = builder.start()
+    try {
+      val deadline = OnlineTimeout.fromNow
+      def online: Int = onlineRobots(log)
+      while (online < 3 && process.isAlive && deadline.hasTimeLeft()) Thread.sleep(500)
+      if (online < 3) {
+        progress(s"the demo showed $online of 3 robots online (see $log)")
+        Double.NaN
+      } else {
+        progress(s"three robots online; settling ${DemoSettle.toSeconds} s, then measuring ${Window.toSeconds} s")
+        Thread.sleep(DemoSettle.toMillis)
+        val info = process.toHandle
+        def cpu(): Option[Long] = info.info().totalCpuDuration().toScala.map(_.toNanos)
+        val (c0, t0) = (cpu(), System.nanoTime())
+        Thread.sleep(Window.toMillis)
+        val (c1, t1) = (cpu(), System.nanoTime())
+        val pct = (for (a <- c0; b <- c1) yield (b - a) * 100.0 / (t1 - t0)).getOrElse(Double.NaN)
+        progress(f"demo process: $pct%.1f %% of one core over ${(t1 - t0) / 1e9}%.0f s")
+        pct
+      }
+    } finally {
+      process.destroy()
+      if (!process.waitFor(20, TimeUnit.SECONDS)) process.destroyForcibly()
+    }
+  }
+
+  // "Robot [n] online at": the gateway's log line when a robot comes online.
+  private def onlineRobots(log: Path): Int =
+    Try(Files.readAllLines(log, StandardCharsets.UTF_8).asScala.collect {
+      case l if l.contains("online at") => l.substring(l.indexOf("Robot [")).takeWhile(_ != ']')
+    }.toSet.size).getOrElse(0)
+
+  private def simIdlePerRobot(): Double = {
+    val sink = DatagramChannel.open(StandardProtocolFamily.INET)
+    sink.bind(new InetSocketAddress(InetAddress.getLoopbackAddress, 0))
+    val reader = new Thread(() => {
+      val buffer = ByteBuffer.allocate(2048)
+      try while (true) { buffer.clear(); sink.receive(buffer) }
+      catch { case _: AsynchronousCloseException => () }
+    }, "idle-bench-sink")
+    reader.setDaemon(true)
+    reader.start()
+    val config = ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load())
+    val system = ActorSystem[Nothing](Behaviors.empty, "idle-bench-robots", config)
+    try {
+      val target = sink.getLocalAddress.asInstanceOf[InetSocketAddress]
+      val fleet = Await.result(Fleet.start(system, FleetSettings(target, (1 to SimRobots).toVector)), 60.seconds)
+      progress(s"${fleet.robots.size} simulated robots up; settling ${SimSettle.toSeconds} s, then measuring ${Window.toSeconds} s")
+      Thread.sleep(SimSettle.toMillis)
+      val os = ManagementFactory.getOperatingSystemMXBean.asInstanceOf[com.sun.management.OperatingSystemMXBean]
+      val (c0, t0) = (os.getProcessCpuTime, System.nanoTime())
+      Thread.sleep(Window.toMillis)
+      val (c1, t1) = (os.getProcessCpuTime, System.nanoTime())
+      val pct = (c1 - c0) * 100.0 / (t1 - t0)
+      progress(f"$SimRobots robots: the whole JVM $pct%.2f %% of one core, ${pct / SimRobots}%.3f %% per robot")
+      Await.result(fleet.stop(), 30.seconds)
+      pct / SimRobots
+    } finally {
+      system.terminate()
+      Await.ready(system.whenTerminated, 30.seconds)
+      sink.close()
+    }
+  }
+}
