@@ -24,9 +24,10 @@ import naogateway.sim.{Fleet, FleetSettings}
 /**
  * What doing nothing costs, in percent of one core of this machine:
  *
- *  - `demo_idle_cpu_pct`: `./sbt run` as a user starts it, in a JVM of its own forked with this classpath (the
- *    launcher's `main`: gateway, middleware, three simulated robots with the faithful link, the ball follower in its
- *    own actor system, the simulated GameController and the status printer, output piped). Once the launcher's log
+ *  - `demo_idle_cpu_pct`: the demo as a user starts it, the staged package's `bin/naogateway` (falling back to the
+ *    launcher's `main` in a JVM forked with this classpath when no package is staged): gateway, middleware, three
+ *    simulated robots with the faithful link, the ball follower in its own actor system, the simulated GameController
+ *    and the status printer, output piped. Once the launcher's log
  *    shows the three robots online, [[DemoSettle]] lets the JIT calm down, then the process's CPU time
  *    (user + system, from the operating system) is taken over [[Window]]. The ball follower keeps robot 1's camera on
  *    and steers it the whole time, so this is the demo's steady state rather than a process with nothing to do.
@@ -56,10 +57,17 @@ object IdleCpuBench extends Benchmark {
     val log = Paths.get("target", "bench", "demo-idle.log").toAbsolutePath
     Files.createDirectories(log.getParent)
     Files.deleteIfExists(log)
-    val javaBin = s"${System.getProperty("java.home")}/bin/java"
-    // The launcher's own logging (INFO to a file), not the tests' logback-test.xml that this classpath also holds.
-    val logging = Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
-    val command = Seq(javaBin) ++ logging ++ Seq("-cp", System.getProperty("java.class.path"), "apps.Launcher")
+    // The package's launcher, as a user starts it (the bench alias stages the package first); without a staged
+    // package, the launcher's main on this classpath with the launcher's own logging, not the tests' logback-test.xml.
+    val packaged = Paths.get("apps", "target", "universal", "stage", "bin", "naogateway").toAbsolutePath
+    val command =
+      if (Files.isExecutable(packaged)) Seq(packaged.toString)
+      else {
+        val javaBin = s"${System.getProperty("java.home")}/bin/java"
+        val logging = Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
+        Seq(javaBin) ++ logging ++ Seq("-cp", System.getProperty("java.class.path"), "apps.Launcher")
+      }
+    progress(s"demo: ${command.head}")
     val builder = new ProcessBuilder(command.asJava)
       .redirectErrorStream(true)
       .redirectOutput(ProcessBuilder.Redirect.DISCARD)
@@ -70,6 +78,7 @@ object IdleCpuBench extends Benchmark {
     env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
     env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
     env.put("NAOGATEWAY_LOG_FILE", log.toString)
+    env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
     val process = builder.start()
     try {
       val deadline = OnlineTimeout.fromNow

@@ -76,7 +76,7 @@ object Soak extends Benchmark {
     progress(s"bin/naogateway started (pid $pid), log in $dir")
 
     implicit val system: ActorSystem[Nothing] =
-      ActorSystem(Behaviors.empty[Nothing], "soak", ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))
+      ActorSystem[Nothing](Behaviors.empty, "soak", ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))
     val network = LossyNetwork.start(seed = 30)
     val random = new Random(30)
     val robotAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, robotPort)
