@@ -41,7 +41,15 @@ object Launcher {
   }
 
   def main(args: Array[String]): Unit = {
-    val overrides = config(args.toSeq)
+    val overrides =
+      try config(args.toSeq)
+      catch {
+        // A wrong file name or a typo in the file is the operator's to fix: say what and where, without a stack trace.
+        case e @ (_: IllegalArgumentException | _: com.typesafe.config.ConfigException) =>
+          System.err.println(s"naogateway: ${e.getMessage.stripPrefix("requirement failed: ")}")
+          System.err.println("usage: naogateway [config-file]   (no file: the demo with simulated robots)")
+          sys.exit(2)
+      }
     val gatewayNode = MiddlewareCluster.start(Root(), MiddlewareCluster.GatewayRole, overrides)
     // Ctrl-C (or a TERM) runs the JVM shutdown hooks: both actor systems leave and stop within the phase timeouts.
     CoordinatedShutdown(gatewayNode.classicSystem).addJvmShutdownHook(println("naogateway stopped"))

@@ -52,6 +52,7 @@ object RobotMiddleware {
   final case class WatchEvents(subscriber: ActorRef[RobotEvent]) extends Command
 
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
+  private final case class GatewayRobotsKnown(robots: Vector[RobotSnapshot]) extends Command
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
@@ -71,6 +72,8 @@ object RobotMiddleware {
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
       gateway ! Gateway.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
+      // Robots configured but never heard from yet send no events: the list starts from the gateway's own.
+      gateway ! Gateway.GetRobots(context.messageAdapter(GatewayRobotsKnown.apply))
       // In a cluster, an app whose node becomes unreachable loses its robots at once, not only when the node is
       // downed seconds later: a blind app must not keep a robot walking.
       if (context.system.settings.config.getString("akka.actor.provider") == "cluster") {
@@ -183,6 +186,10 @@ object RobotMiddleware {
         context.log.info("App [{}] is gone: releasing its leases and stopping its robots", apps.get(app).map(_.name).getOrElse("?"))
         apps -= app
         guards.values.foreach(_ ! RobotGuard.AppGone(app))
+        Behaviors.same
+      case GatewayRobotsKnown(known) =>
+        // The gateway answered after it published every event this middleware already has, so its list is as new.
+        snapshots = snapshots ++ known.map(r => r.robotId -> r)
         Behaviors.same
       case GatewayEventReceived(event) =>
         event match {

@@ -23,7 +23,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
    * With `snapshotOnline` the robot answers `GetSnapshot` with that online state; without, it does not answer.
    */
   private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = None,
-      middlewareSettings: MiddlewareSettings = settings) {
+      middlewareSettings: MiddlewareSettings = settings, known: Vector[RobotSnapshot] = Vector.empty) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
     val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
     val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
@@ -51,6 +51,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
         Behaviors.same
       case Gateway.GetRobot(id, replyTo) =>
         replyTo ! (if (id == 1) Some(robotRef) else None)
+        Behaviors.same
+      case Gateway.GetRobots(replyTo) =>
+        replyTo ! known
         Behaviors.same
       case _ => Behaviors.same
     }
@@ -245,6 +248,17 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       listed() shouldBe first.copy(online = false, quality = LinkQuality.Offline)
       f.publish ! RobotOnline(1, robotAddress)
       listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
+    }
+    "list the robots the gateway knows from its configuration before any of them was heard from" in {
+      val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)
+      val f = new Fixture(known = Vector(configured))
+      val robots = createTestProbe[Vector[RobotSnapshot]]()
+      f.middleware ! RobotMiddleware.ListRobots(robots.ref)
+      robots.receiveMessage().map(_.robotId) should contain(7)
+      // Later events about it still update the listed snapshot.
+      f.publish ! RobotStatusUpdated(configured.copy(batteryVoltage = Some(12.2)))
+      f.middleware ! RobotMiddleware.ListRobots(robots.ref)
+      robots.receiveMessage().find(_.robotId == 7).flatMap(_.batteryVoltage) shouldBe Some(12.2)
     }
     "answer for robots the gateway does not know" in {
       val f = new Fixture
