@@ -41,6 +41,9 @@ object Launcher {
   }
 
   def main(args: Array[String]): Unit = {
+    // Logback is set up before the actor systems' threads log at once; otherwise SLF4J queues their first lines and
+    // prints a warning about replaying them on every start.
+    org.slf4j.LoggerFactory.getILoggerFactory
     val overrides =
       try config(args.toSeq)
       catch {

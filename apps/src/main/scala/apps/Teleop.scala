@@ -103,6 +103,9 @@ object Teleop {
       System.err.println("usage: teleop <robotId>")
       sys.exit(2)
     }
+    // Logback is set up before the actor systems' threads log at once; otherwise SLF4J queues their first lines and
+    // prints a warning about replaying them on every start.
+    org.slf4j.LoggerFactory.getILoggerFactory
     val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole)
     implicit val ec: ExecutionContext = node.executionContext
     val raw = System.console() != null && Try(stty("-icanon -echo min 1")).isSuccess
