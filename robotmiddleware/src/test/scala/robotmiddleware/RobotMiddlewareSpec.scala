@@ -253,8 +253,11 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)
       val f = new Fixture(known = Vector(configured))
       val robots = createTestProbe[Vector[RobotSnapshot]]()
-      f.middleware ! RobotMiddleware.ListRobots(robots.ref)
-      robots.receiveMessage().map(_.robotId) should contain(7)
+      // The gateway's answer reaches the middleware after it started; the list has the robot from then on.
+      robots.awaitAssert {
+        f.middleware ! RobotMiddleware.ListRobots(robots.ref)
+        robots.receiveMessage().map(_.robotId) should contain(7)
+      }
       // Later events about it still update the listed snapshot.
       f.publish ! RobotStatusUpdated(configured.copy(batteryVoltage = Some(12.2)))
       f.middleware ! RobotMiddleware.ListRobots(robots.ref)
