@@ -63,12 +63,12 @@ object RobotActor {
   final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
 
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
+  private final case class ZmqLinkEvent(event: ZmqRobotLink.Event) extends Command
   private case object PullOptions extends Command
   private case object PullKey
 
   /** How often `optionPull` is repeated until the robot's `optionPush` arrives (protocol.md 8, step 1). */
   val OptionPullInterval: FiniteDuration = 1.second
-  private final case class ZmqLinkEvent(event: ZmqRobotLink.Event) extends Command
 
   /** How a robot is reached. */
   sealed trait Transport extends Product with Serializable
