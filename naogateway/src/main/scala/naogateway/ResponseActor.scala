@@ -7,7 +7,12 @@ import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
 import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
-/** Request-reply with one robot: correlation ids, per-call timeouts, retries of idempotent calls, one answer per call. */
+/**
+ * Request-reply with one robot: correlation ids, per-call timeouts, retries of idempotent calls, one answer per call.
+ *
+ * A retry is a new `Request` with a new call id (docs/protocol.md 7.1): a robot answers every request it gets once,
+ * so a repeated call id would earn two answers to one request. An answer to any attempt of a call completes it.
+ */
 object ResponseActor {
 
   /** What the response actor accepts. */
@@ -29,7 +34,7 @@ object ResponseActor {
   final case class Reachability(online: Boolean) extends Command
 
   private final case class SendOutcome(outcome: Outbox.Outcome) extends Command
-  private final case class AttemptTimedOut(callId: Long, attempt: Int) extends Command
+  private final case class AttemptTimedOut(key: Long, attempt: Int) extends Command
 
   /** Call ids of this actor carry this tag in their two top bits. */
   val CallIdTag: Long = 0L
@@ -41,8 +46,10 @@ object ResponseActor {
   /** Calls in flight at once; more wait in the stash so the robot's 1400-byte module buffer is not flooded. */
   val MaxInFlight: Int = 4
 
+  /** One call in flight; `ids` are the call ids of its attempts, the first one being its key. */
   private final case class Pending(
       call: RpcCall,
+      ids: Set[Long],
       replyTo: ActorRef[CallResult],
       attempts: Int,
       maxAttempts: Int,
@@ -76,11 +83,17 @@ object ResponseActor {
     private def answer(p: Pending, result: Either[CallError, Option[RpcValue]]): Unit =
       p.replyTo ! CallResult(robotId, p.call.name, result)
 
-    // The attempt's timer runs before anyone can react to the call going out.
-    private def transmit(id: Long, p: Pending, priority: Priority): Unit = {
-      timers.startSingleTimer(id, AttemptTimedOut(id, p.attempts), p.attemptTimeout)
+    // The attempt's timer (keyed by the call's first id) runs before anyone can react to the attempt going out.
+    private def transmit(key: Long, id: Long, p: Pending, priority: Priority): Unit = {
+      timers.startSingleTimer(key, AttemptTimedOut(key, p.attempts), p.attemptTimeout)
       robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(p.call.copy(callId = Some(id))), priority, Some(outcomes), id)
     }
+
+    private def nextId(lastId: Long): Long = CallIdTag | ((lastId + 1) & 0x3fffffffL)
+
+    /** The call one of whose attempts carried `id`, with its key; at most MaxInFlight calls are searched. */
+    private def attemptOf(pending: Map[Long, Pending], id: Long): Option[(Long, Pending)] =
+      pending.find { case (_, p) => p.ids(id) }
 
     private def failAll(pending: Map[Long, Pending], error: CallError): Unit =
       pending.foreach { case (id, p) =>
@@ -110,35 +123,37 @@ object ResponseActor {
             else stash.stash(c)
             Behaviors.same
           case Call(call, replyTo, priority, timeout, idempotent) =>
-            val id = CallIdTag | ((lastId + 1) & 0x3fffffffL)
+            val id = nextId(lastId)
             val total = timeout.getOrElse(settings.timeout)
             val retries = if (idempotent.getOrElse(IdempotentCalls(call.name))) settings.idempotentRetries else 0
-            val p = Pending(call, replyTo, 1, retries + 1, total / (retries + 1).toLong, total, System.nanoTime())
-            transmit(id, p, priority)
+            val p = Pending(call, Set(id), replyTo, 1, retries + 1, total / (retries + 1).toLong, total, System.nanoTime())
+            transmit(id, id, p, priority)
             running(pending.updated(id, p), online, id & 0x3fffffffL)
           case ReplyReceived(reply) =>
-            reply.callId.flatMap(pending.get) match {
+            reply.callId.flatMap(attemptOf(pending, _)) match {
               case None => Behaviors.same // a late or duplicate reply: the call was answered already
-              case Some(p) =>
+              case Some((key, p)) =>
                 // Karn's rule: only a call sent once gives a clean round-trip sample.
                 if (p.attempts == 1) robot ! RobotActor.RoundTrip(System.nanoTime() - p.sentAt)
-                settle(pending, reply.callId.get, p, reply.result.left.map(CallError.RobotError(robotId, _)), online, lastId)
+                settle(pending, key, p, reply.result.left.map(CallError.RobotError(robotId, _)), online, lastId)
             }
-          case AttemptTimedOut(id, attempt) =>
-            pending.get(id) match {
+          case AttemptTimedOut(key, attempt) =>
+            pending.get(key) match {
               case Some(p) if p.attempts == attempt && p.attempts < p.maxAttempts =>
-                val again = p.copy(attempts = p.attempts + 1)
+                // Sent again as a new request: the same call id twice would be answered twice (protocol.md 7.1).
+                val id = nextId(lastId)
+                val again = p.copy(ids = p.ids + id, attempts = p.attempts + 1)
                 robot ! RobotActor.Retransmitted
-                transmit(id, again, Priority.Command)
-                running(pending.updated(id, again), online, lastId)
+                transmit(key, id, again, Priority.Command)
+                running(pending.updated(key, again), online, id & 0x3fffffffL)
               case Some(p) if p.attempts == attempt =>
-                settle(pending, id, p, Left(CallError.Timeout(robotId, p.call.name, p.total)), online, lastId)
+                settle(pending, key, p, Left(CallError.Timeout(robotId, p.call.name, p.total)), online, lastId)
               case _ => Behaviors.same
             }
           case SendOutcome(outcome) =>
-            (CallError.ofOutcome(robotId, outcome), pending.get(outcome.tag)) match {
-              case (Some(error), Some(p)) => settle(pending, outcome.tag, p, Left(error), online, lastId)
-              case _                      => Behaviors.same
+            (CallError.ofOutcome(robotId, outcome), attemptOf(pending, outcome.tag)) match {
+              case (Some(error), Some((key, p))) => settle(pending, key, p, Left(error), online, lastId)
+              case _                             => Behaviors.same
             }
           case Reachability(nowOnline) =>
             if (!nowOnline) {

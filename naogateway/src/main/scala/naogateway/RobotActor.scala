@@ -5,11 +5,11 @@ import java.net.InetSocketAddress
 import scala.collection.immutable.Queue
 import scala.concurrent.duration._
 
-import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 
 import naogateway.link.ZmqRobotLink
-import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
+import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameState
 
@@ -64,6 +64,11 @@ object RobotActor {
 
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
   private final case class ZmqLinkEvent(event: ZmqRobotLink.Event) extends Command
+  private case object PullOptions extends Command
+  private case object PullKey
+
+  /** How often `optionPull` is repeated until the robot's `optionPush` arrives (protocol.md 8, step 1). */
+  val OptionPullInterval: FiniteDuration = 1.second
 
   /** How a robot is reached. */
   sealed trait Transport extends Product with Serializable
@@ -129,8 +134,10 @@ object RobotActor {
       transport: Transport = Transport.Datagrams
   ): Behavior[Command] =
     Behaviors.setup { context =>
-      Behaviors.withStash(64) { stash =>
-        new Robot(robotId, settings, outbox, events, transport, context, stash).start(address, heard)
+      Behaviors.withTimers { timers =>
+        Behaviors.withStash(64) { stash =>
+          new Robot(robotId, settings, outbox, events, transport, context, stash, timers).start(address, heard)
+        }
       }
     }
 
@@ -141,7 +148,8 @@ object RobotActor {
       events: ActorRef[GatewayEvent],
       transport: Transport,
       context: ActorContext[Command],
-      stash: StashBuffer[Command]
+      stash: StashBuffer[Command],
+      timers: TimerScheduler[Command]
   ) {
     private val heartbeatReports = context.messageAdapter[HeartBeatActor.Report](HeartbeatReport.apply)
     private val heartbeatSettings = transport match {
@@ -160,6 +168,10 @@ object RobotActor {
     private var snapshot: RobotSnapshot = null
     // Debug options switched on through the gateway, re-enabled after a robot restart.
     private var activeOptions = Set.empty[String]
+    // The robot's option list of this session (protocol.md 8): None until its optionPush answers our optionPull.
+    // Over datagrams, option commands wait for it; a ZeroMQ robot is not pulled (docs/zeromq.md).
+    private var optionList: Option[Seq[DebuggingOption]] = None
+    private var pulling = false
 
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       address = at
@@ -239,7 +251,40 @@ object RobotActor {
     private def wentOnline(): Unit = {
       context.log.info("Robot [{}] online at {}", robotId, address)
       snapshot = snapshot.copy(online = true, quality = LinkQuality.Good)
+      if (pullsOptions && optionList.isEmpty) { if (pulling) sendPull() else startPull() }
       events ! RobotOnline(robotId, address)
+    }
+
+    private def pullsOptions: Boolean = transport == Transport.Datagrams
+
+    /** protocol.md 8, step 1: `optionPull` now and about every second until an `optionPush` arrives. */
+    private def startPull(): Unit =
+      if (pullsOptions) {
+        pulling = true
+        optionList = None
+        sendPull()
+        timers.startTimerWithFixedDelay(PullKey, PullOptions, OptionPullInterval)
+      }
+
+    private def sendPull(): Unit =
+      // Not while the robot is offline: it would only fill a silent robot's buffer.
+      if (snapshot.online)
+        context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionPull = Some(true))), Priority.Debug, None)
+
+    /** The robot's list arrived (steps 2, 3); the first one of a session lets the options we want go out (step 4). */
+    private def optionsPushed(list: Seq[DebuggingOption]): Unit = {
+      optionList = Some(list)
+      if (pulling) {
+        pulling = false
+        timers.cancel(PullKey)
+        val offered = list.map(_.name)
+        val (known, unknown) = activeOptions.toVector.sorted
+          .partition(n => offered.exists(o => o == n || o.startsWith(n + ".")))
+        if (unknown.nonEmpty) context.log.info("Robot [{}] does not offer options {}", robotId, unknown.mkString(","))
+        if (known.nonEmpty)
+          context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(known)))),
+            Priority.Debug, None)
+      }
     }
 
     /** Messages handled the same way in every state. */
@@ -253,6 +298,7 @@ object RobotActor {
         bytesIn += size
         form = frameForm
         contents.status.foreach(_ => keepAlive(contents, children, heartbeat))
+        contents.debuggingCommands.flatMap(_.optionPush).foreach(list => optionsPushed(list.options))
         contents.rpcResponse.foreach { response =>
           val reply = RpcReply.fromProto(response)
           reply.callId.foreach { id =>
@@ -295,6 +341,14 @@ object RobotActor {
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
         address = newAddress
         snapshot = snapshot.copy(address = newAddress)
+        Behaviors.same
+      case PullOptions =>
+        sendPull()
+        Behaviors.same
+      case Transmit(Outbound.DebugOut(commands), _, outcome, tag) if pulling && commands.optionPull.isEmpty =>
+        // Step 4 waits for the list: remembered now, sent (as far as the robot offers it) when the push arrives.
+        noteOptions(commands)
+        outcome.foreach(_ ! Outbox.Accepted(tag))
         Behaviors.same
       case Transmit(out, priority, outcome, tag) =>
         zmqLink match {
@@ -402,7 +456,9 @@ object RobotActor {
     private def resync(children: Option[Children]): Unit = {
       context.log.info("Robot [{}] restarted (boot {}); re-enabling {}", robotId, snapshot.bootId, activeOptions.mkString(","))
       val options = activeOptions.toVector.sorted
-      if (options.nonEmpty)
+      // A new session: pull its option list first (protocol.md 8, steps 1 and 6); the push re-enables `options`.
+      if (pullsOptions) startPull()
+      else if (options.nonEmpty)
         context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options)))),
           Priority.Debug, None)
       children.foreach { c =>

@@ -53,7 +53,10 @@ object StreamActor {
   def apply(robotId: Int, settings: StreamSettings, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        new Endpoint(robotId, robot, timers, context).running(SecureStream.initial(settings, System.nanoTime()), 0L, Map.empty, Set.empty)
+        val endpoint = new Endpoint(robotId, robot, timers, context)
+        val fresh = SecureStream.initial(settings, System.nanoTime())
+        endpoint.schedule(fresh)
+        endpoint.running(fresh, 0L, Map.empty, Set.empty)
       }
     }
 
@@ -77,12 +80,16 @@ object StreamActor {
           left.get(id).foreach(_ ! Expired)
           left -= id
       }
-      step.state.nextTimerAt match {
+      schedule(step.state)
+      left
+    }
+
+    /** Keeps the one timer at the state's next due time; a fresh or idle stream has none and sends nothing. */
+    def schedule(stream: SecureStream): Unit =
+      stream.nextTimerAt match {
         case Some(at) => timers.startSingleTimer(TickKey, Tick, math.max(0L, at - System.nanoTime()).nanos)
         case None     => timers.cancel(TickKey)
       }
-      left
-    }
 
     def running(stream: SecureStream, lastId: Long, waiting: Map[Long, ActorRef[SendResult]], subscribers: Set[ActorRef[Received]])
         : Behavior[Command] = Behaviors.receiveMessage[Command] {

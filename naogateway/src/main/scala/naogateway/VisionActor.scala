@@ -66,16 +66,17 @@ object VisionActor {
         if (subscribers.isEmpty) Set.empty
         else Set(RegionsOption) ++ (if (subscribers.values.exists(identity)) Set(GridOption) else Set.empty)
 
+      def send(cmd: DebuggingCommands): Unit =
+        robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(cmd), Priority.Debug, None)
+
       def switch(from: Set[String], to: Set[String]): Unit = {
         val on = to -- from
         val off = from -- to
         if (on.nonEmpty || off.nonEmpty) {
           context.log.info("Robot [{}]: camera options on {} off {}", robotId, on.mkString(","), off.mkString(","))
-          val cmd = DebuggingCommands(
-            optionEnable = if (on.isEmpty) None else Some(DebuggingOptionNames(on.toSeq.sorted)),
-            optionDisable = if (off.isEmpty) None else Some(DebuggingOptionNames(off.toSeq.sorted))
-          )
-          robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(cmd), Priority.Debug, None)
+          // One field per DebuggingCommands message (protocol.md 6.3): enabling and disabling are two messages.
+          if (on.nonEmpty) send(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(on.toSeq.sorted))))
+          if (off.nonEmpty) send(DebuggingCommands(optionDisable = Some(DebuggingOptionNames(off.toSeq.sorted))))
         }
       }
 

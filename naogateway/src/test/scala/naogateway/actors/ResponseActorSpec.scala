@@ -39,21 +39,43 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.ReplyReceived(RpcReply(Left("flat"), Some(first)))
       caller.expectNoMessage(100.millis)
     }
-    "resend an idempotent call and then time out with one answer" in {
+    "resend an idempotent call as new requests with new call ids, then time out with one answer (protocol.md 7.1)" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val caller = createTestProbe[CallResult]()
+      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      reachable(robot)
+      responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref)
+      val (first, _) = transmitted(robot)
+      manualTime.timePasses(667.millis)
+      robot.expectMessage(RobotActor.Retransmitted)
+      val (second, t2) = transmitted(robot)
+      manualTime.timePasses(667.millis)
+      robot.expectMessage(RobotActor.Retransmitted)
+      val (third, _) = transmitted(robot)
+      // A robot answers every request once: a repeated call id would earn two answers to one request.
+      Set(first, second, third) should have size 3
+      Seq(second, third).foreach(id => (id >>> 30) shouldBe 0)
+      t2.out shouldBe RobotActor.Outbound.CallOut(RpcCall("motion", "stop", Vector.empty, Some(second)))
+      manualTime.timePasses(667.millis)
+      caller.expectMessage(CallResult(3, "motion.stop", Left(CallError.Timeout(3, "motion.stop", 2.seconds))))
+      robot.expectNoMessage(Duration.Zero)
+    }
+    "complete a resent call with the late answer to an earlier attempt, once" in {
       val robot = createTestProbe[RobotActor.FromChild]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
       reachable(robot)
       responder ! ResponseActor.Call(RpcCall("motion", "getPosture", Vector.empty), caller.ref)
-      val (id, _) = transmitted(robot)
+      val (first, _) = transmitted(robot)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      transmitted(robot)._1 shouldBe id
-      manualTime.timePasses(667.millis)
-      robot.expectMessage(RobotActor.Retransmitted)
-      transmitted(robot)._1 shouldBe id
-      manualTime.timePasses(667.millis)
-      caller.expectMessage(CallResult(3, "motion.getPosture", Left(CallError.Timeout(3, "motion.getPosture", 2.seconds))))
+      val (second, _) = transmitted(robot)
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(first)))
+      caller.expectMessage(CallResult(3, "motion.getPosture", Right(Some(RpcValue.Text("sit")))))
+      // The second attempt's answer finds the call settled; no sample from a call sent twice (Karn's rule).
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(second)))
+      caller.expectNoMessage(100.millis)
+      manualTime.timePasses(2.seconds)
       robot.expectNoMessage(Duration.Zero)
     }
     "send a call that is not idempotent only once" in {

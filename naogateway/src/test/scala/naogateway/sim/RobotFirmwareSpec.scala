@@ -105,6 +105,26 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       walking = RobotFirmware.advance(walking, standing.now + 10000 * ms)._1
       (standing.battery - walking.battery) should be > 5 * (standing.battery - idle.battery)
     }
+    "answer every optionPull with its whole list in one frame, to the sender, in the command's header form (protocol.md 8)" in {
+      val fuRemote = new InetSocketAddress("127.0.0.9", 11012)
+      val pull = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionPull = Some(true))))
+      val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))
+      val (on, _) = RobotFirmware.receive(RobotFirmware.boot(settings, 0), MessageContents.encodeFrame(enable).value, gateway, ms)
+      (1 to 2).foldLeft(on) { (s, i) =>
+        val (next, out) = RobotFirmware.receive(s, MessageContents.encodeFrame(pull, HeaderForm.Compact).value, fuRemote, (1 + i) * ms)
+        val pushes = out.filter(o => frames(Seq(o)).head.debuggingCommands.isDefined)
+        pushes should have size 1
+        MessageContents.decodeFrame(pushes.head.bytes).value._1.form shouldBe HeaderForm.Compact
+        pushes.head.to match {
+          case Destination.ReplyTo(to) => to.getAddress shouldBe fuRemote.getAddress
+          case other                   => fail(s"sent to $other, not to the sender")
+        }
+        val options = frames(pushes).head.debuggingCommands.get.optionPush.get.options
+        options.map(_.name) shouldBe RobotFirmware.OptionCatalogue.map(_._1)
+        options.filter(_.enabled.contains(true)).map(_.name).toSet shouldBe Set("status.text", "status.table")
+        next
+      }
+    }
     "offer its debug option list in under 1400 bytes and switch options by prefix" in {
       val s0 = RobotFirmware.boot(settings, 0)
       val pull = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionPull = Some(true))))

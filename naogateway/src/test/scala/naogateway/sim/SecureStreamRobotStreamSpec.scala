@@ -39,8 +39,11 @@ class SecureStreamRobotStreamSpec extends AnyWordSpec with Matchers {
     }
     "map timers through, and drop a reply its endpoint refuses" in {
       val robot = SecureStreamRobotStream.factory()(0L)
-      robot.nextTimerAt shouldBe Some(StreamSettings.thesis.idleAckInterval.toNanos)
-      robot.tick(robot.nextTimerAt.get).transmit.map(_.toVector) shouldBe Vector(Vector[Byte](20, 20))
+      // Fresh: nothing to repair, no timer (protocol.md 11.3); received data earns one idle ACK.
+      robot.nextTimerAt shouldBe None
+      val answered = robot.receive(Array[Byte](0, 20, 'x'), 0L).stream
+      answered.nextTimerAt shouldBe Some(StreamSettings.thesis.idleAckInterval.toNanos)
+      answered.tick(answered.nextTimerAt.get).transmit.map(_.toVector) shouldBe Vector(Vector[Byte](20, 0))
       val refused = robot.send(Array.emptyByteArray, 5L)
       refused.transmit shouldBe empty
       refused.stream shouldBe a[SecureStreamRobotStream]

@@ -46,8 +46,11 @@ import naogateway.wire.WireLimits
   *      sample only from the newest segment it covers, and only if that segment was sent once and nothing else the
   *      ACK covers was sent after it. A clean sample ends any back-off; an ACK that acknowledges new data without
   *      giving a sample keeps at most one doubling (see [[RtoEstimator.afterProgress]]).
-  *   1. Keep-alive: an endpoint with nothing unacknowledged sends a pure ACK whenever it has sent nothing for
-  *      idleAckInterval. This keeps the pair alive and repairs lost ACKs.
+  *   1. Idle ACK: an endpoint that has received data (or acted on a skip notice) since its last idle ACK, and has
+  *      nothing unacknowledged, sends one pure ACK once it has sent nothing for idleAckInterval. It repeats the last
+  *      ACK in case that was lost, once: a fresh or reset endpoint, and one whose peer has sent nothing new since,
+  *      stays silent. Liveness is the keep-alive's job (protocol.md 6.2), so an idle stream costs the robot's
+  *      module buffer nothing.
   *   1. A payload may carry a deadline. Once the deadline is reached, a payload still waiting in the queue is dropped
   *      without using a sequence number, and a sent one is no longer retransmitted; both are reported `Expired`.
   *      Byte 0 of every pure ACK is the sender's "settled" number, the last sequence number such that it and all
@@ -97,6 +100,7 @@ final class SecureStream private (
     private val lastInOrderSeq: Int,
     private val buffer: Map[Int, Array[Byte]],
     private val lastTransmitAt: Long,
+    private val idleAckOwed: Boolean,
     private val retransmittedAt: Vector[Long],
     private val reuseBlockedUntil: Long,
     val counters: StreamCounters
@@ -136,12 +140,15 @@ final class SecureStream private (
   /** The smoothed round-trip time in nanoseconds, once there has been a sample. */
   def smoothedRttNanos: Option[Long] = if (rtoEstimator.hasSample) Some(rtoEstimator.srttNanos) else None
 
-  /** When [[tick]] must be called next: retransmission, the earliest deadline, or the next keep-alive. */
+  /** Whether an idle ACK is due once nothing has been sent for idleAckInterval (data arrived since the last one). */
+  def idleAckDue: Boolean = idleAckOwed
+
+  /** When [[tick]] must be called next: retransmission, the earliest deadline, or the idle ACK. */
   val nextTimerAt: Option[Long] = {
     var t = Long.MaxValue
     if (rtxAt != NoTime) t = rtxAt
     if (deadlines.nonEmpty) t = math.min(t, deadlines.firstKey.deadline)
-    if (slots.isEmpty) t = math.min(t, lastTransmitAt + settings.idleAckNanos)
+    if (slots.isEmpty && idleAckOwed) t = math.min(t, lastTransmitAt + settings.idleAckNanos)
     if (reuseBlockedUntil != NoTime) t = math.min(t, reuseBlockedUntil)
     if (t == Long.MaxValue) None else Some(t)
   }
@@ -200,6 +207,7 @@ final class SecureStream private (
       lastInOrderSeq = settings.maxSeq,
       buffer = Map.empty,
       lastTransmitAt = now,
+      idleAckOwed = false,
       retransmittedAt = retransmittedAt,
       reuseBlockedUntil = NoTime,
       counters = counters
@@ -273,7 +281,7 @@ object SecureStream {
     }
   }
 
-  /** A fresh endpoint: nothing sent, nothing received; the first keep-alive is due after `idleAckInterval`. */
+  /** A fresh endpoint: nothing sent, nothing received, so nothing to send until a payload is offered or data arrives. */
   def initial(settings: StreamSettings, now: Long): SecureStream =
     new SecureStream(
       settings,
@@ -292,6 +300,7 @@ object SecureStream {
       lastInOrderSeq = settings.maxSeq,
       buffer = Map.empty,
       lastTransmitAt = now,
+      idleAckOwed = false,
       retransmittedAt = Vector.fill(settings.sequenceSpace)(NoTime),
       reuseBlockedUntil = NoTime,
       counters = StreamCounters.zero
@@ -348,6 +357,7 @@ object SecureStream {
     private var lastInOrder = s.lastInOrderSeq
     private var buffer = s.buffer
     private var lastTransmitAt = s.lastTransmitAt
+    private var idleAckOwed = s.idleAckOwed
     private var retransmittedAt = s.retransmittedAt
     private var reuseBlockedUntil = s.reuseBlockedUntil
 
@@ -406,6 +416,7 @@ object SecureStream {
         lastInOrder,
         buffer,
         lastTransmitAt,
+        idleAckOwed,
         retransmittedAt,
         reuseBlockedUntil,
         counters
@@ -439,7 +450,10 @@ object SecureStream {
         rtxAt = now + rto.rtoNanos
       }
       fillWindow()
-      if (slots.isEmpty && !sentData && !sentPureAck && now - lastTransmitAt >= st.idleAckNanos) sendPureAck()
+      if (idleAckOwed && slots.isEmpty && !sentData && !sentPureAck && now - lastTransmitAt >= st.idleAckNanos) {
+        sendPureAck()
+        idleAckOwed = false
+      }
     }
 
     def receive(d: Array[Byte]): Unit = {
@@ -475,7 +489,11 @@ object SecureStream {
             if (ackCurrent && ackForward > 0) onAckAdvance(ack, ackForward)
             else if (ackCurrent && !isData) onDuplicateAck()
             fillWindow()
-            if ((isData || skipNotice) && !sentData && !sentPureAck) sendPureAck()
+            if (isData || skipNotice) {
+              if (!sentData && !sentPureAck) sendPureAck()
+              // The answer just sent may be lost: one idle ACK repeats it once the link has been quiet.
+              idleAckOwed = true
+            }
           }
         }
       }

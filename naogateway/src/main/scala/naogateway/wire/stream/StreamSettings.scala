@@ -19,7 +19,7 @@ import naogateway.wire.WireLimits
   * @param maxRto
   *   upper bound of the adaptive retransmission timeout, also the cap of the exponential back-off
   * @param idleAckInterval
-  *   how long an endpoint with nothing unacknowledged stays silent before it sends a keep-alive pure ACK
+  *   how long an endpoint stays silent before it repeats its last ACK once, after data arrived (the idle ACK)
   * @param sendQueueLimit
   *   how many payloads may wait for a free window slot; a send beyond it is refused, never dropped
   * @param honourSkipNotices

@@ -103,6 +103,53 @@ class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheck
     }
   }
 
+  "Idle ACKs (protocol.md 11.4)" should {
+    "follow only answered data: at most one per quiet spell after it, none from a fresh or idle endpoint" in {
+      val events: Gen[List[Either[Array[Byte], Int]]] = Gen.listOf(Gen.frequency(
+        2 -> datagramGen(41).map(Left(_)),
+        3 -> Gen.frequency(3 -> Gen.choose(0, 400), 1 -> Gen.choose(400, 700000)).map(Right(_))
+      ))
+      forAll(settingsGen, events, minSuccessful(300)) { (settings, script) =>
+        var state = SecureStream.initial(settings, 0L)
+        var now = 0L
+        var lastSent = 0L
+        var answeredSinceIdle = false
+        def ticked(at: Long): Vector[Array[Byte]] = {
+          val step = state.tick(at)
+          state = step.state
+          step.outputs.collect { case Transmit(d) => d }
+        }
+        script.foreach {
+          case Left(d) =>
+            val step = state.receive(d, now)
+            state = step.state
+            // A receiver that never sends data transmits only to answer data or an acted-on skip notice.
+            if (step.outputs.exists(_.isInstanceOf[Transmit])) {
+              answeredSinceIdle = true
+              lastSent = now
+            }
+          case Right(ms) =>
+            now += ms * 1000000L
+            val sent = ticked(now)
+            if (sent.nonEmpty) {
+              answeredSinceIdle shouldBe true
+              sent.map(_.length) shouldBe Vector(HeaderBytes)
+              answeredSinceIdle = false
+              lastSent = now
+            }
+        }
+        // What is owed is paid when due, and then nothing more is ever sent.
+        state.idleAckDue shouldBe answeredSinceIdle
+        if (answeredSinceIdle) {
+          state.nextTimerAt shouldBe Some(lastSent + settings.idleAckNanos)
+          ticked(lastSent + settings.idleAckNanos).map(_.length) shouldBe Vector(HeaderBytes)
+        }
+        state.nextTimerAt shouldBe None
+        ticked(now + 3600L * 1000000000L) shouldBe empty
+      }
+    }
+  }
+
   "A pair of endpoints over a seeded lossy channel" should {
     "deliver every payload exactly once and in order, in both directions, at window 1 and 20" in {
       val runs = for {

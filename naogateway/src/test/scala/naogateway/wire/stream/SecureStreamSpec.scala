@@ -224,14 +224,55 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       transmits(resent).map(_.drop(2).map(_.toChar).mkString) shouldBe Vector("abc")
     }
 
-    "send keep-alive ACKs when idle, and not answer them" in {
+    "send nothing at all while fresh and nothing happens (protocol.md 11.3)" in {
       val a = SecureStream.initial(thesis, 0L)
-      a.nextTimerAt shouldBe Some(ms(200))
-      a.tick(ms(100)).outputs shouldBe empty
-      val idle = a.tick(ms(200))
-      transmits(idle) shouldBe Vector(Vector(20, 20))
-      idle.state.nextTimerAt shouldBe Some(ms(400))
+      a.nextTimerAt shouldBe None
+      a.idleAckDue shouldBe false
+      a.tick(ms(200)).outputs shouldBe empty
+      a.tick(ms(604000)).outputs shouldBe empty
+    }
+
+    "repeat the ACK of received data once as an idle ACK, then fall silent, and not answer it (protocol.md 11.4)" in {
+      val answered = SecureStream.initial(thesis, 0L).receive(segment(0, 20, "x"), 0L)
+      transmits(answered) shouldBe Vector(Vector(20, 0))
+      answered.state.nextTimerAt shouldBe Some(ms(200))
+      answered.state.tick(ms(199)).outputs shouldBe empty
+      val idle = answered.state.tick(ms(200))
+      transmits(idle) shouldBe Vector(Vector(20, 0))
+      idle.state.nextTimerAt shouldBe None
+      idle.state.tick(ms(400)).outputs shouldBe empty
+      idle.state.tick(ms(60000)).outputs shouldBe empty
+      // A duplicate of the data (its ACK was lost after all) is answered and earns one more idle ACK.
+      val again = idle.state.receive(segment(0, 20, "x"), ms(1000))
+      transmits(again) shouldBe Vector(Vector(20, 0))
+      transmits(again.state.tick(ms(1200))) shouldBe Vector(Vector(20, 0))
+      // The peer does not answer an idle ACK.
       SecureStream.initial(thesis, 0L).receive(datagrams(idle).head, ms(201)).outputs shouldBe empty
+    }
+
+    "owe no idle ACK for pure ACKs, nor after a reset" in {
+      val pure = SecureStream.initial(thesis, 0L).receive(segment(20, 20), 0L)
+      pure.outputs shouldBe empty
+      pure.state.nextTimerAt shouldBe None
+      val answered = SecureStream.initial(thesis, 0L).receive(segment(0, 20, "x"), 0L).state
+      val reset = answered.reset(ms(100))
+      reset.outputs shouldBe empty
+      reset.state.nextTimerAt shouldBe None
+      reset.state.tick(ms(10000)).outputs shouldBe empty
+    }
+
+    "send the idle ACK only once its own data is acknowledged" in {
+      val a = SecureStream.initial(thesis, 0L).offer("q", 1L, 0L).state
+      val answered = a.receive(segment(0, 20, "x"), ms(10))
+      answered.outputs.collect { case Transmit(d) => d.length } shouldBe Vector(2)
+      // Seq 0 is in flight: the retransmission timer is what runs, no idle ACK before the ACK.
+      answered.state.nextTimerAt shouldBe Some(ms(200))
+      transmits(answered.state.tick(ms(200))).map(_.take(2)) shouldBe Vector(Vector(0, 0))
+      val acked = answered.state.receive(segment(0, 0), ms(20))
+      acked.state.inFlight shouldBe 0
+      // Due 200 ms after the last datagram sent, the ACK at 10 ms.
+      acked.state.nextTimerAt shouldBe Some(ms(210))
+      transmits(acked.state.tick(ms(210))) shouldBe Vector(Vector(0, 0))
     }
 
     "not fast-retransmit on duplicate ACKs" in {
