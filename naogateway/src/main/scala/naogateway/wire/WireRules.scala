@@ -1,0 +1,152 @@
+package naogateway.wire
+
+import java.nio.charset.StandardCharsets
+
+import com.google.protobuf.{ByteString, CodedInputStream, CodedOutputStream, InvalidProtocolBufferException, WireFormat}
+import com.google.protobuf.descriptor.FieldDescriptorProto.Type
+import scalapb.descriptors.{Descriptor, FieldDescriptor, ScalaType}
+
+import naogateway.proto._
+
+/** The decoding rules of docs/protocol.md §5 that ScalaPB alone does not follow, applied before it parses.
+  *
+  * ScalaPB refuses unknown groups, refuses a whole message for one string that is not UTF-8, and cuts a varint beyond
+  * 32 bits to its low bits. The document says instead: unknown fields of every wire type are skipped (groups
+  * included), a malformed string is read with U+FFFD for each bad sequence, and a 32-bit field whose varint does not
+  * fit is refused, as nanopb (the firmware's decoder) does. Both decode paths run `normalize` first, so they agree.
+  */
+private[wire] object WireRules {
+
+  /** How deep sub-messages may nest; deeper input is refused rather than risking the stack. */
+  private val MaxDepth = 32
+
+  private val extensions: Map[Int, Descriptor] = Map(
+    MessageContents.StatusField -> Status.scalaDescriptor,
+    MessageContents.RobotHealthField -> RobotHealth.scalaDescriptor,
+    MessageContents.DebuggingCommandsField -> DebuggingCommands.scalaDescriptor,
+    MessageContents.DebugDataField -> DebugData.scalaDescriptor,
+    MessageContents.HavimoRegionsField -> HaViMoRegionFrame.scalaDescriptor,
+    MessageContents.HavimoGridField -> HaViMoGridFrame.scalaDescriptor,
+    MessageContents.RpcRequestField -> Request.scalaDescriptor,
+    MessageContents.RpcResponseField -> Response.scalaDescriptor
+  )
+
+  /** What a field number means inside one message: its declared field, or for `Message` also its extensions. */
+  private final case class Schema(descriptor: Descriptor, withExtensions: Boolean) {
+    def field(number: Int): Option[FieldDescriptor] = descriptor.findFieldByNumber(number)
+    def sub(number: Int, fd: Option[FieldDescriptor]): Option[Schema] = fd match {
+      case Some(f) => f.scalaType match {
+          case ScalaType.Message(d) => Some(Schema(d, withExtensions = false))
+          case _                    => None
+        }
+      case None if withExtensions => extensions.get(number).map(Schema(_, withExtensions = false))
+      case None                   => None
+    }
+  }
+
+  private val messageSchema = Schema(Message.scalaDescriptor, withExtensions = true)
+
+  /** The bytes of a `Message` as ScalaPB may read them: the same slice when nothing needs rewriting, else a new
+    * array without groups and with malformed strings repaired. Throws `InvalidProtocolBufferException` for a 32-bit
+    * field whose varint does not fit, an end-group tag without its start, or malformed framing.
+    */
+  def normalize(bytes: Array[Byte], offset: Int, length: Int): (Array[Byte], Int, Int) =
+    if (!needsRewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema, 0)) (bytes, offset, length)
+    else {
+      val out = rewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema, 0)
+      (out, 0, out.length)
+    }
+
+  /** Checks every field; true when a group or a malformed string must be rewritten. */
+  private def needsRewrite(in: CodedInputStream, schema: Schema, depth: Int): Boolean = {
+    if (depth > MaxDepth) throw new InvalidProtocolBufferException("sub-messages nested too deeply")
+    var rewrite = false
+    var done = false
+    while (!done) {
+      val tag = in.readTag()
+      if (tag == 0) done = true
+      else {
+        val number = WireFormat.getTagFieldNumber(tag)
+        val fd = schema.field(number)
+        WireFormat.getTagWireType(tag) match {
+          case WireFormat.WIRETYPE_VARINT =>
+            checkRange(fd, in.readRawVarint64())
+          case WireFormat.WIRETYPE_LENGTH_DELIMITED =>
+            schema.sub(number, fd) match {
+              case Some(sub) =>
+                val limit = in.pushLimit(in.readRawVarint32())
+                rewrite |= needsRewrite(in, sub, depth + 1)
+                in.popLimit(limit)
+              case None if fd.exists(_.protoType == Type.TYPE_STRING) =>
+                rewrite |= !in.readBytes().isValidUtf8
+              case None => in.skipField(tag)
+            }
+          case WireFormat.WIRETYPE_START_GROUP => in.skipField(tag); rewrite = true
+          case WireFormat.WIRETYPE_END_GROUP =>
+            throw new InvalidProtocolBufferException(s"end of group $number that was never started")
+          case _ => in.skipField(tag) // fixed 32 / 64 bits; an invalid wire type throws here
+        }
+      }
+    }
+    rewrite
+  }
+
+  /** Copies a message, dropping groups and replacing malformed strings by their U+FFFD reading. */
+  private def rewrite(in: CodedInputStream, schema: Schema, depth: Int): Array[Byte] = {
+    val buffer = new java.io.ByteArrayOutputStream()
+    val out = CodedOutputStream.newInstance(buffer)
+    var done = false
+    while (!done) {
+      val tag = in.readTag()
+      if (tag == 0) done = true
+      else {
+        val number = WireFormat.getTagFieldNumber(tag)
+        val fd = schema.field(number)
+        WireFormat.getTagWireType(tag) match {
+          case WireFormat.WIRETYPE_START_GROUP => in.skipField(tag)
+          case WireFormat.WIRETYPE_LENGTH_DELIMITED =>
+            schema.sub(number, fd) match {
+              case Some(sub) =>
+                val limit = in.pushLimit(in.readRawVarint32())
+                val nested = rewrite(in, sub, depth + 1)
+                in.popLimit(limit)
+                out.writeByteArray(number, nested)
+              case None if fd.exists(_.protoType == Type.TYPE_STRING) =>
+                val raw = in.readBytes()
+                out.writeBytes(number, if (raw.isValidUtf8) raw else repaired(raw))
+              case None => out.writeBytes(number, in.readBytes())
+            }
+          case WireFormat.WIRETYPE_VARINT =>
+            out.writeUInt32NoTag(tag); out.writeUInt64NoTag(in.readRawVarint64())
+          case WireFormat.WIRETYPE_FIXED64 =>
+            out.writeUInt32NoTag(tag); out.writeFixed64NoTag(in.readRawLittleEndian64())
+          case WireFormat.WIRETYPE_FIXED32 =>
+            out.writeUInt32NoTag(tag); out.writeFixed32NoTag(in.readRawLittleEndian32())
+          case other => throw new InvalidProtocolBufferException(s"invalid wire type $other") // needsRewrite refused it
+        }
+      }
+    }
+    out.flush()
+    buffer.toByteArray
+  }
+
+  private def repaired(raw: ByteString): ByteString =
+    ByteString.copyFromUtf8(new String(raw.toByteArray, StandardCharsets.UTF_8))
+
+  /** Refuses a varint that does not fit the 32-bit type declared for its field (docs/protocol.md §5). */
+  private def checkRange(fd: Option[FieldDescriptor], value: Long): Unit = fd.map(_.protoType).foreach {
+    case Type.TYPE_INT32 | Type.TYPE_ENUM =>
+      if (value != value.toInt.toLong) outOfRange(fd, value)
+    case Type.TYPE_UINT32 =>
+      if ((value >>> 32) != 0L) outOfRange(fd, value)
+    case Type.TYPE_SINT32 =>
+      val decoded = (value >>> 1) ^ -(value & 1)
+      if (decoded != decoded.toInt.toLong) outOfRange(fd, value)
+    case _ => ()
+  }
+
+  private def outOfRange(fd: Option[FieldDescriptor], value: Long): Nothing =
+    throw new InvalidProtocolBufferException(
+      s"varint ${java.lang.Long.toUnsignedString(value)} does not fit 32-bit field ${fd.map(_.name).getOrElse("?")}"
+    )
+}
