@@ -51,14 +51,14 @@ private[wire] object WireRules {
     * field whose varint does not fit, an end-group tag without its start, or malformed framing.
     */
   def normalize(bytes: Array[Byte], offset: Int, length: Int): (Array[Byte], Int, Int) =
-    if (!needsRewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema, 0)) (bytes, offset, length)
+    if (!needsRewrite(CodedInputStream.newInstance(bytes, offset, length), bytes, offset, messageSchema, 0)) (bytes, offset, length)
     else {
       val out = rewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema, 0)
       (out, 0, out.length)
     }
 
   /** Checks every field; true when a group or a malformed string must be rewritten. */
-  private def needsRewrite(in: CodedInputStream, schema: Schema, depth: Int): Boolean = {
+  private def needsRewrite(in: CodedInputStream, bytes: Array[Byte], offset: Int, schema: Schema, depth: Int): Boolean = {
     if (depth > MaxDepth) throw new InvalidProtocolBufferException("sub-messages nested too deeply")
     var rewrite = false
     var done = false
@@ -75,10 +75,14 @@ private[wire] object WireRules {
             schema.sub(number, fd) match {
               case Some(sub) =>
                 val limit = in.pushLimit(in.readRawVarint32())
-                rewrite |= needsRewrite(in, sub, depth + 1)
+                rewrite |= needsRewrite(in, bytes, offset, sub, depth + 1)
                 in.popLimit(limit)
               case None if fd.exists(_.protoType == Type.TYPE_STRING) =>
-                rewrite |= !in.readBytes().isValidUtf8
+                // Checked in place: the stream reads `bytes` from `offset`, so no copy of the string is made.
+                val size = in.readRawVarint32()
+                if (size < 0 || size > in.getBytesUntilLimit) throw new InvalidProtocolBufferException("truncated string")
+                rewrite |= !utf8(bytes, offset + in.getTotalBytesRead, size)
+                in.skipRawBytes(size)
               case None => in.skipField(tag)
             }
           case WireFormat.WIRETYPE_START_GROUP => in.skipField(tag); rewrite = true
@@ -128,6 +132,17 @@ private[wire] object WireRules {
     }
     out.flush()
     buffer.toByteArray
+  }
+
+  /** Whether `size` bytes from `at` are valid UTF-8; ASCII, the usual case, without allocating. */
+  private def utf8(bytes: Array[Byte], at: Int, size: Int): Boolean = {
+    var i = at
+    while (i < at + size && bytes(i) >= 0) i += 1
+    i == at + size || {
+      val decoder = StandardCharsets.UTF_8.newDecoder() // reports malformed input by default
+      try { decoder.decode(java.nio.ByteBuffer.wrap(bytes, i, at + size - i)); true }
+      catch { case _: java.nio.charset.CharacterCodingException => false }
+    }
   }
 
   private def repaired(raw: ByteString): ByteString =

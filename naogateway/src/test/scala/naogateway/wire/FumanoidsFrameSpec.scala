@@ -225,6 +225,14 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       // Status: teamID 1, activeAgent = 41 FF 42 ("A", a byte no UTF-8 text holds, "B").
       val bad = Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x07, 0x10, 0x01, 0x62, 0x03, 0x41, 0xff.toByte, 0x42)
       both(bad) shouldBe Right(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("A\uFFFDB")))))
+      // Valid text beyond ASCII is kept as it is; a sequence cut short is replaced like any malformed one.
+      val text = "Müller ✓ 😀"
+      val valid = Status(activeAgent = Some(text)).toByteArray
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, valid.length.toByte) ++ valid).map(_.status.flatMap(_.activeAgent)) shouldBe
+        Right(Some(text))
+      val cut = Array[Byte](0x62, 0x02, 0x41, 0xc3.toByte)
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, cut.length.toByte) ++ cut).map(_.status.flatMap(_.activeAgent)) shouldBe
+        Right(Some("A\uFFFD"))
     }
     "refuse a varint that does not fit its 32-bit field instead of cutting it (protocol.md §5)" in {
       // robotID 2^32 + 5: cut to 32 bits it would read as robot 5.
