@@ -31,20 +31,52 @@ private[wire] object WireRules {
     MessageContents.RpcResponseField -> Response.scalaDescriptor
   )
 
-  /** What a field number means inside one message: its declared field, or for `Message` also its extensions. */
-  private final case class Schema(descriptor: Descriptor, withExtensions: Boolean) {
-    def field(number: Int): Option[FieldDescriptor] = descriptor.findFieldByNumber(number)
-    def sub(number: Int, fd: Option[FieldDescriptor]): Option[Schema] = fd match {
-      case Some(f) => f.scalaType match {
-          case ScalaType.Message(d) => Some(Schema(d, withExtensions = false))
-          case _                    => None
-        }
-      case None if withExtensions => extensions.get(number).map(Schema(_, withExtensions = false))
-      case None                   => None
-    }
+  /** What the rules need to know of one field: how its varint is bounded, whether it is text or a sub-message. */
+  private sealed trait Kind
+  private case object Other extends Kind
+  private case object Int32 extends Kind
+  private case object UInt32 extends Kind
+  private case object SInt32 extends Kind
+  private case object Text extends Kind
+  private final case class Sub(descriptor: Descriptor) extends Kind
+
+  private def kindOf(fd: FieldDescriptor): Kind = fd.scalaType match {
+    case ScalaType.Message(d) => Sub(d)
+    case _ => fd.protoType match {
+        case Type.TYPE_INT32 | Type.TYPE_ENUM => Int32
+        case Type.TYPE_UINT32                 => UInt32
+        case Type.TYPE_SINT32                 => SInt32
+        case Type.TYPE_STRING                 => Text
+        case _                                => Other
+      }
   }
 
-  private val messageSchema = Schema(Message.scalaDescriptor, withExtensions = true)
+  /** The fields of one message by number, read off its descriptor once (plus, for `Message`, its extensions). */
+  private final class Schema(kinds: Map[Int, Kind]) {
+    private val table: Array[Kind] = {
+      val t = Array.fill[Kind](if (kinds.isEmpty) 1 else kinds.keys.max + 1)(Other)
+      kinds.foreach { case (n, k) => t(n) = k }
+      t
+    }
+    def kind(number: Int): Kind = if (number < table.length) table(number) else Other
+  }
+
+  // Every message reachable from `Message`, built once; recursive messages (MixedValue) share their entry.
+  private val schemas: Map[Descriptor, Schema] = {
+    def fields(d: Descriptor): Map[Int, Kind] = d.fields.iterator.map(f => f.number -> kindOf(f)).toMap
+    @scala.annotation.tailrec
+    def reach(todo: List[Descriptor], seen: Map[Descriptor, Schema]): Map[Descriptor, Schema] = todo match {
+      case Nil                          => seen
+      case d :: rest if seen.contains(d) => reach(rest, seen)
+      case d :: rest =>
+        val kinds = fields(d)
+        reach(kinds.values.collect { case Sub(s) => s }.toList ++ rest, seen.updated(d, new Schema(kinds)))
+    }
+    reach(extensions.values.toList, Map.empty)
+  }
+
+  private val messageSchema =
+    new Schema(Message.scalaDescriptor.fields.iterator.map(f => f.number -> kindOf(f)).toMap ++ extensions.map { case (n, d) => n -> Sub(d) })
 
   /** The bytes of a `Message` as ScalaPB may read them: the same slice when nothing needs rewriting, else a new
     * array without groups and with malformed strings repaired. Throws `InvalidProtocolBufferException` for a 32-bit
@@ -53,7 +85,7 @@ private[wire] object WireRules {
   def normalize(bytes: Array[Byte], offset: Int, length: Int): (Array[Byte], Int, Int) =
     if (!needsRewrite(CodedInputStream.newInstance(bytes, offset, length), bytes, offset, messageSchema, 0)) (bytes, offset, length)
     else {
-      val out = rewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema, 0)
+      val out = rewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema)
       (out, 0, out.length)
     }
 
@@ -67,23 +99,22 @@ private[wire] object WireRules {
       if (tag == 0) done = true
       else {
         val number = WireFormat.getTagFieldNumber(tag)
-        val fd = schema.field(number)
         WireFormat.getTagWireType(tag) match {
           case WireFormat.WIRETYPE_VARINT =>
-            checkRange(fd, in.readRawVarint64())
+            checkRange(schema.kind(number), number, in.readRawVarint64())
           case WireFormat.WIRETYPE_LENGTH_DELIMITED =>
-            schema.sub(number, fd) match {
-              case Some(sub) =>
+            schema.kind(number) match {
+              case Sub(d) =>
                 val limit = in.pushLimit(in.readRawVarint32())
-                rewrite |= needsRewrite(in, bytes, offset, sub, depth + 1)
+                rewrite |= needsRewrite(in, bytes, offset, schemas(d), depth + 1)
                 in.popLimit(limit)
-              case None if fd.exists(_.protoType == Type.TYPE_STRING) =>
+              case Text =>
                 // Checked in place: the stream reads `bytes` from `offset`, so no copy of the string is made.
                 val size = in.readRawVarint32()
                 if (size < 0 || size > in.getBytesUntilLimit) throw new InvalidProtocolBufferException("truncated string")
                 rewrite |= !utf8(bytes, offset + in.getTotalBytesRead, size)
                 in.skipRawBytes(size)
-              case None => in.skipField(tag)
+              case _ => in.skipField(tag)
             }
           case WireFormat.WIRETYPE_START_GROUP => in.skipField(tag); rewrite = true
           case WireFormat.WIRETYPE_END_GROUP =>
@@ -96,7 +127,7 @@ private[wire] object WireRules {
   }
 
   /** Copies a message, dropping groups and replacing malformed strings by their U+FFFD reading. */
-  private def rewrite(in: CodedInputStream, schema: Schema, depth: Int): Array[Byte] = {
+  private def rewrite(in: CodedInputStream, schema: Schema): Array[Byte] = {
     val buffer = new java.io.ByteArrayOutputStream()
     val out = CodedOutputStream.newInstance(buffer)
     var done = false
@@ -105,20 +136,19 @@ private[wire] object WireRules {
       if (tag == 0) done = true
       else {
         val number = WireFormat.getTagFieldNumber(tag)
-        val fd = schema.field(number)
         WireFormat.getTagWireType(tag) match {
           case WireFormat.WIRETYPE_START_GROUP => in.skipField(tag)
           case WireFormat.WIRETYPE_LENGTH_DELIMITED =>
-            schema.sub(number, fd) match {
-              case Some(sub) =>
+            schema.kind(number) match {
+              case Sub(d) =>
                 val limit = in.pushLimit(in.readRawVarint32())
-                val nested = rewrite(in, sub, depth + 1)
+                val nested = rewrite(in, schemas(d))
                 in.popLimit(limit)
                 out.writeByteArray(number, nested)
-              case None if fd.exists(_.protoType == Type.TYPE_STRING) =>
+              case Text =>
                 val raw = in.readBytes()
                 out.writeBytes(number, if (raw.isValidUtf8) raw else repaired(raw))
-              case None => out.writeBytes(number, in.readBytes())
+              case _ => out.writeBytes(number, in.readBytes())
             }
           case WireFormat.WIRETYPE_VARINT =>
             out.writeUInt32NoTag(tag); out.writeUInt64NoTag(in.readRawVarint64())
@@ -149,19 +179,16 @@ private[wire] object WireRules {
     ByteString.copyFromUtf8(new String(raw.toByteArray, StandardCharsets.UTF_8))
 
   /** Refuses a varint that does not fit the 32-bit type declared for its field (docs/protocol.md §5). */
-  private def checkRange(fd: Option[FieldDescriptor], value: Long): Unit = fd.map(_.protoType).foreach {
-    case Type.TYPE_INT32 | Type.TYPE_ENUM =>
-      if (value != value.toInt.toLong) outOfRange(fd, value)
-    case Type.TYPE_UINT32 =>
-      if ((value >>> 32) != 0L) outOfRange(fd, value)
-    case Type.TYPE_SINT32 =>
-      val decoded = (value >>> 1) ^ -(value & 1)
-      if (decoded != decoded.toInt.toLong) outOfRange(fd, value)
-    case _ => ()
+  private def checkRange(kind: Kind, number: Int, value: Long): Unit = {
+    val fits = kind match {
+      case Int32  => value == value.toInt.toLong
+      case UInt32 => (value >>> 32) == 0L
+      case SInt32 => val decoded = (value >>> 1) ^ -(value & 1); decoded == decoded.toInt.toLong
+      case _      => true
+    }
+    if (!fits)
+      throw new InvalidProtocolBufferException(
+        s"varint ${java.lang.Long.toUnsignedString(value)} does not fit the 32-bit field $number"
+      )
   }
-
-  private def outOfRange(fd: Option[FieldDescriptor], value: Long): Nothing =
-    throw new InvalidProtocolBufferException(
-      s"varint ${java.lang.Long.toUnsignedString(value)} does not fit 32-bit field ${fd.map(_.name).getOrElse("?")}"
-    )
 }
