@@ -166,6 +166,8 @@ object RobotActor {
     private var rttNanos: Option[Double] = None
     private var keepAliveTimes = Queue.empty[Long]
     private var snapshot: RobotSnapshot = null
+    // The bootId the restart rule compares the next keep-alive with (RobotSnapshot.keepAlive).
+    private var lastBootId: Option[Int] = None
     // Debug options switched on through the gateway, re-enabled after a robot restart.
     private var activeOptions = Set.empty[String]
     // The robot's option list of this session (protocol.md 8): None until its optionPush answers our optionPull.
@@ -432,23 +434,10 @@ object RobotActor {
       val now = System.nanoTime()
       // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
       keepAliveTimes = keepAliveTimes.enqueue(now).dropWhile(_ < now - settings.heartbeat.qualityWindow.toNanos)
-      val status = contents.status.get
-      val health = contents.robotHealth
-      val previous = snapshot
-      snapshot = snapshot.copy(
-        teamId = status.teamID.map(_.toInt).orElse(previous.teamId),
-        role = status.activeRole.orElse(previous.role),
-        agent = status.activeAgent.orElse(previous.agent),
-        posture = health.flatMap(_.posture).orElse(status.currentState).orElse(previous.posture),
-        batteryVoltage = health.flatMap(_.batteryVoltage).map(_.toDouble).orElse(previous.batteryVoltage),
-        uptimeMillis = health.flatMap(_.uptimeMs).map(_ & 0xffffffffL).orElse(status.timestamp),
-        bootId = health.flatMap(_.bootId).orElse(previous.bootId),
-        position = status.robotPosition.map(p => (p.getX, p.getY, p.getRotation.toDouble)).orElse(previous.position),
-        receivedAtNanos = now
-      )
-      val restarted = (previous.bootId.isDefined && snapshot.bootId != previous.bootId) ||
-        (for (before <- previous.uptimeMillis; after <- snapshot.uptimeMillis) yield after + 1000 < before).getOrElse(false)
-      if (restarted) resync(children)
+      val step = RobotSnapshot.keepAlive(snapshot, lastBootId, contents.status.get, contents.robotHealth, now)
+      snapshot = step.snapshot
+      lastBootId = step.lastBootId
+      if (step.restarted) resync(children)
       events ! RobotStatusUpdated(snapshot)
     }
 

@@ -34,8 +34,56 @@ final case class RobotSnapshot(
     receivedAtNanos: Long = 0L
 )
 
+/** What one keep-alive did: the robot's new snapshot, whether it began a fresh session, and the bootId now remembered. */
+final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, lastBootId: Option[Int])
+
 /** Keeping copies of robot snapshots in step with the gateway's events. */
 object RobotSnapshot {
+
+  /**
+   * `previous` after one keep-alive (docs/protocol.md §6.2): the keep-alive describes the robot as it is now, so every
+   * robot-reported field comes from it alone. A field it does not carry is unknown (`None`), never left over from an
+   * earlier keep-alive: a robot that restarts with firmware sending `Status` only must not show the battery, role,
+   * posture, position or `bootId` of its previous session. Link fields (address, online, quality) stay.
+   */
+  def afterKeepAlive(
+      previous: RobotSnapshot,
+      status: naogateway.proto.Status,
+      health: Option[naogateway.proto.RobotHealth],
+      receivedAtNanos: Long
+  ): RobotSnapshot =
+    previous.copy(
+      teamId = status.teamID.map(_.toInt),
+      role = status.activeRole,
+      agent = status.activeAgent,
+      posture = health.flatMap(_.posture).orElse(status.currentState),
+      batteryVoltage = health.flatMap(_.batteryVoltage).map(_.toDouble),
+      uptimeMillis = health.flatMap(_.uptimeMs).map(_ & 0xffffffffL).orElse(status.timestamp),
+      bootId = health.flatMap(_.bootId),
+      position = status.robotPosition.map(p => (p.getX, p.getY, p.getRotation.toDouble)),
+      receivedAtNanos = receivedAtNanos
+    )
+
+  /**
+   * One keep-alive applied to the gateway's view of a robot: the snapshot it publishes ([[afterKeepAlive]]), whether
+   * the keep-alive starts a fresh session by the restart rule of docs/protocol.md §6.2, and the `bootId` the next
+   * keep-alive is compared with. `lastBootId` is kept apart from the snapshot, which shows only the latest keep-alive.
+   */
+  def keepAlive(
+      previous: RobotSnapshot,
+      lastBootId: Option[Int],
+      status: naogateway.proto.Status,
+      health: Option[naogateway.proto.RobotHealth],
+      receivedAtNanos: Long
+  ): KeepAliveStep = {
+    val current = afterKeepAlive(previous, status, health, receivedAtNanos)
+    // A bootId differing from the last one seen (a keep-alive without one says nothing), or uptime going backwards by
+    // more than a second (so reordered keep-alives are no restart).
+    val restarted = (for (before <- lastBootId; now <- current.bootId) yield now != before).getOrElse(false) ||
+      (for (before <- previous.uptimeMillis; after <- current.uptimeMillis) yield after + 1000 < before).getOrElse(false)
+    // A restart announced without a bootId forgets the old session's, so it cannot make the next keep-alive a restart.
+    KeepAliveStep(current, restarted, if (current.bootId.isDefined || restarted) current.bootId else lastBootId)
+  }
 
   /**
    * `snapshots` after `event`: a keep-alive replaces the robot's snapshot, and online, offline and quality events

@@ -2,7 +2,7 @@ package naogateway.wire
 
 import java.io.ByteArrayOutputStream
 import java.nio.ByteBuffer
-import java.util.zip.{GZIPInputStream, GZIPOutputStream}
+import java.util.zip.GZIPOutputStream
 
 import scala.util.control.NonFatal
 
@@ -155,9 +155,12 @@ object FumanoidsFrame {
       parseMessage(raw.protobuf).map(DecodedFrame(raw.header, _))
     }
 
-  /** Parses protobuf bytes into a `Message`, as a value or a typed error. */
+  /** Parses protobuf bytes into a `Message` by the rules of docs/protocol.md §5, as a value or a typed error. */
   def parseMessage(protobuf: Array[Byte]): Either[FrameError.BadProtobuf, Message] =
-    try Right(Message.parseFrom(protobuf))
+    try {
+      val (bytes, offset, length) = WireRules.normalize(protobuf, 0, protobuf.length)
+      Right(Message.parseFrom(com.google.protobuf.CodedInputStream.newInstance(bytes, offset, length)))
+    }
     catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
 
   private def u16(b: Array[Byte], at: Int): Int = ((b(at) & 0xff) << 8) | (b(at + 1) & 0xff)
@@ -173,22 +176,58 @@ object FumanoidsFrame {
     out.toByteArray
   }
 
-  private def inflate(bytes: Array[Byte]): Either[FrameError.BadGzip, Array[Byte]] =
-    try {
-      val in = new GZIPInputStream(new java.io.ByteArrayInputStream(bytes))
-      try {
-        val out = new ByteArrayOutputStream(bytes.length * 4)
-        val chunk = new Array[Byte](4096)
-        var total = 0
-        var read = in.read(chunk)
-        while (read >= 0) {
-          total += read
-          if (total > MaxInflatedBytes)
-            return Left(FrameError.BadGzip(s"inflates beyond $MaxInflatedBytes bytes"))
-          out.write(chunk, 0, read)
-          read = in.read(chunk)
-        }
-        Right(out.toByteArray)
-      } finally in.close()
-    } catch { case NonFatal(e) => Left(FrameError.BadGzip(String.valueOf(e.getMessage))) }
+  /** Inflates exactly one gzip member (RFC 1952), as docs/protocol.md §4.3 demands: a second member or any byte
+    * after the member's trailer is refused, so every receiver reads the same payload.
+    */
+  private def inflate(bytes: Array[Byte]): Either[FrameError.BadGzip, Array[Byte]] = {
+    def bad(reason: String) = Left(FrameError.BadGzip(reason))
+    def u8(at: Int): Int = bytes(at) & 0xff
+    def le16(at: Int): Int = u8(at) | (u8(at + 1) << 8)
+    def le32(at: Int): Long = (le16(at) | (le16(at + 2).toLong << 16)) & 0xffffffffL
+    // Skips a zero-terminated field of the header; -1 when the terminator is missing.
+    def afterZero(from: Int): Int = { val z = bytes.indexOf(0.toByte, from); if (z < 0) -1 else z + 1 }
+    val FText = 1; val FHcrc = 2; val FExtra = 4; val FName = 8; val FComment = 16
+    if (bytes.length < 18) bad(s"${bytes.length} bytes cannot hold a gzip member")
+    else if (u8(0) != 0x1f || u8(1) != 0x8b) bad("not in gzip format")
+    else if (u8(2) != 8) bad(s"compression method ${u8(2)} is not deflate")
+    else if ((u8(3) & ~(FText | FHcrc | FExtra | FName | FComment)) != 0) bad(s"reserved gzip flags 0x${Integer.toHexString(u8(3))}")
+    else {
+      val flags = u8(3)
+      var at = 10
+      if ((flags & FExtra) != 0) at = if (at + 2 <= bytes.length) at + 2 + le16(at) else -1
+      if (at >= 0 && (flags & FName) != 0) at = afterZero(at)
+      if (at >= 0 && (flags & FComment) != 0) at = afterZero(at)
+      if (at >= 0 && (flags & FHcrc) != 0) at += 2
+      if (at < 0 || at > bytes.length - 8) bad("truncated gzip header")
+      else {
+        val inflater = new java.util.zip.Inflater(true)
+        try {
+          inflater.setInput(bytes, at, bytes.length - at)
+          val out = new ByteArrayOutputStream(bytes.length * 4)
+          val chunk = new Array[Byte](4096)
+          var failure: Option[String] = None
+          while (failure.isEmpty && !inflater.finished()) {
+            val n = inflater.inflate(chunk)
+            out.write(chunk, 0, n)
+            if (out.size > MaxInflatedBytes) failure = Some(s"inflates beyond $MaxInflatedBytes bytes")
+            else if (n == 0 && !inflater.finished()) failure = Some("truncated deflate data") // no progress: input used up
+          }
+          failure match {
+            case Some(reason) => bad(reason)
+            case None =>
+              val trailer = bytes.length - inflater.getRemaining
+              val inflated = out.toByteArray
+              val crc = new java.util.zip.CRC32()
+              crc.update(inflated)
+              if (inflater.getRemaining < 8) bad("truncated gzip trailer")
+              else if (inflater.getRemaining > 8) bad(s"${inflater.getRemaining - 8} bytes after the gzip member")
+              else if (le32(trailer) != crc.getValue) bad("CRC-32 mismatch")
+              else if (le32(trailer + 4) != (inflated.length.toLong & 0xffffffffL)) bad("inflated size mismatch")
+              else Right(inflated)
+          }
+        } catch { case NonFatal(e) => bad(String.valueOf(e.getMessage)) }
+        finally inflater.end()
+      }
+    }
+  }
 }

@@ -121,6 +121,13 @@ object MessageContents {
   /** Parses `length` protobuf bytes from `offset`; same result as `of(Message.parseFrom(...))`, without the detour. */
   def parse(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
     try {
+      val (normalized, from, size) = WireRules.normalize(bytes, offset, length)
+      fastParse(normalized, from, size)
+    } catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
+
+  /** The one-pass reading of bytes that `WireRules.normalize` has already checked (no groups, strings repaired). */
+  private def fastParse(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
+    try {
       val in = CodedInputStream.newInstance(bytes, offset, length)
       var robotId = 0
       var seenRobotId = false
@@ -153,9 +160,6 @@ object MessageContents {
             case _ => repeated ||= c.rpcResponse.isDefined; c = c.copy(rpcResponse = Some(nested(in, Response)))
           }
         } else {
-          // No FU-Remote or project message uses groups, and the general (ScalaPB) path refuses them: so does this one.
-          if (wireType == WireFormat.WIRETYPE_START_GROUP || wireType == WireFormat.WIRETYPE_END_GROUP)
-            throw new com.google.protobuf.InvalidProtocolBufferException(s"group wire type $wireType in field $field")
           if (!unknown.contains(field)) unknown = unknown :+ field
           in.skipField(tag)
         }
@@ -167,7 +171,7 @@ object MessageContents {
     } catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
 
   private def slowParse(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
-    try of(Message.parseFrom(CodedInputStream.newInstance(bytes, offset, length)))
+    try of(Message.parseFrom(CodedInputStream.newInstance(bytes, offset, length))) // already normalized
     catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
 
   private def nested[A <: scalapb.GeneratedMessage](in: CodedInputStream, companion: scalapb.GeneratedMessageCompanion[A]): A = {

@@ -47,6 +47,40 @@ class FumanoidsFrameSpec extends AnyWordSpec with Matchers with ScalaCheckProper
       header.gzip shouldBe true
       contents shouldBe workedContents
     }
+    "refuse a gzip payload of two members, or with bytes after its member: one member only (protocol.md §4.3)" in {
+      def gzip(bytes: Array[Byte]): Array[Byte] = {
+        val out = new java.io.ByteArrayOutputStream()
+        val z = new java.util.zip.GZIPOutputStream(out)
+        z.write(bytes); z.close()
+        out.toByteArray
+      }
+      def gzipFrame(payload: Array[Byte]): Array[Byte] =
+        java.nio.ByteBuffer.allocate(12 + payload.length).putInt(0x002a0200).putInt(0).putInt(payload.length).put(payload).array()
+      val half = workedProtobuf.length / 2
+      val single = gzipFrame(gzip(workedProtobuf))
+      MessageContents.decodeFrame(single).map(_._2) shouldBe Right(workedContents)
+      // The two halves of the Message in two members: a concatenating reader would see the whole Message.
+      val twoMembers = gzipFrame(gzip(workedProtobuf.take(half)) ++ gzip(workedProtobuf.drop(half)))
+      MessageContents.decodeFrame(twoMembers) should matchPattern { case Left(FrameError.BadGzip(r)) if r.contains("after the gzip member") => }
+      FumanoidsFrame.decode(twoMembers) should matchPattern { case Left(FrameError.BadGzip(_)) => }
+      val trailing = gzipFrame(gzip(workedProtobuf) ++ Array[Byte](0x00, 0x13, 0x37))
+      MessageContents.decodeFrame(trailing) shouldBe Left(FrameError.BadGzip("3 bytes after the gzip member"))
+      // A member cut short, or with a wrong CRC, is refused as well.
+      val member = gzip(workedProtobuf)
+      MessageContents.decodeFrame(gzipFrame(member.dropRight(1))) should matchPattern { case Left(FrameError.BadGzip(_)) => }
+      val badCrc = member.clone(); badCrc(member.length - 8) = (badCrc(member.length - 8) ^ 1).toByte
+      MessageContents.decodeFrame(gzipFrame(badCrc)) shouldBe Left(FrameError.BadGzip("CRC-32 mismatch"))
+    }
+    "read a gzip member whose header carries a file name and a comment" in {
+      val plain = new java.io.ByteArrayOutputStream()
+      val z = new java.util.zip.GZIPOutputStream(plain)
+      z.write(workedProtobuf); z.close()
+      val member = plain.toByteArray
+      // FLG = FNAME | FCOMMENT, then "a\0" and "b\0" after the 10-byte header.
+      val named = member.take(3) ++ Array[Byte](0x18) ++ member.slice(4, 10) ++ Array[Byte](0x61, 0, 0x62, 0) ++ member.drop(10)
+      val frame = java.nio.ByteBuffer.allocate(12 + named.length).putInt(0x002a0200).putInt(0).putInt(named.length).put(named).array()
+      MessageContents.decodeFrame(frame).map(_._2) shouldBe Right(workedContents)
+    }
     "refuse a truncated header" in {
       FumanoidsFrame.decode(workedFrame.take(5)) shouldBe Left(FrameError.Truncated(8, 5))
       FumanoidsFrame.decode(workedFrame.take(10)) shouldBe Left(FrameError.Truncated(12, 10))
@@ -143,10 +177,23 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
   implicit override val generatorDrivenConfig: PropertyCheckConfiguration =
     PropertyCheckConfiguration(minSuccessful = 2000)
 
+  /** The general path: the gateway's `Message` parse (ScalaPB after the §5 rules), then the contents. */
+  private def general(bytes: Array[Byte]): Either[FrameError, MessageContents] =
+    FumanoidsFrame.parseMessage(bytes).flatMap(MessageContents.of)
+
+  /** Both paths' answer when they agree; the test fails when they do not. */
+  private def both(bytes: Array[Byte]): Either[FrameError, MessageContents] = {
+    val fast = MessageContents.parse(bytes)
+    fast.isRight shouldBe general(bytes).isRight
+    fast.foreach(c => general(bytes) shouldBe Right(c))
+    fast
+  }
+
   "MessageContents.parse" should {
     "agree with the general ScalaPB path for every message" in {
       forAll(contents) { c =>
         val bytes = c.toMessage.toByteArray
+        MessageContents.parse(bytes) shouldBe general(bytes)
         MessageContents.parse(bytes) shouldBe MessageContents.of(Message.parseFrom(bytes))
         MessageContents.parse(bytes) shouldBe Right(c)
       }
@@ -159,27 +206,60 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       val merged = MessageContents.parse(first.toByteArray ++ second.toByteArray)
       merged.map(_.status) shouldBe Right(Some(Status(teamID = Some(3), activeRole = Some("striker"))))
     }
-    "refuse group wire types, as the general path does" in {
-      // robotID 4, then field 11 with wire type 4 (end group) and no group open.
-      MessageContents.parse(Array[Byte](0x08, 0x04, 0x5c)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+    "skip unknown groups like every other unknown field, in both paths (protocol.md §5)" in {
+      def bytes(s: String) = s.split(' ').map(Integer.parseInt(_, 16).toByte)
       // robotID 1, then an empty group in field 5.
-      MessageContents.parse(Array[Byte](0x08, 0x01, 0x2b, 0x2c)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+      both(bytes("08 01 2B 2C")) shouldBe Right(MessageContents(1))
+      // robotID 1, a group in field 50 holding a varint and an inner group, then Status with teamID 1.
+      both(bytes("08 01 93 03 08 05 5B 5C 94 03 BA 01 02 10 01")) shouldBe
+        Right(MessageContents(1, status = Some(Status(teamID = Some(1)))))
+      // A group inside a known extension: Status with teamID 1 and an unknown group in field 11.
+      both(bytes("08 01 BA 01 04 10 01 5B 5C")) shouldBe Right(MessageContents(1, status = Some(Status(teamID = Some(1)))))
+    }
+    "still refuse malformed groups: an end without a start, or an end of another field" in {
+      both(Array[Byte](0x08, 0x04, 0x5c)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+      both(Array[Byte](0x08, 0x01, 0x2b, 0x34)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+      both(Array[Byte](0x08, 0x01, 0x2b)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+    }
+    "read a display string that is not UTF-8 with U+FFFD, keeping the rest of the message (protocol.md §5)" in {
+      // Status: teamID 1, activeAgent = 41 FF 42 ("A", a byte no UTF-8 text holds, "B").
+      val bad = Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x07, 0x10, 0x01, 0x62, 0x03, 0x41, 0xff.toByte, 0x42)
+      both(bad) shouldBe Right(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("A\uFFFDB")))))
+      // Valid text beyond ASCII is kept as it is; a sequence cut short is replaced like any malformed one.
+      val text = "Müller ✓ 😀"
+      val valid = Status(activeAgent = Some(text)).toByteArray
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, valid.length.toByte) ++ valid).map(_.status.flatMap(_.activeAgent)) shouldBe
+        Right(Some(text))
+      val cut = Array[Byte](0x62, 0x02, 0x41, 0xc3.toByte)
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, cut.length.toByte) ++ cut).map(_.status.flatMap(_.activeAgent)) shouldBe
+        Right(Some("A\uFFFD"))
+    }
+    "refuse a varint that does not fit its 32-bit field instead of cutting it (protocol.md §5)" in {
+      // robotID 2^32 + 5: cut to 32 bits it would read as robot 5.
+      both(Array[Byte](0x08, 0x85.toByte, 0x80.toByte, 0x80.toByte, 0x80.toByte, 0x10)) should matchPattern {
+        case Left(FrameError.BadProtobuf(reason)) if reason.contains("4294967301") =>
+      }
+      // robotID 2^31: positive, but beyond int32.
+      both(Array[Byte](0x08, 0x80.toByte, 0x80.toByte, 0x80.toByte, 0x80.toByte, 0x08)) should matchPattern {
+        case Left(FrameError.BadProtobuf(_)) =>
+      }
+      // Status.teamID (uint32) 2^32 + 1.
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x06, 0x10, 0x81.toByte, 0x80.toByte, 0x80.toByte, 0x80.toByte, 0x10)) should
+        matchPattern { case Left(FrameError.BadProtobuf(_)) => }
+      // −1 in its 10-byte form and the largest uint32 are in range.
+      both(Array[Byte](0x08) ++ Array.fill(9)(0xff.toByte) :+ 0x01.toByte) shouldBe Right(MessageContents(-1))
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x06, 0x10, 0xff.toByte, 0xff.toByte, 0xff.toByte, 0xff.toByte, 0x0f)) shouldBe
+        Right(MessageContents(1, status = Some(Status(teamID = Some(0xffffffff)))))
     }
     "agree with the general path on arbitrary bytes after a valid robot id" in {
       forAll(anyBytes) { tail =>
         val bytes = Array[Byte](0x08, 0x01) ++ tail.take(60)
-        val general =
-          try MessageContents.of(Message.parseFrom(bytes)).isRight
-          catch { case _: Exception => false }
-        MessageContents.parse(bytes).isRight shouldBe general
+        both(bytes)
       }
     }
     "agree with the general path on arbitrary bytes" in {
       forAll(anyBytes) { bytes =>
-        val general =
-          try MessageContents.of(Message.parseFrom(bytes)).isRight
-          catch { case _: Exception => false }
-        MessageContents.parse(bytes).isRight shouldBe general
+        both(bytes)
       }
     }
   }

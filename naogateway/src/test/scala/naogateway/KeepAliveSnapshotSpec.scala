@@ -1,0 +1,79 @@
+package naogateway
+
+import java.net.InetSocketAddress
+
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.proto.{Position, RobotHealth, Status}
+
+/** docs/protocol.md §6.2: what a keep-alive does to the published snapshot, and the restart rule. */
+class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
+
+  private val start = RobotSnapshot(4, new InetSocketAddress("127.0.0.4", 3838), online = true, quality = LinkQuality.Good)
+
+  // The simulated firmware's keep-alive: Status and RobotHealth, everything set.
+  private val fullStatus = Status(timestamp = Some(600000L), teamID = Some(1), activeAgent = Some("soccer"),
+    robotPosition = Some(Position(x = Some(-1200), y = Some(300), rotation = Some(0.5f))), activeRole = Some("striker"),
+    currentState = Some("walking"))
+  private val fullHealth = RobotHealth(batteryVoltage = Some(11.5f), posture = Some("walking"), uptimeMs = Some(600000), bootId = Some(3))
+
+  // The thesis firmware's keep-alive after a power cycle: Status alone, team and agent only, a young clock.
+  private val bareStatus = Status(timestamp = Some(400L), teamID = Some(1), activeAgent = Some("AgentTest"))
+
+  private def run(steps: (Status, Option[RobotHealth])*): Vector[KeepAliveStep] =
+    steps.foldLeft(Vector.empty[KeepAliveStep]) { (done, keepAlive) =>
+      val (snapshot, lastBootId) = done.lastOption.fold((start, Option.empty[Int]))(s => (s.snapshot, s.lastBootId))
+      done :+ RobotSnapshot.keepAlive(snapshot, lastBootId, keepAlive._1, keepAlive._2, receivedAtNanos = done.size.toLong)
+    }
+
+  "A keep-alive" should {
+    "publish what it carries" in {
+      val s = run(fullStatus -> Some(fullHealth)).last
+      s.restarted shouldBe false
+      s.snapshot shouldBe start.copy(teamId = Some(1), role = Some("striker"), agent = Some("soccer"), posture = Some("walking"),
+        batteryVoltage = Some(11.5), uptimeMillis = Some(600000L), bootId = Some(3), position = Some((-1200, 300, 0.5)),
+        receivedAtNanos = 0L)
+    }
+
+    "carry nothing over from the previous session when the new one sends Status only" in {
+      val Vector(_, restart) = run(fullStatus -> Some(fullHealth), bareStatus -> None)
+      restart.restarted shouldBe true
+      restart.snapshot shouldBe start.copy(teamId = Some(1), agent = Some("AgentTest"), uptimeMillis = Some(400L), receivedAtNanos = 1L)
+      restart.snapshot.batteryVoltage shouldBe None
+      restart.snapshot.position shouldBe None
+      restart.snapshot.role shouldBe None
+      restart.snapshot.posture shouldBe None
+      restart.snapshot.bootId shouldBe None
+    }
+
+    "show a field as unknown when the robot stops sending it, without taking that for a restart" in {
+      val later = fullStatus.copy(timestamp = Some(600200L), activeRole = None, robotPosition = None)
+      val Vector(_, next) = run(fullStatus -> Some(fullHealth), later -> Some(fullHealth.copy(uptimeMs = Some(600200), batteryVoltage = None)))
+      next.restarted shouldBe false
+      next.snapshot.role shouldBe None
+      next.snapshot.position shouldBe None
+      next.snapshot.batteryVoltage shouldBe None
+      next.snapshot.bootId shouldBe Some(3)
+      next.lastBootId shouldBe Some(3)
+    }
+  }
+
+  "The restart rule" should {
+    "see a new bootId, and a clock that went back, but not a keep-alive that merely lacks RobotHealth" in {
+      val steps = run(
+        fullStatus -> Some(fullHealth),
+        fullStatus.copy(timestamp = Some(600200L)) -> None, // RobotHealth left out: no bootId, no restart
+        fullStatus.copy(timestamp = Some(600400L)) -> Some(fullHealth.copy(uptimeMs = Some(600400))),
+        fullStatus.copy(timestamp = Some(600600L)) -> Some(fullHealth.copy(uptimeMs = Some(600600), bootId = Some(4))),
+        bareStatus -> None, // a power cycle to Status-only firmware: the clock went back
+        bareStatus.copy(timestamp = Some(600L)) -> None,
+        bareStatus.copy(timestamp = Some(800L)) -> Some(RobotHealth(uptimeMs = Some(800), bootId = Some(1))),
+        bareStatus.copy(timestamp = Some(1000L)) -> Some(RobotHealth(uptimeMs = Some(1000), bootId = Some(1)))
+      )
+      steps.map(_.restarted) shouldBe Vector(false, false, false, true, true, false, false, false)
+      steps.map(_.lastBootId) shouldBe Vector(Some(3), Some(3), Some(3), Some(4), None, None, Some(1), Some(1))
+      steps(1).snapshot.bootId shouldBe None
+    }
+  }
+}
