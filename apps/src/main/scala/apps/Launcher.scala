@@ -118,13 +118,19 @@ object Launcher {
           context.log.error("Ball follower found no middleware", e)
           Behaviors.stopped
       }
-    }, MiddlewareCluster.AppRole)
+    }, MiddlewareCluster.AppRole, appNodeConfig(gatewayNode.settings.config))
     // The app node lives and dies with the gateway node.
     CoordinatedShutdown(gatewayNode.classicSystem).addTask(CoordinatedShutdown.PhaseBeforeServiceUnbind, "stop-apps") { () =>
       appNode.terminate()
       appNode.whenTerminated
     }
   }
+
+  /** What the demo's app node takes over from the gateway node's config: where the cluster is, and the dispatcher's size. */
+  def appNodeConfig(gatewayNode: Config): Config =
+    Seq("robotmiddleware.cluster", "akka.actor.default-dispatcher").foldLeft(ConfigFactory.empty()) { (c, path) =>
+      c.withValue(path, gatewayNode.getValue(path))
+    }
 
   private final case class BallFollowerNode(robot: scala.util.Try[robotmiddleware.RobotInterface])
 }
