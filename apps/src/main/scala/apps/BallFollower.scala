@@ -26,6 +26,9 @@ object BallFollower {
   private final case class Preempted(event: AppEvent) extends Command
   private case object Retry extends Command
 
+  /** Head targets closer than this (radians) to the last one sent are not sent again. */
+  val HeadDeadband: Double = 0.01
+
   /** How far the follower is. */
   final case class Progress(reached: Boolean, lastDistance: Option[Double], frames: Long)
 
@@ -38,11 +41,18 @@ object BallFollower {
         def acquire(): Unit =
           context.pipeToSelf(robot.acquire(robotId, ActuatorGroup.Walk, ActuatorGroup.Head))(Leased.apply)
 
-        def following(state: BallFollowerControl.State, progress: Progress, lastWalk: (Double, Double)): Behavior[Command] =
+        def following(state: BallFollowerControl.State, progress: Progress, lastWalk: (Double, Double),
+            lastHead: (Double, Double) = (Double.NaN, Double.NaN)): Behavior[Command] =
           Behaviors.receiveMessage {
             case Frame(frame) =>
               val (next, t) = BallFollowerControl.step(state, frame.regions)
-              robot.head(robotId, t.pan, t.tilt)
+              // A head that already looks where it should gets no command: at 16 frames a second, a still ball
+              // would otherwise cost a datagram to the robot per frame.
+              val head =
+                if (math.abs(t.pan - lastHead._1) > HeadDeadband || math.abs(t.tilt - lastHead._2) > HeadDeadband || lastHead._1.isNaN) {
+                  robot.head(robotId, t.pan, t.tilt)
+                  (t.pan, t.tilt)
+                } else lastHead
               // Only changed velocities go out; the middleware keeps the current walk alive.
               val walk = (t.vx, t.omega)
               if (math.abs(walk._1 - lastWalk._1) > 0.02 || math.abs(walk._2 - lastWalk._2) > 0.05 || lastWalk._1.isNaN) {
@@ -50,11 +60,11 @@ object BallFollower {
                 context.pipeToSelf(sent)(WalkDone.apply)
               }
               if (next.reached && !state.reached) context.log.info("Robot [{}] reached the ball", robotId)
-              following(next, Progress(next.reached, t.ballDistance.orElse(progress.lastDistance), progress.frames + 1), walk)
+              following(next, Progress(next.reached, t.ballDistance.orElse(progress.lastDistance), progress.frames + 1), walk, head)
             case WalkDone(Failure(e)) =>
               // The robot refused or missed it: send the current target again with the next frame.
               context.log.debug("Ball follower walk on robot [{}] failed: {}", robotId, e.getMessage)
-              following(state, progress, (Double.NaN, Double.NaN))
+              following(state, progress, (Double.NaN, Double.NaN), (Double.NaN, Double.NaN))
             case GetProgress(replyTo) =>
               replyTo ! progress
               Behaviors.same
