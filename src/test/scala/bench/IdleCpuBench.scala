@@ -1,7 +1,7 @@
 package bench
 
 import java.lang.management.ManagementFactory
-import java.net.{DatagramSocket, InetAddress, InetSocketAddress, ServerSocket, StandardProtocolFamily}
+import java.net.{InetAddress, InetSocketAddress, StandardProtocolFamily}
 import java.nio.ByteBuffer
 import java.nio.channels.{AsynchronousCloseException, DatagramChannel}
 import java.nio.charset.StandardCharsets
@@ -12,7 +12,6 @@ import scala.collection.immutable.ListMap
 import scala.concurrent.Await
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
-import scala.jdk.OptionConverters._
 import scala.util.Try
 
 import akka.actor.typed.ActorSystem
@@ -51,8 +50,6 @@ object IdleCpuBench extends Benchmark {
 
   private def progress(line: String): Unit = println(s"  idle: $line")
 
-  private def freeTcpPort(): Int = { val s = new ServerSocket(0); try s.getLocalPort finally s.close() }
-  private def freeUdpPort(): Int = { val s = new DatagramSocket(0); try s.getLocalPort finally s.close() }
 
   private def demoIdle(): Double = {
     val log = Paths.get("target", "bench", "demo-idle.log").toAbsolutePath
@@ -60,9 +57,9 @@ object IdleCpuBench extends Benchmark {
     Files.deleteIfExists(log)
     // The package's launcher, as a user starts it (the bench alias stages the package first); without a staged
     // package, the launcher's main on this classpath with the launcher's own logging, not the tests' logback-test.xml.
-    val packaged = Paths.get("apps", "target", "universal", "stage", "bin", "naogateway").toAbsolutePath
+    import Packaged.{freeTcpPort, freeUdpPort}
     val command =
-      if (Files.isExecutable(packaged)) Seq(packaged.toString)
+      if (Packaged.isStaged) Seq(Packaged.bin("naogateway").toString)
       else {
         val javaBin = s"${System.getProperty("java.home")}/bin/java"
         val logging = Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
@@ -91,8 +88,7 @@ object IdleCpuBench extends Benchmark {
       } else {
         progress(s"three robots online; settling ${DemoSettle.toSeconds} s, then measuring ${Window.toSeconds} s")
         Thread.sleep(DemoSettle.toMillis)
-        val info = process.toHandle
-        def cpu(): Option[Long] = info.info().totalCpuDuration().toScala.map(_.toNanos)
+        def cpu(): Option[Long] = Packaged.cpuNanos(process.pid())
         val (c0, t0) = (cpu(), System.nanoTime())
         Thread.sleep(Window.toMillis)
         val (c1, t1) = (cpu(), System.nanoTime())

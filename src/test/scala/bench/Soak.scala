@@ -1,7 +1,7 @@
 package bench
 
 import java.io.File
-import java.net.{DatagramSocket, InetAddress, InetSocketAddress, ServerSocket}
+import java.net.{InetAddress, InetSocketAddress}
 import java.nio.charset.StandardCharsets
 import java.nio.file.{Files, Path, Paths}
 import java.util.concurrent.TimeUnit
@@ -52,10 +52,9 @@ object Soak extends Benchmark {
   private def progress(line: String): Unit = println(s"  soak: $line")
 
   def run(): ListMap[String, Double] = {
-    val stage = Paths.get("apps", "target", "universal", "stage").toAbsolutePath
-    val bin = stage.resolve("bin")
-    require(Files.isExecutable(bin.resolve("naogateway")),
-      s"no package at $stage: run the soak through the bench alias (./sbt \"bench soak\"), which stages it first")
+    import Packaged.{bin, freeTcpPort, freeUdpPort}
+    require(Packaged.isStaged,
+      s"no package at ${Packaged.stage}: run the soak through the bench alias (./sbt \"bench soak\"), which stages it first")
     val dir = Paths.get("target", "soak").toAbsolutePath
     Files.createDirectories(dir)
 
@@ -67,7 +66,7 @@ object Soak extends Benchmark {
     Files.write(conf, soakConfig(robotPort, gameControllerPort, controlPort, clusterPort).getBytes(StandardCharsets.UTF_8))
 
     val gatewayLog = dir.resolve("naogateway.out").toFile
-    val builder = new ProcessBuilder(bin.resolve("naogateway").toString, conf.toString)
+    val builder = new ProcessBuilder(bin("naogateway").toString, conf.toString)
       .redirectErrorStream(true).redirectOutput(gatewayLog).redirectInput(ProcessBuilder.Redirect.from(new File("/dev/null")))
     builder.environment().put("NAOGATEWAY_LOG_FILE", dir.resolve("naogateway.log").toString)
     builder.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
@@ -89,7 +88,7 @@ object Soak extends Benchmark {
         ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))
 
       def robotctl(args: String*): Either[String, String] = {
-        val b = new ProcessBuilder((bin.resolve("robotctl").toString +: args).asJava).redirectErrorStream(true)
+        val b = new ProcessBuilder((bin("robotctl").toString +: args).asJava).redirectErrorStream(true)
         b.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
         val p = b.start()
         val out = p.getInputStream
@@ -110,7 +109,7 @@ object Soak extends Benchmark {
       require(up, s"the gateway did not report ${Robots.size} robots online within 2 minutes; see $gatewayLog")
       progress("three robots online; soaking for " + f"$minutes%.1f minutes")
 
-      val cpuStart = cpuTicks(pid)
+      val cpuStart = Packaged.cpuNanos(pid)
       val start = System.nanoTime()
       val end = (minutes * 60).seconds.fromNow
       var nextCall, nextCycle, nextHeap = Deadline.now
@@ -166,7 +165,7 @@ object Soak extends Benchmark {
         Thread.sleep(200)
       }
       val ranMinutes = (System.nanoTime() - start) / 60e9
-      val cpuPct = (cpuTicks(pid) - cpuStart).toDouble / clockTicksPerSecond / (ranMinutes * 60) * 100
+      val cpuPct = (for (a <- cpuStart; b <- Packaged.cpuNanos(pid)) yield (b - a) / (ranMinutes * 60e9) * 100).getOrElse(Double.NaN)
       alive = alive && gateway.isAlive && robotctl("status").isRight
       gameController.terminate()
       Try(Await.result(fleet.stop(), 30.seconds))
@@ -199,18 +198,6 @@ object Soak extends Benchmark {
        |naogateway.game-controller { bind-address = "127.0.0.1", port = $gameControllerPort }
        |robotmiddleware.cluster { gateway-host = "127.0.0.1", gateway-port = $clusterPort }
        |""".stripMargin
-
-  private def freeUdpPort(): Int = { val s = new DatagramSocket(0, InetAddress.getLoopbackAddress); try s.getLocalPort finally s.close() }
-  private def freeTcpPort(): Int = { val s = new ServerSocket(0, 1, InetAddress.getLoopbackAddress); try s.getLocalPort finally s.close() }
-
-  private val clockTicksPerSecond = 100.0
-
-  /** utime + stime of a process, in clock ticks (Linux /proc). */
-  private def cpuTicks(pid: Long): Long = {
-    val stat = new String(Files.readAllBytes(Paths.get(s"/proc/$pid/stat")), StandardCharsets.US_ASCII)
-    val fields = stat.substring(stat.lastIndexOf(')') + 2).split(" ")
-    fields(11).toLong + fields(12).toLong
-  }
 
   private lazy val jcmd: Path = {
     val java = Paths.get(ProcessHandle.current().info().command().orElse("java"))
