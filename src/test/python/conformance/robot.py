@@ -751,7 +751,7 @@ def main():
     p.add_argument("--boot-id", type=int, default=1)
     p.add_argument("--battery", type=float, default=12.4)
     p.add_argument("--forms", default="legacy,compact,legacy-gzip,compact-gzip", help="keep-alive header forms, in turn")
-    p.add_argument("--stream-sends", type=int, default=3, help="keep-alive frames sent through the stream per session")
+    p.add_argument("--stream-sends", type=int, default=5, help="keep-alive frames sent through the stream per session")
     p.add_argument("--restart-silence", type=float, default=4.0)
     p.add_argument("--duration", type=float, default=110.0, help="the robot exits by itself after this many seconds")
     p.add_argument("--report", required=True)
