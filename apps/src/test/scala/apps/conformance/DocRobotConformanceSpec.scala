@@ -96,6 +96,7 @@ object ConformanceEnv {
     }.get
 }
 
+/** The gateway's configuration for the conformance run, the robot's modes and today's known disagreements. */
 object DocRobotConformanceSpec {
 
   /** A gateway on free loopback ports; robots are discovered from their keep-alives, the GameController port stays shut. */
@@ -108,7 +109,11 @@ object DocRobotConformanceSpec {
 
   /** How the robot is run: strictly as section 2 says, or also acting on datagrams at its sending socket. */
   sealed abstract class Mode(val name: String, val compat: Boolean)
+
+  /** As section 2 describes the hardware: acting only on what arrives at 127.0.0.x:3838. */
   case object Strict extends Mode("strict", false)
+
+  /** Also acting on datagrams at the robot's sending socket (CONFORMANCE_COMPAT=1). */
   case object Compat extends Mode("compatibility", true)
 
   /**
