@@ -30,12 +30,15 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     val stream: TestProbe[StreamActor.Command] = createTestProbe[StreamActor.Command]()
     val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
     val connects: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
+    /** Every `Connect` the robot got, held or answered. */
+    val connectsSeen: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
     val connected: RobotActor.Connected = RobotActor.Connected(1, response.ref, noResponse.ref, vision.ref, stream.ref)
     /** What the robot answers a `Connect` with: a test swaps it for new children to stand in for a restart. */
     @volatile var current: RobotActor.Connected = connected
 
     private val robot: Behavior[RobotActor.Command] = Behaviors.receiveMessage {
       case RobotActor.Connect(replyTo) =>
+        connectsSeen.ref ! replyTo
         if (holdConnect) connects.ref ! replyTo else replyTo ! current
         Behaviors.same
       case RobotActor.GetSnapshot(replyTo) =>
@@ -105,7 +108,10 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.expectCall("motion.head").replyTo ! CallResult(1, "motion.head", Right(None))
       val fresh = createTestProbe[ResponseActor.Command]()
       f.current = f.connected.copy(response = fresh.ref)
+      f.connectsSeen.receiveMessage() // the guard's first connect
       f.response.stop()
+      // The guard watches the refs it holds: their end makes it connect again, and calls wait meanwhile.
+      f.connectsSeen.receiveMessage()
       val result = f.execute(app, Operation.Head(0.2, 0.0))
       val call = fresh.fishForMessage(3.seconds) {
         case c: ResponseActor.Call if c.call.name == "motion.head" => akka.actor.testkit.typed.FishingOutcome.Complete
