@@ -39,7 +39,8 @@ private[robotmiddleware] object RobotGuard {
   private final case class OperationDone(
       replyTo: ActorRef[RobotMiddleware.OperationResult],
       operation: Operation,
-      result: Either[RobotFailure, Option[RpcValue]]
+      result: Either[RobotFailure, Option[RpcValue]],
+      superseded: Boolean = false
   ) extends Command
   private case object WalkRefresh extends Command
   private case object StatsTick extends Command
@@ -205,10 +206,12 @@ private[robotmiddleware] object RobotGuard {
           if (held.exists(_ == ActuatorGroup.Walk)) stopWalking(c, "app gone")
         }
         Behaviors.same
-      case OperationDone(replyTo, operation, result) =>
+      case OperationDone(replyTo, operation, result, superseded) =>
         replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
-        if (result.isLeft && operation.isInstanceOf[Operation.Posture] && online) stopWalking(c, s"${operation.name} failed")
+        // A superseded one is not undefined: the newer call of its slot decides the motion.
+        if (result.isLeft && !superseded && operation.isInstanceOf[Operation.Posture] && online)
+          stopWalking(c, s"${operation.name} failed")
         operation match {
           case w: Operation.Walk if walking.exists(_._1 == w) =>
             // Refreshing starts only once the robot has confirmed the walk: a refused walk is never sent again.
@@ -239,6 +242,7 @@ private[robotmiddleware] object RobotGuard {
           // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
           case Right(_) | Left(_: CallError.Superseded) if step == SafetyStep.StopThenSit && safety.isDefined =>
             safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text("sit")), settings.postureTimeout)
+          case Left(_: CallError.Superseded) => () // a newer call of the slot took over: nothing failed
           case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
           case Right(_)    => ()
         }
@@ -266,7 +270,9 @@ private[robotmiddleware] object RobotGuard {
       case ChildrenReady(_) => Behaviors.same
       case ChildGone(child) if child == c.response || child == c.vision =>
         context.log.info("Robot [{}]: its children were restarted; connecting again", robotId)
+        // Nothing refreshes the walk meanwhile, so the robot stops by itself within its lease: forget the walk.
         timers.cancel(WalkKey)
+        walking = None
         robot ! RobotActor.Connect(childrenReady)
         connecting(online)
       case ChildGone(_) => Behaviors.same
@@ -332,7 +338,8 @@ private[robotmiddleware] object RobotGuard {
         priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + 1.second
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
-        case Success(result) => OperationDone(replyTo, operation, result.result.left.map(failure))
+        case Success(result) =>
+          OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[CallError.Superseded]))
         case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
       }
     }
