@@ -1,15 +1,14 @@
 package naogateway
 
-import scala.concurrent.duration.FiniteDuration
-
-import akka.actor.typed.scaladsl.{Behaviors, StashBuffer, TimerScheduler}
+import akka.actor.typed.scaladsl.{Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
-import naogateway.wire.{RpcCall, RpcReply, RpcValue}
+import naogateway.wire.{CommandSlot, RpcCall, RpcMethod, RpcValue}
 
 /**
- * Ordered fire-and-forget commands that still honour the link's request-reply lockstep: one command in flight,
- * the rest stashed (bounded) until its answer arrives, so the robot's 1400-byte module buffer is never flooded.
+ * Ordered fire-and-forget commands: a lockstep client of its sibling `ResponseActor`, which alone sends to the robot.
+ * One command in flight (sent once, no retries), the rest stashed (bounded) until its answer arrives; a newer command
+ * of a slot takes the place of a stashed one of that slot (latest wins).
  */
 object NoResponseActor {
 
@@ -20,44 +19,20 @@ object NoResponseActor {
   final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None, priority: Priority = Priority.Command)
       extends Command
 
-  /** A reply with one of this actor's call ids arrived. */
-  final case class ReplyReceived(reply: RpcReply) extends Command
+  private final case class Answered(result: CallResult) extends Command
 
-  /** The robot's reachability changed. */
-  final case class Reachability(online: Boolean) extends Command
-
-  private final case class AnswerTimedOut(callId: Long) extends Command
-  private final case class SendOutcome(outcome: Outbox.Outcome) extends Command
-
-  /** Call ids of this actor carry this tag in their two top bits. */
-  val CallIdTag: Long = 1L << 30
-
-  /** Commands that set a target (velocity, angles): a newer one replaces its stashed predecessor. */
-  val LatestWins: Set[String] = Set("motion.walk", "motion.head", "motion.arms")
-
-  private case object AnswerKey
-
-  /** A no-response actor for robot `robotId`, sending through `robot`. */
-  def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild], online: Boolean): Behavior[Command] =
+  /** A no-response actor for robot `robotId`, calling through `response`. */
+  def apply(robotId: Int, settings: CallSettings, response: ActorRef[ResponseActor.Command]): Behavior[Command] =
     Behaviors.setup { context =>
-      Behaviors.withTimers { timers =>
-        Behaviors.withStash(settings.stashCapacity) { stash =>
-          val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
-          robot ! RobotActor.ReachabilityWanted(context.messageAdapter[Boolean](Reachability.apply))
-          val actor = new Lockstep(robotId, settings.timeout, robot, outcomes, timers, stash, context.log)
-          // Call ids start at a random point per incarnation, so a late reply from before a restart matches nothing new.
-          val firstId = java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL)
-          if (online) actor.communicating(firstId, Map.empty) else actor.offline(firstId)
-        }
+      Behaviors.withStash(settings.stashCapacity) { stash =>
+        new Lockstep(robotId, response, context.messageAdapter(Answered.apply), stash, context.log).idle(Map.empty)
       }
     }
 
   private final class Lockstep(
       robotId: Int,
-      timeout: FiniteDuration,
-      robot: ActorRef[RobotActor.FromChild],
-      outcomes: ActorRef[Outbox.Outcome],
-      timers: TimerScheduler[Command],
+      response: ActorRef[ResponseActor.Command],
+      answers: ActorRef[CallResult],
       stash: StashBuffer[Command],
       log: org.slf4j.Logger
   ) {
@@ -66,40 +41,42 @@ object NoResponseActor {
     private def finish(s: Send, result: Either[CallError, Option[RpcValue]]): Unit =
       s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, result))
 
-    /** Newest replacement of a stashed latest-wins command, by call name. */
-    type Newest = Map[String, Send]
+    /** The newest replacement of a stashed command, by slot. */
+    type Newest = Map[CommandSlot, Send]
 
-    /** Idle: the next command goes out at once. */
-    def communicating(lastId: Long, newest: Newest): Behavior[Command] = Behaviors
+    /** Idle: the next command goes to the response actor at once. */
+    def idle(newest: Newest): Behavior[Command] = Behaviors
       .receiveMessage[Command] {
         case s0: Send =>
-          // A stashed latest-wins command is swapped for its newest replacement when its turn comes.
-          val s = newest.getOrElse(s0.call.name, s0)
-          val id = CallIdTag | ((lastId + 1) & 0x3fffffffL)
-          // The answer's timer runs before anyone can react to the command going out.
-          timers.startSingleTimer(AnswerKey, AnswerTimedOut(id), timeout)
-          robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(s.call.copy(callId = Some(id))), s.priority, Some(outcomes), id)
-          waiting(id, s, (lastId + 1) & 0x3fffffffL, newest - s0.call.name)
-        case Reachability(false) => toOffline(lastId, newest)
-        case Reachability(true) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same
+          // A stashed command of a slot is swapped for its newest replacement when its turn comes.
+          val slot = RpcMethod.slotOf(s0.call)
+          val s = slot.flatMap(newest.get).getOrElse(s0)
+          response ! ResponseActor.Call(s.call, answers, s.priority, idempotent = Some(false))
+          waiting(s, slot.fold(newest)(newest - _))
+        case Answered(_) => Behaviors.same
       }
       .receiveSignal(signals(None, newest))
 
     /** One command in flight: everything new waits in the stash, in order. */
-    private def waiting(id: Long, current: Send, lastId: Long, newest: Newest): Behavior[Command] = Behaviors
+    private def waiting(current: Send, newest: Newest): Behavior[Command] = Behaviors
       .receiveMessage[Command] {
         case s: Send =>
-          val name = s.call.name
-          if (LatestWins(name) && (newest.contains(name) || stash.exists {
-              case q: Send => q.call.name == name
-              case _       => false
-            })) {
-            newest.get(name).foreach(old => finish(old, Left(CallError.Superseded(robotId, name))))
-            if (!newest.contains(name)) stash.foreach {
-              case q: Send if q.call.name == name && q != s => finish(q, Left(CallError.Superseded(robotId, name)))
-              case _                                         => ()
+          val slot = RpcMethod.slotOf(s.call)
+          val stashedOfSlot = slot.exists(sl => newest.contains(sl) || stash.exists {
+            case q: Send => RpcMethod.slotOf(q.call).contains(sl)
+            case _       => false
+          })
+          if (stashedOfSlot) {
+            val sl = slot.get
+            newest.get(sl) match {
+              case Some(old) => finish(old, Left(CallError.Superseded(robotId, old.call.name)))
+              case None =>
+                stash.foreach {
+                  case q: Send if RpcMethod.slotOf(q.call).contains(sl) => finish(q, Left(CallError.Superseded(robotId, q.call.name)))
+                  case _                                                => ()
+                }
             }
-            waiting(id, current, lastId, newest.updated(name, s))
+            waiting(current, newest.updated(sl, s))
           } else if (stash.isFull) {
             overflowed += 1
             if (overflowed % 100 == 1)
@@ -110,52 +87,21 @@ object NoResponseActor {
             stash.stash(s)
             Behaviors.same
           }
-        case ReplyReceived(reply) if reply.callId.contains(id) =>
-          next(current, reply.result.left.map(CallError.RobotError(robotId, _)), lastId, newest)
-        case AnswerTimedOut(timedOut) if timedOut == id =>
-          next(current, Left(CallError.Timeout(robotId, current.call.name, timeout)), lastId, newest)
-        case SendOutcome(outcome) if outcome.tag == id =>
-          CallError.ofOutcome(robotId, outcome).fold(Behaviors.same[Command])(e => next(current, Left(e), lastId, newest))
-        case Reachability(false) =>
-          timers.cancel(AnswerKey)
-          finish(current, Left(CallError.RobotOffline(robotId)))
-          toOffline(lastId, newest)
-        case Reachability(true) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same
+        case Answered(result) =>
+          // The response actor answers every call exactly once, also when it restarts or stops.
+          finish(current, result.result)
+          stash.unstash(idle(newest), 1, identity)
       }
       .receiveSignal(signals(Some(current), newest))
 
-    /** Ends the command in flight with `result` and sends the next waiting one. */
-    private def next(current: Send, result: Either[CallError, Option[RpcValue]], lastId: Long, newest: Newest)
-        : Behavior[Command] = {
-      timers.cancel(AnswerKey)
-      finish(current, result)
-      stash.unstash(communicating(lastId, newest), 1, identity)
-    }
-
-    private def toOffline(lastId: Long, newest: Newest): Behavior[Command] = {
-      failWaiting(newest, CallError.RobotOffline(robotId))
-      stash.clear()
-      offline(lastId)
-    }
-
-    /** Offline: every command fails at once with robot-offline. */
-    def offline(lastId: Long): Behavior[Command] = Behaviors.receiveMessage {
-      case s: Send =>
-        finish(s, Left(CallError.RobotOffline(robotId)))
-        robot ! RobotActor.Wanted
-        Behaviors.same
-      case Reachability(true) => communicating(lastId, Map.empty)
-      case Reachability(false) | ReplyReceived(_) | AnswerTimedOut(_) | SendOutcome(_) => Behaviors.same
-    }
-
-    private def failWaiting(newest: Newest, error: CallError): Unit = {
+    private def failWaiting(newest: Newest, error: CallError): Unit =
       stash.foreach {
-        case s: Send => finish(newest.getOrElse(s.call.name, s), Left(error))
+        case s: Send => finish(RpcMethod.slotOf(s.call).flatMap(newest.get).getOrElse(s), Left(error))
         case _       => ()
       }
-    }
 
-    private def signals(current: Option[Send], newest: Newest): PartialFunction[(akka.actor.typed.scaladsl.ActorContext[Command], akka.actor.typed.Signal), Behavior[Command]] = {
+    private def signals(current: Option[Send], newest: Newest)
+        : PartialFunction[(akka.actor.typed.scaladsl.ActorContext[Command], akka.actor.typed.Signal), Behavior[Command]] = {
       case (_, PreRestart) =>
         current.foreach(c => finish(c, Left(CallError.Interrupted(robotId, c.call.name))))
         failWaiting(newest, CallError.Interrupted(robotId, "waiting command"))

@@ -27,6 +27,12 @@ object Outbox {
       tag: Long = 0L
   ) extends Command
 
+  /**
+   * Takes back robot `robotId`'s datagrams marked with `tags` that still wait for the budget: a call superseded by a
+   * newer one must not leave after it. A `Send` from the same sender after this one is processed after it.
+   */
+  final case class Withdraw(robotId: Int, tags: Set[Long]) extends Command
+
   /** Counts a datagram received from the team, for the two-way traffic figures. */
   final case class Inbound(robotId: Int, bytes: Int) extends Command
 
@@ -189,6 +195,9 @@ private final class Outbox(
       Behaviors.same
     case Drain =>
       drain(System.nanoTime())
+      Behaviors.same
+    case Withdraw(robotId, tags) =>
+      queues = queues.map(_.filterNot(q => q.robotId == robotId && tags(q.tag)))
       Behaviors.same
     case Inbound(_, bytes) =>
       in.record(System.nanoTime(), bytes)

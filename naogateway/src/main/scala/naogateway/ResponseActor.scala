@@ -1,24 +1,32 @@
 package naogateway
 
+import java.net.InetSocketAddress
+
 import scala.concurrent.duration._
 
 import akka.actor.typed.scaladsl.{Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
-import naogateway.wire.{RpcCall, RpcReply, RpcValue}
+import naogateway.link.ZmqRobotLink
+import naogateway.wire.{HeaderForm, MessageContents, RpcCall, RpcMethod, RpcReply, RpcValue}
 
 /**
- * Request-reply with one robot: correlation ids, per-call timeouts, retries of idempotent calls, one answer per call.
+ * The one owner of a robot's outbound command order: every call the robot gets passes here, in the order
+ * `CommandOrder` decides (slots, supersession, the in-flight cap), and leaves straight for the outbox.
  *
- * A retry is a new `Request` with a new call id (docs/protocol.md 7.1): a robot answers every request it gets once,
- * so a repeated call id would earn two answers to one request. An answer to any attempt of a call completes it.
+ * Request-reply: correlation ids, per-call timeouts, retries of idempotent calls, one answer per call. A retry is a
+ * new `Request` with a new call id (docs/protocol.md 7.1): a robot answers every request it gets once, so a repeated
+ * call id would earn two answers to one request. An answer to any attempt of a call completes it.
  */
 object ResponseActor {
 
   /** What the response actor accepts. */
   sealed trait Command
 
-  /** Calls the robot; `replyTo` gets exactly one `CallResult`. `timeout` overrides the configured one. */
+  /**
+   * Calls the robot; `replyTo` gets exactly one `CallResult`. `timeout` overrides the configured one; `idempotent`
+   * overrides the method table's word on whether the call may be sent again (`Some(false)`: no retries).
+   */
   final case class Call(
       call: RpcCall,
       replyTo: ActorRef[CallResult],
@@ -33,24 +41,37 @@ object ResponseActor {
   /** The robot's reachability changed. */
   final case class Reachability(online: Boolean) extends Command
 
+  /** Where the robot's datagrams go now; the robot actor owns it and pushes every change. */
+  final case class RouteChanged(route: Route) extends Command
+
   private final case class SendOutcome(outcome: Outbox.Outcome) extends Command
   private final case class AttemptTimedOut(key: Long, attempt: Int) extends Command
+
+  /** How a call reaches the robot. */
+  sealed trait Route extends Product with Serializable
+
+  /** The two routes, one per transport. */
+  object Route {
+
+    /** FU-Remote frames in `form` to `to` through the outbox. */
+    final case class Datagrams(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, form: HeaderForm) extends Route
+
+    /** Serialized `Message`s through the robot's ZeroMQ link. */
+    final case class ZeroMq(link: ActorRef[ZmqRobotLink.Command]) extends Route
+  }
 
   /** Call ids of this actor carry this tag in their two top bits. */
   val CallIdTag: Long = 0L
 
-  /** Calls that may be sent again when no reply came: reads, and commands that set an absolute target. */
-  val IdempotentCalls: Set[String] =
-    Set("system.battery", "system.ping", "motion.getPosture", "motion.head", "motion.arms", "motion.stop", "motion.walk")
-
-  /** Calls in flight at once; more wait in the stash so the robot's 1400-byte module buffer is not flooded. */
+  /** Calls in flight at once; more wait so the robot's 1400-byte module buffer is not flooded. Safety never waits. */
   val MaxInFlight: Int = 4
 
-  /** One call in flight; `ids` are the call ids of its attempts, the first one being its key. */
+  /** What the owner keeps with a call: `ids` are the call ids of its attempts, the first one being its key. */
   private final case class Pending(
       call: RpcCall,
       ids: Set[Long],
       replyTo: ActorRef[CallResult],
+      priority: Priority,
       attempts: Int,
       maxAttempts: Int,
       attemptTimeout: FiniteDuration,
@@ -58,15 +79,19 @@ object ResponseActor {
       sentAt: Long
   )
 
-  /** A response actor for robot `robotId`, sending through `robot`. */
+  private type Order = CommandOrder[Pending]
+
+  /** A response actor for robot `robotId`; `robot` owns the route and reachability, and hears round trips. */
   def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild], online: Boolean): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>
           val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
           robot ! RobotActor.ReachabilityWanted(context.messageAdapter[Boolean](Reachability.apply))
-          new Responder(robotId, settings, robot, outcomes, timers, stash)
-            .running(Map.empty, online, java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL))
+          // The route is the robot actor's: asked for on every (re)start, pushed on every change.
+          robot ! RobotActor.RouteWanted(context.self)
+          val firstId = java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL)
+          new Responder(robotId, settings, robot, outcomes, timers, stash).awaitingRoute(online, firstId)
         }
       }
     }
@@ -83,99 +108,160 @@ object ResponseActor {
     private def answer(p: Pending, result: Either[CallError, Option[RpcValue]]): Unit =
       p.replyTo ! CallResult(robotId, p.call.name, result)
 
-    // The attempt's timer (keyed by the call's first id) runs before anyone can react to the attempt going out.
-    private def transmit(key: Long, id: Long, p: Pending, priority: Priority): Unit = {
-      timers.startSingleTimer(key, AttemptTimedOut(key, p.attempts), p.attemptTimeout)
-      robot ! RobotActor.Transmit(RobotActor.Outbound.CallOut(p.call.copy(callId = Some(id))), priority, Some(outcomes), id)
-    }
+    private def answer(c: Call, error: CallError): Unit = c.replyTo ! CallResult(robotId, c.call.name, Left(error))
 
     private def nextId(lastId: Long): Long = CallIdTag | ((lastId + 1) & 0x3fffffffL)
 
-    /** The call one of whose attempts carried `id`, with its key; at most MaxInFlight calls are searched. */
-    private def attemptOf(pending: Map[Long, Pending], id: Long): Option[(Long, Pending)] =
-      pending.find { case (_, p) => p.ids(id) }
-
-    private def failAll(pending: Map[Long, Pending], error: CallError): Unit =
-      pending.foreach { case (id, p) =>
-        timers.cancel(id)
-        answer(p, Left(error))
+    /** Before the robot actor has told the route: calls wait (bounded). */
+    def awaitingRoute(online: Boolean, lastId: Long): Behavior[Command] = Behaviors
+      .receiveMessage[Command] {
+        case RouteChanged(route) =>
+          stash.unstashAll(running(CommandOrder.empty(MaxInFlight, settings.stashCapacity), online, lastId, route))
+        case Reachability(nowOnline) => awaitingRoute(nowOnline, lastId)
+        case c: Call if stash.isFull =>
+          answer(c, CallError.Overloaded(robotId, s"${stash.size} calls wait for the robot's address"))
+          Behaviors.same
+        case other =>
+          stash.stash(other)
+          Behaviors.same
+      }
+      .receiveSignal {
+        case (_, PreRestart) =>
+          failStashed(c => CallError.Interrupted(robotId, c.call.name))
+          Behaviors.same
+        case (_, PostStop) =>
+          failStashed(_ => CallError.RobotOffline(robotId))
+          Behaviors.same
       }
 
-    /** Answers call `id`, forgets it, and lets the next waiting call in. */
-    private def settle(pending: Map[Long, Pending], id: Long, p: Pending, result: Either[CallError, Option[RpcValue]],
-        online: Boolean, lastId: Long): Behavior[Command] = {
-      timers.cancel(id)
-      answer(p, result)
-      stash.unstash(running(pending - id, online, lastId), 1, identity)
+    private def failStashed(error: Call => CallError): Unit =
+      stash.foreach {
+        case c: Call => answer(c, error(c))
+        case _       => ()
+      }
+
+    /** Sends attempt `id` of call `key`; the attempt's timer runs before anyone can react to it going out. */
+    private def transmit(route: Route, key: Long, id: Long, p: Pending): Option[CallError] = {
+      timers.startSingleTimer(key, AttemptTimedOut(key, p.attempts), p.attemptTimeout)
+      val contents = MessageContents(robotId, rpcRequest = Some(p.call.copy(callId = Some(id)).toProto))
+      route match {
+        case Route.Datagrams(outbox, to, form) =>
+          MessageContents.encodeFrame(contents, form) match {
+            case Right(bytes) =>
+              robot ! RobotActor.SentDirect(bytes.length)
+              outbox ! Outbox.Send(robotId, to, bytes, p.priority, Some(outcomes), id)
+              None
+            case Left(error) => Some(CallError.Overloaded(robotId, error.describe))
+          }
+        case Route.ZeroMq(link) =>
+          val bytes = contents.toProtobuf
+          robot ! RobotActor.SentDirect(bytes.length)
+          link ! ZmqRobotLink.Send(bytes, Some(outcomes), id)
+          None
+      }
     }
 
-    def running(pending: Map[Long, Pending], online: Boolean, lastId: Long): Behavior[Command] =
+    /** Carries out the order's steps: supersessions first (their withdrawals reach the outbox before any send). */
+    private def perform(order: Order, steps: Vector[CommandOrder.Step[Pending]], route: Route): Order =
+      steps.foldLeft(order) {
+        case (o, CommandOrder.Superseded(e, wasInFlight)) =>
+          if (wasInFlight) {
+            timers.cancel(e.key)
+            route match {
+              case Route.Datagrams(outbox, _, _) => outbox ! Outbox.Withdraw(robotId, e.payload.ids)
+              case Route.ZeroMq(_)               => () // a ZeroMQ link holds nothing back: there is nothing to withdraw
+            }
+          }
+          answer(e.payload, Left(CallError.Superseded(robotId, e.payload.call.name)))
+          o
+        case (o, CommandOrder.Refused(e)) =>
+          answer(e.payload, Left(CallError.Overloaded(robotId,
+            s"${o.inFlight.size} calls in flight and ${o.waiting.size} waiting")))
+          o
+        case (o, CommandOrder.Transmit(e)) =>
+          val sent = e.payload.copy(sentAt = System.nanoTime())
+          transmit(route, e.key, e.key, sent) match {
+            case None => o.updated(e.key, sent)
+            case Some(error) =>
+              timers.cancel(e.key)
+              answer(sent, Left(error))
+              val (next, more) = o.complete(e.key)
+              perform(next, more, route)
+          }
+      }
+
+    private def failAll(order: Order, error: String => CallError): Unit = {
+      val (_, flying, waiting) = order.drained
+      (flying ++ waiting).foreach { e =>
+        timers.cancel(e.key)
+        answer(e.payload, Left(error(e.payload.call.name)))
+      }
+    }
+
+    /** Answers call `key` and lets waiting calls in. */
+    private def settle(order: Order, key: Long, p: Pending, result: Either[CallError, Option[RpcValue]], online: Boolean,
+        lastId: Long, route: Route): Behavior[Command] = {
+      timers.cancel(key)
+      answer(p, result)
+      val (next, steps) = order.complete(key)
+      running(perform(next, steps, route), online, lastId, route)
+    }
+
+    def running(order: Order, online: Boolean, lastId: Long, route: Route): Behavior[Command] =
       Behaviors
         .receiveMessage[Command] {
           case c: Call if !online =>
-            c.replyTo ! CallResult(robotId, c.call.name, Left(CallError.RobotOffline(robotId)))
+            answer(c, CallError.RobotOffline(robotId))
             robot ! RobotActor.Wanted
-            Behaviors.same
-          case c: Call if pending.size >= MaxInFlight =>
-            if (stash.isFull)
-              c.replyTo ! CallResult(robotId, c.call.name,
-                Left(CallError.Overloaded(robotId, s"${pending.size} calls in flight and ${stash.size} waiting")))
-            else stash.stash(c)
             Behaviors.same
           case Call(call, replyTo, priority, timeout, idempotent) =>
             val id = nextId(lastId)
             val total = timeout.getOrElse(settings.timeout)
-            val retries = if (idempotent.getOrElse(IdempotentCalls(call.name))) settings.idempotentRetries else 0
-            val p = Pending(call, Set(id), replyTo, 1, retries + 1, total / (retries + 1).toLong, total, System.nanoTime())
-            transmit(id, id, p, priority)
-            running(pending.updated(id, p), online, id & 0x3fffffffL)
+            val retries = if (idempotent.getOrElse(RpcMethod.idempotent(call))) settings.idempotentRetries else 0
+            val p = Pending(call, Set(id), replyTo, priority, 1, retries + 1, total / (retries + 1).toLong, total, 0L)
+            val (next, steps) = order.submit(CommandOrder.Entry(id, RpcMethod.slotOf(call), priority == Priority.Safety, p))
+            running(perform(next, steps, route), online, id & 0x3fffffffL, route)
           case ReplyReceived(reply) =>
-            reply.callId.flatMap(attemptOf(pending, _)) match {
-              case None => Behaviors.same // a late or duplicate reply: the call was answered already
-              case Some((key, p)) =>
+            reply.callId.flatMap(id => order.findInFlight(_.ids(id))) match {
+              case None => Behaviors.same // a late or duplicate reply, or one of a superseded call: answered already
+              case Some(e) =>
                 // Karn's rule: only a call sent once gives a clean round-trip sample.
-                if (p.attempts == 1) robot ! RobotActor.RoundTrip(System.nanoTime() - p.sentAt)
-                settle(pending, key, p, reply.result.left.map(CallError.RobotError(robotId, _)), online, lastId)
+                if (e.payload.attempts == 1) robot ! RobotActor.RoundTrip(System.nanoTime() - e.payload.sentAt)
+                settle(order, e.key, e.payload, reply.result.left.map(CallError.RobotError(robotId, _)), online, lastId, route)
             }
           case AttemptTimedOut(key, attempt) =>
-            pending.get(key) match {
+            order.inFlightCall(key).map(_.payload) match {
               case Some(p) if p.attempts == attempt && p.attempts < p.maxAttempts =>
                 // Sent again as a new request: the same call id twice would be answered twice (protocol.md 7.1).
                 val id = nextId(lastId)
                 val again = p.copy(ids = p.ids + id, attempts = p.attempts + 1)
                 robot ! RobotActor.Retransmitted
-                transmit(key, id, again, Priority.Command)
-                running(pending.updated(key, again), online, id & 0x3fffffffL)
+                transmit(route, key, id, again) match {
+                  case None        => running(order.updated(key, again), online, id & 0x3fffffffL, route)
+                  case Some(error) => settle(order, key, again, Left(error), online, id & 0x3fffffffL, route)
+                }
               case Some(p) if p.attempts == attempt =>
-                settle(pending, key, p, Left(CallError.Timeout(robotId, p.call.name, p.total)), online, lastId)
+                settle(order, key, p, Left(CallError.Timeout(robotId, p.call.name, p.total)), online, lastId, route)
               case _ => Behaviors.same
             }
           case SendOutcome(outcome) =>
-            (CallError.ofOutcome(robotId, outcome), attemptOf(pending, outcome.tag)) match {
-              case (Some(error), Some((key, p))) => settle(pending, key, p, Left(error), online, lastId)
-              case _                             => Behaviors.same
+            (CallError.ofOutcome(robotId, outcome), order.findInFlight(_.ids(outcome.tag))) match {
+              case (Some(error), Some(e)) => settle(order, e.key, e.payload, Left(error), online, lastId, route)
+              case _                      => Behaviors.same
             }
+          case RouteChanged(newRoute) => running(order, online, lastId, newRoute)
           case Reachability(nowOnline) =>
             if (!nowOnline) {
-              failAll(pending, CallError.RobotOffline(robotId))
-              // Waiting calls fail fast too: they meet the offline state when unstashed.
-              stash.unstashAll(running(Map.empty, online = false, lastId))
-            } else running(pending, online = true, lastId)
+              failAll(order, _ => CallError.RobotOffline(robotId))
+              running(order.drained._1, online = false, lastId, route)
+            } else running(order, online = true, lastId, route)
         }
         .receiveSignal {
           case (_, PreRestart) =>
-            failAll(pending, CallError.Interrupted(robotId, "pending call"))
-            stash.foreach {
-              case c: Call => c.replyTo ! CallResult(robotId, c.call.name, Left(CallError.Interrupted(robotId, c.call.name)))
-              case _       => ()
-            }
+            failAll(order, CallError.Interrupted(robotId, _))
             Behaviors.same
           case (_, PostStop) =>
-            failAll(pending, CallError.RobotOffline(robotId))
-            stash.foreach {
-              case c: Call => c.replyTo ! CallResult(robotId, c.call.name, Left(CallError.RobotOffline(robotId)))
-              case _       => ()
-            }
+            failAll(order, _ => CallError.RobotOffline(robotId))
             Behaviors.same
         }
   }

@@ -59,6 +59,12 @@ object RobotActor {
   /** A call was sent again. */
   case object Retransmitted extends FromChild
 
+  /** The response actor (re)started and asks for the robot's route; every later change is pushed to it. */
+  final case class RouteWanted(replyTo: ActorRef[ResponseActor.RouteChanged]) extends FromChild
+
+  /** The response actor sent a datagram of `bytes` straight to the outbox (or the ZeroMQ link): counted here. */
+  final case class SentDirect(bytes: Int) extends FromChild
+
   /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
   final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
 
@@ -199,10 +205,12 @@ object RobotActor {
 
     private def spawnChildren(heartbeat: ActorRef[HeartBeatActor.Command]): Children = {
       val self = context.self
+      val response =
+        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response")
       Children(
         heartbeat,
-        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response"),
-        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "no-response"),
+        response,
+        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, response)).onFailure(ChildRestarts), "no-response"),
         context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision"),
         context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream")
       )
@@ -236,7 +244,6 @@ object RobotActor {
         if (!online) {
           // Children first: a subscriber that calls the moment it hears RobotOnline must find them online.
           children.response ! ResponseActor.Reachability(true)
-          children.noResponse ! NoResponseActor.Reachability(true)
           wentOnline()
         }
         running(children, online = true)
@@ -244,7 +251,6 @@ object RobotActor {
         context.log.info("Robot [{}] offline: {}", robotId, reason)
         snapshot = snapshot.copy(online = false, quality = LinkQuality.Offline)
         children.response ! ResponseActor.Reachability(false)
-        children.noResponse ! NoResponseActor.Reachability(false)
         events ! RobotOffline(robotId, reason)
         running(children, online = false)
       case other => common(other, Some(children), children.heartbeat)
@@ -298,7 +304,10 @@ object RobotActor {
       case FrameReceived(contents, frameForm, size) =>
         datagramsIn += 1
         bytesIn += size
-        form = frameForm
+        if (frameForm != form) {
+          form = frameForm
+          routeChanged(children)
+        }
         contents.status.foreach(_ => keepAlive(contents, children, heartbeat))
         contents.debuggingCommands.flatMap(_.optionPush).foreach(list => optionsPushed(list.options))
         contents.rpcResponse.foreach { response =>
@@ -306,7 +315,6 @@ object RobotActor {
           reply.callId.foreach { id =>
             (id >>> 30) match {
               case 0 => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
-              case 1 => children.foreach(_.noResponse ! NoResponseActor.ReplyReceived(reply))
               case 2 => heartbeat ! HeartBeatActor.ProbeAnswered(id)
               case _ => count("unknown call id")
             }
@@ -343,6 +351,14 @@ object RobotActor {
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
         address = newAddress
         snapshot = snapshot.copy(address = newAddress)
+        routeChanged(children)
+        Behaviors.same
+      case RouteWanted(replyTo) =>
+        replyTo ! ResponseActor.RouteChanged(route)
+        Behaviors.same
+      case SentDirect(bytes) =>
+        datagramsOut += 1
+        bytesOut += bytes
         Behaviors.same
       case PullOptions =>
         sendPull()
@@ -410,6 +426,13 @@ object RobotActor {
       case HeartbeatReport(HeartBeatActor.CameOnline | HeartBeatActor.WentOffline(_)) | Connect(_) | Wanted =>
         Behaviors.unhandled
     }
+
+    /** Where calls go now: this actor owns the address and header form, the response actor follows them. */
+    private def route: ResponseActor.Route =
+      zmqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form))(ResponseActor.Route.ZeroMq(_))
+
+    private def routeChanged(children: Option[Children]): Unit =
+      children.foreach(_.response ! ResponseActor.RouteChanged(route))
 
     private def count(reason: String): Unit = {
       val n = rejected.getOrElse(reason, 0L) + 1

@@ -1,6 +1,6 @@
 package robotmiddleware
 
-import naogateway.wire.RpcValue
+import naogateway.wire.{RpcMethod, RpcValue}
 
 /** A group of actuators one app may hold at a time (a lease is per robot and group). */
 final case class ActuatorGroup(name: String) {
@@ -38,45 +38,45 @@ object Operation {
   final case class Walk(vx: Double, vy: Double, omega: Double) extends Operation {
     require(Seq(vx, vy, omega).forall(v => !v.isNaN && !v.isInfinite), "walk velocities must be finite numbers")
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Walk)
-    def name: String = "motion.walk"
+    def name: String = RpcMethod.Walk.name
   }
 
   /** Stop walking. */
   final case class Stop() extends Operation {
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Walk)
-    def name: String = "motion.stop"
+    def name: String = RpcMethod.Stop.name
   }
 
   /** Turn the head (radians; pan ±2.0, tilt -0.6..0.5). */
   final case class Head(pan: Double, tilt: Double) extends Operation {
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Head)
-    def name: String = "motion.head"
+    def name: String = RpcMethod.Head.name
   }
 
   /** Set the four arm joints (radians). */
   final case class Arms(leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double) extends Operation {
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Arms)
-    def name: String = "motion.arms"
+    def name: String = RpcMethod.Arms.name
   }
 
   /** Go to a posture: "sit", "stand" or "crouch"; answers when the motion has ended. */
   final case class Posture(posture: String) extends Operation {
     require(Set("sit", "stand", "crouch")(posture), s"unknown posture '$posture' (sit, stand, crouch)")
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Walk)
-    def name: String = "motion.posture"
+    def name: String = RpcMethod.Posture.name
   }
 
   /** Say a text. */
   final case class Say(text: String) extends Operation {
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Speech)
-    def name: String = "speech.say"
+    def name: String = RpcMethod.Say.name
   }
 
   /** Any call of the robot's RPC interface; motion and speech calls need the matching lease. */
   final case class RawCall(module: String, method: String, params: Vector[RpcValue]) extends Operation {
     def group: Option[ActuatorGroup] = (module, method) match {
-      case ("motion", "head") => Some(ActuatorGroup.Head)
-      case ("motion", "arms") => Some(ActuatorGroup.Arms)
+      case _ if RpcMethod.find(module, method).contains(RpcMethod.Head) => Some(ActuatorGroup.Head)
+      case _ if RpcMethod.find(module, method).contains(RpcMethod.Arms) => Some(ActuatorGroup.Arms)
       case ("motion", _)      => Some(ActuatorGroup.Walk)
       case ("speech", _)      => Some(ActuatorGroup.Speech)
       case ("system", "reset") => Some(ActuatorGroup.Walk)

@@ -8,7 +8,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import akka.util.Timeout
 
 import naogateway._
-import naogateway.wire.{RpcCall, RpcValue}
+import naogateway.wire.{RpcCall, RpcMethod, RpcValue}
 
 /** An app as the middleware knows it: its event ref (its identity), name and priority. */
 final case class AppInfo(events: ActorRef[AppEvent], name: String, priority: Int)
@@ -39,13 +39,28 @@ private[robotmiddleware] object RobotGuard {
   private final case class OperationDone(
       replyTo: ActorRef[RobotMiddleware.OperationResult],
       operation: Operation,
-      result: Either[RobotFailure, Option[RpcValue]]
+      result: Either[RobotFailure, Option[RpcValue]],
+      superseded: Boolean = false
   ) extends Command
   private case object WalkRefresh extends Command
   private case object StatsTick extends Command
   private final case class StatsReceived(stats: LinkStats) extends Command
   private final case class StatsWatcherGone(subscriber: ActorRef[LinkStats]) extends Command
-  private final case class SafetyStepDone(step: String, result: CallResult) extends Command
+  private final case class SafetyStepDone(step: SafetyStep, result: CallResult) extends Command
+  private final case class ChildGone(child: ActorRef[Nothing]) extends Command
+
+  /** The guard's own calls that keep a robot safe; each one's answer comes back with its own step. */
+  private sealed abstract class SafetyStep(val describe: String) extends Product with Serializable
+  private object SafetyStep {
+    /** The stop of a safety hold, followed by a sit once the robot has stopped. */
+    case object StopThenSit extends SafetyStep("stop")
+    /** A stop that ends a walk (lease released or taken, app gone, a motion failed). */
+    case object StopOnly extends SafetyStep("stop only")
+    /** The stop a robot gets when it comes back online. */
+    case object StopAfterReconnect extends SafetyStep("stop after reconnect")
+    /** The sit of a safety hold. */
+    case object Sit extends SafetyStep("sit")
+  }
 
   private case object WalkKey
   private case object StatsKey
@@ -57,8 +72,9 @@ private[robotmiddleware] object RobotGuard {
         Behaviors.withStash(settings.pendingLimit) { stash =>
           // `online` was right when the guard was first created; after a restart only the robot actor knows.
           robot ! RobotActor.GetSnapshot(context.messageAdapter(SnapshotReceived.apply))
-          robot ! RobotActor.Connect(context.messageAdapter(ChildrenReady.apply))
-          new Guard(robotId, robot, settings, context, timers, stash).connecting(online)
+          val childrenReady = context.messageAdapter(ChildrenReady.apply)
+          robot ! RobotActor.Connect(childrenReady)
+          new Guard(robotId, robot, settings, context, timers, stash, childrenReady).connecting(online)
         }
       }
     }
@@ -72,7 +88,8 @@ private[robotmiddleware] object RobotGuard {
       settings: MiddlewareSettings,
       context: ActorContext[Command],
       timers: TimerScheduler[Command],
-      stash: StashBuffer[Command]
+      stash: StashBuffer[Command],
+      childrenReady: ActorRef[RobotActor.Connected]
   ) {
     private var leases: Leases = Map.empty
     private var walking: Option[(Operation.Walk, AppInfo)] = None
@@ -97,8 +114,11 @@ private[robotmiddleware] object RobotGuard {
       online = initiallyOnline
       Behaviors.receiveMessage {
         case ChildrenReady(children) =>
+          // The refs die with the robot actor's restart (or a child's stop): then the guard connects again.
+          Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref => context.watchWith(ref, ChildGone(ref)))
           if (reconnectedWhileConnecting) stopAfterReconnect(children)
           stash.unstashAll(ready(children))
+        case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
         case e: Execute if !online =>
           e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
@@ -186,10 +206,12 @@ private[robotmiddleware] object RobotGuard {
           if (held.exists(_ == ActuatorGroup.Walk)) stopWalking(c, "app gone")
         }
         Behaviors.same
-      case OperationDone(replyTo, operation, result) =>
+      case OperationDone(replyTo, operation, result, superseded) =>
         replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
-        if (result.isLeft && operation.isInstanceOf[Operation.Posture] && online) stopWalking(c, s"${operation.name} failed")
+        // A superseded one is not undefined: the newer call of its slot decides the motion.
+        if (result.isLeft && !superseded && operation.isInstanceOf[Operation.Posture] && online)
+          stopWalking(c, s"${operation.name} failed")
         operation match {
           case w: Operation.Walk if walking.exists(_._1 == w) =>
             // Refreshing starts only once the robot has confirmed the walk: a refused walk is never sent again.
@@ -202,7 +224,10 @@ private[robotmiddleware] object RobotGuard {
         }
         Behaviors.same
       case WalkRefresh =>
-        walking.foreach { case (w, _) => c.noResponse ! NoResponseActor.Send(walkCall(w)) }
+        // Through the robot's one command owner, once (no retries): a later stop supersedes it wherever it is.
+        walking.foreach { case (w, _) =>
+          c.response ! ResponseActor.Call(walkCall(w), context.system.ignoreRef, idempotent = Some(false))
+        }
         Behaviors.same
       case RobotEventReceived(event) =>
         common(event)
@@ -214,11 +239,12 @@ private[robotmiddleware] object RobotGuard {
         Behaviors.same
       case SafetyStepDone(step, result) =>
         result.result match {
-          case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step, error.describe)
-          case Right(_) =>
-            if (step == "stop" && safety.isDefined)
-              c.response ! ResponseActor.Call(RpcCall("motion", "posture", Vector(RpcValue.Text("sit"))), safetyAdapter("sit"),
-                Priority.Safety, Some(settings.postureTimeout))
+          // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
+          case Right(_) | Left(_: CallError.Superseded) if step == SafetyStep.StopThenSit && safety.isDefined =>
+            safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text("sit")), settings.postureTimeout)
+          case Left(_: CallError.Superseded) => () // a newer call of the slot took over: nothing failed
+          case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
+          case Right(_)    => ()
         }
         Behaviors.same
       case WatchVision(subscriber, grid) =>
@@ -242,25 +268,40 @@ private[robotmiddleware] object RobotGuard {
         statsWatchers.foreach(_ ! stats)
         Behaviors.same
       case ChildrenReady(_) => Behaviors.same
+      case ChildGone(child) if child == c.response || child == c.vision =>
+        context.log.info("Robot [{}]: its children were restarted; connecting again", robotId)
+        // Nothing refreshes the walk meanwhile, so the robot stops by itself within its lease: forget the walk.
+        timers.cancel(WalkKey)
+        walking = None
+        robot ! RobotActor.Connect(childrenReady)
+        connecting(online)
+      case ChildGone(_) => Behaviors.same
     }
 
     /** Back from a lost link: puts the robot in a defined state before anyone moves it again. */
     private def stopAfterReconnect(c: RobotActor.Connected): Unit = {
       reconnectedWhileConnecting = false
-      c.response ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), safetyAdapter("stop after reconnect"), Priority.Safety)
+      safetyCall(c, SafetyStep.StopAfterReconnect, RpcMethod.Stop.call(), settings.callTimeout)
     }
 
     private lazy val statsAdapter = context.messageAdapter[LinkStats](StatsReceived.apply)
 
 
-    private def safetyAdapter(step: String): ActorRef[CallResult] =
-      context.messageAdapter[CallResult](r => SafetyStepDone(step, r))
+    /** One ask per step, not a message adapter: Akka keeps one adapter per message class, so labels would mix. */
+    private def safetyCall(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
+      implicit val askTimeout: Timeout = timeout + 1.second
+      context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
+        case Success(result) => SafetyStepDone(step, result)
+        case Failure(_)      => SafetyStepDone(step, CallResult(robotId, rpc.name, Left(CallError.Timeout(robotId, rpc.name, timeout))))
+      }
+    }
 
     private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
       case _: Operation.Walk | _: Operation.Arms => true
       case Operation.Posture(p)                  => p != "sit"
       case r: Operation.RawCall =>
-        (r.group.contains(ActuatorGroup.Walk) && r.method != "stop" && !(r.method == "posture" && r.params == Vector(RpcValue.Text("sit")))) ||
+        (r.group.contains(ActuatorGroup.Walk) && !RpcMethod.find(r.module, r.method).contains(RpcMethod.Stop) &&
+          !(RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture) && r.params == Vector(RpcValue.Text("sit")))) ||
           r.group.contains(ActuatorGroup.Arms)
       case _                                     => false
     }
@@ -284,12 +325,11 @@ private[robotmiddleware] object RobotGuard {
       if (walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
       timers.cancel(WalkKey)
       walking = None
-      c.response ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), safetyAdapter(if (thenSit) "stop" else "stop only"),
-        Priority.Safety)
+      safetyCall(c, if (thenSit) SafetyStep.StopThenSit else SafetyStep.StopOnly, RpcMethod.Stop.call(), settings.callTimeout)
     }
 
     private def walkCall(w: Operation.Walk): RpcCall =
-      RpcCall("motion", "walk", Vector(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat), RpcValue.Number(w.omega.toFloat)))
+      RpcMethod.Walk.call(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat), RpcValue.Number(w.omega.toFloat))
 
     private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation, result: Either[RobotFailure, Option[RpcValue]])
         : Unit = replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
@@ -298,7 +338,8 @@ private[robotmiddleware] object RobotGuard {
         priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + 1.second
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
-        case Success(result) => OperationDone(replyTo, operation, result.result.left.map(failure))
+        case Success(result) =>
+          OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[CallError.Superseded]))
         case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
       }
     }
@@ -314,18 +355,18 @@ private[robotmiddleware] object RobotGuard {
       case Operation.Stop() =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcCall("motion", "stop", Vector.empty), operation, replyTo, Priority.Safety)
+        call(c, RpcMethod.Stop.call(), operation, replyTo, Priority.Safety)
       case Operation.Head(pan, tilt) =>
-        call(c, RpcCall("motion", "head", Vector(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat))), operation, replyTo)
+        call(c, RpcMethod.Head.call(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat)), operation, replyTo)
       case Operation.Arms(ls, le, rs, re) =>
-        call(c, RpcCall("motion", "arms", Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat))), operation, replyTo)
+        call(c, RpcMethod.Arms.call(Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat)): _*), operation, replyTo)
       case Operation.Posture(p) =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcCall("motion", "posture", Vector(RpcValue.Text(p))), operation, replyTo, timeout = settings.postureTimeout)
-      case Operation.Say(text) => call(c, RpcCall("speech", "say", Vector(RpcValue.Text(text))), operation, replyTo)
+        call(c, RpcMethod.Posture.call(RpcValue.Text(p)), operation, replyTo, timeout = settings.postureTimeout)
+      case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo)
       case r: Operation.RawCall =>
-        val timeout = if (r.name == "motion.posture") settings.postureTimeout else settings.callTimeout
+        val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout else settings.callTimeout
         call(c, RpcCall(r.module, r.method, r.params), operation, replyTo, timeout = timeout)
     }
   }

@@ -30,11 +30,16 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     val stream: TestProbe[StreamActor.Command] = createTestProbe[StreamActor.Command]()
     val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
     val connects: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
+    /** Every `Connect` the robot got, held or answered. */
+    val connectsSeen: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
     val connected: RobotActor.Connected = RobotActor.Connected(1, response.ref, noResponse.ref, vision.ref, stream.ref)
+    /** What the robot answers a `Connect` with: a test swaps it for new children to stand in for a restart. */
+    @volatile var current: RobotActor.Connected = connected
 
     private val robot: Behavior[RobotActor.Command] = Behaviors.receiveMessage {
       case RobotActor.Connect(replyTo) =>
-        if (holdConnect) connects.ref ! replyTo else replyTo ! connected
+        connectsSeen.ref ! replyTo
+        if (holdConnect) connects.ref ! replyTo else replyTo ! current
         Behaviors.same
       case RobotActor.GetSnapshot(replyTo) =>
         snapshotOnline.foreach(online => replyTo ! RobotSnapshot(1, robotAddress, online = online))
@@ -95,6 +100,42 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
   private val linkStats = LinkStats(1, 10, 9, 400, 300, Some(2.5), 0.1, 0, Map.empty)
 
   "The middleware" must {
+    "reach the robot's new children after they were restarted, instead of calling dead refs" in {
+      val f = new Fixture
+      val (app, _) = f.app("teleop", 1)
+      f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
+      f.execute(app, Operation.Head(0.1, 0.0))
+      f.expectCall("motion.head").replyTo ! CallResult(1, "motion.head", Right(None))
+      val fresh = createTestProbe[ResponseActor.Command]()
+      f.current = f.connected.copy(response = fresh.ref)
+      f.connectsSeen.receiveMessage() // the guard's first connect
+      f.response.stop()
+      // The guard watches the refs it holds: their end makes it connect again, and calls wait meanwhile.
+      f.connectsSeen.receiveMessage()
+      val result = f.execute(app, Operation.Head(0.2, 0.0))
+      val call = fresh.fishForMessage(3.seconds) {
+        case c: ResponseActor.Call if c.call.name == "motion.head" => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                                                     => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+      }.last.asInstanceOf[ResponseActor.Call]
+      call.replyTo ! CallResult(1, "motion.head", Right(None))
+      result.receiveMessage().result shouldBe Right(None)
+    }
+    "sit a robot with a low battery even when another stop was sent before the first one was answered" in {
+      val f = new Fixture
+      val (app, events) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      f.execute(app, Operation.Walk(0.2, 0, 0))
+      f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(None))
+      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true))
+      events.expectMessageType[AppEvent.SafetyStop]
+      val first = f.expectCall("motion.stop")
+      // The app lets go of the walk lease: a second stop, one that is not followed by a sit.
+      f.middleware ! RobotMiddleware.Release(app, 1, ActuatorGroup.Walk)
+      val second = f.expectCall("motion.stop")
+      first.replyTo ! CallResult(1, "motion.stop", Right(None))
+      second.replyTo ! CallResult(1, "motion.stop", Right(None))
+      f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
+    }
     "send a new link-figures watcher the current figures at once, not one interval later" in {
       val f = new Fixture(middlewareSettings = settings.copy(linkStatsInterval = 1.hour))
       val watcher = createTestProbe[LinkStats]()
@@ -139,9 +180,10 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
       f.execute(app, Operation.Walk(0.2, 0, 0))
       f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(Some(RpcValue.Flag(true))))
-      // Refreshes go the ordered fire-and-forget way, every 200 ms.
-      val refreshes = f.noResponse.receiveMessages(3, 3.seconds)
-      refreshes.foreach(_.asInstanceOf[NoResponseActor.Send].call.name shouldBe "motion.walk")
+      // Refreshes go through the robot's one command owner too, every 200 ms, each sent once (no retries).
+      val refreshes = (1 to 3).map(_ => f.expectCall("motion.walk"))
+      refreshes.foreach(_.idempotent shouldBe Some(false))
+      f.noResponse.expectNoMessage(Duration.Zero)
       testKit.stop(app)
       val stop = f.expectCall("motion.stop")
       stop.priority shouldBe Priority.Safety
@@ -175,11 +217,11 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val result = f.execute(app, Operation.Walk(0.2, 0, 0))
       val walk = f.expectCall("motion.walk")
       // The robot takes several refresh periods to answer: a refresh sent meanwhile would repeat a walk it may refuse.
-      f.noResponse.expectNoMessage(settings.walkRefresh * 3)
+      f.response.expectNoMessage(settings.walkRefresh * 3)
       walk.replyTo ! CallResult(1, "motion.walk", Left(CallError.RobotError(1, "not standing: sit")))
       result.receiveMessage().result shouldBe Left(RobotFailure.RobotError(1, "not standing: sit"))
       // The guard has handled the refusal (it answered above), so from here on only a refresh timer could send.
-      f.noResponse.expectNoMessage(1.second)
+      f.response.expectNoMessage(1.second)
     }
     "refuse raw arm and walk calls under a safety hold too" in {
       val f = new Fixture

@@ -10,7 +10,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.UdpLink
 import naogateway.sim.gs1500m.{Cm530Config, Cm530Stats, Gs1500mConfig, Gs1500mCounters}
-import naogateway.wire.{Datagram, WireLimits}
+import naogateway.wire.{Datagram, MessageContents, RpcCall, WireLimits}
 import naogateway.wire.stream.StreamSettings
 
 /** Settings of one simulated robot on a real UDP socket.
@@ -81,6 +81,9 @@ final case class RobotCounters(
     powerCycles: Long = 0
 )
 
+/** One call as the simulated robot's firmware read it, at `atNanos` on the robot's clock (since its start). */
+final case class ReceivedCall(atNanos: Long, call: RpcCall)
+
 /** A snapshot of one simulated robot, for tests and tools.
   *
   * @param online `false` while the robot is powered off or its module boots (it neither sends nor answers)
@@ -130,6 +133,12 @@ object SimulatedRobot {
 
   /** Asks for a snapshot of the robot. */
   final case class GetState(replyTo: ActorRef[RobotView]) extends Command
+
+  /** Asks for the receive log: the calls the firmware has read, oldest first (the latest `ReceiveLogCapacity`). */
+  final case class GetReceivedCalls(replyTo: ActorRef[Vector[ReceivedCall]]) extends Command
+
+  /** Calls the receive log keeps; older ones are forgotten. */
+  val ReceiveLogCapacity: Int = 20000
 
   /** Cuts the power: the robot falls silent at once, its firmware restarts (new boot id, uptime from now, debug options
     * off, fresh stream), and its module answers again after `bootDelay`.
@@ -221,7 +230,7 @@ object SimulatedRobot {
         waiting.foreach(_ ! Done)
         Behaviors.stopped
       case Stop(replyTo) => stoppingWithoutSocket(id, waiting :+ replyTo, timers, context)
-      case GetState(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
+      case GetState(_) | GetReceivedCalls(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
         Behaviors.same
     }
   }
@@ -267,6 +276,14 @@ private final class SimulatedRobot(
 
   private def now(): Long = System.nanoTime() - origin
 
+  // The receive log: an observer's record beside the firmware, so tests can see what arrived in which order.
+  private var receivedCalls = Vector.empty[ReceivedCall]
+
+  private def logCalls(frame: Array[Byte], at: Long): Unit =
+    MessageContents.decodeFrame(frame).toOption.flatMap(_._2.rpcRequest).foreach { request =>
+      receivedCalls = receivedCalls.takeRight(ReceiveLogCapacity - 1) :+ ReceivedCall(at, RpcCall.fromProto(request))
+    }
+
   def start(): Behavior[Command] = {
     val t = now()
     val booted = RobotFirmware.boot(settings.firmware, t)
@@ -287,6 +304,9 @@ private final class SimulatedRobot(
       case FromSocket(UdpLink.Received(bytes, from)) =>
         val counted = robot.copy(counters = robot.counters.copy(received = robot.counters.received + 1))
         after(counted, Some(bytes -> from))
+      case GetReceivedCalls(replyTo) =>
+        replyTo ! receivedCalls
+        Behaviors.same
       case GetState(replyTo) =>
         val t = now()
         val (next, reset) = run(robot, t, None)
@@ -335,6 +355,9 @@ private final class SimulatedRobot(
         case WakeUp => flushing(drained)
         case FromSocket(UdpLink.Received(_, _)) =>
           flushingCounted(drained)
+        case GetReceivedCalls(replyTo) =>
+          replyTo ! receivedCalls
+          Behaviors.same
         case GetState(replyTo) =>
           val at = now()
           replyTo ! view(drained, at, online = false, upAt = Some(at + settings.resetBootDelay.toNanos))
@@ -380,6 +403,9 @@ private final class SimulatedRobot(
         online(proceed(up, t, None))
       case FromSocket(UdpLink.Received(_, _)) =>
         offline(robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1)), upAt)
+      case GetReceivedCalls(replyTo) =>
+        replyTo ! receivedCalls
+        Behaviors.same
       case GetState(replyTo) =>
         replyTo ! view(robot, now(), online = false, upAt = Some(upAt))
         Behaviors.same
@@ -418,7 +444,7 @@ private final class SimulatedRobot(
         waiting.foreach(_ ! Done)
         Behaviors.stopped
       case Stop(replyTo) => waitForSocket(waiting :+ replyTo)
-      case GetState(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
+      case GetState(_) | GetReceivedCalls(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
         Behaviors.same
     }
 
@@ -527,6 +553,7 @@ private final class SimulatedRobot(
           val app = Vector.newBuilder[Outgoing]
           // Each delivered payload is one frame from the gateway; its replies go back through the stream.
           step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
+            logCalls(frame, at)
             val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now))
             next = next.copy(firmware = firmware)
             app ++= out
@@ -534,6 +561,7 @@ private final class SimulatedRobot(
           (next, step.transmit.map(Out(_, gateway)), app.result())
         }
       case _ =>
+        logCalls(bytes, at)
         val (firmware, out) = RobotFirmware.receive(robot.firmware, bytes, from, at)
         (robot.copy(firmware = firmware), Vector.empty, out)
     }

@@ -8,7 +8,7 @@ import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, Type
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.actors.RobotStandIn.reachable
+import naogateway.actors.RobotStandIn.started
 import naogateway.wire.{RpcCall, RpcValue}
 
 /** A child that really crashes, under the supervision the robot actor gives it, still answers its callers. */
@@ -32,40 +32,48 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
   "A crashing response actor" must {
     "answer its pending and waiting calls with Interrupted, and serve new calls after the restart" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(true) => true; case _ => false })
       val responder = spawn(
         Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
       )
-      reachable(robot, online = true)
+      started(robot, outbox)
       (1 to 5).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
-      robot.receiveMessages(4) // four in flight, one waiting in the stash
+      outbox.receiveMessages(4) // four in flight, one waiting
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         responder ! ResponseActor.Reachability(true)
       }
       val answers = caller.receiveMessages(5)
       answers.foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
-      // After the back-off the restarted actor asks again whether the robot is reachable, then takes calls.
-      reachable(robot, online = true)
+      // After the back-off the restarted actor asks again whether the robot is reachable and for its route.
+      robot.fishForMessage(3.seconds) {
+        case _: RobotActor.ReachabilityWanted => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                                => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+      }.last.asInstanceOf[RobotActor.ReachabilityWanted].replyTo ! true
+      // Calls wait for the route: the new incarnation sends nothing until the robot actor has told it.
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      robot.expectMessageType[RobotActor.Transmit]
+      robot.expectMessageType[RobotActor.RouteWanted].replyTo ! ResponseActor.RouteChanged(
+        ResponseActor.Route.Datagrams(outbox.ref, RobotStandIn.RobotAddress, naogateway.wire.HeaderForm.Legacy))
+      RobotStandIn.sent(outbox)._1.name shouldBe "system.ping"
     }
 
     "still know after a restart that the robot is offline, and fail calls at once" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(false) => true; case _ => false })
       val responder = spawn(
         Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
       )
-      reachable(robot, online = true)
+      started(robot, outbox)
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         responder ! ResponseActor.Reachability(false)
       }
       // The restarted actor starts from its spawn-time assumption (online) until the robot actor answers.
-      reachable(robot, online = false)
+      started(robot, outbox, online = false)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       caller.expectMessageType[CallResult].result shouldBe Left(CallError.RobotOffline(2))
       robot.expectMessage(RobotActor.Wanted)
@@ -74,42 +82,25 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
 
   "A crashing no-response actor" must {
     "answer the command in flight and the waiting ones, then take commands again" in {
-      val robot = createTestProbe[RobotActor.FromChild]()
+      val response = createTestProbe[ResponseActor.Command]()
       val caller = createTestProbe[CallResult]()
-      val crash = new CrashOn[NoResponseActor.Command]({ case NoResponseActor.Reachability(true) => true; case _ => false })
+      val crash = new CrashOn[NoResponseActor.Command]({
+        case NoResponseActor.Send(call, _, _) => call.params == Vector(RpcValue.Text("boom"))
+        case _                                => false
+      })
       val actor = spawn(
-        Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
+        Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, response.ref))).onFailure(restart)
       )
-      reachable(robot, online = true)
       (1 to 3).foreach(i => actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
-      robot.expectMessageType[RobotActor.Transmit]
+      response.expectMessageType[ResponseActor.Call]
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
-        actor ! NoResponseActor.Reachability(true)
+        actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("boom"))))
       }
       caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
       caller.expectNoMessage(200.millis)
-      reachable(robot, online = true)
       actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
-      robot.expectMessageType[RobotActor.Transmit]
-    }
-
-    "still know after a restart that the robot is offline, and fail commands at once" in {
-      val robot = createTestProbe[RobotActor.FromChild]()
-      val caller = createTestProbe[CallResult]()
-      val crash = new CrashOn[NoResponseActor.Command]({ case NoResponseActor.Reachability(false) => true; case _ => false })
-      val actor = spawn(
-        Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
-      )
-      reachable(robot, online = true)
-      crash.arm()
-      LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
-        actor ! NoResponseActor.Reachability(false)
-      }
-      reachable(robot, online = false)
-      actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("lost"))), Some(caller.ref))
-      caller.expectMessageType[CallResult].result shouldBe Left(CallError.RobotOffline(2))
-      robot.expectMessage(RobotActor.Wanted)
+      response.expectMessageType[ResponseActor.Call].call.params shouldBe Vector(RpcValue.Text("again"))
     }
   }
 }

@@ -6,29 +6,32 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWit
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.actors.RobotStandIn.reachable
+import naogateway.actors.RobotStandIn.{sent, started}
 import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
 class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
   private val manualTime = ManualTime()
   private val settings = CallSettings(2.seconds, idempotentRetries = 2, stashCapacity = 2)
 
-  private def transmitted(robot: TestProbe[RobotActor.FromChild]): (Long, RobotActor.Transmit) =
-    robot.expectMessageType[RobotActor.Transmit] match {
-      case t @ RobotActor.Transmit(RobotActor.Outbound.CallOut(call), _, _, _) => (call.callId.get, t)
-      case other                                                           => fail(s"unexpected $other")
-    }
+  /** The next attempt the responder sent straight to the outbox; the robot actor only counts it. */
+  private def transmitted(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command]): (Long, RpcCall, Outbox.Send) = {
+    robot.expectMessageType[RobotActor.SentDirect]
+    val (call, send) = sent(outbox)
+    send.tag shouldBe call.callId.get
+    (call.callId.get, call, send)
+  }
 
   "ResponseActor" must {
     "pair a reply with its call by call id and answer exactly once" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("system", "battery", Vector.empty), caller.ref)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      val (first, _) = transmitted(robot)
-      val (second, _) = transmitted(robot)
+      val (first, _, _) = transmitted(robot, outbox)
+      val (second, _, _) = transmitted(robot, outbox)
       (first >>> 30) shouldBe 0
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.UInt(99))), Some(second)))
       caller.expectMessage(CallResult(3, "system.ping", Right(Some(RpcValue.UInt(99)))))
@@ -41,61 +44,65 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
     }
     "resend an idempotent call as new requests with new call ids, then time out with one answer (protocol.md 7.1)" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref)
-      val (first, _) = transmitted(robot)
+      val (first, _, _) = transmitted(robot, outbox)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (second, t2) = transmitted(robot)
+      val (second, c2, _) = transmitted(robot, outbox)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (third, _) = transmitted(robot)
+      val (third, _, _) = transmitted(robot, outbox)
       // A robot answers every request once: a repeated call id would earn two answers to one request.
       Set(first, second, third) should have size 3
       Seq(second, third).foreach(id => (id >>> 30) shouldBe 0)
-      t2.out shouldBe RobotActor.Outbound.CallOut(RpcCall("motion", "stop", Vector.empty, Some(second)))
+      c2 shouldBe RpcCall("motion", "stop", Vector.empty, Some(second))
       manualTime.timePasses(667.millis)
       caller.expectMessage(CallResult(3, "motion.stop", Left(CallError.Timeout(3, "motion.stop", 2.seconds))))
-      robot.expectNoMessage(Duration.Zero)
+      outbox.expectNoMessage(Duration.Zero)
     }
     "complete a resent call with the late answer to an earlier attempt, once" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "getPosture", Vector.empty), caller.ref)
-      val (first, _) = transmitted(robot)
+      val (first, _, _) = transmitted(robot, outbox)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (second, _) = transmitted(robot)
+      val (second, _, _) = transmitted(robot, outbox)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(first)))
       caller.expectMessage(CallResult(3, "motion.getPosture", Right(Some(RpcValue.Text("sit")))))
       // The second attempt's answer finds the call settled; no sample from a call sent twice (Karn's rule).
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(second)))
       caller.expectNoMessage(100.millis)
       manualTime.timePasses(2.seconds)
-      robot.expectNoMessage(Duration.Zero)
+      outbox.expectNoMessage(Duration.Zero)
     }
     "send a call that is not idempotent only once" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text("hi"))), caller.ref)
-      transmitted(robot)
+      transmitted(robot, outbox)
       manualTime.timePasses(2.seconds)
       caller.expectMessageType[CallResult].result.left.toOption.get shouldBe a[CallError.Timeout]
-      robot.expectNoMessage(Duration.Zero)
+      outbox.expectNoMessage(Duration.Zero)
     }
     "fail pending and new calls fast when the robot goes offline" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      transmitted(robot)
+      transmitted(robot, outbox)
       responder ! ResponseActor.Reachability(false)
       caller.expectMessage(CallResult(3, "system.ping", Left(CallError.RobotOffline(3))))
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
@@ -104,27 +111,80 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
     }
     "keep at most four calls in flight, stash a bounded number and refuse the rest with an error" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       (1 to 7).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
-      val ids = (1 to 4).map(_ => transmitted(robot)._1)
+      val ids = (1 to 4).map(_ => transmitted(robot, outbox)._1)
       caller.expectMessageType[CallResult].result shouldBe Left(CallError.Overloaded(3, "4 calls in flight and 2 waiting"))
-      robot.expectNoMessage(Duration.Zero)
+      outbox.expectNoMessage(Duration.Zero)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(ids.head)))
       caller.expectMessageType[CallResult].result shouldBe Right(None)
       robot.expectMessageType[RobotActor.RoundTrip]
-      transmitted(robot)._2.out shouldBe RobotActor.Outbound.CallOut(RpcCall("speech", "say", Vector(RpcValue.Text("5")), Some(ids.last + 1)))
+      transmitted(robot, outbox)._2 shouldBe RpcCall("speech", "say", Vector(RpcValue.Text("5")), Some(ids.last + 1))
     }
     "fail a call at once with the rule when the outbox refuses it" in {
       val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      reachable(robot)
+      started(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      val (id, t) = transmitted(robot)
-      t.outcome.get ! Outbox.RefusedByRule(id, Outbox.NoSendingWhileGameRuns)
+      val (id, _, t) = transmitted(robot, outbox)
+      t.replyTo.get ! Outbox.RefusedByRule(id, Outbox.NoSendingWhileGameRuns)
       caller.expectMessage(CallResult(3, "system.ping", Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))))
+    }
+    "supersede an older call of a slot: no more retries, its caller told, its held datagrams withdrawn before the next goes" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
+      val caller = createTestProbe[CallResult]()
+      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      started(robot, outbox)
+      responder ! ResponseActor.Call(RpcCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0.2f))), caller.ref)
+      val (walk, _, _) = transmitted(robot, outbox)
+      responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
+      caller.expectMessage(CallResult(3, "motion.walk", Left(CallError.Superseded(3, "motion.walk"))))
+      // The withdrawal reaches the outbox before the stop: a walk held behind the budget cannot follow the stop.
+      outbox.expectMessage(Outbox.Withdraw(3, Set(walk)))
+      val (stop, call, send) = transmitted(robot, outbox)
+      call.name shouldBe "motion.stop"
+      send.priority shouldBe Priority.Safety
+      manualTime.timePasses(667.millis)
+      robot.expectMessage(RobotActor.Retransmitted)
+      val (_, again, _) = transmitted(robot, outbox)
+      again.name shouldBe "motion.stop"
+      // Only the stop is retried, never the superseded walk; a late answer to the walk changes nothing.
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(walk)))
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.Flag(true))), Some(stop)))
+      caller.expectMessage(CallResult(3, "motion.stop", Right(Some(RpcValue.Flag(true)))))
+      manualTime.timePasses(2.seconds)
+      outbox.expectNoMessage(Duration.Zero)
+    }
+    "send a safety call at once even with four calls in flight, and let the newest head target win the wait" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
+      val caller = createTestProbe[CallResult]()
+      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
+      started(robot, outbox)
+      (1 to 4).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
+      def head(pan: Float) = RpcCall("motion", "head", Vector(RpcValue.Number(pan), RpcValue.Number(0f)))
+      responder ! ResponseActor.Call(head(0.1f), caller.ref)
+      responder ! ResponseActor.Call(head(0.2f), caller.ref)
+      caller.expectMessage(CallResult(3, "motion.head", Left(CallError.Superseded(3, "motion.head"))))
+      responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
+      val (stop, stopCall, _) = transmitted(robot, outbox)
+      stopCall.name shouldBe "motion.stop"
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(stop)))
+      caller.expectMessageType[CallResult].call shouldBe "motion.stop"
+      robot.expectMessageType[RobotActor.RoundTrip]
+      // The four ordinary calls still fill the room: the head waits.
+      outbox.expectNoMessage(Duration.Zero)
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(busy.head)))
+      caller.expectMessageType[CallResult].call shouldBe "speech.say"
+      robot.expectMessageType[RobotActor.RoundTrip]
+      transmitted(robot, outbox)._2.params shouldBe Vector(RpcValue.Number(0.2f), RpcValue.Number(0f))
     }
   }
 }

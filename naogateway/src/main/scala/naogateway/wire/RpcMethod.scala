@@ -1,0 +1,89 @@
+package naogateway.wire
+
+/**
+ * A robot's actuator slot: a newer command in a slot supersedes every older one of that slot still waiting, in
+ * flight or held, so the robot only ever gets a slot's commands in the order they were given.
+ */
+sealed abstract class CommandSlot(val name: String) extends Product with Serializable
+
+/** The three slots: legs (walk, stop, posture), head, arms. */
+object CommandSlot {
+
+  /** Walking and postures: one body, one motion at a time. */
+  case object Walk extends CommandSlot("walk")
+
+  /** The head's pan and tilt. */
+  case object Head extends CommandSlot("head")
+
+  /** The four arm joints. */
+  case object Arms extends CommandSlot("arms")
+
+  val all: Vector[CommandSlot] = Vector(Walk, Head, Arms)
+}
+
+/**
+ * One method of the RPC contract the robot serves (docs/protocol.md 7.2).
+ *
+ * @param idempotent whether it may run twice, so it may be called again when no answer came (protocol.md 7.1)
+ * @param slot the actuator slot whose order it takes part in, if any
+ */
+sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean, val slot: Option[CommandSlot])
+    extends Product with Serializable {
+
+  /** `module.method`, as in logs, errors and the docs. */
+  def name: String = s"$module.$method"
+
+  /** A call of this method with `params`. */
+  def call(params: RpcValue*): RpcCall = RpcCall(module, method, params.toVector)
+}
+
+/** The method table: the one place that names the robot's methods. */
+object RpcMethod {
+
+  /** Walk with these velocities; the robot's 500 ms lease needs it refreshed. */
+  case object Walk extends RpcMethod("motion", "walk", idempotent = true, Some(CommandSlot.Walk))
+
+  /** End walking. */
+  case object Stop extends RpcMethod("motion", "stop", idempotent = true, Some(CommandSlot.Walk))
+
+  /** Turn the head. */
+  case object Head extends RpcMethod("motion", "head", idempotent = true, Some(CommandSlot.Head))
+
+  /** Set the four arm joints. */
+  case object Arms extends RpcMethod("motion", "arms", idempotent = true, Some(CommandSlot.Arms))
+
+  /** Move to a posture; answers when the motion has ended, and a second one during a motion is refused (busy). */
+  case object Posture extends RpcMethod("motion", "posture", idempotent = false, Some(CommandSlot.Walk))
+
+  /** Read the posture. */
+  case object GetPosture extends RpcMethod("motion", "getPosture", idempotent = true, None)
+
+  /** Speak a text: not repeated, the robot would say it twice. */
+  case object Say extends RpcMethod("speech", "say", idempotent = false, None)
+
+  /** Read the battery voltage. */
+  case object Battery extends RpcMethod("system", "battery", idempotent = true, None)
+
+  /** Read the uptime. */
+  case object Ping extends RpcMethod("system", "ping", idempotent = true, None)
+
+  /** Restart the robot: never repeated. */
+  case object Reset extends RpcMethod("system", "reset", idempotent = false, None)
+
+  /** Every method, in the order of the docs' table. */
+  val all: Vector[RpcMethod] = Vector(Walk, Stop, Head, Arms, Posture, GetPosture, Say, Battery, Ping, Reset)
+
+  private val byName: Map[(String, String), RpcMethod] = all.map(m => (m.module, m.method) -> m).toMap
+
+  /** The method `module.method`, if the robot serves it. */
+  def find(module: String, method: String): Option[RpcMethod] = byName.get((module, method))
+
+  /** The method `call` calls, if the robot serves it. */
+  def of(call: RpcCall): Option[RpcMethod] = find(call.module, call.method)
+
+  /** The slot `call` takes part in, if any. */
+  def slotOf(call: RpcCall): Option[CommandSlot] = of(call).flatMap(_.slot)
+
+  /** Whether `call` may be called again when no answer came; a method the table does not know is not. */
+  def idempotent(call: RpcCall): Boolean = of(call).exists(_.idempotent)
+}
