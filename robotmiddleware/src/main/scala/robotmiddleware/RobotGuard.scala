@@ -8,7 +8,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import akka.util.Timeout
 
 import naogateway._
-import naogateway.wire.{RpcCall, RpcValue}
+import naogateway.wire.{Posture, RpcCall, RpcValue}
 
 /** An app as the middleware knows it: its event ref (its identity), name and priority. */
 final case class AppInfo(events: ActorRef[AppEvent], name: String, priority: Int)
@@ -119,7 +119,7 @@ private[robotmiddleware] object RobotGuard {
             case e: Execute =>
               e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
-            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.group.name, Left(RobotFailure.Overloaded(robotId, "busy")))
+            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.group, Left(RobotFailure.Overloaded(robotId, "busy")))
             case _          => ()
           }
           else stash.stash(other)
@@ -150,7 +150,7 @@ private[robotmiddleware] object RobotGuard {
         val held = group.forall(g => leases.get(g).exists(_.events == app.events))
         if (!online) reply(replyTo, operation, Left(RobotFailure.RobotOffline(robotId)))
         else if (!held)
-          reply(replyTo, operation, Left(RobotFailure.LeaseNotHeld(robotId, group.get.name, group.flatMap(leases.get).map(_.name))))
+          reply(replyTo, operation, Left(RobotFailure.LeaseNotHeld(robotId, group.get, group.flatMap(leases.get).map(_.name))))
         else if (safety.isDefined && refusedWhenUnsafe(operation))
           reply(replyTo, operation, Left(RobotFailure.SafetyHold(robotId, safety.get)))
         else run(c, app, operation, replyTo)
@@ -158,18 +158,18 @@ private[robotmiddleware] object RobotGuard {
       case Acquire(app, group, replyTo) =>
         leases.get(group) match {
           case Some(holder) if holder.events == app.events =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name, Right(()))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group, Right(()))
           case Some(holder) if holder.priority >= app.priority =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name,
-              Left(RobotFailure.LeaseNotHeld(robotId, group.name, Some(holder.name))))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group,
+              Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
           case previous =>
             previous.foreach { holder =>
               context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name, holder.name, app.name)
-              holder.events ! AppEvent.LeasePreempted(robotId, group.name, app.name)
+              holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
               if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
             }
             leases = leases.updated(group, app)
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name, Right(()))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group, Right(()))
         }
         Behaviors.same
       case Release(app, group) =>
@@ -258,9 +258,9 @@ private[robotmiddleware] object RobotGuard {
 
     private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
       case _: Operation.Walk | _: Operation.Arms => true
-      case Operation.Posture(p)                  => p != "sit"
+      case Operation.Posture(p)                  => p != Posture.Sit
       case r: Operation.RawCall =>
-        (r.group.contains(ActuatorGroup.Walk) && r.method != "stop" && !(r.method == "posture" && r.params == Vector(RpcValue.Text("sit")))) ||
+        (r.group.contains(ActuatorGroup.Walk) && r.method != "stop" && !(r.method == "posture" && r.params == Vector(RpcValue.Text(Posture.Sit.name)))) ||
           r.group.contains(ActuatorGroup.Arms)
       case _                                     => false
     }
@@ -322,7 +322,7 @@ private[robotmiddleware] object RobotGuard {
       case Operation.Posture(p) =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcCall("motion", "posture", Vector(RpcValue.Text(p))), operation, replyTo, timeout = settings.postureTimeout)
+        call(c, RpcCall("motion", "posture", Vector(RpcValue.Text(p.name))), operation, replyTo, timeout = settings.postureTimeout)
       case Operation.Say(text) => call(c, RpcCall("speech", "say", Vector(RpcValue.Text(text))), operation, replyTo)
       case r: Operation.RawCall =>
         val timeout = if (r.name == "motion.posture") settings.postureTimeout else settings.callTimeout
