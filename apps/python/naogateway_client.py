@@ -21,6 +21,18 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 _PROTO_DIR = os.path.join(_HERE, "..", "..", "proto", "src", "main", "protobuf")
 _PROTO_FILES = ["message.proto", "rpc.proto", "havimo.proto", "debugging.proto"]
 
+# The gateway's names, as the endpoint takes and reports them (docs/zeromq.md); apps.zeromq.PythonNamesSpec checks
+# them against the gateway's own types.
+POSTURES = ("sit", "stand", "crouch", "walking", "moving", "fallen")
+"""Every posture a robot reports (docs/protocol.md 7.2). A newer robot may report one not listed; status dicts carry it
+as it came."""
+
+POSTURE_TARGETS = ("sit", "stand", "crouch")
+"""The postures `posture` may ask for; the endpoint answers any other name with a malformed-request error."""
+
+ACTUATOR_GROUPS = ("walk", "head", "arms", "speech")
+"""The lease groups of `acquire` and `release`: walk (walking and postures), head, arms, speech."""
+
 message_pb2 = None
 rpc_pb2 = None
 havimo_pb2 = None
@@ -156,6 +168,7 @@ class GatewayClient:
         return snapshot
 
     def acquire(self, robot_id, *groups):
+        """Takes the leases of these ACTUATOR_GROUPS on the robot."""
         return self.call(robot_id, "gateway", "acquire", *groups)
 
     def release(self, robot_id, *groups):
@@ -176,6 +189,7 @@ class GatewayClient:
         return self.call(robot_id, "motion", "arms", *values)
 
     def posture(self, robot_id, name):
+        """Goes to one of POSTURE_TARGETS; returns the posture reached once the motion has ended."""
         return self.call(robot_id, "motion", "posture", name)
 
     def say(self, robot_id, text):

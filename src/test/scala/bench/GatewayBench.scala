@@ -368,7 +368,7 @@ object GatewayBench extends Benchmark {
           case (_, LinkQualityChanged(1, _))    => quality += 1
           case _                                => ()
         }
-      val c = network.counters(proxy)
+      val c = network.stats(proxy)
       progress(s"loss 20 % over ${LossHold.toSeconds} s: $offline offline, $online back online, $quality quality changes, " +
         s"${sim.sink.statusUpdates.get - statusBefore} keep-alives arrived; proxy uplink ${c.uplink.forwarded}/${c.uplink.received} " +
         s"forwarded, downlink ${c.downlink.forwarded}/${c.downlink.received}")

@@ -20,6 +20,7 @@ import apps.BallFollower
 import naogateway._
 import naogateway.sim._
 import naogateway.sim.network.LossyNetwork
+import naogateway.wire.Posture
 import robotmiddleware._
 import robotmiddleware.cluster.MiddlewareCluster
 
@@ -104,9 +105,9 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val app = connect(node, "walker", 1)
       implicit val system: ActorSystem[_] = node
       app.acquire(11, ActuatorGroup.Walk).futureValue
-      app.posture(11, "stand").futureValue shouldBe "stand"
+      app.posture(11, Posture.Stand).futureValue shouldBe Posture.Stand
       app.walk(11, 0.2, 0.0, 0.0).futureValue
-      val walking = app.status(11).filter(_.posture.contains("walking")).runWith(Sink.head)
+      val walking = app.status(11).filter(_.posture.contains(Posture.Walking)).runWith(Sink.head)
       walking.futureValue.robotId shouldBe 11
       // The middleware keeps the walk alive past the robot's 500 ms lease: the robot walks on for well over the 0.1 m
       // one lease carries it at 0.2 m/s. The distance adds up across a late refresh, which a look at the posture would not.
@@ -145,7 +146,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val doomed = appNode()
       val first = connect(doomed, "doomed", 1)
       first.acquire(12, ActuatorGroup.Walk).futureValue
-      first.posture(12, "stand").futureValue
+      first.posture(12, Posture.Stand).futureValue
       first.walk(12, 0.2, 0.0, 0.0).futureValue
       val second = connect(appNode(), "patient", 1)
       second.acquire(12, ActuatorGroup.Walk).failed.futureValue shouldBe a[RobotFailure.LeaseNotHeld]
@@ -163,12 +164,12 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       implicit val system: ActorSystem[_] = node
       val safetyStop = app.appEvents.collect { case e: AppEvent.SafetyStop => e }.runWith(Sink.head)
       app.acquire(13, ActuatorGroup.Walk).futureValue
-      app.posture(13, "stand").futureValue
+      app.posture(13, Posture.Stand).futureValue
       app.walk(13, 0.1, 0.0, 0.0).futureValue
       sim ! SimulatedRobot.SetBattery(10.4)
       eventually(view(sim).posture shouldBe Posture.Sit)
       app.walk(13, 0.1, 0.0, 0.0).failed.futureValue shouldBe a[RobotFailure.SafetyHold]
-      app.posture(13, "stand").failed.futureValue shouldBe a[RobotFailure.SafetyHold]
+      app.posture(13, Posture.Stand).failed.futureValue shouldBe a[RobotFailure.SafetyHold]
       safetyStop.futureValue.robotId shouldBe 13
       app.close()
     }
@@ -181,7 +182,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
         online(14)
         val app = connect(appNode(), "walker", 1)
         app.acquire(14, ActuatorGroup.Walk).futureValue
-        app.posture(14, "stand").futureValue
+        app.posture(14, Posture.Stand).futureValue
         app.walk(14, 0.2, 0.0, 0.0).futureValue
         network.partition(proxy, on = true)
         eventually {
@@ -206,8 +207,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val lowEvents = low.appEvents.takeWithin(20.seconds).runWith(Sink.head)
       low.acquire(15, ActuatorGroup.Walk).futureValue
       high.acquire(15, ActuatorGroup.Walk).futureValue
-      lowEvents.futureValue shouldBe AppEvent.LeasePreempted(15, "walk", "referee")
-      low.stop(15).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(15, "walk", Some("referee"))
+      lowEvents.futureValue shouldBe AppEvent.LeasePreempted(15, ActuatorGroup.Walk, "referee")
+      low.stop(15).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(15, ActuatorGroup.Walk, Some("referee"))
       high.stop(15).futureValue
     }
   }

@@ -8,6 +8,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import akka.stream.scaladsl.Sink
 
 import naogateway.VisionFrame
+import naogateway.wire.Posture
 import robotmiddleware.{ActuatorGroup, AppEvent, RobotInterface}
 
 /** The ball follower app: tracks the ball with the head from HaViMo2 regions and walks to it. */
@@ -21,7 +22,7 @@ object BallFollower {
 
   private final case class Frame(frame: VisionFrame.Regions) extends Command
   private final case class Leased(result: scala.util.Try[akka.Done]) extends Command
-  private final case class Stood(result: scala.util.Try[String]) extends Command
+  private final case class Stood(result: scala.util.Try[Posture]) extends Command
   private final case class WalkDone(result: scala.util.Try[akka.Done]) extends Command
   private final case class Preempted(event: AppEvent) extends Command
   private case object Retry extends Command
@@ -84,7 +85,7 @@ object BallFollower {
             timers.startSingleTimer(Retry, 1.second)
             Behaviors.same
           case Retry =>
-            context.pipeToSelf(robot.posture(robotId, "stand"))(Stood.apply)
+            context.pipeToSelf(robot.posture(robotId, Posture.Stand))(Stood.apply)
             Behaviors.same
           case GetProgress(replyTo) =>
             replyTo ! progress
@@ -101,7 +102,7 @@ object BallFollower {
             Behaviors.same
           case Leased(Success(_)) =>
             context.log.info("Ball follower has robot [{}]", robotId)
-            context.pipeToSelf(robot.posture(robotId, "stand"))(Stood.apply)
+            context.pipeToSelf(robot.posture(robotId, Posture.Stand))(Stood.apply)
             standingUp(progress)
           case Leased(Failure(e)) =>
             context.log.info("Ball follower waits for robot [{}]: {}", robotId, e.getMessage)

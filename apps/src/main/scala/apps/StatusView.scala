@@ -39,7 +39,7 @@ object StatusView {
     val loss = link.map(_.lossEstimate)
     val quality = Option(r.quality).fold("-")(_.name)
     f"robot ${r.robotId}%-3d ${if (r.online) "online " else "offline"} $quality%-8s " +
-      f"battery ${opt(r.batteryVoltage)(finite(_)(v => f"$v%.2f V"))}%-8s posture ${opt(r.posture)(identity)}%-8s " +
+      f"battery ${opt(r.batteryVoltage)(finite(_)(v => f"$v%.2f V"))}%-8s posture ${opt(r.posture)(_.name)}%-8s " +
       f"role ${opt(r.role)(identity)}%-9s rtt ${opt(rtt)(finite(_)(v => f"$v%.1f ms"))}%-9s " +
       f"loss ${opt(loss)(finite(_)(v => f"${v * 100}%.0f %%"))}%-5s " + address(r)
   }

@@ -6,6 +6,7 @@ import scala.concurrent.{ExecutionContext, Future}
 import scala.util.{Failure, Success, Try}
 
 import akka.actor.typed.scaladsl.Behaviors
+import naogateway.wire.Posture
 import robotmiddleware.RobotClient
 import robotmiddleware.cluster.MiddlewareCluster
 
@@ -25,8 +26,8 @@ object Teleop {
     case object Stop extends Action
     /** Turn the head by these angles (rad). */
     final case class HeadBy(dPan: Double, dTilt: Double) extends Action
-    /** Take the named posture. */
-    final case class Posture(name: String) extends Action
+    /** Go to this posture. */
+    final case class Posture(target: naogateway.wire.Posture.Target) extends Action
     /** Stop the robot and leave. */
     case object Quit extends Action
   }
@@ -44,9 +45,9 @@ object Teleop {
     ('l', "head right", Action.HeadBy(-0.2, 0.0)),
     ('k', "head up", Action.HeadBy(0.0, 0.1)),
     ('j', "head down", Action.HeadBy(0.0, -0.1)),
-    ('1', "sit", Action.Posture("sit")),
-    ('2', "stand", Action.Posture("stand")),
-    ('3', "crouch", Action.Posture("crouch")),
+    ('1', "sit", Action.Posture(Posture.Sit)),
+    ('2', "stand", Action.Posture(Posture.Stand)),
+    ('3', "crouch", Action.Posture(Posture.Crouch)),
     ('x', "quit", Action.Quit)
   )
 
@@ -87,7 +88,7 @@ object Teleop {
             pan = math.max(-2.0, math.min(2.0, pan + dp))
             tilt = math.max(-0.6, math.min(0.5, tilt + dt))
             report(f"head $pan%.1f $tilt%.1f", robot.head(robotId, pan, tilt))
-          case Action.Posture(name) => report(s"posture $name", robot.posture(robotId, name))
+          case Action.Posture(target) => report(s"posture ${target.name}", robot.posture(robotId, target))
         }
     }
     report("stop", robot.stop(robotId))

@@ -9,13 +9,14 @@ import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec, GameState, SecondaryGameState}
+import naogateway.wire.Posture
 import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot}
 
 class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
   import StatusViewSpec._
 
   private val address = new InetSocketAddress("127.0.0.1", 40000)
-  private val sitting = RobotSnapshot(1, address, role = Some("keeper"), posture = Some("sit"), batteryVoltage = Some(12.4),
+  private val sitting = RobotSnapshot(1, address, role = Some("keeper"), posture = Some(Posture.Sit), batteryVoltage = Some(12.4),
     online = true, quality = LinkQuality.Good)
   private val link = LinkStats(1, 10, 10, 300, 300, Some(0.4), 0.0, 0, Map.empty)
   private val traffic = Outbox.TrafficStats(1500, 500, 125000, Map.empty, 10, 10, 0, 0, gameRunning = false, competition = false)
@@ -32,7 +33,7 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       val first = StatusModel(Vector(sitting), Map(1 -> link), None, None)
       StatusView.changes(StatusModel.empty, first).map(_.take(20)) shouldBe Vector("robot 1   online  go")
       StatusView.changes(first, first) shouldBe empty
-      val standing = first.copy(robots = Vector(sitting.copy(posture = Some("stand"))))
+      val standing = first.copy(robots = Vector(sitting.copy(posture = Some(Posture.Stand))))
       StatusView.changes(first, standing).head should include("stand")
       val offline = first.copy(robots = Vector(sitting.copy(online = false)))
       StatusView.changes(first, offline).head should include("offline")
@@ -116,7 +117,7 @@ object StatusViewSpec {
     id <- Arbitrary.arbitrary[Int]
     address <- genAddress
     role <- Gen.option(Arbitrary.arbitrary[String])
-    posture <- Gen.option(Arbitrary.arbitrary[String])
+    posture <- Gen.option(Arbitrary.arbitrary[String].map(Posture.reported))
     battery <- Gen.option(genDouble)
     online <- Arbitrary.arbitrary[Boolean]
     quality <- Gen.oneOf(LinkQuality.Good, LinkQuality.Degraded, LinkQuality.Offline)

@@ -12,6 +12,7 @@ import org.scalatest.wordspec.AnyWordSpec
 import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
+import naogateway.wire.Posture
 import robotmiddleware.{ActuatorGroup, AppEvent, RobotFailure, RobotInterface}
 
 class TeleopSpec extends AnyWordSpec with Matchers {
@@ -31,7 +32,7 @@ class TeleopSpec extends AnyWordSpec with Matchers {
       Future.failed(RobotFailure.RobotError(robotId, "out of range"))
     }
     def arms(robotId: Int, a: Double, b: Double, c: Double, d: Double): Future[Done] = ok("arms")
-    def posture(robotId: Int, posture: String): Future[String] = { log :+= s"posture $posture"; Future.successful(posture) }
+    def posture(robotId: Int, target: Posture.Target): Future[Posture] = { log :+= s"posture ${target.name}"; Future.successful(target) }
     def say(robotId: Int, text: String): Future[Done] = ok(s"say $text")
     def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] = Future.successful(None)
     def status(robotId: Int): Source[RobotSnapshot, NotUsed] = Source.empty

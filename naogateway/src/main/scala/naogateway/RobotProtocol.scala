@@ -4,7 +4,7 @@ import java.net.InetSocketAddress
 
 import scala.concurrent.duration.FiniteDuration
 
-import naogateway.wire.RpcValue
+import naogateway.wire.{Posture, RobotReport, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 
 /** How well a robot's link works, with hysteresis so a lossy link does not flap. */
@@ -24,7 +24,7 @@ final case class RobotSnapshot(
     teamId: Option[Int] = None,
     role: Option[String] = None,
     agent: Option[String] = None,
-    posture: Option[String] = None,
+    posture: Option[Posture] = None,
     batteryVoltage: Option[Double] = None,
     uptimeMillis: Option[Long] = None,
     bootId: Option[Int] = None,
@@ -32,7 +32,12 @@ final case class RobotSnapshot(
     online: Boolean = false,
     quality: LinkQuality = LinkQuality.Offline,
     receivedAtNanos: Long = 0L
-)
+) {
+
+  /** What the robot reported about itself, as a keep-alive says it (the link fields are not part of it). */
+  def report: RobotReport =
+    RobotReport(teamId, role, agent, posture, batteryVoltage, uptimeMillis, bootId, position)
+}
 
 /** What one keep-alive did: the robot's new snapshot, whether it began a fresh session, and the bootId now remembered. */
 final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, lastBootId: Option[Int])
@@ -51,18 +56,20 @@ object RobotSnapshot {
       status: naogateway.proto.Status,
       health: Option[naogateway.proto.RobotHealth],
       receivedAtNanos: Long
-  ): RobotSnapshot =
+  ): RobotSnapshot = {
+    val r = RobotReport.read(status, health)
     previous.copy(
-      teamId = status.teamID.map(_.toInt),
-      role = status.activeRole,
-      agent = status.activeAgent,
-      posture = health.flatMap(_.posture).orElse(status.currentState),
-      batteryVoltage = health.flatMap(_.batteryVoltage).map(_.toDouble),
-      uptimeMillis = health.flatMap(_.uptimeMs).map(_ & 0xffffffffL).orElse(status.timestamp),
-      bootId = health.flatMap(_.bootId),
-      position = status.robotPosition.map(p => (p.getX, p.getY, p.getRotation.toDouble)),
+      teamId = r.teamId,
+      role = r.role,
+      agent = r.agent,
+      posture = r.posture,
+      batteryVoltage = r.batteryVoltage,
+      uptimeMillis = r.uptimeMillis,
+      bootId = r.bootId,
+      position = r.position,
       receivedAtNanos = receivedAtNanos
     )
+  }
 
   /**
    * One keep-alive applied to the gateway's view of a robot: the snapshot it publishes ([[afterKeepAlive]]), whether

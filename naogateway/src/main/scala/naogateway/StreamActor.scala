@@ -5,7 +5,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.wire.stream.{SecureStream, StreamCounters, StreamSettings}
+import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
 /** The gateway's end of one robot's secure stream (SPEC §6): reliable, ordered payloads over the lossy link. */
 object StreamActor {
@@ -20,8 +20,8 @@ object StreamActor {
   /** Delivers every payload received from the robot, in order, to `subscriber`. */
   final case class Subscribe(subscriber: ActorRef[Received]) extends Command
 
-  /** Answers with the stream's counters. */
-  final case class GetCounters(replyTo: ActorRef[StreamCounters]) extends Command
+  /** Answers with the stream's stats. */
+  final case class GetStats(replyTo: ActorRef[StreamStats]) extends Command
 
   /** A segment from the robot's address. */
   final case class SegmentReceived(bytes: Array[Byte]) extends Command
@@ -119,8 +119,8 @@ object StreamActor {
         running(stream, lastId, waiting, subscribers + subscriber)
       case SubscriberGone(subscriber) =>
         running(stream, lastId, waiting, subscribers - subscriber)
-      case GetCounters(replyTo) =>
-        replyTo ! stream.counters
+      case GetStats(replyTo) =>
+        replyTo ! stream.stats
         Behaviors.same
     }.receiveSignal {
       case (_, akka.actor.typed.PreRestart | akka.actor.typed.PostStop) =>

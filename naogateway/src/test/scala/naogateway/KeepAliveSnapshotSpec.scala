@@ -6,6 +6,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.proto.{Position, RobotHealth, Status}
+import naogateway.wire.Posture
 
 /** docs/protocol.md §6.2: what a keep-alive does to the published snapshot, and the restart rule. */
 class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
@@ -31,7 +32,7 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
     "publish what it carries" in {
       val s = run(fullStatus -> Some(fullHealth)).last
       s.restarted shouldBe false
-      s.snapshot shouldBe start.copy(teamId = Some(1), role = Some("striker"), agent = Some("soccer"), posture = Some("walking"),
+      s.snapshot shouldBe start.copy(teamId = Some(1), role = Some("striker"), agent = Some("soccer"), posture = Some(Posture.Walking),
         batteryVoltage = Some(11.5), uptimeMillis = Some(600000L), bootId = Some(3), position = Some((-1200, 300, 0.5)),
         receivedAtNanos = 0L)
     }
@@ -56,6 +57,21 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
       next.snapshot.batteryVoltage shouldBe None
       next.snapshot.bootId shouldBe Some(3)
       next.lastBootId shouldBe Some(3)
+    }
+    "carry a posture this build does not know as the robot reported it, and take Status' posture without RobotHealth" in {
+      val Vector(unknown, fromStatus) =
+        run(fullStatus -> Some(fullHealth.copy(posture = Some("kneeling"))), fullStatus.copy(currentState = Some("fallen")) -> None)
+      unknown.snapshot.posture.map(_.name) shouldBe Some("kneeling")
+      unknown.snapshot.posture.get should not be a[Posture.Target]
+      Posture.known.map(_.name) should not contain "kneeling"
+      fromStatus.snapshot.posture shouldBe Some(Posture.Fallen)
+    }
+
+    "read back what the snapshot's report writes (one mapping both ways)" in {
+      val s = run(fullStatus -> Some(fullHealth)).last.snapshot
+      RobotSnapshot.afterKeepAlive(start, s.report.status, Some(s.report.health), s.receivedAtNanos) shouldBe s
+      s.report.status shouldBe fullStatus.copy(timeOnline = Some(600))
+      s.report.health shouldBe fullHealth
     }
   }
 

@@ -1,24 +1,31 @@
 package robotmiddleware
 
-import naogateway.wire.{RpcMethod, RpcValue}
+import naogateway.wire.{Posture => WirePosture, RpcMethod, RpcValue}
 
 /** A group of actuators one app may hold at a time (a lease is per robot and group). */
-final case class ActuatorGroup(name: String) {
-  require(ActuatorGroup.names(name), s"unknown actuator group '$name' (${ActuatorGroup.names.mkString(", ")})")
-}
+sealed abstract class ActuatorGroup(val name: String) extends Product with Serializable
 
 /** The actuator groups: walking and posture, head, arms, speech. */
 object ActuatorGroup {
-  val Walk: ActuatorGroup = ActuatorGroup("walk")
-  val Head: ActuatorGroup = ActuatorGroup("head")
-  val Arms: ActuatorGroup = ActuatorGroup("arms")
-  val Speech: ActuatorGroup = ActuatorGroup("speech")
 
-  /** Every group name. */
-  lazy val names: Set[String] = Set("walk", "head", "arms", "speech")
+  /** Walking, stopping and postures (and `system.reset`, which moves the robot). */
+  case object Walk extends ActuatorGroup("walk")
 
-  /** Every group. */
-  lazy val all: Set[ActuatorGroup] = names.map(ActuatorGroup(_))
+  /** The head's pan and tilt. */
+  case object Head extends ActuatorGroup("head")
+
+  /** The four arm joints. */
+  case object Arms extends ActuatorGroup("arms")
+
+  /** The speaker. */
+  case object Speech extends ActuatorGroup("speech")
+
+  /** Every group, in the order the docs list them. */
+  val all: Vector[ActuatorGroup] = Vector(Walk, Head, Arms, Speech)
+
+  /** The group named `name`, or a sentence naming the groups there are. */
+  def parse(name: String): Either[String, ActuatorGroup] =
+    all.find(_.name == name).toRight(s"unknown actuator group '$name' (${all.map(_.name).mkString(", ")})")
 }
 
 /** Something an app asks a robot to do. */
@@ -59,9 +66,8 @@ object Operation {
     def name: String = RpcMethod.Arms.name
   }
 
-  /** Go to a posture: "sit", "stand" or "crouch"; answers when the motion has ended. */
-  final case class Posture(posture: String) extends Operation {
-    require(Set("sit", "stand", "crouch")(posture), s"unknown posture '$posture' (sit, stand, crouch)")
+  /** Go to a posture (sit, stand or crouch); answers when the motion has ended. */
+  final case class Posture(target: WirePosture.Target) extends Operation {
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Walk)
     def name: String = RpcMethod.Posture.name
   }
@@ -99,8 +105,8 @@ object RobotFailure {
   final case class UnknownRobot(robotId: Int) extends RobotFailure(s"no robot $robotId is known")
 
   /** The app does not hold the lease the operation needs. */
-  final case class LeaseNotHeld(robotId: Int, group: String, holder: Option[String])
-      extends RobotFailure(s"lease '$group' of robot $robotId is not held by this app" + holder.fold("")(h => s" (held by $h)"))
+  final case class LeaseNotHeld(robotId: Int, group: ActuatorGroup, holder: Option[String])
+      extends RobotFailure(s"lease '${group.name}' of robot $robotId is not held by this app" + holder.fold("")(h => s" (held by $h)"))
 
   /** A competition rule forbids sending now. */
   final case class RuleGate(rule: String) extends RobotFailure(rule)
@@ -139,7 +145,7 @@ sealed trait AppEvent extends SessionMessage with Product with Serializable
 object AppEvent {
 
   /** A higher-priority app took a lease away. */
-  final case class LeasePreempted(robotId: Int, group: String, byApp: String) extends AppEvent
+  final case class LeasePreempted(robotId: Int, group: ActuatorGroup, byApp: String) extends AppEvent
 
   /** The middleware stopped the robot for safety; the app's motion is refused until `SafetyCleared`. */
   final case class SafetyStop(robotId: Int, reason: String) extends AppEvent

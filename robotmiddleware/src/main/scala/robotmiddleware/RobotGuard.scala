@@ -8,7 +8,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import akka.util.Timeout
 
 import naogateway._
-import naogateway.wire.{RpcCall, RpcMethod, RpcValue}
+import naogateway.wire.{Posture, RpcCall, RpcMethod, RpcValue}
 
 /** An app as the middleware knows it: its event ref (its identity), name and priority. */
 final case class AppInfo(events: ActorRef[AppEvent], name: String, priority: Int)
@@ -139,7 +139,7 @@ private[robotmiddleware] object RobotGuard {
             case e: Execute =>
               e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
-            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.group.name, Left(RobotFailure.Overloaded(robotId, "busy")))
+            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.group, Left(RobotFailure.Overloaded(robotId, "busy")))
             case _          => ()
           }
           else stash.stash(other)
@@ -170,7 +170,7 @@ private[robotmiddleware] object RobotGuard {
         val held = group.forall(g => leases.get(g).exists(_.events == app.events))
         if (!online) reply(replyTo, operation, Left(RobotFailure.RobotOffline(robotId)))
         else if (!held)
-          reply(replyTo, operation, Left(RobotFailure.LeaseNotHeld(robotId, group.get.name, group.flatMap(leases.get).map(_.name))))
+          reply(replyTo, operation, Left(RobotFailure.LeaseNotHeld(robotId, group.get, group.flatMap(leases.get).map(_.name))))
         else if (safety.isDefined && refusedWhenUnsafe(operation))
           reply(replyTo, operation, Left(RobotFailure.SafetyHold(robotId, safety.get)))
         else run(c, app, operation, replyTo)
@@ -178,18 +178,18 @@ private[robotmiddleware] object RobotGuard {
       case Acquire(app, group, replyTo) =>
         leases.get(group) match {
           case Some(holder) if holder.events == app.events =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name, Right(()))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group, Right(()))
           case Some(holder) if holder.priority >= app.priority =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name,
-              Left(RobotFailure.LeaseNotHeld(robotId, group.name, Some(holder.name))))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group,
+              Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
           case previous =>
             previous.foreach { holder =>
               context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name, holder.name, app.name)
-              holder.events ! AppEvent.LeasePreempted(robotId, group.name, app.name)
+              holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
               if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
             }
             leases = leases.updated(group, app)
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group.name, Right(()))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, group, Right(()))
         }
         Behaviors.same
       case Release(app, group) =>
@@ -241,7 +241,7 @@ private[robotmiddleware] object RobotGuard {
         result.result match {
           // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
           case Right(_) | Left(_: CallError.Superseded) if step == SafetyStep.StopThenSit && safety.isDefined =>
-            safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text("sit")), settings.postureTimeout)
+            safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)), settings.postureTimeout)
           case Left(_: CallError.Superseded) => () // a newer call of the slot took over: nothing failed
           case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
           case Right(_)    => ()
@@ -298,10 +298,10 @@ private[robotmiddleware] object RobotGuard {
 
     private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
       case _: Operation.Walk | _: Operation.Arms => true
-      case Operation.Posture(p)                  => p != "sit"
+      case Operation.Posture(p)                  => p != Posture.Sit
       case r: Operation.RawCall =>
         (r.group.contains(ActuatorGroup.Walk) && !RpcMethod.find(r.module, r.method).contains(RpcMethod.Stop) &&
-          !(RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture) && r.params == Vector(RpcValue.Text("sit")))) ||
+          !(RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture) && r.params == Vector(RpcValue.Text(Posture.Sit.name)))) ||
           r.group.contains(ActuatorGroup.Arms)
       case _                                     => false
     }
@@ -363,7 +363,7 @@ private[robotmiddleware] object RobotGuard {
       case Operation.Posture(p) =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcMethod.Posture.call(RpcValue.Text(p)), operation, replyTo, timeout = settings.postureTimeout)
+        call(c, RpcMethod.Posture.call(RpcValue.Text(p.name)), operation, replyTo, timeout = settings.postureTimeout)
       case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo)
       case r: Operation.RawCall =>
         val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout else settings.callTimeout

@@ -14,7 +14,7 @@ import akka.util.Timeout
 import akka.{Done, NotUsed}
 
 import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
-import naogateway.wire.RpcValue
+import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 
 /** What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor. */
@@ -44,8 +44,11 @@ trait RobotInterface {
   /** Sets the arm joints (radians); needs the `arms` lease. */
   def arms(robotId: Int, leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double): Future[Done]
 
-  /** Goes to "sit", "stand" or "crouch"; completes with the posture reached when the motion has ended; needs `walk`. */
-  def posture(robotId: Int, posture: String): Future[String]
+  /**
+   * Goes to a posture; completes with the posture reached when the motion has ended (normally `target`, `Fallen` if
+   * the robot fell on the way); needs `walk`.
+   */
+  def posture(robotId: Int, target: Posture.Target): Future[Posture]
 
   /** Says a text; needs the `speech` lease. */
   def say(robotId: Int, text: String): Future[Done]
@@ -153,10 +156,12 @@ object RobotClient {
     def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done(execute(robotId, Operation.Head(pan, tilt)))
     def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] =
       done(execute(robotId, Operation.Arms(ls, le, rs, re)))
-    def posture(robotId: Int, posture: String): Future[String] =
-      Future(Operation.Posture(posture)).flatMap(execute(robotId, _)).map {
-        case Some(RpcValue.Text(reached)) => reached
-        case other                        => other.fold(posture)(_.toString)
+    def posture(robotId: Int, target: Posture.Target): Future[Posture] =
+      execute(robotId, Operation.Posture(target)).flatMap {
+        case Some(RpcValue.Text(reached)) => Future.successful(Posture.reported(reached))
+        case None                         => Future.successful(target)
+        case Some(other) =>
+          Future.failed(RobotFailure.RobotError(robotId, s"motion.posture answered $other, not a posture name"))
       }
     def say(robotId: Int, text: String): Future[Done] = done(execute(robotId, Operation.Say(text)))
     def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =

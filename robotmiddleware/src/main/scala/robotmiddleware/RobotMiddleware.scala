@@ -65,7 +65,7 @@ object RobotMiddleware {
   final case class OperationResult(robotId: Int, operation: String, result: Either[RobotFailure, Option[RpcValue]])
 
   /** The answer to `Acquire`. */
-  final case class LeaseResult(robotId: Int, group: String, result: Either[RobotFailure, Unit])
+  final case class LeaseResult(robotId: Int, group: ActuatorGroup, result: Either[RobotFailure, Unit])
 
   /** The middleware in front of `gateway`, registered with the receptionist. */
   def apply(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings): Behavior[Command] =
@@ -149,7 +149,7 @@ object RobotMiddleware {
         command match {
           case Execute(_, _, operation, replyTo) =>
             replyTo ! OperationResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
-          case Acquire(_, _, group, replyTo) => replyTo ! LeaseResult(robotId, group.name, Left(RobotFailure.UnknownRobot(robotId)))
+          case Acquire(_, _, group, replyTo) => replyTo ! LeaseResult(robotId, group, Left(RobotFailure.UnknownRobot(robotId)))
           case _                             => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
         }
         Behaviors.same

@@ -11,7 +11,7 @@ import org.scalatest.LoneElement
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.wire.{RpcCall, RpcValue}
+import naogateway.wire.{Posture, RpcCall, RpcValue}
 
 class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing with LoneElement {
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 16)
@@ -146,7 +146,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val f = new Fixture
       val (app, _) = f.app("teleop", 1)
       f.execute(app, Operation.Head(0.3, 0.0)).expectMessageType[RobotMiddleware.OperationResult].result shouldBe
-        Left(RobotFailure.LeaseNotHeld(1, "head", None))
+        Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Head, None))
       f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
       val result = f.execute(app, Operation.Head(0.3, 0.0))
       val call = f.expectCall("motion.head")
@@ -161,7 +161,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(walker, ActuatorGroup.Walk).result shouldBe Right(())
       f.acquire(looker, ActuatorGroup.Head).result shouldBe Right(())
       f.execute(looker, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe
-        Left(RobotFailure.LeaseNotHeld(1, "walk", Some("walker")))
+        Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("walker")))
     }
     "let a higher priority preempt a lease, tell the loser, and refuse equal priority" in {
       val f = new Fixture
@@ -169,10 +169,10 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val (equal, _) = f.app("other", 1)
       val (high, _) = f.app("referee", 5)
       f.acquire(low, ActuatorGroup.Walk).result shouldBe Right(())
-      f.acquire(equal, ActuatorGroup.Walk).result shouldBe Left(RobotFailure.LeaseNotHeld(1, "walk", Some("follower")))
+      f.acquire(equal, ActuatorGroup.Walk).result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("follower")))
       f.acquire(high, ActuatorGroup.Walk).result shouldBe Right(())
-      lowEvents.expectMessage(AppEvent.LeasePreempted(1, "walk", "referee"))
-      f.execute(low, Operation.Stop()).receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1, "walk", Some("referee")))
+      lowEvents.expectMessage(AppEvent.LeasePreempted(1, ActuatorGroup.Walk, "referee"))
+      f.execute(low, Operation.Stop()).receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("referee")))
     }
     "keep a walk alive inside the robot's lease, and stop the robot when its app dies, freeing the lease" in {
       val f = new Fixture
@@ -202,7 +202,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.expectCall("motion.stop").replyTo ! CallResult(1, "motion.stop", Right(None))
       f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
       f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
-      f.execute(app, Operation.Posture("stand")).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
+      f.execute(app, Operation.Posture(Posture.Stand)).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
       f.execute(app, Operation.Head(0.1, 0.0))
       f.expectCall("motion.head")
       f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true))

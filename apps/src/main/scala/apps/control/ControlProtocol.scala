@@ -2,7 +2,7 @@ package apps.control
 
 import java.nio.charset.StandardCharsets
 
-import naogateway.wire.RpcValue
+import naogateway.wire.{Posture, RpcValue}
 
 /**
  * The control port's wire format (docs/architecture.md, "The control port"), shared by the gateway's
@@ -127,10 +127,18 @@ object ControlProtocol {
             m <- unescape(module)
             f <- unescape(method)
             ps <- params.foldLeft[Either[String, Vector[RpcValue]]](Right(Vector.empty)) { (acc, p) => acc.flatMap(v => readParam(p).map(v :+ _)) }
+            _ <- postureNamed(m, f, ps)
           } yield Request.Call(robot, m, f, ps)
         case _ => Left(s"unknown request '${printable(line.take(40))}'")
       }
   }
+
+  // A posture name is checked here, where the operator typed it, so a typo is answered at once and never moves a robot.
+  private def postureNamed(module: String, method: String, params: Vector[RpcValue]): Either[String, Unit] =
+    (module, method, params) match {
+      case ("motion", "posture", Vector(RpcValue.Text(name))) => Posture.target(name).map(_ => ())
+      case _                                                  => Right(())
+    }
 
   private def readParam(word: String): Either[String, RpcValue] =
     if (word.startsWith("n:")) {

@@ -291,6 +291,6 @@ object ControlServer {
     val rtt = stats.flatMap(_.rttMillis).fold("-")(v => f"$v%.1f ms")
     val loss = stats.fold("-")(s => f"${s.lossEstimate * 100}%.0f %%")
     f"${r.robotId}%-4d $address%-22s ${if (r.online) "online" else "offline"}%-8s ${r.quality.name}%-9s " +
-      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.getOrElse("-")}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss"
+      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.fold("-")(_.name)}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss"
   }
 }

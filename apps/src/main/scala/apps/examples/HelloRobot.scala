@@ -4,6 +4,7 @@ import scala.concurrent.duration._
 
 import akka.actor.typed.ActorSystem
 import akka.actor.typed.scaladsl.Behaviors
+import naogateway.wire.Posture
 import robotmiddleware.cluster.MiddlewareCluster
 import robotmiddleware.{ActuatorGroup, RobotClient}
 
@@ -15,7 +16,7 @@ object HelloRobot {
     val done = for {
       robot <- RobotClient(system, "hello-robot", priority = 1)
       _ <- robot.acquire(1, ActuatorGroup.Walk, ActuatorGroup.Speech)
-      _ <- robot.posture(1, "stand")
+      _ <- robot.posture(1, Posture.Stand)
       _ <- robot.say(1, "Hello, I am robot 1")
       _ <- robot.walk(1, 0.1, 0.0, 0.0)
       _ <- akka.pattern.after(2.seconds)(robot.stop(1))(system)

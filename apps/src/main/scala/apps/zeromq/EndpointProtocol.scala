@@ -6,9 +6,9 @@ import scala.util.control.NonFatal
 
 import com.google.protobuf.{ByteString, CodedInputStream, WireFormat}
 
-import naogateway.proto.{HaViMoRegionFrame, Position, RobotHealth, Status}
+import naogateway.proto.HaViMoRegionFrame
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
-import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
+import naogateway.wire.{HaViMo, MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 import naogateway.{RobotSnapshot, VisionFrame}
 import robotmiddleware.{ActuatorGroup, Operation, RobotFailure}
 
@@ -126,13 +126,12 @@ object EndpointProtocol {
   private def groups(call: RpcCall)(route: Vector[ActuatorGroup] => Route): Either[String, Route] = {
     val names = texts(call)
     if (names.isEmpty || names.length != call.params.length)
-      Left(s"$Malformed${call.name} takes one or more group names (${ActuatorGroup.names.toVector.sorted.mkString(", ")})")
+      Left(s"$Malformed${call.name} takes one or more group names (${ActuatorGroup.all.map(_.name).mkString(", ")})")
     else
-      names.find(n => !ActuatorGroup.names(n)) match {
-        case Some(unknown) =>
-          Left(s"${Malformed}unknown actuator group '$unknown' (${ActuatorGroup.names.toVector.sorted.mkString(", ")})")
-        case None => Right(route(names.distinct.map(ActuatorGroup(_))))
-      }
+      names.distinct
+        .foldLeft[Either[String, Vector[ActuatorGroup]]](Right(Vector.empty))((done, n) => done.flatMap(gs => ActuatorGroup.parse(n).map(gs :+ _)))
+        .left.map(Malformed + _)
+        .map(route)
   }
 
   /** What `request` asks for, or the error text of a call whose parameters cannot be right. */
@@ -158,8 +157,10 @@ object EndpointProtocol {
           .flatMap(v => execute(Operation.Arms(v(0), v(1), v(2), v(3))))
       case ("motion", "posture") =>
         call.params match {
-          case Vector(RpcValue.Text(name)) => execute(Operation.Posture(name))
-          case other => Left(s"${Malformed}motion.posture takes one text (sit, stand or crouch), got ${describe(other)}")
+          case Vector(RpcValue.Text(name)) =>
+            Posture.target(name).left.map(Malformed + _).flatMap(target => execute(Operation.Posture(target)))
+          case other =>
+            Left(s"${Malformed}motion.posture takes one text (${Posture.targets.map(_.name).mkString(", ")}), got ${describe(other)}")
         }
       case ("speech", "say") =>
         call.params match {
@@ -190,34 +191,17 @@ object EndpointProtocol {
     val snapshot = result.toOption.flatMap(_.snapshot)
     MessageContents(
       robotId,
-      status = snapshot.map(status),
-      robotHealth = snapshot.map(health),
+      status = snapshot.map(_.report.status),
+      robotHealth = snapshot.map(_.report.health),
       rpcResponse = Some(RpcReply(result.map(_.value), callId).toProto)
     ).toProtobuf
   }
-
-  private def status(s: RobotSnapshot): Status = Status(
-    timestamp = s.uptimeMillis,
-    teamID = s.teamId,
-    timeOnline = s.uptimeMillis.map(ms => (ms / 1000L).toInt),
-    robotPosition = s.position.map { case (x, y, r) => Position(Some(x), Some(y), Some(r.toFloat)) },
-    activeAgent = s.agent,
-    activeRole = s.role,
-    currentState = s.posture
-  )
-
-  private def health(s: RobotSnapshot): RobotHealth = RobotHealth(
-    batteryVoltage = s.batteryVoltage.map(_.toFloat),
-    posture = s.posture,
-    uptimeMs = s.uptimeMillis.map(_.toInt),
-    bootId = s.bootId
-  )
 
   /** The frames of a status publication: topic, the keep-alive as `Message` with `status` and `robotHealth`, link quality. */
   def statusFrames(s: RobotSnapshot): Vector[Array[Byte]] =
     Vector(
       utf8(statusTopic(s.robotId)),
-      MessageContents(s.robotId, status = Some(status(s)), robotHealth = Some(health(s))).toProtobuf,
+      s.report.contents(s.robotId).toProtobuf,
       utf8(s.quality.name)
     )
 

@@ -293,7 +293,7 @@ object ZeroMqEndpoint {
               case Stop()                 => robots.stop(robotId).map(_ => done)
               case Head(pan, tilt)        => robots.head(robotId, pan, tilt).map(_ => done)
               case Arms(ls, le, rs, re)   => robots.arms(robotId, ls, le, rs, re).map(_ => done)
-              case Posture(p)             => robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached))))
+              case Posture(p)             => robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached.name))))
               case Say(text)              => robots.say(robotId, text).map(_ => done)
               case RawCall(module, method, params) => robots.call(robotId, module, method, params: _*).map(Answer(_))
             }

@@ -68,6 +68,10 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       ControlProtocol.readRequest("call 1 motion getPosture n:0x10") shouldBe Left("'n:0x10' is not a number parameter")
       ControlProtocol.readRequest("call 1 motion getPosture 3") shouldBe Left("parameter '3' is not n:, f: or t:")
       ControlProtocol.readRequest("watch 1 0") shouldBe Left("'0' is not a number of seconds")
+      ControlProtocol.readRequest("call 1 motion posture t:dance") shouldBe Left("unknown posture 'dance' (sit, stand, crouch)")
+      ControlProtocol.readRequest("call 1 motion posture t:walking") shouldBe Left("unknown posture 'walking' (sit, stand, crouch)")
+      ControlProtocol.readRequest("call 1 motion posture t:crouch") shouldBe
+        Right(Request.Call(1, "motion", "posture", Vector(RpcValue.Text("crouch"))))
       ControlProtocol.readRequest("status\r") shouldBe Right(Request.Status)
     }
 

@@ -9,7 +9,7 @@ import scala.jdk.CollectionConverters._
 import akka.stream.scaladsl.Source
 import akka.{Done, NotUsed}
 
-import naogateway.wire.RpcValue
+import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
@@ -26,7 +26,7 @@ final class FleetStub(robots: Int) extends RobotInterface {
   def history: Vector[String] = seen.asScala.toVector
 
   private def snapshot(id: Int) =
-    RobotSnapshot(id, new InetSocketAddress("127.0.0.1", 20000 + id), role = Some("striker"), posture = Some("sit"),
+    RobotSnapshot(id, new InetSocketAddress("127.0.0.1", 20000 + id), role = Some("striker"), posture = Some(Posture.Sit),
       batteryVoltage = Some(12.25), online = id % 10 != 0, quality = if (id % 10 != 0) LinkQuality.Good else LinkQuality.Offline)
 
   private def known(id: Int): Either[Throwable, Int] = if (id >= 1 && id <= robots) Right(id) else Left(RobotFailure.UnknownRobot(id))
@@ -54,7 +54,7 @@ final class FleetStub(robots: Int) extends RobotInterface {
   def stop(robotId: Int): Future[Done] = unused
   def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = unused
   def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] = unused
-  def posture(robotId: Int, posture: String): Future[String] = unused
+  def posture(robotId: Int, target: Posture.Target): Future[Posture] = unused
   def say(robotId: Int, text: String): Future[Done] = unused
 
   def status(robotId: Int): Source[RobotSnapshot, NotUsed] =

@@ -13,7 +13,7 @@ import akka.stream.scaladsl.Source
 import akka.{Done, NotUsed}
 
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
-import naogateway.wire.{HaViMoRegion, RpcValue}
+import naogateway.wire.{HaViMoRegion, Posture, RpcValue}
 import naogateway.{LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
 
@@ -36,7 +36,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   val visionEnded = new AtomicInteger
 
   val snapshot: RobotSnapshot = RobotSnapshot(7, new InetSocketAddress("127.0.0.1", 3838), teamId = Some(1), role = Some("striker"),
-    posture = Some("stand"), batteryVoltage = Some(12.3), uptimeMillis = Some(5000L), online = true, quality = LinkQuality.Good)
+    posture = Some(Posture.Stand), batteryVoltage = Some(12.3), uptimeMillis = Some(5000L), online = true, quality = LinkQuality.Good)
 
   private def failure(robotId: Int, operation: String): Option[Throwable] = robotId match {
     case 99 => Some(RobotFailure.UnknownRobot(99))
@@ -66,7 +66,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
     calls.add(s"acquire $robotId ${groups.map(_.name).mkString(",")}")
     robotId match {
       case 99 => Future.failed(RobotFailure.UnknownRobot(99))
-      case 9  => Future.failed(RobotFailure.LeaseNotHeld(9, groups.head.name, Some("referee")))
+      case 9  => Future.failed(RobotFailure.LeaseNotHeld(9, groups.head, Some("referee")))
       case _  => Future.successful(Done)
     }
   }
@@ -78,7 +78,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   def stop(robotId: Int): Future[Done] = answer(robotId, "stop", Done)
   def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = answer(robotId, f"head $pan%.1f $tilt%.1f", Done)
   def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] = answer(robotId, "arms", Done)
-  def posture(robotId: Int, posture: String): Future[String] = answer(robotId, s"posture $posture", posture)
+  def posture(robotId: Int, target: Posture.Target): Future[Posture] = answer(robotId, s"posture ${target.name}", target)
   def say(robotId: Int, text: String): Future[Done] = answer(robotId, s"say $text", Done)
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
     answer(robotId, s"call $module.$method", Some(RpcValue.Text(s"$robotId:$module.$method(${params.mkString(",")})")))

@@ -18,7 +18,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import org.zeromq.{SocketType, ZContext, ZMQ, ZMsg}
 
 import naogateway.wire.gamecontroller.{GameControllerCodec, GameState}
-import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
+import naogateway.wire.{HaViMo, MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 
 /** Requests and replies as a client sees them. */
 object EndpointClient {
@@ -140,7 +140,7 @@ class ZeroMqEndpointSpec
       hex(EndpointProtocol.reply(20, Some(1L), Right(Answer(Some(RpcValue.Text("stand")))))) shouldBe example("zmq-reply")
       EndpointProtocol.parse(request(20, "motion", "posture", Vector(RpcValue.Text("stand")), callId = 1))
         .flatMap(r => EndpointProtocol.route(r).left.map(e => Unreadable(20, None, e))) shouldBe
-        Right(Route.Execute(20, robotmiddleware.Operation.Posture("stand")))
+        Right(Route.Execute(20, robotmiddleware.Operation.Posture(Posture.Stand)))
     }
   }
 

@@ -51,7 +51,7 @@ final case class FaithfulLink(
     val caughtUp = advance(now)
     val t = math.max(now, caughtUp.link.module.clock)
     val remote = remoteOf(from)
-    val datagram = gs1500m.Datagram(ServerCid, remote, ArraySeq.unsafeWrapArray(bytes))
+    val datagram = gs1500m.AirDatagram(ServerCid, remote, ArraySeq.unsafeWrapArray(bytes))
     val step = caughtUp.link.module.arrive(datagram, t)
     caughtUp.copy(link = caughtUp.link.copy(module = step.module).wake(t))
   }

@@ -41,21 +41,6 @@ final case class FirmwareSettings(
     s"the HaViMo2 delivers at most ${HaViMo.MaxFramesPerSecond} frames/s")
 }
 
-/** The robot's postures as it reports them (`motion.getPosture`, RobotHealth.posture, Status.currentState). */
-sealed abstract class Posture(val name: String) extends Product with Serializable
-
-/** Every posture a simulated robot can be in. */
-object Posture {
-  case object Sit extends Posture("sit")
-  case object Stand extends Posture("stand")
-  case object Crouch extends Posture("crouch")
-  case object Walking extends Posture("walking")
-  case object Moving extends Posture("moving")
-
-  /** Postures a `motion.posture` call may ask for. */
-  val targets: Map[String, Posture] = Map("sit" -> Sit, "stand" -> Stand, "crouch" -> Crouch)
-}
-
 /** Where the firmware sends a datagram. */
 sealed trait Destination extends Product with Serializable
 
@@ -72,8 +57,8 @@ object Destination {
 /** A datagram the firmware wants on the air. */
 final case class Outgoing(bytes: Array[Byte], to: Destination)
 
-/** Counters of what a simulated firmware saw; tests read them. */
-final case class FirmwareCounters(
+/** Stats of what a simulated firmware saw; tests read them. */
+final case class FirmwareStats(
     datagramsIn: Long = 0,
     datagramsOut: Long = 0,
     rpcCalls: Long = 0,
@@ -110,7 +95,7 @@ final case class FirmwareState(
     frame: Int,
     said: Vector[String],
     game: Option[GameControlData],
-    counters: FirmwareCounters
+    stats: FirmwareStats
 ) {
 
   /** Milliseconds since the firmware booted. */
@@ -189,7 +174,7 @@ object RobotFirmware {
       frame = 0,
       said = Vector.empty,
       game = None,
-      counters = FirmwareCounters()
+      stats = FirmwareStats()
     )
 
   /** The firmware after a restart: same settings and battery, fresh session, debug options off. */
@@ -222,14 +207,14 @@ object RobotFirmware {
       s = next.copy(nextCameraAt = nextSlot(s.nextCameraAt, s.settings.cameraInterval, now))
     }
     val sent = out.result()
-    (s.copy(counters = s.counters.copy(datagramsOut = s.counters.datagramsOut + sent.length)), sent)
+    (s.copy(stats = s.stats.copy(datagramsOut = s.stats.datagramsOut + sent.length)), sent)
   }
 
   /** Handles one datagram from `from` at `now` (after advancing to `now`). */
   def receive(state: FirmwareState, bytes: Array[Byte], from: InetSocketAddress, now: Long)
       : (FirmwareState, Vector[Outgoing]) = {
     val (advanced, due) = advance(state, now)
-    val s = advanced.copy(counters = advanced.counters.copy(datagramsIn = advanced.counters.datagramsIn + 1))
+    val s = advanced.copy(stats = advanced.stats.copy(datagramsIn = advanced.stats.datagramsIn + 1))
     val (next, replies) = Datagram.classify(bytes) match {
       case Datagram.FuRemoteFrame(b) =>
         MessageContents.decodeFrame(b) match {
@@ -243,7 +228,7 @@ object RobotFirmware {
         }
       case _ => (rejected(s), Vector.empty)
     }
-    (next.copy(counters = next.counters.copy(datagramsOut = next.counters.datagramsOut + replies.length)), due ++ replies)
+    (next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length)), due ++ replies)
   }
 
   /** Handles one decoded message: RPC calls and debug option commands; anything else is ignored. */
@@ -260,7 +245,7 @@ object RobotFirmware {
 
   private def onGameController(s: FirmwareState, data: GameControlData, from: InetSocketAddress)
       : (FirmwareState, Vector[Outgoing]) = {
-    val counted = s.copy(game = Some(data), counters = s.counters.copy(gameControllerPackets = s.counters.gameControllerPackets + 1))
+    val counted = s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))
     // Robots answer each round's version-8 packet for their team with an "alive" return packet to port 3838;
     // the version-7 copy of the same round needs no second answer.
     if (data.version != GameControlVersion.V8 || data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
@@ -297,7 +282,7 @@ object RobotFirmware {
   }
 
   private def onCall(s0: FirmwareState, call: RpcCall, pending: PendingReply): (FirmwareState, Vector[Outgoing]) = {
-    val s = s0.copy(counters = s0.counters.copy(rpcCalls = s0.counters.rpcCalls + 1))
+    val s = s0.copy(stats = s0.stats.copy(rpcCalls = s0.stats.rpcCalls + 1))
     def answer(result: Either[String, Option[RpcValue]], next: FirmwareState = s) =
       (next, Vector(reply(next, pending, result)))
     val ok = Right(Some(RpcValue.Flag(true)))
@@ -335,11 +320,11 @@ object RobotFirmware {
       case (Motion, "posture") =>
         call.params match {
           case Vector(RpcValue.Text(name)) =>
-            Posture.targets.get(name) match {
-              case None => answer(Left(RpcReply.badParameters(s"unknown posture '$name' (sit, stand, crouch)")))
-              case Some(_) if s.change.isDefined => answer(Left(s"busy: ${Posture.Moving.name}"))
-              case Some(target) if target == s.posture => answer(Right(Some(RpcValue.Text(target.name))))
-              case Some(target) =>
+            Posture.target(name) match {
+              case Left(unknown) => answer(Left(RpcReply.badParameters(unknown)))
+              case Right(_) if s.change.isDefined => answer(Left(s"busy: ${Posture.Moving.name}"))
+              case Right(target) if target == s.posture => answer(Right(Some(RpcValue.Text(target.name))))
+              case Right(target) =>
                 val duration = target match {
                   case Posture.Stand  => s.settings.standUpTime
                   case Posture.Sit    => s.settings.sitDownTime
@@ -372,7 +357,7 @@ object RobotFirmware {
     Outgoing(encode(contents, pending.form), pending.to)
   }
 
-  private def rejected(s: FirmwareState): FirmwareState = s.copy(counters = s.counters.copy(rejected = s.counters.rejected + 1))
+  private def rejected(s: FirmwareState): FirmwareState = s.copy(stats = s.stats.copy(rejected = s.stats.rejected + 1))
 
   private def nextSlot(previous: Long, interval: FiniteDuration, now: Long): Long = {
     val next = previous + interval.toNanos
@@ -397,19 +382,17 @@ object RobotFirmware {
     MessageContents.encodeFrame(contents, form).fold(e => throw new IllegalStateException(e.describe), identity)
 
   /** The keep-alive: Status as FU-Remote expects it, plus this project's RobotHealth. */
-  def keepAlive(s: FirmwareState): MessageContents = {
-    val status = Status(
-      timestamp = Some(s.uptimeMillis),
-      teamID = Some(s.settings.teamId),
-      timeOnline = Some((s.uptimeMillis / 1000L).toInt),
-      robotPosition = Some(Position(Some((s.pose.x * 1000).round.toInt), Some((s.pose.y * 1000).round.toInt), Some(s.pose.theta.toFloat))),
-      activeAgent = Some(s.settings.agent),
-      activeRole = Some(s.settings.role),
-      currentState = Some(s.posture.name)
-    )
-    val health = RobotHealth(Some(s.battery.toFloat), Some(s.posture.name), Some((s.uptimeMillis & 0xffffffffL).toInt), Some(s.bootId))
-    MessageContents(s.settings.robotId, status = Some(status), robotHealth = Some(health))
-  }
+  def keepAlive(s: FirmwareState): MessageContents =
+    RobotReport(
+      teamId = Some(s.settings.teamId),
+      role = Some(s.settings.role),
+      agent = Some(s.settings.agent),
+      posture = Some(s.posture),
+      batteryVoltage = Some(s.battery),
+      uptimeMillis = Some(s.uptimeMillis),
+      bootId = Some(s.bootId),
+      position = Some(((s.pose.x * 1000).round.toInt, (s.pose.y * 1000).round.toInt, s.pose.theta))
+    ).contents(s.settings.robotId)
 
   private def debugData(s: FirmwareState): Vector[DebugData] = {
     val ts = Some(s.uptimeMillis)

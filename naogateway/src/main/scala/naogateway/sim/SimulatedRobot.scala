@@ -9,8 +9,8 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerSch
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.UdpLink
-import naogateway.sim.gs1500m.{Cm530Config, Cm530Stats, Gs1500mConfig, Gs1500mCounters}
-import naogateway.wire.{Datagram, MessageContents, RpcCall, WireLimits}
+import naogateway.sim.gs1500m.{Cm530Config, Cm530Stats, Gs1500mConfig, Gs1500mStats}
+import naogateway.wire.{Datagram, MessageContents, Posture, RpcCall, WireLimits}
 import naogateway.wire.stream.StreamSettings
 
 /** Settings of one simulated robot on a real UDP socket.
@@ -72,7 +72,7 @@ object SimulatedRobotSettings {
 }
 
 /** What a simulated robot counted on its socket, over its whole life (power cycles included). */
-final case class RobotCounters(
+final case class RobotStats(
     received: Long = 0,
     sent: Long = 0,
     droppedWhileOff: Long = 0,
@@ -89,8 +89,8 @@ final case class ReceivedCall(atNanos: Long, call: RpcCall)
   * @param online `false` while the robot is powered off or its module boots (it neither sends nor answers)
   * @param onlineAgainIn while offline, the time left until the module answers again
   * @param uptimeMillis since the last power-up (or reset)
-  * @param module counters of the GS1500M model since the last power-up (`None` without the faithful link)
-  * @param cpu counters of the CM-530 main loop since the last power-up (`None` without the faithful link)
+  * @param module stats of the GS1500M model since the last power-up (`None` without the faithful link)
+  * @param cpu stats of the CM-530 main loop since the last power-up (`None` without the faithful link)
   */
 final case class RobotView(
     robotId: Int,
@@ -108,9 +108,9 @@ final case class RobotView(
     ball: (Double, Double),
     debugEnabled: Set[String],
     said: Vector[String],
-    firmware: FirmwareCounters,
-    counters: RobotCounters,
-    module: Option[Gs1500mCounters],
+    firmware: FirmwareStats,
+    stats: RobotStats,
+    module: Option[Gs1500mStats],
     cpu: Option[Cm530Stats]
 )
 
@@ -256,7 +256,7 @@ object SimulatedRobot {
       firmware: FirmwareState,
       link: Option[FaithfulLink],
       stream: Option[RobotStream],
-      counters: RobotCounters,
+      stats: RobotStats,
       armedAt: Long
   )
 }
@@ -288,7 +288,7 @@ private final class SimulatedRobot(
     val t = now()
     val booted = RobotFirmware.boot(settings.firmware, t)
     val firmware = booted.copy(nextKeepAliveAt = t + settings.keepAlivePhase.toNanos)
-    val robot = Robot(firmware, freshLink(t), settings.stream.map(_(t)), RobotCounters(), Long.MinValue)
+    val robot = Robot(firmware, freshLink(t), settings.stream.map(_(t)), RobotStats(), Long.MinValue)
     online(proceed(robot, t, None))
   }
 
@@ -302,7 +302,7 @@ private final class SimulatedRobot(
       case WakeUp =>
         after(robot.copy(armedAt = Long.MinValue), None)
       case FromSocket(UdpLink.Received(bytes, from)) =>
-        val counted = robot.copy(counters = robot.counters.copy(received = robot.counters.received + 1))
+        val counted = robot.copy(stats = robot.stats.copy(received = robot.stats.received + 1))
         after(counted, Some(bytes -> from))
       case GetReceivedCalls(replyTo) =>
         replyTo ! receivedCalls
@@ -337,15 +337,15 @@ private final class SimulatedRobot(
     if (!reset) online(arm(robot, t))
     else {
       context.log.info("Simulated robot [{}] restarts on request (boot {})", id, robot.firmware.bootId)
-      flushing(robot.copy(counters = robot.counters.copy(powerCycles = robot.counters.powerCycles + 1)))
+      flushing(robot.copy(stats = robot.stats.copy(powerCycles = robot.stats.powerCycles + 1)))
     }
 
   // After `system.reset`: the reply must still cross the module before the robot restarts and falls silent.
   private def flushing(robot: Robot): Behavior[Command] = {
     val t = now()
     val drained = robot.link.map(_.advance(t)).fold(robot) { step =>
-      val sent = send(robot.counters, step.transmitted.map(tx => Out(tx.bytes, tx.to)))
-      robot.copy(link = Some(step.link), counters = sent)
+      val sent = send(robot.stats, step.transmitted.map(tx => Out(tx.bytes, tx.to)))
+      robot.copy(link = Some(step.link), stats = sent)
     }
     val pending = drained.link.exists(l => l.queued.nonEmpty || l.onLine.nonEmpty)
     if (!pending) goOffline(drained, settings.resetBootDelay, t)
@@ -375,15 +375,15 @@ private final class SimulatedRobot(
   }
 
   private def flushingCounted(robot: Robot): Behavior[Command] =
-    flushing(robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1)))
+    flushing(robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1)))
 
   private def powerOff(robot: Robot, bootDelay: FiniteDuration, why: String): Behavior[Command] = {
     val t = now()
     // Battery and pose run up to the moment the power goes; whatever was due then is lost with it.
     val restarted = RobotFirmware.restart(RobotFirmware.advance(robot.firmware, t)._1, t)
     context.log.info("Simulated robot [{}] {}: silent for {} (boot {})", id, why, bootDelay, restarted.bootId)
-    val counters = robot.counters.copy(powerCycles = robot.counters.powerCycles + 1)
-    goOffline(robot.copy(firmware = restarted, counters = counters), bootDelay, t)
+    val stats = robot.stats.copy(powerCycles = robot.stats.powerCycles + 1)
+    goOffline(robot.copy(firmware = restarted, stats = stats), bootDelay, t)
   }
 
   private def goOffline(robot: Robot, bootDelay: FiniteDuration, t: Long): Behavior[Command] = {
@@ -402,7 +402,7 @@ private final class SimulatedRobot(
         val up = robot.copy(link = freshLink(t), stream = settings.stream.map(_(t)))
         online(proceed(up, t, None))
       case FromSocket(UdpLink.Received(_, _)) =>
-        offline(robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1)), upAt)
+        offline(robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1)), upAt)
       case GetReceivedCalls(replyTo) =>
         replyTo ! receivedCalls
         Behaviors.same
@@ -494,7 +494,7 @@ private final class SimulatedRobot(
       // Stream segments the robot sends; like everything it sends, they take the radio path below.
       val segments = Vector.newBuilder[Out]
       deliveries.foreach { d =>
-        if (reset) robot = robot.copy(counters = robot.counters.copy(droppedWhileOff = robot.counters.droppedWhileOff + 1))
+        if (reset) robot = robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1))
         else {
           val at = math.max(d.at, robot.firmware.now)
           handle(robot, d.bytes, d.from.getOrElse(gateway), at) match {
@@ -538,7 +538,7 @@ private final class SimulatedRobot(
         deliveries = Vector.empty
       }
     }
-    robot = robot.copy(counters = send(robot.counters, out.result()))
+    robot = robot.copy(stats = send(robot.stats, out.result()))
     (robot, reset)
   }
 
@@ -546,7 +546,7 @@ private final class SimulatedRobot(
   private def handle(robot: Robot, bytes: Array[Byte], from: InetSocketAddress, at: Long): (Robot, Vector[Out], Vector[Outgoing]) =
     Datagram.classify(bytes) match {
       case Datagram.StreamSegment(segment) =>
-        val counted = robot.copy(counters = robot.counters.copy(streamSegments = robot.counters.streamSegments + 1))
+        val counted = robot.copy(stats = robot.stats.copy(streamSegments = robot.stats.streamSegments + 1))
         counted.stream.fold((counted, Vector.empty[Out], Vector.empty[Outgoing])) { stream =>
           val step = stream.receive(segment, at)
           var next = counted.copy(stream = Some(step.stream))
@@ -584,11 +584,11 @@ private final class SimulatedRobot(
   }
 
   /** Puts datagrams on the socket; nothing larger than the module's 1400 bytes ever leaves a robot. */
-  private def send(counters: RobotCounters, out: Vector[Out]): RobotCounters = {
+  private def send(stats: RobotStats, out: Vector[Out]): RobotStats = {
     val (fit, oversize) = out.partition(_.bytes.length <= WireLimits.MaxDatagramBytes)
     fit.foreach(o => socket ! UdpLink.Send(o.bytes, o.to))
     if (oversize.nonEmpty) context.log.warn("Simulated robot [{}] dropped {} oversize datagram(s)", id, oversize.size)
-    counters.copy(sent = counters.sent + fit.size, oversizeDropped = counters.oversizeDropped + oversize.size)
+    stats.copy(sent = stats.sent + fit.size, oversizeDropped = stats.oversizeDropped + oversize.size)
   }
 
   private def movedBall(firmware: FirmwareState, x: Double, y: Double): FirmwareState =
@@ -612,9 +612,9 @@ private final class SimulatedRobot(
       ball = (f.settings.scene.ballX, f.settings.scene.ballY),
       debugEnabled = f.debugEnabled,
       said = f.said,
-      firmware = f.counters,
-      counters = robot.counters,
-      module = robot.link.map(_.module.counters),
+      firmware = f.stats,
+      stats = robot.stats,
+      module = robot.link.map(_.module.stats),
       cpu = robot.link.map(_.cpu.stats)
     )
   }

@@ -3,9 +3,9 @@ package naogateway.sim
 import scala.collection.immutable.{ArraySeq, Queue}
 import scala.concurrent.duration._
 
-import naogateway.sim.gs1500m.{Cm530Firmware, Cm530Stats, FirmwareEvent, Gs1500mCounters, Gs1500mModule, ModuleEvent, OverflowExperiment, Outgoing, SeededRandom}
+import naogateway.sim.gs1500m.{Cm530Firmware, Cm530Stats, FirmwareEvent, Gs1500mStats, Gs1500mModule, ModuleEvent, OverflowExperiment, Outgoing, SeededRandom}
 import naogateway.wire.Datagram
-import naogateway.wire.stream.{SecureStream, StreamCounters, StreamSettings}
+import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
 /** The thesis's overflow experiment (SPEC §6) over the secure stream, through the same GS1500M and CM-530 models
   * as the raw run of [[OverflowExperiment]], in simulated time.
@@ -61,10 +61,10 @@ object StreamOverflowExperiment {
     * @param completed whether every payload was delivered and acknowledged before a limit struck
     * @param lastDeliveryAt simulated nanoseconds until the robot delivered its last payload (0 if none)
     * @param finishedAt simulated nanoseconds at which the run ended (all acknowledged, or a limit)
-    * @param gateway the gateway-side endpoint's counters (retransmissions, timeouts, …)
-    * @param robot the robot-side endpoint's counters (duplicates dropped, ACKs sent, …)
-    * @param module the GS1500M's counters (losses, overwrites, peak buffer use)
-    * @param cpu the CM-530 loop's counters
+    * @param gateway the gateway-side endpoint's stats (retransmissions, timeouts, …)
+    * @param robot the robot-side endpoint's stats (duplicates dropped, ACKs sent, …)
+    * @param module the GS1500M's stats (losses, overwrites, peak buffer use)
+    * @param cpu the CM-530 loop's stats
     * @param events events processed
     */
   final case class Result(
@@ -75,9 +75,9 @@ object StreamOverflowExperiment {
       completed: Boolean,
       lastDeliveryAt: Long,
       finishedAt: Long,
-      gateway: StreamCounters,
-      robot: StreamCounters,
-      module: Gs1500mCounters,
+      gateway: StreamStats,
+      robot: StreamStats,
+      module: Gs1500mStats,
       cpu: Cm530Stats,
       events: Long
   ) {
@@ -171,9 +171,9 @@ object StreamOverflowExperiment {
         completed = done,
         lastDeliveryAt = lastDeliveryAt,
         finishedAt = math.min(now, timeLimit),
-        gateway = gateway.counters,
-        robot = robot.counters,
-        module = module.counters,
+        gateway = gateway.stats,
+        robot = robot.stats,
+        module = module.stats,
         cpu = firmware.stats,
         events = events
       )
@@ -190,7 +190,7 @@ object StreamOverflowExperiment {
       case ToModule =>
         val (arrival, rest) = toModule.dequeue
         toModule = rest
-        val datagram = gs1500m.Datagram(ex.cid, Some(ex.peer), ArraySeq.unsafeWrapArray(arrival._2))
+        val datagram = gs1500m.AirDatagram(ex.cid, Some(ex.peer), ArraySeq.unsafeWrapArray(arrival._2))
         val step = module.arrive(datagram, now)
         module = step.module
         onModule(step.events)

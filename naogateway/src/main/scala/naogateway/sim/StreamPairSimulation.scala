@@ -5,7 +5,7 @@ import java.util.SplittableRandom
 import scala.collection.mutable
 import scala.concurrent.duration._
 
-import naogateway.wire.stream.{SecureStream, StreamCounters, StreamSettings}
+import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
 /** A deterministic discrete-event simulation of two secure-stream endpoints, A and B, joined by a seeded lossy
   * channel, for tests and benchmarks.
@@ -141,7 +141,7 @@ object StreamPairSimulation {
   final case class Expiry(id: Long, at: Long)
 
   /** What one direction of the channel did. */
-  final case class LinkStats(datagrams: Long, bytes: Long, lost: Long, duplicated: Long, reordered: Long)
+  final case class DirectionStats(datagrams: Long, bytes: Long, lost: Long, duplicated: Long, reordered: Long)
 
   /** The outcome for one endpoint: what it received and what became of what it sent.
     *
@@ -153,8 +153,8 @@ object StreamPairSimulation {
     *   own payloads that expired
     * @param refused
     *   own sends the endpoint refused
-    * @param counters
-    *   the endpoint's counters at the end
+    * @param stats
+    *   the endpoint's stats at the end
     * @param finalState
     *   the endpoint at the end, for inspecting the round-trip estimate and the like
     * @param link
@@ -165,9 +165,9 @@ object StreamPairSimulation {
       acknowledged: Vector[Long],
       expired: Vector[Expiry],
       refused: Vector[SecureStream.SendRefused],
-      counters: StreamCounters,
+      stats: StreamStats,
       finalState: SecureStream,
-      link: LinkStats
+      link: DirectionStats
   ) {
 
     /** The delivered payloads in order. */
@@ -285,7 +285,7 @@ object StreamPairSimulation {
       }
     }
 
-    def stats: LinkStats = LinkStats(datagrams, bytes, lost, duplicated, reordered)
+    def stats: DirectionStats = DirectionStats(datagrams, bytes, lost, duplicated, reordered)
   }
 
   private final class Run(config: SimConfig, sends: Vector[ScheduledSend]) {
@@ -388,7 +388,7 @@ object StreamPairSimulation {
         endpoint.acknowledged.result(),
         endpoint.expired.result(),
         endpoint.refused.result(),
-        endpoint.state.counters,
+        endpoint.state.stats,
         endpoint.state,
         links(side).stats
       )

@@ -128,7 +128,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           atKickOff.gameRunning shouldBe true
           // Datagrams sent just before kick-off may still be on their way; once the robot has counted every one of
           // them, nothing is in flight any more.
-          eventually(timeout(10.seconds)) { f.view(robot).counters.received shouldBe atKickOff.datagramsOut }
+          eventually(timeout(10.seconds)) { f.view(robot).stats.received shouldBe atKickOff.datagramsOut }
           (1 to 5).foreach { _ =>
             call(connected, "system.ping").result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
           }
@@ -137,7 +137,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           val during = f.traffic()
           during.datagramsOut shouldBe atKickOff.datagramsOut
           during.refusedByRule should be >= atKickOff.refusedByRule + 5
-          f.view(robot).counters.received shouldBe atKickOff.datagramsOut
+          f.view(robot).stats.received shouldBe atKickOff.datagramsOut
           sendGameState(gc, f, GameState.Finished)
           f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
           call(connected, "system.ping").result.isRight shouldBe true

@@ -14,7 +14,7 @@ import org.zeromq.{SocketType, ZContext}
 import naogateway._
 import naogateway.sim.{FirmwareSettings, ZmqSimulatedRobot}
 import naogateway.wire.gamecontroller.GameState
-import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
+import naogateway.wire.{MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 
 object ZmqRobotLinkSpec {
 
@@ -132,7 +132,7 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
         gateway ! Gateway.Subscribe(events.ref)
         expectEvent(events, 10.seconds) { case RobotOnline(20, _) => () }
         val snapshot = expectEvent(events, 3.seconds) { case RobotStatusUpdated(s) if s.robotId == 20 => s }
-        snapshot.posture shouldBe Some("sit")
+        snapshot.posture shouldBe Some(Posture.Sit)
         snapshot.batteryVoltage.get shouldBe 12.4 +- 0.1
 
         val found = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
@@ -148,7 +148,7 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
           Right(Some(RpcValue.Flag(true)))
         call(connected, "heartbeat", "probe").result shouldBe
           Left(CallError.RobotError(20, RpcReply.unknownMethod("heartbeat", "probe")))
-        expectEvent(events, 2.seconds) { case RobotStatusUpdated(s) if s.posture.contains("stand") || s.posture.contains("walking") => () }
+        expectEvent(events, 2.seconds) { case RobotStatusUpdated(s) if s.posture.contains(Posture.Stand) || s.posture.contains(Posture.Walking) => () }
 
         robot.stop()
         // quiet-after + 3 probes = 3.6 s after the last keep-alive; the rest is slack for a loaded machine.

@@ -64,7 +64,7 @@ class FaithfulLinkSpec extends AnyWordSpec with Matchers with LoneElement {
       // ESC 'y' 0 "127.0.0.1 40000" TAB "0100": 23 header bytes + 100 at 46080 bytes/s, then 5.05 ms of handling.
       val expected = math.ceil(123 * 1e9 / 46080).toLong + Cm530Costs.Real.nanos(5.05)
       d.at shouldBe expected +- (1 * ms)
-      run.link.module.counters.readIntact shouldBe 1
+      run.link.module.stats.readIntact shouldBe 1
     }
 
     "put a frame on air at its destination after the CM-530's encode and send costs" in {
@@ -75,7 +75,7 @@ class FaithfulLinkSpec extends AnyWordSpec with Matchers with LoneElement {
       tx.to shouldBe peer
       tx.at should be >= Cm530Costs.Real.encodeAndSendNanos(200)
       tx.at should be < Cm530Costs.Real.encodeAndSendNanos(200) + 2 * ms
-      run.link.module.counters.onAir shouldBe 1
+      run.link.module.stats.onAir shouldBe 1
     }
 
     "keep every frame's destination, in order" in {
@@ -89,14 +89,14 @@ class FaithfulLinkSpec extends AnyWordSpec with Matchers with LoneElement {
     "lose or overwrite a burst of 1 kB datagrams, and deliver the same datagrams spaced out" in {
       val burst = (0 until 10).map(i => Arrive(i * 100000L, payload(1000, i)))
       val crowded = drive(fresh(), burst, 3000 * ms)
-      val c = crowded.link.module.counters
+      val c = crowded.link.module.stats
       (c.lost + c.overwritten) should be > 0L
       crowded.delivered.count(d => d.bytes.length == 1000) should be < 10
 
       val spaced = (0 until 10).map(i => Arrive(i * 100L * ms, payload(1000, i)))
       val calm = drive(fresh(), spaced, 3000 * ms)
-      calm.link.module.counters.lost shouldBe 0
-      calm.link.module.counters.overwritten shouldBe 0
+      calm.link.module.stats.lost shouldBe 0
+      calm.link.module.stats.overwritten shouldBe 0
       calm.delivered.map(_.bytes.head.toInt) shouldBe (0 until 10).toVector
     }
 

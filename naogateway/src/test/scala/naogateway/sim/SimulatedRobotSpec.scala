@@ -11,7 +11,7 @@ import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
-import naogateway.wire.{MessageContents, RpcValue, WireLimits}
+import naogateway.wire.{MessageContents, Posture, RpcValue, WireLimits}
 
 class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   import RpcValue._
@@ -167,8 +167,8 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       val view = state(robot)
       view.online shouldBe true
       view.bootId shouldBe 2
-      view.counters.powerCycles shouldBe 1
-      view.counters.droppedWhileOff should be >= 1L
+      view.stats.powerCycles shouldBe 1
+      view.stats.droppedWhileOff should be >= 1L
       stop(robot)
     }
 
@@ -248,7 +248,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         // The socket's buffer takes the whole burst; the snapshot is read once the robot has taken every datagram in.
         val crowded = eventually(timeout(10.seconds)) {
           val view = state(robot)
-          view.counters.received shouldBe 38
+          view.stats.received shouldBe 38
           view
         }
         val module = crowded.module.get
@@ -278,7 +278,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
           else None
         }
         reply shouldBe defined
-        state(robot).counters.streamSegments shouldBe 1
+        state(robot).stats.streamSegments shouldBe 1
         stop(robot)
 
         val (plain, plainAddress) = start(settings(gateway, FirmwareSettings(robotId = 13)))
@@ -286,7 +286,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         val heard = gateway.collectFor(500.millis)
         val frames = heard.flatMap(h => h.contents.toVector ++ MessageContents.decodeFrame(h.bytes.drop(2)).toOption.map(_._2))
         frames.flatMap(_.rpcResponse).flatMap(_.callId) should not contain 78
-        state(plain).counters.streamSegments shouldBe 1
+        state(plain).stats.streamSegments shouldBe 1
         stop(plain)
     }
   }

@@ -56,7 +56,7 @@ class SimulatedRobotStreamSpec extends ScalaTestWithActorTestKit with AnyWordSpe
         val view = state(robot)
         view.said shouldBe chunks
         view.said.mkString shouldBe loremIpsum
-        view.counters.streamSegments should be >= chunks.size.toLong
+        view.stats.streamSegments should be >= chunks.size.toLong
         view.module.map(_.readIntact).getOrElse(0L) should be >= chunks.size.toLong
         driver.replies.map(_.callId) shouldBe chunks.indices.map(i => Some(100L + i))
         all(driver.replies.map(_.result)) shouldBe Right(Some(RpcValue.Flag(true)))
@@ -72,7 +72,7 @@ class SimulatedRobotStreamSpec extends ScalaTestWithActorTestKit with AnyWordSpe
         driver.pumpUntil(5.seconds)(driver.replies.exists(_.callId.contains(500L))) shouldBe true
         withoutRepeats(driver.robotDataSequences.drop(before)) shouldBe Vector(0)
         driver.robotDataAcks.last shouldBe 0
-        state(robot).counters.powerCycles shouldBe 1
+        state(robot).stats.powerCycles shouldBe 1
         stop(robot)
       } finally gateway.close()
     }

@@ -19,8 +19,8 @@ class StreamPairSimulationSpec extends AnyWordSpec with Matchers {
       r.finishedAt,
       r.lastDeliveryAt,
       r.events,
-      r.a.counters,
-      r.b.counters,
+      r.a.stats,
+      r.b.stats,
       r.a.link,
       r.b.link,
       r.b.deliveries.map(d => (d.at, d.payload.toVector))
@@ -45,7 +45,7 @@ class StreamPairSimulationSpec extends AnyWordSpec with Matchers {
       a.lost.toDouble / a.datagrams shouldBe 0.2 +- 0.04
       a.duplicated.toDouble / (a.datagrams - a.lost) shouldBe 0.1 +- 0.03
       a.reordered.toDouble / (a.datagrams - a.lost + a.duplicated) shouldBe 0.3 +- 0.05
-      result.b.counters.duplicatesDropped should be > 0L
+      result.b.stats.duplicatesDropped should be > 0L
     }
 
     "queue datagrams behind each other on a link with a limited rate" in {

@@ -329,7 +329,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
         sent(skip1)) shouldBe lines("stream-skip").map(_.toVector)
       expiry.outputs.collect { case SecureStream.Expired(id) => id } shouldBe Vector(1L, 2L)
       skip1.outputs.collect { case SecureStream.Deliver(p) => new String(p, US_ASCII) } shouldBe Vector("c")
-      skip1.state.counters.skipped shouldBe 2
+      skip1.state.stats.skipped shouldBe 2
       done.outputs.collect { case SecureStream.Acknowledged(id) => id } shouldBe Vector(3L)
       done.state.inFlight shouldBe 0
     }

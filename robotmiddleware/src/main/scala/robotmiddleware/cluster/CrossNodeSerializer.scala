@@ -12,7 +12,7 @@ import scalapb.GeneratedMessage
 
 import naogateway._
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
-import naogateway.wire.{HaViMoGrid, HaViMoRegion, RpcValue}
+import naogateway.wire.{HaViMoGrid, HaViMoRegion, Posture, RpcValue}
 import robotmiddleware._
 import robotmiddleware.cluster.{proto => pb}
 
@@ -96,14 +96,14 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       )
       bytes(pb.OperationResult(robotId, operation, r))
     case RobotMiddleware.LeaseResult(robotId, group, result) =>
-      bytes(pb.LeaseResult(robotId, group, result.left.toOption.map(f => toProto(f))))
+      bytes(pb.LeaseResult(robotId, group.name, result.left.toOption.map(f => toProto(f))))
     case v: Vector[_] if v.forall(_.isInstanceOf[RobotSnapshot]) =>
       bytes(pb.RobotSnapshots(v.collect { case s: RobotSnapshot => toProto(s) }))
     case o: Operation                           => bytes(toProto(o))
     case f: RobotFailure                        => bytes(toProto(f))
     case SessionMessage.SubscribeAppEvents(subscriber) => bytes(pb.SubscribeAppEvents(refText(subscriber)))
     case SessionMessage.Close                   => Array.emptyByteArray
-    case AppEvent.LeasePreempted(robotId, group, byApp) => bytes(pb.LeasePreempted(robotId, group, byApp))
+    case AppEvent.LeasePreempted(robotId, group, byApp) => bytes(pb.LeasePreempted(robotId, group.name, byApp))
     case AppEvent.SafetyStop(robotId, reason)   => bytes(pb.SafetyStop(robotId, reason))
     case AppEvent.SafetyCleared(robotId)        => bytes(pb.SafetyCleared(robotId))
     case s: RobotSnapshot                       => bytes(toProto(s))
@@ -134,10 +134,10 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       RobotMiddleware.Execute(ref(m.app), m.robotId, fromProto(m.operation), ref(m.replyTo))
     case M.Acquire =>
       val m = pb.Acquire.parseFrom(bytes)
-      RobotMiddleware.Acquire(ref(m.app), m.robotId, ActuatorGroup(m.group), ref(m.replyTo))
+      RobotMiddleware.Acquire(ref(m.app), m.robotId, group(M.Acquire, m.group), ref(m.replyTo))
     case M.Release =>
       val m = pb.Release.parseFrom(bytes)
-      RobotMiddleware.Release(ref(m.app), m.robotId, ActuatorGroup(m.group))
+      RobotMiddleware.Release(ref(m.app), m.robotId, group(M.Release, m.group))
     case M.ListRobots => RobotMiddleware.ListRobots(ref(pb.ListRobots.parseFrom(bytes).replyTo))
     case M.WatchStatus =>
       val m = pb.WatchStatus.parseFrom(bytes)
@@ -161,7 +161,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       RobotMiddleware.OperationResult(m.robotId, m.operation, result)
     case M.LeaseResult =>
       val m = pb.LeaseResult.parseFrom(bytes)
-      RobotMiddleware.LeaseResult(m.robotId, m.group, m.failure.map(f => fromProto(f)).toLeft(()))
+      RobotMiddleware.LeaseResult(m.robotId, group(M.LeaseResult, m.group), m.failure.map(f => fromProto(f)).toLeft(()))
     case M.RobotSnapshots => pb.RobotSnapshots.parseFrom(bytes).robots.iterator.map(s => fromProto(s)).toVector
     case M.Operation      => fromProto(pb.Operation.parseFrom(bytes))
     case M.RobotFailure   => fromProto(pb.RobotFailure.parseFrom(bytes))
@@ -170,7 +170,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.Close          => SessionMessage.Close
     case M.LeasePreempted =>
       val m = pb.LeasePreempted.parseFrom(bytes)
-      AppEvent.LeasePreempted(m.robotId, m.group, m.byApp)
+      AppEvent.LeasePreempted(m.robotId, group(M.LeasePreempted, m.group), m.byApp)
     case M.SafetyStop =>
       val m = pb.SafetyStop.parseFrom(bytes)
       AppEvent.SafetyStop(m.robotId, m.reason)
@@ -214,6 +214,10 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
   private def corrupt(manifest: String, detail: String): NotSerializableException =
     new NotSerializableException(s"CrossNodeSerializer: corrupt [$manifest]: $detail")
 
+  // A node of another build may name a group this one does not have: refuse the message rather than guess.
+  private def group(manifest: String, name: String): ActuatorGroup =
+    ActuatorGroup.parse(name).fold(e => throw corrupt(manifest, e), identity)
+
   private def gamePacket(data: GameControlData): Array[Byte] =
     GameControllerCodec.encodeControl(data).fold(e => throw unfitGame(e.describe), identity)
 
@@ -230,7 +234,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       case robotmiddleware.Operation.Stop()               => Kind.Stop(pb.Operation.Stop())
       case robotmiddleware.Operation.Head(pan, tilt)      => Kind.Head(pb.Operation.Head(pan, tilt))
       case robotmiddleware.Operation.Arms(ls, le, rs, re) => Kind.Arms(pb.Operation.Arms(ls, le, rs, re))
-      case robotmiddleware.Operation.Posture(posture)     => Kind.Posture(pb.Operation.Posture(posture))
+      case robotmiddleware.Operation.Posture(posture)     => Kind.Posture(pb.Operation.Posture(posture.name))
       case robotmiddleware.Operation.Say(text)            => Kind.Say(pb.Operation.Say(text))
       case robotmiddleware.Operation.RawCall(module, method, params) =>
         Kind.RawCall(pb.Operation.RawCall(module, method, params.map(_.toProto)))
@@ -244,7 +248,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       case Kind.Stop(_)    => robotmiddleware.Operation.Stop()
       case Kind.Head(h)    => robotmiddleware.Operation.Head(h.pan, h.tilt)
       case Kind.Arms(a)    => robotmiddleware.Operation.Arms(a.leftShoulder, a.leftElbow, a.rightShoulder, a.rightElbow)
-      case Kind.Posture(p) => robotmiddleware.Operation.Posture(p.posture)
+      case Kind.Posture(p) =>
+        robotmiddleware.Operation.Posture(Posture.target(p.posture).fold(e => throw corrupt(M.Operation, e), identity))
       case Kind.Say(s)     => robotmiddleware.Operation.Say(s.text)
       case Kind.RawCall(r) =>
         val params = r.params.iterator.map(naogateway.wire.RpcValue.fromProto).toVector
@@ -260,7 +265,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       case F.RobotOffline(robotId)                => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
       case F.UnknownRobot(robotId)                => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
       case F.LeaseNotHeld(robotId, group, holder) =>
-        Kind.LeaseNotHeld(pb.RobotFailure.LeaseNotHeld(robotId, group, holder))
+        Kind.LeaseNotHeld(pb.RobotFailure.LeaseNotHeld(robotId, group.name, holder))
       case F.RuleGate(rule)                       => Kind.RuleGate(pb.RobotFailure.RuleGate(rule))
       case F.Timeout(robotId, operation, millis)  => Kind.Timeout(pb.RobotFailure.Timeout(robotId, operation, millis))
       case F.RobotError(robotId, error)           => Kind.RobotError(pb.RobotFailure.RobotError(robotId, error))
@@ -275,7 +280,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     f.kind match {
       case Kind.RobotOffline(m) => F.RobotOffline(m.robotId)
       case Kind.UnknownRobot(m) => F.UnknownRobot(m.robotId)
-      case Kind.LeaseNotHeld(m) => F.LeaseNotHeld(m.robotId, m.group, m.holder)
+      case Kind.LeaseNotHeld(m) => F.LeaseNotHeld(m.robotId, group(M.RobotFailure, m.group), m.holder)
       case Kind.RuleGate(m)     => F.RuleGate(m.rule)
       case Kind.Timeout(m)      => F.Timeout(m.robotId, m.operation, m.millis)
       case Kind.RobotError(m)   => F.RobotError(m.robotId, m.error)
@@ -314,7 +319,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       teamId = s.teamId,
       role = s.role,
       agent = s.agent,
-      posture = s.posture,
+      posture = s.posture.map(_.name),
       batteryVoltage = s.batteryVoltage,
       uptimeMillis = s.uptimeMillis,
       bootId = s.bootId,
@@ -331,7 +336,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       teamId = s.teamId,
       role = s.role,
       agent = s.agent,
-      posture = s.posture,
+      posture = s.posture.map(Posture.reported),
       batteryVoltage = s.batteryVoltage,
       uptimeMillis = s.uptimeMillis,
       bootId = s.bootId,

@@ -16,7 +16,7 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway._
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerGenerators}
-import naogateway.wire.{HaViMoGrid, HaViMoRegion, RpcValue}
+import naogateway.wire.{HaViMoGrid, HaViMoRegion, Posture, RpcValue}
 import robotmiddleware._
 
 /** Every message that crosses nodes survives the protobuf serializer unchanged, and nothing falls back to Java. */
@@ -94,6 +94,14 @@ class CrossNodeSerializationSpec
       serialization.serialize(Vector("not a snapshot")).failed.get shouldBe an[IllegalArgumentException]
       val serializer = serialization.findSerializerFor(AppEvent.SafetyCleared(1)).asInstanceOf[CrossNodeSerializer]
       a[NotSerializableException] should be thrownBy serializer.fromBinary(Array.emptyByteArray, "NoSuchMessage")
+      // A node of another build may send a posture to go to or a group this build does not have.
+      val dance = robotmiddleware.cluster.proto.Operation(
+        robotmiddleware.cluster.proto.Operation.Kind.Posture(robotmiddleware.cluster.proto.Operation.Posture("dance")))
+      the[NotSerializableException] thrownBy serializer.fromBinary(dance.toByteArray, "Operation") should have message
+        "CrossNodeSerializer: corrupt [Operation]: unknown posture 'dance' (sit, stand, crouch)"
+      val legs = robotmiddleware.cluster.proto.LeasePreempted(7, "legs", "referee")
+      the[NotSerializableException] thrownBy serializer.fromBinary(legs.toByteArray, "LeasePreempted") should have message
+        "CrossNodeSerializer: corrupt [LeasePreempted]: unknown actuator group 'legs' (walk, head, arms, speech)"
     }
   }
 }
@@ -126,7 +134,7 @@ object CrossNodeSerializationSpec {
     teamId = Some(12),
     role = Some("striker"),
     agent = Some("ballfollower"),
-    posture = Some("stand"),
+    posture = Some(Posture.Stand),
     batteryVoltage = Some(11.7),
     uptimeMillis = Some(123456L),
     bootId = Some(3),
@@ -151,7 +159,7 @@ object CrossNodeSerializationSpec {
     Operation.Stop(),
     Operation.Head(1.0, -0.3),
     Operation.Arms(0.1, 0.2, -0.3, -0.4),
-    Operation.Posture("stand"),
+    Operation.Posture(Posture.Stand),
     Operation.Say("hello"),
     Operation.RawCall("system", "echo", rpcValues)
   )
@@ -159,8 +167,8 @@ object CrossNodeSerializationSpec {
   val failures: Vector[RobotFailure] = Vector(
     RobotFailure.RobotOffline(7),
     RobotFailure.UnknownRobot(8),
-    RobotFailure.LeaseNotHeld(7, "walk", Some("teleop")),
-    RobotFailure.LeaseNotHeld(7, "head", None),
+    RobotFailure.LeaseNotHeld(7, ActuatorGroup.Walk, Some("teleop")),
+    RobotFailure.LeaseNotHeld(7, ActuatorGroup.Head, None),
     RobotFailure.RuleGate("no sending while the game is playing"),
     RobotFailure.Timeout(7, "motion.posture", 5000L),
     RobotFailure.RobotError(7, "unknown method: motion.fly"),
@@ -199,16 +207,17 @@ object CrossNodeSerializationSpec {
       RobotMiddleware.AppRegistered("teleop"),
       RobotMiddleware.OperationResult(7, "motion.walk", Right(None)),
       RobotMiddleware.OperationResult(7, "system.echo", Right(Some(rpcValues.last))),
-      RobotMiddleware.LeaseResult(7, "walk", Right(())),
+      RobotMiddleware.LeaseResult(7, ActuatorGroup.Walk, Right(())),
       Vector(snapshot, snapshot.copy(robotId = 8, address = ipv6)),
       Vector.empty[RobotSnapshot],
       SessionMessage.SubscribeAppEvents(ref),
       SessionMessage.Close,
-      AppEvent.LeasePreempted(7, "walk", "referee"),
+      AppEvent.LeasePreempted(7, ActuatorGroup.Walk, "referee"),
       AppEvent.SafetyStop(7, "battery low"),
       AppEvent.SafetyCleared(7),
       snapshot,
       snapshot.copy(address = named, quality = LinkQuality.Degraded),
+      snapshot.copy(posture = Some(Posture.reported("kneeling"))), // a posture this build does not know crosses as reported
       RobotSnapshot(9, unresolved),
       linkStats,
       linkStats.copy(rttMillis = None, rejected = Map.empty),
@@ -229,7 +238,7 @@ object CrossNodeSerializationSpec {
       operations.map(o => RobotMiddleware.Execute(ref, 7, o, ref)) ++
       operations ++
       failures.map(f => RobotMiddleware.OperationResult(7, "motion.walk", Left(f))) ++
-      failures.map(f => RobotMiddleware.LeaseResult(7, "walk", Left(f))) ++
+      failures.map(f => RobotMiddleware.LeaseResult(7, ActuatorGroup.Walk, Left(f))) ++
       failures ++
       rpcValues
 }

@@ -157,7 +157,7 @@ class MiddlewareClusterSpec
       val battery = app.call(7, "system", "battery")
       answerUntil("system.battery", Some(RpcValue.Number(11.4f)))
       battery.futureValue shouldBe Some(RpcValue.Number(11.4f))
-      app.arms(7, 0, 0, 0, 0).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(7, "arms", None)
+      app.arms(7, 0, 0, 0, 0).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(7, ActuatorGroup.Arms, None)
 
       val frames = nodeB.createTestProbe[VisionFrame]()
       app.vision(7, grid = true).runWith(Sink.foreach(frames.ref ! _))
@@ -184,13 +184,13 @@ class MiddlewareClusterSpec
       app.robots().futureValue // the local subscription on node B is in place long before this round trip ends
       val referee = RobotClient.connect(nodeA.system, middleware, "referee", priority = 9).futureValue
       referee.acquire(7, ActuatorGroup.Head).futureValue shouldBe Done
-      appEvents.expectMessage(10.seconds, AppEvent.LeasePreempted(7, "head", "referee"))
+      appEvents.expectMessage(10.seconds, AppEvent.LeasePreempted(7, ActuatorGroup.Head, "referee"))
       referee.close()
     }
 
     "lose its leases when its node leaves, and its walking robot is stopped" in {
       fallback.acquire(7, ActuatorGroup.Walk).failed.futureValue shouldBe
-        RobotFailure.LeaseNotHeld(7, "walk", Some("remote-app"))
+        RobotFailure.LeaseNotHeld(7, ActuatorGroup.Walk, Some("remote-app"))
       nodeB.shutdownTestKit()
       answerUntil("motion.stop")
       fallback.acquire(7, ActuatorGroup.Walk).futureValue shouldBe Done

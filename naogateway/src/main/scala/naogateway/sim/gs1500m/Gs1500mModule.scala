@@ -5,7 +5,7 @@ import scala.collection.immutable.ArraySeq
 /** A UDP datagram reaching the module from the air, on connection `cid`; `remote` is the sender when the connection
   * is a UDP server (the module then frames it `ESC 'y'`), `None` for a direct connection (`ESC 'Z'`).
   */
-final case class Datagram(cid: Int, remote: Option[Remote], payload: ArraySeq[Byte])
+final case class AirDatagram(cid: Int, remote: Option[Remote], payload: ArraySeq[Byte])
 
 /** Settings of the GS1500M model.
   *
@@ -58,7 +58,7 @@ sealed trait RxEntry extends Product with Serializable {
 object RxEntry {
 
   /** A received datagram; `overwritten` bytes of its beginning are gone, and with them its header. */
-  final case class Frame(id: Long, datagram: Datagram, header: ArraySeq[Byte], arrivedAt: Long, overwritten: Int)
+  final case class Frame(id: Long, datagram: AirDatagram, header: ArraySeq[Byte], arrivedAt: Long, overwritten: Int)
       extends RxEntry {
 
     /** Payload bytes still in the buffer. */
@@ -163,7 +163,7 @@ object ModuleEvent {
   * @param bytesOnAir payload bytes that went on air
   * @param peakBuffered the most buffer bytes ever in use
   */
-final case class Gs1500mCounters(
+final case class Gs1500mStats(
     arrived: Long = 0,
     buffered: Long = 0,
     lost: Long = 0,
@@ -226,7 +226,7 @@ final case class Gs1500mModule(
     txLineFreeAt: Long,
     random: SeededRandom,
     nextId: Long,
-    counters: Gs1500mCounters
+    stats: Gs1500mStats
 ) {
   import ModuleEvent._
 
@@ -257,34 +257,34 @@ final case class Gs1500mModule(
       tx = pending,
       drains = drains.filter(_.endsAt > t),
       rxQueue = rxQueue ++ replies,
-      counters = counters.copy(
-        onAir = counters.onAir + done.size,
-        bytesOnAir = counters.bytesOnAir + done.iterator.map(_.data.length.toLong).sum
+      stats = stats.copy(
+        onAir = stats.onAir + done.size,
+        bytesOnAir = stats.bytesOnAir + done.iterator.map(_.data.length.toLong).sum
       )
     )
     ModuleStep(next, done.map(e => OnAir(e.cid, e.data, e.endsAt)))
   }
 
   /** A datagram reaches the module from the air at `now`. */
-  def arrive(datagram: Datagram, now: Long): ModuleStep = {
+  def arrive(datagram: AirDatagram, now: Long): ModuleStep = {
     val ModuleStep(m, early) = advance(now)
     val t = m.clock
     val id = m.nextId
     val length = datagram.payload.length
-    val counted = m.copy(nextId = id + 1, counters = m.counters.copy(arrived = m.counters.arrived + 1))
+    val counted = m.copy(nextId = id + 1, stats = m.stats.copy(arrived = m.stats.arrived + 1))
     def lose(reason: LossReason, random: SeededRandom) = {
-      val c = counted.counters
+      val c = counted.stats
       val c2 =
         if (reason == LossReason.Oversize) c.copy(lost = c.lost + 1, lostOversize = c.lostOversize + 1)
         else c.copy(lost = c.lost + 1)
-      ModuleStep(counted.copy(random = random, counters = c2), early :+ Lost(id, t, reason))
+      ModuleStep(counted.copy(random = random, stats = c2), early :+ Lost(id, t, reason))
     }
     if (length > config.bufferBytes || length > Gs1500mSerial.MaxPayload) lose(LossReason.Oversize, m.random)
     else
       Gs1500mSerial.headerBytes(datagram.cid, datagram.remote, length) match {
         case Left(error) =>
-          val c = counted.counters
-          ModuleStep(counted.copy(counters = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, t))
+          val c = counted.stats
+          ModuleStep(counted.copy(stats = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, t))
         case Right(header) =>
           val frame = RxEntry.Frame(id, datagram, header, t, 0)
           val deficit = length - (config.bufferBytes - m.bufferedAt(t))
@@ -293,12 +293,12 @@ final case class Gs1500mModule(
             val (coin, random) = m.random.nextDouble
             if (coin < config.overwriteProbability && m.queuedBytes >= deficit) {
               val (queue, overwrites, newly) = overwrite(m.rxQueue, deficit, t)
-              val c = counted.counters
+              val c = counted.stats
               counted
                 .copy(
                   rxQueue = queue,
                   random = random,
-                  counters = c.copy(
+                  stats = c.copy(
                     overwritten = c.overwritten + newly,
                     overwrittenBytes = c.overwrittenBytes + deficit
                   )
@@ -320,12 +320,12 @@ final case class Gs1500mModule(
       val end = start + config.lineNanos(bytes.length)
       val frames = m.rxQueue.collect { case f: RxEntry.Frame => f }
       val intact = frames.count(_.overwritten == 0)
-      val c = m.counters
+      val c = m.stats
       val next = m.copy(
         rxQueue = Vector.empty,
         drains = if (m.queuedBytes > 0) m.drains :+ Drain(m.queuedBytes, start, end) else m.drains,
         rxLineFreeAt = end,
-        counters = c.copy(
+        stats = c.copy(
           readIntact = c.readIntact + intact,
           readDamaged = c.readDamaged + (frames.size - intact),
           bytesToFirmware = c.bytesToFirmware + bytes.length
@@ -345,36 +345,36 @@ final case class Gs1500mModule(
   def firmwareSend(cid: Int, data: ArraySeq[Byte], now: Long, transferNanos: Long = 0L): ModuleStep = {
     val ModuleStep(m, early) = advance(now)
     val t = m.clock
-    val c = m.counters.copy(sends = m.counters.sends + 1)
+    val c = m.stats.copy(sends = m.stats.sends + 1)
     Gs1500mSerial.bulkHeader(cid, data.length) match {
       case Right(header) if data.length <= config.bufferBytes =>
         val start = math.max(t, m.txLineFreeAt)
         val end = start + math.max(config.lineNanos(header.length + data.length), transferNanos)
         val entry = TxEntry(cid, data, start, end)
         val deficit = data.length - (config.bufferBytes - m.bufferedAt(t))
-        if (deficit <= 0) m.copy(tx = m.tx :+ entry, txLineFreeAt = end, counters = c).withPeak(early)
+        if (deficit <= 0) m.copy(tx = m.tx :+ entry, txLineFreeAt = end, stats = c).withPeak(early)
         else if (m.queuedBytes >= deficit) {
           val (queue, overwrites, newly) = overwrite(m.rxQueue, deficit, t)
           m.copy(
             rxQueue = queue,
             tx = m.tx :+ entry,
             txLineFreeAt = end,
-            counters = c.copy(overwritten = c.overwritten + newly, overwrittenBytes = c.overwrittenBytes + deficit)
+            stats = c.copy(overwritten = c.overwritten + newly, overwrittenBytes = c.overwrittenBytes + deficit)
           ).withPeak(early ++ overwrites)
         } else {
           // The module acknowledges the loss as soon as it gives up; the bytes still occupy the line.
           val fail: Vector[RxEntry] =
             if (config.acknowledgeSends) Vector(RxEntry.ReplyEntry(SerialEvent.Fail)) else Vector.empty
           ModuleStep(
-            m.copy(rxQueue = m.rxQueue ++ fail, txLineFreeAt = end, counters = c.copy(sendsLost = c.sendsLost + 1)),
+            m.copy(rxQueue = m.rxQueue ++ fail, txLineFreeAt = end, stats = c.copy(sendsLost = c.sendsLost + 1)),
             early :+ SendLost(cid, data.length, t)
           )
         }
       case Right(_) =>
         val refused = Refused(s"${data.length} bytes exceed the buffer", t)
-        ModuleStep(m.copy(counters = c.copy(refused = c.refused + 1)), early :+ refused)
+        ModuleStep(m.copy(stats = c.copy(refused = c.refused + 1)), early :+ refused)
       case Left(error) =>
-        ModuleStep(m.copy(counters = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, t))
+        ModuleStep(m.copy(stats = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, t))
     }
   }
 
@@ -384,17 +384,17 @@ final case class Gs1500mModule(
     Gs1500mSerial.encode(SerialEvent.StatusLine(text)) match {
       case Right(bytes) => ModuleStep(m.copy(rxQueue = m.rxQueue :+ RxEntry.StatusEntry(text, bytes)), early)
       case Left(error) =>
-        val c = m.counters
-        ModuleStep(m.copy(counters = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, m.clock))
+        val c = m.stats
+        ModuleStep(m.copy(stats = c.copy(refused = c.refused + 1)), early :+ Refused(error.describe, m.clock))
     }
   }
 
   private def enqueue(frame: RxEntry.Frame, early: Vector[ModuleEvent], overwrites: Vector[ModuleEvent]): ModuleStep =
-    copy(rxQueue = rxQueue :+ frame, counters = counters.copy(buffered = counters.buffered + 1))
+    copy(rxQueue = rxQueue :+ frame, stats = stats.copy(buffered = stats.buffered + 1))
       .withPeak(early ++ overwrites :+ Buffered(frame.id, frame.arrivedAt, frame.datagram.payload.length))
 
   private def withPeak(events: Vector[ModuleEvent]): ModuleStep =
-    ModuleStep(copy(counters = counters.copy(peakBuffered = math.max(counters.peakBuffered, buffered))), events)
+    ModuleStep(copy(stats = stats.copy(peakBuffered = math.max(stats.peakBuffered, buffered))), events)
 
   // Overwrites `deficit` bytes from the front of the unread queue, oldest first; returns the new queue, the events
   // and how many datagrams lost their beginning for the first time.
@@ -423,5 +423,5 @@ object Gs1500mModule {
   /** An empty module at time `start`, its overflow coin seeded with `seed`. */
   def apply(config: Gs1500mConfig = Gs1500mConfig(), seed: Long = 1L, start: Long = 0L): Gs1500mModule =
     Gs1500mModule(config, start, Vector.empty, Vector.empty, Vector.empty, start, start, SeededRandom(seed), 0L,
-      Gs1500mCounters())
+      Gs1500mStats())
 }

@@ -84,12 +84,12 @@ object OverflowExperiment {
   )
 
   /** The peer's datagrams: byte 0 of the i-th (0-based) is i, the rest random from the seed. */
-  def datagrams(config: Config): Vector[Datagram] = {
-    val (_, out) = (0 until config.datagrams).foldLeft((SeededRandom(config.seed).split(3), Vector.empty[Datagram])) {
+  def datagrams(config: Config): Vector[AirDatagram] = {
+    val (_, out) = (0 until config.datagrams).foldLeft((SeededRandom(config.seed).split(3), Vector.empty[AirDatagram])) {
       case ((rng, acc), i) =>
         val (rest, next) = rng.nextBytes(math.max(0, config.payloadBytes - 1))
         val payload = if (config.payloadBytes <= 0) ArraySeq.empty[Byte] else i.toByte +: rest
-        (next, acc :+ Datagram(config.cid, Some(config.peer), payload))
+        (next, acc :+ AirDatagram(config.cid, Some(config.peer), payload))
     }
     out
   }
@@ -116,7 +116,7 @@ object OverflowExperiment {
   /** Scores a run against the datagrams that were sent: the firmware's sum of byte 0 over everything it decoded, and
     * how many of those were a sent datagram intact.
     */
-  def evaluate(sent: Vector[Datagram], run: ReceivePath.Run): Result = {
+  def evaluate(sent: Vector[AirDatagram], run: ReceivePath.Run): Result = {
     val payloads = sent.map(_.payload).toSet
     val got = run.received.filter(_.bytes.nonEmpty)
     val intact = got.count(r => payloads.contains(r.bytes))
@@ -127,9 +127,9 @@ object OverflowExperiment {
       received = run.received.size,
       intact = intact,
       spurious = got.size - intact,
-      lost = run.module.counters.lost,
-      overwritten = run.module.counters.overwritten,
-      peakBuffered = run.module.counters.peakBuffered
+      lost = run.module.stats.lost,
+      overwritten = run.module.stats.overwritten,
+      peakBuffered = run.module.stats.peakBuffered
     )
   }
 }

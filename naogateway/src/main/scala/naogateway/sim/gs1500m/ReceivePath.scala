@@ -3,7 +3,7 @@ package naogateway.sim.gs1500m
 import scala.annotation.tailrec
 
 /** A datagram the peer puts on air at simulated time `at` (nanoseconds), towards the robot. */
-final case class Scheduled(at: Long, datagram: Datagram)
+final case class Scheduled(at: Long, datagram: AirDatagram)
 
 /** A discrete-event driver of the robot's receive path in simulated time: the peer's datagrams reach the module at
   * their scheduled times while the firmware loop runs, both in time order (on a tie the datagram is in the module

@@ -33,7 +33,7 @@ final case class Proxy(
   * extra copies, `reordered` the forwarded datagrams that were held back, and `sendFailures` the copies the operating
   * system refused (full socket buffer or an I/O error).
   */
-final case class LinkCounters(
+final case class DirectionStats(
     received: Long = 0,
     forwarded: Long = 0,
     droppedLoss: Long = 0,
@@ -48,11 +48,11 @@ final case class LinkCounters(
   def dropped: Long = droppedLoss + droppedPartition
 }
 
-/** Counters of both directions of one proxy. */
-final case class ProxyCounters(uplink: LinkCounters, downlink: LinkCounters) {
+/** Stats of both directions of one proxy. */
+final case class ProxyStats(uplink: DirectionStats, downlink: DirectionStats) {
 
-  /** The counters of one direction. */
-  def apply(direction: Direction): LinkCounters = direction match {
+  /** The stats of one direction. */
+  def apply(direction: Direction): DirectionStats = direction match {
     case Direction.Uplink   => uplink
     case Direction.Downlink => downlink
   }
@@ -75,7 +75,7 @@ final case class ProxyCounters(uplink: LinkCounters, downlink: LinkCounters) {
   * Thread safety: every method may be called from any thread. Sockets and state are touched only by the network
   * thread; a method hands it a task and waits for the answer (at most a few seconds), so when it returns its change
   * applies to every later datagram. Methods block briefly, so an actor should not call them from its message handler.
-  * After `stop()` every method except `counters`, `stop` and `isRunning` throws `IllegalStateException`.
+  * After `stop()` every method except `stats`, `stop` and `isRunning` throws `IllegalStateException`.
   */
 final class LossyNetwork private (val seed: Long, val name: String) {
   import LossyNetwork._
@@ -108,15 +108,15 @@ final class LossyNetwork private (val seed: Long, val name: String) {
     onNetworkThread(openProxy(gateway, robot, uplink, downlink))
   }
 
-  /** Closes a proxy's sockets, forgets copies still waiting, and returns its final counters. */
-  def removeProxy(proxy: Proxy): ProxyCounters = onNetworkThread {
+  /** Closes a proxy's sockets, forgets copies still waiting, and returns its final stats. */
+  def removeProxy(proxy: Proxy): ProxyStats = onNetworkThread {
     val state = stateOf(proxy)
     state.close()
     proxies.remove(proxy.id.toLong)
     // A registered channel keeps its port until the selector drops its key, which happens at the next select.
     selector.selectNow()
     handleSelected()
-    state.counters
+    state.stats
   }
 
   /** The settings of one direction of a proxy. */
@@ -139,11 +139,11 @@ final class LossyNetwork private (val seed: Long, val name: String) {
   /** Switches a partition of every proxy, both directions, on top of each proxy's own settings. */
   def partitionNetwork(on: Boolean): Unit = onNetworkThread { networkPartitioned = on }
 
-  /** A consistent snapshot of a proxy's counters; after `stop()` the final ones. */
-  def counters(proxy: Proxy): ProxyCounters =
-    tryOnNetworkThread(stateOf(proxy).counters).getOrElse {
+  /** A consistent snapshot of a proxy's stats; after `stop()` the final ones. */
+  def stats(proxy: Proxy): ProxyStats =
+    tryOnNetworkThread(stateOf(proxy).stats).getOrElse {
       thread.join()
-      stateOf(proxy).counters
+      stateOf(proxy).stats
     }
 
   /** Whether the network thread still serves requests. */
@@ -435,8 +435,8 @@ object LossyNetwork {
     var undeliverable = 0L
     var sendFailures = 0L
 
-    def counters: LinkCounters =
-      LinkCounters(
+    def stats: DirectionStats =
+      DirectionStats(
         received,
         forwarded,
         droppedLoss,
@@ -473,7 +473,7 @@ object LossyNetwork {
       case Direction.Downlink => clientChannel
     }
 
-    def counters: ProxyCounters = ProxyCounters(uplink.counters, downlink.counters)
+    def stats: ProxyStats = ProxyStats(uplink.stats, downlink.stats)
 
     def close(): Unit = {
       open = false

@@ -103,7 +103,7 @@ final class SecureStream private (
     private val idleAckOwed: Boolean,
     private val retransmittedAt: Vector[Long],
     private val reuseBlockedUntil: Long,
-    val counters: StreamCounters
+    val stats: StreamStats
 ) {
   import SecureStream._
 
@@ -184,7 +184,7 @@ final class SecureStream private (
   }
 
   /** Starts the sequence state afresh for a peer that restarted, keeping unacknowledged and queued payloads (they
-    * are sent again from sequence number 0), the round-trip estimate and the counters.
+    * are sent again from sequence number 0), the round-trip estimate and the stats.
     */
   def reset(now: Long): Step = {
     val carried: Vector[Pending] =
@@ -210,7 +210,7 @@ final class SecureStream private (
       idleAckOwed = false,
       retransmittedAt = retransmittedAt,
       reuseBlockedUntil = NoTime,
-      counters = counters
+      stats = stats
     )
     val work = new Work(fresh, now)
     work.tick()
@@ -303,7 +303,7 @@ object SecureStream {
       idleAckOwed = false,
       retransmittedAt = Vector.fill(settings.sequenceSpace)(NoTime),
       reuseBlockedUntil = NoTime,
-      counters = StreamCounters.zero
+      stats = StreamStats.zero
     )
 
   private final val NoTime = Long.MinValue
@@ -361,7 +361,7 @@ object SecureStream {
     private var retransmittedAt = s.retransmittedAt
     private var reuseBlockedUntil = s.reuseBlockedUntil
 
-    private val c0 = s.counters
+    private val c0 = s.stats
     private var dataSegmentsSent = c0.dataSegmentsSent
     private var retransmissions = c0.retransmissions
     private var fastRetransmissions = c0.fastRetransmissions
@@ -384,8 +384,8 @@ object SecureStream {
         queue = Queue.empty
         dropped = Set.empty
       }
-      val counters =
-        StreamCounters(
+      val stats =
+        StreamStats(
           dataSegmentsSent,
           retransmissions,
           fastRetransmissions,
@@ -419,7 +419,7 @@ object SecureStream {
         idleAckOwed,
         retransmittedAt,
         reuseBlockedUntil,
-        counters
+        stats
       )
       Step(state, outputs)
     }

@@ -28,7 +28,7 @@ package naogateway.wire.stream
   * @param expired
   *   own payloads given up because their deadline passed
   */
-final case class StreamCounters(
+final case class StreamStats(
     dataSegmentsSent: Long,
     retransmissions: Long,
     fastRetransmissions: Long,
@@ -48,8 +48,8 @@ final case class StreamCounters(
 }
 
 /** The starting totals. */
-object StreamCounters {
+object StreamStats {
 
   /** All totals zero. */
-  val zero: StreamCounters = StreamCounters(0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L)
+  val zero: StreamStats = StreamStats(0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L)
 }

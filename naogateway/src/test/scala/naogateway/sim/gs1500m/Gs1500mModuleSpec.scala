@@ -29,7 +29,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
   // Filler bytes 0x80..0xE3 are neither ESC, nor a line end, nor text, so a headerless tail is plain garbage.
   private def payload(n: Int, first: Int = 0): ArraySeq[Byte] =
     ArraySeq.tabulate[Byte](n)(i => if (i == 0) first.toByte else (0x80 + i % 100).toByte)
-  private def datagram(n: Int, first: Int = 0): Datagram = Datagram(0, peer, payload(n, first))
+  private def datagram(n: Int, first: Int = 0): AirDatagram = AirDatagram(0, peer, payload(n, first))
 
   private def module(overwrite: Double = 0.5, seed: Long = 1L) =
     Gs1500mModule(Gs1500mConfig(overwriteProbability = overwrite), seed)
@@ -66,7 +66,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
       read.bytes shouldBe Gs1500mSerial.encode(Data(0, peer, d.payload)).toOption.get
       SerialDecoder.empty.feed(read.bytes)._2 shouldBe Vector(Data(0, peer, d.payload))
       read.events should contain(ReadOut(0L, read.doneAt, intact = true))
-      read.module.counters.readIntact shouldBe 1
+      read.module.stats.readIntact shouldBe 1
     }
     "fit an empty buffer even at the full 1400 bytes" in {
       val step = module(overwrite = 0.0).arrive(datagram(1400), 0L)
@@ -88,7 +88,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
       val m = module(overwrite = 0.0).arrive(datagram(1000, 1), 0L).module
       val step = m.arrive(datagram(1000, 2), 50 * ms)
       step.events shouldBe Vector(Lost(1L, 50 * ms, LossReason.BufferFull))
-      step.module.counters.lost shouldBe 1
+      step.module.stats.lost shouldBe 1
       val got = SerialDecoder.empty.feed(step.module.firmwareRead(60 * ms).bytes)._2
       got shouldBe Vector(Data(0, peer, payload(1000, 1)))
     }
@@ -97,7 +97,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
       val step = m.arrive(datagram(1000, 2), 50 * ms)
       step.events shouldBe Vector(Overwritten(0L, 50 * ms, 600, 400), Buffered(1L, 50 * ms, 1000))
       step.module.buffered shouldBe 1400
-      step.module.counters.overwritten shouldBe 1
+      step.module.stats.overwritten shouldBe 1
       val read = step.module.firmwareRead(60 * ms)
       read.events should contain(ReadOut(0L, read.doneAt, intact = false))
       // The older datagram lost its header with its beginning: the firmware sees its tail as garbage.
@@ -109,7 +109,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
       step.events.collect { case o: Overwritten => (o.id, o.bytes, o.remaining) } shouldBe
         Vector((0L, 400, 0), (1L, 600, 400))
       step.module.rxQueue.collect { case f: RxEntry.Frame => f.id } shouldBe Vector(1L, 2L)
-      step.module.counters.overwritten shouldBe 2
+      step.module.stats.overwritten shouldBe 2
     }
     "be lost even when overwriting, if only bytes already crossing the line stand in the way" in {
       val m = module(overwrite = 1.0).arrive(datagram(1000, 1), 0L).module
@@ -134,7 +134,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
     "be lost as oversize when larger than the whole buffer" in {
       val step = module().arrive(datagram(1401), 0L)
       step.events shouldBe Vector(Lost(0L, 0L, LossReason.Oversize))
-      step.module.counters.lostOversize shouldBe 1
+      step.module.stats.lostOversize shouldBe 1
     }
   }
 
@@ -167,7 +167,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
       sent.events shouldBe Vector(Overwritten(0L, 1 * ms, 600, 400))
       val lost = sent.module.firmwareSend(0, payload(1000), 2 * ms)
       lost.events shouldBe Vector(SendLost(0, 1000, 2 * ms))
-      lost.module.counters.sendsLost shouldBe 1
+      lost.module.stats.sendsLost shouldBe 1
     }
     "refuse a bad connection number" in {
       module().firmwareSend(16, payload(1), 0L).events.head shouldBe a[Refused]
@@ -201,7 +201,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
           case ((m, t0), (dt, op)) =>
             val t = t0 + dt
             val next = op match {
-              case Arrive(n) => m.arrive(Datagram(0, peer, payload(n)), t).module
+              case Arrive(n) => m.arrive(AirDatagram(0, peer, payload(n)), t).module
               case Send(n, transfer) => m.firmwareSend(1, payload(n), t, transfer).module
               case Read => m.firmwareRead(t).module
               case Advance => m.advance(t).module
@@ -209,7 +209,7 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
             next.buffered should (be >= 0 and be <= 1400)
             (next, t)
         }._1
-        val c = end.counters
+        val c = end.stats
         c.peakBuffered should be <= 1400
         c.arrived shouldBe c.buffered + c.lost
         c.overwritten should be <= c.buffered

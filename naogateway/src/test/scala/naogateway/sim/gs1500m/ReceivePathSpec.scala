@@ -24,7 +24,7 @@ class ReceivePathSpec extends AnyWordSpec with Matchers {
   "The firmware loop" should {
     "get a datagram when its bytes have crossed the line at its next poll, and handle it in header + parse time" in {
       val data = ArraySeq.fill[Byte](100)(65)
-      val r = run(Seq(Scheduled(3 * ms, Datagram(0, peer, data))))
+      val r = run(Seq(Scheduled(3 * ms, AirDatagram(0, peer, data))))
       val serial = Gs1500mSerial.encode(SerialEvent.Data(0, peer, data)).toOption.get.length
       val got = r.received
       got.map(_.bytes) shouldBe Vector(data)

@@ -78,9 +78,9 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
           val down = random.nextBytes(1 + random.nextInt(1400))
           withClue(s"round trip $i: ")(roundTrip(proxy, robot, gateway, up, down))
         }
-        val counters = network.counters(proxy)
-        counters.uplink shouldBe LinkCounters(received = 50, forwarded = 50)
-        counters.downlink shouldBe LinkCounters(received = 50, forwarded = 50)
+        val stats = network.stats(proxy)
+        stats.uplink shouldBe DirectionStats(received = 50, forwarded = 50)
+        stats.downlink shouldBe DirectionStats(received = 50, forwarded = 50)
       }
     }
 
@@ -96,8 +96,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
         val unknown = network.addProxy(gateway.address)
         gateway.send(numbered(8), unknown.upstream)
-        eventually(network.counters(unknown).downlink.received shouldBe 1)
-        network.counters(unknown).downlink shouldBe LinkCounters(received = 1, undeliverable = 1)
+        eventually(network.stats(unknown).downlink.received shouldBe 1)
+        network.stats(unknown).downlink shouldBe DirectionStats(received = 1, undeliverable = 1)
 
         // The robot's latest datagram decides where replies go.
         other.send(numbered(9), known.clientSide)
@@ -112,8 +112,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         val proxy = network.addProxy(gateway.address, uplink = Impairment(loss = 0.3))
         val n = 400
         sendPaced(robot, proxy.clientSide, n)
-        eventually(network.counters(proxy).uplink.received shouldBe n)
-        val uplink = network.counters(proxy).uplink
+        eventually(network.stats(proxy).uplink.received shouldBe n)
+        val uplink = network.stats(proxy).uplink
         uplink.received shouldBe uplink.forwarded + uplink.droppedLoss
         uplink.droppedPartition shouldBe 0
         uplink.forwarded.toDouble / n shouldBe 0.7 +- 0.1
@@ -139,15 +139,15 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
           gateway.send(numbered(i), proxy.upstream)
         }
         eventually {
-          val counters = network.counters(proxy)
-          counters.uplink.received shouldBe 11
-          counters.downlink.received shouldBe 11
+          val stats = network.stats(proxy)
+          stats.uplink.received shouldBe 11
+          stats.downlink.received shouldBe 11
         }
         gateway.collectFor(300.millis) shouldBe empty
         robot.collectFor(300.millis) shouldBe empty
-        val counters = network.counters(proxy)
-        counters.uplink.droppedPartition shouldBe 10
-        counters.downlink.droppedPartition shouldBe 10
+        val stats = network.stats(proxy)
+        stats.uplink.droppedPartition shouldBe 10
+        stats.downlink.droppedPartition shouldBe 10
 
         network.partition(proxy, on = false)
         roundTrip(proxy, robot, gateway, numbered(3), numbered(4))
@@ -164,8 +164,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         robotA.send(numbered(1), a.clientSide)
         robotB.send(numbered(2), b.clientSide)
         eventually {
-          network.counters(a).uplink.droppedPartition shouldBe 1
-          network.counters(b).uplink.droppedPartition shouldBe 1
+          network.stats(a).uplink.droppedPartition shouldBe 1
+          network.stats(b).uplink.droppedPartition shouldBe 1
         }
         gateway.collectFor(300.millis) shouldBe empty
         network.impairment(a, Direction.Uplink).partitioned shouldBe false
@@ -183,7 +183,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         robot.send(numbered(1), proxy.clientSide)
         gateway.receive().map(numberOf) shouldBe Some(1)
         gateway.send(numbered(2), proxy.upstream)
-        eventually(network.counters(proxy).downlink.droppedLoss shouldBe 1)
+        eventually(network.stats(proxy).downlink.droppedLoss shouldBe 1)
         robot.collectFor(200.millis) shouldBe empty
 
         network.setImpairment(proxy, Direction.Downlink, Impairment.Off)
@@ -202,7 +202,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         order.distinct should have size order.size.toLong
         all(order) should (be >= 0 and be < n)
         order should not be order.sorted
-        network.counters(proxy).uplink.reordered should be > 0L
+        network.stats(proxy).uplink.reordered should be > 0L
       }
     }
 
@@ -212,7 +212,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         (0 until 20).foreach(i => robot.send(numbered(i), proxy.clientSide))
         val arrived = gateway.receiveUpTo(40, 10.seconds).map(numberOf)
         arrived.groupBy(identity).map { case (i, copies) => i -> copies.size } shouldBe (0 until 20).map(_ -> 2).toMap
-        val uplink = network.counters(proxy).uplink
+        val uplink = network.stats(proxy).uplink
         uplink.forwarded shouldBe 20
         uplink.duplicated shouldBe 20
       }
@@ -251,8 +251,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
           val proxy = network.addProxy(gateway.address, uplink = settings)
           (1 to n).map { i =>
             robot.send(numbered(i), proxy.clientSide)
-            eventually(network.counters(proxy).uplink.received shouldBe i)
-            val uplink = network.counters(proxy).uplink
+            eventually(network.stats(proxy).uplink.received shouldBe i)
+            val uplink = network.stats(proxy).uplink
             (uplink.forwarded, uplink.duplicated)
           }.toVector
         }
@@ -285,7 +285,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
           canBind(proxy.clientSide) shouldBe true
           canBind(proxy.upstream) shouldBe true
         }
-        an[IllegalArgumentException] should be thrownBy network.counters(proxy)
+        an[IllegalArgumentException] should be thrownBy network.stats(proxy)
         an[IllegalArgumentException] should be thrownBy network.partition(proxy, on = true)
       }
     }
@@ -295,7 +295,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         val started = (0 until 3).map(_ => network.addProxy(gateway.address, uplink = Impairment(delay = 1.second)))
         // A copy still waiting must not keep anything alive.
         robot.send(numbered(1), started.head.clientSide)
-        eventually(network.counters(started.head).uplink.forwarded shouldBe 1)
+        eventually(network.stats(started.head).uplink.forwarded shouldBe 1)
         started
       }
       network.isRunning shouldBe true
@@ -304,7 +304,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
       network.isRunning shouldBe false
       Thread.getAllStackTraces.keySet.asScala.filter(t => t.getName == network.name && t.isAlive) shouldBe empty
       eventually(all(proxies.flatMap(p => List(p.clientSide, p.upstream)).map(canBind)) shouldBe true)
-      network.counters(proxies.head).uplink.forwarded shouldBe 1
+      network.stats(proxies.head).uplink.forwarded shouldBe 1
       an[IllegalStateException] should be thrownBy network.addProxy(proxies.head.gateway)
       an[IllegalStateException] should be thrownBy network.partitionNetwork(on = true)
     }

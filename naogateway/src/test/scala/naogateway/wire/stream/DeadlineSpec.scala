@@ -45,7 +45,7 @@ class DeadlineSpec extends AnyWordSpec with Matchers {
         result.a.expired shouldBe Vector(Expiry(0L, ms(300)))
         result.a.acknowledged shouldBe Vector(1L, 2L, 3L)
         result.b.delivered.map(text) shouldBe Vector("one", "two", "three")
-        result.b.counters.skipped shouldBe 1
+        result.b.stats.skipped shouldBe 1
         all(result.b.deliveries.map(_.at)) should be > ms(1000)
       }
 
@@ -54,12 +54,12 @@ class DeadlineSpec extends AnyWordSpec with Matchers {
         val result = partitioned(window, honour = false, timeLimit = 10.seconds)
         result.completed shouldBe false
         result.a.expired shouldBe Vector(Expiry(0L, ms(300)))
-        result.b.counters.skipped shouldBe 0
+        result.b.stats.skipped shouldBe 0
         result.b.delivered shouldBe empty
         result.a.acknowledged shouldBe empty
         result.b.finalState.lastInOrder shouldBe settingsFor(window).maxSeq
         // The sender keeps repeating its skip notice instead of the expired data.
-        result.a.counters.pureAcksSent should be > 3L
+        result.a.stats.pureAcksSent should be > 3L
       }
 
     for (window <- Seq(1, 20))
@@ -81,7 +81,7 @@ class DeadlineSpec extends AnyWordSpec with Matchers {
         deliveredIds.distinct shouldBe deliveredIds
         deliveredIds.toSet should contain allElementsOf result.a.acknowledged.map(_.toInt)
         deliveredIds should contain allElementsOf payloads.indices.filter(_ % 3 != 0)
-        result.b.counters.skipped should be <= expiredIds.size.toLong
+        result.b.stats.skipped should be <= expiredIds.size.toLong
       }
   }
 }

@@ -22,7 +22,7 @@ class RtoSpec extends AnyWordSpec with Matchers {
     val config = SimConfig.symmetric(settings, link, seed = 5L)
     val result = StreamPairSimulation.run(config, evenlySpaced(Side.A, payloads, 0L, 3 * delay))
     result.completed shouldBe true
-    if (jitter == Duration.Zero) result.a.counters.retransmissions shouldBe 0
+    if (jitter == Duration.Zero) result.a.stats.retransmissions shouldBe 0
     result.a.finalState
   }
 
@@ -83,7 +83,7 @@ class RtoSpec extends AnyWordSpec with Matchers {
         result.completed shouldBe false
         result.a.finalState.rtoNanos shouldBe maxRto.toNanos
         result.a.finalState.smoothedRttNanos shouldBe None
-        result.a.counters.timeouts should be > 5L
+        result.a.stats.timeouts should be > 5L
       }
     }
 

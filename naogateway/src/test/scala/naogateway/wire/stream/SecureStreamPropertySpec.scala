@@ -98,7 +98,7 @@ class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheck
         }
         deliveredBySut.toVector shouldBe model.delivered.toVector
         all(deliveredBySut.map(fedTails.contains)) shouldBe true
-        deliveredBySut.size.toLong shouldBe state.counters.delivered
+        deliveredBySut.size.toLong shouldBe state.stats.delivered
       }
     }
   }
@@ -226,7 +226,7 @@ class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheck
           result.completed shouldBe true
           firstDifference(result.b.delivered, fromA) shouldBe None
           firstDifference(result.a.delivered, fromB) shouldBe None
-          result.a.counters.skipped + result.b.counters.skipped shouldBe 0
+          result.a.stats.skipped + result.b.stats.skipped shouldBe 0
         }
       }
     }

@@ -107,13 +107,13 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       b.nextTimerAt shouldBe Some(ms(200))
       val bTimeout = b.tick(ms(200)); b = bTimeout.state
       transmits(bTimeout) shouldBe Vector(Vector(0, 0) ++ bytes("b1").map(_ & 0xff))
-      b.counters.retransmissions shouldBe 1
+      b.stats.retransmissions shouldBe 1
       b.rtoNanos shouldBe ms(400)
 
       // A has seen it before: dropped, answered with a pure ACK, which now gets through.
       val aGetsDup = a.receive(datagrams(bTimeout).head, ms(205)); a = aGetsDup.state
       delivered(aGetsDup) shouldBe empty
-      a.counters.duplicatesDropped shouldBe 1
+      a.stats.duplicatesDropped shouldBe 1
       transmits(aGetsDup) shouldBe Vector(Vector(0, 0))
 
       // A's timeout: it resends its lost segment.
@@ -146,7 +146,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       dataHeaders.map(_._1) shouldBe (0 until 45).map(_ % 21)
       a.lastAcknowledged shouldBe 44 % 21
       b.lastInOrder shouldBe 44 % 21
-      a.counters.acknowledged shouldBe 45
+      a.stats.acknowledged shouldBe 45
     }
 
     "deliver a duplicate once and answer both copies" in {
@@ -157,8 +157,8 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       val second = first.state.receive(segment(0, 20, "x"), ms(1))
       delivered(second) shouldBe empty
       transmits(second) shouldBe Vector(Vector(20, 0))
-      second.state.counters.duplicatesDropped shouldBe 1
-      second.state.counters.delivered shouldBe 1
+      second.state.stats.duplicatesDropped shouldBe 1
+      second.state.stats.delivered shouldBe 1
     }
 
     "ignore and count malformed and misbehaving datagrams without answering them" in {
@@ -180,9 +180,9 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
         step.outputs shouldBe empty
         step.state
       }
-      end.counters.ignored shouldBe bad.size
+      end.stats.ignored shouldBe bad.size
       end.lastInOrder shouldBe 0
-      end.counters.delivered shouldBe 1
+      end.stats.delivered shouldBe 1
     }
 
     "take data whose ACK is stale but disregard the ACK" in {
@@ -193,7 +193,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       val step = a.receive(segment(0, 20, "theirs"), ms(2))
       delivered(step) shouldBe Vector("theirs")
       step.state.lastAcknowledged shouldBe 0
-      step.state.counters.ignored shouldBe 0
+      step.state.stats.ignored shouldBe 0
     }
 
     "refuse empty and oversize payloads with typed errors, and accept the largest that fits" in {
@@ -282,7 +282,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       val dup2 = dup1.state.receive(segment(20, 20), ms(2))
       val dup3 = dup2.state.receive(segment(20, 20), ms(3))
       (dup1.outputs ++ dup2.outputs ++ dup3.outputs) shouldBe empty
-      dup3.state.counters.fastRetransmissions shouldBe 0
+      dup3.state.stats.fastRetransmissions shouldBe 0
     }
 
     "expire a queued payload without using a sequence number" in {
@@ -314,7 +314,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       val b = SecureStream.initial(thesis, 0L)
       val skip = b.receive(datagrams(expiry).head, ms(55))
       delivered(skip) shouldBe empty
-      skip.state.counters.skipped shouldBe 1
+      skip.state.stats.skipped shouldBe 1
       skip.state.lastInOrder shouldBe 0
       transmits(skip) shouldBe Vector(Vector(20, 0))
 
@@ -327,7 +327,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       val ignored = stubborn.receive(datagrams(expiry).head, ms(55))
       ignored.outputs shouldBe empty
       ignored.state.lastInOrder shouldBe 20
-      ignored.state.counters.skipped shouldBe 0
+      ignored.state.stats.skipped shouldBe 0
     }
 
     "start afresh on reset and send unacknowledged payloads again from sequence number 0" in {
@@ -358,14 +358,14 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       val s2 = s1.state.receive(segment(2, 41, "c"), 0L)
       val beyond = s2.state.receive(segment(4, 41, "beyond the window"), 0L)
       beyond.outputs shouldBe empty
-      beyond.state.counters.ignored shouldBe 1
+      beyond.state.stats.ignored shouldBe 1
       val s3 = beyond.state.receive(segment(0, 41, "a"), 0L)
       delivered(s3) shouldBe Vector("a", "b", "c")
       transmits(s3) shouldBe Vector(Vector(41, 2))
       val dup = s3.state.receive(segment(0, 41, "a"), 0L)
       delivered(dup) shouldBe empty
       transmits(dup) shouldBe Vector(Vector(41, 2))
-      dup.state.counters.duplicatesDropped shouldBe 1
+      dup.state.stats.duplicatesDropped shouldBe 1
     }
 
     "keep up to W segments in flight, fast-retransmit the oldest once, and resend at once on a partial ACK" in {
@@ -383,14 +383,14 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       dup1.outputs shouldBe empty
       val dup2 = dup1.state.receive(segment(41, 41), ms(11))
       headers(dup2) shouldBe Vector((0, 41))
-      dup2.state.counters.fastRetransmissions shouldBe 1
+      dup2.state.stats.fastRetransmissions shouldBe 1
       val dup3 = dup2.state.receive(segment(41, 41), ms(12))
       dup3.outputs shouldBe empty
 
       val partial = dup3.state.receive(segment(41, 1), ms(20))
       acknowledged(partial) shouldBe Vector(0L, 1L)
       headers(partial) shouldBe Vector((2, 41), (4, 41))
-      partial.state.counters.retransmissions shouldBe 2
+      partial.state.stats.retransmissions shouldBe 2
 
       val full = partial.state.receive(segment(41, 3), ms(30))
       acknowledged(full) shouldBe Vector(2L, 3L)
@@ -416,13 +416,13 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       ahead.state.lastInOrder shouldBe 41
       val skip = ahead.state.receive(segment(0, 41), ms(1))
       delivered(skip) shouldBe Vector("b")
-      skip.state.counters.skipped shouldBe 1
+      skip.state.stats.skipped shouldBe 1
       skip.state.lastInOrder shouldBe 1
       transmits(skip) shouldBe Vector(Vector(41, 1))
       val skipMore = skip.state.receive(segment(2, 41), ms(2))
       delivered(skipMore) shouldBe Vector("d")
       skipMore.state.lastInOrder shouldBe 3
-      skipMore.state.counters.skipped shouldBe 2
+      skipMore.state.stats.skipped shouldBe 2
 
       val stubborn = SecureStream.initial(sr4.copy(honourSkipNotices = false), 0L)
       val held = stubborn.receive(segment(1, 41, "b"), 0L).state.receive(segment(0, 41), ms(1))
@@ -452,7 +452,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
 
       val skip1 = b.receive(datagrams(next).head, ms(65)); b = skip1.state
       delivered(skip1) shouldBe Vector("p2")
-      b.counters.skipped shouldBe 2
+      b.stats.skipped shouldBe 2
       val done = next.state.receive(datagrams(skip1).head, ms(70))
       acknowledged(done) shouldBe Vector(2L)
       done.state.inFlight shouldBe 0
@@ -466,7 +466,7 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       var a = SecureStream.initial(tight, 0L)
       (0 until 8).foreach(i => a = a.offer(s"p$i", i.toLong, 0L).state)
       a = a.receive(segment(7, 7), ms(10)).state.receive(segment(7, 7), ms(11)).state
-      a.counters.retransmissions shouldBe 1
+      a.stats.retransmissions shouldBe 1
       val acked = a.receive(segment(7, 3), ms(13))
       acknowledged(acked) shouldBe Vector(0L, 1L, 2L, 3L)
       headers(acked) shouldBe empty

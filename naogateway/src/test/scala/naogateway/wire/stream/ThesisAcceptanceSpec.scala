@@ -46,8 +46,8 @@ class ThesisAcceptanceSpec extends AnyWordSpec with Matchers {
         val result = StreamPairSimulation.run(config, evenlySpaced(Side.A, chunks, 0L, 5.millis))
         result.completed shouldBe true
         new String(result.b.delivered.flatten.toArray, StandardCharsets.UTF_8) shouldBe loremIpsum
-        result.b.counters.delivered shouldBe chunks.size
-        if (loss > 0.0) result.a.counters.retransmissions should be > 0L
+        result.b.stats.delivered shouldBe chunks.size
+        if (loss > 0.0) result.a.stats.retransmissions should be > 0L
       }
   }
 
@@ -120,8 +120,8 @@ class ThesisAcceptanceSpec extends AnyWordSpec with Matchers {
         if (seed == seeds.head && (loss == 0.0 || loss == 0.1))
           info(
             f"finished after ${result.finishedAt / 1e6}%.1f ms simulated, last delivery at " +
-              f"${result.lastDeliveryAt / 1e6}%.1f ms, ${result.a.counters.dataSegmentsSent} data segments sent, " +
-              f"${result.a.counters.retransmissions} retransmissions, ${result.a.link.lost} of " +
+              f"${result.lastDeliveryAt / 1e6}%.1f ms, ${result.a.stats.dataSegmentsSent} data segments sent, " +
+              f"${result.a.stats.retransmissions} retransmissions, ${result.a.link.lost} of " +
               f"${result.a.link.datagrams} datagrams A to B lost"
           )
       }

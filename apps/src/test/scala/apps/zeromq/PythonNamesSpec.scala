@@ -1,0 +1,39 @@
+package apps.zeromq
+
+import java.io.File
+import java.nio.charset.StandardCharsets
+import java.nio.file.Files
+
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.wire.Posture
+import robotmiddleware.ActuatorGroup
+
+/** The Python client's names for postures and actuator groups are the gateway's, in the same order. */
+class PythonNamesSpec extends AnyWordSpec with Matchers {
+
+  private lazy val client: String =
+    new String(Files.readAllBytes(new File(PythonEnv.root, "apps/python/naogateway_client.py").toPath), StandardCharsets.UTF_8)
+
+  /** The strings of the module-level tuple `name = ("a", "b", ...)` in the client's source. */
+  private def tuple(name: String): Vector[String] = {
+    val assignment = s"""(?m)^$name = \\(([^)]*)\\)""".r
+    val body = assignment.findFirstMatchIn(client).getOrElse(fail(s"apps/python/naogateway_client.py has no $name tuple")).group(1)
+    "\"([^\"]*)\"".r.findAllMatchIn(body).map(_.group(1)).toVector
+  }
+
+  "The Python client" should {
+    "name every posture a robot reports as Posture does" in {
+      tuple("POSTURES") shouldBe Posture.known.map(_.name)
+    }
+
+    "name the postures a caller may ask for as Posture.targets does" in {
+      tuple("POSTURE_TARGETS") shouldBe Posture.targets.map(_.name)
+    }
+
+    "name the actuator groups as ActuatorGroup does" in {
+      tuple("ACTUATOR_GROUPS") shouldBe ActuatorGroup.all.map(_.name)
+    }
+  }
+}
