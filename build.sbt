@@ -52,24 +52,52 @@ lazy val proto = (project in file("proto"))
     scalacOptions ++= Seq("-deprecation", "-feature")
   )
 
-lazy val naogateway = (project in file("naogateway"))
+// The robots' wire format (frames, messages, RPC, HaViMo, the secure stream, GameController packets): pure
+// code over the protobuf classes. No Akka on its classpath, so none can creep in (wire.NoAkkaSpec checks).
+lazy val wire = (project in file("naogateway/wire"))
   .dependsOn(proto)
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-wire",
+    libraryDependencies ++= testLibs
+  )
+
+lazy val naogateway = (project in file("naogateway"))
+  .dependsOn(proto, wire)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
     libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j, jeromq, logback) ++ testLibs ++ akkaTestLibs
   )
 
+// The simulator: simulated robots and their firmware, the GS1500M model, the lossy network, the fleet and the
+// simulated GameController. The demo runs it, so it is a jar of its own beside the gateway's, not inside it.
+// Its tests hold every gateway test that drives a simulated robot (sbt allows no cycle back into naogateway);
+// they take the gateway's test resources (logback-test.xml) through test->test.
+lazy val sim = (project in file("naogateway/sim"))
+  .dependsOn(naogateway % "compile->compile;test->test", wire % "compile->compile;test->test")
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-sim",
+    libraryDependencies ++= testLibs ++ akkaTestLibs
+  )
+
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(naogateway % "compile->compile;test->test")
+  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",
-    libraryDependencies ++= Seq(akkaClusterTyped, scalaReflect) ++ testLibs ++ akkaTestLibs
+    // The cluster's own messages (cluster.proto) import the robot protos of `proto`, whose classes that module
+    // already holds. protoc sees only the imported files, not `proto`'s package.proto with its flat_package
+    // option, so the generator is told flat packages itself (both packages use them).
+    Compile / PB.targets := Seq(scalapb.gen(flatPackage = true) -> (Compile / sourceManaged).value / "scalapb"),
+    Compile / PB.includePaths ++= (proto / Compile / PB.protoSources).value,
+    libraryDependencies ++= Seq(akkaClusterTyped, scalaReflect) ++ testLibs ++ akkaTestLibs,
+    libraryDependencies += "com.thesamet.scalapb" %% "scalapb-runtime" % V.scalapb % "protobuf"
   )
 
 lazy val apps = (project in file("apps"))
-  .dependsOn(robotmiddleware % "compile->compile;test->test")
+  .dependsOn(robotmiddleware % "compile->compile;test->test", sim % "compile->compile;test->test")
   .enablePlugins(JavaAppPackaging)
   .settings(strictScalac, testSettings)
   .settings(
@@ -96,7 +124,7 @@ lazy val apps = (project in file("apps"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, naogateway, robotmiddleware, apps)
+  .aggregate(proto, wire, naogateway, sim, robotmiddleware, apps)
   .dependsOn(apps % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(

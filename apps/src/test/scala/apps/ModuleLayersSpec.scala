@@ -1,0 +1,61 @@
+package apps
+
+import java.io.File
+import java.net.URL
+import java.nio.file.{Files, Path, Paths}
+import java.util.zip.ZipFile
+
+import scala.jdk.CollectionConverters._
+import scala.util.Using
+
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+/** The modules the build separates stay separate in what it produces: the gateway ships no simulator class. */
+class ModuleLayersSpec extends AnyWordSpec with Matchers {
+
+  /** Where a class was loaded from: a classes directory or a jar. */
+  private def origin(cls: Class[_]): Path = {
+    val location: URL = cls.getProtectionDomain.getCodeSource.getLocation
+    Paths.get(location.toURI)
+  }
+
+  /** The class-file paths ('/'-separated) of a classes directory or a jar. */
+  private def classEntries(at: Path): Seq[String] =
+    if (Files.isDirectory(at))
+      Using.resource(Files.walk(at))(_.iterator.asScala.filter(p => Files.isRegularFile(p)).map(p => at.relativize(p).toString.replace(File.separatorChar, '/')).toVector)
+    else
+      Using.resource(new ZipFile(at.toFile))(_.entries.asScala.map(_.getName).toVector)
+
+  /** A Scala object's class, without running its initialiser. */
+  private def objectClass(name: String): Class[_] = Class.forName(name + "$", false, getClass.getClassLoader)
+
+  private val gateway = origin(objectClass("naogateway.Gateway"))
+
+  "The gateway's classes" should {
+    "hold no naogateway.sim class" in {
+      val entries = classEntries(gateway)
+      entries should contain("naogateway/Gateway.class")
+      entries.filter(_.startsWith("naogateway/sim/")) shouldBe empty
+    }
+
+    "hold no wire class either: the wire format is a module of its own" in {
+      classEntries(gateway).filter(_.startsWith("naogateway/wire/")) shouldBe empty
+      origin(objectClass("naogateway.wire.Datagram")) should not be gateway
+    }
+  }
+
+  "The simulator's classes" should {
+    "come from the sim module, not the gateway's" in {
+      val sim = origin(classOf[naogateway.sim.FleetSettings])
+      sim should not be gateway
+      classEntries(sim) should contain("naogateway/sim/SimulatedRobot.class")
+    }
+
+    "keep the test-only experiments out of the simulator's main classes" in {
+      val sim = origin(classOf[naogateway.sim.FleetSettings])
+      origin(objectClass("naogateway.sim.StreamPairSimulation")) should not be sim
+      classEntries(sim).filter(e => e.contains("StreamPairSimulation") || e.contains("OverflowExperiment")) shouldBe empty
+    }
+  }
+}
