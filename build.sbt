@@ -83,7 +83,7 @@ lazy val sim = (project in file("naogateway/sim"))
   )
 
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test")
+  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",

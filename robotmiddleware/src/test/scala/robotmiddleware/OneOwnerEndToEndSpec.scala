@@ -12,7 +12,7 @@ import naogateway._
 import naogateway.integration.GatewayFixture
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{ReceivedCall, SimulatedRobot}
-import naogateway.wire.{RpcMethod, RpcValue}
+import naogateway.wire.{Posture, RpcMethod, RpcValue}
 
 /**
  * A robot's command order end to end, seen where it counts: the simulated robot's receive log. Loopback only, ports
@@ -53,7 +53,7 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         val middleware = spawn(RobotMiddleware(f.gateway, settings))
         val app = Await.result(RobotClient.connect(system, middleware, "walker", 1), Patience)
         untilDone(5)(app.acquire(21, ActuatorGroup.Walk, ActuatorGroup.Head, ActuatorGroup.Arms))
-        untilDone(10)(app.posture(21, "stand")) shouldBe "stand"
+        untilDone(10)(app.posture(21, Posture.Stand)) shouldBe Posture.Stand
         untilDone(10)(app.walk(21, 0.2, 0, 0))
         // Quick changes of every slot: far more than the budget lets out, so the outbox holds them back.
         val burst = (1 to 40).flatMap { i =>

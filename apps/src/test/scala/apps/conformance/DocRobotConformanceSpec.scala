@@ -18,7 +18,7 @@ import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
-import naogateway.wire.{MessageContents, RpcValue}
+import naogateway.wire.{MessageContents, Posture, RpcValue}
 import naogateway.{Gateway, GatewaySettings, RobotActor, StreamActor}
 import robotmiddleware.{ActuatorGroup, MiddlewareSettings, RobotClient, RobotFailure, RobotInterface, RobotMiddleware}
 
@@ -269,10 +269,10 @@ class DocRobotConformanceSpec
       robotError("bad parameters: "))
     step("7.4", "unknown-posture")(client.call(id, "motion", "posture", RpcValue.Text("fly")))(robotError("bad parameters: "))
     if (answered) {
-      val standing = client.posture(id, "stand")
+      val standing = client.posture(id, Posture.Stand)
       Thread.sleep(300)
       step("7.4", "posture-during-posture")(client.call(id, "motion", "posture", RpcValue.Text("crouch")))(robotError("busy: moving"))
-      step("7.2", "posture-answers-when-reached")(standing)(_ == Right("stand"))
+      step("7.2", "posture-answers-when-reached")(standing)(_ == Right(Posture.Stand))
     }
     step("7.2", "walk")(client.walk(id, 0.1, 0, 0))(_.isRight)
     step("7.2", "getPosture-walking")(client.call(id, "motion", "getPosture"))(_ == Right(Some(RpcValue.Text("walking"))))
