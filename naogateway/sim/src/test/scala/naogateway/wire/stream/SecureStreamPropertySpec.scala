@@ -12,6 +12,7 @@ import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
 
 import SecureStream._
+import StreamTestKit._
 
 /** Properties over arbitrary datagrams and over random seeded channels. */
 class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
@@ -147,6 +148,76 @@ class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheck
         state.nextTimerAt shouldBe None
         ticked(now + 3600L * 1000000000L) shouldBe empty
       }
+    }
+  }
+
+  "Lost-resend detection" should {
+    "on a channel that keeps order and never duplicates, send the oldest segment again only when its copy was lost" in {
+      val runs = for {
+        seed <- Gen.choose(Long.MinValue, Long.MaxValue)
+        window <- Gen.oneOf(2, 4, 20)
+        count <- Gen.choose(5, 80)
+        lossOut <- Gen.choose(0.0, 0.4)
+        lossBack <- Gen.choose(0.0, 0.4)
+      } yield (seed, window, count, lossOut, lossBack)
+      var detections = 0L
+      forAll(runs, minSuccessful(200)) { case (seed, window, count, lossOut, lossBack) =>
+        val random = new java.util.SplittableRandom(seed)
+        val settings = StreamSettings.selectiveRepeat(window)
+        var a = SecureStream.initial(settings, 0L)
+        var b = SecureStream.initial(settings, 0L)
+        val toB = mutable.Queue.empty[Array[Byte]]
+        val toA = mutable.Queue.empty[Array[Byte]]
+        // The fate of the newest copy of each sequence number A sent: None while it is on its way.
+        val lost = mutable.Map.empty[Int, Option[Boolean]]
+        val got = mutable.ArrayBuffer.empty[String]
+        var acked = 0
+        var now = 0L
+        def fromA(step: Step): Unit = {
+          val before = a.stats.lostRetransmissions
+          a = step.state
+          val data = datagrams(step).filter(_.length > HeaderBytes)
+          if (a.stats.lostRetransmissions > before) {
+            detections += 1
+            withClue(s"seed $seed window $window: resent seq ${data.head(0)} while its copy was ${lost(data.head(0))}: ") {
+              lost(data.head(0).toInt) shouldBe Some(true)
+            }
+          }
+          data.foreach(d => lost(d(0).toInt) = None)
+          acked += acknowledged(step).size
+          toB ++= datagrams(step)
+        }
+        def fromB(step: Step): Unit = {
+          b = step.state
+          got ++= delivered(step)
+          toA ++= datagrams(step)
+        }
+        (0 until count).foreach(i => fromA(a.offer(s"p$i", i.toLong, now)))
+        var steps = 0
+        while (acked < count && steps < 100000) {
+          steps += 1
+          now += ms(1)
+          val r = random.nextDouble()
+          if (toB.nonEmpty && (r < 0.5 || toA.isEmpty)) {
+            val d = toB.dequeue()
+            val drop = random.nextDouble() < lossOut
+            if (d.length > HeaderBytes) lost(d(0).toInt) = Some(drop)
+            if (!drop) fromB(b.receive(d, now))
+          } else if (toA.nonEmpty) {
+            val d = toA.dequeue()
+            if (random.nextDouble() >= lossBack) fromA(a.receive(d, now))
+          } else {
+            // Both directions are empty: only a timer can move things on.
+            now = math.max(now, a.nextTimerAt.getOrElse(now))
+            fromA(a.tick(now))
+            b.nextTimerAt.filter(_ <= now).foreach(_ => fromB(b.tick(now)))
+          }
+        }
+        acked shouldBe count
+        got.toVector shouldBe (0 until count).map(i => s"p$i")
+      }
+      // The property must not hold only because the rule never fired.
+      detections should be > 0L
     }
   }
 

@@ -39,8 +39,12 @@ import naogateway.wire.WireLimits
   *   1. One retransmission timer runs for the oldest unacknowledged segment. When it expires only that segment is
   *      sent again and the timeout doubles (up to maxRto). At W > 1 only: two duplicate pure ACKs resend the oldest
   *      segment once per recovery (fast retransmit), and an ACK that advances but does not cover everything sent
-  *      before the loss was noticed resends the new oldest segment at once (partial ACK, as in NewReno). So only
-  *      missing segments are sent again. There is no fast retransmit at W = 1.
+  *      before the loss was noticed resends the new oldest segment at once (partial ACK, as in NewReno). A resent
+  *      oldest segment is itself taken as lost, and sent again at once, when two more duplicate pure ACKs arrive
+  *      after it than the segments ahead of it can explain: those sent after the latest transmission among the
+  *      segments the last advancing ACK covered, and before the resend (the link keeps order, so earlier ones were
+  *      answered with an older ACK). So only missing segments are sent again, and a lost resend need not wait for
+  *      the timer. There is no fast retransmit at W = 1.
   *   1. The timeout adapts as in RFC 6298: SRTT and RTTVAR with alpha 1/8 and beta 1/4, RTO = SRTT + max(1 ms,
   *      4 RTTVAR) kept within [minRto, maxRto], initialRto before the first sample. Karn's rule: an ACK gives a
   *      sample only from the newest segment it covers, and only if that segment was sent once and nothing else the
@@ -97,6 +101,9 @@ final class SecureStream private (
     private val rtxAt: Long,
     private val dupAcks: Int,
     private val recoverSeq: Int,
+    private val rtxAhead: Int,
+    private val dupAcksSinceRtx: Int,
+    private val coveredSentAt: Long,
     private val lastInOrderSeq: Int,
     private val buffer: Map[Int, Array[Byte]],
     private val lastTransmitAt: Long,
@@ -204,6 +211,9 @@ final class SecureStream private (
       rtxAt = NoTime,
       dupAcks = 0,
       recoverSeq = NoRecovery,
+      rtxAhead = NoMark,
+      dupAcksSinceRtx = 0,
+      coveredSentAt = NoTime,
       lastInOrderSeq = settings.maxSeq,
       buffer = Map.empty,
       lastTransmitAt = now,
@@ -297,6 +307,9 @@ object SecureStream {
       rtxAt = NoTime,
       dupAcks = 0,
       recoverSeq = NoRecovery,
+      rtxAhead = NoMark,
+      dupAcksSinceRtx = 0,
+      coveredSentAt = NoTime,
       lastInOrderSeq = settings.maxSeq,
       buffer = Map.empty,
       lastTransmitAt = now,
@@ -309,6 +322,7 @@ object SecureStream {
   private final val NoTime = Long.MinValue
   private final val NoDeadline = Long.MaxValue
   private final val NoRecovery = -1
+  private final val NoMark = -1
 
   /** A sent, unacknowledged data segment; `serial` links it to its deadline entry. */
   private final case class Slot(
@@ -354,6 +368,14 @@ object SecureStream {
     private var rtxAt = s.rtxAt
     private var dupAcks = s.dupAcks
     private var recoverSeq = s.recoverSeq
+    // Lost-resend detection. coveredSentAt: the latest transmission among the segments the last advancing ACK
+    // covered; the copy that completed that ACK went no later, and the link keeps order, so segments sent before it
+    // arrived before it and were answered with an older ACK. rtxAhead: the unacknowledged segments sent after that
+    // and before the latest resend of the oldest one; dupAcksSinceRtx: duplicate ACKs counted since that resend. Each
+    // segment ahead causes at most one, so more mean the resend itself was lost.
+    private var rtxAhead = s.rtxAhead
+    private var dupAcksSinceRtx = s.dupAcksSinceRtx
+    private var coveredSentAt = s.coveredSentAt
     private var lastInOrder = s.lastInOrderSeq
     private var buffer = s.buffer
     private var lastTransmitAt = s.lastTransmitAt
@@ -374,6 +396,7 @@ object SecureStream {
     private var skipped = c0.skipped
     private var acknowledged = c0.acknowledged
     private var expired = c0.expired
+    private var lostRetransmissions = c0.lostRetransmissions
 
     private var outputs = Vector.empty[Output]
     private var sentData = false
@@ -397,7 +420,8 @@ object SecureStream {
           ignored,
           skipped,
           acknowledged,
-          expired
+          expired,
+          lostRetransmissions
         )
       val state = new SecureStream(
         st,
@@ -413,6 +437,9 @@ object SecureStream {
         rtxAt,
         dupAcks,
         recoverSeq,
+        rtxAhead,
+        dupAcksSinceRtx,
+        coveredSentAt,
         lastInOrder,
         buffer,
         lastTransmitAt,
@@ -594,6 +621,14 @@ object SecureStream {
       if (slots.nonEmpty) {
         if (!slots(0).expired) transmitSlot(0)
         else if (!sentPureAck) sendPureAck()
+        var ahead = 0
+        var i = 1
+        while (i < slots.length) {
+          if (slots(i).lastSentAt >= coveredSentAt) ahead += 1
+          i += 1
+        }
+        rtxAhead = ahead
+        dupAcksSinceRtx = 0
       }
 
     private def deliver(payload: Array[Byte]): Unit = {
@@ -643,10 +678,12 @@ object SecureStream {
       // Karn: only a segment sent once can be timed, and only if nothing else this ACK covers was sent after it
       // (else the ACK may answer that later copy).
       var clean = newest.transmissions == 1
+      var coveredAt = NoTime
       var i = 0
       while (i < count) {
         val slot = slots(i)
         if (slot.lastSentAt > newest.firstSentAt) clean = false
+        coveredAt = math.max(coveredAt, slot.lastSentAt)
         if (!slot.expired) {
           acknowledged += 1
           outputs :+= Acknowledged(slot.id)
@@ -657,6 +694,9 @@ object SecureStream {
       slots = slots.drop(count)
       lastAcked = ack
       dupAcks = 0
+      rtxAhead = NoMark
+      dupAcksSinceRtx = 0
+      coveredSentAt = coveredAt
       rto = if (clean) rto.sample(now - newest.firstSentAt, st) else rto.afterProgress(st)
       val partial = recoverSeq != NoRecovery && {
         val covered = count >= mod(recoverSeq - previous)
@@ -678,6 +718,16 @@ object SecureStream {
           fastRetransmissions += 1
           retransmitOldest()
           rtxAt = now + rto.rtoNanos
+        } else if (rtxAhead != NoMark) {
+          dupAcksSinceRtx += 1
+          // Only the segments that were ahead of the resend can explain a duplicate ACK while it is on its way;
+          // FastRetransmitThreshold more than those (a duplicated datagram causes one extra) mean it was lost, so it
+          // goes again now instead of after a timeout that a window of queued segments has made long.
+          if (dupAcksSinceRtx >= rtxAhead + FastRetransmitThreshold) {
+            lostRetransmissions += 1
+            retransmitOldest()
+            rtxAt = now + rto.rtoNanos
+          }
         }
       }
   }

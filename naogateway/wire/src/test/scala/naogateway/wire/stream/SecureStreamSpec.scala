@@ -398,6 +398,51 @@ class SecureStreamSpec extends AnyWordSpec with Matchers {
       full.state.inFlight shouldBe 1
     }
 
+    "resend a lost resend at once when more duplicate ACKs arrive than the segments ahead of it can explain" in {
+      var a = SecureStream.initial(sr4, 0L)
+      (0 until 8).foreach(i => a = a.offer(s"p$i", i.toLong, 0L).state)
+      // Seq 0 and 2 are lost; the duplicate ACKs of 1 and 3 resend 0, whose arrival makes B acknowledge 1.
+      val fast = a.receive(segment(41, 41), ms(10)).state.receive(segment(41, 41), ms(11))
+      headers(fast) shouldBe Vector((0, 41))
+      val partial = fast.state.receive(segment(41, 1), ms(20))
+      headers(partial) shouldBe Vector((2, 41), (4, 41), (5, 41))
+      // The resent seq 2 is lost too. Seq 3 went before the resent 0, so B answered it with an older ACK: nothing
+      // was ahead of the resent 2, and the duplicate ACKs of 4 and 5 prove it lost.
+      val dup4 = partial.state.receive(segment(41, 1), ms(30))
+      dup4.outputs shouldBe empty
+      val dup5 = dup4.state.receive(segment(41, 1), ms(31))
+      headers(dup5) shouldBe Vector((2, 41))
+      dup5.state.stats.lostRetransmissions shouldBe 1
+      dup5.state.stats.timeouts shouldBe 0
+      dup5.state.nextTimerAt shouldBe Some(ms(31) + dup5.state.rtoNanos)
+    }
+
+    "not resend the oldest again while the segments ahead of its resend can explain the duplicate ACKs" in {
+      var a = SecureStream.initial(sr4, 0L)
+      (0 until 4).foreach(i => a = a.offer(s"p$i", i.toLong, 0L).state)
+      var step = a.receive(segment(41, 41), ms(10)).state.receive(segment(41, 41), ms(11))
+      headers(step) shouldBe Vector((0, 41))
+      // Seq 1 to 3 were ahead of the resend: each may still cause a duplicate ACK, and one more may be a duplicated
+      // datagram, so four prove nothing; a fifth does.
+      (1 to 4).foreach { i =>
+        step = step.state.receive(segment(41, 41), ms(11L + i))
+        step.outputs shouldBe empty
+      }
+      val fifth = step.state.receive(segment(41, 41), ms(16))
+      headers(fifth) shouldBe Vector((0, 41))
+      fifth.state.stats.lostRetransmissions shouldBe 1
+    }
+
+    "count no lost resends at window 1, where duplicate ACKs start nothing" in {
+      var a = SecureStream.initial(thesis, 0L)
+      a = a.offer("p0", 0L, 0L).state
+      val timeout = a.tick(ms(200))
+      headers(timeout) shouldBe Vector((0, 20))
+      val dups = (1 to 5).foldLeft(timeout) { (st, i) => st.state.receive(segment(20, 20), ms(200L + i)) }
+      dups.outputs shouldBe empty
+      dups.state.stats.lostRetransmissions shouldBe 0
+    }
+
     "on timeout resend only the oldest unacknowledged segment and back off" in {
       var a = SecureStream.initial(sr4, 0L)
       (0 until 4).foreach(i => a = a.offer(s"p$i", i.toLong, 0L).state)

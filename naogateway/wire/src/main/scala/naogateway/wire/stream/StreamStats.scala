@@ -27,6 +27,9 @@ package naogateway.wire.stream
   *   own payloads the peer acknowledged
   * @param expired
   *   own payloads given up because their deadline passed
+  * @param lostRetransmissions
+  *   resends of the oldest segment found lost by counting duplicate ACKs, and sent again before the timer expired
+  *   (never at window 1)
   */
 final case class StreamStats(
     dataSegmentsSent: Long,
@@ -40,7 +43,8 @@ final case class StreamStats(
     ignored: Long,
     skipped: Long,
     acknowledged: Long,
-    expired: Long
+    expired: Long,
+    lostRetransmissions: Long
 ) {
 
   /** Every datagram this endpoint sent. */
@@ -51,5 +55,5 @@ final case class StreamStats(
 object StreamStats {
 
   /** All totals zero. */
-  val zero: StreamStats = StreamStats(0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L)
+  val zero: StreamStats = StreamStats(0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L, 0L)
 }
