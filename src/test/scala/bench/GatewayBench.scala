@@ -57,6 +57,11 @@ import naogateway.wire.{MessageContents, RpcCall}
 object GatewayBench extends Benchmark {
   val name = "gateway"
 
+  /** The parts to run (`rtt`, `ingest`, `heartbeat`, `fleet`); all when empty. */
+  var parts: Set[String] = Set.empty
+  private def part(name: String)(figures: => ListMap[String, Double]): ListMap[String, Double] =
+    if (parts.isEmpty || parts(name)) figures else ListMap.empty
+
   private val RttWarmup = 2000
   private val RttSamples = 3000
   private val RttGapNanos = 1000000L
@@ -84,10 +89,10 @@ object GatewayBench extends Benchmark {
     startedAt.set(System.nanoTime())
     progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${loadAverage()}")
     quietLogging {
-      val rtt = roundTrips()
-      val ingest = ingestion()
-      val heartbeat = heartbeats()
-      val fleet = fleets()
+      val rtt = part("rtt")(roundTrips())
+      val ingest = part("ingest")(ingestion())
+      val heartbeat = part("heartbeat")(heartbeats())
+      val fleet = part("fleet")(fleets())
       progress(s"done, load average ${loadAverage()}")
       rtt ++ ingest ++ heartbeat ++ fleet
     }
