@@ -235,7 +235,8 @@ object Gateway {
       entry
     }
 
-    private def wiring(backlog: Backlog): RobotActor.Wiring = RobotActor.Wiring(subscribers, Some(subscriptionRequests), backlog)
+    // The robot actor asks for the subscribers itself (RobotWantsSubscribers), on its first start and after restarts.
+    private def wiring(backlog: Backlog): RobotActor.Wiring = RobotActor.Wiring(Set.empty, Some(subscriptionRequests), backlog)
 
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
     private def spawnZmqRobot(robot: ZmqRobot): Unit = {

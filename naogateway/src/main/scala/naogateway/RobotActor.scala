@@ -57,16 +57,17 @@ object RobotActor {
   final case class SubscribersWanted(robot: ActorRef[Subscribers])
 
   /**
-   * How a robot actor is wired to its gateway: the event subscribers when it was spawned, where it asks for them again
-   * after a restart (the gateway pushes every later change itself), and the backlog of datagrams the robot port's
-   * reader has handed it (given back as each is handled).
+   * How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start
+   * (a restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the
+   * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
+   * the robot port's reader has handed the actor, given back as each is handled.
    */
   final case class Wiring(subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
 
   /** Wirings without a gateway. */
   object Wiring {
 
-    /** Events to `events` alone, nobody to ask after a restart: for a robot actor on its own (tests). */
+    /** Events to `events` alone, no gateway to ask: for a robot actor on its own (tests). */
     def to(events: ActorRef[GatewayEvent]): Wiring = Wiring(Set(events), None, new Backlog(Int.MaxValue))
   }
 
@@ -138,6 +139,9 @@ object RobotActor {
     def connected(robotId: Int): Connected = Connected(robotId, response, noResponse, vision, stream)
   }
 
+  /** Events a robot actor holds while it waits for the gateway's subscriber list. */
+  private val HeldEvents = 64
+
   private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
 
   /**
@@ -180,8 +184,9 @@ object RobotActor {
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
     private var zmqLink: Option[ActorRef[ZmqRobotLink.Command]] = None
-    // Set by the gateway (Subscribers); read only to publish.
-    private var subscribers = wiring.subscribers
+    // Set by the gateway (Subscribers); None until its first answer, and events wait meanwhile.
+    private var subscribers: Option[Set[ActorRef[GatewayEvent]]] = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
+    private var held = Vector.empty[GatewayEvent]
 
     // Link figures: mutable counters owned by this actor alone.
     private var address: InetSocketAddress = null
@@ -284,7 +289,11 @@ object RobotActor {
       publish(RobotOnline(robotId, address))
     }
 
-    private def publish(event: GatewayEvent): Unit = subscribers.foreach(_ ! event)
+    private def publish(event: GatewayEvent): Unit = subscribers match {
+      case Some(all) => all.foreach(_ ! event)
+      // The gateway answers within one of its messages; a bound all the same, so a silent gateway costs no memory.
+      case None => if (held.size < HeldEvents) held :+= event
+    }
 
     /** The snapshot as it leaves this actor: `online` from the behaviour, the quality offline while offline. */
     private def view(online: Boolean): RobotSnapshot =
@@ -344,7 +353,9 @@ object RobotActor {
         count(reason)
         Behaviors.same
       case Subscribers(now) =>
-        subscribers = now
+        subscribers = Some(now)
+        held.foreach(e => now.foreach(_ ! e))
+        held = Vector.empty
         Behaviors.same
       case ReachabilityWanted(replyTo) =>
         replyTo ! online
