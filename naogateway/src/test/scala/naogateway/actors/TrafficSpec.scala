@@ -85,6 +85,21 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
       outcomes.expectMessage(Outbox.Accepted(8))
       link.expectMessageType[UdpLink.Send]
     }
+    "count a datagram the socket did not take (kernel buffer full) as dropped, and keep sending" in {
+      val taken = new java.util.concurrent.atomic.AtomicBoolean(false)
+      val sent = new java.util.concurrent.atomic.AtomicInteger
+      val full: naogateway.link.DatagramWriter = (_, _) => { sent.incrementAndGet(); taken.get }
+      val outbox = spawn(Outbox(full, BudgetSettings(125000, 0, 0.8), competition = false))
+      val stats = createTestProbe[Outbox.TrafficStats]()
+      outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Command)
+      outbox ! Outbox.GetStats(stats.ref)
+      stats.receiveMessage().dropped shouldBe 1
+      taken.set(true)
+      outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Command)
+      outbox ! Outbox.GetStats(stats.ref)
+      val after = stats.receiveMessage()
+      (after.dropped, after.datagramsOut, sent.get) shouldBe ((1L, 2L, 2))
+    }
   }
 }
 
