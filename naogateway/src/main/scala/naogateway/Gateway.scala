@@ -5,7 +5,7 @@ import java.util.concurrent.ConcurrentHashMap
 import java.util.concurrent.atomic.{AtomicLong, AtomicReference}
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
-import akka.actor.typed.{ActorRef, Behavior, PostStop, SupervisorStrategy}
+import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop, SupervisorStrategy}
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
 
@@ -75,6 +75,9 @@ object Gateway {
   /** Refusal counter key of a frame dropped because the gateway has [[GatewayBacklog]] waiting. */
   val GatewayBusy: String = "gateway busy: backlog full"
 
+  /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
+  val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
+
   /** A datagram robot as the port's reader reaches it: its actor and the backlog of what the reader handed it. */
   private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog)
 
@@ -93,7 +96,8 @@ object Gateway {
         val outbox = context.spawn(
           Behaviors.supervise(Outbox(port, settings.budget, settings.competition))
             .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
-          "outbox"
+          "outbox",
+          RobotDispatcher
         )
         val logic = new GatewayLogic(settings, context, stash, port, outbox)
         logic.start()
@@ -225,7 +229,8 @@ object Gateway {
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard))
           .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
-        s"robot-$robotId"
+        s"robot-$robotId",
+        RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId))
       val entry = Entry(actor, address, heard, zeromq = false, backlog)
@@ -245,7 +250,8 @@ object Gateway {
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
           RobotActor.Transport.ZeroMq(robot.endpoint)))
           .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
-        s"robot-${robot.robotId}"
+        s"robot-${robot.robotId}",
+        RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robot.robotId))
       byId = byId.updated(robot.robotId, Entry(actor, robot.address, heard = false, zeromq = true, backlog))

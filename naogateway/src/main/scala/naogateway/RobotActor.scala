@@ -222,7 +222,8 @@ object RobotActor {
       }
       val heartbeat = context.spawn(
         Behaviors.supervise(HeartBeatActor(heartbeatSettings, heartbeatReports, online = false)).onFailure(ChildRestarts),
-        "heartbeat"
+        "heartbeat",
+        Gateway.RobotDispatcher
       )
       // A discovered robot has spoken already: its keep-alive counts as the first sign of life.
       if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
@@ -233,10 +234,10 @@ object RobotActor {
       val self = context.self
       Children(
         heartbeat,
-        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response"),
-        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "no-response"),
-        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision"),
-        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream")
+        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "no-response", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream", Gateway.RobotDispatcher)
       )
     }
 
