@@ -21,12 +21,13 @@ object BenchSuite {
   /** Every benchmark, in the order they run. */
   val benchmarks: Vector[Benchmark] = Vector(CodecBench, StreamBench, SimBench, GatewayBench, RobotCtlBench, IdleCpuBench)
 
-  /** Run only when named: `./sbt "bench soak [minutes]"`. */
+  /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the gateway's. */
   val onRequest: Vector[Benchmark] = Vector(Soak)
 
   def main(args: Array[String]): Unit = {
     args.flatMap(_.toDoubleOption).headOption.foreach(m => Soak.minutes = m)
-    val names = args.filter(_.toDoubleOption.isEmpty)
+    args.collect { case s"gateway:$parts" => GatewayBench.parts = parts.split(',').toSet }
+    val names = args.filter(_.toDoubleOption.isEmpty).map(_.takeWhile(_ != ':'))
     val selected = if (names.isEmpty) benchmarks else (benchmarks ++ onRequest).filter(b => names.contains(b.name))
     val results = selected.foldLeft(ListMap.empty[String, Double]) { (acc, b) =>
       println(s"running ${b.name} ...")

@@ -48,7 +48,7 @@ import naogateway.wire.{MessageContents, RpcCall}
  *  - `fleet_*`: the largest fleet of [[FleetSizes]] (keep-alives at 5 Hz) that had no RobotOffline event over 60 s.
  *    The gateway and the simulated robots run in two actor systems of this JVM, so the gateway's part can be
  *    separated: `fleet_gateway_cpu_pct` is the CPU time of the gateway system's threads (dispatchers, scheduler,
- *    Akka IO selector) over the 60 s, in percent of one core; GC and JIT threads serve both systems and are not in
+ *    robot port reader, Akka IO selector of the GameController link) over the 60 s, in percent of one core; GC and JIT threads serve both systems and are not in
  *    it (the progress lines show them, the robots' threads and the whole process). `fleet_heap_bytes_per_robot` is
  *    the gateway's heap per robot: used heap after GC with the fleet minus used heap after GC once the gateway
  *    system is stopped (robots still running), less the empty gateway system, divided by the robots; the progress
@@ -56,6 +56,11 @@ import naogateway.wire.{MessageContents, RpcCall}
  */
 object GatewayBench extends Benchmark {
   val name = "gateway"
+
+  /** The parts to run (`rtt`, `ingest`, `heartbeat`, `fleet`); all when empty. */
+  var parts: Set[String] = Set.empty
+  private def part(name: String)(figures: => ListMap[String, Double]): ListMap[String, Double] =
+    if (parts.isEmpty || parts(name)) figures else ListMap.empty
 
   private val RttWarmup = 2000
   private val RttSamples = 3000
@@ -84,10 +89,10 @@ object GatewayBench extends Benchmark {
     startedAt.set(System.nanoTime())
     progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${loadAverage()}")
     quietLogging {
-      val rtt = roundTrips()
-      val ingest = ingestion()
-      val heartbeat = heartbeats()
-      val fleet = fleets()
+      val rtt = part("rtt")(roundTrips())
+      val ingest = part("ingest")(ingestion())
+      val heartbeat = part("heartbeat")(heartbeats())
+      val fleet = part("fleet")(fleets())
       progress(s"done, load average ${loadAverage()}")
       rtt ++ ingest ++ heartbeat ++ fleet
     }

@@ -1,12 +1,17 @@
 package naogateway
 
 import java.net.InetSocketAddress
+import java.util.concurrent.ConcurrentHashMap
+import java.util.concurrent.atomic.{AtomicLong, AtomicReference}
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
-import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
+import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop, SupervisorStrategy}
 import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
 
-import naogateway.link.UdpLink
+import org.slf4j.LoggerFactory
+
+import naogateway.link.{Backlog, RobotPort, UdpLink}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
 
@@ -19,7 +24,7 @@ object Gateway {
   /** Answers with the bound addresses (the real ports when 0 was configured). */
   final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Command
 
-  /** Answers with the latest snapshot of every known robot. */
+  /** Answers with every known robot's snapshot, asked of the robot actors ([[SnapshotTimeout]] for each). */
   final case class GetRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Command
 
   /** Answers with the robot actor of `robotId`, if the robot is known. */
@@ -28,7 +33,7 @@ object Gateway {
   /** Lets robot `robotId` be re-bound to the address its next datagram comes from. */
   final case class AllowRebind(robotId: Int) extends Command
 
-  /** Sends every `GatewayEvent` to `subscriber` until it stops. */
+  /** Sends every `GatewayEvent` to `subscriber` until it stops (robot events come straight from the robot actors). */
   final case class Subscribe(subscriber: ActorRef[GatewayEvent]) extends Command
 
   /** Stops sending events to `subscriber`. */
@@ -43,11 +48,11 @@ object Gateway {
   /** Answers with the latest GameController packet, if any arrived. */
   final case class GetGameState(replyTo: ActorRef[Option[GameControlData]]) extends Command
 
-  private final case class RobotLinkEvent(event: UdpLink.Event) extends Command
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
-  private final case class Publish(event: GatewayEvent) extends Command
+  private final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int) extends Command
+  private final case class RobotWantsSubscribers(request: RobotActor.SubscribersWanted) extends Command
 
   /** Where the gateway listens. */
   final case class Addresses(robots: InetSocketAddress, gameController: Option[InetSocketAddress])
@@ -55,147 +60,227 @@ object Gateway {
   /** The gateway's own figures: datagrams seen, relayed, refused by reason. */
   final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int)
 
-  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, heard: Boolean, zeromq: Boolean = false)
+  /** How long `GetRobots` waits for each robot actor; one that does not answer in time is listed as not reached. */
+  val SnapshotTimeout: FiniteDuration = 1.second
+
+  /** Datagrams the port's reader hands one robot actor that may wait in its mailbox before more are dropped. */
+  val RobotBacklog: Int = 256
+
+  /** Frames the port's reader hands the gateway (unknown senders, discovery) that may wait before more are dropped. */
+  val GatewayBacklog: Int = 1024
+
+  /** Refusal counter key of a datagram dropped because its robot actor has [[RobotBacklog]] waiting. */
+  val RobotBusy: String = "robot actor busy: backlog full"
+
+  /** Refusal counter key of a frame dropped because the gateway has [[GatewayBacklog]] waiting. */
+  val GatewayBusy: String = "gateway busy: backlog full"
+
+  /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
+  val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
+
+  /** A datagram robot as the port's reader reaches it: its actor and the backlog of what the reader handed it. */
+  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog)
+
+  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, heard: Boolean,
+      zeromq: Boolean, backlog: Backlog)
 
   /** The gateway with `settings`. */
   def apply(settings: GatewaySettings): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(1024) { stash =>
-        context.spawn(
-          UdpLink(new InetSocketAddress(settings.bindAddress, settings.robotPort), context.messageAdapter(RobotLinkEvent.apply)),
-          "robot-link"
-        )
-        new GatewayLogic(settings, context, stash).binding
-      }
-    }
-
-  private final class GatewayLogic(settings: GatewaySettings, context: ActorContext[Command], stash: StashBuffer[Command]) {
-    private val publisher = context.messageAdapter[GatewayEvent](Publish.apply)
-    private var byId = Map.empty[Int, Entry]
-    private var byAddress = Map.empty[InetSocketAddress, Int]
-    private var snapshots = Map.empty[Int, RobotSnapshot]
-    private var subscribers = Set.empty[ActorRef[GatewayEvent]]
-    private var rebindable = Set.empty[Int]
-    private var rejected = Map.empty[String, Long]
-    private var datagramsIn, relayed, gcPackets = 0L
-    private var game: Option[GameControlData] = None
-
-    def binding: Behavior[Command] = Behaviors.receiveMessage {
-      case RobotLinkEvent(UdpLink.Bound(link, local)) =>
-        context.log.info("Gateway listening for robots on {}", local)
+        val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
+        val port =
+          try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
+          catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
+        context.log.info("Gateway listening for robots on {}", port.localAddress)
         val outbox = context.spawn(
-          Behaviors.supervise(Outbox(link, settings.budget, settings.competition))
+          Behaviors.supervise(Outbox(port, settings.budget, settings.competition))
             .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
-          "outbox"
+          "outbox",
+          RobotDispatcher
         )
-        settings.robots.foreach(r => spawnRobot(r.robotId, r.address, outbox, heard = false))
-        settings.zeromq.robots.foreach(r => spawnZmqRobot(r, outbox))
+        val logic = new GatewayLogic(settings, context, stash, port, outbox)
+        logic.start()
         if (settings.gameControllerEnabled) {
-          // Akka keeps one message adapter per message class, and the robot link's adapter already takes
-          // UdpLink.Event; the GameController link reports through a forwarder of its own instead.
-          val self = context.self
-          val gcEvents = context.spawn(
-            Behaviors.receiveMessage[UdpLink.Event] { event =>
-              self ! GameControllerEvent(event)
-              Behaviors.same
-            },
-            "game-controller-events"
-          )
           context.spawn(
-            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort), gcEvents,
+            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
+              context.messageAdapter(GameControllerEvent.apply),
               UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true)),
             "game-controller-link"
           )
-          bindingGameController(link, local, outbox)
-        } else stash.unstashAll(running(link, Addresses(local, None), outbox))
-      case RobotLinkEvent(UdpLink.BindFailed(address, reason)) =>
-        throw new IllegalStateException(s"gateway cannot listen for robots on $address: $reason")
-      case other =>
-        stash.stash(other)
-        Behaviors.same
+          logic.bindingGameController
+        } else stash.unstashAll(logic.running(Addresses(port.localAddress, None)))
+      }
     }
 
-    private def bindingGameController(link: ActorRef[UdpLink.Command], local: InetSocketAddress, outbox: ActorRef[Outbox.Command])
-        : Behavior[Command] = Behaviors.receiveMessage {
+  /** The kernel receive buffer of the robot port: a burst of a few thousand datagrams waits there, not dropped. */
+  private val ReceiveBufferBytes = 4 * 1024 * 1024
+
+  /** Refused datagrams by reason, counted by the port's reader and the gateway alike; logged sparingly. */
+  private final class Rejections {
+    private val counts = new ConcurrentHashMap[String, AtomicLong]()
+    private val log = LoggerFactory.getLogger("naogateway.Gateway")
+
+    def count(reason: String, from: InetSocketAddress): Unit = {
+      val n = counts.computeIfAbsent(reason, _ => new AtomicLong).incrementAndGet()
+      // Logged at the 1st, 10th, 100th, ... of each reason: a flood of bad datagrams cannot flood the log.
+      if (RateLimitedLog.due(n)) log.warn("Rejected datagram from {}: {} ({} so far)", from, reason, n)
+    }
+
+    def snapshot: Map[String, Long] = counts.asScala.iterator.map { case (k, v) => k -> v.get }.toMap
+  }
+
+  /**
+   * The robot port's reader side of the gateway: runs on the reader thread, routes each datagram with the table the
+   * gateway last published, and hands the robot actors (or the gateway) their messages directly.
+   */
+  private final class PortReader(
+      settings: GatewaySettings,
+      port: RobotPort,
+      gateway: ActorRef[Unrouted],
+      gatewayBacklog: Backlog,
+      outbox: ActorRef[Outbox.Command],
+      rejections: Rejections
+  ) extends RobotPort.Handler {
+    val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
+    // Written by the reader thread only; read by the gateway for its figures.
+    @volatile var datagramsIn, relayed = 0L
+
+    def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
+      datagramsIn += 1
+      settings.relay.foreach { relay =>
+        if (port.send(bytes, relay)) relayed += 1
+      }
+      val table = routes.get
+      outbox ! Outbox.Inbound(table.byAddress.get(from).fold(-1)(_.robotId), bytes.length)
+      Routing.decide(table, bytes, from) match {
+        case Routing.ToRobot(route, header, contents, size) =>
+          deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+        case Routing.SegmentToRobot(route, segment) =>
+          deliver(route, RobotActor.SegmentReceived(segment), from)
+        case unrouted: Routing.ToGateway =>
+          if (gatewayBacklog.tryAdd()) gateway ! Unrouted(unrouted) else rejections.count(GatewayBusy, from)
+        case Routing.Refused(reason, route) =>
+          rejections.count(reason, from)
+          route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(reason))
+      }
+    }
+
+    private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
+      if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(RobotBusy, from)
+
+    def caughtUp(): Unit = ()
+  }
+
+  private final class GatewayLogic(
+      settings: GatewaySettings,
+      context: ActorContext[Command],
+      stash: StashBuffer[Command],
+      port: RobotPort,
+      outbox: ActorRef[Outbox.Command]
+  ) {
+    private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
+    private val rejections = new Rejections
+    private val gatewayBacklog = new Backlog(GatewayBacklog)
+    private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections)
+    private var byId = Map.empty[Int, Entry]
+    private var byAddress = Map.empty[InetSocketAddress, Int]
+    private var subscribers = Set.empty[ActorRef[GatewayEvent]]
+    private var rebindable = Set.empty[Int]
+    private var gcPackets = 0L
+    private var game: Option[GameControlData] = None
+
+    /** The configured robots, then the reader: it never sees a table without them. */
+    def start(): Unit = {
+      settings.robots.foreach(r => spawnRobot(r.robotId, r.address, heard = false))
+      settings.zeromq.robots.foreach(spawnZmqRobot)
+      port.start(reader)
+    }
+
+    def bindingGameController: Behavior[Command] = Behaviors.receiveMessage[Command] {
       case GameControllerEvent(UdpLink.Bound(_, gcLocal)) =>
         context.log.info("Gateway listening for the GameController on {}", gcLocal)
-        stash.unstashAll(running(link, Addresses(local, Some(gcLocal)), outbox))
+        stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
       case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
         context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
-        stash.unstashAll(running(link, Addresses(local, None), outbox))
+        stash.unstashAll(running(Addresses(port.localAddress, None)))
+      case u: Unrouted =>
+        // Robots speak before the GameController socket is bound; discovery must not wait for it.
+        handleUnrouted(u)
+        Behaviors.same
       case other =>
         stash.stash(other)
         Behaviors.same
+    }.receiveSignal { case (_, PostStop) => closePort() }
+
+    private def closePort(): Behavior[Command] = {
+      port.close()
+      Behaviors.same
     }
 
-    private def spawnRobot(robotId: Int, address: InetSocketAddress, outbox: ActorRef[Outbox.Command], heard: Boolean): Entry = {
+    /** The routing table the reader uses from now on: every datagram robot at its bound address. */
+    private def publishRoutes(): Unit =
+      reader.routes.set(Routing.Table.of(byId.collect {
+        case (id, e) if !e.zeromq => Routing.Route(id, e.address, Inlet(e.actor, e.backlog))
+      }))
+
+    private def spawnRobot(robotId: Int, address: InetSocketAddress, heard: Boolean): Entry = {
+      val backlog = new Backlog(RobotBacklog)
       val actor = context.spawn(
-        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, publisher, heard))
+        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard))
           .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
-        s"robot-$robotId"
+        s"robot-$robotId",
+        RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId))
-      val entry = Entry(actor, address, heard)
+      val entry = Entry(actor, address, heard, zeromq = false, backlog)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address, robotId)
-      snapshots = snapshots.updated(robotId, RobotSnapshot(robotId, address))
+      publishRoutes()
       entry
     }
 
+    // The robot actor asks for the subscribers itself (RobotWantsSubscribers), on its first start and after restarts.
+    private def wiring(backlog: Backlog): RobotActor.Wiring = RobotActor.Wiring(Set.empty, Some(subscriptionRequests), backlog)
+
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
-    private def spawnZmqRobot(robot: ZmqRobot, outbox: ActorRef[Outbox.Command]): Unit = {
+    private def spawnZmqRobot(robot: ZmqRobot): Unit = {
+      val backlog = new Backlog(RobotBacklog)
       val actor = context.spawn(
-        Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, publisher, heard = false,
+        Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
           RobotActor.Transport.ZeroMq(robot.endpoint)))
           .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
-        s"robot-${robot.robotId}"
+        s"robot-${robot.robotId}",
+        RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robot.robotId))
-      byId = byId.updated(robot.robotId, Entry(actor, robot.address, heard = false, zeromq = true))
-      snapshots = snapshots.updated(robot.robotId, RobotSnapshot(robot.robotId, robot.address))
+      byId = byId.updated(robot.robotId, Entry(actor, robot.address, heard = false, zeromq = true, backlog))
     }
 
-    private def reject(reason: String, from: InetSocketAddress): Unit = {
-      val n = rejected.getOrElse(reason, 0L) + 1
-      rejected = rejected.updated(reason, n)
-      // Logged at the 1st, 10th, 100th, ... of each reason: a flood of bad datagrams cannot flood the log.
-      if (RateLimitedLog.due(n))
-        context.log.warn("Rejected datagram from {}: {} ({} so far)", from, reason, n)
-    }
+    private def reject(reason: String, from: InetSocketAddress): Unit = rejections.count(reason, from)
 
     private def rejectFor(robotId: Option[Int], reason: String, from: InetSocketAddress): Unit = {
       reject(reason, from)
-      robotId.flatMap(byId.get).foreach(_.actor ! RobotActor.DatagramRejected(reason))
+      robotId.flatMap(byId.get).foreach { e =>
+        e.backlog.add()
+        e.actor ! RobotActor.DatagramRejected(reason)
+      }
     }
 
     private def publish(event: GatewayEvent): Unit = subscribers.foreach(_ ! event)
 
-    def running(link: ActorRef[UdpLink.Command], addresses: Addresses, outbox: ActorRef[Outbox.Command]): Behavior[Command] =
-      Behaviors.receiveMessage {
-        case RobotLinkEvent(UdpLink.Received(bytes, from)) =>
-          datagramsIn += 1
-          settings.relay.foreach { relay =>
-            relayed += 1
-            link ! UdpLink.Send(bytes, relay)
-          }
-          val known = byAddress.get(from)
-          outbox ! Outbox.Inbound(known.getOrElse(-1), bytes.length)
-          Datagram.classify(bytes) match {
-            case Datagram.FuRemoteFrame(_) =>
-              MessageContents.decodeFrame(bytes) match {
-                case Right((header, contents)) => frame(header, contents, bytes.length, from, outbox)
-                case Left(error)               => rejectFor(known, s"bad frame: ${errorKind(error)}", from)
-              }
-            case Datagram.StreamSegment(_) =>
-              known.flatMap(byId.get) match {
-                case Some(entry) => entry.actor ! RobotActor.SegmentReceived(bytes)
-                case None        => reject("stream segment from an unknown address", from)
-              }
-            case Datagram.GameControllerControl(_) | Datagram.GameControllerReturn(_) =>
-              rejectFor(known, "GameController packet on the robot port", from)
-            case Datagram.Rejected(reason, _) =>
-              rejectFor(known, s"unclassifiable: ${reason.describe.takeWhile(_ != ':')}", from)
-          }
+    /** Every robot actor learns the new subscriber list: robot events go from them straight to the subscribers. */
+    private def subscribersChanged(): Unit = byId.values.foreach(_.actor ! RobotActor.Subscribers(subscribers))
+
+    private def handleUnrouted(u: Unrouted): Unit = {
+      gatewayBacklog.done()
+      frame(u.frame.header, u.frame.contents, u.frame.size, u.frame.from)
+    }
+
+    def running(addresses: Addresses): Behavior[Command] =
+      Behaviors.receiveMessage[Command] {
+        case u: Unrouted =>
+          handleUnrouted(u)
           Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
           GameControllerCodec.decodeControl(bytes) match {
@@ -216,27 +301,30 @@ object Gateway {
               if (!Datagram.isGameControllerReturn(bytes)) reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
           }
           Behaviors.same
-        case RobotLinkEvent(_) | GameControllerEvent(_) => Behaviors.same
-        case Publish(event) =>
-          snapshots = RobotSnapshot.following(snapshots, event)
-          publish(event)
-          Behaviors.same
+        case GameControllerEvent(_) => Behaviors.same
         case Subscribe(subscriber) =>
           context.watchWith(subscriber, SubscriberGone(subscriber))
           subscribers += subscriber
+          subscribersChanged()
           Behaviors.same
         case Unsubscribe(subscriber) =>
           context.unwatch(subscriber)
           subscribers -= subscriber
+          subscribersChanged()
           Behaviors.same
         case SubscriberGone(subscriber) =>
           subscribers -= subscriber
+          subscribersChanged()
+          Behaviors.same
+        case RobotWantsSubscribers(RobotActor.SubscribersWanted(robot)) =>
+          robot ! RobotActor.Subscribers(subscribers)
           Behaviors.same
         case GetAddresses(replyTo) =>
           replyTo ! addresses
           Behaviors.same
         case GetRobots(replyTo) =>
-          replyTo ! snapshots.values.toVector.sortBy(_.robotId)
+          if (byId.isEmpty) replyTo ! Vector.empty
+          else context.spawnAnonymous(SnapshotCollector(byId.map { case (id, e) => id -> (e.actor -> e.address) }, replyTo))
           Behaviors.same
         case GetRobot(robotId, replyTo) =>
           replyTo ! byId.get(robotId).map(_.actor)
@@ -245,7 +333,7 @@ object Gateway {
           rebindable += robotId
           Behaviors.same
         case GetStats(replyTo) =>
-          replyTo ! GatewayStats(datagramsIn, relayed, gcPackets, rejected, byId.size)
+          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size)
           Behaviors.same
         case GetTraffic(replyTo) =>
           outbox ! Outbox.GetStats(replyTo)
@@ -256,19 +344,21 @@ object Gateway {
         case RobotStopped(robotId) =>
           byId.get(robotId).filterNot(_.zeromq).foreach(e => byAddress -= e.address)
           byId -= robotId
+          publishRoutes()
           Behaviors.same
-      }
+      }.receiveSignal { case (_, PostStop) => closePort() }
 
-    private def errorKind(error: FrameError): String = error.productPrefix
-
-    /** Routes one decoded frame, binding a robot id to the address it first came from. */
-    private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress, outbox: ActorRef[Outbox.Command])
-        : Unit = {
+    /** Decides a frame the reader's table could not place, binding a robot id to the address it first came from. */
+    private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress): Unit = {
       val robotId = contents.robotId
-      def deliver(entry: Entry): Unit = entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
+      def deliver(entry: Entry): Unit = {
+        entry.backlog.add()
+        entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
+      }
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>
           rejectFor(Some(robotId), s"robot id $robotId belongs to a ZeroMQ robot", from)
+        // The reader saw the table before the gateway bound this address (discovery or re-bind in between).
         case Some(entry) if entry.address == from => deliver(entry)
         case Some(entry) if rebindable(robotId) || (!entry.heard && entry.address.getAddress == from.getAddress) =>
           // An explicit re-bind, or a configured robot speaking for the first time from its own host.
@@ -276,6 +366,7 @@ object Gateway {
           byAddress = byAddress - entry.address + (from -> robotId)
           val moved = entry.copy(address = from, heard = true)
           byId = byId.updated(robotId, moved)
+          publishRoutes()
           entry.actor ! RobotActor.Rebound(from)
           deliver(moved)
         case Some(entry) =>
@@ -285,10 +376,39 @@ object Gateway {
             case Some(other) => rejectFor(Some(other), s"address of robot $other claims robot id $robotId", from)
             case None if settings.discoverFromKeepAlive && contents.status.isDefined =>
               context.log.info("Discovered robot [{}] at {}", robotId, from)
-              deliver(spawnRobot(robotId, from, outbox, heard = true))
+              deliver(spawnRobot(robotId, from, heard = true))
             case None => reject("frame from an unknown robot that is not a keep-alive", from)
           }
       }
     }
+  }
+
+  /** One `GetRobots`: asks each robot actor for its snapshot and answers once all did or the timeout passed. */
+  private object SnapshotCollector {
+    sealed trait Message
+    private final case class Got(snapshot: RobotSnapshot) extends Message
+    private case object TimedOut extends Message
+
+    def apply(robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], replyTo: ActorRef[Vector[RobotSnapshot]])
+        : Behavior[Message] =
+      Behaviors.setup { context =>
+        Behaviors.withTimers { timers =>
+          val got = context.messageAdapter(Got.apply)
+          robots.values.foreach { case (actor, _) => actor ! RobotActor.GetSnapshot(got) }
+          timers.startSingleTimer(TimedOut, SnapshotTimeout)
+          def answer(known: Map[Int, RobotSnapshot]): Behavior[Message] = {
+            // A robot actor that did not answer (restarting) is listed as the gateway knows it: at its address, not reached.
+            replyTo ! robots.map { case (id, (_, address)) => known.getOrElse(id, RobotSnapshot(id, address)) }.toVector.sortBy(_.robotId)
+            Behaviors.stopped
+          }
+          def collecting(known: Map[Int, RobotSnapshot]): Behavior[Message] = Behaviors.receiveMessage {
+            case Got(s) =>
+              val now = known.updated(s.robotId, s)
+              if (robots.keySet.forall(now.contains)) answer(now) else collecting(now)
+            case TimedOut => answer(known)
+          }
+          collecting(Map.empty)
+        }
+      }
   }
 }

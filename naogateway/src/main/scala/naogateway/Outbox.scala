@@ -8,7 +8,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.link.UdpLink
+import naogateway.link.DatagramWriter
 import naogateway.wire.gamecontroller.GameState
 
 /** The last gate before the air: the competition rule, the team's traffic budget and the priority classes. */
@@ -94,8 +94,8 @@ object Outbox {
 
   private val Second = 1000000000L
 
-  /** An outbox sending through `link` under `budget`, closing in competition mode while the game runs. */
-  def apply(link: ActorRef[UdpLink.Command], budget: BudgetSettings, competition: Boolean): Behavior[Command] =
+  /** An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs. */
+  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         new Outbox(link, budget, competition, timers, context.log).behavior()
@@ -108,7 +108,7 @@ object Outbox {
 }
 
 private final class Outbox(
-    link: ActorRef[UdpLink.Command],
+    link: DatagramWriter,
     budget: BudgetSettings,
     competition: Boolean,
     timers: TimerScheduler[Outbox.Command],
@@ -134,7 +134,12 @@ private final class Outbox(
   private def transmit(now: Long, s: Send): Unit = {
     out.record(now, s.bytes.length)
     robotMeter(s.robotId).record(now, s.bytes.length)
-    link ! UdpLink.Send(s.bytes, s.to)
+    // Written here, on the outbox's own thread: no link actor between the decision and the socket. A full kernel
+    // buffer takes nothing (UDP would lose the datagram further on anyway): counted as dropped.
+    if (!link.send(s.bytes, s.to)) {
+      dropped += 1
+      if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
+    }
     warnIfLoaded(now)
   }
 

@@ -8,7 +8,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 
-import naogateway.link.ZmqRobotLink
+import naogateway.link.{Backlog, ZmqRobotLink}
 import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameState
@@ -49,6 +49,27 @@ object RobotActor {
   /** Sends `out` to the robot; the outbox's outcome goes to `outcome`, marked with `tag`. */
   final case class Transmit(out: Outbound, priority: Priority, outcome: Option[ActorRef[Outbox.Outcome]], tag: Long = 0L)
       extends FromChild
+
+  /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
+  final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Command
+
+  /** A robot actor (re)started and asks the gateway for its current subscribers. */
+  final case class SubscribersWanted(robot: ActorRef[Subscribers])
+
+  /**
+   * How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start
+   * (a restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the
+   * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
+   * the robot port's reader has handed the actor, given back as each is handled.
+   */
+  final case class Wiring(subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
+
+  /** Wirings without a gateway. */
+  object Wiring {
+
+    /** Events to `events` alone, no gateway to ask: for a robot actor on its own (tests). */
+    def to(events: ActorRef[GatewayEvent]): Wiring = Wiring(Set(events), None, new Backlog(Int.MaxValue))
+  }
 
   /** A caller wants the robot while it is offline: probe it now. */
   case object Wanted extends FromChild
@@ -124,6 +145,9 @@ object RobotActor {
     def connected(robotId: Int): Connected = Connected(robotId, response, noResponse, vision, stream)
   }
 
+  /** Events a robot actor holds while it waits for the gateway's subscriber list. */
+  private val HeldEvents = 64
+
   private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
 
   /**
@@ -135,14 +159,17 @@ object RobotActor {
       address: InetSocketAddress,
       settings: GatewaySettings,
       outbox: ActorRef[Outbox.Command],
-      events: ActorRef[GatewayEvent],
+      wiring: Wiring,
       heard: Boolean,
       transport: Transport = Transport.Datagrams
   ): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(64) { stash =>
-          new Robot(robotId, settings, outbox, events, transport, context, stash, timers).start(address, heard)
+          // Datagrams handed to an earlier incarnation are gone with it; the count starts again.
+          wiring.backlog.reset()
+          wiring.gateway.foreach(_ ! SubscribersWanted(context.self))
+          new Robot(robotId, settings, outbox, wiring, transport, context, stash, timers).start(address, heard)
         }
       }
     }
@@ -151,7 +178,7 @@ object RobotActor {
       robotId: Int,
       settings: GatewaySettings,
       outbox: ActorRef[Outbox.Command],
-      events: ActorRef[GatewayEvent],
+      wiring: Wiring,
       transport: Transport,
       context: ActorContext[Command],
       stash: StashBuffer[Command],
@@ -163,6 +190,9 @@ object RobotActor {
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
     private var zmqLink: Option[ActorRef[ZmqRobotLink.Command]] = None
+    // Set by the gateway (Subscribers); None until its first answer, and events wait meanwhile.
+    private var subscribers: Option[Set[ActorRef[GatewayEvent]]] = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
+    private var held = Vector.empty[GatewayEvent]
 
     // Link figures: mutable counters owned by this actor alone.
     private var address: InetSocketAddress = null
@@ -171,6 +201,8 @@ object RobotActor {
     private var rejected = Map.empty[String, Long]
     private var rttNanos: Option[Double] = None
     private var keepAliveTimes = Queue.empty[Long]
+    // The latest keep-alive's fields, the address and the link quality; `online` is not kept here but taken from the
+    // behaviour (unreached, or running with its flag) whenever the snapshot leaves this actor (`view`).
     private var snapshot: RobotSnapshot = null
     // The bootId the restart rule compares the next keep-alive with (RobotSnapshot.keepAlive).
     private var lastBootId: Option[Int] = None
@@ -196,7 +228,8 @@ object RobotActor {
       }
       val heartbeat = context.spawn(
         Behaviors.supervise(HeartBeatActor(heartbeatSettings, heartbeatReports, online = false)).onFailure(ChildRestarts),
-        "heartbeat"
+        "heartbeat",
+        Gateway.RobotDispatcher
       )
       // A discovered robot has spoken already: its keep-alive counts as the first sign of life.
       if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
@@ -206,13 +239,13 @@ object RobotActor {
     private def spawnChildren(heartbeat: ActorRef[HeartBeatActor.Command]): Children = {
       val self = context.self
       val response =
-        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response")
+        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response", Gateway.RobotDispatcher)
       Children(
         heartbeat,
         response,
-        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, response)).onFailure(ChildRestarts), "no-response"),
-        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision"),
-        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream")
+        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, response)).onFailure(ChildRestarts), "no-response", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream", Gateway.RobotDispatcher)
       )
     }
 
@@ -229,7 +262,7 @@ object RobotActor {
       case Wanted =>
         heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
-      case other => common(other, None, heartbeat)
+      case other => common(other, None, heartbeat, online = false)
     }
 
     private def running(children: Children, online: Boolean): Behavior[Command] = Behaviors.receiveMessage {
@@ -249,34 +282,44 @@ object RobotActor {
         running(children, online = true)
       case HeartbeatReport(HeartBeatActor.WentOffline(reason)) =>
         context.log.info("Robot [{}] offline: {}", robotId, reason)
-        snapshot = snapshot.copy(online = false, quality = LinkQuality.Offline)
         children.response ! ResponseActor.Reachability(false)
-        events ! RobotOffline(robotId, reason)
+        publish(RobotOffline(robotId, reason))
         running(children, online = false)
-      case other => common(other, Some(children), children.heartbeat)
+      case other => common(other, Some(children), children.heartbeat, online)
     }
 
+    /** Called as the behaviour becomes online: the quality starts good (HeartBeatActor's rule), options are pulled. */
     private def wentOnline(): Unit = {
       context.log.info("Robot [{}] online at {}", robotId, address)
-      snapshot = snapshot.copy(online = true, quality = LinkQuality.Good)
-      if (pullsOptions && optionList.isEmpty) { if (pulling) sendPull() else startPull() }
-      events ! RobotOnline(robotId, address)
+      snapshot = snapshot.copy(quality = LinkQuality.Good)
+      if (pullsOptions && optionList.isEmpty) { if (pulling) sendPull(online = true) else startPull(online = true) }
+      publish(RobotOnline(robotId, address))
     }
+
+    private def publish(event: GatewayEvent): Unit = subscribers match {
+      case Some(all) => all.foreach(_ ! event)
+      // The gateway answers within one of its messages; a bound all the same, so a silent gateway costs no memory.
+      case None => if (held.size < HeldEvents) held :+= event
+    }
+
+    /** The snapshot as it leaves this actor: `online` from the behaviour, the quality offline while offline. */
+    private def view(online: Boolean): RobotSnapshot =
+      snapshot.copy(online = online, quality = if (online) snapshot.quality else LinkQuality.Offline)
 
     private def pullsOptions: Boolean = transport == Transport.Datagrams
 
     /** protocol.md 8, step 1: `optionPull` now and about every second until an `optionPush` arrives. */
-    private def startPull(): Unit =
+    private def startPull(online: Boolean): Unit =
       if (pullsOptions) {
         pulling = true
         optionList = None
-        sendPull()
+        sendPull(online)
         timers.startTimerWithFixedDelay(PullKey, PullOptions, OptionPullInterval)
       }
 
-    private def sendPull(): Unit =
+    private def sendPull(online: Boolean): Unit =
       // Not while the robot is offline: it would only fill a silent robot's buffer.
-      if (snapshot.online)
+      if (online)
         context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionPull = Some(true))), Priority.Debug, None)
 
     /** The robot's list arrived (steps 2, 3); the first one of a session lets the options we want go out (step 4). */
@@ -299,53 +342,30 @@ object RobotActor {
     private def common(
         message: Command,
         children: Option[Children],
-        heartbeat: ActorRef[HeartBeatActor.Command]
+        heartbeat: ActorRef[HeartBeatActor.Command],
+        online: Boolean
     ): Behavior[Command] = message match {
       case FrameReceived(contents, frameForm, size) =>
-        datagramsIn += 1
-        bytesIn += size
-        if (frameForm != form) {
-          form = frameForm
-          routeChanged(children)
-        }
-        contents.status.foreach(_ => keepAlive(contents, children, heartbeat))
-        contents.debuggingCommands.flatMap(_.optionPush).foreach(list => optionsPushed(list.options))
-        contents.rpcResponse.foreach { response =>
-          val reply = RpcReply.fromProto(response)
-          reply.callId.foreach { id =>
-            (id >>> 30) match {
-              case 0 => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
-              case 2 => heartbeat ! HeartBeatActor.ProbeAnswered(id)
-              case _ => count("unknown call id")
-            }
-          }
-        }
-        contents.havimoRegions.foreach { f =>
-          HaViMo.decodeRegions(f.records.map(_.toByteArray).getOrElse(Array.emptyByteArray)) match {
-            case Right(regions) =>
-              children.foreach(_.vision ! VisionActor.FrameReceived(
-                VisionFrame.Regions(robotId, f.frame & 0xffffffffL, f.timestamp, regions)))
-            case Left(e) => count(s"havimo regions: ${e.describe}")
-          }
-        }
-        contents.havimoGrid.foreach { f =>
-          HaViMo.decodeGrid(f.cells.toByteArray) match {
-            case Right(grid) =>
-              children.foreach(_.vision ! VisionActor.FrameReceived(VisionFrame.Grid(robotId, f.frame & 0xffffffffL, f.timestamp, grid)))
-            case Left(e) => count(s"havimo grid: ${e.describe}")
-          }
-        }
+        wiring.backlog.done()
+        frame(contents, frameForm, size, children, heartbeat, online)
         Behaviors.same
       case SegmentReceived(bytes) =>
+        wiring.backlog.done()
         datagramsIn += 1
         bytesIn += bytes.length
         children.foreach(_.stream ! StreamActor.SegmentReceived(bytes))
         Behaviors.same
       case DatagramRejected(reason) =>
+        wiring.backlog.done()
         count(reason)
         Behaviors.same
+      case Subscribers(now) =>
+        subscribers = Some(now)
+        held.foreach(e => now.foreach(_ ! e))
+        held = Vector.empty
+        Behaviors.same
       case ReachabilityWanted(replyTo) =>
-        replyTo ! snapshot.online
+        replyTo ! online
         Behaviors.same
       case Rebound(newAddress) =>
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
@@ -361,7 +381,7 @@ object RobotActor {
         bytesOut += bytes
         Behaviors.same
       case PullOptions =>
-        sendPull()
+        sendPull(online)
         Behaviors.same
       case Transmit(Outbound.DebugOut(commands), _, outcome, tag) if pulling && commands.optionPull.isEmpty =>
         // Step 4 waits for the list: remembered now, sent (as far as the robot offers it) when the push arrives.
@@ -369,33 +389,14 @@ object RobotActor {
         outcome.foreach(_ ! Outbox.Accepted(tag))
         Behaviors.same
       case Transmit(out, priority, outcome, tag) =>
-        zmqLink match {
-          case None =>
-            encode(out) match {
-              case Right(bytes) =>
-                datagramsOut += 1
-                bytesOut += bytes.length
-                outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
-              case Left(error) =>
-                outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
-            }
-          case Some(link) =>
-            // No FU-Remote header over ZeroMQ: a ZeroMQ message carries exactly one serialized Message.
-            contentsOf(out) match {
-              case Some(contents) =>
-                val bytes = contents.toProtobuf
-                datagramsOut += 1
-                bytesOut += bytes.length
-                link ! ZmqRobotLink.Send(bytes, outcome, tag)
-              case None => outcome.foreach(_ ! Outbox.Dropped(tag, "the secure stream does not run over ZeroMQ"))
-            }
-        }
+        transmit(out, priority, outcome, tag)
         Behaviors.same
       case GameStateChanged(state) =>
         zmqLink.foreach(_ ! ZmqRobotLink.GameStateChanged(state))
         Behaviors.same
       case ZmqLinkEvent(ZmqRobotLink.MessageReceived(contents, size)) =>
-        common(FrameReceived(contents, HeaderForm.Legacy, size), children, heartbeat)
+        frame(contents, HeaderForm.Legacy, size, children, heartbeat, online)
+        Behaviors.same
       case ZmqLinkEvent(ZmqRobotLink.MessageRejected(reason)) =>
         count(reason)
         Behaviors.same
@@ -414,10 +415,10 @@ object RobotActor {
       case HeartbeatReport(HeartBeatActor.QualityChanged(quality)) =>
         context.log.info("Robot [{}] link quality {}", robotId, quality.name)
         snapshot = snapshot.copy(quality = quality)
-        events ! LinkQualityChanged(robotId, quality)
+        publish(LinkQualityChanged(robotId, quality))
         Behaviors.same
       case GetSnapshot(replyTo) =>
-        replyTo ! snapshot
+        replyTo ! view(online)
         Behaviors.same
       case GetLinkStats(replyTo) =>
         replyTo ! LinkStats(robotId, datagramsIn, datagramsOut, bytesIn, bytesOut, rttNanos.map(_ / 1e6), lossEstimate(),
@@ -433,6 +434,74 @@ object RobotActor {
 
     private def routeChanged(children: Option[Children]): Unit =
       children.foreach(_.response ! ResponseActor.RouteChanged(route))
+
+    /** One FU-Remote message from the robot, over datagrams or ZeroMQ. */
+    private def frame(
+        contents: MessageContents,
+        frameForm: HeaderForm,
+        size: Int,
+        children: Option[Children],
+        heartbeat: ActorRef[HeartBeatActor.Command],
+        online: Boolean
+    ): Unit = {
+      datagramsIn += 1
+      bytesIn += size
+      if (frameForm != form) {
+        form = frameForm
+        routeChanged(children)
+      }
+      contents.status.foreach(_ => keepAlive(contents, children, heartbeat, online))
+      contents.debuggingCommands.flatMap(_.optionPush).foreach(list => optionsPushed(list.options))
+      contents.rpcResponse.foreach { response =>
+        val reply = RpcReply.fromProto(response)
+        reply.callId.foreach { id =>
+          (id >>> 30) match {
+            case 0 => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
+            case 2 => heartbeat ! HeartBeatActor.ProbeAnswered(id)
+            case _ => count("unknown call id")
+          }
+        }
+      }
+      contents.havimoRegions.foreach { f =>
+        HaViMo.decodeRegions(f.records.map(_.toByteArray).getOrElse(Array.emptyByteArray)) match {
+          case Right(regions) =>
+            children.foreach(_.vision ! VisionActor.FrameReceived(
+              VisionFrame.Regions(robotId, f.frame & 0xffffffffL, f.timestamp, regions)))
+          case Left(e) => count(s"havimo regions: ${e.describe}")
+        }
+      }
+      contents.havimoGrid.foreach { f =>
+        HaViMo.decodeGrid(f.cells.toByteArray) match {
+          case Right(grid) =>
+            children.foreach(_.vision ! VisionActor.FrameReceived(VisionFrame.Grid(robotId, f.frame & 0xffffffffL, f.timestamp, grid)))
+          case Left(e) => count(s"havimo grid: ${e.describe}")
+        }
+      }
+    }
+
+    /** Encodes `out` for this robot's transport and hands it on: to the outbox, or to the ZeroMQ link. */
+    private def transmit(out: Outbound, priority: Priority, outcome: Option[ActorRef[Outbox.Outcome]], tag: Long): Unit =
+      zmqLink match {
+        case None =>
+          encode(out) match {
+            case Right(bytes) =>
+              datagramsOut += 1
+              bytesOut += bytes.length
+              outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
+            case Left(error) =>
+              outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
+          }
+        case Some(link) =>
+          // No FU-Remote header over ZeroMQ: a ZeroMQ message carries exactly one serialized Message.
+          contentsOf(out) match {
+            case Some(contents) =>
+              val bytes = contents.toProtobuf
+              datagramsOut += 1
+              bytesOut += bytes.length
+              link ! ZmqRobotLink.Send(bytes, outcome, tag)
+            case None => outcome.foreach(_ ! Outbox.Dropped(tag, "the secure stream does not run over ZeroMQ"))
+          }
+      }
 
     private def count(reason: String): Unit = {
       val n = rejected.getOrElse(reason, 0L) + 1
@@ -452,7 +521,12 @@ object RobotActor {
       if (datagramsIn == 0) 1.0 else math.max(0.0, 1.0 - keepAliveTimes.size / expected)
     }
 
-    private def keepAlive(contents: MessageContents, children: Option[Children], heartbeat: ActorRef[HeartBeatActor.Command]): Unit = {
+    private def keepAlive(
+        contents: MessageContents,
+        children: Option[Children],
+        heartbeat: ActorRef[HeartBeatActor.Command],
+        online: Boolean
+    ): Unit = {
       heartbeat ! HeartBeatActor.KeepAliveSeen
       val now = System.nanoTime()
       // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
@@ -460,16 +534,16 @@ object RobotActor {
       val step = RobotSnapshot.keepAlive(snapshot, lastBootId, contents.status.get, contents.robotHealth, now)
       snapshot = step.snapshot
       lastBootId = step.lastBootId
-      if (step.restarted) resync(children)
-      events ! RobotStatusUpdated(snapshot)
+      if (step.restarted) resync(children, online)
+      publish(RobotStatusUpdated(view(online)))
     }
 
     /** A fresh session on the robot: switch back on what was active, and tell subscribers. */
-    private def resync(children: Option[Children]): Unit = {
+    private def resync(children: Option[Children], online: Boolean): Unit = {
       context.log.info("Robot [{}] restarted (boot {}); re-enabling {}", robotId, snapshot.bootId, activeOptions.mkString(","))
       val options = activeOptions.toVector.sorted
       // A new session: pull its option list first (protocol.md 8, steps 1 and 6); the push re-enables `options`.
-      if (pullsOptions) startPull()
+      if (pullsOptions) startPull(online)
       else if (options.nonEmpty)
         context.self ! Transmit(Outbound.DebugOut(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options)))),
           Priority.Debug, None)
@@ -477,7 +551,7 @@ object RobotActor {
         c.vision ! VisionActor.Resync
         c.stream ! StreamActor.Reset
       }
-      events ! RobotRestarted(robotId, snapshot.bootId, options)
+      publish(RobotRestarted(robotId, snapshot.bootId, options))
     }
 
     private def contentsOf(out: Outbound): Option[MessageContents] = out match {

@@ -42,7 +42,7 @@ final case class RobotSnapshot(
 /** What one keep-alive did: the robot's new snapshot, whether it began a fresh session, and the bootId now remembered. */
 final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, lastBootId: Option[Int])
 
-/** Keeping copies of robot snapshots in step with the gateway's events. */
+/** How a keep-alive changes a robot's snapshot. */
 object RobotSnapshot {
 
   /**
@@ -90,23 +90,6 @@ object RobotSnapshot {
       (for (before <- previous.uptimeMillis; after <- current.uptimeMillis) yield after + 1000 < before).getOrElse(false)
     // A restart announced without a bootId forgets the old session's, so it cannot make the next keep-alive a restart.
     KeepAliveStep(current, restarted, if (current.bootId.isDefined || restarted) current.bootId else lastBootId)
-  }
-
-  /**
-   * `snapshots` after `event`: a keep-alive replaces the robot's snapshot, and online, offline and quality events
-   * change it at once, so whoever reads the copy after hearing RobotOnline does not see the robot offline until its
-   * next keep-alive. Robots without a snapshot yet are left out.
-   */
-  def following(snapshots: Map[Int, RobotSnapshot], event: GatewayEvent): Map[Int, RobotSnapshot] = {
-    def change(id: Int)(f: RobotSnapshot => RobotSnapshot) = snapshots.get(id).fold(snapshots)(s => snapshots.updated(id, f(s)))
-    event match {
-      case RobotStatusUpdated(s) => snapshots.updated(s.robotId, s)
-      case RobotOnline(id, _) =>
-        change(id)(s => s.copy(online = true, quality = if (s.quality == LinkQuality.Offline) LinkQuality.Good else s.quality))
-      case RobotOffline(id, _)       => change(id)(_.copy(online = false, quality = LinkQuality.Offline))
-      case LinkQualityChanged(id, q) => change(id)(_.copy(quality = q))
-      case _                         => snapshots
-    }
   }
 }
 

@@ -126,9 +126,11 @@ private[robotmiddleware] object RobotGuard {
           online = snapshot.online
           Behaviors.same
         case RobotEventReceived(event) =>
+          val wasOnline = online
           common(event)
           event match {
-            case RobotOnline(_, _)  => reconnectedWhileConnecting = true
+            // Only a robot the guard saw offline has come back; an online event older than its snapshot has not.
+            case RobotOnline(_, _)  => if (!wasOnline) reconnectedWhileConnecting = true
             // Offline again before the guard is ready: the next RobotOnline, in ready, brings the stop.
             case RobotOffline(_, _) => reconnectedWhileConnecting = false
             case _                  => ()
@@ -230,10 +232,12 @@ private[robotmiddleware] object RobotGuard {
         }
         Behaviors.same
       case RobotEventReceived(event) =>
+        val wasOnline = online
         common(event)
         event match {
           case RobotStatusUpdated(snapshot) => checkBattery(c, snapshot)
-          case RobotOnline(_, _) => stopAfterReconnect(c)
+          // A stop only when the robot really was offline: a stale online event must not supersede an app's motion.
+          case RobotOnline(_, _) => if (!wasOnline) stopAfterReconnect(c)
           case _                 => ()
         }
         Behaviors.same

@@ -33,10 +33,10 @@ object RobotMiddleware {
   /** Gives a lease back. */
   final case class Release(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup) extends Command
 
-  /** Answers with every known robot's latest snapshot. */
+  /** Answers with every known robot's latest snapshot (the gateway answers, asking its robot actors). */
   final case class ListRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Command
 
-  /** Streams snapshots of one robot (or all) to `subscriber` until it stops. */
+  /** Streams snapshots of one robot (or all) to `subscriber` until it stops, starting with the current ones. */
   final case class WatchStatus(robotId: Option[Int], subscriber: ActorRef[RobotSnapshot]) extends Command
 
   /** Streams HaViMo2 frames of a robot to `subscriber` (newest only). */
@@ -52,11 +52,13 @@ object RobotMiddleware {
   final case class WatchEvents(subscriber: ActorRef[RobotEvent]) extends Command
 
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
-  private final case class GatewayRobotsKnown(robots: Vector[RobotSnapshot]) extends Command
+  private final case class StatusKnown(subscriber: ActorRef[RobotSnapshot], robots: Vector[RobotSnapshot]) extends Command
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
   private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]], retry: Command) extends Command
+  private final case class RobotReached(robotId: Int, robot: ActorRef[RobotActor.Command], online: Boolean, retry: Command)
+      extends Command
 
   /** The answer to `RegisterApp`. */
   final case class AppRegistered(name: String)
@@ -72,8 +74,6 @@ object RobotMiddleware {
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
       gateway ! Gateway.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
-      // Robots configured but never heard from yet send no events: the list starts from the gateway's own.
-      gateway ! Gateway.GetRobots(context.messageAdapter(GatewayRobotsKnown.apply))
       // In a cluster, an app whose node becomes unreachable loses its robots at once, not only when the node is
       // downed seconds later: a blind app must not keep a robot walking.
       if (context.system.settings.config.getString("akka.actor.provider") == "cluster") {
@@ -86,17 +86,16 @@ object RobotMiddleware {
 
   private final class Middleware(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings, context: ActorContext[Command]) {
     private var apps = Map.empty[ActorRef[AppEvent], AppInfo]
+    // No copy of any robot's state here: snapshots and online belong to the robot actors; this actor asks or forwards.
     private var guards = Map.empty[Int, ActorRef[RobotGuard.Command]]
-    private var online = Map.empty[Int, Boolean]
-    private var snapshots = Map.empty[Int, RobotSnapshot]
     private var statusWatchers = Map.empty[ActorRef[RobotSnapshot], Option[Int]]
     private var gameWatchers = Set.empty[ActorRef[GameControlData]]
     private var eventWatchers = Set.empty[ActorRef[RobotEvent]]
 
-    private def guard(robotId: Int, robot: ActorRef[RobotActor.Command]): ActorRef[RobotGuard.Command] =
+    private def guard(robotId: Int, robot: ActorRef[RobotActor.Command], online: Boolean): ActorRef[RobotGuard.Command] =
       guards.getOrElse(robotId, {
         val g = context.spawn(
-          Behaviors.supervise(RobotGuard(robotId, robot, settings, online.getOrElse(robotId, false)))
+          Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
             .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)),
           s"guard-$robotId"
         )
@@ -142,7 +141,17 @@ object RobotMiddleware {
         withGuard(robotId, c)(_ ! RobotGuard.WatchLinkStats(subscriber))
         Behaviors.same
       case RobotFound(robotId, Some(robot), command) =>
-        guard(robotId, robot)
+        if (guards.contains(robotId)) context.self ! command
+        else
+          // The new guard must know at once whether the robot is online (an Execute may reach it before its own
+          // question to the robot is answered); the robot actor, which owns that, is asked.
+          context.ask(robot, RobotActor.GetSnapshot.apply) {
+            case scala.util.Success(snapshot) => RobotReached(robotId, robot, snapshot.online, command)
+            case scala.util.Failure(_)        => RobotReached(robotId, robot, online = false, command)
+          }
+        Behaviors.same
+      case RobotReached(robotId, robot, online, command) =>
+        guard(robotId, robot, online)
         context.self ! command
         Behaviors.same
       case RobotFound(robotId, None, command) =>
@@ -154,12 +163,16 @@ object RobotMiddleware {
         }
         Behaviors.same
       case ListRobots(replyTo) =>
-        replyTo ! snapshots.values.toVector.sortBy(_.robotId)
+        gateway ! Gateway.GetRobots(replyTo)
         Behaviors.same
       case WatchStatus(robotId, subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))
         statusWatchers = statusWatchers.updated(subscriber, robotId)
-        snapshots.values.filter(s => robotId.forall(_ == s.robotId)).foreach(subscriber ! _)
+        // The current snapshots first, asked of the gateway; keep-alives follow as they arrive.
+        context.ask(gateway, Gateway.GetRobots.apply)(tried => StatusKnown(subscriber, tried.getOrElse(Vector.empty)))
+        Behaviors.same
+      case StatusKnown(subscriber, robots) =>
+        statusWatchers.get(subscriber).foreach(filter => robots.filter(s => filter.forall(_ == s.robotId)).foreach(subscriber ! _))
         Behaviors.same
       case WatchGame(subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))
@@ -187,18 +200,11 @@ object RobotMiddleware {
         apps -= app
         guards.values.foreach(_ ! RobotGuard.AppGone(app))
         Behaviors.same
-      case GatewayRobotsKnown(known) =>
-        // The gateway answered after it published every event this middleware already has, so its list is as new.
-        snapshots = snapshots ++ known.map(r => r.robotId -> r)
-        Behaviors.same
       case GatewayEventReceived(event) =>
         event match {
           case e: RobotEvent =>
-            snapshots = RobotSnapshot.following(snapshots, e)
             e match {
               case RobotStatusUpdated(s) => statusWatchers.foreach { case (w, filter) => if (filter.forall(_ == s.robotId)) w ! s }
-              case RobotOnline(id, _)    => online = online.updated(id, true)
-              case RobotOffline(id, _)   => online = online.updated(id, false)
               case _                     => ()
             }
             guards.get(e.robotId).foreach(_ ! RobotGuard.RobotEventReceived(e))

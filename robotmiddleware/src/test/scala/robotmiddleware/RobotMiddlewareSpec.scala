@@ -20,9 +20,10 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
   /**
    * A gateway that knows robot 1 and hands out probes as the robot's children. With `holdConnect` the robot does not
    * answer a guard's `Connect` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
-   * With `snapshotOnline` the robot answers `GetSnapshot` with that online state; without, it does not answer.
+   * The robot answers `GetSnapshot` with the online state `snapshotOnline` (online unless a test says otherwise); with
+   * `None` it does not answer.
    */
-  private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = None,
+  private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = Some(true),
       middlewareSettings: MiddlewareSettings = settings, known: Vector[RobotSnapshot] = Vector.empty) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
     val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
@@ -245,7 +246,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.expectCall("motion.stop").priority shouldBe Priority.Safety
     }
     "take the robot actor's word on reachability over the one it was created with (a restarted guard's)" in {
-      // The middleware heard RobotOnline, so the guard is created online; the robot actor knows better.
+      // The middleware heard RobotOnline, but the robot actor, which owns reachability, says offline: that counts.
       val f = new Fixture(snapshotOnline = Some(false))
       val (app, _) = f.app("walker", 1)
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
@@ -272,38 +273,30 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.expectCall("motion.stop").priority shouldBe Priority.Safety
       lease.receiveMessage().result shouldBe Right(())
     }
-    "show a robot online in its snapshot as soon as it comes online, not only from its next keep-alive" in {
-      val f = new Fixture
-      val robots = createTestProbe[Vector[RobotSnapshot]]()
-      def listed(): RobotSnapshot = {
-        f.middleware ! RobotMiddleware.ListRobots(robots.ref)
-        robots.receiveMessage().loneElement
-      }
-      // A newly discovered robot's first keep-alive arrives before the robot counts as online.
-      val first = RobotSnapshot(1, robotAddress, batteryVoltage = Some(12.1), online = false, quality = LinkQuality.Offline)
-      f.publish ! RobotStatusUpdated(first)
-      f.publish ! RobotOnline(1, robotAddress)
-      listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
-      f.publish ! LinkQualityChanged(1, LinkQuality.Degraded)
-      listed() shouldBe first.copy(online = true, quality = LinkQuality.Degraded)
-      f.publish ! RobotOffline(1, "test")
-      listed() shouldBe first.copy(online = false, quality = LinkQuality.Offline)
-      f.publish ! RobotOnline(1, robotAddress)
-      listed() shouldBe first.copy(online = true, quality = LinkQuality.Good)
-    }
-    "list the robots the gateway knows from its configuration before any of them was heard from" in {
+    "list robots as the gateway answers, keeping no copy that events could leave behind" in {
       val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)
       val f = new Fixture(known = Vector(configured))
       val robots = createTestProbe[Vector[RobotSnapshot]]()
-      // The gateway's answer reaches the middleware after it started; the list has the robot from then on.
-      robots.awaitAssert {
-        f.middleware ! RobotMiddleware.ListRobots(robots.ref)
-        robots.receiveMessage().map(_.robotId) should contain(7)
-      }
-      // Later events about it still update the listed snapshot.
-      f.publish ! RobotStatusUpdated(configured.copy(batteryVoltage = Some(12.2)))
       f.middleware ! RobotMiddleware.ListRobots(robots.ref)
-      robots.receiveMessage().find(_.robotId == 7).flatMap(_.batteryVoltage) shouldBe Some(12.2)
+      robots.receiveMessage() shouldBe Vector(configured)
+      // An event about the robot changes nothing the middleware answers with: the gateway (its robot actor) owns it.
+      f.publish ! RobotStatusUpdated(configured.copy(batteryVoltage = Some(12.2), online = true))
+      f.publish ! RobotOnline(7, configured.address)
+      f.middleware ! RobotMiddleware.ListRobots(robots.ref)
+      robots.receiveMessage() shouldBe Vector(configured)
+    }
+    "start a status watcher with the gateway's current snapshots, then stream keep-alives" in {
+      val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838))
+      val other = RobotSnapshot(8, new InetSocketAddress("192.168.1.108", 3838))
+      val f = new Fixture(known = Vector(configured, other))
+      val watcher = createTestProbe[RobotSnapshot]()
+      f.middleware ! RobotMiddleware.WatchStatus(Some(7), watcher.ref)
+      watcher.expectMessage(configured)
+      val next = configured.copy(batteryVoltage = Some(12.2), online = true, quality = LinkQuality.Good)
+      f.publish ! RobotStatusUpdated(other)
+      f.publish ! RobotStatusUpdated(next)
+      watcher.expectMessage(next)
+      watcher.expectNoMessage(100.millis)
     }
     "answer for robots the gateway does not know" in {
       val f = new Fixture

@@ -26,6 +26,12 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
     acc
   }
 
+  /** A writer that hands every datagram to `link` as the send it is, and always takes it. */
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter = (bytes, to) => {
+    link ! UdpLink.Send(bytes, to)
+    true
+  }
+
   "A walk" must {
     "never be retried after a later stop" in {
       val robot = createTestProbe[RobotActor.FromChild]()
@@ -43,7 +49,7 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
     }
     "never leave the outbox after a later stop when the budget held it" in {
       val link = createTestProbe[UdpLink.Command]()
-      val outbox = spawn(Outbox(link.ref, BudgetSettings(1400, 0, 1.0), competition = false))
+      val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(1400, 0, 1.0), competition = false))
       val robot = spawn(Behaviors.receiveMessage[RobotActor.FromChild] {
         case RobotActor.ReachabilityWanted(r) => r ! true; Behaviors.same
         case RobotActor.RouteWanted(r) =>

@@ -34,10 +34,16 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
     }
   }
 
+  /** A writer that hands every datagram to `link` as the send it is, and always takes it. */
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter = (bytes, to) => {
+    link ! UdpLink.Send(bytes, to)
+    true
+  }
+
   "Outbox" must {
     "stay within the budget when asked for far more, send safety first and commands before debug" in {
       val link = createTestProbe[UdpLink.Command]()
-      val outbox = spawn(Outbox(link.ref, BudgetSettings(10000, 0, 0.8), competition = false))
+      val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(10000, 0, 0.8), competition = false))
       val debug = Array.fill[Byte](1000)(0)
       val command = Array.fill[Byte](1000)(1)
       val safety = Array[Byte](2, 2, 2)
@@ -69,7 +75,7 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
     "send nothing to robots while the game runs in competition mode, and say which rule" in {
       val link = createTestProbe[UdpLink.Command]()
       val outcomes = createTestProbe[Outbox.Outcome]()
-      val outbox = spawn(Outbox(link.ref, BudgetSettings(125000, 0, 0.8), competition = true))
+      val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(125000, 0, 0.8), competition = true))
       outbox ! Outbox.GameStateChanged(GameState.Playing)
       outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Safety, Some(outcomes.ref), 7)
       outcomes.expectMessage(Outbox.RefusedByRule(7, Outbox.NoSendingWhileGameRuns))
@@ -78,6 +84,21 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
       outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Command, Some(outcomes.ref), 8)
       outcomes.expectMessage(Outbox.Accepted(8))
       link.expectMessageType[UdpLink.Send]
+    }
+    "count a datagram the socket did not take (kernel buffer full) as dropped, and keep sending" in {
+      val taken = new java.util.concurrent.atomic.AtomicBoolean(false)
+      val sent = new java.util.concurrent.atomic.AtomicInteger
+      val full: naogateway.link.DatagramWriter = (_, _) => { sent.incrementAndGet(); taken.get }
+      val outbox = spawn(Outbox(full, BudgetSettings(125000, 0, 0.8), competition = false))
+      val stats = createTestProbe[Outbox.TrafficStats]()
+      outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Command)
+      outbox ! Outbox.GetStats(stats.ref)
+      stats.receiveMessage().dropped shouldBe 1
+      taken.set(true)
+      outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Command)
+      outbox ! Outbox.GetStats(stats.ref)
+      val after = stats.receiveMessage()
+      (after.dropped, after.datagramsOut, sent.get) shouldBe ((1L, 2L, 2))
     }
   }
 }

@@ -243,10 +243,13 @@ object MiddlewareClusterSpec {
   def appOverrides(gatewayPort: Int): Config =
     ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort").withFallback(common)
 
-  /** The robot actor as far as the middleware uses it: its children and its link figures. */
+  /** The robot actor as far as the middleware uses it: its children, its snapshot (online) and its link figures. */
   def fakeRobot(children: RobotActor.Connected): Behavior[RobotActor.Command] = Behaviors.receiveMessage {
     case RobotActor.Connect(replyTo) =>
       replyTo ! children
+      Behaviors.same
+    case RobotActor.GetSnapshot(replyTo) =>
+      replyTo ! CrossNodeSerializationSpec.snapshot
       Behaviors.same
     case RobotActor.GetLinkStats(replyTo) =>
       replyTo ! CrossNodeSerializationSpec.linkStats
@@ -254,7 +257,7 @@ object MiddlewareClusterSpec {
     case _ => Behaviors.unhandled
   }
 
-  /** The gateway as far as the middleware uses it: one robot, 7, and the subscription to its events. */
+  /** The gateway as far as the middleware uses it: one robot, 7, its snapshot, and the subscription to its events. */
   def fakeGateway(
       robot: ActorRef[RobotActor.Command],
       subscriptions: ActorRef[ActorRef[GatewayEvent]]
@@ -265,6 +268,10 @@ object MiddlewareClusterSpec {
         Behaviors.same
       case Gateway.GetRobot(robotId, replyTo) =>
         replyTo ! Some(robot).filter(_ => robotId == 7)
+        Behaviors.same
+      case Gateway.GetRobots(replyTo) =>
+        // What the real gateway would collect from robot 7's actor.
+        replyTo ! Vector(CrossNodeSerializationSpec.snapshot)
         Behaviors.same
       case _ => Behaviors.unhandled
     }

@@ -39,6 +39,19 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
   }
 
   "The gateway" must {
+    "free its robot port and stop its reader thread when it stops, however often it is started" in {
+      def readers = Thread.getAllStackTraces.keySet.toArray(Array.empty[Thread])
+        .count(t => t.isAlive && t.getName == s"${system.name}-robot-port")
+      val before = readers
+      (1 to 5).foreach { _ =>
+        val f = new GatewayFixture(testKit)
+        readers shouldBe before + 1
+        f.stop()
+        readers shouldBe before
+        // Closed with the gateway, not left to the garbage collector: the port can be bound again at once.
+        DatagramChannel.open().bind(f.addresses.robots).close()
+      }
+    }
     "discover several robots from their keep-alives and answer calls to each" in withGateway() { f =>
       val robots = (1 to 3).map(id => id -> f.robot(id))
       val online = (1 to 3).map(_ => f.awaitEvent(10.seconds) { case RobotOnline(id, address) => id -> address }).toMap

@@ -1,0 +1,71 @@
+package naogateway
+
+import java.net.InetSocketAddress
+
+import naogateway.wire._
+
+/**
+ * Where a datagram on the robot port goes, decided without actors: the robot port's reader applies [[Routing.decide]]
+ * to the table the gateway last published. The gateway alone writes the table and alone decides what the table cannot
+ * (discovery, re-binding, conflicting claims); the reader hands those frames to it.
+ */
+object Routing {
+
+  /** Robot `robotId`, bound to `address`, reached through `target`. */
+  final case class Route[+A](robotId: Int, address: InetSocketAddress, target: A)
+
+  /** The datagram robots by id and by bound address (ZeroMQ robots are not in it); immutable, replaced whole. */
+  final case class Table[+A](byId: Map[Int, Route[A]], byAddress: Map[InetSocketAddress, Route[A]])
+
+  /** Building tables. */
+  object Table {
+
+    /** No robots. */
+    val empty: Table[Nothing] = Table(Map.empty, Map.empty)
+
+    /** The table of `routes`. */
+    def of[A](routes: Iterable[Route[A]]): Table[A] =
+      Table(routes.map(r => r.robotId -> r).toMap, routes.map(r => r.address -> r).toMap)
+  }
+
+  /** What becomes of one datagram. */
+  sealed trait Decision[+A] extends Product with Serializable
+
+  /** A frame from robot `route`'s bound address, carrying its id: for that robot. */
+  final case class ToRobot[A](route: Route[A], header: FrameHeader, contents: MessageContents, size: Int) extends Decision[A]
+
+  /** A secure-stream segment from robot `route`'s bound address. */
+  final case class SegmentToRobot[A](route: Route[A], bytes: Array[Byte]) extends Decision[A]
+
+  /** A frame the table cannot place (an id not bound here, or bound to another address): the gateway decides. */
+  final case class ToGateway(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress)
+      extends Decision[Nothing]
+
+  /** Refused with `reason`; `route` is the robot bound to the sender's address, if any (it counts the refusal too). */
+  final case class Refused[A](reason: String, route: Option[Route[A]]) extends Decision[A]
+
+  /** The decision for `bytes` from `from` under `table`; total: bad bytes give [[Refused]], never an exception. */
+  def decide[A](table: Table[A], bytes: Array[Byte], from: InetSocketAddress): Decision[A] = {
+    def sender = table.byAddress.get(from)
+    Datagram.classify(bytes) match {
+      case Datagram.FuRemoteFrame(_) =>
+        MessageContents.decodeFrame(bytes) match {
+          case Right((header, contents)) =>
+            table.byId.get(contents.robotId) match {
+              case Some(route) if route.address == from => ToRobot(route, header, contents, bytes.length)
+              case _                                    => ToGateway(header, contents, bytes.length, from)
+            }
+          case Left(error) => Refused(s"bad frame: ${error.productPrefix}", sender)
+        }
+      case Datagram.StreamSegment(_) =>
+        sender match {
+          case Some(route) => SegmentToRobot(route, bytes)
+          case None        => Refused("stream segment from an unknown address", None)
+        }
+      case Datagram.GameControllerControl(_) | Datagram.GameControllerReturn(_) =>
+        Refused("GameController packet on the robot port", sender)
+      case Datagram.Rejected(reason, _) =>
+        Refused(s"unclassifiable: ${reason.describe.takeWhile(_ != ':')}", sender)
+    }
+  }
+}
