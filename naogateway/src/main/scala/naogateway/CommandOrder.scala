@@ -5,8 +5,10 @@ import naogateway.wire.CommandSlot
 /**
  * The order in which one robot's calls leave: the pure core of `ResponseActor`.
  *
- * Rules: a call of a slot supersedes every older call of that slot, waiting or in flight (it gets no more retries
- * and its held datagrams are withdrawn); at most `maxInFlight` calls are in flight, later ones wait in arrival
+ * Rules: a call of a slot supersedes every older call of that slot still waiting, and every older replaceable one in
+ * flight (a target such as a walk's velocities or the head's angles: it gets no more retries and its held datagrams
+ * are withdrawn); a stop or a posture once sent is never superseded: the robot carries it out, and its caller keeps
+ * its answer; at most `maxInFlight` calls are in flight, later ones wait in arrival
  * order, at most `maxWaiting` of them; a safety call never waits. So within a slot the robot gets calls in the
  * order they were given, and nothing older follows a newer one: no walk after a stop.
  */
@@ -20,7 +22,7 @@ final case class CommandOrder[A] private (
 
   /** Takes call `e`: what it supersedes, then whether it leaves now, waits (no step) or is refused. */
   def submit(e: Entry[A]): (CommandOrder[A], Vector[Step[A]]) = {
-    val (sameFlying, otherFlying) = e.slot.fold((Vector.empty[Entry[A]], inFlight))(s => inFlight.partition(_.slot.contains(s)))
+    val (sameFlying, otherFlying) = e.slot.fold((Vector.empty[Entry[A]], inFlight))(s => inFlight.partition(x => x.replaceable && x.slot.contains(s)))
     val (sameWaiting, otherWaiting) = e.slot.fold((Vector.empty[Entry[A]], waiting))(s => waiting.partition(_.slot.contains(s)))
     val superseded = sameFlying.map(Superseded(_, wasInFlight = true)) ++ sameWaiting.map(Superseded(_, wasInFlight = false))
     val rest = copy(inFlight = otherFlying, waiting = otherWaiting)
@@ -62,8 +64,11 @@ final case class CommandOrder[A] private (
 /** Entries and steps of the command order. */
 object CommandOrder {
 
-  /** A call: its key (its first call id), its slot, whether it is a safety call, and what the owner keeps with it. */
-  final case class Entry[A](key: Long, slot: Option[CommandSlot], safety: Boolean, payload: A)
+  /**
+   * A call: its key (its first call id), its slot, whether it is a safety call, what the owner keeps with it, and
+   * whether a newer call of its slot replaces it (targets do; a stop or a posture does not).
+   */
+  final case class Entry[A](key: Long, slot: Option[CommandSlot], safety: Boolean, payload: A, replaceable: Boolean = true)
 
   /** What the owner must do. */
   sealed trait Step[A] extends Product with Serializable

@@ -219,7 +219,8 @@ object ResponseActor {
             val total = timeout.getOrElse(settings.timeout)
             val retries = if (idempotent.getOrElse(RpcMethod.idempotent(call))) settings.idempotentRetries else 0
             val p = Pending(call, Set(id), replyTo, priority, 1, retries + 1, total / (retries + 1).toLong, total, 0L)
-            val (next, steps) = order.submit(CommandOrder.Entry(id, RpcMethod.slotOf(call), priority == Priority.Safety, p))
+            val (next, steps) = order.submit(CommandOrder.Entry(id, RpcMethod.slotOf(call), priority == Priority.Safety, p,
+              replaceable = RpcMethod.of(call).forall(_.latestWins)))
             running(perform(next, steps, route), online, id & 0x3fffffffL, route)
           case ReplyReceived(reply) =>
             reply.callId.flatMap(id => order.findInFlight(_.ids(id))) match {

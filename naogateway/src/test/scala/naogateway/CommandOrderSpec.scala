@@ -12,11 +12,12 @@ import naogateway.wire.CommandSlot
 class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
   private sealed trait Op
-  private final case class Submit(slot: Option[CommandSlot], safety: Boolean) extends Op
+  private final case class Submit(slot: Option[CommandSlot], safety: Boolean, replaceable: Boolean) extends Op
   private final case class Answer(pick: Int) extends Op
 
   private val ops: Gen[Op] = Gen.frequency(
-    3 -> Gen.zip(Gen.option(Gen.oneOf(CommandSlot.all)), Gen.frequency(1 -> true, 4 -> false)).map((Submit.apply _).tupled),
+    3 -> Gen.zip(Gen.option(Gen.oneOf(CommandSlot.all)), Gen.frequency(1 -> true, 4 -> false), Gen.frequency(3 -> true, 1 -> false))
+      .map((Submit.apply _).tupled),
     2 -> Gen.choose(0, 7).map(Answer.apply)
   )
   private val scripts = Gen.zip(Gen.choose(1, 4), Gen.choose(0, 4), Gen.listOf(ops))
@@ -34,8 +35,8 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
       states :+= order
     }
     script.foreach {
-      case Submit(slot, safety) =>
-        val e = Entry(submitted.size.toLong, slot, safety, ())
+      case Submit(slot, safety, replaceable) =>
+        val e = Entry(submitted.size.toLong, slot, safety, (), replaceable)
         submitted :+= e
         apply(order.submit(e))
       case Answer(pick) =>
@@ -84,11 +85,11 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
         states.foreach(s => s.waiting.size should be <= waiting)
       }
     }
-    "hold at most one live call per slot, and send other calls first come, first served" in {
+    "hold at most one live replaceable call per slot, and send other calls first come, first served" in {
       forAll(scripts) { case (max, waiting, script) =>
         val (steps, _, states) = run(max, waiting, script)
         states.foreach { s =>
-          val live = (s.inFlight ++ s.waiting).flatMap(_.slot)
+          val live = (s.inFlight ++ s.waiting).filter(_.replaceable).flatMap(_.slot)
           live.distinct.size shouldBe live.size
         }
         val ordinary = sent(steps).filterNot(_.safety).map(_.key)
@@ -103,6 +104,12 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
           val given = submitted.filter(e => e.slot.contains(slot) && !refused(e.key)).map(_.key)
           sent(steps).filter(_.slot.contains(slot)).map(_.key).lastOption shouldBe given.lastOption
         }
+      }
+    }
+    "never supersede a stop or a posture once sent: a newer call of the slot leaves after it and its caller keeps its answer" in {
+      forAll(scripts) { case (max, waiting, script) =>
+        val (steps, _, _) = run(max, waiting, script)
+        steps.collect { case (_, Superseded(e, true)) => e }.foreach(_.replaceable shouldBe true)
       }
     }
     "withdraw nothing that is not in flight, and supersede a walk held behind the cap before a stop goes" in {

@@ -255,7 +255,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.noResponse.expectNoMessage(200.millis)
     }
     "stop a robot that came back while its guard was still connecting, once the guard is ready" in {
-      val f = new Fixture(holdConnect = true)
+      // The robot actor, asked by the new guard, knows the robot is offline.
+      val f = new Fixture(holdConnect = true, snapshotOnline = Some(false))
       val (app, _) = f.app("walker", 1)
       val robotEvents = createTestProbe[RobotEvent]()
       f.middleware ! RobotMiddleware.WatchEvents(robotEvents.ref)
@@ -272,6 +273,24 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       guardConnect ! f.connected
       f.expectCall("motion.stop").priority shouldBe Priority.Safety
       lease.receiveMessage().result shouldBe Right(())
+    }
+    "not stop a robot on an online event older than what the guard knows (no stop overtaking an app's first command)" in {
+      val f = new Fixture()
+      val (app, _) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      // The guard asked the robot actor: online. The gateway's RobotOnline of first contact reaches it afterwards.
+      f.publish ! RobotOnline(1, robotAddress)
+      val done = createTestProbe[RobotMiddleware.OperationResult]()
+      f.middleware ! RobotMiddleware.Execute(app, 1, Operation.Posture(Posture.Stand), done.ref)
+      val seen = f.response.fishForMessage(3.seconds) {
+        case c: ResponseActor.Call if c.call.name == "motion.posture" => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                                                       => akka.actor.testkit.typed.FishingOutcome.Continue
+      }
+      seen.collect { case c: ResponseActor.Call => c.call.name } should not contain "motion.stop"
+      val posture = seen.last.asInstanceOf[ResponseActor.Call]
+      f.response.expectNoMessage(300.millis)
+      posture.replyTo ! CallResult(1, "motion.posture", Right(None))
+      done.receiveMessage().result shouldBe Right(None)
     }
     "list robots as the gateway answers, keeping no copy that events could leave behind" in {
       val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)

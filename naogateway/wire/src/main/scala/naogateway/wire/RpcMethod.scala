@@ -33,6 +33,9 @@ sealed abstract class RpcMethod(val module: String, val method: String, val idem
   /** `module.method`, as in logs, errors and the docs. */
   def name: String = s"$module.$method"
 
+  /** Whether a newer call of its slot replaces it: a target (walk velocities, head or arm angles), not a stop or posture. */
+  def latestWins: Boolean = slot.isDefined && this != RpcMethod.Stop && this != RpcMethod.Posture
+
   /** A call of this method with `params`. */
   def call(params: RpcValue*): RpcCall = RpcCall(module, method, params.toVector)
 }
