@@ -1,0 +1,231 @@
+package naogateway.wire
+
+import java.nio.charset.StandardCharsets
+import java.security.MessageDigest
+
+import javax.crypto.Mac
+import javax.crypto.spec.SecretKeySpec
+
+import scala.util.control.NonFatal
+
+import com.google.protobuf.{CodedInputStream, CodedOutputStream, WireFormat}
+
+/** A team's secret for signed frames (docs/protocol.md 6.7); it never appears in `toString`, so never in a log. */
+final class SigningKey private (private val secret: Array[Byte]) {
+
+  /** A fresh HMAC-SHA256 instance keyed with this secret (instances are not thread-safe, so one per use). */
+  private[wire] def hmac(): Mac = {
+    val mac = Mac.getInstance("HmacSHA256")
+    mac.init(new SecretKeySpec(secret, "HmacSHA256"))
+    mac
+  }
+
+  override def toString: String = "SigningKey(<secret>)"
+  override def equals(other: Any): Boolean = other match {
+    case k: SigningKey => MessageDigest.isEqual(secret, k.secret)
+    case _             => false
+  }
+  override def hashCode(): Int = 0
+}
+
+/** Reading a signing key from config or the environment. */
+object SigningKey {
+
+  /** The shortest key accepted: 128 bits. */
+  val MinBytes: Int = 16
+
+  /** The longest key accepted: one SHA-256 block (longer keys would be hashed first, which firmware need not do). */
+  val MaxBytes: Int = 64
+
+  /** A key from raw bytes, refused when shorter than [[MinBytes]] or longer than [[MaxBytes]]. */
+  def fromBytes(bytes: Array[Byte]): Either[String, SigningKey] =
+    if (bytes.length < MinBytes) Left(s"a signing key needs at least $MinBytes bytes, this one has ${bytes.length}")
+    else if (bytes.length > MaxBytes) Left(s"a signing key has at most $MaxBytes bytes, this one has ${bytes.length}")
+    else Right(new SigningKey(bytes.clone()))
+
+  /** A key written as hexadecimal digits (32 to 128 of them); the error never repeats the digits. */
+  def fromHex(hex: String): Either[String, SigningKey] = {
+    val digits = hex.trim
+    if (digits.length % 2 != 0 || !digits.forall(c => Character.digit(c, 16) >= 0))
+      Left(s"a signing key is an even number of hexadecimal digits (got ${digits.length} characters)")
+    else fromBytes(digits.grouped(2).map(Integer.parseInt(_, 16).toByte).toArray)
+  }
+}
+
+/** Who signed a frame: part of the MAC, so a robot's frame cannot be reflected back to it as the gateway's. */
+sealed abstract class SignDirection(val code: Byte) extends Product with Serializable
+
+/** The two directions of a signed link. */
+object SignDirection {
+
+  /** Frames a robot sends (keep-alives, replies, option lists, debug data, camera frames). */
+  case object RobotToGateway extends SignDirection(1)
+
+  /** Frames the gateway sends (requests, option commands). */
+  case object GatewayToRobot extends SignDirection(2)
+}
+
+/** Why a frame's signature was not accepted: a closed set, so counts per kind stay bounded. */
+sealed abstract class SignatureError(val kind: String) extends Product with Serializable
+
+/** The kinds of signature failure. */
+object SignatureError {
+
+  /** The frame carries no signature field. */
+  case object Missing extends SignatureError("unsigned")
+
+  /** A field follows the signature: those bytes would not be covered by the MAC. */
+  case object NotLast extends SignatureError("signature not last")
+
+  /** The signature field is not a well-formed `FrameSignature`. */
+  case object Malformed extends SignatureError("malformed signature")
+
+  /** The MAC does not match: another key, or altered bytes. */
+  case object BadMac extends SignatureError("bad signature")
+
+  /** The timestamp is not above the last accepted one: a replayed or reordered frame. */
+  case object Replayed extends SignatureError("replayed")
+
+  /** Every kind. */
+  val all: Vector[SignatureError] = Vector(Missing, NotLast, Malformed, BadMac, Replayed)
+}
+
+/** A frame whose MAC matched: its timestamp, and how many leading bytes of the protobuf body were signed. */
+final case class SignedBody(timestamp: Long, signedLength: Int)
+
+/** The replay rule: a sender's timestamps only ever grow (compared as unsigned 64-bit numbers). */
+final case class ReplayWindow(last: Option[Long]) {
+
+  /** The window after accepting `timestamp`, or `Replayed` when it is not above the last accepted one. */
+  def accept(timestamp: Long): Either[SignatureError, ReplayWindow] =
+    if (last.exists(l => java.lang.Long.compareUnsigned(timestamp, l) <= 0)) Left(SignatureError.Replayed)
+    else Right(ReplayWindow(Some(timestamp)))
+}
+
+/** The empty window. */
+object ReplayWindow {
+
+  /** Nothing accepted yet: any timestamp goes. */
+  val empty: ReplayWindow = ReplayWindow(None)
+}
+
+/**
+ * Opt-in signed FU-Remote frames (docs/protocol.md 6.7): a `FrameSignature` extension (number 7199, always the last
+ * field of the `Message`) carrying a strictly increasing timestamp and the first 8 bytes of
+ * HMAC-SHA256(key, "FUSIG1" | direction | timestamp as 8 big-endian bytes | the Message's bytes before the field).
+ * Peers that do not sign (FU-Remote, older firmware) skip the extension like any unknown one.
+ */
+object FrameSigning {
+
+  /** The signature's extension number: the last of the project's range, so protobuf libraries write it last. */
+  val Field: Int = 7199
+
+  /** Bytes of the truncated MAC (64 bits, as much as MAVLink 2's 48 and then some). */
+  val MacBytes: Int = 8
+
+  /** The domain separator at the start of every MAC input, so no other HMAC use of the key can be replayed here. */
+  val Domain: Array[Byte] = "FUSIG1".getBytes(StandardCharsets.US_ASCII)
+
+  /** The encoded length of the signature field: tag (3) + length (1) + fixed64 (1 + 8) + mac (1 + 1 + 8). */
+  val FieldBytes: Int = 23
+
+  /** The truncated MAC of `length` body bytes from `offset`. */
+  def mac(key: SigningKey, direction: SignDirection, timestamp: Long, body: Array[Byte], offset: Int, length: Int): Array[Byte] = {
+    val hmac = key.hmac()
+    hmac.update(Domain)
+    hmac.update(direction.code)
+    var i = 7
+    while (i >= 0) { hmac.update((timestamp >>> (8 * i)).toByte); i -= 1 }
+    hmac.update(body, offset, length)
+    java.util.Arrays.copyOf(hmac.doFinal(), MacBytes)
+  }
+
+  /** `body` (the protobuf bytes of a `Message`) with the signature field appended. */
+  def sign(body: Array[Byte], key: SigningKey, direction: SignDirection, timestamp: Long): Array[Byte] = {
+    val tag = mac(key, direction, timestamp, body, 0, body.length)
+    val out = new Array[Byte](body.length + FieldBytes)
+    System.arraycopy(body, 0, out, 0, body.length)
+    val coded = CodedOutputStream.newInstance(out, body.length, FieldBytes)
+    coded.writeTag(Field, WireFormat.WIRETYPE_LENGTH_DELIMITED)
+    coded.writeUInt32NoTag(FieldBytes - 4)
+    coded.writeFixed64(1, timestamp)
+    coded.writeByteArray(2, tag)
+    coded.checkNoSpaceLeft()
+    out
+  }
+
+  /** `contents` as a signed frame in header form `form` (signed frames are never gzip-flagged: the MAC is the check). */
+  def signFrame(
+      contents: MessageContents,
+      form: HeaderForm,
+      key: SigningKey,
+      direction: SignDirection,
+      timestamp: Long
+  ): Either[FrameError.Oversize, Array[Byte]] =
+    FumanoidsFrame.encodeProtobuf(sign(contents.toProtobuf, key, direction, timestamp), form, gzip = false)
+
+  /**
+   * Checks the signature of the `length` protobuf bytes at `offset` (a `Message`, after any gzip is undone):
+   * the last field must be the signature, and its MAC must match the bytes before it. The replay rule is the
+   * caller's ([[ReplayWindow]]), because only the caller knows the sender.
+   */
+  def verify(body: Array[Byte], offset: Int, length: Int, key: SigningKey, direction: SignDirection): Either[SignatureError, SignedBody] =
+    try {
+      val in = CodedInputStream.newInstance(body, offset, length)
+      var signatureAt = -1
+      var signature: Option[(Long, Array[Byte])] = None
+      var malformed = false
+      var notLast = false
+      var done = false
+      while (!done) {
+        val at = in.getTotalBytesRead
+        val tag = in.readTag()
+        if (tag == 0) done = true
+        else if (signatureAt >= 0) { notLast = true; done = true }
+        else if (WireFormat.getTagFieldNumber(tag) == Field) {
+          signatureAt = at
+          if (WireFormat.getTagWireType(tag) != WireFormat.WIRETYPE_LENGTH_DELIMITED) { malformed = true; done = true }
+          else {
+            val limit = in.pushLimit(in.readRawVarint32())
+            signature = readSignature(in)
+            in.popLimit(limit)
+            if (signature.isEmpty) { malformed = true; done = true }
+          }
+        } else in.skipField(tag)
+      }
+      if (notLast) Left(SignatureError.NotLast)
+      else if (malformed) Left(SignatureError.Malformed)
+      else
+        signature match {
+          case None => Left(SignatureError.Missing)
+          case Some((timestamp, tag)) =>
+            val expected = mac(key, direction, timestamp, body, offset, signatureAt)
+            if (MessageDigest.isEqual(expected, tag)) Right(SignedBody(timestamp, signatureAt))
+            else Left(SignatureError.BadMac)
+        }
+    } catch { case NonFatal(_) => Left(SignatureError.Malformed) }
+
+  /** The signature message: exactly one fixed64 timestamp (1) and one 8-byte mac (2); anything else is malformed. */
+  private def readSignature(in: CodedInputStream): Option[(Long, Array[Byte])] = {
+    var timestamp: Option[Long] = None
+    var tag: Option[Array[Byte]] = None
+    var ok = true
+    var done = false
+    while (ok && !done) {
+      val t = in.readTag()
+      if (t == 0) done = true
+      else if (t == WireFormat.makeTag(1, WireFormat.WIRETYPE_FIXED64) && timestamp.isEmpty) timestamp = Some(in.readFixed64())
+      else if (t == WireFormat.makeTag(2, WireFormat.WIRETYPE_LENGTH_DELIMITED) && tag.isEmpty) {
+        val bytes = in.readByteArray()
+        if (bytes.length == MacBytes) tag = Some(bytes) else ok = false
+      } else ok = false
+    }
+    if (ok) for { ts <- timestamp; mac <- tag } yield ts -> mac else None
+  }
+
+  /** The gateway's next timestamp: microseconds since the Unix epoch, but always above the last one it used. */
+  def nextGatewayTimestamp(last: Long, nowMicros: Long): Long = math.max(last + 1, nowMicros)
+
+  /** A robot's timestamp: its persisted boot counter in the high 32 bits, its frame counter of this boot in the low. */
+  def robotTimestamp(bootCounter: Long, frameCounter: Long): Long = ((bootCounter & 0xffffffffL) << 32) | (frameCounter & 0xffffffffL)
+}
