@@ -70,7 +70,7 @@ object Launcher {
     val gateway = context.spawn(Gateway(GatewaySettings(context.system)), "gateway")
     val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
-    apps.control.ControlServer.spawnIfEnabled(context, middleware)
+    apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(gateway))
     context.spawn(StatusPrinter.fromConfig(gateway, config.getConfig("apps.launcher")), "status")
     gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
 

@@ -48,11 +48,29 @@ object Gateway {
   /** Answers with the latest GameController packet, if any arrived. */
   final case class GetGameState(replyTo: ActorRef[Option[GameControlData]]) extends Command
 
+  /** Answers with where game state comes from: the trusted sources, the last sender and the packets ignored. */
+  final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Command
+
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int) extends Command
   private final case class RobotWantsSubscribers(request: RobotActor.SubscribersWanted) extends Command
+
+  /**
+   * Where the game state comes from, for the status view and robotctl.
+   *
+   * @param trusted the configured GameController addresses or subnets, in words ("any source" when none is)
+   * @param lastFrom the sender of the last control packet that counted
+   * @param untrusted control packets ignored because they came from elsewhere
+   */
+  final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long) {
+
+    /** One line: "game state from 10.0.0.5:3838 (trusted: 10.0.0.0/24), 3 packets from elsewhere ignored". */
+    def describe: String =
+      s"game state from ${lastFrom.fold("nowhere yet")(a => s"${a.getAddress.getHostAddress}:${a.getPort}")} (trusted: $trusted)" +
+        (if (untrusted > 0) s", $untrusted packet(s) from elsewhere ignored" else "")
+  }
 
   /** Where the gateway listens. */
   final case class Addresses(robots: InetSocketAddress, gameController: Option[InetSocketAddress])
@@ -189,6 +207,8 @@ object Gateway {
     private var rebindable = Set.empty[Int]
     private var gcPackets = 0L
     private var game: Option[GameControlData] = None
+    private var gameFrom: Option[InetSocketAddress] = None
+    private var gameUntrusted = 0L
 
     /** The configured robots, then the reader: it never sees a table without them. */
     def start(): Unit = {
@@ -282,10 +302,18 @@ object Gateway {
         case u: Unrouted =>
           handleUnrouted(u)
           Behaviors.same
+        case GameControllerEvent(UdpLink.Received(bytes, _)) if Datagram.isGameControllerReturn(bytes) =>
+          Behaviors.same // robots' answers to the GameController share its port
+        case GameControllerEvent(UdpLink.Received(_, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
+          // Anyone on the field's WiFi can send a control packet: only the configured GameController steers the gate.
+          gameUntrusted += 1
+          reject(Rejection.UntrustedGameController.name, from)
+          Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
           GameControllerCodec.decodeControl(bytes) match {
             case Right(data) =>
               gcPackets += 1
+              gameFrom = Some(from)
               val changed = !game.exists(_.gameState == data.gameState)
               // Every packet, not only changes: a restarted outbox or ZeroMQ link learns the game state within one round.
               // Every gate (the outbox's, each ZeroMQ robot's) hears of it before any subscriber does, so a subscriber
@@ -298,7 +326,7 @@ object Gateway {
                 publish(GameStateUpdated(data))
               }
             case Left(error) =>
-              if (!Datagram.isGameControllerReturn(bytes)) reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
+              reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
           }
           Behaviors.same
         case GameControllerEvent(_) => Behaviors.same
@@ -340,6 +368,9 @@ object Gateway {
           Behaviors.same
         case GetGameState(replyTo) =>
           replyTo ! game
+          Behaviors.same
+        case GetGameSource(replyTo) =>
+          replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted)
           Behaviors.same
         case RobotStopped(robotId) =>
           byId.get(robotId).filterNot(_.zeromq).foreach(e => byAddress -= e.address)

@@ -101,12 +101,16 @@ final case class GatewaySettings(
     budget: BudgetSettings,
     competition: Boolean,
     stream: StreamSettings,
-    zeromq: ZmqLinkSettings
+    zeromq: ZmqLinkSettings,
+    gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty)
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
   require(gameControllerPort >= 0 && gameControllerPort <= 65535, s"game-controller.port $gameControllerPort is not a UDP port")
   require(robots.map(_.robotId).distinct.size == robots.size, "robots: every robot id may appear only once")
+  require(!(competition && gameControllerEnabled && !gameControllerTrusted.configured),
+    "competition mode needs game-controller.trusted-sources (the GameController's address or subnet, e.g. " +
+      "[\"10.0.0.0/24\"]; env NAOGATEWAY_GAMECONTROLLER_TRUSTED): otherwise anyone on the WiFi could start or end the game")
   require(robots.map(_.robotId).intersect(zeromq.robots.map(_.robotId)).isEmpty,
     "a robot id may be a UDP robot (robots) or a ZeroMQ robot (zeromq.robots), not both")
 }
@@ -179,7 +183,19 @@ object GatewaySettings {
           probeTimeout = duration(zmqHeartbeat, "probe-timeout"),
           chances = zmqHeartbeat.getInt("chances")
         )
-      )
+      ),
+      gameControllerTrusted = trustedSources(gc)
     )
+  }
+
+  /** `game-controller.trusted-sources`: a list of addresses or subnets, or one comma-separated string (the env form). */
+  private def trustedSources(gc: Config): TrustedSources = {
+    val key = "trusted-sources"
+    val texts =
+      if (!gc.hasPath(key)) Vector.empty
+      else if (gc.getValue(key).valueType == com.typesafe.config.ConfigValueType.STRING)
+        gc.getString(key).split(",").toVector.map(_.trim).filter(_.nonEmpty)
+      else gc.getStringList(key).asScala.toVector
+    TrustedSources(texts.map(t => Subnet.parse(t).fold(e => throw new IllegalArgumentException(s"game-controller.$key: $e"), identity)))
   }
 }

@@ -28,9 +28,10 @@ object Subnet {
 
   /** A subnet from `address[/bits]`; only literal addresses (no name lookups), with a clear error otherwise. */
   def parse(text: String): Either[String, Subnet] = {
-    val (host, bits) = text.trim.split("/", 2) match {
-      case Array(h, b) => h -> Some(b)
-      case Array(h)    => h -> None
+    val trimmed = text.trim
+    val (host, bits) = trimmed.indexOf('/') match {
+      case -1 => trimmed -> None
+      case i  => trimmed.take(i) -> Some(trimmed.drop(i + 1))
     }
     val literal = host.nonEmpty && (host.forall(c => c.isDigit || c == '.') || host.contains(':'))
     if (!literal) Left(s"'$text' is not an IP address or subnet (a literal address, optionally /prefix-bits)")

@@ -40,7 +40,8 @@ object ControlServer {
   private final case class BindFailed(reason: Throwable) extends Command
 
   /** The server for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
-  def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ControlSettings): Behavior[Command] =
+  def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ControlSettings,
+      gateway: Option[ActorRef[naogateway.Gateway.Command]] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(16) { stash =>
         context.pipeToSelf(RobotClient.connect(context.system, middleware, settings.appName, settings.priority)) {
@@ -48,7 +49,7 @@ object ControlServer {
           case Failure(e)      => ConnectFailed(e)
         }
         Behaviors.receiveMessage {
-          case Connected(robots) => stash.unstashAll(serving(robots, settings, ownsInterface = true))
+          case Connected(robots) => stash.unstashAll(serving(robots, settings, ownsInterface = true, gateway))
           case ConnectFailed(e) =>
             context.log.error("Control port: cannot register with the middleware; robotctl will find no gateway", e)
             Behaviors.stopped
@@ -60,22 +61,24 @@ object ControlServer {
     }
 
   /** Spawns the server as a child of `context` when `apps.control.enabled` is on (it is, by default). */
-  def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command]): Option[ActorRef[Command]] = {
+  def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command],
+      gateway: Option[ActorRef[naogateway.Gateway.Command]] = None): Option[ActorRef[Command]] = {
     val settings = ControlSettings(context.system)
-    if (settings.enabled) Some(context.spawn(apply(middleware, settings), "control")) else None
+    if (settings.enabled) Some(context.spawn(apply(middleware, settings, gateway), "control")) else None
   }
 
   /** The server in front of `robots`, which the caller owns (and closes). */
   def withInterface(robots: RobotInterface, settings: ControlSettings): Behavior[Command] =
-    serving(robots, settings, ownsInterface = false)
+    serving(robots, settings, ownsInterface = false, None)
 
-  private def serving(robots: RobotInterface, settings: ControlSettings, ownsInterface: Boolean): Behavior[Command] =
+  private def serving(robots: RobotInterface, settings: ControlSettings, ownsInterface: Boolean,
+      gateway: Option[ActorRef[naogateway.Gateway.Command]]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(16) { stash =>
         implicit val system: ActorSystem[_] = context.system
         // Touched by the connections' stream callbacks, never by the actor's state.
         val open = new AtomicInteger
-        val handler = answering(settings)(answer(robots, settings, _))
+        val handler = answering(settings)(answer(robots, settings, _, gateway))
         // A client told it is busy has its request line read first: closing a socket with unread input resets the
         // connection, and the client would see "connection reset" instead of the reason.
         val busyAnswer = Answer.Error(s"busy: ${settings.maxConnections} robotctl commands are being served; try again")
@@ -215,12 +218,13 @@ object ControlServer {
   }
 
   /** The answer to `request`: output lines, then exactly one `Ok` or `Error`, within the request's time limit. */
-  def answer(robots: RobotInterface, settings: ControlSettings, request: Request)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
+  def answer(robots: RobotInterface, settings: ControlSettings, request: Request,
+      gateway: Option[ActorRef[naogateway.Gateway.Command]] = None)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     val limit = request match {
       case Request.Watch(_, seconds) => settings.answerTimeout + seconds.seconds
       case _                         => settings.answerTimeout
     }
-    val answers = try body(robots, settings, request) catch { case NonFatal(e) => Source.failed(e) }
+    val answers = try body(robots, settings, request, gateway) catch { case NonFatal(e) => Source.failed(e) }
     answers
       .completionTimeout(limit)
       .recover {
@@ -238,7 +242,8 @@ object ControlServer {
   // The final line's text, in characters: at most 6 bytes each once escaped, well inside MaxAnswerBytes.
   private val MaxFinalChars = 1000
 
-  private def body(robots: RobotInterface, settings: ControlSettings, request: Request)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
+  private def body(robots: RobotInterface, settings: ControlSettings, request: Request,
+      gateway: Option[ActorRef[naogateway.Gateway.Command]])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     implicit val ec: ExecutionContext = system.executionContext
     request match {
       case Request.Status =>
@@ -248,7 +253,7 @@ object ControlServer {
           val stats = all.map(r => linkStats(robots, r.robotId, settings.linkStatsTimeout))
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
-            .concat(Source.single(Answer.Ok("")))
+            .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).map(Answer.Ok(_)))
         }
       case Request.Call(id, module, method, params) =>
         val needs = Operation.RawCall(module, method, params).group
@@ -268,6 +273,17 @@ object ControlServer {
                 .concat(robots.status(id).takeWithin(seconds.seconds).map(s => Answer.Line(statusLine(s, None))))
                 .concat(Source.single(Answer.Ok(s"watched robot $id for $seconds s")))
           }
+    }
+  }
+
+  /** Where game state comes from, for the status's final line; empty without a gateway or when it does not answer. */
+  private def gameSource(gateway: Option[ActorRef[naogateway.Gateway.Command]], timeout: FiniteDuration)(
+      implicit system: ActorSystem[_]): Future[String] = {
+    import akka.actor.typed.scaladsl.AskPattern._
+    implicit val ec: ExecutionContext = system.executionContext
+    implicit val askTimeout: akka.util.Timeout = timeout
+    gateway.fold(Future.successful("")) { g =>
+      g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(_.describe).recover { case NonFatal(_) => "" }
     }
   }
 

@@ -52,6 +52,37 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         DatagramChannel.open().bind(f.addresses.robots).close()
       }
     }
+    "take game state only from its trusted GameController: a forged PLAYING from elsewhere changes nothing" in
+      withGateway("competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]") { f =>
+        val stranger = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.2", 0))
+        val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+        try {
+          (1 to 5).foreach(_ => sendGameState(stranger, f, GameState.Playing))
+          val source = createTestProbe[Gateway.GameSource]()
+          source.awaitAssert({
+            f.gateway ! Gateway.GetGameSource(source.ref)
+            source.receiveMessage().untrusted shouldBe 5L
+          }, 10.seconds)
+          val game = createTestProbe[Option[GameControlData]]()
+          f.gateway ! Gateway.GetGameState(game.ref)
+          game.receiveMessage() shouldBe None
+          val traffic = createTestProbe[Outbox.TrafficStats]()
+          f.gateway ! Gateway.GetTraffic(traffic.ref)
+          traffic.receiveMessage().gateOpen shouldBe true
+          // The trusted GameController's packet counts, and the view learns where game state comes from.
+          sendGameState(gc, f, GameState.Playing)
+          f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Playing => () }
+          f.gateway ! Gateway.GetGameSource(source.ref)
+          val seen = source.receiveMessage()
+          seen.lastFrom.map(_.getAddress.getHostAddress) shouldBe Some("127.0.0.1")
+          seen.describe should include("trusted: 127.0.0.1/32")
+          seen.describe should include("5 packet(s) from elsewhere ignored")
+        } finally { stranger.close(); gc.close() }
+      }
+    "refuse to start competition mode without a trusted GameController source" in {
+      val e = intercept[IllegalArgumentException](new GatewayFixture(testKit, "competition.enabled = on"))
+      e.getMessage should include("trusted-sources")
+    }
     "discover several robots from their keep-alives and answer calls to each" in withGateway() { f =>
       val robots = (1 to 3).map(id => id -> f.robot(id))
       val online = (1 to 3).map(_ => f.awaitEvent(10.seconds) { case RobotOnline(id, address) => id -> address }).toMap

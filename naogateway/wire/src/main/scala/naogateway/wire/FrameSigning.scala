@@ -214,8 +214,8 @@ object FrameSigning {
     while (ok && !done) {
       val t = in.readTag()
       if (t == 0) done = true
-      else if (t == WireFormat.makeTag(1, WireFormat.WIRETYPE_FIXED64) && timestamp.isEmpty) timestamp = Some(in.readFixed64())
-      else if (t == WireFormat.makeTag(2, WireFormat.WIRETYPE_LENGTH_DELIMITED) && tag.isEmpty) {
+      else if (t == ((1 << 3) | WireFormat.WIRETYPE_FIXED64) && timestamp.isEmpty) timestamp = Some(in.readFixed64())
+      else if (t == ((2 << 3) | WireFormat.WIRETYPE_LENGTH_DELIMITED) && tag.isEmpty) {
         val bytes = in.readByteArray()
         if (bytes.length == MacBytes) tag = Some(bytes) else ok = false
       } else ok = false

@@ -9,8 +9,8 @@ import naogateway.proto.{Message, MessageProto}
 
 class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
-  private val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
-  private val otherKey = SigningKey.fromHex("ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+  private val teamKey = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+  private val otherTeamKey = SigningKey.fromHex("ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
   private val R = SignDirection.RobotToGateway
 
   private val contents: Gen[MessageContents] = for {
@@ -19,31 +19,31 @@ class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     health <- Gen.option(MessageGenerators.robotHealth)
   } yield MessageContents(id, status = status, robotHealth = health)
 
-  private def verify(body: Array[Byte], k: SigningKey = key, d: SignDirection = R) = FrameSigning.verify(body, 0, body.length, k, d)
+  private def verify(body: Array[Byte], k: SigningKey = teamKey, d: SignDirection = R) = FrameSigning.verify(body, 0, body.length, k, d)
 
   "A signed body" should {
-    "verify with the same key and direction, covering exactly the unsigned bytes" in {
+    "verify with the same teamKey and direction, covering exactly the unsigned bytes" in {
       forAll(contents, Arbitrary.arbitrary[Long]) { (c, ts) =>
         val body = c.toProtobuf
-        verify(FrameSigning.sign(body, key, R, ts)) shouldBe Right(SignedBody(ts, body.length))
+        verify(FrameSigning.sign(body, teamKey, R, ts)) shouldBe Right(SignedBody(ts, body.length))
       }
     }
 
-    "be refused when any covered byte changes, with another key, or in the other direction" in {
+    "be refused when any covered byte changes, with another teamKey, or in the other direction" in {
       forAll(contents, Arbitrary.arbitrary[Long], Gen.choose(0, 10000), Gen.choose(1, 255)) { (c, ts, at, flip) =>
-        val signed = FrameSigning.sign(c.toProtobuf, key, R, ts)
+        val signed = FrameSigning.sign(c.toProtobuf, teamKey, R, ts)
         val i = at % signed.length
         val altered = signed.clone()
         altered(i) = (altered(i) ^ flip).toByte
         verify(altered).isRight shouldBe false
-        verify(signed, otherKey) shouldBe Left(SignatureError.BadMac)
-        verify(signed, key, SignDirection.GatewayToRobot) shouldBe Left(SignatureError.BadMac)
+        verify(signed, otherTeamKey) shouldBe Left(SignatureError.BadMac)
+        verify(signed, teamKey, SignDirection.GatewayToRobot) shouldBe Left(SignatureError.BadMac)
       }
     }
 
     "still decode for a peer that does not sign: the signature is an unknown extension it skips" in {
       forAll(contents, Arbitrary.arbitrary[Long]) { (c, ts) =>
-        val signed = FrameSigning.sign(c.toProtobuf, key, R, ts)
+        val signed = FrameSigning.sign(c.toProtobuf, teamKey, R, ts)
         val decoded = MessageContents.parse(signed).toOption.get
         decoded.copy(unknownExtensions = Vector.empty) shouldBe c
         decoded.unknownExtensions shouldBe Vector(FrameSigning.Field)
@@ -55,7 +55,7 @@ class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     "be refused when unsigned, when a field follows the signature, or when the signature is malformed" in {
       val body = MessageContents(3).toProtobuf
       verify(body) shouldBe Left(SignatureError.Missing)
-      val signed = FrameSigning.sign(body, key, R, 1L)
+      val signed = FrameSigning.sign(body, teamKey, R, 1L)
       verify(signed ++ Array[Byte](0x08, 0x05)) shouldBe Left(SignatureError.NotLast)
       // A 7-byte mac: the same field with one byte short.
       val short = signed.clone()
@@ -87,11 +87,11 @@ class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     }
   }
 
-  "A signing key" should {
+  "A signing teamKey" should {
     "refuse short or non-hex keys without echoing the digits, and never print itself" in {
       SigningKey.fromHex("00112233").left.toOption.get should include("at least 16 bytes")
       SigningKey.fromHex("zz" * 16).left.toOption.get should not include "zz"
-      key.toString should not include "0001"
+      teamKey.toString should not include "0001"
     }
   }
 }
