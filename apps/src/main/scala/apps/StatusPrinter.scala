@@ -20,6 +20,7 @@ object StatusPrinter {
   private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
   private final case class Traffic(stats: Outbox.TrafficStats) extends Command
   private final case class Game(game: Option[GameControlData]) extends Command
+  private final case class Source(source: Gateway.GameSource) extends Command
   private final case class Link(stats: LinkStats) extends Command
   private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]]) extends Command
   private final case class RobotGone(robotId: Int) extends Command
@@ -113,6 +114,7 @@ object StatusPrinter {
         val robotsAdapter = context.messageAdapter(Robots.apply)
         val trafficAdapter = context.messageAdapter(Traffic.apply)
         val gameAdapter = context.messageAdapter(Game.apply)
+        val sourceAdapter = context.messageAdapter(Source.apply)
         val linkAdapter = context.messageAdapter(Link.apply)
         implicit val askTimeout: Timeout = Timeout(refresh.max(1.second))
 
@@ -130,6 +132,7 @@ object StatusPrinter {
               gateway ! Gateway.GetRobots(robotsAdapter)
               gateway ! Gateway.GetTraffic(trafficAdapter)
               gateway ! Gateway.GetGameState(gameAdapter)
+              gateway ! Gateway.GetGameSource(sourceAdapter)
               refs.values.foreach(_ ! RobotActor.GetLinkStats(linkAdapter))
               val toFind = model.robots.map(_.robotId).filterNot(id => refs.contains(id) || asked(id))
               toFind.foreach { id =>
@@ -143,6 +146,7 @@ object StatusPrinter {
             case Robots(robots) => running(model.copy(robots = robots), shown, refs, asked)
             case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown, refs, asked)
             case Game(game)     => running(model.copy(game = game), shown, refs, asked)
+            case Source(source) => running(model.copy(gameSource = Some(source)), shown, refs, asked)
             case Link(stats)    => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown, refs, asked)
             case RobotFound(id, Some(robot)) =>
               context.watchWith(robot, RobotGone(id))

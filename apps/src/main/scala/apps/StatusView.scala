@@ -8,7 +8,8 @@ final case class StatusModel(
     robots: Vector[RobotSnapshot],
     links: Map[Int, LinkStats],
     traffic: Option[Outbox.TrafficStats],
-    game: Option[GameControlData]
+    game: Option[GameControlData],
+    gameSource: Option[naogateway.Gateway.GameSource] = None
 )
 
 /** Constructors of status models. */
@@ -82,7 +83,8 @@ object StatusView {
   /** The full screen for a terminal. */
   def render(model: StatusModel): Vector[String] = {
     val online = model.robots.count(_.online)
-    Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game), gateLine(model.traffic),
+    Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game)) ++
+      model.gameSource.map(_.describe).toVector ++ Vector(gateLine(model.traffic),
       trafficLine(model.traffic), "") ++
       model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ Vector("", "Ctrl-C stops everything.")
   }

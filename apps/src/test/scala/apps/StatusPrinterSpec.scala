@@ -50,7 +50,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
 
   "The status printer" should {
     "print one line per change when piped: the robot, each game state of the real packets, and the competition gate" in {
-      val fixture = new GatewayFixture(testKit, "competition.enabled = on")
+      val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val lines = new ConcurrentLinkedQueue[String]()
         spawn(StatusPrinter(fixture.gateway, 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
@@ -74,7 +74,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     }
 
     "redraw a screen showing the robot with its link figures, the game of the real packets, the gate and the traffic" in {
-      val fixture = new GatewayFixture(testKit, "competition.enabled = on")
+      val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val screen = new RecordingScreen
         spawn(StatusPrinter(fixture.gateway, 100.millis, screen))
@@ -86,6 +86,8 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
         sendUntil(gc, "v8-playing.bin")(frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"))
         awaitTrue("gate closed")(frame.exists(_.startsWith("competition gate: CLOSED")))
+        awaitTrue("where game state comes from")(frame.exists(l => l.startsWith("game state from 127.0.0.1:") &&
+          l.contains("(trusted: 127.0.0.0/8)")))
         frame.exists(_.matches("team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
         sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 2)
         sendUntil(gc, "v8-finished.bin")(frame.exists(_.startsWith("game: FINISHED")))

@@ -157,7 +157,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
     }
 
     "send nothing to a robot while the game runs in competition mode, and fail calls at once naming the rule" in
-      withGateway("competition.enabled = on") { f =>
+      withGateway("competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]") { f =>
         val (robot, _) = f.robot(6)
         f.awaitEvent(10.seconds) { case RobotOnline(6, _) => () }
         val connected = f.connect(6)
@@ -194,6 +194,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       try {
         val endpoint = zmqRobot.boundEndpoint.get
         withGateway(s"""competition.enabled = on
+          |game-controller.trusted-sources = ["127.0.0.0/8"]
             |zeromq.robots = [{ id = 25, endpoint = "$endpoint" }]""".stripMargin) { f =>
           f.awaitEvent(15.seconds) { case RobotOnline(25, _) => () }
           val connected = f.connect(25)
