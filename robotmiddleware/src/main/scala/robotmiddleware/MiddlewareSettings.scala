@@ -14,13 +14,15 @@ final case class MiddlewareSettings(
     callTimeout: FiniteDuration,
     postureTimeout: FiniteDuration,
     linkStatsInterval: FiniteDuration,
-    pendingLimit: Int
+    pendingLimit: Int,
+    batteryReadings: Int = 5
 ) {
   require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
   require(walkRefresh > Duration.Zero && walkRefresh < 500.millis, "walk-refresh must be inside the robot's 500 ms walk lease")
   require(callTimeout > Duration.Zero && postureTimeout >= callTimeout, "need 0 < call-timeout <= posture-timeout")
   require(linkStatsInterval > Duration.Zero, "link-stats-interval must be positive")
   require(pendingLimit >= 1, "pending-limit must be at least 1")
+  require(batteryReadings >= 1 && batteryReadings <= 100, "safety.battery-readings must be from 1 to 100")
 }
 
 /** Reading the settings. */
@@ -37,6 +39,7 @@ object MiddlewareSettings {
     c.getDuration("call-timeout").toScala,
     c.getDuration("posture-timeout").toScala,
     c.getDuration("link-stats-interval").toScala,
-    c.getInt("pending-limit")
+    c.getInt("pending-limit"),
+    c.getInt("safety.battery-readings")
   )
 }

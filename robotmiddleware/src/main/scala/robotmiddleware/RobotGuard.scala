@@ -310,15 +310,20 @@ private[robotmiddleware] object RobotGuard {
       case _                                     => false
     }
 
+    // The latest battery readings, at most `batteryReadings` of them: the hold acts on a sustained reading only.
+    private var readings = Vector.empty[Double]
+
     private def checkBattery(c: RobotActor.Connected, snapshot: RobotSnapshot): Unit =
       snapshot.batteryVoltage.foreach { volts =>
-        if (safety.isEmpty && volts < settings.lowBattery) {
-          val reason = f"battery low: $volts%.2f V (below ${settings.lowBattery}%.2f V)"
+        readings = (readings :+ volts).takeRight(settings.batteryReadings)
+        val sustained = readings.size == settings.batteryReadings
+        if (safety.isEmpty && sustained && readings.forall(_ < settings.lowBattery)) {
+          val reason = f"battery low: ${readings.max}%.2f V or less for ${readings.size} keep-alives (below ${settings.lowBattery}%.2f V)"
           context.log.warn("Robot [{}]: {}; stopping and sitting down", robotId, reason)
           safety = Some(reason)
           leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))
           stopWalking(c, reason, thenSit = true)
-        } else if (safety.isDefined && volts > settings.batteryOk) {
+        } else if (safety.isDefined && sustained && readings.forall(_ > settings.batteryOk)) {
           context.log.info("Robot [{}]: battery back at {} V; motion allowed again", robotId, volts)
           safety = None
           leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyCleared(robotId))

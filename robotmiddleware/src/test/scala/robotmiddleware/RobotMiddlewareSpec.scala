@@ -127,7 +127,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
       f.execute(app, Operation.Walk(0.2, 0, 0))
       f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(None))
-      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true))
+      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
       events.expectMessageType[AppEvent.SafetyStop]
       val first = f.expectCall("motion.stop")
       // The app lets go of the walk lease: a second stop, one that is not followed by a sit.
@@ -191,6 +191,17 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val (next, _) = f.app("next", 0)
       f.acquire(next, ActuatorGroup.Walk).result shouldBe Right(())
     }
+    "not stop a robot for one low battery reading among good ones (a forged keep-alive cannot drive safety)" in {
+      val f = new Fixture()
+      val (app, events) = f.app("walker", 1)
+      f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
+      (1 to 3 * settings.batteryReadings).foreach { i =>
+        val volts = if (i % settings.batteryReadings == 0) 10.0 else 12.0
+        f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(volts), online = true))
+      }
+      events.expectNoMessage(300.millis)
+      f.response.expectNoMessage(300.millis)
+    }
     "stop and sit a robot whose battery runs low, refuse motion until it recovers, and tell the lease holders" in {
       val f = new Fixture
       val (app, events) = f.app("walker", 1)
@@ -198,7 +209,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
       f.execute(app, Operation.Walk(0.2, 0, 0)) // established a guard and a walk
       f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(None))
-      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true))
+      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
       events.expectMessageType[AppEvent.SafetyStop].reason should include("battery low")
       f.expectCall("motion.stop").replyTo ! CallResult(1, "motion.stop", Right(None))
       f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
@@ -206,7 +217,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.execute(app, Operation.Posture(Posture.Stand)).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
       f.execute(app, Operation.Head(0.1, 0.0))
       f.expectCall("motion.head")
-      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true))
+      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true)))
       events.expectMessage(AppEvent.SafetyCleared(1))
       f.execute(app, Operation.Walk(0.1, 0, 0))
       f.expectCall("motion.walk")
@@ -229,7 +240,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val (app, events) = f.app("x", 1)
       f.acquire(app, ActuatorGroup.Arms).result shouldBe Right(())
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
-      f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.0), online = true))
+      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.0), online = true)))
       events.expectMessageType[AppEvent.SafetyStop]
       val arms = Operation.RawCall("motion", "arms", Vector.fill(4)(RpcValue.Number(0f)))
       f.execute(app, arms).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
