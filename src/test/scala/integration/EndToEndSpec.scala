@@ -1,5 +1,7 @@
 package integration
 
+import naogateway.wire.ActuatorGroup
+
 import java.net.InetSocketAddress
 
 import scala.concurrent.duration._

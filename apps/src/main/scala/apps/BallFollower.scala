@@ -1,5 +1,7 @@
 package apps
 
+import naogateway.wire.ActuatorGroup
+
 import scala.concurrent.duration._
 import scala.util.{Failure, Success}
 
@@ -9,7 +11,7 @@ import akka.stream.scaladsl.Sink
 
 import naogateway.VisionFrame
 import naogateway.wire.Posture
-import robotmiddleware.{ActuatorGroup, AppEvent, RobotInterface}
+import robotmiddleware.{AppEvent, RobotInterface}
 
 /** The ball follower app: tracks the ball with the head from HaViMo2 regions and walks to it. */
 object BallFollower {

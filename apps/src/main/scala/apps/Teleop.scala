@@ -1,5 +1,7 @@
 package apps
 
+import naogateway.wire.ActuatorGroup
+
 import java.io.{InputStream, PrintStream}
 
 import scala.concurrent.{ExecutionContext, Future}
@@ -10,7 +12,7 @@ import naogateway.wire.Posture
 import robotmiddleware.RobotClient
 import robotmiddleware.cluster.MiddlewareCluster
 
-import robotmiddleware.{ActuatorGroup, RobotInterface}
+import robotmiddleware.RobotInterface
 
 /** Keyboard teleoperation of one robot: keys become walk, head and posture commands through `RobotInterface`. */
 object Teleop {

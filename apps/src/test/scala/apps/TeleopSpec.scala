@@ -1,5 +1,9 @@
 package apps
 
+import naogateway.RobotFailure
+
+import naogateway.wire.ActuatorGroup
+
 import java.io.{ByteArrayInputStream, ByteArrayOutputStream, PrintStream}
 
 import scala.concurrent.{ExecutionContext, Future}
@@ -13,7 +17,7 @@ import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.wire.Posture
-import robotmiddleware.{ActuatorGroup, AppEvent, RobotFailure, RobotInterface}
+import robotmiddleware.{AppEvent, RobotInterface}
 
 class TeleopSpec extends AnyWordSpec with Matchers {
 

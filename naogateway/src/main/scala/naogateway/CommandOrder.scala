@@ -1,6 +1,6 @@
 package naogateway
 
-import naogateway.wire.CommandSlot
+import naogateway.wire.ActuatorGroup
 
 /**
  * The order in which one robot's calls leave: the pure core of `ResponseActor`.
@@ -68,7 +68,7 @@ object CommandOrder {
    * A call: its key (its first call id), its slot, whether it is a safety call, what the owner keeps with it, and
    * whether a newer call of its slot replaces it (targets do; a stop or a posture does not).
    */
-  final case class Entry[A](key: Long, slot: Option[CommandSlot], safety: Boolean, payload: A, replaceable: Boolean = true)
+  final case class Entry[A](key: Long, slot: Option[ActuatorGroup], safety: Boolean, payload: A, replaceable: Boolean = true)
 
   /** What the owner must do. */
   sealed trait Step[A] extends Product with Serializable

@@ -3,7 +3,7 @@ package naogateway
 import akka.actor.typed.scaladsl.{Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
-import naogateway.wire.{CommandSlot, RpcCall, RpcMethod, RpcValue}
+import naogateway.wire.{ActuatorGroup, RpcCall, RpcMethod, RpcValue}
 
 /**
  * Ordered fire-and-forget commands: a lockstep client of its sibling `ResponseActor`, which alone sends to the robot.
@@ -38,11 +38,11 @@ object NoResponseActor {
   ) {
     private var overflowed = 0L
 
-    private def finish(s: Send, result: Either[CallError, Option[RpcValue]]): Unit =
+    private def finish(s: Send, result: Either[RobotFailure, Option[RpcValue]]): Unit =
       s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, result))
 
     /** The newest replacement of a stashed command, by slot. */
-    type Newest = Map[CommandSlot, Send]
+    type Newest = Map[ActuatorGroup, Send]
 
     /** Idle: the next command goes to the response actor at once. */
     def idle(newest: Newest): Behavior[Command] = Behaviors
@@ -69,10 +69,10 @@ object NoResponseActor {
           if (stashedOfSlot) {
             val sl = slot.get
             newest.get(sl) match {
-              case Some(old) => finish(old, Left(CallError.Superseded(robotId, old.call.name)))
+              case Some(old) => finish(old, Left(RobotFailure.Superseded(robotId, old.call.name)))
               case None =>
                 stash.foreach {
-                  case q: Send if RpcMethod.slotOf(q.call).contains(sl) => finish(q, Left(CallError.Superseded(robotId, q.call.name)))
+                  case q: Send if RpcMethod.slotOf(q.call).contains(sl) => finish(q, Left(RobotFailure.Superseded(robotId, q.call.name)))
                   case _                                                => ()
                 }
             }
@@ -81,7 +81,7 @@ object NoResponseActor {
             overflowed += 1
             if (overflowed % 100 == 1)
               log.warn("Robot [{}]: {} command(s) refused so far, {} wait already", robotId, overflowed, stash.size)
-            finish(s, Left(CallError.Overloaded(robotId, s"${stash.size} commands wait already")))
+            finish(s, Left(RobotFailure.Overloaded(robotId, s"${stash.size} commands wait already")))
             Behaviors.same
           } else {
             stash.stash(s)
@@ -94,7 +94,7 @@ object NoResponseActor {
       }
       .receiveSignal(signals(Some(current), newest))
 
-    private def failWaiting(newest: Newest, error: CallError): Unit =
+    private def failWaiting(newest: Newest, error: RobotFailure): Unit =
       stash.foreach {
         case s: Send => finish(RpcMethod.slotOf(s.call).flatMap(newest.get).getOrElse(s), Left(error))
         case _       => ()
@@ -103,12 +103,12 @@ object NoResponseActor {
     private def signals(current: Option[Send], newest: Newest)
         : PartialFunction[(akka.actor.typed.scaladsl.ActorContext[Command], akka.actor.typed.Signal), Behavior[Command]] = {
       case (_, PreRestart) =>
-        current.foreach(c => finish(c, Left(CallError.Interrupted(robotId, c.call.name))))
-        failWaiting(newest, CallError.Interrupted(robotId, "waiting command"))
+        current.foreach(c => finish(c, Left(RobotFailure.Interrupted(robotId, c.call.name))))
+        failWaiting(newest, RobotFailure.Interrupted(robotId, "waiting command"))
         Behaviors.same
       case (_, PostStop) =>
-        current.foreach(c => finish(c, Left(CallError.RobotOffline(robotId))))
-        failWaiting(newest, CallError.RobotOffline(robotId))
+        current.foreach(c => finish(c, Left(RobotFailure.RobotOffline(robotId))))
+        failWaiting(newest, RobotFailure.RobotOffline(robotId))
         Behaviors.same
     }
   }

@@ -105,10 +105,10 @@ object ResponseActor {
       stash: StashBuffer[Command]
   ) {
 
-    private def answer(p: Pending, result: Either[CallError, Option[RpcValue]]): Unit =
+    private def answer(p: Pending, result: Either[RobotFailure, Option[RpcValue]]): Unit =
       p.replyTo ! CallResult(robotId, p.call.name, result)
 
-    private def answer(c: Call, error: CallError): Unit = c.replyTo ! CallResult(robotId, c.call.name, Left(error))
+    private def answer(c: Call, error: RobotFailure): Unit = c.replyTo ! CallResult(robotId, c.call.name, Left(error))
 
     private def nextId(lastId: Long): Long = CallIdTag | ((lastId + 1) & 0x3fffffffL)
 
@@ -119,7 +119,7 @@ object ResponseActor {
           stash.unstashAll(running(CommandOrder.empty(MaxInFlight, settings.stashCapacity), online, lastId, route))
         case Reachability(nowOnline) => awaitingRoute(nowOnline, lastId)
         case c: Call if stash.isFull =>
-          answer(c, CallError.Overloaded(robotId, s"${stash.size} calls wait for the robot's address"))
+          answer(c, RobotFailure.Overloaded(robotId, s"${stash.size} calls wait for the robot's address"))
           Behaviors.same
         case other =>
           stash.stash(other)
@@ -127,21 +127,21 @@ object ResponseActor {
       }
       .receiveSignal {
         case (_, PreRestart) =>
-          failStashed(c => CallError.Interrupted(robotId, c.call.name))
+          failStashed(c => RobotFailure.Interrupted(robotId, c.call.name))
           Behaviors.same
         case (_, PostStop) =>
-          failStashed(_ => CallError.RobotOffline(robotId))
+          failStashed(_ => RobotFailure.RobotOffline(robotId))
           Behaviors.same
       }
 
-    private def failStashed(error: Call => CallError): Unit =
+    private def failStashed(error: Call => RobotFailure): Unit =
       stash.foreach {
         case c: Call => answer(c, error(c))
         case _       => ()
       }
 
     /** Sends attempt `id` of call `key`; the attempt's timer runs before anyone can react to it going out. */
-    private def transmit(route: Route, key: Long, id: Long, p: Pending): Option[CallError] = {
+    private def transmit(route: Route, key: Long, id: Long, p: Pending): Option[RobotFailure] = {
       timers.startSingleTimer(key, AttemptTimedOut(key, p.attempts), p.attemptTimeout)
       val contents = MessageContents(robotId, rpcRequest = Some(p.call.copy(callId = Some(id)).toProto))
       route match {
@@ -151,7 +151,7 @@ object ResponseActor {
               robot ! RobotActor.SentDirect(bytes.length)
               outbox ! Outbox.Send(robotId, to, bytes, p.priority, Some(outcomes), id)
               None
-            case Left(error) => Some(CallError.Overloaded(robotId, error.describe))
+            case Left(error) => Some(RobotFailure.Overloaded(robotId, error.describe))
           }
         case Route.ZeroMq(link) =>
           val bytes = contents.toProtobuf
@@ -172,10 +172,10 @@ object ResponseActor {
               case Route.ZeroMq(_)               => () // a ZeroMQ link holds nothing back: there is nothing to withdraw
             }
           }
-          answer(e.payload, Left(CallError.Superseded(robotId, e.payload.call.name)))
+          answer(e.payload, Left(RobotFailure.Superseded(robotId, e.payload.call.name)))
           o
         case (o, CommandOrder.Refused(e)) =>
-          answer(e.payload, Left(CallError.Overloaded(robotId,
+          answer(e.payload, Left(RobotFailure.Overloaded(robotId,
             s"${o.inFlight.size} calls in flight and ${o.waiting.size} waiting")))
           o
         case (o, CommandOrder.Transmit(e)) =>
@@ -190,7 +190,7 @@ object ResponseActor {
           }
       }
 
-    private def failAll(order: Order, error: String => CallError): Unit = {
+    private def failAll(order: Order, error: String => RobotFailure): Unit = {
       val (_, flying, waiting) = order.drained
       (flying ++ waiting).foreach { e =>
         timers.cancel(e.key)
@@ -199,7 +199,7 @@ object ResponseActor {
     }
 
     /** Answers call `key` and lets waiting calls in. */
-    private def settle(order: Order, key: Long, p: Pending, result: Either[CallError, Option[RpcValue]], online: Boolean,
+    private def settle(order: Order, key: Long, p: Pending, result: Either[RobotFailure, Option[RpcValue]], online: Boolean,
         lastId: Long, route: Route): Behavior[Command] = {
       timers.cancel(key)
       answer(p, result)
@@ -211,7 +211,7 @@ object ResponseActor {
       Behaviors
         .receiveMessage[Command] {
           case c: Call if !online =>
-            answer(c, CallError.RobotOffline(robotId))
+            answer(c, RobotFailure.RobotOffline(robotId))
             robot ! RobotActor.Wanted
             Behaviors.same
           case Call(call, replyTo, priority, timeout, idempotent) =>
@@ -228,7 +228,7 @@ object ResponseActor {
               case Some(e) =>
                 // Karn's rule: only a call sent once gives a clean round-trip sample.
                 if (e.payload.attempts == 1) robot ! RobotActor.RoundTrip(System.nanoTime() - e.payload.sentAt)
-                settle(order, e.key, e.payload, reply.result.left.map(CallError.RobotError(robotId, _)), online, lastId, route)
+                settle(order, e.key, e.payload, reply.result.left.map(RobotFailure.RobotError(robotId, _)), online, lastId, route)
             }
           case AttemptTimedOut(key, attempt) =>
             order.inFlightCall(key).map(_.payload) match {
@@ -242,27 +242,27 @@ object ResponseActor {
                   case Some(error) => settle(order, key, again, Left(error), online, id & 0x3fffffffL, route)
                 }
               case Some(p) if p.attempts == attempt =>
-                settle(order, key, p, Left(CallError.Timeout(robotId, p.call.name, p.total)), online, lastId, route)
+                settle(order, key, p, Left(RobotFailure.Timeout(robotId, p.call.name, (p.total).toMillis)), online, lastId, route)
               case _ => Behaviors.same
             }
           case SendOutcome(outcome) =>
-            (CallError.ofOutcome(robotId, outcome), order.findInFlight(_.ids(outcome.tag))) match {
+            (RobotFailure.ofOutcome(robotId, outcome), order.findInFlight(_.ids(outcome.tag))) match {
               case (Some(error), Some(e)) => settle(order, e.key, e.payload, Left(error), online, lastId, route)
               case _                      => Behaviors.same
             }
           case RouteChanged(newRoute) => running(order, online, lastId, newRoute)
           case Reachability(nowOnline) =>
             if (!nowOnline) {
-              failAll(order, _ => CallError.RobotOffline(robotId))
+              failAll(order, _ => RobotFailure.RobotOffline(robotId))
               running(order.drained._1, online = false, lastId, route)
             } else running(order, online = true, lastId, route)
         }
         .receiveSignal {
           case (_, PreRestart) =>
-            failAll(order, CallError.Interrupted(robotId, _))
+            failAll(order, RobotFailure.Interrupted(robotId, _))
             Behaviors.same
           case (_, PostStop) =>
-            failAll(order, _ => CallError.RobotOffline(robotId))
+            failAll(order, _ => RobotFailure.RobotOffline(robotId))
             Behaviors.same
         }
   }

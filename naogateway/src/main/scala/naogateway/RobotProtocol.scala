@@ -1,8 +1,9 @@
 package naogateway
 
+import naogateway.wire.ActuatorGroup
+
 import java.net.InetSocketAddress
 
-import scala.concurrent.duration.FiniteDuration
 
 import naogateway.wire.{Posture, RobotReport, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
@@ -136,63 +137,60 @@ final case class RobotRestarted(robotId: Int, bootId: Option[Int], resynced: Vec
 /** The GameController's latest packet. */
 final case class GameStateUpdated(data: GameControlData) extends GatewayEvent
 
-/** Why a call did not return a value. */
-sealed trait CallError extends Product with Serializable {
+/**
+ * Why a call or an operation failed: the one error type of every caller, from a robot's response actor up to an app
+ * using `RobotInterface` (an exception, so a failed `Future` carries it as it is).
+ */
+sealed abstract class RobotFailure(message: String) extends Exception(message) with Product with Serializable {
 
   /** A sentence for logs and error replies. */
-  def describe: String
+  def describe: String = message
 }
 
-/** The ways a call can fail. */
-object CallError {
+/** The ways a call or an operation can fail. */
+object RobotFailure {
 
-  /** The error an outbox outcome means for the call it carried, if any (`Accepted` is none). */
-  def ofOutcome(robotId: Int, outcome: Outbox.Outcome): Option[CallError] = outcome match {
+  /** The failure an outbox outcome means for the call it carried, if any (`Accepted` is none). */
+  def ofOutcome(robotId: Int, outcome: Outbox.Outcome): Option[RobotFailure] = outcome match {
     case Outbox.Accepted(_)            => None
     case Outbox.RefusedByRule(_, rule) => Some(RuleGate(rule))
     case Outbox.Dropped(_, reason)     => Some(Overloaded(robotId, reason))
   }
 
-  /** The robot answered with an error text. */
-  final case class RobotError(robotId: Int, message: String) extends CallError {
-    def describe: String = s"robot $robotId: $message"
-  }
-
   /** The robot is offline; nothing was sent. */
-  final case class RobotOffline(robotId: Int) extends CallError {
-    def describe: String = s"robot $robotId is offline"
-  }
+  final case class RobotOffline(robotId: Int) extends RobotFailure(s"robot $robotId is offline")
 
   /** No robot with this id is known. */
-  final case class UnknownRobot(robotId: Int) extends CallError {
-    def describe: String = s"no robot $robotId is known"
-  }
+  final case class UnknownRobot(robotId: Int) extends RobotFailure(s"no robot $robotId is known")
 
-  /** No reply came in time (after the retries allowed). */
-  final case class Timeout(robotId: Int, call: String, after: FiniteDuration) extends CallError {
-    def describe: String = s"robot $robotId did not answer $call within ${after.toMillis} ms"
-  }
+  /** The app does not hold the lease the operation needs. */
+  final case class LeaseNotHeld(robotId: Int, group: ActuatorGroup, holder: Option[String])
+      extends RobotFailure(s"lease '${group.name}' of robot $robotId is not held by this app" + holder.fold("")(h => s" (held by $h)"))
 
   /** A competition rule forbids sending now. */
-  final case class RuleGate(rule: String) extends CallError {
-    def describe: String = rule
-  }
+  final case class RuleGate(rule: String) extends RobotFailure(rule)
 
-  /** Too many calls wait already. */
-  final case class Overloaded(robotId: Int, detail: String) extends CallError {
-    def describe: String = s"robot $robotId is overloaded: $detail"
-  }
+  /** No answer in time (after the retries allowed). */
+  final case class Timeout(robotId: Int, operation: String, millis: Long)
+      extends RobotFailure(s"robot $robotId did not answer $operation within $millis ms")
 
-  /** A newer command of the same kind replaced this one before it was sent (latest wins). */
-  final case class Superseded(robotId: Int, call: String) extends CallError {
-    def describe: String = s"$call to robot $robotId was replaced by a newer $call before it was sent"
-  }
+  /** The robot answered with an error text. */
+  final case class RobotError(robotId: Int, error: String) extends RobotFailure(s"robot $robotId: $error")
+
+  /** The middleware holds the robot in a safe state (low battery, lost link) and refuses motion. */
+  final case class SafetyHold(robotId: Int, reason: String) extends RobotFailure(s"robot $robotId is held safe: $reason")
+
+  /** Too much is waiting for this robot. */
+  final case class Overloaded(robotId: Int, detail: String) extends RobotFailure(s"robot $robotId is overloaded: $detail")
+
+  /** A newer command of the same slot replaced this one (latest wins). */
+  final case class Superseded(robotId: Int, call: String)
+      extends RobotFailure(s"$call to robot $robotId was replaced by a newer one")
 
   /** The actor handling the call restarted before the reply came. */
-  final case class Interrupted(robotId: Int, call: String) extends CallError {
-    def describe: String = s"call $call to robot $robotId was interrupted by a restart of its handler"
-  }
+  final case class Interrupted(robotId: Int, call: String)
+      extends RobotFailure(s"call $call to robot $robotId was interrupted by a restart of its handler")
 }
 
 /** The one answer every call gets. */
-final case class CallResult(robotId: Int, call: String, result: Either[CallError, Option[RpcValue]])
+final case class CallResult(robotId: Int, call: String, result: Either[RobotFailure, Option[RpcValue]])

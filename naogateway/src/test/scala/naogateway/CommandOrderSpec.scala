@@ -6,17 +6,17 @@ import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.CommandOrder.{Entry, Refused, Step, Superseded, Transmit}
-import naogateway.wire.CommandSlot
+import naogateway.wire.ActuatorGroup
 
 /** The command order's rules, over random scripts of calls and answers. */
 class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
   private sealed trait Op
-  private final case class Submit(slot: Option[CommandSlot], safety: Boolean, replaceable: Boolean) extends Op
+  private final case class Submit(slot: Option[ActuatorGroup], safety: Boolean, replaceable: Boolean) extends Op
   private final case class Answer(pick: Int) extends Op
 
   private val ops: Gen[Op] = Gen.frequency(
-    3 -> Gen.zip(Gen.option(Gen.oneOf(CommandSlot.all)), Gen.frequency(1 -> true, 4 -> false), Gen.frequency(3 -> true, 1 -> false))
+    3 -> Gen.zip(Gen.option(Gen.oneOf(ActuatorGroup.slots)), Gen.frequency(1 -> true, 4 -> false), Gen.frequency(3 -> true, 1 -> false))
       .map((Submit.apply _).tupled),
     2 -> Gen.choose(0, 7).map(Answer.apply)
   )
@@ -53,7 +53,7 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     "send a slot's calls in the order they were given: nothing older leaves after a newer one (no walk after a stop)" in {
       forAll(scripts) { case (max, waiting, script) =>
         val (steps, _, _) = run(max, waiting, script)
-        CommandSlot.all.foreach { slot =>
+        ActuatorGroup.slots.foreach { slot =>
           val keys = sent(steps).filter(_.slot.contains(slot)).map(_.key)
           keys shouldBe keys.sorted.distinct
         }
@@ -100,7 +100,7 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
       forAll(scripts) { case (max, waiting, script) =>
         val (steps, submitted, _) = run(max, waiting, script)
         val refused = steps.map(_._2).collect { case Refused(e) => e.key }.toSet
-        CommandSlot.all.foreach { slot =>
+        ActuatorGroup.slots.foreach { slot =>
           val given = submitted.filter(e => e.slot.contains(slot) && !refused(e.key)).map(_.key)
           sent(steps).filter(_.slot.contains(slot)).map(_.key).lastOption shouldBe given.lastOption
         }
@@ -116,10 +116,10 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
       val o0 = CommandOrder.empty[Unit](1, 4)
       val (o1, s1) = o0.submit(Entry(1, None, safety = false, ()))
       s1 shouldBe Vector(Transmit(Entry(1, None, safety = false, ())))
-      val walk = Entry(2, Some(CommandSlot.Walk), safety = false, ())
+      val walk = Entry(2, Some(ActuatorGroup.Walk), safety = false, ())
       val (o2, s2) = o1.submit(walk)
       s2 shouldBe empty // waits behind the cap
-      val stop = Entry(3, Some(CommandSlot.Walk), safety = true, ())
+      val stop = Entry(3, Some(ActuatorGroup.Walk), safety = true, ())
       val (o3, s3) = o2.submit(stop)
       s3 shouldBe Vector(Superseded(walk, wasInFlight = false), Transmit(stop))
       o3.waiting shouldBe empty

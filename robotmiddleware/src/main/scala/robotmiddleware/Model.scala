@@ -1,32 +1,8 @@
 package robotmiddleware
 
+import naogateway.wire.ActuatorGroup
+
 import naogateway.wire.{Posture => WirePosture, RpcMethod, RpcValue}
-
-/** A group of actuators one app may hold at a time (a lease is per robot and group). */
-sealed abstract class ActuatorGroup(val name: String) extends Product with Serializable
-
-/** The actuator groups: walking and posture, head, arms, speech. */
-object ActuatorGroup {
-
-  /** Walking, stopping and postures (and `system.reset`, which moves the robot). */
-  case object Walk extends ActuatorGroup("walk")
-
-  /** The head's pan and tilt. */
-  case object Head extends ActuatorGroup("head")
-
-  /** The four arm joints. */
-  case object Arms extends ActuatorGroup("arms")
-
-  /** The speaker. */
-  case object Speech extends ActuatorGroup("speech")
-
-  /** Every group, in the order the docs list them. */
-  val all: Vector[ActuatorGroup] = Vector(Walk, Head, Arms, Speech)
-
-  /** The group named `name`, or a sentence naming the groups there are. */
-  def parse(name: String): Either[String, ActuatorGroup] =
-    all.find(_.name == name).toRight(s"unknown actuator group '$name' (${all.map(_.name).mkString(", ")})")
-}
 
 /** Something an app asks a robot to do. */
 sealed trait Operation extends Product with Serializable {
@@ -90,39 +66,6 @@ object Operation {
     }
     def name: String = s"$module.$method"
   }
-}
-
-/** Why an operation or a lease request failed; every failure of `RobotInterface` is one of these. */
-sealed abstract class RobotFailure(message: String) extends Exception(message) with Product with Serializable
-
-/** The typed failures of `RobotInterface`. */
-object RobotFailure {
-
-  /** The robot is offline; nothing was sent. */
-  final case class RobotOffline(robotId: Int) extends RobotFailure(s"robot $robotId is offline")
-
-  /** No such robot. */
-  final case class UnknownRobot(robotId: Int) extends RobotFailure(s"no robot $robotId is known")
-
-  /** The app does not hold the lease the operation needs. */
-  final case class LeaseNotHeld(robotId: Int, group: ActuatorGroup, holder: Option[String])
-      extends RobotFailure(s"lease '${group.name}' of robot $robotId is not held by this app" + holder.fold("")(h => s" (held by $h)"))
-
-  /** A competition rule forbids sending now. */
-  final case class RuleGate(rule: String) extends RobotFailure(rule)
-
-  /** No answer in time. */
-  final case class Timeout(robotId: Int, operation: String, millis: Long)
-      extends RobotFailure(s"robot $robotId did not answer $operation within $millis ms")
-
-  /** The robot answered with an error. */
-  final case class RobotError(robotId: Int, error: String) extends RobotFailure(s"robot $robotId: $error")
-
-  /** The middleware holds the robot in a safe state (low battery, lost link) and refuses motion. */
-  final case class SafetyHold(robotId: Int, reason: String) extends RobotFailure(s"robot $robotId is held safe: $reason")
-
-  /** Too much is waiting for this robot. */
-  final case class Overloaded(robotId: Int, detail: String) extends RobotFailure(s"robot $robotId is overloaded: $detail")
 }
 
 /** The messages of an app's session actor: the middleware's events plus local subscriptions. */

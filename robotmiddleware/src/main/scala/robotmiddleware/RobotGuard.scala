@@ -1,5 +1,7 @@
 package robotmiddleware
 
+import naogateway.wire.ActuatorGroup
+
 import scala.concurrent.duration._
 import scala.util.{Failure, Success}
 
@@ -99,15 +101,11 @@ private[robotmiddleware] object RobotGuard {
     private var reconnectedWhileConnecting = false
     private var statsWatchers = Set.empty[ActorRef[LinkStats]]
 
-    private def failure(error: CallError): RobotFailure = error match {
-      case CallError.RobotError(_, message)   => RobotFailure.RobotError(robotId, message)
-      case CallError.RobotOffline(_)          => RobotFailure.RobotOffline(robotId)
-      case CallError.UnknownRobot(_)          => RobotFailure.UnknownRobot(robotId)
-      case CallError.Timeout(_, call, after)  => RobotFailure.Timeout(robotId, call, after.toMillis)
-      case CallError.RuleGate(rule)           => RobotFailure.RuleGate(rule)
-      case CallError.Overloaded(_, detail)    => RobotFailure.Overloaded(robotId, detail)
-      case CallError.Superseded(_, call)      => RobotFailure.Overloaded(robotId, s"$call replaced by a newer one")
-      case CallError.Interrupted(_, call)     => RobotFailure.Overloaded(robotId, s"$call interrupted, try again")
+    // Apps are told of a replaced or interrupted call as an overload to retry: the one error type, in words for apps.
+    private def failure(error: RobotFailure): RobotFailure = error match {
+      case RobotFailure.Superseded(_, call)  => RobotFailure.Overloaded(robotId, s"$call replaced by a newer one")
+      case RobotFailure.Interrupted(_, call) => RobotFailure.Overloaded(robotId, s"$call interrupted, try again")
+      case other                             => other
     }
 
     def connecting(initiallyOnline: Boolean): Behavior[Command] = {
@@ -244,9 +242,9 @@ private[robotmiddleware] object RobotGuard {
       case SafetyStepDone(step, result) =>
         result.result match {
           // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
-          case Right(_) | Left(_: CallError.Superseded) if step == SafetyStep.StopThenSit && safety.isDefined =>
+          case Right(_) | Left(_: RobotFailure.Superseded) if step == SafetyStep.StopThenSit && safety.isDefined =>
             safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)), settings.postureTimeout)
-          case Left(_: CallError.Superseded) => () // a newer call of the slot took over: nothing failed
+          case Left(_: RobotFailure.Superseded) => () // a newer call of the slot took over: nothing failed
           case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
           case Right(_)    => ()
         }
@@ -296,7 +294,7 @@ private[robotmiddleware] object RobotGuard {
       implicit val askTimeout: Timeout = timeout + 1.second
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
-        case Failure(_)      => SafetyStepDone(step, CallResult(robotId, rpc.name, Left(CallError.Timeout(robotId, rpc.name, timeout))))
+        case Failure(_)      => SafetyStepDone(step, CallResult(robotId, rpc.name, Left(RobotFailure.Timeout(robotId, rpc.name, (timeout).toMillis))))
       }
     }
 
@@ -348,7 +346,7 @@ private[robotmiddleware] object RobotGuard {
       implicit val askTimeout: Timeout = timeout + 1.second
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
         case Success(result) =>
-          OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[CallError.Superseded]))
+          OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
         case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
       }
     }

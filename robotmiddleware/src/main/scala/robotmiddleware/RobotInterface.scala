@@ -1,5 +1,9 @@
 package robotmiddleware
 
+import naogateway.RobotFailure
+
+import naogateway.wire.ActuatorGroup
+
 import scala.concurrent.duration._
 import scala.concurrent.{ExecutionContext, Future}
 

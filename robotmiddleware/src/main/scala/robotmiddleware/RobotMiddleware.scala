@@ -1,5 +1,7 @@
 package robotmiddleware
 
+import naogateway.wire.ActuatorGroup
+
 import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}

@@ -1,5 +1,7 @@
 package robotmiddleware
 
+import naogateway.wire.ActuatorGroup
+
 import scala.concurrent.duration._
 import scala.concurrent.{Await, Future}
 import scala.util.Try

@@ -1,5 +1,7 @@
 package robotmiddleware
 
+import naogateway.wire.ActuatorGroup
+
 import java.net.InetSocketAddress
 
 import scala.concurrent.duration._
@@ -230,7 +232,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val walk = f.expectCall("motion.walk")
       // The robot takes several refresh periods to answer: a refresh sent meanwhile would repeat a walk it may refuse.
       f.response.expectNoMessage(settings.walkRefresh * 3)
-      walk.replyTo ! CallResult(1, "motion.walk", Left(CallError.RobotError(1, "not standing: sit")))
+      walk.replyTo ! CallResult(1, "motion.walk", Left(RobotFailure.RobotError(1, "not standing: sit")))
       result.receiveMessage().result shouldBe Left(RobotFailure.RobotError(1, "not standing: sit"))
       // The guard has handled the refusal (it answered above), so from here on only a refresh timer could send.
       f.response.expectNoMessage(1.second)
@@ -340,10 +342,10 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val (app, _) = f.app("x", 1)
       f.acquire(app, ActuatorGroup.Speech).result shouldBe Right(())
       val result = f.execute(app, Operation.Say("hi"))
-      f.expectCall("speech.say").replyTo ! CallResult(1, "speech.say", Left(CallError.RuleGate("rule")))
+      f.expectCall("speech.say").replyTo ! CallResult(1, "speech.say", Left(RobotFailure.RuleGate("rule")))
       result.receiveMessage().result shouldBe Left(RobotFailure.RuleGate("rule"))
       val raw = f.execute(app, Operation.RawCall("system", "battery", Vector.empty))
-      f.expectCall("system.battery").replyTo ! CallResult(1, "system.battery", Left(CallError.RobotError(1, "flat")))
+      f.expectCall("system.battery").replyTo ! CallResult(1, "system.battery", Left(RobotFailure.RobotError(1, "flat")))
       raw.receiveMessage().result shouldBe Left(RobotFailure.RobotError(1, "flat"))
       RpcCall("system", "battery", Vector.empty).name shouldBe "system.battery"
     }

@@ -1,5 +1,7 @@
 package apps.control
 
+import naogateway.RobotFailure
+
 import java.net.InetSocketAddress
 import java.nio.charset.StandardCharsets
 import java.util.concurrent.TimeoutException
@@ -19,7 +21,7 @@ import akka.{Done, NotUsed}
 
 import apps.control.ControlProtocol.{Answer, Request}
 import naogateway.{LinkStats, RobotSnapshot}
-import robotmiddleware.{Operation, RobotClient, RobotFailure, RobotInterface, RobotMiddleware}
+import robotmiddleware.{Operation, RobotClient, RobotInterface, RobotMiddleware}
 
 /**
  * The control port: a loopback TCP server on the gateway node that answers robotctl's requests through the

@@ -4,9 +4,9 @@ import scala.concurrent.duration._
 
 import akka.actor.typed.ActorSystem
 import akka.actor.typed.scaladsl.Behaviors
-import naogateway.wire.Posture
+import naogateway.wire.{ActuatorGroup, Posture}
 import robotmiddleware.cluster.MiddlewareCluster
-import robotmiddleware.{ActuatorGroup, RobotClient}
+import robotmiddleware.RobotClient
 
 /** A first app: stand robot 1 up, greet, walk for two seconds, stop. Run it next to `./sbt run`. */
 object HelloRobot {

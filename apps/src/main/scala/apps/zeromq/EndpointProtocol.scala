@@ -1,5 +1,9 @@
 package apps.zeromq
 
+import naogateway.RobotFailure
+
+import naogateway.wire.ActuatorGroup
+
 import java.nio.charset.StandardCharsets
 
 import scala.util.control.NonFatal
@@ -10,7 +14,7 @@ import naogateway.proto.HaViMoRegionFrame
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
 import naogateway.wire.{HaViMo, MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 import naogateway.{RobotSnapshot, VisionFrame}
-import robotmiddleware.{ActuatorGroup, Operation, RobotFailure}
+import robotmiddleware.Operation
 
 /** A request as the endpoint read it: the addressed robot and the call, with the client's `callId`. */
 final case class EndpointRequest(robotId: Int, call: RpcCall)

@@ -271,7 +271,7 @@ object ZeroMqEndpoint {
 
     private def execute(route: Route): Future[Answer] = {
       val done = Answer(Some(RpcValue.Flag(true)))
-      def leased(robotId: Int, group: Option[robotmiddleware.ActuatorGroup])(f: => Future[Answer]): Future[Answer] =
+      def leased(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(f: => Future[Answer]): Future[Answer] =
         group.fold(f)(g => robots.acquire(robotId, g).flatMap(_ => f))
       try route match {
         case Route.Robots =>
@@ -279,7 +279,7 @@ object ZeroMqEndpoint {
         case Route.Status(robotId) =>
           robots.robots().flatMap(_.find(_.robotId == robotId) match {
             case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
-            case None    => Future.failed(robotmiddleware.RobotFailure.UnknownRobot(robotId))
+            case None    => Future.failed(naogateway.RobotFailure.UnknownRobot(robotId))
           })
         case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
         case Route.Release(robotId, groups) =>

@@ -1,5 +1,9 @@
 package apps.conformance
 
+import naogateway.RobotFailure
+
+import naogateway.wire.ActuatorGroup
+
 import java.io.File
 import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress, SocketTimeoutException}
 import java.nio.charset.StandardCharsets
@@ -20,7 +24,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
 import naogateway.{Gateway, GatewaySettings, RobotActor, StreamActor}
-import robotmiddleware.{ActuatorGroup, MiddlewareSettings, RobotClient, RobotFailure, RobotInterface, RobotMiddleware}
+import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result. */
 final case class Finding(section: String, check: String, pass: Boolean, detail: String) {

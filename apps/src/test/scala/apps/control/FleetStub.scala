@@ -1,5 +1,9 @@
 package apps.control
 
+import naogateway.RobotFailure
+
+import naogateway.wire.ActuatorGroup
+
 import java.net.InetSocketAddress
 import java.util.concurrent.ConcurrentLinkedQueue
 

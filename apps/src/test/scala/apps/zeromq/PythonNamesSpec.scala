@@ -1,5 +1,7 @@
 package apps.zeromq
 
+import naogateway.wire.ActuatorGroup
+
 import java.io.File
 import java.nio.charset.StandardCharsets
 import java.nio.file.Files
@@ -8,8 +10,6 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.Posture
-import robotmiddleware.ActuatorGroup
-
 /** The Python client's names for postures and actuator groups are the gateway's, in the same order. */
 class PythonNamesSpec extends AnyWordSpec with Matchers {
 

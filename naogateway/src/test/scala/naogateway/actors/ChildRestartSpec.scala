@@ -46,7 +46,7 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         responder ! ResponseActor.Reachability(true)
       }
       val answers = caller.receiveMessages(5)
-      answers.foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
+      answers.foreach(_.result.left.toOption.get shouldBe a[RobotFailure.Interrupted])
       // After the back-off the restarted actor asks again whether the robot is reachable and for its route.
       robot.fishForMessage(3.seconds) {
         case _: RobotActor.ReachabilityWanted => akka.actor.testkit.typed.FishingOutcome.Complete
@@ -75,7 +75,7 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       // The restarted actor starts from its spawn-time assumption (online) until the robot actor answers.
       started(robot, outbox, online = false)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      caller.expectMessageType[CallResult].result shouldBe Left(CallError.RobotOffline(2))
+      caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.RobotOffline(2))
       robot.expectMessage(RobotActor.Wanted)
     }
   }
@@ -97,7 +97,7 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("boom"))))
       }
-      caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[CallError.Interrupted])
+      caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[RobotFailure.Interrupted])
       caller.expectNoMessage(200.millis)
       actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
       response.expectMessageType[ResponseActor.Call].call.params shouldBe Vector(RpcValue.Text("again"))

@@ -37,7 +37,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val b = called(response)
       b.call.params shouldBe Vector(RpcValue.Text("b"))
       // A lost answer ends as the response actor's timeout, which lets the next one go.
-      b.replyTo ! CallResult(4, "speech.say", Left(CallError.Timeout(4, "speech.say", 1.second)))
+      b.replyTo ! CallResult(4, "speech.say", Left(RobotFailure.Timeout(4, "speech.say", (1.second).toMillis)))
       called(response).call.params shouldBe Vector(RpcValue.Text("c"))
     }
     "let a newer command of a slot replace the stashed one (latest wins, a stop replaces a walk) and tell the replaced caller" in {
@@ -52,8 +52,8 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       actor ! NoResponseActor.Send(head(0.3f), Some(replies.ref))
       actor ! NoResponseActor.Send(stop, Some(replies.ref), Priority.Safety)
       replies.receiveMessages(3).map(_.result) shouldBe Seq(
-        Left(CallError.Superseded(4, "motion.walk")), Left(CallError.Superseded(4, "motion.head")),
-        Left(CallError.Superseded(4, "motion.walk")))
+        Left(RobotFailure.Superseded(4, "motion.walk")), Left(RobotFailure.Superseded(4, "motion.head")),
+        Left(RobotFailure.Superseded(4, "motion.walk")))
       first.replyTo ! CallResult(4, "speech.say", Right(None))
       val s = called(response)
       s.call shouldBe stop
@@ -70,11 +70,11 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       called(response)
       actor ! NoResponseActor.Send(walk(0.1f), Some(replies.ref))
       actor ! NoResponseActor.Send(walk(0.2f), Some(replies.ref))
-      replies.expectMessage(CallResult(4, "motion.walk", Left(CallError.Superseded(4, "motion.walk"))))
+      replies.expectMessage(CallResult(4, "motion.walk", Left(RobotFailure.Superseded(4, "motion.walk"))))
       testKit.stop(actor)
       val last = replies.receiveMessages(2)
       last.map(_.call).sorted shouldBe Seq("motion.walk", "speech.say")
-      last.foreach(_.result shouldBe Left(CallError.RobotOffline(4)))
+      last.foreach(_.result shouldBe Left(RobotFailure.RobotOffline(4)))
       replies.expectNoMessage(200.millis)
     }
     "answer an overflow with an error instead of dropping silently" in {
@@ -83,7 +83,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val actor = spawn(NoResponseActor(4, settings, response.ref))
       (1 to 5).foreach(i => actor ! NoResponseActor.Send(say(s"$i"), Some(replies.ref)))
       called(response)
-      replies.expectMessageType[CallResult].result.left.toOption.get shouldBe a[CallError.Overloaded]
+      replies.expectMessageType[CallResult].result.left.toOption.get shouldBe a[RobotFailure.Overloaded]
     }
   }
 }

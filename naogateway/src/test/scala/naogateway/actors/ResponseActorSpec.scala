@@ -37,7 +37,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       caller.expectMessage(CallResult(3, "system.ping", Right(Some(RpcValue.UInt(99)))))
       robot.expectMessageType[RobotActor.RoundTrip]
       responder ! ResponseActor.ReplyReceived(RpcReply(Left("flat"), Some(first)))
-      caller.expectMessage(CallResult(3, "system.battery", Left(CallError.RobotError(3, "flat"))))
+      caller.expectMessage(CallResult(3, "system.battery", Left(RobotFailure.RobotError(3, "flat"))))
       // A duplicate reply finds no pending call and is not answered twice.
       responder ! ResponseActor.ReplyReceived(RpcReply(Left("flat"), Some(first)))
       caller.expectNoMessage(100.millis)
@@ -61,7 +61,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       Seq(second, third).foreach(id => (id >>> 30) shouldBe 0)
       c2 shouldBe RpcCall("motion", "stop", Vector.empty, Some(second))
       manualTime.timePasses(667.millis)
-      caller.expectMessage(CallResult(3, "motion.stop", Left(CallError.Timeout(3, "motion.stop", 2.seconds))))
+      caller.expectMessage(CallResult(3, "motion.stop", Left(RobotFailure.Timeout(3, "motion.stop", (2.seconds).toMillis))))
       outbox.expectNoMessage(Duration.Zero)
     }
     "complete a resent call with the late answer to an earlier attempt, once" in {
@@ -92,7 +92,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text("hi"))), caller.ref)
       transmitted(robot, outbox)
       manualTime.timePasses(2.seconds)
-      caller.expectMessageType[CallResult].result.left.toOption.get shouldBe a[CallError.Timeout]
+      caller.expectMessageType[CallResult].result.left.toOption.get shouldBe a[RobotFailure.Timeout]
       outbox.expectNoMessage(Duration.Zero)
     }
     "fail pending and new calls fast when the robot goes offline" in {
@@ -104,9 +104,9 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       transmitted(robot, outbox)
       responder ! ResponseActor.Reachability(false)
-      caller.expectMessage(CallResult(3, "system.ping", Left(CallError.RobotOffline(3))))
+      caller.expectMessage(CallResult(3, "system.ping", Left(RobotFailure.RobotOffline(3))))
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      caller.expectMessage(CallResult(3, "system.ping", Left(CallError.RobotOffline(3))))
+      caller.expectMessage(CallResult(3, "system.ping", Left(RobotFailure.RobotOffline(3))))
       robot.expectMessage(RobotActor.Wanted)
     }
     "keep at most four calls in flight, stash a bounded number and refuse the rest with an error" in {
@@ -117,7 +117,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       started(robot, outbox)
       (1 to 7).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val ids = (1 to 4).map(_ => transmitted(robot, outbox)._1)
-      caller.expectMessageType[CallResult].result shouldBe Left(CallError.Overloaded(3, "4 calls in flight and 2 waiting"))
+      caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(3, "4 calls in flight and 2 waiting"))
       outbox.expectNoMessage(Duration.Zero)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(ids.head)))
       caller.expectMessageType[CallResult].result shouldBe Right(None)
@@ -133,7 +133,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       val (id, _, t) = transmitted(robot, outbox)
       t.replyTo.get ! Outbox.RefusedByRule(id, Outbox.NoSendingWhileGameRuns)
-      caller.expectMessage(CallResult(3, "system.ping", Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))))
+      caller.expectMessage(CallResult(3, "system.ping", Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))))
     }
     "supersede an older call of a slot: no more retries, its caller told, its held datagrams withdrawn before the next goes" in {
       val robot = createTestProbe[RobotActor.FromChild]()
@@ -144,7 +144,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.Call(RpcCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0.2f))), caller.ref)
       val (walk, _, _) = transmitted(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
-      caller.expectMessage(CallResult(3, "motion.walk", Left(CallError.Superseded(3, "motion.walk"))))
+      caller.expectMessage(CallResult(3, "motion.walk", Left(RobotFailure.Superseded(3, "motion.walk"))))
       // The withdrawal reaches the outbox before the stop: a walk held behind the budget cannot follow the stop.
       outbox.expectMessage(Outbox.Withdraw(3, Set(walk)))
       val (stop, call, send) = transmitted(robot, outbox)
@@ -172,7 +172,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       def head(pan: Float) = RpcCall("motion", "head", Vector(RpcValue.Number(pan), RpcValue.Number(0f)))
       responder ! ResponseActor.Call(head(0.1f), caller.ref)
       responder ! ResponseActor.Call(head(0.2f), caller.ref)
-      caller.expectMessage(CallResult(3, "motion.head", Left(CallError.Superseded(3, "motion.head"))))
+      caller.expectMessage(CallResult(3, "motion.head", Left(RobotFailure.Superseded(3, "motion.head"))))
       responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
       val (stop, stopCall, _) = transmitted(robot, outbox)
       stopCall.name shouldBe "motion.stop"

@@ -1,5 +1,9 @@
 package robotmiddleware.cluster
 
+import naogateway.RobotFailure
+
+import naogateway.wire.ActuatorGroup
+
 import java.io.NotSerializableException
 import java.net.{InetAddress, InetSocketAddress}
 
@@ -260,7 +264,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
 
   private def toProto(f: RobotFailure): pb.RobotFailure = {
     import pb.RobotFailure.Kind
-    import robotmiddleware.{RobotFailure => F}
+    import naogateway.{RobotFailure => F}
     pb.RobotFailure(f match {
       case F.RobotOffline(robotId)                => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
       case F.UnknownRobot(robotId)                => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
@@ -271,12 +275,14 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       case F.RobotError(robotId, error)           => Kind.RobotError(pb.RobotFailure.RobotError(robotId, error))
       case F.SafetyHold(robotId, reason)          => Kind.SafetyHold(pb.RobotFailure.SafetyHold(robotId, reason))
       case F.Overloaded(robotId, detail)          => Kind.Overloaded(pb.RobotFailure.Overloaded(robotId, detail))
+      case F.Superseded(robotId, call)            => Kind.Superseded(pb.RobotFailure.Superseded(robotId, call))
+      case F.Interrupted(robotId, call)           => Kind.Interrupted(pb.RobotFailure.Interrupted(robotId, call))
     })
   }
 
   private def fromProto(f: pb.RobotFailure): RobotFailure = {
     import pb.RobotFailure.Kind
-    import robotmiddleware.{RobotFailure => F}
+    import naogateway.{RobotFailure => F}
     f.kind match {
       case Kind.RobotOffline(m) => F.RobotOffline(m.robotId)
       case Kind.UnknownRobot(m) => F.UnknownRobot(m.robotId)
@@ -286,6 +292,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       case Kind.RobotError(m)   => F.RobotError(m.robotId, m.error)
       case Kind.SafetyHold(m)   => F.SafetyHold(m.robotId, m.reason)
       case Kind.Overloaded(m)   => F.Overloaded(m.robotId, m.detail)
+      case Kind.Superseded(m)   => F.Superseded(m.robotId, m.call)
+      case Kind.Interrupted(m)  => F.Interrupted(m.robotId, m.call)
       case Kind.Empty           => throw corrupt(M.RobotFailure, "no failure")
     }
   }

@@ -1,5 +1,7 @@
 package robotmiddleware.cluster
 
+import naogateway.wire.ActuatorGroup
+
 import java.io.NotSerializableException
 import java.net.{InetAddress, InetSocketAddress}
 
@@ -173,7 +175,9 @@ object CrossNodeSerializationSpec {
     RobotFailure.Timeout(7, "motion.posture", 5000L),
     RobotFailure.RobotError(7, "unknown method: motion.fly"),
     RobotFailure.SafetyHold(7, "battery low"),
-    RobotFailure.Overloaded(7, "too many operations wait for the robot")
+    RobotFailure.Overloaded(7, "too many operations wait for the robot"),
+    RobotFailure.Superseded(7, "motion.walk"),
+    RobotFailure.Interrupted(7, "motion.head")
   )
 
   val regions: VisionFrame.Regions = VisionFrame.Regions(

@@ -1,5 +1,7 @@
 package robotmiddleware.cluster
 
+import naogateway.wire.ActuatorGroup
+
 import scala.annotation.tailrec
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._

@@ -108,7 +108,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         network.partition(proxy, on = true)
         // The three chances themselves, in manual time, are HeartBeatActorSpec's; here the reason names them.
         f.awaitEvent(10.seconds) { case RobotOffline(7, reason) => reason should include("3 unanswered probes") }
-        call(connected, "system.ping").result shouldBe Left(CallError.RobotOffline(7))
+        call(connected, "system.ping").result shouldBe Left(RobotFailure.RobotOffline(7))
         network.partition(proxy, on = false)
         f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
         call(connected, "system.ping").result.isRight shouldBe true
@@ -174,7 +174,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           // them, nothing is in flight any more.
           eventually(timeout(10.seconds)) { f.view(robot).stats.received shouldBe atKickOff.datagramsOut }
           (1 to 5).foreach { _ =>
-            call(connected, "system.ping").result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
+            call(connected, "system.ping").result shouldBe Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
           }
           // Two seconds of heartbeat probing, status traffic and calls: nothing may leave the outbox or reach the robot.
           Thread.sleep(2000)
@@ -212,7 +212,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
           try {
             sendGameState(gc, f, GameState.Playing)
-            results.receiveMessage(10.seconds).result shouldBe Left(CallError.RuleGate(Outbox.NoSendingWhileGameRuns))
+            results.receiveMessage(10.seconds).result shouldBe Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
             sendGameState(gc, f, GameState.Finished)
             f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
             // Without status polls during the game the robot may have been taken offline; a call brings it back.

@@ -147,14 +147,14 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
         call(connected, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)).result shouldBe
           Right(Some(RpcValue.Flag(true)))
         call(connected, "heartbeat", "probe").result shouldBe
-          Left(CallError.RobotError(20, RpcReply.unknownMethod("heartbeat", "probe")))
+          Left(RobotFailure.RobotError(20, RpcReply.unknownMethod("heartbeat", "probe")))
         expectEvent(events, 2.seconds) { case RobotStatusUpdated(s) if s.posture.contains(Posture.Stand) || s.posture.contains(Posture.Walking) => () }
 
         robot.stop()
         // quiet-after + 3 probes = 3.6 s after the last keep-alive; the rest is slack for a loaded machine.
         val offline = expectEvent(events, 15.seconds) { case RobotOffline(20, reason) => reason }
         offline should include("unanswered probes")
-        call(connected, "motion", "getPosture").result shouldBe Left(CallError.RobotOffline(20))
+        call(connected, "motion", "getPosture").result shouldBe Left(RobotFailure.RobotOffline(20))
 
         robot.start()
         // Back online, and the status poll saw the uptime go back: a new session (reported in either order).

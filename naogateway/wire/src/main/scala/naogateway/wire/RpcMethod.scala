@@ -1,33 +1,12 @@
 package naogateway.wire
 
 /**
- * A robot's actuator slot: a newer command in a slot supersedes every older one of that slot still waiting, in
- * flight or held, so the robot only ever gets a slot's commands in the order they were given.
- */
-sealed abstract class CommandSlot(val name: String) extends Product with Serializable
-
-/** The three slots: legs (walk, stop, posture), head, arms. */
-object CommandSlot {
-
-  /** Walking and postures: one body, one motion at a time. */
-  case object Walk extends CommandSlot("walk")
-
-  /** The head's pan and tilt. */
-  case object Head extends CommandSlot("head")
-
-  /** The four arm joints. */
-  case object Arms extends CommandSlot("arms")
-
-  val all: Vector[CommandSlot] = Vector(Walk, Head, Arms)
-}
-
-/**
  * One method of the RPC contract the robot serves (docs/protocol.md 7.2).
  *
  * @param idempotent whether it may run twice, so it may be called again when no answer came (protocol.md 7.1)
  * @param slot the actuator slot whose order it takes part in, if any
  */
-sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean, val slot: Option[CommandSlot])
+sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean, val slot: Option[ActuatorGroup])
     extends Product with Serializable {
 
   /** `module.method`, as in logs, errors and the docs. */
@@ -44,19 +23,19 @@ sealed abstract class RpcMethod(val module: String, val method: String, val idem
 object RpcMethod {
 
   /** Walk with these velocities; the robot's 500 ms lease needs it refreshed. */
-  case object Walk extends RpcMethod("motion", "walk", idempotent = true, Some(CommandSlot.Walk))
+  case object Walk extends RpcMethod("motion", "walk", idempotent = true, Some(ActuatorGroup.Walk))
 
   /** End walking. */
-  case object Stop extends RpcMethod("motion", "stop", idempotent = true, Some(CommandSlot.Walk))
+  case object Stop extends RpcMethod("motion", "stop", idempotent = true, Some(ActuatorGroup.Walk))
 
   /** Turn the head. */
-  case object Head extends RpcMethod("motion", "head", idempotent = true, Some(CommandSlot.Head))
+  case object Head extends RpcMethod("motion", "head", idempotent = true, Some(ActuatorGroup.Head))
 
   /** Set the four arm joints. */
-  case object Arms extends RpcMethod("motion", "arms", idempotent = true, Some(CommandSlot.Arms))
+  case object Arms extends RpcMethod("motion", "arms", idempotent = true, Some(ActuatorGroup.Arms))
 
   /** Move to a posture; answers when the motion has ended, and a second one during a motion is refused (busy). */
-  case object Posture extends RpcMethod("motion", "posture", idempotent = false, Some(CommandSlot.Walk))
+  case object Posture extends RpcMethod("motion", "posture", idempotent = false, Some(ActuatorGroup.Walk))
 
   /** Read the posture. */
   case object GetPosture extends RpcMethod("motion", "getPosture", idempotent = true, None)
@@ -85,7 +64,7 @@ object RpcMethod {
   def of(call: RpcCall): Option[RpcMethod] = find(call.module, call.method)
 
   /** The slot `call` takes part in, if any. */
-  def slotOf(call: RpcCall): Option[CommandSlot] = of(call).flatMap(_.slot)
+  def slotOf(call: RpcCall): Option[ActuatorGroup] = of(call).flatMap(_.slot)
 
   /** Whether `call` may be called again when no answer came; a method the table does not know is not. */
   def idempotent(call: RpcCall): Boolean = of(call).exists(_.idempotent)
