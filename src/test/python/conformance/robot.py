@@ -11,6 +11,19 @@ Compatibility mode (environment CONFORMANCE_COMPAT=1): the robot also acts on da
 arrive at its sending socket.  Section 2 says nothing ever arrives there; the mode exists only so
 the rest of the document can be exercised against a gateway that answers to the source port.
 Datagrams arriving there are logged and reported as a section 2 failure in both modes.
+
+Lossy mode (--loss or --loss-every): from --loss-start seconds on, the robot drops a share of the
+datagrams it receives (before acting on them; a seeded random, or every n-th) and of the stream
+segments it sends, as a full module buffer does (section 2: "lost and garbled datagrams are
+normal").  It then checks section 7.1 (a call the gateway repeats comes as a new Request with a new
+callId) and section 11 (what the gateway's stream lost is sent again).
+
+Hostile input (--hostile-start): between its good keep-alives the robot sends frames that sections
+4.3, 4.4 and 5 say a receiver refuses (gzip with a second member or bytes after it, a varint too
+large for its 32-bit field, an end-group key without its start, a truncated frame) or must
+tolerate (unknown groups, unknown extensions and fields, a string that is not valid UTF-8).  Each
+carries a whole keep-alive whose activeAgent names the case, so whoever reads the gateway's view of
+the robot can tell which ones counted.
 """
 
 import argparse
@@ -18,6 +31,7 @@ import gzip
 import json
 import math
 import os
+import random
 import select
 import signal
 import socket
@@ -46,11 +60,33 @@ CAMERA_OPTIONS = ("havimo.regions", "havimo.grid", "camera.image")
 # Non-camera options go out in name order (section 8, "non-camera options").
 NON_CAMERA_ORDER = sorted(n for n, _ in CATALOGUE if n not in CAMERA_OPTIONS)
 
+# The hostile frames of --hostile-start and what the document says a receiver does with each:
+# "refused" (the keep-alive it carries must not count) or "tolerated" (it counts in full).
+HOSTILE_CASES = {
+    "gzip-two-members": "refused",
+    "gzip-trailing-zeros": "refused",
+    "gzip-trailing-garbage": "refused",
+    "gzip-bad-crc": "refused",
+    "varint-robot-id": "refused",
+    "varint-team-id": "refused",
+    "end-group-without-start": "refused",
+    "group-closed-by-other-field": "refused",
+    "truncated-protobuf": "refused",
+    "truncated-frame": "refused",
+    "truncated-header": "refused",
+    "oversize": "refused",
+    "group": "tolerated",
+    "unknown-fields": "tolerated",
+    "invalid-utf8": "tolerated",
+}
+
 POSTURE_SECONDS = {"stand": 1.5, "sit": 1.0, "crouch": 0.6}
 HEAD_PAN = (-2.0, 2.0)
 HEAD_TILT = (-0.6, 0.5)
 ARM_LIMIT = 2.5  # the document names no arm limits (7.2): this robot's own
 WALK_LIMITS = (0.3, 0.3, 1.0)
+# 7.1: the calls the gateway may repeat (as new Requests) when no answer came.
+REPEATABLE = {"system.battery", "system.ping", "motion.getPosture", "motion.head", "motion.arms", "motion.stop", "motion.walk"}
 
 
 def hexs(data):
@@ -107,6 +143,58 @@ class Stream:
         self.unanswered = 0
 
 
+class Loss:
+    """The lossy link: drops a share of the datagrams received and of the stream segments sent, deterministically."""
+
+    def __init__(self, share, seed, every, start_at):
+        self.share, self.every, self.start_at = share, every, start_at
+        # One generator per direction, so the drops of one direction do not depend on the traffic of the other.
+        self.rng = {"in": random.Random(seed), "out": random.Random(seed + 1)}
+        self.seen = {"in": 0, "out": 0}
+        self.dropped = {"in": 0, "out": 0}
+        self.announced = False
+
+    def enabled(self):
+        return self.share > 0 or self.every > 0
+
+    def active(self, now):
+        return self.enabled() and now >= self.start_at
+
+    def drop(self, direction, now):
+        """Whether this datagram (direction "in": received, "out": a stream segment sent) is lost."""
+        if not self.active(now):
+            return False
+        self.seen[direction] += 1
+        if self.every > 0:
+            lost = self.seen[direction] % self.every == 0
+        else:
+            lost = self.rng[direction].random() < self.share
+        if lost:
+            self.dropped[direction] += 1
+        return lost
+
+
+def varint(n):
+    """Section 5: 7 bits per byte, least significant group first, top bit = more follows (n >= 0)."""
+    out = bytearray()
+    while True:
+        b = n & 0x7F
+        n >>= 7
+        if n:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+def key(field, wire_type):
+    return varint((field << 3) | wire_type)
+
+
+def length_delimited(field, data):
+    return key(field, 2) + varint(len(data)) + data
+
+
 class Robot:
     """The robot's state machine: keep-alive, RPC contract, debug options, GameController, stream, restart."""
 
@@ -132,7 +220,21 @@ class Robot:
         self.keepalive_count = 0
         self.silent_until = 0.0
         self.pending_restart = None
-        self.counts = {"on3838": 0, "onsend": 0, "requests": 0, "gc": 0, "segments": 0}
+        self.counts = {"on3838": 0, "onsend": 0, "requests": 0, "gc": 0, "segments": 0,
+                       "stream_resends": 0, "stream_duplicates_received": 0, "requests_dropped": 0,
+                       "retries_seen": 0, "data_segments_dropped": 0, "data_segments_sent_again": 0}
+        # Lossy mode: its start is set when the run starts.
+        self.loss = Loss(args.loss, args.loss_seed, args.loss_every, float("inf"))
+        # Requests this robot dropped, by (module, method, parameters): (time, callId), to recognise a repeated call (7.1).
+        self.dropped_requests = {}
+        # Gateway data segments this robot dropped and has not seen again yet: [time, seq, payload].
+        self.dropped_segments = []
+        # Robot -> gateway stream payloads offered, by the uptimeMs each carries (the harness compares what arrived).
+        self.stream_offered = []
+        self.unanswered_limit = 12 if self.loss.enabled() else 6
+        self.hostile_cases = []
+        self.hostile_at = float("inf")
+        self.next_hostile = None
         self.first_session = True
         self.active_before_restart = None
         self.reenabled_after_restart = None
@@ -166,7 +268,8 @@ class Robot:
         self.seen_debug_command = False
         self.pushed = False
         self.stream_sends_left = self.args.stream_sends
-        self.next_stream_send = now + 2.0
+        self.next_stream_send = now + self.args.stream_start
+        self.dropped_segments = []
 
     def uptime_ms(self):
         return int((time.monotonic() - self.boot_time) * 1000) & 0xFFFFFFFF
@@ -246,6 +349,15 @@ class Robot:
     def keepalive(self):
         form = self.keepalive_forms[self.keepalive_count % len(self.keepalive_forms)]
         self.keepalive_count += 1
+        # The header form rides in the agent's name, so whoever reads the published status can tell
+        # which forms the gateway accepted (4.1, 4.3).
+        m = self.keepalive_message("conformance-" + form)
+        header, gz = (form.split("-") + [""])[:2]
+        data = self.frame(m, header, gz == "gzip")
+        self.send_raw(data)
+
+    def keepalive_message(self, agent):
+        """One keep-alive (6.2): Status and RobotHealth, every field set, activeAgent = agent."""
         m = self.message()
         st = m.Extensions[self.pb_msg.status]
         up = self.uptime_ms()
@@ -255,9 +367,7 @@ class Robot:
         st.robotPosition.x = -1000
         st.robotPosition.y = 0
         st.robotPosition.rotation = 0.0
-        # The header form rides in the agent's name, so whoever reads the published status can tell
-        # which forms the gateway accepted (4.1, 4.3).
-        st.activeAgent = "conformance-" + form
+        st.activeAgent = agent
         st.activeRole = "striker"
         st.currentState = self.posture
         h = m.Extensions[self.pb_msg.robotHealth]
@@ -265,9 +375,82 @@ class Robot:
         h.posture = self.posture
         h.uptimeMs = up
         h.bootId = self.boot_id
-        header, gz = (form.split("-") + [""])[:2]
-        data = self.frame(m, header, gz == "gzip")
+        return m
+
+    # ----- hostile input (sections 4.3, 4.4, 5) -----------------------------------------------------------------
+
+    def hostile_frame(self, case):
+        """A keep-alive whose activeAgent is "hostile-<case>", framed or encoded as `case` says (HOSTILE_CASES)."""
+        m = self.keepalive_message("hostile-" + case)
+        st, h = m.Extensions[self.pb_msg.status], m.Extensions[self.pb_msg.robotHealth]
+        status_b, health_b = st.SerializeToString(), h.SerializeToString()
+        robot_id = key(1, 0) + varint(self.args.robot_id)
+
+        def body(rid=robot_id, status=status_b, health=health_b, extra=b""):
+            # Ascending field numbers: robotID (1), status (23), robotHealth (7105), then whatever is added.
+            return rid + length_delimited(23, status) + length_delimited(7105, health) + extra
+
+        def legacy(payload, flags=0):
+            return struct.pack(">HBBII", OPERATION, flags, 0, 0, len(payload)) + payload
+
+        def status_without(field):
+            copy = self.pb_msg.Status()
+            copy.CopyFrom(st)
+            copy.ClearField(field)
+            return copy.SerializeToString()
+
+        plain = body()
+        member = gzip.compress(plain, mtime=0)
+        if case == "gzip-two-members":  # 4.3: exactly one member; a concatenating reader would find the keep-alive
+            return legacy(member + gzip.compress(b"", mtime=0), FLAG_GZIP)
+        if case == "gzip-trailing-zeros":  # 4.3: nothing after the member's 8-byte trailer
+            return legacy(member + bytes(4), FLAG_GZIP)
+        if case == "gzip-trailing-garbage":
+            return legacy(member + b"JUNK", FLAG_GZIP)
+        if case == "gzip-bad-crc":  # 4.3: a member whose CRC-32 does not match
+            bad = bytearray(member)
+            bad[-8] ^= 0xFF
+            return legacy(bytes(bad), FLAG_GZIP)
+        if case == "varint-robot-id":  # 5: robotID 2^32 + id does not fit an int32: refused, never read as id
+            return legacy(body(rid=key(1, 0) + varint(2 ** 32 + self.args.robot_id)))
+        if case == "varint-team-id":  # 5: teamID (uint32) 2^32 + team: refused
+            return legacy(body(status=status_without("teamID") + key(2, 0) + varint(2 ** 32 + self.args.team)))
+        if case == "end-group-without-start":  # 5: malformed, refused
+            return legacy(body(extra=key(50, 4)))
+        if case == "group-closed-by-other-field":  # 5: an end-group key that closes another field's group
+            return legacy(body(extra=key(50, 3) + key(1, 0) + varint(7) + key(51, 4)))
+        if case == "truncated-protobuf":  # 4.4 BadProtobuf: robotHealth cut short; the Status before it is whole
+            return legacy(plain[:-2])
+        if case == "truncated-frame":  # 4.4 LengthMismatch: the datagram ends before the declared length
+            return legacy(plain)[:-5]
+        if case == "truncated-header":  # 4.4 Truncated(8, 7)
+            return legacy(plain)[:7]
+        if case == "oversize":  # 4.4 Oversize: 1401 bytes, padded with an unknown field
+            pad = 1401 - len(legacy(plain)) - 4
+            return legacy(body(extra=length_delimited(90, bytes(pad))))[:1401]
+        if case == "group":  # 5: unknown groups skipped at every depth: top level, nested, inside Status
+            group = key(50, 3) + key(1, 0) + varint(7) + length_delimited(2, b"x") + key(51, 3) + key(1, 5) + bytes(4) \
+                + key(51, 4) + key(50, 4)
+            return legacy(body(status=status_b + key(30, 3) + key(1, 0) + varint(1) + key(30, 4), extra=group))
+        if case == "unknown-fields":  # 5: an unknown extension and unknown fields of wire types 0, 1, 2, 5
+            extra = length_delimited(7150, key(1, 0) + varint(1) + length_delimited(2, b"abc")) + key(99, 1) + bytes(8) \
+                + key(98, 5) + bytes(4)
+            status = status_b + key(40, 0) + varint(300) + key(41, 1) + bytes(8) + key(42, 5) + bytes(4) \
+                + length_delimited(43, b"zz")
+            return legacy(body(status=status, health=health_b + key(20, 0) + varint(1), extra=extra))
+        if case == "invalid-utf8":  # 5: each malformed byte sequence reads as U+FFFD, the rest counts
+            agent = b"hostile-invalid-utf8-\xff\xfe-end"
+            return legacy(body(status=status_without("activeAgent") + length_delimited(12, agent)))
+        raise ValueError(case)
+
+    def send_hostile(self, now):
+        case = self.hostile_cases.pop(0)
+        data = self.hostile_frame(case)
         self.send_raw(data)
+        section = "4.3" if case.startswith("gzip") else "4.4" if case.startswith(("truncated", "oversize")) else "5"
+        self.report.check(section, "hostile-frame-sent", True, "%s (%s): %s" % (case, HOSTILE_CASES[case], hexs(data)))
+        if not self.hostile_cases:
+            print("hostile done", flush=True)
 
     def answer(self, request, form, via_stream, value=None, error=None):
         m = self.message()
@@ -315,18 +498,18 @@ class Robot:
         name = "%s.%s" % (request.module, request.method)
         self.counts["requests"] += 1
         now = time.monotonic()
-        # 7.1: a callId is never sent twice.
-        if request.HasField("callId"):
-            cid = request.callId
-            if cid in self.call_ids:
-                t, earlier = self.call_ids[cid]
-                self.report.check("7.1", "call-id-never-repeated", False,
-                                  "callId %d (%s) arrived again %.3f s after %s; bytes %s" % (cid, name, now - t, earlier, hexs(raw)))
-            else:
-                self.report.check("7.1", "call-id-never-repeated", True, "callId %d %s" % (cid, name))
-            self.call_ids[cid] = (now, name)
-        else:
-            self.report.check("6.6", "request-carries-call-id", False, "%s without callId; bytes %s" % (name, hexs(raw)))
+        self.note_call_id(request, name, raw, now)
+        # 7.1: a call the gateway repeats because this robot dropped it comes as a new Request with a new callId.
+        earlier = self.dropped_requests.pop(self.call_key(request), None)
+        if earlier is not None and now - earlier[0] < 5.0:
+            self.counts["retries_seen"] += 1
+            new_id = request.HasField("callId") and request.callId != earlier[1]
+            self.report.check("7.1", "repeated-call-has-new-call-id", new_id,
+                              "%s dropped with callId %s, arrived again %.3f s later with callId %s; bytes %s" % (
+                                  name, earlier[1], now - earlier[0], request.callId if request.HasField("callId") else None, hexs(raw)))
+            if name not in REPEATABLE and name != "heartbeat.probe":
+                self.report.check("7.1", "only-repeatable-calls-repeated", False,
+                                  "%s arrived again %.3f s after a dropped copy; 7.1 repeats only %s" % (name, now - earlier[0], sorted(REPEATABLE)))
         if self.first_session and not getattr(self, "first_request_seen", False) and name != "heartbeat.probe":
             self.first_request_seen = True
             self.report.check("7.2", "first-command-is-motion-stop", name == "motion.stop",
@@ -341,6 +524,24 @@ class Robot:
             return
         if result is not None:
             self.answer(request, form, via_stream, value=result)
+
+    def note_call_id(self, request, name, raw, now, dropped=False):
+        """7.1: a callId is never sent twice (a dropped copy counts as sent)."""
+        if request.HasField("callId"):
+            cid = request.callId
+            if cid in self.call_ids:
+                t, earlier = self.call_ids[cid]
+                self.report.check("7.1", "call-id-never-repeated", False,
+                                  "callId %d (%s) arrived again %.3f s after %s; bytes %s" % (cid, name, now - t, earlier, hexs(raw)))
+            else:
+                self.report.check("7.1", "call-id-never-repeated", True, "callId %d %s%s" % (cid, name, " (dropped)" if dropped else ""))
+            self.call_ids[cid] = (now, name + (" (dropped)" if dropped else ""))
+        else:
+            self.report.check("6.6", "request-carries-call-id", False, "%s without callId; bytes %s" % (name, hexs(raw)))
+
+    @staticmethod
+    def call_key(request):
+        return request.module, request.method, tuple(p.SerializeToString() for p in request.params)
 
     def dispatch(self, request, name, form, via_stream):
         now = time.monotonic()
@@ -563,7 +764,8 @@ class Robot:
             s.timer = now + s.rto
             self.send_segment(bytes([seq, s.last]) + payload, now)
             s.pure_acks_since_data = 0
-            if sends + 1 == 6:
+            self.counts["stream_resends"] += 1
+            if sends + 1 == self.unanswered_limit:
                 self.report.check("11.4", "data-segments-answered", False,
                                   "seq %d sent %d times over %.1f s without an ACK" % (seq, sends + 1, now - first))
         if s.idle_owed and s.in_flight is None and now - s.last_sent >= s.idle_interval:
@@ -575,6 +777,10 @@ class Robot:
 
     def send_segment(self, data, now):
         self.stream.last_sent = now
+        if self.loss.drop("out", now):
+            self.log.write(json.dumps({"t": round(now - self.start, 3), "at": "sent", "boot": self.boot_id,
+                                       "dropped": True, "bytes": hexs(data)}) + "\n")
+            return
         self.send_raw(data)
 
     def segment(self, data, raw_ok, where):
@@ -614,6 +820,7 @@ class Robot:
             self.report.check("11.4", "data-segment-in-order", True, "seq %d, %d payload bytes" % (seq, len(data) - 2))
             self.datagram(data[2:], where, via_stream=True)
         elif d >= s.m - 1:
+            self.counts["stream_duplicates_received"] += 1
             self.send_segment(bytes([self.settled(), s.last]), now)
         else:
             self.report.check("11.4", "data-segment-in-range", False, "seq %d while expecting %d" % (seq, (s.last + 1) % s.m))
@@ -672,6 +879,40 @@ class Robot:
         if not handled:
             self.report.check("6.1", "frame-carries-a-request-or-command", False, "nothing this robot serves: " + hexs(data))
 
+    # ----- the lossy link -------------------------------------------------------------------------------------
+
+    def lost(self, data, source, where):
+        """A received datagram the lossy link drops: logged, never acted on. Only its callId and, for a new stream
+        data segment, its sequence number and payload are noted, to check that the gateway repeats them (7.1, 11.5)."""
+        now = time.monotonic()
+        self.log.write(json.dumps({"t": round(now - self.start, 3), "at": where, "from": "%s:%d" % source,
+                                   "boot": self.boot_id, "dropped": True, "bytes": hexs(data)}) + "\n")
+        if now < self.silent_until or len(data) < 2:
+            return
+        s = self.stream
+        if len(data) > 2 and data[0] < 42 and data[1] < 42:
+            if data[0] == (s.last + 1) % s.m:  # new data: the gateway must send it again
+                self.counts["data_segments_dropped"] += 1
+                self.dropped_segments.append((now, data[0], bytes(data[2:])))
+        elif data[:2] == b"\x00\x2a":
+            try:
+                _, _, msg = self.parse_frame(data)
+            except ValueError:
+                return
+            if msg.HasExtension(self.pb_rpc.rpcRequest):
+                request = msg.Extensions[self.pb_rpc.rpcRequest]
+                self.counts["requests_dropped"] += 1
+                self.note_call_id(request, "%s.%s" % (request.module, request.method), data, now, dropped=True)
+                self.dropped_requests[self.call_key(request)] = (now, request.callId if request.HasField("callId") else None)
+
+    def data_segment_again(self, data):
+        """A stream data segment that repeats one the lossy link dropped: the gateway sent it again (11.5)."""
+        if self.dropped_segments and len(data) > 2 and data[0] < 42 and data[1] < 42:
+            again = [e for e in self.dropped_segments if e[1] == data[0] and e[2] == bytes(data[2:])]
+            for e in again:
+                self.dropped_segments.remove(e)
+                self.counts["data_segments_sent_again"] += 1
+
     # ----- main loop ------------------------------------------------------------------------------------------
 
     def tick(self, now):
@@ -686,30 +927,55 @@ class Robot:
             self.answer(request, form, via_stream, value=("string", target))
         if self.posture == "walking":
             self.battery -= 0.00001
+        if self.loss.enabled() and not self.loss.announced and now >= self.loss.start_at:
+            self.loss.announced = True
+            self.report.check("2", "lossy-link", True, "from now on dropping %s of the datagrams received and of the "
+                              "stream segments sent (seed %d)" % (
+                                  "every %d-th" % self.args.loss_every if self.args.loss_every else "%.0f %%" % (100 * self.args.loss),
+                                  self.args.loss_seed))
+            print("loss on", flush=True)
         if now >= self.next_keepalive:
             self.next_keepalive = now + 0.2
             self.keepalive()
+            # A hostile frame halfway between two good keep-alives.
+            if self.hostile_cases and now >= self.hostile_at:
+                self.next_hostile = now + 0.1
+        if self.next_hostile is not None and now >= self.next_hostile:
+            self.next_hostile = None
+            self.send_hostile(now)
         self.debug_output(now)
         # Robot -> gateway stream data: a few keep-alive frames through the stream, one a second (11).
-        if self.stream_sends_left > 0 and now >= self.next_stream_send and self.stream.in_flight is None:
+        # With --stream-queue they are offered at the interval whether or not the previous one is acknowledged, so
+        # they queue up behind losses.
+        if self.stream_sends_left > 0 and now >= self.next_stream_send and (self.stream.in_flight is None or self.args.stream_queue):
             self.stream_sends_left -= 1
-            self.next_stream_send = now + 1.0
+            self.next_stream_send = now + self.args.stream_interval
             m = self.message()
             h = m.Extensions[self.pb_msg.robotHealth]
             h.posture, h.uptimeMs, h.bootId = self.posture, self.uptime_ms(), self.boot_id
+            self.stream_offered.append(h.uptimeMs)
             self.stream_offer(self.frame(m))
         self.stream_pump(now)
 
     def run(self):
         self.start = time.monotonic()
         end = self.start + self.args.duration
+        self.loss.start_at = self.start + self.args.loss_start
+        if self.args.hostile_start >= 0:
+            self.hostile_cases = list(HOSTILE_CASES) * self.args.hostile_rounds
+            self.hostile_at = self.start + self.args.hostile_start
         socks = [self.recv_sock, self.send_sock]
         while not self.stop_flag and time.monotonic() < end:
             now = time.monotonic()
             readable, _, _ = select.select(socks, [], [], 0.01)
             for sock in readable:
                 data, source = sock.recvfrom(65535)
-                self.received(data, source, "3838" if sock is self.recv_sock else "send")
+                where = "3838" if sock is self.recv_sock else "send"
+                self.data_segment_again(data)
+                if self.loss.drop("in", time.monotonic()):
+                    self.lost(data, source, where)
+                    continue
+                self.received(data, source, where)
                 if self.pending_restart:
                     self.pending_restart = None
                     self.restart()
@@ -726,8 +992,23 @@ class Robot:
                               "active before the restart: %s, enabled now: %s" % (sorted(self.active_before_restart), sorted(self.enabled)))
         if self.stream.in_flight is not None:
             self.report.check("11.4", "data-segments-answered", False, "seq %d still unacknowledged at the end" % self.stream.in_flight[0])
+        if self.loss.enabled():
+            end = time.monotonic()
+            for t, seq, payload in self.dropped_segments:
+                if end - t > 3.0:
+                    self.report.check("11.5", "lost-data-segment-sent-again", False,
+                                      "seq %d (%d payload bytes) dropped %.1f s before the end never arrived again" % (seq, len(payload), end - t))
+            self.report.check("11.5", "retransmissions-after-loss", c["data_segments_sent_again"] + c["stream_duplicates_received"] > 0,
+                              "%d dropped data segments sent again, %d duplicates received after dropped ACKs, %d resends by the robot" % (
+                                  c["data_segments_sent_again"], c["stream_duplicates_received"], c["stream_resends"]))
+            self.report.check("7.1", "dropped-calls-called-again", c["retries_seen"] > 0,
+                              "%d requests dropped, %d arrived again as new Requests" % (c["requests_dropped"], c["retries_seen"]))
+        self.report.check("11", "robot-stream-payloads", True, "uptimeMs " + " ".join(str(u) for u in self.stream_offered))
         self.report.check("summary", "counts", True, json.dumps(dict(c, restarts=self.restarts, bootId=self.boot_id,
-                                                                      stream_data_sent=self.stream.sent_data)))
+                                                                      stream_data_sent=self.stream.sent_data,
+                                                                      received_seen=self.loss.seen["in"], received_dropped=self.loss.dropped["in"],
+                                                                      segments_sent_seen=self.loss.seen["out"],
+                                                                      segments_sent_dropped=self.loss.dropped["out"])))
         self.report.close()
         self.log.close()
 
@@ -752,6 +1033,15 @@ def main():
     p.add_argument("--battery", type=float, default=12.4)
     p.add_argument("--forms", default="legacy,compact,legacy-gzip,compact-gzip", help="keep-alive header forms, in turn")
     p.add_argument("--stream-sends", type=int, default=5, help="keep-alive frames sent through the stream per session")
+    p.add_argument("--stream-start", type=float, default=2.0, help="seconds after each power-up before the first stream payload")
+    p.add_argument("--stream-interval", type=float, default=1.0, help="seconds between stream payloads")
+    p.add_argument("--stream-queue", action="store_true", help="offer stream payloads without waiting for the previous ACK")
+    p.add_argument("--loss", type=float, default=0.0, help="share of received datagrams and sent stream segments dropped")
+    p.add_argument("--loss-seed", type=int, default=1, help="seed of the lossy link's random drops")
+    p.add_argument("--loss-every", type=int, default=0, help="instead of --loss: drop every n-th datagram of each direction")
+    p.add_argument("--loss-start", type=float, default=0.0, help="seconds after the start before the link turns lossy")
+    p.add_argument("--hostile-start", type=float, default=-1.0, help="seconds after the start before the hostile frames (off if < 0)")
+    p.add_argument("--hostile-rounds", type=int, default=2, help="how often each hostile frame is sent")
     p.add_argument("--restart-silence", type=float, default=4.0)
     p.add_argument("--duration", type=float, default=110.0, help="the robot exits by itself after this many seconds")
     p.add_argument("--report", required=True)

@@ -23,7 +23,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
-import naogateway.{Gateway, GatewaySettings, RobotActor, StreamActor}
+import naogateway.{Gateway, GatewaySettings, LinkStats, RobotActor, RobotOffline, RobotSnapshot, StreamActor}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result. */
@@ -121,6 +121,22 @@ object DocRobotConformanceSpec {
   case object Compat extends Mode("compatibility", true)
 
   /**
+   * The compatibility mode under loss and hostile input: the robot first sends hostile frames between its keep-alives
+   * (sections 4.3, 4.4, 5), then drops 20 % of what it receives and of the stream segments it sends (seeded), while
+   * calls (7.1) and stream data both ways (11) go through. In the compatibility mode because that is where calls
+   * arrive today (section 2).
+   */
+  case object Lossy extends Mode("lossy", true)
+
+  /** The lossy robot's arguments: keep-alives in the legacy form only, hostile frames from 2 s, loss from 9 s. */
+  val lossyArguments: Seq[String] = Seq("--forms", "legacy", "--hostile-start", "2", "--hostile-rounds", "2",
+    "--loss", "0.2", "--loss-seed", "7", "--loss-start", "9",
+    "--stream-sends", "12", "--stream-start", "10", "--stream-interval", "0.3", "--stream-queue")
+
+  /** Stream pings the harness sends the lossy robot through the secure stream. */
+  val lossyStreamPings = 12
+
+  /**
    * Disagreements between the gateway and docs/protocol.md known today, per mode. Each must still be seen (the test
    * fails when one passes, so this list shrinks with every fix); anything failing that is not listed fails the test.
    */
@@ -136,6 +152,13 @@ object DocRobotConformanceSpec {
       "4.1" -> "gateway-sends-legacy-form",
       // §7.2: at first contact no motion.stop precedes the first application call (after a restart one does).
       "7.2" -> "first-command-is-motion-stop"
+    ),
+    Lossy -> Set(
+      "2" -> "gateway-sends-to-port-3838",
+      "7.2" -> "first-command-is-motion-stop",
+      // §3 / §4.4: the 7-byte datagram 00 2A 00 00 00 00 00 is an FU-Remote frame the decoder refuses as Truncated(8, 7);
+      // the gateway refuses it (agreed) but counts it as "unclassifiable: datagram of 7 bytes is too short".
+      "4.4" -> "short-frame-counted-as-truncated"
     )
   )
 }
@@ -162,7 +185,8 @@ class DocRobotConformanceSpec
   }
 
   /** One robot process and the findings this harness makes about it. */
-  private final class RobotRun(val mode: Mode, val robotId: Int, val address: String, python: File, gateway: InetSocketAddress) {
+  private final class RobotRun(val mode: Mode, val robotId: Int, val address: String, python: File, gateway: InetSocketAddress,
+      extra: Seq[String] = Nil) {
     val dir = new File(ConformanceEnv.target, mode.name)
     ConformanceEnv.deleteTree(dir.toPath)
     dir.mkdirs()
@@ -171,11 +195,11 @@ class DocRobotConformanceSpec
     val output = new File(dir, "robot.out")
     private val findings = new ConcurrentLinkedQueue[Finding]()
     val process: Process = {
-      val b = new ProcessBuilder(Seq(python.getPath, "-u", ConformanceEnv.robotScript.getPath,
+      val b = new ProcessBuilder((Seq(python.getPath, "-u", ConformanceEnv.robotScript.getPath,
         "--robot-id", robotId.toString, "--address", address, "--gateway", s"127.0.0.1:${gateway.getPort}",
         "--report", report.getPath, "--log", datagrams.getPath, "--duration", "110",
         "--proto", new File(ConformanceEnv.root, "proto/src/main/protobuf").getPath,
-        "--gen", new File(ConformanceEnv.target, s"gen-${mode.name}").getPath).asJava)
+        "--gen", new File(ConformanceEnv.target, s"gen-${mode.name}").getPath) ++ extra).asJava)
         .directory(ConformanceEnv.root).redirectErrorStream(true).redirectOutput(output)
       b.environment().put("CONFORMANCE_COMPAT", if (mode.compat) "1" else "0")
       b.environment().put("PYTHONDONTWRITEBYTECODE", "1")
@@ -185,6 +209,15 @@ class DocRobotConformanceSpec
     }
 
     def note(section: String, check: String, pass: Boolean, detail: String): Unit = findings.add(Finding(section, check, pass, detail))
+
+    /** Keep-alive snapshots the gateway published for this robot. */
+    val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
+
+    /** The robotHealth.uptimeMs of each of the robot's stream payloads the gateway delivered, in delivery order. */
+    val streamUptimes = new ConcurrentLinkedQueue[Long]()
+
+    /** Checks that need the robot's report, made after it ended (`findings`: its report). */
+    var afterRun: Vector[Finding] => Unit = _ => ()
     def harnessFindings: Vector[Finding] = findings.asScala.toVector
     def out: String = Try(new String(Files.readAllBytes(output.toPath), StandardCharsets.UTF_8)).getOrElse("")
 
@@ -199,7 +232,9 @@ class DocRobotConformanceSpec
     def finish(): Vector[Finding] = {
       process.destroy()
       if (!process.waitFor(15, TimeUnit.SECONDS)) process.destroyForcibly()
-      ConformanceEnv.readReport(report) ++ harnessFindings
+      val reported = ConformanceEnv.readReport(report)
+      afterRun(reported)
+      reported ++ harnessFindings
     }
   }
 
@@ -211,6 +246,21 @@ class DocRobotConformanceSpec
     var ok = condition
     while (!ok && deadline.hasTimeLeft()) { Thread.sleep(100); ok = condition }
     ok
+  }
+
+  /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
+  private def streamOf(id: Int, gateway: akka.actor.typed.ActorRef[Gateway.Command])
+      : Option[(akka.actor.typed.ActorRef[StreamActor.Command], akka.actor.testkit.typed.scaladsl.TestProbe[StreamActor.Received])] = {
+    val robot = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
+    gateway ! Gateway.GetRobot(id, robot.ref)
+    robot.receiveMessage(10.seconds).map { actor =>
+      val connected = createTestProbe[RobotActor.Connected]()
+      actor ! RobotActor.Connect(connected.ref)
+      val stream = connected.receiveMessage(10.seconds).stream
+      val received = createTestProbe[StreamActor.Received]()
+      stream ! StreamActor.Subscribe(received.ref)
+      stream -> received
+    }
   }
 
   /** The scenario through the public RobotInterface (and the robot's stream), noting what the robot answered. */
@@ -225,18 +275,7 @@ class DocRobotConformanceSpec
     if (!online) return
     await(client.acquire(id, ActuatorGroup.all.toSeq: _*))
     // Subscribed at once: the robot sends its stream payloads in the first seconds of each session.
-    val streamProbe = {
-      val robot = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-      gateway ! Gateway.GetRobot(id, robot.ref)
-      robot.receiveMessage(10.seconds).map { actor =>
-        val connected = createTestProbe[RobotActor.Connected]()
-        actor ! RobotActor.Connect(connected.ref)
-        val stream = connected.receiveMessage(10.seconds).stream
-        val received = createTestProbe[StreamActor.Received]()
-        stream ! StreamActor.Subscribe(received.ref)
-        stream -> received
-      }
-    }
+    val streamProbe = streamOf(id, gateway)
 
     var answered = true
     // One RPC step: `expect` judges the answer; an unanswered call is a section 2 finding, and ends the RPC steps.
@@ -273,10 +312,18 @@ class DocRobotConformanceSpec
       robotError("bad parameters: "))
     step("7.4", "unknown-posture")(client.call(id, "motion", "posture", RpcValue.Text("fly")))(robotError("bad parameters: "))
     if (answered) {
+      // Alone, a posture call is answered when the motion has ended (crouch takes about 0.6 s).
+      val started = System.nanoTime()
+      step("7.2", "posture-answers-when-reached")(client.posture(id, Posture.Crouch))(r =>
+        r == Right(Posture.Crouch) && (System.nanoTime() - started).nanos >= 400.millis)
+      // A second one during a motion is refused by the robot; the gateway itself hands the first call's slot to the
+      // second one (the first ends as superseded), so the harness waits for the robot to reach the first target.
       val standing = client.posture(id, Posture.Stand)
       Thread.sleep(300)
-      step("7.4", "posture-during-posture")(client.call(id, "motion", "posture", RpcValue.Text("crouch")))(robotError("busy: moving"))
-      step("7.2", "posture-answers-when-reached")(standing)(_ == Right(Posture.Stand))
+      step("7.4", "posture-during-posture")(client.call(id, "motion", "posture", RpcValue.Text("sit")))(robotError("busy: moving"))
+      await(standing)
+      val stood = poll(10.seconds)(await(client.call(id, "motion", "getPosture"), 5.seconds) == Right(Some(RpcValue.Text("stand"))))
+      run.note("7.2", "posture-reaches-target", stood, "getPosture after motion.posture(stand)")
     }
     step("7.2", "walk")(client.walk(id, 0.1, 0, 0))(_.isRight)
     step("7.2", "getPosture-walking")(client.call(id, "motion", "getPosture"))(_ == Right(Some(RpcValue.Text("walking"))))
@@ -365,6 +412,126 @@ class DocRobotConformanceSpec
     }
   }
 
+  /** The detail of the robot's "hostile-frame-sent" lines (a JSON string): case, what the document says, bytes. */
+  private val HostileSent = """"?(\S+) \((refused|tolerated)\): ([0-9A-F ]*)"?""".r
+
+  /**
+   * The lossy robot's scenario: hostile frames between good keep-alives (4.3, 4.4, 5), judged by the keep-alives the
+   * gateway published; then calls (7.1) and stream data both ways (11) while the robot drops 20 % of what it receives
+   * and of the stream segments it sends.
+   */
+  private def driveLossy(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Unit = {
+    import run.{robotId => id}
+    client.status(id).runWith(Sink.foreach(run.snapshots.add))
+    val offline = new ConcurrentLinkedQueue[RobotOffline]()
+    client.robotEvents.runWith(Sink.foreach { case o: RobotOffline if o.robotId == id => offline.add(o); case _ => () })
+
+    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(_.exists(r => r.robotId == id && r.online)))
+    run.note("6.2", "keep-alive-makes-robot-online", online, s"robot $id online: $online")
+    if (!online) return
+    // Subscribed once the gateway knows the robot: it pushes the robot's link figures every second.
+    val stats = new java.util.concurrent.atomic.AtomicReference[Option[LinkStats]](None)
+    client.linkStats(id).runWith(Sink.foreach(s => stats.set(Some(s))))
+    await(client.acquire(id, ActuatorGroup.all.toSeq: _*))
+    val streamProbe = streamOf(id, gateway)
+    // The robot's own stream payloads (robotHealth frames), in the order the gateway delivers them.
+    val pingAnswers = new ConcurrentLinkedQueue[Long]()
+    val collecting = streamProbe.map { case (_, received) =>
+      Future {
+        val deadline = 90.seconds.fromNow
+        while (deadline.hasTimeLeft() && run.process.isAlive)
+          Try(received.receiveMessage(1.second)).toOption.foreach { r =>
+            MessageContents.decodeFrame(r.payload).toOption.foreach { case (_, c) =>
+              c.rpcResponse.flatMap(_.callId).foreach(cid => pingAnswers.add(cid.toLong & 0xFFFFFFFFL))
+              c.robotHealth.flatMap(_.uptimeMs).foreach(u => run.streamUptimes.add(u.toLong & 0xFFFFFFFFL))
+            }
+          }
+      }(scala.concurrent.ExecutionContext.global)
+    }
+
+    // Hostile input: the robot stays online and is answered throughout; what it sent is judged after the run.
+    val hostileDone = poll(40.seconds)(run.out.contains("hostile done"))
+    run.note("4.4", "hostile-frames-sent", hostileDone, "the robot's hostile phase ended")
+    val pings = (1 to 3).map(_ => await(client.call(id, "system", "ping")))
+    run.note("4.4", "answered-after-hostile-input", pings.forall { case Right(Some(RpcValue.UInt(_))) => true; case _ => false },
+      s"pings after the hostile frames: $pings")
+    // Counted per robot under the error's name (4.4); a datagram over 1400 bytes is rejected before it is a frame (3).
+    val counted = poll(10.seconds)(stats.get.exists(s => Seq("BadGzip", "BadProtobuf", "LengthMismatch", "1400")
+      .forall(e => s.rejected.keys.exists(_.contains(e)))))
+    run.note("4.4", "refused-frames-counted-per-robot", counted, s"rejected: ${stats.get.map(_.rejected)}")
+    // A 7-byte datagram starting 00 2A is an FU-Remote frame (3) that the decoder refuses as Truncated(8, 7) (4.4).
+    run.note("4.4", "short-frame-counted-as-truncated", stats.get.exists(_.rejected.keys.exists(_.contains("Truncated"))),
+      s"rejected: ${stats.get.map(_.rejected)}")
+
+    // Calls over the lossy link (7.1): each ends cleanly, answered or timed out, and nearly all are answered.
+    val lossOn = poll(30.seconds)(run.out.contains("loss on"))
+    run.note("2", "lossy-link-started", lossOn, "the robot's link turned lossy")
+    if (!lossOn) return
+    var answered, timedOut = 0
+    def lossy[T](name: String)(call: => Future[T])(ok: T => Boolean): Unit =
+      Try(Await.result(call, 20.seconds)) match {
+        case scala.util.Success(v) =>
+          answered += 1
+          run.note("7.1", "call-under-loss-answered-correctly", ok(v), s"$name: $v")
+        case scala.util.Failure(e: RobotFailure.Timeout) =>
+          timedOut += 1
+          run.note("7.1", "call-under-loss-ends-cleanly", pass = true, s"$name: ${e.getMessage}")
+        case scala.util.Failure(e) =>
+          run.note("7.1", "call-under-loss-ends-cleanly", pass = false, s"$name: $e")
+      }
+    (1 to 8).foreach { i =>
+      lossy("system.ping")(client.call(id, "system", "ping")) { case Some(RpcValue.UInt(_)) => true; case _ => false }
+      lossy("system.battery")(client.call(id, "system", "battery")) { case Some(RpcValue.Number(v)) => v >= 10.5f && v <= 12.6f; case _ => false }
+      lossy("motion.getPosture")(client.call(id, "motion", "getPosture"))(_ == Some(RpcValue.Text("sit")))
+      lossy("motion.head")(client.head(id, 0.1 * (i % 3), 0.1))(_ => true)
+      lossy("motion.arms")(client.arms(id, 0.1, 0.2, 0.3, 0.1 * i))(_ => true)
+      lossy("motion.stop")(client.stop(id))(_ => true)
+    }
+    run.note("7.1", "calls-under-loss-answered", answered >= 40, s"$answered of 48 answered, $timedOut timed out")
+
+    // Stream data both ways under loss (11): gateway -> robot pings answered through the stream, complete and in order.
+    streamProbe.foreach { case (stream, _) =>
+      val base = 3000000000L + Random.nextInt(100000)
+      val ids = (0 until lossyStreamPings).map(base + _)
+      ids.foreach { cid =>
+        val frame = MessageContents.encodeFrame(MessageContents(id, rpcRequest = Some(Request("system", "ping", callId = Some(cid.toInt))))).toOption.get
+        stream ! StreamActor.Send(frame)
+      }
+      val all = poll(45.seconds)(pingAnswers.size >= ids.size && run.streamUptimes.size >= 12)
+      val got = pingAnswers.asScala.toVector.filter(ids.contains)
+      run.note("11", "gateway-to-robot-complete-and-in-order", got == ids,
+        s"answers to ${ids.size} stream pings, in arrival order: ${got.map(_ - base)}${if (all) "" else " (waited 45 s)"}")
+    }
+    run.note("2", "robot-stays-online", offline.isEmpty, s"offline events: ${offline.asScala.toVector}")
+    collecting.foreach(_ => ())
+
+    run.afterRun = reported => {
+      // The robot's stream payloads: every one delivered, once, in the order offered.
+      val offered = reported.find(_.key == ("11" -> "robot-stream-payloads")).map(_.detail).getOrElse("")
+        .split("[^0-9]+").filter(_.nonEmpty).map(_.toLong).toVector
+      val delivered = run.streamUptimes.asScala.toVector
+      run.note("11", "robot-to-gateway-complete-and-in-order", offered.nonEmpty && delivered == offered,
+        s"offered uptimeMs $offered, delivered $delivered")
+      // Hostile frames: the keep-alive each carries counts exactly when the document says it is tolerated.
+      val agents = run.snapshots.asScala.toVector.filter(_.agent.exists(_.startsWith("hostile-")))
+      reported.filter(_.check == "hostile-frame-sent").map(_.detail).collect { case HostileSent(c, verdict, bytes) => (c, verdict, bytes) }
+        .distinctBy(_._1).foreach { case (c, verdict, bytes) =>
+          val seen = agents.filter(_.agent.exists(_.startsWith(s"hostile-$c")))
+          val section = if (c.startsWith("gzip")) "4.3" else if (c.startsWith("truncated") || c == "oversize") "4.4" else "5"
+          if (verdict == "refused")
+            run.note(section, s"hostile-$c-refused", seen.isEmpty, s"published: ${seen.take(1)}; sent: ${bytes.take(300)}")
+          else {
+            val whole = seen.exists(s => s.bootId.contains(1) && s.teamId.contains(12) && s.batteryVoltage.isDefined && s.role.contains("striker"))
+            run.note(section, s"hostile-$c-tolerated", whole, s"published: ${seen.take(1)}; sent: ${bytes.take(300)}")
+          }
+        }
+      // Section 5: each malformed byte sequence reads as U+FFFD.
+      val utf8 = agents.flatMap(_.agent).filter(_.startsWith("hostile-invalid-utf8"))
+      run.note("5", "invalid-utf8-reads-as-replacement-character", utf8.contains("hostile-invalid-utf8-\uFFFD\uFFFD-end"),
+        s"agents published: ${utf8.distinct.map(_.map(ch => if (ch < 128) ch.toString else f"\\u${ch.toInt}%04X").mkString)}")
+    }
+  }
+
   "The conformance robot written from docs/protocol.md" must {
     "agree with the gateway in every section except the listed known disagreements, strictly and in compatibility mode" in {
       val python = ConformanceEnv.python() match {
@@ -382,14 +549,19 @@ class DocRobotConformanceSpec
       val compatAddress = ConformanceEnv.freeRobotAddress(Set(strictAddress))
       val gcAddresses = Seq(ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress)))
       val gcCompat = ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress) ++ gcAddresses)
+      val lossyAddress = ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress, gcCompat) ++ gcAddresses)
       val runs = Seq(
-        new RobotRun(Strict, strictAddress.split('.').last.toInt, strictAddress, python, addresses.robots) -> gcAddresses.head,
-        new RobotRun(Compat, compatAddress.split('.').last.toInt, compatAddress, python, addresses.robots) -> gcCompat
+        new RobotRun(Strict, strictAddress.split('.').last.toInt, strictAddress, python, addresses.robots) -> Some(gcAddresses.head),
+        new RobotRun(Compat, compatAddress.split('.').last.toInt, compatAddress, python, addresses.robots) -> Some(gcCompat),
+        new RobotRun(Lossy, lossyAddress.split('.').last.toInt, lossyAddress, python, addresses.robots, lossyArguments) -> None
       )
       runs.foreach(_._1.awaitReady())
       val client = Await.result(RobotClient.connect(system, middleware, "conformance", priority = 5), 15.seconds)
-      // Both robots at once, on threads of their own (every step blocks): the whole test stays well under two minutes.
-      val driving = runs.map { case (run, gc) => Future(drive(run, client, gateway, gc))(scala.concurrent.ExecutionContext.global) }
+      // All robots at once, on threads of their own (every step blocks): the whole test stays well under two minutes.
+      val driving = runs.map {
+        case (run, Some(gc)) => Future(drive(run, client, gateway, gc))(scala.concurrent.ExecutionContext.global)
+        case (run, None)     => Future(driveLossy(run, client, gateway))(scala.concurrent.ExecutionContext.global)
+      }
       driving.foreach(d => Await.result(d, 100.seconds))
       val problems = runs.flatMap { case (run, _) =>
         val findings = run.finish()
