@@ -218,7 +218,12 @@ object SimulatedRobot {
           val id = settings.firmware.robotId
           val host = settings.bindAddress.getAddress
           val fromSocket = context.messageAdapter[UdpLink.Event](FromSocket.apply)
-          val fromSender = context.messageAdapter[UdpLink.Event](FromSender.apply)
+          // Akka keeps one message adapter per message class, so the sending socket's events come through a relay.
+          val self = context.self
+          val fromSender = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { event =>
+            self ! FromSender(event)
+            Behaviors.same
+          }, "sending-socket-events")
           // The receive socket shares its port with a GameController listener on the same host (the demo binds
           // 0.0.0.0:3838 with SO_REUSEADDR); the more specific address still gets the robot's unicast datagrams.
           val receiveOptions = UdpLink.Options(reuseAddress = true, receiveBufferBytes = settings.receiveBufferBytes)
