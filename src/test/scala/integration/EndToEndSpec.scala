@@ -17,6 +17,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import apps.BallFollower
+import naogateway.testkit.TestLoopback
 import naogateway._
 import naogateway.sim._
 import naogateway.sim.network.LossyNetwork
@@ -77,7 +78,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
   private def spawnRobot(id: Int, to: InetSocketAddress = robotPort, firmware: FirmwareSettings => FirmwareSettings = identity)
       : ActorRef[SimulatedRobot.Command] = {
     val probe = gatewayNode.createTestProbe[SimulatedRobot.StartResult]()
-    gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to, faithfulLink = false), Some(probe.ref)),
+    gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to,
+      bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false), Some(probe.ref)),
       s"robot-$id")
     probe.receiveMessage(10.seconds) match {
       case SimulatedRobot.Started(_, ref, _) => ref
@@ -177,7 +179,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
     "get fast robot-offline failures when the link is lost, while the robot stops its interrupted walk itself" in {
       val network = LossyNetwork.start(seed = 4)
       try {
-        val proxy = network.addProxy(robotPort)
+        val proxy = network.addProxy(robotPort, TestLoopback.address())
         val sim = spawnRobot(14, to = proxy.clientSide)
         online(14)
         val app = connect(appNode(), "walker", 1)

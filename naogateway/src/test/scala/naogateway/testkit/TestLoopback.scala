@@ -25,17 +25,30 @@ object TestLoopback {
   /** A fresh loopback address whose `port` (the robot receive port by default) is free now. */
   def address(port: Int = RobotReceivePort): InetAddress = block(1, port)
 
-  /** `n` fresh consecutive loopback addresses (for a fleet), each with `port` free now; returns the first. */
+  /** `n` fresh consecutive loopback addresses (for a fleet: robot `i` at the first + `i`), each with `port` free now;
+    * returns the first.
+    */
   def block(n: Int, port: Int = RobotReceivePort): InetAddress = synchronized {
-    require(n >= 1 && n <= 254, s"a block holds 1 to 254 addresses, not $n")
+    require(n >= 1 && n <= 200 * 254, s"a block holds 1 to ${200 * 254} addresses, not $n")
     Iterator.continually {
-      // Within one third octet, so a fleet's addresses (first + index) never leave it.
-      if (next % 254 + n > 254) next = (next / 254 + 1) * 254
-      val hosts = (next until next + n).map(host)
-      next += n
+      val first =
+        if (n <= 254) {
+          // Within one third octet, so first + i is the allocator's own index + i.
+          if (next % 254 + n > 254) next = (next / 254 + 1) * 254
+          next
+        } else {
+          // Whole third octets from here: first + i runs through .255 and .0 too.
+          next = (next / 254 + 1) * 254
+          next
+        }
+      val hosts = (0 until n).map(i => plus(host(first), i))
+      next = if (n <= 254) first + n else first + ((n + 1) / 256 + 2) * 254
       hosts
     }.find(_.forall(free(_, port))).get.head
   }
+
+  private def plus(address: InetAddress, i: Int): InetAddress =
+    InetAddress.getByAddress(java.nio.ByteBuffer.allocate(4).putInt(java.nio.ByteBuffer.wrap(address.getAddress).getInt + i).array())
 
   /** A fresh address at the robot receive port, as a socket address. */
   def robotAt(port: Int = RobotReceivePort): InetSocketAddress = new InetSocketAddress(address(port), port)

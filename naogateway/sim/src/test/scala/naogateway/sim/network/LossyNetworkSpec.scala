@@ -255,7 +255,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         val arrived = gateway.receiveUpTo(10, 10.seconds)
         val expectedSources = proxies.zipWithIndex.map { case (p, i) => i -> p.upstream }.toMap
         arrived.map(r => numberOf(r) -> r.from).toMap shouldBe expectedSources
-        arrived.foreach(r => gateway.send(numbered(100 + numberOf(r)), r.from))
+        // Replies to each robot's receive port: its IP as the gateway saw it, at 3838.
+        arrived.foreach(r => gateway.send(numbered(100 + numberOf(r)), new InetSocketAddress(r.from.getAddress, TestLoopback.RobotReceivePort)))
         robots.zipWithIndex.foreach { case (robot, i) => robot.receive().map(numberOf) shouldBe Some(100 + i) }
       }
     }
