@@ -19,6 +19,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
+import naogateway.testkit.TestLoopback
 import naogateway.{Gateway, GatewaySettings, RobotActor, StreamActor}
 import robotmiddleware.{ActuatorGroup, MiddlewareSettings, RobotClient, RobotFailure, RobotInterface, RobotMiddleware}
 
@@ -89,11 +90,8 @@ object ConformanceEnv {
         case Line(section, check, pass, detail) => Finding(section, check, pass == "true", detail)
       }
 
-  /** A loopback address 127.0.0.x whose UDP 3838 is free now, other than `not`. */
-  def freeRobotAddress(not: Set[String]): String =
-    Iterator.continually(s"127.0.0.${60 + Random.nextInt(180)}").filterNot(not).find { a =>
-      Try { val s = new DatagramSocket(new InetSocketAddress(a, 3838)); s.close() }.isSuccess
-    }.get
+  /** A loopback address of its own whose UDP 3838 is free now (the shared test allocator: never handed out twice). */
+  def freeRobotAddress(): String = TestLoopback.address().getHostAddress
 }
 
 /** The gateway's configuration for the conformance run, the robot's modes and today's known disagreements. */
@@ -119,20 +117,12 @@ object DocRobotConformanceSpec {
   /**
    * Disagreements between the gateway and docs/protocol.md known today, per mode. Each must still be seen (the test
    * fails when one passes, so this list shrinks with every fix); anything failing that is not listed fails the test.
+   * None are left: section 2 (the destination rule, identity by IP) is what the gateway does, and 4.1 and 7.2 now
+   * say what it does.
    */
   val knownDisagreements: Map[Mode, Set[(String, String)]] = Map(
-    // §2: requests, option commands and stream segments go to the keep-alive's source port, never to 3838 ...
-    // so no call is answered and the gateway's stream ACKs never reach the robot's stream endpoint.
-    Strict -> Set("2" -> "gateway-sends-to-port-3838", "2" -> "calls-answered", "11.4" -> "data-segments-answered"),
-    // The compatibility mode works around §2 but still reports it, and reaches these:
-    Compat -> Set(
-      "2" -> "gateway-sends-to-port-3838",
-      // §4.1 says the gateway sends the legacy form by default; after a compact keep-alive it sends compact frames
-      // (00 2A 00 00 00 00 00 27 08 …), which §4.1 does not say.
-      "4.1" -> "gateway-sends-legacy-form",
-      // §7.2: at first contact no motion.stop precedes the first application call (after a restart one does).
-      "7.2" -> "first-command-is-motion-stop"
-    )
+    Strict -> Set.empty,
+    Compat -> Set.empty
   )
 }
 
@@ -374,13 +364,13 @@ class DocRobotConformanceSpec
         gateway ! Gateway.GetAddresses(probe.ref)
         probe.receiveMessage(10.seconds)
       }
-      val strictAddress = ConformanceEnv.freeRobotAddress(Set.empty)
-      val compatAddress = ConformanceEnv.freeRobotAddress(Set(strictAddress))
-      val gcAddresses = Seq(ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress)))
-      val gcCompat = ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress) ++ gcAddresses)
+      val strictAddress = ConformanceEnv.freeRobotAddress()
+      val compatAddress = ConformanceEnv.freeRobotAddress()
+      val gcStrict = ConformanceEnv.freeRobotAddress()
+      val gcCompat = ConformanceEnv.freeRobotAddress()
       val runs = Seq(
-        new RobotRun(Strict, strictAddress.split('.').last.toInt, strictAddress, python, addresses.robots) -> gcAddresses.head,
-        new RobotRun(Compat, compatAddress.split('.').last.toInt, compatAddress, python, addresses.robots) -> gcCompat
+        new RobotRun(Strict, 43, strictAddress, python, addresses.robots) -> gcStrict,
+        new RobotRun(Compat, 44, compatAddress, python, addresses.robots) -> gcCompat
       )
       runs.foreach(_._1.awaitReady())
       val client = Await.result(RobotClient.connect(system, middleware, "conformance", priority = 5), 15.seconds)
