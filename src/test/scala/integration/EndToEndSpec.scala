@@ -136,7 +136,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val (code, status, errors) = robotctl("status")
       withClue(errors) { code shouldBe 0 }
       val line = status.find(_.startsWith("17 ")).getOrElse(fail(status.mkString("\n")))
-      Seq("127.0.0.1:", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
+      // The robot at its own loopback address and receive port (docs/protocol.md section 2).
+      Seq(":3838 ", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
       robotctl("call", "17", "motion", "getPosture") shouldBe ((0, Vector("robot 17: motion.getPosture -> Text(sit)"), Vector.empty))
       robotctl("call", "4711", "motion", "getPosture") shouldBe ((1, Vector.empty, Vector("robotctl: no robot 4711 is known")))
       gatewayNode.stop(control)

@@ -255,7 +255,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.noResponse.expectNoMessage(200.millis)
     }
     "stop a robot that came back while its guard was still connecting, once the guard is ready" in {
-      val f = new Fixture(holdConnect = true)
+      // The robot is offline when the guard asks for its snapshot, so its snapshot says so.
+      val f = new Fixture(holdConnect = true, snapshotOnline = Some(false))
       val (app, _) = f.app("walker", 1)
       val robotEvents = createTestProbe[RobotEvent]()
       f.middleware ! RobotMiddleware.WatchEvents(robotEvents.ref)
