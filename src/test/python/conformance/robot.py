@@ -42,6 +42,8 @@ import time
 import zlib
 
 MAX_DATAGRAM = 1400
+# 4.1: how long a frame the robot sent may still be in flight when the gateway writes its answer.
+FORM_SLACK = 1.0
 OPERATION = 42
 FLAG_GZIP = 2
 
@@ -236,6 +238,9 @@ class Robot:
         self.hostile_at = float("inf")
         self.next_hostile = None
         self.first_session = True
+        # Requests other than probes in this session (7.2), and the forms of the frames sent lately (4.1).
+        self.session_requests = 0
+        self.sent_forms = []
         self.active_before_restart = None
         self.reenabled_after_restart = None
         self.restarts = 0
@@ -332,6 +337,11 @@ class Robot:
     # ----- sending -------------------------------------------------------------------------------------------
 
     def send_raw(self, data):
+        if data[:2] == b"\x00\x2a" and len(data) >= 8:
+            # 4.1: the gateway answers in the header form of the robot's latest frame.
+            now = time.monotonic()
+            self.sent_forms.append((now, "legacy" if data[4:8] == b"\x00\x00\x00\x00" else "compact"))
+            self.sent_forms = [f for f in self.sent_forms[:-1] if f[0] > now - FORM_SLACK] + self.sent_forms[-1:]
         self.send_sock.sendto(data, self.gateway)
 
     def send_message(self, message, form="legacy", via_stream=False):
@@ -510,10 +520,17 @@ class Robot:
             if name not in REPEATABLE and name != "heartbeat.probe":
                 self.report.check("7.1", "only-repeatable-calls-repeated", False,
                                   "%s arrived again %.3f s after a dropped copy; 7.1 repeats only %s" % (name, now - earlier[0], sorted(REPEATABLE)))
-        if self.first_session and not getattr(self, "first_request_seen", False) and name != "heartbeat.probe":
-            self.first_request_seen = True
-            self.report.check("7.2", "first-command-is-motion-stop", name == "motion.stop",
-                              "first request other than the probe at first contact: %s" % name)
+        if name != "heartbeat.probe" and self.session_requests == 0:
+            # 7.2: no motion.stop at first contact (it would overtake an application's first command); after a
+            # restart's silence, which takes the robot offline, the motion.stop comes first.
+            if self.first_session:
+                self.report.check("7.2", "no-motion-stop-at-first-contact", name != "motion.stop",
+                                  "first request other than the probe at first contact: %s" % name)
+            else:
+                self.report.check("7.2", "motion-stop-first-when-back-online", name == "motion.stop",
+                                  "first request other than the probe after restart %d: %s" % (self.restarts, name))
+        if name != "heartbeat.probe":
+            self.session_requests += 1
         try:
             result = self.dispatch(request, name, form, via_stream)
         except BadParams as e:
@@ -617,6 +634,7 @@ class Robot:
         self.reenabled_after_restart = None
         self.boot_id += 1
         self.first_session = False
+        self.session_requests = 0
         self.boot()
         # The module's start-up: nothing is received or sent for about 4 s (7.2, 12).
         self.silent_until = time.monotonic() + self.args.restart_silence
@@ -864,7 +882,12 @@ class Robot:
         except ValueError as e:
             self.report.check("4.4", "frame-valid", False, "%s: %s" % (e, hexs(data)))
             return
-        self.report.check("4.1", "gateway-sends-legacy-form", form == "legacy", "%s form: %s" % (form, hexs(data[:12])))
+        if not via_stream:
+            # 4.1: the form of the robot's latest frame (legacy before any). A frame the gateway wrote just before
+            # the robot's latest one arrived is in flight, so the forms of the last FORM_SLACK seconds count too.
+            allowed = set(f for _, f in self.sent_forms) or {"legacy"}
+            self.report.check("4.1", "gateway-sends-form-of-latest-frame", form in allowed,
+                              "%s form; the robot's latest frames: %s; bytes %s" % (form, sorted(allowed), hexs(data[:12])))
         self.report.check("6.1", "robot-id-is-addressed-robot", msg.robotID == self.args.robot_id,
                           "robotID %d" % msg.robotID)
         handled = False

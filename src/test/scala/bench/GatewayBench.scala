@@ -23,6 +23,7 @@ import akka.util.Timeout
 import com.typesafe.config.{Config, ConfigFactory}
 import org.slf4j.LoggerFactory
 
+import naogateway.testkit.TestLoopback
 import naogateway._
 import naogateway.proto.Status
 import naogateway.sim.network.{Impairment, LossyNetwork}
@@ -102,7 +103,7 @@ object GatewayBench extends Benchmark {
 
   private def roundTrips(): ListMap[String, Double] = {
     val rpc = withNodes("rtt") { (gw, sim) =>
-      sim.fleet(FleetSettings(gw.addresses.robots, Vector(1), faithfulLink = false))
+      sim.fleet(FleetSettings(gw.addresses.robots, Vector(1), faithfulLink = false, firstAddress = TestLoopback.address()))
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
       val connected = gw.connect(1)
       val ping = RpcCall("system", "ping", Vector.empty)
@@ -331,8 +332,8 @@ object GatewayBench extends Benchmark {
   private def detectionTrials(): Double = withNodes("detect") { (gw, sim) =>
     val network = LossyNetwork.start(seed = 7)
     try {
-      val proxy = network.addProxy(gw.addresses.robots)
-      sim.fleet(FleetSettings(proxy.clientSide, Vector(1), faithfulLink = false))
+      val proxy = network.addProxy(gw.addresses.robots, TestLoopback.address())
+      sim.fleet(FleetSettings(proxy.clientSide, Vector(1), faithfulLink = false, firstAddress = TestLoopback.address()))
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
       val random = new scala.util.Random(7)
       val times = (1 to DetectTrials).map { trial =>
@@ -358,8 +359,8 @@ object GatewayBench extends Benchmark {
     val network = LossyNetwork.start(seed = 20)
     try {
       val lossy = Impairment(loss = 0.2)
-      val proxy = network.addProxy(gw.addresses.robots, uplink = lossy, downlink = lossy)
-      sim.fleet(FleetSettings(proxy.clientSide, Vector(1), faithfulLink = false))
+      val proxy = network.addProxy(gw.addresses.robots, TestLoopback.address(), uplink = lossy, downlink = lossy)
+      sim.fleet(FleetSettings(proxy.clientSide, Vector(1), faithfulLink = false, firstAddress = TestLoopback.address()))
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
       val statusBefore = sim.sink.statusUpdates.get
       val end = LossHold.fromNow
@@ -410,7 +411,7 @@ object GatewayBench extends Benchmark {
         gw.subscribe(sim.sinkRef)
         val gatewayBase = usedHeapAfterGc()
         val ids = (1 to n).toVector
-        val handle = sim.fleet(FleetSettings(gw.addresses.robots, ids, faithfulLink = false, startTimeout = 90.seconds,
+        val handle = sim.fleet(FleetSettings(gw.addresses.robots, ids, faithfulLink = false, firstAddress = TestLoopback.block(n), startTimeout = 90.seconds,
           stopTimeout = 60.seconds))
         try {
           val online = mutable.Set.empty[Int]

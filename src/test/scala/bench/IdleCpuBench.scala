@@ -18,6 +18,7 @@ import akka.actor.typed.ActorSystem
 import akka.actor.typed.scaladsl.Behaviors
 import com.typesafe.config.ConfigFactory
 
+import naogateway.testkit.TestLoopback
 import naogateway.sim.{Fleet, FleetSettings}
 
 /**
@@ -122,7 +123,7 @@ object IdleCpuBench extends Benchmark {
     val system = ActorSystem[Nothing](Behaviors.empty, "idle-bench-robots", config)
     try {
       val target = sink.getLocalAddress.asInstanceOf[InetSocketAddress]
-      val fleet = Await.result(Fleet.start(system, FleetSettings(target, (1 to SimRobots).toVector)), 60.seconds)
+      val fleet = Await.result(Fleet.start(system, FleetSettings(target, (1 to SimRobots).toVector, firstAddress = TestLoopback.block(SimRobots))), 60.seconds)
       progress(s"${fleet.robots.size} simulated robots up; settling ${SimSettle.toSeconds} s, then measuring ${Window.toSeconds} s")
       Thread.sleep(SimSettle.toMillis)
       val os = ManagementFactory.getOperatingSystemMXBean.asInstanceOf[com.sun.management.OperatingSystemMXBean]

@@ -17,6 +17,7 @@ import com.typesafe.config.ConfigFactory
 
 import apps.RobotCtl
 import apps.control.{ControlServer, ControlSettings, FleetStub}
+import naogateway.testkit.TestLoopback
 import naogateway.sim.{Fleet, FleetSettings}
 import naogateway.{Gateway, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
@@ -58,7 +59,7 @@ object RobotCtlBench extends Benchmark {
       val thousand = addressOf(system.systemActorOf(ControlServer.withInterface(new FleetStub(1000), settings), "control-1000"))
       val robots = Await.result(gateway.ask[Gateway.Addresses](Gateway.GetAddresses(_)), 30.seconds).robots
       Await.result(Fleet.start(system, FleetSettings(new InetSocketAddress("127.0.0.1", robots.getPort), Vector(1, 2, 3),
-        faithfulLink = false)), 60.seconds)
+        faithfulLink = false, firstAddress = TestLoopback.block(3))), 60.seconds)
       awaitOnline(demo, 3)
 
       val floorPort = { val s = new java.net.ServerSocket(0); try s.getLocalPort finally s.close() }

@@ -16,6 +16,7 @@ import akka.actor.typed.ActorSystem
 import akka.actor.typed.scaladsl.Behaviors
 import com.typesafe.config.ConfigFactory
 
+import naogateway.testkit.TestLoopback
 import naogateway.sim.network.{Direction, Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
 
@@ -81,8 +82,8 @@ object Soak extends Benchmark {
     val robotAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, robotPort)
     val gameControllerAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, gameControllerPort)
     try {
-      val proxies = Robots.map(id => id -> network.addProxy(robotAddress)).toMap
-      val fleet = Await.result(Fleet.start(system, FleetSettings(robotAddress, Robots,
+      val proxies = Robots.map(id => id -> network.addProxy(robotAddress, TestLoopback.address())).toMap
+      val fleet = Await.result(Fleet.start(system, FleetSettings(robotAddress, Robots, firstAddress = TestLoopback.block(Robots.size),
         customize = s => s.copy(gateway = proxies(s.firmware.robotId).clientSide))), 60.seconds)
       val gameController = ActorSystem(SimulatedGameController(SimulatedGameControllerSettings(gameControllerAddress)), "soak-gc",
         ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))

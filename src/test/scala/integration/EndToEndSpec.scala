@@ -19,6 +19,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import apps.BallFollower
+import naogateway.testkit.TestLoopback
 import naogateway._
 import naogateway.sim._
 import naogateway.sim.network.LossyNetwork
@@ -79,7 +80,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
   private def spawnRobot(id: Int, to: InetSocketAddress = robotPort, firmware: FirmwareSettings => FirmwareSettings = identity)
       : ActorRef[SimulatedRobot.Command] = {
     val probe = gatewayNode.createTestProbe[SimulatedRobot.StartResult]()
-    gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to, faithfulLink = false), Some(probe.ref)),
+    gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to,
+      bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false), Some(probe.ref)),
       s"robot-$id")
     probe.receiveMessage(10.seconds) match {
       case SimulatedRobot.Started(_, ref, _) => ref
@@ -136,7 +138,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val (code, status, errors) = robotctl("status")
       withClue(errors) { code shouldBe 0 }
       val line = status.find(_.startsWith("17 ")).getOrElse(fail(status.mkString("\n")))
-      Seq("127.0.0.1:", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
+      // The robot at its own loopback address and receive port (docs/protocol.md section 2).
+      Seq(":3838 ", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
       robotctl("call", "17", "motion", "getPosture") shouldBe ((0, Vector("robot 17: motion.getPosture -> Text(sit)"), Vector.empty))
       robotctl("call", "4711", "motion", "getPosture") shouldBe ((1, Vector.empty, Vector("robotctl: no robot 4711 is known")))
       gatewayNode.stop(control)
@@ -179,7 +182,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
     "get fast robot-offline failures when the link is lost, while the robot stops its interrupted walk itself" in {
       val network = LossyNetwork.start(seed = 4)
       try {
-        val proxy = network.addProxy(robotPort)
+        val proxy = network.addProxy(robotPort, TestLoopback.address())
         val sim = spawnRobot(14, to = proxy.clientSide)
         online(14)
         val app = connect(appNode(), "walker", 1)

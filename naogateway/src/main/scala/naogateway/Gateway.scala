@@ -1,6 +1,6 @@
 package naogateway
 
-import java.net.InetSocketAddress
+import java.net.{InetAddress, InetSocketAddress}
 import java.util.concurrent.ConcurrentHashMap
 import java.util.concurrent.atomic.{AtomicLong, AtomicReference}
 
@@ -30,7 +30,7 @@ object Gateway {
   /** Answers with the robot actor of `robotId`, if the robot is known. */
   final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]]) extends Command
 
-  /** Lets robot `robotId` be re-bound to the address its next datagram comes from. */
+  /** Lets robot `robotId` be re-bound to the IP address its next datagram comes from (a robot that moved host). */
   final case class AllowRebind(robotId: Int) extends Command
 
   /** Sends every `GatewayEvent` to `subscriber` until it stops (robot events come straight from the robot actors). */
@@ -99,8 +99,9 @@ object Gateway {
   /** A datagram robot as the port's reader reaches it: its actor and the backlog of what the reader handed it. */
   private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog)
 
-  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, heard: Boolean,
-      zeromq: Boolean, backlog: Backlog)
+  /** A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is. */
+  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
+      backlog: Backlog)
 
   /** The gateway with `settings`. */
   def apply(settings: GatewaySettings): Behavior[Command] =
@@ -170,7 +171,7 @@ object Gateway {
         if (port.send(bytes, relay)) relayed += 1
       }
       val table = routes.get
-      outbox ! Outbox.Inbound(table.byAddress.get(from).fold(-1)(_.robotId), bytes.length)
+      outbox ! Outbox.Inbound(table.byAddress.get(from.getAddress).fold(-1)(_.robotId), bytes.length)
       Routing.decide(table, bytes, from) match {
         case Routing.ToRobot(route, header, contents, size) =>
           deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
@@ -202,7 +203,8 @@ object Gateway {
     private val gatewayBacklog = new Backlog(GatewayBacklog)
     private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections)
     private var byId = Map.empty[Int, Entry]
-    private var byAddress = Map.empty[InetSocketAddress, Int]
+    // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
+    private var byAddress = Map.empty[InetAddress, Int]
     private var subscribers = Set.empty[ActorRef[GatewayEvent]]
     private var rebindable = Set.empty[Int]
     private var gcPackets = 0L
@@ -238,10 +240,10 @@ object Gateway {
       Behaviors.same
     }
 
-    /** The routing table the reader uses from now on: every datagram robot at its bound address. */
+    /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
       reader.routes.set(Routing.Table.of(byId.collect {
-        case (id, e) if !e.zeromq => Routing.Route(id, e.address, Inlet(e.actor, e.backlog))
+        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog))
       }))
 
     private def spawnRobot(robotId: Int, address: InetSocketAddress, heard: Boolean): Entry = {
@@ -253,9 +255,9 @@ object Gateway {
         RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId))
-      val entry = Entry(actor, address, heard, zeromq = false, backlog)
+      val entry = Entry(actor, address, zeromq = false, backlog)
       byId = byId.updated(robotId, entry)
-      byAddress = byAddress.updated(address, robotId)
+      byAddress = byAddress.updated(address.getAddress, robotId)
       publishRoutes()
       entry
     }
@@ -274,7 +276,7 @@ object Gateway {
         RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robot.robotId))
-      byId = byId.updated(robot.robotId, Entry(actor, robot.address, heard = false, zeromq = true, backlog))
+      byId = byId.updated(robot.robotId, Entry(actor, robot.address, zeromq = true, backlog))
     }
 
     private def reject(reason: String, from: InetSocketAddress): Unit = rejections.count(reason, from)
@@ -373,15 +375,19 @@ object Gateway {
           replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted)
           Behaviors.same
         case RobotStopped(robotId) =>
-          byId.get(robotId).filterNot(_.zeromq).foreach(e => byAddress -= e.address)
+          byId.get(robotId).filterNot(_.zeromq).foreach(e => byAddress -= e.address.getAddress)
           byId -= robotId
           publishRoutes()
           Behaviors.same
       }.receiveSignal { case (_, PostStop) => closePort() }
 
-    /** Decides a frame the reader's table could not place, binding a robot id to the address it first came from. */
+    /**
+     * Decides a frame the reader's table could not place, binding a robot id to the IP address it first came from.
+     * Everything sent to the robot goes to that IP at the robot's receive port, never to the frame's source port.
+     */
     private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress): Unit = {
       val robotId = contents.robotId
+      val ip = from.getAddress
       def deliver(entry: Entry): Unit = {
         entry.backlog.add()
         entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
@@ -389,25 +395,28 @@ object Gateway {
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>
           rejectFor(Some(robotId), s"robot id $robotId belongs to a ZeroMQ robot", from)
-        // The reader saw the table before the gateway bound this address (discovery or re-bind in between).
-        case Some(entry) if entry.address == from => deliver(entry)
-        case Some(entry) if rebindable(robotId) || (!entry.heard && entry.address.getAddress == from.getAddress) =>
-          // An explicit re-bind, or a configured robot speaking for the first time from its own host.
+        // The reader saw the table before the gateway bound this IP (discovery or re-bind in between).
+        case Some(entry) if entry.address.getAddress == ip => deliver(entry)
+        case Some(entry) if rebindable(robotId) && !byAddress.contains(ip) =>
+          // An explicit re-bind: the robot moved to another host. It keeps its receive port.
           rebindable -= robotId
-          byAddress = byAddress - entry.address + (from -> robotId)
-          val moved = entry.copy(address = from, heard = true)
+          val to = new InetSocketAddress(ip, entry.address.getPort)
+          byAddress = byAddress - entry.address.getAddress + (ip -> robotId)
+          val moved = entry.copy(address = to)
           byId = byId.updated(robotId, moved)
           publishRoutes()
-          entry.actor ! RobotActor.Rebound(from)
+          entry.actor ! RobotActor.Rebound(to)
           deliver(moved)
         case Some(entry) =>
-          rejectFor(Some(robotId), s"robot id $robotId claimed from another address than ${entry.address}", from)
+          rejectFor(Some(robotId), s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}", from)
         case None =>
-          byAddress.get(from) match {
+          byAddress.get(ip) match {
             case Some(other) => rejectFor(Some(other), s"address of robot $other claims robot id $robotId", from)
             case None if settings.discoverFromKeepAlive && contents.status.isDefined =>
-              context.log.info("Discovered robot [{}] at {}", robotId, from)
-              deliver(spawnRobot(robotId, from, heard = true))
+              // The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port.
+              val at = new InetSocketAddress(ip, settings.robotReceivePort)
+              context.log.info("Discovered robot [{}] at {} (sending from {})", robotId, at, from)
+              deliver(spawnRobot(robotId, at, heard = true))
             case None => reject("frame from an unknown robot that is not a keep-alive", from)
           }
       }

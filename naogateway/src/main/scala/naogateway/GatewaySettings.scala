@@ -11,7 +11,7 @@ import com.typesafe.config.Config
 
 import naogateway.wire.stream.StreamSettings
 
-/** A robot known from configuration: its id and where it receives. */
+/** A robot known from configuration: its id and where it receives (its IP, which identifies it, at its receive port). */
 final case class StaticRobot(robotId: Int, address: InetSocketAddress)
 
 /** Liveness settings of the heartbeat. */
@@ -111,6 +111,8 @@ final case class GatewaySettings(
   require(!(competition && gameControllerEnabled && !gameControllerTrusted.configured),
     "competition mode needs game-controller.trusted-sources (the GameController's address or subnet, e.g. " +
       "[\"10.0.0.0/24\"]; env NAOGATEWAY_GAMECONTROLLER_TRUSTED): otherwise anyone on the WiFi could start or end the game")
+  // A robot is known by its IP address (the gateway's routing), so two robots cannot share one.
+  require(robots.map(_.address.getAddress).distinct.size == robots.size, "robots: every robot address may appear only once")
   require(robots.map(_.robotId).intersect(zeromq.robots.map(_.robotId)).isEmpty,
     "a robot id may be a UDP robot (robots) or a ZeroMQ robot (zeromq.robots), not both")
 }
@@ -154,7 +156,12 @@ object GatewaySettings {
         if (relay.getBoolean("enabled")) Some(new InetSocketAddress(relay.getString("address"), relay.getInt("port")))
         else None,
       robots = c.getConfigList("robots").asScala.toVector.map { r =>
-        val port = if (r.hasPath("port")) r.getInt("port") else link.getInt("robot-receive-port")
+        // `port` is the older name of `receive-port`; both mean where the robot listens, never where it sends from.
+        val port =
+          if (r.hasPath("receive-port")) r.getInt("receive-port")
+          else if (r.hasPath("port")) r.getInt("port")
+          else link.getInt("robot-receive-port")
+        require(port > 0 && port <= 65535, s"robots: robot ${r.getInt("id")}: receive-port $port is not a UDP port")
         StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port))
       },
       discoverFromKeepAlive = c.getBoolean("discover-from-keep-alive"),

@@ -28,7 +28,7 @@ object RobotActor {
   /** A datagram from this robot's address was refused, with the reason. */
   final case class DatagramRejected(reason: String) extends Command
 
-  /** The robot was re-bound to a new address. */
+  /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
   final case class Rebound(address: InetSocketAddress) extends Command
 
   /** Answers with the children's refs once the robot is reachable (probing it first if needed). */

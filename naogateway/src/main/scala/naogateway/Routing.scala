@@ -1,6 +1,6 @@
 package naogateway
 
-import java.net.InetSocketAddress
+import java.net.{InetAddress, InetSocketAddress}
 
 import naogateway.wire._
 
@@ -8,14 +8,18 @@ import naogateway.wire._
  * Where a datagram on the robot port goes, decided without actors: the robot port's reader applies [[Routing.decide]]
  * to the table the gateway last published. The gateway alone writes the table and alone decides what the table cannot
  * (discovery, re-binding, conflicting claims); the reader hands those frames to it.
+ *
+ * A robot is known by its IP address, not by IP and port: the GS1500M sends from a client connection whose source port
+ * changes whenever the module reconnects, while it receives on its own port (docs/protocol.md section 2), so the
+ * source port says nothing about the robot.
  */
 object Routing {
 
-  /** Robot `robotId`, bound to `address`, reached through `target`. */
-  final case class Route[+A](robotId: Int, address: InetSocketAddress, target: A)
+  /** Robot `robotId`, bound to the IP address `address`, reached through `target`. */
+  final case class Route[+A](robotId: Int, address: InetAddress, target: A)
 
-  /** The datagram robots by id and by bound address (ZeroMQ robots are not in it); immutable, replaced whole. */
-  final case class Table[+A](byId: Map[Int, Route[A]], byAddress: Map[InetSocketAddress, Route[A]])
+  /** The datagram robots by id and by bound IP address (ZeroMQ robots are not in it); immutable, replaced whole. */
+  final case class Table[+A](byId: Map[Int, Route[A]], byAddress: Map[InetAddress, Route[A]])
 
   /** Building tables. */
   object Table {
@@ -31,10 +35,10 @@ object Routing {
   /** What becomes of one datagram. */
   sealed trait Decision[+A] extends Product with Serializable
 
-  /** A frame from robot `route`'s bound address, carrying its id: for that robot. */
+  /** A frame from robot `route`'s bound IP address (any source port), carrying its id: for that robot. */
   final case class ToRobot[A](route: Route[A], header: FrameHeader, contents: MessageContents, size: Int) extends Decision[A]
 
-  /** A secure-stream segment from robot `route`'s bound address. */
+  /** A secure-stream segment from robot `route`'s bound IP address (any source port). */
   final case class SegmentToRobot[A](route: Route[A], bytes: Array[Byte]) extends Decision[A]
 
   /** A frame the table cannot place (an id not bound here, or bound to another address): the gateway decides. */
@@ -46,13 +50,13 @@ object Routing {
 
   /** The decision for `bytes` from `from` under `table`; total: bad bytes give [[Refused]], never an exception. */
   def decide[A](table: Table[A], bytes: Array[Byte], from: InetSocketAddress): Decision[A] = {
-    def sender = table.byAddress.get(from)
+    def sender = table.byAddress.get(from.getAddress)
     Datagram.classify(bytes) match {
       case Datagram.FuRemoteFrame(_) =>
         MessageContents.decodeFrame(bytes) match {
           case Right((header, contents)) =>
             table.byId.get(contents.robotId) match {
-              case Some(route) if route.address == from => ToRobot(route, header, contents, bytes.length)
+              case Some(route) if route.address == from.getAddress => ToRobot(route, header, contents, bytes.length)
               case _                                    => ToGateway(header, contents, bytes.length, from)
             }
           case Left(error) => Refused(s"bad frame: ${error.productPrefix}", sender)

@@ -10,6 +10,7 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
+import naogateway.testkit.TestLoopback
 import naogateway._
 import naogateway.integration.GatewayFixture
 import naogateway.sim.network.{Impairment, LossyNetwork}
@@ -49,7 +50,7 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       val network = LossyNetwork.start(seed = 11)
       try {
         val lossy = Impairment(loss = 0.1)
-        val proxy = network.addProxy(f.addresses.robots, uplink = lossy, downlink = lossy)
+        val proxy = network.addProxy(f.addresses.robots, TestLoopback.address(), uplink = lossy, downlink = lossy)
         val (robot, _) = f.robot(21, to = proxy.clientSide)
         f.awaitEvent(Patience) { case RobotOnline(21, _) => () }
         val middleware = spawn(RobotMiddleware(f.gateway, settings))

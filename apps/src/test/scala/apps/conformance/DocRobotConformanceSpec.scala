@@ -23,6 +23,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
+import naogateway.testkit.TestLoopback
 import naogateway.{Gateway, GatewaySettings, LinkStats, RobotActor, RobotOffline, RobotSnapshot, StreamActor}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
@@ -93,11 +94,8 @@ object ConformanceEnv {
         case Line(section, check, pass, detail) => Finding(section, check, pass == "true", detail)
       }
 
-  /** A loopback address 127.0.0.x whose UDP 3838 is free now, other than `not`. */
-  def freeRobotAddress(not: Set[String]): String =
-    Iterator.continually(s"127.0.0.${60 + Random.nextInt(180)}").filterNot(not).find { a =>
-      Try { val s = new DatagramSocket(new InetSocketAddress(a, 3838)); s.close() }.isSuccess
-    }.get
+  /** A loopback address of its own whose UDP 3838 is free now (the shared test allocator: never handed out twice). */
+  def freeRobotAddress(): String = TestLoopback.address().getHostAddress
 }
 
 /** The gateway's configuration for the conformance run, the robot's modes and today's known disagreements. */
@@ -139,23 +137,13 @@ object DocRobotConformanceSpec {
   /**
    * Disagreements between the gateway and docs/protocol.md known today, per mode. Each must still be seen (the test
    * fails when one passes, so this list shrinks with every fix); anything failing that is not listed fails the test.
+   * None are left: section 2 (the destination rule, identity by IP) is what the gateway does, and 4.1 and 7.2 now
+   * say what it does.
    */
   val knownDisagreements: Map[Mode, Set[(String, String)]] = Map(
-    // §2: requests, option commands and stream segments go to the keep-alive's source port, never to 3838 ...
-    // so no call is answered and the gateway's stream ACKs never reach the robot's stream endpoint.
-    Strict -> Set("2" -> "gateway-sends-to-port-3838", "2" -> "calls-answered", "11.4" -> "data-segments-answered"),
-    // The compatibility mode works around §2 but still reports it, and reaches these:
-    Compat -> Set(
-      "2" -> "gateway-sends-to-port-3838",
-      // §4.1 says the gateway sends the legacy form by default; after a compact keep-alive it sends compact frames
-      // (00 2A 00 00 00 00 00 27 08 …), which §4.1 does not say.
-      "4.1" -> "gateway-sends-legacy-form",
-      // §7.2: at first contact no motion.stop precedes the first application call (after a restart one does).
-      "7.2" -> "first-command-is-motion-stop"
-    ),
+    Strict -> Set.empty,
+    Compat -> Set.empty,
     Lossy -> Set(
-      "2" -> "gateway-sends-to-port-3838",
-      "7.2" -> "first-command-is-motion-stop",
       // §3 / §4.4: the 7-byte datagram 00 2A 00 00 00 00 00 is an FU-Remote frame the decoder refuses as Truncated(8, 7);
       // the gateway refuses it (agreed) but counts it as "unclassifiable: datagram of 7 bytes is too short".
       "4.4" -> "short-frame-counted-as-truncated"
@@ -311,17 +299,18 @@ class DocRobotConformanceSpec
     step("7.4", "walk-with-two-parameters")(client.call(id, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f)))(
       robotError("bad parameters: "))
     step("7.4", "unknown-posture")(client.call(id, "motion", "posture", RpcValue.Text("fly")))(robotError("bad parameters: "))
+    step("7.2", "posture-answers-when-reached")(client.posture(id, Posture.Stand))(_ == Right(Posture.Stand))
     if (answered) {
       // Alone, a posture call is answered when the motion has ended (crouch takes about 0.6 s).
       val started = System.nanoTime()
       step("7.2", "posture-answers-when-reached")(client.posture(id, Posture.Crouch))(r =>
         r == Right(Posture.Crouch) && (System.nanoTime() - started).nanos >= 400.millis)
-      // A second one during a motion is refused by the robot; the gateway itself hands the first call's slot to the
-      // second one (the first ends as superseded), so the harness waits for the robot to reach the first target.
+      // A second one during a motion is refused by the robot ("busy: moving", 7.4); the first keeps its answer, given
+      // when the robot has reached the first target (the gateway never supersedes a posture once sent).
       val standing = client.posture(id, Posture.Stand)
       Thread.sleep(300)
       step("7.4", "posture-during-posture")(client.call(id, "motion", "posture", RpcValue.Text("sit")))(robotError("busy: moving"))
-      await(standing)
+      step("7.2", "posture-answers-when-reached-despite-a-second")(standing)(_ == Right(Posture.Stand))
       val stood = poll(10.seconds)(await(client.call(id, "motion", "getPosture"), 5.seconds) == Right(Some(RpcValue.Text("stand"))))
       run.note("7.2", "posture-reaches-target", stood, "getPosture after motion.posture(stand)")
     }
@@ -545,15 +534,15 @@ class DocRobotConformanceSpec
         gateway ! Gateway.GetAddresses(probe.ref)
         probe.receiveMessage(10.seconds)
       }
-      val strictAddress = ConformanceEnv.freeRobotAddress(Set.empty)
-      val compatAddress = ConformanceEnv.freeRobotAddress(Set(strictAddress))
-      val gcAddresses = Seq(ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress)))
-      val gcCompat = ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress) ++ gcAddresses)
-      val lossyAddress = ConformanceEnv.freeRobotAddress(Set(strictAddress, compatAddress, gcCompat) ++ gcAddresses)
+      val strictAddress = ConformanceEnv.freeRobotAddress()
+      val compatAddress = ConformanceEnv.freeRobotAddress()
+      val gcStrict = ConformanceEnv.freeRobotAddress()
+      val gcCompat = ConformanceEnv.freeRobotAddress()
+      val lossyAddress = ConformanceEnv.freeRobotAddress()
       val runs = Seq(
-        new RobotRun(Strict, strictAddress.split('.').last.toInt, strictAddress, python, addresses.robots) -> Some(gcAddresses.head),
-        new RobotRun(Compat, compatAddress.split('.').last.toInt, compatAddress, python, addresses.robots) -> Some(gcCompat),
-        new RobotRun(Lossy, lossyAddress.split('.').last.toInt, lossyAddress, python, addresses.robots, lossyArguments) -> None
+        new RobotRun(Strict, 43, strictAddress, python, addresses.robots) -> Some(gcStrict),
+        new RobotRun(Compat, 44, compatAddress, python, addresses.robots) -> Some(gcCompat),
+        new RobotRun(Lossy, 45, lossyAddress, python, addresses.robots, lossyArguments) -> None
       )
       runs.foreach(_._1.awaitReady())
       val client = Await.result(RobotClient.connect(system, middleware, "conformance", priority = 5), 15.seconds)

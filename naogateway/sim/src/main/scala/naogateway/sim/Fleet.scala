@@ -16,7 +16,7 @@ import akka.util.Timeout
 
 import naogateway.wire.stream.StreamSettings
 
-/** One robot of a fleet: its id, where it receives, and its actor. */
+/** One robot of a fleet: its id, where it receives (its own IP at the receive port), and its actor. */
 final case class FleetRobot(robotId: Int, address: InetSocketAddress, robot: ActorRef[SimulatedRobot.Command])
 
 /** Settings of a fleet of simulated robots of one team, all sending to one gateway.
@@ -24,7 +24,10 @@ final case class FleetRobot(robotId: Int, address: InetSocketAddress, robot: Act
   * @param gateway the gateway's robot port, where every robot sends keep-alives and debug output
   * @param robotIds distinct robot ids; the first robot is the keeper
   * @param faithfulLink each robot's datagrams pass the GS1500M and CM-530 models; switch off for hundreds of robots
-  * @param bindHost the host every robot's socket binds to, each on a port the operating system picks
+  * @param firstAddress the IP address of the fleet's first robot; the `i`-th robot has `firstAddress + i`, so every
+  *   robot is a host of its own (on loopback: Linux routes all of 127.0.0.0/8), as a team's robots are
+  * @param receivePort where each robot receives on its own address (3838, docs/protocol.md section 2); each sends
+  *   from a port the operating system picks
   * @param spreadKeepAlives spread the robots' keep-alive phases over one interval, as real robots switched on one by
   *   one would be, instead of every robot sending in the same instant
   * @param customize a last change to each robot's settings (debug timings, battery, stream hook, …)
@@ -35,7 +38,8 @@ final case class FleetSettings(
     teamId: Int = 1,
     faithfulLink: Boolean = true,
     timeScale: Double = SimulatedRobotSettings.DefaultTimeScale,
-    bindHost: InetAddress = InetAddress.getLoopbackAddress,
+    firstAddress: InetAddress = FleetSettings.DemoFirstAddress,
+    receivePort: Int = SimulatedRobot.ReceivePort,
     seed: Long = 1L,
     spreadKeepAlives: Boolean = true,
     startTimeout: FiniteDuration = 30.seconds,
@@ -46,6 +50,13 @@ final case class FleetSettings(
   require(robotIds.nonEmpty, "a fleet needs at least one robot")
   require(robotIds.distinct.size == robotIds.size, s"robot ids must be distinct: ${robotIds.diff(robotIds.distinct)}")
   require(robotIds.forall(_ >= 0), "robot ids must not be negative")
+  require(firstAddress.getAddress.length == 4, s"firstAddress $firstAddress is not an IPv4 address")
+
+  /** The IP address of the fleet's `index`-th robot: `firstAddress + index`. */
+  def addressOf(index: Int): InetAddress = {
+    val first = java.nio.ByteBuffer.wrap(firstAddress.getAddress).getInt
+    InetAddress.getByAddress(java.nio.ByteBuffer.allocate(4).putInt(first + index).array())
+  }
 
   /** These settings with every robot taking part in the secure stream (see [[SimulatedRobotSettings.withStream]]),
     * after whatever `customize` already does.
@@ -56,6 +67,11 @@ final case class FleetSettings(
 
 /** Shorthands for [[FleetSettings]]. */
 object FleetSettings {
+
+  /** The demo's first robot address, 127.0.0.11: robots 127.0.0.11, .12, ... stay clear of 127.0.0.1, where the
+    * gateway listens.
+    */
+  val DemoFirstAddress: InetAddress = InetAddress.getByAddress(Array[Byte](127, 0, 0, 11))
 
   /** Robots 1 to `n`. */
   def ofSize(n: Int, gateway: InetSocketAddress): FleetSettings = {
@@ -137,7 +153,8 @@ object Fleet {
         SimulatedRobotSettings(
           firmware = firmware,
           gateway = settings.gateway,
-          bindAddress = new InetSocketAddress(settings.bindHost, 0),
+          bindAddress = new InetSocketAddress(settings.addressOf(index), 0),
+          receivePort = settings.receivePort,
           faithfulLink = settings.faithfulLink,
           timeScale = settings.timeScale,
           seed = settings.seed * 1000003L + id,

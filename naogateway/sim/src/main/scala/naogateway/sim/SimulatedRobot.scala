@@ -18,7 +18,10 @@ import naogateway.wire.stream.StreamSettings
   * @param firmware the simulated CM-530 firmware (robot id, team, role, timings, battery, scene, …)
   * @param gateway where keep-alives, debug output and secure-stream segments go (the gateway's robot port; 11011 in
   *   production)
-  * @param bindAddress the robot's own socket, where requests, GameController packets and segments arrive
+  * @param bindAddress the robot's own IP address and the port it sends from (0: the operating system picks one, as
+  *   the GS1500M's client connection gets a new one whenever it connects)
+  * @param receivePort where the robot receives on its own IP address: requests, GameController packets and segments
+  *   arrive at `bindAddress`'s IP on this port (3838, docs/protocol.md section 2; 0 lets the system pick one)
   * @param faithfulLink `true`: every datagram passes the GS1500M module and CM-530 models ([[FaithfulLink]]);
   *   `false`: datagrams go straight between socket and firmware, the cheap mode for big fleets
   * @param timeScale multiplies the modelled module and CM-530 durations (1.0 = the measured times)
@@ -36,6 +39,7 @@ final case class SimulatedRobotSettings(
     firmware: FirmwareSettings,
     gateway: InetSocketAddress,
     bindAddress: InetSocketAddress = SimulatedRobotSettings.AnyLoopbackPort,
+    receivePort: Int = SimulatedRobot.ReceivePort,
     faithfulLink: Boolean = true,
     timeScale: Double = SimulatedRobotSettings.DefaultTimeScale,
     resetBootDelay: FiniteDuration = SimulatedRobot.ModuleBootDelay,
@@ -50,6 +54,7 @@ final case class SimulatedRobotSettings(
   require(resetBootDelay >= Duration.Zero, "resetBootDelay must not be negative")
   require(receiveBufferBytes > 0, "receiveBufferBytes must be positive")
   require(keepAlivePhase >= Duration.Zero, "keepAlivePhase must not be negative")
+  require(receivePort >= 0 && receivePort <= 65535, s"receivePort $receivePort is not a UDP port")
 
   /** These settings with the robot taking part in the secure stream: a fresh [[SecureStreamRobotStream]] with
     * `settings` at every boot (default: the thesis firmware's window 1, sequence numbers 0..20).
@@ -61,7 +66,7 @@ final case class SimulatedRobotSettings(
 /** Defaults of [[SimulatedRobotSettings]]. */
 object SimulatedRobotSettings {
 
-  /** Port 0 on 127.0.0.1: the operating system picks a free port. */
+  /** Port 0 on 127.0.0.1: the operating system picks a free port (to send from; it receives on 3838 there). */
   val AnyLoopbackPort: InetSocketAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, 0)
 
   /** Modelled CM-530 and module times at 5 %: fast enough for tests, and the model still shapes every datagram. */
@@ -71,14 +76,20 @@ object SimulatedRobotSettings {
   val DefaultReceiveBufferBytes: Int = 256 * 1024
 }
 
-/** What a simulated robot counted on its socket, over its whole life (power cycles included). */
+/** What a simulated robot counted on its sockets, over its whole life (power cycles included).
+  *
+  * @param received datagrams that arrived at the receive socket (its IP at the receive port)
+  * @param ignoredAtSendingSocket datagrams that arrived at the sending socket instead: the module's client connection
+  *   passes nothing to the CM-530, so they are counted here and never acted on
+  */
 final case class RobotStats(
     received: Long = 0,
     sent: Long = 0,
     droppedWhileOff: Long = 0,
     streamSegments: Long = 0,
     oversizeDropped: Long = 0,
-    powerCycles: Long = 0
+    powerCycles: Long = 0,
+    ignoredAtSendingSocket: Long = 0
 )
 
 /** One call as the simulated robot's firmware read it, at `atNanos` on the robot's clock (since its start). */
@@ -89,8 +100,10 @@ final case class ReceivedCall(atNanos: Long, call: RpcCall)
   * @param online `false` while the robot is powered off or its module boots (it neither sends nor answers)
   * @param onlineAgainIn while offline, the time left until the module answers again
   * @param uptimeMillis since the last power-up (or reset)
+  * @param address where the robot receives (its IP at the receive port)
   * @param module stats of the GS1500M model since the last power-up (`None` without the faithful link)
   * @param cpu stats of the CM-530 main loop since the last power-up (`None` without the faithful link)
+  * @param sendingFrom where the robot's datagrams come from now (its IP at the sending socket's port)
   */
 final case class RobotView(
     robotId: Int,
@@ -111,11 +124,19 @@ final case class RobotView(
     firmware: FirmwareStats,
     stats: RobotStats,
     module: Option[Gs1500mStats],
-    cpu: Option[Cm530Stats]
+    cpu: Option[Cm530Stats],
+    sendingFrom: InetSocketAddress
 )
 
-/** One simulated CM-530 robot on a real UDP socket: [[RobotFirmware]] in real time, behind the GS1500M and CM-530
-  * models ([[FaithfulLink]]) or straight on the socket.
+/** One simulated CM-530 robot on real UDP sockets: [[RobotFirmware]] in real time, behind the GS1500M and CM-530
+  * models ([[FaithfulLink]]) or straight on the sockets.
+  *
+  * Two sockets, as the thesis hardware has: the GS1500M keeps a UDP client connection for everything it sends and a
+  * UDP server on port 3838 for everything it receives. So the robot sends from one socket (its IP, a port of the
+  * system's choosing) and receives on another (its IP, the receive port); a datagram sent to the source port of its
+  * datagrams reaches the sending socket, is counted and is not acted on, exactly as a gateway that answered to the
+  * source port would find with a real robot. [[SimulatedRobot.Reconnect]] gives the sending socket a new port, as a
+  * module reconnect does.
   *
   * The robot sends keep-alives and debug output to the configured gateway address and answers each request to its
   * sender. Time is `System.nanoTime` relative to the robot's start; the pure models run in that clock, and the actor
@@ -127,6 +148,9 @@ object SimulatedRobot {
 
   /** The GS1500M needs about 4 s after power-up before it answers (SPEC §7). */
   val ModuleBootDelay: FiniteDuration = 4.seconds
+
+  /** Where a robot receives on its own IP address (docs/protocol.md section 2). */
+  val ReceivePort: Int = 3838
 
   /** What a simulated robot accepts. */
   sealed trait Command
@@ -151,22 +175,29 @@ object SimulatedRobot {
   /** Moves the ball to field coordinates (metres); the camera sees the new scene from the next frame on. */
   final case class MoveBall(x: Double, y: Double) extends Command
 
-  /** Closes the robot's socket and stops the robot; `Done` once the port is free. */
+  /** Closes the robot's sockets and stops the robot; `Done` once both ports are free. */
   final case class Stop(replyTo: ActorRef[Done]) extends Command
+
+  /** The module reconnects its client connection: the robot sends from a new port from now on (it keeps receiving
+    * where it did); `replyTo` learns the new source address.
+    */
+  final case class Reconnect(replyTo: ActorRef[InetSocketAddress]) extends Command
 
   private case object WakeUp extends Command
   private case object ModuleUp extends Command
   private case object StopTimedOut extends Command
-  private case object SocketGone extends Command
+  private final case class SocketGone(link: ActorRef[UdpLink.Command]) extends Command
+  // Events of the receive socket (FromSocket) and of the sending socket (FromSender), told apart by adapter.
   private final case class FromSocket(event: UdpLink.Event) extends Command
+  private final case class FromSender(event: UdpLink.Event) extends Command
 
   /** What a robot reports once its socket is bound, or could not be. */
   sealed trait StartResult
 
-  /** The robot is running and receives at `address`. */
+  /** The robot is running and receives at `address` (its IP at the receive port). */
   final case class Started(robotId: Int, robot: ActorRef[Command], address: InetSocketAddress) extends StartResult
 
-  /** The socket could not be bound; the robot has stopped. */
+  /** A socket could not be bound; the robot has stopped. */
   final case class StartFailed(robotId: Int, reason: String) extends StartResult
 
   private case object WakeUpKey
@@ -179,58 +210,85 @@ object SimulatedRobot {
   private val MinStreamTickNanos = 1000000L
   private val MaxRounds = 8
 
-  /** A robot with `settings`; `reportTo` learns its bound address (or the failure). */
+  /** A robot with `settings`; `reportTo` learns its receive address (or the failure). */
   def apply(settings: SimulatedRobotSettings, reportTo: Option[ActorRef[StartResult]] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(StashCapacity) { stash =>
           val id = settings.firmware.robotId
+          val host = settings.bindAddress.getAddress
           val fromSocket = context.messageAdapter[UdpLink.Event](FromSocket.apply)
-          val options = UdpLink.Options(receiveBufferBytes = settings.receiveBufferBytes)
-          val socket = context.spawn(UdpLink(settings.bindAddress, fromSocket, options), "udp")
-          context.watchWith(socket, SocketGone)
+          // Akka keeps one message adapter per message class, so the sending socket's events come through a relay.
+          val self = context.self
+          val fromSender = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { event =>
+            self ! FromSender(event)
+            Behaviors.same
+          }, "sending-socket-events")
+          // The receive socket shares its port with a GameController listener on the same host (the demo binds
+          // 0.0.0.0:3838 with SO_REUSEADDR); the more specific address still gets the robot's unicast datagrams.
+          val receiveOptions = UdpLink.Options(reuseAddress = true, receiveBufferBytes = settings.receiveBufferBytes)
+          val receiver = context.spawn(UdpLink(new InetSocketAddress(host, settings.receivePort), fromSocket, receiveOptions), "udp-receive")
+          val sender = context.spawn(UdpLink(settings.bindAddress, fromSender, UdpLink.Options(receiveBufferBytes = 64 * 1024)), "udp-send")
+          context.watchWith(receiver, SocketGone(receiver))
+          context.watchWith(sender, SocketGone(sender))
           val origin = System.nanoTime()
 
-          Behaviors.receiveMessage {
-            case FromSocket(UdpLink.Bound(_, local)) =>
-              context.log.debug("Simulated robot [{}] listens on {}", id, local)
-              reportTo.foreach(_ ! Started(id, context.self, local))
-              val robot = new SimulatedRobot(settings, context, timers, socket, local, origin)
-              stash.unstashAll(robot.start())
-            case FromSocket(UdpLink.BindFailed(address, reason)) =>
-              context.log.warn("Simulated robot [{}] cannot bind {}: {}", id, address, reason)
-              reportTo.foreach(_ ! StartFailed(id, reason))
-              Behaviors.stopped
-            case FromSocket(UdpLink.Received(_, _)) =>
-              Behaviors.same
-            case SocketGone =>
-              reportTo.foreach(_ ! StartFailed(id, "the socket stopped before it was bound"))
-              Behaviors.stopped
-            case Stop(replyTo) =>
-              socket ! UdpLink.Unbind
-              stoppingWithoutSocket(id, Vector(replyTo), timers, context)
-            case other =>
-              stashOrDrop(stash, other, context, id)
+          def binding(received: Option[InetSocketAddress], sending: Option[InetSocketAddress]): Behavior[Command] =
+            (received, sending) match {
+              case (Some(local), Some(from)) =>
+                context.log.debug("Simulated robot [{}] receives on {} and sends from {}", id, local, from)
+                reportTo.foreach(_ ! Started(id, context.self, local))
+                val robot = new SimulatedRobot(settings, context, timers, receiver, local, sender, from, fromSender, origin)
+                stash.unstashAll(robot.start())
+              case _ =>
+                Behaviors.receiveMessage {
+                  case FromSocket(UdpLink.Bound(_, local)) => binding(Some(local), sending)
+                  case FromSender(UdpLink.Bound(_, local)) => binding(received, Some(local))
+                  case FromSocket(UdpLink.BindFailed(address, reason)) => failed(address, reason)
+                  case FromSender(UdpLink.BindFailed(address, reason)) => failed(address, reason)
+                  case FromSocket(UdpLink.Received(_, _)) | FromSender(UdpLink.Received(_, _)) =>
+                    Behaviors.same
+                  case SocketGone(_) =>
+                    reportTo.foreach(_ ! StartFailed(id, "a socket stopped before it was bound"))
+                    Behaviors.stopped
+                  case Stop(replyTo) =>
+                    receiver ! UdpLink.Unbind
+                    sender ! UdpLink.Unbind
+                    stoppingWithoutSocket(id, Set(receiver, sender), Vector(replyTo), timers, context)
+                  case other =>
+                    stashOrDrop(stash, other, context, id)
+                }
+            }
+
+          def failed(address: InetSocketAddress, reason: String): Behavior[Command] = {
+            context.log.warn("Simulated robot [{}] cannot bind {}: {}", id, address, reason)
+            reportTo.foreach(_ ! StartFailed(id, s"$address: $reason"))
+            Behaviors.stopped
           }
+
+          binding(None, None)
         }
       }
     }
 
-  // Stop before the socket was bound: the link stops at once, taking its half-open socket with it.
+  // Stop before the sockets were bound: the links stop at once, taking their half-open sockets with them.
   private def stoppingWithoutSocket(
       id: Int,
+      links: Set[ActorRef[UdpLink.Command]],
       waiting: Vector[ActorRef[Done]],
       timers: TimerScheduler[Command],
       context: ActorContext[Command]
   ): Behavior[Command] = {
     timers.startSingleTimer(StopKey, StopTimedOut, StopTimeout)
     Behaviors.receiveMessage {
-      case SocketGone | StopTimedOut =>
+      case SocketGone(link) if links.size > 1 => stoppingWithoutSocket(id, links - link, waiting, timers, context)
+      case SocketGone(_) | StopTimedOut =>
         context.log.debug("Simulated robot [{}] stopped before it was bound", id)
         waiting.foreach(_ ! Done)
         Behaviors.stopped
-      case Stop(replyTo) => stoppingWithoutSocket(id, waiting :+ replyTo, timers, context)
-      case GetState(_) | GetReceivedCalls(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
+      case Stop(replyTo) => stoppingWithoutSocket(id, links, waiting :+ replyTo, timers, context)
+      case GetState(_) | GetReceivedCalls(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp |
+          FromSocket(_) | FromSender(_) | Reconnect(_) =>
         Behaviors.same
     }
   }
@@ -265,11 +323,72 @@ private final class SimulatedRobot(
     settings: SimulatedRobotSettings,
     context: ActorContext[SimulatedRobot.Command],
     timers: TimerScheduler[SimulatedRobot.Command],
-    socket: ActorRef[UdpLink.Command],
+    receiver: ActorRef[UdpLink.Command],
     address: InetSocketAddress,
+    firstSender: ActorRef[UdpLink.Command],
+    firstSendingFrom: InetSocketAddress,
+    fromSender: ActorRef[UdpLink.Event],
     origin: Long
 ) {
   import SimulatedRobot._
+
+  // The sending socket changes on Reconnect; these belong to this actor alone.
+  private var sender = firstSender
+  private var sendingFrom = firstSendingFrom
+  private var reconnecting = Option.empty[ActorRef[UdpLink.Command]]
+  private var reconnectWaiters = Vector.empty[ActorRef[InetSocketAddress]]
+  private var reconnects = 0
+  private var ignoredAtSender = 0L
+
+  /** Events of the sending socket, the same in every state: nothing that arrives there is acted on. */
+  private def senderEvent(event: UdpLink.Event): Unit = event match {
+    case UdpLink.Received(_, _) => ignoredAtSender += 1
+    case UdpLink.Bound(link, local) if reconnecting.contains(link) =>
+      // The new connection is up: the old one closes, and everything from now on leaves from the new port.
+      context.unwatch(sender)
+      sender ! UdpLink.Unbind
+      sender = link
+      sendingFrom = local
+      reconnecting = None
+      context.watchWith(link, SocketGone(link))
+      context.log.info("Simulated robot [{}] reconnected: sends from {}", id, local)
+      reconnectWaiters.foreach(_ ! local)
+      reconnectWaiters = Vector.empty
+    case UdpLink.BindFailed(address, reason) =>
+      // The old connection stays: the robot keeps sending from where it did.
+      context.log.warn("Simulated robot [{}] could not reconnect on {}: {}", id, address, reason)
+      reconnecting = None
+      reconnectWaiters.foreach(_ ! sendingFrom)
+      reconnectWaiters = Vector.empty
+    case _ => ()
+  }
+
+  private def reconnect(replyTo: ActorRef[InetSocketAddress]): Unit = {
+    reconnectWaiters :+= replyTo
+    if (reconnecting.isEmpty) {
+      reconnects += 1
+      reconnecting = Some(context.spawn(
+        UdpLink(new InetSocketAddress(address.getAddress, 0), fromSender, UdpLink.Options(receiveBufferBytes = 64 * 1024)),
+        s"udp-send-$reconnects"))
+    }
+  }
+
+  /** Messages every running state handles alike; `None` for the others. */
+  private def always(message: Command): Option[Behavior[Command]] = message match {
+    case FromSender(event) =>
+      senderEvent(event)
+      Some(Behaviors.same)
+    case Reconnect(replyTo) =>
+      reconnect(replyTo)
+      Some(Behaviors.same)
+    case GetReceivedCalls(replyTo) =>
+      replyTo ! receivedCalls
+      Some(Behaviors.same)
+    case SocketGone(link) =>
+      context.log.error("Simulated robot [{}] lost its socket {} and stops", id, if (link == receiver) address else sendingFrom)
+      Some(Behaviors.stopped)
+    case _ => None
+  }
 
   private val id = settings.firmware.robotId
   private val gateway = settings.gateway
@@ -298,15 +417,15 @@ private final class SimulatedRobot(
 
   // Powered and on the air.
   private def online(robot: Robot): Behavior[Command] =
-    Behaviors.receiveMessage {
+    Behaviors.receiveMessage { message => always(message).getOrElse(onlineMessage(robot, message)) }
+
+  private def onlineMessage(robot: Robot, message: Command): Behavior[Command] =
+    message match {
       case WakeUp =>
         after(robot.copy(armedAt = Long.MinValue), None)
       case FromSocket(UdpLink.Received(bytes, from)) =>
         val counted = robot.copy(stats = robot.stats.copy(received = robot.stats.received + 1))
         after(counted, Some(bytes -> from))
-      case GetReceivedCalls(replyTo) =>
-        replyTo ! receivedCalls
-        Behaviors.same
       case GetState(replyTo) =>
         val t = now()
         val (next, reset) = run(robot, t, None)
@@ -320,10 +439,7 @@ private final class SimulatedRobot(
         online(robot.copy(firmware = movedBall(robot.firmware, x, y)))
       case Stop(replyTo) =>
         stopping(Vector(replyTo))
-      case SocketGone =>
-        context.log.error("Simulated robot [{}] lost its socket {} and stops", id, address)
-        Behaviors.stopped
-      case FromSocket(_) | ModuleUp | StopTimedOut =>
+      case _ =>
         Behaviors.same
     }
 
@@ -351,13 +467,10 @@ private final class SimulatedRobot(
     if (!pending) goOffline(drained, settings.resetBootDelay, t)
     else {
       drained.link.flatMap(_.nextWakeUp).foreach(at => timers.startSingleTimer(WakeUpKey, WakeUp, delay(at, t)))
-      Behaviors.receiveMessage {
+      Behaviors.receiveMessage { message => always(message).getOrElse(message match {
         case WakeUp => flushing(drained)
         case FromSocket(UdpLink.Received(_, _)) =>
           flushingCounted(drained)
-        case GetReceivedCalls(replyTo) =>
-          replyTo ! receivedCalls
-          Behaviors.same
         case GetState(replyTo) =>
           val at = now()
           replyTo ! view(drained, at, online = false, upAt = Some(at + settings.resetBootDelay.toNanos))
@@ -366,11 +479,8 @@ private final class SimulatedRobot(
         case SetBattery(volts) => flushing(drained.copy(firmware = drained.firmware.copy(battery = math.max(0.0, volts))))
         case MoveBall(x, y) => flushing(drained.copy(firmware = movedBall(drained.firmware, x, y)))
         case Stop(replyTo) => stopping(Vector(replyTo))
-        case SocketGone =>
-          context.log.error("Simulated robot [{}] lost its socket {} and stops", id, address)
-          Behaviors.stopped
-        case FromSocket(_) | ModuleUp | StopTimedOut => Behaviors.same
-      }
+        case _ => Behaviors.same
+      })}
     }
   }
 
@@ -395,7 +505,7 @@ private final class SimulatedRobot(
 
   // Powered off, or the module is still booting: nothing goes out, nothing is answered.
   private def offline(robot: Robot, upAt: Long): Behavior[Command] =
-    Behaviors.receiveMessage {
+    Behaviors.receiveMessage { message => always(message).getOrElse(message match {
       case ModuleUp =>
         val t = now()
         context.log.info("Simulated robot [{}] is back (boot {})", id, robot.firmware.bootId)
@@ -403,9 +513,6 @@ private final class SimulatedRobot(
         online(proceed(up, t, None))
       case FromSocket(UdpLink.Received(_, _)) =>
         offline(robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1)), upAt)
-      case GetReceivedCalls(replyTo) =>
-        replyTo ! receivedCalls
-        Behaviors.same
       case GetState(replyTo) =>
         replyTo ! view(robot, now(), online = false, upAt = Some(upAt))
         Behaviors.same
@@ -417,34 +524,39 @@ private final class SimulatedRobot(
         offline(robot.copy(firmware = movedBall(robot.firmware, x, y)), upAt)
       case Stop(replyTo) =>
         stopping(Vector(replyTo))
-      case SocketGone =>
-        context.log.error("Simulated robot [{}] lost its socket {} and stops", id, address)
-        Behaviors.stopped
-      case FromSocket(_) | WakeUp | StopTimedOut =>
+      case _ =>
         Behaviors.same
-    }
+    })}
 
   private def stopping(waiting: Vector[ActorRef[Done]]): Behavior[Command] = {
     timers.cancel(WakeUpKey)
     timers.cancel(ModuleUpKey)
     timers.startSingleTimer(StopKey, StopTimedOut, StopTimeout)
-    socket ! UdpLink.Unbind
-    waitForSocket(waiting)
+    // A connection still being made is not watched; it stops with this actor.
+    reconnecting.foreach(_ ! UdpLink.Unbind)
+    receiver ! UdpLink.Unbind
+    sender ! UdpLink.Unbind
+    waitForSockets(Set(receiver, sender), waiting)
   }
 
-  private def waitForSocket(waiting: Vector[ActorRef[Done]]): Behavior[Command] =
+  private def waitForSockets(open: Set[ActorRef[UdpLink.Command]], waiting: Vector[ActorRef[Done]]): Behavior[Command] =
     Behaviors.receiveMessage {
-      case SocketGone =>
-        context.log.debug("Simulated robot [{}] closed {}", id, address)
+      case SocketGone(link) if open.size > 1 => waitForSockets(open - link, waiting)
+      case SocketGone(_) =>
+        context.log.debug("Simulated robot [{}] closed {} and {}", id, address, sendingFrom)
         waiting.foreach(_ ! Done)
         Behaviors.stopped
       case StopTimedOut =>
-        // Stopping this actor stops the link and its socket adapter, which closes the port soon after.
+        // Stopping this actor stops the links and their socket adapters, which closes the ports soon after.
         context.log.warn("Simulated robot [{}] did not see {} close within {}; stopping anyway", id, address, StopTimeout)
         waiting.foreach(_ ! Done)
         Behaviors.stopped
-      case Stop(replyTo) => waitForSocket(waiting :+ replyTo)
-      case GetState(_) | GetReceivedCalls(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp | FromSocket(_) =>
+      case Stop(replyTo) => waitForSockets(open, waiting :+ replyTo)
+      case Reconnect(replyTo) =>
+        replyTo ! sendingFrom
+        Behaviors.same
+      case GetState(_) | GetReceivedCalls(_) | PowerCycle(_) | SetBattery(_) | MoveBall(_, _) | WakeUp | ModuleUp |
+          FromSocket(_) | FromSender(_) =>
         Behaviors.same
     }
 
@@ -586,7 +698,8 @@ private final class SimulatedRobot(
   /** Puts datagrams on the socket; nothing larger than the module's 1400 bytes ever leaves a robot. */
   private def send(stats: RobotStats, out: Vector[Out]): RobotStats = {
     val (fit, oversize) = out.partition(_.bytes.length <= WireLimits.MaxDatagramBytes)
-    fit.foreach(o => socket ! UdpLink.Send(o.bytes, o.to))
+    // Always from the sending socket: the receive socket only ever receives, as the module's UDP server does.
+    fit.foreach(o => sender ! UdpLink.Send(o.bytes, o.to))
     if (oversize.nonEmpty) context.log.warn("Simulated robot [{}] dropped {} oversize datagram(s)", id, oversize.size)
     stats.copy(sent = stats.sent + fit.size, oversizeDropped = stats.oversizeDropped + oversize.size)
   }
@@ -613,9 +726,10 @@ private final class SimulatedRobot(
       debugEnabled = f.debugEnabled,
       said = f.said,
       firmware = f.stats,
-      stats = robot.stats,
+      stats = robot.stats.copy(ignoredAtSendingSocket = ignoredAtSender),
       module = robot.link.map(_.module.stats),
-      cpu = robot.link.map(_.cpu.stats)
+      cpu = robot.link.map(_.cpu.stats),
+      sendingFrom = sendingFrom
     )
   }
 }

@@ -1,6 +1,6 @@
 package naogateway.integration
 
-import java.net.InetSocketAddress
+import java.net.{InetAddress, InetSocketAddress}
 
 import scala.concurrent.duration._
 
@@ -10,6 +10,7 @@ import com.typesafe.config.ConfigFactory
 
 import naogateway._
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
+import naogateway.testkit.TestLoopback
 
 /** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only.
   * Call `stop()` at the end of each test: a fixture left running (robots streaming to their gateway) loads the next.
@@ -36,12 +37,16 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
   gateway ! Gateway.Subscribe(events.ref)
   private var robots = Vector.empty[ActorRef[SimulatedRobot.Command]]
 
-  /** Starts robot `robotId` sending to `to` (the gateway unless a proxy is given). */
+  /** Starts robot `robotId` on a loopback address of its own (`at`), sending to `to` (the gateway unless a proxy is
+    * given); it receives on `at`:3838, where the gateway must send. Returns the robot and its receive address.
+    */
   def robot(robotId: Int, to: InetSocketAddress = addresses.robots, faithful: Boolean = false,
-      firmware: FirmwareSettings => FirmwareSettings = identity): (ActorRef[SimulatedRobot.Command], InetSocketAddress) = {
+      firmware: FirmwareSettings => FirmwareSettings = identity,
+      at: InetAddress = TestLoopback.address()): (ActorRef[SimulatedRobot.Command], InetSocketAddress) = {
     val started = testKit.createTestProbe[SimulatedRobot.StartResult]()
     testKit.spawn(
-      SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(robotId)), to, faithfulLink = faithful), Some(started.ref)),
+      SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(robotId)), to, bindAddress = new InetSocketAddress(at, 0),
+        faithfulLink = faithful), Some(started.ref)),
       s"sim-robot-$robotId-${System.nanoTime()}"
     )
     started.receiveMessage(10.seconds) match {

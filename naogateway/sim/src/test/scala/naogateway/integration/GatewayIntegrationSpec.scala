@@ -12,6 +12,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZmqSimulatedRobot}
+import naogateway.testkit.TestLoopback
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.wire.{MessageContents, RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
@@ -83,6 +84,54 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       val e = intercept[IllegalArgumentException](new GatewayFixture(testKit, "competition.enabled = on"))
       e.getMessage should include("trusted-sources")
     }
+    "send requests and option commands to the robot's receive port (its IP, 3838), nothing to where it sends from" in
+      withGateway() { f =>
+        val (robot, receivesAt) = f.robot(13)
+        val online = f.awaitEvent(10.seconds) { case RobotOnline(13, address) => address }
+        // Known at its IP and receive port, although every datagram it sent came from another port.
+        online shouldBe receivesAt
+        online.getPort shouldBe 3838
+        f.view(robot).sendingFrom.getPort should not be 3838
+        val connected = f.connect(13)
+        call(connected, "system.ping").result.isRight shouldBe true
+        connected.vision ! VisionActor.Register(createTestProbe[VisionFrame]().ref, grid = false)
+        eventually(timeout(10.seconds)) { f.view(robot).debugEnabled should contain("havimo.regions") }
+        val view = f.view(robot)
+        view.stats.received should be >= 3L
+        // Had the gateway answered to the keep-alives' source port, the robot would have ignored (and counted) it all.
+        view.stats.ignoredAtSendingSocket shouldBe 0L
+      }
+    "keep a robot that starts sending from another port online, known once, and reached at its receive port" in
+      withGateway() { f =>
+        val (robot, receivesAt) = f.robot(14)
+        f.awaitEvent(10.seconds) { case RobotOnline(14, _) => () }
+        val connected = f.connect(14)
+        call(connected, "system.ping").result.isRight shouldBe true
+        def heard(): Long = {
+          val stats = createTestProbe[LinkStats]()
+          f.robotActor(14) ! RobotActor.GetLinkStats(stats.ref)
+          stats.receiveMessage(5.seconds).datagramsIn
+        }
+        // The module reconnects: its client connection, and so the source port of everything it sends, is new.
+        val before = f.view(robot).sendingFrom
+        val moved = createTestProbe[InetSocketAddress]()
+        robot ! SimulatedRobot.Reconnect(moved.ref)
+        val now = moved.receiveMessage(10.seconds)
+        now should not be before
+        // Fifteen keep-alives from the new port reach the robot actor: three seconds, several times the time after
+        // which a silent robot goes offline (quiet-after + 3 probes).
+        val counted = heard()
+        eventually(timeout(20.seconds), interval(100.millis)) { heard() should be >= counted + 15 }
+        call(connected, "system.ping").result.isRight shouldBe true
+        // Every event so far (status updates come five times a second, so a 100 ms pause means none is waiting).
+        val seen = Iterator.continually(scala.util.Try(f.events.receiveMessage(100.millis)).toOption).takeWhile(_.isDefined).flatten.toVector
+        seen.collect { case e: RobotOffline => e } shouldBe empty
+        val robots = createTestProbe[Vector[RobotSnapshot]]()
+        f.gateway ! Gateway.GetRobots(robots.ref)
+        robots.receiveMessage(10.seconds).map(s => (s.robotId, s.online, s.address)) shouldBe Vector((14, true, receivesAt))
+        f.stats().rejected.keys.filter(_.contains("robot id 14")) shouldBe empty
+        f.view(robot).stats.ignoredAtSendingSocket shouldBe 0L
+      }
     "discover several robots from their keep-alives and answer calls to each" in withGateway() { f =>
       val robots = (1 to 3).map(id => id -> f.robot(id))
       val online = (1 to 3).map(_ => f.awaitEvent(10.seconds) { case RobotOnline(id, address) => id -> address }).toMap
@@ -101,7 +150,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
     "take a partitioned robot offline within its three chances and back online when the partition heals" in withGateway() { f =>
       val network = LossyNetwork.start(seed = 3)
       try {
-        val proxy = network.addProxy(f.addresses.robots)
+        val proxy = network.addProxy(f.addresses.robots, TestLoopback.address())
         f.robot(7, to = proxy.clientSide)
         f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
         val connected = f.connect(7)
@@ -136,7 +185,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       val network = LossyNetwork.start(seed = 11)
       try {
         val lossy = Impairment(loss = 0.2)
-        val proxy = network.addProxy(f.addresses.robots, uplink = lossy, downlink = lossy)
+        val proxy = network.addProxy(f.addresses.robots, TestLoopback.address(), uplink = lossy, downlink = lossy)
         val (robot, _) = f.robot(5, to = proxy.clientSide)
         f.awaitEvent(10.seconds) { case RobotOnline(5, _) => () }
         val connected = f.connect(5)

@@ -11,6 +11,8 @@ import akka.Done
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
+import naogateway.testkit.TestLoopback
+
 class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
   private val somewhere = new InetSocketAddress("127.0.0.1", 11011)
@@ -35,7 +37,10 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
         math.abs(r.firmware.startPose.y) should be <= 3.0
         r.gateway shouldBe somewhere
         r.bindAddress.getPort shouldBe 0
+        r.receivePort shouldBe 3838
       }
+      // Each robot a host of its own, from 127.0.0.11 on: the gateway knows robots by IP address.
+      robots.map(_.bindAddress.getAddress.getHostAddress) shouldBe (11 to 18).map(i => s"127.0.0.$i").toVector
       robots.map(_.keepAlivePhase) shouldBe (0 until 8).map(i => 200.millis * i.toLong / 8L).toVector
       robots.map(_.seed).distinct.size shouldBe 8
     }
@@ -53,7 +58,7 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
     "run 20 robots that send keep-alives with distinct ids from distinct addresses, power-cycle one, stop cleanly" in {
       val gateway = new TestGateway
       try {
-        val fleet = Await.result(Fleet.start(system, FleetSettings.ofSize(20, gateway.address)), 30.seconds)
+        val fleet = Await.result(Fleet.start(system, FleetSettings.ofSize(20, gateway.address).copy(firstAddress = TestLoopback.block(20))), 30.seconds)
         fleet.robots.map(_._1) shouldBe (1 to 20).toVector
         fleet.robots.map(_._2).distinct.size shouldBe 20
 
@@ -68,7 +73,11 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
           }
         }
         seen.keySet shouldBe (1 to 20).toSet
-        fleet.robots.foreach { case (id, address) => seen(id)._1 shouldBe address }
+        // Heard from its own host (from its sending socket); it receives at that host's 3838.
+        fleet.robots.foreach { case (id, address) =>
+          seen(id)._1.getAddress shouldBe address.getAddress
+          address.getPort shouldBe 3838
+        }
         seen(1)._2 shouldBe Some("keeper")
         seen(2)._2 shouldBe Some("striker")
 
@@ -91,12 +100,11 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
 
     "fail to start, and close what it opened, when a robot cannot bind its socket" in {
       val gateway = new TestGateway
-      val taken = DatagramChannel.open(StandardProtocolFamily.INET).bind(new InetSocketAddress("127.0.0.1", 0))
+      val first = TestLoopback.block(3)
+      val settings = FleetSettings.ofSize(3, gateway.address).copy(firstAddress = first)
+      // Robot 2's receive port is taken on its host.
+      val taken = DatagramChannel.open(StandardProtocolFamily.INET).bind(new InetSocketAddress(settings.addressOf(1), 3838))
       try {
-        val port = taken.getLocalAddress.asInstanceOf[InetSocketAddress]
-        val settings = FleetSettings.ofSize(3, gateway.address).copy(
-          customize = s => if (s.firmware.robotId == 2) s.copy(bindAddress = port) else s
-        )
         val failure = Try(Await.result(Fleet.start(system, settings), 30.seconds)).failed.get
         failure.getMessage should include("robot 2")
         // The two robots that did start are stopped again: the keep-alives (five a second each) end for good.

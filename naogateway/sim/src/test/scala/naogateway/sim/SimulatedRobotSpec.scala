@@ -11,6 +11,7 @@ import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
+import naogateway.testkit.TestLoopback
 import naogateway.wire.{MessageContents, Posture, RpcValue, WireLimits}
 
 class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
@@ -23,7 +24,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
   }
 
   private def settings(gateway: TestGateway, firmware: FirmwareSettings): SimulatedRobotSettings =
-    SimulatedRobotSettings(firmware, gateway.address)
+    SimulatedRobotSettings(firmware, gateway.address, bindAddress = new InetSocketAddress(TestLoopback.address(), 0))
 
   private def state(robot: ActorRef[SimulatedRobot.Command]): RobotView = {
     val probe = createTestProbe[RobotView]()
@@ -45,7 +46,9 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
   private def result(gateway: TestGateway, robot: InetSocketAddress, module: String, method: String, params: RpcValue*)
       : Either[String, Option[RpcValue]] = {
     val (reply, heard) = gateway.call(robot, module, method, params: _*).getOrElse(fail(s"no reply to $module.$method"))
-    heard.from shouldBe robot
+    // From the robot's host, but from its sending socket: the receive socket never sends.
+    heard.from.getAddress shouldBe robot.getAddress
+    heard.from.getPort should not be robot.getPort
     reply.result
   }
 
@@ -54,6 +57,33 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
   private val ok = Right(Some(Flag(true)))
 
   "A simulated robot" should {
+    "receive on its own address at 3838, send from another socket, and act on nothing sent to that one" in withGateway {
+      gateway =>
+        val (robot, address) = start(settings(gateway, FirmwareSettings(robotId = 12)))
+        val sendingFrom = state(robot).sendingFrom
+        address.getPort shouldBe 3838
+        sendingFrom.getAddress shouldBe address.getAddress
+        sendingFrom.getPort should not be 3838
+        // A request to the port the robot's datagrams come from: the module's client connection passes it on to nobody.
+        gateway.send(TestGateway.request("system", "ping", Vector.empty, 4711), sendingFrom)
+        createTestProbe[Any]().awaitAssert(state(robot).stats.ignoredAtSendingSocket shouldBe 1, 10.seconds)
+        state(robot).firmware.rpcCalls shouldBe 0
+        // The same request at the receive port is answered, from the sending socket.
+        val (reply, heard) = gateway.call(address, "system", "ping").getOrElse(fail("no reply at the receive port"))
+        reply.result.isRight shouldBe true
+        heard.from shouldBe sendingFrom
+        // Reconnect: a new source port, the same receive port.
+        val moved = createTestProbe[InetSocketAddress]()
+        robot ! SimulatedRobot.Reconnect(moved.ref)
+        val now = moved.receiveMessage(5.seconds)
+        now should not be sendingFrom
+        now.getAddress shouldBe address.getAddress
+        gateway.drain()
+        gateway.call(address, "system", "ping").map(_._2.from) shouldBe Some(now)
+        state(robot).stats.ignoredAtSendingSocket shouldBe 1
+        stop(robot)
+    }
+
     "send keep-alives that decode into its Status and RobotHealth, and never a datagram over 1400 bytes" in withGateway {
       gateway =>
         val (robot, address) = start(settings(gateway, FirmwareSettings(robotId = 7, teamId = 12, role = "keeper")))
@@ -67,7 +97,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         heard.size should be > 20
         heard.foreach { h =>
           h.bytes.length should be <= WireLimits.MaxDatagramBytes
-          h.from shouldBe address
+          h.from.getAddress shouldBe address.getAddress
         }
         heard.map(_.bytes.length).max should be > 700
         heard.flatMap(_.contents).exists(_.havimoGrid.isDefined) shouldBe true
@@ -174,6 +204,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
 
     "use the module's 4 s boot delay by default" in withGateway { gateway =>
       SimulatedRobot.PowerCycle().bootDelay shouldBe 4.seconds
+      SimulatedRobotSettings(FirmwareSettings(robotId = 1), gateway.address).receivePort shouldBe 3838
       SimulatedRobotSettings(FirmwareSettings(robotId = 1), gateway.address).resetBootDelay shouldBe 4.seconds
       val (robot, _) = start(settings(gateway, FirmwareSettings(robotId = 6)))
       robot ! SimulatedRobot.PowerCycle()

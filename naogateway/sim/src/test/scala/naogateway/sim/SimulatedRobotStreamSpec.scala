@@ -9,6 +9,7 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
+import naogateway.testkit.TestLoopback
 import naogateway.wire.{Datagram, MessageContents, RpcReply, RpcValue}
 import naogateway.wire.stream.{SecureStream, StreamSettings}
 
@@ -41,7 +42,8 @@ class SimulatedRobotStreamSpec extends ScalaTestWithActorTestKit with AnyWordSpe
     "receive a text through the stream over its module model, complete and in order, and restart at 0 after a power cycle" in {
       val gateway = new TestGateway
       try {
-        val robot = spawn(SimulatedRobot(SimulatedRobotSettings(FirmwareSettings(robotId = 21), gateway.address).withStream()))
+        val robot = spawn(SimulatedRobot(SimulatedRobotSettings(FirmwareSettings(robotId = 21), gateway.address,
+          bindAddress = new InetSocketAddress(TestLoopback.address(), 0)).withStream()))
         val address = state(robot).address
         val driver = new GatewayStream(gateway, address, StreamSettings.thesis)
 
@@ -108,7 +110,8 @@ object SimulatedRobotStreamSpec {
       while (!done && deadline.hasTimeLeft()) {
         val untilTimer = stream.nextTimerAt.fold(20.millis)(t => math.max(1000000L, t - now()).nanos)
         gateway.receive(untilTimer.min(20.millis).min(deadline.timeLeft.max(1.millis))).foreach { heard =>
-          if (heard.from == robot) onDatagram(heard.bytes)
+          // The robot's host, any port: it sends from its sending socket and receives at `robot`.
+          if (heard.from.getAddress == robot.getAddress) onDatagram(heard.bytes)
         }
         if (stream.nextTimerAt.exists(_ <= now())) apply(stream.tick(now()))
       }

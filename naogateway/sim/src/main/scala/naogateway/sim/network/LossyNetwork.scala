@@ -17,21 +17,24 @@ import org.slf4j.LoggerFactory
   *
   * @param id the proxy's creation index within its network (it also selects the proxy's random streams)
   * @param gateway where the proxy forwards the robot's datagrams
-  * @param clientSide the address the robot must send to
-  * @param upstream the address the gateway sees as the robot's source, and where its replies must go
+  * @param clientSide the address the robot must send to (and where the gateway's datagrams come from, seen by the robot)
+  * @param upstream the address the gateway sees as the robot's source: the robot's IP as far as the gateway knows
+  * @param receiveSide where the gateway must send to reach the robot: `upstream`'s IP at the robot receive port
   */
 final case class Proxy(
     id: Int,
     gateway: InetSocketAddress,
     clientSide: InetSocketAddress,
-    upstream: InetSocketAddress
+    upstream: InetSocketAddress,
+    receiveSide: InetSocketAddress
 )
 
 /** What one direction of one proxy did with its datagrams.
   *
   * `received == forwarded + droppedLoss + droppedPartition + undeliverable` always holds. `duplicated` counts the
   * extra copies, `reordered` the forwarded datagrams that were held back, and `sendFailures` the copies the operating
-  * system refused (full socket buffer or an I/O error).
+  * system refused (full socket buffer or an I/O error). `atSourcePort` (downlink only) counts datagrams the gateway sent
+  * to the robot's source port instead of its receive port: like a real robot's module, the proxy never passes them on.
   */
 final case class DirectionStats(
     received: Long = 0,
@@ -41,7 +44,8 @@ final case class DirectionStats(
     duplicated: Long = 0,
     reordered: Long = 0,
     undeliverable: Long = 0,
-    sendFailures: Long = 0
+    sendFailures: Long = 0,
+    atSourcePort: Long = 0
 ) {
 
   /** Datagrams dropped on purpose (loss and partition). */
@@ -60,10 +64,13 @@ final case class ProxyStats(uplink: DirectionStats, downlink: DirectionStats) {
 
 /** A seeded, impaired UDP network on loopback between a gateway and simulated robots.
   *
-  * Each proxy owns two sockets on 127.0.0.1: the client side P, which the robot sends to, and the upstream socket U,
-  * which forwards the robot's datagrams to the gateway, so the gateway sees a distinct source per robot. Datagrams
-  * the gateway sends to U go back to the robot (the source of its latest datagram, or the address given at
-  * creation). Each direction passes through [[ImpairmentModel]] with its own [[Rng]] derived from the seed.
+  * Each proxy stands for one robot host and owns three sockets: the client side P on 127.0.0.1, which the robot sends
+  * to; the upstream socket U on the proxy's own host address H (any port), which forwards the robot's datagrams to
+  * the gateway, so the gateway sees a host of its own per robot; and the receive side R on H at the robot receive port
+  * (3838), where the gateway sends to reach the robot, as it would a real one. Datagrams at R go from P to the robot's
+  * receive address (the one given at creation, or the robot receive port on the IP of the robot's latest datagram),
+  * never to a source port. Datagrams at U are counted (`atSourcePort`) and dropped, as a robot's module drops them.
+  * Each direction passes through [[ImpairmentModel]] with its own [[Rng]] derived from the seed.
   *
   * Design: java.nio with a single thread that owns one `Selector`, every socket and a deadline queue of delayed
   * copies. That thread handles every datagram of every proxy in arrival order, so each direction's decisions come
@@ -96,16 +103,24 @@ final class LossyNetwork private (val seed: Long, val name: String) {
   private var copySequence = 0L
   private val buffer = ByteBuffer.allocate(MaxDatagram)
 
-  /** Starts a proxy that forwards to `gateway`; `robot` is where replies go until the robot's first datagram. */
+  /** Starts a proxy on host address `host` that forwards to `gateway`.
+    *
+    * @param robot the robot's receive address, where the gateway's datagrams go; `None`: the robot receive port on the
+    *   IP of the robot's latest datagram (nothing goes to the robot before its first one)
+    * @param receivePort the robot receive port: where the proxy listens on `host`, and where it delivers when
+    *   `robot` is not given
+    */
   def addProxy(
       gateway: InetSocketAddress,
+      host: InetAddress,
       robot: Option[InetSocketAddress] = None,
       uplink: Impairment = Impairment.Off,
-      downlink: Impairment = Impairment.Off
+      downlink: Impairment = Impairment.Off,
+      receivePort: Int = RobotReceivePort
   ): Proxy = {
     require(!gateway.isUnresolved, s"gateway address $gateway is unresolved")
     robot.foreach(r => require(!r.isUnresolved, s"robot address $r is unresolved"))
-    onNetworkThread(openProxy(gateway, robot, uplink, downlink))
+    onNetworkThread(openProxy(gateway, host, robot, uplink, downlink, receivePort))
   }
 
   /** Closes a proxy's sockets, forgets copies still waiting, and returns its final stats. */
@@ -190,48 +205,51 @@ final class LossyNetwork private (val seed: Long, val name: String) {
 
   private def openProxy(
       gateway: InetSocketAddress,
+      host: InetAddress,
       robot: Option[InetSocketAddress],
       uplink: Impairment,
-      downlink: Impairment
+      downlink: Impairment,
+      receivePort: Int
   ): Proxy = {
-    val clientChannel = openChannel()
-    val upstreamChannel =
-      try openChannel()
-      catch {
-        case NonFatal(e) =>
-          clientChannel.close()
-          throw e
-      }
+    val opened = mutable.ArrayBuffer.empty[DatagramChannel]
     try {
+      val clientChannel = openChannel(new InetSocketAddress(Loopback, 0))
+      opened += clientChannel
+      val upstreamChannel = openChannel(new InetSocketAddress(host, 0))
+      opened += upstreamChannel
+      val receiveChannel = openChannel(new InetSocketAddress(host, receivePort))
+      opened += receiveChannel
       val index = nextProxyIndex
-      val handle = Proxy(index, gateway, localAddress(clientChannel), localAddress(upstreamChannel))
+      val handle = Proxy(index, gateway, localAddress(clientChannel), localAddress(upstreamChannel), localAddress(receiveChannel))
       val state = new ProxyState(
         handle,
         clientChannel,
         upstreamChannel,
+        receiveChannel,
         new LinkState(uplink, Rng.derive(seed, index, Direction.Uplink)),
         new LinkState(downlink, Rng.derive(seed, index, Direction.Downlink)),
-        robot
+        robot,
+        receivePort
       )
       clientChannel.register(selector, SelectionKey.OP_READ, Endpoint(state, Direction.Uplink))
-      upstreamChannel.register(selector, SelectionKey.OP_READ, Endpoint(state, Direction.Downlink))
+      receiveChannel.register(selector, SelectionKey.OP_READ, Endpoint(state, Direction.Downlink))
+      upstreamChannel.register(selector, SelectionKey.OP_READ, AtSourcePort(state))
       nextProxyIndex += 1
       proxies.update(index.toLong, state)
       handle
     } catch {
       case NonFatal(e) =>
-        clientChannel.close()
-        upstreamChannel.close()
+        opened.foreach(_.close())
         throw e
     }
   }
 
-  private def openChannel(): DatagramChannel = {
+  private def openChannel(address: InetSocketAddress): DatagramChannel = {
     val channel = DatagramChannel.open(StandardProtocolFamily.INET)
     try {
       channel.setOption[Integer](StandardSocketOptions.SO_RCVBUF, SocketBuffer)
       channel.setOption[Integer](StandardSocketOptions.SO_SNDBUF, SocketBuffer)
-      channel.bind(new InetSocketAddress(Loopback, 0))
+      channel.bind(address)
       channel.configureBlocking(false)
       channel
     } catch {
@@ -298,6 +316,7 @@ final class LossyNetwork private (val seed: Long, val name: String) {
       keys.remove()
       if (key.isValid && key.isReadable) key.attachment() match {
         case Endpoint(state, direction) => readFrom(state, direction)
+        case AtSourcePort(state)        => drainSourcePort(state)
         case _                          => ()
       }
     }
@@ -328,6 +347,22 @@ final class LossyNetwork private (val seed: Long, val name: String) {
     }
   }
 
+  // The gateway sent to the port the robot's datagrams came from: a robot's client connection passes nothing on.
+  private def drainSourcePort(state: ProxyState): Unit = {
+    var remaining = MaxReadsPerWakeup
+    while (remaining > 0 && state.open) {
+      buffer.clear()
+      val source =
+        try state.upstreamChannel.receive(buffer)
+        catch { case _: IOException => null }
+      if (source == null) remaining = 0
+      else {
+        state.link(Direction.Downlink).atSourcePort += 1
+        remaining -= 1
+      }
+    }
+  }
+
   private def handleDatagram(
       state: ProxyState,
       direction: Direction,
@@ -338,7 +373,8 @@ final class LossyNetwork private (val seed: Long, val name: String) {
     link.received += 1
     val target = direction match {
       case Direction.Uplink =>
-        state.robot = Some(from)
+        // Where the robot receives: its IP at the receive port, whatever port this datagram left from.
+        if (state.fixedRobot.isEmpty) state.robot = Some(new InetSocketAddress(from.getAddress, state.receivePort))
         Some(state.handle.gateway)
       case Direction.Downlink => state.robot
     }
@@ -403,6 +439,9 @@ object LossyNetwork {
   private val instances = new AtomicInteger(0)
 
   private val Loopback = InetAddress.getLoopbackAddress
+
+  /** The port a robot receives on (docs/protocol.md section 2). */
+  val RobotReceivePort: Int = 3838
   private val MaxDatagram = 65536
   private val SocketBuffer: Integer = 1 << 20
   private val MaxReadsPerWakeup = 64
@@ -434,6 +473,7 @@ object LossyNetwork {
     var reordered = 0L
     var undeliverable = 0L
     var sendFailures = 0L
+    var atSourcePort = 0L
 
     def stats: DirectionStats =
       DirectionStats(
@@ -444,19 +484,23 @@ object LossyNetwork {
         duplicated,
         reordered,
         undeliverable,
-        sendFailures
+        sendFailures,
+        atSourcePort
       )
   }
 
   private final class ProxyState(
       val handle: Proxy,
       clientChannel: DatagramChannel,
-      upstreamChannel: DatagramChannel,
+      val upstreamChannel: DatagramChannel,
+      receiveChannel: DatagramChannel,
       uplink: LinkState,
       downlink: LinkState,
-      var robot: Option[InetSocketAddress]
+      val fixedRobot: Option[InetSocketAddress],
+      val receivePort: Int
   ) {
     var open = true
+    var robot: Option[InetSocketAddress] = fixedRobot
 
     def link(direction: Direction): LinkState = direction match {
       case Direction.Uplink   => uplink
@@ -465,7 +509,7 @@ object LossyNetwork {
 
     def receivingChannel(direction: Direction): DatagramChannel = direction match {
       case Direction.Uplink   => clientChannel
-      case Direction.Downlink => upstreamChannel
+      case Direction.Downlink => receiveChannel
     }
 
     def sendingChannel(direction: Direction): DatagramChannel = direction match {
@@ -477,7 +521,7 @@ object LossyNetwork {
 
     def close(): Unit = {
       open = false
-      List(clientChannel, upstreamChannel).foreach { channel =>
+      List(clientChannel, upstreamChannel, receiveChannel).foreach { channel =>
         try channel.close()
         catch { case e: IOException => log.warn("Proxy [{}] could not close a socket", Int.box(handle.id), e) }
       }
@@ -485,6 +529,7 @@ object LossyNetwork {
   }
 
   private final case class Endpoint(state: ProxyState, direction: Direction)
+  private final case class AtSourcePort(state: ProxyState)
 
   private final case class PendingCopy(
       dueNanos: Long,

@@ -12,6 +12,8 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.time.{Millis, Seconds, Span}
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.TestLoopback
+
 /** The lossy network over real UDP on loopback. */
 class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
@@ -25,7 +27,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
   }
 
   private def withPeers[A](robots: Int)(body: (UdpPeer, IndexedSeq[UdpPeer]) => A): A = {
-    val peers = new UdpPeer("gateway") +: (0 until robots).map(i => new UdpPeer(s"robot-$i"))
+    val peers = new UdpPeer("gateway") +: (0 until robots).map(i => new UdpPeer(s"robot-$i", TestLoopback.robotAt()))
     try body(peers.head, peers.tail)
     finally peers.foreach(_.close())
   }
@@ -54,7 +56,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
     val atGateway = gateway.receive().getOrElse(fail("uplink datagram did not arrive"))
     atGateway.bytes shouldBe up.toVector
     atGateway.from shouldBe proxy.upstream
-    gateway.send(down, atGateway.from)
+    gateway.send(down, proxy.receiveSide)
     val atRobot = robot.receive().getOrElse(fail("downlink datagram did not arrive"))
     atRobot.bytes shouldBe down.toVector
     atRobot.from shouldBe proxy.clientSide
@@ -69,7 +71,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
   "LossyNetwork" should {
     "forward every datagram byte-identical in both directions on a perfect link" in withNetwork(1L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
-        val proxy = network.addProxy(gateway.address)
+        val proxy = network.addProxy(gateway.address, TestLoopback.address())
         proxy.clientSide.getAddress.isLoopbackAddress shouldBe true
         proxy.upstream.getAddress.isLoopbackAddress shouldBe true
         val random = new Random(5)
@@ -88,28 +90,43 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
       withPeers(2) { (gateway, robots) =>
         val robot = robots(0)
         val other = robots(1)
-        val known = network.addProxy(gateway.address, robot = Some(robot.address))
-        gateway.send(numbered(7), known.upstream)
+        val known = network.addProxy(gateway.address, TestLoopback.address(), robot = Some(robot.address))
+        gateway.send(numbered(7), known.receiveSide)
         val atRobot = robot.receive().getOrElse(fail("downlink datagram did not arrive"))
         atRobot.bytes shouldBe numbered(7).toVector
         atRobot.from shouldBe known.clientSide
 
-        val unknown = network.addProxy(gateway.address)
-        gateway.send(numbered(8), unknown.upstream)
+        val unknown = network.addProxy(gateway.address, TestLoopback.address())
+        gateway.send(numbered(8), unknown.receiveSide)
         eventually(network.stats(unknown).downlink.received shouldBe 1)
         network.stats(unknown).downlink shouldBe DirectionStats(received = 1, undeliverable = 1)
 
-        // The robot's latest datagram decides where replies go.
-        other.send(numbered(9), known.clientSide)
-        gateway.receive().map(_.from) shouldBe Some(known.upstream)
-        gateway.send(numbered(10), known.upstream)
+        // Without an address given, the robot's latest datagram decides: its IP at the receive port, not its source.
+        other.send(numbered(9), unknown.clientSide)
+        gateway.receive().map(_.from) shouldBe Some(unknown.upstream)
+        gateway.send(numbered(10), unknown.receiveSide)
         other.receive().map(r => numberOf(r)) shouldBe Some(10)
+      }
+    }
+
+    "deliver nothing the gateway sends to the robot's source port, and count it" in withNetwork(12L) { network =>
+      withGatewayAndRobot { (gateway, robot) =>
+        val proxy = network.addProxy(gateway.address, TestLoopback.address())
+        robot.send(numbered(1), proxy.clientSide)
+        val atGateway = gateway.receive().getOrElse(fail("uplink datagram did not arrive"))
+        atGateway.from shouldBe proxy.upstream
+        proxy.receiveSide shouldBe new InetSocketAddress(proxy.upstream.getAddress, TestLoopback.RobotReceivePort)
+        // A reply to the datagram's source, as a gateway that ignored section 2 would send it.
+        gateway.send(numbered(2), atGateway.from)
+        eventually(network.stats(proxy).downlink.atSourcePort shouldBe 1)
+        robot.receive(300.millis) shouldBe None
+        network.stats(proxy).downlink shouldBe DirectionStats(atSourcePort = 1)
       }
     }
 
     "lose about 30 % of the uplink and account for every datagram" in withNetwork(3L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
-        val proxy = network.addProxy(gateway.address, uplink = Impairment(loss = 0.3))
+        val proxy = network.addProxy(gateway.address, TestLoopback.address(), uplink = Impairment(loss = 0.3))
         val n = 400
         sendPaced(robot, proxy.clientSide, n)
         eventually(network.stats(proxy).uplink.received shouldBe n)
@@ -128,7 +145,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "drop everything while partitioned and let traffic flow again afterwards" in withNetwork(4L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
-        val proxy = network.addProxy(gateway.address)
+        val proxy = network.addProxy(gateway.address, TestLoopback.address())
         roundTrip(proxy, robot, gateway, numbered(1), numbered(2))
 
         network.partition(proxy, on = true)
@@ -136,7 +153,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         network.impairment(proxy, Direction.Downlink).partitioned shouldBe true
         (0 until 10).foreach { i =>
           robot.send(numbered(i), proxy.clientSide)
-          gateway.send(numbered(i), proxy.upstream)
+          gateway.send(numbered(i), proxy.receiveSide)
         }
         eventually {
           val stats = network.stats(proxy)
@@ -158,8 +175,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
       withPeers(2) { (gateway, robots) =>
         val robotA = robots(0)
         val robotB = robots(1)
-        val a = network.addProxy(gateway.address)
-        val b = network.addProxy(gateway.address)
+        val a = network.addProxy(gateway.address, TestLoopback.address())
+        val b = network.addProxy(gateway.address, TestLoopback.address())
         network.partitionNetwork(on = true)
         robotA.send(numbered(1), a.clientSide)
         robotB.send(numbered(2), b.clientSide)
@@ -178,11 +195,11 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "apply changed settings to the next datagram" in withNetwork(6L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
-        val proxy = network.addProxy(gateway.address)
+        val proxy = network.addProxy(gateway.address, TestLoopback.address())
         network.setImpairment(proxy, Direction.Downlink, Impairment(loss = 1.0))
         robot.send(numbered(1), proxy.clientSide)
         gateway.receive().map(numberOf) shouldBe Some(1)
-        gateway.send(numbered(2), proxy.upstream)
+        gateway.send(numbered(2), proxy.receiveSide)
         eventually(network.stats(proxy).downlink.droppedLoss shouldBe 1)
         robot.collectFor(200.millis) shouldBe empty
 
@@ -194,7 +211,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
     "reorder datagrams when some are held back" in withNetwork(7L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
         val held = Impairment(reordering = 0.5, reorderMaxDelay = 40.millis)
-        val proxy = network.addProxy(gateway.address, uplink = held)
+        val proxy = network.addProxy(gateway.address, TestLoopback.address(), uplink = held)
         val n = 200
         sendPaced(robot, proxy.clientSide, n)
         val order = gateway.receiveUpTo(n, 10.seconds).map(numberOf)
@@ -208,7 +225,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "send duplicated datagrams twice" in withNetwork(8L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
-        val proxy = network.addProxy(gateway.address, uplink = Impairment(duplication = 1.0))
+        val proxy = network.addProxy(gateway.address, TestLoopback.address(), uplink = Impairment(duplication = 1.0))
         (0 until 20).foreach(i => robot.send(numbered(i), proxy.clientSide))
         val arrived = gateway.receiveUpTo(40, 10.seconds).map(numberOf)
         arrived.groupBy(identity).map { case (i, copies) => i -> copies.size } shouldBe (0 until 20).map(_ -> 2).toMap
@@ -221,9 +238,9 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
     "hold every datagram back for at least the base delay" in withNetwork(9L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
         val proxy =
-          network.addProxy(gateway.address, robot = Some(robot.address), downlink = Impairment(delay = 150.millis))
+          network.addProxy(gateway.address, TestLoopback.address(), robot = Some(robot.address), downlink = Impairment(delay = 150.millis))
         val sent = System.nanoTime()
-        gateway.send(numbered(1), proxy.upstream)
+        gateway.send(numbered(1), proxy.receiveSide)
         robot.receive().map(numberOf) shouldBe Some(1)
         (System.nanoTime() - sent).nanos should be >= 150.millis
       }
@@ -231,14 +248,15 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "keep ten robots apart behind one gateway" in withNetwork(10L) { network =>
       withPeers(10) { (gateway, robots) =>
-        val proxies = robots.map(_ => network.addProxy(gateway.address))
+        val proxies = robots.map(_ => network.addProxy(gateway.address, TestLoopback.address()))
         robots.zip(proxies).zipWithIndex.foreach { case ((robot, proxy), i) =>
           robot.send(numbered(i), proxy.clientSide)
         }
         val arrived = gateway.receiveUpTo(10, 10.seconds)
         val expectedSources = proxies.zipWithIndex.map { case (p, i) => i -> p.upstream }.toMap
         arrived.map(r => numberOf(r) -> r.from).toMap shouldBe expectedSources
-        arrived.foreach(r => gateway.send(numbered(100 + numberOf(r)), r.from))
+        // Replies to each robot's receive port: its IP as the gateway saw it, at 3838.
+        arrived.foreach(r => gateway.send(numbered(100 + numberOf(r)), new InetSocketAddress(r.from.getAddress, TestLoopback.RobotReceivePort)))
         robots.zipWithIndex.foreach { case (robot, i) => robot.receive().map(numberOf) shouldBe Some(100 + i) }
       }
     }
@@ -248,7 +266,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
       val n = 40
       def run(seed: Long): Vector[(Long, Long)] = withNetwork(seed) { network =>
         withGatewayAndRobot { (gateway, robot) =>
-          val proxy = network.addProxy(gateway.address, uplink = settings)
+          val proxy = network.addProxy(gateway.address, TestLoopback.address(), uplink = settings)
           (1 to n).map { i =>
             robot.send(numbered(i), proxy.clientSide)
             eventually(network.stats(proxy).uplink.received shouldBe i)
@@ -275,7 +293,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "release its ports when a proxy is removed" in withNetwork(13L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
-        val proxy = network.addProxy(gateway.address)
+        val proxy = network.addProxy(gateway.address, TestLoopback.address())
         roundTrip(proxy, robot, gateway, numbered(1), numbered(2))
         val last = network.removeProxy(proxy)
         last.uplink.forwarded shouldBe 1
@@ -292,7 +310,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "release every port and its thread on stop, and stop only once" in withNetwork(14L) { network =>
       val proxies = withGatewayAndRobot { (gateway, robot) =>
-        val started = (0 until 3).map(_ => network.addProxy(gateway.address, uplink = Impairment(delay = 1.second)))
+        val started = (0 until 3).map(_ => network.addProxy(gateway.address, TestLoopback.address(), uplink = Impairment(delay = 1.second)))
         // A copy still waiting must not keep anything alive.
         robot.send(numbered(1), started.head.clientSide)
         eventually(network.stats(started.head).uplink.forwarded shouldBe 1)
@@ -303,9 +321,9 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
       network.stop()
       network.isRunning shouldBe false
       Thread.getAllStackTraces.keySet.asScala.filter(t => t.getName == network.name && t.isAlive) shouldBe empty
-      eventually(all(proxies.flatMap(p => List(p.clientSide, p.upstream)).map(canBind)) shouldBe true)
+      eventually(all(proxies.flatMap(p => List(p.clientSide, p.upstream, p.receiveSide)).map(canBind)) shouldBe true)
       network.stats(proxies.head).uplink.forwarded shouldBe 1
-      an[IllegalStateException] should be thrownBy network.addProxy(proxies.head.gateway)
+      an[IllegalStateException] should be thrownBy network.addProxy(proxies.head.gateway, TestLoopback.address())
       an[IllegalStateException] should be thrownBy network.partitionNetwork(on = true)
     }
   }

@@ -9,9 +9,12 @@ import scala.concurrent.duration._
 /** A datagram a test peer received, with its source. */
 final case class Received(bytes: Vector[Byte], from: InetSocketAddress)
 
-/** A plain UDP endpoint on 127.0.0.1 standing in for the gateway or a robot; a reader thread drains its socket. */
-final class UdpPeer(label: String) extends AutoCloseable {
-  private val socket = new DatagramSocket(new InetSocketAddress(InetAddress.getLoopbackAddress, 0))
+/** A plain UDP endpoint standing in for the gateway or a robot (bound to `at`, 127.0.0.1 and a free port by
+  * default); a reader thread drains its socket. It sends and receives on one socket.
+  */
+final class UdpPeer(label: String, at: InetSocketAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, 0))
+    extends AutoCloseable {
+  private val socket = new DatagramSocket(at)
   socket.setReceiveBufferSize(1 << 20)
   private val inbox = new LinkedBlockingQueue[Received]()
 
