@@ -75,8 +75,12 @@ object Gateway {
   /** Where the gateway listens. */
   final case class Addresses(robots: InetSocketAddress, gameController: Option[InetSocketAddress])
 
-  /** The gateway's own figures: datagrams seen, relayed, refused by reason. */
-  final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int)
+  /**
+   * The gateway's own figures: datagrams seen, relayed, refused by kind (a closed set, [[Rejection]]) and by source
+   * address (at most [[RejectionAddresses]] of them, the rest under "other addresses").
+   */
+  final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int,
+      rejectedBySource: Map[String, Long] = Map.empty)
 
   /** How long `GetRobots` waits for each robot actor; one that does not answer in time is listed as not reached. */
   val SnapshotTimeout: FiniteDuration = 1.second
@@ -87,11 +91,8 @@ object Gateway {
   /** Frames the port's reader hands the gateway (unknown senders, discovery) that may wait before more are dropped. */
   val GatewayBacklog: Int = 1024
 
-  /** Refusal counter key of a datagram dropped because its robot actor has [[RobotBacklog]] waiting. */
-  val RobotBusy: String = "robot actor busy: backlog full"
-
-  /** Refusal counter key of a frame dropped because the gateway has [[GatewayBacklog]] waiting. */
-  val GatewayBusy: String = "gateway busy: backlog full"
+  /** Source addresses whose refusals are counted one by one; the rest are counted together (`other addresses`). */
+  val RejectionAddresses: Int = 64
 
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
@@ -135,18 +136,35 @@ object Gateway {
   /** The kernel receive buffer of the robot port: a burst of a few thousand datagrams waits there, not dropped. */
   private val ReceiveBufferBytes = 4 * 1024 * 1024
 
-  /** Refused datagrams by reason, counted by the port's reader and the gateway alike; logged sparingly. */
+  /**
+   * Refused datagrams by kind and by source address, counted by the port's reader and the gateway alike (so the maps
+   * are concurrent). Both are bounded: the kinds are a closed set, and addresses beyond [[RejectionAddresses]] share
+   * one counter. A warning names the kind only, at its 1st, 10th, 100th … refusal; the sender and its values go to
+   * the debug log, so nothing a sender chooses can make the log grow faster.
+   */
   private final class Rejections {
-    private val counts = new ConcurrentHashMap[String, AtomicLong]()
+    private val counts = new ConcurrentHashMap[Rejection, AtomicLong]()
+    private val bySource = new ConcurrentHashMap[java.net.InetAddress, AtomicLong]()
+    private val otherSources = new AtomicLong
     private val log = LoggerFactory.getLogger("naogateway.Gateway")
 
-    def count(reason: String, from: InetSocketAddress): Unit = {
-      val n = counts.computeIfAbsent(reason, _ => new AtomicLong).incrementAndGet()
-      // Logged at the 1st, 10th, 100th, ... of each reason: a flood of bad datagrams cannot flood the log.
-      if (RateLimitedLog.due(n)) log.warn("Rejected datagram from {}: {} ({} so far)", from, reason, n)
+    def count(kind: Rejection, from: InetSocketAddress, detail: => String = ""): Unit = {
+      val n = counts.computeIfAbsent(kind, _ => new AtomicLong).incrementAndGet()
+      val address = from.getAddress
+      val known = bySource.get(address)
+      if (known != null) known.incrementAndGet()
+      else if (bySource.size < RejectionAddresses) bySource.computeIfAbsent(address, _ => new AtomicLong).incrementAndGet()
+      else otherSources.incrementAndGet()
+      if (RateLimitedLog.due(n)) log.warn("Refused datagram: {} ({} so far)", kind.name, n)
+      if (log.isDebugEnabled) log.debug("Refused datagram from {}: {} {}", from, kind.name, detail)
     }
 
-    def snapshot: Map[String, Long] = counts.asScala.iterator.map { case (k, v) => k -> v.get }.toMap
+    def snapshot: Map[String, Long] = counts.asScala.iterator.map { case (k, v) => k.name -> v.get }.toMap
+
+    def sources: Map[String, Long] = {
+      val each = bySource.asScala.iterator.map { case (a, v) => a.getHostAddress -> v.get }.toMap
+      if (otherSources.get > 0) each.updated("other addresses", otherSources.get) else each
+    }
   }
 
   /**
@@ -178,15 +196,15 @@ object Gateway {
         case Routing.SegmentToRobot(route, segment) =>
           deliver(route, RobotActor.SegmentReceived(segment), from)
         case unrouted: Routing.ToGateway =>
-          if (gatewayBacklog.tryAdd()) gateway ! Unrouted(unrouted) else rejections.count(GatewayBusy, from)
-        case Routing.Refused(reason, route) =>
-          rejections.count(reason, from)
-          route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(reason))
+          if (gatewayBacklog.tryAdd()) gateway ! Unrouted(unrouted) else rejections.count(Rejection.GatewayBusy, from)
+        case Routing.Refused(kind, detail, route) =>
+          rejections.count(kind, from, detail)
+          route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(kind))
       }
     }
 
     private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
-      if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(RobotBusy, from)
+      if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)
 
     def caughtUp(): Unit = ()
   }
@@ -279,13 +297,13 @@ object Gateway {
       byId = byId.updated(robot.robotId, Entry(actor, robot.address, zeromq = true, backlog))
     }
 
-    private def reject(reason: String, from: InetSocketAddress): Unit = rejections.count(reason, from)
+    private def reject(kind: Rejection, from: InetSocketAddress, detail: => String = ""): Unit = rejections.count(kind, from, detail)
 
-    private def rejectFor(robotId: Option[Int], reason: String, from: InetSocketAddress): Unit = {
-      reject(reason, from)
+    private def rejectFor(robotId: Option[Int], kind: Rejection, from: InetSocketAddress, detail: => String): Unit = {
+      reject(kind, from, detail)
       robotId.flatMap(byId.get).foreach { e =>
         e.backlog.add()
-        e.actor ! RobotActor.DatagramRejected(reason)
+        e.actor ! RobotActor.DatagramRejected(kind)
       }
     }
 
@@ -309,7 +327,7 @@ object Gateway {
         case GameControllerEvent(UdpLink.Received(_, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
           // Anyone on the field's WiFi can send a control packet: only the configured GameController steers the gate.
           gameUntrusted += 1
-          reject(Rejection.UntrustedGameController.name, from)
+          reject(Rejection.UntrustedGameController, from)
           Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
           GameControllerCodec.decodeControl(bytes) match {
@@ -328,7 +346,7 @@ object Gateway {
                 publish(GameStateUpdated(data))
               }
             case Left(error) =>
-              reject(s"bad GameController packet: ${error.describe.takeWhile(_ != ':')}", from)
+              reject(Rejection.BadGameControllerPacket, from, error.describe)
           }
           Behaviors.same
         case GameControllerEvent(_) => Behaviors.same
@@ -363,7 +381,7 @@ object Gateway {
           rebindable += robotId
           Behaviors.same
         case GetStats(replyTo) =>
-          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size)
+          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size, rejections.sources)
           Behaviors.same
         case GetTraffic(replyTo) =>
           outbox ! Outbox.GetStats(replyTo)
@@ -394,7 +412,7 @@ object Gateway {
       }
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>
-          rejectFor(Some(robotId), s"robot id $robotId belongs to a ZeroMQ robot", from)
+          rejectFor(Some(robotId), Rejection.ZeroMqRobotId, from, s"robot id $robotId")
         // The reader saw the table before the gateway bound this IP (discovery or re-bind in between).
         case Some(entry) if entry.address.getAddress == ip => deliver(entry)
         case Some(entry) if rebindable(robotId) && !byAddress.contains(ip) =>
@@ -408,16 +426,16 @@ object Gateway {
           entry.actor ! RobotActor.Rebound(to)
           deliver(moved)
         case Some(entry) =>
-          rejectFor(Some(robotId), s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}", from)
+          rejectFor(Some(robotId), Rejection.RobotIdMismatch, from, s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}")
         case None =>
           byAddress.get(ip) match {
-            case Some(other) => rejectFor(Some(other), s"address of robot $other claims robot id $robotId", from)
+            case Some(other) => rejectFor(Some(other), Rejection.RobotIdMismatch, from, s"address of robot $other claims robot id $robotId")
             case None if settings.discoverFromKeepAlive && contents.status.isDefined =>
               // The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port.
               val at = new InetSocketAddress(ip, settings.robotReceivePort)
               context.log.info("Discovered robot [{}] at {} (sending from {})", robotId, at, from)
               deliver(spawnRobot(robotId, at, heard = true))
-            case None => reject("frame from an unknown robot that is not a keep-alive", from)
+            case None => reject(Rejection.UnknownSender, from, s"robot id $robotId")
           }
       }
     }

@@ -2,7 +2,7 @@ package naogateway
 
 import java.net.InetAddress
 
-import naogateway.wire.{FrameError, SignatureError}
+import naogateway.wire.{Datagram, FrameError, SignatureError}
 
 /**
  * Why the gateway refused a datagram: a closed set, so counters stay bounded and a warning is rate-limited per kind.
@@ -67,6 +67,12 @@ object Rejection {
   /** A reply whose call id no caller of the gateway uses. */
   case object UnknownCallId extends Rejection("unknown call id")
 
+  /** The robot actor had too many datagrams waiting: its backlog is full. */
+  case object RobotBusy extends Rejection("robot actor busy")
+
+  /** The gateway had too many unrouted frames waiting: its backlog is full. */
+  case object GatewayBusy extends Rejection("gateway busy")
+
   /** A robot that must sign sent an unsigned frame. */
   case object Unsigned extends Rejection("unsigned")
 
@@ -85,7 +91,7 @@ object Rejection {
   /** Every kind, in the order the link figures list them. */
   val all: Vector[Rejection] = Vector(Unclassifiable, TruncatedFrame, NotAFrame, BadFlags, LengthMismatch, BadGzip, BadProtobuf,
     Oversize, GameControllerOnRobotPort, BadGameControllerPacket, UntrustedGameController, StreamFromUnknownAddress, UnknownSender,
-    RobotIdMismatch, ZeroMqRobotId, RobotCapReached, BadHaViMo, UnknownCallId, Unsigned, SignatureNotLast, MalformedSignature,
+    RobotIdMismatch, ZeroMqRobotId, RobotCapReached, BadHaViMo, UnknownCallId, RobotBusy, GatewayBusy, Unsigned, SignatureNotLast, MalformedSignature,
     BadSignature, Replayed)
 
   /** The kind for a frame the decoder refused. */
@@ -97,6 +103,13 @@ object Rejection {
     case _: FrameError.BadGzip        => BadGzip
     case _: FrameError.BadProtobuf    => BadProtobuf
     case _: FrameError.Oversize       => Oversize
+  }
+
+  /** The kind for a datagram the classifier refused (protocol.md 3): `00 2A` too short for a header is a truncated frame. */
+  def of(rejected: Datagram.Rejection): Rejection = rejected match {
+    case Datagram.Rejection.TooShort(_, needed) if needed == Datagram.FuRemoteMinBytes => TruncatedFrame
+    case _: Datagram.Rejection.Oversize                                              => Oversize
+    case _                                                                            => Unclassifiable
   }
 
   /** The kind for a signature the gateway did not accept. */

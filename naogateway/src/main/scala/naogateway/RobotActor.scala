@@ -25,8 +25,8 @@ object RobotActor {
   /** A secure-stream segment from this robot's address. */
   final case class SegmentReceived(bytes: Array[Byte]) extends Command
 
-  /** A datagram from this robot's address was refused, with the reason. */
-  final case class DatagramRejected(reason: String) extends Command
+  /** A datagram from this robot's address was refused, for this kind of reason. */
+  final case class DatagramRejected(kind: Rejection) extends Command
 
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
   final case class Rebound(address: InetSocketAddress) extends Command
@@ -198,7 +198,7 @@ object RobotActor {
     private var address: InetSocketAddress = null
     private var form: HeaderForm = HeaderForm.Legacy
     private var datagramsIn, datagramsOut, bytesIn, bytesOut, retransmissions = 0L
-    private var rejected = Map.empty[String, Long]
+    private var rejected = Map.empty[Rejection, Long]
     private var rttNanos: Option[Double] = None
     private var keepAliveTimes = Queue.empty[Long]
     // The latest keep-alive's fields, the address and the link quality; `online` is not kept here but taken from the
@@ -355,9 +355,9 @@ object RobotActor {
         bytesIn += bytes.length
         children.foreach(_.stream ! StreamActor.SegmentReceived(bytes))
         Behaviors.same
-      case DatagramRejected(reason) =>
+      case DatagramRejected(kind) =>
         wiring.backlog.done()
-        count(reason)
+        count(kind)
         Behaviors.same
       case Subscribers(now) =>
         subscribers = Some(now)
@@ -398,7 +398,7 @@ object RobotActor {
         frame(contents, HeaderForm.Legacy, size, children, heartbeat, online)
         Behaviors.same
       case ZmqLinkEvent(ZmqRobotLink.MessageRejected(reason)) =>
-        count(reason)
+        count(Rejection.BadProtobuf, reason)
         Behaviors.same
       case RoundTrip(nanos) =>
         rttNanos = Some(rttNanos.fold(nanos.toDouble)(r => r * 0.875 + nanos * 0.125))
@@ -422,7 +422,7 @@ object RobotActor {
         Behaviors.same
       case GetLinkStats(replyTo) =>
         replyTo ! LinkStats(robotId, datagramsIn, datagramsOut, bytesIn, bytesOut, rttNanos.map(_ / 1e6), lossEstimate(),
-          retransmissions, rejected)
+          retransmissions, rejected.map { case (k, n) => k.name -> n })
         Behaviors.same
       case HeartbeatReport(HeartBeatActor.CameOnline | HeartBeatActor.WentOffline(_)) | Connect(_) | Wanted =>
         Behaviors.unhandled
@@ -458,7 +458,7 @@ object RobotActor {
           (id >>> 30) match {
             case 0 => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
             case 2 => heartbeat ! HeartBeatActor.ProbeAnswered(id)
-            case _ => count("unknown call id")
+            case _ => count(Rejection.UnknownCallId, s"call id $id")
           }
         }
       }
@@ -467,14 +467,14 @@ object RobotActor {
           case Right(regions) =>
             children.foreach(_.vision ! VisionActor.FrameReceived(
               VisionFrame.Regions(robotId, f.frame & 0xffffffffL, f.timestamp, regions)))
-          case Left(e) => count(s"havimo regions: ${e.describe}")
+          case Left(e) => count(Rejection.BadHaViMo, e.describe)
         }
       }
       contents.havimoGrid.foreach { f =>
         HaViMo.decodeGrid(f.cells.toByteArray) match {
           case Right(grid) =>
             children.foreach(_.vision ! VisionActor.FrameReceived(VisionFrame.Grid(robotId, f.frame & 0xffffffffL, f.timestamp, grid)))
-          case Left(e) => count(s"havimo grid: ${e.describe}")
+          case Left(e) => count(Rejection.BadHaViMo, e.describe)
         }
       }
     }
@@ -503,12 +503,12 @@ object RobotActor {
           }
       }
 
-    private def count(reason: String): Unit = {
-      val n = rejected.getOrElse(reason, 0L) + 1
-      rejected = rejected.updated(reason, n)
-      // Logged at 1, 10, 100, ... so a flood of bad datagrams cannot flood the log.
-      if (RateLimitedLog.due(n))
-        context.log.warn("Robot [{}]: rejected datagram ({}), {} so far", robotId, reason, n)
+    private def count(kind: Rejection, detail: => String = ""): Unit = {
+      val n = rejected.getOrElse(kind, 0L) + 1
+      rejected = rejected.updated(kind, n)
+      // Per kind, at 1, 10, 100, ...: the kinds are a closed set, so neither the map nor the log can grow with a flood.
+      if (RateLimitedLog.due(n)) context.log.warn("Robot [{}]: refused datagram ({}), {} so far", robotId, kind.name, n)
+      if (context.log.isDebugEnabled) context.log.debug("Robot [{}]: refused datagram ({}) {}", robotId, kind.name, detail)
     }
 
     private def lossEstimate(): Double = {

@@ -45,8 +45,11 @@ object Routing {
   final case class ToGateway(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress)
       extends Decision[Nothing]
 
-  /** Refused with `reason`; `route` is the robot bound to the sender's address, if any (it counts the refusal too). */
-  final case class Refused[A](reason: String, route: Option[Route[A]]) extends Decision[A]
+  /**
+   * Refused for `kind` (`detail`: the sender's values, for the debug log only); `route` is the robot bound to the
+   * sender's address, if any (it counts the refusal too).
+   */
+  final case class Refused[A](kind: Rejection, detail: String, route: Option[Route[A]]) extends Decision[A]
 
   /** The decision for `bytes` from `from` under `table`; total: bad bytes give [[Refused]], never an exception. */
   def decide[A](table: Table[A], bytes: Array[Byte], from: InetSocketAddress): Decision[A] = {
@@ -59,17 +62,17 @@ object Routing {
               case Some(route) if route.address == from.getAddress => ToRobot(route, header, contents, bytes.length)
               case _                                    => ToGateway(header, contents, bytes.length, from)
             }
-          case Left(error) => Refused(s"bad frame: ${error.productPrefix}", sender)
+          case Left(error) => Refused(Rejection.of(error), error.describe, sender)
         }
       case Datagram.StreamSegment(_) =>
         sender match {
           case Some(route) => SegmentToRobot(route, bytes)
-          case None        => Refused("stream segment from an unknown address", None)
+          case None        => Refused(Rejection.StreamFromUnknownAddress, "", None)
         }
       case Datagram.GameControllerControl(_) | Datagram.GameControllerReturn(_) =>
-        Refused("GameController packet on the robot port", sender)
+        Refused(Rejection.GameControllerOnRobotPort, "", sender)
       case Datagram.Rejected(reason, _) =>
-        Refused(s"unclassifiable: ${reason.describe.takeWhile(_ != ':')}", sender)
+        Refused(Rejection.of(reason), reason.describe, sender)
     }
   }
 }

@@ -143,11 +143,7 @@ object DocRobotConformanceSpec {
   val knownDisagreements: Map[Mode, Set[(String, String)]] = Map(
     Strict -> Set.empty,
     Compat -> Set.empty,
-    Lossy -> Set(
-      // §3 / §4.4: the 7-byte datagram 00 2A 00 00 00 00 00 is an FU-Remote frame the decoder refuses as Truncated(8, 7);
-      // the gateway refuses it (agreed) but counts it as "unclassifiable: datagram of 7 bytes is too short".
-      "4.4" -> "short-frame-counted-as-truncated"
-    )
+    Lossy -> Set.empty
   )
 }
 
@@ -444,12 +440,12 @@ class DocRobotConformanceSpec
     val pings = (1 to 3).map(_ => await(client.call(id, "system", "ping")))
     run.note("4.4", "answered-after-hostile-input", pings.forall { case Right(Some(RpcValue.UInt(_))) => true; case _ => false },
       s"pings after the hostile frames: $pings")
-    // Counted per robot under the error's name (4.4); a datagram over 1400 bytes is rejected before it is a frame (3).
-    val counted = poll(10.seconds)(stats.get.exists(s => Seq("BadGzip", "BadProtobuf", "LengthMismatch", "1400")
+    // Counted per robot under the kind of refusal (4.4, architecture.md 13); over 1400 bytes is "oversize" (3).
+    val counted = poll(10.seconds)(stats.get.exists(s => Seq("bad gzip", "bad protobuf", "length mismatch", "oversize")
       .forall(e => s.rejected.keys.exists(_.contains(e)))))
     run.note("4.4", "refused-frames-counted-per-robot", counted, s"rejected: ${stats.get.map(_.rejected)}")
     // A 7-byte datagram starting 00 2A is an FU-Remote frame (3) that the decoder refuses as Truncated(8, 7) (4.4).
-    run.note("4.4", "short-frame-counted-as-truncated", stats.get.exists(_.rejected.keys.exists(_.contains("Truncated"))),
+    run.note("4.4", "short-frame-counted-as-truncated", stats.get.exists(_.rejected.contains("truncated frame")),
       s"rejected: ${stats.get.map(_.rejected)}")
 
     // Calls over the lossy link (7.1): each ends cleanly, answered or timed out, and nearly all are answered.
