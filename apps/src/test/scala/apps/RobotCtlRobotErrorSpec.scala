@@ -10,7 +10,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import apps.control.{ControlServer, ControlSettings}
 import apps.zeromq.PythonClientSpec
-import naogateway.{Gateway, GatewaySettings, ZmqRobot}
+import naogateway.{Gateway, GatewaySettings, ZeroMqRobot}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /**
@@ -37,7 +37,7 @@ class RobotCtlRobotErrorSpec
       val robot = PythonClientSpec.startRobot()
       try {
         val configured = GatewaySettings(system)
-        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZmqRobot(20, robot.endpoint))))),
+        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZeroMqRobot(20, robot.endpoint))))),
           "gateway")
         val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
         val server = spawn(ControlServer(middleware, ControlSettings(system).copy(host = "127.0.0.1", port = 0)), "control")

@@ -233,7 +233,7 @@ object Gateway {
     /** The configured robots, then the reader: it never sees a table without them. */
     def start(): Unit = {
       settings.robots.foreach(r => spawnRobot(r.robotId, r.address, heard = false))
-      settings.zeromq.robots.foreach(spawnZmqRobot)
+      settings.zeromq.robots.foreach(spawnZeroMqRobot)
       port.start(reader)
     }
 
@@ -284,7 +284,7 @@ object Gateway {
     private def wiring(backlog: Backlog): RobotActor.Wiring = RobotActor.Wiring(Set.empty, Some(subscriptionRequests), backlog)
 
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
-    private def spawnZmqRobot(robot: ZmqRobot): Unit = {
+    private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
       val backlog = new Backlog(RobotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,

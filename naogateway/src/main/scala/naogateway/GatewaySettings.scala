@@ -50,25 +50,25 @@ final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: In
 }
 
 /** A robot that serves the RPC over a ZeroMQ REP socket at `endpoint`, e.g. `tcp://127.0.0.1:5600`. */
-final case class ZmqRobot(robotId: Int, endpoint: String) {
+final case class ZeroMqRobot(robotId: Int, endpoint: String) {
   require(robotId >= 0, s"zeromq.robots: robot id $robotId must not be negative")
 
   /** The endpoint's host and port, for snapshots and events. */
   val address: InetSocketAddress = endpoint match {
-    case ZmqRobot.TcpEndpoint(host, port) if port.toInt > 0 && port.toInt <= 65535 => new InetSocketAddress(host, port.toInt)
+    case ZeroMqRobot.TcpEndpoint(host, port) if port.toInt > 0 && port.toInt <= 65535 => new InetSocketAddress(host, port.toInt)
     case _ =>
       throw new IllegalArgumentException(s"zeromq.robots: robot $robotId: '$endpoint' is not tcp://<host>:<port>")
   }
 }
 
 /** Reading endpoints. */
-object ZmqRobot {
+object ZeroMqRobot {
   private val TcpEndpoint = "tcp://([^:/]+):([0-9]{1,5})".r
 }
 
 /** The links to ZeroMQ robots: which robots, how often their status is polled, and their own liveness timing. */
-final case class ZmqLinkSettings(
-    robots: Vector[ZmqRobot],
+final case class ZeroMqLinkSettings(
+    robots: Vector[ZeroMqRobot],
     statusInterval: FiniteDuration,
     statusTimeout: FiniteDuration,
     sendQueue: Int,
@@ -101,7 +101,7 @@ final case class GatewaySettings(
     budget: BudgetSettings,
     competition: Boolean,
     stream: StreamSettings,
-    zeromq: ZmqLinkSettings,
+    zeromq: ZeroMqLinkSettings,
     gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty)
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
@@ -132,7 +132,7 @@ object GatewaySettings {
     val calls = c.getConfig("calls")
     val budget = c.getConfig("budget")
     val stream = c.getConfig("stream")
-    val zmq = c.getConfig("zeromq")
+    val zeroMq = c.getConfig("zeromq")
     def duration(cfg: Config, key: String): FiniteDuration = cfg.getDuration(key).toScala
     val heartbeat = HeartbeatSettings(
       duration(hb, "keep-alive-interval"),
@@ -143,7 +143,7 @@ object GatewaySettings {
       hb.getDouble("degraded-below"),
       hb.getDouble("good-above")
     )
-    val zmqHeartbeat = zmq.getConfig("heartbeat")
+    val zeroMqHeartbeat = zeroMq.getConfig("heartbeat")
     GatewaySettings(
       bindAddress = link.getString("bind-address"),
       robotPort = link.getInt("robot-port"),
@@ -175,20 +175,20 @@ object GatewaySettings {
         maxSeq = stream.getInt("max-seq"),
         honourSkipNotices = stream.getBoolean("honour-skip-notices")
       ),
-      zeromq = ZmqLinkSettings(
-        robots = zmq.getConfigList("robots").asScala.toVector.map(r => ZmqRobot(r.getInt("id"), r.getString("endpoint"))),
-        statusInterval = duration(zmq, "status-interval"),
-        statusTimeout = duration(zmq, "status-timeout"),
-        sendQueue = zmq.getInt("send-queue"),
-        pollTimeout = duration(zmq, "poll-timeout"),
-        handshakeTimeout = duration(zmq, "handshake-timeout"),
+      zeromq = ZeroMqLinkSettings(
+        robots = zeroMq.getConfigList("robots").asScala.toVector.map(r => ZeroMqRobot(r.getInt("id"), r.getString("endpoint"))),
+        statusInterval = duration(zeroMq, "status-interval"),
+        statusTimeout = duration(zeroMq, "status-timeout"),
+        sendQueue = zeroMq.getInt("send-queue"),
+        pollTimeout = duration(zeroMq, "poll-timeout"),
+        handshakeTimeout = duration(zeroMq, "handshake-timeout"),
         // A REP robot answers one call at a time, so a posture motion holds back probes and status polls:
         // its liveness timing is its own, and the keep-alive it is judged by is the status poll.
         heartbeat = heartbeat.copy(
-          keepAliveInterval = duration(zmq, "status-interval"),
-          quietAfter = duration(zmqHeartbeat, "quiet-after"),
-          probeTimeout = duration(zmqHeartbeat, "probe-timeout"),
-          chances = zmqHeartbeat.getInt("chances")
+          keepAliveInterval = duration(zeroMq, "status-interval"),
+          quietAfter = duration(zeroMqHeartbeat, "quiet-after"),
+          probeTimeout = duration(zeroMqHeartbeat, "probe-timeout"),
+          chances = zeroMqHeartbeat.getInt("chances")
         )
       ),
       gameControllerTrusted = trustedSources(gc)

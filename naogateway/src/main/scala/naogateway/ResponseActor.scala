@@ -7,7 +7,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
-import naogateway.link.ZmqRobotLink
+import naogateway.link.ZeroMqRobotLink
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall, RpcMethod, RpcReply, RpcValue}
 
 /**
@@ -57,7 +57,7 @@ object ResponseActor {
     final case class Datagrams(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, form: HeaderForm) extends Route
 
     /** Serialized `Message`s through the robot's ZeroMQ link. */
-    final case class ZeroMq(link: ActorRef[ZmqRobotLink.Command]) extends Route
+    final case class ZeroMq(link: ActorRef[ZeroMqRobotLink.Command]) extends Route
   }
 
   /** Call ids of this actor carry this tag in their two top bits. */
@@ -156,7 +156,7 @@ object ResponseActor {
         case Route.ZeroMq(link) =>
           val bytes = contents.toProtobuf
           robot ! RobotActor.SentDirect(bytes.length)
-          link ! ZmqRobotLink.Send(bytes, Some(outcomes), id)
+          link ! ZeroMqRobotLink.Send(bytes, Some(outcomes), id)
           None
       }
     }

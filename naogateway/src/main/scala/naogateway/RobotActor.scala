@@ -8,7 +8,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 
-import naogateway.link.{Backlog, ZmqRobotLink}
+import naogateway.link.{Backlog, ZeroMqRobotLink}
 import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameState
@@ -90,7 +90,7 @@ object RobotActor {
   final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
 
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
-  private final case class ZmqLinkEvent(event: ZmqRobotLink.Event) extends Command
+  private final case class ZeroMqLinkEvent(event: ZeroMqRobotLink.Event) extends Command
   private case object PullOptions extends Command
   private case object PullKey
 
@@ -189,7 +189,7 @@ object RobotActor {
       case Transport.Datagrams => settings.heartbeat
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
-    private var zmqLink: Option[ActorRef[ZmqRobotLink.Command]] = None
+    private var zeroMqLink: Option[ActorRef[ZeroMqRobotLink.Command]] = None
     // Set by the gateway (Subscribers); None until its first answer, and events wait meanwhile.
     private var subscribers: Option[Set[ActorRef[GatewayEvent]]] = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
     private var held = Vector.empty[GatewayEvent]
@@ -218,10 +218,10 @@ object RobotActor {
       snapshot = RobotSnapshot(robotId, at)
       transport match {
         case Transport.ZeroMq(endpoint) =>
-          val loop = ZmqRobotLink.SharedLoop(context.system).loop
-          zmqLink = Some(context.spawn(
-            Behaviors.supervise(ZmqRobotLink(robotId, endpoint, settings.zeromq, settings.competition,
-              context.messageAdapter(ZmqLinkEvent.apply), loop)).onFailure(ChildRestarts),
+          val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
+          zeroMqLink = Some(context.spawn(
+            Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq, settings.competition,
+              context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(ChildRestarts),
             "zeromq-link"
           ))
         case Transport.Datagrams => ()
@@ -392,12 +392,12 @@ object RobotActor {
         transmit(out, priority, outcome, tag)
         Behaviors.same
       case GameStateChanged(state) =>
-        zmqLink.foreach(_ ! ZmqRobotLink.GameStateChanged(state))
+        zeroMqLink.foreach(_ ! ZeroMqRobotLink.GameStateChanged(state))
         Behaviors.same
-      case ZmqLinkEvent(ZmqRobotLink.MessageReceived(contents, size)) =>
+      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) =>
         frame(contents, HeaderForm.Legacy, size, children, heartbeat, online)
         Behaviors.same
-      case ZmqLinkEvent(ZmqRobotLink.MessageRejected(reason)) =>
+      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageRejected(reason)) =>
         count(Rejection.BadProtobuf, reason)
         Behaviors.same
       case RoundTrip(nanos) =>
@@ -430,7 +430,7 @@ object RobotActor {
 
     /** Where calls go now: this actor owns the address and header form, the response actor follows them. */
     private def route: ResponseActor.Route =
-      zmqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form))(ResponseActor.Route.ZeroMq(_))
+      zeroMqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form))(ResponseActor.Route.ZeroMq(_))
 
     private def routeChanged(children: Option[Children]): Unit =
       children.foreach(_.response ! ResponseActor.RouteChanged(route))
@@ -481,7 +481,7 @@ object RobotActor {
 
     /** Encodes `out` for this robot's transport and hands it on: to the outbox, or to the ZeroMQ link. */
     private def transmit(out: Outbound, priority: Priority, outcome: Option[ActorRef[Outbox.Outcome]], tag: Long): Unit =
-      zmqLink match {
+      zeroMqLink match {
         case None =>
           encode(out) match {
             case Right(bytes) =>
@@ -498,7 +498,7 @@ object RobotActor {
               val bytes = contents.toProtobuf
               datagramsOut += 1
               bytesOut += bytes.length
-              link ! ZmqRobotLink.Send(bytes, outcome, tag)
+              link ! ZeroMqRobotLink.Send(bytes, outcome, tag)
             case None => outcome.foreach(_ ! Outbox.Dropped(tag, "the secure stream does not run over ZeroMQ"))
           }
       }

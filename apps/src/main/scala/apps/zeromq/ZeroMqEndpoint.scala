@@ -16,7 +16,7 @@ import akka.stream.typed.scaladsl.ActorSink
 import akka.stream.{KillSwitches, SharedKillSwitch, UniqueKillSwitch}
 import org.zeromq.{SocketType, ZMQ, ZMsg}
 
-import naogateway.link.ZmqLoop
+import naogateway.link.ZeroMqLoop
 import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{RobotSnapshot, VisionFrame}
@@ -24,7 +24,7 @@ import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
 
 /**
  * The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket
- * (docs/zeromq.md). The sockets live on a `ZmqLoop` on the endpoint's own dispatcher; this actor hands requests to
+ * (docs/zeromq.md). The sockets live on a `ZeroMqLoop` on the endpoint's own dispatcher; this actor hands requests to
  * the `RobotInterface` and replies go back to the loop, so no actor ever blocks.
  */
 object ZeroMqEndpoint {
@@ -127,7 +127,7 @@ object ZeroMqEndpoint {
     private implicit val system: ActorSystem[_] = context.system
     // Only for composing the interface's futures; none of their callbacks touches the actor's state.
     private implicit val ec: ExecutionContext = context.executionContext
-    private val loop = new ZmqLoop(LoopName, settings.pollTimeout)
+    private val loop = new ZeroMqLoop(LoopName, settings.pollTimeout)
     private val io = new Io
     private val streams: SharedKillSwitch = KillSwitches.shared("zeromq-endpoint")
     private var visionStreams = Map.empty[Int, UniqueKillSwitch]

@@ -16,8 +16,8 @@ import org.scalatest.Assertions
 import org.scalatest.wordspec.AnyWordSpecLike
 import org.zeromq.{ZMQ, ZMQException}
 
-import naogateway.sim.{FirmwareSettings, ZmqSimulatedRobot}
-import naogateway.{Gateway, GatewaySettings, ZmqRobot}
+import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
+import naogateway.{Gateway, GatewaySettings, ZeroMqRobot}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** A Python virtual environment under target/ with the client's pinned packages, made once and reused. */
@@ -92,13 +92,13 @@ object PythonClientSpec {
    * The simulated robot, started on a free port. It binds the endpoint it is given and cannot tell a port it picked
    * itself, so the port is picked here; one that another process takes before the robot binds it is picked again.
    */
-  @tailrec def startRobot(attempts: Int = 5): ZmqSimulatedRobot = {
+  @tailrec def startRobot(attempts: Int = 5): ZeroMqSimulatedRobot = {
     val port = {
       val s = new ServerSocket(0)
       try s.getLocalPort
       finally s.close()
     }
-    val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 20), s"tcp://127.0.0.1:$port")
+    val robot = new ZeroMqSimulatedRobot(FirmwareSettings(robotId = 20), s"tcp://127.0.0.1:$port")
     val started = Try(robot.start())
     started match {
       case Success(_) => robot
@@ -117,7 +117,7 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
       val robot = startRobot()
       try {
         val configured = GatewaySettings(system)
-        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZmqRobot(20, robot.endpoint))))),
+        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZeroMqRobot(20, robot.endpoint))))),
           "gateway")
         val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
         val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq")

@@ -77,18 +77,18 @@ class ZeroMqEndpointSpec
     endpoint ! ZeroMqEndpoint.GetAddresses(probe.ref)
     probe.receiveMessage(5.seconds)
   }
-  private val zmq = new ZContext()
+  private val zeroMq = new ZContext()
   private val threads = Executors.newFixedThreadPool(8)
   private implicit val threadPool: ExecutionContext = ExecutionContext.fromExecutor(threads)
 
   override protected def afterAll(): Unit = {
     threads.shutdownNow()
-    zmq.close()
+    zeroMq.close()
     super.afterAll()
   }
 
   private def dealer(): ZMQ.Socket = {
-    val s = zmq.createSocket(SocketType.DEALER)
+    val s = zeroMq.createSocket(SocketType.DEALER)
     s.setLinger(0)
     readyClient(s)
     s.connect(addresses.requests)
@@ -175,7 +175,7 @@ class ZeroMqEndpointSpec
       }
       val reqs = (1 to 2).map { client =>
         Future {
-          val s = zmq.createSocket(SocketType.REQ)
+          val s = zeroMq.createSocket(SocketType.REQ)
           s.setLinger(0)
           readyClient(s)
           s.setReceiveTimeOut(10000)
@@ -295,7 +295,7 @@ class ZeroMqEndpointSpec
     "answer a request the robots do not answer in time once, with a timeout, and drop the late answer" in {
       // Robot 14 answers only when the test lets it, after the timeout reply: the order does not depend on timing.
       val (own, addresses) = ownEndpoint(stub, _.copy(requestTimeout = 300.millis))
-      val s = zmq.createSocket(SocketType.DEALER)
+      val s = zeroMq.createSocket(SocketType.DEALER)
       s.setLinger(0)
       readyClient(s)
       s.connect(addresses.requests)
@@ -312,7 +312,7 @@ class ZeroMqEndpointSpec
     }
 
     "publish status and game always, and a robot's vision only while someone subscribes to it" in {
-      val sub = zmq.createSocket(SocketType.SUB)
+      val sub = zeroMq.createSocket(SocketType.SUB)
       sub.setLinger(0)
       readyClient(sub)
       sub.connect(addresses.publish)

@@ -11,7 +11,7 @@ import akka.actor.typed.scaladsl.Behaviors
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZmqSimulatedRobot}
+import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZeroMqSimulatedRobot}
 import naogateway.testkit.TestLoopback
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.wire.{MessageContents, RpcCall, RpcValue}
@@ -238,10 +238,10 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       }
 
     "close a ZeroMQ robot's gate before any subscriber hears of kick-off" in {
-      val zmqRobot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 25), "tcp://127.0.0.1:*")
-      zmqRobot.start()
+      val zeroMqRobot = new ZeroMqSimulatedRobot(FirmwareSettings(robotId = 25), "tcp://127.0.0.1:*")
+      zeroMqRobot.start()
       try {
-        val endpoint = zmqRobot.boundEndpoint.get
+        val endpoint = zeroMqRobot.boundEndpoint.get
         withGateway(s"""competition.enabled = on
           |game-controller.trusted-sources = ["127.0.0.0/8"]
             |zeromq.robots = [{ id = 25, endpoint = "$endpoint" }]""".stripMargin) { f =>
@@ -268,7 +268,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
             eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
           } finally gc.close()
         }
-      } finally zmqRobot.stop()
+      } finally zeroMqRobot.stop()
     }
 
     "relay every robot datagram byte-identical to FU-Remote and reject spoofed robot ids" in {

@@ -12,11 +12,11 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import org.zeromq.{SocketType, ZContext}
 
 import naogateway._
-import naogateway.sim.{FirmwareSettings, ZmqSimulatedRobot}
+import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
 import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 
-object ZmqRobotLinkSpec {
+object ZeroMqRobotLinkSpec {
 
   /** Every endpoint a test binds lets the system pick the port; the real one is read back after binding. */
   val AnyPort: String = "tcp://127.0.0.1:*"
@@ -37,8 +37,8 @@ object ZmqRobotLinkSpec {
        |""".stripMargin
 }
 
-class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config) with AnyWordSpecLike with LogCapturing {
-  import ZmqRobotLinkSpec._
+class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.config) with AnyWordSpecLike with LogCapturing {
+  import ZeroMqRobotLinkSpec._
 
   /** The gateway's settings with one ZeroMQ robot, `robotId` at `endpoint`. */
   private def gatewaySettings(robotId: Int, endpoint: String): GatewaySettings =
@@ -60,9 +60,9 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
       case _                      => FishingOutcome.ContinueAndIgnore
     }.collectFirst(pf).get
 
-  "ZmqLoop" must {
+  "ZeroMqLoop" must {
     "end its thread and terminate its context promptly when stopped, and refuse work afterwards" in {
-      val loop = new ZmqLoop("spec-loop", 100.millis)
+      val loop = new ZeroMqLoop("spec-loop", 100.millis)
       val executor = java.util.concurrent.Executors.newSingleThreadExecutor()
       try {
         loop.start(executor)
@@ -85,9 +85,9 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
     }
   }
 
-  "ZmqSimulatedRobot" must {
+  "ZeroMqSimulatedRobot" must {
     "answer the firmware's RPC over REP, the heartbeat's probe with the unknown-method error, and hold posture calls" in {
-      val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 31), AnyPort)
+      val robot = new ZeroMqSimulatedRobot(FirmwareSettings(robotId = 31), AnyPort)
       robot.start()
       val endpoint = robot.boundEndpoint.get
       val context = new ZContext()
@@ -123,7 +123,7 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
 
   "A ZeroMQ robot behind the gateway" must {
     "come online, serve calls and the heartbeat through the link, go offline when stopped and come back when restarted" in {
-      val robot = new ZmqSimulatedRobot(FirmwareSettings(robotId = 20), AnyPort)
+      val robot = new ZeroMqSimulatedRobot(FirmwareSettings(robotId = 20), AnyPort)
       robot.start()
       try {
         val events = createTestProbe[GatewayEvent]()
@@ -181,16 +181,16 @@ class ZmqRobotLinkSpec extends ScalaTestWithActorTestKit(ZmqRobotLinkSpec.config
       try {
         deaf.bind(new InetSocketAddress("127.0.0.1", 0))
         val settings = GatewaySettings(system).zeromq
-        val owner = createTestProbe[ZmqRobotLink.Event]()
+        val owner = createTestProbe[ZeroMqRobotLink.Event]()
         val outcomes = createTestProbe[Outbox.Outcome]()
-        val link = spawn(ZmqRobotLink(21, s"tcp://127.0.0.1:${deaf.getLocalPort}", settings, competition = true, owner.ref,
-          ZmqRobotLink.SharedLoop(system).loop))
-        link ! ZmqRobotLink.GameStateChanged(GameState.Playing)
-        link ! ZmqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 5L)
+        val link = spawn(ZeroMqRobotLink(21, s"tcp://127.0.0.1:${deaf.getLocalPort}", settings, competition = true, owner.ref,
+          ZeroMqRobotLink.SharedLoop(system).loop))
+        link ! ZeroMqRobotLink.GameStateChanged(GameState.Playing)
+        link ! ZeroMqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 5L)
         outcomes.expectMessage(Outbox.RefusedByRule(5L, Outbox.NoSendingWhileGameRuns))
-        link ! ZmqRobotLink.GameStateChanged(GameState.Finished)
+        link ! ZeroMqRobotLink.GameStateChanged(GameState.Finished)
         // Nobody listens on the port: with immediate queueing the request is dropped, not kept for later.
-        link ! ZmqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 6L)
+        link ! ZeroMqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 6L)
         outcomes.expectMessageType[Outbox.Dropped].tag shouldBe 6L
         testKit.stop(link)
       } finally deaf.close()

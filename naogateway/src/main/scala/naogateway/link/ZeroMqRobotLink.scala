@@ -13,14 +13,14 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.wire.gamecontroller.GameState
-import naogateway.{Outbox, ZmqLinkSettings}
+import naogateway.{Outbox, ZeroMqLinkSettings}
 
 /**
  * The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several
  * may wait in the robot's queue, answered in order), replies come back as decoded messages. Such a robot cannot push
  * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive.
  */
-object ZmqRobotLink {
+object ZeroMqRobotLink {
 
   /** What a link accepts. */
   sealed trait Command
@@ -55,10 +55,10 @@ object ZmqRobotLink {
   def apply(
       robotId: Int,
       endpoint: String,
-      settings: ZmqLinkSettings,
+      settings: ZeroMqLinkSettings,
       competition: Boolean,
       owner: ActorRef[Event],
-      loop: ZmqLoop
+      loop: ZeroMqLoop
   ): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
@@ -199,9 +199,9 @@ object ZmqRobotLink {
   final class SharedLoop(system: ActorSystem[_]) extends Extension {
 
     /** The loop; its thread comes from `naogateway.zeromq.dispatcher`. */
-    val loop: ZmqLoop = {
+    val loop: ZeroMqLoop = {
       val settings = system.settings.config.getConfig("naogateway.zeromq")
-      val l = new ZmqLoop("zeromq-robots", settings.getDuration("poll-timeout").toScala)
+      val l = new ZeroMqLoop("zeromq-robots", settings.getDuration("poll-timeout").toScala)
       l.start(system.dispatchers.lookup(DispatcherSelector.fromConfig("naogateway.zeromq.dispatcher")))
       CoordinatedShutdown(system.toClassic).addTask(CoordinatedShutdown.PhaseBeforeActorSystemTerminate, "zeromq-robot-links") { () =>
         l.stop()

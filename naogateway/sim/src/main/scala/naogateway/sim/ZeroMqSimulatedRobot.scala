@@ -21,8 +21,8 @@ import naogateway.wire.{HeaderForm, MessageContents, RpcReply}
  * as a power-cycled robot keeps its address.
  * `start` and `stop` block until the socket is bound or closed: call them from tests or tools, never from an actor.
  */
-final class ZmqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) {
-  private val log = LoggerFactory.getLogger(classOf[ZmqSimulatedRobot])
+final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) {
+  private val log = LoggerFactory.getLogger(classOf[ZeroMqSimulatedRobot])
   // Replies of the firmware go to this marker; everything else it emits (keep-alives, debug data) has nowhere to go.
   private val ReplyMarker = Destination.ReplyTo(new InetSocketAddress("127.0.0.1", 1))
   private val PollMillis = 20L

@@ -18,11 +18,11 @@ import org.zeromq.{SocketType, ZContext, ZMQ}
  * actors never touch them: they `submit` operations, which the loop runs on its own thread between polls.
  * The loop blocks in `poll`, so it runs on a dedicated dispatcher, never on the actors' one.
  */
-final class ZmqLoop(val name: String, pollTimeout: FiniteDuration) extends Runnable {
+final class ZeroMqLoop(val name: String, pollTimeout: FiniteDuration) extends Runnable {
   require(pollTimeout.toMillis >= 1, "the poll timeout must be at least 1 ms")
 
-  private val log = LoggerFactory.getLogger(classOf[ZmqLoop])
-  private val operations = new ConcurrentLinkedQueue[ZmqLoop.Sockets => Unit]()
+  private val log = LoggerFactory.getLogger(classOf[ZeroMqLoop])
+  private val operations = new ConcurrentLinkedQueue[ZeroMqLoop.Sockets => Unit]()
   // A pipe in the poll set lets another thread end a poll at once instead of after the timeout.
   private val wakeUp = Pipe.open()
   wakeUp.source.configureBlocking(false)
@@ -33,7 +33,7 @@ final class ZmqLoop(val name: String, pollTimeout: FiniteDuration) extends Runna
   private val done = Promise[Done]()
 
   /** Runs `operation` on the loop's thread; false when the loop is stopping (the operation is then dropped). */
-  def submit(operation: ZmqLoop.Sockets => Unit): Boolean =
+  def submit(operation: ZeroMqLoop.Sockets => Unit): Boolean =
     if (stopping) false
     else {
       operations.add(operation)
@@ -79,7 +79,7 @@ final class ZmqLoop(val name: String, pollTimeout: FiniteDuration) extends Runna
     thread.setName(s"$threadName-$name")
     val context = new ZContext(1)
     context.setLinger(0)
-    val sockets = new ZmqLoop.Sockets(context)
+    val sockets = new ZeroMqLoop.Sockets(context)
     var poller: ZMQ.Poller = null
     var pollerItems = Vector.empty[ZMQ.Socket]
     val drain = ByteBuffer.allocate(64)
@@ -140,16 +140,16 @@ final class ZmqLoop(val name: String, pollTimeout: FiniteDuration) extends Runna
 }
 
 /** The loop's side: sockets and their handlers, used only on the loop's thread. */
-object ZmqLoop {
+object ZeroMqLoop {
 
   /** Messages read from one socket per wake-up at most, so one busy socket cannot starve the others. */
   val ReadBatch: Int = 256
 
   /** Creating, watching and closing sockets; only ever called on the loop's thread (inside `submit`). */
-  final class Sockets private[ZmqLoop] (context: ZContext) {
+  final class Sockets private[ZeroMqLoop] (context: ZContext) {
     private var handlers = Map.empty[ZMQ.Socket, ZMQ.Socket => Boolean]
     private var order = Vector.empty[ZMQ.Socket]
-    private[ZmqLoop] var changed = false
+    private[ZeroMqLoop] var changed = false
 
     /** A new socket of `kind` that drops unsent messages when closed (no linger). */
     def socket(kind: SocketType): ZMQ.Socket = {
@@ -178,9 +178,9 @@ object ZmqLoop {
       socket.close()
     }
 
-    private[ZmqLoop] def readable: Vector[ZMQ.Socket] = order
+    private[ZeroMqLoop] def readable: Vector[ZMQ.Socket] = order
 
-    private[ZmqLoop] def dispatch(socket: ZMQ.Socket): Unit =
+    private[ZeroMqLoop] def dispatch(socket: ZMQ.Socket): Unit =
       handlers.get(socket).foreach { read =>
         var n = 0
         while (n < ReadBatch && read(socket)) n += 1
