@@ -204,7 +204,13 @@ object GatewayBench extends Benchmark {
 
   /** One thread sending the frames round-robin, each from its own socket, to `target` for `seconds`. */
   private final class Blaster(target: InetSocketAddress, frames: Array[Array[Byte]]) {
-    private val channels = frames.map(_ => DatagramChannel.open().bind(anyLoopbackPort))
+    // The gateway knows a robot by its IP address: each ingest robot sends from a loopback address of its own.
+    private val first = naogateway.testkit.TestLoopback.block(frames.length)
+    private val channels = frames.indices.toArray.map { i =>
+      val base = ByteBuffer.wrap(first.getAddress).getInt
+      val address = java.net.InetAddress.getByAddress(ByteBuffer.allocate(4).putInt(base + i).array())
+      DatagramChannel.open().bind(new InetSocketAddress(address, 0))
+    }
     private val buffers = frames.map { f =>
       val b = ByteBuffer.allocateDirect(f.length)
       b.put(f)
