@@ -240,9 +240,11 @@ private[robotmiddleware] object RobotGuard {
         }
         Behaviors.same
       case SafetyStepDone(step, result) =>
+        val wantsSit = step == SafetyStep.StopThenSit || (isStop(step) && sitAfterStop)
+        if (isStop(step)) { stopInFlight = false; sitAfterStop = false }
         result.result match {
           // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
-          case Right(_) | Left(_: RobotFailure.Superseded) if step == SafetyStep.StopThenSit && safety.isDefined =>
+          case Right(_) | Left(_: RobotFailure.Superseded) if wantsSit && safety.isDefined =>
             safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)), settings.postureTimeout)
           case Left(_: RobotFailure.Superseded) => () // a newer call of the slot took over: nothing failed
           case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
@@ -290,7 +292,24 @@ private[robotmiddleware] object RobotGuard {
 
 
     /** One ask per step, not a message adapter: Akka keeps one adapter per message class, so labels would mix. */
-    private def safetyCall(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
+    // One safety stop in flight at a time (the response actor resends it with new call ids when it is lost): events
+    // anyone can provoke (a robot coming back, a battery reading) cannot be turned into a flood of stops. A hold that
+    // wants the robot sitting while a stop is in flight sits once that stop is answered.
+    private var stopInFlight = false
+    private var sitAfterStop = false
+
+    private def isStop(step: SafetyStep): Boolean =
+      step == SafetyStep.StopThenSit || step == SafetyStep.StopOnly || step == SafetyStep.StopAfterReconnect
+
+    private def safetyCall(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit =
+      if (isStop(step) && stopInFlight) {
+        if (step == SafetyStep.StopThenSit) sitAfterStop = true
+      } else {
+        if (isStop(step)) stopInFlight = true
+        askSafety(c, step, rpc, timeout)
+      }
+
+    private def askSafety(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
       implicit val askTimeout: Timeout = timeout + 1.second
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
