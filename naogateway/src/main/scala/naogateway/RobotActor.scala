@@ -89,7 +89,14 @@ object RobotActor {
   /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
   final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
 
+  /** A stream subscribes to this robot's camera frames (through the vision actor, which this actor outlives). */
+  final case class VisionSubscribe(subscriber: ActorRef[VisionFrame], grid: Boolean) extends FromChild
+
+  /** The vision actor (re)started and asks for the registrations; every later change is pushed to it. */
+  final case class VisionSubscribersWanted(replyTo: ActorRef[VisionActor.Subscribers]) extends FromChild
+
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
+  private final case class VisionSubscriberGone(subscriber: ActorRef[VisionFrame]) extends Command
   private final case class ZeroMqLinkEvent(event: ZeroMqRobotLink.Event) extends Command
   private case object PullOptions extends Command
   private case object PullKey
@@ -212,6 +219,9 @@ object RobotActor {
     // Over datagrams, option commands wait for it; a ZeroMQ robot is not pulled (docs/zeromq.md).
     private var optionList: Option[Seq[DebuggingOption]] = None
     private var pulling = false
+    // The camera streams of this robot and whether each wants grid frames: kept here, so a restarted vision actor
+    // gets them back (VisionSubscribersWanted). Apps subscribe through the middleware, one stream each.
+    private var visionSubscribers = Map.empty[ActorRef[VisionFrame], Boolean]
 
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       address = at
@@ -366,6 +376,18 @@ object RobotActor {
         Behaviors.same
       case ReachabilityWanted(replyTo) =>
         replyTo ! online
+        Behaviors.same
+      case VisionSubscribe(subscriber, grid) =>
+        if (!visionSubscribers.contains(subscriber)) context.watchWith(subscriber, VisionSubscriberGone(subscriber))
+        visionSubscribers = visionSubscribers.updated(subscriber, grid)
+        children.foreach(_.vision ! VisionActor.Subscribers(visionSubscribers))
+        Behaviors.same
+      case VisionSubscriberGone(subscriber) =>
+        visionSubscribers -= subscriber
+        children.foreach(_.vision ! VisionActor.Subscribers(visionSubscribers))
+        Behaviors.same
+      case VisionSubscribersWanted(replyTo) =>
+        replyTo ! VisionActor.Subscribers(visionSubscribers)
         Behaviors.same
       case Rebound(newAddress) =>
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
