@@ -58,9 +58,9 @@ final case class ClockSyncSettings(window: FiniteDuration = ClockSync.DefaultWin
  * can exceed.
  *
  * The error bound: the fit's line touches two points, and the error of the line is linear between what their delays
- * make it at each. Those delays are not seen; they are taken as at most twice the `k`-th smallest distance of the
- * window's points above the line (`k` = [[BoundRank]], or half the points while fewer) plus one tick of the robot's
- * clock (its ms readings are cut, not rounded). Away from the two points the bound grows with the distance over their
+ * make it at each. Those delays are not seen; they are taken as at most a multiple of the `k`-th smallest distance of the
+ * window's points above the line (`k` = [[BoundRank]], or half the points while fewer; the factor is
+ * [[BoundFactor]]) plus [[ReadingMillis]] for the robot's whole-ms readings. Away from the two points the bound grows with the distance over their
  * span. It is a statistical bound for delays whose least values recur (the jitter of a LAN), not a proof: a link whose
  * every datagram of the window waited long shifts the offset by that wait (see [[ClockEstimate]]).
  *
@@ -191,10 +191,13 @@ object ClockSync {
   val BoundRank: Int = 10
 
   /** The factor on that distance. */
-  val BoundFactor: Double = 2.0
+  val BoundFactor: Double = 2.5
 
-  /** The robot clock's resolution: its readings are whole ms. */
-  val TickMillis: Double = 1.0
+  /**
+   * What the robot's whole-ms readings add: each is up to 1 ms behind its clock, and as that cut sweeps along a window
+   * it can tilt the fit by up to half as much again.
+   */
+  val ReadingMillis: Double = 1.5
 
   /** The largest drift a fit may show; crystals are within about 100 ppm. */
   val MaxDriftPpm: Double = 1000.0
@@ -270,7 +273,7 @@ object ClockSync {
         }
       val above = Array.tabulate(n)(j => math.max(0.0, py(j) - c - s * px(j)))
       java.util.Arrays.sort(above)
-      val b = BoundFactor * above(math.min(BoundRank, n / 2)) + TickMillis
+      val b = BoundFactor * above(math.min(BoundRank, n / 2)) + ReadingMillis
       Some(Fit(c, s, v1, v2, b, at))
     }
   }
