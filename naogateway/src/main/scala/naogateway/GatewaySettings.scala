@@ -102,7 +102,8 @@ final case class GatewaySettings(
     competition: Boolean,
     stream: StreamSettings,
     zeromq: ZeroMqLinkSettings,
-    gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty)
+    gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty),
+    clockSync: ClockSyncSettings = ClockSyncSettings()
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
@@ -191,7 +192,8 @@ object GatewaySettings {
           chances = zeroMqHeartbeat.getInt("chances")
         )
       ),
-      gameControllerTrusted = trustedSources(gc)
+      gameControllerTrusted = trustedSources(gc),
+      clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window"))
     )
   }
 

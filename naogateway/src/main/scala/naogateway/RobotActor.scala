@@ -213,6 +213,8 @@ object RobotActor {
     private var snapshot: RobotSnapshot = null
     // The bootId the restart rule compares the next keep-alive with (RobotSnapshot.keepAlive).
     private var lastBootId: Option[Int] = None
+    // The robot's clock against the gateway's, from keep-alives alone; a new session at every restart.
+    private var clockSync = ClockSync(settings.clockSync)
     // Debug options switched on through the gateway, re-enabled after a robot restart.
     private var activeOptions = Set.empty[String]
     // The robot's option list of this session (protocol.md 8): None until its optionPush answers our optionPull.
@@ -444,7 +446,7 @@ object RobotActor {
         Behaviors.same
       case GetLinkStats(replyTo) =>
         replyTo ! LinkStats(robotId, datagramsIn, datagramsOut, bytesIn, bytesOut, rttNanos.map(_ / 1e6), lossEstimate(),
-          retransmissions, rejected.map { case (k, n) => k.name -> n })
+          retransmissions, rejected.map { case (k, n) => k.name -> n }, clockSync.estimate)
         Behaviors.same
       case HeartbeatReport(HeartBeatActor.CameOnline | HeartBeatActor.WentOffline(_)) | Connect(_) | Wanted =>
         Behaviors.unhandled
@@ -554,8 +556,14 @@ object RobotActor {
       // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
       keepAliveTimes = keepAliveTimes.enqueue(now).dropWhile(_ < now - settings.heartbeat.qualityWindow.toNanos)
       val step = RobotSnapshot.keepAlive(snapshot, lastBootId, contents.status.get, contents.robotHealth, now)
-      snapshot = step.snapshot
       lastBootId = step.lastBootId
+      if (step.restarted) clockSync = clockSync.restart
+      // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.
+      val robotTime = contents.status.get.timestamp
+        .orElse(contents.robotHealth.flatMap(_.uptimeMs).map(u => clockSync.unwrap32(u.toLong)))
+      robotTime.foreach(t => clockSync = clockSync.add(t, now))
+      val clock = clockSync.estimate
+      snapshot = step.snapshot.copy(clock = clock, stampedAtNanos = for (t <- robotTime; c <- clock) yield c.toGatewayNanos(t))
       if (step.restarted) resync(children, online)
       publish(RobotStatusUpdated(view(online)))
     }

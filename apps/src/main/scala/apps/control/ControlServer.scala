@@ -301,14 +301,19 @@ object ControlServer {
 
   /** The column heads of [[statusLine]]. */
   val statusHeader: String =
-    f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s ${"rtt"}%-9s loss"
+    f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s ${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
 
-  /** One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss. */
+  /**
+   * One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
+   * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
+   */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
     val address = s"${r.address.getAddress.getHostAddress}:${r.address.getPort}"
     val rtt = stats.flatMap(_.rttMillis).fold("-")(v => f"$v%.1f ms")
     val loss = stats.fold("-")(s => f"${s.lossEstimate * 100}%.0f %%")
+    val clock = r.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
+    val drift = r.clock.fold("-")(c => f"${c.driftPpm}%+.0f ppm")
     f"${r.robotId}%-4d $address%-22s ${if (r.online) "online" else "offline"}%-8s ${r.quality.name}%-9s " +
-      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.fold("-")(_.name)}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss"
+      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.fold("-")(_.name)}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
   }
 }

@@ -32,7 +32,8 @@ final case class FirmwareSettings(
     maxTurn: Double = 1.0,
     startPose: Pose = Pose(-1.0, 0.0, 0.0),
     scene: Scene = Scene(0.5, 0.3),
-    headerForm: HeaderForm = HeaderForm.Legacy
+    headerForm: HeaderForm = HeaderForm.Legacy,
+    clock: RobotClock = RobotClock.Exact
 ) {
   require(robotId >= 0, s"robotId must not be negative, got $robotId")
   require(keepAliveInterval > Duration.Zero, "keepAliveInterval must be positive")
@@ -98,8 +99,8 @@ final case class FirmwareState(
     stats: FirmwareStats
 ) {
 
-  /** Milliseconds since the firmware booted. */
-  def uptimeMillis: Long = math.max(0L, (now - bootedAt) / 1000000L)
+  /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */
+  def uptimeMillis: Long = settings.clock.millisAt(now - bootedAt)
 
   /** The next moment `RobotFirmware.advance` has something to do. */
   def nextWakeUp: Long = {
