@@ -97,12 +97,18 @@ object Gateway {
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
 
-  /** A datagram robot as the port's reader reaches it: its actor and the backlog of what the reader handed it. */
-  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog)
+  /**
+   * A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
+   * robot that must sign, the check every frame passes before it is handed on.
+   */
+  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
-  /** A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is. */
+  /**
+   * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
+   * `signatures`, its frames count only when signed (the IP alone does not identify it then).
+   */
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
-      backlog: Backlog)
+      backlog: Backlog, signatures: Option[SignatureCheck] = None)
 
   /** The gateway with `settings`. */
   def apply(settings: GatewaySettings): Behavior[Command] =
@@ -113,8 +119,10 @@ object Gateway {
           try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
           catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
         context.log.info("Gateway listening for robots on {}", port.localAddress)
+        // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
+        val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
         val outbox = context.spawn(
-          Behaviors.supervise(Outbox(port, settings.budget, settings.competition))
+          Behaviors.supervise(Outbox(port, settings.budget, settings.competition, signer))
             .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
           "outbox",
           RobotDispatcher
@@ -192,7 +200,13 @@ object Gateway {
       outbox ! Outbox.Inbound(table.byAddress.get(from.getAddress).fold(-1)(_.robotId), bytes.length)
       Routing.decide(table, bytes, from) match {
         case Routing.ToRobot(route, header, contents, size) =>
-          deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
+          route.target.signatures.map(_.check(bytes, header)) match {
+            case Some(Left(kind)) =>
+              rejections.count(kind, from)
+              if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
+            case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          }
         case Routing.SegmentToRobot(route, segment) =>
           deliver(route, RobotActor.SegmentReceived(segment), from)
         case unrouted: Routing.ToGateway =>
@@ -261,7 +275,7 @@ object Gateway {
     /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
       reader.routes.set(Routing.Table.of(byId.collect {
-        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog))
+        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog, e.signatures))
       }))
 
     private def spawnRobot(robotId: Int, address: InetSocketAddress, heard: Boolean): Entry = {
@@ -273,7 +287,8 @@ object Gateway {
         RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId))
-      val entry = Entry(actor, address, zeromq = false, backlog)
+      val signatures = settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
+      val entry = Entry(actor, address, zeromq = false, backlog, signatures)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address.getAddress, robotId)
       publishRoutes()
@@ -314,7 +329,7 @@ object Gateway {
 
     private def handleUnrouted(u: Unrouted): Unit = {
       gatewayBacklog.done()
-      frame(u.frame.header, u.frame.contents, u.frame.size, u.frame.from)
+      frame(u.frame.header, u.frame.contents, u.frame.size, u.frame.from, u.frame.bytes)
     }
 
     def running(addresses: Addresses): Behavior[Command] =
@@ -403,28 +418,38 @@ object Gateway {
      * Decides a frame the reader's table could not place, binding a robot id to the IP address it first came from.
      * Everything sent to the robot goes to that IP at the robot's receive port, never to the frame's source port.
      */
-    private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress): Unit = {
+    private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress, bytes: Array[Byte]): Unit = {
       val robotId = contents.robotId
       val ip = from.getAddress
       def deliver(entry: Entry): Unit = {
         entry.backlog.add()
         entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
       }
+      // The same check as on the reader's path, and before any re-binding: an address alone proves nothing.
+      def verified(entry: Entry): Boolean =
+        entry.signatures.map(_.check(bytes, header)) match {
+          case Some(Left(kind)) =>
+            rejectFor(Some(robotId), kind, from, s"robot id $robotId")
+            false
+          case _ => true
+        }
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>
           rejectFor(Some(robotId), Rejection.ZeroMqRobotId, from, s"robot id $robotId")
         // The reader saw the table before the gateway bound this IP (discovery or re-bind in between).
-        case Some(entry) if entry.address.getAddress == ip => deliver(entry)
+        case Some(entry) if entry.address.getAddress == ip => if (verified(entry)) deliver(entry)
         case Some(entry) if rebindable(robotId) && !byAddress.contains(ip) =>
           // An explicit re-bind: the robot moved to another host. It keeps its receive port.
-          rebindable -= robotId
-          val to = new InetSocketAddress(ip, entry.address.getPort)
-          byAddress = byAddress - entry.address.getAddress + (ip -> robotId)
-          val moved = entry.copy(address = to)
-          byId = byId.updated(robotId, moved)
-          publishRoutes()
-          entry.actor ! RobotActor.Rebound(to)
-          deliver(moved)
+          if (verified(entry)) {
+            rebindable -= robotId
+            val to = new InetSocketAddress(ip, entry.address.getPort)
+            byAddress = byAddress - entry.address.getAddress + (ip -> robotId)
+            val moved = entry.copy(address = to)
+            byId = byId.updated(robotId, moved)
+            publishRoutes()
+            entry.actor ! RobotActor.Rebound(to)
+            deliver(moved)
+          }
         case Some(entry) =>
           rejectFor(Some(robotId), Rejection.RobotIdMismatch, from, s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}")
         case None =>
