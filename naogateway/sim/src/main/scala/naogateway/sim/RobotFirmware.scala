@@ -250,7 +250,10 @@ object RobotFirmware {
         }
       case _ => (rejected(s), Vector.empty)
     }
-    signed(next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length)), due ++ replies)
+    val counted = next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length))
+    // The reply to `system.reset` leaves before the restart: it is the old session's last frame, signed as such.
+    if (counted.bootId == s.bootId) signed(counted, due ++ replies)
+    else (counted, signed(s, due ++ replies)._2)
   }
 
   /** The state after accepting a frame from the gateway, or (`Left`) after refusing it for its signature. */
