@@ -99,7 +99,7 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
           case e: RobotEvent => e.robotId == 33
           case _             => false
         }
-        forgedStateChanges(seen, truth = before) shouldBe 0
+        ForgedFrames.stateChanges(seen, truth = before) shouldBe 0
         seen.collect { case RobotStatusUpdated(s) => s } should not be empty // the real keep-alives went on
         val after = snapshot(f, 33)
         (after.online, after.bootId, after.posture) shouldBe ((true, Some(1), before.posture))
@@ -181,17 +181,4 @@ object SignedFramesSpec {
   val SignatureKinds: Set[String] =
     Set("unsigned", "signature not last", "malformed signature", "bad signature", "replayed")
 
-  /**
-   * Events of one robot that no real keep-alive of it would cause: a status whose session, battery, posture, team or
-   * role differs from `truth` (the robot sat idle meanwhile, so its battery stays within a few millivolts), a restart,
-   * or a change of liveness.
-   */
-  def forgedStateChanges(events: Seq[GatewayEvent], truth: RobotSnapshot): Int =
-    events.count {
-      case RobotStatusUpdated(s) =>
-        s.bootId != truth.bootId || s.posture != truth.posture || s.teamId != truth.teamId || s.role != truth.role ||
-          !s.batteryVoltage.exists(v => truth.batteryVoltage.exists(t => math.abs(v - t) < 0.05))
-      case _: RobotRestarted | _: RobotOffline | _: RobotOnline => true
-      case _                                                   => false
-    }
 }

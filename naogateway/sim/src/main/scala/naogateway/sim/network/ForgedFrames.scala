@@ -2,6 +2,7 @@ package naogateway.sim.network
 
 import scala.util.Random
 
+import naogateway.{GatewayEvent, RobotOffline, RobotOnline, RobotRestarted, RobotSnapshot, RobotStatusUpdated}
 import naogateway.wire._
 
 /**
@@ -61,6 +62,21 @@ object ForgedFrames {
     made.toVector ++ recorded ++ recorded.map(bitFlipped(_, random)) ++ recorded.map(fieldAfterSignature) ++
       recorded.map(malformedSignature)
   }
+
+  /**
+   * Events of one robot that no real keep-alive of it would cause while it sits idle: a status whose session,
+   * battery (beyond a few hundredths of a volt), posture, team or role differs from `truth`, a restart, or a change
+   * of liveness. The robot state changes a forgery caused, as every subscriber of the gateway (the middleware and its
+   * safety checks among them) would have seen them.
+   */
+  def stateChanges(events: Seq[GatewayEvent], truth: RobotSnapshot): Int =
+    events.count {
+      case RobotStatusUpdated(s) =>
+        s.bootId != truth.bootId || s.posture != truth.posture || s.teamId != truth.teamId || s.role != truth.role ||
+          !s.batteryVoltage.exists(v => truth.batteryVoltage.exists(t => math.abs(v - t) < 0.05))
+      case _: RobotRestarted | _: RobotOffline | _: RobotOnline => true
+      case _                                                   => false
+    }
 
   private def rewrap(frame: Array[Byte])(change: Array[Byte] => Array[Byte]): Array[Byte] =
     FumanoidsFrame.decodeRaw(frame) match {
