@@ -329,7 +329,12 @@ object Gateway {
 
     private def handleUnrouted(u: Unrouted): Unit = {
       gatewayBacklog.done()
-      frame(u.frame.header, u.frame.contents, u.frame.size, u.frame.from, u.frame.bytes)
+      val f = u.frame
+      // A robot that must sign: the reader's check, here before any delivery or re-binding (an address proves nothing).
+      byId.get(f.contents.robotId).flatMap(_.signatures).map(_.check(f.bytes, f.header)) match {
+        case Some(Left(kind)) => rejectFor(Some(f.contents.robotId), kind, f.from, s"robot id ${f.contents.robotId}")
+        case _                => frame(f.header, f.contents, f.size, f.from)
+      }
     }
 
     def running(addresses: Addresses): Behavior[Command] =
@@ -418,38 +423,28 @@ object Gateway {
      * Decides a frame the reader's table could not place, binding a robot id to the IP address it first came from.
      * Everything sent to the robot goes to that IP at the robot's receive port, never to the frame's source port.
      */
-    private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress, bytes: Array[Byte]): Unit = {
+    private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress): Unit = {
       val robotId = contents.robotId
       val ip = from.getAddress
       def deliver(entry: Entry): Unit = {
         entry.backlog.add()
         entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
       }
-      // The same check as on the reader's path, and before any re-binding: an address alone proves nothing.
-      def verified(entry: Entry): Boolean =
-        entry.signatures.map(_.check(bytes, header)) match {
-          case Some(Left(kind)) =>
-            rejectFor(Some(robotId), kind, from, s"robot id $robotId")
-            false
-          case _ => true
-        }
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>
           rejectFor(Some(robotId), Rejection.ZeroMqRobotId, from, s"robot id $robotId")
         // The reader saw the table before the gateway bound this IP (discovery or re-bind in between).
-        case Some(entry) if entry.address.getAddress == ip => if (verified(entry)) deliver(entry)
+        case Some(entry) if entry.address.getAddress == ip => deliver(entry)
         case Some(entry) if rebindable(robotId) && !byAddress.contains(ip) =>
           // An explicit re-bind: the robot moved to another host. It keeps its receive port.
-          if (verified(entry)) {
-            rebindable -= robotId
-            val to = new InetSocketAddress(ip, entry.address.getPort)
-            byAddress = byAddress - entry.address.getAddress + (ip -> robotId)
-            val moved = entry.copy(address = to)
-            byId = byId.updated(robotId, moved)
-            publishRoutes()
-            entry.actor ! RobotActor.Rebound(to)
-            deliver(moved)
-          }
+          rebindable -= robotId
+          val to = new InetSocketAddress(ip, entry.address.getPort)
+          byAddress = byAddress - entry.address.getAddress + (ip -> robotId)
+          val moved = entry.copy(address = to)
+          byId = byId.updated(robotId, moved)
+          publishRoutes()
+          entry.actor ! RobotActor.Rebound(to)
+          deliver(moved)
         case Some(entry) =>
           rejectFor(Some(robotId), Rejection.RobotIdMismatch, from, s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}")
         case None =>
