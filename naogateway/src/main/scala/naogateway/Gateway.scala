@@ -110,12 +110,18 @@ object Gateway {
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
 
-  /** A datagram robot as the port's reader reaches it: its actor and the backlog of what the reader handed it. */
-  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog)
+  /**
+   * A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
+   * robot that must sign, the check every frame passes before it is handed on.
+   */
+  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
-  /** A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is. */
+  /**
+   * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
+   * `signatures`, its frames count only when signed (the IP alone does not identify it then).
+   */
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
-      backlog: Backlog)
+      backlog: Backlog, signatures: Option[SignatureCheck] = None)
 
   /** The gateway with `settings`. */
   def apply(settings: GatewaySettings): Behavior[Command] =
@@ -126,8 +132,10 @@ object Gateway {
           try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
           catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
         context.log.info("Gateway listening for robots on {}", port.localAddress)
+        // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
+        val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
         val outbox = context.spawn(
-          Behaviors.supervise(Outbox(port, settings.budget, settings.competition))
+          Behaviors.supervise(Outbox(port, settings.budget, settings.competition, signer))
             .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
           "outbox",
           RobotDispatcher
@@ -205,7 +213,13 @@ object Gateway {
       outbox ! Outbox.Inbound(table.byAddress.get(from.getAddress).fold(-1)(_.robotId), bytes.length)
       Routing.decide(table, bytes, from) match {
         case Routing.ToRobot(route, header, contents, size) =>
-          deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
+          route.target.signatures.map(_.check(bytes, header)) match {
+            case Some(Left(kind)) =>
+              rejections.count(kind, from)
+              if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
+            case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          }
         case Routing.SegmentToRobot(route, segment) =>
           deliver(route, RobotActor.SegmentReceived(segment), from)
         case unrouted: Routing.ToGateway =>
@@ -274,7 +288,7 @@ object Gateway {
     /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
       reader.routes.set(Routing.Table.of(byId.collect {
-        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog))
+        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog, e.signatures))
       }))
 
     private def robotRefs: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)] =
@@ -289,7 +303,8 @@ object Gateway {
         RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId))
-      val entry = Entry(actor, address, zeromq = false, backlog)
+      val signatures = settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
+      val entry = Entry(actor, address, zeromq = false, backlog, signatures)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address.getAddress, robotId)
       publishRoutes()
@@ -330,7 +345,12 @@ object Gateway {
 
     private def handleUnrouted(u: Unrouted): Unit = {
       gatewayBacklog.done()
-      frame(u.frame.header, u.frame.contents, u.frame.size, u.frame.from)
+      val f = u.frame
+      // A robot that must sign: the reader's check, here before any delivery or re-binding (an address proves nothing).
+      byId.get(f.contents.robotId).flatMap(_.signatures).map(_.check(f.bytes, f.header)) match {
+        case Some(Left(kind)) => rejectFor(Some(f.contents.robotId), kind, f.from, s"robot id ${f.contents.robotId}")
+        case _                => frame(f.header, f.contents, f.size, f.from)
+      }
     }
 
     def running(addresses: Addresses): Behavior[Command] =

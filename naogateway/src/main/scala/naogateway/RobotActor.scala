@@ -197,6 +197,8 @@ object RobotActor {
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
     private var zeroMqLink: Option[ActorRef[ZeroMqRobotLink.Command]] = None
+    // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
+    private val signs = transport == Transport.Datagrams && settings.signingOf(robotId) == RobotSigning.Required
     // Set by the gateway (Subscribers); None until its first answer, and events wait meanwhile.
     private var subscribers: Option[Set[ActorRef[GatewayEvent]]] = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
     private var held = Vector.empty[GatewayEvent]
@@ -454,7 +456,7 @@ object RobotActor {
 
     /** Where calls go now: this actor owns the address and header form, the response actor follows them. */
     private def route: ResponseActor.Route =
-      zeroMqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form))(ResponseActor.Route.ZeroMq(_))
+      zeroMqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form, signs))(ResponseActor.Route.ZeroMq(_))
 
     private def routeChanged(children: Option[Children]): Unit =
       children.foreach(_.response ! ResponseActor.RouteChanged(route))
@@ -511,7 +513,11 @@ object RobotActor {
             case Right(bytes) =>
               datagramsOut += 1
               bytesOut += bytes.length
-              outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
+              val signed = signs && (out match {
+                case _: Outbound.SegmentOut => false
+                case _                      => true
+              })
+              outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag, signed)
             case Left(error) =>
               outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
           }

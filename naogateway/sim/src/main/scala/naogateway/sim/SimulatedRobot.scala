@@ -677,7 +677,7 @@ private final class SimulatedRobot(
           // Each delivered payload is one frame from the gateway; its replies go back through the stream.
           step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
             logCalls(frame, at)
-            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now))
+            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now), viaStream = true)
             next = next.copy(firmware = firmware)
             app ++= out
           }
