@@ -25,7 +25,7 @@ import org.slf4j.LoggerFactory
 
 import naogateway.testkit.TestLoopback
 import naogateway._
-import naogateway.proto.Status
+import naogateway.proto.{Response, Status}
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings}
 import naogateway.wire.{MessageContents, RpcCall}
@@ -126,6 +126,9 @@ object GatewayBench extends Benchmark {
     val raw = rawRoundTrips()
     progress(f"raw udp rtt: p50 ${percentile(raw, 0.50) / 1e3}%.0f us, p99 ${percentile(raw, 0.99) / 1e3}%.0f us, " +
       f"max ${raw.max / 1e3}%.0f us over ${raw.length} exchanges")
+    val rawRobot = rawRobotRoundTrips()
+    progress(f"rpc rtt to a plain-channel robot: p50 ${percentile(rawRobot, 0.50) / 1e3}%.0f us, " +
+      f"p99 ${percentile(rawRobot, 0.99) / 1e3}%.0f us, max ${rawRobot.max / 1e3}%.0f us over ${rawRobot.length} calls")
     val simOnly = simulatedRobotRoundTrips()
     progress(f"simulated robot alone: p50 ${percentile(simOnly, 0.50) / 1e3}%.0f us, p99 ${percentile(simOnly, 0.99) / 1e3}%.0f us, " +
       f"max ${simOnly.max / 1e3}%.0f us over ${simOnly.length} calls")
@@ -134,9 +137,63 @@ object GatewayBench extends Benchmark {
       "rpc_rtt_p99_us" -> percentile(rpc, 0.99) / 1e3,
       "raw_udp_rtt_p50_us" -> percentile(raw, 0.50) / 1e3,
       "raw_udp_rtt_p99_us" -> percentile(raw, 0.99) / 1e3,
+      "rpc_rtt_raw_robot_p50_us" -> percentile(rawRobot, 0.50) / 1e3,
+      "rpc_rtt_raw_robot_p99_us" -> percentile(rawRobot, 0.99) / 1e3,
       "sim_robot_rtt_p50_us" -> percentile(simOnly, 0.50) / 1e3,
       "sim_robot_rtt_p99_us" -> percentile(simOnly, 0.99) / 1e3
     )
+  }
+
+  /**
+   * The `rpc_rtt_*` calls to a robot that is one thread on a plain DatagramChannel (keep-alives from another thread
+   * every 200 ms, every request answered at once): the gateway's own round trip, without the simulator's actors.
+   */
+  private def rawRobotRoundTrips(): Array[Long] = withNodes("rtt-raw") { (gw, sim) =>
+    val socket = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
+    val watchdog = closeAfter(60.seconds, socket)
+    val keepAlive = MessageContents.encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("RawRobot")))))
+      .fold(e => throw new IllegalStateException(e.describe), identity)
+    val beats = new Thread(() => {
+      try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gw.addresses.robots); Thread.sleep(200) }
+      catch { case _: ClosedChannelException | _: InterruptedException => () }
+    }, "raw-robot-keep-alive")
+    val answers = new Thread(() => {
+      val in = ByteBuffer.allocate(2048)
+      try
+        while (socket.isOpen) {
+          in.clear()
+          val from = socket.receive(in)
+          in.flip()
+          val bytes = new Array[Byte](in.remaining)
+          in.get(bytes)
+          MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
+            val reply = MessageContents(1, rpcResponse = Some(Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)))
+            MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+          }
+        }
+      catch { case _: ClosedChannelException => () }
+    }, "raw-robot-answers")
+    Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
+    try {
+      sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
+      val connected = gw.connect(1)
+      val ping = RpcCall("system", "ping", Vector.empty)
+      implicit val scheduler: Scheduler = gw.system.scheduler
+      implicit val timeout: Timeout = Timeout(5.seconds)
+      def once(): Long = {
+        val start = System.nanoTime()
+        val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
+        val took = System.nanoTime() - start
+        require(answer.result.isRight, s"system.ping failed: $answer")
+        took
+      }
+      paced(RttWarmup)(() => once())
+      paced(RttSamples)(() => once())
+    } finally {
+      socket.close()
+      beats.interrupt()
+      watchdog.shutdownNow()
+    }
   }
 
   /**
