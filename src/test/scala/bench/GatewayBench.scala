@@ -25,7 +25,7 @@ import org.slf4j.LoggerFactory
 
 import naogateway.testkit.TestLoopback
 import naogateway._
-import naogateway.proto.Status
+import naogateway.proto.{Response, Status}
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings}
 import naogateway.wire.{MessageContents, RpcCall}
@@ -36,7 +36,9 @@ import naogateway.wire.{MessageContents, RpcCall}
  *  - `rpc_rtt_p50_us`, `rpc_rtt_p99_us`: sequential `system.ping` calls asked of a robot's ResponseActor from outside
  *    the gateway, to a simulated robot without the CM-530/GS1500M models (faithfulLink = false), so the gateway's own
  *    path and the network are measured; `raw_udp_rtt_*`: the floor, a plain DatagramChannel ping-pong between two
- *    threads. Both paced at one exchange per millisecond (that keeps the calls far under the team budget of
+ *    threads; `sim_robot_rtt_*`: the same calls framed by hand and sent by a plain DatagramChannel straight to the same
+ *    kind of simulated robot, which answers that channel: the simulator's own part of `rpc_rtt_*`. All paced at one
+ *    exchange per millisecond (that keeps the calls far under the team budget of
  *    125 kB/s, which the gateway enforces and which would otherwise be what is measured), after a warm-up.
  *  - `ingest_datagrams_s`: pre-encoded keep-alives blasted by one thread from [[IngestRobots]] sockets (one robot id
  *    per socket: the gateway binds each id to the address it first came from and rejects other ids from that
@@ -124,12 +126,114 @@ object GatewayBench extends Benchmark {
     val raw = rawRoundTrips()
     progress(f"raw udp rtt: p50 ${percentile(raw, 0.50) / 1e3}%.0f us, p99 ${percentile(raw, 0.99) / 1e3}%.0f us, " +
       f"max ${raw.max / 1e3}%.0f us over ${raw.length} exchanges")
+    val rawRobot = rawRobotRoundTrips()
+    progress(f"rpc rtt to a plain-channel robot: p50 ${percentile(rawRobot, 0.50) / 1e3}%.0f us, " +
+      f"p99 ${percentile(rawRobot, 0.99) / 1e3}%.0f us, max ${rawRobot.max / 1e3}%.0f us over ${rawRobot.length} calls")
+    val simOnly = simulatedRobotRoundTrips()
+    progress(f"simulated robot alone: p50 ${percentile(simOnly, 0.50) / 1e3}%.0f us, p99 ${percentile(simOnly, 0.99) / 1e3}%.0f us, " +
+      f"max ${simOnly.max / 1e3}%.0f us over ${simOnly.length} calls")
     ListMap(
       "rpc_rtt_p50_us" -> percentile(rpc, 0.50) / 1e3,
       "rpc_rtt_p99_us" -> percentile(rpc, 0.99) / 1e3,
       "raw_udp_rtt_p50_us" -> percentile(raw, 0.50) / 1e3,
-      "raw_udp_rtt_p99_us" -> percentile(raw, 0.99) / 1e3
+      "raw_udp_rtt_p99_us" -> percentile(raw, 0.99) / 1e3,
+      "rpc_rtt_raw_robot_p50_us" -> percentile(rawRobot, 0.50) / 1e3,
+      "rpc_rtt_raw_robot_p99_us" -> percentile(rawRobot, 0.99) / 1e3,
+      "sim_robot_rtt_p50_us" -> percentile(simOnly, 0.50) / 1e3,
+      "sim_robot_rtt_p99_us" -> percentile(simOnly, 0.99) / 1e3
     )
+  }
+
+  /**
+   * The `rpc_rtt_*` calls to a robot that is one thread on a plain DatagramChannel (keep-alives from another thread
+   * every 200 ms, every request answered at once): the gateway's own round trip, without the simulator's actors.
+   */
+  private def rawRobotRoundTrips(): Array[Long] = withNodes("rtt-raw") { (gw, sim) =>
+    val socket = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
+    val watchdog = closeAfter(60.seconds, socket)
+    val keepAlive = MessageContents.encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("RawRobot")))))
+      .fold(e => throw new IllegalStateException(e.describe), identity)
+    val beats = new Thread(() => {
+      try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gw.addresses.robots); Thread.sleep(200) }
+      catch { case _: ClosedChannelException | _: InterruptedException => () }
+    }, "raw-robot-keep-alive")
+    val answers = new Thread(() => {
+      val in = ByteBuffer.allocate(2048)
+      try
+        while (socket.isOpen) {
+          in.clear()
+          val from = socket.receive(in)
+          in.flip()
+          val bytes = new Array[Byte](in.remaining)
+          in.get(bytes)
+          MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
+            val reply = MessageContents(1, rpcResponse = Some(Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)))
+            MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+          }
+        }
+      catch { case _: ClosedChannelException => () }
+    }, "raw-robot-answers")
+    Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
+    try {
+      sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
+      val connected = gw.connect(1)
+      val ping = RpcCall("system", "ping", Vector.empty)
+      implicit val scheduler: Scheduler = gw.system.scheduler
+      implicit val timeout: Timeout = Timeout(5.seconds)
+      def once(): Long = {
+        val start = System.nanoTime()
+        val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
+        val took = System.nanoTime() - start
+        require(answer.result.isRight, s"system.ping failed: $answer")
+        took
+      }
+      paced(RttWarmup)(() => once())
+      paced(RttSamples)(() => once())
+    } finally {
+      socket.close()
+      beats.interrupt()
+      watchdog.shutdownNow()
+    }
+  }
+
+  /**
+   * The same `system.ping` calls, framed by hand and sent by a plain DatagramChannel straight to the same kind of
+   * simulated robot, which answers that channel as its gateway: the part of `rpc_rtt_*` that is the simulator's.
+   */
+  private def simulatedRobotRoundTrips(): Array[Long] = {
+    val client = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(), 0))
+    val watchdog = closeAfter(60.seconds, client)
+    val sim = new SimNode("sim-alone")
+    try {
+      val fleet = sim.fleet(FleetSettings(client.getLocalAddress.asInstanceOf[InetSocketAddress], Vector(1), faithfulLink = false,
+        firstAddress = TestLoopback.address()))
+      val robot = fleet.address(1).getOrElse(throw new IllegalStateException("the simulated robot did not start"))
+      val in = ByteBuffer.allocate(2048)
+      var id = 0L
+      def once(): Long = {
+        id += 1
+        val request = RpcCall("system", "ping", Vector.empty).copy(callId = Some(id)).toProto
+        val frame = MessageContents.encodeFrame(MessageContents(1, rpcRequest = Some(request))).fold(e => throw new IllegalStateException(e.describe), identity)
+        val start = System.nanoTime()
+        client.send(ByteBuffer.wrap(frame), robot)
+        var answered = false
+        while (!answered) { // keep-alives arrive too; only the answer to this call ends the wait
+          in.clear()
+          client.receive(in)
+          in.flip()
+          val bytes = new Array[Byte](in.remaining)
+          in.get(bytes)
+          answered = MessageContents.decodeFrame(bytes).exists(_._2.rpcResponse.exists(_.callId.exists(_ == id.toInt)))
+        }
+        System.nanoTime() - start
+      }
+      paced(RttWarmup)(() => once())
+      paced(RttSamples)(() => once())
+    } finally {
+      sim.stop()
+      client.close()
+      watchdog.shutdownNow()
+    }
   }
 
   /** Ping-pong of a 40-byte datagram between two blocking channels on loopback, one echo thread. */

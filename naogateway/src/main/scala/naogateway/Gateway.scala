@@ -104,6 +104,9 @@ object Gateway {
   /** Frames the port's reader hands the gateway (unknown senders, discovery) that may wait before more are dropped. */
   val GatewayBacklog: Int = 1024
 
+  /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
+  val InboundBatch: Int = 64
+
   /** Source addresses whose refusals are counted one by one; the rest are counted together (`other addresses`). */
   val RejectionAddresses: Int = 64
 
@@ -203,14 +206,18 @@ object Gateway {
     val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
     // Written by the reader thread only; read by the gateway for its figures.
     @volatile var datagramsIn, relayed = 0L
+    // What the outbox has not been told yet: told in one message per InboundBatch datagrams or when the port is quiet.
+    private var inboundDatagrams, inboundBytes = 0
 
     def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
       datagramsIn += 1
       settings.relay.foreach { relay =>
         if (port.send(bytes, relay)) relayed += 1
       }
+      inboundDatagrams += 1
+      inboundBytes += bytes.length
+      if (inboundDatagrams >= InboundBatch) caughtUp()
       val table = routes.get
-      outbox ! Outbox.Inbound(table.byAddress.get(from.getAddress).fold(-1)(_.robotId), bytes.length)
       Routing.decide(table, bytes, from) match {
         case Routing.ToRobot(route, header, contents, size) =>
           // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
@@ -233,7 +240,12 @@ object Gateway {
     private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
       if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)
 
-    def caughtUp(): Unit = ()
+    def caughtUp(): Unit =
+      if (inboundDatagrams > 0) {
+        outbox ! Outbox.Inbound(inboundDatagrams, inboundBytes)
+        inboundDatagrams = 0
+        inboundBytes = 0
+      }
   }
 
   private final class GatewayLogic(

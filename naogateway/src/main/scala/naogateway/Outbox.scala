@@ -42,8 +42,8 @@ object Outbox {
    */
   final case class Withdraw(robotId: Int, tags: Set[Long]) extends Command
 
-  /** Counts a datagram received from the team, for the two-way traffic figures. */
-  final case class Inbound(robotId: Int, bytes: Int) extends Command
+  /** Counts `datagrams` datagrams of `bytes` in all received from the team, for the two-way traffic figures. */
+  final case class Inbound(datagrams: Int, bytes: Int) extends Command
 
   /** The GameController's latest game state. */
   final case class GameStateChanged(state: GameState) extends Command
@@ -224,8 +224,8 @@ private final class Outbox(
     case Withdraw(robotId, tags) =>
       queues = queues.map(_.filterNot(q => q.robotId == robotId && tags(q.tag)))
       Behaviors.same
-    case Inbound(_, bytes) =>
-      in.record(System.nanoTime(), bytes)
+    case Inbound(datagrams, bytes) =>
+      in.record(System.nanoTime(), bytes, datagrams)
       Behaviors.same
     case GameStateChanged(state) =>
       val nowRunning = gameRunning(state)

@@ -2,7 +2,6 @@ package naogateway
 
 import java.net.InetSocketAddress
 
-import scala.collection.immutable.Queue
 import scala.concurrent.duration._
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
@@ -209,7 +208,12 @@ object RobotActor {
     private var datagramsIn, datagramsOut, bytesIn, bytesOut, retransmissions = 0L
     private var rejected = Map.empty[Rejection, Long]
     private var rttNanos: Option[Double] = None
-    private var keepAliveTimes = Queue.empty[Long]
+    // Oldest first, trimmed to the quality window, and never more than lossEstimate can tell apart: with more than a
+    // window's worth of keep-alives the estimate is 0 anyway, so a flooding robot costs what a punctual one costs.
+    private val keepAliveTimes = scala.collection.mutable.ArrayDeque.empty[Long]
+    private val keepAliveTimesKept = (heartbeatSettings.qualityWindow / heartbeatSettings.keepAliveInterval).toInt + 2
+    private def trimKeepAliveTimes(before: Long): Unit =
+      while (keepAliveTimes.nonEmpty && keepAliveTimes.head < before) keepAliveTimes.removeHead()
     // The latest keep-alive's fields, the address and the link quality; `online` is not kept here but taken from the
     // behaviour (unreached, or running with its flag) whenever the snapshot leaves this actor (`view`).
     private var snapshot: RobotSnapshot = null
@@ -544,7 +548,7 @@ object RobotActor {
     private def lossEstimate(): Double = {
       val now = System.nanoTime()
       val window = heartbeatSettings.qualityWindow.toNanos
-      keepAliveTimes = keepAliveTimes.dropWhile(_ < now - window)
+      trimKeepAliveTimes(now - window)
       // Over the window, or over the time since the first keep-alive when the robot is younger than that.
       val observed = keepAliveTimes.headOption.fold(window)(first => math.min(window, now - first + heartbeatSettings.keepAliveInterval.toNanos))
       val expected = observed.toDouble / heartbeatSettings.keepAliveInterval.toNanos
@@ -560,7 +564,9 @@ object RobotActor {
       heartbeat ! HeartBeatActor.KeepAliveSeen
       val now = System.nanoTime()
       // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
-      keepAliveTimes = keepAliveTimes.enqueue(now).dropWhile(_ < now - settings.heartbeat.qualityWindow.toNanos)
+      if (keepAliveTimes.size >= keepAliveTimesKept) keepAliveTimes.removeHead()
+      keepAliveTimes.append(now)
+      trimKeepAliveTimes(now - settings.heartbeat.qualityWindow.toNanos)
       val step = RobotSnapshot.keepAlive(snapshot, lastBootId, contents.status.get, contents.robotHealth, now)
       lastBootId = step.lastBootId
       if (step.restarted) clockSync = clockSync.restart

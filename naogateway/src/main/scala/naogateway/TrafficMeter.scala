@@ -17,12 +17,15 @@ final class TrafficMeter(windowNanos: Long) {
     }
 
   /** Counts `bytes` at `now`. */
-  def record(now: Long, bytes: Int): Unit = {
+  def record(now: Long, bytes: Int): Unit = record(now, bytes, 1)
+
+  /** Counts `datagrams` datagrams of `bytes` together at `now`. */
+  def record(now: Long, bytes: Int, datagrams: Int): Unit = {
     expire(now)
     times.append(now)
     sizes.append(bytes)
     sum += bytes
-    datagramCount += 1
+    datagramCount += datagrams
     byteCount += bytes
   }
 

@@ -130,14 +130,14 @@ object FumanoidsFrame {
       else {
         val word = u32(bytes, 4)
         // A Message is never empty (robotID is required), so a zero here can only be the legacy type field.
-        val (form, declared) =
-          if (word != 0L) (HeaderForm.Compact, word)
-          else if (bytes.length < HeaderForm.Legacy.headerBytes)
-            return Left(FrameError.Truncated(HeaderForm.Legacy.headerBytes, bytes.length))
-          else (HeaderForm.Legacy, u32(bytes, 8))
-        val actual = bytes.length - form.headerBytes
-        if (declared != actual.toLong) Left(FrameError.LengthMismatch(declared, actual))
-        else Right(FrameHeader(form, (flags & GzipFlag) != 0, actual))
+        val form = if (word != 0L) HeaderForm.Compact else HeaderForm.Legacy
+        if (bytes.length < form.headerBytes) Left(FrameError.Truncated(form.headerBytes, bytes.length))
+        else {
+          val declared = if (form == HeaderForm.Compact) word else u32(bytes, 8)
+          val actual = bytes.length - form.headerBytes
+          if (declared != actual.toLong) Left(FrameError.LengthMismatch(declared, actual))
+          else Right(FrameHeader(form, (flags & GzipFlag) != 0, actual))
+        }
       }
     }
 

@@ -110,9 +110,15 @@ object MessageContents {
 
   /** Decodes a datagram all the way to its contents. */
   def decodeFrame(bytes: Array[Byte]): Either[FrameError, (FrameHeader, MessageContents)] =
-    FumanoidsFrame.decodeHeader(bytes).flatMap { header =>
-      if (header.gzip) FumanoidsFrame.decodeRaw(bytes).flatMap(raw => parse(raw.protobuf).map(header -> _))
-      else parse(bytes, header.form.headerBytes, header.payloadLength).map(header -> _)
+    FumanoidsFrame.decodeHeader(bytes) match {
+      case Right(header) if !header.gzip =>
+        val offset = header.form.headerBytes
+        KeepAliveReader.read(bytes, offset, header.payloadLength) match {
+          case null     => general(bytes, offset, header.payloadLength).map(header -> _)
+          case contents => Right(header -> contents)
+        }
+      case Right(header) => FumanoidsFrame.decodeRaw(bytes).flatMap(raw => parse(raw.protobuf).map(header -> _))
+      case Left(error)   => Left(error)
     }
 
   /** Parses the protobuf bytes of a `Message` in one pass, reading known extensions in place. */
@@ -120,6 +126,13 @@ object MessageContents {
 
   /** Parses `length` protobuf bytes from `offset`; same result as `of(Message.parseFrom(...))`, without the detour. */
   def parse(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
+    KeepAliveReader.read(bytes, offset, length) match {
+      case null     => general(bytes, offset, length)
+      case contents => Right(contents)
+    }
+
+  /** Any `Message`: the rules of docs/protocol.md §5 applied by `WireRules.normalize`, then one decoding pass. */
+  private[wire] def general(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
     try {
       val (normalized, from, size) = WireRules.normalize(bytes, offset, length)
       fastParse(normalized, from, size)

@@ -13,7 +13,8 @@ import naogateway.proto._
   * ScalaPB refuses unknown groups, refuses a whole message for one string that is not UTF-8, and cuts a varint beyond
   * 32 bits to its low bits. The document says instead: unknown fields of every wire type are skipped (groups
   * included), a malformed string is read with U+FFFD for each bad sequence, and a 32-bit field whose varint does not
-  * fit is refused, as nanopb (the firmware's decoder) does. Both decode paths run `normalize` first, so they agree.
+  * fit is refused, as nanopb (the firmware's decoder) does. Both general decode paths run `normalize` first, so they
+  * agree; `KeepAliveReader` applies the same rules itself to the keep-alive's fields and leaves everything else here.
   */
 private[wire] object WireRules {
 
