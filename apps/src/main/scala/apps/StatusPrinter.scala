@@ -147,7 +147,10 @@ object StatusPrinter {
             case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown, refs, asked)
             case Game(game)     => running(model.copy(game = game), shown, refs, asked)
             case Source(source) => running(model.copy(gameSource = Some(source)), shown, refs, asked)
-            case Link(stats)    => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown, refs, asked)
+            case Link(stats) =>
+              // Only robots still known: figures arriving after a forgotten robot's actor stopped are not kept.
+              if (refs.contains(stats.robotId)) running(model.copy(links = model.links.updated(stats.robotId, stats)), shown, refs, asked)
+              else Behaviors.same
             case RobotFound(id, Some(robot)) =>
               context.watchWith(robot, RobotGone(id))
               running(model, shown, refs.updated(id, robot), asked - id)
