@@ -1,7 +1,6 @@
 package naogateway
 
 import scala.collection.immutable.Queue
-import scala.concurrent.duration._
 
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
@@ -107,9 +106,10 @@ object HeartBeatActor {
     private var probeSentAt = 0L
     private var probeId = -1L
     // Rounds of probes in a row that ended without an answer to any probe (a keep-alive does not count: anyone can send
-    // one). While it is above 0, a new round for someone who wants the robot waits for the back-off.
+    // one). After each, a new round for someone who wants the robot waits for the back-off (BackoffKey running);
+    // `wanted` remembers that someone asked meanwhile.
     private var silentRounds = 0
-    private var nextRoundAt = 0L
+    private var wanted = false
 
     private def armQuietCheck(): Unit = timers.startSingleTimer(QuietKey, QuietCheck, settings.quietAfter)
 
@@ -170,7 +170,8 @@ object HeartBeatActor {
         if (chance < settings.chances) probe(chance + 1, wasOnline, q)
         else {
           silentRounds += 1
-          nextRoundAt = System.nanoTime() + settings.probeBackoff(silentRounds).toNanos
+          wanted = false
+          timers.startSingleTimer(BackoffKey, BackoffOver, settings.probeBackoff(silentRounds))
           if (wasOnline) {
             report ! WentOffline(s"no keep-alive for ${settings.quietAfter.toMillis} ms and ${settings.chances} unanswered probes")
           }
@@ -187,13 +188,15 @@ object HeartBeatActor {
         timers.cancel(BackoffKey)
         backOnline(wasOnline = false, q.seen, probeAnswered = false)
       case ProbeNow =>
-        val wait = nextRoundAt - System.nanoTime()
-        if (silentRounds == 0 || wait <= 0) probe(chance = 1, wasOnline = false, q)
-        else {
-          if (!timers.isTimerActive(BackoffKey)) timers.startSingleTimer(BackoffKey, BackoffOver, wait.nanos)
+        if (timers.isTimerActive(BackoffKey)) {
+          wanted = true
           Behaviors.same
-        }
-      case BackoffOver => probe(chance = 1, wasOnline = false, q)
+        } else probe(chance = 1, wasOnline = false, q)
+      case BackoffOver =>
+        if (wanted) {
+          wanted = false
+          probe(chance = 1, wasOnline = false, q)
+        } else Behaviors.same
       case ProbeAnswered(id) =>
         if (isAwaited(id)) backOnline(wasOnline = false, q, probeAnswered = true) else Behaviors.same
       case QualityTick | QuietCheck | ProbeTimeout => Behaviors.same
