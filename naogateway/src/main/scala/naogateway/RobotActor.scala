@@ -372,7 +372,9 @@ object RobotActor {
         Behaviors.same
       case DatagramRejected(kind) =>
         wiring.backlog.done()
-        count(kind)
+        // The gateway warned of it already (per kind, for all robots): here it is counted, and logged at debug only, so
+        // robots that come and go cannot multiply the warnings.
+        count(kind, warn = false)
         Behaviors.same
       case Subscribers(now) =>
         subscribers = Some(now)
@@ -523,11 +525,11 @@ object RobotActor {
           }
       }
 
-    private def count(kind: Rejection, detail: => String = ""): Unit = {
+    private def count(kind: Rejection, detail: => String = "", warn: Boolean = true): Unit = {
       val n = rejected.getOrElse(kind, 0L) + 1
       rejected = rejected.updated(kind, n)
       // Per kind, at 1, 10, 100, ...: the kinds are a closed set, so neither the map nor the log can grow with a flood.
-      if (RateLimitedLog.due(n)) context.log.warn("Robot [{}]: refused datagram ({}), {} so far", robotId, kind.name, n)
+      if (warn && RateLimitedLog.due(n)) context.log.warn("Robot [{}]: refused datagram ({}), {} so far", robotId, kind.name, n)
       if (context.log.isDebugEnabled) context.log.debug("Robot [{}]: refused datagram ({}) {}", robotId, kind.name, detail)
     }
 

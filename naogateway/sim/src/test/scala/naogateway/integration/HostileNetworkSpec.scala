@@ -43,48 +43,17 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
            |discovery.forget-offline-after = 2s
            |competition.enabled = on
            |game-controller.trusted-sources = ["127.0.0.1"]""".stripMargin)
-      val stranger = new HostileTraffic.Sender(HostileTraffic.addresses(TestLoopback.block(4, 0), 4))
-      val idFlooders = new HostileTraffic.Sender(HostileTraffic.addresses(TestLoopback.block(50, 0), 50))
-      val lonely = new HostileTraffic.Sender(Vector(TestLoopback.address(0)))
       val log = new HostileTraffic.LogLines
       try {
         val (_, at1) = f.robot(1)
         f.robot(2)
-        f.awaitEvent(10.seconds) { case RobotOnline(1, _) => () }
-        f.awaitEvent(10.seconds) { case RobotOnline(2, _) => () }
-        // The robot's own keep-alives, for mutating: a valid frame that decodes as robot 1.
-        val forger = DatagramChannel.open(StandardProtocolFamily.INET).bind(new InetSocketAddress(at1.getAddress, 0))
+        var online = Set.empty[Int]
+        while (online.size < 2) online += f.awaitEvent(10.seconds) { case RobotOnline(id @ (1 | 2), _) => id }
         val heapBefore = HostileTraffic.usedHeapAfterGc()
         val linesBefore = log.count
         drainEvents(f)
-        val random = new Random(13)
-        val robotPort = f.addresses.robots
-        val gcPort = f.addresses.gameController.get
-        val frame = HostileTraffic.keepAlive(1)
-        var robotsMax = 0
-        var nextId = 1000
-        var gcSent = 0
-        try {
-          (0 until 20).foreach { round =>
-            HostileTraffic.randomDatagrams(1000, random).zipWithIndex.foreach { case (d, i) => stranger.send(d, robotPort, i) }
-            HostileTraffic.mutatedFrames(frame, 1000, random).zipWithIndex.foreach { case (d, i) => stranger.send(d, robotPort, i) }
-            // Invented robot ids: 150 from one socket, 100 from 50 addresses.
-            (0 until 150).foreach { _ => lonely.send(HostileTraffic.keepAlive(nextId), robotPort); nextId += 1 }
-            (0 until 100).foreach { i => idFlooders.send(HostileTraffic.keepAlive(nextId), robotPort, i); nextId += 1 }
-            // Control packets from an address the gateway does not trust.
-            (0 until 25).foreach { i =>
-              stranger.send(HostileTraffic.gameControllerPacket(if (i % 2 == 0) GameState.Playing else GameState.Ready), gcPort, i)
-              gcSent += 1
-            }
-            // Odd keep-alives from robot 1's own address, between its real ones: another session, a clock far off, a
-            // flat battery. Never three in a row.
-            forger.send(ByteBuffer.wrap(HostileTraffic.keepAlive(1, Some(random.nextInt(100) + 2), random.nextInt(5000).toLong, 10.0f)), robotPort)
-            forger.send(ByteBuffer.wrap(HostileTraffic.keepAlive(1, Some(1), 1000000000L + random.nextInt(1000000), 10.0f)), robotPort)
-            robotsMax = math.max(robotsMax, f.stats().robots)
-            Thread.sleep(if (round % 2 == 0) 250 else 150)
-            robotsMax = math.max(robotsMax, f.stats().robots)
-          }
-        } finally forger.close()
+        val flood = HostileTraffic.flood(f, at1.getAddress, rounds = 20, scale = 1, seed = 13)
+        val robotsMax = flood.robotActorsMax
 
         // The robots stayed online and answer; no session was disturbed.
         ping(f, 1).isRight shouldBe true
@@ -107,21 +76,19 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         seen.collect { case e: GameStateUpdated => e } shouldBe empty
         val source = createTestProbe[Gateway.GameSource]()
         f.gateway ! Gateway.GetGameSource(source.ref)
-        source.receiveMessage().untrusted shouldBe gcSent.toLong
+        source.receiveMessage().untrusted shouldBe flood.gameControllerPackets.toLong
         f.traffic().gateOpen shouldBe true
         // About 45,000 bad datagrams: a bounded number of log lines (the issue saw 80,000 warnings), and the heap
         // (generously) bounded.
         val lines = log.count - linesBefore
-        info(s"${stranger.count + idFlooders.count + lonely.count} datagrams, $lines log lines, at most $robotsMax robot actors")
+        info(s"${flood.datagrams} datagrams, $lines log lines, at most $robotsMax robot actors")
+        info(s"most frequent: ${log.top(8).mkString("; ")}")
         lines should be <= 300L
         val growth = HostileTraffic.usedHeapAfterGc() - heapBefore
         info(s"heap growth ${growth / 1024} KiB")
         growth should be < 256L * 1024 * 1024
       } finally {
         log.close()
-        stranger.close()
-        idFlooders.close()
-        lonely.close()
         f.stop()
       }
     }

@@ -13,6 +13,7 @@ import ch.qos.logback.core.AppenderBase
 import org.slf4j.LoggerFactory
 
 import naogateway.proto.{RobotHealth, Status}
+import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller.{GameControllerCodec, GameState}
 import naogateway.wire.{HeaderForm, MessageContents}
 
@@ -96,8 +97,16 @@ object HostileTraffic {
     private val gateway: Logger = context.getLogger("naogateway")
     private val levelBefore = gateway.getLevel
     private val counted = new AtomicLong
+    private val byTemplate = new java.util.concurrent.ConcurrentHashMap[String, AtomicLong]()
     private val appender = new AppenderBase[ILoggingEvent] {
-      override def append(e: ILoggingEvent): Unit = if (e.getLevel.isGreaterOrEqual(Level.INFO)) { counted.incrementAndGet(); () }
+      override def append(e: ILoggingEvent): Unit =
+        if (e.getLevel.isGreaterOrEqual(Level.INFO)) {
+          counted.incrementAndGet()
+          // Templates, not formatted lines: a bounded set however many lines there are.
+          if (byTemplate.size < 200 || byTemplate.containsKey(e.getMessage))
+            byTemplate.computeIfAbsent(e.getMessage, _ => new AtomicLong).incrementAndGet()
+          ()
+        }
     }
     appender.setContext(context)
     appender.setName(s"count-${System.nanoTime()}")
@@ -108,11 +117,61 @@ object HostileTraffic {
     /** Lines logged since installed. */
     def count: Long = counted.get
 
+    /** The most frequent message templates and their counts, for a report. */
+    def top(n: Int): Vector[(String, Long)] = {
+      import scala.jdk.CollectionConverters._
+      byTemplate.asScala.toVector.map { case (k, v) => k -> v.get }.sortBy(-_._2).take(n)
+    }
+
     def close(): Unit = {
       root.detachAppender(appender)
       appender.stop()
       gateway.setLevel(levelBefore)
     }
+  }
+
+  /** What a flood sent, and the most robot actors the gateway had while it ran. */
+  final case class FloodResult(datagrams: Long, robotActorsMax: Int, gameControllerPackets: Int)
+
+  /**
+   * `rounds` rounds of what a stranger can send to the gateway of `f`, `scale` times this much each round: 1000 random
+   * datagrams and 1000 mutations of robot 1's keep-alive from 4 addresses; 150 keep-alives with invented robot ids
+   * from one socket and 100 from `50 x scale` addresses (at most 200); 25 GameController packets saying PLAYING or
+   * READY from an address the gateway must not trust; and two odd keep-alives from robot 1's own address `robot1`
+   * (another bootId, a clock far ahead, a flat battery), never three in a row. Between rounds it pauses 150-250 ms and
+   * samples the gateway's robot count.
+   */
+  def flood(f: GatewayFixture, robot1: InetAddress, rounds: Int, scale: Int, seed: Long): FloodResult = {
+    val stranger = new Sender(addresses(TestLoopback.block(4, 0), 4))
+    val spread = math.min(200, 50 * scale)
+    val idFlooders = new Sender(addresses(TestLoopback.block(spread, 0), spread))
+    val lonely = new Sender(Vector(TestLoopback.address(0)))
+    val forger = new Sender(Vector(robot1))
+    val random = new Random(seed)
+    val robotPort = f.addresses.robots
+    val gcPort = f.addresses.gameController.get
+    val frame = keepAlive(1)
+    var robotsMax = 0
+    var nextId = 1000
+    var gcSent = 0
+    try {
+      (0 until rounds).foreach { round =>
+        randomDatagrams(1000 * scale, random).zipWithIndex.foreach { case (d, i) => stranger.send(d, robotPort, i) }
+        mutatedFrames(frame, 1000 * scale, random).zipWithIndex.foreach { case (d, i) => stranger.send(d, robotPort, i) }
+        (0 until 150 * scale).foreach { _ => lonely.send(keepAlive(nextId), robotPort); nextId += 1 }
+        (0 until 100 * scale).foreach { i => idFlooders.send(keepAlive(nextId), robotPort, i); nextId += 1 }
+        (0 until 25 * scale).foreach { i =>
+          stranger.send(gameControllerPacket(if (i % 2 == 0) GameState.Playing else GameState.Ready), gcPort, i)
+          gcSent += 1
+        }
+        forger.send(keepAlive(1, Some(random.nextInt(100) + 2), random.nextInt(5000).toLong, 10.0f), robotPort)
+        forger.send(keepAlive(1, Some(1), 1000000000L + random.nextInt(1000000), 10.0f), robotPort)
+        robotsMax = math.max(robotsMax, f.stats().robots)
+        Thread.sleep(if (round % 2 == 0) 250 else 150)
+        robotsMax = math.max(robotsMax, f.stats().robots)
+      }
+    } finally Seq(stranger, idFlooders, lonely, forger).foreach(_.close())
+    FloodResult(stranger.count + idFlooders.count + lonely.count + forger.count, robotsMax, gcSent)
   }
 
   /** Heap in use after a full collection, in bytes (a rough figure: enough for a generous bound). */
