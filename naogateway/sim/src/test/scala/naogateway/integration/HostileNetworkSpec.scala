@@ -83,7 +83,7 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         val lines = log.count - linesBefore
         info(s"${flood.datagrams} datagrams, $lines log lines, at most $robotsMax robot actors")
         info(s"most frequent: ${log.top(8).mkString("; ")}")
-        lines should be <= 300L
+        lines should be <= 200L
         val growth = HostileTraffic.usedHeapAfterGc() - heapBefore
         info(s"heap growth ${growth / 1024} KiB")
         growth should be < 256L * 1024 * 1024
