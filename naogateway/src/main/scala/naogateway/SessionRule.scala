@@ -70,7 +70,7 @@ object SessionRule {
    * How far a session's power-up time follows each keep-alive of it: enough for clock drift and slowly changing delays,
    * little enough that a forged keep-alive that still belongs to the session moves it by at most this much.
    */
-  val ClockFollowMillis: Long = 50L
+  val ClockFollowMillis: Long = 5L
 
   /** `RobotHealth.uptimeMs` is a `uint32`: it wraps after about 49.7 days, which is no restart. */
   val UptimeWrapMillis: Long = 1L << 32
