@@ -15,7 +15,7 @@ import naogateway._
 import naogateway.sim.SimulatedRobot
 import naogateway.testkit.TestLoopback
 import naogateway.wire.RpcCall
-import naogateway.wire.gamecontroller.{GameControlData, GameState}
+import naogateway.wire.gamecontroller.GameControlData
 
 /**
  * Issue "no traffic on the field's WiFi can fill the gateway, flood its log, or steer a robot": a real gateway with
