@@ -640,6 +640,7 @@ object GatewayBench extends Benchmark {
       """naogateway.link.bind-address = "127.0.0.1"
         |naogateway.link.robot-port = 0
         |naogateway.game-controller.enabled = off
+        |naogateway.discovery.max-robots = 1000
         |akka.loglevel = "WARNING"
         |""".stripMargin
     )

@@ -58,6 +58,14 @@ object Launcher {
     CoordinatedShutdown(gatewayNode.classicSystem).addJvmShutdownHook(println("naogateway stopped"))
   }
 
+  /**
+   * The demo's simulated robots introduce themselves with their keep-alives like strangers would: the discovery cap is
+   * raised to their number when it is smaller (a demo on loopback, not a shared WiFi).
+   */
+  private def demoDiscovery(settings: GatewaySettings, simulated: Int): GatewaySettings =
+    if (simulated <= settings.discovery.maxRobots) settings
+    else settings.copy(discovery = settings.discovery.copy(maxRobots = simulated))
+
   /** What the root of the gateway node accepts. */
   sealed trait Command
   private final case class Addresses(addresses: Gateway.Addresses) extends Command
@@ -67,7 +75,7 @@ object Launcher {
   def Root(): Behavior[Command] = Behaviors.setup { context =>
     val config = context.system.settings.config
     val launcher = settings(config.getConfig("apps.launcher"))
-    val gateway = context.spawn(Gateway(GatewaySettings(context.system)), "gateway")
+    val gateway = context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots)), "gateway")
     val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(gateway))

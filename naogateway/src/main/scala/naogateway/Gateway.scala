@@ -67,7 +67,7 @@ object Gateway {
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
-  private final case class RobotStopped(robotId: Int) extends Command
+  private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
   private final case class RobotWantsSubscribers(request: RobotActor.SubscribersWanted) extends Command
 
   /**
@@ -120,11 +120,12 @@ object Gateway {
   private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
   /**
-   * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
-   * `signatures`, its frames count only when signed (the IP alone does not identify it then).
-   */
+    * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
+    * `signatures`, its frames count only when signed (the IP alone does not identify it then). A `discovered` one was
+    * introduced by its keep-alive: it counts against `discovery.max-robots` and may be forgotten.
+    */
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
-      backlog: Backlog, signatures: Option[SignatureCheck] = None)
+      backlog: Backlog, signatures: Option[SignatureCheck] = None, discovered: Boolean = false)
 
   /** The gateway with `settings`. */
   def apply(settings: GatewaySettings): Behavior[Command] =
@@ -269,9 +270,11 @@ object Gateway {
     private var gameFrom: Option[InetSocketAddress] = None
     private var gameUntrusted = 0L
 
+    private def discoveredRobots: Int = byId.valuesIterator.count(_.discovered)
+
     /** The configured robots, then the reader: it never sees a table without them. */
     def start(): Unit = {
-      settings.robots.foreach(r => spawnRobot(r.robotId, r.address, heard = false))
+      settings.robots.foreach(r => spawnRobot(r.robotId, r.address, discovered = false))
       settings.zeromq.robots.foreach(spawnZeroMqRobot)
       port.start(reader)
     }
@@ -306,17 +309,17 @@ object Gateway {
     private def robotRefs: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)] =
       byId.map { case (id, e) => id -> (e.actor -> e.address) }
 
-    private def spawnRobot(robotId: Int, address: InetSocketAddress, heard: Boolean): Entry = {
+    private def spawnRobot(robotId: Int, address: InetSocketAddress, discovered: Boolean): Entry = {
       val backlog = new Backlog(RobotBacklog)
       val actor = context.spawn(
-        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard))
+        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false, discovered = discovered))
           .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
         s"robot-$robotId",
         RobotDispatcher
       )
-      context.watchWith(actor, RobotStopped(robotId))
+      context.watchWith(actor, RobotStopped(robotId, actor))
       val signatures = settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
-      val entry = Entry(actor, address, zeromq = false, backlog, signatures)
+      val entry = Entry(actor, address, zeromq = false, backlog, signatures, discovered)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address.getAddress, robotId)
       publishRoutes()
@@ -336,7 +339,7 @@ object Gateway {
         s"robot-${robot.robotId}",
         RobotDispatcher
       )
-      context.watchWith(actor, RobotStopped(robot.robotId))
+      context.watchWith(actor, RobotStopped(robot.robotId, actor))
       byId = byId.updated(robot.robotId, Entry(actor, robot.address, zeromq = true, backlog))
     }
 
@@ -448,10 +451,15 @@ object Gateway {
         case GetGameSource(replyTo) =>
           replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted)
           Behaviors.same
-        case RobotStopped(robotId) =>
-          byId.get(robotId).filterNot(_.zeromq).foreach(e => byAddress -= e.address.getAddress)
-          byId -= robotId
-          publishRoutes()
+        case RobotStopped(robotId, actor) =>
+          // A forgotten robot: its IP address, its id and its traffic meter are free again.
+          byId.get(robotId).filter(_.actor == actor).foreach { e =>
+            if (!e.zeromq) byAddress -= e.address.getAddress
+            byId -= robotId
+            rebindable -= robotId
+            outbox ! Outbox.RobotGone(robotId)
+            publishRoutes()
+          }
           Behaviors.same
       }.receiveSignal { case (_, PostStop) => closePort() }
 
@@ -486,11 +494,16 @@ object Gateway {
         case None =>
           byAddress.get(ip) match {
             case Some(other) => rejectFor(Some(other), Rejection.RobotIdMismatch, from, s"address of robot $other claims robot id $robotId")
-            case None if settings.discoverFromKeepAlive && contents.status.isDefined =>
-              // The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port.
-              val at = new InetSocketAddress(ip, settings.robotReceivePort)
-              context.log.info("Discovered robot [{}] at {} (sending from {})", robotId, at, from)
-              deliver(spawnRobot(robotId, at, heard = true))
+            case None if settings.discovery.enabled && contents.status.isDefined =>
+              if (discoveredRobots >= settings.discovery.maxRobots)
+                // Anyone can invent robot ids: what they create is bounded, the rest is counted (and logged rarely).
+                reject(Rejection.RobotCapReached, from, s"robot id $robotId")
+              else {
+                // The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port.
+                val at = new InetSocketAddress(ip, settings.robotReceivePort)
+                context.log.info("Discovered robot [{}] at {} (sending from {})", robotId, at, from)
+                deliver(spawnRobot(robotId, at, discovered = true))
+              }
             case None => reject(Rejection.UnknownSender, from, s"robot id $robotId")
           }
       }

@@ -26,7 +26,8 @@ final case class HeartbeatSettings(
     chances: Int,
     qualityWindow: FiniteDuration,
     degradedBelow: Double,
-    goodAbove: Double
+    goodAbove: Double,
+    probeBackoffMax: FiniteDuration = 30.seconds
 ) {
   require(keepAliveInterval > Duration.Zero, "heartbeat.keep-alive-interval must be positive")
   require(quietAfter >= keepAliveInterval, "heartbeat.quiet-after must be at least one keep-alive interval")
@@ -34,6 +35,19 @@ final case class HeartbeatSettings(
   require(chances >= 1, "heartbeat.chances must be at least 1")
   require(qualityWindow >= keepAliveInterval * 2, "heartbeat.quality-window must cover at least two keep-alives")
   require(0 < degradedBelow && degradedBelow <= goodAbove && goodAbove <= 1, "need 0 < degraded-below <= good-above <= 1")
+  require(probeBackoffMax >= probeTimeout * chances.toLong, "heartbeat.probe-backoff-max must be at least chances x probe-timeout")
+
+  /** How long one round of probes lasts when none is answered: the first pause of the back-off. */
+  def probeRound: FiniteDuration = probeTimeout * chances.toLong
+
+  /** The pause after `silentRounds` rounds in a row without an answer: doubling from one round, at most the maximum. */
+  def probeBackoff(silentRounds: Int): FiniteDuration =
+    if (silentRounds <= 0) Duration.Zero
+    else {
+      val doublings = math.min(silentRounds - 1, 30)
+      val nanos = math.min(probeRound.toNanos.toDouble * math.pow(2, doublings.toDouble), probeBackoffMax.toNanos.toDouble)
+      nanos.toLong.nanos
+    }
 
   /** Worst-case time from the last keep-alive to offline. */
   def detection: FiniteDuration = quietAfter + probeTimeout * chances.toLong
@@ -47,10 +61,35 @@ final case class CallSettings(timeout: FiniteDuration, idempotentRetries: Int, s
 }
 
 /** The team's traffic budget. */
-final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: Int, warnAt: Double) {
+final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: Int, warnAt: Double, probeShare: Double = 0.1) {
   require(teamBytesPerSecond >= 1400, "budget.team-bytes-per-second must allow at least one datagram")
   require(robotBytesPerSecond == 0 || robotBytesPerSecond >= 1400, "budget.robot-bytes-per-second is 0 (none) or >= 1400")
   require(warnAt > 0 && warnAt <= 1, "budget.warn-at must be in (0, 1]")
+  require(probeShare > 0 && probeShare <= 1, "budget.probe-share must be in (0, 1]")
+  require(probeBytesPerSecond >= 100, "budget.probe-share of the team budget must allow at least 100 bytes per second")
+
+  /** The most bytes heartbeat probes may take in any 1 s window. */
+  def probeBytesPerSecond: Long = (teamBytesPerSecond * probeShare).toLong
+}
+
+/**
+ * Robots the network introduces (`naogateway.discovery`): whether keep-alives create robots, how many discovered robots
+ * may be known at once, and when a discovered robot that is not online is forgotten.
+ */
+final case class DiscoverySettings(
+    enabled: Boolean,
+    maxRobots: Int,
+    forgetUnreachedAfter: FiniteDuration,
+    forgetOfflineAfter: FiniteDuration
+) {
+  require(maxRobots >= 0 && maxRobots <= 1000, "discovery.max-robots must be between 0 and 1000")
+  require(forgetUnreachedAfter >= 1.second, "discovery.forget-unreached-after must be at least 1 s")
+  require(forgetOfflineAfter >= 1.second, "discovery.forget-offline-after must be at least 1 s")
+}
+
+/** The defaults, for settings built in code. */
+object DiscoverySettings {
+  val default: DiscoverySettings = DiscoverySettings(enabled = true, maxRobots = 16, 10.seconds, 2.minutes)
 }
 
 /** A robot that serves the RPC over a ZeroMQ REP socket at `endpoint`, e.g. `tcp://127.0.0.1:5600`. */
@@ -99,7 +138,7 @@ final case class GatewaySettings(
     gameControllerReuseAddress: Boolean,
     relay: Option[InetSocketAddress],
     robots: Vector[StaticRobot],
-    discoverFromKeepAlive: Boolean,
+    discovery: DiscoverySettings,
     heartbeat: HeartbeatSettings,
     calls: CallSettings,
     budget: BudgetSettings,
@@ -108,8 +147,10 @@ final case class GatewaySettings(
     zeromq: ZeroMqLinkSettings,
     gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty),
     clockSync: ClockSyncSettings = ClockSyncSettings(),
-    signingKey: Option[SigningKey] = None
+    signingKey: Option[SigningKey] = None,
+    newSessionKeepAlives: Int = 3
 ) {
+  require(newSessionKeepAlives >= 1 && newSessionKeepAlives <= 20, "new-session.keep-alives must be between 1 and 20")
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
   require(gameControllerPort >= 0 && gameControllerPort <= 65535, s"game-controller.port $gameControllerPort is not a UDP port")
@@ -145,6 +186,9 @@ object GatewaySettings {
     val budget = c.getConfig("budget")
     val stream = c.getConfig("stream")
     val zeroMq = c.getConfig("zeromq")
+    val discovery = c.getConfig("discovery")
+    // One name per concept: the old key is not read beside the new one, but named, so an old config fails clearly.
+    require(!c.hasPath("discover-from-keep-alive"), "discover-from-keep-alive is now discovery.enabled")
     def duration(cfg: Config, key: String): FiniteDuration = cfg.getDuration(key).toScala
     val heartbeat = HeartbeatSettings(
       duration(hb, "keep-alive-interval"),
@@ -153,7 +197,8 @@ object GatewaySettings {
       hb.getInt("chances"),
       duration(hb, "quality-window"),
       hb.getDouble("degraded-below"),
-      hb.getDouble("good-above")
+      hb.getDouble("good-above"),
+      duration(hb, "probe-backoff-max")
     )
     val zeroMqHeartbeat = zeroMq.getConfig("heartbeat")
     GatewaySettings(
@@ -179,11 +224,16 @@ object GatewaySettings {
           else RobotSigning.parse(r.getString("signing")).fold(e => throw new IllegalArgumentException(s"robots: robot ${r.getInt("id")}: $e"), identity)
         StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port), signing)
       },
-      discoverFromKeepAlive = c.getBoolean("discover-from-keep-alive"),
+      discovery = DiscoverySettings(
+        enabled = discovery.getBoolean("enabled"),
+        maxRobots = discovery.getInt("max-robots"),
+        forgetUnreachedAfter = duration(discovery, "forget-unreached-after"),
+        forgetOfflineAfter = duration(discovery, "forget-offline-after")
+      ),
       heartbeat = heartbeat,
       calls = CallSettings(duration(calls, "timeout"), calls.getInt("idempotent-retries"), calls.getInt("stash-capacity")),
       budget = BudgetSettings(budget.getInt("team-bytes-per-second"), budget.getInt("robot-bytes-per-second"),
-        budget.getDouble("warn-at")),
+        budget.getDouble("warn-at"), budget.getDouble("probe-share")),
       competition = c.getBoolean("competition.enabled"),
       stream = StreamSettings(
         window = stream.getInt("window"),
@@ -208,7 +258,8 @@ object GatewaySettings {
       ),
       gameControllerTrusted = trustedSources(gc),
       clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window")),
-      signingKey = signingKey(c)
+      signingKey = signingKey(c),
+      newSessionKeepAlives = c.getInt("new-session.keep-alives")
     )
   }
 

@@ -25,6 +25,7 @@ object HeartBeatActor {
   private case object QuietCheck extends Command
   private case object ProbeTimeout extends Command
   private case object QualityTick extends Command
+  private case object BackoffOver extends Command
 
   /** What the heartbeat tells its robot actor. */
   sealed trait Report
@@ -82,6 +83,7 @@ object HeartBeatActor {
   private case object QuietKey
   private case object ProbeKey
   private case object QualityKey
+  private case object BackoffKey
 
   /** A heartbeat reporting to `report`; `online` says whether the robot has just been heard. */
   def apply(settings: HeartbeatSettings, report: ActorRef[Report], online: Boolean): Behavior[Command] =
@@ -103,6 +105,11 @@ object HeartBeatActor {
     private var nextProbeId = 0L
     private var probeSentAt = 0L
     private var probeId = -1L
+    // Rounds of probes in a row that ended without an answer to any probe (a keep-alive does not count: anyone can send
+    // one). After each, a new round for someone who wants the robot waits for the back-off (BackoffKey running);
+    // `wanted` remembers that someone asked meanwhile.
+    private var silentRounds = 0
+    private var wanted = false
 
     private def armQuietCheck(): Unit = timers.startSingleTimer(QuietKey, QuietCheck, settings.quietAfter)
 
@@ -118,7 +125,7 @@ object HeartBeatActor {
         onlineLoop(q.seen)
       case QualityTick     => onlineLoop(q.tick(settings, report))
       case QuietCheck      => probe(chance = 1, wasOnline = true, q)
-      case ProbeNow        => Behaviors.same
+      case ProbeNow | BackoffOver => Behaviors.same
       case ProbeAnswered(id) =>
         if (isAwaited(id)) reportRoundTrip()
         Behaviors.same
@@ -138,6 +145,8 @@ object HeartBeatActor {
     private def reportRoundTrip(): Unit = {
       report ! ProbeRoundTrip(System.nanoTime() - probeSentAt)
       probeId = -1L
+      silentRounds = 0
+      timers.cancel(BackoffKey)
     }
 
     def probe(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = {
@@ -160,19 +169,34 @@ object HeartBeatActor {
       case ProbeTimeout =>
         if (chance < settings.chances) probe(chance + 1, wasOnline, q)
         else {
+          silentRounds += 1
+          wanted = false
+          timers.startSingleTimer(BackoffKey, BackoffOver, settings.probeBackoff(silentRounds))
           if (wasOnline) {
             report ! WentOffline(s"no keep-alive for ${settings.quietAfter.toMillis} ms and ${settings.chances} unanswered probes")
           }
           offline(q.copy(reported = LinkQuality.Offline, ticks = Queue.empty, current = 0))
         }
       case QualityTick => probing(chance, wasOnline, q.tick(settings, report))
-      case QuietCheck | ProbeNow => Behaviors.same
+      case QuietCheck | ProbeNow | BackoffOver => Behaviors.same
     }
 
-    // Offline: the heartbeat stops probing; the next keep-alive or someone's request starts it again.
+    // Offline: the heartbeat stops probing; the next keep-alive or someone's request starts it again. A request starts a
+    // round only once the back-off after the silent rounds has passed (at once for a robot that answered last time).
     private def offline(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
-      case KeepAliveSeen => backOnline(wasOnline = false, q.seen, probeAnswered = false)
-      case ProbeNow      => probe(chance = 1, wasOnline = false, q)
+      case KeepAliveSeen =>
+        timers.cancel(BackoffKey)
+        backOnline(wasOnline = false, q.seen, probeAnswered = false)
+      case ProbeNow =>
+        if (timers.isTimerActive(BackoffKey)) {
+          wanted = true
+          Behaviors.same
+        } else probe(chance = 1, wasOnline = false, q)
+      case BackoffOver =>
+        if (wanted) {
+          wanted = false
+          probe(chance = 1, wasOnline = false, q)
+        } else Behaviors.same
       case ProbeAnswered(id) =>
         if (isAwaited(id)) backOnline(wasOnline = false, q, probeAnswered = true) else Behaviors.same
       case QualityTick | QuietCheck | ProbeTimeout => Behaviors.same

@@ -42,6 +42,9 @@ object Outbox {
    */
   final case class Withdraw(robotId: Int, tags: Set[Long]) extends Command
 
+  /** Robot `robotId` is gone (forgotten): its waiting datagrams and its traffic meter go too. */
+  final case class RobotGone(robotId: Int) extends Command
+
   /** Counts `datagrams` datagrams of `bytes` in all received from the team, for the two-way traffic figures. */
   final case class Inbound(datagrams: Int, bytes: Int) extends Command
 
@@ -131,7 +134,11 @@ private final class Outbox(
 
   private val out = new TrafficMeter(Second)
   private val in = new TrafficMeter(Second)
+  // Keyed by robot id, but only robot actors send, and a forgotten robot's meter goes with it (RobotGone).
   private val perRobot = scala.collection.mutable.Map.empty[Int, TrafficMeter]
+  // Heartbeat probes together: however many robots are probed, they take at most budget.probe-share of the budget.
+  private val probes = new TrafficMeter(Second)
+  private val droppedByClass = Array.fill(Priority.all.size)(0L)
   private var queues: Vector[Queue[Send]] = Vector.fill(Priority.all.size)(Queue.empty)
   private var gameIsRunning = false
   private var refused = 0L
@@ -140,13 +147,31 @@ private final class Outbox(
 
   private def robotMeter(robotId: Int) = perRobot.getOrElseUpdate(robotId, new TrafficMeter(Second))
 
-  private def allowed(now: Long, s: Send): Boolean =
+  /** Whether `s` fits the team's and its robot's budget now (what holds back every class behind it). */
+  private def fitsBudget(now: Long, s: Send): Boolean =
     s.priority == Priority.Safety || (out.fits(now, s.size, budget.teamBytesPerSecond.toLong) &&
       (budget.robotBytesPerSecond == 0 || robotMeter(s.robotId).fits(now, s.size, budget.robotBytesPerSecond.toLong)))
+
+  /** Whether a probe `s` fits the probes' share (other classes always do). */
+  private def fitsShare(now: Long, s: Send): Boolean =
+    s.priority != Priority.Heartbeat || probes.fits(now, s.size, budget.probeBytesPerSecond)
+
+  private def allowed(now: Long, s: Send): Boolean = fitsBudget(now, s) && fitsShare(now, s)
+
+  /** The earliest time `s` may go (now, if it may go now). */
+  private def fitsAt(now: Long, s: Send): Long = {
+    val team = out.fitsAt(now, s.size, budget.teamBytesPerSecond.toLong)
+    val robot =
+      if (budget.robotBytesPerSecond == 0) now
+      else robotMeter(s.robotId).fitsAt(now, s.size, budget.robotBytesPerSecond.toLong)
+    val share = if (s.priority == Priority.Heartbeat) probes.fitsAt(now, s.size, budget.probeBytesPerSecond) else now
+    math.max(team, math.max(robot, share))
+  }
 
   private def transmit(now: Long, s: Send): Unit = {
     out.record(now, s.size)
     robotMeter(s.robotId).record(now, s.size)
+    if (s.priority == Priority.Heartbeat) probes.record(now, s.size)
     // Signed now, not when it was queued: the robot accepts only growing timestamps, and the queues reorder.
     val bytes = if (!s.signed) Right(s.bytes) else signer.toRight("no signing key").flatMap(_.sign(s.bytes).left.map(_.describe))
     // Written here, on the outbox's own thread: no link actor between the decision and the socket. A full kernel
@@ -166,26 +191,30 @@ private final class Outbox(
     }
   }
 
-  /** Sends what the budget allows, most urgent class first, and sets a timer for the rest. */
+  /**
+   * Sends what the budget allows, most urgent class first, and sets a timer for the rest. A datagram that does not fit
+   * the budget holds back everything behind it; probes held back only by their share let the classes behind them go.
+   */
   private def drain(now: Long): Unit = {
     var blocked = false
     var rank = 0
+    var waiting = Vector.empty[Send]
     while (rank < queues.size && !blocked) {
       var q = queues(rank)
-      while (q.nonEmpty && !blocked) {
+      var classHeld = false
+      while (q.nonEmpty && !blocked && !classHeld) {
         val (s, rest) = q.dequeue
         if (allowed(now, s)) { transmit(now, s); q = rest }
-        else blocked = true
+        else {
+          waiting :+= s
+          if (fitsBudget(now, s)) classHeld = true else blocked = true
+        }
       }
       queues = queues.updated(rank, q)
       rank += 1
     }
-    queues.find(_.nonEmpty).map(_.head).foreach { head =>
-      val team = out.fitsAt(now, head.size, budget.teamBytesPerSecond.toLong)
-      val robot =
-        if (budget.robotBytesPerSecond == 0) now
-        else robotMeter(head.robotId).fitsAt(now, head.size, budget.robotBytesPerSecond.toLong)
-      val wait = math.max(1000000L, math.max(team, robot) - now)
+    if (waiting.nonEmpty) {
+      val wait = math.max(1000000L, waiting.map(fitsAt(now, _)).min - now)
       timers.startSingleTimer(DrainTimer, Drain, wait.nanos)
     }
   }
@@ -208,13 +237,17 @@ private final class Outbox(
           s.replyTo.foreach(_ ! Accepted(s.tag))
         } else if (queues(rank).size >= QueueCapacity) {
           dropped += 1
+          droppedByClass(rank) += 1
           s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
-          if (dropped % 100 == 1) log.warn("Outbox dropped {} datagram(s) so far: {} queue full", dropped, s.priority.name)
+          // Per class at its 1st, 10th, 100th ... drop: a flood of probes cannot flood the log.
+          if (RateLimitedLog.due(droppedByClass(rank)))
+            log.warn("Outbox dropped {} datagram(s) so far: {} queue full", droppedByClass(rank), s.priority.name)
         } else {
           queues = queues.updated(rank, queues(rank).enqueue(s))
           s.replyTo.foreach(_ ! Accepted(s.tag))
-          // Safety must not wait for the timer; other classes drain when the budget frees.
-          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer)) drain(now)
+          // Safety must not wait for the timer; other classes drain when the budget frees, or at once when only probes
+          // held back by their share wait (they must not make the others wait for the timer).
+          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer) || queues(Priority.Heartbeat.rank).nonEmpty) drain(now)
         }
       }
       Behaviors.same
@@ -223,6 +256,10 @@ private final class Outbox(
       Behaviors.same
     case Withdraw(robotId, tags) =>
       queues = queues.map(_.filterNot(q => q.robotId == robotId && tags(q.tag)))
+      Behaviors.same
+    case RobotGone(robotId) =>
+      perRobot -= robotId
+      queues = queues.map(_.filterNot(_.robotId == robotId))
       Behaviors.same
     case Inbound(datagrams, bytes) =>
       in.record(System.nanoTime(), bytes, datagrams)

@@ -99,6 +99,8 @@ object RobotActor {
   private final case class ZeroMqLinkEvent(event: ZeroMqRobotLink.Event) extends Command
   private case object PullOptions extends Command
   private case object PullKey
+  private final case class Forget(reason: String) extends Command
+  private case object ForgetKey
 
   /** How often `optionPull` is repeated until the robot's `optionPush` arrives (protocol.md 8, step 1). */
   val OptionPullInterval: FiniteDuration = 1.second
@@ -157,8 +159,11 @@ object RobotActor {
   private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
 
   /**
-   * A robot actor for `robotId` at `address`; `heard` says whether it was discovered from its own keep-alive.
-   * `transport` says how it is reached; everything above the transport is the same for both kinds.
+   * A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once).
+   * `transport` says how it is reached; everything above the transport is the same for both kinds. A `discovered`
+   * robot (introduced by its own keep-alive, `naogateway.discovery`) is not online from that one keep-alive: a second
+   * one or a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come
+   * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
    */
   def apply(
       robotId: Int,
@@ -167,7 +172,8 @@ object RobotActor {
       outbox: ActorRef[Outbox.Command],
       wiring: Wiring,
       heard: Boolean,
-      transport: Transport = Transport.Datagrams
+      transport: Transport = Transport.Datagrams,
+      discovered: Boolean = false
   ): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
@@ -175,7 +181,7 @@ object RobotActor {
           // Datagrams handed to an earlier incarnation are gone with it; the count starts again.
           wiring.backlog.reset()
           wiring.gateway.foreach(_ ! SubscribersWanted(context.self))
-          new Robot(robotId, settings, outbox, wiring, transport, context, stash, timers).start(address, heard)
+          new Robot(robotId, settings, outbox, wiring, transport, discovered, context, stash, timers).start(address, heard)
         }
       }
     }
@@ -186,6 +192,7 @@ object RobotActor {
       outbox: ActorRef[Outbox.Command],
       wiring: Wiring,
       transport: Transport,
+      discovered: Boolean,
       context: ActorContext[Command],
       stash: StashBuffer[Command],
       timers: TimerScheduler[Command]
@@ -217,8 +224,10 @@ object RobotActor {
     // The latest keep-alive's fields, the address and the link quality; `online` is not kept here but taken from the
     // behaviour (unreached, or running with its flag) whenever the snapshot leaves this actor (`view`).
     private var snapshot: RobotSnapshot = null
-    // The bootId the restart rule compares the next keep-alive with (RobotSnapshot.keepAlive).
-    private var lastBootId: Option[Int] = None
+    // The restart rule's state: the session believed in and a candidate new one (RobotSnapshot.keepAlive).
+    private var sessions = SessionRule.empty
+    // A discovered robot's first keep-alive (the one that introduced it) does not make it online: anyone can send one.
+    private var introducing = discovered
     // The robot's clock against the gateway's, from keep-alives alone; a new session at every restart.
     private var clockSync = ClockSync(settings.clockSync)
     // Debug options switched on through the gateway, re-enabled after a robot restart.
@@ -249,8 +258,8 @@ object RobotActor {
         "heartbeat",
         Gateway.RobotDispatcher
       )
-      // A discovered robot has spoken already: its keep-alive counts as the first sign of life.
       if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
+      forgetAfter(settings.discovery.forgetUnreachedAfter, "not online")
       unreached(heartbeat)
     }
 
@@ -300,6 +309,7 @@ object RobotActor {
         running(children, online = true)
       case HeartbeatReport(HeartBeatActor.WentOffline(reason)) =>
         context.log.info("Robot [{}] offline: {}", robotId, reason)
+        forgetAfter(settings.discovery.forgetOfflineAfter, "offline")
         children.response ! ResponseActor.Reachability(false)
         publish(RobotOffline(robotId, reason))
         running(children, online = false)
@@ -308,11 +318,16 @@ object RobotActor {
 
     /** Called as the behaviour becomes online: the quality starts good (HeartBeatActor's rule), options are pulled. */
     private def wentOnline(): Unit = {
+      timers.cancel(ForgetKey)
       context.log.info("Robot [{}] online at {}", robotId, address)
       snapshot = snapshot.copy(quality = LinkQuality.Good)
       if (pullsOptions && optionList.isEmpty) { if (pulling) sendPull(online = true) else startPull(online = true) }
       publish(RobotOnline(robotId, address))
     }
+
+    /** A discovered robot is forgotten when it is still not online after `delay`; configured robots never are. */
+    private def forgetAfter(delay: FiniteDuration, state: String): Unit =
+      if (discovered) timers.startSingleTimer(ForgetKey, Forget(s"$state for ${delay.toSeconds} s"), delay)
 
     private def publish(event: GatewayEvent): Unit = subscribers match {
       case Some(all) => all.foreach(_ ! event)
@@ -375,7 +390,9 @@ object RobotActor {
         Behaviors.same
       case DatagramRejected(kind) =>
         wiring.backlog.done()
-        count(kind)
+        // The gateway warned of it already (per kind, for all robots): here it is counted, and logged at debug only, so
+        // robots that come and go cannot multiply the warnings.
+        count(kind, warn = false)
         Behaviors.same
       case Subscribers(now) =>
         subscribers = Some(now)
@@ -397,6 +414,11 @@ object RobotActor {
       case VisionSubscribersWanted(replyTo) =>
         replyTo ! VisionActor.Subscribers(visionSubscribers)
         Behaviors.same
+      case Forget(reason) =>
+        // The gateway watches this actor: its IP address and id are free once it has stopped.
+        context.log.info("Robot [{}] forgotten: {}", robotId, reason)
+        publish(RobotForgotten(robotId, reason))
+        Behaviors.stopped
       case Rebound(newAddress) =>
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
         address = newAddress
@@ -537,11 +559,11 @@ object RobotActor {
           }
       }
 
-    private def count(kind: Rejection, detail: => String = ""): Unit = {
+    private def count(kind: Rejection, detail: => String = "", warn: Boolean = true): Unit = {
       val n = rejected.getOrElse(kind, 0L) + 1
       rejected = rejected.updated(kind, n)
       // Per kind, at 1, 10, 100, ...: the kinds are a closed set, so neither the map nor the log can grow with a flood.
-      if (RateLimitedLog.due(n)) context.log.warn("Robot [{}]: refused datagram ({}), {} so far", robotId, kind.name, n)
+      if (warn && RateLimitedLog.due(n)) context.log.warn("Robot [{}]: refused datagram ({}), {} so far", robotId, kind.name, n)
       if (context.log.isDebugEnabled) context.log.debug("Robot [{}]: refused datagram ({}) {}", robotId, kind.name, detail)
     }
 
@@ -561,14 +583,14 @@ object RobotActor {
         heartbeat: ActorRef[HeartBeatActor.Command],
         online: Boolean
     ): Unit = {
-      heartbeat ! HeartBeatActor.KeepAliveSeen
+      if (introducing) introducing = false else heartbeat ! HeartBeatActor.KeepAliveSeen
       val now = System.nanoTime()
       // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
       if (keepAliveTimes.size >= keepAliveTimesKept) keepAliveTimes.removeHead()
       keepAliveTimes.append(now)
       trimKeepAliveTimes(now - settings.heartbeat.qualityWindow.toNanos)
-      val step = RobotSnapshot.keepAlive(snapshot, lastBootId, contents.status.get, contents.robotHealth, now)
-      lastBootId = step.lastBootId
+      val step = RobotSnapshot.keepAlive(snapshot, sessions, contents.status.get, contents.robotHealth, now, settings.newSessionKeepAlives)
+      sessions = step.sessions
       if (step.restarted) clockSync = clockSync.restart
       // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.
       val robotTime = contents.status.get.timestamp

@@ -46,8 +46,8 @@ final case class RobotSnapshot(
     RobotReport(teamId, role, agent, posture, batteryVoltage, uptimeMillis, bootId, position)
 }
 
-/** What one keep-alive did: the robot's new snapshot, whether it began a fresh session, and the bootId now remembered. */
-final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, lastBootId: Option[Int])
+/** What one keep-alive did: the robot's new snapshot, whether it completed a new session, and the restart rule now. */
+final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, sessions: SessionRule)
 
 /** How a keep-alive changes a robot's snapshot. */
 object RobotSnapshot {
@@ -79,24 +79,22 @@ object RobotSnapshot {
   }
 
   /**
-   * One keep-alive applied to the gateway's view of a robot: the snapshot it publishes ([[afterKeepAlive]]), whether
-   * the keep-alive starts a fresh session by the restart rule of docs/protocol.md §6.2, and the `bootId` the next
-   * keep-alive is compared with. `lastBootId` is kept apart from the snapshot, which shows only the latest keep-alive.
+   * One keep-alive applied to the gateway's view of a robot: the snapshot it publishes ([[afterKeepAlive]]), and
+   * whether it completes a new session by the restart rule of docs/protocol.md §6.2 ([[SessionRule]]: `keepAlives`
+   * keep-alives in a row of one new session). The rule's state is kept apart from the snapshot, which shows only the
+   * latest keep-alive.
    */
   def keepAlive(
       previous: RobotSnapshot,
-      lastBootId: Option[Int],
+      sessions: SessionRule,
       status: naogateway.proto.Status,
       health: Option[naogateway.proto.RobotHealth],
-      receivedAtNanos: Long
+      receivedAtNanos: Long,
+      keepAlives: Int
   ): KeepAliveStep = {
     val current = afterKeepAlive(previous, status, health, receivedAtNanos)
-    // A bootId differing from the last one seen (a keep-alive without one says nothing), or uptime going backwards by
-    // more than a second (so reordered keep-alives are no restart).
-    val restarted = (for (before <- lastBootId; now <- current.bootId) yield now != before).getOrElse(false) ||
-      (for (before <- previous.uptimeMillis; after <- current.uptimeMillis) yield after + 1000 < before).getOrElse(false)
-    // A restart announced without a bootId forgets the old session's, so it cannot make the next keep-alive a restart.
-    KeepAliveStep(current, restarted, if (current.bootId.isDefined || restarted) current.bootId else lastBootId)
+    val (next, restarted) = sessions.step(SessionMark(current.bootId, current.uptimeMillis, receivedAtNanos / 1000000L), keepAlives)
+    KeepAliveStep(current, restarted, next)
   }
 }
 
@@ -140,6 +138,12 @@ final case class RobotStatusUpdated(snapshot: RobotSnapshot) extends RobotEvent 
 
 /** The robot came back with a fresh session; the gateway has re-synced it. */
 final case class RobotRestarted(robotId: Int, bootId: Option[Int], resynced: Vector[String]) extends RobotEvent
+
+/**
+ * A robot discovered from its keep-alives was forgotten (never online, or offline too long): its robot actor stopped,
+ * its IP address and id are free. Its next keep-alive discovers it again. Configured robots are never forgotten.
+ */
+final case class RobotForgotten(robotId: Int, reason: String) extends RobotEvent
 
 /** The GameController's latest packet. */
 final case class GameStateUpdated(data: GameControlData) extends GatewayEvent

@@ -22,10 +22,12 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
   // The thesis firmware's keep-alive after a power cycle: Status alone, team and agent only, a young clock.
   private val bareStatus = Status(timestamp = Some(400L), teamID = Some(1), activeAgent = Some("AgentTest"))
 
+  // Keep-alives 200 ms apart by the gateway's clock, three in a row of a new session making a restart.
   private def run(steps: (Status, Option[RobotHealth])*): Vector[KeepAliveStep] =
     steps.foldLeft(Vector.empty[KeepAliveStep]) { (done, keepAlive) =>
-      val (snapshot, lastBootId) = done.lastOption.fold((start, Option.empty[Int]))(s => (s.snapshot, s.lastBootId))
-      done :+ RobotSnapshot.keepAlive(snapshot, lastBootId, keepAlive._1, keepAlive._2, receivedAtNanos = done.size.toLong)
+      val (snapshot, sessions) = done.lastOption.fold((start, SessionRule.empty))(s => (s.snapshot, s.sessions))
+      done :+ RobotSnapshot.keepAlive(snapshot, sessions, keepAlive._1, keepAlive._2,
+        receivedAtNanos = 1000000000000L + done.size * 200000000L, keepAlives = 3)
     }
 
   "A keep-alive" should {
@@ -34,13 +36,15 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
       s.restarted shouldBe false
       s.snapshot shouldBe start.copy(teamId = Some(1), role = Some("striker"), agent = Some("soccer"), posture = Some(Posture.Walking),
         batteryVoltage = Some(11.5), uptimeMillis = Some(600000L), bootId = Some(3), position = Some((-1200, 300, 0.5)),
-        receivedAtNanos = 0L)
+        receivedAtNanos = 1000000000000L)
     }
 
     "carry nothing over from the previous session when the new one sends Status only" in {
       val Vector(_, restart) = run(fullStatus -> Some(fullHealth), bareStatus -> None)
-      restart.restarted shouldBe true
-      restart.snapshot shouldBe start.copy(teamId = Some(1), agent = Some("AgentTest"), uptimeMillis = Some(400L), receivedAtNanos = 1L)
+      // One keep-alive of a new session is no restart yet (the rule wants three in a row), but it is shown as it is.
+      restart.restarted shouldBe false
+      restart.snapshot shouldBe start.copy(teamId = Some(1), agent = Some("AgentTest"), uptimeMillis = Some(400L),
+        receivedAtNanos = 1000200000000L)
       restart.snapshot.batteryVoltage shouldBe None
       restart.snapshot.position shouldBe None
       restart.snapshot.role shouldBe None
@@ -56,7 +60,7 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
       next.snapshot.position shouldBe None
       next.snapshot.batteryVoltage shouldBe None
       next.snapshot.bootId shouldBe Some(3)
-      next.lastBootId shouldBe Some(3)
+      next.sessions.current.flatMap(_.bootId) shouldBe Some(3)
     }
     "carry a posture this build does not know as the robot reported it, and take Status' posture without RobotHealth" in {
       val Vector(unknown, fromStatus) =
@@ -76,19 +80,20 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
   }
 
   "The restart rule" should {
-    "see a new bootId, and a clock that went back, but not a keep-alive that merely lacks RobotHealth" in {
+    "see a new bootId, and a clock that went back, only from three keep-alives in a row of the new session" in {
       val steps = run(
         fullStatus -> Some(fullHealth),
-        fullStatus.copy(timestamp = Some(600200L)) -> None, // RobotHealth left out: no bootId, no restart
+        fullStatus.copy(timestamp = Some(600200L)) -> None, // RobotHealth left out: no bootId, the same clock
         fullStatus.copy(timestamp = Some(600400L)) -> Some(fullHealth.copy(uptimeMs = Some(600400))),
-        fullStatus.copy(timestamp = Some(600600L)) -> Some(fullHealth.copy(uptimeMs = Some(600600), bootId = Some(4))),
+        fullStatus.copy(timestamp = Some(600600L)) -> Some(fullHealth.copy(uptimeMs = Some(600600), bootId = Some(4))), // odd
+        fullStatus.copy(timestamp = Some(600800L)) -> Some(fullHealth.copy(uptimeMs = Some(600800))), // the session goes on
         bareStatus -> None, // a power cycle to Status-only firmware: the clock went back
         bareStatus.copy(timestamp = Some(600L)) -> None,
         bareStatus.copy(timestamp = Some(800L)) -> Some(RobotHealth(uptimeMs = Some(800), bootId = Some(1))),
         bareStatus.copy(timestamp = Some(1000L)) -> Some(RobotHealth(uptimeMs = Some(1000), bootId = Some(1)))
       )
-      steps.map(_.restarted) shouldBe Vector(false, false, false, true, true, false, false, false)
-      steps.map(_.lastBootId) shouldBe Vector(Some(3), Some(3), Some(3), Some(4), None, None, Some(1), Some(1))
+      steps.map(_.restarted) shouldBe Vector(false, false, false, false, false, false, false, true, false)
+      steps.map(_.sessions.current.flatMap(_.bootId)) shouldBe Vector(Some(3), Some(3), Some(3), Some(3), Some(3), Some(3), Some(3), Some(1), Some(1))
       steps(1).snapshot.bootId shouldBe None
     }
   }

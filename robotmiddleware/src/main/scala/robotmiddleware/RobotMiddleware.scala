@@ -209,7 +209,13 @@ object RobotMiddleware {
               case RobotStatusUpdated(s) => statusWatchers.foreach { case (w, filter) => if (filter.forall(_ == s.robotId)) w ! s }
               case _                     => ()
             }
-            guards.get(e.robotId).foreach(_ ! RobotGuard.RobotEventReceived(e))
+            e match {
+              case RobotForgotten(robotId, _) =>
+                // The gateway forgot a robot the network introduced: its guard goes too, so no map here outlives it.
+                guards.get(robotId).foreach(context.stop(_))
+                guards -= robotId
+              case _ => guards.get(e.robotId).foreach(_ ! RobotGuard.RobotEventReceived(e))
+            }
             if (!e.isInstanceOf[RobotStatusUpdated]) eventWatchers.foreach(_ ! e)
           case GameStateUpdated(data) => gameWatchers.foreach(_ ! data)
         }

@@ -93,6 +93,41 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       reports.receiveMessage() shouldBe a[ProbeRoundTrip]
       reports.expectMessage(CameOnline)
     }
+    "back off rounds for a robot that never answers, however often it is wanted, and start again after an answer" in {
+      val reports = createTestProbe[Report]()
+      val heartbeat = spawn(HeartBeatActor(settings.copy(probeBackoffMax = 2.seconds), reports.ref, online = false))
+      // One round: three probes 150 ms apart, then the last one's timeout.
+      def silentRound(): Unit = {
+        probeId(reports.receiveMessage())
+        manualTime.timePasses(150.millis)
+        probeId(reports.receiveMessage())
+        manualTime.timePasses(150.millis)
+        probeId(reports.receiveMessage())
+        manualTime.timePasses(150.millis)
+      }
+      def wantedAfter(backoff: FiniteDuration): Unit = {
+        (1 to 5).foreach(_ => heartbeat ! ProbeNow)
+        manualTime.timePasses(backoff - 1.milli)
+        reports.expectNoMessage(50.millis)
+        manualTime.timePasses(1.milli)
+      }
+      silentRound()
+      // Wanted again and again: each round waits for the back-off, doubling from one round (450 ms) to the maximum.
+      Seq(450.millis, 900.millis, 1800.millis, 2.seconds, 2.seconds).foreach { backoff =>
+        wantedAfter(backoff)
+        silentRound()
+      }
+      // An answer ends the back-off; the next silence starts it again from one round.
+      wantedAfter(2.seconds)
+      heartbeat ! ProbeAnswered(probeId(reports.receiveMessage()))
+      reports.receiveMessage() shouldBe a[ProbeRoundTrip]
+      reports.expectMessage(CameOnline)
+      manualTime.timePasses(400.millis)
+      silentRound()
+      reports.receiveMessage() shouldBe a[WentOffline]
+      wantedAfter(450.millis)
+      probeId(reports.receiveMessage())
+    }
     "ignore answers to probes it did not send" in {
       val reports = createTestProbe[Report]()
       val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = true))

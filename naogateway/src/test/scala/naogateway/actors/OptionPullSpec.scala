@@ -84,8 +84,9 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))), HeaderForm.Legacy, 40)
       robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(enable("havimo.regions")), Priority.Debug, None)
       nextDebug(outbox) shouldBe enable("havimo.regions")
-      keepAlive(robot, boot = 2)
-      // A new session: its list first, nothing enabled before it arrives.
+      // A new session: three keep-alives in a row of it (new-session.keep-alives), then its list first, nothing enabled
+      // before it arrives.
+      (1 to settings.newSessionKeepAlives).foreach(_ => keepAlive(robot, boot = 2))
       nextDebug(outbox) shouldBe pull
       remainingDebug(outbox) shouldBe empty
       robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))), HeaderForm.Legacy, 40)

@@ -41,6 +41,32 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
   }
 
   "Outbox" must {
+    "never let probes take more than budget.probe-share of the budget in any second, and not hold back commands" in {
+      val written = new java.util.concurrent.ConcurrentLinkedQueue[(Long, Int, Byte)]()
+      val recording: naogateway.link.DatagramWriter = (bytes, _) => { written.add((System.nanoTime(), bytes.length, bytes(0))); true }
+      val budget = BudgetSettings(20000, 0, 0.8, probeShare = 0.1)
+      val outbox = spawn(Outbox(recording, budget, competition = false))
+      val probe = Array.fill[Byte](50)(1)
+      val command = Array.fill[Byte](500)(2)
+      val start = System.nanoTime()
+      // 300 probes from 30 robots at once (7.5 times the probes' share), then 20 commands.
+      (1 to 300).foreach(i => outbox ! Outbox.Send(i % 30, robot, probe, Priority.Heartbeat))
+      (1 to 20).foreach(i => outbox ! Outbox.Send(i % 30, robot, command, Priority.Command))
+      Thread.sleep(2600)
+      import scala.jdk.CollectionConverters._
+      val all = written.asScala.toVector
+      val probes = all.filter(_._3 == 1)
+      // The commands went out at once: the probes held back by their share do not stand in their way.
+      all.filter(_._3 == 2).map(_._1 - start).max should be < 500000000L
+      // Every 1 s window: at most 2000 bytes of probes (one datagram's leeway: the writer's clock reads a little later
+      // than the outbox's decision).
+      probes.foreach { case (t, _, _) =>
+        probes.filter { case (u, _, _) => u > t - 1000000000L && u <= t }.map(_._2).sum should be <= 2000 + 50
+      }
+      // And the probes did use their share: about 40 a second.
+      probes.size should be >= 80
+      outbox ! Outbox.GetStats(createTestProbe[Outbox.TrafficStats]().ref)
+    }
     "stay within the budget when asked for far more, send safety first and commands before debug" in {
       val link = createTestProbe[UdpLink.Command]()
       val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(10000, 0, 0.8), competition = false))

@@ -71,6 +71,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case _: LinkQualityChanged             => M.LinkQualityChanged
     case _: RobotStatusUpdated             => M.RobotStatusUpdated
     case _: RobotRestarted                 => M.RobotRestarted
+    case _: RobotForgotten                 => M.RobotForgotten
     case _: GameStateUpdated               => M.GameStateUpdated
     case _: GameControlData                => M.GameControlData
     case _: RpcValue                       => M.RpcValue
@@ -123,6 +124,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case LinkQualityChanged(robotId, quality)   => bytes(pb.LinkQualityChanged(robotId, toProto(quality)))
     case RobotStatusUpdated(snapshot)           => bytes(toProto(snapshot))
     case RobotRestarted(robotId, bootId, resynced) => bytes(pb.RobotRestarted(robotId, bootId, resynced))
+    case RobotForgotten(robotId, reason)        => bytes(pb.RobotForgotten(robotId, reason))
     case GameStateUpdated(data)                 => gamePacket(data)
     case data: GameControlData                  => gamePacket(data)
     case v: RpcValue                            => bytes(v.toProto)
@@ -203,6 +205,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.RobotRestarted =>
       val m = pb.RobotRestarted.parseFrom(bytes)
       naogateway.RobotRestarted(m.robotId, m.bootId, m.resynced.toVector)
+    case M.RobotForgotten =>
+      val m = pb.RobotForgotten.parseFrom(bytes)
+      naogateway.RobotForgotten(m.robotId, m.reason)
     case M.GameStateUpdated => naogateway.GameStateUpdated(gameData(bytes))
     case M.GameControlData  => gameData(bytes)
     case M.RpcValue         => naogateway.wire.RpcValue.fromProto(naogateway.proto.MixedValue.parseFrom(bytes))
@@ -396,6 +401,7 @@ object CrossNodeSerializer {
     val LinkQualityChanged = "LinkQualityChanged"
     val RobotStatusUpdated = "RobotStatusUpdated"
     val RobotRestarted = "RobotRestarted"
+    val RobotForgotten = "RobotForgotten"
     val GameStateUpdated = "GameStateUpdated"
     val GameControlData = "GameControlData"
     val RpcValue = "RpcValue"

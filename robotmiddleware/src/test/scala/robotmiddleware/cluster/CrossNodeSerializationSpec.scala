@@ -120,7 +120,7 @@ object CrossNodeSerializationSpec {
     "WatchGame", "WatchEvents", "AppRegistered", "OperationResult", "LeaseResult", "RobotSnapshots", "Operation",
     "RobotFailure", "SubscribeAppEvents", "Close", "LeasePreempted", "SafetyStop", "SafetyCleared", "RobotSnapshot",
     "LinkStats", "VisionRegions", "VisionGrid", "RobotOnline", "RobotOffline", "LinkQualityChanged",
-    "RobotStatusUpdated", "RobotRestarted", "GameStateUpdated", "GameControlData", "RpcValue"
+    "RobotStatusUpdated", "RobotRestarted", "RobotForgotten", "GameStateUpdated", "GameControlData", "RpcValue"
   )
 
   val ipv4: InetSocketAddress = new InetSocketAddress(InetAddress.getByAddress(Array[Byte](127, 0, 0, 7)), 11011)
@@ -236,6 +236,7 @@ object CrossNodeSerializationSpec {
       RobotStatusUpdated(snapshot),
       RobotRestarted(7, Some(4), Vector("havimo.regions", "havimo.grid")),
       RobotRestarted(7, None, Vector.empty),
+      RobotForgotten(7, "offline for 120 s"),
       GameStateUpdated(gameData),
       gameData
     ) ++

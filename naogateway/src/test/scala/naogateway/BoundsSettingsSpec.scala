@@ -1,0 +1,56 @@
+package naogateway
+
+import scala.concurrent.duration._
+
+import com.typesafe.config.ConfigFactory
+import org.scalacheck.Gen
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
+
+/** The keys that bound what the network can make the gateway do (docs/architecture.md 13.1, 15.1). */
+class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
+
+  private def settings(overrides: String = ""): GatewaySettings =
+    GatewaySettings.fromConfig(ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("naogateway")))
+
+  "The gateway's settings" should {
+    "bound discovery, probes and restarts by default" in {
+      val s = settings()
+      s.discovery shouldBe DiscoverySettings(enabled = true, maxRobots = 16, forgetUnreachedAfter = 10.seconds, forgetOfflineAfter = 120.seconds)
+      s.budget.probeShare shouldBe 0.1
+      s.budget.probeBytesPerSecond shouldBe 12500L
+      s.heartbeat.probeBackoffMax shouldBe 30.seconds
+      s.newSessionKeepAlives shouldBe 3
+    }
+
+    "name the new key when a config still sets discover-from-keep-alive" in {
+      val e = intercept[IllegalArgumentException](settings("discover-from-keep-alive = off"))
+      e.getMessage should include("discovery.enabled")
+      settings("discovery.enabled = off").discovery.enabled shouldBe false
+    }
+
+    "refuse bounds that bound nothing" in {
+      an[IllegalArgumentException] should be thrownBy settings("discovery.max-robots = -1")
+      an[IllegalArgumentException] should be thrownBy settings("discovery.forget-offline-after = 0s")
+      an[IllegalArgumentException] should be thrownBy settings("budget.probe-share = 0")
+      an[IllegalArgumentException] should be thrownBy settings("new-session.keep-alives = 0")
+      an[IllegalArgumentException] should be thrownBy settings("heartbeat.probe-backoff-max = 100ms")
+    }
+  }
+
+  "The probe back-off" should {
+    "double from one round of probes up to the maximum, and never probe more often than one round per back-off" in {
+      val hb = settings().heartbeat
+      (1 to 8).map(hb.probeBackoff) shouldBe Vector(450, 900, 1800, 3600, 7200, 14400, 28800, 30000).map(_.millis)
+      forAll(Gen.choose(1, 10000)) { rounds =>
+        hb.probeBackoff(rounds) should (be >= hb.probeRound and be <= hb.probeBackoffMax)
+        hb.probeBackoff(rounds + 1) should be >= hb.probeBackoff(rounds)
+      }
+      // Probing a robot that never answers, wanted all the time: after the first minute at most one round of
+      // `chances` probes per 30 s + 450 ms.
+      val perHourAfterwards = 3600.0 / (hb.probeBackoffMax + hb.probeRound).toUnit(SECONDS) * hb.chances
+      perHourAfterwards should be < 400.0
+    }
+  }
+}
