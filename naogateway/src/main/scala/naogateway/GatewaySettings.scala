@@ -9,6 +9,7 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
+import naogateway.recording.RecordingSettings
 import naogateway.wire.stream.StreamSettings
 
 /** A robot known from configuration: its id and where it receives (its IP, which identifies it, at its receive port). */
@@ -102,7 +103,8 @@ final case class GatewaySettings(
     competition: Boolean,
     stream: StreamSettings,
     zeromq: ZeroMqLinkSettings,
-    gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty)
+    gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty),
+    recording: RecordingSettings = RecordingSettings.Off
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
@@ -191,7 +193,8 @@ object GatewaySettings {
           chances = zeroMqHeartbeat.getInt("chances")
         )
       ),
-      gameControllerTrusted = trustedSources(gc)
+      gameControllerTrusted = trustedSources(gc),
+      recording = RecordingSettings.fromConfig(c.getConfig("recording"))
     )
   }
 

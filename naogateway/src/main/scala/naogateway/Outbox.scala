@@ -9,6 +9,7 @@ import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.DatagramWriter
+import naogateway.recording.{Decision, Recording}
 import naogateway.wire.gamecontroller.GameState
 
 /** The last gate before the air: the competition rule, the team's traffic budget and the priority classes. */
@@ -94,11 +95,14 @@ object Outbox {
 
   private val Second = 1000000000L
 
-  /** An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs. */
-  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean): Behavior[Command] =
+  /**
+   * An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs; its
+   * decisions (each datagram's outcome, the gate, the budget once a second while sending) go to `recording`.
+   */
+  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean, recording: Recording = Recording.Off): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        new Outbox(link, budget, competition, timers, context.log).behavior()
+        new Outbox(link, budget, competition, timers, context.log, recording).behavior()
       }
     }
 
@@ -112,7 +116,8 @@ private final class Outbox(
     budget: BudgetSettings,
     competition: Boolean,
     timers: TimerScheduler[Outbox.Command],
-    log: org.slf4j.Logger
+    log: org.slf4j.Logger,
+    recording: Recording
 ) {
   import Outbox._
 
@@ -124,6 +129,17 @@ private final class Outbox(
   private var refused = 0L
   private var dropped = 0L
   private var lastWarning = Long.MinValue
+  private var lastBudgetRecord = System.nanoTime() - 2 * Second
+
+  /** The outcome of one datagram, and once a second the budget's state, for the recording. */
+  private def record(now: Long, s: Send, outcome: String): Unit = if (recording.enabled) {
+    recording.decision(Decision.Outgoing(s.robotId, s.priority, outcome, s.bytes))
+    if (now - lastBudgetRecord >= Second) {
+      lastBudgetRecord = now
+      recording.decision(Decision.Budget(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
+        Priority.all.map(p => p.name -> queues(p.rank).size).toMap))
+    }
+  }
 
   private def robotMeter(robotId: Int) = perRobot.getOrElseUpdate(robotId, new TrafficMeter(Second))
 
@@ -159,7 +175,7 @@ private final class Outbox(
       var q = queues(rank)
       while (q.nonEmpty && !blocked) {
         val (s, rest) = q.dequeue
-        if (allowed(now, s)) { transmit(now, s); q = rest }
+        if (allowed(now, s)) { transmit(now, s); record(now, s, "sent"); q = rest }
         else blocked = true
       }
       queues = queues.updated(rank, q)
@@ -180,18 +196,22 @@ private final class Outbox(
       val now = System.nanoTime()
       if (competition && gameIsRunning) {
         refused += 1
+        record(now, s, "refused-by-rule")
         s.replyTo.foreach(_ ! RefusedByRule(s.tag, NoSendingWhileGameRuns))
       } else {
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {
           transmit(now, s)
+          record(now, s, "sent")
           s.replyTo.foreach(_ ! Accepted(s.tag))
         } else if (queues(rank).size >= QueueCapacity) {
           dropped += 1
+          record(now, s, "dropped")
           s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
           if (dropped % 100 == 1) log.warn("Outbox dropped {} datagram(s) so far: {} queue full", dropped, s.priority.name)
         } else {
           queues = queues.updated(rank, queues(rank).enqueue(s))
+          record(now, s, "queued")
           s.replyTo.foreach(_ ! Accepted(s.tag))
           // Safety must not wait for the timer; other classes drain when the budget frees.
           if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer)) drain(now)
@@ -202,6 +222,10 @@ private final class Outbox(
       drain(System.nanoTime())
       Behaviors.same
     case Withdraw(robotId, tags) =>
+      if (recording.enabled) {
+        val now = System.nanoTime()
+        queues.foreach(_.foreach(q => if (q.robotId == robotId && tags(q.tag)) record(now, q, "withdrawn")))
+      }
       queues = queues.map(_.filterNot(q => q.robotId == robotId && tags(q.tag)))
       Behaviors.same
     case Inbound(_, bytes) =>
@@ -209,13 +233,19 @@ private final class Outbox(
       Behaviors.same
     case GameStateChanged(state) =>
       val nowRunning = gameRunning(state)
-      if (competition && nowRunning != gameIsRunning)
+      if (competition && nowRunning != gameIsRunning) {
         log.info("Game state {}: sending to robots {}", state, if (nowRunning) "closed" else "open again")
+        if (recording.enabled) recording.decision(Decision.Gate(open = !nowRunning, state))
+      }
       gameIsRunning = nowRunning
       if (competition && gameIsRunning) {
         // Nothing queued before kick-off may leak out during the game.
         val held = queues.map(_.size).sum
         if (held > 0) log.info("Discarding {} queued datagram(s) at game start", held)
+        if (recording.enabled) {
+          val now = System.nanoTime()
+          queues.foreach(_.foreach(q => record(now, q, "refused-by-rule")))
+        }
         queues.foreach(_.foreach(q => q.replyTo.foreach(_ ! RefusedByRule(q.tag, NoSendingWhileGameRuns))))
         refused += held
         queues = Vector.fill(Priority.all.size)(Queue.empty)
