@@ -22,6 +22,7 @@ object StatusPrinter {
   private final case class Game(game: Option[GameControlData]) extends Command
   private final case class Source(source: Gateway.GameSource) extends Command
   private final case class Link(stats: LinkStats) extends Command
+  private final case class Stats(stats: Gateway.GatewayStats) extends Command
   private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]]) extends Command
   private final case class RobotGone(robotId: Int) extends Command
 
@@ -116,6 +117,7 @@ object StatusPrinter {
         val gameAdapter = context.messageAdapter(Game.apply)
         val sourceAdapter = context.messageAdapter(Source.apply)
         val linkAdapter = context.messageAdapter(Link.apply)
+        val statsAdapter = context.messageAdapter(Stats.apply)
         implicit val askTimeout: Timeout = Timeout(refresh.max(1.second))
 
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
@@ -133,6 +135,7 @@ object StatusPrinter {
               gateway ! Gateway.GetTraffic(trafficAdapter)
               gateway ! Gateway.GetGameState(gameAdapter)
               gateway ! Gateway.GetGameSource(sourceAdapter)
+              gateway ! Gateway.GetStats(statsAdapter)
               refs.values.foreach(_ ! RobotActor.GetLinkStats(linkAdapter))
               val toFind = model.robots.map(_.robotId).filterNot(id => refs.contains(id) || asked(id))
               toFind.foreach { id =>
@@ -147,6 +150,7 @@ object StatusPrinter {
             case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown, refs, asked)
             case Game(game)     => running(model.copy(game = game), shown, refs, asked)
             case Source(source) => running(model.copy(gameSource = Some(source)), shown, refs, asked)
+            case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown, refs, asked)
             case Link(stats)    => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown, refs, asked)
             case RobotFound(id, Some(robot)) =>
               context.watchWith(robot, RobotGone(id))
