@@ -11,7 +11,7 @@ import scala.jdk.CollectionConverters._
 
 import org.slf4j.LoggerFactory
 
-import naogateway.link.{Backlog, DatagramWriter, RobotLink, RobotPort, UdpLink}
+import naogateway.link.{Backlog, DatagramWriter, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
 import naogateway.recording.{Decision, Recording, RecordingStats}
 import naogateway.wire._
@@ -82,7 +82,8 @@ object Gateway {
    * address (at most [[RejectionAddresses]] of them, the rest under "other addresses").
    */
   final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int,
-      rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = Recording.Off.stats)
+      rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = Recording.Off.stats,
+      replay: Option[Replay.Progress] = None)
 
   /** How long `GetRobots` waits for each robot actor; one that does not answer in time is listed as not reached. */
   val SnapshotTimeout: FiniteDuration = 1.second
@@ -106,16 +107,26 @@ object Gateway {
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
       backlog: Backlog)
 
-  /** The gateway with `settings`. */
-  def apply(settings: GatewaySettings): Behavior[Command] =
+  /**
+   * The gateway with `settings`, on its sockets; or, with `replay`, fed from a recording instead: no socket is opened,
+   * nothing is sent anywhere, nothing is recorded.
+   */
+  def apply(settings: GatewaySettings, replay: Option[Replay] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(1024) { stash =>
         val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
-        val port =
-          try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
-          catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
-        context.log.info("Gateway listening for robots on {}", port.localAddress)
-        val recording = Recording(settings.recording, s"${context.system.name}-recorder")
+        val port: RobotLink = replay match {
+          case Some(r) =>
+            context.log.info("Gateway replaying {} at {}x: nothing is sent", r.files.mkString(", "), r.speed)
+            new ReplayLink(r, s"${context.system.name}-replay")
+          case None =>
+            val p =
+              try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
+              catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
+            context.log.info("Gateway listening for robots on {}", p.localAddress)
+            p
+        }
+        val recording = if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder")
         val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
         val outbox = context.spawn(
           Behaviors.supervise(Outbox(recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
@@ -126,7 +137,7 @@ object Gateway {
         )
         val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes)
         logic.start()
-        if (settings.gameControllerEnabled) {
+        if (settings.gameControllerEnabled && replay.isEmpty) {
           context.spawn(
             UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
               context.messageAdapter(GameControllerEvent.apply),
@@ -430,7 +441,7 @@ object Gateway {
           Behaviors.same
         case GetStats(replyTo) =>
           replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size, rejections.sources,
-            recording.stats)
+            recording.stats, port match { case r: ReplayLink => Some(r.progress); case _ => None })
           Behaviors.same
         case GetTraffic(replyTo) =>
           outbox ! Outbox.GetStats(replyTo)
