@@ -55,7 +55,10 @@ object Decision {
   final case class Budget(outBytes: Long, inBytes: Long, limit: Int, queued: Map[String, Int]) extends Decision
 }
 
-/** What the recorder did so far: files, messages, and entries dropped because its queue was full. */
+/**
+ * What the recorder did so far: files begun, MCAP messages written, entries dropped because its queue was full, and
+ * entries lost because no file could be written.
+ */
 final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long, currentFile: Option[String])
 
 /**
@@ -225,8 +228,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     file match {
       case Some(f) =>
         try {
+          val before = f.writer.messages
           f.write(e)
-          messageCount.incrementAndGet()
+          messageCount.addAndGet(f.writer.messages - before)
           if (f.writer.size >= settings.rotateBytes) rotate()
         } catch {
           case ex: IOException =>
