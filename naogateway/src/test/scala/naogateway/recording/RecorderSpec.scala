@@ -60,6 +60,19 @@ class RecorderSpec extends AnyWordSpec with Matchers {
       recording.stats.files shouldBe 0L
     }
 
+    "begin a new file when the current one is older than rotate-interval, each file complete" in {
+      val dir = Files.createTempDirectory("recorder-spec")
+      val recording = Recording(settings(dir).copy(rotateInterval = 1.second), "recorder-spec-age")
+      (1 to 6).foreach { i =>
+        recording.decision(Decision.Budget(i.toLong, 0L, 125000, Map.empty))
+        Thread.sleep(500)
+      }
+      recording.close()
+      val recorded = files(dir)
+      recorded.size should be >= 2
+      recorded.map(p => McapReader.read(Files.readAllBytes(p)).messages.size).sum shouldBe 6
+    }
+
     "record nothing when off" in {
       Recording(RecordingSettings.Off, "unused") shouldBe Recording.Off
       Recording.Off.enabled shouldBe false
