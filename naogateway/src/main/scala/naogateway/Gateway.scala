@@ -108,11 +108,13 @@ object Gateway {
       backlog: Backlog)
 
   /**
-   * The gateway with `settings`, on its sockets; or, with `replay`, fed from a recording instead: no socket is opened,
-   * nothing is sent anywhere, nothing is recorded.
+   * The gateway with `configured` settings, on its sockets; or, with `replay`, fed from a recording instead: no socket
+   * is opened, nothing is sent anywhere, nothing is recorded.
    */
-  def apply(settings: GatewaySettings, replay: Option[Replay] = None): Behavior[Command] =
+  def apply(configured: GatewaySettings, replay: Option[Replay] = None): Behavior[Command] =
     Behaviors.setup { context =>
+      // A replay reaches no robot: ZeroMQ robots, which would be called over their own sockets, are left out.
+      val settings = if (replay.isEmpty) configured else configured.copy(zeromq = configured.zeromq.copy(robots = Vector.empty))
       Behaviors.withStash(1024) { stash =>
         val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
         val port: RobotLink = replay match {
