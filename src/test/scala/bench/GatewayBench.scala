@@ -45,7 +45,8 @@ import naogateway.wire.{MessageContents, RpcCall}
  *    the same way. On two cores the sending thread takes about one of them in both runs.
  *  - `recording_ingest_datagrams_s`: `ingest_datagrams_s` with `naogateway.recording` on (every datagram, each
  *    keep-alive's Status and the decisions into MCAP files in a temporary directory, deleted afterwards);
- *    `recording_ingest_ratio` = that ÷ `ingest_datagrams_s` (goal ≥ 0.9).
+ *    `recording_ingest_ratio` = that ÷ the mean of `ingest_datagrams_s` and a second run without recording after it
+ *    (goal ≥ 0.9).
  *  - `heartbeat_detect_ms`: from a partition of the robot's link (LossyNetwork) to RobotOffline, median of
  *    [[DetectTrials]] trials; the cut falls at a random phase of the 200 ms keep-alive period.
  *  - `heartbeat_false_offline_loss20`: RobotOffline events of one robot over 60 s at 20 % loss each way.
@@ -268,15 +269,19 @@ object GatewayBench extends Benchmark {
     val recordingDir = Files.createTempDirectory("bench-recording")
     val recorded = routedIngest("ingest-recording", frames, ConfigFactory.parseString(
       s"""naogateway.recording { enabled = on, directory = "${recordingDir.toString}" }"""))
+    // Off again after it: on a shared machine the load drifts, so the ratio is taken against the mean of both.
+    val routedAfter = routedIngest("ingest-again", frames, ConfigFactory.empty())
+    val without = (routed + routedAfter) / 2
     val recordedFiles = Files.list(recordingDir).iterator()
     var recordedBytes = 0L
     while (recordedFiles.hasNext) { val f = recordedFiles.next(); recordedBytes += Files.size(f); Files.delete(f) }
     Files.delete(recordingDir)
-    progress(f"ingest with recording: ${recorded}%.0f/s against ${routed}%.0f/s without (ratio ${recorded / routed}%.3f), " +
+    progress(f"ingest with recording: ${recorded}%.0f/s against ${routed}%.0f/s and ${routedAfter}%.0f/s without " +
+      f"(ratio ${recorded / without}%.3f), " +
       f"${recordedBytes / 1e6}%.1f MB recorded")
     val raw = rawIngest(frames, blastSeconds)
     ListMap("ingest_datagrams_s" -> routed, "raw_udp_ingest_datagrams_s" -> raw,
-      "recording_ingest_datagrams_s" -> recorded, "recording_ingest_ratio" -> recorded / routed)
+      "recording_ingest_datagrams_s" -> recorded, "recording_ingest_ratio" -> recorded / without)
   }
 
   /** Keep-alives the robot actors handled per second under the blast, with `gatewayConfig` over the defaults. */
