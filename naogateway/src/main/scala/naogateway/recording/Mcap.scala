@@ -252,6 +252,12 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
     if (chunk.length >= chunkBytes) flushChunk()
   }
 
+  /** Ends the chunk being filled (if it holds anything) and flushes `out`: what was written so far is on its way to disk. */
+  def flush(): Unit = if (!closed) {
+    flushChunk()
+    out.flush()
+  }
+
   /** Ends the file: the last chunk, Data End, the summary, the footer; then closes `out`. Idempotent. */
   def close(): Unit = if (!closed) {
     closed = true

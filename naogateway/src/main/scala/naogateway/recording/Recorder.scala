@@ -194,7 +194,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         batch.clear()
         queue.drainTo(batch, 1024)
         val now = System.nanoTime()
-        file.foreach(f => if (f.due(now)) rotate())
+        file.foreach(f => if (f.due(now)) rotate() else if (f.flushDue(now)) flush(f, now))
         if (batch.isEmpty) {
           // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
           if (running) LockSupport.parkNanos(2000000L)
@@ -217,6 +217,22 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     file.foreach(closeQuietly)
     file = None
     current = None
+  }
+
+  private val FlushNanos = 1000000000L
+
+  private def flush(f: FileWriter, now: Long): Unit = {
+    f.flushedAt = now
+    try f.writer.flush()
+    catch {
+      case ex: IOException =>
+        failedCount.incrementAndGet()
+        log.error(s"Recording: writing ${f.path} failed; a new file in 5 s", ex)
+        closeQuietly(f)
+        file = None
+        current = None
+        nextAttempt = System.nanoTime() + 5000000000L
+    }
   }
 
   private def closeQuietly(f: FileWriter): Unit =
@@ -280,6 +296,10 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     private val robots = mutable.Map.empty[Int, Array[Int]]
 
     def due(now: Long): Boolean = now - openedAt >= settings.rotateInterval.toNanos
+
+    // A crash loses at most the last second: the chunk being filled is written out at least once a second.
+    var flushedAt: Long = openedAt
+    def flushDue(now: Long): Boolean = now - flushedAt >= FlushNanos
 
     def close(): Unit = writer.close()
 

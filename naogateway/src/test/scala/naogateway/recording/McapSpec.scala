@@ -95,6 +95,22 @@ class McapSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
       an[Mcap.FormatException] should be thrownBy McapReader.read("not an mcap file at all".getBytes(StandardCharsets.UTF_8))
     }
 
+    "leave what was flushed readable in a file that was never closed (a crash)" in {
+      val out = new ByteArrayOutputStream()
+      val writer = new McapWriter(out, "", "McapSpec")
+      val channel = writer.addChannel("/a", "json", 0)
+      (1 to 3).foreach(i => writer.write(channel, i.toLong, i.toLong, Array(i.toByte)))
+      writer.flush()
+      writer.write(channel, 4L, 4L, Array(4.toByte)) // still in the chunk being filled when the "crash" comes
+      val stream = McapReader.stream(new java.io.ByteArrayInputStream(out.toByteArray))
+      val got = Vector.newBuilder[Long]
+      an[java.io.EOFException] should be thrownBy stream.items.foreach {
+        case McapReader.MessageItem(m) => got += m.logTime
+        case _                         => ()
+      }
+      got.result() shouldBe Vector(1L, 2L, 3L)
+    }
+
     "carry the project's protobuf descriptors, so a Status can be decoded from the file alone" in {
       val set = com.google.protobuf.DescriptorProtos.FileDescriptorSet.parseFrom(Recording.descriptorSet)
       val files = set.getFileList
