@@ -19,7 +19,7 @@ trait Benchmark {
 object BenchSuite {
 
   /** Every benchmark, in the order they run. */
-  val benchmarks: Vector[Benchmark] = Vector(CodecBench, StreamBench, SimBench, GatewayBench, RobotCtlBench, IdleCpuBench)
+  val benchmarks: Vector[Benchmark] = Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, ForgeryBench, RobotCtlBench, IdleCpuBench)
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the gateway's. */
   val onRequest: Vector[Benchmark] = Vector(Soak)

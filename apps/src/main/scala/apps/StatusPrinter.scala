@@ -1,15 +1,13 @@
 package apps
 
 import scala.concurrent.duration._
-import scala.util.{Failure, Success}
 
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior, PostStop, SupervisorStrategy}
-import akka.util.Timeout
 import com.typesafe.config.Config
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{Gateway, LinkStats, Outbox, RobotActor, RobotSnapshot}
+import naogateway.{Gateway, Outbox, RobotSnapshot}
 
 /** Prints the launcher's status: a redrawn screen on a terminal, one line per change otherwise. */
 object StatusPrinter {
@@ -21,10 +19,8 @@ object StatusPrinter {
   private final case class Traffic(stats: Outbox.TrafficStats) extends Command
   private final case class Game(game: Option[GameControlData]) extends Command
   private final case class Source(source: Gateway.GameSource) extends Command
-  private final case class Link(stats: LinkStats) extends Command
+  private final case class Links(links: Gateway.RobotLinks) extends Command
   private final case class Stats(stats: Gateway.GatewayStats) extends Command
-  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]]) extends Command
-  private final case class RobotGone(robotId: Int) extends Command
 
   /** How the status is shown: chosen from the terminal (`Auto`), or forced. */
   sealed trait ViewMode extends Product with Serializable
@@ -76,7 +72,7 @@ object StatusPrinter {
     Settings(c.getDuration("refresh").toNanos.nanos, ViewMode.parse(c.getString("view")))
 
   /** The printer of the `apps.launcher` block `c`, writing where its `view` says. */
-  def fromConfig(gateway: ActorRef[Gateway.Command], c: Config): Behavior[Command] = {
+  def fromConfig(gateway: ActorRef[Gateway.Query], c: Config): Behavior[Command] = {
     val s = settings(c)
     apply(gateway, s.refresh, output(s.view))
   }
@@ -99,64 +95,48 @@ object StatusPrinter {
   }
 
   /**
-   * A printer polling `gateway` every `refresh` and writing to `output`. It restarts (after a back-off, so a
+   * A printer polling the gateway's read-only view every `refresh` and writing to `output`. It restarts (after a back-off, so a
    * failure repeating every refresh cannot flood the log) on any failure.
    */
-  def apply(gateway: ActorRef[Gateway.Command], refresh: FiniteDuration, output: Output): Behavior[Command] =
+  def apply(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output): Behavior[Command] =
     Behaviors.supervise(printer(gateway, refresh, output)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
-  private def printer(gateway: ActorRef[Gateway.Command], refresh: FiniteDuration, output: Output): Behavior[Command] =
+  private def printer(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         timers.startTimerWithFixedDelay(Refresh, refresh)
         // One adapter per reply class: Akka keeps one adapter per message class, so a second adapter for Option
-        // would replace the first. The game state's Option[GameControlData] has the Option adapter; GetRobot's
-        // Option[ActorRef] reply comes back through ask, which maps each reply on its own.
+        // would replace the first.
         val robotsAdapter = context.messageAdapter(Robots.apply)
+        val linksAdapter = context.messageAdapter(Links.apply)
         val trafficAdapter = context.messageAdapter(Traffic.apply)
         val gameAdapter = context.messageAdapter(Game.apply)
         val sourceAdapter = context.messageAdapter(Source.apply)
-        val linkAdapter = context.messageAdapter(Link.apply)
         val statsAdapter = context.messageAdapter(Stats.apply)
-        implicit val askTimeout: Timeout = Timeout(refresh.max(1.second))
 
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
           case screen: ScreenOutput => screen.draw(StatusView.render(model))
           case LineOutput(write)    => StatusView.changes(shown, model).foreach(write)
         }
 
-        // `refs`: the robot actors found so far, asked for their link figures each refresh; a robot actor is
-        // looked up once, and forgotten when it stops.
-        def running(model: StatusModel, shown: StatusModel, refs: Map[Int, ActorRef[RobotActor.Command]],
-            asked: Set[Int]): Behavior[Command] =
+        def running(model: StatusModel, shown: StatusModel): Behavior[Command] =
           Behaviors.receiveMessage[Command] {
             case Refresh =>
               gateway ! Gateway.GetRobots(robotsAdapter)
+              gateway ! Gateway.GetLinkStats(linksAdapter)
               gateway ! Gateway.GetTraffic(trafficAdapter)
               gateway ! Gateway.GetGameState(gameAdapter)
               gateway ! Gateway.GetGameSource(sourceAdapter)
               gateway ! Gateway.GetStats(statsAdapter)
-              refs.values.foreach(_ ! RobotActor.GetLinkStats(linkAdapter))
-              val toFind = model.robots.map(_.robotId).filterNot(id => refs.contains(id) || asked(id))
-              toFind.foreach { id =>
-                context.ask(gateway, (ref: ActorRef[Option[ActorRef[RobotActor.Command]]]) => Gateway.GetRobot(id, ref)) {
-                  case Success(robot) => RobotFound(id, robot)
-                  case Failure(_)     => RobotFound(id, None)
-                }
-              }
               show(shown, model)
-              running(model, model, refs, asked ++ toFind)
-            case Robots(robots) => running(model.copy(robots = robots), shown, refs, asked)
-            case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown, refs, asked)
-            case Game(game)     => running(model.copy(game = game), shown, refs, asked)
-            case Source(source) => running(model.copy(gameSource = Some(source)), shown, refs, asked)
-            case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown, refs, asked)
-            case Link(stats)    => running(model.copy(links = model.links.updated(stats.robotId, stats)), shown, refs, asked)
-            case RobotFound(id, Some(robot)) =>
-              context.watchWith(robot, RobotGone(id))
-              running(model, shown, refs.updated(id, robot), asked - id)
-            case RobotFound(id, None) => running(model, shown, refs, asked - id)
-            case RobotGone(id)        => running(model.copy(links = model.links - id), shown, refs - id, asked)
+              running(model, model)
+            case Robots(robots) => running(model.copy(robots = robots), shown)
+            case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown)
+            case Game(game)     => running(model.copy(game = game), shown)
+            case Source(source) => running(model.copy(gameSource = Some(source)), shown)
+            case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown)
+            // The link figures of robots the gateway no longer knows are dropped with them.
+            case Links(l)       => running(model.copy(links = l.links.map(s => s.robotId -> s).toMap), shown)
           }.receiveSignal { case (_, PostStop) =>
             output match {
               case screen: ScreenOutput => screen.close()
@@ -165,7 +145,7 @@ object StatusPrinter {
             Behaviors.same
           }
 
-        running(StatusModel.empty, StatusModel.empty, Map.empty, Set.empty)
+        running(StatusModel.empty, StatusModel.empty)
       }
     }
 }

@@ -67,8 +67,8 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
       run.err shouldBe empty
       run.code shouldBe RobotCtl.ExitOk
       run.out.size shouldBe 1001
-      run.out.head.split("\\s+").toList shouldBe List("id", "address", "state", "link", "battery", "posture", "role", "rtt", "loss")
-      run.out(1).split("\\s+").toList shouldBe List("1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%")
+      run.out.head.split("\\s+").toList shouldBe List("id", "address", "state", "link", "battery", "posture", "role", "rtt", "loss", "clock", "drift")
+      run.out(1).split("\\s+").toList shouldBe List("1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
     }
 
     "make a call with its parameters typed as on the command line, the port taken from the environment" in {

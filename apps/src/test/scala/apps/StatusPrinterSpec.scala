@@ -80,7 +80,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         spawn(StatusPrinter(fixture.gateway, 100.millis, screen))
         fixture.robot(1)
         def frame = screen.frame.get
-        // "loss" shows a figure only once the robot actor, found with GetRobot, answered with its link figures.
+        // "loss" shows a figure only once the gateway's read-only view answered GetLinkStats with the robot's link figures.
         awaitTrue("robot 1 with link figures")(frame.exists(l => l.startsWith("robot 1") && l.contains("online") &&
           l.matches(".*loss \\d+ %.*")))
         val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))

@@ -8,6 +8,7 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop, SupervisorStrategy}
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
+import scala.reflect.ClassTag
 
 import org.slf4j.LoggerFactory
 
@@ -23,14 +24,26 @@ object Gateway {
   /** What the gateway accepts. */
   sealed trait Command
 
+  /**
+   * The read-only view of the gateway: questions that change nothing. Operator tools (the status view, the control
+   * port) hold an `ActorRef[Gateway.Query]`, so they can look but never reach a robot past the middleware.
+   */
+  sealed trait Query extends Command
+
   /** Answers with the bound addresses (the real ports when 0 was configured). */
-  final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Command
+  final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Query
 
   /** Answers with every known robot's snapshot, asked of the robot actors ([[SnapshotTimeout]] for each). */
-  final case class GetRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Command
+  final case class GetRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Query
 
   /** Answers with the robot actor of `robotId`, if the robot is known. */
   final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]]) extends Command
+
+  /** Answers with every known robot's link figures, asked of the robot actors ([[SnapshotTimeout]] for each). */
+  final case class GetLinkStats(replyTo: ActorRef[RobotLinks]) extends Query
+
+  /** The link figures of every robot whose actor answered `GetLinkStats` in time, by robot id. */
+  final case class RobotLinks(links: Vector[LinkStats])
 
   /** Lets robot `robotId` be re-bound to the IP address its next datagram comes from (a robot that moved host). */
   final case class AllowRebind(robotId: Int) extends Command
@@ -42,16 +55,16 @@ object Gateway {
   final case class Unsubscribe(subscriber: ActorRef[GatewayEvent]) extends Command
 
   /** Answers with the gateway's own figures. */
-  final case class GetStats(replyTo: ActorRef[GatewayStats]) extends Command
+  final case class GetStats(replyTo: ActorRef[GatewayStats]) extends Query
 
   /** Answers with the team traffic figures of the outbox. */
-  final case class GetTraffic(replyTo: ActorRef[Outbox.TrafficStats]) extends Command
+  final case class GetTraffic(replyTo: ActorRef[Outbox.TrafficStats]) extends Query
 
   /** Answers with the latest GameController packet, if any arrived. */
-  final case class GetGameState(replyTo: ActorRef[Option[GameControlData]]) extends Command
+  final case class GetGameState(replyTo: ActorRef[Option[GameControlData]]) extends Query
 
   /** Answers with where game state comes from: the trusted sources, the last sender and the packets ignored. */
-  final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Command
+  final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Query
 
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class Unrouted(frame: Routing.ToGateway) extends Command
@@ -100,12 +113,18 @@ object Gateway {
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
 
-  /** A datagram robot as the port's reader reaches it: its actor and the backlog of what the reader handed it. */
-  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog)
+  /**
+   * A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
+   * robot that must sign, the check every frame passes before it is handed on.
+   */
+  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
-  /** A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is. */
+  /**
+   * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
+   * `signatures`, its frames count only when signed (the IP alone does not identify it then).
+   */
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
-      backlog: Backlog)
+      backlog: Backlog, signatures: Option[SignatureCheck] = None)
 
   /**
    * The gateway with `configured` settings, on its sockets; or, with `replay`, fed from a recording instead: no socket
@@ -130,9 +149,11 @@ object Gateway {
         }
         val recording = if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder")
         val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
+        // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
+        val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
         val outbox = context.spawn(
           Behaviors.supervise(Outbox(recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
-            settings.competition, recording))
+            settings.competition, signer, recording))
             .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
           "outbox",
           RobotDispatcher
@@ -235,7 +256,13 @@ object Gateway {
       outbox ! Outbox.Inbound(robotId, bytes.length)
       Routing.decide(table, bytes, from) match {
         case Routing.ToRobot(route, header, contents, size) =>
-          deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
+          route.target.signatures.map(_.check(bytes, header)) match {
+            case Some(Left(kind)) =>
+              rejections.count(kind, from)
+              if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
+            case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          }
         case Routing.SegmentToRobot(route, segment) =>
           deliver(route, RobotActor.SegmentReceived(segment), from)
         case unrouted: Routing.ToGateway =>
@@ -314,8 +341,11 @@ object Gateway {
     /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
       routes.set(Routing.Table.of(byId.collect {
-        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog))
+        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog, e.signatures))
       }))
+
+    private def robotRefs: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)] =
+      byId.map { case (id, e) => id -> (e.actor -> e.address) }
 
     private def spawnRobot(robotId: Int, address: InetSocketAddress, heard: Boolean): Entry = {
       val backlog = new Backlog(RobotBacklog)
@@ -326,7 +356,8 @@ object Gateway {
         RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId))
-      val entry = Entry(actor, address, zeromq = false, backlog)
+      val signatures = settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
+      val entry = Entry(actor, address, zeromq = false, backlog, signatures)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address.getAddress, robotId)
       publishRoutes()
@@ -375,7 +406,12 @@ object Gateway {
 
     private def handleUnrouted(u: Unrouted): Unit = {
       gatewayBacklog.done()
-      frame(u.frame.header, u.frame.contents, u.frame.size, u.frame.from)
+      val f = u.frame
+      // A robot that must sign: the reader's check, here before any delivery or re-binding (an address proves nothing).
+      byId.get(f.contents.robotId).flatMap(_.signatures).map(_.check(f.bytes, f.header)) match {
+        case Some(Left(kind)) => rejectFor(Some(f.contents.robotId), kind, f.from, s"robot id ${f.contents.robotId}")
+        case _                => frame(f.header, f.contents, f.size, f.from)
+      }
     }
 
     def running(addresses: Addresses): Behavior[Command] =
@@ -433,7 +469,15 @@ object Gateway {
           Behaviors.same
         case GetRobots(replyTo) =>
           if (byId.isEmpty) replyTo ! Vector.empty
-          else context.spawnAnonymous(SnapshotCollector(byId.map { case (id, e) => id -> (e.actor -> e.address) }, replyTo))
+          else
+            context.spawnAnonymous(Collector(robotRefs, replyTo ! (_: Vector[RobotSnapshot]))(RobotActor.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
+              (id, address) => Some(RobotSnapshot(id, address))))
+          Behaviors.same
+        case GetLinkStats(replyTo) =>
+          if (byId.isEmpty) replyTo ! RobotLinks(Vector.empty)
+          else
+            context.spawnAnonymous(Collector(robotRefs, (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotActor.GetLinkStats(_),
+              (l: LinkStats) => l.robotId, (_, _) => None))
           Behaviors.same
         case GetRobot(robotId, replyTo) =>
           replyTo ! byId.get(robotId).map(_.actor)
@@ -503,27 +547,30 @@ object Gateway {
     }
   }
 
-  /** One `GetRobots`: asks each robot actor for its snapshot and answers once all did or the timeout passed. */
-  private object SnapshotCollector {
+  /**
+   * One question to every robot actor (`GetRobots`, `GetLinkStats`): asks each, and answers once all did or
+   * [[SnapshotTimeout]] passed. A robot actor that did not answer in time (restarting) is listed by `missing`.
+   */
+  private object Collector {
     sealed trait Message
-    private final case class Got(snapshot: RobotSnapshot) extends Message
+    private final case class Got[A](robotId: Int, answer: A) extends Message
     private case object TimedOut extends Message
 
-    def apply(robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], replyTo: ActorRef[Vector[RobotSnapshot]])
-        : Behavior[Message] =
-      Behaviors.setup { context =>
+    def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], replyTo: Vector[A] => Unit)(
+        ask: ActorRef[A] => RobotActor.Command, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A]): Behavior[Message] =
+      Behaviors.setup[Message] { context =>
         Behaviors.withTimers { timers =>
-          val got = context.messageAdapter(Got.apply)
-          robots.values.foreach { case (actor, _) => actor ! RobotActor.GetSnapshot(got) }
+          // One adapter for the one reply class this collector waits for.
+          val got = context.messageAdapter[A](a => Got(idOf(a), a))
+          robots.values.foreach { case (actor, _) => actor ! ask(got) }
           timers.startSingleTimer(TimedOut, SnapshotTimeout)
-          def answer(known: Map[Int, RobotSnapshot]): Behavior[Message] = {
-            // A robot actor that did not answer (restarting) is listed as the gateway knows it: at its address, not reached.
-            replyTo ! robots.map { case (id, (_, address)) => known.getOrElse(id, RobotSnapshot(id, address)) }.toVector.sortBy(_.robotId)
+          def answer(known: Map[Int, A]): Behavior[Message] = {
+            replyTo(robots.toVector.sortBy(_._1).flatMap { case (id, (_, address)) => known.get(id).orElse(missing(id, address)) })
             Behaviors.stopped
           }
-          def collecting(known: Map[Int, RobotSnapshot]): Behavior[Message] = Behaviors.receiveMessage {
-            case Got(s) =>
-              val now = known.updated(s.robotId, s)
+          def collecting(known: Map[Int, A]): Behavior[Message] = Behaviors.receiveMessage {
+            case g: Got[A @unchecked] =>
+              val now = known.updated(g.robotId, g.answer)
               if (robots.keySet.forall(now.contains)) answer(now) else collecting(now)
             case TimedOut => answer(known)
           }

@@ -10,10 +10,14 @@ import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
 import naogateway.recording.RecordingSettings
+import naogateway.wire.SigningKey
 import naogateway.wire.stream.StreamSettings
 
-/** A robot known from configuration: its id and where it receives (its IP, which identifies it, at its receive port). */
-final case class StaticRobot(robotId: Int, address: InetSocketAddress)
+/**
+ * A robot known from configuration: its id, where it receives (its IP, which identifies it, at its receive port),
+ * and whether its frames must be signed.
+ */
+final case class StaticRobot(robotId: Int, address: InetSocketAddress, signing: RobotSigning = RobotSigning.Off)
 
 /** Liveness settings of the heartbeat. */
 final case class HeartbeatSettings(
@@ -104,6 +108,8 @@ final case class GatewaySettings(
     stream: StreamSettings,
     zeromq: ZeroMqLinkSettings,
     gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty),
+    clockSync: ClockSyncSettings = ClockSyncSettings(),
+    signingKey: Option[SigningKey] = None,
     recording: RecordingSettings = RecordingSettings.Off
 ) {
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
@@ -117,6 +123,12 @@ final case class GatewaySettings(
   require(robots.map(_.address.getAddress).distinct.size == robots.size, "robots: every robot address may appear only once")
   require(robots.map(_.robotId).intersect(zeromq.robots.map(_.robotId)).isEmpty,
     "a robot id may be a UDP robot (robots) or a ZeroMQ robot (zeromq.robots), not both")
+  require(signingKey.isDefined || !robots.exists(_.signing == RobotSigning.Required),
+    s"robots: robot ${robots.find(_.signing == RobotSigning.Required).fold("")(_.robotId.toString)} has signing = required, " +
+      "but no signing key is set (signing.key, env NAOGATEWAY_SIGNING_KEY: the team key as 32 to 128 hexadecimal digits)")
+
+  /** Whether robot `robotId`'s frames must be signed; robots not configured (discovered ones) are `Off`. */
+  def signingOf(robotId: Int): RobotSigning = robots.find(_.robotId == robotId).fold[RobotSigning](RobotSigning.Off)(_.signing)
 }
 
 /** Reading and validating the settings. */
@@ -164,7 +176,10 @@ object GatewaySettings {
           else if (r.hasPath("port")) r.getInt("port")
           else link.getInt("robot-receive-port")
         require(port > 0 && port <= 65535, s"robots: robot ${r.getInt("id")}: receive-port $port is not a UDP port")
-        StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port))
+        val signing =
+          if (!r.hasPath("signing")) RobotSigning.Off
+          else RobotSigning.parse(r.getString("signing")).fold(e => throw new IllegalArgumentException(s"robots: robot ${r.getInt("id")}: $e"), identity)
+        StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port), signing)
       },
       discoverFromKeepAlive = c.getBoolean("discover-from-keep-alive"),
       heartbeat = heartbeat,
@@ -194,8 +209,17 @@ object GatewaySettings {
         )
       ),
       gameControllerTrusted = trustedSources(gc),
+      clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window")),
+      signingKey = signingKey(c),
       recording = RecordingSettings.fromConfig(c.getConfig("recording"))
     )
+  }
+
+  /** `signing.key`: empty for none; a message about a bad key names its length, never its digits. */
+  private def signingKey(c: Config): Option[SigningKey] = {
+    val hex = if (c.hasPath("signing.key")) c.getString("signing.key").trim else ""
+    if (hex.isEmpty) None
+    else Some(SigningKey.fromHex(hex).fold(e => throw new IllegalArgumentException(s"signing.key (env NAOGATEWAY_SIGNING_KEY): $e"), identity))
   }
 
   /** `game-controller.trusted-sources`: a list of addresses or subnets, or one comma-separated string (the env form). */

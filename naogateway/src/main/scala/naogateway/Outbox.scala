@@ -10,6 +10,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.DatagramWriter
 import naogateway.recording.{Decision, Recording}
+import naogateway.wire.{FrameSigning, WireLimits}
 import naogateway.wire.gamecontroller.GameState
 
 /** The last gate before the air: the competition rule, the team's traffic budget and the priority classes. */
@@ -18,15 +19,23 @@ object Outbox {
   /** What the outbox accepts. */
   sealed trait Command
 
-  /** Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns the outcome, marked with `tag`. */
+  /**
+   * Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns the outcome, marked with `tag`. `signed`:
+   * `bytes` is an unsigned FU-Remote frame of a robot that must sign, signed here at the moment it leaves.
+   */
   final case class Send(
       robotId: Int,
       to: InetSocketAddress,
       bytes: Array[Byte],
       priority: Priority,
       replyTo: Option[ActorRef[Outcome]] = None,
-      tag: Long = 0L
-  ) extends Command
+      tag: Long = 0L,
+      signed: Boolean = false
+  ) extends Command {
+
+    /** The size on the wire: the signature field comes on top of a signed frame. */
+    def size: Int = if (signed) bytes.length + FrameSigning.FieldBytes else bytes.length
+  }
 
   /**
    * Takes back robot `robotId`'s datagrams marked with `tags` that still wait for the budget: a call superseded by a
@@ -96,13 +105,15 @@ object Outbox {
   private val Second = 1000000000L
 
   /**
-   * An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs; its
-   * decisions (each datagram's outcome, the gate, the budget once a second while sending) go to `recording`.
+   * An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs;
+   * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
+   * second while sending) go to `recording`.
    */
-  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean, recording: Recording = Recording.Off): Behavior[Command] =
+  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean, signer: Option[FrameSigner] = None,
+      recording: Recording = Recording.Off): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        new Outbox(link, budget, competition, timers, context.log, recording).behavior()
+        new Outbox(link, budget, competition, signer, timers, context.log, recording).behavior()
       }
     }
 
@@ -115,6 +126,7 @@ private final class Outbox(
     link: DatagramWriter,
     budget: BudgetSettings,
     competition: Boolean,
+    signer: Option[FrameSigner],
     timers: TimerScheduler[Outbox.Command],
     log: org.slf4j.Logger,
     recording: Recording
@@ -144,15 +156,17 @@ private final class Outbox(
   private def robotMeter(robotId: Int) = perRobot.getOrElseUpdate(robotId, new TrafficMeter(Second))
 
   private def allowed(now: Long, s: Send): Boolean =
-    s.priority == Priority.Safety || (out.fits(now, s.bytes.length, budget.teamBytesPerSecond.toLong) &&
-      (budget.robotBytesPerSecond == 0 || robotMeter(s.robotId).fits(now, s.bytes.length, budget.robotBytesPerSecond.toLong)))
+    s.priority == Priority.Safety || (out.fits(now, s.size, budget.teamBytesPerSecond.toLong) &&
+      (budget.robotBytesPerSecond == 0 || robotMeter(s.robotId).fits(now, s.size, budget.robotBytesPerSecond.toLong)))
 
   private def transmit(now: Long, s: Send): Unit = {
-    out.record(now, s.bytes.length)
-    robotMeter(s.robotId).record(now, s.bytes.length)
+    out.record(now, s.size)
+    robotMeter(s.robotId).record(now, s.size)
+    // Signed now, not when it was queued: the robot accepts only growing timestamps, and the queues reorder.
+    val bytes = if (!s.signed) Right(s.bytes) else signer.toRight("no signing key").flatMap(_.sign(s.bytes).left.map(_.describe))
     // Written here, on the outbox's own thread: no link actor between the decision and the socket. A full kernel
     // buffer takes nothing (UDP would lose the datagram further on anyway): counted as dropped.
-    if (!link.send(s.bytes, s.to)) {
+    if (!bytes.exists(link.send(_, s.to))) {
       dropped += 1
       if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
     }
@@ -182,10 +196,10 @@ private final class Outbox(
       rank += 1
     }
     queues.find(_.nonEmpty).map(_.head).foreach { head =>
-      val team = out.fitsAt(now, head.bytes.length, budget.teamBytesPerSecond.toLong)
+      val team = out.fitsAt(now, head.size, budget.teamBytesPerSecond.toLong)
       val robot =
         if (budget.robotBytesPerSecond == 0) now
-        else robotMeter(head.robotId).fitsAt(now, head.bytes.length, budget.robotBytesPerSecond.toLong)
+        else robotMeter(head.robotId).fitsAt(now, head.size, budget.robotBytesPerSecond.toLong)
       val wait = math.max(1000000L, math.max(team, robot) - now)
       timers.startSingleTimer(DrainTimer, Drain, wait.nanos)
     }
@@ -198,6 +212,12 @@ private final class Outbox(
         refused += 1
         record(now, s, "refused-by-rule")
         s.replyTo.foreach(_ ! RefusedByRule(s.tag, NoSendingWhileGameRuns))
+      } else if (s.signed && (signer.isEmpty || s.size > WireLimits.MaxDatagramBytes)) {
+        dropped += 1
+        record(now, s, "dropped")
+        s.replyTo.foreach(_ ! Dropped(s.tag,
+          if (signer.isEmpty) "the frame must be signed, but the gateway has no signing key"
+          else s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"))
       } else {
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {

@@ -53,8 +53,9 @@ object ResponseActor {
   /** The two routes, one per transport. */
   object Route {
 
-    /** FU-Remote frames in `form` to `to` through the outbox. */
-    final case class Datagrams(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, form: HeaderForm) extends Route
+    /** FU-Remote frames in `form` to `to` through the outbox; `signed`: the outbox signs them (the robot must sign). */
+    final case class Datagrams(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, form: HeaderForm, signed: Boolean = false)
+        extends Route
 
     /** Serialized `Message`s through the robot's ZeroMQ link. */
     final case class ZeroMq(link: ActorRef[ZeroMqRobotLink.Command]) extends Route
@@ -145,11 +146,11 @@ object ResponseActor {
       timers.startSingleTimer(key, AttemptTimedOut(key, p.attempts), p.attemptTimeout)
       val contents = MessageContents(robotId, rpcRequest = Some(p.call.copy(callId = Some(id)).toProto))
       route match {
-        case Route.Datagrams(outbox, to, form) =>
+        case Route.Datagrams(outbox, to, form, signed) =>
           MessageContents.encodeFrame(contents, form) match {
             case Right(bytes) =>
               robot ! RobotActor.SentDirect(bytes.length)
-              outbox ! Outbox.Send(robotId, to, bytes, p.priority, Some(outcomes), id)
+              outbox ! Outbox.Send(robotId, to, bytes, p.priority, Some(outcomes), id, signed)
               None
             case Left(error) => Some(RobotFailure.Overloaded(robotId, error.describe))
           }
@@ -168,7 +169,7 @@ object ResponseActor {
           if (wasInFlight) {
             timers.cancel(e.key)
             route match {
-              case Route.Datagrams(outbox, _, _) => outbox ! Outbox.Withdraw(robotId, e.payload.ids)
+              case Route.Datagrams(outbox, _, _, _) => outbox ! Outbox.Withdraw(robotId, e.payload.ids)
               case Route.ZeroMq(_)               => () // a ZeroMQ link holds nothing back: there is nothing to withdraw
             }
           }

@@ -89,7 +89,14 @@ object RobotActor {
   /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
   final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
 
+  /** A stream subscribes to this robot's camera frames (through the vision actor, which this actor outlives). */
+  final case class VisionSubscribe(subscriber: ActorRef[VisionFrame], grid: Boolean) extends FromChild
+
+  /** The vision actor (re)started and asks for the registrations; every later change is pushed to it. */
+  final case class VisionSubscribersWanted(replyTo: ActorRef[VisionActor.Subscribers]) extends FromChild
+
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
+  private final case class VisionSubscriberGone(subscriber: ActorRef[VisionFrame]) extends Command
   private final case class ZeroMqLinkEvent(event: ZeroMqRobotLink.Event) extends Command
   private case object PullOptions extends Command
   private case object PullKey
@@ -190,6 +197,8 @@ object RobotActor {
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
     private var zeroMqLink: Option[ActorRef[ZeroMqRobotLink.Command]] = None
+    // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
+    private val signs = transport == Transport.Datagrams && settings.signingOf(robotId) == RobotSigning.Required
     // Set by the gateway (Subscribers); None until its first answer, and events wait meanwhile.
     private var subscribers: Option[Set[ActorRef[GatewayEvent]]] = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
     private var held = Vector.empty[GatewayEvent]
@@ -206,12 +215,17 @@ object RobotActor {
     private var snapshot: RobotSnapshot = null
     // The bootId the restart rule compares the next keep-alive with (RobotSnapshot.keepAlive).
     private var lastBootId: Option[Int] = None
+    // The robot's clock against the gateway's, from keep-alives alone; a new session at every restart.
+    private var clockSync = ClockSync(settings.clockSync)
     // Debug options switched on through the gateway, re-enabled after a robot restart.
     private var activeOptions = Set.empty[String]
     // The robot's option list of this session (protocol.md 8): None until its optionPush answers our optionPull.
     // Over datagrams, option commands wait for it; a ZeroMQ robot is not pulled (docs/zeromq.md).
     private var optionList: Option[Seq[DebuggingOption]] = None
     private var pulling = false
+    // The camera streams of this robot and whether each wants grid frames: kept here, so a restarted vision actor
+    // gets them back (VisionSubscribersWanted). Apps subscribe through the middleware, one stream each.
+    private var visionSubscribers = Map.empty[ActorRef[VisionFrame], Boolean]
 
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       address = at
@@ -367,6 +381,18 @@ object RobotActor {
       case ReachabilityWanted(replyTo) =>
         replyTo ! online
         Behaviors.same
+      case VisionSubscribe(subscriber, grid) =>
+        if (!visionSubscribers.contains(subscriber)) context.watchWith(subscriber, VisionSubscriberGone(subscriber))
+        visionSubscribers = visionSubscribers.updated(subscriber, grid)
+        children.foreach(_.vision ! VisionActor.Subscribers(visionSubscribers))
+        Behaviors.same
+      case VisionSubscriberGone(subscriber) =>
+        visionSubscribers -= subscriber
+        children.foreach(_.vision ! VisionActor.Subscribers(visionSubscribers))
+        Behaviors.same
+      case VisionSubscribersWanted(replyTo) =>
+        replyTo ! VisionActor.Subscribers(visionSubscribers)
+        Behaviors.same
       case Rebound(newAddress) =>
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, address, newAddress)
         address = newAddress
@@ -422,7 +448,7 @@ object RobotActor {
         Behaviors.same
       case GetLinkStats(replyTo) =>
         replyTo ! LinkStats(robotId, datagramsIn, datagramsOut, bytesIn, bytesOut, rttNanos.map(_ / 1e6), lossEstimate(),
-          retransmissions, rejected.map { case (k, n) => k.name -> n })
+          retransmissions, rejected.map { case (k, n) => k.name -> n }, clockSync.estimate)
         Behaviors.same
       case HeartbeatReport(HeartBeatActor.CameOnline | HeartBeatActor.WentOffline(_)) | Connect(_) | Wanted =>
         Behaviors.unhandled
@@ -430,7 +456,7 @@ object RobotActor {
 
     /** Where calls go now: this actor owns the address and header form, the response actor follows them. */
     private def route: ResponseActor.Route =
-      zeroMqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form))(ResponseActor.Route.ZeroMq(_))
+      zeroMqLink.fold[ResponseActor.Route](ResponseActor.Route.Datagrams(outbox, address, form, signs))(ResponseActor.Route.ZeroMq(_))
 
     private def routeChanged(children: Option[Children]): Unit =
       children.foreach(_.response ! ResponseActor.RouteChanged(route))
@@ -487,7 +513,11 @@ object RobotActor {
             case Right(bytes) =>
               datagramsOut += 1
               bytesOut += bytes.length
-              outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag)
+              val signed = signs && (out match {
+                case _: Outbound.SegmentOut => false
+                case _                      => true
+              })
+              outbox ! Outbox.Send(robotId, address, bytes, priority, outcome, tag, signed)
             case Left(error) =>
               outcome.foreach(_ ! Outbox.Dropped(tag, error.describe))
           }
@@ -532,8 +562,14 @@ object RobotActor {
       // Only the quality window's worth is kept (25 at the defaults), trimmed on every keep-alive.
       keepAliveTimes = keepAliveTimes.enqueue(now).dropWhile(_ < now - settings.heartbeat.qualityWindow.toNanos)
       val step = RobotSnapshot.keepAlive(snapshot, lastBootId, contents.status.get, contents.robotHealth, now)
-      snapshot = step.snapshot
       lastBootId = step.lastBootId
+      if (step.restarted) clockSync = clockSync.restart
+      // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.
+      val robotTime = contents.status.get.timestamp
+        .orElse(contents.robotHealth.flatMap(_.uptimeMs).map(u => clockSync.unwrap32(u.toLong)))
+      robotTime.foreach(t => clockSync = clockSync.add(t, now))
+      val clock = clockSync.estimate
+      snapshot = step.snapshot.copy(clock = clock, stampedAtNanos = for (t <- robotTime; c <- clock) yield c.toGatewayNanos(t))
       if (step.restarted) resync(children, online)
       publish(RobotStatusUpdated(view(online)))
     }

@@ -18,7 +18,11 @@ object LinkQuality {
   case object Offline extends LinkQuality("offline")
 }
 
-/** What the gateway last heard from a robot's keep-alive. */
+/**
+ * What the gateway last heard from a robot's keep-alive. `receivedAtNanos` and `stampedAtNanos` are on the gateway's
+ * clock (its JVM's `System.nanoTime`); `stampedAtNanos` is when the robot's clock read this keep-alive's timestamp,
+ * by the robot's clock estimate `clock` (None until there is one, or when the keep-alive carries no robot time).
+ */
 final case class RobotSnapshot(
     robotId: Int,
     address: InetSocketAddress,
@@ -32,7 +36,9 @@ final case class RobotSnapshot(
     position: Option[(Int, Int, Double)] = None,
     online: Boolean = false,
     quality: LinkQuality = LinkQuality.Offline,
-    receivedAtNanos: Long = 0L
+    receivedAtNanos: Long = 0L,
+    clock: Option[ClockEstimate] = None,
+    stampedAtNanos: Option[Long] = None
 ) {
 
   /** What the robot reported about itself, as a keep-alive says it (the link fields are not part of it). */
@@ -94,7 +100,7 @@ object RobotSnapshot {
   }
 }
 
-/** Link figures of one robot. */
+/** Link figures of one robot; `clock` is the estimate of the robot's clock against the gateway's (ClockSync). */
 final case class LinkStats(
     robotId: Int,
     datagramsIn: Long,
@@ -104,7 +110,8 @@ final case class LinkStats(
     rttMillis: Option[Double],
     lossEstimate: Double,
     retransmissions: Long,
-    rejected: Map[String, Long]
+    rejected: Map[String, Long],
+    clock: Option[ClockEstimate] = None
 )
 
 /** Something that happened to a robot or the game, for subscribers. */

@@ -41,8 +41,11 @@ object Routing {
   /** A secure-stream segment from robot `route`'s bound IP address (any source port). */
   final case class SegmentToRobot[A](route: Route[A], bytes: Array[Byte]) extends Decision[A]
 
-  /** A frame the table cannot place (an id not bound here, or bound to another address): the gateway decides. */
-  final case class ToGateway(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress)
+  /**
+   * A frame the table cannot place (an id not bound here, or bound to another address): the gateway decides. `bytes`
+   * is the datagram, for the signature check of a robot that must sign.
+   */
+  final case class ToGateway(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress, bytes: Array[Byte])
       extends Decision[Nothing]
 
   /**
@@ -60,7 +63,7 @@ object Routing {
           case Right((header, contents)) =>
             table.byId.get(contents.robotId) match {
               case Some(route) if route.address == from.getAddress => ToRobot(route, header, contents, bytes.length)
-              case _                                    => ToGateway(header, contents, bytes.length, from)
+              case _                                    => ToGateway(header, contents, bytes.length, from, bytes)
             }
           case Left(error) => Refused(Rejection.of(error), error.describe, sender)
         }

@@ -36,13 +36,17 @@ object VisionActor {
   /** A frame arrived from the robot. */
   final case class FrameReceived(frame: VisionFrame) extends Command
 
-  /** Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). */
+  /**
+   * Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). The robot
+   * actor keeps the registrations, so they outlive a restart of this actor.
+   */
   final case class Register(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+
+  /** The robot actor's registrations now, subscriber to whether it wants grid frames: on every change and every start. */
+  final case class Subscribers(subscribers: Map[ActorRef[VisionFrame], Boolean]) extends Command
 
   /** The robot restarted: switch the camera options on again if anyone is watching. */
   case object Resync extends Command
-
-  private final case class Unregister(subscriber: ActorRef[VisionFrame]) extends Command
 
   val RegionsOption: String = "havimo.regions"
   val GridOption: String = "havimo.grid"
@@ -59,9 +63,14 @@ object VisionActor {
         NotUsed
       }
 
-  /** A vision actor for robot `robotId`, switching camera options through `robot`. */
+  /**
+   * A vision actor for robot `robotId`, switching camera options through `robot`, which owns the registrations: a new
+   * incarnation asks it for them before it forwards any frame.
+   */
   def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
     Behaviors.setup { context =>
+      robot ! RobotActor.VisionSubscribersWanted(context.self)
+
       def options(subscribers: Map[ActorRef[VisionFrame], Boolean]): Set[String] =
         if (subscribers.isEmpty) Set.empty
         else Set(RegionsOption) ++ (if (subscribers.values.exists(identity)) Set(GridOption) else Set.empty)
@@ -88,12 +97,11 @@ object VisionActor {
           }
           Behaviors.same
         case Register(subscriber, grid) =>
-          context.watchWith(subscriber, Unregister(subscriber))
-          val next = subscribers.updated(subscriber, grid)
-          switch(options(subscribers), options(next))
-          running(next)
-        case Unregister(subscriber) =>
-          val next = subscribers - subscriber
+          robot ! RobotActor.VisionSubscribe(subscriber, grid)
+          Behaviors.same
+        case Subscribers(next) =>
+          // A new incarnation starts from none: the options its predecessor switched on are enabled again, which the
+          // robot takes as a no-op.
           switch(options(subscribers), options(next))
           running(next)
         case Resync =>

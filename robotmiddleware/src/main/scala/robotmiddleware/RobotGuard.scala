@@ -48,6 +48,7 @@ private[robotmiddleware] object RobotGuard {
   private case object StatsTick extends Command
   private final case class StatsReceived(stats: LinkStats) extends Command
   private final case class StatsWatcherGone(subscriber: ActorRef[LinkStats]) extends Command
+  private final case class VisionWatcherGone(subscriber: ActorRef[VisionFrame]) extends Command
   private final case class SafetyStepDone(step: SafetyStep, result: CallResult) extends Command
   private final case class ChildGone(child: ActorRef[Nothing]) extends Command
 
@@ -100,6 +101,9 @@ private[robotmiddleware] object RobotGuard {
     // A robot that came back while the guard was still connecting gets its reconnect stop once the guard is ready.
     private var reconnectedWhileConnecting = false
     private var statsWatchers = Set.empty[ActorRef[LinkStats]]
+    // Apps' camera streams: registered again with the new children after the robot actor restarted, whose
+    // registrations died with it.
+    private var visionWatchers = Map.empty[ActorRef[VisionFrame], Boolean]
 
     // Apps are told of a replaced or interrupted call as an overload to retry: the one error type, in words for apps.
     private def failure(error: RobotFailure): RobotFailure = error match {
@@ -114,6 +118,7 @@ private[robotmiddleware] object RobotGuard {
         case ChildrenReady(children) =>
           // The refs die with the robot actor's restart (or a child's stop): then the guard connects again.
           Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref => context.watchWith(ref, ChildGone(ref)))
+          visionWatchers.foreach { case (subscriber, grid) => children.vision ! VisionActor.Register(subscriber, grid) }
           if (reconnectedWhileConnecting) stopAfterReconnect(children)
           stash.unstashAll(ready(children))
         case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
@@ -252,7 +257,12 @@ private[robotmiddleware] object RobotGuard {
         }
         Behaviors.same
       case WatchVision(subscriber, grid) =>
+        if (!visionWatchers.contains(subscriber)) context.watchWith(subscriber, VisionWatcherGone(subscriber))
+        visionWatchers = visionWatchers.updated(subscriber, grid)
         c.vision ! VisionActor.Register(subscriber, grid)
+        Behaviors.same
+      case VisionWatcherGone(subscriber) =>
+        visionWatchers -= subscriber
         Behaviors.same
       case WatchLinkStats(subscriber) =>
         context.watchWith(subscriber, StatsWatcherGone(subscriber))

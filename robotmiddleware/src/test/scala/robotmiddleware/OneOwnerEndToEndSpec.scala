@@ -89,7 +89,7 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       }
     }
 
-    "keep an app working through a restart of the robot actor and of its response actor" in {
+    "keep an app's calls and camera stream working through a restart of the robot actor and of each child it hands out" in {
       val f = new GatewayFixture(testKit)
       try {
         val (robot, _) = f.robot(22)
@@ -97,21 +97,43 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         val middleware = spawn(RobotMiddleware(f.gateway, settings))
         val app = Await.result(RobotClient.connect(system, middleware, "looker", 1), Patience)
         untilDone(5)(app.acquire(22, ActuatorGroup.Head))
-        untilDone(5)(app.head(22, 0.1, 0))
-        // A reply ref that is null stands in for any bug: the robot actor throws and its supervisor restarts it,
-        // with new children; the guard finds their refs dead and connects again.
-        f.robotActor(22) ! RobotActor.GetSnapshot(null)
-        eventually(timeout(Patience)) {
-          Await.result(app.head(22, 0.2, 0), 10.seconds)
-          f.view(robot).head shouldBe ((0.2f.toDouble, 0.0))
+        // One camera stream for the whole test; each step watches it through a probe of its own, so frames from
+        // before a crash cannot count for after it.
+        val watcher = new java.util.concurrent.atomic.AtomicReference(createTestProbe[VisionFrame]())
+        app.vision(22).runForeach(frame => watcher.get.ref ! frame)
+        watcher.get.expectMessageType[VisionFrame](Patience)
+        var pan = 0.0
+        // Supervisors' failure reports, counted at the root logger: proof that each crash below really happened.
+        val failures = new java.util.concurrent.atomic.AtomicInteger()
+        val root = org.slf4j.LoggerFactory.getLogger(org.slf4j.Logger.ROOT_LOGGER_NAME).asInstanceOf[ch.qos.logback.classic.Logger]
+        val counter = new ch.qos.logback.core.AppenderBase[ch.qos.logback.classic.spi.ILoggingEvent] {
+          override def append(e: ch.qos.logback.classic.spi.ILoggingEvent): Unit =
+            if (e.getLevel == ch.qos.logback.classic.Level.ERROR && e.getFormattedMessage.contains("saw failure")) failures.incrementAndGet()
         }
-        // A route that is null makes the response actor throw on its next call: its caller is answered, it restarts.
-        f.connect(22).response ! ResponseActor.RouteChanged(null)
-        eventually(timeout(Patience)) {
-          Await.result(app.head(22, 0.3, 0), 10.seconds)
-          f.view(robot).head shouldBe ((0.3f.toDouble, 0.0))
+        counter.start()
+        root.addAppender(counter)
+        // The app still moves the robot's head and still gets camera frames after `crash` made an actor fail.
+        def stillWorks(what: String)(crash: => Unit): Unit = withClue(what) {
+          val before = failures.get
+          crash
+          pan += 0.1
+          eventually(timeout(Patience)) {
+            Await.result(app.head(22, pan, 0), 10.seconds)
+            f.view(robot).head._1 shouldBe (pan.toFloat.toDouble +- 1e-6)
+          }
+          watcher.set(createTestProbe[VisionFrame]())
+          watcher.get.expectMessageType[VisionFrame](Patience)
+          // The actor did fail (some only on the call after the crash message): one report per crash.
+          eventually(timeout(Patience)) { failures.get shouldBe before + 1 }
         }
+        // A reply ref or route that is null stands in for any bug: the actor throws and its supervisor restarts it.
+        stillWorks("robot actor")(f.robotActor(22) ! RobotActor.GetSnapshot(null))
+        stillWorks("response actor")(f.connect(22).response ! ResponseActor.RouteChanged(null))
+        stillWorks("vision actor")(f.connect(22).vision ! VisionActor.Subscribers(null))
+        stillWorks("stream actor")(f.connect(22).stream ! StreamActor.GetStats(null))
+        stillWorks("no-response actor")(f.connect(22).noResponse ! NoResponseActor.Send(null))
         app.close()
+        root.detachAppender(counter)
       } finally f.stop()
     }
   }

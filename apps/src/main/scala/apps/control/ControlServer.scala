@@ -43,7 +43,7 @@ object ControlServer {
 
   /** The server for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ControlSettings,
-      gateway: Option[ActorRef[naogateway.Gateway.Command]] = None): Behavior[Command] =
+      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(16) { stash =>
         context.pipeToSelf(RobotClient.connect(context.system, middleware, settings.appName, settings.priority)) {
@@ -64,7 +64,7 @@ object ControlServer {
 
   /** Spawns the server as a child of `context` when `apps.control.enabled` is on (it is, by default). */
   def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command],
-      gateway: Option[ActorRef[naogateway.Gateway.Command]] = None): Option[ActorRef[Command]] = {
+      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Option[ActorRef[Command]] = {
     val settings = ControlSettings(context.system)
     if (settings.enabled) Some(context.spawn(apply(middleware, settings, gateway), "control")) else None
   }
@@ -74,7 +74,7 @@ object ControlServer {
     serving(robots, settings, ownsInterface = false, None)
 
   private def serving(robots: RobotInterface, settings: ControlSettings, ownsInterface: Boolean,
-      gateway: Option[ActorRef[naogateway.Gateway.Command]]): Behavior[Command] =
+      gateway: Option[ActorRef[naogateway.Gateway.Query]]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(16) { stash =>
         implicit val system: ActorSystem[_] = context.system
@@ -221,7 +221,7 @@ object ControlServer {
 
   /** The answer to `request`: output lines, then exactly one `Ok` or `Error`, within the request's time limit. */
   def answer(robots: RobotInterface, settings: ControlSettings, request: Request,
-      gateway: Option[ActorRef[naogateway.Gateway.Command]] = None)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
+      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     val limit = request match {
       case Request.Watch(_, seconds) => settings.answerTimeout + seconds.seconds
       case _                         => settings.answerTimeout
@@ -245,7 +245,7 @@ object ControlServer {
   private val MaxFinalChars = 1000
 
   private def body(robots: RobotInterface, settings: ControlSettings, request: Request,
-      gateway: Option[ActorRef[naogateway.Gateway.Command]])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
+      gateway: Option[ActorRef[naogateway.Gateway.Query]])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     implicit val ec: ExecutionContext = system.executionContext
     request match {
       case Request.Status =>
@@ -279,7 +279,7 @@ object ControlServer {
   }
 
   /** Where game state comes from, for the status's final line; empty without a gateway or when it does not answer. */
-  private def gameSource(gateway: Option[ActorRef[naogateway.Gateway.Command]], timeout: FiniteDuration)(
+  private def gameSource(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
       implicit system: ActorSystem[_]): Future[String] = {
     import akka.actor.typed.scaladsl.AskPattern._
     implicit val ec: ExecutionContext = system.executionContext
@@ -301,14 +301,19 @@ object ControlServer {
 
   /** The column heads of [[statusLine]]. */
   val statusHeader: String =
-    f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s ${"rtt"}%-9s loss"
+    f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s ${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
 
-  /** One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss. */
+  /**
+   * One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
+   * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
+   */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
     val address = s"${r.address.getAddress.getHostAddress}:${r.address.getPort}"
     val rtt = stats.flatMap(_.rttMillis).fold("-")(v => f"$v%.1f ms")
     val loss = stats.fold("-")(s => f"${s.lossEstimate * 100}%.0f %%")
+    val clock = r.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
+    val drift = r.clock.fold("-")(c => f"${c.driftPpm}%+.0f ppm")
     f"${r.robotId}%-4d $address%-22s ${if (r.online) "online" else "offline"}%-8s ${r.quality.name}%-9s " +
-      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.fold("-")(_.name)}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss"
+      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.fold("-")(_.name)}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
   }
 }

@@ -59,7 +59,7 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       val robots = lines.slice(1, 1001)
       robots.map(_.drop(2).split("\\s+")(0).toInt) shouldBe (1 to 1000)
       robots.foreach(l => l.length should be < 200)
-      robots.head.split("\\s+").toList shouldBe List(".", "1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%")
+      robots.head.split("\\s+").toList shouldBe List(".", "1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
       robots(9) should include("offline  offline")
     }
 

@@ -15,7 +15,7 @@ import akka.{Done, NotUsed}
 
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
 
 /**
@@ -31,7 +31,8 @@ final class FleetStub(robots: Int) extends RobotInterface {
 
   private def snapshot(id: Int) =
     RobotSnapshot(id, new InetSocketAddress("127.0.0.1", 20000 + id), role = Some("striker"), posture = Some(Posture.Sit),
-      batteryVoltage = Some(12.25), online = id % 10 != 0, quality = if (id % 10 != 0) LinkQuality.Good else LinkQuality.Offline)
+      batteryVoltage = Some(12.25), online = id % 10 != 0, quality = if (id % 10 != 0) LinkQuality.Good else LinkQuality.Offline,
+      clock = if (id % 10 != 0) Some(ClockEstimate(5000L, 7000000000L, 1.0 / (1.0 + 250e-6), 1.4, 0.0001, 40)) else None)
 
   private def known(id: Int): Either[Throwable, Int] = if (id >= 1 && id <= robots) Right(id) else Left(RobotFailure.UnknownRobot(id))
 

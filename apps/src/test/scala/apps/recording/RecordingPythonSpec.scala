@@ -48,6 +48,7 @@ class RecordingPythonSpec extends ScalaTestWithActorTestKit(RecordingPythonSpec.
       val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
       val strangerAt = stranger.getLocalAddress.asInstanceOf[InetSocketAddress]
       val odd = Array[Byte](0, 1, 2, 3, -1, -2, 'x', 'y')
+      val robot2 = fleet.address(2).getOrElse(fail("robot 2 has no address"))
       try {
         events.fishForMessage(20.seconds) {
           case RobotOnline(2, _) => akka.actor.testkit.typed.FishingOutcome.Complete
@@ -79,7 +80,9 @@ class RecordingPythonSpec extends ScalaTestWithActorTestKit(RecordingPythonSpec.
         // GameController packets as they came ("RGme"), and the robots' keep-alives (FU-Remote frames, 00 2a).
         datagrams.exists { case (port, dir, _, _, _, hex) => port == "GAME_CONTROLLER" && dir == "RECEIVED" && hex.startsWith("52476d65") } shouldBe true
         datagrams.exists { case (port, dir, _, _, robot, hex) => port == "ROBOT_PORT" && dir == "RECEIVED" && robot == "1" && hex.startsWith("002a") } shouldBe true
-        datagrams.exists { case (port, dir, _, _, robot, _) => port == "ROBOT_PORT" && dir == "SENT" && robot == "2" } shouldBe true
+        // What the gateway sent robot 2 (its option pull, probes), to the robot's receive address.
+        val two = robot2.getAddress.getHostAddress + ":" + robot2.getPort
+        datagrams.exists { case (port, dir, _, to, _, _) => port == "ROBOT_PORT" && dir == "SENT" && to == two } shouldBe true
         val Status = """status (\d+) (\d+) team (\d+) agent (\S+) timestamp (\d+)""".r
         val statuses = lines.collect { case Status(robot, _, team, agent, _) => (robot.toInt, team.toInt, agent) }
         statuses.map(_._1).distinct.sorted shouldBe Vector(1, 2)

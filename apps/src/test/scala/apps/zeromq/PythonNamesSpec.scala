@@ -1,7 +1,5 @@
 package apps.zeromq
 
-import naogateway.wire.ActuatorGroup
-
 import java.io.File
 import java.nio.charset.StandardCharsets
 import java.nio.file.Files
@@ -9,8 +7,9 @@ import java.nio.file.Files
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.wire.Posture
-/** The Python client's names for postures and actuator groups are the gateway's, in the same order. */
+import naogateway.wire.{ActuatorGroup, Posture, RpcMethod}
+
+/** The Python client's names for postures, actuator groups and robot methods are the gateway's, in the same order. */
 class PythonNamesSpec extends AnyWordSpec with Matchers {
 
   private lazy val client: String =
@@ -34,6 +33,17 @@ class PythonNamesSpec extends AnyWordSpec with Matchers {
 
     "name the actuator groups as ActuatorGroup does" in {
       tuple("ACTUATOR_GROUPS") shouldBe ActuatorGroup.all.map(_.name)
+    }
+
+    "call only robot methods of RpcMethod, each by its module and method name" in {
+      // Every `self.call(robot_id, "module", "method", ...)` except the endpoint's own module `gateway`.
+      val Call = """self\.call\(robot_id, "([a-zA-Z]+)", "([a-zA-Z]+)"""".r
+      val called = Call.findAllMatchIn(client).map(m => (m.group(1), m.group(2))).filterNot(_._1 == "gateway").toVector
+      called should not be empty
+      all(called.map { case (module, method) => RpcMethod.find(module, method).map(_.name) }) shouldBe defined
+      // The client's named commands: motion.walk, stop, head, arms, posture and speech.say at least.
+      called.map { case (m, n) => s"$m.$n" }.toSet should contain allElementsOf
+        Set(RpcMethod.Walk, RpcMethod.Stop, RpcMethod.Head, RpcMethod.Arms, RpcMethod.Posture, RpcMethod.Say).map(_.name)
     }
   }
 }

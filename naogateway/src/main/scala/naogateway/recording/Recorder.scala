@@ -23,17 +23,17 @@ import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
 /** Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's time base (ns since the Unix epoch). */
-trait RobotClock {
+trait RobotTimeBase {
 
   /** The gateway time of robot `robotId`'s clock reading `robotMillis`, once the robot's offset is known. */
   def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long]
 }
 
 /** Robot clocks. */
-object RobotClock {
+object RobotTimeBase {
 
   /** No robot's offset is known: a `Status` message is published at the time the gateway received it. */
-  val Unknown: RobotClock = (_: Int, _: Long) => None
+  val Unknown: RobotTimeBase = (_: Int, _: Long) => None
 }
 
 /** A gateway decision worth recording, handed over as data and written as JSON by the writer thread. */
@@ -98,7 +98,7 @@ object Recording {
   }
 
   /** A recorder writing to `settings.directory` on a thread named `threadName`, or [[Off]] when not enabled. */
-  def apply(settings: RecordingSettings, threadName: String, clock: RobotClock = RobotClock.Unknown): Recording =
+  def apply(settings: RecordingSettings, threadName: String, clock: RobotTimeBase = RobotTimeBase.Unknown): Recording =
     if (settings.enabled) new Recorder(settings, threadName, clock) else Off
 
   /** Topics of a recording (docs/recording.md). */
@@ -140,7 +140,7 @@ private[recording] final case class DecisionEntry(nanoTime: Long, decision: Deci
  * A full queue drops the entry and counts it ([[RecordingStats.dropped]]). A file that cannot be written is closed;
  * entries are dropped (counted as failed) until a new file can be opened, tried every 5 s.
  */
-final class Recorder(settings: RecordingSettings, threadName: String, clock: RobotClock) extends Recording {
+final class Recorder(settings: RecordingSettings, threadName: String, clock: RobotTimeBase) extends Recording {
   import Recording._
 
   private val log = LoggerFactory.getLogger(classOf[Recorder])

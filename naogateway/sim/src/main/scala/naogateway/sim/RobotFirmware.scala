@@ -32,7 +32,9 @@ final case class FirmwareSettings(
     maxTurn: Double = 1.0,
     startPose: Pose = Pose(-1.0, 0.0, 0.0),
     scene: Scene = Scene(0.5, 0.3),
-    headerForm: HeaderForm = HeaderForm.Legacy
+    headerForm: HeaderForm = HeaderForm.Legacy,
+    clock: RobotClock = RobotClock.Exact,
+    signingKey: Option[SigningKey] = None
 ) {
   require(robotId >= 0, s"robotId must not be negative, got $robotId")
   require(keepAliveInterval > Duration.Zero, "keepAliveInterval must be positive")
@@ -63,7 +65,8 @@ final case class FirmwareStats(
     datagramsOut: Long = 0,
     rpcCalls: Long = 0,
     gameControllerPackets: Long = 0,
-    rejected: Long = 0
+    rejected: Long = 0,
+    refusedSignatures: Map[String, Long] = Map.empty
 )
 
 /** A call whose reply waits until a motion ends. */
@@ -75,7 +78,12 @@ private[sim] final case class PostureChange(target: Posture, doneAt: Long, reply
 /** A walk command and the moment its lease runs out. */
 private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseUntil: Long)
 
-/** The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`. */
+/**
+ * The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`.
+ * `bootId` doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and
+ * resets. `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh
+ * at every boot, as RAM does.
+ */
 final case class FirmwareState(
     settings: FirmwareSettings,
     bootId: Int,
@@ -95,11 +103,13 @@ final case class FirmwareState(
     frame: Int,
     said: Vector[String],
     game: Option[GameControlData],
-    stats: FirmwareStats
+    stats: FirmwareStats,
+    framesSigned: Long = 0L,
+    gatewayWindow: ReplayWindow = ReplayWindow.empty
 ) {
 
-  /** Milliseconds since the firmware booted. */
-  def uptimeMillis: Long = math.max(0L, (now - bootedAt) / 1000000L)
+  /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */
+  def uptimeMillis: Long = settings.clock.millisAt(now - bootedAt)
 
   /** The next moment `RobotFirmware.advance` has something to do. */
   def nextWakeUp: Long = {
@@ -181,8 +191,13 @@ object RobotFirmware {
   def restart(state: FirmwareState, now: Long): FirmwareState =
     boot(state.settings.copy(initialBattery = state.battery, startPose = state.pose), now, state.bootId + 1)
 
-  /** Moves time forward to `now`: motion, battery, leases, keep-alives and debug output. */
+  /** Moves time forward to `now`: motion, battery, leases, keep-alives and debug output (signed, with a key). */
   def advance(state: FirmwareState, now: Long): (FirmwareState, Vector[Outgoing]) = {
+    val (s, out) = advanceUnsigned(state, now)
+    signed(s, out)
+  }
+
+  private def advanceUnsigned(state: FirmwareState, now: Long): (FirmwareState, Vector[Outgoing]) = {
     var s = integrate(state, now)
     val out = Vector.newBuilder[Outgoing]
     s.change.filter(_.doneAt <= now).foreach { c =>
@@ -210,16 +225,24 @@ object RobotFirmware {
     (s.copy(stats = s.stats.copy(datagramsOut = s.stats.datagramsOut + sent.length)), sent)
   }
 
-  /** Handles one datagram from `from` at `now` (after advancing to `now`). */
-  def receive(state: FirmwareState, bytes: Array[Byte], from: InetSocketAddress, now: Long)
+  /**
+   * Handles one datagram from `from` at `now` (after advancing to `now`). With a signing key, a frame counts only when
+   * the gateway signed it and its timestamp is above the last one accepted this boot; the others are counted by kind
+   * and ignored. `viaStream`: the frame came as a secure-stream payload, which is not signed (docs/protocol.md 6.7).
+   */
+  def receive(state: FirmwareState, bytes: Array[Byte], from: InetSocketAddress, now: Long, viaStream: Boolean = false)
       : (FirmwareState, Vector[Outgoing]) = {
-    val (advanced, due) = advance(state, now)
+    val (advanced, due) = advanceUnsigned(state, now)
     val s = advanced.copy(stats = advanced.stats.copy(datagramsIn = advanced.stats.datagramsIn + 1))
     val (next, replies) = Datagram.classify(bytes) match {
       case Datagram.FuRemoteFrame(b) =>
         MessageContents.decodeFrame(b) match {
-          case Right((header, contents)) => onMessage(s, header.form, contents, Destination.ReplyTo(from))
-          case Left(_)                   => (rejected(s), Vector.empty)
+          case Right((header, contents)) =>
+            authenticated(s, b, header, viaStream) match {
+              case Right(accepted) => onMessage(accepted, header.form, contents, Destination.ReplyTo(from))
+              case Left(refused)   => (refused, Vector.empty)
+            }
+          case Left(_) => (rejected(s), Vector.empty)
         }
       case Datagram.GameControllerControl(b) =>
         GameControllerCodec.decodeControl(b) match {
@@ -228,8 +251,49 @@ object RobotFirmware {
         }
       case _ => (rejected(s), Vector.empty)
     }
-    (next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length)), due ++ replies)
+    val counted = next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length))
+    // The reply to `system.reset` leaves before the restart: it is the old session's last frame, signed as such.
+    if (counted.bootId == s.bootId) signed(counted, due ++ replies)
+    else (counted, signed(s, due ++ replies)._2)
   }
+
+  /** The state after accepting a frame from the gateway, or (`Left`) after refusing it for its signature. */
+  private def authenticated(s: FirmwareState, frame: Array[Byte], header: FrameHeader, viaStream: Boolean)
+      : Either[FirmwareState, FirmwareState] =
+    s.settings.signingKey.filterNot(_ => viaStream) match {
+      case None => Right(s)
+      case Some(key) =>
+        FrameSigning.verifyFrame(frame, header, key, SignDirection.GatewayToRobot)
+          .flatMap(body => s.gatewayWindow.accept(body.timestamp)) match {
+          case Right(window) => Right(s.copy(gatewayWindow = window))
+          case Left(error) =>
+            val counts = s.stats.refusedSignatures
+            Left(s.copy(stats = s.stats.copy(refusedSignatures = counts.updated(error.kind, counts.getOrElse(error.kind, 0L) + 1))))
+        }
+    }
+
+  /**
+   * With a signing key, every FU-Remote frame of `out` signed in order under the robot's timestamps (boot counter in
+   * the high 32 bits, frame counter of this boot in the low); GameController answers are not frames and stay as
+   * they are.
+   */
+  private def signed(s: FirmwareState, out: Vector[Outgoing]): (FirmwareState, Vector[Outgoing]) =
+    s.settings.signingKey match {
+      case None => (s, out)
+      case Some(key) =>
+        var frames = s.framesSigned
+        val signedOut = out.map { o =>
+          if (!Datagram.isFuRemoteFrame(o.bytes)) o
+          else {
+            val timestamp = FrameSigning.robotTimestamp(s.bootId.toLong, frames)
+            frames += 1
+            // The firmware leaves room for the signature in everything it builds; no room is a bug in the simulator.
+            o.copy(bytes = FrameSigning.signEncoded(o.bytes, key, SignDirection.RobotToGateway, timestamp)
+              .fold(e => throw new IllegalStateException(e.describe), identity))
+          }
+        }
+        (s.copy(framesSigned = frames), signedOut)
+    }
 
   /** Handles one decoded message: RPC calls and debug option commands; anything else is ignored. */
   def onMessage(state: FirmwareState, form: HeaderForm, contents: MessageContents, replyTo: Destination)

@@ -104,6 +104,9 @@ final case class ReceivedCall(atNanos: Long, call: RpcCall)
   * @param module stats of the GS1500M model since the last power-up (`None` without the faithful link)
   * @param cpu stats of the CM-530 main loop since the last power-up (`None` without the faithful link)
   * @param sendingFrom where the robot's datagrams come from now (its IP at the sending socket's port)
+  * @param clock the robot's clock, which `uptimeMillis` and the keep-alives' timestamps read
+  * @param bootedAtNanos when the firmware last booted, on this JVM's `System.nanoTime` (the gateway's clock when the
+  *   gateway runs in the same JVM)
   */
 final case class RobotView(
     robotId: Int,
@@ -125,8 +128,16 @@ final case class RobotView(
     stats: RobotStats,
     module: Option[Gs1500mStats],
     cpu: Option[Cm530Stats],
-    sendingFrom: InetSocketAddress
-)
+    sendingFrom: InetSocketAddress,
+    clock: RobotClock = RobotClock.Exact,
+    bootedAtNanos: Long = 0L
+) {
+
+  /** When (on this JVM's `System.nanoTime`) the robot's clock read `robotMillis` in this session: the truth a clock
+    * estimate is checked against.
+    */
+  def gatewayNanosOf(robotMillis: Long): Double = bootedAtNanos + clock.sinceBootNanosOf(robotMillis)
+}
 
 /** One simulated CM-530 robot on real UDP sockets: [[RobotFirmware]] in real time, behind the GS1500M and CM-530
   * models ([[FaithfulLink]]) or straight on the sockets.
@@ -666,7 +677,7 @@ private final class SimulatedRobot(
           // Each delivered payload is one frame from the gateway; its replies go back through the stream.
           step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
             logCalls(frame, at)
-            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now))
+            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now), viaStream = true)
             next = next.copy(firmware = firmware)
             app ++= out
           }
@@ -717,7 +728,7 @@ private final class SimulatedRobot(
       online = online,
       onlineAgainIn = upAt.map(at => math.max(0L, at - t).nanos),
       bootId = f.bootId,
-      uptimeMillis = math.max(0L, t - f.bootedAt) / 1000000L,
+      uptimeMillis = f.settings.clock.millisAt(t - f.bootedAt),
       posture = f.posture,
       battery = f.battery,
       pose = f.pose,
@@ -729,7 +740,9 @@ private final class SimulatedRobot(
       stats = robot.stats.copy(ignoredAtSendingSocket = ignoredAtSender),
       module = robot.link.map(_.module.stats),
       cpu = robot.link.map(_.cpu.stats),
-      sendingFrom = sendingFrom
+      sendingFrom = sendingFrom,
+      clock = f.settings.clock,
+      bootedAtNanos = origin + f.bootedAt
     )
   }
 }

@@ -8,6 +8,7 @@ import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
@@ -145,6 +146,15 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       f.gateway ! Gateway.GetRobots(robotsProbe.ref)
       robotsProbe.receiveMessage().map(s => (s.robotId, s.online, s.quality)) shouldBe
         Vector((1, true, LinkQuality.Good), (2, true, LinkQuality.Good), (3, true, LinkQuality.Good))
+      // The read-only view: the same robots' link figures, through a ref that can ask but not send.
+      val view: ActorRef[Gateway.Query] = f.gateway
+      val links = createTestProbe[Gateway.RobotLinks]()
+      view ! Gateway.GetLinkStats(links.ref)
+      val figures = links.receiveMessage().links
+      figures.map(_.robotId) shouldBe Vector(1, 2, 3)
+      // Each answered at least its two calls, so each received datagrams and sent some.
+      all(figures.map(_.datagramsIn)) should be > 0L
+      all(figures.map(_.datagramsOut)) should be >= 2L
     }
 
     "take a partitioned robot offline within its three chances and back online when the partition heals" in withGateway() { f =>

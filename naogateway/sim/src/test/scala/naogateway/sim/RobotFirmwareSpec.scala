@@ -167,6 +167,50 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       reset.uptimeMillis shouldBe 0
       reset.debugEnabled shouldBe empty
     }
+    "with a key, sign every frame it sends under boot counter and frame counter, the boot counter surviving a reset" in {
+      val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").value
+      val signing = settings.copy(signingKey = Some(key))
+      def stamps(out: Seq[Outgoing]): Seq[Long] = out.filter(o => Datagram.isFuRemoteFrame(o.bytes)).map { o =>
+        val header = FumanoidsFrame.decodeHeader(o.bytes).value
+        FrameSigning.verifyFrame(o.bytes, header, key, SignDirection.RobotToGateway).value.timestamp
+      }
+      def request(c: MessageContents, ts: Long) =
+        FrameSigning.signFrame(c, HeaderForm.Legacy, key, SignDirection.GatewayToRobot, ts).value
+      val (s1, first) = RobotFirmware.advance(RobotFirmware.boot(signing, 0), 0)
+      val (s2, second) = RobotFirmware.advance(s1, 200 * ms)
+      stamps(first ++ second) shouldBe Seq(FrameSigning.robotTimestamp(1, 0), FrameSigning.robotTimestamp(1, 1))
+      val reset = MessageContents(0, rpcRequest = Some(RpcCall("system", "reset", Vector.empty, Some(3L)).toProto))
+      val (s3, answered) = RobotFirmware.receive(s2, request(reset, 1000L), gateway, 300 * ms)
+      stamps(answered) shouldBe Seq(FrameSigning.robotTimestamp(1, 2))
+      s3.bootId shouldBe 2
+      // The next session's frames sort above every frame of the one before, whatever its frame counter reached.
+      stamps(RobotFirmware.advance(s3, 400 * ms)._2) shouldBe Seq(FrameSigning.robotTimestamp(2, 0))
+      s3.stats.refusedSignatures shouldBe empty
+    }
+    "with a key, act only on the gateway's signed, newer frames and count the others by kind" in {
+      val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").value
+      val other = SigningKey.fromHex("ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").value
+      val s0 = RobotFirmware.boot(settings.copy(signingKey = Some(key)), 0)
+      val stand = MessageContents(0, rpcRequest = Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand")), Some(4L)).toProto))
+      def signed(ts: Long, k: SigningKey = key, d: SignDirection = SignDirection.GatewayToRobot) =
+        FrameSigning.signFrame(stand, HeaderForm.Legacy, k, d, ts).value
+      val attempts = Vector(
+        MessageContents.encodeFrame(stand).value, signed(50L, other), signed(50L, d = SignDirection.RobotToGateway))
+      val refused = attempts.foldLeft(s0) { (s, bytes) =>
+        val (next, out) = RobotFirmware.receive(s, bytes, gateway, ms)
+        out.flatMap(o => MessageContents.decodeFrame(o.bytes).toOption).flatMap(_._2.rpcResponse) shouldBe empty
+        next
+      }
+      refused.stats.refusedSignatures shouldBe Map("unsigned" -> 1L, "bad signature" -> 2L)
+      refused.change shouldBe None
+      val (moving, _) = RobotFirmware.receive(refused, signed(100L), gateway, 2 * ms)
+      moving.change.map(_.target) shouldBe Some(Posture.Stand)
+      val (replayed, _) = RobotFirmware.receive(moving, signed(100L), gateway, 3 * ms)
+      replayed.stats.refusedSignatures.get("replayed") shouldBe Some(1L)
+      // Through the secure stream nothing is signed (protocol.md 6.7): the stream's payloads count as they come.
+      val (viaStream, _) = RobotFirmware.receive(refused, MessageContents.encodeFrame(stand).value, gateway, 4 * ms, viaStream = true)
+      viaStream.change.map(_.target) shouldBe Some(Posture.Stand)
+    }
     "see the ball ahead in the middle of the image and lose it when looking away" in {
       val pose = Pose(0, 0, 0)
       val ahead = Scene.regions(Scene(1.0, 0.0), pose, 0, -0.3)

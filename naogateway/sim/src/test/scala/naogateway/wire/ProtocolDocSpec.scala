@@ -126,6 +126,36 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     }
   }
 
+  "The signed frame example of 9.14" should {
+    val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+    val timestamp = FrameSigning.robotTimestamp(bootCounter = 3, frameCounter = 5)
+    "be the Status of 9.2 signed by the robot under the documented key and timestamp" in {
+      timestamp shouldBe 0x0000000300000005L
+      FrameSigning.signFrame(workedStatus, HeaderForm.Compact, key, SignDirection.RobotToGateway, timestamp).map(_.toVector) shouldBe
+        Right(bytes("signed-status").toVector)
+      val header = FumanoidsFrame.decodeHeader(bytes("signed-status")).toOption.get
+      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.RobotToGateway) shouldBe
+        Right(SignedBody(timestamp, bytes("status-compact").length - HeaderForm.Compact.headerBytes))
+      // A peer that does not sign reads 9.2 with one unknown extension.
+      MessageContents.decodeFrame(bytes("signed-status")).map(_._2) shouldBe
+        Right(workedStatus.copy(unknownExtensions = Vector(FrameSigning.Field)))
+    }
+    "show the HMAC input, whose HMAC-SHA256 begins with the frame's mac" in {
+      val input = bytes("signed-status-mac-input")
+      input.toVector shouldBe (FrameSigning.Domain ++ Array[Byte](SignDirection.RobotToGateway.code) ++
+        java.nio.ByteBuffer.allocate(8).putLong(timestamp).array() ++ bytes("status-compact").drop(HeaderForm.Compact.headerBytes)).toVector
+      // Computed here without the codec, as firmware would.
+      val hmac = javax.crypto.Mac.getInstance("HmacSHA256")
+      hmac.init(new javax.crypto.spec.SecretKeySpec(Array.tabulate[Byte](32)(_.toByte), "HmacSHA256"))
+      hmac.doFinal(input).take(FrameSigning.MacBytes).toVector shouldBe bytes("signed-status").takeRight(FrameSigning.MacBytes).toVector
+    }
+    "be refused as a copy, and not pass as the gateway's" in {
+      ReplayWindow.empty.accept(timestamp).flatMap(_.accept(timestamp)) shouldBe Left(SignatureError.Replayed)
+      val header = FumanoidsFrame.decodeHeader(bytes("signed-status")).toOption.get
+      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.GatewayToRobot) shouldBe Left(SignatureError.BadMac)
+    }
+  }
+
   "The extension tables" should {
     val extensions = Seq(MessageProto, DebuggingProto, HavimoProto, RpcProto)
       .flatMap(_.javaDescriptor.getExtensions.asScala)
@@ -480,7 +510,8 @@ object ProtocolDocSpec {
   val ExampleTags: Set[String] = FrameExamples.keySet ++ Set(
     "gc-v8-header", "gc-v7-header", "gc-return-alive",
     "stream-data", "stream-pure-ack", "stream-data-rpc",
-    "serial-send-status", "serial-receive-udp-server"
+    "serial-send-status", "serial-receive-udp-server",
+    "signed-status", "signed-status-mac-input"
   )
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =

@@ -165,6 +165,32 @@ object FrameSigning {
     FumanoidsFrame.encodeProtobuf(sign(contents.toProtobuf, key, direction, timestamp), form, gzip = false)
 
   /**
+   * An encoded, unsigned frame (either header form, never gzip-flagged) signed as it stands: the same header form,
+   * the length grown by [[FieldBytes]], the signature field appended. For senders that encode first and sign at the
+   * moment of sending, so timestamps follow the order frames leave in.
+   */
+  def signEncoded(frame: Array[Byte], key: SigningKey, direction: SignDirection, timestamp: Long): Either[FrameError, Array[Byte]] =
+    FumanoidsFrame.decodeHeader(frame).flatMap { header =>
+      if (header.gzip) Left(FrameError.UnsupportedFlags(FumanoidsFrame.GzipFlag))
+      else {
+        val body = java.util.Arrays.copyOfRange(frame, header.form.headerBytes, frame.length)
+        FumanoidsFrame.encodeProtobuf(sign(body, key, direction, timestamp), header.form, gzip = false)
+      }
+    }
+
+  /**
+   * Checks the signature of a whole received frame whose header decoded as `header` (a gzip-flagged payload is
+   * checked after inflating; a frame that does not decode at all is `Malformed`). The replay rule is the caller's.
+   */
+  def verifyFrame(frame: Array[Byte], header: FrameHeader, key: SigningKey, direction: SignDirection): Either[SignatureError, SignedBody] =
+    if (!header.gzip) verify(frame, header.form.headerBytes, header.payloadLength, key, direction)
+    else
+      FumanoidsFrame.decodeRaw(frame) match {
+        case Right(raw) => verify(raw.protobuf, 0, raw.protobuf.length, key, direction)
+        case Left(_)    => Left(SignatureError.Malformed)
+      }
+
+  /**
    * Checks the signature of the `length` protobuf bytes at `offset` (a `Message`, after any gzip is undone):
    * the last field must be the signature, and its MAC must match the bytes before it. The replay rule is the
    * caller's ([[ReplayWindow]]), because only the caller knows the sender.

@@ -65,6 +65,29 @@ class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     }
   }
 
+  "A signed frame" should {
+    "be the same whether signed from its contents or from its encoded unsigned frame, in both header forms" in {
+      forAll(contents, Arbitrary.arbitrary[Long], Gen.oneOf(HeaderForm.Legacy, HeaderForm.Compact)) { (c, ts, form) =>
+        val encoded = MessageContents.encodeFrame(c, form).toOption.get
+        val signed = FrameSigning.signEncoded(encoded, teamKey, R, ts)
+        signed.map(_.toVector) shouldBe FrameSigning.signFrame(c, form, teamKey, R, ts).map(_.toVector)
+        val header = FumanoidsFrame.decodeHeader(signed.toOption.get).toOption.get
+        header.form shouldBe form
+        header.gzip shouldBe false
+        FrameSigning.verifyFrame(signed.toOption.get, header, teamKey, R) shouldBe Right(SignedBody(ts, c.toProtobuf.length))
+        MessageContents.decodeFrame(signed.toOption.get).map(_._2.copy(unknownExtensions = Vector.empty)) shouldBe Right(c)
+      }
+    }
+
+    "not be made from a gzip-flagged frame, and be checked after inflating one that arrives" in {
+      val c = MessageContents(2, status = Some(naogateway.proto.Status(teamID = Some(1))))
+      FrameSigning.signEncoded(MessageContents.encodeFrame(c, gzip = true).toOption.get, teamKey, R, 1L).isLeft shouldBe true
+      val zipped = FumanoidsFrame.encodeProtobuf(FrameSigning.sign(c.toProtobuf, teamKey, R, 3L), gzip = true).toOption.get
+      val header = FumanoidsFrame.decodeHeader(zipped).toOption.get
+      FrameSigning.verifyFrame(zipped, header, teamKey, R).map(_.timestamp) shouldBe Right(3L)
+    }
+  }
+
   "The replay window" should {
     "accept only timestamps above the last accepted one, as unsigned numbers" in {
       forAll(Gen.listOf(Arbitrary.arbitrary[Long])) { stamps =>
