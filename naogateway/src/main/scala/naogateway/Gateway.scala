@@ -14,7 +14,7 @@ import org.slf4j.LoggerFactory
 
 import naogateway.link.{Backlog, DatagramWriter, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
-import naogateway.recording.{Decision, Recording, RecordingStats}
+import naogateway.recording.{Decision, Recording, RecordingStats, RobotClockEstimates}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
 
@@ -147,7 +147,9 @@ object Gateway {
             context.log.info("Gateway listening for robots on {}", p.localAddress)
             p
         }
-        val recording = if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder")
+        val clocks = new RobotClockEstimates
+        val recording =
+          if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
         val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
         // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
         val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
@@ -158,7 +160,7 @@ object Gateway {
           "outbox",
           RobotDispatcher
         )
-        val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes)
+        val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
         logic.start()
         if (settings.gameControllerEnabled && replay.isEmpty) {
           context.spawn(
@@ -185,9 +187,14 @@ object Gateway {
         }
       }
 
-  /** Hands the gateway's events to the recording (keep-alives are on the recording's status channels already). */
-  private def recordingEvents(recording: Recording): Behavior[GatewayEvent] = Behaviors.receiveMessage {
-    case _: RobotStatusUpdated => Behaviors.same
+  /**
+   * Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only
+   * brings the robot's clock estimate, with which the recorder dates the robot's Status.
+   */
+  private def recordingEvents(recording: Recording, clocks: RobotClockEstimates): Behavior[GatewayEvent] = Behaviors.receiveMessage {
+    case RobotStatusUpdated(snapshot) =>
+      clocks.update(snapshot.robotId, snapshot.clock)
+      Behaviors.same
     case event =>
       recording.decision(Decision.Published(event))
       Behaviors.same
@@ -289,7 +296,8 @@ object Gateway {
       port: RobotLink,
       outbox: ActorRef[Outbox.Command],
       recording: Recording,
-      routes: AtomicReference[Routing.Table[Inlet]]
+      routes: AtomicReference[Routing.Table[Inlet]],
+      clocks: RobotClockEstimates
   ) {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
     private val rejections = new Rejections
@@ -300,7 +308,7 @@ object Gateway {
     // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
     private var byAddress = Map.empty[InetAddress, Int]
     private var subscribers: Set[ActorRef[GatewayEvent]] =
-      if (recording.enabled) Set(context.spawn(recordingEvents(recording), "recording-events")) else Set.empty
+      if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events")) else Set.empty
     private var rebindable = Set.empty[Int]
     private var gcPackets = 0L
     private var game: Option[GameControlData] = None

@@ -22,18 +22,38 @@ import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedData
 import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
-/** Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's time base (ns since the Unix epoch). */
+/**
+ * Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
+ * as [[naogateway.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
+ */
 trait RobotTimeBase {
 
-  /** The gateway time of robot `robotId`'s clock reading `robotMillis`, once the robot's offset is known. */
+  /** The gateway time of robot `robotId`'s clock reading `robotMillis`, once the robot's clock is estimated. */
   def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long]
 }
 
-/** Robot clocks. */
+/** Robot time bases. */
 object RobotTimeBase {
 
-  /** No robot's offset is known: a `Status` message is published at the time the gateway received it. */
+  /** No robot's clock is known: a `Status` message is published at the time the gateway received it. */
   val Unknown: RobotTimeBase = (_: Int, _: Long) => None
+}
+
+/**
+ * The robots' clock estimates as the robot actors last published them (`RobotSnapshot.clock`), read by the recorder's
+ * thread: one entry per robot actor, replaced at every keep-alive, removed while a robot has no estimate.
+ */
+final class RobotClockEstimates extends RobotTimeBase {
+  private val estimates = new java.util.concurrent.ConcurrentHashMap[Int, ClockEstimate]()
+
+  /** Robot `robotId`'s estimate now. */
+  def update(robotId: Int, estimate: Option[ClockEstimate]): Unit = estimate match {
+    case Some(e) => estimates.put(robotId, e)
+    case None    => estimates.remove(robotId)
+  }
+
+  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long] =
+    Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
 }
 
 /** A gateway decision worth recording, handed over as data and written as JSON by the writer thread. */
@@ -336,7 +356,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         case Right((_, c)) =>
           robotChannels(c.robotId).foreach { ids =>
             c.status.foreach { s =>
-              val published = s.timestamp.flatMap(t => clock.toGatewayNanos(c.robotId, t)).getOrElse(time)
+              // The robot's own time of the keep-alive, on the gateway's clock once the robot's clock is estimated.
+              val robotTime = s.timestamp.orElse(c.robotHealth.flatMap(_.uptimeMs).map(_.toLong & 0xffffffffL))
+              val published = robotTime.flatMap(t => clock.toGatewayNanos(c.robotId, t)).map(epochNanos).getOrElse(time)
               writer.write(ids(0), time, published, s.toByteArray)
             }
             c.robotHealth.foreach(h => writer.write(ids(1), time, time, h.toByteArray))

@@ -39,6 +39,9 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       try {
         f.robot(7)
         f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+        // Until the robot's clock is estimated, and one more keep-alive after it (dated by that estimate).
+        f.awaitEvent(20.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 && snapshot.clock.isDefined => () }
+        f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
         stranger.send(ByteBuffer.wrap(odd), f.addresses.robots)
         val probe = createTestProbe[CallResult]()
         f.connect(7).response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
@@ -70,7 +73,13 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       datagrams.count(d => d.robotID.contains(7) && d.direction == RecordedDirection.RECEIVED) should be > 1
       datagrams.count(d => d.robotID.contains(7) && d.direction == RecordedDirection.SENT && d.port == RecordedPort.ROBOT_PORT) should be >= 1
 
-      val statuses = on(Recording.Topics.status(7)).map(m => Status.parseFrom(m.data))
+      val statusMessages = on(Recording.Topics.status(7))
+      val statuses = statusMessages.map(m => Status.parseFrom(m.data))
+      // Once the robot's clock is estimated, a Status is published at its own time put on the gateway's clock: on
+      // loopback, shortly before the gateway received it.
+      val dated = statusMessages.filter(m => m.publishTime != m.logTime)
+      dated should not be empty
+      dated.foreach(m => math.abs(m.logTime - m.publishTime) should be < 1000000000L)
       statuses should not be empty
       statuses.flatMap(_.teamID).distinct shouldBe Vector(1)
       contents.schemas(channel(Recording.Topics.status(7)).schemaId).name shouldBe "naogateway.proto.Status"
