@@ -115,6 +115,8 @@ lazy val apps = (project in file("apps"))
     },
     // Logs beside the installation, not in the directory the operator happens to start from.
     bashScriptExtraDefines += """addJava "-Dnaogateway.log.dir=${app_home}/../logs"""",
+    // Recordings likewise, unless the operator names a directory.
+    bashScriptExtraDefines += """[ -n "$NAOGATEWAY_RECORDING_DIR" ] || export NAOGATEWAY_RECORDING_DIR="${app_home}/../recordings"""",
     // robotctl is a short-lived socket client: the quick compiler tier and the serial collector start it faster.
     bashScriptExtraDefines += """case " $* " in *" -main apps.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; esac""",
     terminalEnv,

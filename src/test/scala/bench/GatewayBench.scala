@@ -45,6 +45,10 @@ import naogateway.wire.{MessageContents, RpcCall}
  *    address) at the robot port; counted are the keep-alives the robot actors handled (their RobotStatusUpdated
  *    events), not merely received datagrams. `raw_udp_ingest_datagrams_s`: one thread's blocking receive loop fed
  *    the same way. On two cores the sending thread takes about one of them in both runs.
+ *  - `recording_ingest_datagrams_s`: `ingest_datagrams_s` with `naogateway.recording` on (every datagram, each
+ *    keep-alive's Status and the decisions into MCAP files in a temporary directory, deleted afterwards);
+ *    `recording_ingest_ratio` = that ÷ the mean of `ingest_datagrams_s` and a second run without recording after it
+ *    (goal ≥ 0.9).
  *  - `heartbeat_detect_ms`: from a partition of the robot's link (LossyNetwork) to RobotOffline, median of
  *    [[DetectTrials]] trials; the cut falls at a random phase of the 200 ms keep-alive period.
  *  - `heartbeat_false_offline_loss20`: RobotOffline events of one robot over 60 s at 20 % loss each way.
@@ -364,7 +368,30 @@ object GatewayBench extends Benchmark {
   private def ingestion(): ListMap[String, Double] = {
     val frames = keepAliveFrames()
     val blastSeconds = IngestWarmupSeconds + IngestSeconds + 0.5
-    val routed = withNodes("ingest") { (gw, sim) =>
+    val routed = routedIngest("ingest", frames, ConfigFactory.empty())
+    // The same blast with recording on: every datagram, each keep-alive's Status, and the decisions into MCAP files.
+    val recordingDir = Files.createTempDirectory("bench-recording")
+    val recorded = routedIngest("ingest-recording", frames, ConfigFactory.parseString(
+      s"""naogateway.recording { enabled = on, directory = "${recordingDir.toString}" }"""))
+    // Off again after it: on a shared machine the load drifts, so the ratio is taken against the mean of both.
+    val routedAfter = routedIngest("ingest-again", frames, ConfigFactory.empty())
+    val without = (routed + routedAfter) / 2
+    val recordedFiles = Files.list(recordingDir).iterator()
+    var recordedBytes = 0L
+    while (recordedFiles.hasNext) { val f = recordedFiles.next(); recordedBytes += Files.size(f); Files.delete(f) }
+    Files.delete(recordingDir)
+    progress(f"ingest with recording: ${recorded}%.0f/s against ${routed}%.0f/s and ${routedAfter}%.0f/s without " +
+      f"(ratio ${recorded / without}%.3f), " +
+      f"${recordedBytes / 1e6}%.1f MB recorded")
+    val raw = rawIngest(frames, blastSeconds)
+    ListMap("ingest_datagrams_s" -> routed, "raw_udp_ingest_datagrams_s" -> raw,
+      "recording_ingest_datagrams_s" -> recorded, "recording_ingest_ratio" -> recorded / without)
+  }
+
+  /** Keep-alives the robot actors handled per second under the blast, with `gatewayConfig` over the defaults. */
+  private def routedIngest(tag: String, frames: Array[Array[Byte]], gatewayConfig: Config): Double = {
+    val blastSeconds = IngestWarmupSeconds + IngestSeconds + 0.5
+    withNodes(tag, gatewayConfig) { (gw, sim) =>
       val blaster = new Blaster(gw.addresses.robots, frames)
       try {
         blaster.introduce()
@@ -385,45 +412,47 @@ object GatewayBench extends Benchmark {
         val sentRate = (blaster.sent.get - sentAtStart) / blastSeconds
         val after = gw.stats()
         val waited = (System.nanoTime() - start) / 1e9 - blastSeconds
-        progress(f"ingest: sent ${sentRate}%.0f/s, routed ${rate}%.0f/s ($counted keep-alives in ${IngestSeconds}%.0f s); " +
+        progress(f"$tag: sent ${sentRate}%.0f/s, routed ${rate}%.0f/s ($counted keep-alives in ${IngestSeconds}%.0f s); " +
           f"gateway actor had taken ${after.datagramsIn - before.datagramsIn} datagrams ${waited}%.1f s after the blast, " +
-          s"rejected ${after.rejected.values.sum - before.rejected.values.sum}, status events so far ${sim.sink.statusUpdates.get}")
+          s"rejected ${after.rejected.values.sum - before.rejected.values.sum}, status events so far ${sim.sink.statusUpdates.get}" +
+          (if (after.recording.enabled) s"; recording: ${after.recording.messages} messages, ${after.recording.dropped} dropped" else ""))
         rate
       } finally blaster.close()
     }
-    val raw = {
-      val receiver = DatagramChannel.open().bind(anyLoopbackPort)
-      // The same receive buffer the gateway's robot link asks for.
-      receiver.setOption[Integer](StandardSocketOptions.SO_RCVBUF, 4 * 1024 * 1024)
-      val watchdog = closeAfter(60.seconds, receiver)
-      val received = new AtomicLong
-      val loop = new Thread(() => {
-        val buffer = ByteBuffer.allocateDirect(2048)
-        try {
-          while (receiver.isOpen) {
-            buffer.clear()
-            if (receiver.receive(buffer) != null) received.lazySet(received.get + 1)
-          }
-        } catch { case _: ClosedChannelException => () }
-      }, "raw-udp-receiver")
-      loop.setDaemon(true)
-      loop.start()
-      val blaster = new Blaster(receiver.getLocalAddress.asInstanceOf[InetSocketAddress], frames)
+  }
+
+  /** One thread's plain receive loop under the same blast: the floor. */
+  private def rawIngest(frames: Array[Array[Byte]], blastSeconds: Double): Double = {
+    val receiver = DatagramChannel.open().bind(anyLoopbackPort)
+    // The same receive buffer the gateway's robot link asks for.
+    receiver.setOption[Integer](StandardSocketOptions.SO_RCVBUF, 4 * 1024 * 1024)
+    val watchdog = closeAfter(60.seconds, receiver)
+    val received = new AtomicLong
+    val loop = new Thread(() => {
+      val buffer = ByteBuffer.allocateDirect(2048)
       try {
-        val start = System.nanoTime()
-        val thread = blaster.blast(blastSeconds)
-        val (rate, counted) = windowRate(start, () => received.get)
-        thread.join()
-        progress(f"raw udp ingest: sent ${blaster.sent.get / blastSeconds}%.0f/s, received ${rate}%.0f/s ($counted in ${IngestSeconds}%.0f s)")
-        rate
-      } finally {
-        blaster.close()
-        receiver.close()
-        loop.join(5000)
-        watchdog.shutdownNow()
-      }
+        while (receiver.isOpen) {
+          buffer.clear()
+          if (receiver.receive(buffer) != null) received.lazySet(received.get + 1)
+        }
+      } catch { case _: ClosedChannelException => () }
+    }, "raw-udp-receiver")
+    loop.setDaemon(true)
+    loop.start()
+    val blaster = new Blaster(receiver.getLocalAddress.asInstanceOf[InetSocketAddress], frames)
+    try {
+      val start = System.nanoTime()
+      val thread = blaster.blast(blastSeconds)
+      val (rate, counted) = windowRate(start, () => received.get)
+      thread.join()
+      progress(f"raw udp ingest: sent ${blaster.sent.get / blastSeconds}%.0f/s, received ${rate}%.0f/s ($counted in ${IngestSeconds}%.0f s)")
+      rate
+    } finally {
+      blaster.close()
+      receiver.close()
+      loop.join(5000)
+      watchdog.shutdownNow()
     }
-    ListMap("ingest_datagrams_s" -> routed, "raw_udp_ingest_datagrams_s" -> raw)
   }
 
   // ---------------------------------------------------------------------------------------------- heartbeat
@@ -647,8 +676,8 @@ object GatewayBench extends Benchmark {
   )
 
   /** A gateway as the guardian of its own actor system. */
-  private final class GatewayNode(systemName: String) {
-    private val config = nodeConfig
+  private final class GatewayNode(systemName: String, extra: Config = ConfigFactory.empty()) {
+    private val config = extra.withFallback(nodeConfig)
     val system: ActorSystem[Gateway.Command] =
       ActorSystem(Gateway(GatewaySettings.fromConfig(config.getConfig("naogateway"))), systemName, config)
     private implicit val scheduler: Scheduler = system.scheduler
@@ -687,10 +716,10 @@ object GatewayBench extends Benchmark {
   }
 
   /** A gateway subscribed to the events sink of a robots' node; both stop afterwards. */
-  private def withNodes[T](tag: String)(body: (GatewayNode, SimNode) => T): T = {
+  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty())(body: (GatewayNode, SimNode) => T): T = {
     val sim = new SimNode(s"sim-$tag")
     try {
-      val gw = new GatewayNode(s"gw-$tag")
+      val gw = new GatewayNode(s"gw-$tag", gatewayConfig)
       try {
         gw.subscribe(sim.sinkRef)
         body(gw, sim)

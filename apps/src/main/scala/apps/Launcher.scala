@@ -2,6 +2,7 @@ package apps
 
 import java.io.File
 import java.net.InetSocketAddress
+import java.nio.file.Paths
 
 import scala.concurrent.duration._
 import scala.jdk.DurationConverters._
@@ -13,6 +14,7 @@ import akka.actor.typed.{ActorSystem, Behavior}
 import com.typesafe.config.{Config, ConfigFactory}
 
 import naogateway._
+import naogateway.link.Replay
 import naogateway.sim.{Fleet, FleetSettings}
 import robotmiddleware.cluster.MiddlewareCluster
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotMiddleware}
@@ -40,20 +42,51 @@ object Launcher {
     file.getOrElse(ConfigFactory.empty()).withFallback(ConfigFactory.parseResources("launcher.conf"))
   }
 
+  /** The command line: an optional config file, and a recording to replay instead of the sockets. */
+  final case class Arguments(configFile: Option[String], replay: Option[Replay])
+
+  /**
+   * `[config-file] [--replay FILE-OR-DIRECTORY [--speed X]]`, in any order. A replay runs no simulated robot and no
+   * simulated GameController: the recording's robots and game are what the gateway sees.
+   */
+  def arguments(args: Seq[String]): Arguments = {
+    def loop(rest: List[String], got: Arguments, speed: Option[Double]): Arguments = rest match {
+      case "--replay" :: path :: more => loop(more, got.copy(replay = Some(Replay.of(Paths.get(path)))), speed)
+      case "--speed" :: x :: more =>
+        val v = x.toDoubleOption.getOrElse(throw new IllegalArgumentException(s"--speed $x is not a number"))
+        loop(more, got, Some(v))
+      case ("--replay" | "--speed") :: Nil => throw new IllegalArgumentException(s"${rest.head} needs a value")
+      case flag :: _ if flag.startsWith("--") => throw new IllegalArgumentException(s"unknown option $flag")
+      case file :: more if got.configFile.isEmpty => loop(more, got.copy(configFile = Some(file)), speed)
+      case extra :: _ => throw new IllegalArgumentException(s"one config file only (also got $extra)")
+      case Nil =>
+        require(speed.isEmpty || got.replay.isDefined, "--speed goes with --replay")
+        got.copy(replay = got.replay.map(r => speed.fold(r)(v => r.copy(speed = v))))
+    }
+    loop(args.toList, Arguments(None, None), None)
+  }
+
+  /** What a replay changes in the launcher's config: no simulated robots, no simulated GameController. */
+  private val ReplayOverrides: Config =
+    ConfigFactory.parseString("apps.launcher { simulated-robots = 0, game-controller = off }")
+
   def main(args: Array[String]): Unit = {
     // Logback is set up before the actor systems' threads log at once; otherwise SLF4J queues their first lines and
     // prints a warning about replaying them on every start.
     org.slf4j.LoggerFactory.getILoggerFactory
-    val overrides =
-      try config(args.toSeq)
-      catch {
+    val (parsed, overrides) =
+      try {
+        val a = arguments(args.toSeq)
+        val c = config(a.configFile.toSeq)
+        (a, if (a.replay.isDefined) ReplayOverrides.withFallback(c) else c)
+      } catch {
         // A wrong file name or a typo in the file is the operator's to fix: say what and where, without a stack trace.
         case e @ (_: IllegalArgumentException | _: com.typesafe.config.ConfigException) =>
           System.err.println(s"naogateway: ${e.getMessage.stripPrefix("requirement failed: ")}")
-          System.err.println("usage: naogateway [config-file]   (no file: the demo with simulated robots)")
+          System.err.println("usage: naogateway [config-file] [--replay FILE-OR-DIRECTORY [--speed X]]   (no file: the demo with simulated robots)")
           sys.exit(2)
       }
-    val gatewayNode = MiddlewareCluster.start(Root(), MiddlewareCluster.GatewayRole, overrides)
+    val gatewayNode = MiddlewareCluster.start(Root(parsed.replay), MiddlewareCluster.GatewayRole, overrides)
     // Ctrl-C (or a TERM) runs the JVM shutdown hooks: both actor systems leave and stop within the phase timeouts.
     CoordinatedShutdown(gatewayNode.classicSystem).addJvmShutdownHook(println("naogateway stopped"))
   }
@@ -71,11 +104,11 @@ object Launcher {
   private final case class Addresses(addresses: Gateway.Addresses) extends Command
   private final case class FleetStarted(result: scala.util.Try[naogateway.sim.FleetHandle]) extends Command
 
-  /** The gateway node's root: gateway, middleware, simulated robots, status view, and the app node. */
-  def Root(): Behavior[Command] = Behaviors.setup { context =>
+  /** The gateway node's root: gateway (on its sockets, or replaying), middleware, simulated robots, status view, app node. */
+  def Root(replay: Option[Replay] = None): Behavior[Command] = Behaviors.setup { context =>
     val config = context.system.settings.config
     val launcher = settings(config.getConfig("apps.launcher"))
-    val gateway = context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots)), "gateway")
+    val gateway = context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots), replay), "gateway")
     val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(gateway))

@@ -20,6 +20,7 @@ object StatusPrinter {
   private final case class Game(game: Option[GameControlData]) extends Command
   private final case class Source(source: Gateway.GameSource) extends Command
   private final case class Links(links: Gateway.RobotLinks) extends Command
+  private final case class Stats(stats: Gateway.GatewayStats) extends Command
 
   /** How the status is shown: chosen from the terminal (`Auto`), or forced. */
   sealed trait ViewMode extends Product with Serializable
@@ -111,6 +112,7 @@ object StatusPrinter {
         val trafficAdapter = context.messageAdapter(Traffic.apply)
         val gameAdapter = context.messageAdapter(Game.apply)
         val sourceAdapter = context.messageAdapter(Source.apply)
+        val statsAdapter = context.messageAdapter(Stats.apply)
 
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
           case screen: ScreenOutput => screen.draw(StatusView.render(model))
@@ -125,12 +127,14 @@ object StatusPrinter {
               gateway ! Gateway.GetTraffic(trafficAdapter)
               gateway ! Gateway.GetGameState(gameAdapter)
               gateway ! Gateway.GetGameSource(sourceAdapter)
+              gateway ! Gateway.GetStats(statsAdapter)
               show(shown, model)
               running(model, model)
             case Robots(robots) => running(model.copy(robots = robots), shown)
             case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown)
             case Game(game)     => running(model.copy(game = game), shown)
             case Source(source) => running(model.copy(gameSource = Some(source)), shown)
+            case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown)
             // The link figures of robots the gateway no longer knows are dropped with them.
             case Links(l)       => running(model.copy(links = l.links.map(s => s.robotId -> s).toMap), shown)
           }.receiveSignal { case (_, PostStop) =>

@@ -9,7 +9,8 @@ final case class StatusModel(
     links: Map[Int, LinkStats],
     traffic: Option[Outbox.TrafficStats],
     game: Option[GameControlData],
-    gameSource: Option[naogateway.Gateway.GameSource] = None
+    gameSource: Option[naogateway.Gateway.GameSource] = None,
+    gateway: Option[naogateway.Gateway.GatewayStats] = None
 )
 
 /** Constructors of status models. */
@@ -80,12 +81,23 @@ object StatusView {
       (if (t.dropped > 0) s", ${t.dropped} dropped" else "")
   }
 
+  /** The recording's figures (docs/recording.md), or the replay's; nothing when neither runs. */
+  def recordingLine(stats: Option[naogateway.Gateway.GatewayStats]): Option[String] = stats.flatMap { g =>
+    g.replay.map { r =>
+      s"replay: ${r.fed} datagrams fed, ${r.discarded} outbound discarded" + (if (r.finished) ", finished" else "")
+    }.orElse(Option.when(g.recording.enabled) {
+      val r = g.recording
+      s"recording: ${r.messages} messages in ${r.files} file(s), ${r.dropped} dropped" +
+        (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f => s", now ${f.split('/').last}")
+    })
+  }
+
   /** The full screen for a terminal. */
   def render(model: StatusModel): Vector[String] = {
     val online = model.robots.count(_.online)
     Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game)) ++
       model.gameSource.map(_.describe).toVector ++ Vector(gateLine(model.traffic),
-      trafficLine(model.traffic), "") ++
+      trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
       model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ Vector("", "Ctrl-C stops everything.")
   }
 

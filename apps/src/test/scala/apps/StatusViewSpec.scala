@@ -38,6 +38,20 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       val offline = first.copy(robots = Vector(sitting.copy(online = false)))
       StatusView.changes(first, offline).head should include("offline")
     }
+    "show the recording's figures or the replay's progress on the screen, and nothing when neither runs" in {
+      val plain = naogateway.Gateway.GatewayStats(10, 0, 0, Map.empty, 1)
+      StatusView.recordingLine(None) shouldBe None
+      StatusView.recordingLine(Some(plain)) shouldBe None
+      val recording = plain.copy(recording = naogateway.recording.RecordingStats(enabled = true, 2, 1234, 5, 0,
+        Some("/var/naogateway/recordings/naogateway-20260101-120000-2.mcap")))
+      StatusView.recordingLine(Some(recording)) shouldBe
+        Some("recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
+      val replay = plain.copy(replay = Some(naogateway.link.Replay.Progress(300, 7, finished = true)))
+      StatusView.recordingLine(Some(replay)) shouldBe Some("replay: 300 datagrams fed, 7 outbound discarded, finished")
+      StatusView.render(StatusModel.empty.copy(gateway = Some(recording))) should contain(
+        "recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
+    }
+
     "render a screen with the game, the competition gate and the team's traffic against the budget" in {
       val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, Some(traffic), None))
       screen.head shouldBe "naogateway - 1 robot(s), 1 online"

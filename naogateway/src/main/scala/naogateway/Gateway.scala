@@ -12,7 +12,9 @@ import scala.reflect.ClassTag
 
 import org.slf4j.LoggerFactory
 
-import naogateway.link.{Backlog, RobotPort, UdpLink}
+import naogateway.link.{Backlog, DatagramWriter, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
+import naogateway.proto.RecordedPort
+import naogateway.recording.{Decision, Recording, RecordingStats, RobotClockEstimates}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
 
@@ -93,7 +95,8 @@ object Gateway {
    * address (at most [[RejectionAddresses]] of them, the rest under "other addresses").
    */
   final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int,
-      rejectedBySource: Map[String, Long] = Map.empty)
+      rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = Recording.Off.stats,
+      replay: Option[Replay.Progress] = None)
 
   /** How long `GetRobots` waits for each robot actor; one that does not answer in time is listed as not reached. */
   val SnapshotTimeout: FiniteDuration = 1.second
@@ -127,26 +130,43 @@ object Gateway {
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
       backlog: Backlog, signatures: Option[SignatureCheck] = None, discovered: Boolean = false)
 
-  /** The gateway with `settings`. */
-  def apply(settings: GatewaySettings): Behavior[Command] =
+  /**
+   * The gateway with `configured` settings, on its sockets; or, with `replay`, fed from a recording instead: no socket
+   * is opened, nothing is sent anywhere, nothing is recorded.
+   */
+  def apply(configured: GatewaySettings, replay: Option[Replay] = None): Behavior[Command] =
     Behaviors.setup { context =>
+      // A replay reaches no robot: ZeroMQ robots, which would be called over their own sockets, are left out.
+      val settings = if (replay.isEmpty) configured else configured.copy(zeromq = configured.zeromq.copy(robots = Vector.empty))
       Behaviors.withStash(1024) { stash =>
         val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
-        val port =
-          try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
-          catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
-        context.log.info("Gateway listening for robots on {}", port.localAddress)
+        val port: RobotLink = replay match {
+          case Some(r) =>
+            context.log.info("Gateway replaying {} at {}x: nothing is sent", r.files.mkString(", "), r.speed)
+            new ReplayLink(r, s"${context.system.name}-replay")
+          case None =>
+            val p =
+              try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
+              catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
+            context.log.info("Gateway listening for robots on {}", p.localAddress)
+            p
+        }
+        val clocks = new RobotClockEstimates
+        val recording =
+          if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
+        val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
         // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
         val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
         val outbox = context.spawn(
-          Behaviors.supervise(Outbox(port, settings.budget, settings.competition, signer))
+          Behaviors.supervise(Outbox(recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
+            settings.competition, signer, recording))
             .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
           "outbox",
           RobotDispatcher
         )
-        val logic = new GatewayLogic(settings, context, stash, port, outbox)
+        val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
         logic.start()
-        if (settings.gameControllerEnabled) {
+        if (settings.gameControllerEnabled && replay.isEmpty) {
           context.spawn(
             UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
               context.messageAdapter(GameControllerEvent.apply),
@@ -157,6 +177,32 @@ object Gateway {
         } else stash.unstashAll(logic.running(Addresses(port.localAddress, None)))
       }
     }
+
+  /** `link`, with every datagram it takes recorded as sent from `local` on `port` (`link` itself when not recording). */
+  private def recorded(link: DatagramWriter, recording: Recording, port: RecordedPort, local: InetSocketAddress,
+      routes: AtomicReference[Routing.Table[Inlet]]): DatagramWriter =
+    if (!recording.enabled) link
+    else
+      new DatagramWriter {
+        def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = {
+          val sent = link.send(bytes, to)
+          if (sent) recording.datagram(port, received = false, local, to, bytes, routes.get.byAddress.get(to.getAddress).fold(-1)(_.robotId))
+          sent
+        }
+      }
+
+  /**
+   * Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only
+   * brings the robot's clock estimate, with which the recorder dates the robot's Status.
+   */
+  private def recordingEvents(recording: Recording, clocks: RobotClockEstimates): Behavior[GatewayEvent] = Behaviors.receiveMessage {
+    case RobotStatusUpdated(snapshot) =>
+      clocks.update(snapshot.robotId, snapshot.clock)
+      Behaviors.same
+    case event =>
+      recording.decision(Decision.Published(event))
+      Behaviors.same
+  }
 
   /** The kernel receive buffer of the robot port: a burst of a few thousand datagrams waits there, not dropped. */
   private val ReceiveBufferBytes = 4 * 1024 * 1024
@@ -198,27 +244,33 @@ object Gateway {
    */
   private final class PortReader(
       settings: GatewaySettings,
-      port: RobotPort,
-      gateway: ActorRef[Unrouted],
+      port: RobotLink,
+      gateway: ActorRef[Command],
       gatewayBacklog: Backlog,
       outbox: ActorRef[Outbox.Command],
-      rejections: Rejections
+      rejections: Rejections,
+      recording: Recording,
+      val routes: AtomicReference[Routing.Table[Inlet]]
   ) extends RobotPort.Handler {
-    val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
     // Written by the reader thread only; read by the gateway for its figures.
     @volatile var datagramsIn, relayed = 0L
     // What the outbox has not been told yet: told in one message per InboundBatch datagrams or when the port is quiet.
     private var inboundDatagrams, inboundBytes = 0
+    private val relayLink = recorded(port, recording, RecordedPort.FU_REMOTE_RELAY, port.localAddress, routes)
 
     def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
       datagramsIn += 1
+      val table = routes.get
+      if (recording.enabled) {
+        val robotId = table.byAddress.get(from.getAddress).fold(-1)(_.robotId)
+        recording.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
+      }
       settings.relay.foreach { relay =>
-        if (port.send(bytes, relay)) relayed += 1
+        if (relayLink.send(bytes, relay)) relayed += 1
       }
       inboundDatagrams += 1
       inboundBytes += bytes.length
       if (inboundDatagrams >= InboundBatch) caughtUp()
-      val table = routes.get
       Routing.decide(table, bytes, from) match {
         case Routing.ToRobot(route, header, contents, size) =>
           // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
@@ -247,23 +299,31 @@ object Gateway {
         inboundDatagrams = 0
         inboundBytes = 0
       }
+
+    def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit =
+      gateway ! GameControllerEvent(UdpLink.Received(bytes, from))
   }
 
   private final class GatewayLogic(
       settings: GatewaySettings,
       context: ActorContext[Command],
       stash: StashBuffer[Command],
-      port: RobotPort,
-      outbox: ActorRef[Outbox.Command]
+      port: RobotLink,
+      outbox: ActorRef[Outbox.Command],
+      recording: Recording,
+      routes: AtomicReference[Routing.Table[Inlet]],
+      clocks: RobotClockEstimates
   ) {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
     private val rejections = new Rejections
     private val gatewayBacklog = new Backlog(GatewayBacklog)
-    private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections)
+    private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
+    private var gameControllerAddress: Option[InetSocketAddress] = None
     private var byId = Map.empty[Int, Entry]
     // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
     private var byAddress = Map.empty[InetAddress, Int]
-    private var subscribers = Set.empty[ActorRef[GatewayEvent]]
+    private var subscribers: Set[ActorRef[GatewayEvent]] =
+      if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events")) else Set.empty
     private var rebindable = Set.empty[Int]
     private var gcPackets = 0L
     private var game: Option[GameControlData] = None
@@ -282,6 +342,7 @@ object Gateway {
     def bindingGameController: Behavior[Command] = Behaviors.receiveMessage[Command] {
       case GameControllerEvent(UdpLink.Bound(_, gcLocal)) =>
         context.log.info("Gateway listening for the GameController on {}", gcLocal)
+        gameControllerAddress = Some(gcLocal)
         stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
       case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
         context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
@@ -297,12 +358,14 @@ object Gateway {
 
     private def closePort(): Behavior[Command] = {
       port.close()
+      // After the port: nothing more is handed to the recording, and what waits is written before the file closes.
+      recording.close()
       Behaviors.same
     }
 
     /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
-      reader.routes.set(Routing.Table.of(byId.collect {
+      routes.set(Routing.Table.of(byId.collect {
         case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog, e.signatures))
       }))
 
@@ -358,6 +421,14 @@ object Gateway {
     /** Every robot actor learns the new subscriber list: robot events go from them straight to the subscribers. */
     private def subscribersChanged(): Unit = byId.values.foreach(_.actor ! RobotActor.Subscribers(subscribers))
 
+    /** Records a GameController packet (every one, before any check); true, so it can guard the first case. */
+    private def recordGameController(bytes: Array[Byte], from: InetSocketAddress): Boolean = {
+      if (recording.enabled)
+        recording.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, gameControllerAddress.orNull, bytes,
+          byAddress.get(from.getAddress).getOrElse(-1))
+      true
+    }
+
     private def handleUnrouted(u: Unrouted): Unit = {
       gatewayBacklog.done()
       val f = u.frame
@@ -373,7 +444,7 @@ object Gateway {
         case u: Unrouted =>
           handleUnrouted(u)
           Behaviors.same
-        case GameControllerEvent(UdpLink.Received(bytes, _)) if Datagram.isGameControllerReturn(bytes) =>
+        case GameControllerEvent(UdpLink.Received(bytes, from)) if recordGameController(bytes, from) && Datagram.isGameControllerReturn(bytes) =>
           Behaviors.same // robots' answers to the GameController share its port
         case GameControllerEvent(UdpLink.Received(_, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
           // Anyone on the field's WiFi can send a control packet: only the configured GameController steers the gate.
@@ -440,7 +511,8 @@ object Gateway {
           rebindable += robotId
           Behaviors.same
         case GetStats(replyTo) =>
-          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size, rejections.sources)
+          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size, rejections.sources,
+            recording.stats, port match { case r: ReplayLink => Some(r.progress); case _ => None })
           Behaviors.same
         case GetTraffic(replyTo) =>
           outbox ! Outbox.GetStats(replyTo)

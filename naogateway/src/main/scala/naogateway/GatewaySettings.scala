@@ -9,6 +9,7 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
+import naogateway.recording.RecordingSettings
 import naogateway.wire.SigningKey
 import naogateway.wire.stream.StreamSettings
 
@@ -148,7 +149,8 @@ final case class GatewaySettings(
     gameControllerTrusted: TrustedSources = TrustedSources(Vector.empty),
     clockSync: ClockSyncSettings = ClockSyncSettings(),
     signingKey: Option[SigningKey] = None,
-    newSessionKeepAlives: Int = 3
+    newSessionKeepAlives: Int = 3,
+    recording: RecordingSettings = RecordingSettings.Off
 ) {
   require(newSessionKeepAlives >= 1 && newSessionKeepAlives <= 20, "new-session.keep-alives must be between 1 and 20")
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
@@ -259,7 +261,8 @@ object GatewaySettings {
       gameControllerTrusted = trustedSources(gc),
       clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window")),
       signingKey = signingKey(c),
-      newSessionKeepAlives = c.getInt("new-session.keep-alives")
+      newSessionKeepAlives = c.getInt("new-session.keep-alives"),
+      recording = RecordingSettings.fromConfig(c.getConfig("recording"))
     )
   }
 

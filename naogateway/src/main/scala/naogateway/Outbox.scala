@@ -9,6 +9,7 @@ import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.DatagramWriter
+import naogateway.recording.{Decision, Recording}
 import naogateway.wire.{FrameSigning, WireLimits}
 import naogateway.wire.gamecontroller.GameState
 
@@ -108,12 +109,14 @@ object Outbox {
 
   /**
    * An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs;
-   * `signer` signs the frames sent as `signed`.
+   * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
+   * second while sending) go to `recording`.
    */
-  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean, signer: Option[FrameSigner] = None): Behavior[Command] =
+  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean, signer: Option[FrameSigner] = None,
+      recording: Recording = Recording.Off): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        new Outbox(link, budget, competition, signer, timers, context.log).behavior()
+        new Outbox(link, budget, competition, signer, timers, context.log, recording).behavior()
       }
     }
 
@@ -128,7 +131,8 @@ private final class Outbox(
     competition: Boolean,
     signer: Option[FrameSigner],
     timers: TimerScheduler[Outbox.Command],
-    log: org.slf4j.Logger
+    log: org.slf4j.Logger,
+    recording: Recording
 ) {
   import Outbox._
 
@@ -144,6 +148,17 @@ private final class Outbox(
   private var refused = 0L
   private var dropped = 0L
   private var lastWarning = Long.MinValue
+  private var lastBudgetRecord = System.nanoTime() - 2 * Second
+
+  /** The outcome of one datagram, and once a second the budget's state, for the recording. */
+  private def record(now: Long, s: Send, outcome: String): Unit = if (recording.enabled) {
+    recording.decision(Decision.Outgoing(s.robotId, s.priority, outcome, s.bytes))
+    if (now - lastBudgetRecord >= Second) {
+      lastBudgetRecord = now
+      recording.decision(Decision.Budget(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
+        Priority.all.map(p => p.name -> queues(p.rank).size).toMap))
+    }
+  }
 
   private def robotMeter(robotId: Int) = perRobot.getOrElseUpdate(robotId, new TrafficMeter(Second))
 
@@ -204,7 +219,7 @@ private final class Outbox(
       var classHeld = false
       while (q.nonEmpty && !blocked && !classHeld) {
         val (s, rest) = q.dequeue
-        if (allowed(now, s)) { transmit(now, s); q = rest }
+        if (allowed(now, s)) { transmit(now, s); record(now, s, "sent"); q = rest }
         else {
           waiting :+= s
           if (fitsBudget(now, s)) classHeld = true else blocked = true
@@ -224,9 +239,11 @@ private final class Outbox(
       val now = System.nanoTime()
       if (competition && gameIsRunning) {
         refused += 1
+        record(now, s, "refused-by-rule")
         s.replyTo.foreach(_ ! RefusedByRule(s.tag, NoSendingWhileGameRuns))
       } else if (s.signed && (signer.isEmpty || s.size > WireLimits.MaxDatagramBytes)) {
         dropped += 1
+        record(now, s, "dropped")
         s.replyTo.foreach(_ ! Dropped(s.tag,
           if (signer.isEmpty) "the frame must be signed, but the gateway has no signing key"
           else s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"))
@@ -234,16 +251,19 @@ private final class Outbox(
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {
           transmit(now, s)
+          record(now, s, "sent")
           s.replyTo.foreach(_ ! Accepted(s.tag))
         } else if (queues(rank).size >= QueueCapacity) {
           dropped += 1
           droppedByClass(rank) += 1
+          record(now, s, "dropped")
           s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
           // Per class at its 1st, 10th, 100th ... drop: a flood of probes cannot flood the log.
           if (RateLimitedLog.due(droppedByClass(rank)))
             log.warn("Outbox dropped {} datagram(s) so far: {} queue full", droppedByClass(rank), s.priority.name)
         } else {
           queues = queues.updated(rank, queues(rank).enqueue(s))
+          record(now, s, "queued")
           s.replyTo.foreach(_ ! Accepted(s.tag))
           // Safety must not wait for the timer; other classes drain when the budget frees, or at once when only probes
           // held back by their share wait (they must not make the others wait for the timer).
@@ -255,6 +275,10 @@ private final class Outbox(
       drain(System.nanoTime())
       Behaviors.same
     case Withdraw(robotId, tags) =>
+      if (recording.enabled) {
+        val now = System.nanoTime()
+        queues.foreach(_.foreach(q => if (q.robotId == robotId && tags(q.tag)) record(now, q, "withdrawn")))
+      }
       queues = queues.map(_.filterNot(q => q.robotId == robotId && tags(q.tag)))
       Behaviors.same
     case RobotGone(robotId) =>
@@ -266,13 +290,19 @@ private final class Outbox(
       Behaviors.same
     case GameStateChanged(state) =>
       val nowRunning = gameRunning(state)
-      if (competition && nowRunning != gameIsRunning)
+      if (competition && nowRunning != gameIsRunning) {
         log.info("Game state {}: sending to robots {}", state, if (nowRunning) "closed" else "open again")
+        if (recording.enabled) recording.decision(Decision.Gate(open = !nowRunning, state))
+      }
       gameIsRunning = nowRunning
       if (competition && gameIsRunning) {
         // Nothing queued before kick-off may leak out during the game.
         val held = queues.map(_.size).sum
         if (held > 0) log.info("Discarding {} queued datagram(s) at game start", held)
+        if (recording.enabled) {
+          val now = System.nanoTime()
+          queues.foreach(_.foreach(q => record(now, q, "refused-by-rule")))
+        }
         queues.foreach(_.foreach(q => q.replyTo.foreach(_ ! RefusedByRule(q.tag, NoSendingWhileGameRuns))))
         refused += held
         queues = Vector.fill(Priority.all.size)(Queue.empty)

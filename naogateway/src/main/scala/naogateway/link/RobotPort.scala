@@ -20,6 +20,22 @@ trait DatagramWriter {
 }
 
 /**
+ * Where the gateway's robot datagrams come from and go to: the robot port's socket ([[RobotPort]]), or a recording
+ * played back ([[ReplayLink]]). Whatever it is, it hands every datagram to one [[RobotPort.Handler]] on one thread.
+ */
+trait RobotLink extends DatagramWriter {
+
+  /** Where the link receives (the real port when 0 was asked for). */
+  def localAddress: InetSocketAddress
+
+  /** Starts handing datagrams to `handler`; once only. */
+  def start(handler: RobotPort.Handler): Unit
+
+  /** Stops handing datagrams (waiting at most `joinMillis` for the thread) and releases the link; safe to repeat. */
+  def close(joinMillis: Long = 2000L): Unit
+}
+
+/**
  * The gateway's robot UDP port: one non-blocking `DatagramChannel`, read by a dedicated daemon thread and written by
  * whoever holds the port (the outbox, the relay).
  *
@@ -28,7 +44,7 @@ trait DatagramWriter {
  * inside an actor, and hands each datagram to a [[RobotPort.Handler]] (the gateway's routing) on that same thread.
  * Writes need no thread of their own: a non-blocking send either takes the datagram or returns 0 at once.
  */
-final class RobotPort private (channel: DatagramChannel, threadName: String) extends DatagramWriter {
+final class RobotPort private (channel: DatagramChannel, threadName: String) extends RobotLink {
   import RobotPort._
 
   private val selector = Selector.open()
@@ -53,7 +69,7 @@ final class RobotPort private (channel: DatagramChannel, threadName: String) ext
   }
 
   /** Stops the reader (waiting at most `joinMillis` for it) and closes the channel; safe to call more than once. */
-  def close(joinMillis: Long = 2000L): Unit = {
+  def close(joinMillis: Long): Unit = {
     open = false
     try selector.wakeup()
     catch { case NonFatal(_) => () }
@@ -119,6 +135,12 @@ object RobotPort {
 
     /** Nothing more to read for now: the reader is about to wait. */
     def caughtUp(): Unit
+
+    /**
+     * A GameController packet from `from`. The robot port never calls it (the GameController has a socket of its
+     * own); a replayed recording does, so the game states come back through the gateway's usual handling.
+     */
+    def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit
   }
 
   /** The largest UDP payload; a longer datagram cannot arrive. */

@@ -18,6 +18,7 @@ class RobotPortSpec extends AnyWordSpec with Matchers {
     val datagrams = new LinkedBlockingQueue[(Array[Byte], InetSocketAddress, String)]()
     def received(bytes: Array[Byte], from: InetSocketAddress): Unit = datagrams.put((bytes, from, Thread.currentThread().getName))
     def caughtUp(): Unit = ()
+    def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit = ()
     def next(): (Array[Byte], InetSocketAddress, String) =
       Option(datagrams.poll(10, TimeUnit.SECONDS)).getOrElse(fail("no datagram within 10 s"))
   }

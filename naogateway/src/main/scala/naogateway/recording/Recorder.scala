@@ -1,0 +1,433 @@
+package naogateway.recording
+
+import java.io.{BufferedOutputStream, IOException}
+import java.net.InetSocketAddress
+import java.nio.file.{Files, Path, StandardOpenOption}
+import java.time.{Instant, ZoneOffset}
+import java.time.format.DateTimeFormatter
+import java.util.concurrent.ArrayBlockingQueue
+import java.util.concurrent.atomic.AtomicLong
+import java.util.concurrent.locks.LockSupport
+
+import scala.collection.mutable
+import scala.util.control.NonFatal
+
+import com.google.protobuf.ByteString
+import com.google.protobuf.DescriptorProtos.FileDescriptorSet
+import com.google.protobuf.Descriptors.FileDescriptor
+import org.slf4j.LoggerFactory
+
+import naogateway._
+import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedDatagram, RecordedDirection, RecordedPort, RecordingProto, RpcProto}
+import naogateway.wire.gamecontroller.GameState
+import naogateway.wire.{MessageContents, RpcCall, RpcReply}
+
+/**
+ * Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
+ * as [[naogateway.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
+ */
+trait RobotTimeBase {
+
+  /** The gateway time of robot `robotId`'s clock reading `robotMillis`, once the robot's clock is estimated. */
+  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long]
+}
+
+/** Robot time bases. */
+object RobotTimeBase {
+
+  /** No robot's clock is known: a `Status` message is published at the time the gateway received it. */
+  val Unknown: RobotTimeBase = (_: Int, _: Long) => None
+}
+
+/**
+ * The robots' clock estimates as the robot actors last published them (`RobotSnapshot.clock`), read by the recorder's
+ * thread: one entry per robot actor, replaced at every keep-alive, removed while a robot has no estimate.
+ */
+final class RobotClockEstimates extends RobotTimeBase {
+  private val estimates = new java.util.concurrent.ConcurrentHashMap[Int, ClockEstimate]()
+
+  /** Robot `robotId`'s estimate now. */
+  def update(robotId: Int, estimate: Option[ClockEstimate]): Unit = estimate match {
+    case Some(e) => estimates.put(robotId, e)
+    case None    => estimates.remove(robotId)
+  }
+
+  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long] =
+    Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
+}
+
+/** A gateway decision worth recording, handed over as data and written as JSON by the writer thread. */
+sealed trait Decision extends Product with Serializable
+
+/** The decisions. */
+object Decision {
+
+  /** A robot or game event the gateway published (online, offline, restarted, link quality, game state). */
+  final case class Published(event: GatewayEvent) extends Decision
+
+  /** What the outbox did with one datagram for robot `robotId`: `sent`, `queued`, `refused-by-rule`, `dropped`. */
+  final case class Outgoing(robotId: Int, priority: Priority, outcome: String, bytes: Array[Byte]) extends Decision
+
+  /** The competition gate opened or closed on `state`. */
+  final case class Gate(open: Boolean, state: GameState) extends Decision
+
+  /** The team budget's state: bytes each way over the last second, the limit, the queues. */
+  final case class Budget(outBytes: Long, inBytes: Long, limit: Int, queued: Map[String, Int]) extends Decision
+}
+
+/**
+ * What the recorder did so far: files begun, MCAP messages written, entries dropped because its queue was full, and
+ * entries lost because no file could be written.
+ */
+final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long, currentFile: Option[String])
+
+/**
+ * Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
+ * reader thread and the outbox call it on their hot paths.
+ */
+trait Recording {
+
+  /** Whether anything is recorded. */
+  def enabled: Boolean
+
+  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none). */
+  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
+      robotId: Int): Unit
+
+  /** A decision of the gateway. */
+  def decision(decision: Decision): Unit
+
+  /** The figures so far. */
+  def stats: RecordingStats
+
+  /** Writes what waits, closes the file and stops the writer; later entries are ignored. */
+  def close(): Unit
+}
+
+/** Recording on and off. */
+object Recording {
+
+  /** Records nothing. */
+  val Off: Recording = new Recording {
+    def enabled: Boolean = false
+    def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
+        robotId: Int): Unit = ()
+    def decision(decision: Decision): Unit = ()
+    def stats: RecordingStats = RecordingStats(enabled = false, 0, 0, 0, 0, None)
+    def close(): Unit = ()
+  }
+
+  /** A recorder writing to `settings.directory` on a thread named `threadName`, or [[Off]] when not enabled. */
+  def apply(settings: RecordingSettings, threadName: String, clock: RobotTimeBase = RobotTimeBase.Unknown): Recording =
+    if (settings.enabled) new Recorder(settings, threadName, clock) else Off
+
+  /** Topics of a recording (docs/recording.md). */
+  object Topics {
+    val Datagrams: String = "/gateway/datagrams"
+    val Decisions: String = "/gateway/decisions"
+    def status(robotId: Int): String = s"/robot/$robotId/status"
+    def health(robotId: Int): String = s"/robot/$robotId/health"
+    def message(robotId: Int): String = s"/robot/$robotId/message"
+  }
+
+  /** Robots per file that get decoded channels of their own; datagrams of further robot ids are kept raw only. */
+  val MaxRobotChannels: Int = 64
+
+  /** Every .proto file of the project with its imports, dependencies first: the schema data of every channel. */
+  lazy val descriptorSet: Array[Byte] = {
+    val ordered = mutable.LinkedHashMap.empty[String, FileDescriptor]
+    def add(f: FileDescriptor): Unit = if (!ordered.contains(f.getName)) {
+      f.getDependencies.forEach(d => add(d))
+      ordered(f.getName) = f
+    }
+    Seq(MessageProto.javaDescriptor, DebuggingProto.javaDescriptor, HavimoProto.javaDescriptor, RpcProto.javaDescriptor,
+      RecordingProto.javaDescriptor).foreach(add)
+    val set = FileDescriptorSet.newBuilder()
+    ordered.values.foreach(f => set.addFile(f.toProto))
+    set.build().toByteArray
+  }
+}
+
+/** One queued entry; `nanoTime` is `System.nanoTime` when it was handed over. */
+private[recording] sealed trait Entry { def nanoTime: Long }
+private[recording] final case class DatagramEntry(nanoTime: Long, port: RecordedPort, received: Boolean, source: InetSocketAddress,
+    destination: InetSocketAddress, bytes: Array[Byte], robotId: Int) extends Entry
+private[recording] final case class DecisionEntry(nanoTime: Long, decision: Decision) extends Entry
+
+/**
+ * The recorder: a bounded queue that the gateway's threads only offer to, and one writer thread of its own that
+ * drains it into MCAP files (decoding robot messages on the way, off the hot paths), rotating them by size and age.
+ * A full queue drops the entry and counts it ([[RecordingStats.dropped]]). A file that cannot be written is closed;
+ * entries are dropped (counted as failed) until a new file can be opened, tried every 5 s.
+ */
+final class Recorder(settings: RecordingSettings, threadName: String, clock: RobotTimeBase) extends Recording {
+  import Recording._
+
+  private val log = LoggerFactory.getLogger(classOf[Recorder])
+  private val queue = new ArrayBlockingQueue[Entry](settings.queueCapacity)
+  private val droppedCount = new AtomicLong
+  private val failedCount = new AtomicLong
+  private val messageCount = new AtomicLong
+  private val fileCount = new AtomicLong
+  @volatile private var current: Option[String] = None
+  @volatile private var running = true
+  // Wall-clock time of a nanoTime: one anchor, so times within a run never go backwards.
+  private val epochAnchor = System.currentTimeMillis() * 1000000L
+  private val nanoAnchor = System.nanoTime()
+  private val thread = new Thread(() => writeLoop(), threadName)
+  thread.setDaemon(true)
+
+  def enabled: Boolean = true
+
+  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
+      robotId: Int): Unit =
+    offer(DatagramEntry(System.nanoTime(), port, received, source, destination, bytes, robotId))
+
+  def decision(decision: Decision): Unit = offer(DecisionEntry(System.nanoTime(), decision))
+
+  private def offer(e: Entry): Unit =
+    if (running && !queue.offer(e)) {
+      val n = droppedCount.incrementAndGet()
+      if (RateLimitedLog.due(n)) log.warn("Recording dropped {} entries so far: the writer is behind (queue of {})", n, settings.queueCapacity)
+    }
+
+  def stats: RecordingStats =
+    RecordingStats(enabled = true, fileCount.get, messageCount.get, droppedCount.get, failedCount.get, current)
+
+  def close(): Unit = {
+    running = false
+    LockSupport.unpark(thread)
+    if (thread ne Thread.currentThread()) thread.join(5000)
+  }
+
+  private def epochNanos(nanoTime: Long): Long = epochAnchor + (nanoTime - nanoAnchor)
+
+  // ------------------------------------------------------------------------------------------- the writer thread
+
+  private var file: Option[FileWriter] = None
+  private var nextAttempt = Long.MinValue
+  private val batch = new java.util.ArrayList[Entry](1024)
+
+  private def writeLoop(): Unit = {
+    try {
+      while (running || !queue.isEmpty) {
+        batch.clear()
+        queue.drainTo(batch, 1024)
+        val now = System.nanoTime()
+        file.foreach(f => if (f.due(now)) rotate() else if (f.flushDue(now)) flush(f, now))
+        if (batch.isEmpty) {
+          // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
+          if (running) LockSupport.parkNanos(2000000L)
+        } else {
+          var i = 0
+          while (i < batch.size) { write(batch.get(i)); i += 1 }
+        }
+      }
+    } catch { case NonFatal(e) => log.error("Recording stopped: the writer failed", e) }
+    finally finish()
+  }
+
+  private def finish(): Unit = {
+    file.foreach(f => closeQuietly(f))
+    file = None
+    current = None
+  }
+
+  private def rotate(): Unit = {
+    file.foreach(closeQuietly)
+    file = None
+    current = None
+  }
+
+  private val FlushNanos = 1000000000L
+
+  private def flush(f: FileWriter, now: Long): Unit = {
+    f.flushedAt = now
+    try f.writer.flush()
+    catch {
+      case ex: IOException =>
+        failedCount.incrementAndGet()
+        log.error(s"Recording: writing ${f.path} failed; a new file in 5 s", ex)
+        closeQuietly(f)
+        file = None
+        current = None
+        nextAttempt = System.nanoTime() + 5000000000L
+    }
+  }
+
+  private def closeQuietly(f: FileWriter): Unit =
+    try f.close()
+    catch { case e: IOException => log.error(s"Recording: could not close ${f.path}", e) }
+
+  private def write(e: Entry): Unit = {
+    if (file.isEmpty && System.nanoTime() >= nextAttempt) open()
+    file match {
+      case Some(f) =>
+        try {
+          val before = f.writer.messages
+          f.write(e)
+          messageCount.addAndGet(f.writer.messages - before)
+          if (f.writer.size >= settings.rotateBytes) rotate()
+        } catch {
+          case ex: IOException =>
+            failedCount.incrementAndGet()
+            log.error(s"Recording: writing ${f.path} failed; a new file in 5 s", ex)
+            closeQuietly(f)
+            file = None
+            current = None
+            nextAttempt = System.nanoTime() + 5000000000L
+        }
+      case None =>
+        failedCount.incrementAndGet()
+    }
+  }
+
+  private def open(): Unit = {
+    val name = s"naogateway-${FileTime.format(Instant.now())}-${fileCount.get + 1}.mcap"
+    val path = settings.directory.resolve(name)
+    try {
+      Files.createDirectories(settings.directory)
+      val out = new BufferedOutputStream(Files.newOutputStream(path, StandardOpenOption.CREATE_NEW, StandardOpenOption.WRITE), 256 * 1024)
+      file = Some(new FileWriter(path, new McapWriter(out, "", "naogateway recording"), System.nanoTime()))
+      fileCount.incrementAndGet()
+      current = Some(path.toString)
+      log.info("Recording to {}", path)
+    } catch {
+      case e: IOException =>
+        log.error(s"Recording: cannot open $path; trying again in 5 s", e)
+        nextAttempt = System.nanoTime() + 5000000000L
+    }
+  }
+
+  private val FileTime = DateTimeFormatter.ofPattern("yyyyMMdd-HHmmss").withZone(ZoneOffset.UTC)
+
+  // Last in the constructor: the writer thread reads the fields above.
+  thread.start()
+
+  /** One open file with its channels. */
+  private final class FileWriter(val path: Path, val writer: McapWriter, openedAt: Long) {
+    private val schema = writer.addSchema("naogateway.proto.RecordedDatagram", "protobuf", descriptorSet)
+    private val datagrams = writer.addChannel(Topics.Datagrams, "protobuf", schema)
+    private val decisions = writer.addChannel(Topics.Decisions, "json", 0)
+    private val statusSchema = writer.addSchema("naogateway.proto.Status", "protobuf", descriptorSet)
+    private val healthSchema = writer.addSchema("naogateway.proto.RobotHealth", "protobuf", descriptorSet)
+    private val messageSchema = writer.addSchema("naogateway.proto.Message", "protobuf", descriptorSet)
+    // Per robot id: its status, health and message channels, made when first needed; at most MaxRobotChannels robots.
+    private val robots = mutable.Map.empty[Int, Array[Int]]
+
+    def due(now: Long): Boolean = now - openedAt >= settings.rotateInterval.toNanos
+
+    // A crash loses at most the last second: the chunk being filled is written out at least once a second.
+    var flushedAt: Long = openedAt
+    def flushDue(now: Long): Boolean = now - flushedAt >= FlushNanos
+
+    def close(): Unit = writer.close()
+
+    private def robotChannels(robotId: Int): Option[Array[Int]] =
+      robots.get(robotId).orElse {
+        if (robots.size >= MaxRobotChannels) None
+        else {
+          val ids = Array(
+            writer.addChannel(Topics.status(robotId), "protobuf", statusSchema, Map("robotID" -> robotId.toString)),
+            writer.addChannel(Topics.health(robotId), "protobuf", healthSchema, Map("robotID" -> robotId.toString)),
+            writer.addChannel(Topics.message(robotId), "protobuf", messageSchema, Map("robotID" -> robotId.toString))
+          )
+          robots(robotId) = ids
+          Some(ids)
+        }
+      }
+
+    def write(e: Entry): Unit = {
+      val time = epochNanos(e.nanoTime)
+      e match {
+        case d: DatagramEntry =>
+          val record = RecordedDatagram(d.port, if (d.received) RecordedDirection.RECEIVED else RecordedDirection.SENT,
+            address(d.source), address(d.destination), ByteString.copyFrom(d.bytes), if (d.robotId >= 0) Some(d.robotId) else None)
+          writer.write(datagrams, time, time, record.toByteArray)
+          if (d.port == RecordedPort.ROBOT_PORT && d.received) decoded(d, time)
+        case DecisionEntry(_, decision) =>
+          writer.write(decisions, time, time, Json.of(decision, time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
+      }
+    }
+
+    /** A robot's frame on its decoded channels, and a reply as a decision of its own. */
+    private def decoded(d: DatagramEntry, time: Long): Unit =
+      MessageContents.decodeFrame(d.bytes) match {
+        case Right((_, c)) =>
+          robotChannels(c.robotId).foreach { ids =>
+            c.status.foreach { s =>
+              // The robot's own time of the keep-alive, on the gateway's clock once the robot's clock is estimated.
+              val robotTime = s.timestamp.orElse(c.robotHealth.flatMap(_.uptimeMs).map(_.toLong & 0xffffffffL))
+              val published = robotTime.flatMap(t => clock.toGatewayNanos(c.robotId, t)).map(epochNanos).getOrElse(time)
+              writer.write(ids(0), time, published, s.toByteArray)
+            }
+            c.robotHealth.foreach(h => writer.write(ids(1), time, time, h.toByteArray))
+            if (c.copy(status = None, robotHealth = None) != MessageContents(c.robotId)) writer.write(ids(2), time, time, c.toProtobuf)
+          }
+          c.rpcResponse.foreach { r =>
+            writer.write(decisions, time, time, Json.reply(c.robotId, RpcReply.fromProto(r), time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
+          }
+        case Left(_) => () // kept raw; the gateway counted the refusal
+      }
+  }
+
+  private def address(a: InetSocketAddress): String =
+    if (a == null) "" else s"${Option(a.getAddress).fold(a.getHostString)(_.getHostAddress)}:${a.getPort}"
+
+  /** The decisions as JSON objects, one per message; field names are the code's names. */
+  private object Json {
+    private def quote(s: String): String = {
+      val b = new StringBuilder("\"")
+      s.foreach {
+        case '"'                 => b.append("\\\"")
+        case '\\'                => b.append("\\\\")
+        case c if c < ' '        => b.append(f"\\u${c.toInt}%04x")
+        case c                   => b.append(c)
+      }
+      b.append('"').toString
+    }
+
+    private def obj(fields: (String, String)*): String = fields.map { case (k, v) => s"${quote(k)}:$v" }.mkString("{", ",", "}")
+
+    private def opt[A](a: Option[A])(f: A => String): String = a.fold("null")(f)
+
+    def reply(robotId: Int, reply: RpcReply, time: Long): String =
+      obj("decision" -> quote("reply"), "gatewayTimeNs" -> time.toString, "robotId" -> robotId.toString,
+        "callId" -> opt(reply.callId)(_.toString),
+        "outcome" -> quote(reply.result.fold(e => s"error: $e", _ => "ok")))
+
+    def of(decision: Decision, time: Long): String = {
+      val t = "gatewayTimeNs" -> time.toString
+      decision match {
+        case Decision.Published(event) =>
+          event match {
+            case RobotOnline(id, at) =>
+              obj("decision" -> quote("robot-online"), t, "robotId" -> id.toString, "address" -> quote(address(at)))
+            case RobotOffline(id, reason) =>
+              obj("decision" -> quote("robot-offline"), t, "robotId" -> id.toString, "reason" -> quote(reason))
+            case RobotRestarted(id, bootId, resynced) =>
+              obj("decision" -> quote("robot-restarted"), t, "robotId" -> id.toString, "bootId" -> opt(bootId)(_.toString),
+                "resynced" -> resynced.map(quote).mkString("[", ",", "]"))
+            case LinkQualityChanged(id, quality) =>
+              obj("decision" -> quote("link-quality"), t, "robotId" -> id.toString, "quality" -> quote(quality.name))
+            case GameStateUpdated(data) =>
+              obj("decision" -> quote("game-state"), t, "state" -> quote(data.gameState.toString),
+                "version" -> data.version.number.toString)
+            case other => // keep-alives are on the status channels; an event added later is still recorded by name
+              obj("decision" -> quote(other.productPrefix), t)
+          }
+        case Decision.Outgoing(robotId, priority, outcome, bytes) =>
+          val call = MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto)
+          obj("decision" -> quote("send"), t, "robotId" -> robotId.toString, "priority" -> quote(priority.name),
+            "outcome" -> quote(outcome), "bytes" -> bytes.length.toString,
+            "call" -> opt(call)(c => quote(c.name)), "callId" -> opt(call.flatMap(_.callId))(_.toString))
+        case Decision.Gate(open, state) =>
+          obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state.toString))
+        case Decision.Budget(out, in, limit, queued) =>
+          obj("decision" -> quote("budget"), t, "outBytesLastSecond" -> out.toString, "inBytesLastSecond" -> in.toString,
+            "limitBytesPerSecond" -> limit.toString,
+            "queued" -> obj(queued.toSeq.sortBy(_._1).map { case (k, v) => k -> v.toString }: _*))
+      }
+    }
+  }
+}

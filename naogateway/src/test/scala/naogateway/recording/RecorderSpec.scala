@@ -1,0 +1,81 @@
+package naogateway.recording
+
+import java.net.InetSocketAddress
+import java.nio.file.{Files, Path}
+
+import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
+
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.proto.{RecordedDatagram, RecordedPort}
+import naogateway.wire.gamecontroller.GameState
+
+class RecorderSpec extends AnyWordSpec with Matchers {
+
+  private val from = new InetSocketAddress("127.0.0.5", 3838)
+  private val to = new InetSocketAddress("127.0.0.1", 3838)
+
+  private def settings(dir: Path, queue: Int = 65536) =
+    RecordingSettings(enabled = true, dir, rotateBytes = 64L * 1024 * 1024, rotateInterval = 10.minutes, queueCapacity = queue)
+
+  private def files(dir: Path): Vector[Path] =
+    Files.list(dir).iterator().asScala.filter(_.toString.endsWith(".mcap")).toVector.sortBy(_.getFileName.toString)
+
+  "A recorder" must {
+    "account for every entry handed to it, written or dropped, when its queue overflows" in {
+      val dir = Files.createTempDirectory("recorder-spec")
+      val recording = Recording(settings(dir, queue = 16), "recorder-spec-overflow")
+      val offered = 20000
+      (1 to offered).foreach(i => recording.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
+      recording.close()
+      val stats = recording.stats
+      stats.dropped should be > 0L
+      stats.messages + stats.dropped shouldBe offered.toLong
+      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+      val payloads = contents.messages.map(m => BigInt(RecordedDatagram.parseFrom(m.data).payload.toByteArray).toInt)
+      payloads.size.toLong shouldBe stats.messages
+      // What was written keeps its order.
+      payloads shouldBe payloads.sorted
+    }
+
+    "write what waits when closed, then ignore further entries" in {
+      val dir = Files.createTempDirectory("recorder-spec")
+      val recording = Recording(settings(dir), "recorder-spec-close")
+      recording.decision(Decision.Gate(open = false, GameState.Playing))
+      recording.close()
+      recording.decision(Decision.Gate(open = true, GameState.Finished))
+      recording.stats.messages shouldBe 1L
+      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+      new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
+    }
+
+    "count entries it cannot write when the directory cannot be made, without failing" in {
+      val file = Files.createTempFile("recorder-spec", ".not-a-directory")
+      val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed")
+      (1 to 10).foreach(_ => recording.decision(Decision.Gate(open = true, GameState.Initial)))
+      recording.close()
+      recording.stats.failed shouldBe 10L
+      recording.stats.files shouldBe 0L
+    }
+
+    "begin a new file when the current one is older than rotate-interval, each file complete" in {
+      val dir = Files.createTempDirectory("recorder-spec")
+      val recording = Recording(settings(dir).copy(rotateInterval = 1.second), "recorder-spec-age")
+      (1 to 6).foreach { i =>
+        recording.decision(Decision.Budget(i.toLong, 0L, 125000, Map.empty))
+        Thread.sleep(500)
+      }
+      recording.close()
+      val recorded = files(dir)
+      recorded.size should be >= 2
+      recorded.map(p => McapReader.read(Files.readAllBytes(p)).messages.size).sum shouldBe 6
+    }
+
+    "record nothing when off" in {
+      Recording(RecordingSettings.Off, "unused") shouldBe Recording.Off
+      Recording.Off.enabled shouldBe false
+    }
+  }
+}
