@@ -323,7 +323,9 @@ object Gateway {
     // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
     private var byAddress = Map.empty[InetAddress, Int]
     private var subscribers: Set[ActorRef[GatewayEvent]] =
-      if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events")) else Set.empty
+      // On the robot actors' own thread: every keep-alive's status event comes here, and a hand-over to another thread per
+      // keep-alive would cost more than the update itself.
+      if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events", RobotDispatcher)) else Set.empty
     private var rebindable = Set.empty[Int]
     private var gcPackets = 0L
     private var game: Option[GameControlData] = None
