@@ -18,6 +18,7 @@ import akka.util.Timeout
 import com.typesafe.config.ConfigFactory
 
 import naogateway._
+import naogateway.integration.RelayCapture
 import naogateway.sim.network.ForgedFrames
 import naogateway.sim.{FirmwareSettings, RobotView, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback
@@ -81,7 +82,7 @@ object ForgeryBench extends Benchmark {
       val connected = Await.result(actor.ask[RobotActor.Connected](RobotActor.Connect(_)), 30.seconds)
       val ping = Await.result(connected.response.ask[CallResult](ResponseActor.Call(RpcCall("system", "ping", Vector.empty), _)), 30.seconds)
       require(ping.result.isRight, s"the signing robot did not answer: $ping")
-      val recorded = record(recorder, 2.seconds)
+      val recorded = RelayCapture.frames(recorder, RobotId, 2.seconds)
       require(recorded.size >= 3, s"only ${recorded.size} frames recorded")
       val truth = snapshot()
       val robotBefore = view()
@@ -121,24 +122,5 @@ object ForgeryBench extends Benchmark {
       recorder.close()
       outsider.close()
     }
-  }
-
-  /** The robot's frames the FU-Remote relay passes to `recorder` within `window`. */
-  private def record(recorder: DatagramChannel, window: FiniteDuration): Vector[Array[Byte]] = {
-    recorder.configureBlocking(false)
-    val buffer = ByteBuffer.allocate(2048)
-    val deadline = window.fromNow
-    var frames = Vector.empty[Array[Byte]]
-    while (deadline.hasTimeLeft()) {
-      buffer.clear()
-      if (recorder.receive(buffer) == null) Thread.sleep(5)
-      else {
-        buffer.flip()
-        val bytes = new Array[Byte](buffer.remaining)
-        buffer.get(bytes)
-        if (MessageContents.decodeFrame(bytes).exists(_._2.robotId == RobotId)) frames :+= bytes
-      }
-    }
-    frames
   }
 }

@@ -86,7 +86,7 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       try withGateway(33, ip, recorder.getLocalAddress.asInstanceOf[InetSocketAddress].getPort) { f =>
         val (robot, _) = f.robot(33, firmware = signing, at = ip)
         call(f.connect(33), "system.ping").result.isRight shouldBe true
-        val recorded = record(recorder, 33, 1.5.seconds)
+        val recorded = RelayCapture.frames(recorder, 33, 1.5.seconds)
         recorded.size should be >= 3
         val before = snapshot(f, 33)
         before.bootId shouldBe Some(1)
@@ -161,25 +161,6 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         } finally outsider.close()
       }
     }
-  }
-
-  /** The frames of robot `robotId` the relay passes to `recorder` within `window`. */
-  private def record(recorder: DatagramChannel, robotId: Int, window: FiniteDuration): Vector[Array[Byte]] = {
-    recorder.configureBlocking(false)
-    val buffer = ByteBuffer.allocate(2048)
-    val deadline = window.fromNow
-    var frames = Vector.empty[Array[Byte]]
-    while (deadline.hasTimeLeft()) {
-      buffer.clear()
-      if (recorder.receive(buffer) == null) Thread.sleep(5)
-      else {
-        buffer.flip()
-        val bytes = new Array[Byte](buffer.remaining)
-        buffer.get(bytes)
-        if (MessageContents.decodeFrame(bytes).exists(_._2.robotId == robotId)) frames :+= bytes
-      }
-    }
-    frames
   }
 
   private def collect(f: GatewayFixture, window: FiniteDuration): Vector[GatewayEvent] = {
