@@ -83,19 +83,45 @@ object Mcap {
       if (size + n > bytes.length) bytes = java.util.Arrays.copyOf(bytes, math.max(bytes.length * 2, size + n))
 
     def u8(v: Int): Buffer = { room(1); bytes(size) = v.toByte; size += 1; this }
-    def u16(v: Int): Buffer = { room(2); putLE(v.toLong, 2); this }
-    def u32(v: Long): Buffer = { room(4); putLE(v, 4); this }
-    def u64(v: Long): Buffer = { room(8); putLE(v, 8); this }
+    def u16(v: Int): Buffer = { room(2); put16(v); this }
+    def u32(v: Long): Buffer = { room(4); put32(v.toInt); this }
+    def u64(v: Long): Buffer = { room(8); put32(v.toInt); put32((v >>> 32).toInt); this }
+
+    /**
+     * A Message record's head: opcode, content length (for `n` bytes of data), channel id, sequence, log time and
+     * publish time, with room for the data checked once.
+     */
+    def messageHead(channelId: Int, sequence: Long, logTime: Long, publishTime: Long, n: Int): Buffer = {
+      room(1 + 8 + 2 + 4 + 8 + 8 + n)
+      bytes(size) = Mcap.Op.Message.toByte
+      size += 1
+      val length = 2L + 4L + 8L + 8L + n
+      put32(length.toInt); put32((length >>> 32).toInt)
+      put16(channelId)
+      put32(sequence.toInt)
+      put32(logTime.toInt); put32((logTime >>> 32).toInt)
+      put32(publishTime.toInt); put32((publishTime >>> 32).toInt)
+      this
+    }
+
+    private def put16(v: Int): Unit = {
+      bytes(size) = v.toByte
+      bytes(size + 1) = (v >>> 8).toByte
+      size += 2
+    }
+
+    private def put32(v: Int): Unit = {
+      val at = size
+      bytes(at) = v.toByte
+      bytes(at + 1) = (v >>> 8).toByte
+      bytes(at + 2) = (v >>> 16).toByte
+      bytes(at + 3) = (v >>> 24).toByte
+      size = at + 4
+    }
     def raw(b: Array[Byte]): Buffer = raw(b, 0, b.length)
     def raw(b: Array[Byte], from: Int, n: Int): Buffer = { room(n); System.arraycopy(b, from, bytes, size, n); size += n; this }
     def string(s: String): Buffer = { val b = s.getBytes(StandardCharsets.UTF_8); u32(b.length.toLong); raw(b) }
     def setU64(at: Int, v: Long): Unit = { var i = 0; while (i < 8) { bytes(at + i) = (v >>> (8 * i)).toByte; i += 1 } }
-
-    private def putLE(v: Long, n: Int): Unit = {
-      var i = 0
-      while (i < n) { bytes(size + i) = (v >>> (8 * i)).toByte; i += 1 }
-      size += n
-    }
 
     /** A record of `op` whose content `body` writes; its length is filled in afterwards. */
     def record(op: Int)(body: Buffer => Unit): Buffer = {
@@ -277,9 +303,7 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
     if (index eq null) { index = new Buffer(256); chunkIndex(channelId) = index }
     if (index.length == 0) indexedChannels.add(channelId)
     index.u64(logTime).u64(chunk.length.toLong)
-    // The Message record: opcode, content length, then channel id, sequence, log time, publish time and the data.
-    chunk.u8(Op.Message).u64(2L + 4L + 8L + 8L + n).u16(channelId).u32(count & 0xffffffffL).u64(logTime).u64(publishTime)
-    chunk.raw(data, from, n)
+    chunk.messageHead(channelId, count & 0xffffffffL, logTime, publishTime, n).raw(data, from, n)
     if (chunk.length >= chunkBytes) flushChunk()
   }
 

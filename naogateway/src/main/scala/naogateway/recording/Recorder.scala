@@ -426,22 +426,40 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
   // The UTF-8 bytes of `address` for the addresses met lately (writer thread only): a robot sends from the same
   // address again and again. Emptied when full, so a flood of addresses costs no more memory than MaxAddresses.
-  private val addresses = new java.util.HashMap[InetSocketAddress, Array[Byte]]()
+  // IPv4 addresses (all the gateway meets in practice) are keyed by address and port in one Long; others by the
+  // socket address itself.
+  private val ipv4Addresses = mutable.LongMap.empty[Array[Byte]]
+  private val otherAddresses = new java.util.HashMap[InetSocketAddress, Array[Byte]]()
   private val MaxAddresses = 4096
   private val NoAddress = new Array[Byte](0)
 
   private def addressBytes(a: InetSocketAddress): Array[Byte] =
     if (a == null) NoAddress
-    else {
-      val known = addresses.get(a)
-      if (known ne null) known
-      else {
-        if (addresses.size >= MaxAddresses) addresses.clear()
-        val bytes = address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
-        addresses.put(a, bytes)
-        bytes
+    else
+      a.getAddress match {
+        case ip: java.net.Inet4Address =>
+          // An Inet4Address's hash code is its 32-bit address.
+          val key = (ip.hashCode.toLong & 0xffffffffL) << 16 | a.getPort.toLong
+          val known = ipv4Addresses.getOrNull(key)
+          if (known ne null) known
+          else {
+            if (ipv4Addresses.size >= MaxAddresses) ipv4Addresses.clear()
+            val bytes = addressText(a)
+            ipv4Addresses(key) = bytes
+            bytes
+          }
+        case _ =>
+          val known = otherAddresses.get(a)
+          if (known ne null) known
+          else {
+            if (otherAddresses.size >= MaxAddresses) otherAddresses.clear()
+            val bytes = addressText(a)
+            otherAddresses.put(a, bytes)
+            bytes
+          }
       }
-    }
+
+  private def addressText(a: InetSocketAddress): Array[Byte] = address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
 
   /** The decisions as JSON objects, one per message; field names are the code's names. */
   private object Json {
