@@ -266,13 +266,23 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         } else {
           var i = 0
           while (i < batch.size) { write(batch.get(i)); i += 1 }
+          publishWritten()
         }
       }
     } catch { case NonFatal(e) => log.error("Recording stopped: the writer failed", e) }
     finally finish()
   }
 
+  // Messages written since the last batch ended: told to the figures once per batch, not once per message.
+  private var written = 0L
+
+  private def publishWritten(): Unit = if (written > 0) {
+    messageCount.addAndGet(written)
+    written = 0L
+  }
+
   private def finish(): Unit = {
+    publishWritten()
     file.foreach(f => closeQuietly(f))
     file = None
     current = None
@@ -311,7 +321,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         try {
           val before = f.writer.messages
           f.write(e)
-          messageCount.addAndGet(f.writer.messages - before)
+          written += f.writer.messages - before
           if (f.writer.size >= settings.rotateBytes) rotate()
         } catch {
           case ex: IOException =>
