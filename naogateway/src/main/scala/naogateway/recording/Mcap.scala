@@ -83,19 +83,45 @@ object Mcap {
       if (size + n > bytes.length) bytes = java.util.Arrays.copyOf(bytes, math.max(bytes.length * 2, size + n))
 
     def u8(v: Int): Buffer = { room(1); bytes(size) = v.toByte; size += 1; this }
-    def u16(v: Int): Buffer = { room(2); putLE(v.toLong, 2); this }
-    def u32(v: Long): Buffer = { room(4); putLE(v, 4); this }
-    def u64(v: Long): Buffer = { room(8); putLE(v, 8); this }
+    def u16(v: Int): Buffer = { room(2); put16(v); this }
+    def u32(v: Long): Buffer = { room(4); put32(v.toInt); this }
+    def u64(v: Long): Buffer = { room(8); put32(v.toInt); put32((v >>> 32).toInt); this }
+
+    /**
+     * A Message record's head: opcode, content length (for `n` bytes of data), channel id, sequence, log time and
+     * publish time, with room for the data checked once.
+     */
+    def messageHead(channelId: Int, sequence: Long, logTime: Long, publishTime: Long, n: Int): Buffer = {
+      room(1 + 8 + 2 + 4 + 8 + 8 + n)
+      bytes(size) = Mcap.Op.Message.toByte
+      size += 1
+      val length = 2L + 4L + 8L + 8L + n
+      put32(length.toInt); put32((length >>> 32).toInt)
+      put16(channelId)
+      put32(sequence.toInt)
+      put32(logTime.toInt); put32((logTime >>> 32).toInt)
+      put32(publishTime.toInt); put32((publishTime >>> 32).toInt)
+      this
+    }
+
+    private def put16(v: Int): Unit = {
+      bytes(size) = v.toByte
+      bytes(size + 1) = (v >>> 8).toByte
+      size += 2
+    }
+
+    private def put32(v: Int): Unit = {
+      val at = size
+      bytes(at) = v.toByte
+      bytes(at + 1) = (v >>> 8).toByte
+      bytes(at + 2) = (v >>> 16).toByte
+      bytes(at + 3) = (v >>> 24).toByte
+      size = at + 4
+    }
     def raw(b: Array[Byte]): Buffer = raw(b, 0, b.length)
     def raw(b: Array[Byte], from: Int, n: Int): Buffer = { room(n); System.arraycopy(b, from, bytes, size, n); size += n; this }
     def string(s: String): Buffer = { val b = s.getBytes(StandardCharsets.UTF_8); u32(b.length.toLong); raw(b) }
     def setU64(at: Int, v: Long): Unit = { var i = 0; while (i < 8) { bytes(at + i) = (v >>> (8 * i)).toByte; i += 1 } }
-
-    private def putLE(v: Long, n: Int): Unit = {
-      var i = 0
-      while (i < n) { bytes(size + i) = (v >>> (8 * i)).toByte; i += 1 }
-      size += n
-    }
 
     /** A record of `op` whose content `body` writes; its length is filled in afterwards. */
     def record(op: Int)(body: Buffer => Unit): Buffer = {
@@ -116,6 +142,22 @@ object Mcap {
     }
 
     def setU32(at: Int, v: Long): Unit = { var i = 0; while (i < 4) { bytes(at + i) = (v >>> (8 * i)).toByte; i += 1 } }
+  }
+
+  /** A growable list of ints, without boxing. */
+  private[recording] final class IntList {
+    private var values = new Array[Int](16)
+    private var n = 0
+
+    def size: Int = n
+    def apply(i: Int): Int = values(i)
+    def clear(): Unit = n = 0
+    def add(v: Int): Unit = {
+      if (n == values.length) values = java.util.Arrays.copyOf(values, n * 2)
+      values(n) = v
+      n += 1
+    }
+    def foreach(f: Int => Unit): Unit = { var i = 0; while (i < n) { f(values(i)); i += 1 } }
   }
 
   /** Reads little-endian fields out of a record's content. */
@@ -186,7 +228,9 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
   private var written = 0L
   private val schemas = mutable.LinkedHashMap.empty[Int, Schema]
   private val channels = mutable.LinkedHashMap.empty[Int, Channel]
-  private val messageCounts = mutable.LinkedHashMap.empty[Int, Long]
+  // Per channel id, messages written so far; and the channels in the order of their first message (the Statistics').
+  private var messageCounts = new Array[Long](64)
+  private val countedChannels = new IntList
   private var messageCount = 0L
   private var firstTime = Long.MaxValue
   private var lastTime = Long.MinValue
@@ -197,7 +241,10 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
   private val chunk = new Buffer(chunkBytes + chunkBytes / 4)
   private var chunkStart = Long.MaxValue
   private var chunkEnd = Long.MinValue
-  private val chunkIndex = mutable.LinkedHashMap.empty[Int, Buffer]
+  // Per channel id, the message index entries of the chunk (buffers kept from chunk to chunk); the channels in the
+  // order of their first message in the chunk.
+  private var chunkIndex = new Array[Buffer](64)
+  private val indexedChannels = new IntList
   private val chunkIndexes = new Buffer(1024)
   private var chunkCount = 0
 
@@ -237,18 +284,26 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
   /** Writes one message whose data are `data[from, from + n)`. */
   def write(channelId: Int, logTime: Long, publishTime: Long, data: Array[Byte], from: Int, n: Int): Unit = {
     require(!closed, "the writer is closed")
-    require(channels.contains(channelId), s"no channel $channelId")
-    val count = messageCounts.getOrElse(channelId, 0L) + 1
+    // Channel ids are given out in order from 1: the id is known when it is at most the number of channels.
+    require(channelId >= 1 && channelId <= channels.size, s"no channel $channelId")
+    if (channelId >= messageCounts.length) {
+      val size = math.max(messageCounts.length * 2, channelId + 1)
+      messageCounts = java.util.Arrays.copyOf(messageCounts, size)
+      chunkIndex = java.util.Arrays.copyOf(chunkIndex, size)
+    }
+    val count = messageCounts(channelId) + 1
+    if (count == 1) countedChannels.add(channelId)
     messageCounts(channelId) = count
     messageCount += 1
-    firstTime = math.min(firstTime, logTime)
-    lastTime = math.max(lastTime, logTime)
-    chunkStart = math.min(chunkStart, logTime)
-    chunkEnd = math.max(chunkEnd, logTime)
-    chunkIndex.getOrElseUpdate(channelId, new Buffer(256)).u64(logTime).u64(chunk.length.toLong)
-    chunk.record(Op.Message) { b =>
-      b.u16(channelId).u32(count & 0xffffffffL).u64(logTime).u64(publishTime).raw(data, from, n)
-    }
+    if (logTime < firstTime) firstTime = logTime
+    if (logTime > lastTime) lastTime = logTime
+    if (logTime < chunkStart) chunkStart = logTime
+    if (logTime > chunkEnd) chunkEnd = logTime
+    var index = chunkIndex(channelId)
+    if (index eq null) { index = new Buffer(256); chunkIndex(channelId) = index }
+    if (index.length == 0) indexedChannels.add(channelId)
+    index.u64(logTime).u64(chunk.length.toLong)
+    chunk.messageHead(channelId, count & 0xffffffffL, logTime, publishTime, n).raw(data, from, n)
     if (chunk.length >= chunkBytes) flushChunk()
   }
 
@@ -280,7 +335,7 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
         b.u64(if (messageCount == 0) 0L else firstTime).u64(if (messageCount == 0) 0L else lastTime)
         val start = b.length
         b.u32(0L)
-        messageCounts.foreach { case (id, n) => b.u16(id).u64(n) }
+        countedChannels.foreach(id => b.u16(id).u64(messageCounts(id)))
         b.setU32(start, (b.length - start - 4).toLong)
       })
       val summaryOffsetStart = written
@@ -313,24 +368,30 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
     emit(chunk.array, chunk.length)
     val chunkLength = written - start
     val indexStart = written
-    val indexOffsets = mutable.LinkedHashMap.empty[Int, Long]
-    chunkIndex.foreach { case (channelId, entries) =>
-      indexOffsets(channelId) = written
+    val indexOffsets = new Array[Long](indexedChannels.size)
+    var i = 0
+    while (i < indexedChannels.size) {
+      val channelId = indexedChannels(i)
+      val entries = chunkIndex(channelId)
+      indexOffsets(i) = written
       scratch.clear()
       scratch.record(Op.MessageIndex) { r => r.u16(channelId).u32(entries.length.toLong).raw(entries.array, 0, entries.length) }
       emit(scratch.array, scratch.length)
+      entries.clear()
+      i += 1
     }
     chunkIndexes.record(Op.ChunkIndex) { r =>
       r.u64(if (hasMessages) chunkStart else 0L).u64(if (hasMessages) chunkEnd else 0L).u64(start).u64(chunkLength)
       val mapAt = r.length
       r.u32(0L)
-      indexOffsets.foreach { case (id, offset) => r.u16(id).u64(offset) }
+      var j = 0
+      while (j < indexOffsets.length) { r.u16(indexedChannels(j)).u64(indexOffsets(j)); j += 1 }
       r.setU32(mapAt, (r.length - mapAt - 4).toLong)
       r.u64(written - indexStart).string("").u64(chunk.length.toLong).u64(chunk.length.toLong)
     }
     chunkCount += 1
     chunk.clear()
-    chunkIndex.clear()
+    indexedChannels.clear()
     chunkStart = Long.MaxValue
     chunkEnd = Long.MinValue
   }

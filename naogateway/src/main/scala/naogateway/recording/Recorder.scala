@@ -12,13 +12,13 @@ import java.util.concurrent.locks.LockSupport
 import scala.collection.mutable
 import scala.util.control.NonFatal
 
-import com.google.protobuf.ByteString
+import com.google.protobuf.CodedOutputStream
 import com.google.protobuf.DescriptorProtos.FileDescriptorSet
 import com.google.protobuf.Descriptors.FileDescriptor
 import org.slf4j.LoggerFactory
 
 import naogateway._
-import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedDatagram, RecordedDirection, RecordedPort, RecordingProto, RpcProto}
+import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedDirection, RecordedPort, RecordingProto, RpcProto}
 import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
@@ -148,6 +148,51 @@ object Recording {
   }
 }
 
+/**
+ * Protobuf bytes of the messages the writer thread writes, in one array reused from message to message (grown when
+ * needed): the same bytes as the generated code's `toByteArray`, without an array, a `ByteString` and strings each.
+ */
+private[recording] final class Encoder {
+  private var buffer = new Array[Byte](1024)
+
+  /** The bytes of the last message encoded, from index 0. */
+  def bytes: Array[Byte] = buffer
+
+  private def room(size: Int): CodedOutputStream = {
+    if (size > buffer.length) buffer = new Array[Byte](math.max(size, buffer.length * 2))
+    CodedOutputStream.newInstance(buffer, 0, size)
+  }
+
+  /**
+   * `d` as a `RecordedDatagram` with `source` and `destination` (their address text in UTF-8), fields by number, the
+   * optional robot id only when known; answers the length.
+   */
+  def datagram(d: DatagramEntry, source: Array[Byte], destination: Array[Byte]): Int = {
+    val direction = if (d.received) RecordedDirection.RECEIVED.value else RecordedDirection.SENT.value
+    val size = CodedOutputStream.computeEnumSize(1, d.port.value) + CodedOutputStream.computeEnumSize(2, direction) +
+      CodedOutputStream.computeByteArraySize(3, source) + CodedOutputStream.computeByteArraySize(4, destination) +
+      CodedOutputStream.computeByteArraySize(5, d.bytes) + (if (d.robotId >= 0) CodedOutputStream.computeInt32Size(6, d.robotId) else 0)
+    val out = room(size)
+    out.writeEnum(1, d.port.value)
+    out.writeEnum(2, direction)
+    out.writeByteArray(3, source)
+    out.writeByteArray(4, destination)
+    out.writeByteArray(5, d.bytes)
+    if (d.robotId >= 0) out.writeInt32(6, d.robotId)
+    out.checkNoSpaceLeft()
+    size
+  }
+
+  /** `m`'s bytes; answers the length. */
+  def message(m: scalapb.GeneratedMessage): Int = {
+    val size = m.serializedSize
+    val out = room(size)
+    m.writeTo(out)
+    out.checkNoSpaceLeft()
+    size
+  }
+}
+
 /** One queued entry; `nanoTime` is `System.nanoTime` when it was handed over. */
 private[recording] sealed trait Entry { def nanoTime: Long }
 private[recording] final case class DatagramEntry(nanoTime: Long, port: RecordedPort, received: Boolean, source: InetSocketAddress,
@@ -221,13 +266,23 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         } else {
           var i = 0
           while (i < batch.size) { write(batch.get(i)); i += 1 }
+          publishWritten()
         }
       }
     } catch { case NonFatal(e) => log.error("Recording stopped: the writer failed", e) }
     finally finish()
   }
 
+  // Messages written since the last batch ended: told to the figures once per batch, not once per message.
+  private var written = 0L
+
+  private def publishWritten(): Unit = if (written > 0) {
+    messageCount.addAndGet(written)
+    written = 0L
+  }
+
   private def finish(): Unit = {
+    publishWritten()
     file.foreach(f => closeQuietly(f))
     file = None
     current = None
@@ -266,7 +321,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         try {
           val before = f.writer.messages
           f.write(e)
-          messageCount.addAndGet(f.writer.messages - before)
+          written += f.writer.messages - before
           if (f.writer.size >= settings.rotateBytes) rotate()
         } catch {
           case ex: IOException =>
@@ -313,7 +368,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     private val healthSchema = writer.addSchema("naogateway.proto.RobotHealth", "protobuf", descriptorSet)
     private val messageSchema = writer.addSchema("naogateway.proto.Message", "protobuf", descriptorSet)
     // Per robot id: its status, health and message channels, made when first needed; at most MaxRobotChannels robots.
-    private val robots = mutable.Map.empty[Int, Array[Int]]
+    private val robots = mutable.LongMap.empty[Array[Int]]
+    private val encoder = new Encoder
 
     def due(now: Long): Boolean = now - openedAt >= settings.rotateInterval.toNanos
 
@@ -323,27 +379,27 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
     def close(): Unit = writer.close()
 
-    private def robotChannels(robotId: Int): Option[Array[Int]] =
-      robots.get(robotId).orElse {
-        if (robots.size >= MaxRobotChannels) None
-        else {
-          val ids = Array(
-            writer.addChannel(Topics.status(robotId), "protobuf", statusSchema, Map("robotID" -> robotId.toString)),
-            writer.addChannel(Topics.health(robotId), "protobuf", healthSchema, Map("robotID" -> robotId.toString)),
-            writer.addChannel(Topics.message(robotId), "protobuf", messageSchema, Map("robotID" -> robotId.toString))
-          )
-          robots(robotId) = ids
-          Some(ids)
-        }
+    /** Robot `robotId`'s status, health and message channels; null when the file has no room for another robot. */
+    private def robotChannels(robotId: Int): Array[Int] = {
+      val known = robots.getOrNull(robotId.toLong)
+      if ((known ne null) || robots.size >= MaxRobotChannels) known
+      else {
+        val ids = Array(
+          writer.addChannel(Topics.status(robotId), "protobuf", statusSchema, Map("robotID" -> robotId.toString)),
+          writer.addChannel(Topics.health(robotId), "protobuf", healthSchema, Map("robotID" -> robotId.toString)),
+          writer.addChannel(Topics.message(robotId), "protobuf", messageSchema, Map("robotID" -> robotId.toString))
+        )
+        robots(robotId.toLong) = ids
+        ids
       }
+    }
 
     def write(e: Entry): Unit = {
       val time = epochNanos(e.nanoTime)
       e match {
         case d: DatagramEntry =>
-          val record = RecordedDatagram(d.port, if (d.received) RecordedDirection.RECEIVED else RecordedDirection.SENT,
-            address(d.source), address(d.destination), ByteString.copyFrom(d.bytes), if (d.robotId >= 0) Some(d.robotId) else None)
-          writer.write(datagrams, time, time, record.toByteArray)
+          val n = encoder.datagram(d, addressBytes(d.source), addressBytes(d.destination))
+          writer.write(datagrams, time, time, encoder.bytes, 0, n)
           if (d.port == RecordedPort.ROBOT_PORT && d.received) decoded(d, time)
         case DecisionEntry(_, decision) =>
           writer.write(decisions, time, time, Json.of(decision, time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
@@ -354,15 +410,19 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     private def decoded(d: DatagramEntry, time: Long): Unit =
       MessageContents.decodeFrame(d.bytes) match {
         case Right((_, c)) =>
-          robotChannels(c.robotId).foreach { ids =>
+          val ids = robotChannels(c.robotId)
+          if (ids ne null) {
             c.status.foreach { s =>
               // The robot's own time of the keep-alive, on the gateway's clock once the robot's clock is estimated.
               val robotTime = s.timestamp.orElse(c.robotHealth.flatMap(_.uptimeMs).map(_.toLong & 0xffffffffL))
               val published = robotTime.flatMap(t => clock.toGatewayNanos(c.robotId, t)).map(epochNanos).getOrElse(time)
-              writer.write(ids(0), time, published, s.toByteArray)
+              writer.write(ids(0), time, published, encoder.bytes, 0, encoder.message(s))
             }
-            c.robotHealth.foreach(h => writer.write(ids(1), time, time, h.toByteArray))
-            if (c.copy(status = None, robotHealth = None) != MessageContents(c.robotId)) writer.write(ids(2), time, time, c.toProtobuf)
+            c.robotHealth.foreach(h => writer.write(ids(1), time, time, encoder.bytes, 0, encoder.message(h)))
+            // Anything beyond a keep-alive's status and health goes on the message channel, whole.
+            if (c.debuggingCommands.isDefined || c.debugData.isDefined || c.havimoRegions.isDefined || c.havimoGrid.isDefined ||
+              c.rpcRequest.isDefined || c.rpcResponse.isDefined || c.unknownExtensions.nonEmpty)
+              writer.write(ids(2), time, time, c.toProtobuf)
           }
           c.rpcResponse.foreach { r =>
             writer.write(decisions, time, time, Json.reply(c.robotId, RpcReply.fromProto(r), time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
@@ -373,6 +433,43 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
   private def address(a: InetSocketAddress): String =
     if (a == null) "" else s"${Option(a.getAddress).fold(a.getHostString)(_.getHostAddress)}:${a.getPort}"
+
+  // The UTF-8 bytes of `address` for the addresses met lately (writer thread only): a robot sends from the same
+  // address again and again. Emptied when full, so a flood of addresses costs no more memory than MaxAddresses.
+  // IPv4 addresses (all the gateway meets in practice) are keyed by address and port in one Long; others by the
+  // socket address itself.
+  private val ipv4Addresses = mutable.LongMap.empty[Array[Byte]]
+  private val otherAddresses = new java.util.HashMap[InetSocketAddress, Array[Byte]]()
+  private val MaxAddresses = 4096
+  private val NoAddress = new Array[Byte](0)
+
+  private def addressBytes(a: InetSocketAddress): Array[Byte] =
+    if (a == null) NoAddress
+    else
+      a.getAddress match {
+        case ip: java.net.Inet4Address =>
+          // An Inet4Address's hash code is its 32-bit address.
+          val key = (ip.hashCode.toLong & 0xffffffffL) << 16 | a.getPort.toLong
+          val known = ipv4Addresses.getOrNull(key)
+          if (known ne null) known
+          else {
+            if (ipv4Addresses.size >= MaxAddresses) ipv4Addresses.clear()
+            val bytes = addressText(a)
+            ipv4Addresses(key) = bytes
+            bytes
+          }
+        case _ =>
+          val known = otherAddresses.get(a)
+          if (known ne null) known
+          else {
+            if (otherAddresses.size >= MaxAddresses) otherAddresses.clear()
+            val bytes = addressText(a)
+            otherAddresses.put(a, bytes)
+            bytes
+          }
+      }
+
+  private def addressText(a: InetSocketAddress): Array[Byte] = address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
 
   /** The decisions as JSON objects, one per message; field names are the code's names. */
   private object Json {

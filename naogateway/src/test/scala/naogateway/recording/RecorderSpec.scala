@@ -6,13 +6,16 @@ import java.nio.file.{Files, Path}
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
 
+import com.google.protobuf.ByteString
+import org.scalacheck.Gen
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
+import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway.proto.{RecordedDatagram, RecordedPort}
+import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort, RobotHealth, Status}
 import naogateway.wire.gamecontroller.GameState
 
-class RecorderSpec extends AnyWordSpec with Matchers {
+class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
   private val from = new InetSocketAddress("127.0.0.5", 3838)
   private val to = new InetSocketAddress("127.0.0.1", 3838)
@@ -71,6 +74,29 @@ class RecorderSpec extends AnyWordSpec with Matchers {
       val recorded = files(dir)
       recorded.size should be >= 2
       recorded.map(p => McapReader.read(Files.readAllBytes(p)).messages.size).sum shouldBe 6
+    }
+
+    "encode a datagram byte for byte as the generated RecordedDatagram does, reusing its buffer" in {
+      val encoder = new Encoder
+      val entries = for {
+        port <- Gen.oneOf(RecordedPort.ROBOT_PORT, RecordedPort.GAME_CONTROLLER, RecordedPort.FU_REMOTE_RELAY)
+        received <- Gen.oneOf(true, false)
+        source <- Gen.oneOf("127.0.0.5:3838", "", "[::1]:65535", "\u00e9t\u00e9:1")
+        destination <- Gen.oneOf("127.0.0.1:11011", "")
+        size <- Gen.oneOf(0, 1, 127, 128, 2000, 70000)
+        payload <- Gen.listOfN(size, Gen.choose(Byte.MinValue, Byte.MaxValue)).map(_.toArray)
+        robotId <- Gen.oneOf(-1, 0, 1, 127, 128, 300, Int.MaxValue)
+      } yield (DatagramEntry(0L, port, received, null, null, payload, robotId), source, destination)
+      forAll(entries) { case (d, source, destination) =>
+        val expected = RecordedDatagram(d.port, if (d.received) RecordedDirection.RECEIVED else RecordedDirection.SENT, source,
+          destination, ByteString.copyFrom(d.bytes), if (d.robotId >= 0) Some(d.robotId) else None).toByteArray
+        val n = encoder.datagram(d, source.getBytes("UTF-8"), destination.getBytes("UTF-8"))
+        encoder.bytes.take(n) shouldBe expected
+      }
+      val status = Status(timestamp = Some(123456789L), teamID = Some(3), activeAgent = Some("striker"))
+      encoder.bytes.take(encoder.message(status)) shouldBe status.toByteArray
+      val health = RobotHealth(uptimeMs = Some(42))
+      encoder.bytes.take(encoder.message(health)) shouldBe health.toByteArray
     }
 
     "record nothing when off" in {
