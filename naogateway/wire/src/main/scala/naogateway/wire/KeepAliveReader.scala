@@ -24,7 +24,7 @@ private[wire] object KeepAliveReader {
   /** Where a reading stands: a position in the array, and where the current message ends. */
   private final class Cursor(val bytes: Array[Byte], var at: Int, var end: Int) {
 
-    /** A varint of at most 10 bytes within `end`; -1 (with `at` past `end`) when it is not one. */
+    /** A varint of at most 10 bytes within `end` (a tenth byte only 01); -1 (with `at` past `end`) when it is not one. */
     def varint(): Long = {
       var result = 0L
       var shift = 0
@@ -32,6 +32,9 @@ private[wire] object KeepAliveReader {
         if (at >= end) { at = Int.MaxValue; return -1L }
         val b = bytes(at)
         at += 1
+        // A tenth byte other than 01 (the only one a negative number is written with) is overlong, and protobuf-java
+        // reads its top bit one way or the other depending on where the varint lies: the general path judges it.
+        if (shift == 63 && b != 1) { at = Int.MaxValue; return -1L }
         result |= (b & 0x7fL) << shift
         if (b >= 0) return result
         shift += 7

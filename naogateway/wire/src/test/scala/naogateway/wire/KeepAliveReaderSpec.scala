@@ -79,6 +79,20 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       fast.map(_.toProtobuf.toVector) shouldBe slow.map(_.toProtobuf.toVector)
     }
 
+    "leave an overlong ten-byte varint to the general path and agree with it" in {
+      // Found by the property above (shrunk): Status.timestamp as nine FF bytes and a tenth 00. protobuf-java reads
+      // the top bit of such a varint one way or the other depending on where it lies; the reader must not guess.
+      val bytes = Array(8, 0, -70, 1, 125, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 16, -1, -1, -1, -1, 0, 24, 0, 58, 16,
+        8, -1, -1, -1, -1, 0, 8, -1, -1, -1, 0, 29, 0, 0, 0, 0, 65, 0, 0, 0, 0, 0, 0, 0, 0, 98, 55) ++ Array.fill(55)(0) ++
+        Array(122, 13) ++ Array.fill(13)(0) ++ Array(-126, 1, 4, 0, 0, 0, 0)
+      val frame = bytes.map(_.toByte)
+      KeepAliveReader.read(frame, 0, frame.length) shouldBe null
+      MessageContents.parse(frame).map(_.toProtobuf.toVector) shouldBe general(frame).map(_.toProtobuf.toVector)
+      // The canonical form of a number with the top bit set (tenth byte 01) is still read here.
+      val negative = robot1 ++ delimited(23, varint(1, -1L))
+      KeepAliveReader.read(negative, 0, negative.length) shouldBe MessageContents(1, status = Some(Status(timestamp = Some(-1L))))
+    }
+
     "read a malformed string as U+FFFD itself (protocol.md 5)" in {
       val bad = robot1 ++ delimited(23, field(12, 2)(_.writeByteArrayNoTag(Array(0x41, 0xff, 0x42).map(_.toByte))))
       val expected = MessageContents(1, status = Some(Status(activeAgent = Some("A\uFFFDB"))))
