@@ -59,6 +59,13 @@ object TerminalScreen {
       // Read once and again on each resize (WINCH), not at every redraw: some JLine providers ask `stty` for it.
       @volatile var size = terminal.getSize
       terminal.handle(Terminal.Signal.WINCH, _ => size = terminal.getSize)
+      // JLine's system terminal sets Ctrl-C (INT) to the operating system's default, which ends the JVM at once: no
+      // shutdown hooks, so the robots are not stopped through the middleware, the cluster node does not leave and the
+      // recording's file is left without its summary. Ended this way, the JVM runs its hooks (CoordinatedShutdown).
+      terminal.handle(Terminal.Signal.INT, _ => {
+        val exit = new Thread(() => sys.exit(130), "ctrl-c")
+        exit.start()
+      })
       new TerminalScreen(terminal, () => size, () => ())
     } else over(System.out, sys.env.get("TERM"), fixedSize = None)
 
