@@ -31,10 +31,7 @@ object FloodBench extends Benchmark {
     try {
       val f = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]")
       try {
-        val (_, at1) = f.robot(1)
-        f.robot(2)
-        var online = Set.empty[Int]
-        while (online.size < 2) online += f.awaitEvent(10.seconds) { case RobotOnline(id @ (1 | 2), _) => id }
+        val at1 = HostileTraffic.twoRobotsOnline(f)
         val heapBefore = HostileTraffic.usedHeapAfterGc()
         val linesBefore = log.count
         val started = System.nanoTime()

@@ -107,23 +107,28 @@ object GatewayBench extends Benchmark {
 
   // ---------------------------------------------------------------------------------------------- round trips
 
+  /** `system.ping` asked of robot 1's response actor, paced: the round trips in nanoseconds, after a warm-up. */
+  private def pings(gw: GatewayNode): Array[Long] = {
+    val connected = gw.connect(1)
+    val ping = RpcCall("system", "ping", Vector.empty)
+    implicit val scheduler: Scheduler = gw.system.scheduler
+    implicit val timeout: Timeout = Timeout(5.seconds)
+    def once(): Long = {
+      val start = System.nanoTime()
+      val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
+      val took = System.nanoTime() - start
+      require(answer.result.isRight, s"system.ping failed: $answer")
+      took
+    }
+    paced(RttWarmup)(() => once())
+    paced(RttSamples)(() => once())
+  }
+
   private def roundTrips(): ListMap[String, Double] = {
     val rpc = withNodes("rtt") { (gw, sim) =>
       sim.fleet(FleetSettings(gw.addresses.robots, Vector(1), faithfulLink = false, firstAddress = TestLoopback.address()))
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
-      val connected = gw.connect(1)
-      val ping = RpcCall("system", "ping", Vector.empty)
-      implicit val scheduler: Scheduler = gw.system.scheduler
-      implicit val timeout: Timeout = Timeout(5.seconds)
-      def once(): Long = {
-        val start = System.nanoTime()
-        val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
-        val took = System.nanoTime() - start
-        require(answer.result.isRight, s"system.ping failed: $answer")
-        took
-      }
-      paced(RttWarmup)(() => once())
-      paced(RttSamples)(() => once())
+      pings(gw)
     }
     progress(f"rpc rtt: p50 ${percentile(rpc, 0.50) / 1e3}%.0f us, p99 ${percentile(rpc, 0.99) / 1e3}%.0f us, " +
       f"max ${rpc.max / 1e3}%.0f us over ${rpc.length} calls")
@@ -180,19 +185,7 @@ object GatewayBench extends Benchmark {
     Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
     try {
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
-      val connected = gw.connect(1)
-      val ping = RpcCall("system", "ping", Vector.empty)
-      implicit val scheduler: Scheduler = gw.system.scheduler
-      implicit val timeout: Timeout = Timeout(5.seconds)
-      def once(): Long = {
-        val start = System.nanoTime()
-        val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
-        val took = System.nanoTime() - start
-        require(answer.result.isRight, s"system.ping failed: $answer")
-        took
-      }
-      paced(RttWarmup)(() => once())
-      paced(RttSamples)(() => once())
+      pings(gw)
     } finally {
       socket.close()
       beats.interrupt()

@@ -299,16 +299,20 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private def flush(f: FileWriter, now: Long): Unit = {
     f.flushedAt = now
     try f.writer.flush()
-    catch {
-      case ex: IOException =>
-        failedCount.incrementAndGet()
-        log.error(s"Recording: writing ${f.path} failed; a new file in 5 s", ex)
-        closeQuietly(f)
-        file = None
-        current = None
-        nextAttempt = System.nanoTime() + 5000000000L
-    }
+    catch { case ex: IOException => writeFailed(f, ex) }
   }
+
+  /** A write to `f` failed (disk full, directory gone): counted, the file given up, a new one tried after a pause. */
+  private def writeFailed(f: FileWriter, ex: IOException): Unit = {
+    failedCount.incrementAndGet()
+    log.error(s"Recording: writing ${f.path} failed; a new file in 5 s", ex)
+    closeQuietly(f)
+    file = None
+    current = None
+    nextAttempt = System.nanoTime() + RetryNanos
+  }
+
+  private val RetryNanos = 5000000000L
 
   private def closeQuietly(f: FileWriter): Unit =
     try f.close()
@@ -323,15 +327,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           f.write(e)
           written += f.writer.messages - before
           if (f.writer.size >= settings.rotateBytes) rotate()
-        } catch {
-          case ex: IOException =>
-            failedCount.incrementAndGet()
-            log.error(s"Recording: writing ${f.path} failed; a new file in 5 s", ex)
-            closeQuietly(f)
-            file = None
-            current = None
-            nextAttempt = System.nanoTime() + 5000000000L
-        }
+        } catch { case ex: IOException => writeFailed(f, ex) }
       case None =>
         failedCount.incrementAndGet()
     }
@@ -350,7 +346,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     } catch {
       case e: IOException =>
         log.error(s"Recording: cannot open $path; trying again in 5 s", e)
-        nextAttempt = System.nanoTime() + 5000000000L
+        nextAttempt = System.nanoTime() + RetryNanos
     }
   }
 

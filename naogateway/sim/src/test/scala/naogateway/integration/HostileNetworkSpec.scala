@@ -45,10 +45,7 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
            |game-controller.trusted-sources = ["127.0.0.1"]""".stripMargin)
       val log = new HostileTraffic.LogLines
       try {
-        val (_, at1) = f.robot(1)
-        f.robot(2)
-        var online = Set.empty[Int]
-        while (online.size < 2) online += f.awaitEvent(10.seconds) { case RobotOnline(id @ (1 | 2), _) => id }
+        val at1 = HostileTraffic.twoRobotsOnline(f)
         val heapBefore = HostileTraffic.usedHeapAfterGc()
         val linesBefore = log.count
         drainEvents(f)

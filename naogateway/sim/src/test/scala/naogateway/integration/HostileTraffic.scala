@@ -5,6 +5,7 @@ import java.nio.ByteBuffer
 import java.nio.channels.DatagramChannel
 import java.util.concurrent.atomic.AtomicLong
 
+import scala.concurrent.duration._
 import scala.util.Random
 
 import ch.qos.logback.classic.spi.ILoggingEvent
@@ -23,6 +24,18 @@ import naogateway.wire.{HeaderForm, MessageContents}
  * spec and the `flood` benchmark. Everything goes to loopback addresses only, in bounded loops.
  */
 object HostileTraffic {
+
+  /**
+   * The two real robots of a flood: robots 1 and 2 started on `f`'s gateway, once both are online. Answers robot 1's
+   * receive address, whose IP a forger then sends from.
+   */
+  def twoRobotsOnline(f: GatewayFixture): InetSocketAddress = {
+    val (_, at1) = f.robot(1)
+    f.robot(2)
+    var online = Set.empty[Int]
+    while (online.size < 2) online += f.awaitEvent(10.seconds) { case naogateway.RobotOnline(id @ (1 | 2), _) => id }
+    at1
+  }
 
   /** A keep-alive of `robotId` as the simulated firmware sends it, with the values a forger chooses. */
   def keepAlive(robotId: Int, bootId: Option[Int] = Some(1), uptimeMillis: Long = 1000L, battery: Float = 12.4f): Array[Byte] =
