@@ -4,10 +4,6 @@ ThisBuild / scalaVersion := V.scala
 ThisBuild / organization := "org.naogateway"
 ThisBuild / version := "0.1.0-SNAPSHOT"
 
-// The shared folder beside the checkout holds real packets from real peers (test vectors).
-lazy val sharedDir = settingKey[File]("the shared folder beside the checkout (test vectors)")
-ThisBuild / sharedDir := (ThisBuild / baseDirectory).value.getAbsoluteFile.getParentFile / "shared"
-
 lazy val strictScalac = Seq(
   scalacOptions ++= Seq(
     "-deprecation",
@@ -28,10 +24,7 @@ lazy val strictScalac = Seq(
 
 lazy val testSettings = Seq(
   Test / fork := true,
-  Test / javaOptions ++= Seq(
-    "-Xmx2g",
-    s"-Dnaogateway.shared.dir=${(ThisBuild / sharedDir).value.getAbsolutePath}"
-  ),
+  Test / javaOptions ++= Seq("-Xmx2g"),
   Test / testOptions += Tests.Argument(TestFrameworks.ScalaTest, "-oDF"),
   Test / parallelExecution := false
 )

@@ -1,7 +1,6 @@
 package apps
 
 import java.net.InetSocketAddress
-import java.nio.file.{Files, Path, Paths}
 
 import org.scalacheck.{Arbitrary, Gen}
 import org.scalatest.matchers.should.Matchers
@@ -109,11 +108,8 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
 
 object StatusViewSpec {
 
-  /** The real GameController packet `file` of the shared folder. */
-  def vector(file: String): Array[Byte] = {
-    val dir: Path = Paths.get(sys.props.getOrElse("naogateway.shared.dir", "../shared"), "vectors", "gamecontroller")
-    Files.readAllBytes(dir.resolve(file))
-  }
+  /** The real GameController packet `file` of the test resources. */
+  def vector(file: String): Array[Byte] = naogateway.wire.gamecontroller.GameControllerVectors.bytes(file)
 
   private val vectors = Seq("v8-initial.bin", "v7-initial.bin", "v8-ready.bin", "v8-set.bin", "v8-playing.bin",
     "v7-playing.bin", "v8-finished.bin")

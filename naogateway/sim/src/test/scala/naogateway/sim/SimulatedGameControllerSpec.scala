@@ -1,7 +1,5 @@
 package naogateway.sim
 
-import java.nio.file.{Files, Path, Paths}
-
 import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
@@ -15,11 +13,7 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
   private val target = SimulatedRobotSettings.AnyLoopbackPort
   private val settings = SimulatedGameControllerSettings(target)
 
-  private def folder(): Path =
-    sys.props.get("naogateway.shared.dir").map(Paths.get(_, "vectors", "gamecontroller")).filter(Files.isDirectory(_))
-      .getOrElse(cancel("GameController vectors unavailable: naogateway.shared.dir is not set or has no vectors"))
-
-  private def vector(file: String): Array[Byte] = Files.readAllBytes(folder().resolve(file))
+  private def vector(file: String): Array[Byte] = GameControllerVectors.bytes(file)
 
   private def decode(bytes: Array[Byte]): GameControlData =
     GameControllerCodec.decodeControl(bytes).fold(e => fail(e.describe), identity)

@@ -1,7 +1,6 @@
 package naogateway.sim
 
 import java.net.InetSocketAddress
-import java.nio.file.{Files, Paths}
 
 import scala.concurrent.duration._
 
@@ -227,8 +226,7 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
     }
 
     "take GameController packets on its own socket" in withGateway { gateway =>
-      val dir = sys.props.getOrElse("naogateway.shared.dir", "../shared")
-      val packet = Files.readAllBytes(Paths.get(dir, "vectors", "gamecontroller", "v8-playing.bin"))
+      val packet = naogateway.wire.gamecontroller.GameControllerVectors.bytes("v8-playing.bin")
       // Team 1 plays in no vector packet, so the robot sends no return packet to anyone's port 3838.
       val (robot, address) = start(settings(gateway, FirmwareSettings(robotId = 4, teamId = 1)))
       gateway.send(packet, address)

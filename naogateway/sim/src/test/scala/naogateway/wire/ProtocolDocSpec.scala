@@ -18,7 +18,7 @@ import naogateway.sim.{Destination, FirmwareSettings, FirmwareState, Outgoing, R
  * Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every
  * `<!-- table: tag -->` offset table in the document is checked here: FU-Remote frames against the codecs (decode to
  * the expected contents, re-encode to the identical bytes), GameController bytes and tables against the real packets
- * in shared/vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules. The
+ * in the test resources' vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules. The
  * keep-alive example and the debug option catalogue are checked against the simulated firmware as well.
  */
 class ProtocolDocSpec extends AnyWordSpec with Matchers {
@@ -406,14 +406,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       case ((state, _), millis) => RobotFirmware.advance(state, millis * 1000000L)
     }
 
-  private def vector(name: String): Array[Byte] = {
-    val candidates = sys.props.get("naogateway.shared.dir").map(Paths.get(_)).toSeq ++
-      Seq(Paths.get("../../shared"), Paths.get("../shared"))
-    candidates.map(_.resolve("vectors/gamecontroller").resolve(name)).find(Files.isRegularFile(_)) match {
-      case Some(path) => Files.readAllBytes(path)
-      case None => fail(s"GameController vector $name not found under ${candidates.mkString(", ")}")
-    }
-  }
+  private def vector(name: String): Array[Byte] = naogateway.wire.gamecontroller.GameControllerVectors.bytes(name)
 
   /** Checks that the rows' offsets follow each other without gap or overlap from 0; returns the total size. */
   private def contiguous(t: Table, offsetColumn: Int, sizeColumn: Int): Int =

@@ -1,32 +1,14 @@
 package naogateway.wire.gamecontroller
 
 import java.nio.charset.StandardCharsets
-import java.nio.file.{Files, Path, Paths}
-
-import scala.jdk.CollectionConverters._
-import scala.util.Using
-
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/** The real packets in the shared folder's `vectors/gamecontroller/`, checked against their README. */
+/** The real packets in the test resources' `vectors/gamecontroller/`, checked against their README. */
 class GameControllerVectorsSpec extends AnyWordSpec with Matchers {
   import GameControllerVectorsSpec.Expected
 
-  private val SharedDirProperty = "naogateway.shared.dir"
-
-  private lazy val vectorDir: Either[String, Path] =
-    sys.props.get(SharedDirProperty) match {
-      case None => Left(s"system property $SharedDirProperty is not set")
-      case Some(shared) =>
-        val dir = Paths.get(shared, "vectors", "gamecontroller")
-        if (Files.isDirectory(dir)) Right(dir) else Left(s"$dir does not exist")
-    }
-
-  // Missing vectors must show as cancelled, never as passed.
-  private def folder(): Path = vectorDir.fold(why => cancel(s"GameController vectors unavailable: $why"), identity)
-
-  private def vector(file: String): Array[Byte] = Files.readAllBytes(folder().resolve(file))
+  private def vector(file: String): Array[Byte] = GameControllerVectors.bytes(file)
 
   private val v8PlayingPenalty = Some((0, 2, Penalty.BallManipulation, 25))
 
@@ -75,8 +57,9 @@ class GameControllerVectorsSpec extends AnyWordSpec with Matchers {
 
   "The GameController vector folder" should {
     "hold exactly the files the README lists" in {
-      val files = Using.resource(Files.list(folder()))(_.iterator().asScala.map(_.getFileName.toString).toList)
-      files.filter(_.endsWith(".bin")).sorted shouldBe table.map(_.file).sorted
+      val listed = raw"(?m)^\| (v\d+-[a-z]+\.bin) \|".r.findAllMatchIn(GameControllerVectors.readme).map(_.group(1)).toList
+      listed.sorted shouldBe table.map(_.file).sorted
+      listed.foreach(file => vector(file) should not be empty)
     }
   }
 
