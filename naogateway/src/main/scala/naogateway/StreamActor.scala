@@ -7,7 +7,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
-/** The gateway's end of one robot's secure stream (SPEC §6): reliable, ordered payloads over the lossy link. */
+/** The gateway's end of one robot's secure stream (docs/protocol.md §11): reliable, ordered payloads over the lossy link. */
 object StreamActor {
 
   /** What the stream endpoint accepts. */

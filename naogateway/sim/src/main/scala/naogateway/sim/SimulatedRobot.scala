@@ -157,7 +157,7 @@ final case class RobotView(
   */
 object SimulatedRobot {
 
-  /** The GS1500M needs about 4 s after power-up before it answers (SPEC §7). */
+  /** The GS1500M needs about 4 s after power-up before it answers (docs/protocol.md §12). */
   val ModuleBootDelay: FiniteDuration = 4.seconds
 
   /** Where a robot receives on its own IP address (docs/protocol.md section 2). */

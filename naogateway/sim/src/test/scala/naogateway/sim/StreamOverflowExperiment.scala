@@ -7,7 +7,7 @@ import naogateway.sim.gs1500m.{Cm530Firmware, Cm530Stats, FirmwareEvent, Gs1500m
 import naogateway.wire.Datagram
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
-/** The thesis's overflow experiment (SPEC §6) over the secure stream, through the same GS1500M and CM-530 models
+/** The thesis's overflow experiment (docs/simulator.md §6) over the secure stream, through the same GS1500M and CM-530 models
   * as the raw run of [[OverflowExperiment]], in simulated time.
   *
   * The gateway side offers the 100 payloads of 1 kB to a gateway-side [[SecureStream]], one every 50 ms (byte 0 of

@@ -1,7 +1,7 @@
 package naogateway.wire
 
 /**
- * A datagram received on a robot's port, sorted by its first bytes (SPEC §5). The original array is
+ * A datagram received on a robot's port, sorted by its first bytes (docs/protocol.md §3 and §10). The original array is
  * kept, not copied; decoding it is the job of the codec of its kind.
  */
 sealed trait Datagram extends Product with Serializable {
@@ -14,7 +14,7 @@ sealed trait Datagram extends Product with Serializable {
 }
 
 /**
- * Classification of any received datagram into exactly one kind, by prefix only (SPEC §5):
+ * Classification of any received datagram into exactly one kind, by prefix only (docs/protocol.md §3 and §10):
  *
  *  - every datagram larger than [[WireLimits.MaxDatagramBytes]] (1400) is rejected, whatever it starts with;
  *  - `00 2A` (operation 42, big-endian) and at least 8 bytes (the shorter, 2014 header form): an FU-Remote frame;
@@ -30,7 +30,7 @@ sealed trait Datagram extends Product with Serializable {
  */
 object Datagram {
 
-  /** Fewest bytes of an FU-Remote frame: the 8-byte header of the 2014 form (SPEC §2). */
+  /** Fewest bytes of an FU-Remote frame: the 8-byte header of the 2014 form (docs/protocol.md §4). */
   val FuRemoteMinBytes: Int = 8
 
   /** Fewest bytes that tell a GameController packet's type (`RGme`, `RGrt`). */

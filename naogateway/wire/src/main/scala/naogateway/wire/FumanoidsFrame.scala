@@ -8,7 +8,7 @@ import scala.util.control.NonFatal
 
 import naogateway.proto.Message
 
-/** The two header forms of an FU-Remote frame (SPEC §2). */
+/** The two header forms of an FU-Remote frame (docs/protocol.md §4). */
 sealed abstract class HeaderForm(val headerBytes: Int) extends Product with Serializable
 
 /** The header forms a reader accepts; `Legacy` is what the CM-530 firmware of the thesis sends. */
@@ -76,7 +76,7 @@ final case class RawFrame(header: FrameHeader, protobuf: Array[Byte])
 /** A frame read from the wire and parsed into a `Message`. */
 final case class DecodedFrame(header: FrameHeader, message: Message)
 
-/** Encoder and decoder of FUmanoids frames (SPEC §2): pure functions, decoding never throws. */
+/** Encoder and decoder of FUmanoids frames (docs/protocol.md §4): pure functions, decoding never throws. */
 object FumanoidsFrame {
 
   /** Flag bit meaning "the payload is gzip-compressed". */

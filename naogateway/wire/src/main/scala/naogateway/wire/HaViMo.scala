@@ -2,7 +2,7 @@ package naogateway.wire
 
 import java.nio.{ByteBuffer, ByteOrder}
 
-/** One HaViMo2 region (SPEC §8): colour class, pixel count, coordinate sums and bounding box in the 160 × 120 image. */
+/** One HaViMo2 region (docs/protocol.md 6.5): colour class, pixel count, coordinate sums and bounding box in the 160 × 120 image. */
 final case class HaViMoRegion(
     index: Int,
     colour: Int,
@@ -36,7 +36,7 @@ final case class HaViMoGrid(cells: Vector[Byte]) {
 /** Why HaViMo2 bytes are refused. */
 final case class HaViMoError(describe: String)
 
-/** Codecs of the HaViMo2 camera's own byte layouts (SPEC §8). */
+/** Codecs of the HaViMo2 camera's own byte layouts (docs/protocol.md 6.5). */
 object HaViMo {
   val ImageWidth: Int = 160
   val ImageHeight: Int = 120

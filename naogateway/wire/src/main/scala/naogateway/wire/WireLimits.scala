@@ -1,6 +1,6 @@
 package naogateway.wire
 
-/** Fixed limits of the robot's link (SPEC §1, §5, §6). */
+/** Fixed limits of the robot's link (docs/protocol.md §2, §10, §11). */
 object WireLimits {
 
   /** The GS1500M module's buffer: no datagram to or from a robot may be larger. */

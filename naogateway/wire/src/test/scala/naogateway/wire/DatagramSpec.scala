@@ -20,7 +20,7 @@ class DatagramSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
   private def bytesOf(values: Int*): Array[Byte] = values.map(_.toByte).toArray
   private def sized(prefix: Array[Byte], size: Int): Array[Byte] = java.util.Arrays.copyOf(prefix, size)
 
-  // SPEC §3: the worked FU-Remote frame of the thesis (legacy header).
+  // docs/protocol.md 9.1: the worked FU-Remote frame of the thesis (legacy header).
   private val workedFrame =
     bytesOf(0x00, 0x2a, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x12, 0x08, 0x01, 0xba, 0x01, 0x0d, 0x10, 0x01, 0x62, 0x09) ++
       ascii("AgentTest")

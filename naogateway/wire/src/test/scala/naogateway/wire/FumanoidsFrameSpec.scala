@@ -16,14 +16,14 @@ class FumanoidsFrameSpec extends AnyWordSpec with Matchers with ScalaCheckProper
 
   private def hex(s: String): Array[Byte] = s.split(' ').map(Integer.parseInt(_, 16).toByte)
 
-  // SPEC §3: robot 1, team 1, activeAgent "AgentTest", as the CM-530 sends it (legacy header).
+  // docs/protocol.md 9.1: robot 1, team 1, activeAgent "AgentTest", as the CM-530 sends it (legacy header).
   private val workedHeader = hex("00 2A 00 00 00 00 00 00 00 00 00 12")
   private val workedProtobuf = hex("08 01 BA 01 0D 10 01 62 09 41 67 65 6E 74 54 65 73 74")
   private val workedFrame = workedHeader ++ workedProtobuf
   private val workedContents =
     MessageContents(robotId = 1, status = Some(Status(teamID = Some(1), activeAgent = Some("AgentTest"))))
 
-  "The SPEC §3 worked example" should {
+  "The docs/protocol.md 9.1 worked example" should {
     "encode byte for byte" in {
       MessageContents.encodeFrame(workedContents).map(_.toSeq) shouldBe Right(workedFrame.toSeq)
     }

@@ -8,7 +8,7 @@ import naogateway.wire.MessageContents
 /** A packet the CM-530 application hands to its send path; `encode` charges the protobuf encoding cost first. */
 final case class Outgoing(cid: Int, data: ArraySeq[Byte], encode: Boolean = false, keepAlive: Boolean = false)
 
-/** The firmware's periodic keep-alive (SPEC §1: a 24-byte `Status` every 200 ms). */
+/** The firmware's periodic keep-alive (docs/protocol.md §2 and 6.2: a 24-byte `Status` every 200 ms). */
 final case class KeepAlive(periodMillis: Double = 200.0, cid: Int = 0, payload: ArraySeq[Byte] = KeepAlive.StatusFrame)
 
 /** The default keep-alive frame. */
@@ -34,7 +34,7 @@ object KeepAlive {
   * @param messageHeaderMillis
   *   reading one WLAN message header (table 4: 0.05 ms)
   * @param handleMessageMillis
-  *   handling one received datagram, fixed part (SPEC §9: parsing ≈ 5 ms)
+  *   handling one received datagram, fixed part (docs/simulator.md 1.4: parsing ≈ 5 ms)
   * @param handlePerByteMillis
   *   handling one received datagram, per payload byte (0 for protobuf messages; see [[OverflowExperiment]])
   * @param statusLineMillis

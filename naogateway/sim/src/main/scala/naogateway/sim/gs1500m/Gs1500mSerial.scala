@@ -11,7 +11,7 @@ sealed trait SerialEvent extends Product with Serializable
 /** A well-formed piece of the serial stream: what the decoder yields besides garbage, and what the encoder takes. */
 sealed trait SerialItem extends SerialEvent
 
-/** The pieces of the GS1500M serial stream in bulk data mode (SPEC §7). */
+/** The pieces of the GS1500M serial stream in bulk data mode (docs/protocol.md §12). */
 object SerialEvent {
 
   /** One datagram on connection `cid`; `remote` is the sender when it came through a UDP server (`ESC 'y'`), else
@@ -82,7 +82,7 @@ object SerialError {
   }
 }
 
-/** Encoding of the GS1500M's serial framing in bulk data mode (SPEC §7; thesis §5.2.2, §5.3).
+/** Encoding of the GS1500M's serial framing in bulk data mode (docs/protocol.md §12; thesis §5.2.2, §5.3).
   *
   * - Bulk send and direct receive: `ESC 'Z' <cid> <length as 4 ASCII digits> <data>`, no trailer.
   * - UDP server receive: `ESC 'y' <cid> <ip> ' ' <port> TAB <length as 4 ASCII digits> <data>`. The thesis only says

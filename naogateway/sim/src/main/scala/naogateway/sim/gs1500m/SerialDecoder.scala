@@ -4,7 +4,7 @@ import scala.collection.immutable.ArraySeq
 
 import naogateway.sim.gs1500m.SerialEvent._
 
-/** An incremental, immutable parser of the byte stream the GS1500M writes to the CM-530 (SPEC §7), modelled on the
+/** An incremental, immutable parser of the byte stream the GS1500M writes to the CM-530 (docs/protocol.md §12), modelled on the
   * thesis's polled state machine (§5.2.2).
   *
   * Feed it chunks of any size; it returns the next decoder and the events completed by that chunk. It never throws:

@@ -15,7 +15,7 @@ class Cm530CostsSpec extends AnyWordSpec with Matchers {
       encodeAndSendMillis(1400) shouldBe (88.0 +- 0.5)
       Real.encodeAndSendNanos(1400) shouldBe (88000000L +- 500000L)
     }
-    "agree with the thesis's combined fit 0.0632x - 0.6217 and SPEC's rounded coefficients" in {
+    "agree with the thesis's combined fit 0.0632x - 0.6217 and the rounded coefficients of docs/simulator.md 1.4" in {
       for (x <- Seq(50, 250, 1000, 1400)) {
         encodeAndSendMillis(x) shouldBe ((0.0632 * x - 0.6217) +- 0.15)
         encodeMillis(x) shouldBe ((0.0386 * x - 0.81) +- 0.01)

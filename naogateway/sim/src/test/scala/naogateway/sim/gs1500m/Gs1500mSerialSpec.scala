@@ -39,7 +39,7 @@ class Gs1500mSerialSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
     (decoder, out.result())
   }
 
-  // SPEC §3: the thesis's worked example as the CM-530 hands it to the module.
+  // docs/protocol.md 9.1: the thesis's worked example as the CM-530 hands it to the module.
   private val serialPrefix = hex("1B 5A 30 30 30 33 30")
   private val fumanoidsFrame =
     hex("00 2A 00 00 00 00 00 00 00 00 00 12") ++ hex("08 01 BA 01 0D 10 01 62 09 41 67 65 6E 74 54 65 73 74")

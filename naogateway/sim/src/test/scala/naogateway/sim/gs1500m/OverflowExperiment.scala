@@ -2,24 +2,24 @@ package naogateway.sim.gs1500m
 
 import scala.collection.immutable.ArraySeq
 
-/** The thesis's overflow experiment (§6.1; SPEC §6) through the module and firmware models, in simulated time.
+/** The thesis's overflow experiment (§6.1; docs/simulator.md §6) through the module and firmware models, in simulated time.
   *
   * A peer sends 100 datagrams of 1 kB, one every 50 ms; byte 0 of the i-th (1-based) is i − 1, the rest is random.
   * The firmware adds up byte 0 of every datagram it decodes; the right sum is 4950. On the real CM-530 the thesis got
   * only about 900 to 1000 in several runs, because the module's 1400-byte buffer overflowed while the firmware was
   * busy. (The thesis's sender was a TCP server; the model replays the same schedule as UDP datagrams on the robot's
-  * UDP server connection, the form SPEC §6 states and the one the robot uses on port 3838.)
+  * UDP server connection, the form docs/protocol.md §2 states and the one the robot uses on port 3838.)
   *
   * '''Calibration of [[ThesisFirmware]].''' The buffer holds one 1 kB datagram, not two, so whatever arrives while
   * an unread one waits is lost or overwrites it: the firmware gets about one datagram per main-loop iteration that
   * handles one, and a sum near 950 means about 19 of 100, i.e. one such iteration per ≈ 250 ms. The parts:
   *   - reading the 1 kB datagram: its serial line time, ≈ 22.3 ms at 460800 baud (1027 bytes with the `ESC 'y'`
   *     header);
-  *   - handling it: 5 ms fixed (SPEC §9's parse figure) plus 0.2 ms per payload byte, ≈ 205 ms for 1 kB. The per-byte
+  *   - handling it: 5 ms fixed (docs/simulator.md 1.4, parse) plus 0.2 ms per payload byte, ≈ 205 ms for 1 kB. The per-byte
   *     figure is fitted, not measured: the thesis only says that its example code spends its receive time on output to
   *     the PC and that the raw 1 kB path was slow. It is of the order of echoing the bytes to the PC at the CM-530's
   *     usual 57600 baud (0.17 ms per byte), which makes it plausible;
-  *   - the rest of the robot's work per iteration: uniform 0–60 ms (a HaViMo2 fetch takes up to 60 ms, SPEC §8),
+  *   - the rest of the robot's work per iteration: uniform 0–60 ms (a HaViMo2 fetch takes up to 60 ms, docs/protocol.md 6.5),
   *     drawn with the seed;
   *   - the keep-alive: a 24-byte `Status` encoded (0.12 ms) and sent (0.77 ms) every 200 ms;
   *   - a 10 ms main-loop period (reached only when idle).

@@ -43,7 +43,7 @@ class ReceivePathSpec extends AnyWordSpec with Matchers {
     "send a keep-alive every 200 ms, which goes on air and is acknowledged" in {
       val r = run(Nil, config = Cm530Config(), until = 999 * ms)
       val sent = r.firmwareEvents.collect { case s: Sent if s.keepAlive => s.at }
-      sent.size shouldBe 5 // at about 0, 200, 400, 600 and 800 ms: SPEC's 5 per second
+      sent.size shouldBe 5 // at about 0, 200, 400, 600 and 800 ms: five keep-alives per second (docs/protocol.md §2)
       sent.zip(sent.tail).foreach { case (a, b) => (b - a) shouldBe (200 * ms +- 1 * ms) }
       val aired = r.moduleEvents.collect { case ModuleEvent.OnAir(_, data, at) => (data, at) }
       aired.map(_._1) shouldBe Vector.fill(5)(KeepAlive.StatusFrame)

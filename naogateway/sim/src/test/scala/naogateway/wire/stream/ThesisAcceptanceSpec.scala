@@ -11,7 +11,7 @@ import org.scalatest.wordspec.AnyWordSpec
 import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
 
-/** The thesis's acceptance tests (SPEC §6), over the seeded lossy channel. */
+/** The thesis's acceptance tests (docs/protocol.md §11), over the seeded lossy channel. */
 class ThesisAcceptanceSpec extends AnyWordSpec with Matchers {
 
   private val windows = Seq(1, 20)

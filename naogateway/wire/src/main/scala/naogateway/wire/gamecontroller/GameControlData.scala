@@ -5,7 +5,7 @@ import scala.collection.immutable.ArraySeq
 /** A layout of the `RGme` control packet, with its exact size on the wire. */
 sealed abstract class GameControlVersion(val number: Int, val packetBytes: Int) extends Product with Serializable
 
-/** The two layouts the GameController broadcasts to the humanoid leagues each round (SPEC §5). */
+/** The two layouts the GameController broadcasts to the humanoid leagues each round (docs/protocol.md §3 and §10). */
 object GameControlVersion {
 
   /** The current layout: u8 version, 158 bytes. */

@@ -7,7 +7,7 @@ import scala.collection.immutable.ArraySeq
 import naogateway.wire.gamecontroller.GameControllerError._
 
 /**
- * Encoder and decoder of GameController packets (SPEC §5): the `RGme` control packet in versions 8
+ * Encoder and decoder of GameController packets (docs/protocol.md §3 and §10): the `RGme` control packet in versions 8
  * (158 bytes) and 7 (116 bytes), and the `RGrt` return packet in version 2 (8 bytes). All numbers are
  * little-endian. Pure functions; decoding never throws and never guesses: a packet must have a known
  * version and exactly that version's size, or it is refused with a typed error.

@@ -4,7 +4,7 @@ import scala.collection.immutable.{Queue, TreeSet}
 
 import naogateway.wire.WireLimits
 
-/** One endpoint of the secure stream (SPEC §6): reliable, ordered delivery over UDP with the thesis's 2-byte header,
+/** One endpoint of the secure stream (docs/protocol.md §11): reliable, ordered delivery over UDP with the thesis's 2-byte header,
   * as a pure state machine.
   *
   * Every transition takes the current time in nanoseconds (simulated or monotonic; only differences matter) and

@@ -4,7 +4,7 @@ import scala.concurrent.duration._
 
 import naogateway.wire.WireLimits
 
-/** Configuration of one secure-stream endpoint (SPEC §6); both ends of a pair must agree on `window` and `maxSeq`.
+/** Configuration of one secure-stream endpoint (docs/protocol.md §11); both ends of a pair must agree on `window` and `maxSeq`.
   *
   * @param window
   *   how many data segments may be unacknowledged at once (1 = the thesis's stop-and-wait, up to 20 = selective
