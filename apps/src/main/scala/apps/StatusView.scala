@@ -88,7 +88,8 @@ object StatusView {
     }.orElse(Option.when(g.recording.enabled) {
       val r = g.recording
       s"recording: ${r.messages} messages in ${r.files} file(s), ${r.dropped} dropped" +
-        (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f => s", now ${f.split('/').last}")
+        (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f => s", now ${f.split('/').last}") +
+        r.retention.fold("")(k => s"; ${k.describe}")
     })
   }
 

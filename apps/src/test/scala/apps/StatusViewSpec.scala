@@ -50,6 +50,13 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       StatusView.render(StatusModel.empty.copy(gateway = Some(recording))) should contain(
         "recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
     }
+    "show what the recording directory keeps and what retention deleted" in {
+      val kept = naogateway.recording.RetentionStatus(12, 96L * 1024 * 1024, 3, 30L * 1024 * 1024, "20.0 GiB, 14 days", None)
+      val stats = naogateway.Gateway.GatewayStats(10, 0, 0, Map.empty, 1).copy(recording =
+        naogateway.recording.RecordingStats(enabled = true, 2, 1234, 0, 0, Some("recordings/naogateway-20260101-120000-2.mcap"), Some(kept)))
+      StatusView.recordingLine(Some(stats)) shouldBe Some("recording: 1234 messages in 2 file(s), 0 dropped, now " +
+        "naogateway-20260101-120000-2.mcap; kept 12 file(s), 96.0 MiB (limits 20.0 GiB, 14 days); 3 deleted so far")
+    }
 
     "render a screen with the game, the competition gate and the team's traffic against the budget" in {
       val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, Some(traffic), None))

@@ -79,7 +79,8 @@ object Decision {
  * What the recorder did so far: files begun, MCAP messages written, entries dropped because its queue was full, and
  * entries lost because no file could be written.
  */
-final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long, currentFile: Option[String])
+final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long, currentFile: Option[String],
+    retention: Option[RetentionStatus] = None)
 
 /**
  * Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
@@ -215,6 +216,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private val messageCount = new AtomicLong
   private val fileCount = new AtomicLong
   @volatile private var current: Option[String] = None
+  private val retention = new RetentionKeeper(settings.directory, settings.retention)
   @volatile private var running = true
   // Wall-clock time of a nanoTime: one anchor, so times within a run never go backwards.
   private val epochAnchor = System.currentTimeMillis() * 1000000L
@@ -237,7 +239,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     }
 
   def stats: RecordingStats =
-    RecordingStats(enabled = true, fileCount.get, messageCount.get, droppedCount.get, failedCount.get, current)
+    RecordingStats(enabled = true, fileCount.get, messageCount.get, droppedCount.get, failedCount.get, current, Some(retention.status))
 
   def close(): Unit = {
     running = false
@@ -343,6 +345,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
       fileCount.incrementAndGet()
       current = Some(path.toString)
       log.info("Recording to {}", path)
+      retention.sweep(Set(path))
     } catch {
       case e: IOException =>
         log.error(s"Recording: cannot open $path; trying again in 5 s", e)

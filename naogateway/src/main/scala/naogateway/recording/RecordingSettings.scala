@@ -8,15 +8,16 @@ import scala.jdk.DurationConverters._
 import com.typesafe.config.Config
 
 /**
- * `naogateway.recording`: whether the gateway records, where, when a file is closed and the next begun, and how many
- * entries may wait for the writer before more are dropped.
+ * `naogateway.recording`: whether the gateway records, where, when a file is closed and the next begun, how many
+ * entries may wait for the writer before more are dropped, and how much the directory keeps.
  */
 final case class RecordingSettings(
     enabled: Boolean,
     directory: Path,
     rotateBytes: Long,
     rotateInterval: FiniteDuration,
-    queueCapacity: Int
+    queueCapacity: Int,
+    retention: RetentionSettings = RetentionSettings.Default
 ) {
   require(rotateBytes >= 64 * 1024, "recording.rotate-bytes must be at least 64 KiB")
   require(rotateInterval >= 1.second, "recording.rotate-interval must be at least 1 s")
@@ -36,6 +37,7 @@ object RecordingSettings {
       directory = Paths.get(c.getString("directory")),
       rotateBytes = c.getBytes("rotate-bytes"),
       rotateInterval = c.getDuration("rotate-interval").toScala,
-      queueCapacity = c.getInt("queue-capacity")
+      queueCapacity = c.getInt("queue-capacity"),
+      retention = RetentionSettings.fromConfig(c.getConfig("retention"))
     )
 }
