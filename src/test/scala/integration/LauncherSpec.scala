@@ -17,7 +17,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
   private def freePort(): Int = { val s = new ServerSocket(0); try s.getLocalPort finally s.close() }
 
   /** A launcher JVM and the lines it prints, read on a thread of their own. */
-  private final class Launched(val process: Process) {
+  private final class Launched(val process: Process, val clusterPort: Int) {
     val lines = new LinkedBlockingQueue[String]()
     val reader = new Thread(() => {
       val in = new BufferedReader(new InputStreamReader(process.getInputStream))
@@ -30,21 +30,31 @@ class LauncherSpec extends AnyWordSpec with Matchers {
   // The launcher's control port, for robotctl; picked like the cluster port.
   private val controlPort = freePort()
 
-  private def launch(): Launched = {
+  private def launch(clusterPort: Int = freePort(), main: String = "apps.Launcher"): Launched = {
     val javaBin = s"${System.getProperty("java.home")}/bin/java"
-    val command = Seq(javaBin, "-Xmx768m", "-cp", System.getProperty("java.class.path"), "apps.Launcher")
+    val command = Seq(javaBin, "-Xmx768m", "-cp", System.getProperty("java.class.path"), main)
     // A process started in the background of a non-interactive shell inherits SIGINT as ignored, and the JVM then
     // never installs its handler; python resets it to the default first, as an interactive terminal would have it.
     val python = Seq("python3", "-c", "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])")
     val builder = new ProcessBuilder((python ++ command).asJava).redirectErrorStream(true)
     // The cluster port must be known beforehand (the launcher's app node joins it as its seed), so it is picked here;
     // the ZeroMQ endpoint takes free ports itself.
-    builder.environment().put("ROBOTS_GATEWAY_PORT", freePort().toString)
+    builder.environment().put("ROBOTS_GATEWAY_PORT", clusterPort.toString)
     builder.environment().put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
     builder.environment().put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
     builder.environment().put("NAOGATEWAY_LOG_FILE", "target/launcher-spec.log")
     builder.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
-    new Launched(builder.start())
+    new Launched(builder.start(), clusterPort)
+  }
+
+  /** Every line `launched` prints until it exits (within `within`), and its exit code (None if it did not exit). */
+  private def runToEnd(launched: Launched, within: FiniteDuration): (Vector[String], Option[Int]) = {
+    val exited = launched.process.waitFor(within.toSeconds, TimeUnit.SECONDS)
+    if (!exited) launched.process.destroyForcibly()
+    launched.reader.join(5000)
+    val lines = new java.util.ArrayList[String]()
+    launched.lines.drainTo(lines)
+    (lines.asScala.toVector, if (exited) Some(launched.process.exitValue()) else None)
   }
 
   "The launcher" should {
@@ -60,7 +70,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         seen.clear()
         val launched = launch()
         val deadline = 90.seconds.fromNow
-        def portTaken = seen.exists(_.contains("Address already in use"))
+        def portTaken = seen.exists(l => l.contains("Address already in use") || l.contains("is in use by another program"))
         while (online.size < 3 && !portTaken && deadline.hasTimeLeft() && (launched.reader.isAlive || !launched.lines.isEmpty)) {
           Option(launched.lines.poll(1, TimeUnit.SECONDS)).foreach(seen += _)
         }
@@ -81,6 +91,34 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         val code = apps.RobotCtl.run(Seq("status"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get, out += _, err += _)
         withClue(err.result().mkString("\n")) { code shouldBe 0 }
         out.result().count(_.matches("[123] .* online .*")) shouldBe 3
+
+        // robotctl doctor against the demo: the simulated GameController heard, three robots online, nothing wrong.
+        val doctor = Vector.newBuilder[String]
+        val doctorErr = Vector.newBuilder[String]
+        val doctorCode = apps.RobotCtl.run(Seq("doctor"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get, doctor += _, doctorErr += _)
+        withClue((doctor.result() ++ doctorErr.result()).mkString("\n")) {
+          doctor.result().exists(_.startsWith("ok   GameController: heard, version ")) shouldBe true
+          doctor.result() should contain("ok   robots: 3 of 3 known robot(s) online, 0 configured")
+          doctorCode shouldBe 0
+        }
+
+        // The first app of docs/writing-apps.md, against the demo as it runs (issue 21: it asked for robot 1's lease).
+        val (hello, helloExit) = runToEnd(launch(launched.clusterPort, "apps.examples.HelloRobot"), 90.seconds)
+        withClue(hello.mkString("\n")) {
+          hello should contain("hello-robot: robot 2 stood up, greeted, walked and stopped")
+          helloExit shouldBe Some(0)
+        }
+
+        // A second launcher beside the running one: one line per port it cannot have, naming the setting; no stack trace.
+        val (second, secondExit) = runToEnd(launch(launched.clusterPort), 60.seconds)
+        withClue(second.mkString("\n")) {
+          secondExit shouldBe Some(apps.Launcher.ExitPortInUse)
+          second should contain(s"naogateway: port ${launched.clusterPort} (TCP on 127.0.0.1, the cluster port of the gateway node, where " +
+            "apps join) is in use by another program; stop that program or move the port with robotmiddleware.cluster.gateway-port " +
+            "(ROBOTS_GATEWAY_PORT)")
+          second.exists(l => l.contains(s"port $controlPort ") && l.contains("apps.control.bind (NAOGATEWAY_CONTROL)")) shouldBe true
+          second.exists(_.contains("Exception")) shouldBe false
+        }
 
         val signalled = System.nanoTime()
         new ProcessBuilder("kill", "-INT", process.pid().toString).start().waitFor()

@@ -6,6 +6,7 @@ import java.nio.file.Paths
 
 import scala.concurrent.duration._
 import scala.jdk.DurationConverters._
+import scala.util.control.NonFatal
 import scala.util.{Failure, Success}
 
 import akka.actor.CoordinatedShutdown
@@ -32,15 +33,28 @@ object Launcher {
   def settings(c: Config): Settings =
     Settings(c.getInt("simulated-robots"), c.getInt("ball-follower-robot"), c.getDuration("refresh").toScala)
 
-  /** The launcher's config: a file given as argument, then application.conf, then launcher.conf and the references. */
+  /** The resource with the launcher's defaults: below application.conf, above the references. */
+  val DefaultsResource: String = "launcher.conf"
+
+  /** The launcher's defaults (the demo's), unresolved: environment variables are read when the whole config is. */
+  def defaults: Config = ConfigFactory.parseResources(DefaultsResource)
+
+  /** The config file given as argument (empty without one); it outranks application.conf and the launcher's defaults. */
   def config(args: Seq[String]): Config = {
     val file = args.headOption.map { path =>
       val f = new File(path)
       require(f.isFile, s"config file $path does not exist")
       ConfigFactory.parseFile(f)
     }
-    file.getOrElse(ConfigFactory.empty()).withFallback(ConfigFactory.parseResources("launcher.conf"))
+    file.getOrElse(ConfigFactory.empty())
   }
+
+  /**
+   * The gateway node's whole config: the file (`overrides`), then `application` (application.conf or -Dconfig.file),
+   * then the launcher's defaults with the environment variables they name, then the cluster settings and references.
+   */
+  def nodeConfig(overrides: Config, application: => Config = ConfigFactory.defaultApplication()): Config =
+    MiddlewareCluster.config(MiddlewareCluster.GatewayRole, overrides, defaults, application)
 
   /** The command line: an optional config file, and a recording to replay instead of the sockets. */
   final case class Arguments(configFile: Option[String], replay: Option[Replay])
@@ -86,10 +100,61 @@ object Launcher {
           System.err.println("usage: naogateway [config-file] [--replay FILE-OR-DIRECTORY [--speed X]]   (no file: the demo with simulated robots)")
           sys.exit(2)
       }
-    val gatewayNode = MiddlewareCluster.start(Root(parsed.replay), MiddlewareCluster.GatewayRole, overrides)
+    val nodeConfig = checked(overrides, code => sys.exit(code))
+    val gatewayNode =
+      try MiddlewareCluster.start(Root(parsed.replay), nodeConfig)
+      catch {
+        // Another program took a port between the check and the bind: the same one line, not Akka's stack trace.
+        case NonFatal(e) if bindFailure(e) =>
+          Preflight.portProblems(Preflight.ports(nodeConfig)).foreach(l => System.err.println(s"naogateway: $l"))
+          System.err.println(s"naogateway: cannot bind a port: ${rootCause(e).getMessage}")
+          sys.exit(ExitPortInUse)
+      }
     // Ctrl-C (or a TERM) runs the JVM shutdown hooks: both actor systems leave and stop within the phase timeouts.
     CoordinatedShutdown(gatewayNode.classicSystem).addJvmShutdownHook(println("naogateway stopped"))
   }
+
+  /** The exit codes of a launcher that could not start: a config problem, and a port it cannot have. */
+  val ExitConfig = 2
+  val ExitPortInUse = 3
+
+  /**
+   * The gateway node's config once it passed the checks of [[Preflight]]: a config problem is one line naming the key
+   * (exit [[ExitConfig]]); a port held by another program one line each, naming the port, its use and the setting
+   * that moves it (exit [[ExitPortInUse]]; a warning for the GameController's port, without which the gateway runs
+   * with game state unknown); the demo's robots on a machine without their loopback addresses one line
+   * saying what to do (exit [[ExitConfig]]). Keys no reference knows are warned about. Lines go to `err`.
+   */
+  def checked(overrides: Config, exit: Int => Nothing, err: String => Unit = System.err.println,
+      application: => Config = ConfigFactory.defaultApplication(), probe: Preflight.PortUse => Preflight.Probe = Preflight.probe,
+      loopback: java.net.InetAddress => Boolean = Preflight.loopbackBindable): Config = {
+    val c =
+      try { val c = nodeConfig(overrides, application); Preflight.validate(c); c }
+      catch {
+        case NonFatal(e) if Preflight.problem(e).isDefined =>
+          err(s"naogateway: ${Preflight.problem(e).get}")
+          exit(ExitConfig)
+      }
+    Preflight.unknownKeys(c, Preflight.knownKeys).foreach(k => err(s"naogateway: warning: config key $k is not a setting (a typo?); it is ignored"))
+    val simulated = c.getInt("apps.launcher.simulated-robots")
+    Preflight.missingLoopback(simulated, loopback).foreach { line =>
+      err(s"naogateway: $line")
+      exit(ExitConfig)
+    }
+    val (essential, optional) = Preflight.ports(c).partition(_.essential)
+    Preflight.portProblems(optional, probe).foreach(l => err(s"naogateway: warning: $l"))
+    val ports = Preflight.portProblems(essential, probe)
+    if (ports.nonEmpty) {
+      ports.foreach(l => err(s"naogateway: $l"))
+      exit(ExitPortInUse)
+    }
+    c
+  }
+
+  private def rootCause(e: Throwable): Throwable = Option(e.getCause).filter(_ ne e).fold(e)(rootCause)
+
+  private def bindFailure(e: Throwable): Boolean =
+    rootCause(e).isInstanceOf[java.net.BindException] || e.isInstanceOf[akka.remote.RemoteTransportException]
 
   /**
    * The demo's simulated robots introduce themselves with their keep-alives like strangers would: the discovery cap is

@@ -77,12 +77,18 @@ object RobotCtl {
                 case ControlProtocol.Request.Watch(_, seconds) => ReadTimeoutMillis + seconds.toLong * 1000
                 case _                                         => ReadTimeoutMillis.toLong
               }
-              exchange(host, port, line, math.min(readTimeout, Int.MaxValue.toLong).toInt, out, err)
+              val noGateway: String => Int = request match {
+                // No gateway to ask: the doctor checks the machine against the config the gateway would start with.
+                case ControlProtocol.Request.Doctor(file) => where => offlineDoctor(where, file, out, err)
+                case _ => where => { err(s"no gateway at $where: is naogateway running?"); ExitFailed }
+              }
+              exchange(host, port, line, math.min(readTimeout, Int.MaxValue.toLong).toInt, out, err, noGateway)
             }
         }
     }
 
-  private def exchange(host: String, port: Int, request: String, readTimeout: Int, out: String => Unit, err: String => Unit): Int = {
+  private def exchange(host: String, port: Int, request: String, readTimeout: Int, out: String => Unit, err: String => Unit,
+      noGateway: String => Int): Int = {
     val where = s"$host:$port"
     val socket = new Socket()
     try {
@@ -106,8 +112,7 @@ object RobotCtl {
       next()
     } catch {
       case _: ConnectException | _: SocketTimeoutException if !socket.isConnected =>
-        err(s"no gateway at $where: is naogateway running?")
-        ExitFailed
+        noGateway(where)
       case _: SocketTimeoutException =>
         err(s"robotctl: no answer from the gateway at $where within ${readTimeout / 1000} s")
         ExitFailed
@@ -121,6 +126,43 @@ object RobotCtl {
       try socket.close()
       catch { case NonFatal(_) => () }
     }
+  }
+
+  /**
+   * `robotctl doctor` without a running gateway: that is the first problem, and the machine is checked against the
+   * config the launcher would read (`configFile`, application.conf, the demo's defaults): the config itself, keys no
+   * reference knows, the demo's loopback addresses, ports held by other programs, the recording directory.
+   */
+  def offlineDoctor(where: String, configFile: Option[String], out: String => Unit, err: String => Unit,
+      probe: Preflight.PortUse => Preflight.Probe = Preflight.probe): Int = {
+    import Doctor.Finding
+    val gateway = Finding("gateway", s"no gateway answers at $where", problem = true,
+      s"start it (bin/naogateway ${configFile.getOrElse("[robots.conf]")}), or give its control port with --control")
+    val machine: Vector[Finding] =
+      try {
+        val c = Launcher.nodeConfig(Launcher.config(configFile.toSeq))
+        Preflight.validate(c)
+        val keys = Doctor.configFindings(Preflight.unknownKeys(c, Preflight.knownKeys))
+        val loopback = Preflight.missingLoopback(c.getInt("apps.launcher.simulated-robots")).toVector
+          .map(l => Finding("demo addresses", l, problem = true, "see the text"))
+        val ports = Preflight.portProblems(Preflight.ports(c), probe)
+        val portFindings =
+          if (ports.isEmpty) Vector(Finding("ports", "every port the gateway binds is free", problem = false))
+          else ports.map(p => Finding("ports", p.split("; ").head, problem = true, p.split("; ").drop(1).mkString("; ")))
+        val settings = naogateway.GatewaySettings.fromConfig(c.getConfig("naogateway"))
+        val disk = Option.when(settings.recording.enabled)(Doctor.disk(settings.recording.directory)).toVector.flatMap { d =>
+          Doctor.recordingFindings(naogateway.recording.Recording.Off.stats, Some(d))
+        }
+        val config = Finding("config", configFile.fold("the demo's defaults (no file given)")(f => s"$f reads without error"), problem = false)
+        config +: (keys ++ loopback ++ portFindings ++ disk)
+      } catch {
+        case e: Exception if Preflight.problem(e).isDefined =>
+          Vector(Finding("config", Preflight.problem(e).get.stripPrefix("config: "), problem = true, "correct the key named"))
+      }
+    val all = gateway +: machine
+    all.foreach(f => out(f.line))
+    err(s"robotctl: ${all.count(_.problem)} problem(s), each with its fix above")
+    ExitFailed
   }
 
   /**

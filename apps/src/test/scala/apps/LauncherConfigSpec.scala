@@ -1,22 +1,54 @@
 package apps
 
-import com.typesafe.config.ConfigFactory
+import com.typesafe.config.{ConfigFactory, ConfigResolveOptions}
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import robotmiddleware.cluster.MiddlewareCluster
 
-/** The launcher's config: the demo's defaults, and what its app node shares with the gateway node. */
+/** The launcher's config: the demo's defaults, what outranks them, and what its app node shares with the gateway node. */
 class LauncherConfigSpec extends AnyWordSpec with Matchers {
+
+  private val noApplication = ConfigFactory.empty()
 
   "The demo's app node" should {
     "join the cluster where the gateway node is, with the gateway node's dispatcher size, whatever the file says" in {
       val file = ConfigFactory.parseString("robotmiddleware.cluster.gateway-port = 25620")
-      val gatewayNode = MiddlewareCluster.config(MiddlewareCluster.GatewayRole, file.withFallback(Launcher.config(Nil)))
+      val gatewayNode = Launcher.nodeConfig(file, noApplication)
       val appNode = MiddlewareCluster.config(MiddlewareCluster.AppRole, Launcher.appNodeConfig(gatewayNode))
       appNode.getInt("robotmiddleware.cluster.gateway-port") shouldBe 25620
       appNode.getInt("akka.actor.default-dispatcher.fork-join-executor.parallelism-min") shouldBe 2
       appNode.getStringList("akka.cluster.seed-nodes").get(0) should endWith(":25620")
+    }
+  }
+
+  "The gateway node's config" should {
+    "take the launcher's defaults when nothing else is given" in {
+      val c = Launcher.nodeConfig(ConfigFactory.empty(), noApplication)
+      c.getString("naogateway.link.bind-address") shouldBe "127.0.0.1"
+      c.getInt("apps.launcher.simulated-robots") shouldBe 3
+    }
+
+    "let application.conf override the launcher's defaults, and the config file override both" in {
+      val application = ConfigFactory.parseString("naogateway.link { bind-address = \"0.0.0.0\", robot-port = 11011 }\napps.launcher.simulated-robots = 0")
+      val c = Launcher.nodeConfig(ConfigFactory.empty(), application)
+      c.getString("naogateway.link.bind-address") shouldBe "0.0.0.0"
+      c.getInt("naogateway.link.robot-port") shouldBe 11011
+      c.getInt("apps.launcher.simulated-robots") shouldBe 0
+      val file = ConfigFactory.parseString("naogateway.link.robot-port = 11013")
+      Launcher.nodeConfig(file, application).getInt("naogateway.link.robot-port") shouldBe 11013
+    }
+
+    "let NAOGATEWAY_BIND_ADDRESS and NAOGATEWAY_ROBOT_PORT override the launcher's defaults" in {
+      // The environment as the resolver sees it; the launcher resolves against the real one the same way.
+      val env = ConfigFactory.parseString("NAOGATEWAY_BIND_ADDRESS = \"0.0.0.0\"\nNAOGATEWAY_ROBOT_PORT = 11011")
+      // Variables are looked up from the root, where the environment's stand-in puts them.
+      val c = Launcher.defaults.withFallback(env).resolve(ConfigResolveOptions.noSystem())
+      c.getString("naogateway.link.bind-address") shouldBe "0.0.0.0"
+      c.getInt("naogateway.link.robot-port") shouldBe 11011
+      val unset = Launcher.defaults.resolve(ConfigResolveOptions.noSystem())
+      unset.getString("naogateway.link.bind-address") shouldBe "127.0.0.1"
+      unset.getInt("naogateway.link.robot-port") shouldBe 0
     }
   }
 

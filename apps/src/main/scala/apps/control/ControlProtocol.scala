@@ -11,7 +11,7 @@ import naogateway.wire.{Posture, RpcValue}
  * A connection carries one exchange: the client sends one request line, the server answers with any number of
  * output lines and one final line, then closes. Lines end with `\n` and are UTF-8.
  *
- *  - request: `status` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>`; words are
+ *  - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>`; words are
  *    separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
  *  - answer: `. <text>` for each line of output, then `ok <text>` or `error <text>`.
  *
@@ -45,6 +45,12 @@ object ControlProtocol {
 
     /** A robot's status stream for `seconds`. */
     final case class Watch(robotId: Int, seconds: Int) extends Request
+
+    /**
+     * The gateway's and the machine's checks, each problem with its fix ([[apps.Doctor]]). `configFile` stays with
+     * robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories) itself.
+     */
+    final case class Doctor(configFile: Option[String] = None) extends Request
   }
 
   /** One line of the server's answer. */
@@ -69,6 +75,7 @@ object ControlProtocol {
       |       robotctl [--control host:port] call <robotId> <module> <method> [param ...]
       |                                         (numbers become floats, true/false flags, else text)
       |       robotctl [--control host:port] watch <robotId> [seconds]   (the robot's status stream; default 10 s)
+      |       robotctl [--control host:port] doctor [config-file]        (what is wrong, each with its fix; exit 0 when all is well)
       |The gateway's control port is --control, else $NAOGATEWAY_CONTROL, else 127.0.0.1:11019.""".stripMargin
 
   /** Reads a command-line parameter: a number, a truth value or a text. */
@@ -80,6 +87,7 @@ object ControlProtocol {
   /** Parses the command's words (after any `--control`); the usage, or a clear message, when they are wrong. */
   def parse(args: Seq[String]): Either[String, Request] = args.toList match {
     case "status" :: Nil => Right(Request.Status)
+    case "doctor" :: file if file.sizeIs <= 1 => Right(Request.Doctor(file.headOption))
     case "call" :: id :: module :: method :: params =>
       robotId(id).map(Request.Call(_, module, method, params.map(param).toVector))
     case "watch" :: id :: rest if rest.sizeIs <= 1 =>
@@ -95,6 +103,7 @@ object ControlProtocol {
   /** The request as one line (without `\n`). */
   def render(request: Request): String = request match {
     case Request.Status          => "status"
+    case Request.Doctor(_)       => "doctor"
     case Request.Watch(id, secs) => s"watch $id $secs"
     case Request.Call(id, module, method, params) =>
       (Vector("call", id.toString, escapeWord(module), escapeWord(method)) ++ params.map(renderParam)).mkString(" ")
@@ -116,6 +125,7 @@ object ControlProtocol {
     else
       line.split(" ", -1).toList match {
         case "status" :: Nil => Right(Request.Status)
+        case "doctor" :: Nil => Right(Request.Doctor(None))
         case "watch" :: id :: seconds :: Nil =>
           for {
             robot <- robotId(id)

@@ -265,6 +265,17 @@ object ControlServer {
         Source.future(done).mapConcat { v =>
           List(Answer.Line(s"robot $id: $module.$method -> ${v.fold("(no value)")(_.toString)}"), Answer.Ok(""))
         }
+      case Request.Doctor(_) =>
+        gateway match {
+          case None => Source.single(Answer.Error("doctor needs the gateway's view, which this control port was not given"))
+          case Some(g) =>
+            Source.future(apps.Doctor.gather(g, system.settings.config)).mapConcat { facts =>
+              val found = apps.Doctor.findings(facts)
+              val problems = found.count(_.problem)
+              found.map(f => Answer.Line(f.line)) :+
+                (if (problems == 0) Answer.Ok("all is well") else Answer.Error(s"$problems problem(s), each with its fix above"))
+            }
+        }
       case Request.Watch(id, seconds) =>
         if (seconds.seconds > settings.maxWatch) Source.single(Answer.Error(s"a watch lasts at most ${settings.maxWatch.toSeconds} s"))
         else

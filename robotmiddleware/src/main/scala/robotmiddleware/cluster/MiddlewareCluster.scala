@@ -24,11 +24,13 @@ object MiddlewareCluster {
   val ConfigResource: String = "robotmiddleware-cluster.conf"
 
   /**
-   * The config of a node with `role`: `overrides` first, then the application's config, then the
-   * cluster settings of `ConfigResource`, then every module's reference. The role is the node's only
-   * cluster role, and picks its port: `robotmiddleware.cluster.gateway-port` or `app-port`.
+   * The config of a node with `role`: `overrides` first, then the application's config (`application`,
+   * `application.conf` unless given), then a program's own `defaults`, then the cluster settings of
+   * `ConfigResource`, then every module's reference. The role is the node's only cluster role, and picks
+   * its port: `robotmiddleware.cluster.gateway-port` or `app-port`.
    */
-  def config(role: String, overrides: Config = ConfigFactory.empty()): Config = {
+  def config(role: String, overrides: Config = ConfigFactory.empty(), defaults: Config = ConfigFactory.empty(),
+      application: => Config = ConfigFactory.defaultApplication()): Config = {
     require(role == GatewayRole || role == AppRole, s"unknown role '$role' ($GatewayRole, $AppRole)")
     val portKey = if (role == GatewayRole) "gateway-port" else "app-port"
     val roles = ConfigFactory.parseString(s"""akka.cluster.roles = ["$role"]""")
@@ -36,15 +38,20 @@ object MiddlewareCluster {
     ConfigFactory.load(
       overrides
         .withFallback(roles)
-        .withFallback(ConfigFactory.defaultApplication())
+        .withFallback(application)
+        .withFallback(defaults)
         .withFallback(port)
         .withFallback(ConfigFactory.parseResources(ConfigResource))
     )
   }
 
   /** Starts a node with `role` running `guardian`; it joins the seed nodes of its config on its own. */
-  def start[T](guardian: Behavior[T], role: String, overrides: Config = ConfigFactory.empty()): ActorSystem[T] = {
-    val c = config(role, overrides)
+  def start[T](guardian: Behavior[T], role: String, overrides: Config = ConfigFactory.empty(),
+      defaults: Config = ConfigFactory.empty()): ActorSystem[T] =
+    start(guardian, config(role, overrides, defaults))
+
+  /** Starts a node running `guardian` with a config made by [[config]]. */
+  def start[T](guardian: Behavior[T], c: Config): ActorSystem[T] = {
     ActorSystem(guardian, c.getString("robotmiddleware.cluster.system-name"), c)
   }
 
