@@ -106,6 +106,16 @@ lazy val apps = (project in file("apps"))
       case (file, "bin/robot-ctl.bat") => file -> "bin/robotctl.bat"
       case other                       => other
     },
+    // The Python client (python/, installable with pip) with the .proto files it generates its classes from: in the
+    // repository naogateway_client/proto links to proto/src/main/protobuf, in the package it is a copy.
+    Universal / mappings ++= {
+      val python = baseDirectory.value / "python"
+      val sources = (python ** ("*.py" || "*.toml" || "*.md" || "*.txt" || "py.typed")).get
+        .filterNot(f => Seq("build", "proto", "__pycache__").exists(d => f.getPath.contains(s"/$d/")) || f.getPath.contains(".egg-info"))
+      val protos = (proto / Compile / PB.protoSources).value.head
+      sources.map(f => f -> s"python/${IO.relativize(python, f).get}") ++
+        (protos ** "*.proto").get.map(f => f -> s"python/naogateway_client/proto/${IO.relativize(protos, f).get}")
+    },
     // Logs beside the installation, not in the directory the operator happens to start from.
     bashScriptExtraDefines += """addJava "-Dnaogateway.log.dir=${app_home}/../logs"""",
     // Recordings likewise, unless the operator names a directory.

@@ -1,7 +1,11 @@
 """Stands a robot up, walks it briefly, stops it and prints its status, through the naogateway ZeroMQ endpoint.
 
-    python3 example_walk.py --robot 20 [--endpoint tcp://127.0.0.1:5555] [--publish tcp://127.0.0.1:5556]
+Against the demo (./sbt run or bin/naogateway: robots 1 to 3, the ball follower steering robot 1):
+
+    python3 example_walk.py [--robot 2] [--endpoint tcp://127.0.0.1:5555] [--publish tcp://127.0.0.1:5556]
 """
+
+from __future__ import annotations
 
 import argparse
 import sys
@@ -11,7 +15,7 @@ import naogateway_client
 from naogateway_client import GatewayClient, GatewayError
 
 
-def wait_for_robot(client, robot_id, timeout):
+def wait_for_robot(client: GatewayClient, robot_id: int, timeout: float) -> None:
     """Waits until the gateway knows the robot and it is online."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -25,11 +29,11 @@ def wait_for_robot(client, robot_id, timeout):
     raise SystemExit("robot %d did not come online within %.0f s" % (robot_id, timeout))
 
 
-def main():
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--endpoint", default="tcp://127.0.0.1:5555")
     parser.add_argument("--publish", default="tcp://127.0.0.1:5556")
-    parser.add_argument("--robot", type=int, required=True)
+    parser.add_argument("--robot", type=int, default=2, help="the robot to walk (default 2: the demo's ball follower has robot 1)")
     parser.add_argument("--seconds", type=float, default=1.0, help="how long to walk")
     args = parser.parse_args()
 

@@ -13,8 +13,11 @@ decisions channel as JSON. Usage:
         print(decision["decision"], decision)
 """
 
+from __future__ import annotations
+
 import json
 from collections import namedtuple
+from typing import Any, Dict, Iterator, Optional, Sequence, Tuple
 
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
@@ -32,11 +35,11 @@ Entry = namedtuple("Entry", "topic log_time_ns publish_time_ns value")
 class Recording:
     """One recording file (or several, read one after the other in the order given)."""
 
-    def __init__(self, *paths, validate_crcs=True):
+    def __init__(self, *paths: str, validate_crcs: bool = True) -> None:
         self.paths = paths
         self.validate_crcs = validate_crcs
 
-    def entries(self, topics=None):
+    def entries(self, topics: Optional[Sequence[str]] = None) -> Iterator[Entry]:
         """Every message of the given topics (all when None), decoded: protobuf messages, dicts (JSON) or bytes."""
         factory = DecoderFactory()
         decoders = {}
@@ -54,7 +57,7 @@ class Recording:
                         value = decode(message.data) if decode else bytes(message.data)
                     yield Entry(channel.topic, message.log_time, message.publish_time, value)
 
-    def datagrams(self):
+    def datagrams(self) -> Iterator[Datagram]:
         """Every datagram in and out, with its time, port, direction, source, destination and payload bytes."""
         for e in self.entries([DATAGRAMS]):
             d = e.value
@@ -62,7 +65,7 @@ class Recording:
                            type(d).DESCRIPTOR.fields_by_name["direction"].enum_type.values_by_number[d.direction].name,
                            d.source, d.destination, bytes(d.payload), d.robotID if d.HasField("robotID") else None)
 
-    def statuses(self, robot_id=None):
+    def statuses(self, robot_id: Optional[int] = None) -> Iterator[Tuple[int, int, Any]]:
         """(robot id, gateway time in ns, Status) for every keep-alive; of one robot when robot_id is given."""
         for e in self.entries():
             parts = e.topic.split("/")
@@ -71,7 +74,7 @@ class Recording:
                 if robot_id is None or rid == robot_id:
                     yield rid, e.publish_time_ns, e.value
 
-    def decisions(self):
+    def decisions(self) -> Iterator[Dict[str, Any]]:
         """The gateway's decisions, as dicts with at least "decision" and "gatewayTimeNs"."""
         for e in self.entries([DECISIONS]):
             yield e.value

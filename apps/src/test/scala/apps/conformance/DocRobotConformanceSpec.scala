@@ -46,38 +46,16 @@ object ConformanceEnv {
   val robotScript: File = new File(root, "src/test/python/conformance/robot.py")
   val target: File = new File(root, "apps/target/conformance")
 
-  private def run(command: Seq[String], within: FiniteDuration, log: File): (Int, String) = {
-    val process = new ProcessBuilder(command.asJava).directory(root).redirectErrorStream(true).redirectOutput(log).start()
-    if (!process.waitFor(within.toSeconds, TimeUnit.SECONDS)) {
-      process.destroyForcibly()
-      throw new IllegalStateException(s"${command.mkString(" ")} did not finish within $within")
-    }
-    process.exitValue() -> new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)
-  }
-
-  /** The venv's python, or why there is none (`Left`: python3 missing; an install failure throws). */
+  /**
+   * The venv's python, or why there is none (python3 missing, no venv module, pip unable to install: the test is
+   * cancelled with the reason). The robot shares the Python tests' one venv (apps.zeromq.PythonEnv); it imports only
+   * protobuf and grpcio-tools' protoc from it, never the project's client.
+   */
   def python(): Either[String, File] = synchronized {
-    target.mkdirs()
-    val log = new File(target, "setup.log")
-    if (!Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption.exists(_._1 == 0)) Left("python3 is not available")
-    else {
-      val venv = new File(target, "venv")
-      val python = new File(venv, "bin/python")
-      val requirements = new File(robotScript.getParentFile, "requirements.txt")
-      val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
-      val stamp = new File(venv, "requirements.installed")
-      if (!python.isFile || !Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption.contains(wanted)) {
-        deleteTree(venv.toPath)
-        val (code, out) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
-        if (code != 0) throw new IllegalStateException(s"python3 -m venv failed:\n$out")
-        val (pip, pipOut) = run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r",
-          requirements.getPath), 8.minutes, log)
-        if (pip != 0) throw new IllegalStateException(s"pip could not install ${requirements.getPath}:\n${pipOut.takeRight(3000)}")
-        Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
-      }
+    apps.zeromq.PythonEnv.environment().map { python =>
       // Generated afresh each run, so the robot's classes always match proto/.
       deleteTree(new File(target, "gen").toPath)
-      Right(python)
+      python
     }
   }
 

@@ -26,10 +26,11 @@ object PythonEnv extends Assertions {
   /** The checkout's root: the folder that holds apps/python (tests may run in the root or in apps/). */
   lazy val root: File =
     Iterator.iterate(new File(".").getAbsoluteFile)(_.getParentFile).takeWhile(_ != null)
-      .find(d => new File(d, "apps/python/example_walk.py").isFile)
+      .find(d => new File(d, "apps/python/pyproject.toml").isFile)
       .getOrElse(fail("cannot find apps/python from " + new File(".").getAbsolutePath))
 
-  private def run(command: Seq[String], within: FiniteDuration, log: File, env: Map[String, String] = Map.empty): (Int, String) = {
+  /** Runs `command` in the checkout's root; its exit code and everything it printed (also kept in `log`). */
+  def run(command: Seq[String], within: FiniteDuration, log: File, env: Map[String, String] = Map.empty): (Int, String) = {
     val builder = new ProcessBuilder(command.asJava).directory(root).redirectErrorStream(true).redirectOutput(log)
     env.foreach { case (k, v) => builder.environment().put(k, v) }
     val process = builder.start()
@@ -40,30 +41,45 @@ object PythonEnv extends Assertions {
     process.exitValue() -> new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)
   }
 
-  /** The venv's python; cancels the test (visibly) when python3, venv or pip cannot provide it. */
-  def python(): File = synchronized {
-    val target = new File(root, "apps/target")
-    target.mkdirs()
-    val log = new File(target, "python-setup.log")
-    val found = Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption
-    if (!found.exists(_._1 == 0)) cancel("python3 is not available: the Python client test cannot run")
-    val venv = new File(target, "python-venv")
-    val python = new File(venv, "bin/python")
-    val requirements = new File(root, "apps/python/requirements.txt")
-    val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
-    val stamp = new File(venv, "requirements.installed")
-    val current = Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption
-    if (!python.isFile || !current.contains(wanted)) {
-      deleteTree(venv.toPath)
-      val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
-      if (venvCode != 0) cancel(s"python3 -m venv failed (is the venv module installed?):\n$venvOut")
-      val (pipCode, pipOut) =
-        run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r", requirements.getPath), 8.minutes, log)
-      if (pipCode != 0) cancel(s"pip could not install apps/python/requirements.txt:\n${pipOut.takeRight(3000)}")
-      Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
+  /** The one venv of every Python test, and the requirements it is made from. */
+  lazy val venv: File = new File(root, "apps/target/python-venv")
+  lazy val requirements: File = new File(root, "apps/python/requirements.txt")
+
+  /**
+   * A venv at `venv` with `requirements` installed (made once, reused while they stay the same), or why there is
+   * none: python3 missing, no venv module, or pip unable to install (no network, no registry). `env` is given to pip.
+   */
+  def environment(venv: File = venv, requirements: File = requirements, env: Map[String, String] = Map.empty): Either[String, File] =
+    synchronized {
+      venv.getParentFile.mkdirs()
+      val log = new File(venv.getParentFile, s"${venv.getName}-setup.log")
+      val python = new File(venv, "bin/python")
+      val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
+      val stamp = new File(venv, "requirements.installed")
+      val current = Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption
+      if (!Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption.exists(_._1 == 0)) Left("python3 is not available")
+      else if (python.isFile && current.contains(wanted)) Right(python)
+      else {
+        deleteTree(venv.toPath)
+        val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
+        if (venvCode != 0) Left(s"python3 -m venv failed (is the venv module installed?):\n${venvOut.takeRight(2000)}")
+        else {
+          val (pipCode, pipOut) = run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r",
+            requirements.getPath), 8.minutes, log, env)
+          if (pipCode != 0) {
+            // A half-made venv is not reused: the next run tries again.
+            deleteTree(venv.toPath)
+            Left(s"pip could not install ${root.toPath.relativize(requirements.toPath)} (no network or no package registry?):\n${pipOut.takeRight(2000)}")
+          } else {
+            Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
+            Right(python)
+          }
+        }
+      }
     }
-    python
-  }
+
+  /** The venv's python; cancels the test, saying why, when python3, venv or pip cannot provide it. */
+  def python(): File = environment().fold(why => cancel(s"$why: the Python test cannot run"), identity)
 
   /** Runs a script of apps/python with `args`; its exit code and everything it printed. */
   def script(name: String, args: Seq[String], within: FiniteDuration): (Int, String) = {
@@ -75,7 +91,8 @@ object PythonEnv extends Assertions {
       Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(root, "apps/python").getPath, "PYTHONDONTWRITEBYTECODE" -> "1"))
   }
 
-  private def deleteTree(path: Path): Unit =
+  /** Deletes `path` and everything below it. */
+  def deleteTree(path: Path): Unit =
     if (Files.exists(path)) Files.walk(path).iterator().asScala.toVector.reverse.foreach(p => Files.delete(p))
 }
 

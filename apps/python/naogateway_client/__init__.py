@@ -4,9 +4,11 @@ Requests go to the endpoint's ROUTER socket from a DEALER socket: one serialized
 rpcRequest per ZeroMQ message, answered with a Message carrying the rpcResponse with the same callId. Robot data
 comes from the endpoint's publish socket on the topics status.<robotId>, vision.<robotId> and game.
 
-The protobuf classes are generated from the repository's proto/ folder with grpcio-tools' protoc; see
-`load_protos`.
+The protobuf classes are generated from the .proto files the package carries (proto/, the repository's
+proto/src/main/protobuf) with grpcio-tools' protoc; see `load_protos`.
 """
+
+from __future__ import annotations
 
 import importlib
 import itertools
@@ -14,11 +16,19 @@ import os
 import sys
 import tempfile
 import time
+from types import ModuleType
+from typing import Any, Callable, Dict, List, Optional, Union
 
 import zmq
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
-_PROTO_DIR = os.path.join(_HERE, "..", "..", "proto", "src", "main", "protobuf")
+_PROTO_DIR = os.path.join(_HERE, "proto")
+
+Value = Union[bool, int, float, str, bytes, List[Any], None]
+"""A value a robot call takes or returns (a protobuf MixedValue)."""
+
+Status = Dict[str, Any]
+"""A robot's status as a dict: robot, battery, posture, uptime_ms, role, link (and online, from `status`)."""
 _PROTO_FILES = ["message.proto", "rpc.proto", "havimo.proto", "debugging.proto"]
 
 # The gateway's names, as the endpoint takes and reports them (docs/zeromq.md); apps.zeromq.PythonNamesSpec checks
@@ -33,12 +43,12 @@ POSTURE_TARGETS = ("sit", "stand", "crouch")
 ACTUATOR_GROUPS = ("walk", "head", "arms", "speech")
 """The lease groups of `acquire` and `release`: walk (walking and postures), head, arms, speech."""
 
-message_pb2 = None
-rpc_pb2 = None
-havimo_pb2 = None
+message_pb2: Optional[ModuleType] = None
+rpc_pb2: Optional[ModuleType] = None
+havimo_pb2: Optional[ModuleType] = None
 
 
-def load_protos(out_dir=None, proto_dir=_PROTO_DIR):
+def load_protos(out_dir: Optional[str] = None, proto_dir: str = _PROTO_DIR) -> None:
     """Imports the generated protobuf modules, generating them into out_dir first when they are not importable.
 
     out_dir defaults to $NAOGATEWAY_PY_GEN, else a fresh temporary folder.
@@ -66,13 +76,13 @@ def load_protos(out_dir=None, proto_dir=_PROTO_DIR):
 class GatewayError(Exception):
     """The endpoint answered with an error; `text` starts with its category, e.g. "lease: " or "offline: "."""
 
-    def __init__(self, text):
+    def __init__(self, text: str) -> None:
         super().__init__(text)
         self.text = text
         self.category = text.split(":", 1)[0]
 
 
-def to_mixed(value, mixed):
+def to_mixed(value: Value, mixed: Any) -> Any:
     """Fills a MixedValue: bool, non-negative int, float (and negative int), str, bytes, list."""
     if isinstance(value, bool):
         mixed.bool = value
@@ -92,7 +102,7 @@ def to_mixed(value, mixed):
     return mixed
 
 
-def from_mixed(mixed):
+def from_mixed(mixed: Any) -> Value:
     """The Python value of a MixedValue (an empty one is an empty list)."""
     for field in ("string", "int", "float", "binary", "bool"):
         if mixed.HasField(field):
@@ -100,7 +110,7 @@ def from_mixed(mixed):
     return [from_mixed(m) for m in mixed.array]
 
 
-def snapshot_of(message, link=None):
+def snapshot_of(message: Any, link: Optional[str] = None) -> Status:
     """A dict of a Message with status and robotHealth: robot, battery, posture, uptime_ms, ..."""
     status = message.Extensions[message_pb2.status]
     health = message.Extensions[message_pb2.robotHealth]
@@ -117,7 +127,7 @@ def snapshot_of(message, link=None):
 class GatewayClient:
     """Calls the endpoint's methods and robot calls; reads the published topics."""
 
-    def __init__(self, endpoint="tcp://127.0.0.1:5555", publish="tcp://127.0.0.1:5556", timeout=10.0):
+    def __init__(self, endpoint: str = "tcp://127.0.0.1:5555", publish: str = "tcp://127.0.0.1:5556", timeout: float = 10.0) -> None:
         if rpc_pb2 is None:
             load_protos()
         self.timeout = timeout
@@ -126,10 +136,11 @@ class GatewayClient:
         self._dealer.setsockopt(zmq.LINGER, 0)
         self._dealer.connect(endpoint)
         self._publish = publish
-        self._sub = None
+        self._sub: Optional[zmq.Socket] = None
         self._ids = itertools.count(1)
+        self.last_reply: Any = None
 
-    def call(self, robot_id, module, method, *params):
+    def call(self, robot_id: int, module: str, method: str, *params: Value) -> Value:
         """Calls module.method on robot robot_id; returns the value or raises GatewayError."""
         call_id = next(self._ids) & 0xFFFFFFFF
         message = message_pb2.Message(robotID=robot_id)
@@ -157,46 +168,53 @@ class GatewayClient:
             return from_mixed(response.returnval) if response.HasField("returnval") else None
 
     # The endpoint's own methods.
-    def robots(self):
+    def robots(self) -> List[int]:
+        """The ids of every robot the gateway knows."""
         return self.call(-1, "gateway", "robots")
 
-    def status(self, robot_id):
+    def status(self, robot_id: int) -> Status:
         """The robot's latest keep-alive as a dict (online: whether the robot is reachable)."""
         online = self.call(robot_id, "gateway", "status")
         snapshot = snapshot_of(self.last_reply)
         snapshot["online"] = online
         return snapshot
 
-    def acquire(self, robot_id, *groups):
+    def acquire(self, robot_id: int, *groups: str) -> Value:
         """Takes the leases of these ACTUATOR_GROUPS on the robot."""
         return self.call(robot_id, "gateway", "acquire", *groups)
 
-    def release(self, robot_id, *groups):
+    def release(self, robot_id: int, *groups: str) -> Value:
+        """Gives the leases of these ACTUATOR_GROUPS back."""
         return self.call(robot_id, "gateway", "release", *groups)
 
     # RobotInterface calls; the endpoint takes the lease each needs on the clients' behalf.
-    def walk(self, robot_id, vx, vy, omega):
+    def walk(self, robot_id: int, vx: float, vy: float, omega: float) -> Value:
+        """Walks with these velocities (m/s, m/s, rad/s) until stopped; the endpoint keeps the walk fresh."""
         return self.call(robot_id, "motion", "walk", float(vx), float(vy), float(omega))
 
-    def stop(self, robot_id):
+    def stop(self, robot_id: int) -> Value:
+        """Stops walking."""
         return self.call(robot_id, "motion", "stop")
 
-    def head(self, robot_id, pan, tilt):
+    def head(self, robot_id: int, pan: float, tilt: float) -> Value:
+        """Turns the head (radians)."""
         return self.call(robot_id, "motion", "head", float(pan), float(tilt))
 
-    def arms(self, robot_id, left_shoulder, left_elbow, right_shoulder, right_elbow):
+    def arms(self, robot_id: int, left_shoulder: float, left_elbow: float, right_shoulder: float, right_elbow: float) -> Value:
+        """Sets the four arm joints (radians)."""
         values = [float(v) for v in (left_shoulder, left_elbow, right_shoulder, right_elbow)]
         return self.call(robot_id, "motion", "arms", *values)
 
-    def posture(self, robot_id, name):
+    def posture(self, robot_id: int, name: str) -> Value:
         """Goes to one of POSTURE_TARGETS; returns the posture reached once the motion has ended."""
         return self.call(robot_id, "motion", "posture", name)
 
-    def say(self, robot_id, text):
+    def say(self, robot_id: int, text: str) -> Value:
+        """Speaks the text."""
         return self.call(robot_id, "speech", "say", text)
 
     # Published data.
-    def subscribe(self, *topics):
+    def subscribe(self, *topics: str) -> None:
         """Subscribes to topics (prefixes), e.g. "status.20", "vision.20", "game"."""
         if self._sub is None:
             self._sub = self._context.socket(zmq.SUB)
@@ -205,7 +223,7 @@ class GatewayClient:
         for topic in topics:
             self._sub.setsockopt(zmq.SUBSCRIBE, topic.encode())
 
-    def next_status(self, robot_id, timeout=5.0, where=lambda s: True):
+    def next_status(self, robot_id: int, timeout: float = 5.0, where: Callable[[Status], bool] = lambda s: True) -> Optional[Status]:
         """The next published status of robot_id that satisfies `where`, as a dict; None after timeout seconds."""
         topic = "status.%d" % robot_id
         self.subscribe(topic)
@@ -223,7 +241,8 @@ class GatewayClient:
             if where(snapshot):
                 return snapshot
 
-    def close(self):
+    def close(self) -> None:
+        """Closes the sockets."""
         self._dealer.close()
         if self._sub is not None:
             self._sub.close()
