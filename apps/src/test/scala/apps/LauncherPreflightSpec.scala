@@ -104,6 +104,19 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
         "(NAOGATEWAY_SIMULATED_ROBOTS=0)")
     }
 
+    "pass the README's real-robot config and conf/robots.example.conf as they are: no key missing, none unknown" in {
+      def find(relative: String): java.nio.file.Path =
+        Seq(java.nio.file.Paths.get("..", relative), java.nio.file.Paths.get(relative)).find(java.nio.file.Files.exists(_))
+          .getOrElse(fail(s"$relative not found"))
+      val readme = new String(java.nio.file.Files.readAllBytes(find("README.md")), java.nio.charset.StandardCharsets.UTF_8)
+      val block = readme.split("```hocon\n", 2)(1).split("```", 2)(0)
+      block should include("# robots.conf")
+      // Without a signing key in the environment: the README's robots must not need one.
+      check(block) shouldBe ((Vector.empty, None))
+      val example = new String(java.nio.file.Files.readAllBytes(find("apps/src/universal/conf/robots.example.conf")), java.nio.charset.StandardCharsets.UTF_8)
+      check(example) shouldBe ((Vector.empty, None))
+    }
+
     "find the demo's loopback addresses on this machine (Linux routes all of 127.0.0.0/8)" in {
       assume(System.getProperty("os.name").toLowerCase.contains("linux"), "only Linux has every 127.x address by default")
       Preflight.missingLoopback(3) shouldBe None
