@@ -138,15 +138,21 @@ object Doctor {
     summary +: (configured ++ strangers ++ unexpected)
   }
 
-  /** Robots that must sign but whose frames fail verification. */
-  def signingFindings(facts: Facts): Vector[Finding] =
-    facts.links.flatMap { l =>
+  /** Which robots sign, and robots whose frames fail verification. */
+  def signingFindings(facts: Facts): Vector[Finding] = {
+    val signing = facts.settings.robots.filter(_.signing == naogateway.RobotSigning.Required).map(_.robotId)
+    val summary =
+      if (signing.nonEmpty) ok("signing", s"robot(s) ${signing.mkString(", ")} sign their frames with the team key")
+      else if (facts.settings.signingKey.isDefined) ok("signing", "a team key is set, but no robot has signing = required: nothing is signed")
+      else ok("signing", "off: no robot has signing = required")
+    summary +: facts.links.flatMap { l =>
       val failed = l.rejected.filter { case (k, _) => SignatureRejections(k) }
       Option.when(failed.values.sum > 0)(fail(s"robot ${l.robotId} signing",
         s"${failed.values.sum} frame(s) failed verification (${failed.toVector.sorted.map { case (k, n) => s"$k $n" }.mkString(", ")})",
         "the robot's firmware must sign with the same team key as naogateway.signing.key (docs/protocol.md 6.7); " +
           "a firmware that does not sign yet needs signing = off for this robot"))
     }
+  }
 
   /** Online robots whose clock estimate has not converged. */
   def clockFindings(robots: Vector[RobotSnapshot]): Vector[Finding] =

@@ -90,6 +90,13 @@ class DoctorSpec extends AnyWordSpec with Matchers {
       p.head should startWith("FAIL robot 1 signing: 32 frame(s) failed verification (bad signature 2, unsigned 30)")
     }
 
+    "say which robots sign" in {
+      val signed = settingsOf("naogateway.robots = [ { id = 1, address = \"10.0.0.101\", signing = required } ]\n" +
+        "naogateway.signing.key = \"00112233445566778899aabbccddeeff\"")
+      Doctor.signingFindings(allWell.copy(settings = signed)).head.line shouldBe "ok   signing: robot(s) 1 sign their frames with the team key"
+      Doctor.signingFindings(allWell).head.line shouldBe "ok   signing: off: no robot has signing = required"
+    }
+
     "find a clock estimate that does not converge" in {
       val p = problems(allWell.copy(robots = Vector(robot(1), robot(2, clockBound = 180.0))))
       p should have size 1
