@@ -29,6 +29,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
 
   // The launcher's control port, for robotctl; picked like the cluster port.
   private val controlPort = freePort()
+  private val gameControllerPort = { val s = new java.net.DatagramSocket(0); try s.getLocalPort finally s.close() }
 
   private def launch(clusterPort: Int = freePort(), main: String = "apps.Launcher"): Launched = {
     val javaBin = s"${System.getProperty("java.home")}/bin/java"
@@ -44,6 +45,9 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     builder.environment().put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
     builder.environment().put("NAOGATEWAY_LOG_FILE", "target/launcher-spec.log")
     builder.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
+    // A GameController port of its own: on 3838 the launcher would also hear any other GameController on this machine
+    // (another demo's), and robotctl doctor would rightly report its packets.
+    builder.environment().put("NAOGATEWAY_GAMECONTROLLER_PORT", gameControllerPort.toString)
     new Launched(builder.start(), clusterPort)
   }
 
