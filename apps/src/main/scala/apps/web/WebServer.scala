@@ -86,8 +86,9 @@ object WebServer {
       require(settings.refusal.isEmpty, settings.refusal.getOrElse(""))
       implicit val system: ActorSystem[_] = context.system
       val view = context.spawn(WebView(gateway, middleware, settings), "view")
+      val foxglove = context.spawn(FoxgloveFeed(middleware), "foxglove")
       val connections = new Connections(settings)
-      context.pipeToSelf(Http().newServerAt(settings.bindAddress, settings.port).bind(routes(view, settings, connections))) {
+      context.pipeToSelf(Http().newServerAt(settings.bindAddress, settings.port).bind(routes(view, foxglove, settings, connections))) {
         case Success(b) => Bound(b)
         case Failure(e) => BindFailed(e)
       }
@@ -173,7 +174,8 @@ object WebServer {
     }
   }
 
-  private[web] def routes(view: ActorRef[WebView.Command], settings: WebSettings, connections: Connections)(implicit system: ActorSystem[_]): Route = {
+  private[web] def routes(view: ActorRef[WebView.Command], foxglove: ActorRef[FoxgloveFeed.Command], settings: WebSettings,
+      connections: Connections)(implicit system: ActorSystem[_]): Route = {
     implicit val timeout: Timeout = Timeout(3.seconds)
     implicit val ec: ExecutionContext = system.executionContext
     val loader = getClass.getClassLoader
@@ -184,6 +186,7 @@ object WebServer {
       path("assets" / Segment) { name =>
         Assets.get(name).fold[Route](complete(StatusCodes.NotFound))(resource => get(getFromResource(resource, akka.http.scaladsl.server.directives.ContentTypeResolver.Default(resource), loader)))
       },
+      path("foxglove")(foxgloveRoute(foxglove, settings, connections)),
       path("ws") {
         (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
           if (!connections.tokenOk(token)) {
@@ -202,6 +205,37 @@ object WebServer {
         }
       }
     )
+  }
+
+  /** The Foxglove-protocol feed (`/foxglove`, subprotocol foxglove.websocket.v1), behind the same token and limits. */
+  private def foxgloveRoute(foxglove: ActorRef[FoxgloveFeed.Command], settings: WebSettings, connections: Connections)(implicit
+      system: ActorSystem[_]): Route = {
+    implicit val timeout: Timeout = Timeout(FoxgloveFeed.ConnectTimeout)
+    implicit val ec: ExecutionContext = system.executionContext
+    (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
+      if (!upgrade.requestedProtocols.contains(FoxgloveFeed.Subprotocol))
+        complete(StatusCodes.BadRequest, s"this feed speaks the WebSocket subprotocol ${FoxgloveFeed.Subprotocol}")
+      else if (!connections.tokenOk(token)) {
+        connections.refuse()
+        complete(StatusCodes.Forbidden, "a valid token is needed: /foxglove?token=...")
+      } else if (!connections.admit()) complete(StatusCodes.ServiceUnavailable, "too many clients connected")
+      else {
+        val flow: Future[Flow[Message, Message, NotUsed]] = foxglove.ask(FoxgloveFeed.Connect(_))
+          .map(feed => FoxgloveFeed.connection(feed, settings.clientBuffer, () => { connections.ignored.incrementAndGet(); () })
+            .watchTermination() { (_, done) =>
+              done.onComplete {
+                case Success(_) => connections.closed(None)
+                case Failure(e) => connections.closed(Some(e))
+              }
+              NotUsed
+            })
+          .recover { case _ =>
+            connections.closed(None)
+            Flow.fromSinkAndSource(Sink.ignore, Source.empty)
+          }
+        complete(upgrade.handleMessages(Flow.futureFlow(flow).mapMaterializedValue(_ => NotUsed), Some(FoxgloveFeed.Subprotocol)))
+      }
+    }
   }
 
   /** One page's connection: its first message, then the shared pushes through its own bounded buffer. */
