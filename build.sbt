@@ -124,7 +124,8 @@ lazy val root = (project in file("."))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-root",
-    libraryDependencies ++= testLibs ++ akkaTestLibs,
+    // The bench's web figures (bench.WebBench) drive the web view with these, as the apps tests do.
+    libraryDependencies ++= Seq(akkaHttp, akkaHttpSprayJson, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := (apps / Compile / mainClass).value,
     terminalEnv,
     run / fork := true,

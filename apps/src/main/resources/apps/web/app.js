@@ -11,7 +11,8 @@
     "#15aabf", "#868e96", "#fab005", "#82c91e", "#e64980", "#4c6ef5", "#12b886", "#ced4da"];
 
   // What the tests and the curious can read: pushes seen, the game state shown, points on the traffic plot.
-  const status = window.naogateway = { pushes: 0, gameState: null, trafficPoints: 0, robotsOnline: 0, lastPushAt: 0 };
+  // `changes`: the last game-state changes with the page's clock when it showed them (the bench's latency figure).
+  const status = window.naogateway = { pushes: 0, gameState: null, trafficPoints: 0, robotsOnline: 0, lastPushAt: 0, changes: [] };
   let historyPoints = 180;
   const robots = new Map(); // id -> { el, plots, data }
   const traffic = { data: [[], [], [], []], plot: null };
@@ -26,7 +27,7 @@
     const width = Math.max(100, Math.floor((el.parentElement.clientWidth || 320) * (share || 1)) - 12);
     const opts = {
       title: title, width: width, height: height || 90, legend: { show: false }, cursor: { show: false },
-      scales: { x: { time: false } }, axes: [{ show: false }, { size: 44, stroke: "#aab3bd", grid: { stroke: "#2c323a" } }],
+      scales: { x: { time: false } }, axes: [{ show: false }, { size: 54, stroke: "#aab3bd", grid: { stroke: "#2c323a" } }],
       series: [{}].concat(series.map(s => ({ label: s.label, stroke: s.stroke, width: 1.5, spanGaps: true, points: { show: false } })))
     };
     return new uPlot(opts, [[]].concat(series.map(() => [])), el);
@@ -128,6 +129,10 @@
       (t.dropped ? ", " + t.dropped + " dropped" : "") : null);
     const refused = Object.entries(g.refused || {}).map(([k, v]) => k + " " + v).join(", ");
     text(document.getElementById("gateway-refused"), refused ? "gateway refused: " + refused : "");
+    if (g.state !== status.gameState) {
+      status.changes.push({ state: g.state, at: Date.now() });
+      if (status.changes.length > 50) status.changes.shift();
+    }
     status.gameState = g.state;
   }
 

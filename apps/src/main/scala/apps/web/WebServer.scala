@@ -52,6 +52,7 @@ object WebServer {
   private[web] lazy val Assets: Map[String, String] = Map(
     "app.js" -> "apps/web/app.js",
     "app.css" -> "apps/web/app.css",
+    "control.js" -> "apps/web/control.js",
     "uPlot.iife.min.js" -> s"META-INF/resources/webjars/uplot/$uplotVersion/dist/uPlot.iife.min.js",
     "uPlot.min.css" -> s"META-INF/resources/webjars/uplot/$uplotVersion/dist/uPlot.min.css"
   )
@@ -81,14 +82,18 @@ object WebServer {
 
   /** The server of `gateway`'s and `middleware`'s view; `bound` hears the address once (None if it did not bind). */
   def apply(gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings,
-      bound: Option[InetSocketAddress] => Unit = _ => ()): Behavior[Command] =
+      bound: Option[InetSocketAddress] => Unit = _ => (), competition: Option[Boolean] = None): Behavior[Command] =
     Behaviors.setup { context =>
       require(settings.refusal.isEmpty, settings.refusal.getOrElse(""))
       implicit val system: ActorSystem[_] = context.system
       val view = context.spawn(WebView(gateway, middleware, settings), "view")
       val foxglove = context.spawn(FoxgloveFeed(middleware), "foxglove")
+      val available = availability(settings, competition.getOrElse(naogateway.GatewaySettings(context.system).competition))
+      if (settings.control.enabled && !available.enabled) context.log.warn("Web control panel refused: {}", available.reason)
+      val control = context.spawn(WebControl(middleware, settings.control, available), "control")
       val connections = new Connections(settings)
-      context.pipeToSelf(Http().newServerAt(settings.bindAddress, settings.port).bind(routes(view, foxglove, settings, connections))) {
+      context.pipeToSelf(Http().newServerAt(settings.bindAddress, settings.port)
+          .bind(routes(view, foxglove, control, available, settings, connections))) {
         case Success(b) => Bound(b)
         case Failure(e) => BindFailed(e)
       }
@@ -174,8 +179,15 @@ object WebServer {
     }
   }
 
-  private[web] def routes(view: ActorRef[WebView.Command], foxglove: ActorRef[FoxgloveFeed.Command], settings: WebSettings,
-      connections: Connections)(implicit system: ActorSystem[_]): Route = {
+  /** Whether the control panel may serve: enabled, a token set, and not in competition mode. */
+  def availability(settings: WebSettings, competition: Boolean): WebControl.Availability =
+    if (!settings.control.enabled) WebControl.Availability(enabled = false, "the control panel is off (apps.web.control.enabled)")
+    else if (competition) WebControl.Availability(enabled = false, "the control panel is refused in competition mode (naogateway.competition.enabled)")
+    else if (settings.token.isEmpty) WebControl.Availability(enabled = false, "the control panel needs an access token (apps.web.token)")
+    else WebControl.Availability(enabled = true, "on")
+
+  private[web] def routes(view: ActorRef[WebView.Command], foxglove: ActorRef[FoxgloveFeed.Command], control: ActorRef[WebControl.Command],
+      available: WebControl.Availability, settings: WebSettings, connections: Connections)(implicit system: ActorSystem[_]): Route = {
     implicit val timeout: Timeout = Timeout(3.seconds)
     implicit val ec: ExecutionContext = system.executionContext
     val loader = getClass.getClassLoader
@@ -187,6 +199,11 @@ object WebServer {
         Assets.get(name).fold[Route](complete(StatusCodes.NotFound))(resource => get(getFromResource(resource, akka.http.scaladsl.server.directives.ContentTypeResolver.Default(resource), loader)))
       },
       path("foxglove")(foxgloveRoute(foxglove, settings, connections)),
+      path("control" / "state") {
+        get(complete(akka.http.scaladsl.model.HttpEntity(akka.http.scaladsl.model.ContentTypes.`application/json`,
+          spray.json.JsObject("enabled" -> spray.json.JsBoolean(available.enabled), "reason" -> spray.json.JsString(available.reason)).compactPrint)))
+      },
+      path("control")(controlRoute(control, available, connections)),
       path("ws") {
         (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
           if (!connections.tokenOk(token)) {
@@ -234,6 +251,39 @@ object WebServer {
             Flow.fromSinkAndSource(Sink.ignore, Source.empty)
           }
         complete(upgrade.handleMessages(Flow.futureFlow(flow).mapMaterializedValue(_ => NotUsed), Some(FoxgloveFeed.Subprotocol)))
+      }
+    }
+  }
+
+  /** The control panel's WebSocket (`/control`): one JSON request in, one JSON answer out; only with the token. */
+  private def controlRoute(control: ActorRef[WebControl.Command], available: WebControl.Availability, connections: Connections)(implicit
+      system: ActorSystem[_]): Route = {
+    implicit val timeout: Timeout = Timeout(WebControl.RequestTimeout)
+    (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
+      if (!available.enabled) complete(StatusCodes.Forbidden, available.reason)
+      else if (!connections.tokenOk(token)) {
+        connections.refuse()
+        complete(StatusCodes.Forbidden, "a valid token is needed: /control?token=...")
+      } else if (!connections.admit()) complete(StatusCodes.ServiceUnavailable, "too many clients connected")
+      else {
+        val flow = Flow[Message]
+          .mapAsync(1) {
+            case t: TextMessage =>
+              t.textStream.limitWeighted(4096L)(_.length.toLong).runFold(new StringBuilder)(_ append _)
+                .flatMap(text => control.ask[String](WebControl.Request(WebControl.drive(text.toString), _)))(system.executionContext)
+            case b: BinaryMessage =>
+              b.dataStream.runWith(Sink.ignore)
+              Future.successful("""{"op":"result","ok":false,"message":"the control panel takes JSON text"}""")
+          }
+          .map(TextMessage.Strict(_): Message)
+          .watchTermination() { (_, done) =>
+            done.onComplete {
+              case Success(_) => connections.closed(None)
+              case Failure(e) => connections.closed(Some(e))
+            }(system.executionContext)
+            NotUsed
+          }
+        complete(upgrade.handleMessages(flow))
       }
     }
   }

@@ -25,7 +25,8 @@ final case class WebSettings(
     events: Int,
     maxClients: Int,
     clientBuffer: Int,
-    gridInterval: FiniteDuration
+    gridInterval: FiniteDuration,
+    control: WebSettings.Control = WebSettings.Control(enabled = false, "web-control", 5, 1.second)
 ) {
   require(port >= 0 && port <= 65535, "apps.web.port must be 0 to 65535")
   require(pushInterval >= 50.millis, "apps.web.push-interval must be at least 50 ms")
@@ -35,6 +36,8 @@ final case class WebSettings(
   require(maxClients >= 1 && maxClients <= 1000, "apps.web.max-clients must be 1 to 1000")
   require(clientBuffer >= 1 && clientBuffer <= 1000, "apps.web.client-buffer must be 1 to 1000")
   require(gridInterval >= pushInterval, "apps.web.grid-interval must be at least push-interval")
+  require(control.appName.nonEmpty, "apps.web.control.app-name must not be empty")
+  require(control.deadman >= 200.millis, "apps.web.control.deadman must be at least 200 ms")
 
   /** Whether the bind address is a loopback one, reachable from this machine only. */
   def loopbackOnly: Boolean = InetAddress.getByName(bindAddress).isLoopbackAddress
@@ -49,6 +52,9 @@ final case class WebSettings(
 
 /** Reading the settings. */
 object WebSettings {
+
+  /** The control panel's settings (`apps.web.control`). */
+  final case class Control(enabled: Boolean, appName: String, priority: Int, deadman: FiniteDuration)
 
   /** Where the settings live in the configuration. */
   val ConfigPath: String = "apps.web"
@@ -69,6 +75,8 @@ object WebSettings {
       events = c.getInt("events"),
       maxClients = c.getInt("max-clients"),
       clientBuffer = c.getInt("client-buffer"),
-      gridInterval = c.getDuration("grid-interval").toScala
+      gridInterval = c.getDuration("grid-interval").toScala,
+      control = Control(c.getBoolean("control.enabled"), c.getString("control.app-name"), c.getInt("control.priority"),
+        c.getDuration("control.deadman").toScala)
     )
 }

@@ -52,6 +52,7 @@ object WebView {
       watched: Set[Int],
       gridsSent: Map[Int, Long],
       gridsAtNanos: Long,
+      pushedAtNanos: Long,
       figures: Figures
   )
 
@@ -67,9 +68,11 @@ object WebView {
         timers.startTimerWithFixedDelay(Tick, settings.pushInterval)
         timers.startTimerWithFixedDelay(Sample, settings.sampleInterval)
         middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
+        // The game comes as the GameController sends it, so a new state reaches the page at once, not at the next tick.
+        middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
         val signing = GatewaySettings(context.system)
         new View(gateway, middleware, settings, context, queue, hub, signing).running(State(
-          WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, Map.empty, 0L, Figures(0, 0, 0)))
+          WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, Map.empty, 0L, 0L, Figures(0, 0, 0)))
       }
     }
 
@@ -80,7 +83,6 @@ object WebView {
     private val robotsAdapter = context.messageAdapter(Robots.apply)
     private val linksAdapter = context.messageAdapter(Links.apply)
     private val trafficAdapter = context.messageAdapter(Traffic.apply)
-    private val gameAdapter = context.messageAdapter(Game.apply)
     private val sourceAdapter = context.messageAdapter(Source_.apply)
     private val statsAdapter = context.messageAdapter(Stats.apply)
     private val visionAdapter = context.messageAdapter(Vision.apply)
@@ -103,8 +105,19 @@ object WebView {
       }
       s.copy(pushedEvents = s.model.eventCount, pushedSamples = s.model.sampleCount, answered = false,
         gridsSent = s.gridsSent ++ grids.map(id => id -> s.model.vision(id).gridFrame),
-        gridsAtNanos = if (grids.nonEmpty) now else s.gridsAtNanos,
+        gridsAtNanos = if (grids.nonEmpty) now else s.gridsAtNanos, pushedAtNanos = now,
         figures = Figures(s.figures.pushes + 1, s.figures.dropped + dropped, json.length))
+    }
+
+    /**
+     * The state with `model`; when the model logged something new (a robot online or offline, a new game state), it is
+     * pushed at once rather than at the next tick, yet never sooner than a fifth of `push-interval` after the last
+     * push, so a burst of events cannot raise the rate above five times the configured one.
+     */
+    private def soon(s: State, model: WebModel): State = {
+      val next = s.copy(model = model)
+      if (model.eventCount != s.model.eventCount && System.nanoTime() - s.pushedAtNanos >= settings.pushInterval.toNanos / 5) push(next)
+      else next
     }
 
     def running(s: State): Behavior[Command] = Behaviors.receiveMessage[Command] {
@@ -112,7 +125,6 @@ object WebView {
         gateway ! Gateway.GetRobots(robotsAdapter)
         gateway ! Gateway.GetLinkStats(linksAdapter)
         gateway ! Gateway.GetTraffic(trafficAdapter)
-        gateway ! Gateway.GetGameState(gameAdapter)
         gateway ! Gateway.GetGameSource(sourceAdapter)
         gateway ! Gateway.GetStats(statsAdapter)
         // The push follows the robots' answer, so a page sees what the gateway saw within about one interval; when the
@@ -126,10 +138,10 @@ object WebView {
         running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
       case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
       case Traffic(stats) => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
-      case Game(game)     => running(s.copy(model = s.model.withGame(game, t, System.currentTimeMillis())))
+      case Game(game)     => running(soon(s, s.model.withGame(game, t, System.currentTimeMillis())))
       case Source_(src)   => running(s.copy(model = s.model.copy(gameSource = Some(src))))
       case Stats(stats)   => running(s.copy(model = s.model.withGatewayStats(stats, t, System.currentTimeMillis())))
-      case Event(event)   => running(s.copy(model = s.model.withEvent(event, t, System.currentTimeMillis())))
+      case Event(event)   => running(soon(s, s.model.withEvent(event, t, System.currentTimeMillis())))
       case Vision(VisionFrame.Regions(id, frame, _, regions)) => running(s.copy(model = s.model.withRegions(id, frame, regions)))
       case Vision(VisionFrame.Grid(id, frame, _, grid))       => running(s.copy(model = s.model.withGrid(id, frame, grid.cells.toArray)))
       case Sample         => running(s.copy(model = s.model.sampled(t)))
