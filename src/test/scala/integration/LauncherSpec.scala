@@ -44,6 +44,8 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     builder.environment().put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
     builder.environment().put("NAOGATEWAY_LOG_FILE", "target/launcher-spec.log")
     builder.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
+    // The demo's web view on a free port: the launcher prints where.
+    builder.environment().put("NAOGATEWAY_WEB_PORT", "0")
     new Launched(builder.start())
   }
 
@@ -74,6 +76,15 @@ class LauncherSpec extends AnyWordSpec with Matchers {
       val process = launched.process
       try {
         withClue(seen.mkString("\n")) { online shouldBe Set("1", "2", "3") }
+
+        // The web view's address is printed, and the page is there.
+        val web = seen.collectFirst { case l if l.startsWith("web view: http://127.0.0.1:") => l.stripPrefix("web view: ") }
+        withClue(seen.mkString("\n"))(web shouldBe defined)
+        val page = new java.net.URL(web.get).openConnection().asInstanceOf[java.net.HttpURLConnection]
+        page.setConnectTimeout(5000)
+        page.setReadTimeout(5000)
+        page.getResponseCode shouldBe 200
+        new String(page.getInputStream.readAllBytes(), "UTF-8") should include("assets/app.js")
 
         // robotctl reaches the running launcher through its control port.
         val out = Vector.newBuilder[String]
