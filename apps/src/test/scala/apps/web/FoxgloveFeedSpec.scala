@@ -123,6 +123,18 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
       } finally client.close()
     }
 
+    "be read by a Python client over websockets, decoding robot 1's status with the advertised schema" in {
+      apps.zeromq.PythonEnv.python() // cancels here when Python, venv or the packages cannot be had
+      val (code, output) = apps.zeromq.PythonEnv.script("foxglove_status.py",
+        Seq(s"ws://127.0.0.1:${demo.address.getPort}/foxglove", "1", "3"), 2.minutes)
+      withClue(output.linesIterator.take(30).mkString("\n")) {
+        code shouldBe 0
+        output should include("op serverInfo")
+        output should include regex """channel \d+ /robot/1/status protobuf naogateway.proto.Status"""
+        output.linesIterator.count(_.matches("status subscription 1 time \\d+ role keeper state \\w+")) shouldBe 3
+      }
+    }
+
     "refuse a client that does not speak the protocol" in {
       new Client(protocol = None).status shouldBe StatusCodes.BadRequest
     }
