@@ -95,7 +95,7 @@ lazy val apps = (project in file("apps"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
-    libraryDependencies ++= Seq(jline) ++ testLibs ++ akkaTestLibs,
+    libraryDependencies ++= Seq(jline, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := Some("apps.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
     Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),
@@ -134,7 +134,8 @@ lazy val root = (project in file("."))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-root",
-    libraryDependencies ++= testLibs ++ akkaTestLibs,
+    // The bench's web figures (bench.WebBench) drive the web view with these, as the apps tests do.
+    libraryDependencies ++= Seq(akkaHttp, akkaHttpSprayJson, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := (apps / Compile / mainClass).value,
     terminalEnv,
     run / fork := true,

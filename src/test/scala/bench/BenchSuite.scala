@@ -20,7 +20,7 @@ object BenchSuite {
 
   /** Every benchmark, in the order they run. */
   val benchmarks: Vector[Benchmark] =
-    Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, ForgeryBench, RobotCtlBench, IdleCpuBench, FloodBench)
+    Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, ForgeryBench, RobotCtlBench, IdleCpuBench, FloodBench, WebBench)
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the gateway's. */
   val onRequest: Vector[Benchmark] = Vector(Soak)

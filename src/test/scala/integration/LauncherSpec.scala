@@ -48,6 +48,8 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     // A GameController port of its own: on 3838 the launcher would also hear any other GameController on this machine
     // (another demo's), and robotctl doctor would rightly report its packets.
     builder.environment().put("NAOGATEWAY_GAMECONTROLLER_PORT", gameControllerPort.toString)
+    // The demo's web view on a free port: the launcher prints where.
+    builder.environment().put("NAOGATEWAY_WEB_PORT", "0")
     new Launched(builder.start(), clusterPort)
   }
 
@@ -88,6 +90,15 @@ class LauncherSpec extends AnyWordSpec with Matchers {
       val process = launched.process
       try {
         withClue(seen.mkString("\n")) { online shouldBe Set("1", "2", "3") }
+
+        // The web view's address is printed, and the page is there.
+        val web = seen.collectFirst { case l if l.startsWith("web view: http://127.0.0.1:") => l.stripPrefix("web view: ") }
+        withClue(seen.mkString("\n"))(web shouldBe defined)
+        val page = new java.net.URL(web.get).openConnection().asInstanceOf[java.net.HttpURLConnection]
+        page.setConnectTimeout(5000)
+        page.setReadTimeout(5000)
+        page.getResponseCode shouldBe 200
+        new String(page.getInputStream.readAllBytes(), "UTF-8") should include("assets/app.js")
 
         // robotctl reaches the running launcher through its control port.
         val out = Vector.newBuilder[String]

@@ -177,7 +177,11 @@ object Launcher {
     val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(gateway))
-    context.spawn(StatusPrinter.fromConfig(gateway, config.getConfig("apps.launcher")), "status")
+    // The web view (docs/web.md), when enabled: its address goes on the status view's first line.
+    val webAddress = new java.util.concurrent.atomic.AtomicReference(Vector.empty[String])
+    apps.web.WebServer.spawnIfEnabled(context, gateway, middleware,
+      bound => webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
+    context.spawn(StatusPrinter.fromConfig(gateway, config.getConfig("apps.launcher"), () => webAddress.get), "status")
     gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
 
     Behaviors.receiveMessage {

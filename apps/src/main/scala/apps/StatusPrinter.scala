@@ -71,10 +71,13 @@ object StatusPrinter {
   def settings(c: Config): Settings =
     Settings(c.getDuration("refresh").toNanos.nanos, ViewMode.parse(c.getString("view")))
 
-  /** The printer of the `apps.launcher` block `c`, writing where its `view` says. */
-  def fromConfig(gateway: ActorRef[Gateway.Query], c: Config): Behavior[Command] = {
+  /**
+   * The printer of the `apps.launcher` block `c`, writing where its `view` says; `notes` are lines shown above the
+   * status (the web view's address once it listens), printed once each in line mode.
+   */
+  def fromConfig(gateway: ActorRef[Gateway.Query], c: Config, notes: () => Vector[String] = () => Vector.empty): Behavior[Command] = {
     val s = settings(c)
-    apply(gateway, s.refresh, output(s.view))
+    apply(gateway, s.refresh, output(s.view), notes)
   }
 
   /**
@@ -98,10 +101,11 @@ object StatusPrinter {
    * A printer polling the gateway's read-only view every `refresh` and writing to `output`. It restarts (after a back-off, so a
    * failure repeating every refresh cannot flood the log) on any failure.
    */
-  def apply(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output): Behavior[Command] =
-    Behaviors.supervise(printer(gateway, refresh, output)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
+  def apply(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output,
+      notes: () => Vector[String] = () => Vector.empty): Behavior[Command] =
+    Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
-  private def printer(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output): Behavior[Command] =
+  private def printer(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output, notes: () => Vector[String]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         timers.startTimerWithFixedDelay(Refresh, refresh)
@@ -114,9 +118,14 @@ object StatusPrinter {
         val sourceAdapter = context.messageAdapter(Source.apply)
         val statsAdapter = context.messageAdapter(Stats.apply)
 
+        var notesShown = Vector.empty[String]
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
-          case screen: ScreenOutput => screen.draw(StatusView.render(model))
-          case LineOutput(write)    => StatusView.changes(shown, model).foreach(write)
+          case screen: ScreenOutput => screen.draw(notes() ++ StatusView.render(model))
+          case LineOutput(write) =>
+            val now = notes()
+            now.filterNot(notesShown.contains).foreach(write)
+            notesShown = now
+            StatusView.changes(shown, model).foreach(write)
         }
 
         def running(model: StatusModel, shown: StatusModel): Behavior[Command] =

@@ -1,0 +1,205 @@
+package apps.web
+
+import java.nio.{ByteBuffer, ByteOrder}
+import java.util.Base64
+
+import scala.concurrent.duration._
+import scala.util.Try
+
+import akka.NotUsed
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior, PostStop}
+import akka.http.scaladsl.model.ws.{BinaryMessage, Message, TextMessage}
+import akka.stream.scaladsl.{BroadcastHub, Flow, Keep, Sink, Source}
+import akka.stream.{BoundedSourceQueue, Materializer, OverflowStrategy}
+import akka.util.ByteString
+import spray.json._
+
+import naogateway.RobotSnapshot
+import naogateway.recording.Recording
+import robotmiddleware.RobotMiddleware
+
+/**
+ * The live feed in the Foxglove WebSocket protocol (`foxglove.websocket.v1`, docs/web.md): the recording's robot
+ * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, so a viewer connected
+ * to the running gateway shows what it shows for a recording. Each keep-alive is published as the gateway read it
+ * ([[naogateway.wire.RobotReport]], the one mapping between the messages and a robot's report).
+ */
+object FoxgloveFeed {
+
+  /** The WebSocket subprotocol a client asks for. */
+  val Subprotocol: String = "foxglove.websocket.v1"
+
+  /** One channel as advertised: its id, topic and schema name (the schema data is the recording's descriptor set). */
+  final case class Channel(id: Int, topic: String, schemaName: String)
+
+  /** What the feed's hub hands its connections: channels appearing, and messages on them. */
+  sealed trait Update
+  final case class Advertised(channels: Vector[Channel]) extends Update
+  final case class Published(channelId: Int, nanos: Long, bytes: Array[Byte]) extends Update
+
+  /** What the feed accepts. */
+  sealed trait Command
+
+  /** Answers with the channels so far and the updates that follow. */
+  final case class Connect(replyTo: ActorRef[Feed]) extends Command
+
+  /** A connection's start: the channels known now, then the shared updates. */
+  final case class Feed(channels: Vector[Channel], updates: Source[Update, NotUsed])
+
+  private final case class Status(snapshot: RobotSnapshot) extends Command
+
+  /** The hub: one owner of the channel list, watching every robot's keep-alives at the middleware. */
+  def apply(middleware: ActorRef[RobotMiddleware.Command]): Behavior[Command] = Behaviors.setup { context =>
+    implicit val mat: Materializer = Materializer(context)
+    val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
+    hub.runWith(Sink.ignore)
+    middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
+    running(queue, hub, Map.empty, Vector.empty)
+  }
+
+  private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Int, Int)],
+      channels: Vector[Channel]): Behavior[Command] =
+    Behaviors.receiveMessage[Command] {
+      case Connect(replyTo) =>
+        replyTo ! Feed(channels, hub)
+        Behaviors.same
+      case Status(snapshot) =>
+        val id = snapshot.robotId
+        val known = robots.get(id)
+        // As in a recording, at most MaxRobotChannels robots get channels: a flood of robot ids cannot grow the list.
+        if (known.isEmpty && robots.size >= Recording.MaxRobotChannels) Behaviors.same
+        else {
+          val (ids, more) = known.fold {
+            val status = Channel(channels.size + 1, Recording.Topics.status(id), "naogateway.proto.Status")
+            val health = Channel(channels.size + 2, Recording.Topics.health(id), "naogateway.proto.RobotHealth")
+            queue.offer(Advertised(Vector(status, health)))
+            ((status.id, health.id), Vector(status, health))
+          }(ids => (ids, Vector.empty))
+          val nanos = System.currentTimeMillis() * 1000000L
+          val report = snapshot.report
+          queue.offer(Published(ids._1, nanos, report.status.toByteArray))
+          queue.offer(Published(ids._2, nanos, report.health.toByteArray))
+          running(queue, hub, robots.updated(id, ids), channels ++ more)
+        }
+    }.receiveSignal { case (_, PostStop) =>
+      queue.complete()
+      Behaviors.same
+    }
+
+  /** The schema data of every channel: the recording's descriptor set, base64 as the protocol wants it. */
+  private lazy val schemaBase64: String = Base64.getEncoder.encodeToString(Recording.descriptorSet)
+
+  private[web] def serverInfo: String = JsObject(
+    "op" -> JsString("serverInfo"), "name" -> JsString("naogateway"), "capabilities" -> JsArray(),
+    "supportedEncodings" -> JsArray(), "metadata" -> JsObject(), "sessionId" -> JsString(System.currentTimeMillis().toString)
+  ).compactPrint
+
+  private[web] def advertise(channels: Vector[Channel]): String = JsObject(
+    "op" -> JsString("advertise"),
+    "channels" -> JsArray(channels.map(c => JsObject("id" -> JsNumber(c.id), "topic" -> JsString(c.topic), "encoding" -> JsString("protobuf"),
+      "schemaName" -> JsString(c.schemaName), "schema" -> JsString(schemaBase64), "schemaEncoding" -> JsString("protobuf"))))
+  ).compactPrint
+
+  private[web] def status(level: Int, message: String): String =
+    JsObject("op" -> JsString("status"), "level" -> JsNumber(level), "message" -> JsString(message)).compactPrint
+
+  /** A message-data frame: opcode 1, subscription id (u32), receive time (u64 ns), the payload; little-endian. */
+  private[web] def messageData(subscription: Int, nanos: Long, bytes: Array[Byte]): ByteString = {
+    val b = ByteBuffer.allocate(13 + bytes.length).order(ByteOrder.LITTLE_ENDIAN)
+    b.put(1.toByte).putInt(subscription).putLong(nanos).put(bytes)
+    ByteString.fromArrayUnsafe(b.array())
+  }
+
+  /** What a client may ask: subscribe, unsubscribe; anything else is bad input. */
+  private[web] sealed trait Request
+  private[web] final case class Subscribe(subscriptions: Vector[(Int, Int)]) extends Request
+  private[web] final case class Unsubscribe(ids: Vector[Int]) extends Request
+  private[web] final case class Bad(reason: String) extends Request
+
+  /** A client's text message as a request (total: whatever it holds, it is a request or `Bad`). */
+  private[web] def request(text: String): Request =
+    Try(text.parseJson.asJsObject).toOption.fold[Request](Bad("not a JSON object")) { o =>
+      def ints(v: JsValue): Option[Int] = v match {
+        case JsNumber(n) if n.isValidInt => Some(n.toInt)
+        case _                           => None
+      }
+      o.fields.get("op") match {
+        case Some(JsString("subscribe")) =>
+          o.fields.get("subscriptions") match {
+            case Some(JsArray(subs)) =>
+              val parsed = subs.map(s => Try(s.asJsObject.fields).toOption.flatMap(f => for {
+                id <- f.get("id").flatMap(ints); ch <- f.get("channelId").flatMap(ints)
+              } yield (id, ch)))
+              if (parsed.forall(_.isDefined)) Subscribe(parsed.flatten) else Bad("a subscription needs an id and a channelId")
+            case _ => Bad("subscribe needs subscriptions")
+          }
+        case Some(JsString("unsubscribe")) =>
+          o.fields.get("subscriptionIds") match {
+            case Some(JsArray(ids)) if ids.forall(ints(_).isDefined) => Unsubscribe(ids.flatMap(ints))
+            case _                                                 => Bad("unsubscribe needs subscriptionIds")
+          }
+        case Some(JsString(op)) => Bad(s"operation '${op.take(40)}' is not supported")
+        case _                  => Bad("no op")
+      }
+    }
+
+  /** Client messages longer than this close the connection (a subscription to every channel is far shorter). */
+  private[web] val MaxRequestChars: Int = 64 * 1024
+
+  /** Status replies to bad requests per connection; beyond it they are only counted. */
+  private val MaxStatusReplies = 16
+
+  private sealed trait In
+  private final case class FromClient(request: Request) extends In
+  private final case class FromHub(update: Update) extends In
+
+  /** One client's connection: server info and the channels, then the data of the channels it subscribed to. */
+  private[web] def connection(feed: Feed, clientBuffer: Int, badInput: () => Unit)(implicit mat: Materializer): Flow[Message, Message, NotUsed] = {
+    val requests = Flow[Message].mapAsync(1) {
+      case t: TextMessage =>
+        t.textStream.limitWeighted(MaxRequestChars.toLong)(_.length.toLong).runFold(new StringBuilder)(_ append _).map(b => request(b.toString))(mat.executionContext)
+      case b: BinaryMessage =>
+        b.dataStream.runWith(Sink.ignore).map(_ => Bad("this server takes no binary messages"))(mat.executionContext)
+    }.map(FromClient(_): In)
+    val updates = feed.updates.buffer(clientBuffer * 16, OverflowStrategy.fail).map(FromHub(_): In)
+    requests.merge(updates, eagerComplete = true)
+      .statefulMapConcat { () =>
+        var channels = feed.channels.map(c => c.id -> c).toMap
+        var subscriptions = Map.empty[Int, Int] // subscription id -> channel id
+        var byChannel = Map.empty[Int, Int] // channel id -> subscription id
+        var statusReplies = 0
+        def bad(reason: String): List[Message] = {
+          badInput()
+          statusReplies += 1
+          if (statusReplies <= MaxStatusReplies) List(TextMessage(status(2, reason))) else Nil
+        }
+        {
+          case FromHub(Advertised(more)) =>
+            channels ++= more.map(c => c.id -> c)
+            List(TextMessage(advertise(more)))
+          case FromHub(Published(channel, nanos, bytes)) =>
+            byChannel.get(channel).map(sub => BinaryMessage(messageData(sub, nanos, bytes)): Message).toList
+          case FromClient(Subscribe(subs)) =>
+            subs.toList.flatMap { case (sub, channel) =>
+              if (!channels.contains(channel)) bad(s"channel $channel does not exist")
+              else if (subscriptions.contains(sub)) bad(s"subscription $sub is taken")
+              else if (byChannel.contains(channel)) bad(s"channel $channel is subscribed already")
+              else {
+                subscriptions += sub -> channel
+                byChannel += channel -> sub
+                Nil
+              }
+            }
+          case FromClient(Unsubscribe(ids)) =>
+            ids.foreach(id => subscriptions.get(id).foreach { ch => byChannel -= ch; subscriptions -= id })
+            Nil
+          case FromClient(Bad(reason)) => bad(reason)
+        }
+      }
+      .prepend(Source((TextMessage(serverInfo) :: (if (feed.channels.isEmpty) Nil else List(TextMessage(advertise(feed.channels))))): List[Message]))
+  }
+
+  /** How long a client may take to be connected to the hub. */
+  private[web] val ConnectTimeout: FiniteDuration = 3.seconds
+}

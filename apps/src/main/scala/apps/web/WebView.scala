@@ -1,0 +1,159 @@
+package apps.web
+
+import akka.NotUsed
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
+import akka.actor.typed.{ActorRef, Behavior, PostStop}
+import akka.stream.scaladsl.{BroadcastHub, Keep, Sink, Source}
+import akka.stream.{BoundedSourceQueue, Materializer}
+
+import naogateway.wire.gamecontroller.GameControlData
+import naogateway.{Gateway, GatewaySettings, Outbox, RobotEvent, RobotSnapshot, VisionFrame}
+import robotmiddleware.RobotMiddleware
+
+/**
+ * The one owner of what the web view shows ([[WebModel]]). It asks the gateway's read-only view as the status view
+ * does, and subscribes at the middleware to robot events and to each robot's HaViMo2 frames; every `push-interval`
+ * it renders one JSON push that every connected page shares (a broadcast hub, so the cost does not grow with pages).
+ */
+object WebView {
+
+  /** What the view accepts. */
+  sealed trait Command
+
+  /** Answers with what a new connection needs: its first message (every plot point, the whole log) and the pushes. */
+  final case class Connect(replyTo: ActorRef[Feed]) extends Command
+
+  /** A new connection's first message, and the shared pushes that follow (a connection buffers them itself). */
+  final case class Feed(hello: String, pushes: Source[String, NotUsed])
+
+  /** Answers with the figures of the pushes so far (for tests and the bench). */
+  final case class GetFigures(replyTo: ActorRef[Figures]) extends Command
+
+  /** Pushes rendered, pushes the shared queue had no room for, and the bytes of the last push. */
+  final case class Figures(pushes: Long, dropped: Long, lastPushBytes: Int)
+
+  private case object Tick extends Command
+  private case object Sample extends Command
+  private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
+  private final case class Links(links: Gateway.RobotLinks) extends Command
+  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private final case class Game(game: Option[GameControlData]) extends Command
+  private final case class Source_(source: Gateway.GameSource) extends Command
+  private final case class Stats(stats: Gateway.GatewayStats) extends Command
+  private final case class Event(event: RobotEvent) extends Command
+  private final case class Vision(frame: VisionFrame) extends Command
+
+  /** The view's state between messages: the model and what the last push and grid carried. */
+  private final case class State(
+      model: WebModel,
+      pushedEvents: Long,
+      pushedSamples: Long,
+      answered: Boolean,
+      watched: Set[Int],
+      gridsSent: Map[Int, Long],
+      gridsAtNanos: Long,
+      pushedAtNanos: Long,
+      figures: Figures
+  )
+
+  /** The view of `gateway` and `middleware`'s robots with `settings`. */
+  def apply(gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings): Behavior[Command] =
+    Behaviors.setup { context =>
+      Behaviors.withTimers { timers =>
+        implicit val mat: Materializer = Materializer(context)
+        // The shared queue holds a few pushes; a push that finds it full is dropped (the next one carries the news).
+        val (queue, hub) = Source.queue[String](4).toMat(BroadcastHub.sink[String](bufferSize = 16))(Keep.both).run()
+        // One consumer that always reads, so the hub never holds pushes back for pages that join later.
+        hub.runWith(Sink.ignore)
+        timers.startTimerWithFixedDelay(Tick, settings.pushInterval)
+        timers.startTimerWithFixedDelay(Sample, settings.sampleInterval)
+        middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
+        // The game comes as the GameController sends it, so a new state reaches the page at once, not at the next tick.
+        middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
+        val signing = GatewaySettings(context.system)
+        new View(gateway, middleware, settings, context, queue, hub, signing).running(State(
+          WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, Map.empty, 0L, 0L, Figures(0, 0, 0)))
+      }
+    }
+
+  private final class View(gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings,
+      context: ActorContext[Command], queue: BoundedSourceQueue[String], hub: Source[String, NotUsed], gatewaySettings: GatewaySettings) {
+    private val started = System.nanoTime()
+    // One adapter per reply class: Akka keeps one adapter per message class.
+    private val robotsAdapter = context.messageAdapter(Robots.apply)
+    private val linksAdapter = context.messageAdapter(Links.apply)
+    private val trafficAdapter = context.messageAdapter(Traffic.apply)
+    private val sourceAdapter = context.messageAdapter(Source_.apply)
+    private val statsAdapter = context.messageAdapter(Stats.apply)
+    private val visionAdapter = context.messageAdapter(Vision.apply)
+
+    private def t: Double = (System.nanoTime() - started) / 1e9
+
+    /** Renders and offers one push; grids go along at most every `grid-interval`, and only those that changed. */
+    private def push(s: State): State = {
+      val now = System.nanoTime()
+      val gridsDue = now - s.gridsAtNanos >= settings.gridInterval.toNanos
+      val grids =
+        if (!gridsDue) Set.empty[Int]
+        else s.model.vision.collect { case (id, v) if v.grid.isDefined && !s.gridsSent.get(id).contains(v.gridFrame) => id }.toSet
+      val newEvents = math.min(s.model.eventCount - s.pushedEvents, s.model.maxEvents.toLong).toInt
+      val newSamples = math.min(s.model.sampleCount - s.pushedSamples, s.model.historyPoints.toLong).toInt
+      val json = WebJson.push(s.model, t, newEvents, newSamples, grids, hello = false)
+      val dropped = queue.offer(json) match {
+        case akka.stream.QueueOfferResult.Enqueued => 0
+        case _                                     => 1
+      }
+      s.copy(pushedEvents = s.model.eventCount, pushedSamples = s.model.sampleCount, answered = false,
+        gridsSent = s.gridsSent ++ grids.map(id => id -> s.model.vision(id).gridFrame),
+        gridsAtNanos = if (grids.nonEmpty) now else s.gridsAtNanos, pushedAtNanos = now,
+        figures = Figures(s.figures.pushes + 1, s.figures.dropped + dropped, json.length))
+    }
+
+    /**
+     * The state with `model`; when the model logged something new (a robot online or offline, a new game state), it is
+     * pushed at once rather than at the next tick, yet never sooner than a fifth of `push-interval` after the last
+     * push, so a burst of events cannot raise the rate above five times the configured one.
+     */
+    private def soon(s: State, model: WebModel): State = {
+      val next = s.copy(model = model)
+      if (model.eventCount != s.model.eventCount && System.nanoTime() - s.pushedAtNanos >= settings.pushInterval.toNanos / 5) push(next)
+      else next
+    }
+
+    def running(s: State): Behavior[Command] = Behaviors.receiveMessage[Command] {
+      case Tick =>
+        gateway ! Gateway.GetRobots(robotsAdapter)
+        gateway ! Gateway.GetLinkStats(linksAdapter)
+        gateway ! Gateway.GetTraffic(trafficAdapter)
+        gateway ! Gateway.GetGameSource(sourceAdapter)
+        gateway ! Gateway.GetStats(statsAdapter)
+        // The push follows the robots' answer, so a page sees what the gateway saw within about one interval; when the
+        // answer is late (a robot actor slow to answer), the next tick pushes what there is.
+        running(if (s.answered) s.copy(answered = false) else push(s))
+      case Robots(robots) =>
+        // Each robot's frames are watched from the first time it is listed (the middleware ends the watch with us).
+        val fresh = robots.map(_.robotId).filterNot(s.watched)
+        fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, visionAdapter, grid = true))
+        val model = s.model.withRobots(robots).copy(signing = robots.map(r => r.robotId -> gatewaySettings.signingOf(r.robotId).name).toMap)
+        running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
+      case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
+      case Traffic(stats) => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
+      case Game(game)     => running(soon(s, s.model.withGame(game, t, System.currentTimeMillis())))
+      case Source_(src)   => running(s.copy(model = s.model.copy(gameSource = Some(src))))
+      case Stats(stats)   => running(s.copy(model = s.model.withGatewayStats(stats, t, System.currentTimeMillis())))
+      case Event(event)   => running(soon(s, s.model.withEvent(event, t, System.currentTimeMillis())))
+      case Vision(VisionFrame.Regions(id, frame, _, regions)) => running(s.copy(model = s.model.withRegions(id, frame, regions)))
+      case Vision(VisionFrame.Grid(id, frame, _, grid))       => running(s.copy(model = s.model.withGrid(id, frame, grid.cells.toArray)))
+      case Sample         => running(s.copy(model = s.model.sampled(t)))
+      case Connect(replyTo) =>
+        replyTo ! Feed(WebJson.push(s.model, t, s.model.maxEvents, s.model.historyPoints, s.model.vision.keySet, hello = true), hub)
+        Behaviors.same
+      case GetFigures(replyTo) =>
+        replyTo ! s.figures
+        Behaviors.same
+    }.receiveSignal { case (_, PostStop) =>
+      queue.complete()
+      Behaviors.same
+    }
+  }
+}
