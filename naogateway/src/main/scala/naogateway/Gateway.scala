@@ -332,6 +332,21 @@ object Gateway {
     private var gameFrom: Option[InetSocketAddress] = None
     private var gameUntrusted = 0L
 
+    private var lastUnreadable: Option[(Long, String)] = None
+
+    /** Where a version stands among those read: newest (richest) first. */
+    private def rank(version: GameControlVersion): Int = GameControlVersion.all.indexOf(version)
+
+    /**
+     * Every packet, not only changes, reaches every gate (the outbox's, each ZeroMQ robot's): a restarted outbox or
+     * ZeroMQ link learns the reading within one round; and it reaches them before any subscriber hears of the game,
+     * so a subscriber reacting to kick-off finds them closed.
+     */
+    private def gate(reading: GameReading): Unit = {
+      outbox ! Outbox.GameStateChanged(reading)
+      byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(reading))
+    }
+
     private def discoveredRobots: Int = byId.valuesIterator.count(_.discovered)
 
     /** The configured robots, then the reader: it never sees a table without them. */
@@ -454,21 +469,24 @@ object Gateway {
           reject(Rejection.UntrustedGameController, from)
           Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
+          val now = System.nanoTime()
           GameControllerCodec.decodeControl(bytes) match {
             case Right(data) =>
               gcPackets += 1
               gameFrom = Some(from)
               val changed = !game.exists(_.gameState == data.gameState)
-              // Every packet, not only changes: a restarted outbox or ZeroMQ link learns the game state within one round.
-              // Every gate (the outbox's, each ZeroMQ robot's) hears of it before any subscriber does, so a subscriber
-              // reacting to kick-off finds them closed.
-              outbox ! Outbox.GameStateChanged(data.gameState)
-              byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(data.gameState))
-              // Both versions arrive each round; the version-8 packet is the richer one to keep.
-              if (data.version == GameControlVersion.V8 || game.forall(_.version != GameControlVersion.V8) || changed) {
+              gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
+              // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
+              if (game.forall(g => rank(data.version) <= rank(g.version)) || changed) {
                 game = Some(data)
                 publish(GameStateUpdated(data))
               }
+            case Left(error) if Datagram.isGameControllerControl(bytes) =>
+              // The trusted GameController sends what this gateway cannot read (a version yet to come): it may well be
+              // running a game, so the gate closes (fail safe) and says why, rather than stay open as if none were.
+              reject(Rejection.BadGameControllerPacket, from, error.describe)
+              lastUnreadable = Some(now -> error.describe)
+              gate(GameReading.Unreadable(error.describe))
             case Left(error) =>
               reject(Rejection.BadGameControllerPacket, from, error.describe)
           }

@@ -19,7 +19,6 @@ import org.slf4j.LoggerFactory
 
 import naogateway._
 import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedDirection, RecordedPort, RecordingProto, RpcProto}
-import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
 /**
@@ -68,8 +67,8 @@ object Decision {
   /** What the outbox did with one datagram for robot `robotId`: `sent`, `queued`, `refused-by-rule`, `dropped`. */
   final case class Outgoing(robotId: Int, priority: Priority, outcome: String, bytes: Array[Byte]) extends Decision
 
-  /** The competition gate opened or closed on `state`. */
-  final case class Gate(open: Boolean, state: GameState) extends Decision
+  /** The competition gate opened or closed on `reading` (a game state, or a packet that could not be read). */
+  final case class Gate(open: Boolean, reading: naogateway.GameReading) extends Decision
 
   /** The team budget's state: bytes each way over the last second, the limit, the queues. */
   final case class Budget(outBytes: Long, inBytes: Long, limit: Int, queued: Map[String, Int]) extends Decision
@@ -514,8 +513,12 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           obj("decision" -> quote("send"), t, "robotId" -> robotId.toString, "priority" -> quote(priority.name),
             "outcome" -> quote(outcome), "bytes" -> bytes.length.toString,
             "call" -> opt(call)(c => quote(c.name)), "callId" -> opt(call.flatMap(_.callId))(_.toString))
-        case Decision.Gate(open, state) =>
-          obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state.toString))
+        case Decision.Gate(open, reading) =>
+          val state = reading match {
+            case naogateway.GameReading.Known(s, _)        => s.toString
+            case naogateway.GameReading.Unreadable(reason) => s"unreadable: $reason"
+          }
+          obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state))
         case Decision.Budget(out, in, limit, queued) =>
           obj("decision" -> quote("budget"), t, "outBytesLastSecond" -> out.toString, "inBytesLastSecond" -> in.toString,
             "limitBytesPerSecond" -> limit.toString,

@@ -125,9 +125,9 @@ object SimulatedGameController {
       version: GameControlVersion,
       moment: GameMoment,
       packetNumber: Int
-  ): GameControlData = {
+  ): ControlData2014 = {
     val v8 = version == GameControlVersion.V8
-    GameControlData(
+    ControlData2014(
       version = version,
       packetNumber = if (v8) Some(packetNumber & 0xff) else None,
       playersPerTeam = settings.playersPerTeam,

@@ -15,16 +15,19 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
 
   private def vector(file: String): Array[Byte] = GameControllerVectors.bytes(file)
 
-  private def decode(bytes: Array[Byte]): GameControlData =
-    GameControllerCodec.decodeControl(bytes).fold(e => fail(e.describe), identity)
+  private def decode(bytes: Array[Byte]): ControlData2014 =
+    GameControllerCodec.decodeControl(bytes) match {
+      case Right(d: ControlData2014) => d
+      case other                     => fail(s"not a 2014 packet: $other")
+    }
 
   // The vectors' PLAYING and FINISHED packets carry a score and a penalty; the simulation plays 0 : 0 without fouls.
-  private def withoutScoreAndFouls(d: GameControlData): GameControlData = {
+  private def withoutScoreAndFouls(d: ControlData2014): ControlData2014 = {
     def clean(t: TeamInfo) = t.copy(score = 0, players = Vector.fill(TeamInfo.PlayerSlots)(PlayerInfo.Unpenalised))
     d.copy(team0 = clean(d.team0), team1 = clean(d.team1))
   }
 
-  private def momentOf(d: GameControlData): GameMoment =
+  private def momentOf(d: ControlData2014): GameMoment =
     GameMoment(d.gameState, d.firstHalf, d.kickOffTeam, d.secsRemaining, d.secondaryTime.getOrElse(0))
 
   "The simulated GameController's packets" should {
@@ -69,7 +72,7 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
         val Vector(v8, v7) = packets(settings, moment, (t / 250000000L).toInt).map(decode)
         val r = real(moment.gameState)
         // Every field but the clocks, the packet number, the half, the kick-off, the score and the fouls.
-        def same(d: GameControlData) = d.copy(packetNumber = r.packetNumber, secsRemaining = r.secsRemaining,
+        def same(d: ControlData2014) = d.copy(packetNumber = r.packetNumber, secsRemaining = r.secsRemaining,
           secondaryTime = r.secondaryTime, firstHalf = r.firstHalf, kickOffTeam = r.kickOffTeam)
         same(v8) shouldBe withoutScoreAndFouls(r)
         v7.copy(gameState = GameState.Initial, secsRemaining = realV7.secsRemaining, firstHalf = true,
