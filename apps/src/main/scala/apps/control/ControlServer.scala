@@ -70,8 +70,9 @@ object ControlServer {
   }
 
   /** The server in front of `robots`, which the caller owns (and closes). */
-  def withInterface(robots: RobotInterface, settings: ControlSettings): Behavior[Command] =
-    serving(robots, settings, ownsInterface = false, None)
+  def withInterface(robots: RobotInterface, settings: ControlSettings,
+      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Behavior[Command] =
+    serving(robots, settings, ownsInterface = false, gateway)
 
   private def serving(robots: RobotInterface, settings: ControlSettings, ownsInterface: Boolean,
       gateway: Option[ActorRef[naogateway.Gateway.Query]]): Behavior[Command] =
@@ -255,6 +256,7 @@ object ControlServer {
           val stats = all.map(r => linkStats(robots, r.robotId, settings.linkStatsTimeout))
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
+            .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).map(Answer.Ok(_)))
         }
       case Request.Call(id, module, method, params) =>
@@ -286,6 +288,23 @@ object ControlServer {
     implicit val askTimeout: akka.util.Timeout = timeout
     gateway.fold(Future.successful("")) { g =>
       g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(_.describe).recover { case NonFatal(_) => "" }
+    }
+  }
+
+  /**
+   * The game and the competition gate as the status screen shows them (with why a closed gate is closed), for the
+   * lines before the status's final one; none without a gateway or when it does not answer.
+   */
+  private def gameLines(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
+      implicit system: ActorSystem[_]): Future[List[String]] = {
+    import akka.actor.typed.scaladsl.AskPattern._
+    implicit val ec: ExecutionContext = system.executionContext
+    implicit val askTimeout: akka.util.Timeout = timeout
+    gateway.fold(Future.successful(List.empty[String])) { g =>
+      val game = g.ask[Option[naogateway.wire.gamecontroller.GameControlData]](naogateway.Gateway.GetGameState(_))
+      val traffic = g.ask[naogateway.Outbox.TrafficStats](naogateway.Gateway.GetTraffic(_))
+      game.zip(traffic).map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
+        .recover { case NonFatal(_) => Nil }
     }
   }
 
