@@ -143,7 +143,11 @@ object Launcher {
     // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
     for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
       val target = if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
-      context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target)), "game-controller")
+      val number = c.getInt("game-controller-version")
+      val version = naogateway.wire.gamecontroller.GameControlVersion.all.find(_.number == number).getOrElse(
+        throw new IllegalArgumentException(s"apps.launcher.game-controller-version $number: the simulation plays 19, 12, 8 or 7"))
+      context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target,
+        version = version)), "game-controller")
     }
   }
 
