@@ -81,6 +81,10 @@ object StatusView {
       s"(team ${g.team0.teamNumber} : team ${g.team1.teamNumber}), version ${g.version.number}"
   }
 
+  /** The team's message budget and every warning (a second GameController, the budget), each on a line of its own. */
+  def sourceLines(source: naogateway.Gateway.GameSource): Vector[String] =
+    source.budget.toVector ++ source.warnings.map(w => s"WARNING: $w")
+
   /** The competition gate in one line. */
   def gateLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("competition gate: -") { t =>
     if (!t.competition) "competition gate: open (competition rule off)"
@@ -112,7 +116,7 @@ object StatusView {
   def render(model: StatusModel): Vector[String] = {
     val online = model.robots.count(_.online)
     Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game)) ++
-      model.gameSource.map(_.describe).toVector ++ Vector(gateLine(model.traffic),
+      model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(gateLine(model.traffic),
       trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
       model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ Vector("", "Ctrl-C stops everything.")
   }
@@ -154,6 +158,10 @@ object StatusView {
       case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || b.gateReason != a.gateReason => Some(gateLine(after.traffic))
       case _                                                => None
     }
-    robots ++ game ++ gate
+    // A warning is news when it first appears (not every refresh its figures change).
+    def warningHeads(m: StatusModel) = m.gameSource.toVector.flatMap(_.warnings).map(_.takeWhile(_ != ':'))
+    val warnings = after.gameSource.toVector.flatMap(_.warnings).filterNot(w => warningHeads(before).contains(w.takeWhile(_ != ':')))
+      .map(w => s"WARNING: $w")
+    robots ++ game ++ gate ++ warnings
   }
 }

@@ -100,6 +100,16 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       val off = Seq(None, Some(traffic), Some(traffic.copy(gameRunning = true))).map(t => StatusModel.empty.copy(traffic = t))
       off.zip(off.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe empty
     }
+    "show the message budget and the warnings on the screen, and print a warning line when one first appears" in {
+      val quiet = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0, Some("team messages (team 12, UDP 10012): 12000 of 12000 left"))
+      val twoGcs = quiet.copy(warnings = Vector("2 GameControllers on this field: game state from 127.0.0.1:3838 only; 127.0.0.2:3838 (untrusted, ignored)"))
+      val screen = StatusView.render(StatusModel.empty.copy(gameSource = Some(twoGcs)))
+      screen should contain("team messages (team 12, UDP 10012): 12000 of 12000 left")
+      screen should contain("WARNING: " + twoGcs.warnings.head)
+      val models = Seq(quiet, twoGcs, twoGcs.copy(warnings = Vector(twoGcs.warnings.head + " ")), quiet)
+        .map(g => StatusModel.empty.copy(gameSource = Some(g)))
+      models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe Vector("WARNING: " + twoGcs.warnings.head)
+    }
     "fit a screen into the terminal: lines cut to its width, the rows that do not fit counted" in {
       val lines = Vector("a" * 10, "b", "c", "d")
       StatusView.fit(lines, 4, 10) shouldBe Vector("aaaa", "b", "c", "d")

@@ -67,6 +67,7 @@ object Gateway {
   final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Query
 
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
+  private final case class TeamMessageEvent(event: UdpLink.Event) extends Command
   private final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
@@ -78,8 +79,11 @@ object Gateway {
    * @param trusted the configured GameController addresses or subnets, in words ("any source" when none is)
    * @param lastFrom the sender of the last control packet that counted
    * @param untrusted control packets ignored because they came from elsewhere
+   * @param budget the team's message budget in one line, when the gateway counts it ([[MessageBudget.describe]])
+   * @param warnings what needs the team's attention: a second GameController, the message budget
    */
-  final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long) {
+  final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long,
+      budget: Option[String] = None, warnings: Vector[String] = Vector.empty) {
 
     /** One line: "game state from 10.0.0.5:3838 (trusted: 10.0.0.0/24), 3 packets from elsewhere ignored". */
     def describe: String =
@@ -166,6 +170,20 @@ object Gateway {
         )
         val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
         logic.start()
+        if (settings.gameControllerEnabled && settings.teamMessages.enabled && replay.isEmpty) {
+          // Akka keeps one message adapter per message class, and the GameController link's events are of the same
+          // class: a child of its own marks the team port's events instead.
+          val self = context.self
+          val teamEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
+            self ! TeamMessageEvent(e)
+            Behaviors.same
+          }, "team-message-events")
+          context.spawn(
+            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port), teamEvents,
+              UdpLink.Options(reuseAddress = true, broadcast = true)),
+            "team-message-link"
+          )
+        }
         if (settings.gameControllerEnabled && replay.isEmpty) {
           context.spawn(
             UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
@@ -333,6 +351,17 @@ object Gateway {
     private var gameUntrusted = 0L
 
     private var lastUnreadable: Option[(Long, String)] = None
+    private var sources = GameControllerSources()
+    private var budget = MessageBudget(settings.teamMessages)
+
+    /** Notes the sender of a readable control packet; true when its game state counts (see GameControllerSources). */
+    private def heard(data: GameControlData, from: InetSocketAddress, trusted: Boolean, now: Long): Boolean = {
+      val (next, use) = sources.packet(from, data.packetNumberOnWire, trusted, now)
+      if (next.others(now).nonEmpty && sources.others(now).isEmpty)
+        context.log.warn("{}", next.warnings(now).mkString("; "))
+      sources = next
+      use
+    }
 
     /** Where a version stands among those read: newest (richest) first. */
     private def rank(version: GameControlVersion): Int = GameControlVersion.all.indexOf(version)
@@ -463,17 +492,30 @@ object Gateway {
           Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) if recordGameController(bytes, from) && Datagram.isGameControllerReturn(bytes) =>
           Behaviors.same // robots' answers to the GameController share its port
-        case GameControllerEvent(UdpLink.Received(_, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
+        case GameControllerEvent(UdpLink.Received(bytes, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
           // Anyone on the field's WiFi can send a control packet: only the configured GameController steers the gate.
+          // A readable one is still noted, so a second GameController on the field is seen and named.
           gameUntrusted += 1
           reject(Rejection.UntrustedGameController, from)
+          GameControllerCodec.decodeControl(bytes).foreach(heard(_, from, trusted = false, System.nanoTime()))
           Behaviors.same
+        case TeamMessageEvent(UdpLink.Received(bytes, _)) =>
+          budget = budget.message(bytes.length, System.nanoTime())
+          Behaviors.same
+        case TeamMessageEvent(UdpLink.BindFailed(address, reason)) =>
+          context.log.error("Team message listener cannot bind {}: {}; the message budget will not be counted", address, reason)
+          Behaviors.same
+        case TeamMessageEvent(_) => Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
           val now = System.nanoTime()
           GameControllerCodec.decodeControl(bytes) match {
+            case Right(data) if !heard(data, from, trusted = true, now) =>
+              // A second trusted GameController while the first keeps sending: named in the warnings, never obeyed.
+              reject(Rejection.UntrustedGameController, from, "a second GameController")
             case Right(data) =>
               gcPackets += 1
               gameFrom = Some(from)
+              if (settings.teamMessages.enabled) budget = budget.game(data)
               val changed = !game.exists(_.gameState == data.gameState)
               gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
               // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
@@ -541,7 +583,10 @@ object Gateway {
           replyTo ! game
           Behaviors.same
         case GetGameSource(replyTo) =>
-          replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted)
+          val now = System.nanoTime()
+          replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted,
+            Option.when(settings.teamMessages.enabled)(budget.describe(now)),
+            sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty))
           Behaviors.same
         case RobotStopped(robotId, actor) =>
           // A forgotten robot: its IP address, its id and its traffic meter are free again.

@@ -150,7 +150,8 @@ final case class GatewaySettings(
     clockSync: ClockSyncSettings = ClockSyncSettings(),
     signingKey: Option[SigningKey] = None,
     newSessionKeepAlives: Int = 3,
-    recording: RecordingSettings = RecordingSettings.Off
+    recording: RecordingSettings = RecordingSettings.Off,
+    teamMessages: TeamMessageSettings = TeamMessageSettings()
 ) {
   require(newSessionKeepAlives >= 1 && newSessionKeepAlives <= 20, "new-session.keep-alives must be between 1 and 20")
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
@@ -262,7 +263,12 @@ object GatewaySettings {
       clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window")),
       signingKey = signingKey(c),
       newSessionKeepAlives = c.getInt("new-session.keep-alives"),
-      recording = RecordingSettings.fromConfig(c.getConfig("recording"))
+      recording = RecordingSettings.fromConfig(c.getConfig("recording")),
+      teamMessages = {
+        val t = gc.getConfig("team-messages")
+        TeamMessageSettings(t.getInt("team-number"), t.getInt("max-bytes"), t.getInt("per-game"), t.getInt("per-extra-minute"),
+          t.getDuration("rate-window").getSeconds.toInt)
+      }
     )
   }
 

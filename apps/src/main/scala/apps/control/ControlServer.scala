@@ -257,7 +257,9 @@ object ControlServer {
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout)).mapConcat(_.map(Answer.Line(_))))
-            .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).map(Answer.Ok(_)))
+            .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
+              source.toList.flatMap(s => apps.StatusView.sourceLines(s).map(Answer.Line(_))) :+ Answer.Ok(source.fold("")(_.describe))
+            })
         }
       case Request.Call(id, module, method, params) =>
         val needs = Operation.RawCall(module, method, params).group
@@ -280,14 +282,17 @@ object ControlServer {
     }
   }
 
-  /** Where game state comes from, for the status's final line; empty without a gateway or when it does not answer. */
+  /**
+   * Where game state comes from, for the status's final line, with the message budget and the warnings for the lines
+   * before it; none without a gateway or when it does not answer.
+   */
   private def gameSource(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
-      implicit system: ActorSystem[_]): Future[String] = {
+      implicit system: ActorSystem[_]): Future[Option[naogateway.Gateway.GameSource]] = {
     import akka.actor.typed.scaladsl.AskPattern._
     implicit val ec: ExecutionContext = system.executionContext
     implicit val askTimeout: akka.util.Timeout = timeout
-    gateway.fold(Future.successful("")) { g =>
-      g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(_.describe).recover { case NonFatal(_) => "" }
+    gateway.fold(Future.successful(Option.empty[naogateway.Gateway.GameSource])) { g =>
+      g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(Option(_)).recover { case NonFatal(_) => None }
     }
   }
 

@@ -107,7 +107,7 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       testKit.stop(small)
     }
 
-    "end a status with the game, the competition gate (why it is closed) and the game's source, asked of the gateway" in {
+    "end a status with the game, the gate (why it is closed), the message budget, warnings and the game's source" in {
       val reason = "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00"
       val gateway = spawn(Behaviors.receiveMessage[naogateway.Gateway.Command] {
         case naogateway.Gateway.GetGameState(replyTo) => replyTo ! None; Behaviors.same
@@ -116,14 +116,18 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
             gateReason = Some(reason))
           Behaviors.same
         case naogateway.Gateway.GetGameSource(replyTo) =>
-          replyTo ! naogateway.Gateway.GameSource("10.0.0.5/32", None, 0)
+          replyTo ! naogateway.Gateway.GameSource("10.0.0.5/32", None, 0,
+            Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
+            Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)"))
           Behaviors.same
         case _ => Behaviors.same
       })
       val withGateway = spawn(ControlServer.withInterface(new FleetStub(2), settings, Some(gateway)))
       val lines = exchange("status", address(withGateway).getPort)
-      lines.takeRight(3) shouldBe Vector(". game: no GameController heard",
+      lines.takeRight(5) shouldBe Vector(". game: no GameController heard",
         s". competition gate: CLOSED: $reason: nothing is sent to the robots",
+        ". team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s",
+        ". WARNING: 2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)",
         "ok game state from nowhere yet (trusted: 10.0.0.5/32)")
       testKit.stop(withGateway)
     }

@@ -335,6 +335,14 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       naogateway.CompetitionGate.closes(naogateway.GameReading.Unreadable("any")) shouldBe true
       rows.last(3) should include(s"${naogateway.CompetitionGate.UnreadableHoldNanos / 1000000000L} s")
     }
+    "give the message budget rules the gateway counts with" in {
+      val rules = table("gc-budget").rows.map(r => r(0) -> r(1)).toMap
+      val defaults = naogateway.TeamMessageSettings()
+      rules("budget per team per game") should startWith(s"${defaults.perGame} messages")
+      rules("per minute of additional time") should startWith(s"${defaults.perExtraMinute} more")
+      rules("largest message") shouldBe s"${defaults.maxBytes} bytes"
+      naogateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway")).teamMessages shouldBe defaults
+    }
   }
 
   "The secure-stream examples" should {
@@ -582,7 +590,7 @@ object ProtocolDocSpec {
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =
     Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return",
-      "gc-v19", "gc-v19-team", "gc-v12", "gc-v12-team", "gc-status", "gc-gate")
+      "gc-v19", "gc-v19-team", "gc-v12", "gc-v12-team", "gc-status", "gc-gate", "gc-budget")
 
   // ---- reading the document ----
 
