@@ -78,6 +78,12 @@ object Launcher {
       try {
         val a = arguments(args.toSeq)
         val c = config(a.configFile.toSeq)
+        // Simulated robots on this host answer the GameController from it, and a GameController refuses a host that
+        // ever sent a status message as a monitor: the two do not go together.
+        require(!(c.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
+            c.getInt("apps.launcher.simulated-robots") > 0),
+          "game-controller.monitor: the simulated robots on this host would answer the GameController from it, which " +
+            "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the monitor off")
         (a, if (a.replay.isDefined) ReplayOverrides.withFallback(c) else c)
       } catch {
         // A wrong file name or a typo in the file is the operator's to fix: say what and where, without a stack trace.

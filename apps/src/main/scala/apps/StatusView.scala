@@ -85,6 +85,19 @@ object StatusView {
   def sourceLines(source: naogateway.Gateway.GameSource): Vector[String] =
     source.budget.toVector ++ source.warnings.map(w => s"WARNING: $w")
 
+  /**
+   * In the monitor role: the age of the true state, and each robot's status message as the GameController forwarded
+   * it (fallen, pose, ball age), shown beside the gateway's own robot lines.
+   */
+  def monitorLines(source: naogateway.Gateway.GameSource): Vector[String] =
+    source.trueStateAgeMillis.map(ms => f"true game state from the GameController (monitor), ${ms / 1000.0}%.1f s old").toVector ++
+      source.forwarded.map { f =>
+        val s = f.status
+        val ball = if (s.ballAge < 0) "ball never seen" else f"ball seen ${s.ballAge}%.1f s ago"
+        f"GameController hears team ${s.team} player ${s.player} (${f.from.getHostAddress}): " +
+          f"${if (s.fallen) "fallen" else "up"}, pose ${s.pose._1}%.0f ${s.pose._2}%.0f mm ${s.pose._3}%.2f rad, $ball"
+      }
+
   /** The competition gate in one line. */
   def gateLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("competition gate: -") { t =>
     if (!t.competition) "competition gate: open (competition rule off)"
@@ -118,7 +131,8 @@ object StatusView {
     Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game)) ++
       model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(gateLine(model.traffic),
       trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
-      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ Vector("", "Ctrl-C stops everything.")
+      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ model.gameSource.toVector.flatMap(monitorLines) ++
+      Vector("", "Ctrl-C stops everything.")
   }
 
   /**

@@ -110,6 +110,19 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
         .map(g => StatusModel.empty.copy(gameSource = Some(g)))
       models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe Vector("WARNING: " + twoGcs.warnings.head)
     }
+    "show, in the monitor role, the true state's age and each forwarded robot status beside the robot lines" in {
+      val status = naogateway.wire.gamecontroller.ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), 2f, (250f, -100f))
+      val source = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0, trueStateAgeMillis = Some(400),
+        forwarded = Vector(naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.23"), status, 0L),
+          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.24"), status.copy(player = 4, fallen = false, ballAge = -1f), 0L)))
+      StatusView.monitorLines(source) shouldBe Vector(
+        "true game state from the GameController (monitor), 0.4 s old",
+        "GameController hears team 12 player 3 (10.0.0.23): fallen, pose 1000 -500 mm 1.50 rad, ball seen 2.0 s ago",
+        "GameController hears team 12 player 4 (10.0.0.24): up, pose 1000 -500 mm 1.50 rad, ball never seen")
+      val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, None, None, Some(source)))
+      val robot = screen.indexWhere(_.startsWith("robot 1"))
+      screen.slice(robot + 1, robot + 4) shouldBe StatusView.monitorLines(source)
+    }
     "fit a screen into the terminal: lines cut to its width, the rows that do not fit counted" in {
       val lines = Vector("a" * 10, "b", "c", "d")
       StatusView.fit(lines, 4, 10) shouldBe Vector("aaaa", "b", "c", "d")

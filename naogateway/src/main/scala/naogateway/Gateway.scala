@@ -68,6 +68,7 @@ object Gateway {
 
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class TeamMessageEvent(event: UdpLink.Event) extends Command
+  private final case class MonitorStatusEvent(event: UdpLink.Event) extends Command
   private final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
@@ -81,9 +82,12 @@ object Gateway {
    * @param untrusted control packets ignored because they came from elsewhere
    * @param budget the team's message budget in one line, when the gateway counts it ([[MessageBudget.describe]])
    * @param warnings what needs the team's attention: a second GameController, the message budget
+   * @param trueStateAgeMillis in the monitor role: how old the last true game state (`RGTD`) is; `None` before the first
+   * @param forwarded in the monitor role: the robots' status messages the GameController forwarded, by team and player
    */
   final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long,
-      budget: Option[String] = None, warnings: Vector[String] = Vector.empty) {
+      budget: Option[String] = None, warnings: Vector[String] = Vector.empty, trueStateAgeMillis: Option[Long] = None,
+      forwarded: Vector[ForwardedStatus] = Vector.empty) {
 
     /** One line: "game state from 10.0.0.5:3838 (trusted: 10.0.0.0/24), 3 packets from elsewhere ignored". */
     def describe: String =
@@ -352,6 +356,50 @@ object Gateway {
 
     private var lastUnreadable: Option[(Long, String)] = None
     private var sources = GameControllerSources()
+    private var trueStateAt: Option[Long] = None
+    private var forwarded = ForwardedStatuses()
+
+    /**
+     * The monitor role: the request for the true state, from the GameController socket, now and every request-interval
+     * (a child owns the timer); the forwarded status messages on a socket of their own.
+     */
+    private def startMonitor(gcLink: ActorRef[UdpLink.Command], m: MonitorSettings): Unit = {
+      context.log.info("Gateway monitoring the GameController at {}: asking for the true game state every {}", m.gameController,
+        m.requestInterval)
+      context.spawn(Behaviors.withTimers[String] { timers =>
+        gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
+        timers.startTimerWithFixedDelay("request", m.requestInterval)
+        Behaviors.receiveMessage { _ =>
+          gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
+          Behaviors.same
+        }
+      }, "monitor-requests")
+      val self = context.self
+      val statusEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
+        self ! MonitorStatusEvent(e)
+        Behaviors.same
+      }, "monitor-status-events")
+      context.spawn(UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, m.statusPort), statusEvents,
+        UdpLink.Options(reuseAddress = true)), "monitor-status-link")
+    }
+
+    /** Whether the monitor role's true state is fresh enough that the broadcast one is not used. */
+    private def trueStateFresh(now: Long): Boolean =
+      settings.monitor.exists(m => trueStateAt.exists(at => now - at < m.trueStateFresh.toNanos))
+
+    /** A readable control packet that counts (broadcast, or the true state): the gate, the budget, the view. */
+    private def control(data: GameControlData, from: InetSocketAddress, now: Long): Unit = {
+      gcPackets += 1
+      gameFrom = Some(from)
+      if (settings.teamMessages.enabled) budget = budget.game(data)
+      val changed = !game.exists(_.gameState == data.gameState)
+      gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
+      // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
+      if (game.forall(g => rank(data.version) <= rank(g.version)) || changed) {
+        game = Some(data)
+        publish(GameStateUpdated(data))
+      }
+    }
     private var budget = MessageBudget(settings.teamMessages)
 
     /** Notes the sender of a readable control packet; true when its game state counts (see GameControllerSources). */
@@ -386,9 +434,10 @@ object Gateway {
     }
 
     def bindingGameController: Behavior[Command] = Behaviors.receiveMessage[Command] {
-      case GameControllerEvent(UdpLink.Bound(_, gcLocal)) =>
+      case GameControllerEvent(UdpLink.Bound(gcLink, gcLocal)) =>
         context.log.info("Gateway listening for the GameController on {}", gcLocal)
         gameControllerAddress = Some(gcLocal)
+        settings.monitor.foreach(startMonitor(gcLink, _))
         stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
       case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
         context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
@@ -506,23 +555,34 @@ object Gateway {
           context.log.error("Team message listener cannot bind {}: {}; the message budget will not be counted", address, reason)
           Behaviors.same
         case TeamMessageEvent(_) => Behaviors.same
+        case MonitorStatusEvent(UdpLink.Received(bytes, from)) =>
+          // Only the GameController forwards status messages; a stranger cannot fill the view.
+          if (!settings.monitor.exists(_.gameController.getAddress == from.getAddress))
+            reject(Rejection.UntrustedGameController, from, "status message from another host than the GameController")
+          else
+            GameControllerCodec.decodeForwardedStatus(bytes) match {
+              case Right((robot, status)) => forwarded = forwarded.add(ForwardedStatus(robot, status, System.nanoTime()))
+              case Left(error)            => reject(Rejection.BadGameControllerPacket, from, error.describe)
+            }
+          Behaviors.same
+        case MonitorStatusEvent(UdpLink.BindFailed(address, reason)) =>
+          context.log.error("Monitor status listener cannot bind {}: {}; forwarded robot statuses will not be shown", address, reason)
+          Behaviors.same
+        case MonitorStatusEvent(_) => Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
           val now = System.nanoTime()
           GameControllerCodec.decodeControl(bytes) match {
             case Right(data) if !heard(data, from, trusted = true, now) =>
               // A second trusted GameController while the first keeps sending: named in the warnings, never obeyed.
               reject(Rejection.UntrustedGameController, from, "a second GameController")
-            case Right(data) =>
+            case Right(_) if trueStateFresh(now) =>
+              // The monitor role: the broadcast state may lag the true one by up to 10 s; the true one rules meanwhile.
               gcPackets += 1
-              gameFrom = Some(from)
-              if (settings.teamMessages.enabled) budget = budget.game(data)
-              val changed = !game.exists(_.gameState == data.gameState)
-              gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
-              // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
-              if (game.forall(g => rank(data.version) <= rank(g.version)) || changed) {
-                game = Some(data)
-                publish(GameStateUpdated(data))
-              }
+            case Right(data) => control(data, from, now)
+            case Left(_) if settings.monitor.exists(_.gameController.getAddress == from.getAddress) &&
+                GameControllerCodec.decodeTrueData(bytes).isRight =>
+              control(GameControllerCodec.decodeTrueData(bytes).toOption.get, from, now)
+              trueStateAt = Some(now)
             case Left(error) if Datagram.isGameControllerControl(bytes) =>
               // The trusted GameController sends what this gateway cannot read (a version yet to come): it may well be
               // running a game, so the gate closes (fail safe) and says why, rather than stay open as if none were.
@@ -586,7 +646,8 @@ object Gateway {
           val now = System.nanoTime()
           replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted,
             Option.when(settings.teamMessages.enabled)(budget.describe(now)),
-            sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty))
+            sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty),
+            trueStateAt.map(at => (now - at) / 1000000L), forwarded.sorted)
           Behaviors.same
         case RobotStopped(robotId, actor) =>
           // A forgotten robot: its IP address, its id and its traffic meter are free again.

@@ -258,7 +258,8 @@ object ControlServer {
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
-              source.toList.flatMap(s => apps.StatusView.sourceLines(s).map(Answer.Line(_))) :+ Answer.Ok(source.fold("")(_.describe))
+              source.toList.flatMap(s => (apps.StatusView.sourceLines(s) ++ apps.StatusView.monitorLines(s)).map(Answer.Line(_))) :+
+                Answer.Ok(source.fold("")(_.describe))
             })
         }
       case Request.Call(id, module, method, params) =>

@@ -335,6 +335,16 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       naogateway.CompetitionGate.closes(naogateway.GameReading.Unreadable("any")) shouldBe true
       rows.last(3) should include(s"${naogateway.CompetitionGate.UnreadableHoldNanos / 1000000000L} s")
     }
+    "give the monitor exchange with the bytes and ports the gateway uses" in {
+      val rows = table("gc-monitor").rows.map(r => r(0) -> r).toMap
+      rows("request")(1) should startWith("RGTr then version 00 (5 bytes)")
+      GameControllerCodec.monitorRequest.toVector shouldBe ("RGTr".getBytes(US_ASCII) :+ 0.toByte).toVector
+      rows("request")(2) should include("3636")
+      rows("true state")(1) should include("RGTD")
+      rows("forwarded status")(2) should include("3940")
+      val defaults = com.typesafe.config.ConfigFactory.load().getConfig("naogateway.game-controller.monitor")
+      (defaults.getInt("request-port"), defaults.getInt("status-port"), defaults.getBoolean("enabled")) shouldBe ((3636, 3940, false))
+    }
     "give the message budget rules the gateway counts with" in {
       val rules = table("gc-budget").rows.map(r => r(0) -> r(1)).toMap
       val defaults = naogateway.TeamMessageSettings()
@@ -590,7 +600,7 @@ object ProtocolDocSpec {
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =
     Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return",
-      "gc-v19", "gc-v19-team", "gc-v12", "gc-v12-team", "gc-status", "gc-gate", "gc-budget")
+      "gc-v19", "gc-v19-team", "gc-v12", "gc-v12-team", "gc-status", "gc-gate", "gc-budget", "gc-monitor")
 
   // ---- reading the document ----
 

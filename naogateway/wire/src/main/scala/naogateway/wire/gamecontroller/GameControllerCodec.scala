@@ -164,6 +164,26 @@ object GameControllerCodec {
     }
   }
 
+  /** First four bytes of a monitor's request for the true game state (to UDP 3636 of the version-19 GameController). */
+  val MonitorRequestHeader: String = "RGTr"
+
+  /** The monitor request: `RGTr` and version 0, 5 bytes. */
+  def monitorRequest: Array[Byte] = MonitorRequestHeader.getBytes(StandardCharsets.US_ASCII) :+ 0.toByte
+
+  /** Bytes of the IPv4 address before each status message the GameController forwards to a monitor (UDP 3940). */
+  val ForwardPrefixBytes: Int = 4
+
+  /**
+   * Decodes a status message forwarded to a monitor: the IPv4 address of the robot that sent it, then its `RGrt`
+   * version-4 packet (36 bytes in all). The GameController forwards without checking; this decoder checks as
+   * [[decodeStatus]] does.
+   */
+  def decodeForwardedStatus(bytes: Array[Byte]): Either[GameControllerError, (java.net.InetAddress, ReturnStatus)] =
+    if (bytes.length < ForwardPrefixBytes) Left(TooShort(ForwardPrefixBytes, bytes.length))
+    else
+      decodeStatus(java.util.Arrays.copyOfRange(bytes, ForwardPrefixBytes, bytes.length))
+        .map(java.net.InetAddress.getByAddress(java.util.Arrays.copyOfRange(bytes, 0, ForwardPrefixBytes)) -> _)
+
   /** The version byte of a return packet, if the bytes start `RGrt` and have one. */
   def returnVersionOf(bytes: Array[Byte]): Option[Int] =
     if (bytes.length > VersionOffset && java.util.Arrays.equals(bytes, 0, HeaderBytes, ReturnHeaderBytes, 0, HeaderBytes))
