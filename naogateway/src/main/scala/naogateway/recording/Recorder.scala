@@ -249,6 +249,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   // ------------------------------------------------------------------------------------------- the writer thread
 
   private var file: Option[FileWriter] = None
+  // One file per half of a game (GameFiles), when recording.game-files is on.
+  private var games = GameFiles(settings.gameQuiet.toNanos)
   private var nextAttempt = Long.MinValue
   private val batch = new java.util.ArrayList[Entry](1024)
 
@@ -259,6 +261,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         queue.drainTo(batch, 1024)
         val now = System.nanoTime()
         file.foreach(f => if (f.due(now)) rotate() else if (f.flushDue(now)) flush(f, now))
+        if (settings.gameFiles && gameSteps(games.tick(now))) rotate()
         if (batch.isEmpty) {
           // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
           if (running) LockSupport.parkNanos(2000000L)
@@ -317,7 +320,26 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     try f.close()
     catch { case e: IOException => log.error(s"Recording: could not close ${f.path}", e) }
 
+  /** Takes the plan's next state; true when it has steps (each logged), i.e. the current file is to be closed. */
+  private def gameSteps(next: (GameFiles, Vector[GameFiles.Step])): Boolean = {
+    games = next._1
+    next._2.foreach(step => log.info("Recording: {}", step match { case GameFiles.Begin(h) => s"${h.label} begins"; case GameFiles.End(why) => why }))
+    next._2.nonEmpty
+  }
+
   private def write(e: Entry): Unit = {
+    // A half begins with the packet that begins it in its file; it ends with the packet that ends it still in it.
+    val endAfter = e match {
+      case DecisionEntry(at, Decision.Published(naogateway.GameStateUpdated(data))) if settings.gameFiles =>
+        val steps = games.packet(data, at)
+        if (gameSteps(steps) && steps._2.exists(_.isInstanceOf[GameFiles.Begin])) { rotate(); false } else steps._2.nonEmpty
+      case _ => false
+    }
+    writeEntry(e)
+    if (endAfter) rotate()
+  }
+
+  private def writeEntry(e: Entry): Unit = {
     if (file.isEmpty && System.nanoTime() >= nextAttempt) open()
     file match {
       case Some(f) =>
@@ -333,7 +355,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   }
 
   private def open(): Unit = {
-    val name = s"naogateway-${FileTime.format(Instant.now())}-${fileCount.get + 1}.mcap"
+    val name = GameFiles.fileName(FileTime.format(Instant.now()), games.half, fileCount.get + 1)
     val path = settings.directory.resolve(name)
     try {
       Files.createDirectories(settings.directory)

@@ -16,11 +16,14 @@ final case class RecordingSettings(
     directory: Path,
     rotateBytes: Long,
     rotateInterval: FiniteDuration,
-    queueCapacity: Int
+    queueCapacity: Int,
+    gameFiles: Boolean = false,
+    gameQuiet: FiniteDuration = 5.seconds
 ) {
   require(rotateBytes >= 64 * 1024, "recording.rotate-bytes must be at least 64 KiB")
   require(rotateInterval >= 1.second, "recording.rotate-interval must be at least 1 s")
   require(queueCapacity >= 16 && queueCapacity <= 1000000, "recording.queue-capacity must be 16 to 1000000")
+  require(gameQuiet >= 1.second, "recording.game-quiet must be at least 1 s")
 }
 
 /** Reading the settings. */
@@ -36,6 +39,8 @@ object RecordingSettings {
       directory = Paths.get(c.getString("directory")),
       rotateBytes = c.getBytes("rotate-bytes"),
       rotateInterval = c.getDuration("rotate-interval").toScala,
-      queueCapacity = c.getInt("queue-capacity")
+      queueCapacity = c.getInt("queue-capacity"),
+      gameFiles = c.getBoolean("game-files"),
+      gameQuiet = c.getDuration("game-quiet").toScala
     )
 }
