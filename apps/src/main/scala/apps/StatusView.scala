@@ -81,6 +81,8 @@ object StatusView {
       s"(team ${g.team0.teamNumber} : team ${g.team1.teamNumber}), version ${g.version.number}"
   }
 
+  private def kind(reason: Option[String]): Option[String] = reason.map(_.takeWhile(_ != '('))
+
   /** The team's message budget and every warning (a second GameController, the budget), each on a line of its own. */
   def sourceLines(source: naogateway.Gateway.GameSource): Vector[String] =
     source.budget.toVector ++ source.warnings.map(w => s"WARNING: $w")
@@ -169,7 +171,8 @@ object StatusView {
     // The first figures say nothing new unless the rule is on; after that, only a change of the gate is news.
     val gate = (before.traffic, after.traffic) match {
       case (None, Some(t)) if t.competition                 => Some(gateLine(after.traffic))
-      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || b.gateReason != a.gateReason => Some(gateLine(after.traffic))
+      // A new reason is news (the game running, or a packet that cannot be read); the state in it is the game line's.
+      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || kind(b.gateReason) != kind(a.gateReason) => Some(gateLine(after.traffic))
       case _                                                => None
     }
     // A warning is news when it first appears (not every refresh its figures change).
