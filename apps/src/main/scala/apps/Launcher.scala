@@ -92,6 +92,12 @@ object Launcher {
       try {
         val a = arguments(args.toSeq)
         val c = config(a.configFile.toSeq)
+        // Simulated robots on this host answer the GameController from it, and a GameController refuses a host that
+        // ever sent a status message as a monitor: the two do not go together.
+        require(!(c.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
+            c.getInt("apps.launcher.simulated-robots") > 0),
+          "game-controller.monitor: the simulated robots on this host would answer the GameController from it, which " +
+            "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the monitor off")
         (a, if (a.replay.isDefined) ReplayOverrides.withFallback(c) else c)
       } catch {
         // A wrong file name or a typo in the file is the operator's to fix: say what and where, without a stack trace.
@@ -212,7 +218,11 @@ object Launcher {
     // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
     for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
       val target = if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
-      context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target)), "game-controller")
+      val number = c.getInt("game-controller-version")
+      val version = naogateway.wire.gamecontroller.GameControlVersion.all.find(_.number == number).getOrElse(
+        throw new IllegalArgumentException(s"apps.launcher.game-controller-version $number: the simulation plays 19, 12, 8 or 7"))
+      context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target,
+        version = version)), "game-controller")
     }
   }
 

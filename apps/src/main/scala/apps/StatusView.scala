@@ -1,7 +1,8 @@
 package apps
 
 import naogateway.{LinkStats, Outbox, RobotSnapshot}
-import naogateway.wire.gamecontroller.{GameControlData, GameState, SecondaryGameState}
+import naogateway.wire.gamecontroller.{ControlData2014, GameControlData, GamePhase, GameState, HlControlData,
+  HlSecondaryState, HslControlData, SecondaryGameState, SetPlay}
 
 /** What the launcher shows: robots, their links, the team's traffic with the competition gate, and the game. */
 final case class StatusModel(
@@ -52,24 +53,58 @@ object StatusView {
     case known                   => known.toString.toUpperCase
   }
 
-  /** The game in one line: state, half, seconds remaining, secondary clock where it counts, score. */
+  /**
+   * What a version says beside the main state, in words: the phase (shoot-out, extra time, time-out), the set play,
+   * and in version 19 whether play is stopped. Empty in regular play.
+   */
+  def situation(game: GameControlData): Vector[String] = game match {
+    case g: ControlData2014 =>
+      Vector(g.secondaryGameState).filter(_ != SecondaryGameState.Normal).map(words)
+    case g: HlControlData =>
+      Vector(g.secondaryState).filter(_ != HlSecondaryState.Normal).map(words)
+    case g: HslControlData =>
+      Vector(g.gamePhase).filter(_ != GamePhase.Normal).map(words) ++
+        Vector(g.setPlay).filter(_ != SetPlay.NoSetPlay).map(words) ++ Option.when(g.stopped)("stopped").toVector
+  }
+
+  /** A code's name in words: `GoalKick` is "goal kick", `Unknown(9)` "unknown(9)". */
+  private def words(value: Any): String = value.toString.replaceAll("([a-z])([A-Z])", "$1 $2").toLowerCase
+
+  /** The game in one line: version, state, half, seconds remaining, secondary clock where it counts, score. */
   def gameLine(game: Option[GameControlData]): String = game.fold("game: no GameController heard") { g =>
-    val secondaryState = g.secondaryGameState match {
-      case SecondaryGameState.Normal => ""
-      case other                     => s" (${other.toString.toLowerCase})"
-    }
+    val extra = situation(g)
+    val secondaryState = if (extra.isEmpty) "" else extra.mkString(" (", ", ", ")")
     // The secondary clock counts the ready phase, a time-out, a penalty shot...; 0 means it is not running.
-    val secondary = g.secondaryTime.filter(_ > 0).fold("")(t => s", secondary $t s")
+    val secondary = g.secondaryClock.filter(_ > 0).fold("")(t => s", secondary $t s")
     s"game: ${stateName(g.gameState)}$secondaryState, ${if (g.firstHalf) "first" else "second"} half, " +
       s"${g.secsRemaining} s left$secondary, score ${g.team0.score} : ${g.team1.score} " +
-      s"(team ${g.team0.teamNumber} : team ${g.team1.teamNumber})"
+      s"(team ${g.team0.teamNumber} : team ${g.team1.teamNumber}), version ${g.version.number}"
   }
+
+  private def kind(reason: Option[String]): Option[String] = reason.map(_.takeWhile(_ != '('))
+
+  /** The team's message budget and every warning (a second GameController, the budget), each on a line of its own. */
+  def sourceLines(source: naogateway.Gateway.GameSource): Vector[String] =
+    source.budget.toVector ++ source.warnings.map(w => s"WARNING: $w")
+
+  /**
+   * In the monitor role: the age of the true state, and each robot's status message as the GameController forwarded
+   * it (fallen, pose, ball age), shown beside the gateway's own robot lines.
+   */
+  def monitorLines(source: naogateway.Gateway.GameSource): Vector[String] =
+    source.trueStateAgeMillis.map(ms => f"true game state from the GameController (monitor), ${ms / 1000.0}%.1f s old").toVector ++
+      source.forwarded.map { f =>
+        val s = f.status
+        val ball = if (s.ballAge < 0) "ball never seen" else f"ball seen ${s.ballAge}%.1f s ago"
+        f"GameController hears team ${s.team} player ${s.player} (${f.from.getHostAddress}): " +
+          f"${if (s.fallen) "fallen" else "up"}, pose ${s.pose._1}%.0f ${s.pose._2}%.0f mm ${s.pose._3}%.2f rad, $ball"
+      }
 
   /** The competition gate in one line. */
   def gateLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("competition gate: -") { t =>
     if (!t.competition) "competition gate: open (competition rule off)"
     else if (t.gateOpen) "competition gate: open"
-    else "competition gate: CLOSED while the game runs: nothing is sent to the robots"
+    else s"competition gate: CLOSED: ${t.gateReason.getOrElse("the game is running")}: nothing is sent to the robots"
   }
 
   /** The team's traffic against the budget in one line. */
@@ -97,9 +132,10 @@ object StatusView {
   def render(model: StatusModel): Vector[String] = {
     val online = model.robots.count(_.online)
     Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game)) ++
-      model.gameSource.map(_.describe).toVector ++ Vector(gateLine(model.traffic),
+      model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(gateLine(model.traffic),
       trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
-      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ Vector("", "Ctrl-C stops everything.")
+      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ model.gameSource.toVector.flatMap(monitorLines) ++
+      Vector("", "Ctrl-C stops everything.")
   }
 
   /**
@@ -130,15 +166,20 @@ object StatusView {
       }
     }
     val game =
-      if (after.game.map(g => (g.gameState, g.secondaryGameState, g.firstHalf)) ==
-          before.game.map(g => (g.gameState, g.secondaryGameState, g.firstHalf))) None
+      if (after.game.map(g => (g.gameState, situation(g), g.firstHalf)) ==
+          before.game.map(g => (g.gameState, situation(g), g.firstHalf))) None
       else after.game.map(g => gameLine(Some(g)))
     // The first figures say nothing new unless the rule is on; after that, only a change of the gate is news.
     val gate = (before.traffic, after.traffic) match {
       case (None, Some(t)) if t.competition                 => Some(gateLine(after.traffic))
-      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen   => Some(gateLine(after.traffic))
+      // A new reason is news (the game running, or a packet that cannot be read); the state in it is the game line's.
+      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || kind(b.gateReason) != kind(a.gateReason) => Some(gateLine(after.traffic))
       case _                                                => None
     }
-    robots ++ game ++ gate
+    // A warning is news when it first appears (not every refresh its figures change).
+    def warningHeads(m: StatusModel) = m.gameSource.toVector.flatMap(_.warnings).map(_.takeWhile(_ != ':'))
+    val warnings = after.gameSource.toVector.flatMap(_.warnings).filterNot(w => warningHeads(before).contains(w.takeWhile(_ != ':')))
+      .map(w => s"WARNING: $w")
+    robots ++ game ++ gate ++ warnings
   }
 }

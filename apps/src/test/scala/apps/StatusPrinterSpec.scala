@@ -63,7 +63,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         sendUntil(gc, "v8-ready.bin")(printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
         awaitTrue("gate closed")(printed.exists(_.startsWith("competition gate: CLOSED")))
         sendUntil(gc, "v8-set.bin")(printed.exists(_.startsWith("game: SET")))
-        sendUntil(gc, "v8-playing.bin")(printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"))
+        sendUntil(gc, "v8-playing.bin")(printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
         sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 5)
         sendUntil(gc, "v8-finished.bin")(printed.exists(_.startsWith("game: FINISHED, second half")))
         awaitTrue("gate open again")(printed.count(_ == "competition gate: open") == 2)
@@ -84,7 +84,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         awaitTrue("robot 1 with link figures")(frame.exists(l => l.startsWith("robot 1") && l.contains("online") &&
           l.matches(".*loss \\d+ %.*")))
         val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
-        sendUntil(gc, "v8-playing.bin")(frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"))
+        sendUntil(gc, "v8-playing.bin")(frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
         awaitTrue("gate closed")(frame.exists(_.startsWith("competition gate: CLOSED")))
         awaitTrue("where game state comes from")(frame.exists(l => l.startsWith("game state from 127.0.0.1:") &&
           l.contains("(trusted: 127.0.0.0/8)")))

@@ -7,7 +7,8 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec, GameState, SecondaryGameState}
+import naogateway.wire.gamecontroller.{ControlData2014, GameControlData, GameControllerCodec, GameControllerGenerators, GameState,
+  SecondaryGameState}
 import naogateway.wire.Posture
 import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot}
 
@@ -68,13 +69,18 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
     }
     "render each real GameController packet on the screen: state, half, seconds left, secondary clock, score" in {
       def gameLine(file: String) = StatusView.render(StatusModel(Vector.empty, Map.empty, None, Some(game(file))))(1)
-      gameLine("v8-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"
-      gameLine("v7-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7)"
-      gameLine("v8-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 30 s, score 0 : 0 (team 12 : team 7)"
+      gameLine("v8-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"
+      gameLine("v7-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 7"
+      gameLine("v8-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 30 s, score 0 : 0 (team 12 : team 7), version 8"
       gameLine("v8-set.bin") should startWith("game: SET, first half, 600 s left, score")
       gameLine("v8-initial.bin") should startWith("game: INITIAL, first half, 600 s left")
       gameLine("v7-initial.bin") should startWith("game: INITIAL, first half, 600 s left")
-      gameLine("v8-finished.bin") shouldBe "game: FINISHED, second half, 587 s left, score 2 : 1 (team 12 : team 7)"
+      gameLine("v8-finished.bin") shouldBe "game: FINISHED, second half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"
+      gameLine("v19-playing.bin") shouldBe "game: PLAYING (goal kick, stopped), first half, 587 s left, secondary 30 s, score 2 : 1 " +
+        "(team 12 : team 7), version 19"
+      gameLine("v19-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 45 s, score 0 : 0 (team 12 : team 7), version 19"
+      gameLine("v12-playing.bin") shouldBe "game: PLAYING (direct free kick), first half, 587 s left, score 2 : 1 (team 12 : team 7), version 12"
+      gameLine("v12-finished.bin") shouldBe "game: FINISHED, second half, 0 s left, score 2 : 1 (team 12 : team 7), version 12"
     }
     "print a line for each change of game state from the real packets, and none for a repeated state" in {
       val files = Seq("v8-initial.bin", "v7-initial.bin", "v8-ready.bin", "v8-set.bin", "v8-playing.bin", "v7-playing.bin",
@@ -87,7 +93,12 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
     "show the competition gate closing while the game runs, and print a line when it closes and opens" in {
       val open = traffic.copy(competition = true)
       val closed = open.copy(gameRunning = true)
-      StatusView.gateLine(Some(closed)) should include("CLOSED")
+      StatusView.gateLine(Some(closed)) shouldBe "competition gate: CLOSED: the game is running: nothing is sent to the robots"
+      val unreadable = closed.copy(gateReason = Some("the trusted GameController's packet cannot be read: RGme packet of unknown version"))
+      StatusView.gateLine(Some(unreadable)) shouldBe "competition gate: CLOSED: the trusted GameController's packet cannot be " +
+        "read: RGme packet of unknown version: nothing is sent to the robots"
+      StatusView.changes(StatusModel.empty.copy(traffic = Some(closed)), StatusModel.empty.copy(traffic = Some(unreadable))) shouldBe
+        Vector(StatusView.gateLine(Some(unreadable)))
       StatusView.gateLine(Some(open)) shouldBe "competition gate: open"
       val models = Seq(None, Some(open), Some(open), Some(closed), Some(closed), Some(open)).map(t => StatusModel.empty.copy(traffic = t))
       models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe
@@ -95,6 +106,29 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       // Without the rule the gate never closes, and the piped view says nothing about it.
       val off = Seq(None, Some(traffic), Some(traffic.copy(gameRunning = true))).map(t => StatusModel.empty.copy(traffic = t))
       off.zip(off.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe empty
+    }
+    "show the message budget and the warnings on the screen, and print a warning line when one first appears" in {
+      val quiet = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0, Some("team messages (team 12, UDP 10012): 12000 of 12000 left"))
+      val twoGcs = quiet.copy(warnings = Vector("2 GameControllers on this field: game state from 127.0.0.1:3838 only; 127.0.0.2:3838 (untrusted, ignored)"))
+      val screen = StatusView.render(StatusModel.empty.copy(gameSource = Some(twoGcs)))
+      screen should contain("team messages (team 12, UDP 10012): 12000 of 12000 left")
+      screen should contain("WARNING: " + twoGcs.warnings.head)
+      val models = Seq(quiet, twoGcs, twoGcs.copy(warnings = Vector(twoGcs.warnings.head + " ")), quiet)
+        .map(g => StatusModel.empty.copy(gameSource = Some(g)))
+      models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe Vector("WARNING: " + twoGcs.warnings.head)
+    }
+    "show, in the monitor role, the true state's age and each forwarded robot status beside the robot lines" in {
+      val status = naogateway.wire.gamecontroller.ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), 2f, (250f, -100f))
+      val source = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0, trueStateAgeMillis = Some(400),
+        forwarded = Vector(naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.23"), status, 0L),
+          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.24"), status.copy(player = 4, fallen = false, ballAge = -1f), 0L)))
+      StatusView.monitorLines(source) shouldBe Vector(
+        "true game state from the GameController (monitor), 0.4 s old",
+        "GameController hears team 12 player 3 (10.0.0.23): fallen, pose 1000 -500 mm 1.50 rad, ball seen 2.0 s ago",
+        "GameController hears team 12 player 4 (10.0.0.24): up, pose 1000 -500 mm 1.50 rad, ball never seen")
+      val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, None, None, Some(source)))
+      val robot = screen.indexWhere(_.startsWith("robot 1"))
+      screen.slice(robot + 1, robot + 4) shouldBe StatusView.monitorLines(source)
     }
     "fit a screen into the terminal: lines cut to its width, the rows that do not fit counted" in {
       val lines = Vector("a" * 10, "b", "c", "d")
@@ -153,10 +187,11 @@ object StatusViewSpec {
     dropped <- Arbitrary.arbitrary[Long]
     running <- Arbitrary.arbitrary[Boolean]
     competition <- Arbitrary.arbitrary[Boolean]
-  } yield Outbox.TrafficStats(out, in, budget, Map.empty, 0, 0, refused, dropped, running, competition)
+    reason <- Gen.option(Gen.alphaStr)
+  } yield Outbox.TrafficStats(out, in, budget, Map.empty, 0, 0, refused, dropped, running, competition, reason)
 
   /** A real packet with arbitrary values in the fields the view shows. */
-  private val genGame: Gen[GameControlData] = for {
+  private val gen2014: Gen[GameControlData] = for {
     file <- Gen.oneOf(vectors)
     state <- Gen.choose(0, 255)
     secondaryState <- Gen.choose(0, 255)
@@ -166,11 +201,18 @@ object StatusViewSpec {
     score0 <- Arbitrary.arbitrary[Int]
     score1 <- Arbitrary.arbitrary[Int]
   } yield {
-    val g = GameControllerCodec.decodeControl(vector(file)).fold(e => throw new IllegalStateException(e.describe), identity)
+    val g = GameControllerCodec.decodeControl(vector(file)) match {
+      case Right(d: ControlData2014) => d
+      case other                     => throw new IllegalStateException(s"$file: $other")
+    }
     g.copy(gameState = GameState.fromCode(state), secondaryGameState = SecondaryGameState.fromCode(secondaryState),
       secsRemaining = secs, secondaryTime = secondary, firstHalf = firstHalf, team0 = g.team0.copy(score = score0),
       team1 = g.team1.copy(score = score1))
   }
+
+  /** The 2014 vectors with arbitrary values where the view reads them, or any value of versions 19 and 12. */
+  private val genGame: Gen[GameControlData] =
+    Gen.oneOf(gen2014, GameControllerGenerators.controlV19, GameControllerGenerators.controlV12)
 
   val genModel: Gen[StatusModel] = for {
     robots <- Gen.choose(0, 12).flatMap(Gen.listOfN(_, genRobot))

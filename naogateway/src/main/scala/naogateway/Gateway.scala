@@ -67,6 +67,8 @@ object Gateway {
   final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Query
 
   private final case class GameControllerEvent(event: UdpLink.Event) extends Command
+  private final case class TeamMessageEvent(event: UdpLink.Event) extends Command
+  private final case class MonitorStatusEvent(event: UdpLink.Event) extends Command
   private final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
@@ -78,8 +80,14 @@ object Gateway {
    * @param trusted the configured GameController addresses or subnets, in words ("any source" when none is)
    * @param lastFrom the sender of the last control packet that counted
    * @param untrusted control packets ignored because they came from elsewhere
+   * @param budget the team's message budget in one line, when the gateway counts it ([[MessageBudget.describe]])
+   * @param warnings what needs the team's attention: a second GameController, the message budget
+   * @param trueStateAgeMillis in the monitor role: how old the last true game state (`RGTD`) is; `None` before the first
+   * @param forwarded in the monitor role: the robots' status messages the GameController forwarded, by team and player
    */
-  final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long) {
+  final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long,
+      budget: Option[String] = None, warnings: Vector[String] = Vector.empty, trueStateAgeMillis: Option[Long] = None,
+      forwarded: Vector[ForwardedStatus] = Vector.empty) {
 
     /** One line: "game state from 10.0.0.5:3838 (trusted: 10.0.0.0/24), 3 packets from elsewhere ignored". */
     def describe: String =
@@ -166,6 +174,20 @@ object Gateway {
         )
         val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
         logic.start()
+        if (settings.gameControllerEnabled && settings.teamMessages.enabled && replay.isEmpty) {
+          // Akka keeps one message adapter per message class, and the GameController link's events are of the same
+          // class: a child of its own marks the team port's events instead.
+          val self = context.self
+          val teamEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
+            self ! TeamMessageEvent(e)
+            Behaviors.same
+          }, "team-message-events")
+          context.spawn(
+            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port), teamEvents,
+              UdpLink.Options(reuseAddress = true, broadcast = true)),
+            "team-message-link"
+          )
+        }
         if (settings.gameControllerEnabled && replay.isEmpty) {
           context.spawn(
             UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
@@ -332,6 +354,76 @@ object Gateway {
     private var gameFrom: Option[InetSocketAddress] = None
     private var gameUntrusted = 0L
 
+    private var lastUnreadable: Option[(Long, String)] = None
+    private var sources = GameControllerSources()
+    private var trueStateAt: Option[Long] = None
+    private var forwarded = ForwardedStatuses()
+
+    /**
+     * The monitor role: the request for the true state, from the GameController socket, now and every request-interval
+     * (a child owns the timer); the forwarded status messages on a socket of their own.
+     */
+    private def startMonitor(gcLink: ActorRef[UdpLink.Command], m: MonitorSettings): Unit = {
+      context.log.info("Gateway monitoring the GameController at {}: asking for the true game state every {}", m.gameController,
+        m.requestInterval)
+      context.spawn(Behaviors.withTimers[String] { timers =>
+        gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
+        timers.startTimerWithFixedDelay("request", m.requestInterval)
+        Behaviors.receiveMessage { _ =>
+          gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
+          Behaviors.same
+        }
+      }, "monitor-requests")
+      val self = context.self
+      val statusEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
+        self ! MonitorStatusEvent(e)
+        Behaviors.same
+      }, "monitor-status-events")
+      context.spawn(UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, m.statusPort), statusEvents,
+        UdpLink.Options(reuseAddress = true)), "monitor-status-link")
+    }
+
+    /** Whether the monitor role's true state is fresh enough that the broadcast one is not used. */
+    private def trueStateFresh(now: Long): Boolean =
+      settings.monitor.exists(m => trueStateAt.exists(at => now - at < m.trueStateFresh.toNanos))
+
+    /** A readable control packet that counts (broadcast, or the true state): the gate, the budget, the view. */
+    private def control(data: GameControlData, from: InetSocketAddress, now: Long): Unit = {
+      gcPackets += 1
+      gameFrom = Some(from)
+      if (settings.teamMessages.enabled) budget = budget.game(data)
+      val changed = !game.exists(_.gameState == data.gameState)
+      gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
+      // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
+      if (game.forall(g => rank(data.version) <= rank(g.version)) || changed) {
+        game = Some(data)
+        publish(GameStateUpdated(data))
+      }
+    }
+    private var budget = MessageBudget(settings.teamMessages)
+
+    /** Notes the sender of a readable control packet; true when its game state counts (see GameControllerSources). */
+    private def heard(data: GameControlData, from: InetSocketAddress, trusted: Boolean, now: Long): Boolean = {
+      val (next, use) = sources.packet(from, data.packetNumberOnWire, trusted, now)
+      if (next.others(now).nonEmpty && sources.others(now).isEmpty)
+        context.log.warn("{}", next.warnings(now).mkString("; "))
+      sources = next
+      use
+    }
+
+    /** Where a version stands among those read: newest (richest) first. */
+    private def rank(version: GameControlVersion): Int = GameControlVersion.all.indexOf(version)
+
+    /**
+     * Every packet, not only changes, reaches every gate (the outbox's, each ZeroMQ robot's): a restarted outbox or
+     * ZeroMQ link learns the reading within one round; and it reaches them before any subscriber hears of the game,
+     * so a subscriber reacting to kick-off finds them closed.
+     */
+    private def gate(reading: GameReading): Unit = {
+      outbox ! Outbox.GameStateChanged(reading)
+      byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(reading))
+    }
+
     private def discoveredRobots: Int = byId.valuesIterator.count(_.discovered)
 
     /** The configured robots, then the reader: it never sees a table without them. */
@@ -342,9 +434,10 @@ object Gateway {
     }
 
     def bindingGameController: Behavior[Command] = Behaviors.receiveMessage[Command] {
-      case GameControllerEvent(UdpLink.Bound(_, gcLocal)) =>
+      case GameControllerEvent(UdpLink.Bound(gcLink, gcLocal)) =>
         context.log.info("Gateway listening for the GameController on {}", gcLocal)
         gameControllerAddress = Some(gcLocal)
+        settings.monitor.foreach(startMonitor(gcLink, _))
         stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
       case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
         context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
@@ -448,27 +541,54 @@ object Gateway {
           Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) if recordGameController(bytes, from) && Datagram.isGameControllerReturn(bytes) =>
           Behaviors.same // robots' answers to the GameController share its port
-        case GameControllerEvent(UdpLink.Received(_, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
+        case GameControllerEvent(UdpLink.Received(bytes, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
           // Anyone on the field's WiFi can send a control packet: only the configured GameController steers the gate.
+          // A readable one is still noted, so a second GameController on the field is seen and named.
           gameUntrusted += 1
           reject(Rejection.UntrustedGameController, from)
+          GameControllerCodec.decodeControl(bytes).foreach(heard(_, from, trusted = false, System.nanoTime()))
           Behaviors.same
+        case TeamMessageEvent(UdpLink.Received(bytes, _)) =>
+          budget = budget.message(bytes.length, System.nanoTime())
+          Behaviors.same
+        case TeamMessageEvent(UdpLink.BindFailed(address, reason)) =>
+          context.log.error("Team message listener cannot bind {}: {}; the message budget will not be counted", address, reason)
+          Behaviors.same
+        case TeamMessageEvent(_) => Behaviors.same
+        case MonitorStatusEvent(UdpLink.Received(bytes, from)) =>
+          // Only the GameController forwards status messages; a stranger cannot fill the view.
+          if (!settings.monitor.exists(_.gameController.getAddress == from.getAddress))
+            reject(Rejection.UntrustedGameController, from, "status message from another host than the GameController")
+          else
+            GameControllerCodec.decodeForwardedStatus(bytes) match {
+              case Right((robot, status)) => forwarded = forwarded.add(ForwardedStatus(robot, status, System.nanoTime()))
+              case Left(error)            => reject(Rejection.BadGameControllerPacket, from, error.describe)
+            }
+          Behaviors.same
+        case MonitorStatusEvent(UdpLink.BindFailed(address, reason)) =>
+          context.log.error("Monitor status listener cannot bind {}: {}; forwarded robot statuses will not be shown", address, reason)
+          Behaviors.same
+        case MonitorStatusEvent(_) => Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
+          val now = System.nanoTime()
           GameControllerCodec.decodeControl(bytes) match {
-            case Right(data) =>
+            case Right(data) if !heard(data, from, trusted = true, now) =>
+              // A second trusted GameController while the first keeps sending: named in the warnings, never obeyed.
+              reject(Rejection.UntrustedGameController, from, "a second GameController")
+            case Right(_) if trueStateFresh(now) =>
+              // The monitor role: the broadcast state may lag the true one by up to 10 s; the true one rules meanwhile.
               gcPackets += 1
-              gameFrom = Some(from)
-              val changed = !game.exists(_.gameState == data.gameState)
-              // Every packet, not only changes: a restarted outbox or ZeroMQ link learns the game state within one round.
-              // Every gate (the outbox's, each ZeroMQ robot's) hears of it before any subscriber does, so a subscriber
-              // reacting to kick-off finds them closed.
-              outbox ! Outbox.GameStateChanged(data.gameState)
-              byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(data.gameState))
-              // Both versions arrive each round; the version-8 packet is the richer one to keep.
-              if (data.version == GameControlVersion.V8 || game.forall(_.version != GameControlVersion.V8) || changed) {
-                game = Some(data)
-                publish(GameStateUpdated(data))
-              }
+            case Right(data) => control(data, from, now)
+            case Left(_) if settings.monitor.exists(_.gameController.getAddress == from.getAddress) &&
+                GameControllerCodec.decodeTrueData(bytes).isRight =>
+              control(GameControllerCodec.decodeTrueData(bytes).toOption.get, from, now)
+              trueStateAt = Some(now)
+            case Left(error) if Datagram.isGameControllerControl(bytes) =>
+              // The trusted GameController sends what this gateway cannot read (a version yet to come): it may well be
+              // running a game, so the gate closes (fail safe) and says why, rather than stay open as if none were.
+              reject(Rejection.BadGameControllerPacket, from, error.describe)
+              lastUnreadable = Some(now -> error.describe)
+              gate(GameReading.Unreadable(error.describe))
             case Left(error) =>
               reject(Rejection.BadGameControllerPacket, from, error.describe)
           }
@@ -523,7 +643,11 @@ object Gateway {
           replyTo ! game
           Behaviors.same
         case GetGameSource(replyTo) =>
-          replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted)
+          val now = System.nanoTime()
+          replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted,
+            Option.when(settings.teamMessages.enabled)(budget.describe(now)),
+            sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty),
+            trueStateAt.map(at => (now - at) / 1000000L), forwarded.sorted)
           Behaviors.same
         case RobotStopped(robotId, actor) =>
           // A forgotten robot: its IP address, its id and its traffic meter are free again.

@@ -150,8 +150,15 @@ final case class GatewaySettings(
     clockSync: ClockSyncSettings = ClockSyncSettings(),
     signingKey: Option[SigningKey] = None,
     newSessionKeepAlives: Int = 3,
-    recording: RecordingSettings = RecordingSettings.Off
+    recording: RecordingSettings = RecordingSettings.Off,
+    teamMessages: TeamMessageSettings = TeamMessageSettings(),
+    monitor: Option[MonitorSettings] = None
 ) {
+  monitor.foreach { _ =>
+    val conflicts = MonitorRole.conflicts(robots, bindAddress)
+    require(conflicts.isEmpty, conflicts.mkString("; "))
+    require(gameControllerEnabled, "game-controller.monitor needs game-controller.enabled")
+  }
   require(newSessionKeepAlives >= 1 && newSessionKeepAlives <= 20, "new-session.keep-alives must be between 1 and 20")
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
   require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
@@ -262,7 +269,22 @@ object GatewaySettings {
       clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window")),
       signingKey = signingKey(c),
       newSessionKeepAlives = c.getInt("new-session.keep-alives"),
-      recording = RecordingSettings.fromConfig(c.getConfig("recording"))
+      recording = RecordingSettings.fromConfig(c.getConfig("recording")),
+      teamMessages = {
+        val t = gc.getConfig("team-messages")
+        TeamMessageSettings(t.getInt("team-number"), t.getInt("max-bytes"), t.getInt("per-game"), t.getInt("per-extra-minute"),
+          t.getDuration("rate-window").getSeconds.toInt)
+      },
+      monitor = {
+        val m = gc.getConfig("monitor")
+        if (!m.getBoolean("enabled")) None
+        else {
+          val address = m.getString("address").trim
+          require(address.nonEmpty, "game-controller.monitor.address: the GameController's address is needed for the monitor role")
+          Some(MonitorSettings(new InetSocketAddress(address, m.getInt("request-port")), m.getInt("status-port"),
+            duration(m, "request-interval"), duration(m, "true-state-fresh")))
+        }
+      }
     )
   }
 

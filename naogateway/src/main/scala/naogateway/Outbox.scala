@@ -49,8 +49,15 @@ object Outbox {
   /** Counts `datagrams` datagrams of `bytes` in all received from the team, for the two-way traffic figures. */
   final case class Inbound(datagrams: Int, bytes: Int) extends Command
 
-  /** The GameController's latest game state. */
-  final case class GameStateChanged(state: GameState) extends Command
+  /** What the trusted GameController last said (or that it could not be read): the gate decides on it. */
+  final case class GameStateChanged(reading: GameReading) extends Command
+
+  /** Constructors of gate updates. */
+  object GameStateChanged {
+
+    /** A readable packet's state. */
+    def apply(state: GameState): GameStateChanged = GameStateChanged(GameReading.Known(state))
+  }
 
   /** Asks for the traffic figures. */
   final case class GetStats(replyTo: ActorRef[TrafficStats]) extends Command
@@ -73,14 +80,15 @@ object Outbox {
   final case class Dropped(tag: Long, reason: String) extends Outcome
 
   /** The rule that closes the gate, in words for errors and logs. */
-  val NoSendingWhileGameRuns: String =
-    "competition rule: the base station must not send to robots while the game is running (READY, SET or PLAYING)"
+  val NoSendingWhileGameRuns: String = CompetitionGate.NoSendingWhileGameRuns
 
   /**
    * The team's traffic: bytes in the last second each way, the budget, queues and counters, and the competition gate.
    *
-   * @param gameRunning whether the GameController last said READY, SET or PLAYING
+   * @param gameRunning whether the gate's reading closes it: the GameController last said READY, SET or PLAYING, or
+   *                    its last packet could not be read
    * @param competition whether the competition rule applies (`naogateway.competition.enabled`)
+   * @param gateReason  why the gate's reading closes it ([[CompetitionGate.why]])
    */
   final case class TrafficStats(
       outBytesLastSecond: Long,
@@ -92,7 +100,8 @@ object Outbox {
       refusedByRule: Long,
       dropped: Long,
       gameRunning: Boolean,
-      competition: Boolean
+      competition: Boolean,
+      gateReason: Option[String] = None
   ) {
 
     /** Whether the outbox sends to robots now: closed only in competition mode while the game runs. */
@@ -120,9 +129,8 @@ object Outbox {
       }
     }
 
-  /** Whether a game state counts as "the game is running". */
-  def gameRunning(state: GameState): Boolean =
-    state == GameState.Ready || state == GameState.Set || state == GameState.Playing
+  /** Whether a game state counts as "the game is running" ([[CompetitionGate.gameRunning]]). */
+  def gameRunning(state: GameState): Boolean = CompetitionGate.gameRunning(state)
 }
 
 private final class Outbox(
@@ -145,6 +153,7 @@ private final class Outbox(
   private val droppedByClass = Array.fill(Priority.all.size)(0L)
   private var queues: Vector[Queue[Send]] = Vector.fill(Priority.all.size)(Queue.empty)
   private var gameIsRunning = false
+  private var reading: GameReading = GameReading.Nothing
   private var refused = 0L
   private var dropped = 0L
   private var lastWarning = Long.MinValue
@@ -288,12 +297,14 @@ private final class Outbox(
     case Inbound(datagrams, bytes) =>
       in.record(System.nanoTime(), bytes, datagrams)
       Behaviors.same
-    case GameStateChanged(state) =>
-      val nowRunning = gameRunning(state)
+    case GameStateChanged(now) =>
+      val nowRunning = CompetitionGate.closes(now)
       if (competition && nowRunning != gameIsRunning) {
-        log.info("Game state {}: sending to robots {}", state, if (nowRunning) "closed" else "open again")
-        if (recording.enabled) recording.decision(Decision.Gate(open = !nowRunning, state))
+        log.info("Competition gate {}: {}", if (nowRunning) "closed" else "open again",
+          CompetitionGate.why(now).getOrElse(s"game state $now"))
+        if (recording.enabled) recording.decision(Decision.Gate(open = !nowRunning, now))
       }
+      reading = now
       gameIsRunning = nowRunning
       if (competition && gameIsRunning) {
         // Nothing queued before kick-off may leak out during the game.
@@ -312,7 +323,7 @@ private final class Outbox(
       val now = System.nanoTime()
       replyTo ! TrafficStats(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
         Priority.all.map(p => p.name -> queues(p.rank).size).toMap, out.totalDatagrams, in.totalDatagrams, refused,
-        dropped, gameIsRunning, competition)
+        dropped, gameIsRunning, competition, CompetitionGate.why(reading))
       Behaviors.same
   }
 }

@@ -10,7 +10,6 @@ import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
 import naogateway.link.{Backlog, ZeroMqRobotLink}
 import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames}
 import naogateway.wire._
-import naogateway.wire.gamecontroller.GameState
 
 /** The supervisor of one robot: owns its address, liveness, children and link figures, and re-syncs it after restarts. */
 object RobotActor {
@@ -39,8 +38,8 @@ object RobotActor {
   /** Answers with the link figures. */
   final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Command
 
-  /** The GameController's game state changed (a ZeroMQ robot's link applies the competition rule itself). */
-  final case class GameStateChanged(state: GameState) extends Command
+  /** What the trusted GameController last said (a ZeroMQ robot's link applies the competition rule itself). */
+  final case class GameStateChanged(reading: GameReading) extends Command
 
   /** Messages from the robot's own children. */
   sealed trait FromChild extends Command
@@ -443,8 +442,8 @@ object RobotActor {
       case Transmit(out, priority, outcome, tag) =>
         transmit(out, priority, outcome, tag)
         Behaviors.same
-      case GameStateChanged(state) =>
-        zeroMqLink.foreach(_ ! ZeroMqRobotLink.GameStateChanged(state))
+      case GameStateChanged(reading) =>
+        zeroMqLink.foreach(_ ! ZeroMqRobotLink.GameStateChanged(reading))
         Behaviors.same
       case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) =>
         frame(contents, HeaderForm.Legacy, size, children, heartbeat, online)

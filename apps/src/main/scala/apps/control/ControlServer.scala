@@ -70,8 +70,9 @@ object ControlServer {
   }
 
   /** The server in front of `robots`, which the caller owns (and closes). */
-  def withInterface(robots: RobotInterface, settings: ControlSettings): Behavior[Command] =
-    serving(robots, settings, ownsInterface = false, None)
+  def withInterface(robots: RobotInterface, settings: ControlSettings,
+      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Behavior[Command] =
+    serving(robots, settings, ownsInterface = false, gateway)
 
   private def serving(robots: RobotInterface, settings: ControlSettings, ownsInterface: Boolean,
       gateway: Option[ActorRef[naogateway.Gateway.Query]]): Behavior[Command] =
@@ -255,7 +256,11 @@ object ControlServer {
           val stats = all.map(r => linkStats(robots, r.robotId, settings.linkStatsTimeout))
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
-            .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).map(Answer.Ok(_)))
+            .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout)).mapConcat(_.map(Answer.Line(_))))
+            .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
+              source.toList.flatMap(s => (apps.StatusView.sourceLines(s) ++ apps.StatusView.monitorLines(s)).map(Answer.Line(_))) :+
+                Answer.Ok(source.fold("")(_.describe))
+            })
         }
       case Request.Call(id, module, method, params) =>
         val needs = Operation.RawCall(module, method, params).group
@@ -289,14 +294,34 @@ object ControlServer {
     }
   }
 
-  /** Where game state comes from, for the status's final line; empty without a gateway or when it does not answer. */
+  /**
+   * Where game state comes from, for the status's final line, with the message budget and the warnings for the lines
+   * before it; none without a gateway or when it does not answer.
+   */
   private def gameSource(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
-      implicit system: ActorSystem[_]): Future[String] = {
+      implicit system: ActorSystem[_]): Future[Option[naogateway.Gateway.GameSource]] = {
     import akka.actor.typed.scaladsl.AskPattern._
     implicit val ec: ExecutionContext = system.executionContext
     implicit val askTimeout: akka.util.Timeout = timeout
-    gateway.fold(Future.successful("")) { g =>
-      g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(_.describe).recover { case NonFatal(_) => "" }
+    gateway.fold(Future.successful(Option.empty[naogateway.Gateway.GameSource])) { g =>
+      g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(Option(_)).recover { case NonFatal(_) => None }
+    }
+  }
+
+  /**
+   * The game and the competition gate as the status screen shows them (with why a closed gate is closed), for the
+   * lines before the status's final one; none without a gateway or when it does not answer.
+   */
+  private def gameLines(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
+      implicit system: ActorSystem[_]): Future[List[String]] = {
+    import akka.actor.typed.scaladsl.AskPattern._
+    implicit val ec: ExecutionContext = system.executionContext
+    implicit val askTimeout: akka.util.Timeout = timeout
+    gateway.fold(Future.successful(List.empty[String])) { g =>
+      val game = g.ask[Option[naogateway.wire.gamecontroller.GameControlData]](naogateway.Gateway.GetGameState(_))
+      val traffic = g.ask[naogateway.Outbox.TrafficStats](naogateway.Gateway.GetTraffic(_))
+      game.zip(traffic).map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
+        .recover { case NonFatal(_) => Nil }
     }
   }
 

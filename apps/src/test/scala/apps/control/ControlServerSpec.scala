@@ -8,6 +8,7 @@ import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import akka.actor.typed.ActorRef
+import akka.actor.typed.scaladsl.Behaviors
 import com.typesafe.config.ConfigFactory
 import org.scalatest.wordspec.AnyWordSpecLike
 
@@ -104,6 +105,31 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       // The slot is free again.
       eventually(exchange("status", smallPort).last shouldBe "ok")
       testKit.stop(small)
+    }
+
+    "end a status with the game, the gate (why it is closed), the message budget, warnings and the game's source" in {
+      val reason = "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00"
+      val gateway = spawn(Behaviors.receiveMessage[naogateway.Gateway.Command] {
+        case naogateway.Gateway.GetGameState(replyTo) => replyTo ! None; Behaviors.same
+        case naogateway.Gateway.GetTraffic(replyTo) =>
+          replyTo ! naogateway.Outbox.TrafficStats(0, 0, 125000, Map.empty, 0, 0, 0, 0, gameRunning = true, competition = true,
+            gateReason = Some(reason))
+          Behaviors.same
+        case naogateway.Gateway.GetGameSource(replyTo) =>
+          replyTo ! naogateway.Gateway.GameSource("10.0.0.5/32", None, 0,
+            Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
+            Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)"))
+          Behaviors.same
+        case _ => Behaviors.same
+      })
+      val withGateway = spawn(ControlServer.withInterface(new FleetStub(2), settings, Some(gateway)))
+      val lines = exchange("status", address(withGateway).getPort)
+      lines.takeRight(5) shouldBe Vector(". game: no GameController heard",
+        s". competition gate: CLOSED: $reason: nothing is sent to the robots",
+        ". team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s",
+        ". WARNING: 2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)",
+        "ok game state from nowhere yet (trusted: 10.0.0.5/32)")
+      testKit.stop(withGateway)
     }
 
     "close the interface it owns only, and survive clients that vanish mid-answer" in {

@@ -13,7 +13,7 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.wire.gamecontroller.GameState
-import naogateway.{Outbox, ZeroMqLinkSettings}
+import naogateway.{CompetitionGate, GameReading, Outbox, ZeroMqLinkSettings}
 
 /**
  * The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several
@@ -28,8 +28,15 @@ object ZeroMqRobotLink {
   /** Sends one serialized `Message` to the robot; `outcome`, when given, learns whether it went out, marked with `tag`. */
   final case class Send(bytes: Array[Byte], outcome: Option[ActorRef[Outbox.Outcome]], tag: Long) extends Command
 
-  /** The GameController's game state changed: in competition mode nothing is sent while the game runs. */
-  final case class GameStateChanged(state: GameState) extends Command
+  /** What the trusted GameController last said: in competition mode nothing is sent while the gate is closed. */
+  final case class GameStateChanged(reading: GameReading) extends Command
+
+  /** Constructors of gate updates. */
+  object GameStateChanged {
+
+    /** A readable packet's state. */
+    def apply(state: GameState): GameStateChanged = GameStateChanged(GameReading.Known(state))
+  }
 
   private final case class Received(bytes: Array[Byte]) extends Command
   private final case class PollSent(outcome: Outbox.Outcome) extends Command
@@ -111,8 +118,9 @@ object ZeroMqRobotLink {
               case PollSent(refused) =>
                 // Not sent, so never answered: give the poll up now and try again at the next tick.
                 if (poll.exists(_.waiting.contains(refused.tag))) running(gameRunning, None, lastPollId) else Behaviors.same
-              case GameStateChanged(state) =>
-                running(Outbox.gameRunning(state), poll, lastPollId)
+              case GameStateChanged(reading) =>
+                // The outbox's gate function: both gates close on the same readings.
+                running(CompetitionGate.closes(reading), poll, lastPollId)
               case StatusTick =>
                 val now = System.nanoTime()
                 if (competition && gameRunning) Behaviors.same

@@ -19,7 +19,6 @@ import org.slf4j.LoggerFactory
 
 import naogateway._
 import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedDirection, RecordedPort, RecordingProto, RpcProto}
-import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
 /**
@@ -68,8 +67,8 @@ object Decision {
   /** What the outbox did with one datagram for robot `robotId`: `sent`, `queued`, `refused-by-rule`, `dropped`. */
   final case class Outgoing(robotId: Int, priority: Priority, outcome: String, bytes: Array[Byte]) extends Decision
 
-  /** The competition gate opened or closed on `state`. */
-  final case class Gate(open: Boolean, state: GameState) extends Decision
+  /** The competition gate opened or closed on `reading` (a game state, or a packet that could not be read). */
+  final case class Gate(open: Boolean, reading: naogateway.GameReading) extends Decision
 
   /** The team budget's state: bytes each way over the last second, the limit, the queues. */
   final case class Budget(outBytes: Long, inBytes: Long, limit: Int, queued: Map[String, Int]) extends Decision
@@ -252,6 +251,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   // ------------------------------------------------------------------------------------------- the writer thread
 
   private var file: Option[FileWriter] = None
+  // One file per half of a game (GameFiles), when recording.game-files is on.
+  private var games = GameFiles(settings.gameQuiet.toNanos)
   private var nextAttempt = Long.MinValue
   private val batch = new java.util.ArrayList[Entry](1024)
 
@@ -262,6 +263,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         queue.drainTo(batch, 1024)
         val now = System.nanoTime()
         file.foreach(f => if (f.due(now)) rotate() else if (f.flushDue(now)) flush(f, now))
+        if (settings.gameFiles && gameSteps(games.tick(now))) rotate()
         if (batch.isEmpty) {
           // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
           if (running) LockSupport.parkNanos(2000000L)
@@ -320,7 +322,26 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     try f.close()
     catch { case e: IOException => log.error(s"Recording: could not close ${f.path}", e) }
 
+  /** Takes the plan's next state; true when it has steps (each logged), i.e. the current file is to be closed. */
+  private def gameSteps(next: (GameFiles, Vector[GameFiles.Step])): Boolean = {
+    games = next._1
+    next._2.foreach(step => log.info("Recording: {}", step match { case GameFiles.Begin(h) => s"${h.label} begins"; case GameFiles.End(why) => why }))
+    next._2.nonEmpty
+  }
+
   private def write(e: Entry): Unit = {
+    // A half begins with the packet that begins it in its file; it ends with the packet that ends it still in it.
+    val endAfter = e match {
+      case DecisionEntry(at, Decision.Published(naogateway.GameStateUpdated(data))) if settings.gameFiles =>
+        val steps = games.packet(data, at)
+        if (gameSteps(steps) && steps._2.exists(_.isInstanceOf[GameFiles.Begin])) { rotate(); false } else steps._2.nonEmpty
+      case _ => false
+    }
+    writeEntry(e)
+    if (endAfter) rotate()
+  }
+
+  private def writeEntry(e: Entry): Unit = {
     if (file.isEmpty && System.nanoTime() >= nextAttempt) open()
     file match {
       case Some(f) =>
@@ -336,7 +357,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   }
 
   private def open(): Unit = {
-    val name = s"naogateway-${FileTime.format(Instant.now())}-${fileCount.get + 1}.mcap"
+    val name = GameFiles.fileName(FileTime.format(Instant.now()), games.half, fileCount.get + 1)
     val path = settings.directory.resolve(name)
     try {
       Files.createDirectories(settings.directory)
@@ -517,8 +538,12 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           obj("decision" -> quote("send"), t, "robotId" -> robotId.toString, "priority" -> quote(priority.name),
             "outcome" -> quote(outcome), "bytes" -> bytes.length.toString,
             "call" -> opt(call)(c => quote(c.name)), "callId" -> opt(call.flatMap(_.callId))(_.toString))
-        case Decision.Gate(open, state) =>
-          obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state.toString))
+        case Decision.Gate(open, reading) =>
+          val state = reading match {
+            case naogateway.GameReading.Known(s, _)        => s.toString
+            case naogateway.GameReading.Unreadable(reason) => s"unreadable: $reason"
+          }
+          obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state))
         case Decision.Budget(out, in, limit, queued) =>
           obj("decision" -> quote("budget"), t, "outBytesLastSecond" -> out.toString, "inBytesLastSecond" -> in.toString,
             "limitBytesPerSecond" -> limit.toString,

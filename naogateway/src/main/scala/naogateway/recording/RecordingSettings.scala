@@ -17,11 +17,14 @@ final case class RecordingSettings(
     rotateBytes: Long,
     rotateInterval: FiniteDuration,
     queueCapacity: Int,
-    retention: RetentionSettings = RetentionSettings.Default
+    retention: RetentionSettings = RetentionSettings.Default,
+    gameFiles: Boolean = false,
+    gameQuiet: FiniteDuration = 5.seconds
 ) {
   require(rotateBytes >= 64 * 1024, "recording.rotate-bytes must be at least 64 KiB")
   require(rotateInterval >= 1.second, "recording.rotate-interval must be at least 1 s")
   require(queueCapacity >= 16 && queueCapacity <= 1000000, "recording.queue-capacity must be 16 to 1000000")
+  require(gameQuiet >= 1.second, "recording.game-quiet must be at least 1 s")
 }
 
 /** Reading the settings. */
@@ -38,6 +41,8 @@ object RecordingSettings {
       rotateBytes = c.getBytes("rotate-bytes"),
       rotateInterval = c.getDuration("rotate-interval").toScala,
       queueCapacity = c.getInt("queue-capacity"),
-      retention = RetentionSettings.fromConfig(c.getConfig("retention"))
+      retention = RetentionSettings.fromConfig(c.getConfig("retention")),
+      gameFiles = c.getBoolean("game-files"),
+      gameQuiet = c.getDuration("game-quiet").toScala
     )
 }

@@ -46,9 +46,9 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
     "write what waits when closed, then ignore further entries" in {
       val dir = Files.createTempDirectory("recorder-spec")
       val recording = Recording(settings(dir), "recorder-spec-close")
-      recording.decision(Decision.Gate(open = false, GameState.Playing))
+      recording.decision(Decision.Gate(open = false, naogateway.GameReading.Known(GameState.Playing)))
       recording.close()
-      recording.decision(Decision.Gate(open = true, GameState.Finished))
+      recording.decision(Decision.Gate(open = true, naogateway.GameReading.Known(GameState.Finished)))
       recording.stats.messages shouldBe 1L
       val contents = McapReader.read(Files.readAllBytes(files(dir).head))
       new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
@@ -57,7 +57,7 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
     "count entries it cannot write when the directory cannot be made, without failing" in {
       val file = Files.createTempFile("recorder-spec", ".not-a-directory")
       val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed")
-      (1 to 10).foreach(_ => recording.decision(Decision.Gate(open = true, GameState.Initial)))
+      (1 to 10).foreach(_ => recording.decision(Decision.Gate(open = true, naogateway.GameReading.Known(GameState.Initial))))
       recording.close()
       recording.stats.failed shouldBe 10L
       recording.stats.files shouldBe 0L

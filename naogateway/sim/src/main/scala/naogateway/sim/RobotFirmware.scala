@@ -8,7 +8,7 @@ import com.google.protobuf.ByteString
 
 import naogateway.proto._
 import naogateway.wire._
-import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec, ReturnData, ReturnMessage}
+import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec, ReturnData, ReturnMessage, ReturnStatus}
 
 /** Settings of one simulated CM-530 firmware; every figure can be changed per robot. */
 final case class FirmwareSettings(
@@ -310,13 +310,28 @@ object RobotFirmware {
   private def onGameController(s: FirmwareState, data: GameControlData, from: InetSocketAddress)
       : (FirmwareState, Vector[Outgoing]) = {
     val counted = s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))
-    // Robots answer each round's version-8 packet for their team with an "alive" return packet to port 3838;
-    // the version-7 copy of the same round needs no second answer.
-    if (data.version != GameControlVersion.V8 || data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
+    // A robot answers the GameController it heard, as robots of that version do: the 2014 one (version 8; its
+    // version-7 copy of the round needs no second answer) with RGrt version 2 to port 3838; the Humanoid League's
+    // (version 12) with RGrt version 2 to 3939; the Humanoid Soccer League's (version 19) with its status message,
+    // RGrt version 4, to 3939.
+    if (data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
     else {
-      val alive = GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive))
-      val to = new InetSocketAddress(from.getAddress, 3838)
-      (counted, alive.toOption.map(b => Outgoing(b, Destination.ReplyTo(to))).toVector)
+      val answer = data.version match {
+        case GameControlVersion.V8 =>
+          GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive)).toOption
+            .map(_ -> 3838)
+        case GameControlVersion.V12 =>
+          GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive)).toOption
+            .map(_ -> GameControllerCodec.ReturnPort)
+        case GameControlVersion.V19 =>
+          val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
+          val status = ReturnStatus(s.settings.playerNumber, s.settings.teamId, fallen = false,
+            ((s.pose.x * 1000).toFloat, (s.pose.y * 1000).toFloat, s.pose.theta.toFloat), ballAge = 0f,
+            ((ahead * 1000).toFloat, (left * 1000).toFloat))
+          GameControllerCodec.encodeStatus(status).toOption.map(_ -> GameControllerCodec.ReturnPort)
+        case GameControlVersion.V7 => None
+      }
+      (counted, answer.map { case (b, port) => Outgoing(b, Destination.ReplyTo(new InetSocketAddress(from.getAddress, port))) }.toVector)
     }
   }
 

@@ -15,15 +15,21 @@ import naogateway.wire.gamecontroller._
   *
   * One cycle is a whole game of two halves; each half runs INITIAL, READY, SET, PLAYING and FINISHED for the given
   * durations. The half's clock (`secsRemaining`) starts at the PLAYING duration and counts down while PLAYING, so a
-  * half ends with the clock at 0, as a real half does.
+  * half ends with the clock at 0, as a real half does. Within PLAYING, `setPlayAfter` into it, the referee stops play for
+  * `stoppedFor` (a goal kick for `teams[1]` is called: version 19 says `stopped` and the set play, version 12 the set
+  * play) and the set play then runs for `setPlayFor` with play going on; the half's clock runs throughout. No set play
+  * when they do not fit the PLAYING duration.
   *
   * @param target where the packets go: the gateway's GameController port (a real GameController broadcasts to 3838)
   * @param bindAddress the controller's own socket; port 0 lets the operating system pick one
   * @param team0 the team number in the packets' `teams[0]` (blue)
   * @param team1 the team number in `teams[1]` (red)
   * @param playersPerTeam the packets' `playersPerTeam` (6 in the humanoid KidSize league)
-  * @param interval one round of packets (version 8, then version 7) this often; the real GameController sends two a
-  *   second
+  * @param interval one round of packets this often; the real GameController sends two a second
+  * @param version the GameController to play: 19 (the Humanoid Soccer League's, the default), 12 (the Humanoid League's
+  *   until 2025), 8 (the 2014 one, which sends a version-8 and a version-7 packet each round) or 7 (its version-7
+  *   packets alone)
+  * @param messageBudget the version-19 `messageBudget` of both teams; the simulation hears no team message, so it stays
   */
 final case class SimulatedGameControllerSettings(
     target: InetSocketAddress,
@@ -36,31 +42,49 @@ final case class SimulatedGameControllerSettings(
     set: FiniteDuration = 3.seconds,
     playing: FiniteDuration = 45.seconds,
     finished: FiniteDuration = 5.seconds,
-    interval: FiniteDuration = 500.millis
+    interval: FiniteDuration = 500.millis,
+    version: GameControlVersion = GameControlVersion.V19,
+    setPlayAfter: FiniteDuration = 20.seconds,
+    stoppedFor: FiniteDuration = 3.seconds,
+    setPlayFor: FiniteDuration = 5.seconds,
+    messageBudget: Int = 12000
 ) {
   require(Seq(team0, team1, playersPerTeam).forall(n => n >= 0 && n <= 255), "team numbers and players must fit a byte")
   require(Seq(initial, ready, set, finished).forall(_ >= Duration.Zero), "phase durations must not be negative")
   require(playing > Duration.Zero, "the PLAYING phase must last")
   require(playing.toSeconds <= Short.MaxValue, "secsRemaining must fit the version-8 i16")
   require(interval >= 10.millis, "interval must be at least 10 ms")
+  require(Seq(team0, team1).forall(_ != 255), "team number 255 means no team in versions 19 and 12")
+  require(messageBudget >= 0 && messageBudget <= 0xffff, "messageBudget must fit a u16")
+
+  /** Whether PLAYING holds the stopped pause and the set play. */
+  def hasSetPlay: Boolean = setPlayAfter + stoppedFor + setPlayFor < playing
 
   /** One half, INITIAL to the end of FINISHED. */
   def halfNanos: Long = (initial + ready + set + playing + finished).toNanos
 }
 
-/** The game as the simulated GameController sees it at one moment: what each round's packets say. */
+/**
+ * The game as the simulated GameController sees it at one moment: what each round's packets say.
+ *
+ * @param stopped play is stopped by the referee (version 19's `stopped`)
+ * @param setPlay the set play under way, taken by `teams[1]` (versions 19 and 12 say it; 8 and 7 do not)
+ */
 final case class GameMoment(
     gameState: GameState,
     firstHalf: Boolean,
     kickOffTeam: KickOffTeam,
     secsRemaining: Long,
-    secondaryTime: Int
+    secondaryTime: Int,
+    stopped: Boolean = false,
+    setPlay: SetPlay = SetPlay.NoSetPlay
 )
 
-/** A simulated RoboCup GameController on loopback: real `RGme` packets of version 8 (158 bytes) and version 7
-  * (116 bytes) each round, as the humanoid leagues' GameController broadcasts them, cycling INITIAL → READY → SET →
-  * PLAYING → FINISHED on the short schedule of its [[SimulatedGameControllerSettings]]. The demo runs one against the
-  * gateway, so the game state and the competition gate can be seen without a field.
+/** A simulated RoboCup GameController on loopback: real `RGme` packets of the version its settings name (19 by
+  * default: 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController
+  * broadcast them; 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and
+  * a set play) → FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo
+  * runs one against the gateway, so the game state and the competition gate can be seen without a field.
   *
   * The schedule and the packets are pure ([[SimulatedGameController.momentAt]], [[SimulatedGameController.packets]]);
   * the actor only wakes at each round's timer and sends.
@@ -112,7 +136,16 @@ object SimulatedGameController {
         if (t < settings.set.toNanos) at(GameState.Set, full, 0)
         else {
           t -= settings.set.toNanos
-          if (t < settings.playing.toNanos) at(GameState.Playing, left(settings.playing, t), 0)
+          if (t < settings.playing.toNanos) {
+            val playing = at(GameState.Playing, left(settings.playing, t), 0)
+            val stopAt = settings.setPlayAfter.toNanos
+            val runAt = stopAt + settings.stoppedFor.toNanos
+            val endAt = runAt + settings.setPlayFor.toNanos
+            if (!settings.hasSetPlay || t < stopAt || t >= endAt) playing
+            else if (t < runAt) playing.copy(stopped = true, setPlay = SetPlay.GoalKick)
+            // The set play's own countdown runs on the secondary clock once play goes on.
+            else playing.copy(setPlay = SetPlay.GoalKick, secondaryTime = ((endAt - t + 999999999L) / 1000000000L).toInt)
+          }
           else at(GameState.Finished, 0, 0)
         }
       }
@@ -125,9 +158,9 @@ object SimulatedGameController {
       version: GameControlVersion,
       moment: GameMoment,
       packetNumber: Int
-  ): GameControlData = {
+  ): ControlData2014 = {
     val v8 = version == GameControlVersion.V8
-    GameControlData(
+    ControlData2014(
       version = version,
       packetNumber = if (v8) Some(packetNumber & 0xff) else None,
       playersPerTeam = settings.playersPerTeam,
@@ -144,14 +177,48 @@ object SimulatedGameController {
     )
   }
 
-  /** One round on the wire: the version-8 packet, then the version-7 packet of the same moment. */
-  def packets(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): Vector[Array[Byte]] =
-    Vector(GameControlVersion.V8, GameControlVersion.V7).map { version =>
-      // The settings' checks keep every field in range, so encoding cannot fail; if it did, that is a bug here.
-      GameControllerCodec
-        .encodeControl(controlData(settings, version, moment, packetNumber))
-        .fold(e => throw new IllegalStateException(e.describe), identity)
+  /** The team number of the team kicking off (by its colour) or taking the set play (always `teams[1]`). */
+  private def kickingTeam(settings: SimulatedGameControllerSettings, moment: GameMoment): Int =
+    if (moment.setPlay != SetPlay.NoSetPlay || moment.kickOffTeam == KickOffTeam.Red) settings.team1 else settings.team0
+
+  /** The version-19 packet content of `moment`: players beyond `playersPerTeam` are substitutes, as the GameController lists them. */
+  def controlDataV19(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): HslControlData = {
+    def team(number: Int, colour: FieldColour, keeperColour: FieldColour) = HslTeamInfo(number, colour, keeperColour,
+      goalkeeper = 1, score = 0, penaltyShot = 0, singleShots = 0, messageBudget = settings.messageBudget,
+      players = Vector.tabulate(HslPlayerInfo.Slots)(i =>
+        if (i < settings.playersPerTeam) HslPlayerInfo.Unpenalised else HslPlayerInfo(HslPenalty.Substitute, 0, 0, 0)))
+    HslControlData(packetNumber & 0xff, settings.playersPerTeam, CompetitionType.Small, moment.stopped, GamePhase.Normal,
+      moment.gameState, moment.setPlay, moment.firstHalf, Some(kickingTeam(settings, moment)), moment.secsRemaining,
+      moment.secondaryTime, team(settings.team0, FieldColour.Blue, FieldColour.Yellow),
+      team(settings.team1, FieldColour.Red, FieldColour.Black))
+  }
+
+  /** The version-12 packet content of `moment`: player 1 the goalkeeper, players beyond `playersPerTeam` substitutes. */
+  def controlDataV12(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): HlControlData = {
+    def team(number: Int, colour: FieldColour) = HlTeamInfo(number, colour, score = 0, penaltyShot = 0, singleShots = 0,
+      coachSequence = 0, ArraySeq.fill[Byte](HlPlayerInfo.CoachMessageBytes)(0), HlPlayerInfo.Unpenalised,
+      Vector.tabulate(HlPlayerInfo.Slots)(i =>
+        if (i >= settings.playersPerTeam) HlPlayerInfo.Unpenalised.copy(penalty = HlPenalty.Substitute)
+        else HlPlayerInfo.Unpenalised.copy(goalkeeper = i == 0)))
+    val setPlay = moment.setPlay != SetPlay.NoSetPlay
+    HlControlData(packetNumber & 0xff, settings.playersPerTeam, HlGameType.KidSize, moment.gameState, moment.firstHalf,
+      Some(kickingTeam(settings, moment)), if (setPlay) HlSecondaryState.GoalKick else HlSecondaryState.Normal,
+      ArraySeq[Byte](if (setPlay) settings.team1.toByte else 0, 0, 0, 0), dropInTeam = 0, dropInTime = 0xffff,
+      moment.secsRemaining, moment.secondaryTime, team(settings.team0, FieldColour.Blue), team(settings.team1, FieldColour.Red))
+  }
+
+  /** One round on the wire in the settings' version (version 8: the version-8 packet, then the version-7 one). */
+  def packets(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): Vector[Array[Byte]] = {
+    val contents: Vector[GameControlData] = settings.version match {
+      case GameControlVersion.V19 => Vector(controlDataV19(settings, moment, packetNumber))
+      case GameControlVersion.V12 => Vector(controlDataV12(settings, moment, packetNumber))
+      case GameControlVersion.V8 =>
+        Vector(GameControlVersion.V8, GameControlVersion.V7).map(controlData(settings, _, moment, packetNumber))
+      case GameControlVersion.V7 => Vector(controlData(settings, GameControlVersion.V7, moment, packetNumber))
     }
+    // The settings' checks keep every field in range, so encoding cannot fail; if it did, that is a bug here.
+    contents.map(c => GameControllerCodec.encodeControl(c).fold(e => throw new IllegalStateException(e.describe), identity))
+  }
 
   /** A controller sending to `settings.target` from a socket of its own, until it is stopped. */
   def apply(settings: SimulatedGameControllerSettings): Behavior[Command] =
@@ -180,16 +247,18 @@ object SimulatedGameController {
       origin: Long
   ) {
     // The first round goes out at once; later ones on the timer.
-    def sending(packetNumber: Int, shown: Option[GameState]): Behavior[Command] = {
+    def sending(packetNumber: Int, shown: Option[(GameState, Boolean, SetPlay)]): Behavior[Command] = {
       val moment = momentAt(settings, System.nanoTime() - origin)
       packets(settings, moment, packetNumber).foreach(link ! UdpLink.Send(_, settings.target))
-      if (!shown.contains(moment.gameState))
-        context.log.info("Simulated GameController: {} ({} half)", moment.gameState,
+      val now = (moment.gameState, moment.stopped, moment.setPlay)
+      if (!shown.contains(now))
+        context.log.info("Simulated GameController (version {}): {}{} ({} half)", settings.version.number.toString, moment.gameState,
+          (if (moment.stopped) ", stopped" else "") + (if (moment.setPlay != SetPlay.NoSetPlay) s", ${moment.setPlay}" else ""),
           if (moment.firstHalf) "first" else "second")
-      waiting((packetNumber + 1) & 0xff, Some(moment.gameState))
+      waiting((packetNumber + 1) & 0xff, Some(now))
     }
 
-    private def waiting(packetNumber: Int, shown: Option[GameState]): Behavior[Command] =
+    private def waiting(packetNumber: Int, shown: Option[(GameState, Boolean, SetPlay)]): Behavior[Command] =
       Behaviors.receiveMessage {
         case Round => sending(packetNumber, shown)
         // Anything arriving on the controller's socket (robots' return packets) is not needed here.

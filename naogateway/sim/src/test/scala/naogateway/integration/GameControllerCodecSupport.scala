@@ -20,7 +20,7 @@ object GameControllerCodecSupport {
   )
 
   /** A version-8 packet of a running game between `teamNumber` and team 99. */
-  def playing(teamNumber: Int): GameControlData = GameControlData(
+  def playing(teamNumber: Int): ControlData2014 = ControlData2014(
     version = GameControlVersion.V8,
     packetNumber = Some(1),
     playersPerTeam = 6,

@@ -225,4 +225,33 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       }
     }
   }
+
+  "The simulated firmware" should {
+    "answer the GameController it heard as a robot of that version does: version, port and content" in {
+      import naogateway.wire.gamecontroller._
+      val gc = new InetSocketAddress("127.0.0.9", 40123)
+      val robot = RobotFirmware.boot(settings.copy(playerNumber = 3), 0)
+      def answers(file: String): Vector[Outgoing] =
+        RobotFirmware.receive(robot, GameControllerVectors.bytes(file), gc, 10 * ms)._2.filter(o => Datagram.isGameControllerReturn(o.bytes))
+      def to(o: Outgoing) = o.to match {
+        case Destination.ReplyTo(a) => (a.getAddress.getHostAddress, a.getPort)
+        case other                  => fail(s"not a reply: $other")
+      }
+      val v19 = answers("v19-playing.bin")
+      v19.map(to) shouldBe Vector(("127.0.0.9", 3939))
+      val status = GameControllerCodec.decodeStatus(v19.head.bytes).fold(e => fail(e.describe), identity)
+      (status.player, status.team, status.fallen) shouldBe ((3, 12, false))
+      status.pose._1 shouldBe (robot.pose.x * 1000).toFloat
+      val v12 = answers("v12-playing.bin")
+      v12.map(to) shouldBe Vector(("127.0.0.9", 3939))
+      GameControllerCodec.decodeReturn(v12.head.bytes) shouldBe Right(ReturnData(12, 3, ReturnMessage.Alive))
+      val v8 = answers("v8-playing.bin")
+      v8.map(to) shouldBe Vector(("127.0.0.9", 3838))
+      GameControllerCodec.decodeReturn(v8.head.bytes) shouldBe Right(ReturnData(12, 3, ReturnMessage.Alive))
+      answers("v7-playing.bin") shouldBe empty
+      // A packet naming neither team as the robot's is not answered.
+      RobotFirmware.receive(RobotFirmware.boot(settings.copy(teamId = 99), 0), GameControllerVectors.bytes("v19-playing.bin"),
+        gc, 10 * ms)._2.filter(o => Datagram.isGameControllerReturn(o.bytes)) shouldBe empty
+    }
+  }
 }

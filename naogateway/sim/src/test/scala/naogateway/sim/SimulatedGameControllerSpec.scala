@@ -11,20 +11,24 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
   import SimulatedGameController._
 
   private val target = SimulatedRobotSettings.AnyLoopbackPort
-  private val settings = SimulatedGameControllerSettings(target)
+  // The 2014 GameController's rounds (a version-8 and a version-7 packet); versions 19 and 12 below.
+  private val settings = SimulatedGameControllerSettings(target, version = GameControlVersion.V8)
 
   private def vector(file: String): Array[Byte] = GameControllerVectors.bytes(file)
 
-  private def decode(bytes: Array[Byte]): GameControlData =
-    GameControllerCodec.decodeControl(bytes).fold(e => fail(e.describe), identity)
+  private def decode(bytes: Array[Byte]): ControlData2014 =
+    GameControllerCodec.decodeControl(bytes) match {
+      case Right(d: ControlData2014) => d
+      case other                     => fail(s"not a 2014 packet: $other")
+    }
 
   // The vectors' PLAYING and FINISHED packets carry a score and a penalty; the simulation plays 0 : 0 without fouls.
-  private def withoutScoreAndFouls(d: GameControlData): GameControlData = {
+  private def withoutScoreAndFouls(d: ControlData2014): ControlData2014 = {
     def clean(t: TeamInfo) = t.copy(score = 0, players = Vector.fill(TeamInfo.PlayerSlots)(PlayerInfo.Unpenalised))
     d.copy(team0 = clean(d.team0), team1 = clean(d.team1))
   }
 
-  private def momentOf(d: GameControlData): GameMoment =
+  private def momentOf(d: ControlData2014): GameMoment =
     GameMoment(d.gameState, d.firstHalf, d.kickOffTeam, d.secsRemaining, d.secondaryTime.getOrElse(0))
 
   "The simulated GameController's packets" should {
@@ -69,7 +73,7 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
         val Vector(v8, v7) = packets(settings, moment, (t / 250000000L).toInt).map(decode)
         val r = real(moment.gameState)
         // Every field but the clocks, the packet number, the half, the kick-off, the score and the fouls.
-        def same(d: GameControlData) = d.copy(packetNumber = r.packetNumber, secsRemaining = r.secsRemaining,
+        def same(d: ControlData2014) = d.copy(packetNumber = r.packetNumber, secsRemaining = r.secsRemaining,
           secondaryTime = r.secondaryTime, firstHalf = r.firstHalf, kickOffTeam = r.kickOffTeam)
         same(v8) shouldBe withoutScoreAndFouls(r)
         v7.copy(gameState = GameState.Initial, secsRemaining = realV7.secsRemaining, firstHalf = true,
@@ -109,7 +113,7 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
     "send a version-8 and a version-7 packet each round, the version-8 packet number counting up" in {
       val gateway = new TestGateway
       try {
-        val s = SimulatedGameControllerSettings(gateway.address, interval = 50.millis)
+        val s = SimulatedGameControllerSettings(gateway.address, interval = 50.millis, version = GameControlVersion.V8)
         val controller = spawn(SimulatedGameController(s))
         val heard = Iterator.continually(gateway.receive(5.seconds)).take(12).flatten.toVector
         testKit.stop(controller)
@@ -119,6 +123,78 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
         decoded.flatMap(_.packetNumber) shouldBe (1 to 6)
         all(decoded.map(_.gameState)) shouldBe GameState.Initial
       } finally gateway.close()
+    }
+  }
+
+  "The simulated GameController of versions 19 and 12" should {
+    val v19 = SimulatedGameControllerSettings(target, playersPerTeam = 7)
+    val v12 = SimulatedGameControllerSettings(target, playersPerTeam = 4, version = GameControlVersion.V12)
+    def one(s: SimulatedGameControllerSettings, moment: GameMoment, number: Int): Array[Byte] =
+      packets(s, moment, number) match {
+        case Vector(only) => only
+        case other        => fail(s"${other.size} packets in a round of version ${s.version.number}")
+      }
+    val initial = GameMoment(GameState.Initial, firstHalf = true, KickOffTeam.Blue, 600, 0)
+
+    "speak version 19 by default, one packet a round, byte-equal to the built vectors for the same values" in {
+      SimulatedGameControllerSettings(target).version shouldBe GameControlVersion.V19
+      one(v19, initial, 1).toSeq shouldBe vector("v19-initial.bin").toSeq
+      one(v19, initial.copy(gameState = GameState.Ready, secondaryTime = 45), 2).toSeq shouldBe vector("v19-ready.bin").toSeq
+    }
+    "speak version 12 when set, byte-equal to the built vectors for the same values" in {
+      one(v12, initial, 1).toSeq shouldBe vector("v12-initial.bin").toSeq
+      one(v12, initial.copy(gameState = GameState.Ready, secondaryTime = 30), 2).toSeq shouldBe vector("v12-ready.bin").toSeq
+      one(v12, initial.copy(gameState = GameState.Set), 3).toSeq shouldBe vector("v12-set.bin").toSeq
+      val v7only = packets(settings.copy(version = GameControlVersion.V7), initial, 1)
+      v7only.map(_.toSeq) shouldBe Vector(vector("v7-initial.bin").toSeq)
+    }
+    "go through every state of both halves, with a stopped pause and a goal kick for teams[1] in PLAYING" in {
+      val s = v19.copy(initial = 1.second, ready = 1.second, set = 1.second, playing = 12.seconds, finished = 1.second,
+        setPlayAfter = 4.seconds, stoppedFor = 2.seconds, setPlayFor = 3.seconds)
+      val seen = (0L until 2 * s.halfNanos by 250000000L).map { t =>
+        GameControllerCodec.decodeControl(one(s, momentAt(s, t), (t / 250000000L).toInt)) match {
+          case Right(d: HslControlData) => d
+          case other                    => fail(s"not version 19: $other")
+        }
+      }
+      // Each step of the game once, in order (a state seen again later is a step again).
+      val steps = seen.map(d => (d.gameState, d.stopped, d.setPlay, d.firstHalf))
+        .foldLeft(Vector.empty[(GameState, Boolean, SetPlay, Boolean)])((acc, x) => if (acc.lastOption.contains(x)) acc else acc :+ x)
+      steps shouldBe Vector(
+        (GameState.Initial, false, SetPlay.NoSetPlay, true), (GameState.Ready, false, SetPlay.NoSetPlay, true),
+        (GameState.Set, false, SetPlay.NoSetPlay, true), (GameState.Playing, false, SetPlay.NoSetPlay, true),
+        (GameState.Playing, true, SetPlay.GoalKick, true), (GameState.Playing, false, SetPlay.GoalKick, true),
+        (GameState.Playing, false, SetPlay.NoSetPlay, true), (GameState.Finished, false, SetPlay.NoSetPlay, true),
+        (GameState.Initial, false, SetPlay.NoSetPlay, false), (GameState.Ready, false, SetPlay.NoSetPlay, false),
+        (GameState.Set, false, SetPlay.NoSetPlay, false), (GameState.Playing, false, SetPlay.NoSetPlay, false),
+        (GameState.Playing, true, SetPlay.GoalKick, false), (GameState.Playing, false, SetPlay.GoalKick, false),
+        (GameState.Playing, false, SetPlay.NoSetPlay, false), (GameState.Finished, false, SetPlay.NoSetPlay, false))
+      // The kicking team: team 12 kicks off the first half, team 7 the second, and team 7 takes the goal kick.
+      seen.filter(d => d.firstHalf && d.setPlay == SetPlay.NoSetPlay).map(_.kickingTeam).distinct shouldBe Vector(Some(12))
+      seen.filter(d => !d.firstHalf).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
+      seen.filter(_.setPlay == SetPlay.GoalKick).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
+      // The set play's countdown runs once play goes on; the half's clock runs throughout.
+      val running = seen.filter(d => d.setPlay == SetPlay.GoalKick && !d.stopped)
+      running.map(_.secondaryTime).distinct shouldBe Vector(3, 2, 1)
+      val clocks = seen.filter(d => d.gameState == GameState.Playing && d.firstHalf).map(_.secsRemaining)
+      clocks shouldBe clocks.sorted.reverse
+      all(seen.map(_.team0.messageBudget)) shouldBe 12000
+    }
+    "say the set play in version 12 as its secondary state, with the taking team in secondaryStateInfo" in {
+      val s = v12.copy(playing = 12.seconds, setPlayAfter = 4.seconds, stoppedFor = 2.seconds, setPlayFor = 3.seconds)
+      val during = momentAt(s, (s.initial + s.ready + s.set + 5.seconds).toNanos)
+      during.setPlay shouldBe SetPlay.GoalKick
+      GameControllerCodec.decodeControl(one(s, during, 9)) match {
+        case Right(d: HlControlData) =>
+          d.secondaryState shouldBe HlSecondaryState.GoalKick
+          d.secondaryStateInfo.head shouldBe 7.toByte
+          d.kickOffTeam shouldBe Some(7)
+        case other => fail(s"not version 12: $other")
+      }
+      // No set play where it does not fit PLAYING.
+      val short = s.copy(playing = 8.seconds)
+      short.hasSetPlay shouldBe false
+      (0L until short.halfNanos by 250000000L).map(t => momentAt(short, t).setPlay).distinct shouldBe Vector(SetPlay.NoSetPlay)
     }
   }
 }

@@ -13,6 +13,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.proto._
 import naogateway.sim.{Destination, FirmwareSettings, FirmwareState, Outgoing, RobotFirmware}
+import naogateway.wire.gamecontroller.{GameControlVersion, GameControllerCodec, GameState, ReturnStatus}
 
 /**
  * Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every
@@ -53,7 +54,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
   "The byte tables below the examples" should {
     "exist for every example but the bare pure ACK, the stream RPC segment and the RGrt packet" in {
       doc.blocks.filter(b => b.annotation.exists(isByteTable)).map(_.tag).toSet shouldBe
-        (ExampleTags ++ DatagramTags -- Set("stream-pure-ack", "stream-data-rpc", "gc-return-alive"))
+        (ExampleTags ++ DatagramTags -- Set("stream-pure-ack", "stream-data-rpc", "gc-return-alive", "gc-status-example"))
     }
     "give every byte of each example at its offset, in order, without gaps" in {
       for (block <- doc.blocks; table <- block.annotation if isByteTable(table)) withClue(s"${block.tag}: ") {
@@ -261,6 +262,96 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       val read = reader(packet, layout, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
       (read("version"), read("team"), read("player"), read("message")) shouldBe ((2, 12, 3, 2))
       classify(packet) shouldBe GameController
+    }
+  }
+
+  "The GameController examples and tables of versions 19 and 12" should {
+    lazy val v19 = vector("v19-playing.bin")
+    lazy val v12 = vector("v12-playing.bin")
+
+    "quote the first bytes of the built packets" in {
+      bytes("gc-v19-header").toVector shouldBe v19.take(18).toVector
+      bytes("gc-v12-header").toVector shouldBe v12.take(24).toVector
+      classify(v19) shouldBe GameController
+      classify(v12) shouldBe GameController
+    }
+    "give version 19 offsets that add up to 198 bytes and read the packet right" in {
+      val packet = table("gc-v19")
+      val team = table("gc-v19-team")
+      contiguous(packet, offsetColumn = 0, sizeColumn = 1) shouldBe 198
+      contiguous(team, offsetColumn = 0, sizeColumn = 3) shouldBe 90
+      teamOffsetsAgree(packet, team, fieldColumn = 2)
+      val read = reader(v19, packet, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
+      (read("version"), read("packetNumber"), read("playersPerTeam"), read("stopped"), read("state"), read("setPlay")) shouldBe
+        ((19, 4, 7, 1, 3, 5))
+      (read("kickingTeam"), read("secsRemaining"), read("secondaryTime")) shouldBe ((7, 587, 30))
+      val team0 = reader(v19, team, offsetColumn = 1, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      val team1 = reader(v19, team, offsetColumn = 2, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      (team0("teamNumber"), team0("goalkeeperColour"), team0("score"), team0("messageBudget")) shouldBe ((12, 2, 2, 11800))
+      (team1("teamNumber"), team1("fieldPlayerColour"), team1("score"), team1("messageBudget")) shouldBe ((7, 1, 1, 11790))
+      val player3 = offsetOf(team, "player[0..19]", 1) + 4 * (3 - 1)
+      v19.slice(player3, player3 + 4).toVector shouldBe Vector[Byte](9, 25, 1, 1)
+      GameControllerCodec.decodeControl(v19).map(_.version) shouldBe Right(GameControlVersion.V19)
+    }
+    "give version 12 offsets that add up to 688 bytes and read the packet right" in {
+      val packet = table("gc-v12")
+      val team = table("gc-v12-team")
+      contiguous(packet, offsetColumn = 0, sizeColumn = 1) shouldBe 688
+      contiguous(team, offsetColumn = 0, sizeColumn = 3) shouldBe 332
+      teamOffsetsAgree(packet, team, fieldColumn = 2)
+      val read = reader(v12, packet, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
+      (read("version"), read("packetNumber"), read("playersPerTeam"), read("state"), read("kickOffTeam")) shouldBe ((12, 4, 4, 3, 7))
+      (read("secondaryState"), read("dropInTime"), read("secsRemaining")) shouldBe ((4, 65535, 587))
+      val team0 = reader(v12, team, offsetColumn = 1, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      val team1 = reader(v12, team, offsetColumn = 2, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
+      (team0("teamNumber"), team0("score"), team1("teamNumber"), team1("score")) shouldBe ((12, 2, 7, 1))
+      val player1 = offsetOf(team, "player[0..10]", 1)
+      val player3 = player1 + 6 * (3 - 1)
+      v12.slice(player3, player3 + 6).toVector shouldBe Vector[Byte](31, 25, 1, 1, 0, 0)
+      v12(player1 + 5) shouldBe 1.toByte // player 1 is the goalkeeper
+      GameControllerCodec.decodeControl(v12).map(_.version) shouldBe Right(GameControlVersion.V12)
+    }
+    "build the RGrt version-4 status message as its table says" in {
+      val packet = bytes("gc-status-example")
+      val layout = table("gc-status")
+      contiguous(layout, offsetColumn = 0, sizeColumn = 1) shouldBe 32
+      GameControllerCodec.decodeStatus(packet) shouldBe
+        Right(ReturnStatus(3, 12, fallen = false, (1000f, -500f, 1.5f), 2f, (250f, -100f)))
+      val read = reader(packet, layout, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
+      (read("version"), read("playerNum"), read("teamNum"), read("fallen")) shouldBe ((4, 3, 12, 0))
+      classify(packet) shouldBe GameController
+    }
+    "say which states close the gate, as CompetitionGate decides" in {
+      val rows = table("gc-gate").rows
+      rows.map(_(0)) shouldBe Seq("19", "12", "8", "7", "unreadable")
+      rows.filter(_(0) != "unreadable").foreach { row =>
+        val closing = "(\\d) [A-Z]+".r.findAllMatchIn(row(2)).map(_.group(1).toInt).toSet
+        val opening = "(\\d) [A-Z]+".r.findAllMatchIn(row(3)).map(_.group(1).toInt).toSet
+        closing shouldBe Set(1, 2, 3)
+        (closing ++ opening) shouldBe GameState.known.map(_.code).toSet
+        closing.foreach(c => naogateway.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe true)
+        opening.foreach(c => naogateway.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe false)
+      }
+      naogateway.CompetitionGate.closes(naogateway.GameReading.Unreadable("any")) shouldBe true
+      rows.last(3) should include(s"${naogateway.CompetitionGate.UnreadableHoldNanos / 1000000000L} s")
+    }
+    "give the monitor exchange with the bytes and ports the gateway uses" in {
+      val rows = table("gc-monitor").rows.map(r => r(0) -> r).toMap
+      rows("request")(1) should startWith("RGTr then version 00 (5 bytes)")
+      GameControllerCodec.monitorRequest.toVector shouldBe ("RGTr".getBytes(US_ASCII) :+ 0.toByte).toVector
+      rows("request")(2) should include("3636")
+      rows("true state")(1) should include("RGTD")
+      rows("forwarded status")(2) should include("3940")
+      val defaults = com.typesafe.config.ConfigFactory.load().getConfig("naogateway.game-controller.monitor")
+      (defaults.getInt("request-port"), defaults.getInt("status-port"), defaults.getBoolean("enabled")) shouldBe ((3636, 3940, false))
+    }
+    "give the message budget rules the gateway counts with" in {
+      val rules = table("gc-budget").rows.map(r => r(0) -> r(1)).toMap
+      val defaults = naogateway.TeamMessageSettings()
+      rules("budget per team per game") should startWith(s"${defaults.perGame} messages")
+      rules("per minute of additional time") should startWith(s"${defaults.perExtraMinute} more")
+      rules("largest message") shouldBe s"${defaults.maxBytes} bytes"
+      naogateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway")).teamMessages shouldBe defaults
     }
   }
 
@@ -501,14 +592,15 @@ object ProtocolDocSpec {
   )
 
   val ExampleTags: Set[String] = FrameExamples.keySet ++ Set(
-    "gc-v8-header", "gc-v7-header", "gc-return-alive",
+    "gc-v8-header", "gc-v7-header", "gc-return-alive", "gc-v19-header", "gc-v12-header", "gc-status-example",
     "stream-data", "stream-pure-ack", "stream-data-rpc",
     "serial-send-status", "serial-receive-udp-server",
     "signed-status", "signed-status-mac-input"
   )
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =
-    Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return")
+    Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return",
+      "gc-v19", "gc-v19-team", "gc-v12", "gc-v12-team", "gc-status", "gc-gate", "gc-budget", "gc-monitor")
 
   // ---- reading the document ----
 

@@ -2,17 +2,84 @@ package naogateway.wire.gamecontroller
 
 import scala.collection.immutable.ArraySeq
 
-/** A layout of the `RGme` control packet, with its exact size on the wire. */
-sealed abstract class GameControlVersion(val number: Int, val packetBytes: Int) extends Product with Serializable
+/**
+ * A layout of the `RGme` control packet, with its exact size on the wire and the width of its version field
+ * (docs/protocol.md §10).
+ */
+sealed abstract class GameControlVersion(val number: Int, val packetBytes: Int, val versionBytes: Int)
+    extends Product with Serializable
 
-/** The two layouts the GameController broadcasts to the humanoid leagues each round (docs/protocol.md §3 and §10). */
+/** The layouts a team may meet: today's Humanoid Soccer League (19), the Humanoid League until 2025 (12), 2014's (8, 7). */
 object GameControlVersion {
 
-  /** The current layout: u8 version, 158 bytes. */
-  case object V8 extends GameControlVersion(8, 158)
+  /** The Humanoid Soccer League's GameController from 2026: u8 version, 198 bytes. */
+  case object V19 extends GameControlVersion(19, 198, 1)
 
-  /** The older layout still broadcast for the humanoid leagues: u32 version, 116 bytes. */
-  case object V7 extends GameControlVersion(7, 116)
+  /** The Humanoid League's GameController until 2025: u16 version, 688 bytes. */
+  case object V12 extends GameControlVersion(12, 688, 2)
+
+  /** The 2014 layout: u8 version, 158 bytes. */
+  case object V8 extends GameControlVersion(8, 158, 1)
+
+  /** The older layout the 2014 GameController also broadcast for the humanoid leagues: u32 version, 116 bytes. */
+  case object V7 extends GameControlVersion(7, 116, 4)
+
+  /** Every version the codec reads, newest first. */
+  val all: Seq[GameControlVersion] = Seq(V19, V12, V8, V7)
+}
+
+/** What every team entry of every version says: who the team is and its score. */
+trait GameTeam {
+
+  /** The team's unique number. */
+  def teamNumber: Int
+
+  /** The team's score. */
+  def score: Int
+}
+
+/**
+ * The content of one `RGme` control packet of any version: what all versions say, as members; the rest in the
+ * version's own type ([[ControlData2014]], [[HlControlData]], [[HslControlData]]), so no field is invented where a
+ * version lacks it.
+ */
+sealed trait GameControlData extends Product with Serializable {
+
+  /** The layout the packet came in. */
+  def version: GameControlVersion
+
+  /** The packet number, counting up with each packet and wrapping at 256; version 7 has none. */
+  def packetNumberOnWire: Option[Int]
+
+  /** Players per team in this game. */
+  def playersPerTeam: Int
+
+  /** The main state: the competition gate reads this. */
+  def gameState: GameState
+
+  /** Whether the game is in its first half (of regular or extra time). */
+  def firstHalf: Boolean
+
+  /** Seconds left in the half (negative: over time). */
+  def secsRemaining: Long
+
+  /** Seconds of the secondary clock (ready phase, set play, time-out …); version 7 has none. */
+  def secondaryClock: Option[Int]
+
+  /** The wire's `teams[0]`. */
+  def team0: GameTeam
+
+  /** The wire's `teams[1]`. */
+  def team1: GameTeam
+
+  /** Whether a penalty shoot-out is under way (team messages are not counted then). */
+  def penaltyShootOut: Boolean
+
+  /** The team with this team number, if it plays in this game. */
+  def teamByNumber(teamNumber: Int): Option[GameTeam] =
+    if (team0.teamNumber == teamNumber) Some(team0)
+    else if (team1.teamNumber == teamNumber) Some(team1)
+    else None
 }
 
 /**
@@ -54,7 +121,7 @@ final case class TeamInfo(
     coachMessage: Option[ArraySeq[Byte]],
     coach: Option[PlayerInfo],
     players: Vector[PlayerInfo]
-)
+) extends GameTeam
 
 /** Sizes shared by both layouts. */
 object TeamInfo {
@@ -67,7 +134,7 @@ object TeamInfo {
 }
 
 /**
- * The content of one `RGme` control packet of either version, every wire field kept: decoding an
+ * The content of one `RGme` control packet of version 8 or 7 (2014), every wire field kept: decoding an
  * accepted packet and encoding the result gives back the same bytes. Fields one version lacks are
  * `None` in packets of that version.
  *
@@ -80,7 +147,7 @@ object TeamInfo {
  * @param team0         the wire's `teams[0]`
  * @param team1         the wire's `teams[1]`
  */
-final case class GameControlData(
+final case class ControlData2014(
     version: GameControlVersion,
     packetNumber: Option[Int],
     playersPerTeam: Int,
@@ -94,11 +161,152 @@ final case class GameControlData(
     secondaryTime: Option[Int],
     team0: TeamInfo,
     team1: TeamInfo
-) {
+) extends GameControlData {
 
-  /** The team with this team number, if it plays in this game. */
-  def teamByNumber(teamNumber: Int): Option[TeamInfo] =
-    if (team0.teamNumber == teamNumber) Some(team0)
-    else if (team1.teamNumber == teamNumber) Some(team1)
-    else None
+  def packetNumberOnWire: Option[Int] = packetNumber
+  def secondaryClock: Option[Int] = secondaryTime
+  def penaltyShootOut: Boolean = secondaryGameState == SecondaryGameState.PenaltyShoot
+}
+
+/**
+ * One player's entry of version 19 (`RobotInfo`, 4 bytes).
+ *
+ * @param secsTillUnpenalised the GameController's estimate; 0 when not penalised
+ * @param cautions            yellow cards
+ */
+final case class HslPlayerInfo(penalty: HslPenalty, secsTillUnpenalised: Int, warnings: Int, cautions: Int)
+
+/** Constructors of version-19 player entries. */
+object HslPlayerInfo {
+
+  /** A player in the game, with no warning or caution. */
+  val Unpenalised: HslPlayerInfo = HslPlayerInfo(HslPenalty.NoPenalty, 0, 0, 0)
+
+  /** Player slots per team on the wire (`MAX_NUM_PLAYERS`). */
+  val Slots: Int = 20
+}
+
+/**
+ * One team's entry of version 19 (`TeamInfo`, 90 bytes).
+ *
+ * @param goalkeeper    the goalkeeper's player number; 0 for none
+ * @param singleShots   bits are the successful penalty shots
+ * @param messageBudget team messages the team may still send in this game (docs/protocol.md §10.5)
+ * @param players       always all 20 slots of the wire
+ */
+final case class HslTeamInfo(
+    teamNumber: Int,
+    fieldPlayerColour: FieldColour,
+    goalkeeperColour: FieldColour,
+    goalkeeper: Int,
+    score: Int,
+    penaltyShot: Int,
+    singleShots: Int,
+    messageBudget: Int,
+    players: Vector[HslPlayerInfo]
+) extends GameTeam
+
+/**
+ * The content of one version-19 control packet (198 bytes, the Humanoid Soccer League's GameController from 2026),
+ * every wire field kept. The same layout comes with header `RGme` (broadcast) or `RGTD` (the true state for a monitor).
+ *
+ * @param stopped     play is stopped (a foul, a set play being prepared) though the state may read PLAYING
+ * @param kickingTeam the team number of the team taking the next kick-off or set play; `None` on the wire's 255
+ */
+final case class HslControlData(
+    packetNumber: Int,
+    playersPerTeam: Int,
+    competitionType: CompetitionType,
+    stopped: Boolean,
+    gamePhase: GamePhase,
+    gameState: GameState,
+    setPlay: SetPlay,
+    firstHalf: Boolean,
+    kickingTeam: Option[Int],
+    secsRemaining: Long,
+    secondaryTime: Int,
+    team0: HslTeamInfo,
+    team1: HslTeamInfo
+) extends GameControlData {
+  def version: GameControlVersion = GameControlVersion.V19
+  def packetNumberOnWire: Option[Int] = Some(packetNumber)
+  def secondaryClock: Option[Int] = Some(secondaryTime)
+  def penaltyShootOut: Boolean = gamePhase == GamePhase.PenaltyShootOut
+}
+
+/**
+ * One player's entry of version 12 (`HlRobotInfo`, 6 bytes).
+ *
+ * @param goalkeeper whether the player is the goalkeeper (the wire's flag, 0 or 1)
+ */
+final case class HlPlayerInfo(
+    penalty: HlPenalty,
+    secsTillUnpenalised: Int,
+    warnings: Int,
+    yellowCards: Int,
+    redCards: Int,
+    goalkeeper: Boolean
+)
+
+/** Constructors of version-12 player entries. */
+object HlPlayerInfo {
+
+  /** A player in the game, with no card. */
+  val Unpenalised: HlPlayerInfo = HlPlayerInfo(HlPenalty.NoPenalty, 0, 0, 0, 0, goalkeeper = false)
+
+  /** Player slots per team on the wire (`MAX_NUM_PLAYERS` of that header). */
+  val Slots: Int = 11
+
+  /** Bytes of the coach message. */
+  val CoachMessageBytes: Int = 253
+}
+
+/**
+ * One team's entry of version 12 (`HlTeamInfo`, 332 bytes).
+ *
+ * @param coachMessage the 253 raw bytes of the coach's message
+ * @param players      always all 11 slots of the wire
+ */
+final case class HlTeamInfo(
+    teamNumber: Int,
+    fieldPlayerColour: FieldColour,
+    score: Int,
+    penaltyShot: Int,
+    singleShots: Int,
+    coachSequence: Int,
+    coachMessage: scala.collection.immutable.ArraySeq[Byte],
+    coach: HlPlayerInfo,
+    players: Vector[HlPlayerInfo]
+) extends GameTeam
+
+/**
+ * The content of one version-12 control packet (688 bytes, the Humanoid League's GameController until 2025), every
+ * wire field kept.
+ *
+ * @param kickOffTeam        the team number of the team kicking off next; `None` on the wire's 255 (dropped ball)
+ * @param secondaryStateInfo the 4 raw bytes of `secondaryStateInfo` (the GameController writes the set play's team
+ *                           number and its phase in the first two)
+ * @param dropInTime         the wire's u16; 65535 before the first drop-in
+ * @param secsRemaining      read as the i16 the GameController writes (the header calls it u16)
+ */
+final case class HlControlData(
+    packetNumber: Int,
+    playersPerTeam: Int,
+    gameType: HlGameType,
+    gameState: GameState,
+    firstHalf: Boolean,
+    kickOffTeam: Option[Int],
+    secondaryState: HlSecondaryState,
+    secondaryStateInfo: scala.collection.immutable.ArraySeq[Byte],
+    dropInTeam: Int,
+    dropInTime: Int,
+    secsRemaining: Long,
+    secondaryTime: Int,
+    team0: HlTeamInfo,
+    team1: HlTeamInfo
+) extends GameControlData {
+  def version: GameControlVersion = GameControlVersion.V12
+  def packetNumberOnWire: Option[Int] = Some(packetNumber)
+  def secondaryClock: Option[Int] = Some(secondaryTime)
+  def penaltyShootOut: Boolean = secondaryState == HlSecondaryState.PenaltyShoot
 }

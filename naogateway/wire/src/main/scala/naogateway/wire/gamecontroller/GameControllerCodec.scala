@@ -7,9 +7,10 @@ import scala.collection.immutable.ArraySeq
 import naogateway.wire.gamecontroller.GameControllerError._
 
 /**
- * Encoder and decoder of GameController packets (docs/protocol.md §3 and §10): the `RGme` control packet in versions 8
- * (158 bytes) and 7 (116 bytes), and the `RGrt` return packet in version 2 (8 bytes). All numbers are
- * little-endian. Pure functions; decoding never throws and never guesses: a packet must have a known
+ * Encoder and decoder of GameController packets (docs/protocol.md §10): the `RGme` control packet in versions 19
+ * (198 bytes), 12 (688 bytes), 8 (158 bytes) and 7 (116 bytes), the same version-19 layout under `RGTD` (the true
+ * state a monitor gets), and the `RGrt` return packet in versions 4 (32 bytes) and 2 (8 bytes). All numbers are
+ * little-endian. Pure functions; decoding never throws and never guesses: a packet must have a known header, a known
  * version and exactly that version's size, or it is refused with a typed error.
  */
 object GameControllerCodec {
@@ -17,19 +18,35 @@ object GameControllerCodec {
   /** First four bytes of every control packet. */
   val ControlHeader: String = "RGme"
 
+  /** First four bytes of the true game state the version-19 GameController sends a registered monitor. */
+  val TrueDataHeader: String = "RGTD"
+
   /** First four bytes of every return packet. */
   val ReturnHeader: String = "RGrt"
 
-  /** The return-packet version robots send to this GameController (the vectors README: version 2). */
+  /** Where the 2014 GameController broadcasts its packets and hears the robots' return packets. */
+  val ControlPort: Int = 3838
+
+  /** Where the version-12 and version-19 GameControllers hear the robots' return packets. */
+  val ReturnPort: Int = 3939
+
+  /** The return-packet version robots send to the 2014 and version-12 GameControllers. */
   val ReturnVersion: Int = 2
 
   /** Exact size of a version-2 return packet. */
   val ReturnPacketBytes: Int = 8
 
+  /** The return-packet version robots send to the version-19 GameController (its status message). */
+  val StatusVersion: Int = 4
+
+  /** Exact size of a version-4 return packet. */
+  val StatusPacketBytes: Int = 32
+
   private val HeaderBytes = 4
   private val VersionOffset = 4
   private val V7VersionBytes = 4
   private val ControlHeaderBytes = ControlHeader.getBytes(StandardCharsets.US_ASCII)
+  private val TrueDataHeaderBytes = TrueDataHeader.getBytes(StandardCharsets.US_ASCII)
   private val ReturnHeaderBytes = ReturnHeader.getBytes(StandardCharsets.US_ASCII)
 
   private val U8Max = 0xffL
@@ -39,39 +56,75 @@ object GameControllerCodec {
   private val I16Max = Short.MaxValue.toLong
 
   /**
-   * Decodes a control packet. The version decides the layout: byte 4 = 8 is version 8 (a u8 field);
-   * otherwise bytes 4–7 must read the u32 7 (version 7). Both start with their number in byte 4, and a
-   * version-8 packet has its packet number in byte 5, so only version 7 is read as four bytes.
+   * Decodes a control packet. The version decides the layout, and each version's field has its own width, all
+   * starting at byte 4: byte 4 = 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read
+   * the u16 12 for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
    */
   def decodeControl(bytes: Array[Byte]): Either[GameControllerError, GameControlData] =
     for {
       _ <- checkHeader(bytes, ControlHeaderBytes, ControlHeader)
-      version <- controlVersion(bytes)
+      version <- controlVersion(bytes, ControlHeader)
       _ <- checkSize(bytes, ControlHeader, version.number, version.packetBytes)
       data <- version match {
-        case GameControlVersion.V8 => decodeV8(bytes)
-        case GameControlVersion.V7 => decodeV7(bytes)
+        case GameControlVersion.V19 => ModernLayouts.decodeV19(bytes)
+        case GameControlVersion.V12 => ModernLayouts.decodeV12(bytes)
+        case GameControlVersion.V8  => decodeV8(bytes)
+        case GameControlVersion.V7  => decodeV7(bytes)
       }
     } yield data
 
-  /** Encodes a control packet in `data.version`'s layout, refusing fields that do not fit that layout. */
+  /** Encodes a control packet in its version's layout, refusing fields that do not fit that layout. */
   def encodeControl(data: GameControlData): Either[GameControllerError, Array[Byte]] =
-    validate(data).toLeft(data.version match {
-      case GameControlVersion.V8 => writeV8(data)
-      case GameControlVersion.V7 => writeV7(data)
-    })
+    data match {
+      case d: ControlData2014 if d.version != GameControlVersion.V8 && d.version != GameControlVersion.V7 =>
+        Left(InvalidField("version", d.version.number.toLong))
+      case d: ControlData2014 =>
+        validate(d).toLeft(d.version match {
+          case GameControlVersion.V7 => writeV7(d)
+          case _                     => writeV8(d)
+        })
+      case d: HlControlData  => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
+      case d: HslControlData => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, ControlHeaderBytes))
+    }
+
+  /** Decodes the true game state a version-19 GameController sends its monitors: `RGTD`, version 19, 198 bytes. */
+  def decodeTrueData(bytes: Array[Byte]): Either[GameControllerError, HslControlData] =
+    for {
+      _ <- checkHeader(bytes, TrueDataHeaderBytes, TrueDataHeader)
+      version <- controlVersion(bytes, TrueDataHeader)
+      _ <-
+        if (version == GameControlVersion.V19) Right(())
+        else Left(UnknownVersion(TrueDataHeader, slice(bytes, VersionOffset, VersionOffset + version.versionBytes)))
+      _ <- checkSize(bytes, TrueDataHeader, version.number, version.packetBytes)
+      data <- ModernLayouts.decodeV19(bytes)
+    } yield data
+
+  /** Encodes the true game state as a version-19 GameController sends it to a monitor (`RGTD`). */
+  def encodeTrueData(data: HslControlData): Either[GameControllerError, Array[Byte]] =
+    ModernLayouts.validateV19(data).toLeft(ModernLayouts.writeV19(data, TrueDataHeaderBytes))
 
   /** Decodes a version-2 return packet (exactly 8 bytes). */
   def decodeReturn(bytes: Array[Byte]): Either[GameControllerError, ReturnData] =
     for {
-      _ <- checkHeader(bytes, ReturnHeaderBytes, ReturnHeader)
-      _ <-
-        if (bytes.length <= VersionOffset) Left(TooShort(VersionOffset + 1, bytes.length))
-        else if (u8(bytes, VersionOffset) != ReturnVersion)
-          Left(UnknownVersion(ReturnHeader, slice(bytes, VersionOffset, VersionOffset + 1)))
-        else Right(())
+      _ <- returnVersion(bytes, ReturnVersion)
       _ <- checkSize(bytes, ReturnHeader, ReturnVersion, ReturnPacketBytes)
     } yield ReturnData(u8(bytes, 5), u8(bytes, 6), ReturnMessage.fromCode(u8(bytes, 7)))
+
+  /**
+   * Decodes a version-4 return packet (exactly 32 bytes). Like the GameController, it refuses a `fallen` byte other
+   * than 0 or 1 and a coordinate that is not a number (NaN).
+   */
+  def decodeStatus(bytes: Array[Byte]): Either[GameControllerError, ReturnStatus] =
+    for {
+      _ <- returnVersion(bytes, StatusVersion)
+      _ <- checkSize(bytes, ReturnHeader, StatusVersion, StatusPacketBytes)
+      r = new LeReader(bytes, VersionOffset + 1)
+      player = r.u8()
+      team = r.u8()
+      fallen <- flag("fallen", r.u8())
+      floats = Vector.fill(6)(r.f32())
+      _ <- notNaN(floats)
+    } yield ReturnStatus(player, team, fallen, (floats(0), floats(1), floats(2)), floats(3), (floats(4), floats(5)))
 
   /** Encodes a version-2 return packet, refusing numbers that do not fit a byte. */
   def encodeReturn(data: ReturnData): Either[GameControllerError, Array[Byte]] = {
@@ -81,7 +134,7 @@ object GameControllerCodec {
       u8Range(v, "player", data.player.toLong),
       u8Range(v, "message", data.message.code.toLong)
     ).toLeft {
-      val w = new Writer(ReturnPacketBytes)
+      val w = new LeWriter(ReturnPacketBytes)
       w.raw(ReturnHeaderBytes)
       w.u8(ReturnVersion)
       w.u8(data.team)
@@ -91,21 +144,95 @@ object GameControllerCodec {
     }
   }
 
+  /** Encodes a version-4 return packet, refusing numbers that do not fit a byte and coordinates that are NaN. */
+  def encodeStatus(data: ReturnStatus): Either[GameControllerError, Array[Byte]] = {
+    val v = StatusVersion
+    val floats = Vector(data.pose._1, data.pose._2, data.pose._3, data.ballAge, data.ball._1, data.ball._2)
+    firstError(
+      u8Range(v, "player", data.player.toLong),
+      u8Range(v, "team", data.team.toLong),
+      notNaN(floats).left.toOption
+    ).toLeft {
+      val w = new LeWriter(StatusPacketBytes)
+      w.raw(ReturnHeaderBytes)
+      w.u8(StatusVersion)
+      w.u8(data.player)
+      w.u8(data.team)
+      w.flag(data.fallen)
+      floats.foreach(w.f32)
+      w.out
+    }
+  }
+
+  /** First four bytes of a monitor's request for the true game state (to UDP 3636 of the version-19 GameController). */
+  val MonitorRequestHeader: String = "RGTr"
+
+  /** The monitor request: `RGTr` and version 0, 5 bytes. */
+  def monitorRequest: Array[Byte] = MonitorRequestHeader.getBytes(StandardCharsets.US_ASCII) :+ 0.toByte
+
+  /** Bytes of the IPv4 address before each status message the GameController forwards to a monitor (UDP 3940). */
+  val ForwardPrefixBytes: Int = 4
+
+  /**
+   * Decodes a status message forwarded to a monitor: the IPv4 address of the robot that sent it, then its `RGrt`
+   * version-4 packet (36 bytes in all). The GameController forwards without checking; this decoder checks as
+   * [[decodeStatus]] does.
+   */
+  def decodeForwardedStatus(bytes: Array[Byte]): Either[GameControllerError, (java.net.InetAddress, ReturnStatus)] =
+    if (bytes.length < ForwardPrefixBytes) Left(TooShort(ForwardPrefixBytes, bytes.length))
+    else
+      decodeStatus(java.util.Arrays.copyOfRange(bytes, ForwardPrefixBytes, bytes.length))
+        .map(java.net.InetAddress.getByAddress(java.util.Arrays.copyOfRange(bytes, 0, ForwardPrefixBytes)) -> _)
+
+  /** The version byte of a return packet, if the bytes start `RGrt` and have one. */
+  def returnVersionOf(bytes: Array[Byte]): Option[Int] =
+    if (bytes.length > VersionOffset && java.util.Arrays.equals(bytes, 0, HeaderBytes, ReturnHeaderBytes, 0, HeaderBytes))
+      Some(u8(bytes, VersionOffset))
+    else None
+
+  private val FloatFields = Vector("pose[0]", "pose[1]", "pose[2]", "ballAge", "ball[0]", "ball[1]")
+
+  private def notNaN(floats: Vector[Float]): Either[GameControllerError, Unit] =
+    floats.indexWhere(_.isNaN) match {
+      case -1 => Right(())
+      case i  => Left(NotANumber(FloatFields(i)))
+    }
+
+  private def returnVersion(bytes: Array[Byte], version: Int): Either[GameControllerError, Unit] =
+    for {
+      _ <- checkHeader(bytes, ReturnHeaderBytes, ReturnHeader)
+      _ <-
+        if (bytes.length <= VersionOffset) Left(TooShort(VersionOffset + 1, bytes.length))
+        else if (u8(bytes, VersionOffset) != version)
+          Left(UnknownVersion(ReturnHeader, slice(bytes, VersionOffset, VersionOffset + 1)))
+        else Right(())
+    } yield ()
+
   private def checkHeader(bytes: Array[Byte], header: Array[Byte], name: String): Either[GameControllerError, Unit] =
     if (bytes.length < HeaderBytes) Left(TooShort(HeaderBytes, bytes.length))
     else if (java.util.Arrays.equals(bytes, 0, HeaderBytes, header, 0, HeaderBytes)) Right(())
     else Left(WrongHeader(name, slice(bytes, 0, HeaderBytes)))
 
-  private def controlVersion(bytes: Array[Byte]): Either[GameControllerError, GameControlVersion] =
+  private def controlVersion(bytes: Array[Byte], header: String): Either[GameControllerError, GameControlVersion] = {
+    def unknown = Left(UnknownVersion(header, slice(bytes, VersionOffset, VersionOffset + V7VersionBytes)))
     if (bytes.length <= VersionOffset) Left(TooShort(VersionOffset + 1, bytes.length))
-    else if (u8(bytes, VersionOffset) == GameControlVersion.V8.number) Right(GameControlVersion.V8)
-    else if (u8(bytes, VersionOffset) != GameControlVersion.V7.number)
-      Left(UnknownVersion(ControlHeader, slice(bytes, VersionOffset, VersionOffset + V7VersionBytes)))
-    else if (bytes.length < VersionOffset + V7VersionBytes) Left(TooShort(VersionOffset + V7VersionBytes, bytes.length))
-    else if (new Reader(bytes, VersionOffset).u32() == GameControlVersion.V7.number.toLong) Right(GameControlVersion.V7)
-    else Left(UnknownVersion(ControlHeader, slice(bytes, VersionOffset, VersionOffset + V7VersionBytes)))
+    else
+      u8(bytes, VersionOffset) match {
+        case 19 => Right(GameControlVersion.V19)
+        case 8  => Right(GameControlVersion.V8)
+        case 12 =>
+          if (bytes.length < VersionOffset + 2) Left(TooShort(VersionOffset + 2, bytes.length))
+          else if (u8(bytes, VersionOffset + 1) == 0) Right(GameControlVersion.V12)
+          else unknown
+        case 7 =>
+          if (bytes.length < VersionOffset + V7VersionBytes) Left(TooShort(VersionOffset + V7VersionBytes, bytes.length))
+          else if (new LeReader(bytes, VersionOffset).u32() == GameControlVersion.V7.number.toLong) Right(GameControlVersion.V7)
+          else unknown
+        case _ => unknown
+      }
+  }
 
-  private def checkSize(
+  private[gamecontroller] def checkSize(
       bytes: Array[Byte],
       header: String,
       version: Int,
@@ -113,8 +240,8 @@ object GameControllerCodec {
   ): Either[GameControllerError, Unit] =
     if (bytes.length == size) Right(()) else Left(WrongSize(header, version, size, bytes.length))
 
-  private def decodeV8(bytes: Array[Byte]): Either[GameControllerError, GameControlData] = {
-    val r = new Reader(bytes, VersionOffset + 1)
+  private def decodeV8(bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
+    val r = new LeReader(bytes, VersionOffset + 1)
     val packetNumber = r.u8()
     val playersPerTeam = r.u8()
     val gameState = GameState.fromCode(r.u8())
@@ -128,7 +255,7 @@ object GameControllerCodec {
     val team0 = teamV8(r)
     val team1 = teamV8(r)
     flag("firstHalf", firstHalf).map { half =>
-      GameControlData(
+      ControlData2014(
         version = GameControlVersion.V8,
         packetNumber = Some(packetNumber),
         playersPerTeam = playersPerTeam,
@@ -146,7 +273,7 @@ object GameControllerCodec {
     }
   }
 
-  private def teamV8(r: Reader): TeamInfo = {
+  private def teamV8(r: LeReader): TeamInfo = {
     val teamNumber = r.u8()
     val teamColour = TeamColour.fromCode(r.u8())
     val score = r.u8()
@@ -168,13 +295,13 @@ object GameControllerCodec {
     )
   }
 
-  private def playerV8(r: Reader): PlayerInfo = {
+  private def playerV8(r: LeReader): PlayerInfo = {
     val penalty = Penalty.fromCode(r.u8())
     PlayerInfo(penalty, r.u8())
   }
 
-  private def decodeV7(bytes: Array[Byte]): Either[GameControllerError, GameControlData] = {
-    val r = new Reader(bytes, VersionOffset + V7VersionBytes)
+  private def decodeV7(bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
+    val r = new LeReader(bytes, VersionOffset + V7VersionBytes)
     val playersPerTeam = r.u8()
     val gameState = GameState.fromCode(r.u8())
     val firstHalf = r.u8()
@@ -186,7 +313,7 @@ object GameControllerCodec {
     val team0 = teamV7(r)
     val team1 = teamV7(r)
     flag("firstHalf", firstHalf).map { half =>
-      GameControlData(
+      ControlData2014(
         version = GameControlVersion.V7,
         packetNumber = None,
         playersPerTeam = playersPerTeam,
@@ -204,7 +331,7 @@ object GameControllerCodec {
     }
   }
 
-  private def teamV7(r: Reader): TeamInfo = {
+  private def teamV7(r: LeReader): TeamInfo = {
     val teamNumber = r.u8()
     val teamColour = TeamColour.fromCode(r.u8())
     val goalColour = GoalColour.fromCode(r.u8())
@@ -227,14 +354,14 @@ object GameControllerCodec {
   }
 
   // Reading 2 as "true" would be a guess; only the two values the GameController writes are accepted.
-  private def flag(field: String, value: Int): Either[GameControllerError, Boolean] =
+  private[gamecontroller] def flag(field: String, value: Int): Either[GameControllerError, Boolean] =
     value match {
       case 0 => Right(false)
       case 1 => Right(true)
       case other => Left(InvalidField(field, other.toLong))
     }
 
-  private def validate(d: GameControlData): Option[GameControllerError] = {
+  private def validate(d: ControlData2014): Option[GameControllerError] = {
     val v = d.version.number
     val common = List(
       u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
@@ -253,7 +380,7 @@ object GameControllerCodec {
           required(v, "secondaryTime", d.secondaryTime),
           d.secondaryTime.flatMap(t => range(v, "secondaryTime", t.toLong, I16Min, I16Max))
         )
-      case GameControlVersion.V7 =>
+      case _ =>
         List(
           absent(v, "packetNumber", d.packetNumber),
           range(v, "secsRemaining", d.secsRemaining, 0L, U32Max),
@@ -288,7 +415,7 @@ object GameControllerCodec {
           t.coachMessage.flatMap(m => length(s"$name.coachMessage", TeamInfo.CoachMessageBytes, m.length)),
           required(v, s"$name.coach", t.coach)
         ) ++ t.coach.toList.flatMap(validatePlayer(v, s"$name.coach", U8Max, _)) ++ validatePlayers(v, name, U8Max, t)
-      case GameControlVersion.V7 =>
+      case _ =>
         common ++ List(
           required(v, s"$name.goalColour", t.goalColour),
           t.goalColour.flatMap(g => u8Range(v, s"$name.goalColour", g.code.toLong)),
@@ -309,13 +436,13 @@ object GameControllerCodec {
       range(v, s"$name.secsTillUnpenalised", p.secsTillUnpenalised.toLong, 0L, max)
     )
 
-  private def firstError(checks: Option[GameControllerError]*): Option[GameControllerError] =
+  private[gamecontroller] def firstError(checks: Option[GameControllerError]*): Option[GameControllerError] =
     checks.collectFirst { case Some(error) => error }
 
-  private def range(v: Int, field: String, value: Long, min: Long, max: Long): Option[GameControllerError] =
+  private[gamecontroller] def range(v: Int, field: String, value: Long, min: Long, max: Long): Option[GameControllerError] =
     if (value < min || value > max) Some(OutOfRange(v, field, value, min, max)) else None
 
-  private def u8Range(v: Int, field: String, value: Long): Option[GameControllerError] =
+  private[gamecontroller] def u8Range(v: Int, field: String, value: Long): Option[GameControllerError] =
     range(v, field, value, 0L, U8Max)
 
   private def required(v: Int, field: String, value: Option[Any]): Option[GameControllerError] =
@@ -324,13 +451,13 @@ object GameControllerCodec {
   private def absent(v: Int, field: String, value: Option[Any]): Option[GameControllerError] =
     if (value.isDefined) Some(UnexpectedField(v, field)) else None
 
-  private def length(field: String, expected: Int, found: Int): Option[GameControllerError] =
+  private[gamecontroller] def length(field: String, expected: Int, found: Int): Option[GameControllerError] =
     if (found != expected) Some(WrongLength(field, expected, found)) else None
 
   // The writers run only after validate, so every Option is present and every value fits.
 
-  private def writeV8(d: GameControlData): Array[Byte] = {
-    val w = new Writer(GameControlVersion.V8.packetBytes)
+  private def writeV8(d: ControlData2014): Array[Byte] = {
+    val w = new LeWriter(GameControlVersion.V8.packetBytes)
     w.raw(ControlHeaderBytes)
     w.u8(GameControlVersion.V8.number)
     w.u8(d.packetNumber.getOrElse(0))
@@ -352,8 +479,8 @@ object GameControllerCodec {
     w.out
   }
 
-  private def writeV7(d: GameControlData): Array[Byte] = {
-    val w = new Writer(GameControlVersion.V7.packetBytes)
+  private def writeV7(d: ControlData2014): Array[Byte] = {
+    val w = new LeWriter(GameControlVersion.V7.packetBytes)
     w.raw(ControlHeaderBytes)
     w.u32(GameControlVersion.V7.number.toLong)
     writeCommon(w, d)
@@ -371,7 +498,7 @@ object GameControllerCodec {
     w.out
   }
 
-  private def writeCommon(w: Writer, d: GameControlData): Unit = {
+  private def writeCommon(w: LeWriter, d: ControlData2014): Unit = {
     w.u8(d.playersPerTeam)
     w.u8(d.gameState.code)
     w.u8(if (d.firstHalf) 1 else 0)
@@ -381,53 +508,8 @@ object GameControllerCodec {
     w.u16(d.dropInTime)
   }
 
-  private def u8(bytes: Array[Byte], at: Int): Int = bytes(at) & 0xff
+  private[gamecontroller] def u8(bytes: Array[Byte], at: Int): Int = bytes(at) & 0xff
 
-  private def slice(bytes: Array[Byte], from: Int, until: Int): ArraySeq[Byte] =
+  private[gamecontroller] def slice(bytes: Array[Byte], from: Int, until: Int): ArraySeq[Byte] =
     ArraySeq.unsafeWrapArray(java.util.Arrays.copyOfRange(bytes, from, math.min(until, bytes.length)))
-
-  /** Little-endian reads from a position; callers check the size first, so reads stay in bounds. */
-  private final class Reader(data: Array[Byte], private var position: Int) {
-    def u8(): Int = {
-      val value = data(position) & 0xff
-      position += 1
-      value
-    }
-    def u16(): Int = {
-      val low = u8()
-      low | (u8() << 8)
-    }
-    def i16(): Int = u16().toShort.toInt
-    def u32(): Long = {
-      val low = u16().toLong
-      low | (u16().toLong << 16)
-    }
-    def take(n: Int): ArraySeq[Byte] = {
-      val copy = java.util.Arrays.copyOfRange(data, position, position + n)
-      position += n
-      ArraySeq.unsafeWrapArray(copy)
-    }
-  }
-
-  /** Little-endian writes into a buffer of the packet's exact size; i16 values go out as their two's complement. */
-  private final class Writer(size: Int) {
-    val out: Array[Byte] = new Array[Byte](size)
-    private var position = 0
-    def u8(value: Int): Unit = {
-      out(position) = value.toByte
-      position += 1
-    }
-    def u16(value: Int): Unit = {
-      u8(value)
-      u8(value >> 8)
-    }
-    def u32(value: Long): Unit = {
-      u16((value & 0xffff).toInt)
-      u16(((value >>> 16) & 0xffff).toInt)
-    }
-    def raw(bytes: Array[Byte]): Unit = {
-      System.arraycopy(bytes, 0, out, position, bytes.length)
-      position += bytes.length
-    }
-  }
 }

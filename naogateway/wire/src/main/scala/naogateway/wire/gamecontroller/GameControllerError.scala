@@ -42,6 +42,11 @@ object GameControllerError {
     def describe: String = s"invalid value $value in field $field"
   }
 
+  /** A floating-point field holds NaN, which the GameController refuses too. */
+  final case class NotANumber(field: String) extends GameControllerError {
+    def describe: String = s"field $field is not a number (NaN)"
+  }
+
   /** A field the target version has is `None`. */
   final case class MissingField(version: Int, field: String) extends GameControllerError {
     def describe: String = s"version $version needs field $field"

@@ -4,7 +4,7 @@ import scala.collection.immutable.ArraySeq
 
 import org.scalacheck.{Arbitrary, Gen}
 
-/** Generators of valid GameController values of both versions, with unknown codes mixed in. */
+/** Generators of valid GameController values of every version, with unknown codes mixed in. */
 object GameControllerGenerators {
 
   val u8: Gen[Int] = Gen.choose(0, 0xff)
@@ -57,7 +57,7 @@ object GameControllerGenerators {
     ps <- players(0xffff)
   } yield TeamInfo(number, colour, score, Some(goal), None, None, None, None, ps)
 
-  val controlV8: Gen[GameControlData] = for {
+  val controlV8: Gen[ControlData2014] = for {
     packetNumber <- u8
     playersPerTeam <- u8
     state <- gameState
@@ -70,7 +70,7 @@ object GameControllerGenerators {
     secondaryTime <- i16
     team0 <- teamV8
     team1 <- teamV8
-  } yield GameControlData(
+  } yield ControlData2014(
     GameControlVersion.V8,
     Some(packetNumber),
     playersPerTeam,
@@ -86,7 +86,7 @@ object GameControllerGenerators {
     team1
   )
 
-  val controlV7: Gen[GameControlData] = for {
+  val controlV7: Gen[ControlData2014] = for {
     playersPerTeam <- u8
     state <- gameState
     firstHalf <- Gen.oneOf(true, false)
@@ -97,7 +97,7 @@ object GameControllerGenerators {
     secsRemaining <- u32
     team0 <- teamV7
     team1 <- teamV7
-  } yield GameControlData(
+  } yield ControlData2014(
     GameControlVersion.V7,
     None,
     playersPerTeam,
@@ -113,7 +113,102 @@ object GameControllerGenerators {
     team1
   )
 
-  val control: Gen[GameControlData] = Gen.oneOf(controlV8, controlV7)
+  private def codes[A](c: WireCodes[A]): Gen[A] = Gen.frequency(3 -> Gen.oneOf(c.known), 1 -> u8.map(c.fromCode))
+
+  /** A team number, or `None` for the wire's 255 (no kicking team, dropped ball). */
+  val teamOrNone: Gen[Option[Int]] = Gen.option(Gen.choose(0, 254))
+
+  val hslPlayer: Gen[HslPlayerInfo] = Gen.frequency(
+    2 -> Gen.const(HslPlayerInfo.Unpenalised),
+    3 -> (for { p <- codes(HslPenalty); s <- u8; w <- u8; c <- u8 } yield HslPlayerInfo(p, s, w, c))
+  )
+
+  val teamV19: Gen[HslTeamInfo] = for {
+    number <- u8
+    colour <- codes(FieldColour)
+    keeperColour <- codes(FieldColour)
+    keeper <- u8
+    score <- u8
+    penaltyShot <- u8
+    singleShots <- u16
+    budget <- u16
+    players <- Gen.listOfN(HslPlayerInfo.Slots, hslPlayer)
+  } yield HslTeamInfo(number, colour, keeperColour, keeper, score, penaltyShot, singleShots, budget, players.toVector)
+
+  val controlV19: Gen[HslControlData] = for {
+    packetNumber <- u8
+    playersPerTeam <- u8
+    competition <- codes(CompetitionType)
+    stopped <- Gen.oneOf(true, false)
+    phase <- codes(GamePhase)
+    state <- gameState
+    setPlay <- codes(SetPlay)
+    firstHalf <- Gen.oneOf(true, false)
+    kicking <- teamOrNone
+    secs <- i16
+    secondary <- i16
+    team0 <- teamV19
+    team1 <- teamV19
+  } yield HslControlData(packetNumber, playersPerTeam, competition, stopped, phase, state, setPlay, firstHalf, kicking,
+    secs.toLong, secondary, team0, team1)
+
+  val hlPlayer: Gen[HlPlayerInfo] = Gen.frequency(
+    2 -> Gen.const(HlPlayerInfo.Unpenalised),
+    3 -> (for { p <- codes(HlPenalty); s <- u8; w <- u8; y <- u8; r <- u8; k <- Gen.oneOf(true, false) } yield
+      HlPlayerInfo(p, s, w, y, r, k))
+  )
+
+  private def rawBytes(n: Int): Gen[ArraySeq[Byte]] = Gen.listOfN(n, Arbitrary.arbitrary[Byte]).map(ArraySeq.from(_))
+
+  val teamV12: Gen[HlTeamInfo] = for {
+    number <- u8
+    colour <- codes(FieldColour)
+    score <- u8
+    penaltyShot <- u8
+    singleShots <- u16
+    sequence <- u8
+    message <- rawBytes(HlPlayerInfo.CoachMessageBytes)
+    coach <- hlPlayer
+    players <- Gen.listOfN(HlPlayerInfo.Slots, hlPlayer)
+  } yield HlTeamInfo(number, colour, score, penaltyShot, singleShots, sequence, message, coach, players.toVector)
+
+  val controlV12: Gen[HlControlData] = for {
+    packetNumber <- u8
+    playersPerTeam <- u8
+    gameType <- codes(HlGameType)
+    state <- gameState
+    firstHalf <- Gen.oneOf(true, false)
+    kickOff <- teamOrNone
+    secondary <- codes(HlSecondaryState)
+    info <- rawBytes(4)
+    dropInTeam <- u8
+    dropInTime <- u16
+    secs <- i16
+    secondaryTime <- i16
+    team0 <- teamV12
+    team1 <- teamV12
+  } yield HlControlData(packetNumber, playersPerTeam, gameType, state, firstHalf, kickOff, secondary, info, dropInTeam,
+    dropInTime, secs.toLong, secondaryTime, team0, team1)
+
+  val control: Gen[GameControlData] = Gen.oneOf(controlV19, controlV12, controlV8, controlV7)
+
+  /** Any float but NaN, the special values included. */
+  val float: Gen[Float] = Gen.frequency(
+    5 -> Gen.choose(-10000f, 10000f),
+    1 -> Gen.oneOf(-1f, 0f, -0f, Float.MaxValue, Float.MinValue, Float.PositiveInfinity, Float.NegativeInfinity)
+  )
+
+  val returnStatus: Gen[ReturnStatus] = for {
+    player <- u8
+    team <- u8
+    fallen <- Gen.oneOf(true, false)
+    x <- float
+    y <- float
+    theta <- float
+    age <- float
+    bx <- float
+    by <- float
+  } yield ReturnStatus(player, team, fallen, (x, y, theta), age, (bx, by))
 
   val returnData: Gen[ReturnData] = for {
     team <- u8

@@ -1,0 +1,249 @@
+package naogateway.wire.gamecontroller
+
+import naogateway.wire.gamecontroller.GameControllerCodec.{firstError, flag, length, range, u8Range}
+
+/**
+ * The layouts of versions 19 and 12 (docs/protocol.md §10.2, §10.3), for [[GameControllerCodec]], which checks the
+ * header, the version and the size before these run. Writers run only after their validation passed.
+ */
+private[gamecontroller] object ModernLayouts {
+
+  private val KickingTeamNone = 255
+  private val SecondaryStateInfoBytes = 4
+  private val I16Min = Short.MinValue.toLong
+  private val I16Max = Short.MaxValue.toLong
+  private val U16Max = 0xffffL
+
+  private def teamOrNone(code: Int): Option[Int] = if (code == KickingTeamNone) None else Some(code)
+
+  def decodeV19(bytes: Array[Byte]): Either[GameControllerError, HslControlData] = {
+    val r = new LeReader(bytes, 5)
+    val packetNumber = r.u8()
+    val playersPerTeam = r.u8()
+    val competitionType = CompetitionType.fromCode(r.u8())
+    val stopped = r.u8()
+    val gamePhase = GamePhase.fromCode(r.u8())
+    val state = GameState.fromCode(r.u8())
+    val setPlay = SetPlay.fromCode(r.u8())
+    val firstHalf = r.u8()
+    val kickingTeam = teamOrNone(r.u8())
+    val secsRemaining = r.i16()
+    val secondaryTime = r.i16()
+    val team0 = teamV19(r)
+    val team1 = teamV19(r)
+    for {
+      s <- flag("stopped", stopped)
+      h <- flag("firstHalf", firstHalf)
+    } yield HslControlData(packetNumber, playersPerTeam, competitionType, s, gamePhase, state, setPlay, h, kickingTeam,
+      secsRemaining.toLong, secondaryTime, team0, team1)
+  }
+
+  private def teamV19(r: LeReader): HslTeamInfo = {
+    val number = r.u8()
+    val fieldColour = FieldColour.fromCode(r.u8())
+    val goalkeeperColour = FieldColour.fromCode(r.u8())
+    val goalkeeper = r.u8()
+    val score = r.u8()
+    val penaltyShot = r.u8()
+    val singleShots = r.u16()
+    val budget = r.u16()
+    val players = Vector.fill(HslPlayerInfo.Slots)(HslPlayerInfo(HslPenalty.fromCode(r.u8()), r.u8(), r.u8(), r.u8()))
+    HslTeamInfo(number, fieldColour, goalkeeperColour, goalkeeper, score, penaltyShot, singleShots, budget, players)
+  }
+
+  def validateV19(d: HslControlData): Option[GameControllerError] = {
+    val v = 19
+    val top = List(
+      u8Range(v, "packetNumber", d.packetNumber.toLong),
+      u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
+      u8Range(v, "competitionType", d.competitionType.code.toLong),
+      u8Range(v, "gamePhase", d.gamePhase.code.toLong),
+      u8Range(v, "gameState", d.gameState.code.toLong),
+      u8Range(v, "setPlay", d.setPlay.code.toLong),
+      d.kickingTeam.flatMap(t => range(v, "kickingTeam", t.toLong, 0L, KickingTeamNone - 1L)),
+      range(v, "secsRemaining", d.secsRemaining, I16Min, I16Max),
+      range(v, "secondaryTime", d.secondaryTime.toLong, I16Min, I16Max)
+    )
+    def team(name: String, t: HslTeamInfo): List[Option[GameControllerError]] =
+      List(
+        u8Range(v, s"$name.teamNumber", t.teamNumber.toLong),
+        u8Range(v, s"$name.fieldPlayerColour", t.fieldPlayerColour.code.toLong),
+        u8Range(v, s"$name.goalkeeperColour", t.goalkeeperColour.code.toLong),
+        u8Range(v, s"$name.goalkeeper", t.goalkeeper.toLong),
+        u8Range(v, s"$name.score", t.score.toLong),
+        u8Range(v, s"$name.penaltyShot", t.penaltyShot.toLong),
+        range(v, s"$name.singleShots", t.singleShots.toLong, 0L, U16Max),
+        range(v, s"$name.messageBudget", t.messageBudget.toLong, 0L, U16Max),
+        length(s"$name.players", HslPlayerInfo.Slots, t.players.size)
+      ) ++ t.players.zipWithIndex.toList.flatMap { case (p, i) =>
+        val n = s"$name.players[$i]"
+        List(
+          u8Range(v, s"$n.penalty", p.penalty.code.toLong),
+          u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
+          u8Range(v, s"$n.warnings", p.warnings.toLong),
+          u8Range(v, s"$n.cautions", p.cautions.toLong)
+        )
+      }
+    firstError(top ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
+  }
+
+  def writeV19(d: HslControlData, header: Array[Byte]): Array[Byte] = {
+    val w = new LeWriter(GameControlVersion.V19.packetBytes)
+    w.raw(header)
+    w.u8(GameControlVersion.V19.number)
+    w.u8(d.packetNumber)
+    w.u8(d.playersPerTeam)
+    w.u8(d.competitionType.code)
+    w.flag(d.stopped)
+    w.u8(d.gamePhase.code)
+    w.u8(d.gameState.code)
+    w.u8(d.setPlay.code)
+    w.flag(d.firstHalf)
+    w.u8(d.kickingTeam.getOrElse(KickingTeamNone))
+    w.u16(d.secsRemaining.toInt)
+    w.u16(d.secondaryTime)
+    List(d.team0, d.team1).foreach { t =>
+      w.u8(t.teamNumber)
+      w.u8(t.fieldPlayerColour.code)
+      w.u8(t.goalkeeperColour.code)
+      w.u8(t.goalkeeper)
+      w.u8(t.score)
+      w.u8(t.penaltyShot)
+      w.u16(t.singleShots)
+      w.u16(t.messageBudget)
+      t.players.foreach { p =>
+        w.u8(p.penalty.code)
+        w.u8(p.secsTillUnpenalised)
+        w.u8(p.warnings)
+        w.u8(p.cautions)
+      }
+    }
+    w.out
+  }
+
+  def decodeV12(bytes: Array[Byte]): Either[GameControllerError, HlControlData] = {
+    val r = new LeReader(bytes, 6)
+    val packetNumber = r.u8()
+    val playersPerTeam = r.u8()
+    val gameType = HlGameType.fromCode(r.u8())
+    val state = GameState.fromCode(r.u8())
+    val firstHalf = r.u8()
+    val kickOffTeam = teamOrNone(r.u8())
+    val secondaryState = HlSecondaryState.fromCode(r.u8())
+    val info = r.take(SecondaryStateInfoBytes)
+    val dropInTeam = r.u8()
+    val dropInTime = r.u16()
+    val secsRemaining = r.i16()
+    val secondaryTime = r.i16()
+    for {
+      h <- flag("firstHalf", firstHalf)
+      team0 <- teamV12(r, "team0")
+      team1 <- teamV12(r, "team1")
+    } yield HlControlData(packetNumber, playersPerTeam, gameType, state, h, kickOffTeam, secondaryState, info, dropInTeam,
+      dropInTime, secsRemaining.toLong, secondaryTime, team0, team1)
+  }
+
+  private def playerV12(r: LeReader, name: String): Either[GameControllerError, HlPlayerInfo] = {
+    val penalty = HlPenalty.fromCode(r.u8())
+    val secs = r.u8()
+    val warnings = r.u8()
+    val yellow = r.u8()
+    val red = r.u8()
+    flag(s"$name.goalKeeper", r.u8()).map(HlPlayerInfo(penalty, secs, warnings, yellow, red, _))
+  }
+
+  private def teamV12(r: LeReader, name: String): Either[GameControllerError, HlTeamInfo] = {
+    val number = r.u8()
+    val colour = FieldColour.fromCode(r.u8())
+    val score = r.u8()
+    val penaltyShot = r.u8()
+    val singleShots = r.u16()
+    val coachSequence = r.u8()
+    val coachMessage = r.take(HlPlayerInfo.CoachMessageBytes)
+    // Every entry is read, so the reader stays in step even when one is refused.
+    val coach = playerV12(r, s"$name.coach")
+    val players = Vector.tabulate(HlPlayerInfo.Slots)(i => playerV12(r, s"$name.players[$i]"))
+    for {
+      c <- coach
+      ps <- players.foldLeft[Either[GameControllerError, Vector[HlPlayerInfo]]](Right(Vector.empty)) { (acc, p) =>
+        acc.flatMap(v => p.map(v :+ _))
+      }
+    } yield HlTeamInfo(number, colour, score, penaltyShot, singleShots, coachSequence, coachMessage, c, ps)
+  }
+
+  def validateV12(d: HlControlData): Option[GameControllerError] = {
+    val v = 12
+    val top = List(
+      u8Range(v, "packetNumber", d.packetNumber.toLong),
+      u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
+      u8Range(v, "gameType", d.gameType.code.toLong),
+      u8Range(v, "gameState", d.gameState.code.toLong),
+      d.kickOffTeam.flatMap(t => range(v, "kickOffTeam", t.toLong, 0L, KickingTeamNone - 1L)),
+      u8Range(v, "secondaryState", d.secondaryState.code.toLong),
+      length("secondaryStateInfo", SecondaryStateInfoBytes, d.secondaryStateInfo.size),
+      u8Range(v, "dropInTeam", d.dropInTeam.toLong),
+      range(v, "dropInTime", d.dropInTime.toLong, 0L, U16Max),
+      range(v, "secsRemaining", d.secsRemaining, I16Min, I16Max),
+      range(v, "secondaryTime", d.secondaryTime.toLong, I16Min, I16Max)
+    )
+    def player(n: String, p: HlPlayerInfo): List[Option[GameControllerError]] =
+      List(
+        u8Range(v, s"$n.penalty", p.penalty.code.toLong),
+        u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
+        u8Range(v, s"$n.warnings", p.warnings.toLong),
+        u8Range(v, s"$n.yellowCards", p.yellowCards.toLong),
+        u8Range(v, s"$n.redCards", p.redCards.toLong)
+      )
+    def team(name: String, t: HlTeamInfo): List[Option[GameControllerError]] =
+      List(
+        u8Range(v, s"$name.teamNumber", t.teamNumber.toLong),
+        u8Range(v, s"$name.fieldPlayerColour", t.fieldPlayerColour.code.toLong),
+        u8Range(v, s"$name.score", t.score.toLong),
+        u8Range(v, s"$name.penaltyShot", t.penaltyShot.toLong),
+        range(v, s"$name.singleShots", t.singleShots.toLong, 0L, U16Max),
+        u8Range(v, s"$name.coachSequence", t.coachSequence.toLong),
+        length(s"$name.coachMessage", HlPlayerInfo.CoachMessageBytes, t.coachMessage.size),
+        length(s"$name.players", HlPlayerInfo.Slots, t.players.size)
+      ) ++ player(s"$name.coach", t.coach) ++
+        t.players.zipWithIndex.toList.flatMap { case (p, i) => player(s"$name.players[$i]", p) }
+    firstError(top ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
+  }
+
+  def writeV12(d: HlControlData): Array[Byte] = {
+    val w = new LeWriter(GameControlVersion.V12.packetBytes)
+    w.raw(GameControllerCodec.ControlHeader.getBytes(java.nio.charset.StandardCharsets.US_ASCII))
+    w.u16(GameControlVersion.V12.number)
+    w.u8(d.packetNumber)
+    w.u8(d.playersPerTeam)
+    w.u8(d.gameType.code)
+    w.u8(d.gameState.code)
+    w.flag(d.firstHalf)
+    w.u8(d.kickOffTeam.getOrElse(KickingTeamNone))
+    w.u8(d.secondaryState.code)
+    w.raw(d.secondaryStateInfo.toArray)
+    w.u8(d.dropInTeam)
+    w.u16(d.dropInTime)
+    w.u16(d.secsRemaining.toInt)
+    w.u16(d.secondaryTime)
+    def player(p: HlPlayerInfo): Unit = {
+      w.u8(p.penalty.code)
+      w.u8(p.secsTillUnpenalised)
+      w.u8(p.warnings)
+      w.u8(p.yellowCards)
+      w.u8(p.redCards)
+      w.flag(p.goalkeeper)
+    }
+    List(d.team0, d.team1).foreach { t =>
+      w.u8(t.teamNumber)
+      w.u8(t.fieldPlayerColour.code)
+      w.u8(t.score)
+      w.u8(t.penaltyShot)
+      w.u16(t.singleShots)
+      w.u8(t.coachSequence)
+      w.raw(t.coachMessage.toArray)
+      player(t.coach)
+      t.players.foreach(player)
+    }
+    w.out
+  }
+}
