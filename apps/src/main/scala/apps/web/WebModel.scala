@@ -90,7 +90,7 @@ final case class WebModel(
 
   /** The model after a GameController packet (asked or pushed); a change of state or half is logged. */
   def withGame(now: Option[GameControlData], t: Double, wall: Long): WebModel = {
-    def key(g: Option[GameControlData]) = g.map(d => (d.gameState, d.secondaryGameState, d.firstHalf))
+    def key(g: Option[GameControlData]) = g.map(d => (d.gameState, StatusView.situation(d), d.firstHalf))
     val next = copy(game = now.orElse(game))
     if (now.isDefined && key(now) != key(game)) next.logged(WebEvent(t, wall, "game", None, StatusView.gameLine(now))) else next
   }
@@ -171,10 +171,10 @@ object WebJson {
     "version" -> opt(m.game)(g => JsNumber(g.version.number)),
     "source" -> opt(m.gameSource)(s => JsString(s.describe)),
     "state" -> opt(m.game)(g => JsString(StatusView.stateName(g.gameState))),
-    "secondary" -> opt(m.game)(g => JsString(g.secondaryGameState.toString.toUpperCase)),
+    "secondary" -> opt(m.game)(g => JsString(StatusView.situation(g).mkString(", "))),
     "firstHalf" -> opt(m.game)(g => JsBoolean(g.firstHalf)),
     "secsRemaining" -> opt(m.game)(g => JsNumber(g.secsRemaining)),
-    "secondaryTime" -> opt(m.game.flatMap(_.secondaryTime))(JsNumber(_)),
+    "secondaryTime" -> opt(m.game.flatMap(_.secondaryClock))(JsNumber(_)),
     "teams" -> opt(m.game)(g => JsArray(Vector(g.team0, g.team1).map(t => JsObject("team" -> JsNumber(t.teamNumber), "score" -> JsNumber(t.score))))),
     "line" -> JsString(StatusView.gameLine(m.game)),
     "gate" -> opt(m.traffic)(t => JsString(if (!t.competition) "open (competition rule off)" else if (t.gateOpen) "open" else "closed")),

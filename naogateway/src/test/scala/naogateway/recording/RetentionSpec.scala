@@ -97,7 +97,7 @@ class RetentionSpec extends AnyWordSpec with Matchers {
       val settings = RecordingSettings(enabled = true, dir, 64 * 1024, 1.minute, 1024, RetentionSettings(0, 14.days))
       val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown)
       try {
-        recorder.decision(Decision.Gate(open = true, naogateway.wire.gamecontroller.GameState.Initial))
+        recorder.decision(Decision.Gate(open = true, naogateway.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
         val deadline = 10.seconds.fromNow
         while (!recorder.stats.retention.exists(_.deletedFiles > 0) && deadline.hasTimeLeft()) Thread.sleep(20)
         Files.exists(stale) shouldBe false
