@@ -1,0 +1,32 @@
+/* firmware/include/fr_port.h: what a board (port) gives the library. Agreed contract between the library
+ * (src/) and the ports (port/posix, port/qemu, port/cm530). Extend with care; do not change signatures. */
+#ifndef FR_PORT_H
+#define FR_PORT_H
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/** An IPv4 address and UDP port, as the robot's network module reports them. */
+typedef struct {
+    uint8_t ip[4];
+    uint16_t port;
+} fr_endpoint_t;
+
+/** Milliseconds since boot; wraps at 2^32 (callers compare with unsigned subtraction). */
+uint32_t fr_port_millis(void);
+
+/** Hands one UDP datagram for `to` to the network without blocking; 0 when accepted, < 0 when it cannot
+ *  be sent now (module busy, buffer full, link down): the library counts the drop and goes on. */
+int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len);
+
+/** Takes at most one received datagram without blocking: its length, 0 when none is waiting, < 0 when
+ *  one was lost (too long for `cap`, framing error); `from` gets the sender. */
+int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap);
+
+/** Whether the module reports the network as associated; the library tells the program on a change. */
+bool fr_port_link_up(void);
+
+/** Nothing to do until the next interrupt or datagram: `wfi` on a board, a short bounded sleep on posix. */
+void fr_port_idle(void);
+
+#endif

@@ -1,0 +1,93 @@
+/* firmware/port/qemu/board_qemu.c: the qemu `netduino2` machine as a stand-in CM-530. Its UART5 has the CM-530's
+ * address, registers and interrupt; it has no RCC (reads give 0), so there is no clock set-up; SysTick runs on the
+ * 120 MHz core clock. The program's arguments, its log and its end go through semihosting
+ * (-semihosting-config enable=on,target=native; `-append "id=2 run_ms=5000"` gives arguments). Bytes leave by
+ * polling: the emulated UART takes each at once. */
+#include <string.h>
+
+#include "board.h"
+#include "stm32.h"
+
+#ifndef BOARD_CORE_HZ
+#define BOARD_CORE_HZ 120000000u
+#endif
+#ifndef BOARD_BASE_IP
+/** The base station the module's first UDP client points at (the example robot's default gateway). */
+#define BOARD_BASE_IP {192, 168, 1, 10}
+#endif
+#ifndef BOARD_BOOT_MS
+/** The emulated module (the test's bridge) needs no 4 s; a real one does. */
+#define BOARD_BOOT_MS 50u
+#endif
+
+#define SYS_WRITE0 0x04u
+#define SYS_GET_CMDLINE 0x15u
+#define SYS_EXIT 0x18u
+#define SYS_EXIT_EXTENDED 0x20u
+#define ADP_STOPPED_APPLICATION_EXIT 0x20026u
+
+static uint32_t semihost(uint32_t op, const void *arg) {
+    register uint32_t r0 __asm__("r0") = op;
+    register const void *r1 __asm__("r1") = arg;
+    __asm__ volatile("bkpt 0xAB" : "+r"(r0) : "r"(r1) : "memory");
+    return r0;
+}
+
+void board_log(const char *text) {
+    semihost(SYS_WRITE0, text);
+    semihost(SYS_WRITE0, "\n");
+}
+
+void board_exit(int status) {
+    /* SYS_EXIT with a parameter block {reason, status}: qemu exits with `status` (ARM semihosting v2). */
+    static uint32_t block[2];
+    block[0] = ADP_STOPPED_APPLICATION_EXIT;
+    block[1] = (uint32_t)status;
+    for (;;) {
+        semihost(SYS_EXIT_EXTENDED, block);
+        /* an emulator without the extended call: plain exit (status 0 for success, 1 otherwise) */
+        semihost(SYS_EXIT, (const void *)(uintptr_t)(status == 0 ? ADP_STOPPED_APPLICATION_EXIT : 0x20024u));
+    }
+}
+
+#define MAX_ARGS 16
+static char cmdline[256];
+static char *args[MAX_ARGS + 1];
+
+int board_args(char ***argv) {
+    /* argv[0] is the program; the words after it are qemu's -append. */
+    static uint32_t block[2];
+    int argc = 0;
+    block[0] = (uint32_t)(uintptr_t)cmdline;
+    block[1] = sizeof cmdline - 1u;
+    if (semihost(SYS_GET_CMDLINE, block) == 0u) {
+        cmdline[sizeof cmdline - 1u] = '\0';
+        char *p = cmdline;
+        while (*p && argc < MAX_ARGS) {
+            while (*p == ' ') *p++ = '\0';
+            if (!*p) break;
+            args[argc++] = p;
+            while (*p && *p != ' ') p++;
+        }
+    }
+    if (argc == 0) args[argc++] = (char *)"robot";
+    args[argc] = NULL;
+    *argv = args;
+    return argc;
+}
+
+void board_tx_kick(void) {
+    uint8_t b;
+    while ((UART5_SR & USART_SR_TXE) && gs1500m_tx_pop(&board_gs, &b)) UART5_DR = b;
+}
+
+void board_init(void) {
+    static const gs1500m_config_t config = {{BOARD_BASE_IP, 11011u}, GS1500M_SERVER_PORT, BOARD_BOOT_MS};
+    gs1500m_init(&board_gs, &config, 0);
+    UART5_BRR = 0x10u; /* the emulator ignores the rate */
+    UART5_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
+    irq_enable(UART5_IRQ);
+    SYST_RVR = BOARD_CORE_HZ / 1000u - 1u;
+    SYST_CVR = 0;
+    SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_TICKINT | SYST_CSR_CORE_CLOCK;
+}

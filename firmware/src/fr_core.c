@@ -1,0 +1,220 @@
+/* firmware/src/fr_core.c: start-up, the poll loop, telling datagrams apart (docs/protocol.md section 3), the
+ * keep-alive (6.2), decoding incoming frames and encoding, framing and signing outgoing ones. */
+#include <string.h>
+#include "fr_internal.h"
+#include "naogateway/proto/debugging.pb.h"
+#include "naogateway/proto/rpc.pb.h"
+
+/** Datagrams handled per fr_poll at most, so one call stays short even under a flood. */
+#define FR_POLL_DATAGRAMS 4
+
+fr_state_t fr_state;
+
+static uint8_t rx[FR_DATAGRAM_MAX];
+static uint8_t tx[FR_HEADER_MAX + FR_DATAGRAM_MAX];
+
+bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
+    const char *s = (const char *)*arg;
+    if (s == NULL) return true;
+    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, (const pb_byte_t *)s, strlen(s));
+}
+
+/** A string field from a zero-terminated string, or left out when NULL. */
+static pb_callback_t str(const char *s) {
+    pb_callback_t cb;
+    cb.funcs.encode = s ? fr_pb_write_string : NULL;
+    cb.arg = (void *)(uintptr_t)s;
+    return cb;
+}
+
+uint32_t fr_uptime_ms(void) { return fr_port_millis() - fr_state.boot_ms; }
+
+const fr_stats_t *fr_stats(void) { return &fr_state.stats; }
+
+fr_route_t fr_route_gateway(void) {
+    fr_route_t r;
+    r.to = fr_state.settings.gateway;
+    r.form = fr_state.settings.form;
+    r.via_stream = false;
+    return r;
+}
+
+bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
+    if (fr_port_send(to, data, len) < 0) {
+        fr_state.stats.send_failed++;
+        return false;
+    }
+    fr_state.stats.sent++;
+    return true;
+}
+
+bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
+    uint8_t *payload = tx + FR_HEADER_MAX;
+    size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
+    size_t cap = FR_DATAGRAM_MAX - header;
+    if (route->via_stream && cap > FR_STREAM_PAYLOAD_MAX - header) cap = FR_STREAM_PAYLOAD_MAX - header;
+    bool signing = fr_state.settings.signing_key_len > 0;
+    pb_ostream_t out = pb_ostream_from_buffer(payload, signing ? cap - FR_SIGNATURE_FIELD_SIZE : cap);
+    msg->robotID = fr_state.settings.robot_id;
+    if (!pb_encode(&out, naogateway_proto_Message_fields, msg)) {
+        fr_state.stats.send_failed++;
+        return false;
+    }
+    size_t len = out.bytes_written;
+    if (signing) len = fr_sign_append(payload, len, cap);
+    uint8_t *frame = fr_frame_header(payload, len, route->form);
+    if (route->via_stream) return fr_stream_send(frame, len + header);
+    return fr_send_raw(&route->to, frame, len + header);
+}
+
+/* ---- the keep-alive ---------------------------------------------------------------------------------- */
+
+/** Sends one keep-alive: Status and RobotHealth in one frame (protocol.md 6.2, 9.13). */
+static void send_keepalive(void) {
+    fr_health_t h;
+    memset(&h, 0, sizeof h);
+    h.posture = "sit";
+    if (fr_state.settings.callbacks.health) fr_state.settings.callbacks.health(&h, fr_state.settings.callbacks.ctx);
+    uint32_t up = fr_uptime_ms();
+    naogateway_proto_Status status = naogateway_proto_Status_init_zero;
+    status.has_timestamp = true;
+    status.timestamp = up;
+    status.has_teamID = true;
+    status.teamID = fr_state.settings.team_number;
+    status.has_timeOnline = true;
+    status.timeOnline = up / 1000u;
+    if (h.has_position) {
+        status.has_robotPosition = true;
+        status.robotPosition.has_x = status.robotPosition.has_y = status.robotPosition.has_rotation = true;
+        status.robotPosition.x = h.x_mm;
+        status.robotPosition.y = h.y_mm;
+        status.robotPosition.rotation = h.rotation;
+    }
+    status.activeAgent = str(fr_state.settings.agent);
+    status.activeRole = str(fr_state.settings.role);
+    status.currentState = str(h.current_state ? h.current_state : h.posture);
+    naogateway_proto_RobotHealth health = naogateway_proto_RobotHealth_init_zero;
+    health.has_batteryVoltage = true;
+    health.batteryVoltage = h.battery_voltage;
+    health.posture = str(h.posture);
+    health.has_uptimeMs = true;
+    health.uptimeMs = up;
+    health.has_bootId = true;
+    health.bootId = fr_state.settings.boot_id;
+    pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health, NULL, true};
+    pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
+    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
+    msg.extensions = &ext_status;
+    fr_route_t route = fr_route_gateway();
+    (void)fr_send_message(&route, &msg);
+}
+
+/* ---- incoming frames ---------------------------------------------------------------------------------- */
+
+/* Requests and debug commands are decoded into static structs: their callbacks fill the library's own
+ * bounded buffers (rpc.c, debug.c). */
+static naogateway_proto_Request request;
+static naogateway_proto_DebuggingCommands commands;
+
+void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream) {
+    const uint8_t *payload;
+    size_t payload_len;
+    fr_form_t form;
+    fr_frame_error_t e = fr_frame_parse(data, len, &payload, &payload_len, &form);
+    if (e == FR_FRAME_GZIP) { fr_state.stats.gzip++; return; }
+    if (e != FR_FRAME_OK) { fr_state.stats.bad_frame++; return; }
+    if (fr_state.settings.require_signed && fr_state.settings.signing_key_len > 0) {
+        size_t signed_len;
+        switch (fr_sign_check(payload, payload_len, &signed_len)) {
+        case FR_SIG_OK: break;
+        case FR_SIG_UNSIGNED: fr_state.stats.unsigned_frames++; return;
+        case FR_SIG_NOT_LAST: fr_state.stats.signature_not_last++; return;
+        case FR_SIG_MALFORMED: fr_state.stats.malformed_signature++; return;
+        case FR_SIG_BAD: fr_state.stats.bad_signature++; return;
+        case FR_SIG_REPLAYED: fr_state.stats.replayed++; return;
+        }
+    }
+    fr_route_t route;
+    route.to = *from;
+    route.to.port = fr_state.settings.gateway.port; /* answers go to the sender's port 11011 (protocol.md 2) */
+    route.form = form;
+    route.via_stream = via_stream;
+
+    /* Two passes when debug commands are present: the first only checks the whole frame (so a frame refused
+     * half-way switches nothing), the second applies the names. */
+    for (int pass = 0; pass < 2; pass++) {
+        memset(&request, 0, sizeof request);
+        memset(&commands, 0, sizeof commands);
+        fr_rpc_prepare(&request);
+        fr_debug_prepare(&commands, pass == 1);
+        pb_extension_t ext_cmd = {&naogateway_proto_debuggingCommands, &commands, NULL, false};
+        pb_extension_t ext_req = {&naogateway_proto_rpcRequest, &request, &ext_cmd, false};
+        naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
+        msg.extensions = &ext_req;
+        pb_istream_t in = pb_istream_from_buffer(payload, payload_len);
+        if (!pb_decode(&in, naogateway_proto_Message_fields, &msg)) {
+            fr_state.stats.bad_protobuf++;
+            return;
+        }
+        if (pass == 0 && ext_cmd.found) continue;
+        if (ext_cmd.found) fr_debug_after(&commands, &route);
+        if (ext_req.found) fr_rpc_dispatch(&route);
+        return;
+    }
+}
+
+/** Tells datagrams apart by their first two bytes (protocol.md section 3). */
+static void handle_datagram(const fr_endpoint_t *from, const uint8_t *data, size_t len) {
+    if (len < 2 || len > FR_DATAGRAM_MAX) { fr_state.stats.unclassifiable++; return; }
+    if (data[0] == 0 && data[1] == 42) {
+        fr_handle_frame(from, data, len, false);
+    } else if (data[0] == 'R' && data[1] == 'G') {
+        fr_gc_receive(from, data, len);
+    } else if (data[0] < 42 && data[1] < 42) {
+        if (memcmp(from->ip, fr_state.settings.gateway.ip, 4) != 0) { fr_state.stats.stream_misbehaving++; return; }
+        fr_stream_receive(data, len);
+    } else {
+        fr_state.stats.unclassifiable++;
+    }
+}
+
+/* ---- start and poll ----------------------------------------------------------------------------------- */
+
+void fr_init(const fr_settings_t *settings) {
+    memset(&fr_state, 0, sizeof fr_state);
+    fr_state.settings = *settings;
+    if (fr_state.settings.signing_key_len > FR_SIGNING_KEY_MAX) fr_state.settings.signing_key_len = 0;
+    fr_state.link_up = true;
+    fr_rpc_reset();
+    fr_debug_reset();
+    fr_gc_reset();
+    fr_stream_reset();
+    /* What the module passed on before this start belongs to the previous session: drop it (bounded). */
+    fr_endpoint_t from;
+    for (int k = 0; k < 64 && fr_port_recv(&from, rx, sizeof rx) != 0; k++) {}
+    fr_state.boot_ms = fr_port_millis();
+    fr_state.next_keepalive = 0;
+}
+
+void fr_poll(void) {
+    bool up = fr_port_link_up();
+    if (up != fr_state.link_up) {
+        fr_state.link_up = up;
+        if (fr_state.settings.callbacks.link) fr_state.settings.callbacks.link(up, fr_state.settings.callbacks.ctx);
+    }
+    for (int k = 0; k < FR_POLL_DATAGRAMS; k++) {
+        fr_endpoint_t from;
+        int n = fr_port_recv(&from, rx, sizeof rx);
+        if (n == 0) break;
+        if (n < 0) { fr_state.stats.recv_lost++; continue; }
+        fr_state.stats.received++;
+        handle_datagram(&from, rx, (size_t)n);
+    }
+    uint32_t up_ms = fr_uptime_ms();
+    if ((int32_t)(up_ms - fr_state.next_keepalive) >= 0) {
+        fr_state.next_keepalive += FR_KEEPALIVE_MS;
+        if ((int32_t)(up_ms - fr_state.next_keepalive) >= 0) fr_state.next_keepalive = up_ms + FR_KEEPALIVE_MS;
+        send_keepalive();
+    }
+    fr_stream_poll();
+}

@@ -1,0 +1,139 @@
+/* firmware/src/fr_internal.h: what the library's modules share; not part of the public API. */
+#ifndef FR_INTERNAL_H
+#define FR_INTERNAL_H
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <pb.h>
+#include <pb_decode.h>
+#include <pb_encode.h>
+#include "fr.h"
+#include "naogateway/proto/message.pb.h"
+
+/** Bytes of the legacy header, the larger of the two forms (protocol.md 4.1). */
+#define FR_HEADER_MAX 12
+/** Bytes the signature field adds to a Message (protocol.md 6.7): key 3, length 1, timestamp 9, mac 10. */
+#define FR_SIGNATURE_FIELD_SIZE 23
+
+/** Where an outgoing frame goes and how: the answer to a request takes the request's form and transport. */
+typedef struct {
+    fr_endpoint_t to;
+    fr_form_t form;
+    bool via_stream;
+} fr_route_t;
+
+/** Why a datagram starting 00 2A was refused (protocol.md 4.4), or FR_FRAME_OK. */
+typedef enum {
+    FR_FRAME_OK = 0,
+    FR_FRAME_OVERSIZE,
+    FR_FRAME_TRUNCATED,
+    FR_FRAME_WRONG_OPERATION,
+    FR_FRAME_UNSUPPORTED_FLAGS,
+    FR_FRAME_LENGTH_MISMATCH,
+    FR_FRAME_GZIP
+} fr_frame_error_t;
+
+/** Finds the payload of a frame: both header forms, gzip refused (this library has no inflater, 4.3). */
+fr_frame_error_t fr_frame_parse(const uint8_t *data, size_t len, const uint8_t **payload, size_t *payload_len,
+                                fr_form_t *form);
+
+/** Writes the header of `form` for a payload of `payload_len` bytes just before `payload`; returns where the
+ *  frame starts (payload - 12 or payload - 8). `payload` must have FR_HEADER_MAX bytes before it. */
+uint8_t *fr_frame_header(uint8_t *payload, size_t payload_len, fr_form_t form);
+
+/** The library's state shared between its modules; one instance, static. */
+typedef struct {
+    fr_settings_t settings;
+    uint32_t boot_ms;           /* fr_port_millis() at fr_init */
+    uint32_t next_keepalive;    /* uptime of the next keep-alive */
+    bool link_up;
+    uint32_t sign_counter;      /* frame counter of the robot's signature timestamps */
+    bool gateway_ts_seen;       /* a signed gateway frame has been accepted since boot */
+    uint64_t gateway_ts;        /* its timestamp: the replay window */
+    fr_stats_t stats;
+} fr_state_t;
+
+extern fr_state_t fr_state;
+
+/** Encodes `msg` (robotID and its extensions), frames it in the route's form, signs it when a key is set,
+ *  and sends it (or offers it to the stream); false when it did not fit or could not be sent. */
+bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg);
+
+/** The default route: the gateway's endpoint, the configured header form, a plain datagram. */
+fr_route_t fr_route_gateway(void);
+
+/** Sends a raw datagram through the port, counting a refusal. */
+bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len);
+
+/** Handles one frame's protobuf payload from `from` (plain datagram or stream payload). */
+void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream);
+
+/* rpc.c */
+/** Resets the handler table and the deferred calls (fr_init). */
+void fr_rpc_reset(void);
+/** Gives the decoder what it needs to read a Request into the library's call buffer. */
+void fr_rpc_prepare(void *request_struct);
+/** Dispatches the request decoded into the call buffer and answers it on `route`. */
+void fr_rpc_dispatch(const fr_route_t *route);
+
+/* debug.c */
+/** Switches every option off and forgets the list (fr_init). */
+void fr_debug_reset(void);
+/** Gives the decoder callbacks for DebuggingCommands: with `apply` they switch options by name (the a.b.*
+ *  rule), without they only read the names. */
+void fr_debug_prepare(void *commands_struct, bool apply);
+/** Acts on the decoded DebuggingCommands: answers a pull (or a change) with the option list on `route`. */
+void fr_debug_after(const void *commands_struct, const fr_route_t *route);
+
+/* gamecontroller.c */
+/** Handles a datagram starting "RG" from `from`. */
+void fr_gc_receive(const fr_endpoint_t *from, const uint8_t *data, size_t len);
+/** Forgets the GameController last heard (fr_init). */
+void fr_gc_reset(void);
+/** Parses a control packet of any supported version for `team`/`player` into `out`; false when not used. */
+bool fr_gc_parse(const uint8_t *data, size_t len, uint32_t team, uint8_t player, fr_game_t *out);
+
+/* stream.c */
+/** Back to the initial state of protocol.md 11.3 (fr_init). */
+void fr_stream_reset(void);
+/** Handles a datagram whose first two bytes are below 42 (a segment) from the gateway. */
+void fr_stream_receive(const uint8_t *data, size_t len);
+/** Retransmissions, idle ACKs and queued sends that are due. */
+void fr_stream_poll(void);
+
+/* sign.c */
+/** Appends the signature field over payload[0 .. len) with the next robot timestamp; the new length, or 0 when
+ *  it does not fit in `cap`. */
+size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap);
+/** What a signature check found (protocol.md 6.7). */
+typedef enum { FR_SIG_OK, FR_SIG_UNSIGNED, FR_SIG_NOT_LAST, FR_SIG_MALFORMED, FR_SIG_BAD, FR_SIG_REPLAYED } fr_sig_result_t;
+/** Checks a gateway frame's signature and moves the replay window on success; `*signed_len` gets the length of
+ *  the bytes before the signature. */
+fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed_len);
+/** The first 8 bytes of HMAC-SHA256(key, "FUSIG1" | direction | timestamp | bytes) into `mac`. */
+void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, uint64_t timestamp, const uint8_t *bytes,
+                 size_t len, uint8_t mac[8]);
+
+/* sha256.c */
+/** SHA-256 state of one running hash. */
+typedef struct {
+    uint32_t h[8];
+    uint8_t block[64];
+    size_t used;
+    uint64_t total;
+} fr_sha256_t;
+/** Starts a hash. */
+void fr_sha256_init(fr_sha256_t *s);
+/** Adds `len` bytes to the hash. */
+void fr_sha256_update(fr_sha256_t *s, const uint8_t *data, size_t len);
+/** Ends the hash and writes the 32-byte digest. */
+void fr_sha256_final(fr_sha256_t *s, uint8_t out[32]);
+/** HMAC-SHA-256 over the concatenation of `parts` (count of them). */
+void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *parts, const size_t *lens, size_t count,
+                    uint8_t out[32]);
+
+/* pb helpers (core.c) */
+/** Encode callback for a zero-terminated string in `*arg`. */
+bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg);
+
+#endif

@@ -1,0 +1,283 @@
+/* firmware/src/fr_rpc.c: the RPC server (docs/protocol.md section 7): a table of handlers the program
+ * registers, requests decoded field by field into one bounded call buffer, exactly one Response per Request
+ * with its callId, the errors of 7.4, and calls answered later (motion.posture). */
+#include <math.h>
+#include <string.h>
+#include "fr_internal.h"
+#include "naogateway/proto/rpc.pb.h"
+
+/** One registered method. */
+typedef struct {
+    const char *module;
+    const char *method;
+    fr_rpc_handler_t handler;
+    void *ctx;
+} handler_t;
+
+/** A call answered later, with where its answer goes. */
+typedef struct {
+    bool used;
+    bool has_call_id;
+    uint32_t call_id;
+    fr_route_t route;
+} deferred_t;
+
+static handler_t handlers[FR_RPC_HANDLERS_MAX];
+static size_t handler_count;
+static deferred_t deferred[FR_RPC_DEFERRED_MAX];
+
+/** The call being decoded: names, parameters and the bytes of its string and binary parameters. */
+static struct {
+    fr_call_t call;
+    char module[FR_RPC_NAME_MAX];
+    char method[FR_RPC_NAME_MAX];
+    bool names_truncated;
+    uint8_t pool[FR_RPC_STRING_POOL];
+    size_t pool_used;
+    bool pool_overflow;
+    fr_value_t *current; /* the parameter whose MixedValue is being decoded, NULL past FR_RPC_PARAMS_MAX */
+} in;
+
+static char error_text[FR_RPC_ERROR_MAX];
+static const naogateway_proto_Request *decoded; /* the struct the decoder fills: callId */
+
+void fr_rpc_reset(void) {
+    memset(handlers, 0, sizeof handlers);
+    handler_count = 0;
+    memset(deferred, 0, sizeof deferred);
+}
+
+bool fr_rpc_register(const char *module, const char *method, fr_rpc_handler_t handler, void *ctx) {
+    if (handler_count >= FR_RPC_HANDLERS_MAX || module == NULL || method == NULL || handler == NULL) return false;
+    handlers[handler_count].module = module;
+    handlers[handler_count].method = method;
+    handlers[handler_count].handler = handler;
+    handlers[handler_count].ctx = ctx;
+    handler_count++;
+    return true;
+}
+
+/* ---- decoding ------------------------------------------------------------------------------------------ */
+
+/** Reads a string field into the char array in `*arg` (FR_RPC_NAME_MAX), cutting it and noting so when long. */
+static bool read_name(pb_istream_t *stream, const pb_field_t *field, void **arg) {
+    (void)field;
+    char *dst = (char *)*arg;
+    size_t n = stream->bytes_left, keep = n < FR_RPC_NAME_MAX - 1 ? n : FR_RPC_NAME_MAX - 1;
+    if (!pb_read(stream, (pb_byte_t *)dst, keep)) return false;
+    dst[keep] = '\0';
+    if (keep < n) {
+        in.names_truncated = true;
+        return pb_read(stream, NULL, n - keep);
+    }
+    return true;
+}
+
+/** Copies a string or bytes parameter into the pool (zero-terminated) and points the current parameter at it. */
+static bool read_blob(pb_istream_t *stream, const pb_field_t *field, void **arg) {
+    bool is_string = *arg != NULL;
+    size_t n = stream->bytes_left;
+    (void)field;
+    if (in.current == NULL || in.pool_used + n + 1 > sizeof in.pool) {
+        if (in.current != NULL) in.pool_overflow = true;
+        return pb_read(stream, NULL, n);
+    }
+    uint8_t *dst = in.pool + in.pool_used;
+    if (!pb_read(stream, dst, n)) return false;
+    dst[n] = 0;
+    in.pool_used += n + 1;
+    if (is_string) {
+        in.current->kind = FR_VALUE_STRING;
+        in.current->u.s = (const char *)dst;
+    } else {
+        in.current->kind = FR_VALUE_BINARY;
+        in.current->u.bin.data = dst;
+        in.current->u.bin.len = n;
+    }
+    return true;
+}
+
+/** A nested array parameter: its elements are read over and not kept; no method of 7.2 takes one. */
+static bool read_array(pb_istream_t *stream, const pb_field_t *field, void **arg) {
+    (void)field;
+    (void)arg;
+    if (in.current != NULL && in.current->kind == FR_VALUE_NONE) in.current->kind = FR_VALUE_ARRAY;
+    return pb_read(stream, NULL, stream->bytes_left);
+}
+
+/** One MixedValue of Request.params. */
+static bool read_param(pb_istream_t *stream, const pb_field_t *field, void **arg) {
+    (void)field;
+    (void)arg;
+    size_t index = in.call.count++;
+    in.current = index < FR_RPC_PARAMS_MAX ? &in.call.params[index] : NULL;
+    naogateway_proto_MixedValue v;
+    memset(&v, 0, sizeof v);
+    v.string.funcs.decode = read_blob;
+    v.string.arg = (void *)1;
+    v.binary.funcs.decode = read_blob;
+    v.binary.arg = NULL;
+    v.array.funcs.decode = read_array;
+    if (!pb_decode(stream, naogateway_proto_MixedValue_fields, &v)) return false;
+    if (in.current != NULL && in.current->kind == FR_VALUE_NONE) {
+        if (v.has_float_value) { in.current->kind = FR_VALUE_FLOAT; in.current->u.f = v.float_value; }
+        else if (v.has_int_value) { in.current->kind = FR_VALUE_INT; in.current->u.i = v.int_value; }
+        else if (v.has_bool_value) { in.current->kind = FR_VALUE_BOOL; in.current->u.b = v.bool_value; }
+    }
+    in.current = NULL;
+    return true;
+}
+
+void fr_rpc_prepare(void *request_struct) {
+    naogateway_proto_Request *r = (naogateway_proto_Request *)request_struct;
+    memset(&in, 0, sizeof in);
+    decoded = r;
+    r->module.funcs.decode = read_name;
+    r->module.arg = in.module;
+    r->method.funcs.decode = read_name;
+    r->method.arg = in.method;
+    r->params.funcs.decode = read_param;
+}
+
+/* ---- answering ----------------------------------------------------------------------------------------- */
+
+/** Encode callback for a binary return value. */
+static bool write_binary(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
+    const fr_value_t *v = (const fr_value_t *)*arg;
+    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, v->u.bin.data, v->u.bin.len);
+}
+
+/** Sends the one Response of a call: `result` or `error` (exactly one of them). */
+static void respond(const fr_route_t *route, bool has_call_id, uint32_t call_id, const fr_value_t *result,
+                    const char *error) {
+    naogateway_proto_Response resp = naogateway_proto_Response_init_zero;
+    resp.has_callId = has_call_id;
+    resp.callId = call_id;
+    if (error != NULL) {
+        resp.error.funcs.encode = fr_pb_write_string;
+        resp.error.arg = (void *)(uintptr_t)error;
+    } else {
+        resp.has_returnval = true;
+        naogateway_proto_MixedValue *v = &resp.returnval;
+        switch (result ? result->kind : FR_VALUE_NONE) {
+        case FR_VALUE_STRING:
+            v->string.funcs.encode = fr_pb_write_string;
+            v->string.arg = (void *)(uintptr_t)result->u.s;
+            break;
+        case FR_VALUE_INT: v->has_int_value = true; v->int_value = result->u.i; break;
+        case FR_VALUE_FLOAT: v->has_float_value = true; v->float_value = result->u.f; break;
+        case FR_VALUE_BOOL: v->has_bool_value = true; v->bool_value = result->u.b; break;
+        case FR_VALUE_BINARY:
+            v->binary.funcs.encode = write_binary;
+            v->binary.arg = (void *)(uintptr_t)result;
+            break;
+        default: break; /* an empty MixedValue: "no value" */
+        }
+    }
+    pb_extension_t ext = {&naogateway_proto_rpcResponse, &resp, NULL, true};
+    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
+    msg.extensions = &ext;
+    (void)fr_send_message(route, &msg);
+}
+
+/** Copies `a` then `b` into error_text. */
+static const char *error2(const char *a, const char *b) {
+    size_t n = 0;
+    for (; *a && n + 1 < sizeof error_text; a++) error_text[n++] = *a;
+    for (; b && *b && n + 1 < sizeof error_text; b++) error_text[n++] = *b;
+    error_text[n] = '\0';
+    return error_text;
+}
+
+void fr_rpc_dispatch(const fr_route_t *route) {
+    fr_call_t *call = &in.call;
+    call->module = in.module;
+    call->method = in.method;
+    call->has_call_id = decoded->has_callId;
+    call->call_id = decoded->callId;
+    const handler_t *h = NULL;
+    for (size_t k = 0; k < handler_count && !in.names_truncated; k++)
+        if (strcmp(handlers[k].module, in.module) == 0 && strcmp(handlers[k].method, in.method) == 0) h = &handlers[k];
+    if (h == NULL) {
+        /* "unknown method: module.method", as 9.7 shows it */
+        char name[2 * FR_RPC_NAME_MAX + 1];
+        size_t n = strlen(in.module);
+        memcpy(name, in.module, n);
+        name[n] = '.';
+        strcpy(name + n + 1, in.method);
+        respond(route, call->has_call_id, call->call_id, NULL, error2("unknown method: ", name));
+        return;
+    }
+    if (in.pool_overflow) {
+        respond(route, call->has_call_id, call->call_id, NULL, error2("bad parameters: parameter too long", NULL));
+        return;
+    }
+    int slot = -1;
+    for (int k = 0; k < FR_RPC_DEFERRED_MAX; k++) if (!deferred[k].used) { slot = k; break; }
+    fr_value_t result;
+    memset(&result, 0, sizeof result);
+    error_text[0] = '\0';
+    fr_rpc_status_t st = h->handler(call, &result, error_text, sizeof error_text, slot, h->ctx);
+    if (st == FR_RPC_LATER) {
+        if (slot < 0) {
+            fr_state.stats.rpc_busy++;
+            respond(route, call->has_call_id, call->call_id, NULL, error2("busy: too many calls waiting", NULL));
+            return;
+        }
+        deferred[slot].used = true;
+        deferred[slot].has_call_id = call->has_call_id;
+        deferred[slot].call_id = call->call_id;
+        deferred[slot].route = *route;
+        return;
+    }
+    if (st == FR_RPC_ERROR) {
+        if (error_text[0] == '\0') error2("bad parameters: ", NULL);
+        respond(route, call->has_call_id, call->call_id, NULL, error_text);
+        return;
+    }
+    respond(route, call->has_call_id, call->call_id, &result, NULL);
+}
+
+void fr_rpc_answer(fr_deferred_t id, const fr_value_t *result, const char *error) {
+    if (id < 0 || id >= FR_RPC_DEFERRED_MAX || !deferred[id].used) return;
+    deferred_t d = deferred[id];
+    deferred[id].used = false;
+    respond(&d.route, d.has_call_id, d.call_id, error ? NULL : result, error);
+}
+
+/** Appends `s` to `out` (zero-terminated, `cap` bytes). */
+static void add(char *out, size_t cap, const char *s) {
+    size_t n = strlen(out);
+    while (*s && n + 1 < cap) out[n++] = *s++;
+    out[n] = '\0';
+}
+
+/** Appends the decimal `v` to `out`. */
+static void add_number(char *out, size_t cap, size_t v) {
+    char digits[21], rev[21];
+    size_t d = 0, k = 0;
+    do { rev[d++] = (char)('0' + v % 10u); v /= 10u; } while (v > 0);
+    while (d > 0) digits[k++] = rev[--d];
+    digits[k] = '\0';
+    add(out, cap, digits);
+}
+
+bool fr_rpc_expect_floats(const fr_call_t *call, size_t count, char *error, size_t error_cap) {
+    bool ok = call->count == count;
+    for (size_t k = 0; ok && k < count; k++)
+        ok = call->params[k].kind == FR_VALUE_FLOAT && isfinite(call->params[k].u.f);
+    if (!ok && error_cap > 0) {
+        /* "bad parameters: expected 3 numbers, got 2 parameter(s)" (protocol.md 7.4) */
+        error[0] = '\0';
+        add(error, error_cap, "bad parameters: expected ");
+        add_number(error, error_cap, count);
+        if (call->count != count) {
+            add(error, error_cap, " numbers, got ");
+            add_number(error, error_cap, call->count);
+            add(error, error_cap, " parameter(s)");
+        } else {
+            add(error, error_cap, " finite numbers");
+        }
+    }
+    return ok;
+}

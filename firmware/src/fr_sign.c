@@ -1,0 +1,120 @@
+/* firmware/src/fr_sign.c: signed frames (docs/protocol.md 6.7): the robot signs every frame it sends when a key
+ * is set, and with `require_signed` acts only on gateway frames with a valid signature newer than the last. */
+#include <string.h>
+#include "fr_internal.h"
+
+void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, uint64_t timestamp, const uint8_t *bytes,
+                 size_t len, uint8_t mac[8]) {
+    static const uint8_t prefix[6] = {'F', 'U', 'S', 'I', 'G', '1'};
+    uint8_t ts[8], full[32];
+    for (int k = 0; k < 8; k++) ts[k] = (uint8_t)(timestamp >> (56 - 8 * k));
+    const uint8_t *parts[4] = {prefix, &direction, ts, bytes};
+    const size_t lens[4] = {sizeof prefix, 1, sizeof ts, len};
+    fr_hmac_sha256(key, key_len, parts, lens, 4, full);
+    memcpy(mac, full, 8);
+}
+
+size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap) {
+    if (len + FR_SIGNATURE_FIELD_SIZE > cap) return 0;
+    uint64_t ts = (uint64_t)fr_state.settings.boot_counter << 32 | fr_state.sign_counter++;
+    uint8_t *p = payload + len;
+    /* key of field 7199, wire type 2 (FA C1 03), length 19, then FrameSignature: 09 + fixed64, 12 08 + mac */
+    *p++ = 0xFA; *p++ = 0xC1; *p++ = 0x03; *p++ = 19;
+    *p++ = 0x09;
+    for (int k = 0; k < 8; k++) *p++ = (uint8_t)(ts >> (8 * k));
+    *p++ = 0x12; *p++ = 8;
+    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 1, ts, payload, len, p);
+    return len + FR_SIGNATURE_FIELD_SIZE;
+}
+
+/** Reads a varint at p (< end); its end, or NULL when truncated or longer than 10 bytes. */
+static const uint8_t *varint(const uint8_t *p, const uint8_t *end, uint64_t *v) {
+    *v = 0;
+    for (int shift = 0; p < end && shift < 70; shift += 7) {
+        uint8_t b = *p++;
+        *v |= (uint64_t)(b & 0x7F) << shift;
+        if (!(b & 0x80)) return p;
+    }
+    return NULL;
+}
+
+/** Skips one field's value of `wire` type; NULL when it does not fit (groups are walked by depth). */
+static const uint8_t *skip(const uint8_t *p, const uint8_t *end, unsigned wire, uint64_t field, int depth) {
+    uint64_t v;
+    switch (wire) {
+    case 0: return varint(p, end, &v);
+    case 1: return end - p >= 8 ? p + 8 : NULL;
+    case 5: return end - p >= 4 ? p + 4 : NULL;
+    case 2:
+        p = varint(p, end, &v);
+        return p && v <= (uint64_t)(end - p) ? p + v : NULL;
+    case 3:
+        if (depth > FR_PB_GROUP_DEPTH) return NULL;
+        while (p && p < end) {
+            uint64_t key;
+            p = varint(p, end, &key);
+            if (!p) return NULL;
+            if ((key & 7) == 4) return (key >> 3) == field ? p : NULL;
+            p = skip(p, end, (unsigned)(key & 7), key >> 3, depth + 1);
+        }
+        return NULL;
+    default: return NULL;
+    }
+}
+
+fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed_len) {
+    const uint8_t *p = payload, *end = payload + len, *sig = NULL, *sig_value = NULL;
+    uint64_t sig_len = 0;
+    while (p < end) {
+        const uint8_t *field_start = p;
+        uint64_t key;
+        p = varint(p, end, &key);
+        if (!p) return FR_SIG_MALFORMED;
+        if (sig) return FR_SIG_NOT_LAST; /* a field after the signature */
+        if ((key >> 3) == 7199) {
+            if ((key & 7) != 2) return FR_SIG_MALFORMED;
+            p = varint(p, end, &sig_len);
+            if (!p || sig_len > (uint64_t)(end - p)) return FR_SIG_MALFORMED;
+            sig = field_start;
+            sig_value = p;
+            p += sig_len;
+            continue;
+        }
+        p = skip(p, end, (unsigned)(key & 7), key >> 3, 1);
+        if (!p) return FR_SIG_MALFORMED;
+    }
+    if (!sig) return FR_SIG_UNSIGNED;
+    /* FrameSignature: exactly timestamp (09 + 8 bytes) and mac (12 08 + 8 bytes), in either order */
+    uint64_t ts = 0;
+    const uint8_t *mac = NULL;
+    bool has_ts = false;
+    const uint8_t *q = sig_value, *qend = sig_value + sig_len;
+    while (q < qend) {
+        uint64_t key, n;
+        q = varint(q, qend, &key);
+        if (!q) return FR_SIG_MALFORMED;
+        if (key == 0x09 && qend - q >= 8) {
+            ts = 0;
+            for (int k = 7; k >= 0; k--) ts = ts << 8 | q[k];
+            has_ts = true;
+            q += 8;
+        } else if (key == 0x12 && (q = varint(q, qend, &n)) != NULL && n == 8 && qend - q >= 8) {
+            mac = q;
+            q += 8;
+        } else {
+            return FR_SIG_MALFORMED;
+        }
+    }
+    if (!has_ts || mac == NULL) return FR_SIG_MALFORMED;
+    uint8_t want[8];
+    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 2, ts, payload, (size_t)(sig - payload),
+                want);
+    uint8_t diff = 0;
+    for (int k = 0; k < 8; k++) diff |= (uint8_t)(want[k] ^ mac[k]);
+    if (diff != 0) return FR_SIG_BAD;
+    if (fr_state.gateway_ts_seen && ts <= fr_state.gateway_ts) return FR_SIG_REPLAYED;
+    fr_state.gateway_ts_seen = true;
+    fr_state.gateway_ts = ts;
+    *signed_len = (size_t)(sig - payload);
+    return FR_SIG_OK;
+}

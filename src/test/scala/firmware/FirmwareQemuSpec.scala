@@ -1,0 +1,273 @@
+package firmware
+
+import java.io.File
+import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress, SocketTimeoutException}
+import java.nio.charset.StandardCharsets
+import java.util.concurrent.ConcurrentLinkedQueue
+
+import scala.concurrent.duration._
+import scala.concurrent.{Await, Future}
+import scala.jdk.CollectionConverters._
+import scala.util.Try
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.stream.scaladsl.Sink
+import org.scalatest.BeforeAndAfterAll
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway.sim.gs1500m.{OverflowExperiment, Remote}
+import naogateway.testkit.TestLoopback
+import naogateway.wire.{ActuatorGroup, Posture, RpcValue}
+import naogateway.{Gateway, GatewaySettings, RobotActor, RobotSnapshot, StreamActor}
+import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
+
+/** The gateway's configuration for the board: its defaults (stream window 1, as the image is built). */
+object FirmwareQemuSpec {
+  val config: String =
+    """naogateway {
+      |  link { bind-address = "127.0.0.1", robot-port = 0 }
+      |  game-controller.enabled = off
+      |}
+      |""".stripMargin
+
+  /** Where the board's firmware believes the base station is (the example robot's default gateway). */
+  val BaseStation: Remote = Remote("192.168.1.10", 11011)
+}
+
+/**
+ * The qemu image of the board (port/qemu on the netduino2 machine, whose UART5 is the CM-530's) through
+ * [[Gs1500mBridge]], the GS1500M on the host: first the AT start-up and the datagram path with the `echo` program,
+ * which uses the port alone; then the example robot (firmware/examples/robot.c) against a real gateway and
+ * middleware, the bridge routing the firmware's base station (192.168.1.10:11011) to the gateway's loopback port.
+ * Cancelled with the reason when the ARM toolchain or qemu is missing (bash firmware/setup.sh installs them).
+ */
+class FirmwareQemuSpec
+    extends ScalaTestWithActorTestKit(FirmwareQemuSpec.config)
+    with AnyWordSpecLike
+    with LogCapturing
+    with BeforeAndAfterAll {
+  import FirmwareQemuSpec._
+
+  private def image(name: String): File = {
+    FirmwareBuild.make(this, Seq(s"build/qemu/$name.elf"), missing = () => FirmwareBuild.missingForArm())
+    new File(FirmwareBuild.dir, s"build/qemu/$name.elf")
+  }
+
+  private def receive(socket: DatagramSocket, within: FiniteDuration): Option[(String, InetSocketAddress)] = {
+    val deadline = within.fromNow
+    var result: Option[(String, InetSocketAddress)] = None
+    while (result.isEmpty && deadline.hasTimeLeft()) {
+      val buffer = new Array[Byte](2048)
+      val packet = new DatagramPacket(buffer, buffer.length)
+      socket.setSoTimeout(math.max(1, deadline.timeLeft.toMillis.toInt))
+      try {
+        socket.receive(packet)
+        result = Some(new String(buffer, 0, packet.getLength, StandardCharsets.ISO_8859_1) ->
+          packet.getSocketAddress.asInstanceOf[InetSocketAddress])
+      } catch { case _: SocketTimeoutException => () }
+    }
+    result
+  }
+
+  "The qemu board with the GS1500M bridge" should {
+    "start the module with AT commands, send from its UDP client and answer through its UDP server" in {
+      val elf = image("echo")
+      val robot = TestLoopback.address()
+      val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+      val peer = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+      val bridge = new Gs1500mBridge(Gs1500mBridge.Config(robot,
+        hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress])))
+      val log = File.createTempFile("qemu-echo", ".log")
+      val qemu = QemuBoard.start(elf, log, serialPort = Some(bridge.serialPort))
+      try {
+        // The firmware's hellos reach the base station from the robot's address, once the module is up.
+        val hello = receive(base, 10.seconds)
+        withClue(QemuBoard.output(log)) { hello.map(_._1) shouldBe Some("hello 1") }
+        hello.get._2.getAddress shouldBe robot
+        bridge.commands.asScala.toVector.take(5) shouldBe
+          Vector("AT", "ATE0", "AT+BDATA=1", "AT+NCUDP=192.168.1.10,11011", "AT+NSUDP=3838")
+        // A datagram to the robot's 3838 comes back to its sender (the firmware opens a connection to it first).
+        val ping = "ping \u001bZ0005 \r\n binary-safe".getBytes(StandardCharsets.ISO_8859_1)
+        peer.send(new DatagramPacket(ping, ping.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
+        val back = receive(peer, 5.seconds)
+        back.map(_._1) shouldBe Some(new String(ping, StandardCharsets.ISO_8859_1))
+        back.get._2.getAddress shouldBe robot
+        // The peer shares the base station's host, so the firmware knows it by that host's network address.
+        bridge.commands.asScala.toVector should contain(s"AT+NCUDP=192.168.1.10,${peer.getLocalPort}")
+        // The largest datagram the module takes crosses whole both ways.
+        val big = Array.tabulate[Byte](1400)(i => (i * 7 + 1).toByte)
+        peer.send(new DatagramPacket(big, big.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
+        receive(peer, 5.seconds).map(_._1.getBytes(StandardCharsets.ISO_8859_1).toSeq) shouldBe Some(big.toSeq)
+        // "exit" ends the program: qemu exits with the program's status.
+        val exit = "exit".getBytes(StandardCharsets.US_ASCII)
+        peer.send(new DatagramPacket(exit, exit.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
+        withClue(QemuBoard.output(log)) { QemuBoard.await(qemu, 10.seconds) shouldBe Some(0) }
+        bridge.firmwareGarbage shouldBe 0
+        bridge.stats.lost shouldBe 0
+      } finally {
+        QemuBoard.stop(qemu)
+        bridge.close()
+        base.close()
+        peer.close()
+        log.delete()
+      }
+    }
+
+    "come back by itself when the module loses the network" in {
+      val elf = image("echo")
+      val robot = TestLoopback.address()
+      val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+      val bridge = new Gs1500mBridge(Gs1500mBridge.Config(robot,
+        hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress])))
+      val log = File.createTempFile("qemu-echo", ".log")
+      val qemu = QemuBoard.start(elf, log, serialPort = Some(bridge.serialPort))
+      try {
+        withClue(QemuBoard.output(log)) { receive(base, 10.seconds).map(_._1) shouldBe Some("hello 1") }
+        bridge.disassociate(rejoinAfter = 700.millis)
+        // The firmware sees the loss, probes the silent module, opens its connections anew and sends again.
+        val deadline = 10.seconds.fromNow
+        while (!QemuBoard.output(log).contains("echo: link down") && deadline.hasTimeLeft()) Thread.sleep(50)
+        Iterator.continually(receive(base, 100.millis)).takeWhile(_.isDefined).foreach(_ => ())
+        withClue(QemuBoard.output(log)) { receive(base, 10.seconds).map(_._1.startsWith("hello")) shouldBe Some(true) }
+        val log1 = QemuBoard.output(log)
+        log1 should include("echo: link down")
+        log1.indexOf("echo: link up", log1.indexOf("echo: link down")) should be > 0
+        bridge.commands.asScala.count(_ == "AT+NSUDP=3838") shouldBe 2
+      } finally {
+        QemuBoard.stop(qemu)
+        bridge.close()
+        base.close()
+        Try(log.delete())
+      }
+    }
+  }
+
+  // ---- the example robot against a real gateway ----------------------------------------------------------------
+
+  private val cleanups = new ConcurrentLinkedQueue[() => Unit]()
+
+  override def afterAll(): Unit = {
+    cleanups.asScala.foreach(c => Try(c()))
+    super.afterAll()
+  }
+
+  private lazy val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
+  private lazy val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
+  private lazy val gatewayAddress: InetSocketAddress = {
+    val probe = createTestProbe[Gateway.Addresses]()
+    gateway ! Gateway.GetAddresses(probe.ref)
+    probe.receiveMessage(10.seconds).robots
+  }
+  private lazy val client: RobotInterface =
+    Await.result(RobotClient.connect(system, middleware, "firmware-qemu", priority = 5), 15.seconds)
+
+  private def poll(within: FiniteDuration)(condition: => Boolean): Boolean = {
+    val deadline = within.fromNow
+    var ok = condition
+    while (!ok && deadline.hasTimeLeft()) { Thread.sleep(50); ok = condition }
+    ok
+  }
+
+  private def result[T](f: Future[T]): Either[Throwable, T] = Try(Await.result(f, 15.seconds)).toEither
+
+  private def robotError(r: Either[Throwable, _]): String = r match {
+    case Left(naogateway.RobotFailure.RobotError(_, e)) => e
+    case other                                          => s"not a robot error: $other"
+  }
+
+  /** The example robot in qemu, its module on the bridge, and what the gateway published about it. */
+  private final class BoardRobot(val id: Int) {
+    val address = TestLoopback.address()
+    // Taken here: the bridge's thread must not be the one to start the gateway (lazy values lock the spec).
+    private val gatewayAt = gatewayAddress
+    val bridge = new Gs1500mBridge(Gs1500mBridge.Config(address, hosts = Map(BaseStation -> gatewayAt)))
+    val log: File = File.createTempFile(s"qemu-robot-$id", ".log")
+    val qemu: Process = QemuBoard.start(image("robot"), log, Seq(s"id=$id", "team=12", "player=3"), Some(bridge.serialPort))
+    cleanups.add(() => { QemuBoard.stop(qemu); bridge.close(); log.delete() })
+    val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
+    client.status(id).runWith(Sink.foreach(snapshots.add))
+    def output: String = QemuBoard.output(log)
+
+    def awaitOnline(): Unit = {
+      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(_.exists(r => r.robotId == id && r.online)))
+      withClue(s"robot $id never came online; qemu's output:\n$output\nmodule commands: ${bridge.commands.asScala.toVector}\n") {
+        online shouldBe true
+      }
+      Await.result(client.acquire(id, ActuatorGroup.all.toSeq: _*), 10.seconds)
+    }
+  }
+
+  private lazy val robot: BoardRobot = {
+    val r = new BoardRobot(71)
+    r.awaitOnline()
+    r
+  }
+
+  /** The gateway's stream endpoint for the robot, subscribed to what it delivers. */
+  private lazy val stream = {
+    val found = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
+    gateway ! Gateway.GetRobot(robot.id, found.ref)
+    val actor = found.receiveMessage(10.seconds).getOrElse(fail(s"the gateway has no robot ${robot.id}"))
+    val connected = createTestProbe[RobotActor.Connected]()
+    actor ! RobotActor.Connect(connected.ref)
+    val endpoint = connected.receiveMessage(10.seconds).stream
+    val received = createTestProbe[StreamActor.Received]()
+    endpoint ! StreamActor.Subscribe(received.ref)
+    endpoint -> received
+  }
+
+  "The example robot on the qemu board" must {
+    "come online through the GS1500M bridge and send a keep-alive every 200 ms" in {
+      val r = robot
+      val before = r.snapshots.size
+      Thread.sleep(2000)
+      val seen = r.snapshots.asScala.toVector
+      (seen.size - before) should be >= 7
+      seen.last.agent shouldBe Some("CAgent")
+      seen.last.teamId shouldBe Some(12)
+      seen.last.posture shouldBe Some(Posture.Sit)
+      // The module's client connection to the base station carried them, from the robot's own address.
+      r.bridge.sent.asScala.count(_.to == gatewayAddress) should be >= 10
+      r.bridge.firmwareGarbage shouldBe 0
+    }
+
+    "answer calls and their errors through the module" in {
+      val id = robot.id
+      result(client.call(id, "system", "ping")) should matchPattern { case Right(Some(RpcValue.UInt(_))) => }
+      result(client.call(id, "motion", "getPosture")) shouldBe Right(Some(RpcValue.Text("sit")))
+      robotError(result(client.walk(id, 0.1, 0, 0))) shouldBe "not standing: sit"
+      robotError(result(client.call(id, "motion", "dance"))) shouldBe "unknown method: motion.dance"
+      result(client.posture(id, Posture.Stand)) shouldBe Right(Posture.Stand)
+      result(client.walk(id, 0.1, 0, 0)).isRight shouldBe true
+      result(client.call(id, "motion", "getPosture")) shouldBe Right(Some(RpcValue.Text("walking")))
+      result(client.stop(id)).isRight shouldBe true
+      result(client.say(id, "hello from the gateway")).isRight shouldBe true
+    }
+
+    "receive the thesis's 100 payloads of 1 kB through the secure stream complete and in order: first-byte sum 4950" in {
+      val (endpoint, received) = stream
+      // The overflow experiment's payloads (thesis 6.1): byte 0 of payload i is i, the rest random. The example robot
+      // sends each stream payload it receives back through its own stream, so what returns is what it received.
+      val payloads = OverflowExperiment.datagrams(OverflowExperiment.Config()).map(_.payload.toArray)
+        .map(p => { if (p(0) == 0 && p(1) == 0x2A) p(1) = 0x2B; p }) // never an FU-Remote frame's 00 2A
+      val started = System.nanoTime()
+      payloads.foreach { p =>
+        endpoint ! StreamActor.Send(p)
+        Thread.sleep(50)
+      }
+      val echoed = Vector.newBuilder[Array[Byte]]
+      var count = 0
+      val deadline = 60.seconds.fromNow
+      while (count < payloads.size && deadline.hasTimeLeft()) {
+        Try(received.receiveMessage(deadline.timeLeft.max(1.milli))).toOption.foreach { r =>
+          echoed += r.payload
+          count += 1
+        }
+      }
+      val back = echoed.result()
+      info(f"${back.size} payloads back in ${(System.nanoTime() - started) / 1e9}%.1f s; module: ${robot.bridge.stats}")
+      back.map(_(0) & 0xff).sum shouldBe 4950
+      back.map(_.toSeq) shouldBe payloads.map(_.toSeq)
+    }
+  }
+}
