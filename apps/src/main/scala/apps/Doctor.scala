@@ -13,7 +13,7 @@ import akka.util.Timeout
 import com.typesafe.config.Config
 
 import naogateway.recording.Retention
-import naogateway.wire.gamecontroller.GameControlData
+import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion}
 import naogateway.{Gateway, GatewaySettings, LinkStats, Outbox, Rejection, RobotSnapshot}
 
 /**
@@ -38,7 +38,8 @@ object Doctor {
    * refused by kind, and whether the competition gate applies. Read through [[gameSnapshot]], the one place that asks
    * the gateway, so more GameController facts (versions, the fail-safe gate, the team message budget) join here.
    */
-  final case class GameSnapshot(latest: Option[GameControlData], source: Gateway.GameSource, refused: Map[String, Long], competition: Boolean)
+  final case class GameSnapshot(latest: Option[GameControlData], source: Gateway.GameSource, refused: Map[String, Long], competition: Boolean,
+      gateReason: Option[String] = None)
 
   /** The disk of the recording directory: whether the gateway can write there, and the space left. */
   final case class Disk(directory: Path, writable: Boolean, usableBytes: Long)
@@ -95,14 +96,22 @@ object Doctor {
     val versions =
       if (unreadable > 0)
         Vector(fail("GameController version", s"$unreadable packet(s) the gateway cannot read (refused as ${Rejection.BadGameControllerPacket.name})",
-          "the gateway reads versions 7 and 8 (docs/protocol.md §10); use a GameController that sends one of them"))
+          s"the gateway reads versions ${GameControlVersion.all.map(_.number).mkString(", ")} (docs/protocol.md §10); " +
+            "a GameController of another version closes the competition gate (fail safe, §10.7) until the gateway is updated"))
       else Vector.empty
+    // A second GameController on the field, the team's message budget running out, messages over the size limit.
+    val warnings = game.source.warnings.map(w =>
+      fail("GameController", w, "see docs/protocol.md §10.8; game state is taken only from naogateway.game-controller.trusted-sources"))
+    val budget = game.source.budget.toVector.map(b => ok("team messages", b))
     val gate =
       if (!game.competition) Vector(ok("competition gate", "off (naogateway.competition.enabled = off): the gateway sends during games"))
+      else if (game.latest.isEmpty && game.gateReason.isDefined)
+        Vector(fail("competition gate", s"on and closed: ${game.gateReason.get}", "see the GameController checks above"))
       else if (game.latest.isEmpty) Vector(fail("competition gate", "on, but no game state yet: it opens and closes only with trusted packets",
         "see the GameController check above"))
-      else Vector(ok("competition gate", s"on, following the GameController (${game.latest.get.gameState})"))
-    heard +: (trusted ++ versions ++ gate)
+      else Vector(ok("competition gate", s"on, following the GameController (${game.latest.get.gameState})" +
+        game.gateReason.fold(", open now")(why => s", closed now: $why")))
+    heard +: (trusted ++ versions ++ warnings ++ budget ++ gate)
   }
 
   /** Robots configured but never heard, offline, heard but not configured, and ids claimed from an unexpected address. */
@@ -240,7 +249,7 @@ object Doctor {
       links <- gateway.ask[Gateway.RobotLinks](Gateway.GetLinkStats(_))
       stats <- gateway.ask[Gateway.GatewayStats](Gateway.GetStats(_))
       traffic <- gateway.ask[Outbox.TrafficStats](Gateway.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) => None }
-      game <- gameSnapshot(gateway, settings.competition)
+      game <- gameSnapshot(gateway, settings.competition).map(_.copy(gateReason = traffic.flatMap(_.gateReason)))
       machine <- Future {
         (Preflight.unknownKeys(config, Preflight.knownKeys),
           Option.when(settings.recording.enabled)(disk(settings.recording.directory)),

@@ -60,6 +60,29 @@ class DoctorSpec extends AnyWordSpec with Matchers {
       p.head should startWith("FAIL GameController version: 40 packet(s) the gateway cannot read")
     }
 
+    "name the versions the gateway reads and the fail-safe gate for a GameController it cannot read" in {
+      val unreadable = heardGame.copy(latest = None, refused = Map(Rejection.BadGameControllerPacket.name -> 3L),
+        gateReason = Some("the trusted GameController's packet cannot be read: unknown version 20"))
+      val p = problems(allWell.copy(game = unreadable))
+      p.exists(l => l.startsWith("FAIL GameController version: 3 packet(s)") && l.contains("versions 19, 12, 8, 7") && l.contains("fail safe")) shouldBe true
+      p should contain("FAIL competition gate: on and closed: the trusted GameController's packet cannot be read: unknown version 20; " +
+        "fix: see the GameController checks above")
+    }
+
+    "find a second GameController and the team's message budget running out, and show the budget" in {
+      val warned = heardGame.copy(source = heardGame.source.copy(budget = Some("team messages (team 12, UDP 10012): 50 of 12000 left"),
+        warnings = Vector("two GameControllers heard: 10.0.0.5 and 10.0.0.9")))
+      val lines = Doctor.gameControllerFindings(warned).map(_.line)
+      lines should contain("ok   team messages: team messages (team 12, UDP 10012): 50 of 12000 left")
+      problems(allWell.copy(game = warned)).exists(_.startsWith("FAIL GameController: two GameControllers heard: 10.0.0.5 and 10.0.0.9")) shouldBe true
+    }
+
+    "say whether the competition gate is closed now, and why" in {
+      val closed = heardGame.copy(gateReason = Some("the game is running (Playing)"))
+      Doctor.gameControllerFindings(closed).last.line should endWith("closed now: the game is running (Playing)")
+      Doctor.gameControllerFindings(heardGame).last.line should endWith("open now")
+    }
+
     "report the GameController's version and state when heard" in {
       Doctor.gameControllerFindings(heardGame).head.line should startWith("ok   GameController: heard, version 8, state ")
     }
