@@ -94,8 +94,9 @@ object Launcher {
         val c = config(a.configFile.toSeq)
         // Simulated robots on this host answer the GameController from it, and a GameController refuses a host that
         // ever sent a status message as a monitor: the two do not go together.
-        require(!(c.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
-            c.getInt("apps.launcher.simulated-robots") > 0),
+        val resolved = c.withFallback(ConfigFactory.load()).resolve()
+        require(!(resolved.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
+            resolved.getInt("apps.launcher.simulated-robots") > 0),
           "game-controller.monitor: the simulated robots on this host would answer the GameController from it, which " +
             "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the monitor off")
         (a, if (a.replay.isDefined) ReplayOverrides.withFallback(c) else c)

@@ -173,7 +173,7 @@ object StatusView {
     val gate = (before.traffic, after.traffic) match {
       case (None, Some(t)) if t.competition                 => Some(gateLine(after.traffic))
       // A new reason is news (the game running, or a packet that cannot be read); the state in it is the game line's.
-      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || kind(b.gateReason) != kind(a.gateReason) => Some(gateLine(after.traffic))
+      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || (a.competition && kind(b.gateReason) != kind(a.gateReason)) => Some(gateLine(after.traffic))
       case _                                                => None
     }
     // A warning is news when it first appears (not every refresh its figures change).

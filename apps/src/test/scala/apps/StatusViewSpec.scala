@@ -104,7 +104,8 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe
         Vector(StatusView.gateLine(Some(open)), StatusView.gateLine(Some(closed)), StatusView.gateLine(Some(open)))
       // Without the rule the gate never closes, and the piped view says nothing about it.
-      val off = Seq(None, Some(traffic), Some(traffic.copy(gameRunning = true))).map(t => StatusModel.empty.copy(traffic = t))
+      val off = Seq(None, Some(traffic), Some(traffic.copy(gameRunning = true, gateReason = Some("the game is running (Ready)"))))
+        .map(t => StatusModel.empty.copy(traffic = t))
       off.zip(off.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe empty
     }
     "show the message budget and the warnings on the screen, and print a warning line when one first appears" in {
