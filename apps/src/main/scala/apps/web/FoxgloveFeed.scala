@@ -35,8 +35,15 @@ object FoxgloveFeed {
 
   /** What the feed's hub hands its connections: channels appearing, and messages on them. */
   sealed trait Update
+
+  /** New channels, to be advertised to every connection. */
   final case class Advertised(channels: Vector[Channel]) extends Update
-  final case class Published(channelId: Int, nanos: Long, bytes: Array[Byte]) extends Update
+
+  /**
+   * A message on a channel, at `nanos` (the gateway's wall clock), for the connections subscribed to it. It names its
+   * channel whole, so a connection that joined the hub just after the channel was advertised still learns of it.
+   */
+  final case class Published(channel: Channel, nanos: Long, bytes: Array[Byte]) extends Update
 
   /** What the feed accepts. */
   sealed trait Command
@@ -58,7 +65,7 @@ object FoxgloveFeed {
     running(queue, hub, Map.empty, Vector.empty)
   }
 
-  private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Int, Int)],
+  private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Channel, Channel)],
       channels: Vector[Channel]): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
@@ -70,17 +77,17 @@ object FoxgloveFeed {
         // As in a recording, at most MaxRobotChannels robots get channels: a flood of robot ids cannot grow the list.
         if (known.isEmpty && robots.size >= Recording.MaxRobotChannels) Behaviors.same
         else {
-          val (ids, more) = known.fold {
+          val ((status, health), more) = known.fold {
             val status = Channel(channels.size + 1, Recording.Topics.status(id), "naogateway.proto.Status")
             val health = Channel(channels.size + 2, Recording.Topics.health(id), "naogateway.proto.RobotHealth")
             queue.offer(Advertised(Vector(status, health)))
-            ((status.id, health.id), Vector(status, health))
-          }(ids => (ids, Vector.empty))
+            ((status, health), Vector(status, health))
+          }(pair => (pair, Vector.empty))
           val nanos = System.currentTimeMillis() * 1000000L
           val report = snapshot.report
-          queue.offer(Published(ids._1, nanos, report.status.toByteArray))
-          queue.offer(Published(ids._2, nanos, report.health.toByteArray))
-          running(queue, hub, robots.updated(id, ids), channels ++ more)
+          queue.offer(Published(status, nanos, report.status.toByteArray))
+          queue.offer(Published(health, nanos, report.health.toByteArray))
+          running(queue, hub, robots.updated(id, (status, health)), channels ++ more)
         }
     }.receiveSignal { case (_, PostStop) =>
       queue.complete()
@@ -176,10 +183,15 @@ object FoxgloveFeed {
         }
         {
           case FromHub(Advertised(more)) =>
-            channels ++= more.map(c => c.id -> c)
-            List(TextMessage(advertise(more)))
+            val fresh = more.filterNot(c => channels.contains(c.id))
+            channels ++= fresh.map(c => c.id -> c)
+            if (fresh.isEmpty) Nil else List(TextMessage(advertise(fresh)))
+          case FromHub(Published(channel, _, _)) if !channels.contains(channel.id) =>
+            // Advertised between this connection's start and its joining the hub: advertised now.
+            channels += channel.id -> channel
+            List(TextMessage(advertise(Vector(channel))))
           case FromHub(Published(channel, nanos, bytes)) =>
-            byChannel.get(channel).map(sub => BinaryMessage(messageData(sub, nanos, bytes)): Message).toList
+            byChannel.get(channel.id).map(sub => BinaryMessage(messageData(sub, nanos, bytes)): Message).toList
           case FromClient(Subscribe(subs)) =>
             subs.toList.flatMap { case (sub, channel) =>
               if (!channels.contains(channel)) bad(s"channel $channel does not exist")

@@ -30,8 +30,14 @@ object WebControl {
 
   /** What a page may ask: walk with velocities (clamped), or stop. */
   sealed trait Drive
+
+  /** Walk with these velocities (m/s, m/s, rad/s), already clamped. */
   final case class Walk(robotId: Int, vx: Double, vy: Double, omega: Double) extends Drive
+
+  /** Stop walking. */
   final case class Stop(robotId: Int) extends Drive
+
+  /** A request the panel cannot read, and why. */
   final case class Bad(reason: String) extends Drive
 
   private final case class Connected(robots: RobotInterface) extends Command

@@ -198,12 +198,15 @@ object WebJson {
     JsObject(if (withGrid) base ++ v.grid.map(g => "grid" -> JsString(Base64.getEncoder.encodeToString(g))) else base)
   }
 
+  /** A log line. */
   def event(e: WebEvent): JsObject =
     JsObject("t" -> num(e.t), "wall" -> JsNumber(e.wallMillis), "kind" -> JsString(e.kind), "robot" -> opt(e.robotId)(JsNumber(_)), "text" -> JsString(e.text))
 
+  /** A robot's plot point as [t, battery, rtt, loss]. */
   def robotSample(s: RobotSample): JsArray =
     JsArray(num(s.t), opt(s.battery)(num), opt(s.rttMillis)(num), opt(s.loss)(num))
 
+  /** A traffic plot point as [t, out, in, budget]. */
   def trafficSample(s: TrafficSample): JsArray =
     JsArray(num(s.t), JsNumber(s.outBytes), JsNumber(s.inBytes), JsNumber(s.budget))
 

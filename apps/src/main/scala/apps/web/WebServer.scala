@@ -136,6 +136,7 @@ object WebServer {
     val ignored = new AtomicLong
     private val log = LoggerFactory.getLogger("apps.web.WebServer")
 
+    /** The counters now. */
     def counters: Counters = Counters(open.get, refused.get, slowDropped.get, ignored.get)
 
     /** Whether `presented` is the token (compared in constant time); any string passes when none is configured. */
@@ -152,6 +153,7 @@ object WebServer {
         false
       }
 
+    /** Counts a connection refused for its token, logged at a bounded rate. */
     def refuse(): Unit = {
       val n = refused.incrementAndGet()
       if (RateLimitedLog.due(n)) log.warn("Web view: connection without the right token refused ({} refused so far)", n)

@@ -26,7 +26,7 @@ final case class WebSettings(
     maxClients: Int,
     clientBuffer: Int,
     gridInterval: FiniteDuration,
-    control: WebSettings.Control = WebSettings.Control(enabled = false, "web-control", 5, 1.second)
+    control: WebSettings.Control
 ) {
   require(port >= 0 && port <= 65535, "apps.web.port must be 0 to 65535")
   require(pushInterval >= 50.millis, "apps.web.push-interval must be at least 50 ms")

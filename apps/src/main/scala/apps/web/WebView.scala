@@ -38,7 +38,7 @@ object WebView {
   private final case class Links(links: Gateway.RobotLinks) extends Command
   private final case class Traffic(stats: Outbox.TrafficStats) extends Command
   private final case class Game(game: Option[GameControlData]) extends Command
-  private final case class Source_(source: Gateway.GameSource) extends Command
+  private final case class GameSourceIs(source: Gateway.GameSource) extends Command
   private final case class Stats(stats: Gateway.GatewayStats) extends Command
   private final case class Event(event: RobotEvent) extends Command
   private final case class Vision(frame: VisionFrame) extends Command
@@ -83,7 +83,7 @@ object WebView {
     private val robotsAdapter = context.messageAdapter(Robots.apply)
     private val linksAdapter = context.messageAdapter(Links.apply)
     private val trafficAdapter = context.messageAdapter(Traffic.apply)
-    private val sourceAdapter = context.messageAdapter(Source_.apply)
+    private val sourceAdapter = context.messageAdapter(GameSourceIs.apply)
     private val statsAdapter = context.messageAdapter(Stats.apply)
     private val visionAdapter = context.messageAdapter(Vision.apply)
 
@@ -120,6 +120,7 @@ object WebView {
       else next
     }
 
+    /** The view with state `s`. */
     def running(s: State): Behavior[Command] = Behaviors.receiveMessage[Command] {
       case Tick =>
         gateway ! Gateway.GetRobots(robotsAdapter)
@@ -139,7 +140,7 @@ object WebView {
       case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
       case Traffic(stats) => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
       case Game(game)     => running(soon(s, s.model.withGame(game, t, System.currentTimeMillis())))
-      case Source_(src)   => running(s.copy(model = s.model.copy(gameSource = Some(src))))
+      case GameSourceIs(src)   => running(s.copy(model = s.model.copy(gameSource = Some(src))))
       case Stats(stats)   => running(s.copy(model = s.model.withGatewayStats(stats, t, System.currentTimeMillis())))
       case Event(event)   => running(soon(s, s.model.withEvent(event, t, System.currentTimeMillis())))
       case Vision(VisionFrame.Regions(id, frame, _, regions)) => running(s.copy(model = s.model.withRegions(id, frame, regions)))
