@@ -184,7 +184,7 @@ object Gateway {
           }, "team-message-events")
           context.spawn(
             UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port), teamEvents,
-              UdpLink.Options(reuseAddress = true, broadcast = true)),
+              UdpLink.Options(reuseAddress = true, broadcast = true, maxDatagramsPerSecond = settings.teamMessages.maxDatagramsPerSecond)),
             "team-message-link"
           )
         }
@@ -192,7 +192,8 @@ object Gateway {
           context.spawn(
             UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
               context.messageAdapter(GameControllerEvent.apply),
-              UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true)),
+              UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true,
+                maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)),
             "game-controller-link"
           )
           logic.bindingGameController
@@ -241,14 +242,14 @@ object Gateway {
     private val otherSources = new AtomicLong
     private val log = LoggerFactory.getLogger("naogateway.Gateway")
 
-    def count(kind: Rejection, from: InetSocketAddress, detail: => String = ""): Unit = {
-      val n = counts.computeIfAbsent(kind, _ => new AtomicLong).incrementAndGet()
+    def count(kind: Rejection, from: InetSocketAddress, detail: => String = "", times: Long = 1L): Unit = {
+      val n = counts.computeIfAbsent(kind, _ => new AtomicLong).addAndGet(times)
       val address = from.getAddress
       val known = bySource.get(address)
-      if (known != null) known.incrementAndGet()
-      else if (bySource.size < RejectionAddresses) bySource.computeIfAbsent(address, _ => new AtomicLong).incrementAndGet()
-      else otherSources.incrementAndGet()
-      if (RateLimitedLog.due(n)) log.warn("Refused datagram: {} ({} so far)", kind.name, n)
+      if (known != null) known.addAndGet(times)
+      else if (bySource.size < RejectionAddresses) bySource.computeIfAbsent(address, _ => new AtomicLong).addAndGet(times)
+      else otherSources.addAndGet(times)
+      if (RateLimitedLog.dueBetween(n - times, n)) log.warn("Refused datagram: {} ({} so far)", kind.name, n)
       if (log.isDebugEnabled) log.debug("Refused datagram from {}: {} {}", from, kind.name, detail)
     }
 
@@ -380,7 +381,7 @@ object Gateway {
         Behaviors.same
       }, "monitor-status-events")
       context.spawn(UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, m.statusPort), statusEvents,
-        UdpLink.Options(reuseAddress = true)), "monitor-status-link")
+        UdpLink.Options(reuseAddress = true, maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)), "monitor-status-link")
     }
 
     /** Whether the monitor role's true state is fresh enough that the broadcast one is not used. */
@@ -503,6 +504,10 @@ object Gateway {
 
     private def reject(kind: Rejection, from: InetSocketAddress, detail: => String = ""): Unit = rejections.count(kind, from, detail)
 
+    /** A link's datagrams over its cap, dropped unread: counted as the gateway being busy, with the last sender. */
+    private def overCap(dropped: UdpLink.Dropped, port: String): Unit =
+      rejections.count(Rejection.GatewayBusy, dropped.lastFrom, s"${dropped.count} datagrams over the cap of the $port port", dropped.count)
+
     private def rejectFor(robotId: Option[Int], kind: Rejection, from: InetSocketAddress, detail: => String): Unit = {
       reject(kind, from, detail)
       robotId.flatMap(byId.get).foreach { e =>
@@ -547,6 +552,15 @@ object Gateway {
           gameUntrusted += 1
           reject(Rejection.UntrustedGameController, from)
           GameControllerCodec.decodeControl(bytes).foreach(heard(_, from, trusted = false, System.nanoTime()))
+          Behaviors.same
+        case GameControllerEvent(d: UdpLink.Dropped) =>
+          overCap(d, "GameController")
+          Behaviors.same
+        case TeamMessageEvent(d: UdpLink.Dropped) =>
+          overCap(d, "team message")
+          Behaviors.same
+        case MonitorStatusEvent(d: UdpLink.Dropped) =>
+          overCap(d, "monitor status")
           Behaviors.same
         case TeamMessageEvent(UdpLink.Received(bytes, _)) =>
           budget = budget.message(bytes.length, System.nanoTime())

@@ -152,8 +152,10 @@ final case class GatewaySettings(
     newSessionKeepAlives: Int = 3,
     recording: RecordingSettings = RecordingSettings.Off,
     teamMessages: TeamMessageSettings = TeamMessageSettings(),
-    monitor: Option[MonitorSettings] = None
+    monitor: Option[MonitorSettings] = None,
+    gameControllerMaxDatagramsPerSecond: Int = 500
 ) {
+  require(gameControllerMaxDatagramsPerSecond > 0, "game-controller.max-datagrams-per-second must be positive")
   monitor.foreach { _ =>
     val conflicts = MonitorRole.conflicts(robots, bindAddress)
     require(conflicts.isEmpty, conflicts.mkString("; "))
@@ -273,8 +275,9 @@ object GatewaySettings {
       teamMessages = {
         val t = gc.getConfig("team-messages")
         TeamMessageSettings(t.getInt("team-number"), t.getInt("max-bytes"), t.getInt("per-game"), t.getInt("per-extra-minute"),
-          t.getDuration("rate-window").getSeconds.toInt)
+          t.getDuration("rate-window").getSeconds.toInt, t.getInt("max-datagrams-per-second"))
       },
+      gameControllerMaxDatagramsPerSecond = gc.getInt("max-datagrams-per-second"),
       monitor = {
         val m = gc.getConfig("monitor")
         if (!m.getBoolean("enabled")) None

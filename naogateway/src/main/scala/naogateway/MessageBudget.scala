@@ -17,8 +17,10 @@ final case class TeamMessageSettings(
     maxBytes: Int = 512,
     perGame: Int = 12000,
     perExtraMinute: Int = 600,
-    rateWindowSeconds: Int = 60
+    rateWindowSeconds: Int = 60,
+    maxDatagramsPerSecond: Int = 2000
 ) {
+  require(maxDatagramsPerSecond > 0, "team-messages.max-datagrams-per-second must be positive")
   require(teamNumber >= 0 && teamNumber <= 254, s"game-controller.team-messages.team-number $teamNumber is not a team number (0 = off)")
   require(maxBytes > 0 && perGame >= 0 && perGame <= 0xffff && perExtraMinute >= 0, "team-messages limits must be positive")
   require(rateWindowSeconds >= 5 && rateWindowSeconds <= 600, "team-messages.rate-window must be 5 s to 10 min")

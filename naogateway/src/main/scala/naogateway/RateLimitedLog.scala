@@ -9,4 +9,8 @@ object RateLimitedLog {
     while (m >= 10 && m % 10 == 0) m /= 10
     m == 1
   }
+
+  /** Whether any of the occurrences `before + 1` to `after` is logged: for counts that grow by more than one at a time. */
+  def dueBetween(before: Long, after: Long): Boolean =
+    after > before && (before < 1 || after.toString.length > before.toString.length || due(after))
 }

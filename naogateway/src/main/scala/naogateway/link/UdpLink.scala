@@ -38,8 +38,39 @@ object UdpLink {
   /** A datagram arrived. */
   final case class Received(bytes: Array[Byte], from: InetSocketAddress) extends Event
 
-  /** Options a link binds with. */
-  final case class Options(reuseAddress: Boolean = false, broadcast: Boolean = false, receiveBufferBytes: Int = 4 * 1024 * 1024)
+  /**
+   * `count` datagrams arrived over the link's cap in a second that has ended and were dropped unread; `lastFrom` sent
+   * the last of them. Told with the first datagram after that second, so a flood costs the owner at most one message
+   * a second beside the datagrams within the cap.
+   */
+  final case class Dropped(count: Long, lastFrom: InetSocketAddress) extends Event
+
+  /**
+   * Options a link binds with. `maxDatagramsPerSecond` (0: no cap) bounds what the owner is handed, so a flood on
+   * a port anyone can send to (the GameController's, the team's) cannot grow the owner's mailbox without bound.
+   */
+  final case class Options(reuseAddress: Boolean = false, broadcast: Boolean = false, receiveBufferBytes: Int = 4 * 1024 * 1024,
+      maxDatagramsPerSecond: Int = 0)
+
+  /** The current second's count of datagrams handed on and dropped; a pure step per datagram. */
+  private[link] final case class RateWindow(startNanos: Long, passed: Int, dropped: Long, lastDropped: Option[InetSocketAddress]) {
+
+    /** The window after a datagram from `from` at `nowNanos` under `cap`: whether it passes, and what the closed window dropped. */
+    def offer(nowNanos: Long, cap: Int, from: InetSocketAddress): (RateWindow, Boolean, Option[Dropped]) =
+      if (cap <= 0) (this, true, None)
+      else if (nowNanos - startNanos >= RateWindow.SecondNanos) {
+        val closed = lastDropped.filter(_ => dropped > 0).map(Dropped(dropped, _))
+        (RateWindow(nowNanos, 1, 0L, None), true, closed)
+      } else if (passed < cap) (copy(passed = passed + 1), true, None)
+      else (copy(dropped = dropped + 1, lastDropped = Some(from)), false, None)
+  }
+
+  private[link] object RateWindow {
+    val SecondNanos: Long = 1000000000L
+
+    /** A fresh window beginning at `nowNanos`. */
+    def start(nowNanos: Long): RateWindow = RateWindow(nowNanos, 0, 0L, None)
+  }
 
   /** A link bound to `address`, reporting to `owner`. */
   def apply(address: InetSocketAddress, owner: ActorRef[Event], options: Options = Options()): Behavior[Command] =
@@ -51,7 +82,7 @@ object UdpLink {
         def binding: Behavior[Command] = Behaviors.receiveMessage {
           case SocketReady(socket, local) =>
             owner ! Bound(context.self, local)
-            stash.unstashAll(ready(socket))
+            stash.unstashAll(ready(socket, RateWindow.start(System.nanoTime())))
           case SocketFailed(reason) =>
             owner ! BindFailed(address, reason)
             Behaviors.stopped
@@ -63,13 +94,15 @@ object UdpLink {
             Behaviors.same
         }
 
-        def ready(socket: classic.ActorRef): Behavior[Command] = Behaviors.receiveMessage {
+        def ready(socket: classic.ActorRef, window: RateWindow): Behavior[Command] = Behaviors.receiveMessage {
           case Send(bytes, to) =>
             socket ! Udp.Send(ByteString.fromArrayUnsafe(bytes), to)
             Behaviors.same
           case SocketReceived(data, from) =>
-            owner ! Received(data.toArrayUnsafe(), from)
-            Behaviors.same
+            val (next, passes, closed) = window.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
+            closed.foreach(owner ! _)
+            if (passes) owner ! Received(data.toArrayUnsafe(), from)
+            if (next eq window) Behaviors.same else ready(socket, next)
           case Unbind =>
             adapter ! Udp.Unbind
             Behaviors.same

@@ -30,6 +30,42 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
   }
 
   "A gateway counting team 12's messages" must {
+
+    "hand the gateway at most the cap a second from a flood on the GameController and team ports, counting the rest" in {
+      val f = new GatewayFixture(testKit, "game-controller.trusted-sources = [\"127.0.0.1\"]\n" +
+        "game-controller.team-messages.team-number = 12\ngame-controller.max-datagrams-per-second = 50\n" +
+        "game-controller.team-messages.max-datagrams-per-second = 50")
+      val flood = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+      val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+      val gcPort = f.addresses.gameController.get
+      val team = new InetSocketAddress("127.0.0.1", 10012)
+      try {
+        gc.send(ByteBuffer.wrap(v19(GameState.Ready, 1)), gcPort)
+        f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Ready => () }
+        val junk = Array.fill[Byte](40)(7)
+        (1 to 3000).foreach { _ =>
+          flood.send(ByteBuffer.wrap(junk), gcPort)
+          flood.send(ByteBuffer.wrap(junk), team)
+        }
+        // The second after the flood: one more datagram on each port brings the count of what was dropped.
+        Thread.sleep(1200)
+        gc.send(ByteBuffer.wrap(v19(GameState.Ready, 2)), gcPort)
+        flood.send(ByteBuffer.wrap(junk), team)
+        eventually(timeout(10.seconds)) {
+          val rejected = f.stats().rejected
+          rejected.getOrElse(Rejection.GatewayBusy.name, 0L) should be > 0L
+          // What passed the cap was read and refused as it always is: at most the cap for each second the flood spanned.
+          rejected.getOrElse(Rejection.BadGameControllerPacket.name, 0L) should be <= 150L
+        }
+        // The team's budget counted only what passed the cap; the game still follows the trusted GameController.
+        val counted = "(\\d+) counted".r.findFirstMatchIn(source(f).budget.get).map(_.group(1).toInt)
+        counted.get should be <= 151
+        f.traffic().gateReason shouldBe Some("the game is running (Ready)")
+      } finally {
+        flood.close(); gc.close()
+        f.stop()
+      }
+    }
     "count what it hears on UDP 10000 + team number as the GameController does, and say so with warnings" in {
       // Team 12 plays in the vectors; its port is 10012.
       val f = new GatewayFixture(testKit, "game-controller.trusted-sources = [\"127.0.0.1\"]\ngame-controller.team-messages.team-number = 12")
