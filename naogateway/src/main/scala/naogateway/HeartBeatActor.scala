@@ -49,9 +49,6 @@ object HeartBeatActor {
   val ProbeModule: String = "heartbeat"
   val ProbeMethod: String = "probe"
 
-  /** Call ids of the heartbeat carry this tag in their two top bits. */
-  val CallIdTag: Long = 2L << 30
-
   /** Keep-alives per tick over the quality window, the quality last reported, and how long it has looked good. */
   private final case class Quality(ticks: Queue[Int], current: Int, reported: LinkQuality, goodTicks: Int = 0) {
     def seen: Quality = copy(current = current + 1)
@@ -133,8 +130,8 @@ object HeartBeatActor {
     }
 
     private def sendProbe(): Unit = {
-      nextProbeId = (nextProbeId + 1) & 0x3fffffffL
-      probeId = CallIdTag | nextProbeId
+      probeId = CallId.next(CallId.Owner.Heartbeat, nextProbeId)
+      nextProbeId = CallId.count(probeId)
       probeSentAt = System.nanoTime()
       timers.startSingleTimer(ProbeKey, ProbeTimeout, settings.probeTimeout)
       report ! SendProbe(RpcCall(ProbeModule, ProbeMethod, Vector.empty, Some(probeId)))

@@ -61,9 +61,6 @@ object ResponseActor {
     final case class ZeroMq(link: ActorRef[ZeroMqRobotLink.Command]) extends Route
   }
 
-  /** Call ids of this actor carry this tag in their two top bits. */
-  val CallIdTag: Long = 0L
-
   /** Calls in flight at once; more wait so the robot's 1400-byte module buffer is not flooded. Safety never waits. */
   val MaxInFlight: Int = 4
 
@@ -91,7 +88,7 @@ object ResponseActor {
           robot ! RobotActor.ReachabilityWanted(context.messageAdapter[Boolean](Reachability.apply))
           // The route is the robot actor's: asked for on every (re)start, pushed on every change.
           robot ! RobotActor.RouteWanted(context.self)
-          val firstId = java.util.concurrent.ThreadLocalRandom.current().nextLong(0x3fffffffL)
+          val firstId = CallId.randomStart()
           new Responder(robotId, settings, robot, outcomes, timers, stash).awaitingRoute(online, firstId)
         }
       }
@@ -111,7 +108,7 @@ object ResponseActor {
 
     private def answer(c: Call, error: RobotFailure): Unit = c.replyTo ! CallResult(robotId, c.call.name, Left(error))
 
-    private def nextId(lastId: Long): Long = CallIdTag | ((lastId + 1) & 0x3fffffffL)
+    private def nextId(lastId: Long): Long = CallId.next(CallId.Owner.Response, lastId)
 
     /** Before the robot actor has told the route: calls wait (bounded). */
     def awaitingRoute(online: Boolean, lastId: Long): Behavior[Command] = Behaviors
@@ -222,7 +219,7 @@ object ResponseActor {
             val p = Pending(call, Set(id), replyTo, priority, 1, retries + 1, total / (retries + 1).toLong, total, 0L)
             val (next, steps) = order.submit(CommandOrder.Entry(id, RpcMethod.slotOf(call), priority == Priority.Safety, p,
               replaceable = RpcMethod.of(call).forall(_.latestWins)))
-            running(perform(next, steps, route), online, id & 0x3fffffffL, route)
+            running(perform(next, steps, route), online, CallId.count(id), route)
           case ReplyReceived(reply) =>
             reply.callId.flatMap(id => order.findInFlight(_.ids(id))) match {
               case None => Behaviors.same // a late or duplicate reply, or one of a superseded call: answered already
@@ -239,8 +236,8 @@ object ResponseActor {
                 val again = p.copy(ids = p.ids + id, attempts = p.attempts + 1)
                 robot ! RobotActor.Retransmitted
                 transmit(route, key, id, again) match {
-                  case None        => running(order.updated(key, again), online, id & 0x3fffffffL, route)
-                  case Some(error) => settle(order, key, again, Left(error), online, id & 0x3fffffffL, route)
+                  case None        => running(order.updated(key, again), online, CallId.count(id), route)
+                  case Some(error) => settle(order, key, again, Left(error), online, CallId.count(id), route)
                 }
               case Some(p) if p.attempts == attempt =>
                 settle(order, key, p, Left(RobotFailure.Timeout(robotId, p.call.name, (p.total).toMillis)), online, lastId, route)

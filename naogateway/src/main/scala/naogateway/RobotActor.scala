@@ -506,10 +506,10 @@ object RobotActor {
       contents.rpcResponse.foreach { response =>
         val reply = RpcReply.fromProto(response)
         reply.callId.foreach { id =>
-          (id >>> 30) match {
-            case 0 => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
-            case 2 => heartbeat ! HeartBeatActor.ProbeAnswered(id)
-            case _ => count(Rejection.UnknownCallId, s"call id $id")
+          CallId.ownerOf(id) match {
+            case Some(CallId.Owner.Response)  => children.foreach(_.response ! ResponseActor.ReplyReceived(reply))
+            case Some(CallId.Owner.Heartbeat) => heartbeat ! HeartBeatActor.ProbeAnswered(id)
+            case _                            => count(Rejection.UnknownCallId, s"call id $id")
           }
         }
       }

@@ -13,7 +13,7 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.wire.gamecontroller.GameState
-import naogateway.{CompetitionGate, GameReading, Outbox, ZeroMqLinkSettings}
+import naogateway.{CallId, CompetitionGate, GameReading, Outbox, ZeroMqLinkSettings}
 
 /**
  * The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several
@@ -51,9 +51,6 @@ object ZeroMqRobotLink {
 
   /** Something arrived that is not a `Message`. */
   final case class MessageRejected(reason: String) extends Event
-
-  /** Call ids of the link's own status polls carry this tag in their two top bits (0-2 are the robot actor's). */
-  val CallIdTag: Long = 3L << 30
 
   /** The calls of one status poll, answered by every robot of the RPC contract (docs/protocol.md 7.2). */
   val StatusCalls: Vector[(String, String)] = Vector("system" -> "ping", "system" -> "battery", "motion" -> "getPosture")
@@ -127,12 +124,12 @@ object ZeroMqRobotLink {
                 else if (poll.exists(p => now - p.startedAt < settings.statusTimeout.toNanos)) Behaviors.same
                 else {
                   // Polls never overlap: a new one starts only when the last was answered or given up.
-                  val ids = StatusCalls.indices.map(i => CallIdTag | ((lastPollId + 1 + i) & 0x3fffffffL)).toVector
+                  val ids = StatusCalls.indices.map(i => CallId(CallId.Owner.StatusPoll, lastPollId + 1 + i)).toVector
                   ids.zip(StatusCalls).foreach { case (id, (module, method)) =>
                     val request = MessageContents(robotId, rpcRequest = Some(RpcCall(module, method, Vector.empty, Some(id)).toProto))
                     transmit(request.toProtobuf, Some(pollOutcomes), id)
                   }
-                  running(gameRunning, Some(Poll(now, ids.zip(StatusCalls.map(_._2)).toMap, Map.empty, 0)), ids.last & 0x3fffffffL)
+                  running(gameRunning, Some(Poll(now, ids.zip(StatusCalls.map(_._2)).toMap, Map.empty, 0)), CallId.count(ids.last))
                 }
               case Received(bytes) =>
                 MessageContents.parse(bytes) match {
@@ -143,7 +140,7 @@ object ZeroMqRobotLink {
                     val pollReply = for {
                       response <- contents.rpcResponse
                       id <- response.callId.map(_ & 0xffffffffL)
-                      if (id >>> 30) == 3
+                      if CallId.ownerOf(id).contains(CallId.Owner.StatusPoll)
                     } yield RpcReply.fromProto(response) -> id
                     pollReply match {
                       case None =>

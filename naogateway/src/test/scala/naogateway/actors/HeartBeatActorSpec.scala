@@ -45,7 +45,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       reports.expectNoMessage(Duration.Zero)
       manualTime.timePasses(1.milli)
       val first = probeId(reports.receiveMessage())
-      (first >>> 30) shouldBe 2
+      CallId.ownerOf(first) shouldBe Some(CallId.Owner.Heartbeat)
       manualTime.timePasses(150.millis)
       probeId(reports.receiveMessage())
       manualTime.timePasses(150.millis)

@@ -32,7 +32,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       val (first, _, _) = transmitted(robot, outbox)
       val (second, _, _) = transmitted(robot, outbox)
-      (first >>> 30) shouldBe 0
+      CallId.ownerOf(first) shouldBe Some(CallId.Owner.Response)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.UInt(99))), Some(second)))
       caller.expectMessage(CallResult(3, "system.ping", Right(Some(RpcValue.UInt(99)))))
       robot.expectMessageType[RobotActor.RoundTrip]
@@ -58,7 +58,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val (third, _, _) = transmitted(robot, outbox)
       // A robot answers every request once: a repeated call id would earn two answers to one request.
       Set(first, second, third) should have size 3
-      Seq(second, third).foreach(id => (id >>> 30) shouldBe 0)
+      Seq(second, third).foreach(id => CallId.ownerOf(id) shouldBe Some(CallId.Owner.Response))
       c2 shouldBe RpcCall("motion", "stop", Vector.empty, Some(second))
       manualTime.timePasses(667.millis)
       caller.expectMessage(CallResult(3, "motion.stop", Left(RobotFailure.Timeout(3, "motion.stop", (2.seconds).toMillis))))
