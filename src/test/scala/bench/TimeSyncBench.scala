@@ -5,7 +5,7 @@ import scala.concurrent.duration._
 
 import naogateway.{ClockEstimate, ClockSync}
 import naogateway.sim.RobotClock
-import naogateway.sim.network.{Decision, Direction, Impairment, ImpairmentModel, Rng}
+import naogateway.sim.network.{Decision, Direction, Impairment, ImpairmentModel}
 
 /**
  * The gateway's estimate of robots' clocks from keep-alives alone (`naogateway.ClockSync`), against simulated robot
@@ -42,7 +42,7 @@ object TimeSyncBench extends Benchmark {
     val results = (0 until Robots).map { i =>
       val robot = Robot(RobotClock((random.nextInt(3600000)).millis, random.nextDouble() * 400 - 200),
         -random.nextLong(3600000000000L))
-      var rng = Rng.derive(14, i, Direction.Uplink)
+      var rng = ImpairmentModel.stream(14, i, Direction.Uplink)
       var sync = ClockSync()
       val t0 = random.nextLong(200000000L)
       var errors = Vector.empty[Double]

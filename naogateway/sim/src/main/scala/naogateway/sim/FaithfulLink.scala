@@ -5,7 +5,7 @@ import java.net.{Inet4Address, InetAddress, InetSocketAddress}
 import scala.collection.immutable.{ArraySeq, Queue}
 import scala.collection.mutable.Builder
 
-import naogateway.sim.gs1500m.{Cm530Config, Cm530Costs, Cm530Firmware, FirmwareEvent, FirmwareStep, Gs1500mConfig, Gs1500mModule, ModuleEvent, Remote, SeededRandom}
+import naogateway.sim.gs1500m.{Cm530Config, Cm530Costs, Cm530Firmware, FirmwareEvent, FirmwareStep, Gs1500mConfig, Gs1500mModule, ModuleEvent, Remote}
 
 /** A simulated robot's WiFi path through the GS1500M module model and the CM-530 main loop model, as a pure value in
   * the robot's clock (nanoseconds); [[SimulatedRobot]] drives it with `faithfulLink = true`.

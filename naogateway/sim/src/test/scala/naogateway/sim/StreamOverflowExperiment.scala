@@ -3,7 +3,7 @@ package naogateway.sim
 import scala.collection.immutable.{ArraySeq, Queue}
 import scala.concurrent.duration._
 
-import naogateway.sim.gs1500m.{Cm530Firmware, Cm530Stats, FirmwareEvent, Gs1500mStats, Gs1500mModule, ModuleEvent, OverflowExperiment, Outgoing, SeededRandom}
+import naogateway.sim.gs1500m.{Cm530Firmware, Cm530Stats, FirmwareEvent, Gs1500mStats, Gs1500mModule, ModuleEvent, OverflowExperiment, Outgoing}
 import naogateway.wire.Datagram
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 

@@ -4,6 +4,7 @@ import scala.collection.immutable.ArraySeq
 
 import naogateway.proto.Status
 import naogateway.wire.MessageContents
+import naogateway.sim.SeededRandom
 
 /** A packet the CM-530 application hands to its send path; `encode` charges the protobuf encoding cost first. */
 final case class Outgoing(cid: Int, data: ArraySeq[Byte], encode: Boolean = false, keepAlive: Boolean = false)

@@ -1,6 +1,7 @@
 package naogateway.sim.gs1500m
 
 import scala.collection.immutable.ArraySeq
+import naogateway.sim.SeededRandom
 
 /** A UDP datagram reaching the module from the air, on connection `cid`; `remote` is the sender when the connection
   * is a UDP server (the module then frames it `ESC 'y'`), `None` for a direct connection (`ESC 'Z'`).

@@ -1,6 +1,7 @@
 package naogateway.sim.network
 
 import scala.concurrent.duration._
+import naogateway.sim.SeededRandom
 
 /** Why a datagram was dropped. */
 sealed trait DropCause extends Product with Serializable
@@ -36,6 +37,14 @@ object Decision {
 /** The pure decision function of the lossy network: settings and random state in, fate of a datagram out. */
 object ImpairmentModel {
 
+  /** The generator of one direction of one proxy, derived from the network seed and the proxy's creation index.
+    *
+    * Each stream gets its own generator so that traffic on one proxy or direction never shifts the decisions of
+    * another.
+    */
+  def stream(seed: Long, proxyIndex: Int, direction: Direction): SeededRandom =
+    SeededRandom.derive(seed, 2L * proxyIndex + (if (direction == Direction.Uplink) 0L else 1L))
+
   /** Every datagram consumes exactly this many draws, whatever the settings and the outcome.
     *
     * So the n-th datagram's fate depends only on the seed, n and the settings at that moment: changing a setting
@@ -47,7 +56,7 @@ object ImpairmentModel {
     *
     * The datagram's contents do not matter; only its position in the sequence does.
     */
-  def decide(impairment: Impairment, rng: Rng): (Decision, Rng) = {
+  def decide(impairment: Impairment, rng: SeededRandom): (Decision, SeededRandom) = {
     val (lossDraw, r1) = rng.nextDouble
     val (duplicationDraw, r2) = r1.nextDouble
     val (reorderDraw, r3) = r2.nextDouble

@@ -12,6 +12,7 @@ import scala.concurrent.duration._
 import scala.util.control.NonFatal
 
 import org.slf4j.LoggerFactory
+import naogateway.sim.SeededRandom
 
 /** Handle of one proxy of a [[LossyNetwork]].
   *
@@ -70,7 +71,7 @@ final case class ProxyStats(uplink: DirectionStats, downlink: DirectionStats) {
   * (3838), where the gateway sends to reach the robot, as it would a real one. Datagrams at R go from P to the robot's
   * receive address (the one given at creation, or the robot receive port on the IP of the robot's latest datagram),
   * never to a source port. Datagrams at U are counted (`atSourcePort`) and dropped, as a robot's module drops them.
-  * Each direction passes through [[ImpairmentModel]] with its own [[Rng]] derived from the seed.
+  * Each direction passes through [[ImpairmentModel]] with its own [[SeededRandom]] derived from the seed.
   *
   * Design: java.nio with a single thread that owns one `Selector`, every socket and a deadline queue of delayed
   * copies. That thread handles every datagram of every proxy in arrival order, so each direction's decisions come
@@ -226,8 +227,8 @@ final class LossyNetwork private (val seed: Long, val name: String) {
         clientChannel,
         upstreamChannel,
         receiveChannel,
-        new LinkState(uplink, Rng.derive(seed, index, Direction.Uplink)),
-        new LinkState(downlink, Rng.derive(seed, index, Direction.Downlink)),
+        new LinkState(uplink, ImpairmentModel.stream(seed, index, Direction.Uplink)),
+        new LinkState(downlink, ImpairmentModel.stream(seed, index, Direction.Downlink)),
         robot,
         receivePort
       )
@@ -464,7 +465,7 @@ object LossyNetwork {
     def abandon(reason: Throwable): Unit = result.completeExceptionally(reason)
   }
 
-  private final class LinkState(var impairment: Impairment, var rng: Rng) {
+  private final class LinkState(var impairment: Impairment, var rng: SeededRandom) {
     var received = 0L
     var forwarded = 0L
     var droppedLoss = 0L

@@ -1,6 +1,7 @@
 package naogateway.sim.gs1500m
 
 import scala.collection.immutable.ArraySeq
+import naogateway.sim.SeededRandom
 
 /** The thesis's overflow experiment (§6.1; docs/simulator.md §6) through the module and firmware models, in simulated time.
   *

@@ -6,11 +6,12 @@ import org.scalacheck.Gen
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
+import naogateway.sim.SeededRandom
 
 /** The settings, the generator and the pure decision function, without sockets. */
 class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
-  private def decisions(impairment: Impairment, rng: Rng, n: Int): Vector[Decision] =
+  private def decisions(impairment: Impairment, rng: SeededRandom, n: Int): Vector[Decision] =
     Iterator
       .iterate((Option.empty[Decision], rng)) { case (_, r) =>
         val (d, next) = ImpairmentModel.decide(impairment, r)
@@ -41,10 +42,10 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     }
   }
 
-  "Rng" should {
+  "SeededRandom" should {
     "draw doubles in [0, 1)" in {
       forAll(seeds) { seed =>
-        val draws = Iterator.iterate(Rng(seed).nextDouble)(_._2.nextDouble).take(200).map(_._1).toVector
+        val draws = Iterator.iterate(SeededRandom(seed).nextDouble)(_._2.nextDouble).take(200).map(_._1).toVector
         all(draws) should (be >= 0.0 and be < 1.0)
       }
     }
@@ -53,7 +54,7 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       val streams = for {
         proxy <- 0 until 5
         direction <- Direction.both
-      } yield Rng.derive(42L, proxy, direction).nextLong._1
+      } yield ImpairmentModel.stream(42L, proxy, direction).nextLong._1
       streams.distinct should have size 10
     }
   }
@@ -61,7 +62,7 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
   "ImpairmentModel" should {
     "deliver exactly one immediate copy on a perfect link" in {
       forAll(seeds) { seed =>
-        decisions(Impairment.Off, Rng(seed), 100).distinct shouldBe
+        decisions(Impairment.Off, SeededRandom(seed), 100).distinct shouldBe
           Vector(Decision.Deliver(List(Duration.Zero), reordered = false))
       }
     }
@@ -69,7 +70,7 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     "lose datagrams at the configured rate" in {
       forAll(seeds, probabilities, minSuccessful(20)) { (seed, loss) =>
         val n = 10000
-        val lost = decisions(Impairment(loss = loss), Rng(seed), n).count(_ == Decision.Drop(DropCause.Loss))
+        val lost = decisions(Impairment(loss = loss), SeededRandom(seed), n).count(_ == Decision.Drop(DropCause.Loss))
         // The standard deviation of the rate is at most 0.005 here; 0.05 is ten of them.
         (lost.toDouble / n) shouldBe loss +- 0.05
       }
@@ -77,14 +78,14 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
 
     "never lose with probability 0 and always lose with probability 1" in {
       forAll(seeds) { seed =>
-        decisions(Impairment(loss = 0.0), Rng(seed), 500).count(_.isInstanceOf[Decision.Drop]) shouldBe 0
-        decisions(Impairment(loss = 1.0), Rng(seed), 500).distinct shouldBe Vector(Decision.Drop(DropCause.Loss))
+        decisions(Impairment(loss = 0.0), SeededRandom(seed), 500).count(_.isInstanceOf[Decision.Drop]) shouldBe 0
+        decisions(Impairment(loss = 1.0), SeededRandom(seed), 500).distinct shouldBe Vector(Decision.Drop(DropCause.Loss))
       }
     }
 
     "send two copies when duplicating" in {
       forAll(seeds) { seed =>
-        decisions(Impairment(duplication = 1.0, delay = 5.millis), Rng(seed), 200).foreach {
+        decisions(Impairment(duplication = 1.0, delay = 5.millis), SeededRandom(seed), 200).foreach {
           case d: Decision.Deliver =>
             d.duplicated shouldBe true
             d.delays shouldBe List(5.millis, 5.millis)
@@ -95,7 +96,7 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
 
     "duplicate at the configured rate" in {
       val n = 10000
-      val duplicated = decisions(Impairment(duplication = 0.2), Rng(7L), n).count {
+      val duplicated = decisions(Impairment(duplication = 0.2), SeededRandom(7L), n).count {
         case d: Decision.Deliver => d.duplicated
         case _                   => false
       }
@@ -105,7 +106,7 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     "drop everything when partitioned, whatever the other settings" in {
       forAll(seeds, probabilities, probabilities) { (seed, loss, duplication) =>
         val settings = Impairment(loss = loss, duplication = duplication, partitioned = true)
-        decisions(settings, Rng(seed), 300).distinct shouldBe Vector(Decision.Drop(DropCause.Partition))
+        decisions(settings, SeededRandom(seed), 300).distinct shouldBe Vector(Decision.Drop(DropCause.Partition))
       }
     }
 
@@ -117,7 +118,7 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
         reorderMaxDelay = 30.millis,
         duplication = 0.5
       )
-      val delivered = decisions(settings, Rng(99L), 5000).collect { case d: Decision.Deliver => d }
+      val delivered = decisions(settings, SeededRandom(99L), 5000).collect { case d: Decision.Deliver => d }
       delivered should have size 5000
       delivered.foreach { d =>
         val upper = if (d.reordered) 10.millis + 4.millis + 30.millis else 10.millis + 4.millis
@@ -131,18 +132,18 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     "give the identical decision sequence for the same seed, and another for another seed" in {
       val settings = Impairment(loss = 0.3, duplication = 0.2, reordering = 0.3, jitter = 5.millis)
       forAll(seeds) { seed =>
-        val first = decisions(settings, Rng(seed), 300)
-        val second = decisions(settings, Rng(seed), 300)
+        val first = decisions(settings, SeededRandom(seed), 300)
+        val second = decisions(settings, SeededRandom(seed), 300)
         first shouldBe second
-        decisions(settings, Rng(seed + 1), 300) should not be first
+        decisions(settings, SeededRandom(seed + 1), 300) should not be first
       }
     }
 
     "consume the same randomness per datagram whatever the settings" in {
       forAll(seeds) { seed =>
-        val afterPerfect = ImpairmentModel.decide(Impairment.Off, Rng(seed))._2
-        val afterPartition = ImpairmentModel.decide(Impairment(partitioned = true), Rng(seed))._2
-        val afterLoss = ImpairmentModel.decide(Impairment(loss = 1.0), Rng(seed))._2
+        val afterPerfect = ImpairmentModel.decide(Impairment.Off, SeededRandom(seed))._2
+        val afterPartition = ImpairmentModel.decide(Impairment(partitioned = true), SeededRandom(seed))._2
+        val afterLoss = ImpairmentModel.decide(Impairment(loss = 1.0), SeededRandom(seed))._2
         afterPartition shouldBe afterPerfect
         afterLoss shouldBe afterPerfect
       }

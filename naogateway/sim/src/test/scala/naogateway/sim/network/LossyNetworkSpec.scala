@@ -13,6 +13,7 @@ import org.scalatest.time.{Millis, Seconds, Span}
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.testkit.TestLoopback
+import naogateway.sim.SeededRandom
 
 /** The lossy network over real UDP on loopback. */
 class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
@@ -276,7 +277,7 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         }
       }
       val expected = Iterator
-        .iterate((0L, 0L, Rng.derive(11L, 0, Direction.Uplink))) { case (forwarded, duplicated, rng) =>
+        .iterate((0L, 0L, ImpairmentModel.stream(11L, 0, Direction.Uplink))) { case (forwarded, duplicated, rng) =>
           ImpairmentModel.decide(settings, rng) match {
             case (d: Decision.Deliver, next) => (forwarded + 1, duplicated + (if (d.duplicated) 1 else 0), next)
             case (_, next)                   => (forwarded, duplicated, next)
