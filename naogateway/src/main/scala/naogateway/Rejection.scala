@@ -1,7 +1,5 @@
 package naogateway
 
-import java.net.InetAddress
-
 import naogateway.wire.{Datagram, FrameError, SignatureError}
 
 /**
@@ -120,47 +118,4 @@ object Rejection {
     case SignatureError.BadMac    => BadSignature
     case SignatureError.Replayed  => Replayed
   }
-}
-
-/**
- * Counts of refused datagrams per kind and per source address, bounded: at most `maxAddresses` addresses are counted
- * one by one, the rest together under `otherAddresses`, so a sender that varies its address cannot grow the map.
- */
-final case class RejectionLedger(
-    byKind: Map[Rejection, Long],
-    byAddress: Map[InetAddress, Long],
-    otherAddresses: Long,
-    maxAddresses: Int
-) {
-
-  /** The total refused so far. */
-  def total: Long = byKind.values.sum
-
-  /**
-   * The ledger after one more refusal of `kind` from `from`, and whether this one deserves a warning: the 1st, 10th,
-   * 100th … of its kind, so 100,000 refusals of one kind write six lines.
-   */
-  def record(kind: Rejection, from: Option[InetAddress]): (RejectionLedger, Boolean) = {
-    val n = byKind.getOrElse(kind, 0L) + 1
-    val next = from match {
-      case Some(a) if byAddress.contains(a) || byAddress.size < maxAddresses =>
-        copy(byKind = byKind.updated(kind, n), byAddress = byAddress.updated(a, byAddress.getOrElse(a, 0L) + 1))
-      case Some(_) => copy(byKind = byKind.updated(kind, n), otherAddresses = otherAddresses + 1)
-      case None    => copy(byKind = byKind.updated(kind, n))
-    }
-    next -> RateLimitedLog.due(n)
-  }
-
-  /** The counts per kind by name, as the link figures carry them. */
-  def named: Map[String, Long] = byKind.map { case (k, n) => k.name -> n }
-}
-
-/** The empty ledger. */
-object RejectionLedger {
-
-  /** Addresses counted one by one by default. */
-  val DefaultMaxAddresses: Int = 64
-
-  /** Nothing refused yet. */
-  def empty(maxAddresses: Int = DefaultMaxAddresses): RejectionLedger = RejectionLedger(Map.empty, Map.empty, 0L, maxAddresses)
 }

@@ -1,11 +1,7 @@
 package naogateway
 
-import akka.NotUsed
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
-import akka.stream.OverflowStrategy
-import akka.stream.scaladsl.Source
-import akka.stream.typed.scaladsl.ActorSource
 
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
 import naogateway.wire.{HaViMoGrid, HaViMoRegion}
@@ -50,18 +46,6 @@ object VisionActor {
 
   val RegionsOption: String = "havimo.regions"
   val GridOption: String = "havimo.grid"
-
-  /**
-   * A source of this robot's frames. Each materialization registers one subscriber; a slow subscriber only ever
-   * gets the newest frame (buffer 1, the older one dropped), because old camera frames are worthless.
-   */
-  def frames(vision: ActorRef[Command], grid: Boolean = false): Source[VisionFrame, NotUsed] =
-    ActorSource
-      .actorRef[VisionFrame](PartialFunction.empty, PartialFunction.empty, 1, OverflowStrategy.dropHead)
-      .mapMaterializedValue { ref =>
-        vision ! Register(ref, grid)
-        NotUsed
-      }
 
   /**
    * A vision actor for robot `robotId`, switching camera options through `robot`, which owns the registrations: a new
