@@ -133,19 +133,26 @@ object RobotClient {
     private implicit val askTimeout: Timeout = Timeout(timeout + 5.seconds)
     private implicit val ec: ExecutionContext = system.executionContext
 
+    /** An ask of the middleware whose lost answer fails as `RobotFailure.Timeout`, as every failure here is one. */
+    private def ask[R](robotId: Int, operation: String)(message: ActorRef[R] => RobotMiddleware.Command): Future[R] =
+      middleware.ask[R](message).recoverWith { case _: java.util.concurrent.TimeoutException =>
+        Future.failed(RobotFailure.Timeout(robotId, operation, askTimeout.duration.toMillis))
+      }
+
     private def execute(robotId: Int, operation: Operation): Future[Option[RpcValue]] =
-      middleware.ask[RobotMiddleware.OperationResult](RobotMiddleware.Execute(session, robotId, operation, _)).flatMap { r =>
+      ask[RobotMiddleware.OperationResult](robotId, operation.name)(RobotMiddleware.Execute(session, robotId, operation, _)).flatMap { r =>
         r.result.fold(Future.failed, Future.successful)
       }
 
     private def done(f: Future[Option[RpcValue]]): Future[Done] = f.map(_ => Done)
 
-    def robots(): Future[Vector[RobotSnapshot]] = middleware.ask(RobotMiddleware.ListRobots(_))
+    // Robot id 0: the list concerns no single robot.
+    def robots(): Future[Vector[RobotSnapshot]] = ask[Vector[RobotSnapshot]](0, "robots")(RobotMiddleware.ListRobots(_))
 
     def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] =
       Future
         .traverse(groups.distinct) { g =>
-          middleware.ask[RobotMiddleware.LeaseResult](RobotMiddleware.Acquire(session, robotId, g, _)).flatMap { r =>
+          ask[RobotMiddleware.LeaseResult](robotId, s"acquire ${g.name}")(RobotMiddleware.Acquire(session, robotId, g, _)).flatMap { r =>
             r.result.fold(Future.failed, _ => Future.successful(Done))
           }
         }
@@ -154,8 +161,13 @@ object RobotClient {
     def release(robotId: Int, groups: ActuatorGroup*): Unit =
       groups.foreach(g => middleware ! RobotMiddleware.Release(session, robotId, g))
 
+    // Bad velocities fail the future like any refusal, never the caller's thread.
     def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] =
-      done(execute(robotId, Operation.Walk(vx, vy, omega)))
+      scala.util.Try(Operation.Walk(vx, vy, omega)) match {
+        case scala.util.Success(walk) => done(execute(robotId, walk))
+        case scala.util.Failure(e) =>
+          Future.failed(RobotFailure.RobotError(robotId, s"out of range: ${e.getMessage.stripPrefix("requirement failed: ")}"))
+      }
     def stop(robotId: Int): Future[Done] = done(execute(robotId, Operation.Stop()))
     def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done(execute(robotId, Operation.Head(pan, tilt)))
     def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] =
