@@ -60,7 +60,7 @@ lazy val naogateway = (project in file("naogateway"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
-    libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j, jeromq, logback) ++ testLibs ++ akkaTestLibs
+    libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j, jeromq) ++ testLibs ++ akkaTestLibs
   )
 
 // The simulator: simulated robots and their firmware, the GS1500M model, the lossy network, the fleet and the
@@ -95,7 +95,9 @@ lazy val apps = (project in file("apps"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
-    libraryDependencies ++= Seq(jline, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
+    // The launcher is the one module with a logging backend at compile scope (its logback.xml); the libraries log
+    // through SLF4J only.
+    libraryDependencies ++= Seq(jline, logback, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := Some("apps.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
     Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),

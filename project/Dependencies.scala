@@ -43,5 +43,6 @@ object Dependencies {
   val scalatestPlusScalacheck = "org.scalatestplus" %% "scalacheck-1-18" % V.scalatestPlusScalacheck % Test
 
   val testLibs: Seq[ModuleID] = Seq(scalatest, scalacheck, scalatestPlusScalacheck)
-  val akkaTestLibs: Seq[ModuleID] = Seq(akkaTestkit, akkaStreamTestkit)
+  // Tests log through Logback (LogCapturing needs it); the libraries themselves ship no logging backend.
+  val akkaTestLibs: Seq[ModuleID] = Seq(akkaTestkit, akkaStreamTestkit, logback % Test)
 }
