@@ -109,6 +109,33 @@
 #if FR_STREAM_WINDOW < 1 || 2 * FR_STREAM_WINDOW > FR_STREAM_MAX_SEQ + 1
 #error "FR_STREAM_WINDOW must be 1 .. (FR_STREAM_MAX_SEQ + 1) / 2"
 #endif
+/* The GS1500M driver (gs1500m.c) on the boards that talk to the module over a serial line. */
+
+/** Largest datagram the module sends or receives: its one 1400-byte buffer (thesis 5.3, 6.1). */
+#define GS1500M_MAX_DATAGRAM 1400
+
+#ifndef GS1500M_RX_RING
+/** Receive ring: one whole datagram with its longest header (1439 bytes, thesis 7.2) plus about 13 ms of
+ *  460800 baud for the bytes that keep coming while the program works; must exceed 1439. */
+#define GS1500M_RX_RING 2048
+#endif
+
+#ifndef GS1500M_TX_RING
+/** Transmit ring: one whole `ESC Z` frame of 1407 bytes, so a send never waits, plus room for an AT command. */
+#define GS1500M_TX_RING 1536
+#endif
+
+#ifndef GS1500M_LINE_MAX
+/** Longest status line kept; a longer one is read to its end and taken for garbage. */
+#define GS1500M_LINE_MAX 48
+#endif
+
+#ifndef GS1500M_PEERS
+/** UDP client connections the driver keeps open at once (the module has 16): the base station, the
+ *  GameController's return address and two more destinations. */
+#define GS1500M_PEERS 4
+#endif
+
 #if FR_STREAM_QUEUE < FR_STREAM_WINDOW || FR_STREAM_QUEUE > FR_STREAM_MAX_SEQ + 1 - FR_STREAM_WINDOW
 #error "FR_STREAM_QUEUE must be FR_STREAM_WINDOW .. FR_STREAM_MAX_SEQ + 1 - FR_STREAM_WINDOW"
 #endif

@@ -17,34 +17,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "fr_config.h"
 #include "fr_port.h"
 
-/* Sizes and timings. The build may override each with -D; docs/firmware.md lists them with the library's. */
-
-/** Largest datagram the module sends or receives: its one 1400-byte buffer (thesis 5.3, 6.1). */
-#define GS1500M_MAX_DATAGRAM 1400
-
-#ifndef GS1500M_RX_RING
-/** Receive ring: one whole datagram with its longest header (1439 bytes, thesis 7.2) plus about 13 ms of
- *  460800 baud for the bytes that keep coming while the program works; must exceed 1439. */
-#define GS1500M_RX_RING 2048
-#endif
-
-#ifndef GS1500M_TX_RING
-/** Transmit ring: one whole `ESC Z` frame of 1407 bytes, so a send never waits, plus room for an AT command. */
-#define GS1500M_TX_RING 1536
-#endif
-
-#ifndef GS1500M_LINE_MAX
-/** Longest status line kept; a longer one is read to its end and taken for garbage. */
-#define GS1500M_LINE_MAX 48
-#endif
-
-#ifndef GS1500M_PEERS
-/** UDP client connections the driver keeps open at once (the module has 16): the base station, the
- *  GameController's return address and two more destinations. */
-#define GS1500M_PEERS 4
-#endif
+/* Timings; the driver's buffer sizes are in fr_config.h with every other buffer. The build may override each
+ * with -D; docs/firmware.md lists them with the library's. */
 
 #ifndef GS1500M_BOOT_MS
 /** How long the module takes after power-up before it listens (thesis 8.1: "up to about 4 seconds"). */
