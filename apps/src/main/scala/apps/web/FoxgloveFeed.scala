@@ -15,23 +15,32 @@ import akka.stream.{BoundedSourceQueue, Materializer, OverflowStrategy}
 import akka.util.ByteString
 import spray.json._
 
-import naogateway.RobotSnapshot
-import naogateway.recording.Recording
+import naogateway.wire.gamecontroller.GameControlData
+import naogateway.{GameStateUpdated, Gateway, Outbox, RobotEvent, RobotSnapshot}
+import naogateway.recording.{Decision, DecisionJson, Recording}
 import robotmiddleware.RobotMiddleware
 
 /**
  * The live feed in the Foxglove WebSocket protocol (`foxglove.websocket.v1`, docs/web.md): the recording's robot
- * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, so a viewer connected
- * to the running gateway shows what it shows for a recording. Each keep-alive is published as the gateway read it
- * ([[naogateway.wire.RobotReport]], the one mapping between the messages and a robot's report).
+ * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its
+ * `/gateway/decisions` channel (JSON, as recorded) with the decisions published live (robot events and game states
+ * from the middleware, the budget once a second from the gateway's read-only view), so a viewer connected to the running gateway shows what it shows for a recording. Each keep-alive is
+ * published as the gateway read it ([[naogateway.wire.RobotReport]], the one mapping between the messages and a
+ * robot's report).
  */
 object FoxgloveFeed {
 
   /** The WebSocket subprotocol a client asks for. */
   val Subprotocol: String = "foxglove.websocket.v1"
 
-  /** One channel as advertised: its id, topic and schema name (the schema data is the recording's descriptor set). */
-  final case class Channel(id: Int, topic: String, schemaName: String)
+  /**
+   * One channel as advertised: its id, topic, schema name and message encoding (the schema data of a protobuf channel
+   * is the recording's descriptor set; a JSON channel has none, as in the recording).
+   */
+  final case class Channel(id: Int, topic: String, schemaName: String, encoding: String = "protobuf")
+
+  /** The gateway's decisions as the recording writes them (JSON without a schema). */
+  private[web] val Decisions: Channel = Channel(1, Recording.Topics.Decisions, "", "json")
 
   /** What the feed's hub hands its connections: channels appearing, and messages on them. */
   sealed trait Update
@@ -55,21 +64,46 @@ object FoxgloveFeed {
   final case class Feed(channels: Vector[Channel], updates: Source[Update, NotUsed])
 
   private final case class Status(snapshot: RobotSnapshot) extends Command
+  private final case class Event(event: RobotEvent) extends Command
+  private final case class Game(data: GameControlData) extends Command
+  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private case object BudgetTick extends Command
 
-  /** The hub: one owner of the channel list, watching every robot's keep-alives at the middleware. */
-  def apply(middleware: ActorRef[RobotMiddleware.Command]): Behavior[Command] = Behaviors.setup { context =>
+  /** How often the budget decision is published (the recording's outbox writes it at most this often). */
+  private val BudgetInterval: FiniteDuration = 1.second
+
+  /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the budget. */
+  def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: ActorRef[Gateway.Query]): Behavior[Command] = Behaviors.setup { context =>
     implicit val mat: Materializer = Materializer(context)
     val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
     hub.runWith(Sink.ignore)
     middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
-    running(queue, hub, Map.empty, Vector.empty)
+    middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
+    middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
+    val traffic = context.messageAdapter(Traffic.apply)
+    Behaviors.withTimers[Command] { timers =>
+      timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
+      running(queue, hub, Map.empty, Vector(Decisions), gateway, traffic)
+    }
   }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Channel, Channel)],
-      channels: Vector[Channel]): Behavior[Command] =
+      channels: Vector[Channel], gateway: ActorRef[Gateway.Query], traffic: ActorRef[Outbox.TrafficStats]): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
         replyTo ! Feed(channels, hub)
+        Behaviors.same
+      case Event(event) =>
+        decided(queue, Decision.Published(event))
+        Behaviors.same
+      case Game(data) =>
+        decided(queue, Decision.Published(GameStateUpdated(data)))
+        Behaviors.same
+      case BudgetTick =>
+        gateway ! Gateway.GetTraffic(traffic)
+        Behaviors.same
+      case Traffic(t) =>
+        decided(queue, Decision.Budget(t.outBytesLastSecond, t.inBytesLastSecond, t.budgetBytesPerSecond, t.queued))
         Behaviors.same
       case Status(snapshot) =>
         val id = snapshot.robotId
@@ -87,14 +121,21 @@ object FoxgloveFeed {
           val report = snapshot.report
           queue.offer(Published(status, nanos, report.status.toByteArray))
           queue.offer(Published(health, nanos, report.health.toByteArray))
-          running(queue, hub, robots.updated(id, (status, health)), channels ++ more)
+          running(queue, hub, robots.updated(id, (status, health)), channels ++ more, gateway, traffic)
         }
     }.receiveSignal { case (_, PostStop) =>
       queue.complete()
       Behaviors.same
     }
 
-  /** The schema data of every channel: the recording's descriptor set, base64 as the protocol wants it. */
+  /** `decision` on the decisions channel, now, in the recording's JSON. */
+  private def decided(queue: BoundedSourceQueue[Update], decision: Decision): Unit = {
+    val nanos = System.currentTimeMillis() * 1000000L
+    queue.offer(Published(Decisions, nanos, DecisionJson.of(decision, nanos).getBytes(java.nio.charset.StandardCharsets.UTF_8)))
+    ()
+  }
+
+  /** The schema data of every protobuf channel: the recording's descriptor set, base64 as the protocol wants it. */
   private lazy val schemaBase64: String = Base64.getEncoder.encodeToString(Recording.descriptorSet)
 
   private[web] def serverInfo: String = JsObject(
@@ -104,8 +145,13 @@ object FoxgloveFeed {
 
   private[web] def advertise(channels: Vector[Channel]): String = JsObject(
     "op" -> JsString("advertise"),
-    "channels" -> JsArray(channels.map(c => JsObject("id" -> JsNumber(c.id), "topic" -> JsString(c.topic), "encoding" -> JsString("protobuf"),
-      "schemaName" -> JsString(c.schemaName), "schema" -> JsString(schemaBase64), "schemaEncoding" -> JsString("protobuf"))))
+    "channels" -> JsArray(channels.map { c =>
+      val common = Map[String, JsValue]("id" -> JsNumber(c.id), "topic" -> JsString(c.topic), "encoding" -> JsString(c.encoding),
+        "schemaName" -> JsString(c.schemaName))
+      // A JSON channel without a schema: an empty schema, which viewers take as schemaless JSON.
+      if (c.encoding == "protobuf") JsObject(common ++ Map("schema" -> JsString(schemaBase64), "schemaEncoding" -> JsString("protobuf")))
+      else JsObject(common + ("schema" -> JsString("")))
+    })
   ).compactPrint
 
   private[web] def status(level: Int, message: String): String =

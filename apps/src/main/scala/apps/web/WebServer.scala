@@ -87,7 +87,7 @@ object WebServer {
       require(settings.refusal.isEmpty, settings.refusal.getOrElse(""))
       implicit val system: ActorSystem[_] = context.system
       val view = context.spawn(WebView(gateway, middleware, settings), "view")
-      val foxglove = context.spawn(FoxgloveFeed(middleware), "foxglove")
+      val foxglove = context.spawn(FoxgloveFeed(middleware, gateway), "foxglove")
       val available = availability(settings, competition.getOrElse(naogateway.GatewaySettings(context.system).competition))
       if (settings.control.enabled && !available.enabled) context.log.warn("Web control panel refused: {}", available.reason)
       val control = context.spawn(WebControl(middleware, settings.control, available), "control")

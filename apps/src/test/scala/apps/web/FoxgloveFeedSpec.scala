@@ -101,6 +101,41 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
       } finally client.close()
     }
 
+    "advertise /gateway/decisions as JSON, and send game states and the budget as the recording writes them" in {
+      val client = new Client()
+      try {
+        eventually(timeout(10.seconds), interval(100.millis)) {
+          client.channels.map(_.fields("topic")) should contain(JsString("/gateway/decisions"))
+        }
+        val channel = client.channels.find(_.fields("topic") == JsString("/gateway/decisions")).get
+        channel.fields("encoding") shouldBe JsString("json")
+        channel.fields("schema") shouldBe JsString("")
+        val channelId = channel.fields("id").asInstanceOf[JsNumber].value.toInt
+        client.send(s"""{"op":"subscribe","subscriptions":[{"id":9,"channelId":$channelId}]}""")
+        // The demo's GameController sends every 100 ms: its packets come as game-state decisions.
+        val decisions = eventually(timeout(20.seconds), interval(100.millis)) {
+          val decoded = client.binaries.map { b =>
+            val frame = b.toByteBuffer.order(ByteOrder.LITTLE_ENDIAN)
+            frame.get() shouldBe 1
+            frame.getInt() shouldBe 9
+            val nanos = frame.getLong()
+            val payload = new Array[Byte](frame.remaining())
+            frame.get(payload)
+            (nanos, new String(payload, java.nio.charset.StandardCharsets.UTF_8).parseJson.asJsObject)
+          }
+          decoded.map(_._2.fields("decision")) should contain allOf (JsString("game-state"), JsString("budget"))
+          decoded
+        }
+        val (nanos, game) = decisions.find(_._2.fields("decision") == JsString("game-state")).get
+        game.fields("gatewayTimeNs") shouldBe JsNumber(nanos)
+        game.fields("state").asInstanceOf[JsString].value should not be empty
+        game.fields.keySet should contain("version")
+        val budget = decisions.map(_._2).find(_.fields("decision") == JsString("budget")).get
+        budget.fields("limitBytesPerSecond").asInstanceOf[JsNumber].value.toInt should be > 0
+        budget.fields("queued").asJsObject.fields.keySet should not be empty
+      } finally client.close()
+    }
+
     "answer a subscription to a channel that does not exist and bad requests with an error status, and keep serving" in {
       val client = new Client()
       try {
@@ -153,6 +188,7 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
           val schema = descriptor(naogateway.recording.Recording.descriptorSet,
             if (topic == "status") "naogateway.proto.Status" else "naogateway.proto.RobotHealth")
           if (field != null) withClue(field)(schema.findFieldByName(field) should not be null)
+        case "/gateway/decisions" => () // JSON without a schema: a raw-messages panel shows it whole
         case other => fail(s"$other is no topic of the feed")
       }
       // Every panel the layout places is configured.
