@@ -1,5 +1,7 @@
 package apps.web
 
+import scala.concurrent.ExecutionContext
+
 import akka.NotUsed
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, PostStop}
@@ -12,8 +14,10 @@ import robotmiddleware.RobotMiddleware
 
 /**
  * The one owner of what the web view shows ([[WebModel]]). It asks the gateway's read-only view as the status view
- * does, and subscribes at the middleware to robot events and to each robot's HaViMo2 frames; every `push-interval`
- * it renders one JSON push that every connected page shares (a broadcast hub, so the cost does not grow with pages).
+ * does, and subscribes at the middleware to robot events and, while at least one page is connected, to each robot's
+ * HaViMo2 frames (the camera costs the robots' WiFi budget: with no page open nobody asks for it); every
+ * `push-interval` it renders one JSON push that every connected page shares (a broadcast hub, so the cost does not
+ * grow with pages).
  */
 object WebView {
 
@@ -42,14 +46,22 @@ object WebView {
   private final case class Stats(stats: Gateway.GatewayStats) extends Command
   private final case class Event(event: RobotEvent) extends Command
   private final case class Vision(frame: VisionFrame) extends Command
+  private case object PageJoined extends Command
+  private case object PageLeft extends Command
 
-  /** The view's state between messages: the model and what the last push and grid carried. */
+  /**
+   * The view's state between messages: the model, what the last push and grid carried, the pages connected, and the
+   * camera watcher (a child that forwards frames, there while `pages > 0`; stopping it ends its watches, and the
+   * robots switch the camera options off).
+   */
   private final case class State(
       model: WebModel,
       pushedEvents: Long,
       pushedSamples: Long,
       answered: Boolean,
       watched: Set[Int],
+      pages: Int,
+      camera: Option[ActorRef[VisionFrame]],
       gridsSent: Map[Int, Long],
       gridsAtNanos: Long,
       pushedAtNanos: Long,
@@ -72,7 +84,7 @@ object WebView {
         middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
         val signing = GatewaySettings(context.system)
         new View(gateway, middleware, settings, context, queue, hub, signing).running(State(
-          WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, Map.empty, 0L, 0L, Figures(0, 0, 0)))
+          WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, 0, None, Map.empty, 0L, 0L, Figures(0, 0, 0)))
       }
     }
 
@@ -85,7 +97,9 @@ object WebView {
     private val trafficAdapter = context.messageAdapter(Traffic.apply)
     private val sourceAdapter = context.messageAdapter(GameSourceIs.apply)
     private val statsAdapter = context.messageAdapter(Stats.apply)
-    private val visionAdapter = context.messageAdapter(Vision.apply)
+
+    // The view's own ref, for the page streams and the camera watcher (which must not touch this context).
+    private val self = context.self
 
     private def t: Double = (System.nanoTime() - started) / 1e9
 
@@ -132,9 +146,10 @@ object WebView {
         // answer is late (a robot actor slow to answer), the next tick pushes what there is.
         running(if (s.answered) s.copy(answered = false) else push(s))
       case Robots(robots) =>
-        // Each robot's frames are watched from the first time it is listed (the middleware ends the watch with us).
-        val fresh = robots.map(_.robotId).filterNot(s.watched)
-        fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, visionAdapter, grid = true))
+        // While a page is open, each robot's frames are watched from the first time it is listed (the middleware ends
+        // the watch when the camera watcher stops).
+        val fresh = s.camera.fold(Vector.empty[Int])(_ => robots.map(_.robotId).filterNot(s.watched))
+        s.camera.foreach(camera => fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, camera, grid = true)))
         val model = s.model.withRobots(robots).copy(signing = robots.map(r => r.robotId -> gatewaySettings.signingOf(r.robotId).name).toMap)
         running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
       case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
@@ -147,8 +162,26 @@ object WebView {
       case Vision(VisionFrame.Grid(id, frame, _, grid))       => running(s.copy(model = s.model.withGrid(id, frame, grid.cells.toArray)))
       case Sample         => running(s.copy(model = s.model.sampled(t)))
       case Connect(replyTo) =>
-        replyTo ! Feed(WebJson.push(s.model, t, s.model.maxEvents, s.model.historyPoints, s.model.vision.keySet, hello = true), hub)
+        // A page counts from when its stream runs until it ends, however it ends.
+        val pushes = hub.watchTermination() { (_, done) =>
+          self ! PageJoined
+          done.onComplete(_ => self ! PageLeft)(ExecutionContext.parasitic)
+          NotUsed
+        }
+        replyTo ! Feed(WebJson.push(s.model, t, s.model.maxEvents, s.model.historyPoints, s.model.vision.keySet, hello = true), pushes)
         Behaviors.same
+      case PageJoined =>
+        // The first page starts a camera watcher; the robots it knows are watched at the next answer of the gateway.
+        val camera = s.camera.orElse(Some(context.spawnAnonymous(Behaviors.receiveMessage[VisionFrame] { frame =>
+          self ! Vision(frame)
+          Behaviors.same
+        })))
+        running(s.copy(pages = s.pages + 1, camera = camera))
+      case PageLeft if s.pages > 1 => running(s.copy(pages = s.pages - 1))
+      case PageLeft =>
+        // The last page left: the watcher stops, the middleware ends its watches, and the robots' cameras go quiet.
+        s.camera.foreach(context.stop)
+        running(s.copy(pages = 0, camera = None, watched = Set.empty))
       case GetFigures(replyTo) =>
         replyTo ! s.figures
         Behaviors.same
