@@ -30,7 +30,10 @@ trait RobotInterface {
   /** Every known robot's latest snapshot. */
   def robots(): Future[Vector[RobotSnapshot]]
 
-  /** Takes the leases of `groups` on a robot; fails with `LeaseNotHeld` when a holder of equal or higher priority has one. */
+  /**
+   * Takes the leases of `groups` on a robot as one: all of them, or, failing with `LeaseNotHeld` when a holder of equal
+   * or higher priority has any of them, none.
+   */
   def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done]
 
   /** Gives leases back (releasing `walk` stops the robot). */
@@ -149,14 +152,15 @@ object RobotClient {
     // Robot id 0: the list concerns no single robot.
     def robots(): Future[Vector[RobotSnapshot]] = ask[Vector[RobotSnapshot]](0, "robots")(RobotMiddleware.ListRobots(_))
 
+    // One request for the whole set, so the middleware grants all of it or nothing; no groups is nothing to ask.
     def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] =
-      Future
-        .traverse(groups.distinct) { g =>
-          ask[RobotMiddleware.LeaseResult](robotId, s"acquire ${g.name}")(RobotMiddleware.Acquire(session, robotId, g, _)).flatMap { r =>
-            r.result.fold(Future.failed, _ => Future.successful(Done))
-          }
-        }
-        .map(_ => Done)
+      if (groups.isEmpty) Future.successful(Done)
+      else {
+        val set = groups.toSet
+        ask[RobotMiddleware.LeaseResult](robotId, s"acquire ${ActuatorGroup.all.filter(set).map(_.name).mkString(",")}")(
+          RobotMiddleware.Acquire(session, robotId, set, _)
+        ).flatMap(r => r.result.fold(Future.failed, _ => Future.successful(Done)))
+      }
 
     def release(robotId: Int, groups: ActuatorGroup*): Unit =
       groups.foreach(g => middleware ! RobotMiddleware.Release(session, robotId, g))
