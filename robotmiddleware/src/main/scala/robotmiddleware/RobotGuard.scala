@@ -325,7 +325,7 @@ private[robotmiddleware] object RobotGuard {
       }
 
     private def askSafety(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
-      implicit val askTimeout: Timeout = timeout + 1.second
+      implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
         case Failure(_)      => SafetyStepDone(step, CallResult(robotId, rpc.name, Left(RobotFailure.Timeout(robotId, rpc.name, (timeout).toMillis))))
@@ -377,7 +377,7 @@ private[robotmiddleware] object RobotGuard {
 
     private def call(c: RobotActor.Connected, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
         priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
-      implicit val askTimeout: Timeout = timeout + 1.second
+      implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
         case Success(result) =>
           OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))

@@ -95,13 +95,14 @@ object RobotClient {
   def find(system: ActorSystem[_], within: FiniteDuration = 10.seconds): Future[ActorRef[RobotMiddleware.Command]] = {
     implicit val ec: ExecutionContext = system.executionContext
     val deadline = within.fromNow
+    val retry = MiddlewareSettings(system).clientFindRetry
     def attempt(): Future[ActorRef[RobotMiddleware.Command]] =
       system.receptionist.ask[Receptionist.Listing](Receptionist.Find(RobotMiddleware.ServiceKey, _))(Timeout(within), system.scheduler)
         .flatMap { listing =>
           listing.serviceInstances(RobotMiddleware.ServiceKey).headOption match {
             case Some(ref) => Future.successful(ref)
             case None if deadline.hasTimeLeft() =>
-              akka.pattern.after(200.millis)(attempt())(system)
+              akka.pattern.after(retry)(attempt())(system)
             case None => Future.failed(new NoSuchElementException(s"no robot middleware found within $within"))
           }
         }
@@ -132,8 +133,8 @@ object RobotClient {
       timeout: FiniteDuration
   ) extends RobotInterface {
     private implicit val s: ActorSystem[_] = system
-    // Posture changes take seconds on the robot; the ask outlives the middleware's own timeouts.
-    private implicit val askTimeout: Timeout = Timeout(timeout + 5.seconds)
+    // Posture changes take seconds on the robot; the ask outlives the middleware's own timeouts (client.ask-margin).
+    private implicit val askTimeout: Timeout = Timeout(timeout + MiddlewareSettings(system).clientAskMargin)
     private implicit val ec: ExecutionContext = system.executionContext
 
     /** An ask of the middleware whose lost answer fails as `RobotFailure.Timeout`, as every failure here is one. */

@@ -4,8 +4,7 @@ import naogateway.wire.ActuatorGroup
 
 import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
-import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
-import scala.concurrent.duration._
+import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway._
 import naogateway.wire.RpcValue
@@ -115,14 +114,14 @@ object RobotMiddleware {
       guards.getOrElse(robotId, {
         val g = context.spawn(
           Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
-            .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)),
+            .onFailure(settings.guardRestart.strategy),
           s"guard-$robotId"
         )
         guards = guards.updated(robotId, g)
         g
       })
 
-    private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(3.seconds)
+    private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(settings.lookupTimeout)
 
     /** Hands `command` to the robot's guard, first finding the robot at the gateway when there is no guard yet. */
     private def withGuard(robotId: Int, command: Command)(use: ActorRef[RobotGuard.Command] => Unit): Unit =
