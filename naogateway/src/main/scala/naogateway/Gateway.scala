@@ -106,12 +106,6 @@ object Gateway {
       rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = Recording.Off.stats,
       replay: Option[Replay.Progress] = None)
 
-  /** Datagrams the port's reader hands one robot actor that may wait in its mailbox before more are dropped. */
-  val RobotBacklog: Int = 256
-
-  /** Frames the port's reader hands the gateway (unknown senders, discovery) that may wait before more are dropped. */
-  val GatewayBacklog: Int = 1024
-
   /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
   val InboundBatch: Int = 64
 
@@ -336,7 +330,7 @@ object Gateway {
   ) {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
     private val rejections = new Rejections
-    private val gatewayBacklog = new Backlog(GatewayBacklog)
+    private val gatewayBacklog = new Backlog(settings.gatewayBacklog)
     private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
     private var gameControllerAddress: Option[InetSocketAddress] = None
     private var byId = Map.empty[Int, Entry]
@@ -466,7 +460,7 @@ object Gateway {
       byId.map { case (id, e) => id -> (e.actor -> e.address) }
 
     private def spawnRobot(robotId: Int, address: InetSocketAddress, discovered: Boolean): Entry = {
-      val backlog = new Backlog(RobotBacklog)
+      val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false, discovered = discovered))
           .onFailure(settings.supervision.robot.strategy),
@@ -487,7 +481,7 @@ object Gateway {
 
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
     private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
-      val backlog = new Backlog(RobotBacklog)
+      val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
           RobotActor.Transport.ZeroMq(robot.endpoint)))

@@ -185,9 +185,13 @@ final case class GatewaySettings(
     monitor: Option[MonitorSettings] = None,
     gameControllerMaxDatagramsPerSecond: Int = 500,
     snapshotTimeout: FiniteDuration = 1.second,
+    robotBacklog: Int = 256,
+    gatewayBacklog: Int = 1024,
     supervision: SupervisionSettings = SupervisionSettings()
 ) {
   require(gameControllerMaxDatagramsPerSecond > 0, "game-controller.max-datagrams-per-second must be positive")
+  require(robotBacklog >= 1 && robotBacklog <= 100000, "link.robot-backlog must be between 1 and 100000")
+  require(gatewayBacklog >= 1 && gatewayBacklog <= 100000, "link.gateway-backlog must be between 1 and 100000")
   require(snapshotTimeout >= 10.millis && snapshotTimeout <= 1.minute, "snapshot-timeout must be between 10 ms and 1 min")
   monitor.foreach { _ =>
     val conflicts = MonitorRole.conflicts(robots, bindAddress)
@@ -312,6 +316,8 @@ object GatewaySettings {
       },
       gameControllerMaxDatagramsPerSecond = gc.getInt("max-datagrams-per-second"),
       snapshotTimeout = duration(c, "snapshot-timeout"),
+      robotBacklog = link.getInt("robot-backlog"),
+      gatewayBacklog = link.getInt("gateway-backlog"),
       supervision = SupervisionSettings(RestartBackoff.fromConfig(c, "supervision.outbox"),
         RestartBackoff.fromConfig(c, "supervision.robot"), RestartBackoff.fromConfig(c, "supervision.robot-children")),
       monitor = {

@@ -24,9 +24,11 @@ class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckProper
       s.newSessionKeepAlives shouldBe 3
     }
 
-    "read the outbox's queue bound, the snapshot timeout and the restart back-offs from reference.conf" in {
+    "read the outbox's queue bound, the backlogs, the snapshot timeout and the restart back-offs from reference.conf" in {
       val s = settings()
       s.budget.queueCapacity shouldBe 1024
+      s.robotBacklog shouldBe 256
+      s.gatewayBacklog shouldBe 1024
       s.snapshotTimeout shouldBe 1.second
       s.supervision shouldBe SupervisionSettings(
         outbox = RestartBackoff(100.millis, 5.seconds, 0.2),
@@ -39,9 +41,13 @@ class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckProper
       settings("supervision.robot.max-backoff = 30s").supervision.robot.maxBackoff shouldBe 30.seconds
     }
 
-    "refuse a queue bound, snapshot timeout or back-off that bounds nothing, naming the key" in {
+    "refuse a queue bound, backlog, snapshot timeout or back-off that bounds nothing, naming the key" in {
       the[IllegalArgumentException] thrownBy settings("budget.queue-capacity = 0") should have message
         "requirement failed: budget.queue-capacity must be between 1 and 1000000"
+      the[IllegalArgumentException] thrownBy settings("link.robot-backlog = 0") should have message
+        "requirement failed: link.robot-backlog must be between 1 and 100000"
+      the[IllegalArgumentException] thrownBy settings("link.gateway-backlog = 0") should have message
+        "requirement failed: link.gateway-backlog must be between 1 and 100000"
       the[IllegalArgumentException] thrownBy settings("snapshot-timeout = 0s") should have message
         "requirement failed: snapshot-timeout must be between 10 ms and 1 min"
       the[IllegalArgumentException] thrownBy settings("supervision.robot.max-backoff = 100ms") should have message
