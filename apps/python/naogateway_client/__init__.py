@@ -180,7 +180,7 @@ class GatewayClient:
         return snapshot
 
     def acquire(self, robot_id: int, *groups: str) -> Value:
-        """Takes the leases of these ACTUATOR_GROUPS on the robot."""
+        """Takes the leases of these ACTUATOR_GROUPS on the robot, all of them or none."""
         return self.call(robot_id, "gateway", "acquire", *groups)
 
     def release(self, robot_id: int, *groups: str) -> Value:

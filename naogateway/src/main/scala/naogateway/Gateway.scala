@@ -5,7 +5,7 @@ import java.util.concurrent.ConcurrentHashMap
 import java.util.concurrent.atomic.{AtomicLong, AtomicReference}
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
-import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop, SupervisorStrategy}
+import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop}
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
 import scala.reflect.ClassTag
@@ -33,13 +33,13 @@ object Gateway {
   /** Answers with the bound addresses (the real ports when 0 was configured). */
   final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Query
 
-  /** Answers with every known robot's snapshot, asked of the robot actors ([[SnapshotTimeout]] for each). */
+  /** Answers with every known robot's snapshot, asked of the robot actors (`snapshot-timeout` for each). */
   final case class GetRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Query
 
   /** Answers with the robot actor of `robotId`, if the robot is known. */
   final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]]) extends Command
 
-  /** Answers with every known robot's link figures, asked of the robot actors ([[SnapshotTimeout]] for each). */
+  /** Answers with every known robot's link figures, asked of the robot actors (`snapshot-timeout` for each). */
   final case class GetLinkStats(replyTo: ActorRef[RobotLinks]) extends Query
 
   /** The link figures of every robot whose actor answered `GetLinkStats` in time, by robot id. */
@@ -106,15 +106,6 @@ object Gateway {
       rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = Recording.Off.stats,
       replay: Option[Replay.Progress] = None)
 
-  /** How long `GetRobots` waits for each robot actor; one that does not answer in time is listed as not reached. */
-  val SnapshotTimeout: FiniteDuration = 1.second
-
-  /** Datagrams the port's reader hands one robot actor that may wait in its mailbox before more are dropped. */
-  val RobotBacklog: Int = 256
-
-  /** Frames the port's reader hands the gateway (unknown senders, discovery) that may wait before more are dropped. */
-  val GatewayBacklog: Int = 1024
-
   /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
   val InboundBatch: Int = 64
 
@@ -168,7 +159,7 @@ object Gateway {
         val outbox = context.spawn(
           Behaviors.supervise(Outbox(recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
             settings.competition, signer, recording))
-            .onFailure(SupervisorStrategy.restartWithBackoff(100.millis, 5.seconds, 0.2)),
+            .onFailure(settings.supervision.outbox.strategy),
           "outbox",
           RobotDispatcher
         )
@@ -339,7 +330,7 @@ object Gateway {
   ) {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
     private val rejections = new Rejections
-    private val gatewayBacklog = new Backlog(GatewayBacklog)
+    private val gatewayBacklog = new Backlog(settings.gatewayBacklog)
     private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
     private var gameControllerAddress: Option[InetSocketAddress] = None
     private var byId = Map.empty[Int, Entry]
@@ -469,10 +460,10 @@ object Gateway {
       byId.map { case (id, e) => id -> (e.actor -> e.address) }
 
     private def spawnRobot(robotId: Int, address: InetSocketAddress, discovered: Boolean): Entry = {
-      val backlog = new Backlog(RobotBacklog)
+      val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false, discovered = discovered))
-          .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
+          .onFailure(settings.supervision.robot.strategy),
         s"robot-$robotId",
         RobotDispatcher
       )
@@ -490,11 +481,11 @@ object Gateway {
 
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
     private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
-      val backlog = new Backlog(RobotBacklog)
+      val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
           RobotActor.Transport.ZeroMq(robot.endpoint)))
-          .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 10.seconds, 0.2)),
+          .onFailure(settings.supervision.robot.strategy),
         s"robot-${robot.robotId}",
         RobotDispatcher
       )
@@ -631,13 +622,13 @@ object Gateway {
         case GetRobots(replyTo) =>
           if (byId.isEmpty) replyTo ! Vector.empty
           else
-            context.spawnAnonymous(Collector(robotRefs, replyTo ! (_: Vector[RobotSnapshot]))(RobotActor.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
+            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, replyTo ! (_: Vector[RobotSnapshot]))(RobotActor.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
               (id, address) => Some(RobotSnapshot(id, address))))
           Behaviors.same
         case GetLinkStats(replyTo) =>
           if (byId.isEmpty) replyTo ! RobotLinks(Vector.empty)
           else
-            context.spawnAnonymous(Collector(robotRefs, (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotActor.GetLinkStats(_),
+            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotActor.GetLinkStats(_),
               (l: LinkStats) => l.robotId, (_, _) => None))
           Behaviors.same
         case GetRobot(robotId, replyTo) =>
@@ -724,21 +715,22 @@ object Gateway {
 
   /**
    * One question to every robot actor (`GetRobots`, `GetLinkStats`): asks each, and answers once all did or
-   * [[SnapshotTimeout]] passed. A robot actor that did not answer in time (restarting) is listed by `missing`.
+   * `timeout` (`snapshot-timeout`) passed. A robot actor that did not answer in time (restarting) is listed by `missing`.
    */
   private object Collector {
     sealed trait Message
     private final case class Got[A](robotId: Int, answer: A) extends Message
     private case object TimedOut extends Message
 
-    def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], replyTo: Vector[A] => Unit)(
+    def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], timeout: FiniteDuration,
+        replyTo: Vector[A] => Unit)(
         ask: ActorRef[A] => RobotActor.Command, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A]): Behavior[Message] =
       Behaviors.setup[Message] { context =>
         Behaviors.withTimers { timers =>
           // One adapter for the one reply class this collector waits for.
           val got = context.messageAdapter[A](a => Got(idOf(a), a))
           robots.values.foreach { case (actor, _) => actor ! ask(got) }
-          timers.startSingleTimer(TimedOut, SnapshotTimeout)
+          timers.startSingleTimer(TimedOut, timeout)
           def answer(known: Map[Int, A]): Behavior[Message] = {
             replyTo(robots.toVector.sortBy(_._1).flatMap { case (id, (_, address)) => known.get(id).orElse(missing(id, address)) })
             Behaviors.stopped

@@ -61,13 +61,15 @@ final case class CallSettings(timeout: FiniteDuration, idempotentRetries: Int, s
   require(stashCapacity >= 1, "calls.stash-capacity must be at least 1")
 }
 
-/** The team's traffic budget. */
-final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: Int, warnAt: Double, probeShare: Double = 0.1) {
+/** The team's traffic budget, and the datagrams each priority class may queue behind it. */
+final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: Int, warnAt: Double, probeShare: Double = 0.1,
+    queueCapacity: Int = 1024) {
   require(teamBytesPerSecond >= 1400, "budget.team-bytes-per-second must allow at least one datagram")
   require(robotBytesPerSecond == 0 || robotBytesPerSecond >= 1400, "budget.robot-bytes-per-second is 0 (none) or >= 1400")
   require(warnAt > 0 && warnAt <= 1, "budget.warn-at must be in (0, 1]")
   require(probeShare > 0 && probeShare <= 1, "budget.probe-share must be in (0, 1]")
   require(probeBytesPerSecond >= 100, "budget.probe-share of the team budget must allow at least 100 bytes per second")
+  require(queueCapacity >= 1 && queueCapacity <= 1000000, "budget.queue-capacity must be between 1 and 1000000")
 
   /** The most bytes heartbeat probes may take in any 1 s window. */
   def probeBytesPerSecond: Long = (teamBytesPerSecond * probeShare).toLong
@@ -128,6 +130,34 @@ final case class ZeroMqLinkSettings(
   require(robots.map(_.robotId).distinct.size == robots.size, "zeromq.robots: every robot id may appear only once")
 }
 
+/** How a supervisor restarts a failed actor: the pause doubles from `minBackoff` up to `maxBackoff`, with jitter. */
+final case class RestartBackoff(minBackoff: FiniteDuration, maxBackoff: FiniteDuration, randomFactor: Double) {
+  require(minBackoff > Duration.Zero && maxBackoff >= minBackoff, "a restart back-off needs 0 < min-backoff <= max-backoff")
+  require(randomFactor >= 0 && randomFactor <= 1, "a restart back-off's random-factor must be between 0 and 1")
+
+  /** The supervisor strategy of these figures. */
+  def strategy: akka.actor.typed.BackoffSupervisorStrategy =
+    akka.actor.typed.SupervisorStrategy.restartWithBackoff(minBackoff, maxBackoff, randomFactor)
+}
+
+/** Reading a restart back-off block (`min-backoff`, `max-backoff`, `random-factor`). */
+object RestartBackoff {
+
+  /** The back-off of block `c`; `key` names it in the error of a bad value. */
+  def fromConfig(c: Config, key: String): RestartBackoff = {
+    val b = c.getConfig(key)
+    try RestartBackoff(b.getDuration("min-backoff").toScala, b.getDuration("max-backoff").toScala, b.getDouble("random-factor"))
+    catch { case e: IllegalArgumentException => throw new IllegalArgumentException(s"$key: ${e.getMessage.stripPrefix("requirement failed: ")}") }
+  }
+}
+
+/** The restart back-offs of the gateway's supervised actors (`naogateway.supervision`). */
+final case class SupervisionSettings(
+    outbox: RestartBackoff = RestartBackoff(100.millis, 5.seconds, 0.2),
+    robot: RestartBackoff = RestartBackoff(200.millis, 10.seconds, 0.2),
+    robotChildren: RestartBackoff = RestartBackoff(200.millis, 5.seconds, 0.2)
+)
+
 /** Everything the gateway reads from `naogateway { ... }`. */
 final case class GatewaySettings(
     bindAddress: String,
@@ -153,9 +183,16 @@ final case class GatewaySettings(
     recording: RecordingSettings = RecordingSettings.Off,
     teamMessages: TeamMessageSettings = TeamMessageSettings(),
     monitor: Option[MonitorSettings] = None,
-    gameControllerMaxDatagramsPerSecond: Int = 500
+    gameControllerMaxDatagramsPerSecond: Int = 500,
+    snapshotTimeout: FiniteDuration = 1.second,
+    robotBacklog: Int = 256,
+    gatewayBacklog: Int = 1024,
+    supervision: SupervisionSettings = SupervisionSettings()
 ) {
   require(gameControllerMaxDatagramsPerSecond > 0, "game-controller.max-datagrams-per-second must be positive")
+  require(robotBacklog >= 1 && robotBacklog <= 100000, "link.robot-backlog must be between 1 and 100000")
+  require(gatewayBacklog >= 1 && gatewayBacklog <= 100000, "link.gateway-backlog must be between 1 and 100000")
+  require(snapshotTimeout >= 10.millis && snapshotTimeout <= 1.minute, "snapshot-timeout must be between 10 ms and 1 min")
   monitor.foreach { _ =>
     val conflicts = MonitorRole.conflicts(robots, bindAddress)
     require(conflicts.isEmpty, conflicts.mkString("; "))
@@ -244,7 +281,7 @@ object GatewaySettings {
       heartbeat = heartbeat,
       calls = CallSettings(duration(calls, "timeout"), calls.getInt("idempotent-retries"), calls.getInt("stash-capacity")),
       budget = BudgetSettings(budget.getInt("team-bytes-per-second"), budget.getInt("robot-bytes-per-second"),
-        budget.getDouble("warn-at"), budget.getDouble("probe-share")),
+        budget.getDouble("warn-at"), budget.getDouble("probe-share"), budget.getInt("queue-capacity")),
       competition = c.getBoolean("competition.enabled"),
       stream = StreamSettings(
         window = stream.getInt("window"),
@@ -278,6 +315,11 @@ object GatewaySettings {
           t.getDuration("rate-window").getSeconds.toInt, t.getInt("max-datagrams-per-second"))
       },
       gameControllerMaxDatagramsPerSecond = gc.getInt("max-datagrams-per-second"),
+      snapshotTimeout = duration(c, "snapshot-timeout"),
+      robotBacklog = link.getInt("robot-backlog"),
+      gatewayBacklog = link.getInt("gateway-backlog"),
+      supervision = SupervisionSettings(RestartBackoff.fromConfig(c, "supervision.outbox"),
+        RestartBackoff.fromConfig(c, "supervision.robot"), RestartBackoff.fromConfig(c, "supervision.robot-children")),
       monitor = {
         val m = gc.getConfig("monitor")
         if (!m.getBoolean("enabled")) None

@@ -111,9 +111,6 @@ object Outbox {
     def teamLoad: Double = (outBytesLastSecond + inBytesLastSecond).toDouble / budgetBytesPerSecond
   }
 
-  /** Datagrams of one class that may wait before the oldest is dropped. */
-  val QueueCapacity: Int = 1024
-
   private val Second = 1000000000L
 
   /**
@@ -262,11 +259,11 @@ private final class Outbox(
           transmit(now, s)
           record(now, s, "sent")
           s.replyTo.foreach(_ ! Accepted(s.tag))
-        } else if (queues(rank).size >= QueueCapacity) {
+        } else if (queues(rank).size >= budget.queueCapacity) {
           dropped += 1
           droppedByClass(rank) += 1
           record(now, s, "dropped")
-          s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds $QueueCapacity datagrams already"))
+          s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds ${budget.queueCapacity} datagrams already"))
           // Per class at its 1st, 10th, 100th ... drop: a flood of probes cannot flood the log.
           if (RateLimitedLog.due(droppedByClass(rank)))
             log.warn("Outbox dropped {} datagram(s) so far: {} queue full", droppedByClass(rank), s.priority.name)

@@ -62,6 +62,8 @@ object ResponseActor {
   }
 
   /** Calls in flight at once; more wait so the robot's 1400-byte module buffer is not flooded. Safety never waits. */
+  // Fixed, not a setting: the bound follows from the one 1400-byte buffer the robot's module has for both directions
+  // (protocol.md 1), which no gateway configuration changes; a larger value would let replies overrun it.
   val MaxInFlight: Int = 4
 
   /** What the owner keeps with a call: `ids` are the call ids of its attempts, the first one being its key. */

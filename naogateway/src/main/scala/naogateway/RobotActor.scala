@@ -5,7 +5,7 @@ import java.net.InetSocketAddress
 import scala.concurrent.duration._
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
-import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
+import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.{Backlog, ZeroMqRobotLink}
 import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames}
@@ -101,7 +101,10 @@ object RobotActor {
   private final case class Forget(reason: String) extends Command
   private case object ForgetKey
 
-  /** How often `optionPull` is repeated until the robot's `optionPush` arrives (protocol.md 8, step 1). */
+  /**
+   * How often `optionPull` is repeated until the robot's `optionPush` arrives. Fixed, not a setting: protocol.md 8,
+   * step 1 gives robots this period ("about every second"), and a robot's firmware is written against it.
+   */
   val OptionPullInterval: FiniteDuration = 1.second
 
   /** How a robot is reached. */
@@ -154,8 +157,6 @@ object RobotActor {
 
   /** Events a robot actor holds while it waits for the gateway's subscriber list. */
   private val HeldEvents = 64
-
-  private val ChildRestarts = SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)
 
   /**
    * A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once).
@@ -238,6 +239,8 @@ object RobotActor {
     // The camera streams of this robot and whether each wants grid frames: kept here, so a restarted vision actor
     // gets them back (VisionSubscribersWanted). Apps subscribe through the middleware, one stream each.
     private var visionSubscribers = Map.empty[ActorRef[VisionFrame], Boolean]
+    // How every child is restarted (naogateway.supervision.robot-children).
+    private val childRestarts = settings.supervision.robotChildren.strategy
 
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       address = at
@@ -247,13 +250,13 @@ object RobotActor {
           val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
           zeroMqLink = Some(context.spawn(
             Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq, settings.competition,
-              context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(ChildRestarts),
+              context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(childRestarts),
             "zeromq-link"
           ))
         case Transport.Datagrams => ()
       }
       val heartbeat = context.spawn(
-        Behaviors.supervise(HeartBeatActor(heartbeatSettings, heartbeatReports, online = false)).onFailure(ChildRestarts),
+        Behaviors.supervise(HeartBeatActor(heartbeatSettings, heartbeatReports, online = false)).onFailure(childRestarts),
         "heartbeat",
         Gateway.RobotDispatcher
       )
@@ -265,13 +268,13 @@ object RobotActor {
     private def spawnChildren(heartbeat: ActorRef[HeartBeatActor.Command]): Children = {
       val self = context.self
       val response =
-        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(ChildRestarts), "response", Gateway.RobotDispatcher)
+        context.spawn(Behaviors.supervise(ResponseActor(robotId, settings.calls, self, online = true)).onFailure(childRestarts), "response", Gateway.RobotDispatcher)
       Children(
         heartbeat,
         response,
-        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, response)).onFailure(ChildRestarts), "no-response", Gateway.RobotDispatcher),
-        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(ChildRestarts), "vision", Gateway.RobotDispatcher),
-        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(ChildRestarts), "stream", Gateway.RobotDispatcher)
+        context.spawn(Behaviors.supervise(NoResponseActor(robotId, settings.calls, response)).onFailure(childRestarts), "no-response", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(VisionActor(robotId, self)).onFailure(childRestarts), "vision", Gateway.RobotDispatcher),
+        context.spawn(Behaviors.supervise(StreamActor(robotId, settings.stream, self)).onFailure(childRestarts), "stream", Gateway.RobotDispatcher)
       )
     }
 

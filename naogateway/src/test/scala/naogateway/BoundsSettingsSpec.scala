@@ -24,6 +24,38 @@ class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckProper
       s.newSessionKeepAlives shouldBe 3
     }
 
+    "read the outbox's queue bound, the backlogs, the snapshot timeout and the restart back-offs from reference.conf" in {
+      val s = settings()
+      s.budget.queueCapacity shouldBe 1024
+      s.robotBacklog shouldBe 256
+      s.gatewayBacklog shouldBe 1024
+      s.snapshotTimeout shouldBe 1.second
+      s.supervision shouldBe SupervisionSettings(
+        outbox = RestartBackoff(100.millis, 5.seconds, 0.2),
+        robot = RestartBackoff(200.millis, 10.seconds, 0.2),
+        robotChildren = RestartBackoff(200.millis, 5.seconds, 0.2)
+      )
+      // The case class's defaults are the same figures, so code that builds settings by hand behaves as configured.
+      s.supervision shouldBe SupervisionSettings()
+      settings("budget.queue-capacity = 16").budget.queueCapacity shouldBe 16
+      settings("supervision.robot.max-backoff = 30s").supervision.robot.maxBackoff shouldBe 30.seconds
+    }
+
+    "refuse a queue bound, backlog, snapshot timeout or back-off that bounds nothing, naming the key" in {
+      the[IllegalArgumentException] thrownBy settings("budget.queue-capacity = 0") should have message
+        "requirement failed: budget.queue-capacity must be between 1 and 1000000"
+      the[IllegalArgumentException] thrownBy settings("link.robot-backlog = 0") should have message
+        "requirement failed: link.robot-backlog must be between 1 and 100000"
+      the[IllegalArgumentException] thrownBy settings("link.gateway-backlog = 0") should have message
+        "requirement failed: link.gateway-backlog must be between 1 and 100000"
+      the[IllegalArgumentException] thrownBy settings("snapshot-timeout = 0s") should have message
+        "requirement failed: snapshot-timeout must be between 10 ms and 1 min"
+      the[IllegalArgumentException] thrownBy settings("supervision.robot.max-backoff = 100ms") should have message
+        "supervision.robot: a restart back-off needs 0 < min-backoff <= max-backoff"
+      the[IllegalArgumentException] thrownBy settings("supervision.robot-children.random-factor = 2") should have message
+        "supervision.robot-children: a restart back-off's random-factor must be between 0 and 1"
+    }
+
     "name the new key when a config still sets discover-from-keep-alive" in {
       val e = intercept[IllegalArgumentException](settings("discover-from-keep-alive = off"))
       e.getMessage should include("discovery.enabled")

@@ -6,6 +6,8 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
+import naogateway.RestartBackoff
+
 /** Settings of the middleware (`robotmiddleware { ... }`). */
 final case class MiddlewareSettings(
     lowBattery: Double,
@@ -15,7 +17,12 @@ final case class MiddlewareSettings(
     postureTimeout: FiniteDuration,
     linkStatsInterval: FiniteDuration,
     pendingLimit: Int,
-    batteryReadings: Int = 5
+    batteryReadings: Int = 5,
+    lookupTimeout: FiniteDuration = 3.seconds,
+    askMargin: FiniteDuration = 1.second,
+    guardRestart: RestartBackoff = RestartBackoff(200.millis, 5.seconds, 0.2),
+    clientAskMargin: FiniteDuration = 5.seconds,
+    clientFindRetry: FiniteDuration = 200.millis
 ) {
   require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
   require(walkRefresh > Duration.Zero && walkRefresh < 500.millis, "walk-refresh must be inside the robot's 500 ms walk lease")
@@ -23,6 +30,10 @@ final case class MiddlewareSettings(
   require(linkStatsInterval > Duration.Zero, "link-stats-interval must be positive")
   require(pendingLimit >= 1, "pending-limit must be at least 1")
   require(batteryReadings >= 1 && batteryReadings <= 100, "safety.battery-readings must be from 1 to 100")
+  require(lookupTimeout > Duration.Zero, "lookup-timeout must be positive")
+  require(askMargin > Duration.Zero, "ask-margin must be positive")
+  require(clientAskMargin > Duration.Zero, "client.ask-margin must be positive")
+  require(clientFindRetry >= 10.millis, "client.find-retry must be at least 10 ms")
 }
 
 /** Reading the settings. */
@@ -40,6 +51,11 @@ object MiddlewareSettings {
     c.getDuration("posture-timeout").toScala,
     c.getDuration("link-stats-interval").toScala,
     c.getInt("pending-limit"),
-    c.getInt("safety.battery-readings")
+    c.getInt("safety.battery-readings"),
+    c.getDuration("lookup-timeout").toScala,
+    c.getDuration("ask-margin").toScala,
+    RestartBackoff.fromConfig(c, "supervision.guard"),
+    c.getDuration("client.ask-margin").toScala,
+    c.getDuration("client.find-retry").toScala
   )
 }

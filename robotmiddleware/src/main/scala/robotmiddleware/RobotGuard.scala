@@ -23,8 +23,8 @@ private[robotmiddleware] object RobotGuard {
 
   /** Runs an app's operation if the app holds its lease, the robot is online and no safety hold forbids it. */
   final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult]) extends Command
-  /** Asks for the lease of one actuator group at the app's priority. */
-  final case class Acquire(app: AppInfo, group: ActuatorGroup, replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
+  /** Asks for the leases of a set of actuator groups at the app's priority: all of them or none. */
+  final case class Acquire(app: AppInfo, groups: Set[ActuatorGroup], replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
   /** Gives a lease back. */
   final case class Release(app: ActorRef[AppEvent], group: ActuatorGroup) extends Command
   /** The app's system is gone: release its leases and stop what it left moving. */
@@ -144,7 +144,7 @@ private[robotmiddleware] object RobotGuard {
             case e: Execute =>
               e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
-            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.group, Left(RobotFailure.Overloaded(robotId, "busy")))
+            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.groups, Left(RobotFailure.Overloaded(robotId, "busy")))
             case _          => ()
           }
           else stash.stash(other)
@@ -180,21 +180,26 @@ private[robotmiddleware] object RobotGuard {
           reply(replyTo, operation, Left(RobotFailure.SafetyHold(robotId, safety.get)))
         else run(c, app, operation, replyTo)
         Behaviors.same
-      case Acquire(app, group, replyTo) =>
-        leases.get(group) match {
-          case Some(holder) if holder.events == app.events =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group, Right(()))
-          case Some(holder) if holder.priority >= app.priority =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group,
-              Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
-          case previous =>
-            previous.foreach { holder =>
-              context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name, holder.name, app.name)
-              holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
-              if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
+      case Acquire(app, groups, replyTo) =>
+        // Checked for every group before any is taken: a set with one group held at equal or higher priority takes
+        // nothing, so no app is preempted (and no robot stopped) for a set that is refused. The first conflict in
+        // the docs' group order is named, so the answer does not depend on a Set's iteration order.
+        val conflict = ActuatorGroup.all.filter(groups).flatMap { group =>
+          leases.get(group).filter(holder => holder.events != app.events && holder.priority >= app.priority).map(group -> _)
+        }.headOption
+        conflict match {
+          case Some((group, holder)) =>
+            replyTo ! RobotMiddleware.LeaseResult(robotId, groups, Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
+          case None =>
+            ActuatorGroup.all.filter(groups).foreach { group =>
+              leases.get(group).filter(_.events != app.events).foreach { holder =>
+                context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name, holder.name, app.name)
+                holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
+                if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
+              }
+              leases = leases.updated(group, app)
             }
-            leases = leases.updated(group, app)
-            replyTo ! RobotMiddleware.LeaseResult(robotId, group, Right(()))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, groups, Right(()))
         }
         Behaviors.same
       case Release(app, group) =>
@@ -320,7 +325,7 @@ private[robotmiddleware] object RobotGuard {
       }
 
     private def askSafety(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
-      implicit val askTimeout: Timeout = timeout + 1.second
+      implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
         case Failure(_)      => SafetyStepDone(step, CallResult(robotId, rpc.name, Left(RobotFailure.Timeout(robotId, rpc.name, (timeout).toMillis))))
@@ -372,7 +377,7 @@ private[robotmiddleware] object RobotGuard {
 
     private def call(c: RobotActor.Connected, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
         priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
-      implicit val askTimeout: Timeout = timeout + 1.second
+      implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
         case Success(result) =>
           OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))

@@ -30,7 +30,10 @@ trait RobotInterface {
   /** Every known robot's latest snapshot. */
   def robots(): Future[Vector[RobotSnapshot]]
 
-  /** Takes the leases of `groups` on a robot; fails with `LeaseNotHeld` when a holder of equal or higher priority has one. */
+  /**
+   * Takes the leases of `groups` on a robot as one: all of them, or, failing with `LeaseNotHeld` when a holder of equal
+   * or higher priority has any of them, none.
+   */
   def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done]
 
   /** Gives leases back (releasing `walk` stops the robot). */
@@ -92,13 +95,14 @@ object RobotClient {
   def find(system: ActorSystem[_], within: FiniteDuration = 10.seconds): Future[ActorRef[RobotMiddleware.Command]] = {
     implicit val ec: ExecutionContext = system.executionContext
     val deadline = within.fromNow
+    val retry = MiddlewareSettings(system).clientFindRetry
     def attempt(): Future[ActorRef[RobotMiddleware.Command]] =
       system.receptionist.ask[Receptionist.Listing](Receptionist.Find(RobotMiddleware.ServiceKey, _))(Timeout(within), system.scheduler)
         .flatMap { listing =>
           listing.serviceInstances(RobotMiddleware.ServiceKey).headOption match {
             case Some(ref) => Future.successful(ref)
             case None if deadline.hasTimeLeft() =>
-              akka.pattern.after(200.millis)(attempt())(system)
+              akka.pattern.after(retry)(attempt())(system)
             case None => Future.failed(new NoSuchElementException(s"no robot middleware found within $within"))
           }
         }
@@ -129,8 +133,8 @@ object RobotClient {
       timeout: FiniteDuration
   ) extends RobotInterface {
     private implicit val s: ActorSystem[_] = system
-    // Posture changes take seconds on the robot; the ask outlives the middleware's own timeouts.
-    private implicit val askTimeout: Timeout = Timeout(timeout + 5.seconds)
+    // Posture changes take seconds on the robot; the ask outlives the middleware's own timeouts (client.ask-margin).
+    private implicit val askTimeout: Timeout = Timeout(timeout + MiddlewareSettings(system).clientAskMargin)
     private implicit val ec: ExecutionContext = system.executionContext
 
     /** An ask of the middleware whose lost answer fails as `RobotFailure.Timeout`, as every failure here is one. */
@@ -149,14 +153,15 @@ object RobotClient {
     // Robot id 0: the list concerns no single robot.
     def robots(): Future[Vector[RobotSnapshot]] = ask[Vector[RobotSnapshot]](0, "robots")(RobotMiddleware.ListRobots(_))
 
+    // One request for the whole set, so the middleware grants all of it or nothing; no groups is nothing to ask.
     def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] =
-      Future
-        .traverse(groups.distinct) { g =>
-          ask[RobotMiddleware.LeaseResult](robotId, s"acquire ${g.name}")(RobotMiddleware.Acquire(session, robotId, g, _)).flatMap { r =>
-            r.result.fold(Future.failed, _ => Future.successful(Done))
-          }
-        }
-        .map(_ => Done)
+      if (groups.isEmpty) Future.successful(Done)
+      else {
+        val set = groups.toSet
+        ask[RobotMiddleware.LeaseResult](robotId, s"acquire ${ActuatorGroup.all.filter(set).map(_.name).mkString(",")}")(
+          RobotMiddleware.Acquire(session, robotId, set, _)
+        ).flatMap(r => r.result.fold(Future.failed, _ => Future.successful(Done)))
+      }
 
     def release(robotId: Int, groups: ActuatorGroup*): Unit =
       groups.foreach(g => middleware ! RobotMiddleware.Release(session, robotId, g))

@@ -4,8 +4,7 @@ import naogateway.wire.ActuatorGroup
 
 import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
-import akka.actor.typed.{ActorRef, Behavior, SupervisorStrategy}
-import scala.concurrent.duration._
+import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway._
 import naogateway.wire.RpcValue
@@ -28,9 +27,19 @@ object RobotMiddleware {
   final case class Execute(app: ActorRef[AppEvent], robotId: Int, operation: Operation, replyTo: ActorRef[OperationResult])
       extends Command
 
-  /** Asks for the lease of `group` on robot `robotId`, preempting a lower-priority holder. */
-  final case class Acquire(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup, replyTo: ActorRef[LeaseResult])
+  /**
+   * Asks for the leases of `groups` on robot `robotId` as one: all are granted (preempting lower-priority holders) or,
+   * when a holder of equal or higher priority has any of them, none is taken.
+   */
+  final case class Acquire(app: ActorRef[AppEvent], robotId: Int, groups: Set[ActuatorGroup], replyTo: ActorRef[LeaseResult])
       extends Command
+
+  /** The single-group request, kept for callers that take one lease at a time. */
+  object Acquire {
+    /** Asks for the lease of `group` alone. */
+    def apply(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup, replyTo: ActorRef[LeaseResult]): Acquire =
+      Acquire(app, robotId, Set(group), replyTo)
+  }
 
   /** Gives a lease back. */
   final case class Release(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup) extends Command
@@ -68,8 +77,15 @@ object RobotMiddleware {
   /** The one answer every `Execute` gets. */
   final case class OperationResult(robotId: Int, operation: String, result: Either[RobotFailure, Option[RpcValue]])
 
-  /** The answer to `Acquire`. */
-  final case class LeaseResult(robotId: Int, group: ActuatorGroup, result: Either[RobotFailure, Unit])
+  /** The answer to `Acquire`, for the groups it asked for together (a refusal's `LeaseNotHeld` names the one in conflict). */
+  final case class LeaseResult(robotId: Int, groups: Set[ActuatorGroup], result: Either[RobotFailure, Unit])
+
+  /** The single-group answer, kept for callers that take one lease at a time. */
+  object LeaseResult {
+    /** The answer for `group` alone. */
+    def apply(robotId: Int, group: ActuatorGroup, result: Either[RobotFailure, Unit]): LeaseResult =
+      LeaseResult(robotId, Set(group), result)
+  }
 
   /** The middleware in front of `gateway`, registered with the receptionist. */
   def apply(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings): Behavior[Command] =
@@ -98,14 +114,14 @@ object RobotMiddleware {
       guards.getOrElse(robotId, {
         val g = context.spawn(
           Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
-            .onFailure(SupervisorStrategy.restartWithBackoff(200.millis, 5.seconds, 0.2)),
+            .onFailure(settings.guardRestart.strategy),
           s"guard-$robotId"
         )
         guards = guards.updated(robotId, g)
         g
       })
 
-    private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(3.seconds)
+    private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(settings.lookupTimeout)
 
     /** Hands `command` to the robot's guard, first finding the robot at the gateway when there is no guard yet. */
     private def withGuard(robotId: Int, command: Command)(use: ActorRef[RobotGuard.Command] => Unit): Unit =
@@ -130,8 +146,8 @@ object RobotMiddleware {
       case c @ Execute(app, robotId, operation, replyTo) =>
         withGuard(robotId, c)(_ ! RobotGuard.Execute(apps.getOrElse(app, unknownApp(app)), operation, replyTo))
         Behaviors.same
-      case c @ Acquire(app, robotId, group, replyTo) =>
-        withGuard(robotId, c)(_ ! RobotGuard.Acquire(apps.getOrElse(app, unknownApp(app)), group, replyTo))
+      case c @ Acquire(app, robotId, groups, replyTo) =>
+        withGuard(robotId, c)(_ ! RobotGuard.Acquire(apps.getOrElse(app, unknownApp(app)), groups, replyTo))
         Behaviors.same
       case Release(app, robotId, group) =>
         guards.get(robotId).foreach(_ ! RobotGuard.Release(app, group))
@@ -160,8 +176,8 @@ object RobotMiddleware {
         command match {
           case Execute(_, _, operation, replyTo) =>
             replyTo ! OperationResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
-          case Acquire(_, _, group, replyTo) => replyTo ! LeaseResult(robotId, group, Left(RobotFailure.UnknownRobot(robotId)))
-          case _                             => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
+          case Acquire(_, _, groups, replyTo) => replyTo ! LeaseResult(robotId, groups, Left(RobotFailure.UnknownRobot(robotId)))
+          case _                              => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
         }
         Behaviors.same
       case ListRobots(replyTo) =>

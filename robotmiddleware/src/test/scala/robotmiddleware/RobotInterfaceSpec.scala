@@ -7,6 +7,7 @@ import org.scalatest.time.{Seconds, Span}
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.RobotFailure
+import naogateway.wire.ActuatorGroup
 
 /** The facade fails every future with a `RobotFailure` (docs/writing-apps.md, Failures), and never throws. */
 class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
@@ -27,6 +28,16 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       val failure = stopped.failed.futureValue(timeout(Span(8, Seconds)))
       failure shouldBe a[RobotFailure.Timeout]
       failure.asInstanceOf[RobotFailure.Timeout].robotId shouldBe 4
+    }
+
+    "ask for a set of leases in one request, so the middleware grants all of them or none" in {
+      val (interface, middleware) = connected()
+      val acquired = interface.acquire(4, ActuatorGroup.Walk, ActuatorGroup.Head, ActuatorGroup.Walk)
+      val request = middleware.expectMessageType[RobotMiddleware.Acquire]
+      request.groups shouldBe Set[ActuatorGroup](ActuatorGroup.Walk, ActuatorGroup.Head)
+      middleware.expectNoMessage(100.millis)
+      request.replyTo ! RobotMiddleware.LeaseResult(4, request.groups, Left(RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))))
+      acquired.failed.futureValue shouldBe RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))
     }
 
     "fail a walk with velocities that are no numbers in the future, without sending it" in {

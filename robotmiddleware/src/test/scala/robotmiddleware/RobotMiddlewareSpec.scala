@@ -85,6 +85,12 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       result.receiveMessage()
     }
 
+    def acquireAll(session: ActorRef[SessionMessage], groups: ActuatorGroup*): RobotMiddleware.LeaseResult = {
+      val result = createTestProbe[RobotMiddleware.LeaseResult]()
+      middleware ! RobotMiddleware.Acquire(session, 1, groups.toSet, result.ref)
+      result.receiveMessage()
+    }
+
     def execute(session: ActorRef[SessionMessage], operation: Operation): TestProbe[RobotMiddleware.OperationResult] = {
       val result = createTestProbe[RobotMiddleware.OperationResult]()
       middleware ! RobotMiddleware.Execute(session, 1, operation, result.ref)
@@ -176,6 +182,41 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(high, ActuatorGroup.Walk).result shouldBe Right(())
       lowEvents.expectMessage(AppEvent.LeasePreempted(1, ActuatorGroup.Walk, "referee"))
       f.execute(low, Operation.Stop()).receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("referee")))
+    }
+    "take a set of groups as one: refused when one is held at higher priority, and then nothing is taken" in {
+      val f = new Fixture
+      val (follower, followerEvents) = f.app("follower", 1)
+      val (referee, _) = f.app("referee", 5)
+      val (coach, coachEvents) = f.app("coach", 3)
+      f.acquire(follower, ActuatorGroup.Walk).result shouldBe Right(())
+      f.acquire(referee, ActuatorGroup.Head).result shouldBe Right(())
+      // Arms are free and walk would be preempted, but head is held above the coach's priority.
+      val refused = f.acquireAll(coach, ActuatorGroup.Arms, ActuatorGroup.Walk, ActuatorGroup.Head)
+      refused shouldBe RobotMiddleware.LeaseResult(1, Set[ActuatorGroup](ActuatorGroup.Arms, ActuatorGroup.Walk, ActuatorGroup.Head),
+        Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Head, Some("referee"))))
+      // Nothing was taken: the follower was not preempted nor its robot stopped, the free group is still free.
+      followerEvents.expectNoMessage(200.millis)
+      coachEvents.expectNoMessage(Duration.Zero)
+      f.response.expectNoMessage(Duration.Zero)
+      f.execute(coach, Operation.Arms(0, 0, 0, 0)).receiveMessage().result shouldBe
+        Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Arms, None))
+      f.execute(coach, Operation.Stop()).receiveMessage().result shouldBe
+        Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("follower")))
+      val (other, _) = f.app("other", 0)
+      f.acquire(other, ActuatorGroup.Arms).result shouldBe Right(())
+    }
+    "take a set of groups as one when each is free or held lower, preempting the lower holder" in {
+      val f = new Fixture
+      val (follower, followerEvents) = f.app("follower", 1)
+      val (coach, _) = f.app("coach", 3)
+      f.acquire(follower, ActuatorGroup.Walk).result shouldBe Right(())
+      f.acquireAll(coach, ActuatorGroup.Walk, ActuatorGroup.Head).result shouldBe Right(())
+      followerEvents.expectMessage(AppEvent.LeasePreempted(1, ActuatorGroup.Walk, "coach"))
+      f.expectCall("motion.stop") // taking walk stops the robot before the new holder steers it
+      f.execute(coach, Operation.Head(0.1, 0)) // the head lease is the coach's: the call reaches the robot
+      f.expectCall("motion.head")
+      f.execute(follower, Operation.Stop()).receiveMessage().result shouldBe
+        Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("coach")))
     }
     "keep a walk alive inside the robot's lease, and stop the robot when its app dies, freeing the lease" in {
       val f = new Fixture

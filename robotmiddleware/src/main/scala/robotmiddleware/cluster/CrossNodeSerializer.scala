@@ -83,8 +83,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       bytes(pb.RegisterApp(name, priority, refText(events), refText(replyTo)))
     case RobotMiddleware.Execute(app, robotId, operation, replyTo) =>
       bytes(pb.Execute(refText(app), robotId, toProto(operation), refText(replyTo)))
-    case RobotMiddleware.Acquire(app, robotId, group, replyTo) =>
-      bytes(pb.Acquire(refText(app), robotId, group.name, refText(replyTo)))
+    case RobotMiddleware.Acquire(app, robotId, groups, replyTo) =>
+      bytes(pb.Acquire(refText(app), robotId, groupNames(groups), refText(replyTo)))
     case RobotMiddleware.Release(app, robotId, group) => bytes(pb.Release(refText(app), robotId, group.name))
     case RobotMiddleware.ListRobots(replyTo)          => bytes(pb.ListRobots(refText(replyTo)))
     case RobotMiddleware.WatchStatus(robotId, subscriber) => bytes(pb.WatchStatus(robotId, refText(subscriber)))
@@ -100,8 +100,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
         v => pb.OperationResult.Result.Returned(pb.Returned(v.map(_.toProto)))
       )
       bytes(pb.OperationResult(robotId, operation, r))
-    case RobotMiddleware.LeaseResult(robotId, group, result) =>
-      bytes(pb.LeaseResult(robotId, group.name, result.left.toOption.map(f => toProto(f))))
+    case RobotMiddleware.LeaseResult(robotId, groups, result) =>
+      bytes(pb.LeaseResult(robotId, groupNames(groups), result.left.toOption.map(f => toProto(f))))
     case v: Vector[_] if v.forall(_.isInstanceOf[RobotSnapshot]) =>
       bytes(pb.RobotSnapshots(v.collect { case s: RobotSnapshot => toProto(s) }))
     case o: Operation                           => bytes(toProto(o))
@@ -140,7 +140,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       RobotMiddleware.Execute(ref(m.app), m.robotId, fromProto(m.operation), ref(m.replyTo))
     case M.Acquire =>
       val m = pb.Acquire.parseFrom(bytes)
-      RobotMiddleware.Acquire(ref(m.app), m.robotId, group(M.Acquire, m.group), ref(m.replyTo))
+      RobotMiddleware.Acquire(ref(m.app), m.robotId, m.groups.map(group(M.Acquire, _)).toSet, ref(m.replyTo))
     case M.Release =>
       val m = pb.Release.parseFrom(bytes)
       RobotMiddleware.Release(ref(m.app), m.robotId, group(M.Release, m.group))
@@ -167,7 +167,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       RobotMiddleware.OperationResult(m.robotId, m.operation, result)
     case M.LeaseResult =>
       val m = pb.LeaseResult.parseFrom(bytes)
-      RobotMiddleware.LeaseResult(m.robotId, group(M.LeaseResult, m.group), m.failure.map(f => fromProto(f)).toLeft(()))
+      RobotMiddleware.LeaseResult(m.robotId, m.groups.map(group(M.LeaseResult, _)).toSet, m.failure.map(f => fromProto(f)).toLeft(()))
     case M.RobotSnapshots => pb.RobotSnapshots.parseFrom(bytes).robots.iterator.map(s => fromProto(s)).toVector
     case M.Operation      => fromProto(pb.Operation.parseFrom(bytes))
     case M.RobotFailure   => fromProto(pb.RobotFailure.parseFrom(bytes))
@@ -226,6 +226,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
   // A node of another build may name a group this one does not have: refuse the message rather than guess.
   private def group(manifest: String, name: String): ActuatorGroup =
     ActuatorGroup.parse(name).fold(e => throw corrupt(manifest, e), identity)
+
+  // In the docs' order, so the same set always gives the same bytes.
+  private def groupNames(groups: Set[ActuatorGroup]): Seq[String] = ActuatorGroup.all.filter(groups).map(_.name)
 
   private def gamePacket(data: GameControlData): Array[Byte] =
     GameControllerCodec.encodeControl(data).fold(e => throw unfitGame(e.describe), identity)

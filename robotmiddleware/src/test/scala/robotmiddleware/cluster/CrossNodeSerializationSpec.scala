@@ -200,6 +200,7 @@ object CrossNodeSerializationSpec {
     Vector[AnyRef](
       RobotMiddleware.RegisterApp("teleop", 3, ref, ref),
       RobotMiddleware.Acquire(ref, 7, ActuatorGroup.Head, ref),
+      RobotMiddleware.Acquire(ref, 7, Set[ActuatorGroup](ActuatorGroup.Walk, ActuatorGroup.Head, ActuatorGroup.Speech), ref),
       RobotMiddleware.Release(ref, 7, ActuatorGroup.Speech),
       RobotMiddleware.ListRobots(ref),
       RobotMiddleware.WatchStatus(Some(7), ref),
@@ -212,6 +213,7 @@ object CrossNodeSerializationSpec {
       RobotMiddleware.OperationResult(7, "motion.walk", Right(None)),
       RobotMiddleware.OperationResult(7, "system.echo", Right(Some(rpcValues.last))),
       RobotMiddleware.LeaseResult(7, ActuatorGroup.Walk, Right(())),
+      RobotMiddleware.LeaseResult(7, ActuatorGroup.all.toSet, Right(())),
       Vector(snapshot, snapshot.copy(robotId = 8, address = ipv6)),
       Vector.empty[RobotSnapshot],
       SessionMessage.SubscribeAppEvents(ref),

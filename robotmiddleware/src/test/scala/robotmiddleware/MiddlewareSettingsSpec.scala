@@ -1,0 +1,55 @@
+package robotmiddleware
+
+import scala.concurrent.duration._
+
+import com.typesafe.config.ConfigFactory
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.RestartBackoff
+
+/** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key (architecture.md 15.2). */
+class MiddlewareSettingsSpec extends AnyWordSpec with Matchers {
+
+  private def settings(overrides: String = ""): MiddlewareSettings =
+    MiddlewareSettings.fromConfig(ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("robotmiddleware")))
+
+  "The middleware's settings" should {
+    "read every limit, back-off and ask timeout from reference.conf" in {
+      val s = settings()
+      s shouldBe MiddlewareSettings(
+        lowBattery = 10.8,
+        batteryOk = 11.0,
+        walkRefresh = 200.millis,
+        callTimeout = 2.seconds,
+        postureTimeout = 5.seconds,
+        linkStatsInterval = 1.second,
+        pendingLimit = 64,
+        batteryReadings = 5,
+        lookupTimeout = 3.seconds,
+        askMargin = 1.second,
+        guardRestart = RestartBackoff(200.millis, 5.seconds, 0.2),
+        clientAskMargin = 5.seconds,
+        clientFindRetry = 200.millis
+      )
+      // Code that builds the settings with the first seven figures (the specs) gets reference.conf's for the rest.
+      MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 64) shouldBe s
+      settings("lookup-timeout = 500ms").lookupTimeout shouldBe 500.millis
+      settings("client.ask-margin = 20s").clientAskMargin shouldBe 20.seconds
+    }
+
+    "refuse a bad value with a message naming the key" in {
+      the[IllegalArgumentException] thrownBy settings("lookup-timeout = 0s") should have message
+        "requirement failed: lookup-timeout must be positive"
+      the[IllegalArgumentException] thrownBy settings("ask-margin = 0s") should have message
+        "requirement failed: ask-margin must be positive"
+      the[IllegalArgumentException] thrownBy settings("client.ask-margin = 0s") should have message
+        "requirement failed: client.ask-margin must be positive"
+      the[IllegalArgumentException] thrownBy settings("client.find-retry = 1ms") should have message
+        "requirement failed: client.find-retry must be at least 10 ms"
+      the[IllegalArgumentException] thrownBy settings("supervision.guard.min-backoff = 10s") should have message
+        "supervision.guard: a restart back-off needs 0 < min-backoff <= max-backoff"
+      an[com.typesafe.config.ConfigException] should be thrownBy settings("lookup-timeout = soon")
+    }
+  }
+}
