@@ -28,7 +28,9 @@ final case class CommandOrder[A] private (
     val rest = copy(inFlight = otherFlying, waiting = otherWaiting)
     if (e.safety || (rest.inFlight.size < maxInFlight && rest.waiting.isEmpty))
       (rest.copy(inFlight = rest.inFlight :+ e), superseded :+ Transmit(e))
-    else if (rest.waiting.size >= maxWaiting) (rest, superseded :+ Refused(e))
+    // A refused call changes nothing: superseding its slot's calls for a call that never goes would leave the slot
+    // without either, and a call in flight withdrawn here would free room no admission follows (a waiting stop stuck).
+    else if (rest.waiting.size >= maxWaiting) (this, Vector(Refused(e)))
     else {
       // Calls superseded above may have freed in-flight room: the oldest waiting ones go first, `e` after them.
       val (admitted, steps) = rest.copy(waiting = rest.waiting :+ e).admit

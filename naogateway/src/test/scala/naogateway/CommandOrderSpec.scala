@@ -106,6 +106,17 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
         }
       }
     }
+    "change nothing for a call it refuses: its slot's call in flight keeps going and a waiting stop still leaves" in {
+      // The case the property above found (seed 1594188751653626614): one in flight, one waiting at most.
+      val (steps, _, states) = run(1, 1, List(Submit(None, safety = false, replaceable = true),
+        Submit(Some(ActuatorGroup.Arms), safety = false, replaceable = true), Answer(0),
+        Submit(Some(ActuatorGroup.Walk), safety = false, replaceable = false),
+        Submit(Some(ActuatorGroup.Arms), safety = false, replaceable = true)))
+      steps.map(_._2).collect { case Refused(e) => e.key } shouldBe Vector(3L)
+      steps.map(_._2).collect { case Superseded(e, _) => e.key } shouldBe empty
+      sent(steps).map(_.key) shouldBe Vector(0L, 1L, 2L)
+      states.last.waiting shouldBe empty
+    }
     "never supersede a stop or a posture once sent: a newer call of the slot leaves after it and its caller keeps its answer" in {
       forAll(scripts) { case (max, waiting, script) =>
         val (steps, _, _) = run(max, waiting, script)
