@@ -8,7 +8,7 @@ import java.util.concurrent.{ConcurrentLinkedQueue, TimeUnit}
 import java.util.concurrent.atomic.AtomicInteger
 
 import scala.concurrent.duration._
-import scala.concurrent.{Await, Future}
+import scala.concurrent.Await
 import scala.jdk.CollectionConverters._
 import scala.util.Try
 
@@ -57,6 +57,7 @@ class FirmwarePosixSpec
     with LogCapturing
     with BeforeAndAfterAll {
   import FirmwarePosixSpec._
+  import RobotCalls._
 
   private val processes = new ConcurrentLinkedQueue[Process]()
   private val sockets = new ConcurrentLinkedQueue[DatagramSocket]()
@@ -102,20 +103,6 @@ class FirmwarePosixSpec
       withClue(s"robot $id never came online; its output:\n$output\n") { online shouldBe true }
       Await.result(client.acquire(id, ActuatorGroup.all.toSeq: _*), 10.seconds)
     }
-  }
-
-  private def poll(within: FiniteDuration)(condition: => Boolean): Boolean = {
-    val deadline = within.fromNow
-    var ok = condition
-    while (!ok && deadline.hasTimeLeft()) { Thread.sleep(50); ok = condition }
-    ok
-  }
-
-  private def result[T](f: Future[T]): Either[Throwable, T] = Try(Await.result(f, 15.seconds)).toEither
-
-  private def robotError(r: Either[Throwable, _]): String = r match {
-    case Left(naogateway.RobotFailure.RobotError(_, e)) => e
-    case other                                          => s"not a robot error: $other"
   }
 
   /** Vision frames of `id` for at most `within`: regions and grids counted until both are seen. */

@@ -6,7 +6,7 @@ import java.nio.charset.StandardCharsets
 import java.util.concurrent.ConcurrentLinkedQueue
 
 import scala.concurrent.duration._
-import scala.concurrent.{Await, Future}
+import scala.concurrent.Await
 import scala.jdk.CollectionConverters._
 import scala.util.Try
 
@@ -47,6 +47,7 @@ class FirmwareQemuSpec
     with LogCapturing
     with BeforeAndAfterAll {
   import FirmwareQemuSpec._
+  import RobotCalls._
 
   private def image(name: String): File = {
     FirmwareBuild.make(this, Seq(s"build/qemu/$name.elf"), missing = () => FirmwareBuild.missingForArm())
@@ -160,20 +161,6 @@ class FirmwareQemuSpec
   }
   private lazy val client: RobotInterface =
     Await.result(RobotClient.connect(system, middleware, "firmware-qemu", priority = 5), 15.seconds)
-
-  private def poll(within: FiniteDuration)(condition: => Boolean): Boolean = {
-    val deadline = within.fromNow
-    var ok = condition
-    while (!ok && deadline.hasTimeLeft()) { Thread.sleep(50); ok = condition }
-    ok
-  }
-
-  private def result[T](f: Future[T]): Either[Throwable, T] = Try(Await.result(f, 15.seconds)).toEither
-
-  private def robotError(r: Either[Throwable, _]): String = r match {
-    case Left(naogateway.RobotFailure.RobotError(_, e)) => e
-    case other                                          => s"not a robot error: $other"
-  }
 
   /** The example robot in qemu, its module on the bridge, and what the gateway published about it. */
   private final class BoardRobot(val id: Int) {
