@@ -47,7 +47,7 @@ lazy val proto = (project in file("proto"))
 
 // The robots' wire format (frames, messages, RPC, HaViMo, the secure stream, GameController packets): pure
 // code over the protobuf classes. No Akka on its classpath, so none can creep in (wire.NoAkkaSpec checks).
-lazy val wire = (project in file("naogateway/wire"))
+lazy val wire = (project in file("wire"))
   .dependsOn(proto)
   .settings(strictScalac, testSettings)
   .settings(
@@ -67,7 +67,7 @@ lazy val naogateway = (project in file("naogateway"))
 // simulated GameController. The demo runs it, so it is a jar of its own beside the gateway's, not inside it.
 // Its tests hold every gateway test that drives a simulated robot (sbt allows no cycle back into naogateway);
 // they take the gateway's test resources (logback-test.xml) through test->test.
-lazy val sim = (project in file("naogateway/sim"))
+lazy val sim = (project in file("sim"))
   .dependsOn(naogateway % "compile->compile;test->test", wire % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(

@@ -1,5 +1,5 @@
 /* firmware/src/gs1500m.c: the GS1500M driver (see gs1500m.h). The parser follows the thesis's polled automaton
- * (5.2.2) and resynchronises as the host-side model does (naogateway/sim/.../gs1500m/SerialDecoder.scala): an ESC
+ * (5.2.2) and resynchronises as the host-side model does (sim/.../gs1500m/SerialDecoder.scala): an ESC
  * outside a datagram's data always starts a new item, a broken header or line is garbage up to the next ESC or LF,
  * and bulk data carry no escaping, so inside the announced length nothing is special. */
 #include "gs1500m.h"

@@ -625,8 +625,8 @@ object ProtocolDocSpec {
 
   object ProtocolDoc {
 
-    /** Forked tests run in the module folder (naogateway/sim/), an sbt shell in the checkout. */
-    val Candidates: Seq[Path] = Seq(Paths.get("../../docs/protocol.md"), Paths.get("docs/protocol.md"))
+    /** Forked tests run in the module folder (sim/), an sbt shell in the checkout. */
+    val Candidates: Seq[Path] = Seq(Paths.get("../docs/protocol.md"), Paths.get("docs/protocol.md"))
 
     private val Marker = """^<!--\s*(example|datagrams|table):\s*([a-z0-9-]+)\s*-->\s*$""".r
 
