@@ -76,9 +76,10 @@ final class ClockSync private (
     anchorRobot: Long,
     anchorGateway: Long,
     // Sorted by robot time, one point per robot ms (the least delay): x = robot ms since the anchor, y = gateway ms
-    // since the anchor minus x.
-    xs: Vector[Double],
-    ys: Vector[Double],
+    // since the anchor minus x. Primitive arrays, never written after construction (every change copies): a window of
+    // 300 boxed Doubles in two Vectors cost a robot about 12 KiB, these 4.7 KiB.
+    xs: Array[Double],
+    ys: Array[Double],
     newestRobot: Long,
     fit: Option[ClockSync.Fit],
     suspects: Vector[(Long, Long)],
@@ -90,7 +91,7 @@ final class ClockSync private (
   import ClockSync._
 
   /** Points in the window. */
-  def samples: Int = xs.size
+  def samples: Int = xs.length
 
   /** The current estimate, anchored at the newest keep-alive; None until the window holds [[MinSamples]] points. */
   def estimate: Option[ClockEstimate] = fit.map { f =>
@@ -102,7 +103,7 @@ final class ClockSync private (
       gatewayPerRobot = 1.0 + f.s,
       errorBoundMillis = f.boundAt(x),
       boundGrowth = f.growth,
-      samples = xs.size
+      samples = xs.length
     )
   }
 
@@ -136,26 +137,37 @@ final class ClockSync private (
 
   /** A new session of the robot (it restarted): everything learnt of the old clock is dropped. */
   def restart: ClockSync =
-    new ClockSync(settings, 0L, 0L, Vector.empty, Vector.empty, 0L, None, Vector.empty, outliers, sessions + 1)
+    new ClockSync(settings, 0L, 0L, NoPoints, NoPoints, 0L, None, Vector.empty, outliers, sessions + 1)
 
   private def fresh(robotMillis: Long, gatewayNanos: Long, session: Long): ClockSync =
-    new ClockSync(settings, robotMillis, gatewayNanos, Vector(0.0), Vector(0.0), robotMillis, None, Vector.empty,
+    new ClockSync(settings, robotMillis, gatewayNanos, Array(0.0), Array(0.0), robotMillis, None, Vector.empty,
       outliers, session)
 
   private def withPoint(robotMillis: Long, x: Double, y: Double): ClockSync = {
     // Keep-alives come in order almost always: an append; a late one is put in its place.
-    val i = if (x > xs.last) xs.size else insertionPoint(x)
-    val (x1, y1) =
-      if (i < xs.size && xs(i) == x) (xs, if (y < ys(i)) ys.updated(i, y) else ys)
-      else if (i == xs.size) (xs :+ x, ys :+ y)
-      else (xs.patch(i, Seq(x), 0), ys.patch(i, Seq(y), 0))
+    val i = if (x > xs(xs.length - 1)) xs.length else insertionPoint(x)
+    val sameMs = i < xs.length && xs(i) == x
     val newest = math.max(newestRobot, robotMillis)
     val from = (newest - anchorRobot).toDouble - settings.window.toMillis
-    val drop = math.max(x1.indexWhere(_ >= from) match { case -1 => x1.size; case n => n }, x1.size - MaxSamples)
-    val (x2, y2) = (x1.drop(drop), y1.drop(drop))
+    // The points kept: those of the window (at most MaxSamples, newest), with the new one in its place.
+    val size = if (sameMs) xs.length else xs.length + 1
+    def xAt(j: Int): Double = if (sameMs || j < i) xs(j) else if (j == i) x else xs(j - 1)
+    var drop = 0
+    while (drop < size && xAt(drop) < from) drop += 1
+    drop = math.max(drop, size - MaxSamples)
+    val x2 = new Array[Double](size - drop)
+    val y2 = new Array[Double](size - drop)
+    var j = drop
+    while (j < size) {
+      x2(j - drop) = xAt(j)
+      y2(j - drop) =
+        if (sameMs) { if (j == i) math.min(y, ys(j)) else ys(j) }
+        else if (j < i) ys(j) else if (j == i) y else ys(j - 1)
+      j += 1
+    }
     val due = fit match {
-      case None    => x2.size >= MinSamples
-      case Some(f) => y < f.c + f.s * x || x - f.at >= RefitEvery.toMillis || x2.size < MinSamples
+      case None    => x2.length >= MinSamples
+      case Some(f) => y < f.c + f.s * x || x - f.at >= RefitEvery.toMillis || x2.length < MinSamples
     }
     val refit = if (due) fitLine(x2, y2, x) else fit
     new ClockSync(settings, anchorRobot, anchorGateway, x2, y2, newest, refit, Vector.empty, outliers, sessions)
@@ -163,7 +175,7 @@ final class ClockSync private (
 
   private def insertionPoint(x: Double): Int = {
     var lo = 0
-    var hi = xs.size
+    var hi = xs.length
     while (lo < hi) {
       val mid = (lo + hi) >>> 1
       if (xs(mid) < x) lo = mid + 1 else hi = mid
@@ -219,7 +231,9 @@ object ClockSync {
 
   /** An estimator with no point yet. */
   def apply(settings: ClockSyncSettings = ClockSyncSettings()): ClockSync =
-    new ClockSync(settings, 0L, 0L, Vector.empty, Vector.empty, 0L, None, Vector.empty, 0L, 0L)
+    new ClockSync(settings, 0L, 0L, NoPoints, NoPoints, 0L, None, Vector.empty, 0L, 0L)
+
+  private val NoPoints: Array[Double] = Array.emptyDoubleArray
 
   /**
    * The line y = c + s x fitted at robot time `at`; `v1`, `v2` the robot times of the points it touches (equal when
@@ -240,12 +254,11 @@ object ClockSync {
       }
   }
 
-  private def fitLine(xs: Vector[Double], ys: Vector[Double], at: Double): Option[Fit] = {
-    val n = xs.size
+  // Reads the arrays only: they are the estimator's, shared with every later ClockSync.
+  private def fitLine(px: Array[Double], py: Array[Double], at: Double): Option[Fit] = {
+    val n = px.length
     if (n < MinSamples) None
     else {
-      val px = xs.toArray
-      val py = ys.toArray
       // The lower convex hull, by the monotone chain over points sorted by x.
       val hull = new Array[Int](n)
       var h = 0
