@@ -65,8 +65,7 @@ lazy val naogateway = (project in file("naogateway"))
 
 // The simulator: simulated robots and their firmware, the GS1500M model, the lossy network, the fleet and the
 // simulated GameController. The demo runs it, so it is a jar of its own beside the gateway's, not inside it.
-// Its tests hold every gateway test that drives a simulated robot (sbt allows no cycle back into naogateway);
-// they take the gateway's test resources (logback-test.xml) through test->test.
+// Its tests are the simulator's own; they take the gateway's test resources (logback-test.xml) through test->test.
 lazy val sim = (project in file("sim"))
   .dependsOn(naogateway % "compile->compile;test->test", wire % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
@@ -75,8 +74,20 @@ lazy val sim = (project in file("sim"))
     libraryDependencies ++= testLibs ++ akkaTestLibs
   )
 
+// The gateway's integration specs: the gateway driven end to end by simulated robots over loopback (sbt allows no
+// cycle from naogateway's tests into sim). Test sources only, nothing to publish; its fixtures (GatewayFixture,
+// HostileTraffic, RelayCapture) serve the middleware's and the apps' specs and the bench too.
+lazy val integration = (project in file("integration"))
+  .dependsOn(naogateway % "compile->compile;test->test", sim % "compile->compile;test->test", wire % "compile->compile;test->test")
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-integration",
+    publish / skip := true,
+    libraryDependencies ++= testLibs ++ akkaTestLibs
+  )
+
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test")
+  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test", integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",
@@ -90,7 +101,7 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
   )
 
 lazy val apps = (project in file("apps"))
-  .dependsOn(robotmiddleware % "compile->compile;test->test", sim % "compile->compile;test->test")
+  .dependsOn(robotmiddleware % "compile->compile;test->test", sim % "compile->compile;test->test", integration % "test->test")
   .enablePlugins(JavaAppPackaging)
   .settings(strictScalac, testSettings)
   .settings(
@@ -131,7 +142,7 @@ lazy val apps = (project in file("apps"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, naogateway, sim, robotmiddleware, apps)
+  .aggregate(proto, wire, naogateway, sim, integration, robotmiddleware, apps)
   .dependsOn(apps % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(
