@@ -55,8 +55,19 @@ lazy val wire = (project in file("wire"))
     libraryDependencies ++= testLibs
   )
 
+// What apps may see of the gateway: snapshots, events, failures, vision frames, link, traffic and gateway figures, the
+// recording's figures; plain data over the wire types (postures, groups, values), in the gateway's packages so no
+// import changes. No Akka on its classpath (naogateway.ApiLayerSpec checks), so no actor internal can creep in.
+lazy val api = (project in file("api"))
+  .dependsOn(wire)
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-api",
+    libraryDependencies ++= testLibs
+  )
+
 lazy val naogateway = (project in file("naogateway"))
-  .dependsOn(proto, wire)
+  .dependsOn(proto, wire, api)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
@@ -142,7 +153,7 @@ lazy val apps = (project in file("apps"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, naogateway, sim, integration, robotmiddleware, apps)
+  .aggregate(proto, wire, api, naogateway, sim, integration, robotmiddleware, apps)
   .dependsOn(apps % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(
