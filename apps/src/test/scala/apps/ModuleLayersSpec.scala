@@ -11,7 +11,10 @@ import scala.util.Using
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/** The modules the build separates stay separate in what it produces: the gateway ships no simulator class. */
+/**
+ * The modules the build separates stay separate in what it produces: the gateway ships no simulator class, the data
+ * apps see is a module of its own (api) and the gateway's integration specs are not the simulator's tests.
+ */
 class ModuleLayersSpec extends AnyWordSpec with Matchers {
 
   /** Where a class was loaded from: a classes directory or a jar. */
@@ -56,6 +59,41 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
       val sim = origin(classOf[naogateway.sim.FleetSettings])
       origin(objectClass("naogateway.sim.StreamPairSimulation")) should not be sim
       classEntries(sim).filter(e => e.contains("StreamPairSimulation") || e.contains("OverflowExperiment")) shouldBe empty
+    }
+  }
+
+  "The api's classes" should {
+    "come from the api module, not the gateway's, and hold no actor" in {
+      val api = origin(classOf[naogateway.RobotSnapshot])
+      api should not be gateway
+      val entries = classEntries(api)
+      entries should contain allOf ("naogateway/RobotSnapshot.class", "naogateway/TrafficStats.class", "naogateway/GatewayStats.class",
+        "naogateway/VisionFrame.class", "naogateway/RobotFailure.class")
+      entries.filter(e => Seq("Gateway$", "RobotActor", "Outbox", "ResponseActor", "NoResponseActor", "VisionActor", "KeepAliveStep")
+        .exists(n => e.startsWith(s"naogateway/$n"))) shouldBe empty
+    }
+
+    "not be in the gateway's classes a second time" in {
+      classEntries(gateway).filter(e => e == "naogateway/RobotSnapshot.class" || e == "naogateway/TrafficStats.class") shouldBe empty
+    }
+
+    "be what the gateway's old nested names mean (aliases, so no import changes)" in {
+      val traffic: naogateway.Outbox.TrafficStats =
+        naogateway.Outbox.TrafficStats(0, 0, 1000, Map.empty, 0, 0, 0, 0, gameRunning = false, competition = false)
+      traffic shouldBe a[naogateway.TrafficStats]
+      val stats: naogateway.Gateway.GatewayStats = naogateway.Gateway.GatewayStats(0, 0, 0, Map.empty, 0)
+      origin(stats.getClass) shouldBe origin(classOf[naogateway.RobotSnapshot])
+    }
+  }
+
+  "The gateway's integration specs" should {
+    "be a module of their own, not the simulator's tests" in {
+      val integration = origin(classOf[naogateway.integration.GatewayFixture])
+      val simTests = origin(classOf[naogateway.sim.TestGateway])
+      integration should not be simTests
+      classEntries(integration) should contain("naogateway/integration/GatewayIntegrationSpec.class")
+      classEntries(simTests).filter(e => e.startsWith("naogateway/integration/") || e.startsWith("naogateway/link/") ||
+        e.startsWith("naogateway/recording/") || e.startsWith("naogateway/MessageBudgetSpec")) shouldBe empty
     }
   }
 }
