@@ -57,13 +57,15 @@ lazy val wire = (project in file("wire"))
 
 // What apps may see of the gateway: snapshots, events, failures, vision frames, link, traffic and gateway figures, the
 // recording's figures; plain data over the wire types (postures, groups, values), in the gateway's packages so no
-// import changes. No Akka on its classpath (naogateway.ApiLayerSpec checks), so no actor internal can creep in.
+// import changes. No Akka on its classpath (naogateway.ApiLayerSpec checks; ApiBoundarySpec shows scalac refusing a
+// probe that imports naogateway.Gateway), so no actor internal can creep in.
 lazy val api = (project in file("api"))
   .dependsOn(wire)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-api",
-    libraryDependencies ++= testLibs
+    // scala-compiler in tests: ApiBoundarySpec compiles probe sources against the api's classpath.
+    libraryDependencies ++= testLibs :+ ("org.scala-lang" % "scala-compiler" % V.scala % Test)
   )
 
 lazy val naogateway = (project in file("naogateway"))
