@@ -122,6 +122,8 @@ lazy val apps = (project in file("apps"))
     // The launcher is the one module with a logging backend at compile scope (its logback.xml); the libraries log
     // through SLF4J only.
     libraryDependencies ++= Seq(jline, logback, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
+    // scala-compiler in tests: ModuleLayersSpec compiles the apps that see only the api without the gateway's classes.
+    libraryDependencies += "org.scala-lang" % "scala-compiler" % V.scala % Test,
     Compile / mainClass := Some("apps.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
     Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),

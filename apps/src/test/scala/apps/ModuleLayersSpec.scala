@@ -6,6 +6,9 @@ import java.nio.file.{Files, Path, Paths}
 import java.util.zip.ZipFile
 
 import scala.jdk.CollectionConverters._
+import scala.reflect.internal.util.BatchSourceFile
+import scala.tools.nsc.reporters.StoreReporter
+import scala.tools.nsc.{Global, Settings}
 import scala.util.Using
 
 import org.scalatest.matchers.should.Matchers
@@ -94,6 +97,42 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
       classEntries(integration) should contain("naogateway/integration/GatewayIntegrationSpec.class")
       classEntries(simTests).filter(e => e.startsWith("naogateway/integration/") || e.startsWith("naogateway/link/") ||
         e.startsWith("naogateway/recording/") || e.startsWith("naogateway/MessageBudgetSpec")) shouldBe empty
+    }
+  }
+
+  /** The class path of this JVM without the gateway's, the simulator's and the apps' own classes. */
+  private def withoutGateway: Seq[String] = {
+    val dropped = Set(gateway, origin(classOf[naogateway.sim.FleetSettings]), origin(classOf[apps.StatusModel])).map(_.toAbsolutePath)
+    System.getProperty("java.class.path").split(File.pathSeparator).toSeq.filterNot(e => dropped(Paths.get(e).toAbsolutePath))
+  }
+
+  /** The errors scalac reports (typer only, nothing written) for `sources` against `classpath`. */
+  private def compileErrors(classpath: Seq[String], sources: Seq[(String, String)]): Vector[String] = {
+    val settings = new Settings()
+    settings.processArgumentString(s"-Ystop-after:typer -d ${Files.createTempDirectory("apps-probe")}")
+    settings.classpath.value = classpath.mkString(File.pathSeparator)
+    val reporter = new StoreReporter(settings)
+    val global = new Global(settings, reporter)
+    new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
+    reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i => s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
+  }
+
+  /** An apps source file's text, found from the module's or the repository's directory. */
+  private def appsSource(relative: String): (String, String) = {
+    val path = Seq(Paths.get("src/main/scala/apps", relative), Paths.get("apps/src/main/scala/apps", relative)).find(Files.exists(_))
+      .getOrElse(fail(s"apps source $relative not found"))
+    relative -> new String(Files.readAllBytes(path), java.nio.charset.StandardCharsets.UTF_8)
+  }
+
+  "The apps that see only the api" should {
+    "compile without the gateway's and the simulator's classes" in {
+      compileErrors(withoutGateway, Seq(appsSource("StatusView.scala"), appsSource("web/WebModel.scala"))) shouldBe empty
+    }
+
+    "refuse, against that class path, a probe that names naogateway.Gateway" in {
+      val errors = compileErrors(withoutGateway, Seq("Probe.scala" -> "package probe\nobject Probe { val g = naogateway.Gateway }\n"))
+      errors should not be empty
+      errors.head should include("Gateway")
     }
   }
 }
