@@ -55,8 +55,21 @@ lazy val wire = (project in file("wire"))
     libraryDependencies ++= testLibs
   )
 
+// What apps may see of the gateway: snapshots, events, failures, vision frames, link, traffic and gateway figures, the
+// recording's figures; plain data over the wire types (postures, groups, values), in the gateway's packages so no
+// import changes. No Akka on its classpath (naogateway.ApiLayerSpec checks; ApiBoundarySpec shows scalac refusing a
+// probe that imports naogateway.Gateway), so no actor internal can creep in.
+lazy val api = (project in file("api"))
+  .dependsOn(wire)
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-api",
+    // scala-compiler in tests: ApiBoundarySpec compiles probe sources against the api's classpath.
+    libraryDependencies ++= testLibs :+ ("org.scala-lang" % "scala-compiler" % V.scala % Test)
+  )
+
 lazy val naogateway = (project in file("naogateway"))
-  .dependsOn(proto, wire)
+  .dependsOn(proto, wire, api)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
@@ -65,8 +78,7 @@ lazy val naogateway = (project in file("naogateway"))
 
 // The simulator: simulated robots and their firmware, the GS1500M model, the lossy network, the fleet and the
 // simulated GameController. The demo runs it, so it is a jar of its own beside the gateway's, not inside it.
-// Its tests hold every gateway test that drives a simulated robot (sbt allows no cycle back into naogateway);
-// they take the gateway's test resources (logback-test.xml) through test->test.
+// Its tests are the simulator's own; they take the gateway's test resources (logback-test.xml) through test->test.
 lazy val sim = (project in file("sim"))
   .dependsOn(naogateway % "compile->compile;test->test", wire % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
@@ -75,8 +87,20 @@ lazy val sim = (project in file("sim"))
     libraryDependencies ++= testLibs ++ akkaTestLibs
   )
 
+// The gateway's integration specs: the gateway driven end to end by simulated robots over loopback (sbt allows no
+// cycle from naogateway's tests into sim). Test sources only, nothing to publish; its fixtures (GatewayFixture,
+// HostileTraffic, RelayCapture) serve the middleware's and the apps' specs and the bench too.
+lazy val integration = (project in file("integration"))
+  .dependsOn(naogateway % "compile->compile;test->test", sim % "compile->compile;test->test", wire % "compile->compile;test->test")
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-integration",
+    publish / skip := true,
+    libraryDependencies ++= testLibs ++ akkaTestLibs
+  )
+
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test")
+  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test", integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",
@@ -90,7 +114,7 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
   )
 
 lazy val apps = (project in file("apps"))
-  .dependsOn(robotmiddleware % "compile->compile;test->test", sim % "compile->compile;test->test")
+  .dependsOn(robotmiddleware % "compile->compile;test->test", sim % "compile->compile;test->test", integration % "test->test")
   .enablePlugins(JavaAppPackaging)
   .settings(strictScalac, testSettings)
   .settings(
@@ -98,6 +122,8 @@ lazy val apps = (project in file("apps"))
     // The launcher is the one module with a logging backend at compile scope (its logback.xml); the libraries log
     // through SLF4J only.
     libraryDependencies ++= Seq(jline, logback, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
+    // scala-compiler in tests: ModuleLayersSpec compiles the apps that see only the api without the gateway's classes.
+    libraryDependencies += "org.scala-lang" % "scala-compiler" % V.scala % Test,
     Compile / mainClass := Some("apps.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
     Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),
@@ -131,7 +157,7 @@ lazy val apps = (project in file("apps"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, naogateway, sim, robotmiddleware, apps)
+  .aggregate(proto, wire, api, naogateway, sim, integration, robotmiddleware, apps)
   .dependsOn(apps % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(

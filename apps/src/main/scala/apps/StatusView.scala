@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{LinkStats, Outbox, RobotSnapshot}
+import naogateway.{GameSource, GatewayStats, LinkStats, RobotSnapshot, TrafficStats}
 import naogateway.wire.gamecontroller.{ControlData2014, GameControlData, GamePhase, GameState, HlControlData,
   HlSecondaryState, HslControlData, SecondaryGameState, SetPlay}
 
@@ -8,10 +8,10 @@ import naogateway.wire.gamecontroller.{ControlData2014, GameControlData, GamePha
 final case class StatusModel(
     robots: Vector[RobotSnapshot],
     links: Map[Int, LinkStats],
-    traffic: Option[Outbox.TrafficStats],
+    traffic: Option[TrafficStats],
     game: Option[GameControlData],
-    gameSource: Option[naogateway.Gateway.GameSource] = None,
-    gateway: Option[naogateway.Gateway.GatewayStats] = None
+    gameSource: Option[GameSource] = None,
+    gateway: Option[GatewayStats] = None
 )
 
 /** Constructors of status models. */
@@ -84,14 +84,14 @@ object StatusView {
   private def kind(reason: Option[String]): Option[String] = reason.map(_.takeWhile(_ != '('))
 
   /** The team's message budget and every warning (a second GameController, the budget), each on a line of its own. */
-  def sourceLines(source: naogateway.Gateway.GameSource): Vector[String] =
+  def sourceLines(source: GameSource): Vector[String] =
     source.budget.toVector ++ source.warnings.map(w => s"WARNING: $w")
 
   /**
    * In the monitor role: the age of the true state, and each robot's status message as the GameController forwarded
    * it (fallen, pose, ball age), shown beside the gateway's own robot lines.
    */
-  def monitorLines(source: naogateway.Gateway.GameSource): Vector[String] =
+  def monitorLines(source: GameSource): Vector[String] =
     source.trueStateAgeMillis.map(ms => f"true game state from the GameController (monitor), ${ms / 1000.0}%.1f s old").toVector ++
       source.forwarded.map { f =>
         val s = f.status
@@ -101,14 +101,14 @@ object StatusView {
       }
 
   /** The competition gate in one line. */
-  def gateLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("competition gate: -") { t =>
+  def gateLine(traffic: Option[TrafficStats]): String = traffic.fold("competition gate: -") { t =>
     if (!t.competition) "competition gate: open (competition rule off)"
     else if (t.gateOpen) "competition gate: open"
     else s"competition gate: CLOSED: ${t.gateReason.getOrElse("the game is running")}: nothing is sent to the robots"
   }
 
   /** The team's traffic against the budget in one line. */
-  def trafficLine(traffic: Option[Outbox.TrafficStats]): String = traffic.fold("team traffic: -") { t =>
+  def trafficLine(traffic: Option[TrafficStats]): String = traffic.fold("team traffic: -") { t =>
     val load = if (t.budgetBytesPerSecond > 0) finite(t.teamLoad * 100)(v => f"$v%.0f %%") else "-"
     f"team traffic: out ${t.outBytesLastSecond / 1000.0}%.1f kB/s, in ${t.inBytesLastSecond / 1000.0}%.1f kB/s, " +
       f"$load of the ${t.budgetBytesPerSecond / 1000.0}%.1f kB/s budget" +
@@ -117,7 +117,7 @@ object StatusView {
   }
 
   /** The recording's figures (docs/recording.md), or the replay's; nothing when neither runs. */
-  def recordingLine(stats: Option[naogateway.Gateway.GatewayStats]): Option[String] = stats.flatMap { g =>
+  def recordingLine(stats: Option[GatewayStats]): Option[String] = stats.flatMap { g =>
     g.replay.map { r =>
       s"replay: ${r.fed} datagrams fed, ${r.discarded} outbound discarded" + (if (r.finished) ", finished" else "")
     }.orElse(Option.when(g.recording.enabled) {

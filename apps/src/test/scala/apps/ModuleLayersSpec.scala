@@ -6,12 +6,18 @@ import java.nio.file.{Files, Path, Paths}
 import java.util.zip.ZipFile
 
 import scala.jdk.CollectionConverters._
+import scala.reflect.internal.util.BatchSourceFile
+import scala.tools.nsc.reporters.StoreReporter
+import scala.tools.nsc.{Global, Settings}
 import scala.util.Using
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/** The modules the build separates stay separate in what it produces: the gateway ships no simulator class. */
+/**
+ * The modules the build separates stay separate in what it produces: the gateway ships no simulator class, the data
+ * apps see is a module of its own (api) and the gateway's integration specs are not the simulator's tests.
+ */
 class ModuleLayersSpec extends AnyWordSpec with Matchers {
 
   /** Where a class was loaded from: a classes directory or a jar. */
@@ -56,6 +62,77 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
       val sim = origin(classOf[naogateway.sim.FleetSettings])
       origin(objectClass("naogateway.sim.StreamPairSimulation")) should not be sim
       classEntries(sim).filter(e => e.contains("StreamPairSimulation") || e.contains("OverflowExperiment")) shouldBe empty
+    }
+  }
+
+  "The api's classes" should {
+    "come from the api module, not the gateway's, and hold no actor" in {
+      val api = origin(classOf[naogateway.RobotSnapshot])
+      api should not be gateway
+      val entries = classEntries(api)
+      entries should contain allOf ("naogateway/RobotSnapshot.class", "naogateway/TrafficStats.class", "naogateway/GatewayStats.class",
+        "naogateway/VisionFrame.class", "naogateway/RobotFailure.class")
+      entries.filter(e => Seq("Gateway$", "RobotActor", "Outbox", "ResponseActor", "NoResponseActor", "VisionActor", "KeepAliveStep")
+        .exists(n => e.startsWith(s"naogateway/$n"))) shouldBe empty
+    }
+
+    "not be in the gateway's classes a second time" in {
+      classEntries(gateway).filter(e => e == "naogateway/RobotSnapshot.class" || e == "naogateway/TrafficStats.class") shouldBe empty
+    }
+
+    "be what the gateway's old nested names mean (aliases, so no import changes)" in {
+      val traffic: naogateway.Outbox.TrafficStats =
+        naogateway.Outbox.TrafficStats(0, 0, 1000, Map.empty, 0, 0, 0, 0, gameRunning = false, competition = false)
+      traffic shouldBe a[naogateway.TrafficStats]
+      val stats: naogateway.Gateway.GatewayStats = naogateway.Gateway.GatewayStats(0, 0, 0, Map.empty, 0)
+      origin(stats.getClass) shouldBe origin(classOf[naogateway.RobotSnapshot])
+    }
+  }
+
+  "The gateway's integration specs" should {
+    "be a module of their own, not the simulator's tests" in {
+      val integration = origin(classOf[naogateway.integration.GatewayFixture])
+      val simTests = origin(classOf[naogateway.sim.TestGateway])
+      integration should not be simTests
+      classEntries(integration) should contain("naogateway/integration/GatewayIntegrationSpec.class")
+      classEntries(simTests).filter(e => e.startsWith("naogateway/integration/") || e.startsWith("naogateway/link/") ||
+        e.startsWith("naogateway/recording/") || e.startsWith("naogateway/MessageBudgetSpec")) shouldBe empty
+    }
+  }
+
+  /** The class path of this JVM without the gateway's, the simulator's and the apps' own classes. */
+  private def withoutGateway: Seq[String] = {
+    val dropped = Set(gateway, origin(classOf[naogateway.sim.FleetSettings]), origin(classOf[apps.StatusModel])).map(_.toAbsolutePath)
+    System.getProperty("java.class.path").split(File.pathSeparator).toSeq.filterNot(e => dropped(Paths.get(e).toAbsolutePath))
+  }
+
+  /** The errors scalac reports (typer only, nothing written) for `sources` against `classpath`. */
+  private def compileErrors(classpath: Seq[String], sources: Seq[(String, String)]): Vector[String] = {
+    val settings = new Settings()
+    settings.processArgumentString(s"-Ystop-after:typer -d ${Files.createTempDirectory("apps-probe")}")
+    settings.classpath.value = classpath.mkString(File.pathSeparator)
+    val reporter = new StoreReporter(settings)
+    val global = new Global(settings, reporter)
+    new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
+    reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i => s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
+  }
+
+  /** An apps source file's text, found from the module's or the repository's directory. */
+  private def appsSource(relative: String): (String, String) = {
+    val path = Seq(Paths.get("src/main/scala/apps", relative), Paths.get("apps/src/main/scala/apps", relative)).find(Files.exists(_))
+      .getOrElse(fail(s"apps source $relative not found"))
+    relative -> new String(Files.readAllBytes(path), java.nio.charset.StandardCharsets.UTF_8)
+  }
+
+  "The apps that see only the api" should {
+    "compile without the gateway's and the simulator's classes" in {
+      compileErrors(withoutGateway, Seq(appsSource("StatusView.scala"), appsSource("web/WebModel.scala"))) shouldBe empty
+    }
+
+    "refuse, against that class path, a probe that names naogateway.Gateway" in {
+      val errors = compileErrors(withoutGateway, Seq("Probe.scala" -> "package probe\nobject Probe { val g = naogateway.Gateway }\n"))
+      errors should not be empty
+      errors.head should include("Gateway")
     }
   }
 }

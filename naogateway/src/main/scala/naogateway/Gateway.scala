@@ -14,7 +14,7 @@ import org.slf4j.LoggerFactory
 
 import naogateway.link.{Backlog, DatagramWriter, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
-import naogateway.recording.{Decision, Recording, RecordingStats, RobotClockEstimates}
+import naogateway.recording.{Decision, Recording, RobotClockEstimates}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
 
@@ -42,8 +42,8 @@ object Gateway {
   /** Answers with every known robot's link figures, asked of the robot actors (`snapshot-timeout` for each). */
   final case class GetLinkStats(replyTo: ActorRef[RobotLinks]) extends Query
 
-  /** The link figures of every robot whose actor answered `GetLinkStats` in time, by robot id. */
-  final case class RobotLinks(links: Vector[LinkStats])
+  /** The link figures of every robot ([[naogateway.RobotLinks]], api). */
+  type RobotLinks = naogateway.RobotLinks; val RobotLinks: naogateway.RobotLinks.type = naogateway.RobotLinks
 
   /** Lets robot `robotId` be re-bound to the IP address its next datagram comes from (a robot that moved host). */
   final case class AllowRebind(robotId: Int) extends Command
@@ -74,37 +74,14 @@ object Gateway {
   private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
   private final case class RobotWantsSubscribers(request: RobotActor.SubscribersWanted) extends Command
 
-  /**
-   * Where the game state comes from, for the status view and robotctl.
-   *
-   * @param trusted the configured GameController addresses or subnets, in words ("any source" when none is)
-   * @param lastFrom the sender of the last control packet that counted
-   * @param untrusted control packets ignored because they came from elsewhere
-   * @param budget the team's message budget in one line, when the gateway counts it ([[MessageBudget.describe]])
-   * @param warnings what needs the team's attention: a second GameController, the message budget
-   * @param trueStateAgeMillis in the monitor role: how old the last true game state (`RGTD`) is; `None` before the first
-   * @param forwarded in the monitor role: the robots' status messages the GameController forwarded, by team and player
-   */
-  final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress], untrusted: Long,
-      budget: Option[String] = None, warnings: Vector[String] = Vector.empty, trueStateAgeMillis: Option[Long] = None,
-      forwarded: Vector[ForwardedStatus] = Vector.empty) {
+  /** Where the game state comes from ([[naogateway.GameSource]], api). */
+  type GameSource = naogateway.GameSource; val GameSource: naogateway.GameSource.type = naogateway.GameSource
 
-    /** One line: "game state from 10.0.0.5:3838 (trusted: 10.0.0.0/24), 3 packets from elsewhere ignored". */
-    def describe: String =
-      s"game state from ${lastFrom.fold("nowhere yet")(a => s"${a.getAddress.getHostAddress}:${a.getPort}")} (trusted: $trusted)" +
-        (if (untrusted > 0) s", $untrusted packet(s) from elsewhere ignored" else "")
-  }
+  /** Where the gateway listens ([[naogateway.GatewayAddresses]], api). */
+  type Addresses = naogateway.GatewayAddresses; val Addresses: naogateway.GatewayAddresses.type = naogateway.GatewayAddresses
 
-  /** Where the gateway listens. */
-  final case class Addresses(robots: InetSocketAddress, gameController: Option[InetSocketAddress])
-
-  /**
-   * The gateway's own figures: datagrams seen, relayed, refused by kind (a closed set, [[Rejection]]) and by source
-   * address (at most [[RejectionAddresses]] of them, the rest under "other addresses").
-   */
-  final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int,
-      rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = Recording.Off.stats,
-      replay: Option[Replay.Progress] = None)
+  /** The gateway's own figures ([[naogateway.GatewayStats]], api). */
+  type GatewayStats = naogateway.GatewayStats; val GatewayStats: naogateway.GatewayStats.type = naogateway.GatewayStats
 
   /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
   val InboundBatch: Int = 64

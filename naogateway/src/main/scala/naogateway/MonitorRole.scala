@@ -1,10 +1,8 @@
 package naogateway
 
-import java.net.{InetAddress, InetSocketAddress}
+import java.net.InetSocketAddress
 
 import scala.concurrent.duration._
-
-import naogateway.wire.gamecontroller.ReturnStatus
 
 /**
  * The monitor role at a version-19 GameController (`naogateway.game-controller.monitor`, docs/protocol.md 10.9):
@@ -26,9 +24,6 @@ final case class MonitorSettings(
   require(statusPort >= 0 && statusPort <= 65535, s"game-controller.monitor.status-port $statusPort is not a UDP port")
   require(requestInterval >= 100.millis, "game-controller.monitor.request-interval must be at least 100 ms")
 }
-
-/** What the monitor role heard: one robot's forwarded status message. */
-final case class ForwardedStatus(from: InetAddress, status: ReturnStatus, atNanos: Long)
 
 /** The robots' status messages the GameController forwarded, by team and player, bounded. */
 final case class ForwardedStatuses(byPlayer: Map[(Int, Int), ForwardedStatus] = Map.empty) {

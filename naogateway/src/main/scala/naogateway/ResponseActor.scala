@@ -246,7 +246,7 @@ object ResponseActor {
               case _ => Behaviors.same
             }
           case SendOutcome(outcome) =>
-            (RobotFailure.ofOutcome(robotId, outcome), order.findInFlight(_.ids(outcome.tag))) match {
+            (OutcomeFailure.of(robotId, outcome), order.findInFlight(_.ids(outcome.tag))) match {
               case (Some(error), Some(e)) => settle(order, e.key, e.payload, Left(error), online, lastId, route)
               case _                      => Behaviors.same
             }

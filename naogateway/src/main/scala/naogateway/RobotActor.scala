@@ -224,7 +224,7 @@ object RobotActor {
     // The latest keep-alive's fields, the address and the link quality; `online` is not kept here but taken from the
     // behaviour (unreached, or running with its flag) whenever the snapshot leaves this actor (`view`).
     private var snapshot: RobotSnapshot = null
-    // The restart rule's state: the session believed in and a candidate new one (RobotSnapshot.keepAlive).
+    // The restart rule's state: the session believed in and a candidate new one (KeepAliveStep.keepAlive).
     private var sessions = SessionRule.empty
     // A discovered robot's first keep-alive (the one that introduced it) does not make it online: anyone can send one.
     private var introducing = discovered
@@ -591,7 +591,7 @@ object RobotActor {
       if (keepAliveTimes.size >= keepAliveTimesKept) keepAliveTimes.removeHead()
       keepAliveTimes.append(now)
       trimKeepAliveTimes(now - settings.heartbeat.qualityWindow.toNanos)
-      val step = RobotSnapshot.keepAlive(snapshot, sessions, contents.status.get, contents.robotHealth, now, settings.newSessionKeepAlives)
+      val step = KeepAliveStep.keepAlive(snapshot, sessions, contents.status.get, contents.robotHealth, now, settings.newSessionKeepAlives)
       sessions = step.sessions
       if (step.restarted) clockSync = clockSync.restart
       // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.

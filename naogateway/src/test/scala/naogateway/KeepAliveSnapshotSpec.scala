@@ -26,7 +26,7 @@ class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {
   private def run(steps: (Status, Option[RobotHealth])*): Vector[KeepAliveStep] =
     steps.foldLeft(Vector.empty[KeepAliveStep]) { (done, keepAlive) =>
       val (snapshot, sessions) = done.lastOption.fold((start, SessionRule.empty))(s => (s.snapshot, s.sessions))
-      done :+ RobotSnapshot.keepAlive(snapshot, sessions, keepAlive._1, keepAlive._2,
+      done :+ KeepAliveStep.keepAlive(snapshot, sessions, keepAlive._1, keepAlive._2,
         receivedAtNanos = 1000000000000L + done.size * 200000000L, keepAlives = 3)
     }
 

@@ -6,8 +6,8 @@ import spray.json._
 
 import naogateway.wire.HaViMoRegion
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{Gateway, GatewayEvent, LinkQualityChanged, LinkStats, Outbox, RobotForgotten, RobotOffline, RobotOnline,
-  RobotRestarted, RobotSnapshot, RobotStatusUpdated, GameStateUpdated}
+import naogateway.{GameSource, GatewayEvent, GatewayStats, LinkQualityChanged, LinkStats, RobotForgotten, RobotOffline, RobotOnline,
+  RobotRestarted, RobotSnapshot, RobotStatusUpdated, GameStateUpdated, TrafficStats}
 import apps.StatusView
 
 /** One point of a robot's plots: seconds since the view started, battery (V), round-trip time (ms), loss (0 to 1). */
@@ -33,10 +33,10 @@ final case class WebModel(
     robots: Vector[RobotSnapshot] = Vector.empty,
     links: Map[Int, LinkStats] = Map.empty,
     signing: Map[Int, String] = Map.empty,
-    traffic: Option[Outbox.TrafficStats] = None,
+    traffic: Option[TrafficStats] = None,
     game: Option[GameControlData] = None,
-    gameSource: Option[Gateway.GameSource] = None,
-    gateway: Option[Gateway.GatewayStats] = None,
+    gameSource: Option[GameSource] = None,
+    gateway: Option[GatewayStats] = None,
     robotHistory: Map[Int, Vector[RobotSample]] = Map.empty,
     trafficHistory: Vector[TrafficSample] = Vector.empty,
     events: Vector[WebEvent] = Vector.empty,
@@ -68,7 +68,7 @@ final case class WebModel(
   }
 
   /** The model after new traffic figures; a change of the competition gate is logged. */
-  def withTraffic(now: Outbox.TrafficStats, t: Double, wall: Long): WebModel = {
+  def withTraffic(now: TrafficStats, t: Double, wall: Long): WebModel = {
     val next = copy(traffic = Some(now))
     traffic match {
       case Some(before) if before.gateOpen != now.gateOpen => next.logged(WebEvent(t, wall, "gate", None, StatusView.gateLine(Some(now))))
@@ -78,7 +78,7 @@ final case class WebModel(
   }
 
   /** The model after the gateway's own figures; datagrams it refused are logged by kind as their counters grow. */
-  def withGatewayStats(now: Gateway.GatewayStats, t: Double, wall: Long): WebModel = {
+  def withGatewayStats(now: GatewayStats, t: Double, wall: Long): WebModel = {
     val before = gateway.map(_.rejected)
     val refusals = before.toVector.flatMap { b =>
       now.rejected.toVector.sortBy(_._1).collect {

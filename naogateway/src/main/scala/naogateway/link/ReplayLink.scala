@@ -39,8 +39,8 @@ object Replay {
     Replay(files, speed)
   }
 
-  /** What a replay did so far: datagrams handed to the gateway, datagrams the gateway sent and that went nowhere. */
-  final case class Progress(fed: Long, discarded: Long, finished: Boolean)
+  /** What a replay did so far ([[ReplayProgress]], api). */
+  type Progress = ReplayProgress; val Progress: ReplayProgress.type = ReplayProgress
 }
 
 /**

@@ -75,13 +75,6 @@ object Decision {
 }
 
 /**
- * What the recorder did so far: files begun, MCAP messages written, entries dropped because its queue was full, and
- * entries lost because no file could be written.
- */
-final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long, currentFile: Option[String],
-    retention: Option[RetentionStatus] = None)
-
-/**
  * Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
  * reader thread and the outbox call it on their hot paths.
  */
@@ -113,7 +106,7 @@ object Recording {
     def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
         robotId: Int): Unit = ()
     def decision(decision: Decision): Unit = ()
-    def stats: RecordingStats = RecordingStats(enabled = false, 0, 0, 0, 0, None)
+    def stats: RecordingStats = RecordingStats.Off
     def close(): Unit = ()
   }
 

@@ -46,15 +46,6 @@ object RetentionSettings {
     RetentionSettings(c.getBytes("max-total-bytes"), c.getDuration("max-age").toScala)
 }
 
-/** What the last sweep of the recording directory found and did, for the status view and `robotctl doctor`. */
-final case class RetentionStatus(files: Int, bytes: Long, deletedFiles: Long, deletedBytes: Long, limits: String, failed: Option[String]) {
-
-  /** One line: "kept 12 files, 96.0 MiB (limits 20 GiB, 14 days); 3 deleted so far". */
-  def describe: String =
-    s"kept $files file(s), ${Retention.bytesText(bytes)} (limits $limits); $deletedFiles deleted so far" +
-      failed.fold("")(f => s"; $f")
-}
-
 /** The retention rule as a pure function over a listing, and the sweep of a directory that applies it. */
 object Retention {
 
@@ -104,14 +95,8 @@ object Retention {
         }.toVector
       }
 
-  /** 1536 → "1.5 KiB". */
-  def bytesText(bytes: Long): String = {
-    val units = Vector("B", "KiB", "MiB", "GiB", "TiB")
-    var value = bytes.toDouble
-    var unit = 0
-    while (value >= 1024 && unit < units.size - 1) { value /= 1024; unit += 1 }
-    if (unit == 0) s"$bytes B" else f"$value%.1f ${units(unit)}"
-  }
+  /** 1536 → "1.5 KiB" ([[RetentionStatus.bytesText]]). */
+  def bytesText(bytes: Long): String = RetentionStatus.bytesText(bytes)
 
   /** 14 days → "14 days"; shorter ages in hours or minutes. */
   def ageText(age: FiniteDuration): String =

@@ -46,10 +46,7 @@ final case class RobotSnapshot(
     RobotReport(teamId, role, agent, posture, batteryVoltage, uptimeMillis, bootId, position)
 }
 
-/** What one keep-alive did: the robot's new snapshot, whether it completed a new session, and the restart rule now. */
-final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, sessions: SessionRule)
-
-/** How a keep-alive changes a robot's snapshot. */
+/** How a keep-alive changes a robot's snapshot (the restart rule over it is the gateway's [[KeepAliveStep]]). */
 object RobotSnapshot {
 
   /**
@@ -76,25 +73,6 @@ object RobotSnapshot {
       position = r.position,
       receivedAtNanos = receivedAtNanos
     )
-  }
-
-  /**
-   * One keep-alive applied to the gateway's view of a robot: the snapshot it publishes ([[afterKeepAlive]]), and
-   * whether it completes a new session by the restart rule of docs/protocol.md §6.2 ([[SessionRule]]: `keepAlives`
-   * keep-alives in a row of one new session). The rule's state is kept apart from the snapshot, which shows only the
-   * latest keep-alive.
-   */
-  def keepAlive(
-      previous: RobotSnapshot,
-      sessions: SessionRule,
-      status: naogateway.proto.Status,
-      health: Option[naogateway.proto.RobotHealth],
-      receivedAtNanos: Long,
-      keepAlives: Int
-  ): KeepAliveStep = {
-    val current = afterKeepAlive(previous, status, health, receivedAtNanos)
-    val (next, restarted) = sessions.step(SessionMark(current.bootId, current.uptimeMillis, receivedAtNanos / 1000000L), keepAlives)
-    KeepAliveStep(current, restarted, next)
   }
 }
 
@@ -160,13 +138,6 @@ sealed abstract class RobotFailure(message: String) extends Exception(message) w
 
 /** The ways a call or an operation can fail. */
 object RobotFailure {
-
-  /** The failure an outbox outcome means for the call it carried, if any (`Accepted` is none). */
-  def ofOutcome(robotId: Int, outcome: Outbox.Outcome): Option[RobotFailure] = outcome match {
-    case Outbox.Accepted(_)            => None
-    case Outbox.RefusedByRule(_, rule) => Some(RuleGate(rule))
-    case Outbox.Dropped(_, reason)     => Some(Overloaded(robotId, reason))
-  }
 
   /** The robot is offline; nothing was sent. */
   final case class RobotOffline(robotId: Int) extends RobotFailure(s"robot $robotId is offline")
