@@ -251,9 +251,6 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
   emit(Magic)
   emitRecord(Op.Header) { b => b.string(profile); b.string(library) }
 
-  /** Bytes written to `out` so far (the chunk being filled not included). */
-  def bytesWritten: Long = written
-
   /** Bytes written so far plus the chunk being filled: what the file will hold before its summary. */
   def size: Long = written + chunk.length
 

@@ -24,9 +24,6 @@ object GameControllerCodec {
   /** First four bytes of every return packet. */
   val ReturnHeader: String = "RGrt"
 
-  /** Where the 2014 GameController broadcasts its packets and hears the robots' return packets. */
-  val ControlPort: Int = 3838
-
   /** Where the version-12 and version-19 GameControllers hear the robots' return packets. */
   val ReturnPort: Int = 3939
 
@@ -183,12 +180,6 @@ object GameControllerCodec {
     else
       decodeStatus(java.util.Arrays.copyOfRange(bytes, ForwardPrefixBytes, bytes.length))
         .map(java.net.InetAddress.getByAddress(java.util.Arrays.copyOfRange(bytes, 0, ForwardPrefixBytes)) -> _)
-
-  /** The version byte of a return packet, if the bytes start `RGrt` and have one. */
-  def returnVersionOf(bytes: Array[Byte]): Option[Int] =
-    if (bytes.length > VersionOffset && java.util.Arrays.equals(bytes, 0, HeaderBytes, ReturnHeaderBytes, 0, HeaderBytes))
-      Some(u8(bytes, VersionOffset))
-    else None
 
   private val FloatFields = Vector("pose[0]", "pose[1]", "pose[2]", "ballAge", "ball[0]", "ball[1]")
 
