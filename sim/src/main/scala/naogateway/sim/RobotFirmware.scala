@@ -132,15 +132,6 @@ final case class FirmwareState(
 /** The simulated CM-530 firmware as pure functions of state, input and time (nanoseconds). */
 object RobotFirmware {
 
-  /** The module `motion` (walk, stop, head, arms, posture, getPosture). */
-  val Motion = "motion"
-
-  /** The module `speech` (say). */
-  val Speech = "speech"
-
-  /** The module `system` (battery, ping, reset). */
-  val System = "system"
-
   /** Head limits, radians. */
   val PanLimit: Double = 2.0
   val TiltMin: Double = -0.6
@@ -365,8 +356,8 @@ object RobotFirmware {
     def answer(result: Either[String, Option[RpcValue]], next: FirmwareState = s) =
       (next, Vector(reply(next, pending, result)))
     val ok = Right(Some(RpcValue.Flag(true)))
-    (call.module, call.method) match {
-      case (Motion, "walk") =>
+    RpcMethod.of(call) match {
+      case Some(RpcMethod.Walk) =>
         floats(call.params, 3) match {
           case Left(e) => answer(Left(e))
           case Right(Vector(vx, vy, omega)) =>
@@ -382,10 +373,10 @@ object RobotFirmware {
             }
           case Right(_) => answer(Left(RpcReply.badParameters("walk takes vx, vy, omega")))
         }
-      case (Motion, "stop") =>
+      case Some(RpcMethod.Stop) =>
         if (call.params.nonEmpty) answer(Left(RpcReply.badParameters("stop takes no parameters")))
         else answer(ok, s.copy(walk = None, posture = if (s.posture == Posture.Walking) Posture.Stand else s.posture))
-      case (Motion, "head") =>
+      case Some(RpcMethod.Head) =>
         floats(call.params, 2) match {
           case Left(e) => answer(Left(e))
           case Right(Vector(pan, tilt)) =>
@@ -394,9 +385,9 @@ object RobotFirmware {
             else answer(ok, s.copy(head = (pan, tilt)))
           case Right(_) => answer(Left(RpcReply.badParameters("head takes pan, tilt")))
         }
-      case (Motion, "arms") =>
+      case Some(RpcMethod.Arms) =>
         floats(call.params, 4).fold(e => answer(Left(e)), a => answer(ok, s.copy(arms = a)))
-      case (Motion, "posture") =>
+      case Some(RpcMethod.Posture) =>
         call.params match {
           case Vector(RpcValue.Text(name)) =>
             Posture.target(name) match {
@@ -415,19 +406,19 @@ object RobotFirmware {
             }
           case _ => answer(Left(RpcReply.badParameters("posture takes one text: sit, stand or crouch")))
         }
-      case (Motion, "getPosture") => answer(Right(Some(RpcValue.Text(s.posture.name))))
-      case (Speech, "say") =>
+      case Some(RpcMethod.GetPosture) => answer(Right(Some(RpcValue.Text(s.posture.name))))
+      case Some(RpcMethod.Say) =>
         call.params match {
           case Vector(RpcValue.Text(text)) => answer(ok, s.copy(said = s.said :+ text))
           case _                           => answer(Left(RpcReply.badParameters("say takes one text")))
         }
-      case (System, "battery") => answer(Right(Some(RpcValue.Number(s.battery.toFloat))))
-      case (System, "ping")    => answer(Right(Some(RpcValue.UInt(s.uptimeMillis & 0xffffffffL))))
-      case (System, "reset") =>
+      case Some(RpcMethod.Battery) => answer(Right(Some(RpcValue.Number(s.battery.toFloat))))
+      case Some(RpcMethod.Ping) => answer(Right(Some(RpcValue.UInt(s.uptimeMillis & 0xffffffffL))))
+      case Some(RpcMethod.Reset) =>
         // Reply first, then come back as a new session (fresh uptime and sequence numbers, options off).
         val (_, out) = answer(ok)
         (restart(s, s.now), out)
-      case _ => answer(Left(RpcReply.unknownMethod(call.module, call.method)))
+      case None => answer(Left(RpcReply.unknownMethod(call.module, call.method)))
     }
   }
 
