@@ -22,14 +22,17 @@ sealed abstract class RpcMethod(val module: String, val method: String, val idem
 /** The method table: the one place that names the robot's methods. */
 object RpcMethod {
 
+  // Constants (final, no type ascription), so the case objects below read them inlined: a case object initialised
+  // first must not start this object's initialisation, whose `all` needs that case object already done.
+
   /** The module of the motions (walk, stop, head, arms, posture, getPosture). */
-  val MotionModule: String = "motion"
+  final val MotionModule = "motion"
 
   /** The module of speech (say). */
-  val SpeechModule: String = "speech"
+  final val SpeechModule = "speech"
 
   /** The module of the robot itself (battery, ping, reset). */
-  val SystemModule: String = "system"
+  final val SystemModule = "system"
 
   /** Walk with these velocities; the robot's 500 ms lease needs it refreshed. */
   case object Walk extends RpcMethod(MotionModule, "walk", idempotent = true, Some(ActuatorGroup.Walk))
