@@ -28,9 +28,6 @@ final case class ClockEstimate(
   /** How much faster the robot's clock runs than the gateway's, in parts per million (negative: slower). */
   def driftPpm: Double = (1.0 / gatewayPerRobot - 1.0) * 1e6
 
-  /** Gateway time minus robot time at the anchor, in ms: the gateway's clock reading when the robot's read 0. */
-  def offsetMillis: Double = gatewayNanos / 1e6 - robotMillis
-
   /** When the robot's clock read `robotTime` (ms), on the gateway's clock (`System.nanoTime` of the gateway's JVM). */
   def toGatewayNanos(robotTime: Long): Long =
     gatewayNanos + math.round((robotTime - robotMillis).toDouble * gatewayPerRobot * 1e6)

@@ -34,7 +34,7 @@ final case class RobotLinks(links: Vector[LinkStats])
 
 /**
  * The gateway's own figures: datagrams seen, relayed, refused by kind (a closed set, `Rejection`) and by source
- * address (at most `Gateway.RejectionAddresses` of them, the rest under "other addresses").
+ * address (at most `RejectionLedger.SourceAddresses` of them, the rest under "other addresses").
  */
 final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long, rejected: Map[String, Long], robots: Int,
     rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = RecordingStats.Off,

@@ -11,7 +11,7 @@ import scala.util.{Failure, Success}
 
 import akka.actor.CoordinatedShutdown
 import akka.actor.typed.scaladsl.Behaviors
-import akka.actor.typed.{ActorSystem, Behavior}
+import akka.actor.typed.{ActorRef, ActorSystem, Behavior}
 import com.typesafe.config.{Config, ConfigFactory}
 
 import naogateway._
@@ -109,7 +109,7 @@ object Launcher {
       }
     val nodeConfig = checked(overrides, code => sys.exit(code))
     val gatewayNode =
-      try MiddlewareCluster.start(Root(parsed.replay), nodeConfig)
+      try MiddlewareCluster.start(Root(parsed.replay, exitWhenStopped), nodeConfig)
       catch {
         // Another program took a port between the check and the bind: the same one line, not Akka's stack trace.
         case NonFatal(e) if bindFailure(e) =>
@@ -124,6 +124,18 @@ object Launcher {
   /** The exit codes of a launcher that could not start: a config problem, and a port it cannot have. */
   val ExitConfig = 2
   val ExitPortInUse = 3
+
+  /** The exit code of a launcher whose gateway or middleware stopped while it ran. */
+  val ExitPartStopped = 4
+
+  /**
+   * What the launcher does when its gateway or middleware stops: says so on the terminal and exits
+   * [[ExitPartStopped]], from a thread of its own (System.exit waits for the shutdown hooks, which wait for the actors).
+   */
+  private def exitWhenStopped(part: String): Unit = {
+    System.err.println(s"naogateway: the $part stopped; exiting")
+    new Thread(() => sys.exit(ExitPartStopped), "naogateway-exit").start()
+  }
 
   /**
    * The gateway node's config once it passed the checks of [[Preflight]]: a config problem is one line naming the key
@@ -175,13 +187,25 @@ object Launcher {
   sealed trait Command
   private final case class Addresses(addresses: Gateway.Addresses) extends Command
   private final case class FleetStarted(result: scala.util.Try[naogateway.sim.FleetHandle]) extends Command
+  private final case class PartStopped(part: String) extends Command
 
-  /** The gateway node's root: gateway (on its sockets, or replaying), middleware, simulated robots, status view, app node. */
-  def Root(replay: Option[Replay] = None): Behavior[Command] = Behaviors.setup { context =>
+  /**
+   * The gateway node's root: gateway (on its sockets, or replaying), middleware, simulated robots, status view, app node.
+   * It watches the gateway and the middleware: when either stops (it failed, or lost its socket) outside a shutdown,
+   * nothing the node offers works any more, so the root calls `stopped` with its name ("gateway", "middleware") and
+   * stops, and the actor system with it. `makeMiddleware` makes the middleware in front of the gateway.
+   */
+  def Root(
+      replay: Option[Replay] = None,
+      stopped: String => Unit = _ => (),
+      makeMiddleware: ActorRef[Gateway.Command] => Behavior[RobotMiddleware.Command] = configuredMiddleware
+  ): Behavior[Command] = Behaviors.setup { context =>
     val config = context.system.settings.config
     val launcher = settings(config.getConfig("apps.launcher"))
     val gateway = context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots), replay), "gateway")
-    val middleware = context.spawn(RobotMiddleware(gateway, MiddlewareSettings(context.system)), "middleware")
+    val middleware = context.spawn(makeMiddleware(gateway), "middleware")
+    context.watchWith(gateway, PartStopped("gateway"))
+    context.watchWith(middleware, PartStopped("middleware"))
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(gateway))
     // The web view (docs/web.md), when enabled: its address goes on the status view's first line.
@@ -208,8 +232,18 @@ object Launcher {
       case FleetStarted(Failure(e)) =>
         context.log.error("Simulated robots did not start", e)
         Behaviors.same
+      case PartStopped(_) if CoordinatedShutdown(context.system).shutdownReason().isDefined =>
+        Behaviors.same // the node is shutting down: its parts stop as they should
+      case PartStopped(part) =>
+        context.log.error("The {} stopped: the gateway node stops", part)
+        stopped(part)
+        Behaviors.stopped
     }
   }
+
+  /** The middleware with the settings of the node's config. */
+  private def configuredMiddleware(gateway: ActorRef[Gateway.Command]): Behavior[RobotMiddleware.Command] =
+    Behaviors.setup(context => RobotMiddleware(gateway, MiddlewareSettings(context.system)))
 
   /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the
     * gateway's GameController port, on loopback when the gateway listens on every address.

@@ -33,18 +33,13 @@ object StatusView {
   /** A number that is not finite shows as "-" rather than as "NaN" or "Infinity". */
   private def finite(d: Double)(f: Double => String): String = if (d.isNaN || d.isInfinite) "-" else f(d)
 
-  private def address(r: RobotSnapshot): String =
-    Option(r.address).fold("-")(a => s"${Option(a.getHostString).getOrElse("-")}:${a.getPort}")
-
-  /** One line describing a robot, as both the screen and the plain lines use it. */
+  /** One line describing a robot (its [[RobotRow]]), as both the screen and the plain lines use it. */
   def robotLine(r: RobotSnapshot, link: Option[LinkStats]): String = {
-    val rtt = link.flatMap(_.rttMillis)
-    val loss = link.map(_.lossEstimate)
-    val quality = Option(r.quality).fold("-")(_.name)
-    f"robot ${r.robotId}%-3d ${if (r.online) "online " else "offline"} $quality%-8s " +
-      f"battery ${opt(r.batteryVoltage)(finite(_)(v => f"$v%.2f V"))}%-8s posture ${opt(r.posture)(_.name)}%-8s " +
-      f"role ${opt(r.role)(identity)}%-9s rtt ${opt(rtt)(finite(_)(v => f"$v%.1f ms"))}%-9s " +
-      f"loss ${opt(loss)(finite(_)(v => f"${v * 100}%.0f %%"))}%-5s " + address(r)
+    val row = RobotRow.of(r, link)
+    f"robot ${row.robotId}%-3d ${if (row.online) "online " else "offline"} ${opt(row.quality)(_.name)}%-8s " +
+      f"battery ${opt(row.battery)(v => f"$v%.2f V")}%-8s posture ${opt(row.posture)(_.name)}%-8s " +
+      f"role ${opt(row.report.role)(identity)}%-9s rtt ${opt(row.rttMillis)(v => f"$v%.1f ms")}%-9s " +
+      f"loss ${opt(row.loss)(v => f"${v * 100}%.0f %%")}%-5s " + row.address.getOrElse("-")
   }
 
   /** The game state as the GameController's display names it: PLAYING, READY, ... */

@@ -1,22 +1,16 @@
 package naogateway
 
 import java.net.{InetAddress, InetSocketAddress}
-import java.util.concurrent.ConcurrentHashMap
-import java.util.concurrent.atomic.{AtomicLong, AtomicReference}
+import java.util.concurrent.atomic.AtomicReference
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop}
-import scala.concurrent.duration._
-import scala.jdk.CollectionConverters._
-import scala.reflect.ClassTag
 
-import org.slf4j.LoggerFactory
-
-import naogateway.link.{Backlog, DatagramWriter, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
+import naogateway.link.{Backlog, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
 import naogateway.recording.{Decision, Recording, RobotClockEstimates}
 import naogateway.wire._
-import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
+import naogateway.wire.gamecontroller.GameControlData
 
 /** The robot side of the middleware: the robots' UDP port, the robot registry, the GameController and the relay. */
 object Gateway {
@@ -45,9 +39,6 @@ object Gateway {
   /** The link figures of every robot ([[naogateway.RobotLinks]], api). */
   type RobotLinks = naogateway.RobotLinks; val RobotLinks: naogateway.RobotLinks.type = naogateway.RobotLinks
 
-  /** Lets robot `robotId` be re-bound to the IP address its next datagram comes from (a robot that moved host). */
-  final case class AllowRebind(robotId: Int) extends Command
-
   /** Sends every `GatewayEvent` to `subscriber` until it stops (robot events come straight from the robot actors). */
   final case class Subscribe(subscriber: ActorRef[GatewayEvent]) extends Command
 
@@ -66,10 +57,10 @@ object Gateway {
   /** Answers with where game state comes from: the trusted sources, the last sender and the packets ignored. */
   final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Query
 
-  private final case class GameControllerEvent(event: UdpLink.Event) extends Command
+  private[naogateway] final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class TeamMessageEvent(event: UdpLink.Event) extends Command
-  private final case class MonitorStatusEvent(event: UdpLink.Event) extends Command
-  private final case class Unrouted(frame: Routing.ToGateway) extends Command
+  private[naogateway] final case class MonitorStatusEvent(event: UdpLink.Event) extends Command
+  private[naogateway] final case class Unrouted(frame: Routing.ToGateway) extends Command
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
   private final case class RobotWantsSubscribers(request: RobotActor.SubscribersWanted) extends Command
@@ -83,20 +74,8 @@ object Gateway {
   /** The gateway's own figures ([[naogateway.GatewayStats]], api). */
   type GatewayStats = naogateway.GatewayStats; val GatewayStats: naogateway.GatewayStats.type = naogateway.GatewayStats
 
-  /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
-  val InboundBatch: Int = 64
-
-  /** Source addresses whose refusals are counted one by one; the rest are counted together (`other addresses`). */
-  val RejectionAddresses: Int = 64
-
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
-
-  /**
-   * A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
-   * robot that must sign, the check every frame passes before it is handed on.
-   */
-  private final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
   /**
     * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
@@ -130,11 +109,11 @@ object Gateway {
         val clocks = new RobotClockEstimates
         val recording =
           if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
-        val routes = new AtomicReference[Routing.Table[Inlet]](Routing.Table.empty)
+        val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
         // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
         val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
         val outbox = context.spawn(
-          Behaviors.supervise(Outbox(recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
+          Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
             settings.competition, signer, recording))
             .onFailure(settings.supervision.outbox.strategy),
           "outbox",
@@ -169,19 +148,6 @@ object Gateway {
       }
     }
 
-  /** `link`, with every datagram it takes recorded as sent from `local` on `port` (`link` itself when not recording). */
-  private def recorded(link: DatagramWriter, recording: Recording, port: RecordedPort, local: InetSocketAddress,
-      routes: AtomicReference[Routing.Table[Inlet]]): DatagramWriter =
-    if (!recording.enabled) link
-    else
-      new DatagramWriter {
-        def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = {
-          val sent = link.send(bytes, to)
-          if (sent) recording.datagram(port, received = false, local, to, bytes, routes.get.byAddress.get(to.getAddress).fold(-1)(_.robotId))
-          sent
-        }
-      }
-
   /**
    * Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only
    * brings the robot's clock estimate, with which the recorder dates the robot's Status.
@@ -198,103 +164,6 @@ object Gateway {
   /** The kernel receive buffer of the robot port: a burst of a few thousand datagrams waits there, not dropped. */
   private val ReceiveBufferBytes = 4 * 1024 * 1024
 
-  /**
-   * Refused datagrams by kind and by source address, counted by the port's reader and the gateway alike (so the maps
-   * are concurrent). Both are bounded: the kinds are a closed set, and addresses beyond [[RejectionAddresses]] share
-   * one counter. A warning names the kind only, at its 1st, 10th, 100th … refusal; the sender and its values go to
-   * the debug log, so nothing a sender chooses can make the log grow faster.
-   */
-  private final class Rejections {
-    private val counts = new ConcurrentHashMap[Rejection, AtomicLong]()
-    private val bySource = new ConcurrentHashMap[java.net.InetAddress, AtomicLong]()
-    private val otherSources = new AtomicLong
-    private val log = LoggerFactory.getLogger("naogateway.Gateway")
-
-    def count(kind: Rejection, from: InetSocketAddress, detail: => String = "", times: Long = 1L): Unit = {
-      val n = counts.computeIfAbsent(kind, _ => new AtomicLong).addAndGet(times)
-      val address = from.getAddress
-      val known = bySource.get(address)
-      if (known != null) known.addAndGet(times)
-      else if (bySource.size < RejectionAddresses) bySource.computeIfAbsent(address, _ => new AtomicLong).addAndGet(times)
-      else otherSources.addAndGet(times)
-      if (RateLimitedLog.dueBetween(n - times, n)) log.warn("Refused datagram: {} ({} so far)", kind.name, n)
-      if (log.isDebugEnabled) log.debug("Refused datagram from {}: {} {}", from, kind.name, detail)
-    }
-
-    def snapshot: Map[String, Long] = counts.asScala.iterator.map { case (k, v) => k.name -> v.get }.toMap
-
-    def sources: Map[String, Long] = {
-      val each = bySource.asScala.iterator.map { case (a, v) => a.getHostAddress -> v.get }.toMap
-      if (otherSources.get > 0) each.updated("other addresses", otherSources.get) else each
-    }
-  }
-
-  /**
-   * The robot port's reader side of the gateway: runs on the reader thread, routes each datagram with the table the
-   * gateway last published, and hands the robot actors (or the gateway) their messages directly.
-   */
-  private final class PortReader(
-      settings: GatewaySettings,
-      port: RobotLink,
-      gateway: ActorRef[Command],
-      gatewayBacklog: Backlog,
-      outbox: ActorRef[Outbox.Command],
-      rejections: Rejections,
-      recording: Recording,
-      val routes: AtomicReference[Routing.Table[Inlet]]
-  ) extends RobotPort.Handler {
-    // Written by the reader thread only; read by the gateway for its figures.
-    @volatile var datagramsIn, relayed = 0L
-    // What the outbox has not been told yet: told in one message per InboundBatch datagrams or when the port is quiet.
-    private var inboundDatagrams, inboundBytes = 0
-    private val relayLink = recorded(port, recording, RecordedPort.FU_REMOTE_RELAY, port.localAddress, routes)
-
-    def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
-      datagramsIn += 1
-      val table = routes.get
-      if (recording.enabled) {
-        val robotId = table.byAddress.get(from.getAddress).fold(-1)(_.robotId)
-        recording.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
-      }
-      settings.relay.foreach { relay =>
-        if (relayLink.send(bytes, relay)) relayed += 1
-      }
-      inboundDatagrams += 1
-      inboundBytes += bytes.length
-      if (inboundDatagrams >= InboundBatch) caughtUp()
-      Routing.decide(table, bytes, from) match {
-        case Routing.ToRobot(route, header, contents, size) =>
-          // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
-          route.target.signatures.map(_.check(bytes, header)) match {
-            case Some(Left(kind)) =>
-              rejections.count(kind, from)
-              if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
-            case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
-          }
-        case Routing.SegmentToRobot(route, segment) =>
-          deliver(route, RobotActor.SegmentReceived(segment), from)
-        case unrouted: Routing.ToGateway =>
-          if (gatewayBacklog.tryAdd()) gateway ! Unrouted(unrouted) else rejections.count(Rejection.GatewayBusy, from)
-        case Routing.Refused(kind, detail, route) =>
-          rejections.count(kind, from, detail)
-          route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(kind))
-      }
-    }
-
-    private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
-      if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)
-
-    def caughtUp(): Unit =
-      if (inboundDatagrams > 0) {
-        outbox ! Outbox.Inbound(inboundDatagrams, inboundBytes)
-        inboundDatagrams = 0
-        inboundBytes = 0
-      }
-
-    def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit =
-      gateway ! GameControllerEvent(UdpLink.Received(bytes, from))
-  }
-
   private final class GatewayLogic(
       settings: GatewaySettings,
       context: ActorContext[Command],
@@ -302,11 +171,11 @@ object Gateway {
       port: RobotLink,
       outbox: ActorRef[Outbox.Command],
       recording: Recording,
-      routes: AtomicReference[Routing.Table[Inlet]],
+      routes: AtomicReference[Routing.Table[PortReader.Inlet]],
       clocks: RobotClockEstimates
   ) {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
-    private val rejections = new Rejections
+    private val rejections = new RejectionLedger.Shared
     private val gatewayBacklog = new Backlog(settings.gatewayBacklog)
     private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
     private var gameControllerAddress: Option[InetSocketAddress] = None
@@ -317,71 +186,7 @@ object Gateway {
       // On the robot actors' own thread: every keep-alive's status event comes here, and a hand-over to another thread per
       // keep-alive would cost more than the update itself.
       if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events", RobotDispatcher)) else Set.empty
-    private var rebindable = Set.empty[Int]
-    private var gcPackets = 0L
-    private var game: Option[GameControlData] = None
-    private var gameFrom: Option[InetSocketAddress] = None
-    private var gameUntrusted = 0L
-
-    private var lastUnreadable: Option[(Long, String)] = None
-    private var sources = GameControllerSources()
-    private var trueStateAt: Option[Long] = None
-    private var forwarded = ForwardedStatuses()
-
-    /**
-     * The monitor role: the request for the true state, from the GameController socket, now and every request-interval
-     * (a child owns the timer); the forwarded status messages on a socket of their own.
-     */
-    private def startMonitor(gcLink: ActorRef[UdpLink.Command], m: MonitorSettings): Unit = {
-      context.log.info("Gateway monitoring the GameController at {}: asking for the true game state every {}", m.gameController,
-        m.requestInterval)
-      context.spawn(Behaviors.withTimers[String] { timers =>
-        gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
-        timers.startTimerWithFixedDelay("request", m.requestInterval)
-        Behaviors.receiveMessage { _ =>
-          gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
-          Behaviors.same
-        }
-      }, "monitor-requests")
-      val self = context.self
-      val statusEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
-        self ! MonitorStatusEvent(e)
-        Behaviors.same
-      }, "monitor-status-events")
-      context.spawn(UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, m.statusPort), statusEvents,
-        UdpLink.Options(reuseAddress = true, maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)), "monitor-status-link")
-    }
-
-    /** Whether the monitor role's true state is fresh enough that the broadcast one is not used. */
-    private def trueStateFresh(now: Long): Boolean =
-      settings.monitor.exists(m => trueStateAt.exists(at => now - at < m.trueStateFresh.toNanos))
-
-    /** A readable control packet that counts (broadcast, or the true state): the gate, the budget, the view. */
-    private def control(data: GameControlData, from: InetSocketAddress, now: Long): Unit = {
-      gcPackets += 1
-      gameFrom = Some(from)
-      if (settings.teamMessages.enabled) budget = budget.game(data)
-      val changed = !game.exists(_.gameState == data.gameState)
-      gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
-      // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
-      if (game.forall(g => rank(data.version) <= rank(g.version)) || changed) {
-        game = Some(data)
-        publish(GameStateUpdated(data))
-      }
-    }
-    private var budget = MessageBudget(settings.teamMessages)
-
-    /** Notes the sender of a readable control packet; true when its game state counts (see GameControllerSources). */
-    private def heard(data: GameControlData, from: InetSocketAddress, trusted: Boolean, now: Long): Boolean = {
-      val (next, use) = sources.packet(from, data.packetNumberOnWire, trusted, now)
-      if (next.others(now).nonEmpty && sources.others(now).isEmpty)
-        context.log.warn("{}", next.warnings(now).mkString("; "))
-      sources = next
-      use
-    }
-
-    /** Where a version stands among those read: newest (richest) first. */
-    private def rank(version: GameControlVersion): Int = GameControlVersion.all.indexOf(version)
+    private val watch = new GameControllerWatch(settings, context, rejections, gate, publish)
 
     /**
      * Every packet, not only changes, reaches every gate (the outbox's, each ZeroMQ robot's): a restarted outbox or
@@ -406,7 +211,7 @@ object Gateway {
       case GameControllerEvent(UdpLink.Bound(gcLink, gcLocal)) =>
         context.log.info("Gateway listening for the GameController on {}", gcLocal)
         gameControllerAddress = Some(gcLocal)
-        settings.monitor.foreach(startMonitor(gcLink, _))
+        settings.monitor.foreach(watch.startMonitor(gcLink, _))
         stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
       case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
         context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
@@ -430,7 +235,7 @@ object Gateway {
     /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
       routes.set(Routing.Table.of(byId.collect {
-        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, Inlet(e.actor, e.backlog, e.signatures))
+        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, PortReader.Inlet(e.actor, e.backlog, e.signatures))
       }))
 
     private def robotRefs: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)] =
@@ -470,7 +275,7 @@ object Gateway {
       byId = byId.updated(robot.robotId, Entry(actor, robot.address, zeromq = true, backlog))
     }
 
-    private def reject(kind: Rejection, from: InetSocketAddress, detail: => String = ""): Unit = rejections.count(kind, from, detail)
+    private def reject(kind: Rejection, from: InetSocketAddress, detail: => String): Unit = rejections.count(kind, from, detail)
 
     /** A link's datagrams over its cap, dropped unread: counted as the gateway being busy, with the last sender. */
     private def overCap(dropped: UdpLink.Dropped, port: String): Unit =
@@ -515,11 +320,7 @@ object Gateway {
         case GameControllerEvent(UdpLink.Received(bytes, from)) if recordGameController(bytes, from) && Datagram.isGameControllerReturn(bytes) =>
           Behaviors.same // robots' answers to the GameController share its port
         case GameControllerEvent(UdpLink.Received(bytes, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
-          // Anyone on the field's WiFi can send a control packet: only the configured GameController steers the gate.
-          // A readable one is still noted, so a second GameController on the field is seen and named.
-          gameUntrusted += 1
-          reject(Rejection.UntrustedGameController, from)
-          GameControllerCodec.decodeControl(bytes).foreach(heard(_, from, trusted = false, System.nanoTime()))
+          watch.untrustedPacket(bytes, from)
           Behaviors.same
         case GameControllerEvent(d: UdpLink.Dropped) =>
           overCap(d, "GameController")
@@ -531,49 +332,21 @@ object Gateway {
           overCap(d, "monitor status")
           Behaviors.same
         case TeamMessageEvent(UdpLink.Received(bytes, _)) =>
-          budget = budget.message(bytes.length, System.nanoTime())
+          watch.teamMessage(bytes)
           Behaviors.same
         case TeamMessageEvent(UdpLink.BindFailed(address, reason)) =>
           context.log.error("Team message listener cannot bind {}: {}; the message budget will not be counted", address, reason)
           Behaviors.same
         case TeamMessageEvent(_) => Behaviors.same
         case MonitorStatusEvent(UdpLink.Received(bytes, from)) =>
-          // Only the GameController forwards status messages; a stranger cannot fill the view.
-          if (!settings.monitor.exists(_.gameController.getAddress == from.getAddress))
-            reject(Rejection.UntrustedGameController, from, "status message from another host than the GameController")
-          else
-            GameControllerCodec.decodeForwardedStatus(bytes) match {
-              case Right((robot, status)) => forwarded = forwarded.add(ForwardedStatus(robot, status, System.nanoTime()))
-              case Left(error)            => reject(Rejection.BadGameControllerPacket, from, error.describe)
-            }
+          watch.forwardedStatus(bytes, from)
           Behaviors.same
         case MonitorStatusEvent(UdpLink.BindFailed(address, reason)) =>
           context.log.error("Monitor status listener cannot bind {}: {}; forwarded robot statuses will not be shown", address, reason)
           Behaviors.same
         case MonitorStatusEvent(_) => Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
-          val now = System.nanoTime()
-          GameControllerCodec.decodeControl(bytes) match {
-            case Right(data) if !heard(data, from, trusted = true, now) =>
-              // A second trusted GameController while the first keeps sending: named in the warnings, never obeyed.
-              reject(Rejection.UntrustedGameController, from, "a second GameController")
-            case Right(_) if trueStateFresh(now) =>
-              // The monitor role: the broadcast state may lag the true one by up to 10 s; the true one rules meanwhile.
-              gcPackets += 1
-            case Right(data) => control(data, from, now)
-            case Left(_) if settings.monitor.exists(_.gameController.getAddress == from.getAddress) &&
-                GameControllerCodec.decodeTrueData(bytes).isRight =>
-              control(GameControllerCodec.decodeTrueData(bytes).toOption.get, from, now)
-              trueStateAt = Some(now)
-            case Left(error) if Datagram.isGameControllerControl(bytes) =>
-              // The trusted GameController sends what this gateway cannot read (a version yet to come): it may well be
-              // running a game, so the gate closes (fail safe) and says why, rather than stay open as if none were.
-              reject(Rejection.BadGameControllerPacket, from, error.describe)
-              lastUnreadable = Some(now -> error.describe)
-              gate(GameReading.Unreadable(error.describe))
-            case Left(error) =>
-              reject(Rejection.BadGameControllerPacket, from, error.describe)
-          }
+          watch.trustedPacket(bytes, from)
           Behaviors.same
         case GameControllerEvent(_) => Behaviors.same
         case Subscribe(subscriber) =>
@@ -611,32 +384,25 @@ object Gateway {
         case GetRobot(robotId, replyTo) =>
           replyTo ! byId.get(robotId).map(_.actor)
           Behaviors.same
-        case AllowRebind(robotId) =>
-          rebindable += robotId
-          Behaviors.same
         case GetStats(replyTo) =>
-          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, gcPackets, rejections.snapshot, byId.size, rejections.sources,
+          val ledger = rejections.current
+          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, watch.packetsCounted, ledger.byKind, byId.size, ledger.sources,
             recording.stats, port match { case r: ReplayLink => Some(r.progress); case _ => None })
           Behaviors.same
         case GetTraffic(replyTo) =>
           outbox ! Outbox.GetStats(replyTo)
           Behaviors.same
         case GetGameState(replyTo) =>
-          replyTo ! game
+          replyTo ! watch.state
           Behaviors.same
         case GetGameSource(replyTo) =>
-          val now = System.nanoTime()
-          replyTo ! GameSource(settings.gameControllerTrusted.describe, gameFrom, gameUntrusted,
-            Option.when(settings.teamMessages.enabled)(budget.describe(now)),
-            sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty),
-            trueStateAt.map(at => (now - at) / 1000000L), forwarded.sorted)
+          replyTo ! watch.source(System.nanoTime())
           Behaviors.same
         case RobotStopped(robotId, actor) =>
           // A forgotten robot: its IP address, its id and its traffic meter are free again.
           byId.get(robotId).filter(_.actor == actor).foreach { e =>
             if (!e.zeromq) byAddress -= e.address.getAddress
             byId -= robotId
-            rebindable -= robotId
             outbox ! Outbox.RobotGone(robotId)
             publishRoutes()
           }
@@ -657,18 +423,8 @@ object Gateway {
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>
           rejectFor(Some(robotId), Rejection.ZeroMqRobotId, from, s"robot id $robotId")
-        // The reader saw the table before the gateway bound this IP (discovery or re-bind in between).
+        // The reader saw the table before the gateway bound this IP (discovery in between).
         case Some(entry) if entry.address.getAddress == ip => deliver(entry)
-        case Some(entry) if rebindable(robotId) && !byAddress.contains(ip) =>
-          // An explicit re-bind: the robot moved to another host. It keeps its receive port.
-          rebindable -= robotId
-          val to = new InetSocketAddress(ip, entry.address.getPort)
-          byAddress = byAddress - entry.address.getAddress + (ip -> robotId)
-          val moved = entry.copy(address = to)
-          byId = byId.updated(robotId, moved)
-          publishRoutes()
-          entry.actor ! RobotActor.Rebound(to)
-          deliver(moved)
         case Some(entry) =>
           rejectFor(Some(robotId), Rejection.RobotIdMismatch, from, s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}")
         case None =>
@@ -688,38 +444,5 @@ object Gateway {
           }
       }
     }
-  }
-
-  /**
-   * One question to every robot actor (`GetRobots`, `GetLinkStats`): asks each, and answers once all did or
-   * `timeout` (`snapshot-timeout`) passed. A robot actor that did not answer in time (restarting) is listed by `missing`.
-   */
-  private object Collector {
-    sealed trait Message
-    private final case class Got[A](robotId: Int, answer: A) extends Message
-    private case object TimedOut extends Message
-
-    def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], timeout: FiniteDuration,
-        replyTo: Vector[A] => Unit)(
-        ask: ActorRef[A] => RobotActor.Command, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A]): Behavior[Message] =
-      Behaviors.setup[Message] { context =>
-        Behaviors.withTimers { timers =>
-          // One adapter for the one reply class this collector waits for.
-          val got = context.messageAdapter[A](a => Got(idOf(a), a))
-          robots.values.foreach { case (actor, _) => actor ! ask(got) }
-          timers.startSingleTimer(TimedOut, timeout)
-          def answer(known: Map[Int, A]): Behavior[Message] = {
-            replyTo(robots.toVector.sortBy(_._1).flatMap { case (id, (_, address)) => known.get(id).orElse(missing(id, address)) })
-            Behaviors.stopped
-          }
-          def collecting(known: Map[Int, A]): Behavior[Message] = Behaviors.receiveMessage {
-            case g: Got[A @unchecked] =>
-              val now = known.updated(g.robotId, g.answer)
-              if (robots.keySet.forall(now.contains)) answer(now) else collecting(now)
-            case TimedOut => answer(known)
-          }
-          collecting(Map.empty)
-        }
-      }
   }
 }

@@ -49,12 +49,12 @@ object Routing {
       extends Decision[Nothing]
 
   /**
-   * Refused for `kind` (`detail`: the sender's values, for the debug log only); `route` is the robot bound to the
+   * Rejected for `kind` (`detail`: the sender's values, for the debug log only); `route` is the robot bound to the
    * sender's address, if any (it counts the refusal too).
    */
-  final case class Refused[A](kind: Rejection, detail: String, route: Option[Route[A]]) extends Decision[A]
+  final case class Rejected[A](kind: Rejection, detail: String, route: Option[Route[A]]) extends Decision[A]
 
-  /** The decision for `bytes` from `from` under `table`; total: bad bytes give [[Refused]], never an exception. */
+  /** The decision for `bytes` from `from` under `table`; total: bad bytes give [[Rejected]], never an exception. */
   def decide[A](table: Table[A], bytes: Array[Byte], from: InetSocketAddress): Decision[A] = {
     def sender = table.byAddress.get(from.getAddress)
     Datagram.classify(bytes) match {
@@ -65,17 +65,17 @@ object Routing {
               case Some(route) if route.address == from.getAddress => ToRobot(route, header, contents, bytes.length)
               case _                                    => ToGateway(header, contents, bytes.length, from, bytes)
             }
-          case Left(error) => Refused(Rejection.of(error), error.describe, sender)
+          case Left(error) => Rejected(Rejection.of(error), error.describe, sender)
         }
       case Datagram.StreamSegment(_) =>
         sender match {
           case Some(route) => SegmentToRobot(route, bytes)
-          case None        => Refused(Rejection.StreamFromUnknownAddress, "", None)
+          case None        => Rejected(Rejection.StreamFromUnknownAddress, "", None)
         }
       case Datagram.GameControllerControl(_) | Datagram.GameControllerReturn(_) =>
-        Refused(Rejection.GameControllerOnRobotPort, "", sender)
+        Rejected(Rejection.GameControllerOnRobotPort, "", sender)
       case Datagram.Rejected(reason, _) =>
-        Refused(Rejection.of(reason), reason.describe, sender)
+        Rejected(Rejection.of(reason), reason.describe, sender)
     }
   }
 }

@@ -8,7 +8,6 @@ final class TrafficMeter(windowNanos: Long) {
   private val sizes = mutable.ArrayDeque.empty[Int]
   private var sum = 0L
   private var datagramCount = 0L
-  private var byteCount = 0L
 
   private def expire(now: Long): Unit =
     while (times.nonEmpty && times.head <= now - windowNanos) {
@@ -26,7 +25,6 @@ final class TrafficMeter(windowNanos: Long) {
     sizes.append(bytes)
     sum += bytes
     datagramCount += datagrams
-    byteCount += bytes
   }
 
   /** Bytes within the window ending at `now`. */
@@ -54,7 +52,4 @@ final class TrafficMeter(windowNanos: Long) {
 
   /** Datagrams counted since creation. */
   def totalDatagrams: Long = datagramCount
-
-  /** Bytes counted since creation. */
-  def totalBytes: Long = byteCount
 }

@@ -46,20 +46,20 @@ class RoutingSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCheck
       val segment = Array[Byte](3, 0, 'h', 'i')
       Routing.decide(table, segment, from(hostTwo, 4002)) shouldBe Routing.SegmentToRobot(two, segment)
       Routing.decide(table, segment, from(hostTwo, 51000)) shouldBe Routing.SegmentToRobot(two, segment)
-      Routing.decide(table, segment, from(stranger, 4002)) shouldBe Routing.Refused(Rejection.StreamFromUnknownAddress, "", None)
+      Routing.decide(table, segment, from(stranger, 4002)) shouldBe Routing.Rejected(Rejection.StreamFromUnknownAddress, "", None)
     }
     "refuse bad frames, GameController packets and unclassifiable bytes, naming the robot bound to the sender" in {
       val truncated = keepAlive(1).dropRight(1)
       Routing.decide(table, truncated, at(4001)) match {
-        case Routing.Refused(kind, _, route) =>
+        case Routing.Rejected(kind, _, route) =>
           kind shouldBe Rejection.LengthMismatch
           route shouldBe Some(one)
         case other => fail(s"not refused: $other")
       }
       Routing.decide(table, "RGme\u0000\u0000".getBytes("US-ASCII"), from(stranger, 4999)) shouldBe
-        Routing.Refused(Rejection.GameControllerOnRobotPort, "", None)
+        Routing.Rejected(Rejection.GameControllerOnRobotPort, "", None)
       Routing.decide(table, Array.emptyByteArray, from(hostTwo, 4002)) match {
-        case Routing.Refused(kind, _, route) =>
+        case Routing.Rejected(kind, _, route) =>
           kind shouldBe Rejection.Unclassifiable
           route shouldBe Some(two)
         case other => fail(s"not refused: $other")

@@ -56,13 +56,14 @@ object Operation {
 
   /** Any call of the robot's RPC interface; motion and speech calls need the matching lease. */
   final case class RawCall(module: String, method: String, params: Vector[RpcValue]) extends Operation {
-    def group: Option[ActuatorGroup] = (module, method) match {
-      case _ if RpcMethod.find(module, method).contains(RpcMethod.Head) => Some(ActuatorGroup.Head)
-      case _ if RpcMethod.find(module, method).contains(RpcMethod.Arms) => Some(ActuatorGroup.Arms)
-      case ("motion", _)      => Some(ActuatorGroup.Walk)
-      case ("speech", _)      => Some(ActuatorGroup.Speech)
-      case ("system", "reset") => Some(ActuatorGroup.Walk)
-      case _                  => None
+    def group: Option[ActuatorGroup] = RpcMethod.find(module, method) match {
+      case Some(RpcMethod.Head)                  => Some(ActuatorGroup.Head)
+      case Some(RpcMethod.Arms)                  => Some(ActuatorGroup.Arms)
+      case Some(RpcMethod.Reset)                 => Some(ActuatorGroup.Walk)
+      // The rest of these modules, known or not, takes the walk or speech lease: an unknown one may move or speak.
+      case _ if module == RpcMethod.MotionModule => Some(ActuatorGroup.Walk)
+      case _ if module == RpcMethod.SpeechModule => Some(ActuatorGroup.Speech)
+      case _                                     => None
     }
     def name: String = s"$module.$method"
   }

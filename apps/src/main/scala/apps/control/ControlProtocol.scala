@@ -2,7 +2,7 @@ package apps.control
 
 import java.nio.charset.StandardCharsets
 
-import naogateway.wire.{Posture, RpcValue}
+import naogateway.wire.{Posture, RpcMethod, RpcValue}
 
 /**
  * The control port's wire format (docs/architecture.md, "The control port"), shared by the gateway's
@@ -145,9 +145,9 @@ object ControlProtocol {
 
   // A posture name is checked here, where the operator typed it, so a typo is answered at once and never moves a robot.
   private def postureNamed(module: String, method: String, params: Vector[RpcValue]): Either[String, Unit] =
-    (module, method, params) match {
-      case ("motion", "posture", Vector(RpcValue.Text(name))) => Posture.target(name).map(_ => ())
-      case _                                                  => Right(())
+    (RpcMethod.find(module, method), params) match {
+      case (Some(RpcMethod.Posture), Vector(RpcValue.Text(name))) => Posture.target(name).map(_ => ())
+      case _                                                      => Right(())
     }
 
   private def readParam(word: String): Either[String, RpcValue] =

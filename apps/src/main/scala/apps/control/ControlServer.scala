@@ -344,12 +344,13 @@ object ControlServer {
    * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
    */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
-    val address = s"${r.address.getAddress.getHostAddress}:${r.address.getPort}"
-    val rtt = stats.flatMap(_.rttMillis).fold("-")(v => f"$v%.1f ms")
-    val loss = stats.fold("-")(s => f"${s.lossEstimate * 100}%.0f %%")
-    val clock = r.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
-    val drift = r.clock.fold("-")(c => f"${c.driftPpm}%+.0f ppm")
-    f"${r.robotId}%-4d $address%-22s ${if (r.online) "online" else "offline"}%-8s ${r.quality.name}%-9s " +
-      f"${r.batteryVoltage.fold("-")(v => f"$v%.2f V")}%-8s ${r.posture.fold("-")(_.name)}%-8s ${r.role.getOrElse("-")}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
+    val row = apps.RobotRow.of(r, stats)
+    val rtt = row.rttMillis.fold("-")(v => f"$v%.1f ms")
+    val loss = row.loss.fold("-")(v => f"${v * 100}%.0f %%")
+    val clock = row.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
+    val drift = row.clock.fold("-")(c => f"${c.driftPpm}%+.0f ppm")
+    f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${if (row.online) "online" else "offline"}%-8s " +
+      f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s ${row.posture.fold("-")(_.name)}%-8s " +
+      f"${row.report.role.getOrElse("-")}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
   }
 }

@@ -127,15 +127,13 @@ final case class WebModel(
   /** The model with one more point on every plot, taken from the current figures. */
   def sampled(t: Double): WebModel = {
     val perRobot = robots.map { r =>
-      val link = links.get(r.robotId)
-      val point = RobotSample(t, r.batteryVoltage.filter(finite), link.flatMap(_.rttMillis).filter(finite), link.map(_.lossEstimate).filter(finite))
+      val row = apps.RobotRow.of(r, links.get(r.robotId))
+      val point = RobotSample(t, row.battery, row.rttMillis, row.loss)
       r.robotId -> (robotHistory.getOrElse(r.robotId, Vector.empty) :+ point).takeRight(historyPoints)
     }.toMap
     val trafficPoint = traffic.map(s => TrafficSample(t, s.outBytesLastSecond, s.inBytesLastSecond, s.budgetBytesPerSecond))
     copy(robotHistory = perRobot, trafficHistory = (trafficHistory ++ trafficPoint).takeRight(historyPoints), sampleCount = sampleCount + 1)
   }
-
-  private def finite(d: Double): Boolean = !d.isNaN && !d.isInfinite
 }
 
 /** The JSON the page reads (docs/web.md, "What the page receives"). */
@@ -143,28 +141,30 @@ object WebJson {
 
   private def num(d: Double): JsValue = if (d.isNaN || d.isInfinite) JsNull else JsNumber(d)
   private def opt[A](a: Option[A])(f: A => JsValue): JsValue = a.fold[JsValue](JsNull)(f)
-  private def str(s: String): JsValue = Option(s).fold[JsValue](JsNull)(JsString(_))
 
-  /** One robot's card: what it reports, its link and clock, signing and refusals by kind. */
-  def robot(r: RobotSnapshot, link: Option[LinkStats], signing: Option[String]): JsObject = JsObject(
-    "id" -> JsNumber(r.robotId),
-    "online" -> JsBoolean(r.online),
-    "quality" -> str(Option(r.quality).fold[String](null)(_.name)),
-    "address" -> str(Option(r.address).fold[String](null)(a => s"${Option(a.getHostString).getOrElse("-")}:${a.getPort}")),
-    "battery" -> opt(r.batteryVoltage)(num),
-    "posture" -> opt(r.posture)(p => JsString(p.name)),
-    "role" -> opt(r.role)(JsString(_)),
-    "agent" -> opt(r.agent)(JsString(_)),
-    "team" -> opt(r.teamId)(JsNumber(_)),
-    "uptimeMs" -> opt(r.uptimeMillis)(JsNumber(_)),
-    "rttMs" -> opt(link.flatMap(_.rttMillis))(num),
-    "loss" -> opt(link.map(_.lossEstimate))(num),
-    "clock" -> opt(link.flatMap(_.clock).orElse(r.clock)) { c =>
-      JsObject("driftPpm" -> num(c.driftPpm), "errorBoundMs" -> num(c.errorBoundMillis), "samples" -> JsNumber(c.samples))
-    },
-    "signing" -> opt(signing)(JsString(_)),
-    "refused" -> JsObject(link.fold(Map.empty[String, Long])(_.rejected).map { case (k, v) => k -> JsNumber(v) })
-  )
+  /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind. */
+  def robot(r: RobotSnapshot, link: Option[LinkStats], signing: Option[String]): JsObject = {
+    val row = apps.RobotRow.of(r, link)
+    JsObject(
+      "id" -> JsNumber(row.robotId),
+      "online" -> JsBoolean(row.online),
+      "quality" -> opt(row.quality)(q => JsString(q.name)),
+      "address" -> opt(row.address)(JsString(_)),
+      "battery" -> opt(row.battery)(num),
+      "posture" -> opt(row.posture)(p => JsString(p.name)),
+      "role" -> opt(row.report.role)(JsString(_)),
+      "agent" -> opt(row.report.agent)(JsString(_)),
+      "team" -> opt(row.report.teamId)(JsNumber(_)),
+      "uptimeMs" -> opt(row.report.uptimeMillis)(JsNumber(_)),
+      "rttMs" -> opt(row.rttMillis)(num),
+      "loss" -> opt(row.loss)(num),
+      "clock" -> opt(row.clock) { c =>
+        JsObject("driftPpm" -> num(c.driftPpm), "errorBoundMs" -> num(c.errorBoundMillis), "samples" -> JsNumber(c.samples))
+      },
+      "signing" -> opt(signing)(JsString(_)),
+      "refused" -> JsObject(row.refused.map { case (k, v) => k -> JsNumber(v) })
+    )
+  }
 
   /** The game: GameController version and source, state, time, score, gate and traffic. */
   def game(m: WebModel): JsObject = JsObject(

@@ -341,7 +341,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         // Counted by kind, a closed set, whatever the bytes said; and by source, bounded.
         val stats = f.stats()
         stats.rejected.keySet.subsetOf(Rejection.all.map(_.name).toSet) shouldBe true
-        stats.rejectedBySource.size should be <= Gateway.RejectionAddresses + 1
+        stats.rejectedBySource.size should be <= RejectionLedger.SourceAddresses + 1
         // No session was disturbed: nobody went offline or looked restarted.
         val seen = f.events.receiveMessages(10, 5.seconds)
         seen.collect { case e @ (_: RobotOffline | _: RobotRestarted) => e } shouldBe empty

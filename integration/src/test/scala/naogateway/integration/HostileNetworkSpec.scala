@@ -64,7 +64,7 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         val stats = f.stats()
         stats.rejected.getOrElse(Rejection.RobotCapReached.name, 0L) should be > 0L
         info(s"refused: ${stats.rejected.toVector.sortBy(-_._2).mkString(", ")}")
-        stats.rejectedBySource.size should be <= Gateway.RejectionAddresses + 1
+        stats.rejectedBySource.size should be <= RejectionLedger.SourceAddresses + 1
         eventually(timeout(10.seconds), interval(200.millis)) { f.stats().robots shouldBe 2 }
         // No untrusted control packet changed the game state or the gate.
         val game = createTestProbe[Option[GameControlData]]()

@@ -119,28 +119,6 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       } finally { recorder.close(); outsider.close() }
     }
 
-    "re-bind a robot that must sign only for a frame that verifies" in {
-      val (ip, elsewhere) = (TestLoopback.address(), TestLoopback.address())
-      withGateway(35, ip) { f =>
-        f.gateway ! Gateway.AllowRebind(35)
-        val mover = DatagramChannel.open().bind(new InetSocketAddress(elsewhere, 0))
-        try {
-          val keepAlive = ForgedFrames.keepAlive(35, battery = 12.3, bootId = 1)
-          def send(frame: Array[Byte]): Unit = { mover.send(ByteBuffer.wrap(frame), f.addresses.robots); () }
-          def refused(kind: String): Long = f.stats().rejected.getOrElse(kind, 0L)
-          send(ForgedFrames.unsigned(keepAlive))
-          send(ForgedFrames.signedWith(WrongKey, keepAlive, 10L))
-          eventually(timeout(10.seconds)) { (refused("unsigned"), refused("bad signature")) shouldBe ((1L, 1L)) }
-          snapshot(f, 35).address.getAddress shouldBe ip
-          send(ForgedFrames.signedWith(TeamKey, keepAlive, 10L))
-          eventually(timeout(10.seconds)) { snapshot(f, 35).address.getAddress shouldBe elsewhere }
-          snapshot(f, 35).batteryVoltage shouldBe Some(12.3f.toDouble)
-          send(ForgedFrames.signedWith(TeamKey, keepAlive, 10L))
-          eventually(timeout(10.seconds)) { refused("replayed") shouldBe 1L }
-        } finally mover.close()
-      }
-    }
-
     "leave a signing robot unmoved by requests the gateway did not sign" in {
       val ip = TestLoopback.address()
       withGateway(34, ip) { f =>

@@ -22,35 +22,47 @@ sealed abstract class RpcMethod(val module: String, val method: String, val idem
 /** The method table: the one place that names the robot's methods. */
 object RpcMethod {
 
+  // Constants (final, no type ascription), so the case objects below read them inlined: a case object initialised
+  // first must not start this object's initialisation, whose `all` needs that case object already done.
+
+  /** The module of the motions (walk, stop, head, arms, posture, getPosture). */
+  final val MotionModule = "motion"
+
+  /** The module of speech (say). */
+  final val SpeechModule = "speech"
+
+  /** The module of the robot itself (battery, ping, reset). */
+  final val SystemModule = "system"
+
   /** Walk with these velocities; the robot's 500 ms lease needs it refreshed. */
-  case object Walk extends RpcMethod("motion", "walk", idempotent = true, Some(ActuatorGroup.Walk))
+  case object Walk extends RpcMethod(MotionModule, "walk", idempotent = true, Some(ActuatorGroup.Walk))
 
   /** End walking. */
-  case object Stop extends RpcMethod("motion", "stop", idempotent = true, Some(ActuatorGroup.Walk))
+  case object Stop extends RpcMethod(MotionModule, "stop", idempotent = true, Some(ActuatorGroup.Walk))
 
   /** Turn the head. */
-  case object Head extends RpcMethod("motion", "head", idempotent = true, Some(ActuatorGroup.Head))
+  case object Head extends RpcMethod(MotionModule, "head", idempotent = true, Some(ActuatorGroup.Head))
 
   /** Set the four arm joints. */
-  case object Arms extends RpcMethod("motion", "arms", idempotent = true, Some(ActuatorGroup.Arms))
+  case object Arms extends RpcMethod(MotionModule, "arms", idempotent = true, Some(ActuatorGroup.Arms))
 
   /** Move to a posture; answers when the motion has ended, and a second one during a motion is refused (busy). */
-  case object Posture extends RpcMethod("motion", "posture", idempotent = false, Some(ActuatorGroup.Walk))
+  case object Posture extends RpcMethod(MotionModule, "posture", idempotent = false, Some(ActuatorGroup.Walk))
 
   /** Read the posture. */
-  case object GetPosture extends RpcMethod("motion", "getPosture", idempotent = true, None)
+  case object GetPosture extends RpcMethod(MotionModule, "getPosture", idempotent = true, None)
 
   /** Speak a text: not repeated, the robot would say it twice. */
-  case object Say extends RpcMethod("speech", "say", idempotent = false, None)
+  case object Say extends RpcMethod(SpeechModule, "say", idempotent = false, None)
 
   /** Read the battery voltage. */
-  case object Battery extends RpcMethod("system", "battery", idempotent = true, None)
+  case object Battery extends RpcMethod(SystemModule, "battery", idempotent = true, None)
 
   /** Read the uptime. */
-  case object Ping extends RpcMethod("system", "ping", idempotent = true, None)
+  case object Ping extends RpcMethod(SystemModule, "ping", idempotent = true, None)
 
   /** Restart the robot: never repeated. */
-  case object Reset extends RpcMethod("system", "reset", idempotent = false, None)
+  case object Reset extends RpcMethod(SystemModule, "reset", idempotent = false, None)
 
   /** Every method, in the order of the docs' table. */
   val all: Vector[RpcMethod] = Vector(Walk, Stop, Head, Arms, Posture, GetPosture, Say, Battery, Ping, Reset)

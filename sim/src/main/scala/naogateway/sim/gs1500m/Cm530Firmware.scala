@@ -2,8 +2,7 @@ package naogateway.sim.gs1500m
 
 import scala.collection.immutable.ArraySeq
 
-import naogateway.proto.Status
-import naogateway.wire.MessageContents
+import naogateway.wire.{MessageContents, RobotReport}
 import naogateway.sim.SeededRandom
 
 /** A packet the CM-530 application hands to its send path; `encode` charges the protobuf encoding cost first. */
@@ -20,8 +19,7 @@ object KeepAlive {
     */
   val StatusFrame: ArraySeq[Byte] =
     MessageContents
-      .encodeFrame(MessageContents(robotId = 1, status = Some(Status(timestamp = Some(200L), teamID = Some(1),
-        timeOnline = Some(0)))))
+      .encodeFrame(MessageContents(robotId = 1, status = Some(RobotReport(teamId = Some(1), uptimeMillis = Some(200L)).status)))
       .fold(_ => ArraySeq.fill[Byte](24)(0), ArraySeq.unsafeWrapArray(_))
 }
 

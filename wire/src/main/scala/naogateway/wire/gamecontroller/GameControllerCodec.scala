@@ -24,9 +24,6 @@ object GameControllerCodec {
   /** First four bytes of every return packet. */
   val ReturnHeader: String = "RGrt"
 
-  /** Where the 2014 GameController broadcasts its packets and hears the robots' return packets. */
-  val ControlPort: Int = 3838
-
   /** Where the version-12 and version-19 GameControllers hear the robots' return packets. */
   val ReturnPort: Int = 3939
 
@@ -43,17 +40,13 @@ object GameControllerCodec {
   val StatusPacketBytes: Int = 32
 
   private val HeaderBytes = 4
-  private val VersionOffset = 4
-  private val V7VersionBytes = 4
-  private val ControlHeaderBytes = ControlHeader.getBytes(StandardCharsets.US_ASCII)
+  private[gamecontroller] val VersionOffset = 4
+  private[gamecontroller] val V7VersionBytes = 4
+  private[gamecontroller] val ControlHeaderBytes = ControlHeader.getBytes(StandardCharsets.US_ASCII)
   private val TrueDataHeaderBytes = TrueDataHeader.getBytes(StandardCharsets.US_ASCII)
   private val ReturnHeaderBytes = ReturnHeader.getBytes(StandardCharsets.US_ASCII)
 
   private val U8Max = 0xffL
-  private val U16Max = 0xffffL
-  private val U32Max = 0xffffffffL
-  private val I16Min = Short.MinValue.toLong
-  private val I16Max = Short.MaxValue.toLong
 
   /**
    * Decodes a control packet. The version decides the layout, and each version's field has its own width, all
@@ -68,8 +61,8 @@ object GameControllerCodec {
       data <- version match {
         case GameControlVersion.V19 => ModernLayouts.decodeV19(bytes)
         case GameControlVersion.V12 => ModernLayouts.decodeV12(bytes)
-        case GameControlVersion.V8  => decodeV8(bytes)
-        case GameControlVersion.V7  => decodeV7(bytes)
+        case GameControlVersion.V8  => Layouts2014.decodeV8(bytes)
+        case GameControlVersion.V7  => Layouts2014.decodeV7(bytes)
       }
     } yield data
 
@@ -79,9 +72,9 @@ object GameControllerCodec {
       case d: ControlData2014 if d.version != GameControlVersion.V8 && d.version != GameControlVersion.V7 =>
         Left(InvalidField("version", d.version.number.toLong))
       case d: ControlData2014 =>
-        validate(d).toLeft(d.version match {
-          case GameControlVersion.V7 => writeV7(d)
-          case _                     => writeV8(d)
+        Layouts2014.validate(d).toLeft(d.version match {
+          case GameControlVersion.V7 => Layouts2014.writeV7(d)
+          case _                     => Layouts2014.writeV8(d)
         })
       case d: HlControlData  => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
       case d: HslControlData => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, ControlHeaderBytes))
@@ -184,12 +177,6 @@ object GameControllerCodec {
       decodeStatus(java.util.Arrays.copyOfRange(bytes, ForwardPrefixBytes, bytes.length))
         .map(java.net.InetAddress.getByAddress(java.util.Arrays.copyOfRange(bytes, 0, ForwardPrefixBytes)) -> _)
 
-  /** The version byte of a return packet, if the bytes start `RGrt` and have one. */
-  def returnVersionOf(bytes: Array[Byte]): Option[Int] =
-    if (bytes.length > VersionOffset && java.util.Arrays.equals(bytes, 0, HeaderBytes, ReturnHeaderBytes, 0, HeaderBytes))
-      Some(u8(bytes, VersionOffset))
-    else None
-
   private val FloatFields = Vector("pose[0]", "pose[1]", "pose[2]", "ballAge", "ball[0]", "ball[1]")
 
   private def notNaN(floats: Vector[Float]): Either[GameControllerError, Unit] =
@@ -240,201 +227,12 @@ object GameControllerCodec {
   ): Either[GameControllerError, Unit] =
     if (bytes.length == size) Right(()) else Left(WrongSize(header, version, size, bytes.length))
 
-  private def decodeV8(bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
-    val r = new LeReader(bytes, VersionOffset + 1)
-    val packetNumber = r.u8()
-    val playersPerTeam = r.u8()
-    val gameState = GameState.fromCode(r.u8())
-    val firstHalf = r.u8()
-    val kickOffTeam = KickOffTeam.fromCode(r.u8())
-    val secondaryGameState = SecondaryGameState.fromCode(r.u8())
-    val dropInTeam = TeamColour.fromCode(r.u8())
-    val dropInTime = r.i16()
-    val secsRemaining = r.i16()
-    val secondaryTime = r.i16()
-    val team0 = teamV8(r)
-    val team1 = teamV8(r)
-    flag("firstHalf", firstHalf).map { half =>
-      ControlData2014(
-        version = GameControlVersion.V8,
-        packetNumber = Some(packetNumber),
-        playersPerTeam = playersPerTeam,
-        gameState = gameState,
-        firstHalf = half,
-        kickOffTeam = kickOffTeam,
-        secondaryGameState = secondaryGameState,
-        dropInTeam = dropInTeam,
-        dropInTime = dropInTime,
-        secsRemaining = secsRemaining.toLong,
-        secondaryTime = Some(secondaryTime),
-        team0 = team0,
-        team1 = team1
-      )
-    }
-  }
-
-  private def teamV8(r: LeReader): TeamInfo = {
-    val teamNumber = r.u8()
-    val teamColour = TeamColour.fromCode(r.u8())
-    val score = r.u8()
-    val penaltyShot = r.u8()
-    val singleShots = r.u16()
-    val coachMessage = r.take(TeamInfo.CoachMessageBytes)
-    val coach = playerV8(r)
-    val players = Vector.fill(TeamInfo.PlayerSlots)(playerV8(r))
-    TeamInfo(
-      teamNumber = teamNumber,
-      teamColour = teamColour,
-      score = score,
-      goalColour = None,
-      penaltyShot = Some(penaltyShot),
-      singleShots = Some(singleShots),
-      coachMessage = Some(coachMessage),
-      coach = Some(coach),
-      players = players
-    )
-  }
-
-  private def playerV8(r: LeReader): PlayerInfo = {
-    val penalty = Penalty.fromCode(r.u8())
-    PlayerInfo(penalty, r.u8())
-  }
-
-  private def decodeV7(bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
-    val r = new LeReader(bytes, VersionOffset + V7VersionBytes)
-    val playersPerTeam = r.u8()
-    val gameState = GameState.fromCode(r.u8())
-    val firstHalf = r.u8()
-    val kickOffTeam = KickOffTeam.fromCode(r.u8())
-    val secondaryGameState = SecondaryGameState.fromCode(r.u8())
-    val dropInTeam = TeamColour.fromCode(r.u8())
-    val dropInTime = r.i16()
-    val secsRemaining = r.u32()
-    val team0 = teamV7(r)
-    val team1 = teamV7(r)
-    flag("firstHalf", firstHalf).map { half =>
-      ControlData2014(
-        version = GameControlVersion.V7,
-        packetNumber = None,
-        playersPerTeam = playersPerTeam,
-        gameState = gameState,
-        firstHalf = half,
-        kickOffTeam = kickOffTeam,
-        secondaryGameState = secondaryGameState,
-        dropInTeam = dropInTeam,
-        dropInTime = dropInTime,
-        secsRemaining = secsRemaining,
-        secondaryTime = None,
-        team0 = team0,
-        team1 = team1
-      )
-    }
-  }
-
-  private def teamV7(r: LeReader): TeamInfo = {
-    val teamNumber = r.u8()
-    val teamColour = TeamColour.fromCode(r.u8())
-    val goalColour = GoalColour.fromCode(r.u8())
-    val score = r.u8()
-    val players = Vector.fill(TeamInfo.PlayerSlots) {
-      val penalty = Penalty.fromCode(r.u16())
-      PlayerInfo(penalty, r.u16())
-    }
-    TeamInfo(
-      teamNumber = teamNumber,
-      teamColour = teamColour,
-      score = score,
-      goalColour = Some(goalColour),
-      penaltyShot = None,
-      singleShots = None,
-      coachMessage = None,
-      coach = None,
-      players = players
-    )
-  }
-
-  // Reading 2 as "true" would be a guess; only the two values the GameController writes are accepted.
   private[gamecontroller] def flag(field: String, value: Int): Either[GameControllerError, Boolean] =
     value match {
       case 0 => Right(false)
       case 1 => Right(true)
       case other => Left(InvalidField(field, other.toLong))
     }
-
-  private def validate(d: ControlData2014): Option[GameControllerError] = {
-    val v = d.version.number
-    val common = List(
-      u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
-      u8Range(v, "gameState", d.gameState.code.toLong),
-      u8Range(v, "kickOffTeam", d.kickOffTeam.code.toLong),
-      u8Range(v, "secondaryGameState", d.secondaryGameState.code.toLong),
-      u8Range(v, "dropInTeam", d.dropInTeam.code.toLong),
-      range(v, "dropInTime", d.dropInTime.toLong, I16Min, I16Max)
-    )
-    val specific = d.version match {
-      case GameControlVersion.V8 =>
-        List(
-          required(v, "packetNumber", d.packetNumber),
-          d.packetNumber.flatMap(n => u8Range(v, "packetNumber", n.toLong)),
-          range(v, "secsRemaining", d.secsRemaining, I16Min, I16Max),
-          required(v, "secondaryTime", d.secondaryTime),
-          d.secondaryTime.flatMap(t => range(v, "secondaryTime", t.toLong, I16Min, I16Max))
-        )
-      case _ =>
-        List(
-          absent(v, "packetNumber", d.packetNumber),
-          range(v, "secsRemaining", d.secsRemaining, 0L, U32Max),
-          absent(v, "secondaryTime", d.secondaryTime)
-        )
-    }
-    val teams = validateTeam(d.version, "team0", d.team0) ++ validateTeam(d.version, "team1", d.team1)
-    firstError(common ++ specific ++ teams: _*)
-  }
-
-  private def validateTeam(
-      version: GameControlVersion,
-      name: String,
-      t: TeamInfo
-  ): List[Option[GameControllerError]] = {
-    val v = version.number
-    val common = List(
-      u8Range(v, s"$name.teamNumber", t.teamNumber.toLong),
-      u8Range(v, s"$name.teamColour", t.teamColour.code.toLong),
-      u8Range(v, s"$name.score", t.score.toLong),
-      length(s"$name.players", TeamInfo.PlayerSlots, t.players.size)
-    )
-    version match {
-      case GameControlVersion.V8 =>
-        common ++ List(
-          absent(v, s"$name.goalColour", t.goalColour),
-          required(v, s"$name.penaltyShot", t.penaltyShot),
-          t.penaltyShot.flatMap(p => u8Range(v, s"$name.penaltyShot", p.toLong)),
-          required(v, s"$name.singleShots", t.singleShots),
-          t.singleShots.flatMap(s => range(v, s"$name.singleShots", s.toLong, 0L, U16Max)),
-          required(v, s"$name.coachMessage", t.coachMessage),
-          t.coachMessage.flatMap(m => length(s"$name.coachMessage", TeamInfo.CoachMessageBytes, m.length)),
-          required(v, s"$name.coach", t.coach)
-        ) ++ t.coach.toList.flatMap(validatePlayer(v, s"$name.coach", U8Max, _)) ++ validatePlayers(v, name, U8Max, t)
-      case _ =>
-        common ++ List(
-          required(v, s"$name.goalColour", t.goalColour),
-          t.goalColour.flatMap(g => u8Range(v, s"$name.goalColour", g.code.toLong)),
-          absent(v, s"$name.penaltyShot", t.penaltyShot),
-          absent(v, s"$name.singleShots", t.singleShots),
-          absent(v, s"$name.coachMessage", t.coachMessage),
-          absent(v, s"$name.coach", t.coach)
-        ) ++ validatePlayers(v, name, U16Max, t)
-    }
-  }
-
-  private def validatePlayers(v: Int, team: String, max: Long, t: TeamInfo): List[Option[GameControllerError]] =
-    t.players.zipWithIndex.toList.flatMap { case (p, i) => validatePlayer(v, s"$team.players[$i]", max, p) }
-
-  private def validatePlayer(v: Int, name: String, max: Long, p: PlayerInfo): List[Option[GameControllerError]] =
-    List(
-      range(v, s"$name.penalty", p.penalty.code.toLong, 0L, max),
-      range(v, s"$name.secsTillUnpenalised", p.secsTillUnpenalised.toLong, 0L, max)
-    )
 
   private[gamecontroller] def firstError(checks: Option[GameControllerError]*): Option[GameControllerError] =
     checks.collectFirst { case Some(error) => error }
@@ -445,68 +243,10 @@ object GameControllerCodec {
   private[gamecontroller] def u8Range(v: Int, field: String, value: Long): Option[GameControllerError] =
     range(v, field, value, 0L, U8Max)
 
-  private def required(v: Int, field: String, value: Option[Any]): Option[GameControllerError] =
-    if (value.isEmpty) Some(MissingField(v, field)) else None
-
-  private def absent(v: Int, field: String, value: Option[Any]): Option[GameControllerError] =
-    if (value.isDefined) Some(UnexpectedField(v, field)) else None
-
   private[gamecontroller] def length(field: String, expected: Int, found: Int): Option[GameControllerError] =
     if (found != expected) Some(WrongLength(field, expected, found)) else None
 
   // The writers run only after validate, so every Option is present and every value fits.
-
-  private def writeV8(d: ControlData2014): Array[Byte] = {
-    val w = new LeWriter(GameControlVersion.V8.packetBytes)
-    w.raw(ControlHeaderBytes)
-    w.u8(GameControlVersion.V8.number)
-    w.u8(d.packetNumber.getOrElse(0))
-    writeCommon(w, d)
-    w.u16(d.secsRemaining.toInt)
-    w.u16(d.secondaryTime.getOrElse(0))
-    List(d.team0, d.team1).foreach { t =>
-      w.u8(t.teamNumber)
-      w.u8(t.teamColour.code)
-      w.u8(t.score)
-      w.u8(t.penaltyShot.getOrElse(0))
-      w.u16(t.singleShots.getOrElse(0))
-      t.coachMessage.foreach(m => w.raw(m.toArray))
-      (t.coach.toList ++ t.players).foreach { p =>
-        w.u8(p.penalty.code)
-        w.u8(p.secsTillUnpenalised)
-      }
-    }
-    w.out
-  }
-
-  private def writeV7(d: ControlData2014): Array[Byte] = {
-    val w = new LeWriter(GameControlVersion.V7.packetBytes)
-    w.raw(ControlHeaderBytes)
-    w.u32(GameControlVersion.V7.number.toLong)
-    writeCommon(w, d)
-    w.u32(d.secsRemaining)
-    List(d.team0, d.team1).foreach { t =>
-      w.u8(t.teamNumber)
-      w.u8(t.teamColour.code)
-      w.u8(t.goalColour.fold(0)(_.code))
-      w.u8(t.score)
-      t.players.foreach { p =>
-        w.u16(p.penalty.code)
-        w.u16(p.secsTillUnpenalised)
-      }
-    }
-    w.out
-  }
-
-  private def writeCommon(w: LeWriter, d: ControlData2014): Unit = {
-    w.u8(d.playersPerTeam)
-    w.u8(d.gameState.code)
-    w.u8(if (d.firstHalf) 1 else 0)
-    w.u8(d.kickOffTeam.code)
-    w.u8(d.secondaryGameState.code)
-    w.u8(d.dropInTeam.code)
-    w.u16(d.dropInTime)
-  }
 
   private[gamecontroller] def u8(bytes: Array[Byte], at: Int): Int = bytes(at) & 0xff
 

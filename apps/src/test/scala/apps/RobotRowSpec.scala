@@ -1,0 +1,46 @@
+package apps
+
+import java.net.InetSocketAddress
+
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.wire.Posture
+import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot}
+
+class RobotRowSpec extends AnyWordSpec with Matchers {
+
+  private val address = new InetSocketAddress("127.0.0.1", 40000)
+  private val clock = ClockEstimate(1000L, 5000000L, 1.00002, 0.7, 0.0, 12)
+  private val robot = RobotSnapshot(3, address, teamId = Some(1), role = Some("keeper"), posture = Some(Posture.Sit),
+    batteryVoltage = Some(12.4), uptimeMillis = Some(9000L), online = true, quality = LinkQuality.Degraded)
+  private val link = LinkStats(3, 10, 10, 300, 300, Some(0.4), 0.25, 0, Map("bad gzip" -> 2L), Some(clock))
+
+  "A robot's row" should {
+    "take the robot's report from its snapshot and the link figures, with the link's clock estimate" in {
+      val row = RobotRow.of(robot, Some(link))
+      (row.robotId, row.address, row.online, row.quality) shouldBe ((3, Some("127.0.0.1:40000"), true, Some(LinkQuality.Degraded)))
+      row.report shouldBe robot.report
+      (row.battery, row.posture, row.rttMillis, row.loss, row.clock) shouldBe ((Some(12.4), Some(Posture.Sit), Some(0.4), Some(0.25), Some(clock)))
+      row.refused shouldBe Map("bad gzip" -> 2L)
+      RobotRow.of(robot.copy(clock = Some(clock)), None).clock shouldBe Some(clock)
+    }
+
+    "leave out what is missing or not finite, whatever the snapshot holds" in {
+      val row = RobotRow.of(RobotSnapshot(4, null, batteryVoltage = Some(Double.NaN), quality = null),
+        Some(link.copy(rttMillis = Some(Double.PositiveInfinity), lossEstimate = Double.NaN)))
+      (row.address, row.quality, row.battery, row.rttMillis, row.loss) shouldBe ((None, None, None, None, None))
+    }
+
+    "be what the launcher's line, robotctl's line and the web card show alike" in {
+      val row = RobotRow.of(robot, Some(link))
+      val shown = Seq("127.0.0.1:40000", "degraded", "12.40 V", "sit", "keeper", "0.4 ms", "25 %")
+      shown.foreach(StatusView.robotLine(robot, Some(link)) should include(_))
+      shown.foreach(control.ControlServer.statusLine(robot, Some(link)) should include(_))
+      val card = web.WebJson.robot(robot, Some(link), None).fields
+      (card("address").toString, card("battery").toString, card("posture").toString) shouldBe
+        ((s"\"${row.address.get}\"", "12.4", "\"sit\""))
+      control.ControlServer.statusLine(robot, Some(link)) should include("±0.7 ms")
+    }
+  }
+}
