@@ -60,7 +60,7 @@ object VisionActor {
         else Set(RegionsOption) ++ (if (subscribers.values.exists(identity)) Set(GridOption) else Set.empty)
 
       def send(cmd: DebuggingCommands): Unit =
-        robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(cmd), Priority.Debug, None)
+        robot ! RobotActor.OptionCommand(cmd)
 
       def switch(from: Set[String], to: Set[String]): Unit = {
         val on = to -- from
