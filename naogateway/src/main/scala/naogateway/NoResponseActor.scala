@@ -82,6 +82,9 @@ object NoResponseActor {
     /** The waiting line was full: it never went. */
     final case class Refused(key: Long, reason: String) extends Notice
 
+    /** No room in the robot's buffer: it waits, and its deadline has not started. */
+    final case class Queued(key: Long) extends Notice
+
     /** It waited for room and has left only now: its deadline starts now. */
     final case class SentLate(key: Long) extends Notice
 
@@ -165,7 +168,9 @@ object NoResponseActor {
             val entry = CommandOrder.Entry(k, call.flatMap(RpcMethod.slotOf), priority == Priority.Safety, item,
               replaceable = call.flatMap(RpcMethod.of).forall(_.latestWins))
             val (next, steps) = order.submit(entry)
-            running(perform(next, steps, route, Some(k)), route, responder, if (key.isEmpty) nextKey + 1 else nextKey)
+            val after = perform(next, steps, route, Some(k))
+            if (after.waiting.exists(_.key == k)) notices.foreach(_ ! Notice.Queued(k))
+            running(after, route, responder, if (key.isEmpty) nextKey + 1 else nextKey)
           case Resend(key, out, tag) =>
             order.find(key) match {
               case Some(e) =>

@@ -157,13 +157,17 @@ object ResponseActor {
             calls.get(notice.key) match {
               case None => Behaviors.same
               case Some(p) =>
-                // The sender has let go of the call already (all but SentLate): nothing to tell it.
+                // The sender has let go of the call already (all but Queued and SentLate): nothing to tell it.
                 def drop(error: RobotFailure): Behavior[Command] = {
                   timers.cancel(notice.key)
                   answer(p, Left(error))
                   running(calls - notice.key, online, lastId)
                 }
                 notice match {
+                  case NoResponseActor.Notice.Queued(key) =>
+                    // Its deadline runs from when it leaves (SentLate), as if it had waited in this actor.
+                    timers.cancel(key)
+                    Behaviors.same
                   case NoResponseActor.Notice.SentLate(key) => running(calls.updated(key, arm(key, p)), online, lastId)
                   case NoResponseActor.Notice.Superseded(_) => drop(RobotFailure.Superseded(robotId, p.call.name))
                   case NoResponseActor.Notice.Refused(_, reason) => drop(RobotFailure.Overloaded(robotId, reason))

@@ -7,9 +7,10 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.RobotFrames.{Arrival, Outbound}
+import naogateway.RobotEffects.{Children, Family}
+import naogateway.RobotFrames.Outbound
 import naogateway.link.{Backlog, ZeroMqRobotLink}
-import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
+import naogateway.proto.DebuggingCommands
 import naogateway.wire._
 
 /**
@@ -22,29 +23,32 @@ object RobotActor {
   /** What a robot actor accepts. */
   sealed trait Command
 
+  /** What a robot actor handles alike in every state (the rest: Connect, the heartbeat's verdicts, Forget). */
+  sealed trait Common extends Command
+
   /** A decoded FU-Remote frame from this robot (`size` bytes on the wire). */
-  final case class FrameReceived(contents: MessageContents, form: HeaderForm, size: Int) extends Command
+  final case class FrameReceived(contents: MessageContents, form: HeaderForm, size: Int) extends Common
 
   /** A secure-stream segment from this robot's address. */
-  final case class SegmentReceived(bytes: Array[Byte]) extends Command
+  final case class SegmentReceived(bytes: Array[Byte]) extends Common
 
   /** A datagram from this robot's address was refused, for this kind of reason. */
-  final case class DatagramRejected(kind: Rejection) extends Command
+  final case class DatagramRejected(kind: Rejection) extends Common
 
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
-  final case class Rebound(address: InetSocketAddress) extends Command
+  final case class Rebound(address: InetSocketAddress) extends Common
 
   /** Answers with the children's refs once the robot is reachable (probing it first if needed). */
   final case class Connect(replyTo: ActorRef[Connected]) extends Command
 
   /** Answers with the latest keep-alive contents and liveness. */
-  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Command
+  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Common
 
   /** Answers with the link figures. */
-  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Command
+  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common
 
   /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
-  final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Command
+  final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
 
   /** A robot actor (re)started and asks the gateway for its current subscribers. */
   final case class SubscribersWanted(robot: ActorRef[Subscribers])
@@ -65,39 +69,32 @@ object RobotActor {
   }
 
   /** Messages from the robot's own children: only they hold the robot actor's ref as this type. */
-  private[naogateway] sealed trait FromChild extends Command
+  private[naogateway] sealed trait FromChild extends Common
 
   /** A caller wants the robot while it is offline: probe it now. */
   private[naogateway] case object Wanted extends FromChild
-
   /** A clean round-trip sample. */
   private[naogateway] final case class RoundTrip(nanos: Long) extends FromChild
-
   /** A call was sent again. */
   private[naogateway] case object Retransmitted extends FromChild
-
   /** The sender (re)started and asks for the robot's route; every later change is pushed to it. */
   private[naogateway] final case class RouteWanted(replyTo: ActorRef[NoResponseActor.Command]) extends FromChild
-
   /** The sender handed the outbox a frame of `bytes` for this robot: counted here. */
   private[naogateway] final case class FrameSent(bytes: Int) extends FromChild
-
   /** A debug option command (the vision actor's): noted here, so a robot restart can re-enable it, then sent. */
   private[naogateway] final case class OptionCommand(commands: DebuggingCommands) extends FromChild
-
   /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
   private[naogateway] final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
-
   /** A stream subscribes to this robot's camera frames (through the vision actor, which this actor outlives). */
   private[naogateway] final case class VisionSubscribe(subscriber: ActorRef[VisionFrame], grid: Boolean) extends FromChild
-
   /** The vision actor (re)started and asks for the registrations; every later change is pushed to it. */
   private[naogateway] final case class VisionSubscribersWanted(replyTo: ActorRef[VisionActor.Subscribers]) extends FromChild
 
-  private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Command
-  private final case class VisionSubscriberGone(subscriber: ActorRef[VisionFrame]) extends Command
-  private final case class ZeroMqLinkEvent(event: ZeroMqRobotLink.Event) extends Command
-  private case object PullOptions extends Command
+  private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Common
+  private final case class Verdict(report: HeartBeatActor.Verdict) extends Command
+  private final case class VisionSubscriberGone(subscriber: ActorRef[VisionFrame]) extends Common
+  private final case class ZeroMqLinkEvent(event: ZeroMqRobotLink.Event) extends Common
+  private case object PullOptions extends Common
   private case object PullKey
   private final case class Forget(reason: String) extends Command
   private case object ForgetKey
@@ -122,24 +119,8 @@ object RobotActor {
   }
 
   /** The robot's children, for callers that talk to it directly. */
-  final case class Connected(
-      robotId: Int,
-      response: ActorRef[ResponseActor.Command],
-      noResponse: ActorRef[NoResponseActor.Command],
-      vision: ActorRef[VisionActor.Command],
-      stream: ActorRef[StreamActor.Command]
-  )
-
-  /** The children that live as long as the robot actor (the vision and stream actors come with the first contact). */
-  private final case class Family(
-      heartbeat: ActorRef[HeartBeatActor.Command],
-      sender: ActorRef[NoResponseActor.Command],
-      response: ActorRef[ResponseActor.Command],
-      zeroMq: Option[ActorRef[ZeroMqRobotLink.Command]]
-  )
-
-  /** The children spawned at first contact. */
-  private final case class Children(vision: ActorRef[VisionActor.Command], stream: ActorRef[StreamActor.Command])
+  final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command], noResponse: ActorRef[NoResponseActor.Command],
+      vision: ActorRef[VisionActor.Command], stream: ActorRef[StreamActor.Command])
 
   /**
    * A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once).
@@ -148,16 +129,8 @@ object RobotActor {
    * one or a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come
    * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
    */
-  def apply(
-      robotId: Int,
-      address: InetSocketAddress,
-      settings: GatewaySettings,
-      outbox: ActorRef[Outbox.Command],
-      wiring: Wiring,
-      heard: Boolean,
-      transport: Transport = Transport.Datagrams,
-      discovered: Boolean = false
-  ): Behavior[Command] =
+  def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings, outbox: ActorRef[Outbox.Command], wiring: Wiring,
+      heard: Boolean, transport: Transport = Transport.Datagrams, discovered: Boolean = false): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(64) { stash =>
@@ -169,25 +142,17 @@ object RobotActor {
       }
     }
 
-  private final class Robot(
-      robotId: Int,
-      settings: GatewaySettings,
-      outbox: ActorRef[Outbox.Command],
-      wiring: Wiring,
-      transport: Transport,
-      discovered: Boolean,
-      context: ActorContext[Command],
-      stash: StashBuffer[Command],
-      timers: TimerScheduler[Command]
-  ) {
+  private final class Robot(robotId: Int, settings: GatewaySettings, outbox: ActorRef[Outbox.Command], wiring: Wiring,
+      transport: Transport, discovered: Boolean, context: ActorContext[Command], stash: StashBuffer[Command],
+      timers: TimerScheduler[Command]) {
     private val heartbeatSettings = transport match {
       case Transport.Datagrams => settings.heartbeat
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
-    private val window = heartbeatSettings.qualityWindow.toNanos
-    private val interval = heartbeatSettings.keepAliveInterval.toNanos
     // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
     private val signs = transport == Transport.Datagrams && settings.signingOf(robotId) == RobotSigning.Required
+    private val effects = new RobotEffects(robotId, settings, heartbeatSettings, transport == Transport.Datagrams, context.log,
+      timers.startTimerWithFixedDelay(PullKey, PullOptions, OptionPullInterval), timers.cancel(PullKey))
     // How every child is restarted (naogateway.supervision.robot-children).
     private val restarts = settings.supervision.robotChildren.strategy
     private def child[T](behavior: Behavior[T], name: String): ActorRef[T] =
@@ -202,51 +167,48 @@ object RobotActor {
             context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(restarts), "zeromq-link"))
         case Transport.Datagrams => None
       }
-      val heartbeat = child(HeartBeatActor(heartbeatSettings, context.messageAdapter(HeartbeatReport.apply), online = false), "heartbeat")
+      val reports = context.messageAdapter[HeartBeatActor.Report] {
+        case v: HeartBeatActor.Verdict => Verdict(v)
+        case r                         => HeartbeatReport(r)
+      }
+      val heartbeat = child(HeartBeatActor(heartbeatSettings, reports, online = false), "heartbeat")
       val sender = child(NoResponseActor(robotId, settings.calls, self), "no-response")
-      val family = Family(heartbeat, sender, child(ResponseActor(robotId, settings.calls, self, sender, online = false), "response"), zeroMq)
+      val response = child(ResponseActor(robotId, settings.calls, self, sender, online = false), "response")
       if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
       forgetAfter(settings.discovery.forgetUnreachedAfter, "not online")
       val kept = (heartbeatSettings.qualityWindow / heartbeatSettings.keepAliveInterval).toInt + 2
       val subscribers = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
-      unreached(family, RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept))
+      unreached(Family(heartbeat, sender, response, zeroMq),
+        RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept))
     }
 
     /** Not reached yet: Connect waits (stashed) until the heartbeat says the robot is there. */
     private def unreached(f: Family, s: RobotState): Behavior[Command] = Behaviors.receiveMessage {
-      case HeartbeatReport(HeartBeatActor.CameOnline) =>
-        val children = Children(child(VisionActor(robotId, context.self), "vision"), child(StreamActor(robotId, settings.stream, f.sender), "stream"))
-        stash.unstashAll(online(f, children, s))
+      case m: Common => unreached(f, common(m, f, None, s, isOnline = false))
       case c: Connect =>
         if (stash.isFull) context.log.warn("Robot [{}]: too many connects waiting", robotId) else stash.stash(c)
         f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
-      case Wanted =>
-        f.heartbeat ! HeartBeatActor.ProbeNow
-        Behaviors.same
-      case HeartbeatReport(HeartBeatActor.WentOffline(_)) => Behaviors.same // never online: nothing to report
-      case Forget(reason)                                 => forget(s, reason)
-      case m: FromChild                                   => unreached(f, fromChild(m, f, None, s, isOnline = false))
-      case m                                              => unreached(f, shared(m, f, None, s, isOnline = false))
+      case Verdict(HeartBeatActor.CameOnline) =>
+        val vision = child(VisionActor(robotId, context.self), "vision")
+        stash.unstashAll(online(f, Children(vision, child(StreamActor(robotId, settings.stream, f.sender), "stream")), s))
+      case Verdict(HeartBeatActor.WentOffline(_)) => Behaviors.same // never online: nothing to report
+      case Forget(reason)                         => forget(s, reason)
     }
 
     private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = Behaviors.receiveMessage {
+      case m: Common => running(f, c, common(m, f, Some(c), s, isOnline), isOnline)
       case Connect(replyTo) =>
         replyTo ! Connected(robotId, f.response, f.sender, c.vision, c.stream)
         if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
-      case Wanted =>
-        if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
-        Behaviors.same
-      case HeartbeatReport(HeartBeatActor.CameOnline) => if (isOnline) Behaviors.same else online(f, c, s)
-      case HeartbeatReport(HeartBeatActor.WentOffline(reason)) =>
+      case Verdict(HeartBeatActor.CameOnline) => if (isOnline) Behaviors.same else online(f, c, s)
+      case Verdict(HeartBeatActor.WentOffline(reason)) =>
         context.log.info("Robot [{}] offline: {}", robotId, reason)
         forgetAfter(settings.discovery.forgetOfflineAfter, "offline")
         f.response ! ResponseActor.Reachability(false)
-        running(f, c, publish(s, RobotOffline(robotId, reason)), isOnline = false)
+        running(f, c, effects.publish(s, RobotOffline(robotId, reason)), isOnline = false)
       case Forget(reason) => forget(s, reason)
-      case m: FromChild   => running(f, c, fromChild(m, f, Some(c), s, isOnline), isOnline)
-      case m            => running(f, c, shared(m, f, Some(c), s, isOnline), isOnline)
     }
 
     /** The robot came online: the response actor first (a subscriber that calls on RobotOnline must find it online). */
@@ -254,36 +216,17 @@ object RobotActor {
       timers.cancel(ForgetKey)
       context.log.info("Robot [{}] online at {}", robotId, s.address)
       f.response ! ResponseActor.Reachability(true)
-      val pulled = if (pullsOptions && s.options.list.isEmpty) { if (s.options.pulling) pull(f, s, isOnline = true) else startPull(f, s, isOnline = true) } else s
-      running(f, c, publish(pulled.wentOnline, RobotOnline(robotId, s.address)), isOnline = true)
+      val pulled = effects.pullOnContact(f, s)
+      running(f, c, effects.publish(pulled.wentOnline, RobotOnline(robotId, s.address)), isOnline = true)
     }
 
-    /** What the children ask and report, the same in both states. */
-    private def fromChild(m: FromChild, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState = m match {
-      case Wanted                     => s // handled by each state before
-      case RoundTrip(nanos)           => s.roundTrip(nanos)
-      case Retransmitted              => s.retransmitted
-      case FrameSent(bytes)           => s.frameSent(bytes)
-      case ReachabilityWanted(replyTo) => replyTo ! isOnline; s
-      case RouteWanted(replyTo)       => replyTo ! NoResponseActor.RouteChanged(route(s, f), f.response); s
-      case OptionCommand(commands) =>
-        // Step 4 waits for the list: remembered now, sent (as far as the robot offers it) when the push arrives.
-        val (next, now) = s.optionCommand(commands)
-        if (now) submitOptions(f, commands)
-        next
-      case VisionSubscribe(subscriber, grid) =>
-        val (next, fresh) = s.visionSubscribed(subscriber, grid)
-        if (fresh) context.watchWith(subscriber, VisionSubscriberGone(subscriber))
-        c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
-        next
-      case VisionSubscribersWanted(replyTo) => replyTo ! VisionActor.Subscribers(s.vision); s
-    }
-
-    /** What the robot, the gateway and the timers say, the same in both states. */
-    private def shared(m: Command, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState = m match {
+    /** Everything handled alike in both states: what the robot, the children, the gateway and the timers say. */
+    private def common(m: Common, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState = m match {
       case FrameReceived(contents, form, size) =>
         wiring.backlog.done()
-        frame(contents, form, size, f, c, s, isOnline)
+        val (next, formChanged) = s.frameReceived(size, form)
+        if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
+        effects.frame(contents, f, c, next, isOnline)
       case SegmentReceived(bytes) =>
         wiring.backlog.done()
         c.foreach(_.stream ! StreamActor.SegmentReceived(bytes))
@@ -291,137 +234,58 @@ object RobotActor {
       case DatagramRejected(kind) =>
         wiring.backlog.done()
         // The gateway warned of it already (per kind, for all robots): here it is counted, and logged at debug only.
-        count(s, kind, "", warn = false)
-      case Subscribers(now) =>
-        val (next, held) = s.subscribersChanged(now)
-        held.foreach(e => now.foreach(_ ! e))
-        next
-      case VisionSubscriberGone(subscriber) =>
-        val next = s.visionGone(subscriber)
-        c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
-        next
+        effects.count(s, kind, "", warn = false)
       case Rebound(to) =>
         context.log.info("Robot [{}] re-bound from {} to {}", robotId, s.address, to)
         val next = s.rebound(to)
         f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
         next
-      case PullOptions => pull(f, s, isOnline)
-      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) => frame(contents, HeaderForm.Legacy, size, f, c, s, isOnline)
-      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageRejected(reason))      => count(s, Rejection.BadProtobuf, reason)
+      case GetSnapshot(replyTo)  => replyTo ! s.view(isOnline); s
+      case GetLinkStats(replyTo) => replyTo ! effects.linkStats(s); s
+      case Subscribers(now) =>
+        val (next, held) = s.subscribersChanged(now)
+        held.foreach(e => now.foreach(_ ! e))
+        next
+      case Wanted =>
+        if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
+        s
+      case RoundTrip(nanos)            => s.roundTrip(nanos)
+      case Retransmitted               => s.retransmitted
+      case FrameSent(bytes)            => s.frameSent(bytes)
+      case ReachabilityWanted(replyTo) => replyTo ! isOnline; s
+      case RouteWanted(replyTo)        => replyTo ! NoResponseActor.RouteChanged(route(s, f), f.response); s
+      case OptionCommand(commands)     => effects.optionCommand(commands, f, s)
+      case VisionSubscribe(subscriber, grid) =>
+        val (next, fresh) = s.visionSubscribed(subscriber, grid)
+        if (fresh) context.watchWith(subscriber, VisionSubscriberGone(subscriber))
+        c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
+        next
+      case VisionSubscribersWanted(replyTo) => replyTo ! VisionActor.Subscribers(s.vision); s
+      case VisionSubscriberGone(subscriber) =>
+        val next = s.visionGone(subscriber)
+        c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
+        next
+      case PullOptions => effects.pull(f, s, isOnline)
+      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) =>
+        effects.frame(contents, f, c, s.frameReceived(size, HeaderForm.Legacy)._1, isOnline)
+      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageRejected(reason)) => effects.count(s, Rejection.BadProtobuf, reason)
       case ZeroMqLinkEvent(ZeroMqRobotLink.PollDue(calls, outcome)) =>
         calls.foreach(call => f.sender ! NoResponseActor.Submit(Outbound.CallOut(call), Priority.Heartbeat, call.callId,
           NoResponseActor.Awaits.Reply(Some(settings.zeromq.statusTimeout)), Some(outcome)))
         s
       case ZeroMqLinkEvent(ZeroMqRobotLink.PollAnswered(id)) => f.sender ! NoResponseActor.Finished(id); s
-      case HeartbeatReport(HeartBeatActor.SendProbe(call)) =>
-        f.sender ! NoResponseActor.Submit(Outbound.CallOut(call), Priority.Heartbeat, call.callId,
-          NoResponseActor.Awaits.Reply(Some(heartbeatSettings.probeTimeout)))
-        s
-      case HeartbeatReport(HeartBeatActor.ProbeRoundTrip(nanos)) => s.roundTrip(nanos)
-      case HeartbeatReport(HeartBeatActor.QualityChanged(quality)) =>
-        context.log.info("Robot [{}] link quality {}", robotId, quality.name)
-        publish(s.qualityChanged(quality), LinkQualityChanged(robotId, quality))
-      case GetSnapshot(replyTo) => replyTo ! s.view(isOnline); s
-      case GetLinkStats(replyTo) => replyTo ! s.linkStats(System.nanoTime(), window, interval); s
-      case _: FromChild | _: Connect | _: Forget | HeartbeatReport(HeartBeatActor.CameOnline | HeartBeatActor.WentOffline(_)) =>
-        s // each state's own
+      case HeartbeatReport(report)                          => effects.heartbeat(report, f, s)
     }
 
     /** Where the robot is reached now: this actor owns the address and header form, the sender follows them. */
     private def route(s: RobotState, f: Family): RobotFrames.Route =
-      f.zeroMq.fold[RobotFrames.Route](RobotFrames.Route.Datagrams(outbox, s.address, s.form, signs))(RobotFrames.Route.ZeroMq(outbox, s.address, _))
-
-    /** One FU-Remote message from the robot, over datagrams or ZeroMQ: each thing it carries to its owner. */
-    private def frame(contents: MessageContents, form: HeaderForm, size: Int, f: Family, c: Option[Children], s0: RobotState,
-        isOnline: Boolean): RobotState = {
-      val (s, formChanged) = s0.frameReceived(size, form)
-      if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(s, f), f.response)
-      RobotFrames.arrivals(robotId, contents).foldLeft(s) {
-        case (st, Arrival.KeepAlive(status, health)) => keepAlive(status, health, f, c, st, isOnline)
-        case (st, Arrival.OptionsPushed(list))       => optionsPushed(list, f, st)
-        case (st, Arrival.Reply(CallId.Owner.Response, reply, _)) => f.response ! ResponseActor.ReplyReceived(reply); st
-        case (st, Arrival.Reply(CallId.Owner.Heartbeat, _, id)) =>
-          f.heartbeat ! HeartBeatActor.ProbeAnswered(id)
-          f.sender ! NoResponseActor.Finished(id)
-          st
-        case (st, Arrival.Reply(owner, _, id))     => count(st, Rejection.UnknownCallId, s"call id $id of $owner")
-        case (st, Arrival.Vision(v))               => c.foreach(_.vision ! VisionActor.FrameReceived(v)); st
-        case (st, Arrival.Refused(kind, detail))   => count(st, kind, detail)
-      }
-    }
-
-    private def keepAlive(status: proto.Status, health: Option[proto.RobotHealth], f: Family, c: Option[Children], s0: RobotState,
-        isOnline: Boolean): RobotState = {
-      val (s, seen) = s0.keepAliveSeen(status, health, System.nanoTime(), window, settings.newSessionKeepAlives)
-      if (seen.heard) f.heartbeat ! HeartBeatActor.KeepAliveSeen
-      val resynced = if (seen.restarted) resync(f, c, s, isOnline) else s
-      publish(resynced, RobotStatusUpdated(resynced.view(isOnline)))
-    }
-
-    /** A fresh session on the robot: switch back on what was active, and tell subscribers. */
-    private def resync(f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState = {
-      val options = s.options.active.toVector.sorted
-      context.log.info("Robot [{}] restarted (boot {}); re-enabling {}", robotId, s.snapshot.bootId, options.mkString(","))
-      // A new session: pull its option list first (protocol.md 8, steps 1 and 6); the push re-enables `options`.
-      val pulled = if (pullsOptions) startPull(f, s, isOnline) else s
-      if (!pullsOptions && options.nonEmpty) submitOptions(f, DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options))))
-      c.foreach { ch =>
-        ch.vision ! VisionActor.Resync
-        ch.stream ! StreamActor.Reset
-      }
-      publish(pulled, RobotRestarted(robotId, s.snapshot.bootId, options))
-    }
-
-    private def pullsOptions: Boolean = transport == Transport.Datagrams
-
-    /** protocol.md 8, step 1: `optionPull` now and about every second until an `optionPush` arrives. */
-    private def startPull(f: Family, s: RobotState, isOnline: Boolean): RobotState = {
-      timers.startTimerWithFixedDelay(PullKey, PullOptions, OptionPullInterval)
-      pull(f, s.pullStarted, isOnline)
-    }
-
-    /** One `optionPull`, taking room in the robot's buffer until the push (or the next pull); none while offline. */
-    private def pull(f: Family, s: RobotState, isOnline: Boolean): RobotState =
-      if (!isOnline || !s.options.pulling) s
-      else {
-        val (next, key) = s.pullSent
-        f.sender ! NoResponseActor.Submit(Outbound.DebugOut(DebuggingCommands(optionPull = Some(true))), Priority.Debug, Some(key),
-          NoResponseActor.Awaits.Reply(Some(OptionPullInterval)))
-        next
-      }
-
-    /** The robot's list arrived (steps 2, 3); the first one of a pull lets the options we want go out (step 4). */
-    private def optionsPushed(list: Seq[proto.DebuggingOption], f: Family, s: RobotState): RobotState = {
-      f.sender ! NoResponseActor.Finished(s.options.pullKey)
-      val wasPulling = s.options.pulling
-      val (next, known, unknown) = s.optionsPushed(list)
-      if (wasPulling) timers.cancel(PullKey)
-      if (unknown.nonEmpty) context.log.info("Robot [{}] does not offer options {}", robotId, unknown.mkString(","))
-      if (known.nonEmpty) submitOptions(f, DebuggingCommands(optionEnable = Some(DebuggingOptionNames(known))))
-      next
-    }
-
-    private def submitOptions(f: Family, commands: DebuggingCommands): Unit =
-      f.sender ! NoResponseActor.Submit(Outbound.DebugOut(commands), Priority.Debug, None, NoResponseActor.Awaits.Nothing)
-
-    private def count(s: RobotState, kind: Rejection, detail: => String, warn: Boolean = true): RobotState = {
-      val (next, n) = s.refused(kind)
-      // Per kind, at 1, 10, 100, ...: the kinds are a closed set, so neither the map nor the log can grow with a flood.
-      if (warn && RateLimitedLog.due(n)) context.log.warn("Robot [{}]: refused datagram ({}), {} so far", robotId, kind.name, n)
-      if (context.log.isDebugEnabled) context.log.debug("Robot [{}]: refused datagram ({}) {}", robotId, kind.name, detail)
-      next
-    }
-
-    private def publish(s: RobotState, event: GatewayEvent): RobotState = {
-      val (next, to) = s.publish(event)
-      to.foreach(_ ! event)
-      next
-    }
+      f.zeroMq.fold[RobotFrames.Route](RobotFrames.Route.Datagrams(outbox, s.address, s.form, signs))(
+        RobotFrames.Route.ZeroMq(outbox, s.address, _))
 
     /** The gateway watches this actor: its IP address and id are free once it has stopped. */
     private def forget(s: RobotState, reason: String): Behavior[Command] = {
       context.log.info("Robot [{}] forgotten: {}", robotId, reason)
-      publish(s, RobotForgotten(robotId, reason))
+      effects.publish(s, RobotForgotten(robotId, reason))
       Behaviors.stopped
     }
 
