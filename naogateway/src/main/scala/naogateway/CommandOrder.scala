@@ -38,7 +38,7 @@ final case class CommandOrder[A] private (
     }
   }
 
-  /** Call `key` has ended (answered, timed out, dropped, or given up while it waited): it leaves, and waiting calls take its room. */
+  /** Call `key` has ended (answered, timed out, dropped, or given up waiting): it leaves, waiting calls take its room. */
   def complete(key: Long): (CommandOrder[A], Vector[Step[A]]) =
     copy(inFlight = inFlight.filterNot(_.key == key), waiting = waiting.filterNot(_.key == key)).admit
 

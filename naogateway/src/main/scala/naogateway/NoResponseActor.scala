@@ -24,8 +24,8 @@ object NoResponseActor {
    * Sends `call` in order, its reply dropped; `replyTo`, when given, learns how it ended (the robot's answer, an error
    * or a drop). Sent once, never retried.
    */
-  final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None, priority: Priority = Priority.Command)
-      extends Command
+  final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None,
+      priority: Priority = Priority.Command) extends Command
 
   /**
    * Sends `out` in order. `key` names it while it takes room (a call's first call id; the sender picks one when
@@ -51,7 +51,8 @@ object NoResponseActor {
   private[naogateway] final case class Abandoned(keys: Set[Long]) extends Command
 
   /** Where the robot is reached now, and the response actor that correlates this robot's calls. */
-  private[naogateway] final case class RouteChanged(route: Route, responder: ActorRef[ResponseActor.Command]) extends Command
+  private[naogateway] final case class RouteChanged(route: Route, responder: ActorRef[ResponseActor.Command])
+      extends Command
 
   private final case class HoldOver(key: Long) extends Command
 
@@ -92,7 +93,7 @@ object NoResponseActor {
     final case class Interrupted(key: Long) extends Notice
   }
 
-  /** Requests in the robot's buffer at once; more wait so its 1400-byte module buffer is not flooded. Safety never waits. */
+  /** Requests in the robot's buffer at once; more wait, so its 1400-byte module buffer is not flooded. */
   // Fixed, not a setting: the bound follows from the one 1400-byte buffer the robot's module has for both directions
   // (protocol.md 1), which no gateway configuration changes; a larger value would let replies overrun it.
   val MaxInFlight: Int = 4
@@ -136,12 +137,15 @@ object NoResponseActor {
     def awaitingRoute: Behavior[Command] = Behaviors
       .receiveMessage[Command] {
         case RouteChanged(route, responder) =>
-          stash.unstashAll(running(CommandOrder.empty(MaxInFlight, settings.stashCapacity), route, responder, Long.MinValue))
+          val order = CommandOrder.empty[Item](MaxInFlight, settings.stashCapacity)
+          stash.unstashAll(running(order, route, responder, Long.MinValue))
         case s: Send if stash.isFull =>
-          s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(RobotFailure.Overloaded(robotId, s"${stash.size} wait for the robot's address"))))
+          val why = RobotFailure.Overloaded(robotId, s"${stash.size} wait for the robot's address")
+          s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(why)))
           Behaviors.same
         case s: Submit if stash.isFull =>
-          refuse(s.key.getOrElse(0L), Item(s.out, s.priority, s.awaits, s.outcome, s.notices, 0L, Set.empty), "the sender has no route yet")
+          val item = Item(s.out, s.priority, s.awaits, s.outcome, s.notices, 0L, Set.empty)
+          refuse(s.key.getOrElse(0L), item, "the sender has no route yet")
           Behaviors.same
         case other =>
           if (!stash.isFull) stash.stash(other)
@@ -150,7 +154,8 @@ object NoResponseActor {
       .receiveSignal(signals(None))
 
     /** Sending: `nextKey` numbers the entries that come without a key of their own (below every call id). */
-    private def running(order: Order, route: Route, responder: ActorRef[ResponseActor.Command], nextKey: Long): Behavior[Command] =
+    private def running(order: Order, route: Route, responder: ActorRef[ResponseActor.Command], nextKey: Long)
+        : Behavior[Command] =
       Behaviors
         .receiveMessage[Command] {
           case Send(call, replyTo, priority) =>
@@ -196,7 +201,8 @@ object NoResponseActor {
         .receiveSignal(signals(Some(order)))
 
     /** Carries out the order's steps: supersessions first (their withdrawals reach the outbox before any send). */
-    private def perform(order: Order, steps: Vector[CommandOrder.Step[Item]], route: Route, submitted: Option[Long]): Order =
+    private def perform(order: Order, steps: Vector[CommandOrder.Step[Item]], route: Route, submitted: Option[Long])
+        : Order =
       steps.foldLeft(order) {
         case (o, CommandOrder.Superseded(e, wasInFlight)) =>
           if (wasInFlight) {
@@ -249,7 +255,9 @@ object NoResponseActor {
         }
         stash.foreach {
           case s: Submit => s.key.foreach(k => s.notices.foreach(_ ! Notice.Interrupted(k)))
-          case s: Send   => s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(RobotFailure.Interrupted(robotId, s.call.name))))
+          case s: Send =>
+            val why = RobotFailure.Interrupted(robotId, s.call.name)
+            s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(why)))
           case _         => ()
         }
         Behaviors.same

@@ -55,15 +55,16 @@ object ResponseActor {
       sentAt: Long
   )
 
-  /** A response actor for robot `robotId`, submitting through `sender`; `robot` owns reachability and hears round trips. */
-  def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild], sender: ActorRef[NoResponseActor.Command],
-      online: Boolean): Behavior[Command] =
+  /** The response actor of robot `robotId`, submitting to `sender`; `robot` owns reachability, hears round trips. */
+  def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild],
+      sender: ActorRef[NoResponseActor.Command], online: Boolean): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
         val notices = context.messageAdapter[NoResponseActor.Notice](OrderNotice.apply)
         robot ! RobotActor.ReachabilityWanted(context.messageAdapter[Boolean](Reachability.apply))
-        new Responder(robotId, settings, robot, sender, outcomes, notices, timers).running(Map.empty, online, CallId.randomStart())
+        val responder = new Responder(robotId, settings, robot, sender, outcomes, notices, timers)
+        responder.running(Map.empty, online, CallId.randomStart())
       }
     }
 
@@ -89,7 +90,8 @@ object ResponseActor {
       p.copy(sentAt = System.nanoTime())
     }
 
-    private def attempt(p: Pending, id: Long): RobotFrames.Outbound = RobotFrames.Outbound.CallOut(p.call.copy(callId = Some(id)))
+    private def attempt(p: Pending, id: Long): RobotFrames.Outbound =
+      RobotFrames.Outbound.CallOut(p.call.copy(callId = Some(id)))
 
     /** Answers call `key`, and frees its room in the robot's buffer. */
     private def settle(calls: Calls, key: Long, result: Either[RobotFailure, Option[RpcValue]]): Calls =
@@ -122,9 +124,10 @@ object ResponseActor {
             val id = nextId(lastId)
             val total = timeout.getOrElse(settings.timeout)
             val retries = if (idempotent.getOrElse(RpcMethod.idempotent(call))) settings.idempotentRetries else 0
-            val p = arm(id, Pending(call, Set(id), replyTo, priority, 1, retries + 1, total / (retries + 1).toLong, total, 0L))
-            sender ! NoResponseActor.Submit(attempt(p, id), priority, Some(id), NoResponseActor.Awaits.Reply(None), Some(outcomes),
-              Some(notices))
+            val each = total / (retries + 1).toLong
+            val p = arm(id, Pending(call, Set(id), replyTo, priority, 1, retries + 1, each, total, 0L))
+            val awaits = NoResponseActor.Awaits.Reply(None)
+            sender ! NoResponseActor.Submit(attempt(p, id), priority, Some(id), awaits, Some(outcomes), Some(notices))
             running(calls.updated(id, p), online, CallId.count(id))
           case ReplyReceived(reply) =>
             reply.callId.flatMap(keyOf(calls, _)) match {
@@ -145,7 +148,8 @@ object ResponseActor {
                 sender ! NoResponseActor.Resend(key, attempt(again, id), id)
                 running(calls.updated(key, again), online, CallId.count(id))
               case Some(p) if p.attempts == n =>
-                running(settle(calls, key, Left(RobotFailure.Timeout(robotId, p.call.name, p.total.toMillis))), online, lastId)
+                val timeout = RobotFailure.Timeout(robotId, p.call.name, p.total.toMillis)
+                running(settle(calls, key, Left(timeout)), online, lastId)
               case _ => Behaviors.same
             }
           case SendOutcome(outcome) =>

@@ -4,6 +4,7 @@ import java.net.InetSocketAddress
 
 import scala.concurrent.duration._
 
+import akka.actor.typed.scaladsl.Behaviors.receiveMessage
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
@@ -27,16 +28,17 @@ object RobotActor {
   sealed trait Common extends Command
 
   /** A decoded FU-Remote frame from this robot (`size` bytes on the wire). */
-  final case class FrameReceived(contents: MessageContents, form: HeaderForm, size: Int) extends Common
+  private[naogateway] final case class FrameReceived(contents: MessageContents, form: HeaderForm, size: Int)
+      extends Common
 
   /** A secure-stream segment from this robot's address. */
-  final case class SegmentReceived(bytes: Array[Byte]) extends Common
+  private[naogateway] final case class SegmentReceived(bytes: Array[Byte]) extends Common
 
   /** A datagram from this robot's address was refused, for this kind of reason. */
-  final case class DatagramRejected(kind: Rejection) extends Common
+  private[naogateway] final case class DatagramRejected(kind: Rejection) extends Common
 
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
-  final case class Rebound(address: InetSocketAddress) extends Common
+  private[naogateway] final case class Rebound(address: InetSocketAddress) extends Common
 
   /** Answers with the children's refs once the robot is reachable (probing it first if needed). */
   final case class Connect(replyTo: ActorRef[Connected]) extends Command
@@ -48,10 +50,10 @@ object RobotActor {
   final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common
 
   /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
-  final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
+  private[naogateway] final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
 
   /** A robot actor (re)started and asks the gateway for its current subscribers. */
-  final case class SubscribersWanted(robot: ActorRef[Subscribers])
+  private[naogateway] final case class SubscribersWanted(robot: ActorRef[Subscribers])
 
   /**
    * How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start
@@ -59,7 +61,8 @@ object RobotActor {
    * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
    * the robot port's reader has handed the actor, given back as each is handled.
    */
-  final case class Wiring(subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
+  final case class Wiring(
+      subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
 
   /** Wirings without a gateway. */
   object Wiring {
@@ -86,9 +89,11 @@ object RobotActor {
   /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
   private[naogateway] final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
   /** A stream subscribes to this robot's camera frames (through the vision actor, which this actor outlives). */
-  private[naogateway] final case class VisionSubscribe(subscriber: ActorRef[VisionFrame], grid: Boolean) extends FromChild
+  private[naogateway] final case class VisionSubscribe(subscriber: ActorRef[VisionFrame], grid: Boolean)
+      extends FromChild
   /** The vision actor (re)started and asks for the registrations; every later change is pushed to it. */
-  private[naogateway] final case class VisionSubscribersWanted(replyTo: ActorRef[VisionActor.Subscribers]) extends FromChild
+  private[naogateway] final case class VisionSubscribersWanted(replyTo: ActorRef[VisionActor.Subscribers])
+      extends FromChild
 
   private final case class HeartbeatReport(report: HeartBeatActor.Report) extends Common
   private final case class Verdict(report: HeartBeatActor.Verdict) extends Command
@@ -99,28 +104,21 @@ object RobotActor {
   private final case class Forget(reason: String) extends Command
   private case object ForgetKey
 
-  /**
-   * How often `optionPull` is repeated until the robot's `optionPush` arrives. Fixed, not a setting: protocol.md 8,
-   * step 1 gives robots this period ("about every second"), and a robot's firmware is written against it.
-   */
-  val OptionPullInterval: FiniteDuration = 1.second
-
   /** How a robot is reached. */
   sealed trait Transport extends Product with Serializable
 
   /** The two kinds of robot. */
   object Transport {
-
     /** FU-Remote frames in UDP datagrams through the gateway's outbox: the CM-530. */
     case object Datagrams extends Transport
-
     /** Serialized `Message`s to a ZeroMQ REP socket at `endpoint`: the original naogateway's robots. */
     final case class ZeroMq(endpoint: String) extends Transport
   }
 
   /** The robot's children, for callers that talk to it directly. */
-  final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command], noResponse: ActorRef[NoResponseActor.Command],
-      vision: ActorRef[VisionActor.Command], stream: ActorRef[StreamActor.Command])
+  final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command],
+      noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
+      stream: ActorRef[StreamActor.Command])
 
   /**
    * A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once).
@@ -129,15 +127,17 @@ object RobotActor {
    * one or a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come
    * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
    */
-  def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings, outbox: ActorRef[Outbox.Command], wiring: Wiring,
-      heard: Boolean, transport: Transport = Transport.Datagrams, discovered: Boolean = false): Behavior[Command] =
+  def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings, outbox: ActorRef[Outbox.Command],
+      wiring: Wiring, heard: Boolean, transport: Transport = Transport.Datagrams, discovered: Boolean = false)
+      : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(64) { stash =>
           // Datagrams handed to an earlier incarnation are gone with it; the count starts again.
           wiring.backlog.reset()
           wiring.gateway.foreach(_ ! SubscribersWanted(context.self))
-          new Robot(robotId, settings, outbox, wiring, transport, discovered, context, stash, timers).start(address, heard)
+          val robot = new Robot(robotId, settings, outbox, wiring, transport, discovered, context, stash, timers)
+          robot.start(address, heard)
         }
       }
     }
@@ -150,9 +150,10 @@ object RobotActor {
       case _: Transport.ZeroMq => settings.zeromq.heartbeat
     }
     // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
-    private val signs = transport == Transport.Datagrams && settings.signingOf(robotId) == RobotSigning.Required
-    private val effects = new RobotEffects(robotId, settings, heartbeatSettings, transport == Transport.Datagrams, context.log,
-      timers.startTimerWithFixedDelay(PullKey, PullOptions, OptionPullInterval), timers.cancel(PullKey))
+    private val datagrams = transport == Transport.Datagrams
+    private val signs = datagrams && settings.signingOf(robotId) == RobotSigning.Required
+    private val effects = new RobotEffects(robotId, settings, heartbeatSettings, datagrams, context.log,
+      timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval), timers.cancel(PullKey))
     // How every child is restarted (naogateway.supervision.robot-children).
     private val restarts = settings.supervision.robotChildren.strategy
     private def child[T](behavior: Behavior[T], name: String): ActorRef[T] =
@@ -183,7 +184,7 @@ object RobotActor {
     }
 
     /** Not reached yet: Connect waits (stashed) until the heartbeat says the robot is there. */
-    private def unreached(f: Family, s: RobotState): Behavior[Command] = Behaviors.receiveMessage {
+    private def unreached(f: Family, s: RobotState): Behavior[Command] = receiveMessage {
       case m: Common => unreached(f, common(m, f, None, s, isOnline = false))
       case c: Connect =>
         if (stash.isFull) context.log.warn("Robot [{}]: too many connects waiting", robotId) else stash.stash(c)
@@ -191,12 +192,13 @@ object RobotActor {
         Behaviors.same
       case Verdict(HeartBeatActor.CameOnline) =>
         val vision = child(VisionActor(robotId, context.self), "vision")
-        stash.unstashAll(online(f, Children(vision, child(StreamActor(robotId, settings.stream, f.sender), "stream")), s))
+        val stream = child(StreamActor(robotId, settings.stream, f.sender), "stream")
+        stash.unstashAll(online(f, Children(vision, stream), s))
       case Verdict(HeartBeatActor.WentOffline(_)) => Behaviors.same // never online: nothing to report
       case Forget(reason)                         => forget(s, reason)
     }
 
-    private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = Behaviors.receiveMessage {
+    private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = receiveMessage {
       case m: Common => running(f, c, common(m, f, Some(c), s, isOnline), isOnline)
       case Connect(replyTo) =>
         replyTo ! Connected(robotId, f.response, f.sender, c.vision, c.stream)
@@ -221,61 +223,63 @@ object RobotActor {
     }
 
     /** Everything handled alike in both states: what the robot, the children, the gateway and the timers say. */
-    private def common(m: Common, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState = m match {
-      case FrameReceived(contents, form, size) =>
-        wiring.backlog.done()
-        val (next, formChanged) = s.frameReceived(size, form)
-        if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
-        effects.frame(contents, f, c, next, isOnline)
-      case SegmentReceived(bytes) =>
-        wiring.backlog.done()
-        c.foreach(_.stream ! StreamActor.SegmentReceived(bytes))
-        s.segmentReceived(bytes.length)
-      case DatagramRejected(kind) =>
-        wiring.backlog.done()
-        // The gateway warned of it already (per kind, for all robots): here it is counted, and logged at debug only.
-        effects.count(s, kind, "", warn = false)
-      case Rebound(to) =>
-        context.log.info("Robot [{}] re-bound from {} to {}", robotId, s.address, to)
-        val next = s.rebound(to)
-        f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
-        next
-      case GetSnapshot(replyTo)  => replyTo ! s.view(isOnline); s
-      case GetLinkStats(replyTo) => replyTo ! effects.linkStats(s); s
-      case Subscribers(now) =>
-        val (next, held) = s.subscribersChanged(now)
-        held.foreach(e => now.foreach(_ ! e))
-        next
-      case Wanted =>
-        if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
-        s
-      case RoundTrip(nanos)            => s.roundTrip(nanos)
-      case Retransmitted               => s.retransmitted
-      case FrameSent(bytes)            => s.frameSent(bytes)
-      case ReachabilityWanted(replyTo) => replyTo ! isOnline; s
-      case RouteWanted(replyTo)        => replyTo ! NoResponseActor.RouteChanged(route(s, f), f.response); s
-      case OptionCommand(commands)     => effects.optionCommand(commands, f, s)
-      case VisionSubscribe(subscriber, grid) =>
-        val (next, fresh) = s.visionSubscribed(subscriber, grid)
-        if (fresh) context.watchWith(subscriber, VisionSubscriberGone(subscriber))
-        c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
-        next
-      case VisionSubscribersWanted(replyTo) => replyTo ! VisionActor.Subscribers(s.vision); s
-      case VisionSubscriberGone(subscriber) =>
-        val next = s.visionGone(subscriber)
-        c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
-        next
-      case PullOptions => effects.pull(f, s, isOnline)
-      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) =>
-        effects.frame(contents, f, c, s.frameReceived(size, HeaderForm.Legacy)._1, isOnline)
-      case ZeroMqLinkEvent(ZeroMqRobotLink.MessageRejected(reason)) => effects.count(s, Rejection.BadProtobuf, reason)
-      case ZeroMqLinkEvent(ZeroMqRobotLink.PollDue(calls, outcome)) =>
-        calls.foreach(call => f.sender ! NoResponseActor.Submit(Outbound.CallOut(call), Priority.Heartbeat, call.callId,
-          NoResponseActor.Awaits.Reply(Some(settings.zeromq.statusTimeout)), Some(outcome)))
-        s
-      case ZeroMqLinkEvent(ZeroMqRobotLink.PollAnswered(id)) => f.sender ! NoResponseActor.Finished(id); s
-      case HeartbeatReport(report)                          => effects.heartbeat(report, f, s)
-    }
+    private def common(m: Common, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState =
+      m match {
+        case FrameReceived(contents, form, size) =>
+          wiring.backlog.done()
+          val (next, formChanged) = s.frameReceived(size, form)
+          if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
+          effects.frame(contents, f, c, next, isOnline)
+        case SegmentReceived(bytes) =>
+          wiring.backlog.done()
+          c.foreach(_.stream ! StreamActor.SegmentReceived(bytes))
+          s.segmentReceived(bytes.length)
+        case DatagramRejected(kind) =>
+          wiring.backlog.done()
+          // The gateway warned of it already (per kind, for all robots): here it is counted, and logged at debug only.
+          effects.count(s, kind, "", warn = false)
+        case Rebound(to) =>
+          context.log.info("Robot [{}] re-bound from {} to {}", robotId, s.address, to)
+          val next = s.rebound(to)
+          f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
+          next
+        case GetSnapshot(replyTo)  => replyTo ! s.view(isOnline); s
+        case GetLinkStats(replyTo) => replyTo ! effects.linkStats(s); s
+        case Subscribers(now) =>
+          val (next, held) = s.subscribersChanged(now)
+          held.foreach(e => now.foreach(_ ! e))
+          next
+        case Wanted =>
+          if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
+          s
+        case RoundTrip(nanos)            => s.roundTrip(nanos)
+        case Retransmitted               => s.retransmitted
+        case FrameSent(bytes)            => s.frameSent(bytes)
+        case ReachabilityWanted(replyTo) => replyTo ! isOnline; s
+        case RouteWanted(replyTo)        => replyTo ! NoResponseActor.RouteChanged(route(s, f), f.response); s
+        case OptionCommand(commands)     => effects.optionCommand(commands, f, s)
+        case VisionSubscribe(subscriber, grid) =>
+          val (next, fresh) = s.visionSubscribed(subscriber, grid)
+          if (fresh) context.watchWith(subscriber, VisionSubscriberGone(subscriber))
+          c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
+          next
+        case VisionSubscribersWanted(replyTo) => replyTo ! VisionActor.Subscribers(s.vision); s
+        case VisionSubscriberGone(subscriber) =>
+          val next = s.visionGone(subscriber)
+          c.foreach(_.vision ! VisionActor.Subscribers(next.vision))
+          next
+        case PullOptions => effects.pull(f, s, isOnline)
+        case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) =>
+          effects.frame(contents, f, c, s.frameReceived(size, HeaderForm.Legacy)._1, isOnline)
+        case ZeroMqLinkEvent(ZeroMqRobotLink.MessageRejected(reason)) => effects.count(s, Rejection.BadProtobuf, reason)
+        case ZeroMqLinkEvent(ZeroMqRobotLink.PollDue(calls, outcome)) =>
+          val hold = NoResponseActor.Awaits.Reply(Some(settings.zeromq.statusTimeout))
+          calls.foreach(c =>
+            f.sender ! NoResponseActor.Submit(Outbound.CallOut(c), Priority.Heartbeat, c.callId, hold, Some(outcome)))
+          s
+        case ZeroMqLinkEvent(ZeroMqRobotLink.PollAnswered(id)) => f.sender ! NoResponseActor.Finished(id); s
+        case HeartbeatReport(report)                          => effects.heartbeat(report, f, s)
+      }
 
     /** Where the robot is reached now: this actor owns the address and header form, the sender follows them. */
     private def route(s: RobotState, f: Family): RobotFrames.Route =

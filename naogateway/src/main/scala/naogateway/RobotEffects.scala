@@ -59,7 +59,8 @@ private[naogateway] final class RobotEffects(
     log.info("Robot [{}] restarted (boot {}); re-enabling {}", robotId, s.snapshot.bootId, options.mkString(","))
     // A new session: pull its option list first (protocol.md 8, steps 1 and 6); the push re-enables `options`.
     val pulled = if (pullsOptions) startPull(f, s, isOnline) else s
-    if (!pullsOptions && options.nonEmpty) submitOptions(f, DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options))))
+    if (!pullsOptions && options.nonEmpty)
+      submitOptions(f, DebuggingCommands(optionEnable = Some(DebuggingOptionNames(options))))
     c.foreach { ch =>
       ch.vision ! VisionActor.Resync
       ch.stream ! StreamActor.Reset
@@ -85,7 +86,7 @@ private[naogateway] final class RobotEffects(
     else {
       val (next, key) = s.pullSent
       f.sender ! NoResponseActor.Submit(Outbound.DebugOut(DebuggingCommands(optionPull = Some(true))), Priority.Debug,
-        Some(key), NoResponseActor.Awaits.Reply(Some(RobotActor.OptionPullInterval)))
+        Some(key), NoResponseActor.Awaits.Reply(Some(RobotOptions.PullInterval)))
       next
     }
 

@@ -44,7 +44,8 @@ object RobotFrames {
     val replies = contents.rpcResponse.toVector.flatMap { response =>
       val reply = RpcReply.fromProto(response)
       reply.callId.toVector.map { id =>
-        CallId.ownerOf(id).fold[Arrival](Arrival.Refused(Rejection.UnknownCallId, s"call id $id"))(Arrival.Reply(_, reply, id))
+        CallId.ownerOf(id)
+          .fold[Arrival](Arrival.Refused(Rejection.UnknownCallId, s"call id $id"))(Arrival.Reply(_, reply, id))
       }
     }
     val regions = contents.havimoRegions.toVector.map { f =>
@@ -87,36 +88,38 @@ object RobotFrames {
   /** The two routes, one per transport. */
   object Route {
 
-    /** FU-Remote frames in `form` to `to`; `signs`: the robot must sign, so the outbox signs its frames as they leave. */
-    final case class Datagrams(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, form: HeaderForm, signs: Boolean = false)
-        extends Route
+    /** FU-Remote frames in `form` to `to`; `signs`: the robot must sign, so the outbox signs its frames as they go. */
+    final case class Datagrams(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, form: HeaderForm,
+        signs: Boolean = false) extends Route
 
     /** Serialized `Message`s, which the outbox hands to the robot's ZeroMQ `link` (`to` only names the robot). */
-    final case class ZeroMq(outbox: ActorRef[Outbox.Command], to: InetSocketAddress, link: ActorRef[ZeroMqRobotLink.Command])
-        extends Route
+    final case class ZeroMq(outbox: ActorRef[Outbox.Command], to: InetSocketAddress,
+        link: ActorRef[ZeroMqRobotLink.Command]) extends Route
   }
 
   /** The bytes of `out` for robot `robotId` on `route`, or why it cannot go. */
   def encode(robotId: Int, out: Outbound, route: Route): Either[String, Array[Byte]] = route match {
     case Route.Datagrams(_, _, form, _) =>
       val frame: Either[FrameError, Array[Byte]] = out match {
-        case Outbound.CallOut(call)      => MessageContents.encodeFrame(MessageContents(robotId, rpcRequest = Some(call.toProto)), form)
-        case Outbound.DebugOut(commands) => MessageContents.encodeFrame(MessageContents(robotId, debuggingCommands = Some(commands)), form)
+        case Outbound.CallOut(call) =>
+          MessageContents.encodeFrame(MessageContents(robotId, rpcRequest = Some(call.toProto)), form)
+        case Outbound.DebugOut(commands) =>
+          MessageContents.encodeFrame(MessageContents(robotId, debuggingCommands = Some(commands)), form)
         case Outbound.SegmentOut(bytes) =>
-          if (bytes.length > WireLimits.MaxDatagramBytes) Left(FrameError.Oversize(bytes.length, WireLimits.MaxDatagramBytes))
-          else Right(bytes)
+          val max = WireLimits.MaxDatagramBytes
+          if (bytes.length > max) Left(FrameError.Oversize(bytes.length, max)) else Right(bytes)
       }
       frame.left.map(_.describe)
     // No FU-Remote header over ZeroMQ: a ZeroMQ message carries exactly one serialized Message.
     case _: Route.ZeroMq =>
       out match {
         case Outbound.CallOut(call)      => Right(MessageContents(robotId, rpcRequest = Some(call.toProto)).toProtobuf)
-        case Outbound.DebugOut(commands) => Right(MessageContents(robotId, debuggingCommands = Some(commands)).toProtobuf)
+        case Outbound.DebugOut(c)        => Right(MessageContents(robotId, debuggingCommands = Some(c)).toProtobuf)
         case Outbound.SegmentOut(_)      => Left("the secure stream does not run over ZeroMQ")
       }
   }
 
-  /** The outbox's `Send` for `bytes` of `out`: signed when the robot must sign, except stream segments (never signed). */
+  /** The outbox's `Send` for `bytes` of `out`: signed when the robot must sign, but never a stream segment. */
   def send(robotId: Int, out: Outbound, bytes: Array[Byte], route: Route, priority: Priority,
       outcome: Option[ActorRef[Outbox.Outcome]], tag: Long): Outbox.Send = route match {
     case Route.Datagrams(_, to, _, signs) =>

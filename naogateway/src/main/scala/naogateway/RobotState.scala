@@ -3,6 +3,7 @@ package naogateway
 import java.net.InetSocketAddress
 
 import scala.collection.immutable.Queue
+import scala.concurrent.duration._
 
 import akka.actor.typed.ActorRef
 
@@ -41,14 +42,28 @@ final case class RobotOptions(
     pulls: Long = 0L
 ) {
 
-  /** The key of the latest `optionPull` in the robot's sender (below every call id; the sender's own keys are lower still). */
+  /** The key of the latest `optionPull` in the robot's sender: below every call id, above the sender's own keys. */
   def pullKey: Long = -1L - pulls
 
   /** `commands` noted: enabled options join, disabled ones (and their sub-options) leave. */
   def noted(commands: DebuggingCommands): RobotOptions = {
     val enabled = commands.optionEnable.fold(active)(e => active ++ e.options)
-    copy(active = commands.optionDisable.fold(enabled)(d => enabled.filterNot(o => d.options.exists(n => o == n || o.startsWith(n + ".")))))
+    val off = commands.optionDisable.fold(Seq.empty[String])(_.options)
+    copy(active = enabled.filterNot(o => off.exists(RobotOptions.covers(_, o))))
   }
+}
+
+/** The option rules. */
+object RobotOptions {
+
+  /**
+   * How often `optionPull` is repeated until the robot's `optionPush` arrives. Fixed, not a setting: protocol.md 8,
+   * step 1 gives robots this period ("about every second"), and a robot's firmware is written against it.
+   */
+  val PullInterval: FiniteDuration = 1.second
+
+  /** Whether option name `n` names option `o` or a group it belongs to (`havimo` covers `havimo.grid`). */
+  def covers(n: String, o: String): Boolean = o == n || o.startsWith(n + ".")
 }
 
 /** What one keep-alive did: whether it completed a new session, and whether the heartbeat is to hear of it. */
@@ -78,7 +93,8 @@ final case class RobotState(
 
   /** A frame of `size` bytes in `frameForm` arrived; true when its form differs from the last (the route changes). */
   def frameReceived(size: Int, frameForm: HeaderForm): (RobotState, Boolean) =
-    (copy(form = frameForm, link = link.copy(datagramsIn = link.datagramsIn + 1, bytesIn = link.bytesIn + size)), frameForm != form)
+    (copy(form = frameForm, link = link.copy(datagramsIn = link.datagramsIn + 1, bytesIn = link.bytesIn + size)),
+      frameForm != form)
 
   /** A secure-stream segment of `size` bytes arrived. */
   def segmentReceived(size: Int): RobotState =
@@ -116,7 +132,8 @@ final case class RobotState(
     val sync = robotTime.fold(restartedSync)(restartedSync.add(_, now))
     val clock = sync.estimate
     val next = copy(
-      snapshot = step.snapshot.copy(clock = clock, stampedAtNanos = for (t <- robotTime; c <- clock) yield c.toGatewayNanos(t)),
+      snapshot = step.snapshot.copy(clock = clock,
+        stampedAtNanos = for (t <- robotTime; c <- clock) yield c.toGatewayNanos(t)),
       sessions = step.sessions,
       introducing = false,
       clockSync = sync,
@@ -165,7 +182,7 @@ final case class RobotState(
     if (!options.pulling) (copy(options = options.copy(list = Some(list))), Vector.empty, Vector.empty)
     else {
       val offered = list.map(_.name)
-      val (known, unknown) = options.active.toVector.sorted.partition(n => offered.exists(o => o == n || o.startsWith(n + ".")))
+      val (known, unknown) = options.active.toVector.sorted.partition(n => offered.exists(RobotOptions.covers(n, _)))
       (copy(options = options.copy(list = Some(list), pulling = false)), known, unknown)
     }
 
@@ -200,8 +217,8 @@ object RobotState {
    * The state of robot `robotId` at `address` before anything was heard; `subscribers` None when the gateway is still
    * to say; a `discovered` robot's first keep-alive only introduces it. `keepAliveTimesKept` bounds the loss window.
    */
-  def initial(robotId: Int, address: InetSocketAddress, clockSync: ClockSync, subscribers: Option[Set[ActorRef[GatewayEvent]]],
-      discovered: Boolean, keepAliveTimesKept: Int): RobotState =
-    RobotState(robotId, address, HeaderForm.Legacy, RobotSnapshot(robotId, address), SessionRule.empty, discovered, clockSync,
-      RobotOptions(), subscribers, Vector.empty, Map.empty, LinkFigures(), keepAliveTimesKept)
+  def initial(robotId: Int, address: InetSocketAddress, clockSync: ClockSync,
+      subscribers: Option[Set[ActorRef[GatewayEvent]]], discovered: Boolean, keepAliveTimesKept: Int): RobotState =
+    RobotState(robotId, address, HeaderForm.Legacy, RobotSnapshot(robotId, address), SessionRule.empty, discovered,
+      clockSync, RobotOptions(), subscribers, Vector.empty, Map.empty, LinkFigures(), keepAliveTimesKept)
 }

@@ -24,10 +24,10 @@ object StreamActor {
   final case class GetStats(replyTo: ActorRef[StreamStats]) extends Command
 
   /** A segment from the robot's address. */
-  final case class SegmentReceived(bytes: Array[Byte]) extends Command
+  private[naogateway] final case class SegmentReceived(bytes: Array[Byte]) extends Command
 
   /** The robot restarted with fresh sequence numbers: start the stream afresh, keeping unacknowledged payloads. */
-  case object Reset extends Command
+  private[naogateway] case object Reset extends Command
 
   private case object Tick extends Command
   private final case class SubscriberGone(subscriber: ActorRef[Received]) extends Command

@@ -29,7 +29,8 @@ object ZeroMqRobotLink {
    * Sends one serialized `Message` to the robot; `outcome`, when given, learns whether it went out, marked with `tag`.
    * Only the outbox sends it, behind the competition gate and the team budget (`Outbox.Send.via`).
    */
-  private[naogateway] final case class Send(bytes: Array[Byte], outcome: Option[ActorRef[Outbox.Outcome]], tag: Long) extends Command
+  private[naogateway] final case class Send(bytes: Array[Byte], outcome: Option[ActorRef[Outbox.Outcome]], tag: Long)
+      extends Command
 
   private final case class Received(bytes: Array[Byte]) extends Command
   private final case class PollSent(outcome: Outbox.Outcome) extends Command
@@ -122,8 +123,10 @@ object ZeroMqRobotLink {
                 else {
                   // Polls never overlap: a new one starts only when the last was answered or given up.
                   val ids = StatusCalls.indices.map(i => CallId(CallId.Owner.StatusPoll, lastPollId + 1 + i)).toVector
-                  owner ! PollDue(ids.zip(StatusCalls).map { case (id, (module, method)) => RpcCall(module, method, Vector.empty, Some(id)) },
-                    pollOutcomes)
+                  val calls = ids.zip(StatusCalls).map { case (id, (module, method)) =>
+                    RpcCall(module, method, Vector.empty, Some(id))
+                  }
+                  owner ! PollDue(calls, pollOutcomes)
                   running(Some(Poll(now, ids.zip(StatusCalls.map(_._2)).toMap, Map.empty, 0)), CallId.count(ids.last))
                 }
               case Received(bytes) =>
