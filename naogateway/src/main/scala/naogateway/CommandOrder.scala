@@ -3,7 +3,7 @@ package naogateway
 import naogateway.wire.ActuatorGroup
 
 /**
- * The order in which one robot's calls leave: the pure core of `ResponseActor`.
+ * The order in which everything for one robot leaves: the pure core of `NoResponseActor`, the robot's one sender.
  *
  * Rules: a call of a slot supersedes every older call of that slot still waiting, and every older replaceable one in
  * flight (a target such as a walk's velocities or the head's angles: it gets no more retries and its held datagrams
@@ -38,9 +38,9 @@ final case class CommandOrder[A] private (
     }
   }
 
-  /** Call `key` has ended (answered, timed out or dropped): it leaves, and waiting calls take its room. */
+  /** Call `key` has ended (answered, timed out, dropped, or given up waiting): it leaves, waiting calls take its room. */
   def complete(key: Long): (CommandOrder[A], Vector[Step[A]]) =
-    copy(inFlight = inFlight.filterNot(_.key == key)).admit
+    copy(inFlight = inFlight.filterNot(_.key == key), waiting = waiting.filterNot(_.key == key)).admit
 
   /** The call in flight whose payload satisfies `p`. */
   def findInFlight(p: A => Boolean): Option[Entry[A]] = inFlight.find(e => p(e.payload))
@@ -48,9 +48,18 @@ final case class CommandOrder[A] private (
   /** The call in flight with `key`. */
   def inFlightCall(key: Long): Option[Entry[A]] = inFlight.find(_.key == key)
 
-  /** Replaces the payload of the call in flight with `key`. */
-  def updated(key: Long, payload: A): CommandOrder[A] =
-    copy(inFlight = inFlight.map(e => if (e.key == key) e.copy(payload = payload) else e))
+  /** Calls `keys` have ended at once: they leave together before any waiting call takes their room. */
+  def completeAll(keys: Set[Long]): (CommandOrder[A], Vector[Step[A]]) =
+    copy(inFlight = inFlight.filterNot(e => keys(e.key)), waiting = waiting.filterNot(e => keys(e.key))).admit
+
+  /** The call with `key`, in flight or waiting. */
+  def find(key: Long): Option[Entry[A]] = inFlight.find(_.key == key).orElse(waiting.find(_.key == key))
+
+  /** Replaces the payload of the call with `key`, in flight or waiting. */
+  def updated(key: Long, payload: A): CommandOrder[A] = {
+    def swap(v: Vector[Entry[A]]) = v.map(e => if (e.key == key) e.copy(payload = payload) else e)
+    copy(inFlight = swap(inFlight), waiting = swap(waiting))
+  }
 
   /** Every call, in flight then waiting, and an order without any. */
   def drained: (CommandOrder[A], Vector[Entry[A]], Vector[Entry[A]]) =

@@ -189,13 +189,12 @@ object Gateway {
     private val watch = new GameControllerWatch(settings, context, rejections, gate, publish)
 
     /**
-     * Every packet, not only changes, reaches every gate (the outbox's, each ZeroMQ robot's): a restarted outbox or
-     * ZeroMQ link learns the reading within one round; and it reaches them before any subscriber hears of the game,
-     * so a subscriber reacting to kick-off finds them closed.
+     * Every packet, not only changes, reaches the one gate (the outbox's, for both transports): a restarted outbox
+     * learns the reading within one round; and it reaches it before any subscriber hears of the game, so a subscriber
+     * reacting to kick-off finds it closed.
      */
     private def gate(reading: GameReading): Unit = {
       outbox ! Outbox.GameStateChanged(reading)
-      byId.values.filter(_.zeromq).foreach(_.actor ! RobotActor.GameStateChanged(reading))
     }
 
     private def discoveredRobots: Int = byId.valuesIterator.count(_.discovered)

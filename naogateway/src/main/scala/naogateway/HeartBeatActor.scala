@@ -14,13 +14,13 @@ object HeartBeatActor {
   sealed trait Command
 
   /** A keep-alive of the robot arrived. */
-  case object KeepAliveSeen extends Command
+  private[naogateway] case object KeepAliveSeen extends Command
 
   /** Any reply with one of this heartbeat's call ids arrived (the probe's error reply proves the robot is there). */
-  final case class ProbeAnswered(callId: Long) extends Command
+  private[naogateway] final case class ProbeAnswered(callId: Long) extends Command
 
   /** Someone wants the robot: probe at once, even when it is offline. */
-  case object ProbeNow extends Command
+  private[naogateway] case object ProbeNow extends Command
 
   private case object QuietCheck extends Command
   private case object ProbeTimeout extends Command
@@ -30,11 +30,14 @@ object HeartBeatActor {
   /** What the heartbeat tells its robot actor. */
   sealed trait Report
 
+  /** The heartbeat's verdicts on whether the robot is there: what changes its robot actor's state. */
+  sealed trait Verdict extends Report
+
   /** The robot answered or spoke after being offline (or at first contact). */
-  case object CameOnline extends Report
+  case object CameOnline extends Verdict
 
   /** The robot missed every chance. */
-  final case class WentOffline(reason: String) extends Report
+  final case class WentOffline(reason: String) extends Verdict
 
   /** The link quality crossed a threshold. */
   final case class QualityChanged(quality: LinkQuality) extends Report

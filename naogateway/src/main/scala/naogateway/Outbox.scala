@@ -8,12 +8,15 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.link.DatagramWriter
+import naogateway.link.{DatagramWriter, ZeroMqRobotLink}
 import naogateway.recording.{Decision, Recording}
 import naogateway.wire.{FrameSigning, WireLimits}
 import naogateway.wire.gamecontroller.GameState
 
-/** The last gate before the air: the competition rule, the team's traffic budget and the priority classes. */
+/**
+ * The last gate before the air, for both transports: the competition rule (applied here alone), the team's traffic
+ * budget and the priority classes. Every robot's sender (`NoResponseActor`) sends through it.
+ */
 object Outbox {
 
   /** What the outbox accepts. */
@@ -21,7 +24,8 @@ object Outbox {
 
   /**
    * Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns the outcome, marked with `tag`. `signed`:
-   * `bytes` is an unsigned FU-Remote frame of a robot that must sign, signed here at the moment it leaves.
+   * `bytes` is an unsigned FU-Remote frame of a robot that must sign, signed here at the moment it leaves. `via`: a
+   * ZeroMQ robot's link, which takes the bytes instead of the datagram socket, behind the same gate and budget.
    */
   final case class Send(
       robotId: Int,
@@ -30,7 +34,8 @@ object Outbox {
       priority: Priority,
       replyTo: Option[ActorRef[Outcome]] = None,
       tag: Long = 0L,
-      signed: Boolean = false
+      signed: Boolean = false,
+      via: Option[ActorRef[ZeroMqRobotLink.Command]] = None
   ) extends Command {
 
     /** The size on the wire: the signature field comes on top of a signed frame. */
@@ -170,10 +175,14 @@ private final class Outbox(
     // Signed now, not when it was queued: the robot accepts only growing timestamps, and the queues reorder.
     val bytes = if (!s.signed) Right(s.bytes) else signer.toRight("no signing key").flatMap(_.sign(s.bytes).left.map(_.describe))
     // Written here, on the outbox's own thread: no link actor between the decision and the socket. A full kernel
-    // buffer takes nothing (UDP would lose the datagram further on anyway): counted as dropped.
-    if (!bytes.exists(link.send(_, s.to))) {
-      dropped += 1
-      if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
+    // buffer takes nothing (UDP would lose the datagram further on anyway): counted as dropped. A ZeroMQ robot's link
+    // reports itself whether its socket took the message.
+    s.via match {
+      case Some(zeroMq) => zeroMq ! ZeroMqRobotLink.Send(s.bytes, s.replyTo, s.tag)
+      case None if !bytes.exists(link.send(_, s.to)) =>
+        dropped += 1
+        if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
+      case None => ()
     }
     warnIfLoaded(now)
   }

@@ -24,10 +24,10 @@ object StreamActor {
   final case class GetStats(replyTo: ActorRef[StreamStats]) extends Command
 
   /** A segment from the robot's address. */
-  final case class SegmentReceived(bytes: Array[Byte]) extends Command
+  private[naogateway] final case class SegmentReceived(bytes: Array[Byte]) extends Command
 
   /** The robot restarted with fresh sequence numbers: start the stream afresh, keeping unacknowledged payloads. */
-  case object Reset extends Command
+  private[naogateway] case object Reset extends Command
 
   private case object Tick extends Command
   private final case class SubscriberGone(subscriber: ActorRef[Received]) extends Command
@@ -49,11 +49,11 @@ object StreamActor {
 
   private case object TickKey
 
-  /** The endpoint for robot `robotId`, sending segments through `robot`. */
-  def apply(robotId: Int, settings: StreamSettings, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
+  /** The endpoint for robot `robotId`, sending segments through the robot's one sender. */
+  def apply(robotId: Int, settings: StreamSettings, sender: ActorRef[NoResponseActor.Command]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        val endpoint = new Endpoint(robotId, robot, timers, context)
+        val endpoint = new Endpoint(robotId, sender, timers, context)
         val fresh = SecureStream.initial(settings, System.nanoTime())
         endpoint.schedule(fresh)
         endpoint.running(fresh, 0L, Map.empty, Set.empty)
@@ -62,7 +62,7 @@ object StreamActor {
 
   private final class Endpoint(
       robotId: Int,
-      robot: ActorRef[RobotActor.FromChild],
+      sender: ActorRef[NoResponseActor.Command],
       timers: TimerScheduler[Command],
       context: akka.actor.typed.scaladsl.ActorContext[Command]
   ) {
@@ -71,7 +71,8 @@ object StreamActor {
       var left = waiting
       step.outputs.foreach {
         case SecureStream.Transmit(datagram) =>
-          robot ! RobotActor.Transmit(RobotActor.Outbound.SegmentOut(datagram), Priority.Command, None)
+          // A segment leaves the robot's buffer as it goes: the stream's own window bounds how many are unacknowledged.
+          sender ! NoResponseActor.Submit(RobotFrames.Outbound.SegmentOut(datagram), Priority.Command, None, NoResponseActor.Awaits.Nothing)
         case SecureStream.Deliver(payload) => subscribers.foreach(_ ! Received(robotId, payload))
         case SecureStream.Acknowledged(id) =>
           left.get(id).foreach(_ ! Acknowledged)

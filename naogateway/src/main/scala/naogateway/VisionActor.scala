@@ -12,7 +12,7 @@ object VisionActor {
   sealed trait Command
 
   /** A frame arrived from the robot. */
-  final case class FrameReceived(frame: VisionFrame) extends Command
+  private[naogateway] final case class FrameReceived(frame: VisionFrame) extends Command
 
   /**
    * Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). The robot
@@ -24,7 +24,7 @@ object VisionActor {
   final case class Subscribers(subscribers: Map[ActorRef[VisionFrame], Boolean]) extends Command
 
   /** The robot restarted: switch the camera options on again if anyone is watching. */
-  case object Resync extends Command
+  private[naogateway] case object Resync extends Command
 
   val RegionsOption: String = "havimo.regions"
   val GridOption: String = "havimo.grid"
@@ -42,7 +42,7 @@ object VisionActor {
         else Set(RegionsOption) ++ (if (subscribers.values.exists(identity)) Set(GridOption) else Set.empty)
 
       def send(cmd: DebuggingCommands): Unit =
-        robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(cmd), Priority.Debug, None)
+        robot ! RobotActor.OptionCommand(cmd)
 
       def switch(from: Set[String], to: Set[String]): Unit = {
         val on = to -- from

@@ -13,7 +13,6 @@ import org.zeromq.{SocketType, ZContext}
 
 import naogateway._
 import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
-import naogateway.wire.gamecontroller.GameState
 import naogateway.wire.{MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 
 object ZeroMqRobotLinkSpec {
@@ -175,7 +174,7 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
   }
 
   "The ZeroMQ robot link" must {
-    "refuse to send while the game runs in competition mode" in {
+    "leave its status polls to the robot's sender, and drop a send when nobody listens" in {
       // Bound but never listening: connecting is refused, and no one else can take the port meanwhile.
       val deaf = new Socket()
       try {
@@ -183,12 +182,12 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
         val settings = GatewaySettings(system).zeromq
         val owner = createTestProbe[ZeroMqRobotLink.Event]()
         val outcomes = createTestProbe[Outbox.Outcome]()
-        val link = spawn(ZeroMqRobotLink(21, s"tcp://127.0.0.1:${deaf.getLocalPort}", settings, competition = true, owner.ref,
+        val link = spawn(ZeroMqRobotLink(21, s"tcp://127.0.0.1:${deaf.getLocalPort}", settings, owner.ref,
           ZeroMqRobotLink.SharedLoop(system).loop))
-        link ! ZeroMqRobotLink.GameStateChanged(GameState.Playing)
-        link ! ZeroMqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 5L)
-        outcomes.expectMessage(Outbox.RefusedByRule(5L, Outbox.NoSendingWhileGameRuns))
-        link ! ZeroMqRobotLink.GameStateChanged(GameState.Finished)
+        // The gate and the in-flight cap are the sender's and the outbox's: the link only says a poll is due.
+        val due = owner.expectMessageType[ZeroMqRobotLink.PollDue](settings.statusInterval * 3)
+        due.calls.map(c => c.module -> c.method) shouldBe ZeroMqRobotLink.StatusCalls
+        due.calls.flatMap(_.callId).map(CallId.ownerOf) shouldBe Vector.fill(3)(Some(CallId.Owner.StatusPoll))
         // Nobody listens on the port: with immediate queueing the request is dropped, not kept for later.
         link ! ZeroMqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 6L)
         outcomes.expectMessageType[Outbox.Dropped].tag shouldBe 6L

@@ -12,31 +12,25 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
-import naogateway.wire.gamecontroller.GameState
-import naogateway.{CallId, CompetitionGate, GameReading, Outbox, ZeroMqLinkSettings}
+import naogateway.{CallId, Outbox, ZeroMqLinkSettings}
 
 /**
  * The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several
  * may wait in the robot's queue, answered in order), replies come back as decoded messages. Such a robot cannot push
- * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive.
+ * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive. It sends
+ * nothing of its own: its polls go out through the robot's sender and the outbox like every other request.
  */
 object ZeroMqRobotLink {
 
   /** What a link accepts. */
   sealed trait Command
 
-  /** Sends one serialized `Message` to the robot; `outcome`, when given, learns whether it went out, marked with `tag`. */
-  final case class Send(bytes: Array[Byte], outcome: Option[ActorRef[Outbox.Outcome]], tag: Long) extends Command
-
-  /** What the trusted GameController last said: in competition mode nothing is sent while the gate is closed. */
-  final case class GameStateChanged(reading: GameReading) extends Command
-
-  /** Constructors of gate updates. */
-  object GameStateChanged {
-
-    /** A readable packet's state. */
-    def apply(state: GameState): GameStateChanged = GameStateChanged(GameReading.Known(state))
-  }
+  /**
+   * Sends one serialized `Message` to the robot; `outcome`, when given, learns whether it went out, marked with `tag`.
+   * Only the outbox sends it, behind the competition gate and the team budget (`Outbox.Send.via`).
+   */
+  private[naogateway] final case class Send(bytes: Array[Byte], outcome: Option[ActorRef[Outbox.Outcome]], tag: Long)
+      extends Command
 
   private final case class Received(bytes: Array[Byte]) extends Command
   private final case class PollSent(outcome: Outbox.Outcome) extends Command
@@ -52,6 +46,15 @@ object ZeroMqRobotLink {
   /** Something arrived that is not a `Message`. */
   final case class MessageRejected(reason: String) extends Event
 
+  /**
+   * A status poll is due: send `calls` (their call ids set) through the robot's sender, which counts them against the
+   * robot's in-flight cap; `outcome` learns whether each went out, so a refused poll is given up at once.
+   */
+  final case class PollDue(calls: Vector[RpcCall], outcome: ActorRef[Outbox.Outcome]) extends Event
+
+  /** The poll call `callId` was answered: it no longer takes room in the robot's buffer. */
+  final case class PollAnswered(callId: Long) extends Event
+
   /** The calls of one status poll, answered by every robot of the RPC contract (docs/protocol.md 7.2). */
   val StatusCalls: Vector[(String, String)] = Vector("system" -> "ping", "system" -> "battery", "motion" -> "getPosture")
 
@@ -60,7 +63,6 @@ object ZeroMqRobotLink {
       robotId: Int,
       endpoint: String,
       settings: ZeroMqLinkSettings,
-      competition: Boolean,
       owner: ActorRef[Event],
       loop: ZeroMqLoop
   ): Behavior[Command] =
@@ -104,32 +106,28 @@ object ZeroMqRobotLink {
           if (!accepted) outcome.foreach(_ ! Outbox.Dropped(tag, "the ZeroMQ link is closing"))
         }
 
-        def running(gameRunning: Boolean, poll: Option[Poll], lastPollId: Long): Behavior[Command] =
+        def running(poll: Option[Poll], lastPollId: Long): Behavior[Command] =
           Behaviors
             .receiveMessage[Command] {
               case Send(bytes, outcome, tag) =>
-                if (competition && gameRunning) outcome.foreach(_ ! Outbox.RefusedByRule(tag, Outbox.NoSendingWhileGameRuns))
-                else transmit(bytes, outcome, tag)
+                transmit(bytes, outcome, tag)
                 Behaviors.same
               case PollSent(Outbox.Accepted(_)) => Behaviors.same
               case PollSent(refused) =>
-                // Not sent, so never answered: give the poll up now and try again at the next tick.
-                if (poll.exists(_.waiting.contains(refused.tag))) running(gameRunning, None, lastPollId) else Behaviors.same
-              case GameStateChanged(reading) =>
-                // The outbox's gate function: both gates close on the same readings.
-                running(CompetitionGate.closes(reading), poll, lastPollId)
+                // Not sent (the gate is closed, or no connection), so never answered: give the poll up now and try again
+                // at the next tick.
+                if (poll.exists(_.waiting.contains(refused.tag))) running(None, lastPollId) else Behaviors.same
               case StatusTick =>
                 val now = System.nanoTime()
-                if (competition && gameRunning) Behaviors.same
-                else if (poll.exists(p => now - p.startedAt < settings.statusTimeout.toNanos)) Behaviors.same
+                if (poll.exists(p => now - p.startedAt < settings.statusTimeout.toNanos)) Behaviors.same
                 else {
                   // Polls never overlap: a new one starts only when the last was answered or given up.
                   val ids = StatusCalls.indices.map(i => CallId(CallId.Owner.StatusPoll, lastPollId + 1 + i)).toVector
-                  ids.zip(StatusCalls).foreach { case (id, (module, method)) =>
-                    val request = MessageContents(robotId, rpcRequest = Some(RpcCall(module, method, Vector.empty, Some(id)).toProto))
-                    transmit(request.toProtobuf, Some(pollOutcomes), id)
+                  val calls = ids.zip(StatusCalls).map { case (id, (module, method)) =>
+                    RpcCall(module, method, Vector.empty, Some(id))
                   }
-                  running(gameRunning, Some(Poll(now, ids.zip(StatusCalls.map(_._2)).toMap, Map.empty, 0)), CallId.count(ids.last))
+                  owner ! PollDue(calls, pollOutcomes)
+                  running(Some(Poll(now, ids.zip(StatusCalls.map(_._2)).toMap, Map.empty, 0)), CallId.count(ids.last))
                 }
               case Received(bytes) =>
                 MessageContents.parse(bytes) match {
@@ -147,14 +145,15 @@ object ZeroMqRobotLink {
                         owner ! MessageReceived(contents, bytes.length)
                         Behaviors.same
                       case Some((reply, id)) =>
+                        owner ! PollAnswered(id)
                         poll.filter(_.waiting.contains(id)) match {
                           case None => Behaviors.same // an answer to a poll given up already
                           case Some(p) =>
                             val next = p.answered(id, reply, bytes.length)
-                            if (next.waiting.nonEmpty) running(gameRunning, Some(next), lastPollId)
+                            if (next.waiting.nonEmpty) running(Some(next), lastPollId)
                             else {
                               owner ! MessageReceived(next.keepAlive(robotId), next.bytes)
-                              running(gameRunning, None, lastPollId)
+                              running(None, lastPollId)
                             }
                         }
                     }
@@ -166,7 +165,7 @@ object ZeroMqRobotLink {
                 Behaviors.same
             }
 
-        running(gameRunning = false, None, 0L)
+        running(None, 0L)
       }
     }
 

@@ -8,7 +8,7 @@ import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, Type
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.actors.RobotStandIn.started
+import naogateway.actors.RobotStandIn.callActors
 import naogateway.wire.{RpcCall, RpcValue}
 
 /** A child that really crashes, under the supervision the robot actor gives it, still answers its callers. */
@@ -35,10 +35,8 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(true) => true; case _ => false })
-      val responder = spawn(
-        Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
-      )
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
+        wrapResponder = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       (1 to 5).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       outbox.receiveMessages(4) // four in flight, one waiting
       crash.arm()
@@ -47,16 +45,17 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       }
       val answers = caller.receiveMessages(5)
       answers.foreach(_.result.left.toOption.get shouldBe a[RobotFailure.Interrupted])
-      // After the back-off the restarted actor asks again whether the robot is reachable and for its route.
+      // After the back-off the restarted actor asks again whether the robot is reachable.
       robot.fishForMessage(3.seconds) {
         case _: RobotActor.ReachabilityWanted => akka.actor.testkit.typed.FishingOutcome.Complete
         case _                                => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }.last.asInstanceOf[RobotActor.ReachabilityWanted].replyTo ! true
-      // Calls wait for the route: the new incarnation sends nothing until the robot actor has told it.
+      // The interrupted calls gave their room back to the sender: a new call goes out at once.
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      robot.expectMessageType[RobotActor.RouteWanted].replyTo ! ResponseActor.RouteChanged(
-        ResponseActor.Route.Datagrams(outbox.ref, RobotStandIn.RobotAddress, naogateway.wire.HeaderForm.Legacy))
-      RobotStandIn.sent(outbox)._1.name shouldBe "system.ping"
+      outbox.fishForMessage(3.seconds) {
+        case s: Outbox.Send if RobotStandIn.callIn(s).name == "system.ping" => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                                                              => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+      }
     }
 
     "still know after a restart that the robot is offline, and fail calls at once" in {
@@ -64,16 +63,14 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(false) => true; case _ => false })
-      val responder = spawn(
-        Behaviors.supervise(Behaviors.intercept(() => crash)(ResponseActor(2, settings, robot.ref, online = true))).onFailure(restart)
-      )
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
+        wrapResponder = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         responder ! ResponseActor.Reachability(false)
       }
       // The restarted actor starts from its spawn-time assumption (online) until the robot actor answers.
-      started(robot, outbox, online = false)
+      RobotStandIn.reachable(robot, online = false)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.RobotOffline(2))
       robot.expectMessage(RobotActor.Wanted)
@@ -81,26 +78,31 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
   }
 
   "A crashing no-response actor" must {
-    "answer the command in flight and the waiting ones, then take commands again" in {
-      val response = createTestProbe[ResponseActor.Command]()
+    "answer the commands in its order with Interrupted, then take commands again" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash = new CrashOn[NoResponseActor.Command]({
         case NoResponseActor.Send(call, _, _) => call.params == Vector(RpcValue.Text("boom"))
         case _                                => false
       })
-      val actor = spawn(
-        Behaviors.supervise(Behaviors.intercept(() => crash)(NoResponseActor(2, settings, response.ref))).onFailure(restart)
-      )
+      val (responder, actor) = callActors(testKit, 2, settings, robot, outbox,
+        wrapSender = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       (1 to 3).foreach(i => actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
-      response.expectMessageType[ResponseActor.Call]
+      outbox.receiveMessages(3)
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
         actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("boom"))))
       }
       caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[RobotFailure.Interrupted])
       caller.expectNoMessage(200.millis)
+      // The new incarnation asks for its route again before it sends anything.
+      robot.fishForMessage(3.seconds) {
+        case _: RobotActor.RouteWanted => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                         => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+      }.last.asInstanceOf[RobotActor.RouteWanted].replyTo ! NoResponseActor.RouteChanged(RobotStandIn.route(outbox.ref), responder)
       actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
-      response.expectMessageType[ResponseActor.Call].call.params shouldBe Vector(RpcValue.Text("again"))
+      RobotStandIn.sent(outbox)._1.params shouldBe Vector(RpcValue.Text("again"))
     }
   }
 }

@@ -7,7 +7,7 @@ import akka.actor.typed.scaladsl.Behaviors
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.actors.RobotStandIn.started
+import naogateway.actors.RobotStandIn.callActors
 import naogateway.link.UdpLink
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall, RpcValue}
 
@@ -37,8 +37,7 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(walk, caller.ref)
       responder ! ResponseActor.Call(stop, caller.ref, Priority.Safety)
       manualTime.timePasses(2.seconds)
@@ -52,16 +51,15 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
       val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(1400, 0, 1.0), competition = false))
       val robot = spawn(Behaviors.receiveMessage[RobotActor.FromChild] {
         case RobotActor.ReachabilityWanted(r) => r ! true; Behaviors.same
-        case RobotActor.RouteWanted(r) =>
-          r ! ResponseActor.RouteChanged(ResponseActor.Route.Datagrams(outbox, RobotStandIn.RobotAddress, HeaderForm.Legacy))
-          Behaviors.same
-        case _ => Behaviors.same
+        case _                                => Behaviors.same
       })
       // The budget is spent: the walk waits in the outbox.
       outbox ! Outbox.Send(3, RobotStandIn.RobotAddress, new Array[Byte](1390), Priority.Command)
       link.receiveMessage()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot, online = true))
+      val sender = spawn(NoResponseActor(3, settings, robot))
+      val responder = spawn(ResponseActor(3, settings, robot, sender, online = true))
+      sender ! NoResponseActor.RouteChanged(RobotFrames.Route.Datagrams(outbox, RobotStandIn.RobotAddress, HeaderForm.Legacy), responder)
       responder ! ResponseActor.Call(walk, caller.ref)
       responder ! ResponseActor.Call(stop, caller.ref, Priority.Safety)
       def name(m: UdpLink.Command): String = m match {

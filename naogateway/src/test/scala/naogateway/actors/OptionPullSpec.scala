@@ -60,7 +60,7 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       events.expectMessageType[RobotOnline]
       keepAlive(robot, boot = 1)
       // A camera subscriber wants an option before the list is known: it waits for the push.
-      robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(enable("havimo.regions", "no.such")), Priority.Debug, None)
+      robot ! RobotActor.OptionCommand(enable("havimo.regions", "no.such"))
       nextDebug(outbox) shouldBe pull
       remainingDebug(outbox) shouldBe empty
       passWhileAlive(robot, boot = 1, 1.second)
@@ -71,7 +71,7 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       // The list is known: no more pulls, and later commands go out at once.
       passWhileAlive(robot, boot = 1, 3.seconds)
       remainingDebug(outbox) shouldBe empty
-      robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(enable("status")), Priority.Debug, None)
+      robot ! RobotActor.OptionCommand(enable("status"))
       nextDebug(outbox) shouldBe enable("status")
     }
 
@@ -82,7 +82,7 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       keepAlive(robot, boot = 1)
       nextDebug(outbox) shouldBe pull
       robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))), HeaderForm.Legacy, 40)
-      robot ! RobotActor.Transmit(RobotActor.Outbound.DebugOut(enable("havimo.regions")), Priority.Debug, None)
+      robot ! RobotActor.OptionCommand(enable("havimo.regions"))
       nextDebug(outbox) shouldBe enable("havimo.regions")
       // A new session: three keep-alives in a row of it (new-session.keep-alives), then its list first, nothing enabled
       // before it arrives.

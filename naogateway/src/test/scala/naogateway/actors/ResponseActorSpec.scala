@@ -6,16 +6,16 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWit
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.actors.RobotStandIn.{sent, started}
+import naogateway.actors.RobotStandIn.{callActors, sent}
 import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
 class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
   private val manualTime = ManualTime()
   private val settings = CallSettings(2.seconds, idempotentRetries = 2, stashCapacity = 2)
 
-  /** The next attempt the responder sent straight to the outbox; the robot actor only counts it. */
+  /** The next attempt the robot's sender handed the outbox; the robot actor only counts it. */
   private def transmitted(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command]): (Long, RpcCall, Outbox.Send) = {
-    robot.expectMessageType[RobotActor.SentDirect]
+    robot.expectMessageType[RobotActor.FrameSent]
     val (call, send) = sent(outbox)
     send.tag shouldBe call.callId.get
     (call.callId.get, call, send)
@@ -26,8 +26,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("system", "battery", Vector.empty), caller.ref)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       val (first, _, _) = transmitted(robot, outbox)
@@ -46,8 +45,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref)
       val (first, _, _) = transmitted(robot, outbox)
       manualTime.timePasses(667.millis)
@@ -68,8 +66,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "getPosture", Vector.empty), caller.ref)
       val (first, _, _) = transmitted(robot, outbox)
       manualTime.timePasses(667.millis)
@@ -87,8 +84,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text("hi"))), caller.ref)
       transmitted(robot, outbox)
       manualTime.timePasses(2.seconds)
@@ -99,8 +95,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       transmitted(robot, outbox)
       responder ! ResponseActor.Reachability(false)
@@ -113,8 +108,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       (1 to 7).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val ids = (1 to 4).map(_ => transmitted(robot, outbox)._1)
       caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(3, "4 calls in flight and 2 waiting"))
@@ -128,8 +122,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       val (id, _, t) = transmitted(robot, outbox)
       t.replyTo.get ! Outbox.RefusedByRule(id, Outbox.NoSendingWhileGameRuns)
@@ -139,8 +132,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0.2f))), caller.ref)
       val (walk, _, _) = transmitted(robot, outbox)
       responder ! ResponseActor.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
@@ -165,8 +157,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val responder = spawn(ResponseActor(3, settings, robot.ref, online = true))
-      started(robot, outbox)
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       (1 to 4).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
       def head(pan: Float) = RpcCall("motion", "head", Vector(RpcValue.Number(pan), RpcValue.Number(0f)))
