@@ -118,6 +118,31 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       robot.expectMessageType[RobotActor.RoundTrip]
       transmitted(robot, outbox)._2 shouldBe RpcCall("speech", "say", Vector(RpcValue.Text("5")), Some(ids.last + 1))
     }
+    "start a waiting call's deadline only when it leaves, so its attempts are not spent waiting for room" in {
+      val robot = createTestProbe[RobotActor.FromChild]()
+      val outbox = createTestProbe[Outbox.Command]()
+      val caller = createTestProbe[CallResult]()
+      val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
+      (1 to 4).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
+      responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
+      outbox.expectNoMessage(100.millis)
+      // Longer than one attempt of the ping: it has not left, so it is neither resent nor timed out.
+      manualTime.timePasses(1.second)
+      robot.expectNoMessage(Duration.Zero)
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(busy.head)))
+      caller.expectMessageType[CallResult].call shouldBe "speech.say"
+      robot.expectMessageType[RobotActor.RoundTrip]
+      val (ping, _, _) = transmitted(robot, outbox)
+      // Now its three attempts of 667 ms each run: the first resend comes one attempt after it left.
+      manualTime.timePasses(600.millis)
+      outbox.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(100.millis)
+      robot.expectMessage(RobotActor.Retransmitted)
+      transmitted(robot, outbox)._2.name shouldBe "system.ping"
+      responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.UInt(1))), Some(ping)))
+      caller.expectMessage(CallResult(3, "system.ping", Right(Some(RpcValue.UInt(1)))))
+    }
     "fail a call at once with the rule when the outbox refuses it" in {
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
