@@ -269,10 +269,37 @@ object ZeroMqEndpoint {
       }
     }
 
+    // Where the last robot request was handed to the interface: the next one starts only after it, so requests reach
+    // the middleware (and the robot) in the order they arrived, also when one first waits for its lease. One tail for
+    // all robots: it holds no per-robot entry a client could grow.
+    private var dispatched: Future[Unit] = Future.unit
+
+    /**
+     * Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it needs
+     * one. When nothing waits and no lease is needed it starts at once, on this actor's thread.
+     */
+    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(operate: () => Future[Answer]): Future[Answer] = {
+      val handedOn = scala.concurrent.Promise[Unit]()
+      def start(ready: scala.util.Try[Any]): Future[Answer] = {
+        val answer = ready match {
+          case Success(_) => try operate() catch { case NonFatal(e) => Future.failed(e) }
+          case Failure(e) => Future.failed(e)
+        }
+        handedOn.success(())
+        answer
+      }
+      val answer = (dispatched.value, group) match {
+        case (Some(_), None) => start(Success(()))
+        case (Some(_), Some(g)) => robots.acquire(robotId, g).transformWith(start)
+        case (None, None) => dispatched.transformWith(_ => start(Success(())))
+        case (None, Some(g)) => dispatched.transformWith(_ => robots.acquire(robotId, g)).transformWith(start)
+      }
+      dispatched = handedOn.future
+      answer
+    }
+
     private def execute(route: Route): Future[Answer] = {
       val done = Answer(Some(RpcValue.Flag(true)))
-      def leased(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(f: => Future[Answer]): Future[Answer] =
-        group.fold(f)(g => robots.acquire(robotId, g).flatMap(_ => f))
       try route match {
         case Route.Robots =>
           robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
@@ -283,11 +310,15 @@ object ZeroMqEndpoint {
           })
         case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
         case Route.Release(robotId, groups) =>
-          robots.release(robotId, groups: _*)
-          Future.successful(done)
+          inOrder(robotId, None) { () =>
+            robots.release(robotId, groups: _*)
+            Future.successful(done)
+          }
+        case Route.Send(robotId, operation) =>
+          inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
         case Route.Execute(robotId, operation) =>
           import robotmiddleware.Operation._
-          leased(robotId, operation.group) {
+          inOrder(robotId, operation.group) { () =>
             operation match {
               case Walk(vx, vy, omega)    => robots.walk(robotId, vx, vy, omega).map(_ => done)
               case Stop()                 => robots.stop(robotId).map(_ => done)
