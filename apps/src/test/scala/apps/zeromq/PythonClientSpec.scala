@@ -103,6 +103,8 @@ object PythonClientSpec {
       |  game-controller.enabled = off
       |}
       |apps.zeromq { enabled = on, bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*" }
+      |# One loop thread for each test's endpoint, and one for the first test's ZeroMQ robot link.
+      |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 4
       |""".stripMargin
 
   /**
@@ -210,6 +212,7 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
           calls.map(_.name) should not contain "motion.head"
         }
         referee.close()
+        testKit.stop(endpoint)
       } finally f.stop()
     }
   }
