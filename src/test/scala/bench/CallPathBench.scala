@@ -39,6 +39,8 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
  *  - `callpath_cluster_*`: a Scala app on another cluster node (its own actor system in this JVM, Artery over
  *    loopback TCP), through `RobotInterface`.
  *  - `callpath_python_*`: the Python client (apps/python) over the ZeroMQ endpoint, a process of its own.
+ *  - `callpath_python_door_*`: the same client and endpoint in front of a `RobotInterface` that answers every call
+ *    at once: the ZeroMQ door's own part (sockets, the endpoint, the client), without middleware or robot.
  *  - `callpath_mavsdk_*`: MAVSDK (the `mavsdk` package) arming a pymavlink-played vehicle on loopback, each arm one
  *    COMMAND_LONG answered by a COMMAND_ACK (src/test/python/bench/mavsdk_peer.py); absent (null) when it cannot be
  *    installed or run here, the reason in the progress lines.
@@ -81,6 +83,9 @@ object CallPathBench extends Benchmark {
         report("RobotInterface, other cluster node", cluster)
         val python = pythonCalls(gateway.zeroMq())
         python.fold(why => progress(s"python client not measured: $why"), p => progress(f"python client: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val door = pythonCalls(gateway.zeroMqAnswering())
+        door.fold(why => progress(s"python door alone not measured: $why"),
+          p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val peer = mavsdk()
         peer.fold(why => progress(s"MAVSDK not measured: $why"), p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         progress(s"done, load average ${GatewayBench.loadAverage()}")
@@ -98,6 +103,8 @@ object CallPathBench extends Benchmark {
           "callpath_cluster_p99_us" -> p99(cluster),
           "callpath_python_p50_us" -> python.fold(_ => nan, _._1),
           "callpath_python_p99_us" -> python.fold(_ => nan, _._2),
+          "callpath_python_door_p50_us" -> door.fold(_ => nan, _._1),
+          "callpath_python_door_p99_us" -> door.fold(_ => nan, _._2),
           "callpath_mavsdk_p50_us" -> peer.fold(_ => nan, _._1),
           "callpath_mavsdk_p99_us" -> peer.fold(_ => nan, _._2),
           "callpath_gateway_over_raw_udp_p50" -> p50(alone) / p50(raw),
@@ -189,6 +196,8 @@ object CallPathBench extends Benchmark {
         |akka.cluster.seed-nodes = []
         |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
         |akka.loglevel = "WARNING"
+        |# A socket-loop thread for each of the bench's two endpoints.
+        |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 2
         |""".stripMargin)
     private val config = MiddlewareCluster.config(MiddlewareCluster.GatewayRole, overrides)
     val system: ActorSystem[Gateway.Command] =
@@ -230,17 +239,53 @@ object CallPathBench extends Benchmark {
       GatewayBench.paced(GatewayBench.RttSamples)(() => once())
     }
 
-    /** Starts the ZeroMQ endpoint on free loopback ports; its addresses. */
-    def zeroMq(): ZeroMqEndpoint.Addresses = {
-      val settings = ZeroMqSettings(system).copy(bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*")
-      val endpoint = system.systemActorOf(ZeroMqEndpoint(middleware, settings), "zeromq")
+    private val zeroMqSettings = ZeroMqSettings(system).copy(bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*")
+
+    private def addresses(endpoint: ActorRef[ZeroMqEndpoint.Command]): ZeroMqEndpoint.Addresses =
       Await.result(endpoint.ask[ZeroMqEndpoint.Addresses](ZeroMqEndpoint.GetAddresses(_)), 30.seconds)
-    }
+
+    /** Starts the ZeroMQ endpoint on free loopback ports; its addresses. */
+    def zeroMq(): ZeroMqEndpoint.Addresses = addresses(system.systemActorOf(ZeroMqEndpoint(middleware, zeroMqSettings), "zeromq"))
+
+    /** An endpoint in front of an interface whose every call is answered at once: the ZeroMQ door's own part. */
+    def zeroMqAnswering(): ZeroMqEndpoint.Addresses =
+      addresses(system.systemActorOf(ZeroMqEndpoint.withInterface(new AnsweringInterface, zeroMqSettings), "zeromq-answering"))
 
     def stop(): Unit = {
       system.terminate()
       Await.result(system.whenTerminated, 60.seconds)
     }
+  }
+
+  /** A `RobotInterface` without robots: every call answers `UInt(0)` at once, streams stay silent. */
+  private final class AnsweringInterface extends RobotInterface {
+    import scala.concurrent.Future
+    import akka.{Done, NotUsed}
+    import akka.stream.scaladsl.Source
+    import naogateway.wire.{ActuatorGroup, Posture, RpcValue}
+    import naogateway.wire.gamecontroller.GameControlData
+    private val done = Future.successful(Done)
+    def appName: String = "answering"
+    def robots(): Future[Vector[RobotSnapshot]] = Future.successful(Vector.empty)
+    def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] = done
+    def release(robotId: Int, groups: ActuatorGroup*): Unit = ()
+    def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] = done
+    def stop(robotId: Int): Future[Done] = done
+    def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done
+    def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] = done
+    def posture(robotId: Int, target: Posture.Target): Future[Posture] = Future.successful(target)
+    def say(robotId: Int, text: String): Future[Done] = done
+    def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
+      Future.successful(Some(RpcValue.UInt(0)))
+    def send(robotId: Int, operation: robotmiddleware.Operation): Future[Done] = done
+    def status(robotId: Int): Source[RobotSnapshot, NotUsed] = Source.never
+    def allStatus: Source[RobotSnapshot, NotUsed] = Source.never
+    def vision(robotId: Int, grid: Boolean): Source[VisionFrame, NotUsed] = Source.never
+    def linkStats(robotId: Int): Source[LinkStats, NotUsed] = Source.never
+    def gameState: Source[GameControlData, NotUsed] = Source.never
+    def robotEvents: Source[RobotEvent, NotUsed] = Source.never
+    def appEvents: Source[robotmiddleware.AppEvent, NotUsed] = Source.never
+    def close(): Unit = ()
   }
 
   /**
