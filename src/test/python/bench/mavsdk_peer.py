@@ -1,8 +1,10 @@
 """The bench's peer (bench.CallPathBench): MAVSDK's command round trip on loopback, in this process.
 
 A pymavlink-played vehicle (a process of its own: a heartbeat as an autopilot, every COMMAND_LONG answered at once
-with a COMMAND_ACK "accepted") and MAVSDK's ground side (the `mavsdk` package) arming it N times; each arm is one command
-sent and its acknowledgement awaited. Prints one JSON line: {"p50_us": ..., "p99_us": ..., "n": ..., "version": ...}
+with a COMMAND_ACK "accepted") and MAVSDK's ground side arming it N times; each arm is one command sent and its
+acknowledgement awaited. The ground side is the `mavsdk` package (since version 4 the native library, in this process),
+or with --grpc the gRPC one, `mavsdk-grpc` (MAVSDK-Python as `mavsdk` was up to version 3: this process asks the
+bundled mavsdk_server, a process of its own, over gRPC). Prints one JSON line: {"p50_us": ..., "p99_us": ..., "n": ..., "version": ...}
 or {"error": "..."} when MAVSDK cannot be used here.
 """
 
@@ -71,11 +73,68 @@ def percentile(samples: List[int], p: float) -> float:
     return float(ordered[max(0, int(-(-p * len(ordered) // 1)) - 1)])
 
 
+def free_tcp_port() -> int:
+    """A TCP port on loopback that nothing holds now (mavsdk_server's gRPC port)."""
+    s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def grpc_peer(args: argparse.Namespace) -> int:
+    """The same arms through mavsdk-grpc: Python asks mavsdk_server over gRPC, mavsdk_server asks the vehicle."""
+    try:
+        import asyncio
+
+        import mavsdk_grpc
+    except Exception as e:  # noqa: BLE001 - any import failure means: not measured
+        print(json.dumps({"error": "mavsdk-grpc cannot be imported: %s: %s" % (type(e).__name__, e)}))
+        return 0
+    port = free_udp_port()
+    vehicle = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--vehicle", str(port)], stdin=subprocess.PIPE)
+
+    async def arms() -> dict:
+        drone = mavsdk_grpc.System(port=free_tcp_port())
+        await asyncio.wait_for(drone.connect(system_address="udpin://127.0.0.1:%d" % port), 30)
+
+        async def connected() -> None:
+            async for state in drone.core.connection_state():
+                if state.is_connected:
+                    return
+
+        await asyncio.wait_for(connected(), 30)
+        samples: List[int] = []
+        for i in range(args.warmup + args.samples):
+            start = time.perf_counter_ns()
+            await drone.action.arm()
+            took = time.perf_counter_ns() - start
+            if i >= args.warmup:
+                samples.append(took)
+            rest = start + int(args.gap_ms * 1e6) - time.perf_counter_ns()
+            if rest > 0:
+                await asyncio.sleep(rest / 1e9)
+        return {"p50_us": percentile(samples, 0.50) / 1e3, "p99_us": percentile(samples, 0.99) / 1e3, "n": len(samples)}
+
+    try:
+        print(json.dumps(asyncio.run(arms())))
+    except Exception as e:  # noqa: BLE001 - reported, never a made-up figure
+        print(json.dumps({"error": "mavsdk-grpc command failed: %s: %s" % (type(e).__name__, e)}))
+    finally:
+        vehicle.stdin.close()
+        try:
+            vehicle.wait(5)
+        except subprocess.TimeoutExpired:
+            vehicle.kill()
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--warmup", type=int, default=200)
     parser.add_argument("--samples", type=int, default=1000)
     parser.add_argument("--gap-ms", type=float, default=1.0)
+    parser.add_argument("--grpc", action="store_true", help="the gRPC ground side (mavsdk-grpc, mavsdk_server)")
     parser.add_argument("--vehicle", type=int, help="play the vehicle, sending to this port, until stdin closes")
     args = parser.parse_args()
     if args.vehicle is not None:
@@ -84,6 +143,8 @@ def main() -> int:
         sys.stdin.read()
         played.stop()
         return 0
+    if args.grpc:
+        return grpc_peer(args)
     try:
         import mavsdk
         from mavsdk import ComponentType, Configuration, Mavsdk

@@ -44,8 +44,10 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
  *  - `callpath_mavsdk_*`: MAVSDK (the `mavsdk` package) arming a pymavlink-played vehicle on loopback, each arm one
  *    COMMAND_LONG answered by a COMMAND_ACK (src/test/python/bench/mavsdk_peer.py); absent (null) when it cannot be
  *    installed or run here, the reason in the progress lines.
+ *  - `callpath_mavsdk_grpc_*`: the same with MAVSDK's gRPC ground side (`mavsdk-grpc`, which the `mavsdk` package
+ *    was up to version 3: Python asks the bundled mavsdk_server over gRPC), in a venv of its own.
  *  - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
- *    `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`.
+ *    `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
  *
  * The gateway's actor system is a cluster node (the gateway role) for the whole group, so every door meets the same
  * gateway. The Python door and the peer need python3 and pip; both run in one venv under apps/target.
@@ -63,6 +65,13 @@ object CallPathBench extends Benchmark {
 
   /** The Python packages of the client's specs, plus the peer's (pinned). */
   private val PeerRequirements = Seq("mavsdk==4.1.0", "pymavlink==2.4.50")
+
+  /**
+   * The gRPC peer's own venv: mavsdk-grpc's generated code needs a grpcio newer than the one the client's protoc
+   * (grpcio-tools) pins, so the two cannot share one. Pinned as pip resolved them.
+   */
+  private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3", "protobuf==7.36.2",
+    "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
 
   def run(): ListMap[String, Double] = GatewayBench.quietLogging {
     progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
@@ -88,6 +97,9 @@ object CallPathBench extends Benchmark {
           p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val peer = mavsdk()
         peer.fold(why => progress(s"MAVSDK not measured: $why"), p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val grpcPeer = mavsdkGrpc()
+        grpcPeer.fold(why => progress(s"MAVSDK over gRPC not measured: $why"),
+          p => progress(f"MAVSDK command over gRPC (mavsdk_server): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         progress(s"done, load average ${GatewayBench.loadAverage()}")
         def p50(s: Array[Long]) = GatewayBench.percentile(s, 0.50) / 1e3
         def p99(s: Array[Long]) = GatewayBench.percentile(s, 0.99) / 1e3
@@ -107,10 +119,14 @@ object CallPathBench extends Benchmark {
           "callpath_python_door_p99_us" -> door.fold(_ => nan, _._2),
           "callpath_mavsdk_p50_us" -> peer.fold(_ => nan, _._1),
           "callpath_mavsdk_p99_us" -> peer.fold(_ => nan, _._2),
+          "callpath_mavsdk_grpc_p50_us" -> grpcPeer.fold(_ => nan, _._1),
+          "callpath_mavsdk_grpc_p99_us" -> grpcPeer.fold(_ => nan, _._2),
           "callpath_gateway_over_raw_udp_p50" -> p50(alone) / p50(raw),
           "callpath_interface_over_gateway_p50" -> p50(interface) / p50(alone),
           "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
-          "callpath_python_over_mavsdk_p50" -> (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan)
+          "callpath_python_over_mavsdk_p50" -> (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
+          "callpath_python_over_mavsdk_grpc_p50" ->
+            (for { py <- python.toOption; mav <- grpcPeer.toOption } yield py._1 / mav._1).getOrElse(nan)
         )
       } finally robot.close()
     } finally gateway.stop()
@@ -154,10 +170,15 @@ object CallPathBench extends Benchmark {
   /** The venv of the Python door and the peer: the client's requirements plus the peer's, or why there is none. */
   private def venv(): Either[String, File] = {
     val client = new String(Files.readAllBytes(PythonEnv.requirements.toPath), StandardCharsets.UTF_8)
-    val wanted = new File(PythonEnv.root, "target/bench/python-requirements.txt")
+    venvOf("python-bench-venv", client + "\n# bench.CallPathBench's peer\n" + PeerRequirements.mkString("\n") + "\n")
+  }
+
+  /** A venv under apps/target made from `requirements` (reused while they stay the same), or why there is none. */
+  private def venvOf(name: String, requirements: String): Either[String, File] = {
+    val wanted = new File(PythonEnv.root, s"target/bench/$name-requirements.txt")
     wanted.getParentFile.mkdirs()
-    Files.write(wanted.toPath, (client + "\n# bench.CallPathBench's peer\n" + PeerRequirements.mkString("\n") + "\n").getBytes(StandardCharsets.UTF_8))
-    Try(PythonEnv.environment(new File(PythonEnv.root, "apps/target/python-bench-venv"), wanted)).fold(e => Left(s"$e"), identity)
+    Files.write(wanted.toPath, requirements.getBytes(StandardCharsets.UTF_8))
+    Try(PythonEnv.environment(new File(PythonEnv.root, s"apps/target/$name"), wanted)).fold(e => Left(s"$e"), identity)
   }
 
   /** Runs a script of src/test/python/bench; its one JSON line as (p50, p99) in microseconds, or why not. */
@@ -182,6 +203,10 @@ object CallPathBench extends Benchmark {
   private def pythonCalls(endpoint: ZeroMqEndpoint.Addresses): Either[String, (Double, Double)] =
     venv().flatMap(python => script(python, "zeromq_calls.py", Seq("--endpoint", endpoint.requests, "--publish", endpoint.publish,
       "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)))
+
+  private def mavsdkGrpc(): Either[String, (Double, Double)] =
+    venvOf("python-peer-grpc-venv", GrpcPeerRequirements.mkString("", "\n", "\n"))
+      .flatMap(python => script(python, "mavsdk_peer.py", Seq("--grpc", "--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
 
   private def mavsdk(): Either[String, (Double, Double)] =
     venv().flatMap(python => script(python, "mavsdk_peer.py", Seq("--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
