@@ -70,8 +70,8 @@ object CallPathBench extends Benchmark {
    * The gRPC peer's own venv: mavsdk-grpc's generated code needs a grpcio newer than the one the client's protoc
    * (grpcio-tools) pins, so the two cannot share one. Pinned as pip resolved them.
    */
-  private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3", "protobuf==7.36.2",
-    "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
+  private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3",
+    "protobuf==7.36.2", "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
 
   def run(): ListMap[String, Double] = GatewayBench.quietLogging {
     progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
@@ -91,12 +91,14 @@ object CallPathBench extends Benchmark {
         val cluster = otherNode(gateway.clusterPort)(appCalls)
         report("RobotInterface, other cluster node", cluster)
         val python = pythonCalls(gateway.zeroMq())
-        python.fold(why => progress(s"python client not measured: $why"), p => progress(f"python client: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        python.fold(why => progress(s"python client not measured: $why"),
+          p => progress(f"python client: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val door = pythonCalls(gateway.zeroMqAnswering())
         door.fold(why => progress(s"python door alone not measured: $why"),
           p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val peer = mavsdk()
-        peer.fold(why => progress(s"MAVSDK not measured: $why"), p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        peer.fold(why => progress(s"MAVSDK not measured: $why"),
+          p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val grpcPeer = mavsdkGrpc()
         grpcPeer.fold(why => progress(s"MAVSDK over gRPC not measured: $why"),
           p => progress(f"MAVSDK command over gRPC (mavsdk_server): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
@@ -124,7 +126,8 @@ object CallPathBench extends Benchmark {
           "callpath_gateway_over_raw_udp_p50" -> p50(alone) / p50(raw),
           "callpath_interface_over_gateway_p50" -> p50(interface) / p50(alone),
           "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
-          "callpath_python_over_mavsdk_p50" -> (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
+          "callpath_python_over_mavsdk_p50" ->
+            (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
           "callpath_python_over_mavsdk_grpc_p50" ->
             (for { py <- python.toOption; mav <- grpcPeer.toOption } yield py._1 / mav._1).getOrElse(nan)
         )
@@ -133,7 +136,8 @@ object CallPathBench extends Benchmark {
   }
 
   private def report(what: String, samples: Array[Long]): Unit =
-    progress(f"$what: p50 ${GatewayBench.percentile(samples, 0.50) / 1e3}%.0f us, p99 ${GatewayBench.percentile(samples, 0.99) / 1e3}%.0f us, " +
+    progress(f"$what: p50 ${GatewayBench.percentile(samples, 0.50) / 1e3}%.0f us, " +
+      f"p99 ${GatewayBench.percentile(samples, 0.99) / 1e3}%.0f us, " +
       f"max ${samples.max / 1e3}%.0f us over ${samples.length}")
 
   /** `system.ping` through an app's `RobotInterface`, paced. */
@@ -158,7 +162,8 @@ object CallPathBench extends Benchmark {
     try {
       Await.result(MiddlewareCluster.up(node), 60.seconds)
       implicit val ec: scala.concurrent.ExecutionContext = node.executionContext
-      val app = Await.result(RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, "bench-remote")), 60.seconds)
+      val connecting = RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, "bench-remote"))
+      val app = Await.result(connecting, 60.seconds)
       try body(app)
       finally app.close()
     } finally {
@@ -187,7 +192,8 @@ object CallPathBench extends Benchmark {
     val env = Map("NAOGATEWAY_PY_GEN" -> new File(PythonEnv.root, "apps/target/python-gen").getPath,
       "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath, "PYTHONDONTWRITEBYTECODE" -> "1")
     // stderr goes to the log too: only the last JSON line is read.
-    Try(PythonEnv.run(Seq(python.getPath, "-u", new File(PythonEnv.root, s"src/test/python/bench/$name").getPath) ++ args,
+    val path = new File(PythonEnv.root, s"src/test/python/bench/$name").getPath
+    Try(PythonEnv.run(Seq(python.getPath, "-u", path) ++ args,
       10.minutes, log, env)) match {
       case Failure(e) => Left(s"$name did not finish: $e")
       case Success((code, output)) =>
@@ -201,15 +207,18 @@ object CallPathBench extends Benchmark {
   }
 
   private def pythonCalls(endpoint: ZeroMqEndpoint.Addresses): Either[String, (Double, Double)] =
-    venv().flatMap(python => script(python, "zeromq_calls.py", Seq("--endpoint", endpoint.requests, "--publish", endpoint.publish,
+    venv().flatMap(python => script(python, "zeromq_calls.py", Seq("--endpoint", endpoint.requests,
+      "--publish", endpoint.publish,
       "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)))
 
   private def mavsdkGrpc(): Either[String, (Double, Double)] =
     venvOf("python-peer-grpc-venv", GrpcPeerRequirements.mkString("", "\n", "\n"))
-      .flatMap(python => script(python, "mavsdk_peer.py", Seq("--grpc", "--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
+      .flatMap(python => script(python, "mavsdk_peer.py",
+        Seq("--grpc", "--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
 
   private def mavsdk(): Either[String, (Double, Double)] =
-    venv().flatMap(python => script(python, "mavsdk_peer.py", Seq("--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
+    venv().flatMap(python =>
+      script(python, "mavsdk_peer.py", Seq("--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
 
   /** The gateway, its middleware and (on request) its ZeroMQ endpoint, in one actor system that is a cluster node. */
   private final class GatewayNode {
@@ -241,7 +250,8 @@ object CallPathBench extends Benchmark {
 
     def awaitOnline(robotId: Int): Unit = {
       val deadline = 30.seconds.fromNow
-      def online = robot(robotId).exists(r => Await.result(r.ask[RobotSnapshot](RobotActor.GetSnapshot(_)), 30.seconds).online)
+      def online =
+        robot(robotId).exists(r => Await.result(r.ask[RobotSnapshot](RobotActor.GetSnapshot(_)), 30.seconds).online)
       while (!online) {
         if (deadline.isOverdue()) throw new IllegalStateException(s"robot $robotId did not come online")
         Thread.sleep(50)
@@ -270,11 +280,13 @@ object CallPathBench extends Benchmark {
       Await.result(endpoint.ask[ZeroMqEndpoint.Addresses](ZeroMqEndpoint.GetAddresses(_)), 30.seconds)
 
     /** Starts the ZeroMQ endpoint on free loopback ports; its addresses. */
-    def zeroMq(): ZeroMqEndpoint.Addresses = addresses(system.systemActorOf(ZeroMqEndpoint(middleware, zeroMqSettings), "zeromq"))
+    def zeroMq(): ZeroMqEndpoint.Addresses =
+      addresses(system.systemActorOf(ZeroMqEndpoint(middleware, zeroMqSettings), "zeromq"))
 
     /** An endpoint in front of an interface whose every call is answered at once: the ZeroMQ door's own part. */
     def zeroMqAnswering(): ZeroMqEndpoint.Addresses =
-      addresses(system.systemActorOf(ZeroMqEndpoint.withInterface(new AnsweringInterface, zeroMqSettings), "zeromq-answering"))
+      addresses(
+        system.systemActorOf(ZeroMqEndpoint.withInterface(new AnsweringInterface, zeroMqSettings), "zeromq-answering"))
 
     def stop(): Unit = {
       system.terminate()
@@ -318,9 +330,11 @@ object CallPathBench extends Benchmark {
    * frame at once with a reply of the same call id, another sends a keep-alive every 200 ms. No simulator.
    */
   private final class PlainRobot(gateway: InetSocketAddress) {
-    private val socket = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
+    private val socket = DatagramChannel.open()
+      .bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
     private val watchdog = GatewayBench.closeAfter(15.minutes, socket)
-    private val keepAlive = MessageContents.encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("PlainRobot")))))
+    private val keepAlive = MessageContents
+      .encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("PlainRobot")))))
       .fold(e => throw new IllegalStateException(e.describe), identity)
     private val beats = new Thread(() => {
       try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gateway); Thread.sleep(200) }
@@ -336,7 +350,8 @@ object CallPathBench extends Benchmark {
           val bytes = new Array[Byte](in.remaining)
           in.get(bytes)
           MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
-            val reply = MessageContents(1, rpcResponse = Some(Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)))
+            val answer = Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)
+            val reply = MessageContents(1, rpcResponse = Some(answer))
             MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
           }
         }

@@ -27,7 +27,8 @@ private[robotmiddleware] object RobotGuard {
    * Sends an app's operation under the same checks as `Execute` and in the same order (one path to the robot's command
    * owner, sent once): `replyTo` learns whether it was accepted; the robot's answer is the guard's alone.
    */
-  final case class Send(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.SendResult]) extends Command
+  final case class Send(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.SendResult])
+      extends Command
   /** Asks for the leases of a set of actuator groups at the app's priority: all of them or none. */
   final case class Acquire(app: AppInfo, groups: Set[ActuatorGroup], replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
   /** Gives a lease back. */
@@ -401,21 +402,22 @@ private[robotmiddleware] object RobotGuard {
     private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation, result: Either[RobotFailure, Option[RpcValue]])
         : Unit = replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
 
-    // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back here,
-    // so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
+    // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
+    // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
     private def call(c: RobotActor.Connected, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
         once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       val idempotent = if (once) Some(false) else None
-      context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout), idempotent)) {
+      context.ask(c.response, (ref: ActorRef[CallResult]) =>
+        ResponseActor.Call(rpc, ref, priority, Some(timeout), idempotent)) {
         case Success(result) =>
           OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
         case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
       }
     }
 
-    private def run(c: RobotActor.Connected, app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
-        once: Boolean): Unit = operation match {
+    private def run(c: RobotActor.Connected, app: AppInfo, operation: Operation,
+        replyTo: ActorRef[RobotMiddleware.OperationResult], once: Boolean): Unit = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.
         // Until then nothing is refreshed: neither this walk, unconfirmed, nor the one it replaces.
@@ -427,13 +429,16 @@ private[robotmiddleware] object RobotGuard {
         walking = None
         call(c, RpcMethod.Stop.call(), operation, replyTo, once, Priority.Safety)
       case Operation.Head(pan, tilt) =>
-        call(c, RpcMethod.Head.call(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat)), operation, replyTo, once)
+        val rpc = RpcMethod.Head.call(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat))
+        call(c, rpc, operation, replyTo, once)
       case Operation.Arms(ls, le, rs, re) =>
-        call(c, RpcMethod.Arms.call(Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat)): _*), operation, replyTo, once)
+        val rpc = RpcMethod.Arms.call(Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat)): _*)
+        call(c, rpc, operation, replyTo, once)
       case Operation.Posture(p) =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcMethod.Posture.call(RpcValue.Text(p.name)), operation, replyTo, once, timeout = settings.postureTimeout)
+        val rpc = RpcMethod.Posture.call(RpcValue.Text(p.name))
+        call(c, rpc, operation, replyTo, once, timeout = settings.postureTimeout)
       case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo, once)
       case r: Operation.RawCall =>
         val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout else settings.callTimeout

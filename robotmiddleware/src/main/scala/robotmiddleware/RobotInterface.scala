@@ -78,7 +78,7 @@ trait RobotInterface {
   final def send(robotId: Int, module: String, method: String, params: RpcValue*): Future[Done] =
     send(robotId, Operation.RawCall(module, method, params.toVector))
 
-  /** Sends one of the typed operations (`Operation.Walk`, `Operation.Head`, …) the same way: accepted, answer dropped. */
+  /** Sends a typed operation (`Operation.Walk`, `Operation.Head`, …) the same way: accepted, its answer dropped. */
   def send(robotId: Int, operation: Operation): Future[Done]
 
   /** The robot's keep-alive snapshots, starting with the latest known. */
@@ -143,8 +143,8 @@ object RobotClient {
    * `f`, failing only with a `RobotFailure`: a timeout as `Timeout` after `waited`, anything else (a throw while
    * starting `f`, a dead system, a message that could not be serialized) as `Overloaded` naming the cause.
    */
-  private[robotmiddleware] def asRobotFailure[R](robotId: Int, operation: String, waited: FiniteDuration)(f: => Future[R])
-      : Future[R] = {
+  private[robotmiddleware] def asRobotFailure[R](robotId: Int, operation: String, waited: FiniteDuration)(
+      f: => Future[R]): Future[R] = {
     val started = try f catch { case scala.util.control.NonFatal(e) => Future.failed(e) }
     started.transform {
       case ok @ scala.util.Success(_)                             => ok
@@ -152,7 +152,8 @@ object RobotClient {
       case scala.util.Failure(_: java.util.concurrent.TimeoutException) =>
         scala.util.Failure(RobotFailure.Timeout(robotId, operation, waited.toMillis))
       case scala.util.Failure(e) =>
-        scala.util.Failure(RobotFailure.Overloaded(robotId, s"$operation could not reach the middleware: ${e.getClass.getSimpleName}: ${e.getMessage}"))
+        val cause = s"${e.getClass.getSimpleName}: ${e.getMessage}"
+        scala.util.Failure(RobotFailure.Overloaded(robotId, s"$operation could not reach the middleware: $cause"))
     }(scala.concurrent.ExecutionContext.parasitic)
   }
 

@@ -71,7 +71,8 @@ object RobotMiddleware {
   final case class WatchEvents(subscriber: ActorRef[RobotEvent]) extends Command
 
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
-  private final case class RobotsListed(replyTo: ActorRef[RobotList], robots: Option[Vector[RobotSnapshot]]) extends Command
+  private final case class RobotsListed(replyTo: ActorRef[RobotList], robots: Option[Vector[RobotSnapshot]])
+      extends Command
   private final case class StatusKnown(subscriber: ActorRef[RobotSnapshot], robots: Vector[RobotSnapshot]) extends Command
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
@@ -86,7 +87,7 @@ object RobotMiddleware {
   /** The one answer every `Execute` gets. */
   final case class OperationResult(robotId: Int, operation: String, result: Either[RobotFailure, Option[RpcValue]])
 
-  /** The one answer every `Send` gets: accepted (`Right`) once the robot's ordered sender has it, or why it was refused. */
+  /** The one answer every `Send` gets: accepted (`Right`) once the robot's command owner has it, or the refusal. */
   final case class SendResult(robotId: Int, operation: String, result: Either[RobotFailure, Unit])
 
   /** The answer to `ListRobots`: every known robot's latest snapshot (a named type, so nodes bind no library class). */

@@ -166,7 +166,8 @@ object EndpointProtocol {
               case other                        => Left(s"${Malformed}gateway.send cannot send $other")
             }
           case _ =>
-            Left(s"${Malformed}gateway.send takes the robot call's module and method (texts, not gateway) and its parameters, " +
+            Left(s"${Malformed}gateway.send takes the robot call's module and method (texts, not gateway) " +
+              "and its parameters, " +
               s"got ${describe(call.params)}")
         }
       case (GatewayModule, _)         => Left(RpcReply.unknownMethod(call.module, call.method))

@@ -286,7 +286,8 @@ object ZeroMqEndpoint {
      * Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it needs
      * one. When nothing waits and no lease is needed it starts at once, on this actor's thread.
      */
-    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(operate: () => Future[Answer]): Future[Answer] = {
+    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(operate: () => Future[Answer])
+        : Future[Answer] = {
       val handedOn = scala.concurrent.Promise[Unit]()
       def start(ready: scala.util.Try[Any]): Future[Answer] = {
         val answer = ready match {
@@ -424,7 +425,10 @@ object ZeroMqEndpoint {
 
     private def stopEverything(): Unit = {
       // Requests still being worked on get an answer while the socket is still there to carry it.
-      pending.values.foreach(p => if (p.take()) reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down")))
+      pending.values.foreach { p =>
+        if (p.take())
+          reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down"))
+      }
       pending = Map.empty
       streams.shutdown()
       visionStreams.values.foreach(_.shutdown())

@@ -179,7 +179,8 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
         endpoint ! ZeroMqEndpoint.GetAddresses(probe.ref)
         val addresses = probe.receiveMessage(10.seconds)
         // A referee above the endpoint's priority holds the head: the client's send of a head turn is refused.
-        val referee = scala.concurrent.Await.result(robotmiddleware.RobotClient.connect(system, middleware, "referee", 99), 10.seconds)
+        val connecting = robotmiddleware.RobotClient.connect(system, middleware, "referee", 99)
+        val referee = scala.concurrent.Await.result(connecting, 10.seconds)
         scala.concurrent.Await.result(referee.acquire(33, naogateway.wire.ActuatorGroup.Head), 10.seconds)
         val code =
           s"""from naogateway_client import GatewayClient, GatewayError
@@ -195,12 +196,14 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
              |c.close()
              |""".stripMargin
         val gen = new File(PythonEnv.root, "apps/target/python-gen")
-        val (exit, output) = PythonEnv.run(Seq(python.getPath, "-u", "-c", code), 90.seconds, new File(PythonEnv.root, "apps/target/doors.log"),
+        val log = new File(PythonEnv.root, "apps/target/doors.log")
+        val (exit, output) = PythonEnv.run(Seq(python.getPath, "-u", "-c", code), 90.seconds, log,
           Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath,
             "PYTHONDONTWRITEBYTECODE" -> "1"))
         withClue(output) {
           exit shouldBe 0
-          output.linesIterator.toVector shouldBe Vector("send: None", "call: True", "send: None", "dropped: None", "refused: lease")
+          output.linesIterator.toVector shouldBe
+            Vector("send: None", "call: True", "send: None", "dropped: None", "refused: lease")
         }
         val heard = createTestProbe[Vector[naogateway.sim.ReceivedCall]]()
         eventually(timeout(30.seconds)) {

@@ -267,7 +267,8 @@ class ZeroMqEndpointSpec
       try {
         // Three requests on one socket without waiting: the interface sees them in the order they came.
         val bodies = Vector(
-          request(7, "gateway", "send", Vector(RpcValue.Text("speech"), RpcValue.Text("say"), RpcValue.Text("first")), callId = 1),
+          request(7, "gateway", "send", Vector(RpcValue.Text("speech"), RpcValue.Text("say"), RpcValue.Text("first")),
+            callId = 1),
           request(7, "speech", "say", Vector(RpcValue.Text("second")), callId = 2),
           request(7, "gateway", "send", Vector(RpcValue.Text("motion"), RpcValue.Text("head"), RpcValue.Number(0.5f),
             RpcValue.Number(0f)), callId = 3))
@@ -279,11 +280,14 @@ class ZeroMqEndpointSpec
         "acquire 7 head", "send motion.head 7")
       error(askOne(9, "gateway", "send", RpcValue.Text("motion"), RpcValue.Text("stop"))) shouldBe
         "lease: lease 'walk' of robot 9 is not held by this app (held by referee)"
-      error(askOne(8, "gateway", "send", RpcValue.Text("system"), RpcValue.Text("battery"))) shouldBe "offline: robot 8 is offline"
-      error(askOne(7, "gateway", "send")) should startWith("malformed request: gateway.send takes the robot call's module")
+      error(askOne(8, "gateway", "send", RpcValue.Text("system"), RpcValue.Text("battery"))) shouldBe
+        "offline: robot 8 is offline"
+      error(askOne(7, "gateway", "send")) should startWith(
+        "malformed request: gateway.send takes the robot call's module")
       error(askOne(7, "gateway", "send", RpcValue.Text("gateway"), RpcValue.Text("robots"))) should startWith(
         "malformed request: gateway.send takes")
-      error(askOne(7, "gateway", "send", RpcValue.Text("motion"), RpcValue.Text("walk"), RpcValue.Text("fast"))) should startWith(
+      val fast = askOne(7, "gateway", "send", RpcValue.Text("motion"), RpcValue.Text("walk"), RpcValue.Text("fast"))
+      error(fast) should startWith(
         "malformed request: motion.walk takes 3 number(s)")
     }
 

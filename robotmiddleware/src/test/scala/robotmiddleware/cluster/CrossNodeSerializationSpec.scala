@@ -96,7 +96,8 @@ class CrossNodeSerializationSpec
     "refuse what it cannot carry with an error, not a wrong message" in {
       // Replies are named types: no library class (a bare Vector) is bound, so one cannot cross nodes at all.
       val bindings = system.settings.config.getConfig("akka.actor.serialization-bindings").root
-      bindings.keySet.asScala.filter(c => c.startsWith("scala.") && bindings.get(c).unwrapped == "robot-middleware") shouldBe empty
+      val ours = bindings.keySet.asScala.filter(c => bindings.get(c).unwrapped == "robot-middleware")
+      ours.filter(_.startsWith("scala.")) shouldBe empty
       serialization.serialize(Vector(snapshot)).isFailure shouldBe true
       val serializer = serialization.findSerializerFor(AppEvent.SafetyCleared(1)).asInstanceOf[CrossNodeSerializer]
       a[NotSerializableException] should be thrownBy serializer.fromBinary(Array.emptyByteArray, "NoSuchMessage")
@@ -120,7 +121,8 @@ object CrossNodeSerializationSpec {
 
   /** Every manifest of CrossNodeSerializer: the samples must use all of them. */
   val manifests: Set[String] = Set(
-    "RegisterApp", "Execute", "Send", "SendResult", "Acquire", "Release", "ListRobots", "WatchStatus", "WatchVision", "WatchLinkStats",
+    "RegisterApp", "Execute", "Send", "SendResult", "Acquire", "Release", "ListRobots", "WatchStatus", "WatchVision",
+    "WatchLinkStats",
     "WatchGame", "WatchEvents", "AppRegistered", "OperationResult", "LeaseResult", "RobotSnapshots", "Operation",
     "RobotFailure", "SubscribeAppEvents", "Close", "LeasePreempted", "SafetyStop", "SafetyCleared", "RobotSnapshot",
     "LinkStats", "VisionRegions", "VisionGrid", "RobotOnline", "RobotOffline", "LinkQualityChanged",
@@ -223,7 +225,8 @@ object CrossNodeSerializationSpec {
       RobotMiddleware.RobotList(Vector(snapshot, snapshot.copy(robotId = 8, address = ipv6))),
       RobotMiddleware.RobotList(Vector.empty),
       RobotMiddleware.SendResult(7, "motion.head", Right(())),
-      RobotMiddleware.SendResult(7, "speech.say", Left(RobotFailure.LeaseNotHeld(7, ActuatorGroup.Speech, Some("referee")))),
+      RobotMiddleware.SendResult(7, "speech.say",
+        Left(RobotFailure.LeaseNotHeld(7, ActuatorGroup.Speech, Some("referee")))),
       SessionMessage.SubscribeAppEvents(ref),
       SessionMessage.Close,
       AppEvent.LeasePreempted(7, ActuatorGroup.Walk, "referee"),

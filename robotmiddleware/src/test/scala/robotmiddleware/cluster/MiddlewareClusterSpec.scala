@@ -220,11 +220,12 @@ class MiddlewareClusterSpec
       fallback.acquire(7, ActuatorGroup.Walk).futureValue shouldBe Done
     }
 
-    "reach a robot through both doors: a send refused without its lease, then in order before a call, its answer dropped" in {
+    "reach a robot through both doors: a send refused without its lease, then before a call, its answer dropped" in {
       val nodeD = appNode(ConfigFactory.empty())
       MiddlewareCluster.up(nodeD.system).futureValue shouldBe Done
       val app = connect(nodeD, "two-doors", priority = 5)
-      app.send(7, Operation.Head(0.3, 0.0)).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(7, ActuatorGroup.Head, None)
+      app.send(7, Operation.Head(0.3, 0.0)).failed.futureValue shouldBe
+        RobotFailure.LeaseNotHeld(7, ActuatorGroup.Head, None)
       app.acquire(7, ActuatorGroup.Head).futureValue shouldBe Done
       val sent = app.send(7, Operation.Head(0.3, 0.0))
       val called = app.call(7, "system", "battery")
