@@ -127,17 +127,24 @@ object RobotClient {
     attempt()
   }
 
-  /** Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. */
+  /**
+   * Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. Fails only
+   * with a `RobotFailure` (robot id 0, operation "connect"): `Timeout` when the middleware does not answer within
+   * `timeout`; then the session made for it is closed again.
+   */
   def connect(system: ActorSystem[_], middleware: ActorRef[RobotMiddleware.Command], appName: String, priority: Int = 0,
-      timeout: FiniteDuration = 10.seconds): Future[RobotInterface] = {
-    implicit val s: ActorSystem[_] = system
-    implicit val t: Timeout = Timeout(timeout)
-    implicit val ec: ExecutionContext = system.executionContext
-    val session = system.systemActorOf(AppSessionActor(), s"app-${java.net.URLEncoder.encode(appName, "UTF-8")}-${System.nanoTime()}")
-    middleware
-      .ask[RobotMiddleware.AppRegistered](RobotMiddleware.RegisterApp(appName, priority, session, _))
-      .map(_ => new ClientImpl(system, middleware, session, appName, timeout))
-  }
+      timeout: FiniteDuration = 10.seconds): Future[RobotInterface] =
+    asRobotFailure(0, "connect", timeout) {
+      implicit val s: ActorSystem[_] = system
+      implicit val t: Timeout = Timeout(timeout)
+      val name = s"app-${java.net.URLEncoder.encode(appName, "UTF-8")}-${System.nanoTime()}"
+      val session = system.systemActorOf(AppSessionActor(), name)
+      val registered =
+        middleware.ask[RobotMiddleware.AppRegistered](RobotMiddleware.RegisterApp(appName, priority, session, _))
+      registered.failed.foreach(_ => session ! SessionMessage.Close)(ExecutionContext.parasitic)
+      registered.map(_ => new ClientImpl(system, middleware, session, appName, timeout): RobotInterface)(
+        ExecutionContext.parasitic)
+    }
 
   /**
    * `f`, failing only with a `RobotFailure`: a timeout as `Timeout` after `waited`, anything else (a throw while

@@ -84,6 +84,14 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       attempts.foreach(_.failed.futureValue(timeout(Span(8, Seconds))) shouldBe a[RobotFailure])
     }
 
+    "fail a connect the middleware never answers with RobotFailure.Timeout, and close the session made for it" in {
+      val middleware = createTestProbe[RobotMiddleware.Command]()
+      val connecting = RobotClient.connect(system, middleware.ref, "unanswered", timeout = 100.millis)
+      val session = middleware.expectMessageType[RobotMiddleware.RegisterApp].events
+      connecting.failed.futureValue shouldBe RobotFailure.Timeout(0, "connect", 100)
+      createTestProbe[Any]().expectTerminated(session)
+    }
+
     "fail a walk with velocities that are no numbers in the future, without sending it" in {
       val (interface, middleware) = connected()
       val walked = interface.walk(4, Double.NaN, 0.0, Double.PositiveInfinity)
