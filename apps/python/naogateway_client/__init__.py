@@ -167,6 +167,14 @@ class GatewayClient:
             self.last_reply = reply
             return from_mixed(response.returnval) if response.HasField("returnval") else None
 
+    def send(self, robot_id: int, module: str, method: str, *params: Value) -> None:
+        """Sends module.method to robot robot_id without waiting for the robot (the endpoint's gateway.send).
+
+        Returns once the gateway accepted it, in order with this client's calls and sends; the robot's answer is
+        dropped. Raises GatewayError when it is refused (lease, offline, safety, ...) as a call would.
+        """
+        self.call(robot_id, "gateway", "send", module, method, *params)
+
     # The endpoint's own methods.
     def robots(self) -> List[int]:
         """The ids of every robot the gateway knows."""

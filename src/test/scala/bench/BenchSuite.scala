@@ -20,8 +20,8 @@ object BenchSuite {
 
   /** Every benchmark, in the order they run. */
   val benchmarks: Vector[Benchmark] =
-    Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, ForgeryBench, RobotCtlBench, IdleCpuBench, FloodBench, WebBench,
-      FirmwareBench)
+    Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, CallPathBench, ForgeryBench, RobotCtlBench,
+      IdleCpuBench, FloodBench, WebBench, FirmwareBench)
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the gateway's. */
   val onRequest: Vector[Benchmark] = Vector(Soak)

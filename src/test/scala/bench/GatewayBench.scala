@@ -69,8 +69,8 @@ object GatewayBench extends Benchmark {
   private def part(name: String)(figures: => ListMap[String, Double]): ListMap[String, Double] =
     if (parts.isEmpty || parts(name)) figures else ListMap.empty
 
-  private val RttWarmup = 2000
-  private val RttSamples = 3000
+  private[bench] val RttWarmup = 2000
+  private[bench] val RttSamples = 3000
   private val RttGapNanos = 1000000L
 
   private val IngestRobots = 256
@@ -234,7 +234,7 @@ object GatewayBench extends Benchmark {
   }
 
   /** Ping-pong of a 40-byte datagram between two blocking channels on loopback, one echo thread. */
-  private def rawRoundTrips(): Array[Long] = {
+  private[bench] def rawRoundTrips(): Array[Long] = {
     val client = DatagramChannel.open().bind(anyLoopbackPort)
     val server = DatagramChannel.open().bind(anyLoopbackPort)
     val serverAddress = server.getLocalAddress
@@ -275,7 +275,7 @@ object GatewayBench extends Benchmark {
   }
 
   /** `n` results of `op`, each started at least [[RttGapNanos]] after the previous one started. */
-  private def paced(n: Int)(op: () => Long): Array[Long] = {
+  private[bench] def paced(n: Int)(op: () => Long): Array[Long] = {
     val out = new Array[Long](n)
     var i = 0
     while (i < n) {
@@ -289,7 +289,7 @@ object GatewayBench extends Benchmark {
   }
 
   /** Nearest-rank percentile. */
-  private def percentile(samples: Array[Long], p: Double): Double = {
+  private[bench] def percentile(samples: Array[Long], p: Double): Double = {
     val sorted = samples.sorted
     sorted(math.max(0, math.ceil(p * sorted.length).toInt - 1)).toDouble
   }
@@ -763,7 +763,7 @@ object GatewayBench extends Benchmark {
   }
 
   /** Closes the channels after `delay` unless shut down first: a bound on every blocking receive. */
-  private def closeAfter(delay: FiniteDuration, channels: DatagramChannel*) = {
+  private[bench] def closeAfter(delay: FiniteDuration, channels: DatagramChannel*) = {
     val timer = Executors.newSingleThreadScheduledExecutor { (r: Runnable) =>
       val t = new Thread(r, "bench-watchdog")
       t.setDaemon(true)
@@ -773,12 +773,12 @@ object GatewayBench extends Benchmark {
     timer
   }
 
-  private def loadAverage(): String =
+  private[bench] def loadAverage(): String =
     Try(new String(Files.readAllBytes(Paths.get("/proc/loadavg")), StandardCharsets.US_ASCII).split(' ').take(3).mkString(" "))
       .getOrElse("unknown")
 
   /** The test logging captures every event in memory for the whole run; the bench keeps only warnings and errors. */
-  private def quietLogging[T](body: => T): T =
+  private[bench] def quietLogging[T](body: => T): T =
     LoggerFactory.getLogger(org.slf4j.Logger.ROOT_LOGGER_NAME) match {
       case root: ch.qos.logback.classic.Logger =>
         val before = root.getLevel

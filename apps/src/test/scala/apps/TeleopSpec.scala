@@ -39,6 +39,7 @@ class TeleopSpec extends AnyWordSpec with Matchers {
     def posture(robotId: Int, target: Posture.Target): Future[Posture] = { log :+= s"posture ${target.name}"; Future.successful(target) }
     def say(robotId: Int, text: String): Future[Done] = ok(s"say $text")
     def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] = Future.successful(None)
+    def send(robotId: Int, operation: robotmiddleware.Operation): Future[Done] = ok(s"send ${operation.name}")
     def status(robotId: Int): Source[RobotSnapshot, NotUsed] = Source.empty
     def allStatus: Source[RobotSnapshot, NotUsed] = Source.empty
     def vision(robotId: Int, grid: Boolean): Source[VisionFrame, NotUsed] = Source.empty

@@ -23,6 +23,12 @@ private[robotmiddleware] object RobotGuard {
 
   /** Runs an app's operation if the app holds its lease, the robot is online and no safety hold forbids it. */
   final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult]) extends Command
+  /**
+   * Sends an app's operation under the same checks as `Execute` and in the same order (one path to the robot's command
+   * owner, sent once): `replyTo` learns whether it was accepted; the robot's answer is the guard's alone.
+   */
+  final case class Send(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.SendResult])
+      extends Command
   /** Asks for the leases of a set of actuator groups at the app's priority: all of them or none. */
   final case class Acquire(app: AppInfo, groups: Set[ActuatorGroup], replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
   /** Gives a lease back. */
@@ -125,6 +131,9 @@ private[robotmiddleware] object RobotGuard {
         case e: Execute if !online =>
           e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
+        case s: Send if !online =>
+          s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name, Left(RobotFailure.RobotOffline(robotId)))
+          Behaviors.same
         case SnapshotReceived(snapshot) =>
           online = snapshot.online
           Behaviors.same
@@ -143,6 +152,9 @@ private[robotmiddleware] object RobotGuard {
           if (stash.isFull) other match {
             case e: Execute =>
               e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
+                Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
+            case s: Send =>
+              s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
             case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.groups, Left(RobotFailure.Overloaded(robotId, "busy")))
             case _          => ()
@@ -171,14 +183,19 @@ private[robotmiddleware] object RobotGuard {
         online = snapshot.online
         Behaviors.same
       case Execute(app, operation, replyTo) =>
-        val group = operation.group
-        val held = group.forall(g => leases.get(g).exists(_.events == app.events))
-        if (!online) reply(replyTo, operation, Left(RobotFailure.RobotOffline(robotId)))
-        else if (!held)
-          reply(replyTo, operation, Left(RobotFailure.LeaseNotHeld(robotId, group.get, group.flatMap(leases.get).map(_.name))))
-        else if (safety.isDefined && refusedWhenUnsafe(operation))
-          reply(replyTo, operation, Left(RobotFailure.SafetyHold(robotId, safety.get)))
-        else run(c, app, operation, replyTo)
+        refusal(app, operation) match {
+          case Some(refused) => reply(replyTo, operation, Left(refused))
+          case None          => run(c, app, operation, replyTo, once = false)
+        }
+        Behaviors.same
+      case Send(app, operation, replyTo) =>
+        // Accepted means handed to the command owner below, in this order: the app's next call cannot overtake it.
+        refusal(app, operation) match {
+          case Some(refused) => replyTo ! RobotMiddleware.SendResult(robotId, operation.name, Left(refused))
+          case None =>
+            run(c, app, operation, context.system.ignoreRef, once = true)
+            replyTo ! RobotMiddleware.SendResult(robotId, operation.name, Right(()))
+        }
         Behaviors.same
       case Acquire(app, groups, replyTo) =>
         // Checked for every group before any is taken: a set with one group held at equal or higher priority takes
@@ -332,6 +349,16 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
+    /** Why an app's operation may not run now (offline, lease, safety), the same for both doors. */
+    private def refusal(app: AppInfo, operation: Operation): Option[RobotFailure] = {
+      val group = operation.group
+      val held = group.forall(g => leases.get(g).exists(_.events == app.events))
+      if (!online) Some(RobotFailure.RobotOffline(robotId))
+      else if (!held) Some(RobotFailure.LeaseNotHeld(robotId, group.get, group.flatMap(leases.get).map(_.name)))
+      else if (safety.isDefined && refusedWhenUnsafe(operation)) Some(RobotFailure.SafetyHold(robotId, safety.get))
+      else None
+    }
+
     private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
       case _: Operation.Walk | _: Operation.Arms => true
       case Operation.Posture(p)                  => p != Posture.Sit
@@ -375,40 +402,47 @@ private[robotmiddleware] object RobotGuard {
     private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation, result: Either[RobotFailure, Option[RpcValue]])
         : Unit = replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
 
+    // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
+    // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
     private def call(c: RobotActor.Connected, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
-        priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
+        once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
-      context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, priority, Some(timeout))) {
+      val idempotent = if (once) Some(false) else None
+      context.ask(c.response, (ref: ActorRef[CallResult]) =>
+        ResponseActor.Call(rpc, ref, priority, Some(timeout), idempotent)) {
         case Success(result) =>
           OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
         case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
       }
     }
 
-    private def run(c: RobotActor.Connected, app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult])
-        : Unit = operation match {
+    private def run(c: RobotActor.Connected, app: AppInfo, operation: Operation,
+        replyTo: ActorRef[RobotMiddleware.OperationResult], once: Boolean): Unit = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.
         // Until then nothing is refreshed: neither this walk, unconfirmed, nor the one it replaces.
         walking = Some(w -> app)
         timers.cancel(WalkKey)
-        call(c, walkCall(w), operation, replyTo)
+        call(c, walkCall(w), operation, replyTo, once)
       case Operation.Stop() =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcMethod.Stop.call(), operation, replyTo, Priority.Safety)
+        call(c, RpcMethod.Stop.call(), operation, replyTo, once, Priority.Safety)
       case Operation.Head(pan, tilt) =>
-        call(c, RpcMethod.Head.call(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat)), operation, replyTo)
+        val rpc = RpcMethod.Head.call(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat))
+        call(c, rpc, operation, replyTo, once)
       case Operation.Arms(ls, le, rs, re) =>
-        call(c, RpcMethod.Arms.call(Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat)): _*), operation, replyTo)
+        val rpc = RpcMethod.Arms.call(Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat)): _*)
+        call(c, rpc, operation, replyTo, once)
       case Operation.Posture(p) =>
         timers.cancel(WalkKey)
         walking = None
-        call(c, RpcMethod.Posture.call(RpcValue.Text(p.name)), operation, replyTo, timeout = settings.postureTimeout)
-      case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo)
+        val rpc = RpcMethod.Posture.call(RpcValue.Text(p.name))
+        call(c, rpc, operation, replyTo, once, timeout = settings.postureTimeout)
+      case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo, once)
       case r: Operation.RawCall =>
         val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout else settings.callTimeout
-        call(c, RpcCall(r.module, r.method, r.params), operation, replyTo, timeout = timeout)
+        call(c, RpcCall(r.module, r.method, r.params), operation, replyTo, once, timeout = timeout)
     }
   }
 }

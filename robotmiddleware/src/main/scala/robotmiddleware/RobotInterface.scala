@@ -21,7 +21,14 @@ import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 
-/** What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor. */
+/**
+ * What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor.
+ *
+ * Two doors to a robot (docs/writing-apps.md): a call (`walk` … `call`) completes with the robot's answer; a send
+ * (`send`) completes once the middleware has accepted it and drops the robot's answer. Both go through the same
+ * checks (lease, online, safety) and one ordered path, so a send followed by a call reaches the robot in that order.
+ * Every future fails only with a `RobotFailure`; no method throws.
+ */
 trait RobotInterface {
 
   /** This app's name, as other apps and logs see it. */
@@ -62,6 +69,17 @@ trait RobotInterface {
 
   /** Any call of the robot's RPC interface (motion and speech calls need their lease). */
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]]
+
+  /**
+   * Sends any call of the robot's RPC interface without waiting for the robot: completes with `Done` once the
+   * middleware accepted it (fails with the same `RobotFailure` a call would for a lease, an offline robot or a safety
+   * hold); the robot's answer, or its error, is dropped. Ordered with this app's calls and sends, sent once.
+   */
+  final def send(robotId: Int, module: String, method: String, params: RpcValue*): Future[Done] =
+    send(robotId, Operation.RawCall(module, method, params.toVector))
+
+  /** Sends a typed operation (`Operation.Walk`, `Operation.Head`, …) the same way: accepted, its answer dropped. */
+  def send(robotId: Int, operation: Operation): Future[Done]
 
   /** The robot's keep-alive snapshots, starting with the latest known. */
   def status(robotId: Int): Source[RobotSnapshot, NotUsed]
@@ -109,16 +127,41 @@ object RobotClient {
     attempt()
   }
 
-  /** Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. */
+  /**
+   * Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. Fails only
+   * with a `RobotFailure` (robot id 0, operation "connect"): `Timeout` when the middleware does not answer within
+   * `timeout`; then the session made for it is closed again.
+   */
   def connect(system: ActorSystem[_], middleware: ActorRef[RobotMiddleware.Command], appName: String, priority: Int = 0,
-      timeout: FiniteDuration = 10.seconds): Future[RobotInterface] = {
-    implicit val s: ActorSystem[_] = system
-    implicit val t: Timeout = Timeout(timeout)
-    implicit val ec: ExecutionContext = system.executionContext
-    val session = system.systemActorOf(AppSessionActor(), s"app-${java.net.URLEncoder.encode(appName, "UTF-8")}-${System.nanoTime()}")
-    middleware
-      .ask[RobotMiddleware.AppRegistered](RobotMiddleware.RegisterApp(appName, priority, session, _))
-      .map(_ => new ClientImpl(system, middleware, session, appName, timeout))
+      timeout: FiniteDuration = 10.seconds): Future[RobotInterface] =
+    asRobotFailure(0, "connect", timeout) {
+      implicit val s: ActorSystem[_] = system
+      implicit val t: Timeout = Timeout(timeout)
+      val name = s"app-${java.net.URLEncoder.encode(appName, "UTF-8")}-${System.nanoTime()}"
+      val session = system.systemActorOf(AppSessionActor(), name)
+      val registered =
+        middleware.ask[RobotMiddleware.AppRegistered](RobotMiddleware.RegisterApp(appName, priority, session, _))
+      registered.failed.foreach(_ => session ! SessionMessage.Close)(ExecutionContext.parasitic)
+      registered.map(_ => new ClientImpl(system, middleware, session, appName, timeout): RobotInterface)(
+        ExecutionContext.parasitic)
+    }
+
+  /**
+   * `f`, failing only with a `RobotFailure`: a timeout as `Timeout` after `waited`, anything else (a throw while
+   * starting `f`, a dead system, a message that could not be serialized) as `Overloaded` naming the cause.
+   */
+  private[robotmiddleware] def asRobotFailure[R](robotId: Int, operation: String, waited: FiniteDuration)(
+      f: => Future[R]): Future[R] = {
+    val started = try f catch { case scala.util.control.NonFatal(e) => Future.failed(e) }
+    started.transform {
+      case ok @ scala.util.Success(_)                             => ok
+      case failed @ scala.util.Failure(_: RobotFailure)           => failed
+      case scala.util.Failure(_: java.util.concurrent.TimeoutException) =>
+        scala.util.Failure(RobotFailure.Timeout(robotId, operation, waited.toMillis))
+      case scala.util.Failure(e) =>
+        val cause = s"${e.getClass.getSimpleName}: ${e.getMessage}"
+        scala.util.Failure(RobotFailure.Overloaded(robotId, s"$operation could not reach the middleware: $cause"))
+    }(scala.concurrent.ExecutionContext.parasitic)
   }
 
   /** `find` then `connect`. */
@@ -135,13 +178,17 @@ object RobotClient {
     private implicit val s: ActorSystem[_] = system
     // Posture changes take seconds on the robot; the ask outlives the middleware's own timeouts (client.ask-margin).
     private implicit val askTimeout: Timeout = Timeout(timeout + MiddlewareSettings(system).clientAskMargin)
-    private implicit val ec: ExecutionContext = system.executionContext
+    // The futures are composed with short, non-blocking steps on the thread that completes them: no hop to a
+    // dispatcher per step (a call's answer reaches the app sooner), and they still complete when the system is gone.
+    private implicit val ec: ExecutionContext = ExecutionContext.parasitic
 
-    /** An ask of the middleware whose lost answer fails as `RobotFailure.Timeout`, as every failure here is one. */
+    /**
+     * An ask of the middleware that fails only with a `RobotFailure`: a lost answer (Akka's `AskTimeoutException`) as
+     * `Timeout`; an ask that cannot even start (the app's actor system is shutting down) or any other error as
+     * `Overloaded` with the cause in words; never a synchronous throw.
+     */
     private def ask[R](robotId: Int, operation: String)(message: ActorRef[R] => RobotMiddleware.Command): Future[R] =
-      middleware.ask[R](message).recoverWith { case _: java.util.concurrent.TimeoutException =>
-        Future.failed(RobotFailure.Timeout(robotId, operation, askTimeout.duration.toMillis))
-      }
+      RobotClient.asRobotFailure(robotId, operation, askTimeout.duration)(middleware.ask[R](message))
 
     private def execute(robotId: Int, operation: Operation): Future[Option[RpcValue]] =
       ask[RobotMiddleware.OperationResult](robotId, operation.name)(RobotMiddleware.Execute(session, robotId, operation, _)).flatMap { r =>
@@ -151,7 +198,8 @@ object RobotClient {
     private def done(f: Future[Option[RpcValue]]): Future[Done] = f.map(_ => Done)
 
     // Robot id 0: the list concerns no single robot.
-    def robots(): Future[Vector[RobotSnapshot]] = ask[Vector[RobotSnapshot]](0, "robots")(RobotMiddleware.ListRobots(_))
+    def robots(): Future[Vector[RobotSnapshot]] =
+      ask[RobotMiddleware.RobotList](0, "robots")(RobotMiddleware.ListRobots(_)).map(_.robots)
 
     // One request for the whole set, so the middleware grants all of it or nothing; no groups is nothing to ask.
     def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] =
@@ -187,6 +235,10 @@ object RobotClient {
     def say(robotId: Int, text: String): Future[Done] = done(execute(robotId, Operation.Say(text)))
     def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
       execute(robotId, Operation.RawCall(module, method, params.toVector))
+
+    def send(robotId: Int, operation: Operation): Future[Done] =
+      ask[RobotMiddleware.SendResult](robotId, operation.name)(RobotMiddleware.Send(session, robotId, operation, _))
+        .flatMap(r => r.result.fold(Future.failed, _ => Future.successful(Done)))
 
     private def source[T](buffer: Int)(register: ActorRef[T] => Unit): Source[T, NotUsed] =
       ActorSource

@@ -28,6 +28,14 @@ object RobotMiddleware {
       extends Command
 
   /**
+   * Sends `operation` to robot `robotId` for the app whose event ref is `app`, in the same order as its `Execute`s and
+   * through the same checks: `replyTo` learns at once whether it was accepted (lease, online, safety) or refused; the
+   * robot's own answer is dropped.
+   */
+  final case class Send(app: ActorRef[AppEvent], robotId: Int, operation: Operation, replyTo: ActorRef[SendResult])
+      extends Command
+
+  /**
    * Asks for the leases of `groups` on robot `robotId` as one: all are granted (preempting lower-priority holders) or,
    * when a holder of equal or higher priority has any of them, none is taken.
    */
@@ -45,7 +53,7 @@ object RobotMiddleware {
   final case class Release(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup) extends Command
 
   /** Answers with every known robot's latest snapshot (the gateway answers, asking its robot actors). */
-  final case class ListRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Command
+  final case class ListRobots(replyTo: ActorRef[RobotList]) extends Command
 
   /** Streams snapshots of one robot (or all) to `subscriber` until it stops, starting with the current ones. */
   final case class WatchStatus(robotId: Option[Int], subscriber: ActorRef[RobotSnapshot]) extends Command
@@ -63,6 +71,8 @@ object RobotMiddleware {
   final case class WatchEvents(subscriber: ActorRef[RobotEvent]) extends Command
 
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
+  private final case class RobotsListed(replyTo: ActorRef[RobotList], robots: Option[Vector[RobotSnapshot]])
+      extends Command
   private final case class StatusKnown(subscriber: ActorRef[RobotSnapshot], robots: Vector[RobotSnapshot]) extends Command
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
@@ -76,6 +86,12 @@ object RobotMiddleware {
 
   /** The one answer every `Execute` gets. */
   final case class OperationResult(robotId: Int, operation: String, result: Either[RobotFailure, Option[RpcValue]])
+
+  /** The one answer every `Send` gets: accepted (`Right`) once the robot's command owner has it, or the refusal. */
+  final case class SendResult(robotId: Int, operation: String, result: Either[RobotFailure, Unit])
+
+  /** The answer to `ListRobots`: every known robot's latest snapshot (a named type, so nodes bind no library class). */
+  final case class RobotList(robots: Vector[RobotSnapshot])
 
   /** The answer to `Acquire`, for the groups it asked for together (a refusal's `LeaseNotHeld` names the one in conflict). */
   final case class LeaseResult(robotId: Int, groups: Set[ActuatorGroup], result: Either[RobotFailure, Unit])
@@ -146,6 +162,9 @@ object RobotMiddleware {
       case c @ Execute(app, robotId, operation, replyTo) =>
         withGuard(robotId, c)(_ ! RobotGuard.Execute(apps.getOrElse(app, unknownApp(app)), operation, replyTo))
         Behaviors.same
+      case c @ Send(app, robotId, operation, replyTo) =>
+        withGuard(robotId, c)(_ ! RobotGuard.Send(apps.getOrElse(app, unknownApp(app)), operation, replyTo))
+        Behaviors.same
       case c @ Acquire(app, robotId, groups, replyTo) =>
         withGuard(robotId, c)(_ ! RobotGuard.Acquire(apps.getOrElse(app, unknownApp(app)), groups, replyTo))
         Behaviors.same
@@ -176,12 +195,21 @@ object RobotMiddleware {
         command match {
           case Execute(_, _, operation, replyTo) =>
             replyTo ! OperationResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
+          case Send(_, _, operation, replyTo) =>
+            replyTo ! SendResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
           case Acquire(_, _, groups, replyTo) => replyTo ! LeaseResult(robotId, groups, Left(RobotFailure.UnknownRobot(robotId)))
           case _                              => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
         }
         Behaviors.same
       case ListRobots(replyTo) =>
-        gateway ! Gateway.GetRobots(replyTo)
+        // A gateway that does not answer leaves the app's own ask to time out, which the facade reports as a Timeout.
+        context.ask(gateway, Gateway.GetRobots.apply) {
+          case scala.util.Success(robots) => RobotsListed(replyTo, Some(robots))
+          case scala.util.Failure(_)      => RobotsListed(replyTo, None)
+        }
+        Behaviors.same
+      case RobotsListed(replyTo, robots) =>
+        robots.foreach(replyTo ! RobotList(_))
         Behaviors.same
       case WatchStatus(robotId, subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))

@@ -2,7 +2,8 @@ package robotmiddleware
 
 import scala.concurrent.duration._
 
-import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.Done
+import akka.actor.testkit.typed.scaladsl.{ActorTestKit, LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.time.{Seconds, Span}
 import org.scalatest.wordspec.AnyWordSpecLike
 
@@ -38,6 +39,57 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       middleware.expectNoMessage(100.millis)
       request.replyTo ! RobotMiddleware.LeaseResult(4, request.groups, Left(RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))))
       acquired.failed.futureValue shouldBe RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))
+    }
+
+    "fail every kind of request the middleware never answers with RobotFailure.Timeout: list, lease, send, call" in {
+      val (interface, middleware) = connected()
+      val listed = interface.robots()
+      middleware.expectMessageType[RobotMiddleware.ListRobots]
+      val acquired = interface.acquire(4, ActuatorGroup.Head)
+      middleware.expectMessageType[RobotMiddleware.Acquire]
+      val sent = interface.send(4, "speech", "say", naogateway.wire.RpcValue.Text("hi"))
+      middleware.expectMessageType[RobotMiddleware.Send].operation shouldBe Operation.RawCall("speech", "say",
+        Vector(naogateway.wire.RpcValue.Text("hi")))
+      val called = interface.call(4, "system", "battery")
+      middleware.expectMessageType[RobotMiddleware.Execute]
+      val waited = timeout(Span(8, Seconds))
+      listed.failed.futureValue(waited) shouldBe a[RobotFailure.Timeout]
+      acquired.failed.futureValue(waited) shouldBe a[RobotFailure.Timeout]
+      sent.failed.futureValue(waited) shouldBe RobotFailure.Timeout(4, "speech.say", 5100)
+      called.failed.futureValue(waited) shouldBe a[RobotFailure.Timeout]
+    }
+
+    "complete a send once the middleware accepted it, and fail it with the middleware's refusal" in {
+      val (interface, middleware) = connected()
+      val accepted = interface.send(4, Operation.Head(0.1, 0.0))
+      val first = middleware.expectMessageType[RobotMiddleware.Send]
+      first.operation shouldBe Operation.Head(0.1, 0.0)
+      first.replyTo ! RobotMiddleware.SendResult(4, "motion.head", Right(()))
+      accepted.futureValue shouldBe Done
+      val refused = interface.send(4, Operation.Head(0.2, 0.0))
+      middleware.expectMessageType[RobotMiddleware.Send].replyTo !
+        RobotMiddleware.SendResult(4, "motion.head", Left(RobotFailure.SafetyHold(4, "battery low")))
+      refused.failed.futureValue shouldBe RobotFailure.SafetyHold(4, "battery low")
+    }
+
+    "fail, never throw, when the app's actor system is gone" in {
+      val gone = ActorTestKit("gone-app")
+      val middleware = gone.createTestProbe[RobotMiddleware.Command]()
+      val connecting = RobotClient.connect(gone.system, middleware.ref, "gone", timeout = 100.millis)
+      middleware.expectMessageType[RobotMiddleware.RegisterApp].replyTo ! RobotMiddleware.AppRegistered("gone")
+      val interface = connecting.futureValue
+      gone.shutdownTestKit()
+      val attempts = Seq(interface.stop(4), interface.send(4, "system", "battery"), interface.robots(),
+        interface.acquire(4, ActuatorGroup.Walk), interface.call(4, "system", "battery"))
+      attempts.foreach(_.failed.futureValue(timeout(Span(8, Seconds))) shouldBe a[RobotFailure])
+    }
+
+    "fail a connect the middleware never answers with RobotFailure.Timeout, and close the session made for it" in {
+      val middleware = createTestProbe[RobotMiddleware.Command]()
+      val connecting = RobotClient.connect(system, middleware.ref, "unanswered", timeout = 100.millis)
+      val session = middleware.expectMessageType[RobotMiddleware.RegisterApp].events
+      connecting.failed.futureValue shouldBe RobotFailure.Timeout(0, "connect", 100)
+      createTestProbe[Any]().expectTerminated(session)
     }
 
     "fail a walk with velocities that are no numbers in the future, without sending it" in {

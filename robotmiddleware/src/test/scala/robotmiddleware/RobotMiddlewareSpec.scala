@@ -365,14 +365,14 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     "list robots as the gateway answers, keeping no copy that events could leave behind" in {
       val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)
       val f = new Fixture(known = Vector(configured))
-      val robots = createTestProbe[Vector[RobotSnapshot]]()
+      val robots = createTestProbe[RobotMiddleware.RobotList]()
       f.middleware ! RobotMiddleware.ListRobots(robots.ref)
-      robots.receiveMessage() shouldBe Vector(configured)
+      robots.receiveMessage() shouldBe RobotMiddleware.RobotList(Vector(configured))
       // An event about the robot changes nothing the middleware answers with: the gateway (its robot actor) owns it.
       f.publish ! RobotStatusUpdated(configured.copy(batteryVoltage = Some(12.2), online = true))
       f.publish ! RobotOnline(7, configured.address)
       f.middleware ! RobotMiddleware.ListRobots(robots.ref)
-      robots.receiveMessage() shouldBe Vector(configured)
+      robots.receiveMessage() shouldBe RobotMiddleware.RobotList(Vector(configured))
     }
     "start a status watcher with the gateway's current snapshots, then stream keep-alives" in {
       val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838))

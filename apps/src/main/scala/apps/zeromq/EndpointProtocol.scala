@@ -42,6 +42,12 @@ object Route {
 
   /** A robot call: a `RobotInterface` operation, its lease taken on the clients' behalf. */
   final case class Execute(robotId: Int, operation: Operation) extends Route
+
+  /**
+   * `gateway.send`: the operation sent through `RobotInterface.send`, lease taken the same way; the reply says it was
+   * accepted, the robot's own answer is dropped.
+   */
+  final case class Send(robotId: Int, operation: Operation) extends Route
 }
 
 /** A successful answer: the return value, and for `gateway.status` the snapshot sent along. */
@@ -151,6 +157,19 @@ object EndpointProtocol {
       case (GatewayModule, "status")  => noParams(Right(Route.Status(robotId)))
       case (GatewayModule, "acquire") => groups(call)(Route.Acquire(robotId, _))
       case (GatewayModule, "release") => groups(call)(Route.Release(robotId, _))
+      case (GatewayModule, "send") =>
+        // The call to send is the parameters: its module, its method, then its own parameters, read as a call is.
+        call.params match {
+          case RpcValue.Text(module) +: RpcValue.Text(method) +: params if module != GatewayModule =>
+            route(EndpointRequest(robotId, RpcCall(module, method, params, call.callId))).flatMap {
+              case Route.Execute(id, operation) => Right(Route.Send(id, operation))
+              case other                        => Left(s"${Malformed}gateway.send cannot send $other")
+            }
+          case _ =>
+            Left(s"${Malformed}gateway.send takes the robot call's module and method (texts, not gateway) " +
+              "and its parameters, " +
+              s"got ${describe(call.params)}")
+        }
       case (GatewayModule, _)         => Left(RpcReply.unknownMethod(call.module, call.method))
       case ("motion", "walk") =>
         numbers(call, "vx", "vy", "omega").flatMap(v => execute(Operation.Walk(v(0), v(1), v(2))))

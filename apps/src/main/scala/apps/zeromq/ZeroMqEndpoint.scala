@@ -44,7 +44,7 @@ object ZeroMqEndpoint {
   private final case class BindFailed(reason: String) extends Command
   private final case class RequestReceived(frames: Vector[Array[Byte]]) extends Command
   private final case class SubscriptionChanged(prefix: String, subscribed: Boolean) extends Command
-  private final case class Answered(requestId: Long, result: Either[String, Answer]) extends Command
+  private final case class Answered(requestId: Long) extends Command
   private final case class RequestTimedOut(requestId: Long) extends Command
   private final case class StatusSeen(snapshot: RobotSnapshot) extends Command
   private final case class GameSeen(data: GameControlData) extends Command
@@ -113,8 +113,16 @@ object ZeroMqEndpoint {
       }
   }
 
-  /** A request being worked on: where its reply goes and what it must echo. */
-  private final case class Pending(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], name: String)
+  /**
+   * A request being worked on: where its reply goes and what it must echo. `answered` is taken by whoever replies
+   * first (the answer, the timeout, the shutdown), so a request is answered exactly once.
+   */
+  private final case class Pending(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], name: String,
+      answered: java.util.concurrent.atomic.AtomicBoolean = new java.util.concurrent.atomic.AtomicBoolean(false)) {
+
+    /** Whether this caller is the one that replies. */
+    def take(): Boolean = answered.compareAndSet(false, true)
+  }
 
   private final class Endpoint(
       robots: RobotInterface,
@@ -269,10 +277,38 @@ object ZeroMqEndpoint {
       }
     }
 
+    // Where the last robot request was handed to the interface: the next one starts only after it, so requests reach
+    // the middleware (and the robot) in the order they arrived, also when one first waits for its lease. One tail for
+    // all robots: it holds no per-robot entry a client could grow.
+    private var dispatched: Future[Unit] = Future.unit
+
+    /**
+     * Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it needs
+     * one. When nothing waits and no lease is needed it starts at once, on this actor's thread.
+     */
+    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(operate: () => Future[Answer])
+        : Future[Answer] = {
+      val handedOn = scala.concurrent.Promise[Unit]()
+      def start(ready: scala.util.Try[Any]): Future[Answer] = {
+        val answer = ready match {
+          case Success(_) => try operate() catch { case NonFatal(e) => Future.failed(e) }
+          case Failure(e) => Future.failed(e)
+        }
+        handedOn.success(())
+        answer
+      }
+      val answer = (dispatched.value, group) match {
+        case (Some(_), None) => start(Success(()))
+        case (Some(_), Some(g)) => robots.acquire(robotId, g).transformWith(start)
+        case (None, None) => dispatched.transformWith(_ => start(Success(())))
+        case (None, Some(g)) => dispatched.transformWith(_ => robots.acquire(robotId, g)).transformWith(start)
+      }
+      dispatched = handedOn.future
+      answer
+    }
+
     private def execute(route: Route): Future[Answer] = {
       val done = Answer(Some(RpcValue.Flag(true)))
-      def leased(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(f: => Future[Answer]): Future[Answer] =
-        group.fold(f)(g => robots.acquire(robotId, g).flatMap(_ => f))
       try route match {
         case Route.Robots =>
           robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
@@ -283,11 +319,15 @@ object ZeroMqEndpoint {
           })
         case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
         case Route.Release(robotId, groups) =>
-          robots.release(robotId, groups: _*)
-          Future.successful(done)
+          inOrder(robotId, None) { () =>
+            robots.release(robotId, groups: _*)
+            Future.successful(done)
+          }
+        case Route.Send(robotId, operation) =>
+          inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
         case Route.Execute(robotId, operation) =>
           import robotmiddleware.Operation._
-          leased(robotId, operation.group) {
+          inOrder(robotId, operation.group) { () =>
             operation match {
               case Walk(vx, vy, omega)    => robots.walk(robotId, vx, vy, omega).map(_ => done)
               case Stop()                 => robots.stop(robotId).map(_ => done)
@@ -319,30 +359,35 @@ object ZeroMqEndpoint {
                     case Right(route) =>
                       val id = nextRequestId
                       nextRequestId += 1
-                      pending = pending.updated(id, Pending(envelope, request.robotId, callId, request.call.name))
+                      val p = Pending(envelope, request.robotId, callId, request.call.name)
+                      pending = pending.updated(id, p)
                       timers.startSingleTimer(id, RequestTimedOut(id), settings.requestTimeout)
                       if (context.log.isDebugEnabled) context.log.debug("ZeroMQ request [{}]: {}", id, request.call)
-                      context.pipeToSelf(execute(route)) {
-                        case Success(answer) => Answered(id, Right(answer))
-                        case Failure(e)      => Answered(id, Left(EndpointProtocol.errorText(e)))
-                      }
+                      // The answer goes to the socket loop from the thread that completes it (the loop's queue is
+                      // thread-safe), not through this actor's mailbox first: one wake-up less per call. The actor
+                      // only forgets the request afterwards.
+                      val self = context.self
+                      execute(route).onComplete { result =>
+                        if (p.take()) {
+                          reply(p.envelope, p.robotId, p.callId, result.toEither.left.map(EndpointProtocol.errorText))
+                          self ! Answered(id)
+                        }
+                      }(ExecutionContext.parasitic)
                   }
             }
         }
         Behaviors.same
-      case Answered(id, result) =>
-        pending.get(id).foreach { p =>
-          timers.cancel(id)
-          pending -= id
-          reply(p.envelope, p.robotId, p.callId, result)
-        }
+      case Answered(id) =>
+        timers.cancel(id)
+        pending -= id
         Behaviors.same
       case RequestTimedOut(id) =>
         pending.get(id).foreach { p =>
           pending -= id
-          // The late answer, if it ever comes, finds no pending request: each request is answered once.
-          reply(p.envelope, p.robotId, p.callId,
-            Left(s"timeout: no answer to ${p.name} within ${settings.requestTimeout.toMillis} ms at the endpoint"))
+          // The late answer, if it ever comes, finds the request taken: each request is answered once.
+          if (p.take())
+            reply(p.envelope, p.robotId, p.callId,
+              Left(s"timeout: no answer to ${p.name} within ${settings.requestTimeout.toMillis} ms at the endpoint"))
         }
         Behaviors.same
       case StatusSeen(snapshot) =>
@@ -380,7 +425,10 @@ object ZeroMqEndpoint {
 
     private def stopEverything(): Unit = {
       // Requests still being worked on get an answer while the socket is still there to carry it.
-      pending.values.foreach(p => reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down")))
+      pending.values.foreach { p =>
+        if (p.take())
+          reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down"))
+      }
       pending = Map.empty
       streams.shutdown()
       visionStreams.values.foreach(_.shutdown())

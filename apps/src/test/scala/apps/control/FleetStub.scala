@@ -56,6 +56,7 @@ final class FleetStub(robots: Int) extends RobotInterface {
 
   private def unused = Future.failed(new UnsupportedOperationException("not served by the control port"))
   def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] = unused
+  def send(robotId: Int, operation: robotmiddleware.Operation): Future[Done] = unused
   def stop(robotId: Int): Future[Done] = unused
   def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = unused
   def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] = unused

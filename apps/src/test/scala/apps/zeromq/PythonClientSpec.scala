@@ -103,6 +103,8 @@ object PythonClientSpec {
       |  game-controller.enabled = off
       |}
       |apps.zeromq { enabled = on, bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*" }
+      |# One loop thread for each test's endpoint, and one for the first test's ZeroMQ robot link.
+      |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 4
       |""".stripMargin
 
   /**
@@ -163,6 +165,58 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
         robot.firmware.get.pose.x - startX should be > 0.05
         robot.firmware.get.posture.name shouldBe "stand"
       } finally robot.stop()
+    }
+
+    "send without waiting and call through both doors, in order, refused as a call is, the send's answer dropped" in {
+      val python = PythonEnv.python()
+      val f = new naogateway.integration.GatewayFixture(testKit)
+      try {
+        val (robot, _) = f.robot(33)
+        f.awaitEvent(30.seconds) { case naogateway.RobotOnline(33, _) => () }
+        val middleware = spawn(RobotMiddleware(f.gateway, MiddlewareSettings(system)), "middleware-doors")
+        val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq-doors")
+        val probe = createTestProbe[ZeroMqEndpoint.Addresses]()
+        endpoint ! ZeroMqEndpoint.GetAddresses(probe.ref)
+        val addresses = probe.receiveMessage(10.seconds)
+        // A referee above the endpoint's priority holds the head: the client's send of a head turn is refused.
+        val connecting = robotmiddleware.RobotClient.connect(system, middleware, "referee", 99)
+        val referee = scala.concurrent.Await.result(connecting, 10.seconds)
+        scala.concurrent.Await.result(referee.acquire(33, naogateway.wire.ActuatorGroup.Head), 10.seconds)
+        val code =
+          s"""from naogateway_client import GatewayClient, GatewayError
+             |c = GatewayClient("${addresses.requests}", "${addresses.publish}")
+             |print("send:", c.send(33, "speech", "say", "first"))
+             |print("call:", c.call(33, "speech", "say", "second"))
+             |print("send:", c.send(33, "speech", "say", "third"))
+             |print("dropped:", c.send(33, "nosuch", "method"))
+             |try:
+             |    c.send(33, "motion", "head", 0.5, 0.0)
+             |except GatewayError as e:
+             |    print("refused:", e.category)
+             |c.close()
+             |""".stripMargin
+        val gen = new File(PythonEnv.root, "apps/target/python-gen")
+        val log = new File(PythonEnv.root, "apps/target/doors.log")
+        val (exit, output) = PythonEnv.run(Seq(python.getPath, "-u", "-c", code), 90.seconds, log,
+          Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath,
+            "PYTHONDONTWRITEBYTECODE" -> "1"))
+        withClue(output) {
+          exit shouldBe 0
+          output.linesIterator.toVector shouldBe
+            Vector("send: None", "call: True", "send: None", "dropped: None", "refused: lease")
+        }
+        val heard = createTestProbe[Vector[naogateway.sim.ReceivedCall]]()
+        eventually(timeout(30.seconds)) {
+          robot ! naogateway.sim.SimulatedRobot.GetReceivedCalls(heard.ref)
+          val calls = heard.receiveMessage(10.seconds).map(_.call)
+          calls.filter(_.name == "speech.say").flatMap(_.params) shouldBe
+            Vector("first", "second", "third").map(naogateway.wire.RpcValue.Text(_))
+          calls.map(_.name) should contain("nosuch.method")
+          calls.map(_.name) should not contain "motion.head"
+        }
+        referee.close()
+        testKit.stop(endpoint)
+      } finally f.stop()
     }
   }
 }

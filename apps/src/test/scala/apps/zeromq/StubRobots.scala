@@ -87,6 +87,10 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
     answer(robotId, s"call $module.$method", Some(RpcValue.Text(s"$robotId:$module.$method(${params.mkString(",")})")))
 
+  def send(robotId: Int, operation: Operation): Future[Done] = {
+    calls.add(s"send ${operation.name} $robotId")
+    failure(robotId, operation.name).fold(Future.successful(Done): Future[Done])(Future.failed)
+  }
   def status(robotId: Int): Source[RobotSnapshot, NotUsed] = allStatus.filter(_.robotId == robotId)
   def allStatus: Source[RobotSnapshot, NotUsed] = Source.tick(0.millis, 50.millis, snapshot).mapMaterializedValue(_ => NotUsed)
 

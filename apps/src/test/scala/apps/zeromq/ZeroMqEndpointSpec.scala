@@ -261,6 +261,36 @@ class ZeroMqEndpointSpec
       )
     }
 
+    "send through gateway.send: accepted, in order with calls, refused and malformed as a call is" in {
+      stub.calls.clear()
+      val s = dealer()
+      try {
+        // Three requests on one socket without waiting: the interface sees them in the order they came.
+        val bodies = Vector(
+          request(7, "gateway", "send", Vector(RpcValue.Text("speech"), RpcValue.Text("say"), RpcValue.Text("first")),
+            callId = 1),
+          request(7, "speech", "say", Vector(RpcValue.Text("second")), callId = 2),
+          request(7, "gateway", "send", Vector(RpcValue.Text("motion"), RpcValue.Text("head"), RpcValue.Number(0.5f),
+            RpcValue.Number(0f)), callId = 3))
+        bodies.foreach { b => s.send(Array.emptyByteArray, ZMQ.SNDMORE); s.send(b, 0) }
+        val replies = (1 to 3).map(_ => decode(receive(s, 5.seconds).last)._2).sortBy(_.callId)
+        replies.map(_.result) shouldBe Vector.fill(3)(Right(Some(RpcValue.Flag(true))))
+      } finally s.close()
+      stub.seen shouldBe Vector("acquire 7 speech", "send speech.say 7", "acquire 7 speech", "say second 7",
+        "acquire 7 head", "send motion.head 7")
+      error(askOne(9, "gateway", "send", RpcValue.Text("motion"), RpcValue.Text("stop"))) shouldBe
+        "lease: lease 'walk' of robot 9 is not held by this app (held by referee)"
+      error(askOne(8, "gateway", "send", RpcValue.Text("system"), RpcValue.Text("battery"))) shouldBe
+        "offline: robot 8 is offline"
+      error(askOne(7, "gateway", "send")) should startWith(
+        "malformed request: gateway.send takes the robot call's module")
+      error(askOne(7, "gateway", "send", RpcValue.Text("gateway"), RpcValue.Text("robots"))) should startWith(
+        "malformed request: gateway.send takes")
+      val fast = askOne(7, "gateway", "send", RpcValue.Text("motion"), RpcValue.Text("walk"), RpcValue.Text("fast"))
+      error(fast) should startWith(
+        "malformed request: motion.walk takes 3 number(s)")
+    }
+
     "serve its own methods: robots, status, acquire and release" in {
       askOne(-1, "gateway", "robots").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.UInt(7), RpcValue.UInt(8)))))
       val s = dealer()

@@ -43,6 +43,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
   override def manifest(o: AnyRef): String = o match {
     case _: RobotMiddleware.RegisterApp    => M.RegisterApp
     case _: RobotMiddleware.Execute        => M.Execute
+    case _: RobotMiddleware.Send           => M.Send
     case _: RobotMiddleware.Acquire        => M.Acquire
     case _: RobotMiddleware.Release        => M.Release
     case _: RobotMiddleware.ListRobots     => M.ListRobots
@@ -54,7 +55,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case _: RobotMiddleware.AppRegistered  => M.AppRegistered
     case _: RobotMiddleware.OperationResult => M.OperationResult
     case _: RobotMiddleware.LeaseResult    => M.LeaseResult
-    case v: Vector[_] if v.forall(_.isInstanceOf[RobotSnapshot]) => M.RobotSnapshots
+    case _: RobotMiddleware.SendResult     => M.SendResult
+    case _: RobotMiddleware.RobotList      => M.RobotSnapshots
     case _: Operation                      => M.Operation
     case _: RobotFailure                   => M.RobotFailure
     case _: SessionMessage.SubscribeAppEvents => M.SubscribeAppEvents
@@ -83,6 +85,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       bytes(pb.RegisterApp(name, priority, refText(events), refText(replyTo)))
     case RobotMiddleware.Execute(app, robotId, operation, replyTo) =>
       bytes(pb.Execute(refText(app), robotId, toProto(operation), refText(replyTo)))
+    case RobotMiddleware.Send(app, robotId, operation, replyTo) =>
+      bytes(pb.Send(refText(app), robotId, toProto(operation), refText(replyTo)))
     case RobotMiddleware.Acquire(app, robotId, groups, replyTo) =>
       bytes(pb.Acquire(refText(app), robotId, groupNames(groups), refText(replyTo)))
     case RobotMiddleware.Release(app, robotId, group) => bytes(pb.Release(refText(app), robotId, group.name))
@@ -102,8 +106,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       bytes(pb.OperationResult(robotId, operation, r))
     case RobotMiddleware.LeaseResult(robotId, groups, result) =>
       bytes(pb.LeaseResult(robotId, groupNames(groups), result.left.toOption.map(f => toProto(f))))
-    case v: Vector[_] if v.forall(_.isInstanceOf[RobotSnapshot]) =>
-      bytes(pb.RobotSnapshots(v.collect { case s: RobotSnapshot => toProto(s) }))
+    case RobotMiddleware.SendResult(robotId, operation, result) =>
+      bytes(pb.SendResult(robotId, operation, result.left.toOption.map(f => toProto(f))))
+    case RobotMiddleware.RobotList(robots) => bytes(pb.RobotSnapshots(robots.map(s => toProto(s))))
     case o: Operation                           => bytes(toProto(o))
     case f: RobotFailure                        => bytes(toProto(f))
     case SessionMessage.SubscribeAppEvents(subscriber) => bytes(pb.SubscribeAppEvents(refText(subscriber)))
@@ -138,6 +143,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.Execute =>
       val m = pb.Execute.parseFrom(bytes)
       RobotMiddleware.Execute(ref(m.app), m.robotId, fromProto(m.operation), ref(m.replyTo))
+    case M.Send =>
+      val m = pb.Send.parseFrom(bytes)
+      RobotMiddleware.Send(ref(m.app), m.robotId, fromProto(m.operation), ref(m.replyTo))
     case M.Acquire =>
       val m = pb.Acquire.parseFrom(bytes)
       RobotMiddleware.Acquire(ref(m.app), m.robotId, m.groups.map(group(M.Acquire, _)).toSet, ref(m.replyTo))
@@ -168,7 +176,11 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.LeaseResult =>
       val m = pb.LeaseResult.parseFrom(bytes)
       RobotMiddleware.LeaseResult(m.robotId, m.groups.map(group(M.LeaseResult, _)).toSet, m.failure.map(f => fromProto(f)).toLeft(()))
-    case M.RobotSnapshots => pb.RobotSnapshots.parseFrom(bytes).robots.iterator.map(s => fromProto(s)).toVector
+    case M.SendResult =>
+      val m = pb.SendResult.parseFrom(bytes)
+      RobotMiddleware.SendResult(m.robotId, m.operation, m.failure.map(f => fromProto(f)).toLeft(()))
+    case M.RobotSnapshots =>
+      RobotMiddleware.RobotList(pb.RobotSnapshots.parseFrom(bytes).robots.iterator.map(s => fromProto(s)).toVector)
     case M.Operation      => fromProto(pb.Operation.parseFrom(bytes))
     case M.RobotFailure   => fromProto(pb.RobotFailure.parseFrom(bytes))
     case M.SubscribeAppEvents =>
@@ -376,6 +388,7 @@ object CrossNodeSerializer {
   object Manifest {
     val RegisterApp = "RegisterApp"
     val Execute = "Execute"
+    val Send = "Send"
     val Acquire = "Acquire"
     val Release = "Release"
     val ListRobots = "ListRobots"
@@ -387,6 +400,7 @@ object CrossNodeSerializer {
     val AppRegistered = "AppRegistered"
     val OperationResult = "OperationResult"
     val LeaseResult = "LeaseResult"
+    val SendResult = "SendResult"
     val RobotSnapshots = "RobotSnapshots"
     val Operation = "Operation"
     val RobotFailure = "RobotFailure"

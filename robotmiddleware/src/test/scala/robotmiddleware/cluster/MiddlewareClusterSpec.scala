@@ -219,6 +219,37 @@ class MiddlewareClusterSpec
       answerUntil("motion.stop")
       fallback.acquire(7, ActuatorGroup.Walk).futureValue shouldBe Done
     }
+
+    "reach a robot through both doors: a send refused without its lease, then before a call, its answer dropped" in {
+      val nodeD = appNode(ConfigFactory.empty())
+      MiddlewareCluster.up(nodeD.system).futureValue shouldBe Done
+      val app = connect(nodeD, "two-doors", priority = 5)
+      app.send(7, Operation.Head(0.3, 0.0)).failed.futureValue shouldBe
+        RobotFailure.LeaseNotHeld(7, ActuatorGroup.Head, None)
+      app.acquire(7, ActuatorGroup.Head).futureValue shouldBe Done
+      val sent = app.send(7, Operation.Head(0.3, 0.0))
+      val called = app.call(7, "system", "battery")
+      // The robot's one command owner gets both, the send first; the robot's error to the send goes nowhere.
+      val seen = response
+        .fishForMessage(30.seconds, "the send, then the call") {
+          case c: ResponseActor.Call if c.call.name == "motion.head" =>
+            c.idempotent shouldBe Some(false) // a send is sent once
+            c.replyTo ! CallResult(7, c.call.name, Left(RobotFailure.RobotError(7, "head is busy")))
+            FishingOutcome.Continue
+          case c: ResponseActor.Call if c.call.name == "system.battery" =>
+            c.replyTo ! CallResult(7, c.call.name, Right(Some(RpcValue.Number(11.9f))))
+            FishingOutcome.Complete
+          case c: ResponseActor.Call =>
+            c.replyTo ! CallResult(7, c.call.name, Right(None))
+            FishingOutcome.ContinueAndIgnore
+          case _ => FishingOutcome.ContinueAndIgnore
+        }
+        .collect { case c: ResponseActor.Call => c.call.name }
+      seen shouldBe Seq("motion.head", "system.battery")
+      sent.futureValue shouldBe Done
+      called.futureValue shouldBe Some(RpcValue.Number(11.9f))
+      app.close()
+    }
   }
 }
 

@@ -1,0 +1,370 @@
+package bench
+
+import java.io.File
+import java.net.InetSocketAddress
+import java.nio.ByteBuffer
+import java.nio.channels.{ClosedChannelException, DatagramChannel}
+import java.nio.charset.StandardCharsets
+import java.nio.file.Files
+
+import scala.collection.immutable.ListMap
+import scala.concurrent.Await
+import scala.concurrent.duration._
+import scala.util.{Failure, Success, Try}
+
+import akka.actor.typed.scaladsl.AskPattern._
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, ActorSystem, Scheduler}
+import akka.cluster.typed.{Cluster, Join}
+import akka.util.Timeout
+import com.typesafe.config.{Config, ConfigFactory}
+
+import apps.zeromq.{PythonEnv, ZeroMqEndpoint, ZeroMqSettings}
+import naogateway._
+import naogateway.proto.{Response, Status}
+import naogateway.testkit.TestLoopback
+import naogateway.wire.{MessageContents, RpcCall}
+import robotmiddleware.cluster.MiddlewareCluster
+import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
+
+/**
+ * The call path users feel: an app's `system.ping` to a robot and back through each door, all to one plain-socket robot
+ * (a thread on a DatagramChannel answering the RPC frame at once, keep-alives from another: no simulator), beside the
+ * raw UDP floor and the command round trip of a peer, MAVSDK, measured in the same run. Paced at one call per
+ * millisecond after a warm-up, as `GatewayBench`'s round trips; nearest-rank percentiles in microseconds.
+ *
+ *  - `callpath_raw_udp_*`: the floor, a plain request/answer between two DatagramChannels (`GatewayBench`'s).
+ *  - `callpath_gateway_*`: the gateway alone, the call asked of the robot's command owner (`ResponseActor`).
+ *  - `callpath_interface_*`: a Scala app through `RobotInterface` in the gateway's JVM and actor system.
+ *  - `callpath_cluster_*`: a Scala app on another cluster node (its own actor system in this JVM, Artery over
+ *    loopback TCP), through `RobotInterface`.
+ *  - `callpath_python_*`: the Python client (apps/python) over the ZeroMQ endpoint, a process of its own.
+ *  - `callpath_python_door_*`: the same client and endpoint in front of a `RobotInterface` that answers every call
+ *    at once: the ZeroMQ door's own part (sockets, the endpoint, the client), without middleware or robot.
+ *  - `callpath_mavsdk_*`: MAVSDK (the `mavsdk` package) arming a pymavlink-played vehicle on loopback, each arm one
+ *    COMMAND_LONG answered by a COMMAND_ACK (src/test/python/bench/mavsdk_peer.py); absent (null) when it cannot be
+ *    installed or run here, the reason in the progress lines.
+ *  - `callpath_mavsdk_grpc_*`: the same with MAVSDK's gRPC ground side (`mavsdk-grpc`, which the `mavsdk` package
+ *    was up to version 3: Python asks the bundled mavsdk_server over gRPC), in a venv of its own.
+ *  - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
+ *    `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
+ *
+ * The gateway's actor system is a cluster node (the gateway role) for the whole group, so every door meets the same
+ * gateway. The Python door and the peer need python3 and pip; both run in one venv under apps/target.
+ */
+object CallPathBench extends Benchmark {
+  val name = "callpath"
+
+  private val PythonWarmup = 1000
+  private val PythonSamples = 2000
+  private val PeerWarmup = 200
+  private val PeerSamples = 1000
+  private val startedAt = System.nanoTime()
+
+  private def progress(line: String): Unit = println(f"[callpath ${(System.nanoTime() - startedAt) / 1e9}%6.1fs] $line")
+
+  /** The Python packages of the client's specs, plus the peer's (pinned). */
+  private val PeerRequirements = Seq("mavsdk==4.1.0", "pymavlink==2.4.50")
+
+  /**
+   * The gRPC peer's own venv: mavsdk-grpc's generated code needs a grpcio newer than the one the client's protoc
+   * (grpcio-tools) pins, so the two cannot share one. Pinned as pip resolved them.
+   */
+  private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3",
+    "protobuf==7.36.2", "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
+
+  def run(): ListMap[String, Double] = GatewayBench.quietLogging {
+    progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
+    val raw = GatewayBench.rawRoundTrips()
+    report("raw udp", raw)
+    val gateway = new GatewayNode
+    try {
+      val robot = new PlainRobot(gateway.addresses.robots)
+      try {
+        gateway.awaitOnline(1)
+        val alone = gateway.pings()
+        report("gateway alone", alone)
+        val local = Await.result(RobotClient.connect(gateway.system, gateway.middleware, "bench-local"), 30.seconds)
+        val interface = appCalls(local)
+        report("RobotInterface, same JVM", interface)
+        local.close()
+        val cluster = otherNode(gateway.clusterPort)(appCalls)
+        report("RobotInterface, other cluster node", cluster)
+        val python = pythonCalls(gateway.zeroMq())
+        python.fold(why => progress(s"python client not measured: $why"),
+          p => progress(f"python client: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val door = pythonCalls(gateway.zeroMqAnswering())
+        door.fold(why => progress(s"python door alone not measured: $why"),
+          p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val peer = mavsdk()
+        peer.fold(why => progress(s"MAVSDK not measured: $why"),
+          p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val grpcPeer = mavsdkGrpc()
+        grpcPeer.fold(why => progress(s"MAVSDK over gRPC not measured: $why"),
+          p => progress(f"MAVSDK command over gRPC (mavsdk_server): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        progress(s"done, load average ${GatewayBench.loadAverage()}")
+        def p50(s: Array[Long]) = GatewayBench.percentile(s, 0.50) / 1e3
+        def p99(s: Array[Long]) = GatewayBench.percentile(s, 0.99) / 1e3
+        val nan = Double.NaN
+        ListMap(
+          "callpath_raw_udp_p50_us" -> p50(raw),
+          "callpath_raw_udp_p99_us" -> p99(raw),
+          "callpath_gateway_p50_us" -> p50(alone),
+          "callpath_gateway_p99_us" -> p99(alone),
+          "callpath_interface_p50_us" -> p50(interface),
+          "callpath_interface_p99_us" -> p99(interface),
+          "callpath_cluster_p50_us" -> p50(cluster),
+          "callpath_cluster_p99_us" -> p99(cluster),
+          "callpath_python_p50_us" -> python.fold(_ => nan, _._1),
+          "callpath_python_p99_us" -> python.fold(_ => nan, _._2),
+          "callpath_python_door_p50_us" -> door.fold(_ => nan, _._1),
+          "callpath_python_door_p99_us" -> door.fold(_ => nan, _._2),
+          "callpath_mavsdk_p50_us" -> peer.fold(_ => nan, _._1),
+          "callpath_mavsdk_p99_us" -> peer.fold(_ => nan, _._2),
+          "callpath_mavsdk_grpc_p50_us" -> grpcPeer.fold(_ => nan, _._1),
+          "callpath_mavsdk_grpc_p99_us" -> grpcPeer.fold(_ => nan, _._2),
+          "callpath_gateway_over_raw_udp_p50" -> p50(alone) / p50(raw),
+          "callpath_interface_over_gateway_p50" -> p50(interface) / p50(alone),
+          "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
+          "callpath_python_over_mavsdk_p50" ->
+            (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
+          "callpath_python_over_mavsdk_grpc_p50" ->
+            (for { py <- python.toOption; mav <- grpcPeer.toOption } yield py._1 / mav._1).getOrElse(nan)
+        )
+      } finally robot.close()
+    } finally gateway.stop()
+  }
+
+  private def report(what: String, samples: Array[Long]): Unit =
+    progress(f"$what: p50 ${GatewayBench.percentile(samples, 0.50) / 1e3}%.0f us, " +
+      f"p99 ${GatewayBench.percentile(samples, 0.99) / 1e3}%.0f us, " +
+      f"max ${samples.max / 1e3}%.0f us over ${samples.length}")
+
+  /** `system.ping` through an app's `RobotInterface`, paced. */
+  private def appCalls(app: RobotInterface): Array[Long] = {
+    def once(): Long = {
+      val start = System.nanoTime()
+      Await.result(app.call(1, "system", "ping"), 10.seconds)
+      System.nanoTime() - start
+    }
+    GatewayBench.paced(GatewayBench.RttWarmup)(() => once())
+    GatewayBench.paced(GatewayBench.RttSamples)(() => once())
+  }
+
+  /** An app node of the gateway's cluster, in its own actor system; `body` gets the app's interface. */
+  private def otherNode[T](gatewayPort: Int)(body: RobotInterface => T): T = {
+    val overrides = ConfigFactory.parseString(
+      s"""robotmiddleware.cluster.gateway-port = $gatewayPort
+         |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
+         |akka.loglevel = "WARNING"
+         |""".stripMargin)
+    val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole, overrides)
+    try {
+      Await.result(MiddlewareCluster.up(node), 60.seconds)
+      implicit val ec: scala.concurrent.ExecutionContext = node.executionContext
+      val connecting = RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, "bench-remote"))
+      val app = Await.result(connecting, 60.seconds)
+      try body(app)
+      finally app.close()
+    } finally {
+      node.terminate()
+      Await.result(node.whenTerminated, 60.seconds)
+    }
+  }
+
+  /** The venv of the Python door and the peer: the client's requirements plus the peer's, or why there is none. */
+  private def venv(): Either[String, File] = {
+    val client = new String(Files.readAllBytes(PythonEnv.requirements.toPath), StandardCharsets.UTF_8)
+    venvOf("python-bench-venv", client + "\n# bench.CallPathBench's peer\n" + PeerRequirements.mkString("\n") + "\n")
+  }
+
+  /** A venv under apps/target made from `requirements` (reused while they stay the same), or why there is none. */
+  private def venvOf(name: String, requirements: String): Either[String, File] = {
+    val wanted = new File(PythonEnv.root, s"target/bench/$name-requirements.txt")
+    wanted.getParentFile.mkdirs()
+    Files.write(wanted.toPath, requirements.getBytes(StandardCharsets.UTF_8))
+    Try(PythonEnv.environment(new File(PythonEnv.root, s"apps/target/$name"), wanted)).fold(e => Left(s"$e"), identity)
+  }
+
+  /** Runs a script of src/test/python/bench; its one JSON line as (p50, p99) in microseconds, or why not. */
+  private def script(python: File, name: String, args: Seq[String]): Either[String, (Double, Double)] = {
+    val log = new File(PythonEnv.root, s"target/bench/$name.log")
+    val env = Map("NAOGATEWAY_PY_GEN" -> new File(PythonEnv.root, "apps/target/python-gen").getPath,
+      "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath, "PYTHONDONTWRITEBYTECODE" -> "1")
+    // stderr goes to the log too: only the last JSON line is read.
+    val path = new File(PythonEnv.root, s"src/test/python/bench/$name").getPath
+    Try(PythonEnv.run(Seq(python.getPath, "-u", path) ++ args,
+      10.minutes, log, env)) match {
+      case Failure(e) => Left(s"$name did not finish: $e")
+      case Success((code, output)) =>
+        val Figure = """.*"p50_us": ([0-9.]+), "p99_us": ([0-9.]+).*""".r
+        val Error = """.*"error": "(.*)".*""".r
+        output.linesIterator.toVector.reverse.collectFirst {
+          case Figure(p50, p99) => Right(p50.toDouble -> p99.toDouble)
+          case Error(why)       => Left(why)
+        }.getOrElse(Left(s"$name exited with $code and no figures (see ${log.getPath})"))
+    }
+  }
+
+  private def pythonCalls(endpoint: ZeroMqEndpoint.Addresses): Either[String, (Double, Double)] =
+    venv().flatMap(python => script(python, "zeromq_calls.py", Seq("--endpoint", endpoint.requests,
+      "--publish", endpoint.publish,
+      "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)))
+
+  private def mavsdkGrpc(): Either[String, (Double, Double)] =
+    venvOf("python-peer-grpc-venv", GrpcPeerRequirements.mkString("", "\n", "\n"))
+      .flatMap(python => script(python, "mavsdk_peer.py",
+        Seq("--grpc", "--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
+
+  private def mavsdk(): Either[String, (Double, Double)] =
+    venv().flatMap(python =>
+      script(python, "mavsdk_peer.py", Seq("--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
+
+  /** The gateway, its middleware and (on request) its ZeroMQ endpoint, in one actor system that is a cluster node. */
+  private final class GatewayNode {
+    private val overrides: Config = ConfigFactory.parseString(
+      """naogateway.link.bind-address = "127.0.0.1"
+        |naogateway.link.robot-port = 0
+        |naogateway.game-controller.enabled = off
+        |robotmiddleware.cluster.gateway-port = 0
+        |akka.cluster.seed-nodes = []
+        |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
+        |akka.loglevel = "WARNING"
+        |# A socket-loop thread for each of the bench's two endpoints.
+        |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 2
+        |""".stripMargin)
+    private val config = MiddlewareCluster.config(MiddlewareCluster.GatewayRole, overrides)
+    val system: ActorSystem[Gateway.Command] =
+      MiddlewareCluster.start(Gateway(GatewaySettings.fromConfig(config.getConfig("naogateway"))), config)
+    private val cluster = Cluster(system)
+    cluster.manager ! Join(cluster.selfMember.address)
+    val clusterPort: Int = cluster.selfMember.address.port.get
+    private implicit val scheduler: Scheduler = system.scheduler
+    private implicit val timeout: Timeout = Timeout(30.seconds)
+    val addresses: Gateway.Addresses = Await.result(system.ask(Gateway.GetAddresses(_)), 30.seconds)
+    val middleware: ActorRef[RobotMiddleware.Command] =
+      system.systemActorOf(RobotMiddleware(system, MiddlewareSettings(system)), "middleware")
+
+    def robot(robotId: Int): Option[ActorRef[RobotActor.Command]] =
+      Await.result(system.ask[Option[ActorRef[RobotActor.Command]]](Gateway.GetRobot(robotId, _)), 30.seconds)
+
+    def awaitOnline(robotId: Int): Unit = {
+      val deadline = 30.seconds.fromNow
+      def online =
+        robot(robotId).exists(r => Await.result(r.ask[RobotSnapshot](RobotActor.GetSnapshot(_)), 30.seconds).online)
+      while (!online) {
+        if (deadline.isOverdue()) throw new IllegalStateException(s"robot $robotId did not come online")
+        Thread.sleep(50)
+      }
+    }
+
+    /** The gateway alone: `system.ping` asked of the robot's command owner. */
+    def pings(): Array[Long] = {
+      val robotRef = robot(1).getOrElse(throw new IllegalStateException("the gateway does not know robot 1"))
+      val connected = Await.result(robotRef.ask[RobotActor.Connected](RobotActor.Connect(_)), 30.seconds)
+      val ping = RpcCall("system", "ping", Vector.empty)
+      def once(): Long = {
+        val start = System.nanoTime()
+        val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
+        val took = System.nanoTime() - start
+        require(answer.result.isRight, s"system.ping failed: $answer")
+        took
+      }
+      GatewayBench.paced(GatewayBench.RttWarmup)(() => once())
+      GatewayBench.paced(GatewayBench.RttSamples)(() => once())
+    }
+
+    private val zeroMqSettings = ZeroMqSettings(system).copy(bind = "tcp://127.0.0.1:*", publish = "tcp://127.0.0.1:*")
+
+    private def addresses(endpoint: ActorRef[ZeroMqEndpoint.Command]): ZeroMqEndpoint.Addresses =
+      Await.result(endpoint.ask[ZeroMqEndpoint.Addresses](ZeroMqEndpoint.GetAddresses(_)), 30.seconds)
+
+    /** Starts the ZeroMQ endpoint on free loopback ports; its addresses. */
+    def zeroMq(): ZeroMqEndpoint.Addresses =
+      addresses(system.systemActorOf(ZeroMqEndpoint(middleware, zeroMqSettings), "zeromq"))
+
+    /** An endpoint in front of an interface whose every call is answered at once: the ZeroMQ door's own part. */
+    def zeroMqAnswering(): ZeroMqEndpoint.Addresses =
+      addresses(
+        system.systemActorOf(ZeroMqEndpoint.withInterface(new AnsweringInterface, zeroMqSettings), "zeromq-answering"))
+
+    def stop(): Unit = {
+      system.terminate()
+      Await.result(system.whenTerminated, 60.seconds)
+    }
+  }
+
+  /** A `RobotInterface` without robots: every call answers `UInt(0)` at once, streams stay silent. */
+  private final class AnsweringInterface extends RobotInterface {
+    import scala.concurrent.Future
+    import akka.{Done, NotUsed}
+    import akka.stream.scaladsl.Source
+    import naogateway.wire.{ActuatorGroup, Posture, RpcValue}
+    import naogateway.wire.gamecontroller.GameControlData
+    private val done = Future.successful(Done)
+    def appName: String = "answering"
+    def robots(): Future[Vector[RobotSnapshot]] = Future.successful(Vector.empty)
+    def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] = done
+    def release(robotId: Int, groups: ActuatorGroup*): Unit = ()
+    def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] = done
+    def stop(robotId: Int): Future[Done] = done
+    def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done
+    def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] = done
+    def posture(robotId: Int, target: Posture.Target): Future[Posture] = Future.successful(target)
+    def say(robotId: Int, text: String): Future[Done] = done
+    def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
+      Future.successful(Some(RpcValue.UInt(0)))
+    def send(robotId: Int, operation: robotmiddleware.Operation): Future[Done] = done
+    def status(robotId: Int): Source[RobotSnapshot, NotUsed] = Source.never
+    def allStatus: Source[RobotSnapshot, NotUsed] = Source.never
+    def vision(robotId: Int, grid: Boolean): Source[VisionFrame, NotUsed] = Source.never
+    def linkStats(robotId: Int): Source[LinkStats, NotUsed] = Source.never
+    def gameState: Source[GameControlData, NotUsed] = Source.never
+    def robotEvents: Source[RobotEvent, NotUsed] = Source.never
+    def appEvents: Source[robotmiddleware.AppEvent, NotUsed] = Source.never
+    def close(): Unit = ()
+  }
+
+  /**
+   * Robot 1 as a bare UDP responder on a loopback address of its own, port 3838: one thread answers every request
+   * frame at once with a reply of the same call id, another sends a keep-alive every 200 ms. No simulator.
+   */
+  private final class PlainRobot(gateway: InetSocketAddress) {
+    private val socket = DatagramChannel.open()
+      .bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
+    private val watchdog = GatewayBench.closeAfter(15.minutes, socket)
+    private val keepAlive = MessageContents
+      .encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("PlainRobot")))))
+      .fold(e => throw new IllegalStateException(e.describe), identity)
+    private val beats = new Thread(() => {
+      try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gateway); Thread.sleep(200) }
+      catch { case _: ClosedChannelException | _: InterruptedException => () }
+    }, "plain-robot-keep-alive")
+    private val answers = new Thread(() => {
+      val in = ByteBuffer.allocate(2048)
+      try
+        while (socket.isOpen) {
+          in.clear()
+          val from = socket.receive(in)
+          in.flip()
+          val bytes = new Array[Byte](in.remaining)
+          in.get(bytes)
+          MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
+            val answer = Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)
+            val reply = MessageContents(1, rpcResponse = Some(answer))
+            MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+          }
+        }
+      catch { case _: ClosedChannelException => () }
+    }, "plain-robot-answers")
+    Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
+
+    def close(): Unit = {
+      socket.close()
+      beats.interrupt()
+      answers.join(5000)
+      watchdog.shutdownNow()
+      ()
+    }
+  }
+}
