@@ -91,7 +91,11 @@ class LauncherSpec extends AnyWordSpec with Matchers {
       try {
         withClue(seen.mkString("\n")) { online shouldBe Set("1", "2", "3") }
 
-        // The web view's address is printed, and the page is there.
+        // The web view's address is printed, and the page is there. On a busy machine its line may come after the
+        // robots' (the web server binds beside them): read on for it a while.
+        val webDeadline = 30.seconds.fromNow
+        while (!seen.exists(_.startsWith("web view: ")) && webDeadline.hasTimeLeft() && (launched.reader.isAlive || !launched.lines.isEmpty))
+          Option(launched.lines.poll(1, TimeUnit.SECONDS)).foreach(seen += _)
         val web = seen.collectFirst { case l if l.startsWith("web view: http://127.0.0.1:") => l.stripPrefix("web view: ") }
         withClue(seen.mkString("\n"))(web shouldBe defined)
         val page = new java.net.URL(web.get).openConnection().asInstanceOf[java.net.HttpURLConnection]

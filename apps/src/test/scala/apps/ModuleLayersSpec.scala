@@ -126,7 +126,7 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
 
   "The apps that see only the api" should {
     "compile without the gateway's and the simulator's classes" in {
-      compileErrors(withoutGateway, Seq(appsSource("StatusView.scala"), appsSource("web/WebModel.scala"))) shouldBe empty
+      compileErrors(withoutGateway, Seq(appsSource("StatusView.scala"), appsSource("web/WebModel.scala"), appsSource("RobotRow.scala"))) shouldBe empty
     }
 
     "refuse, against that class path, a probe that names naogateway.Gateway" in {
