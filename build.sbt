@@ -125,7 +125,8 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
 // The apps: the status and web views, the control port, the ZeroMQ endpoint, the ball follower, teleop. They see the
 // middleware and the api; the launcher hands them what they read of the gateway.
 lazy val apps = (project in file("apps"))
-  .dependsOn(api, zeromq, robotmiddleware % "compile->compile;test->test", sim % "test->test", integration % "test->test")
+  .dependsOn(api, zeromq, robotmiddleware % "compile->compile;test->test", sim % "test->test",
+    integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
@@ -136,7 +137,8 @@ lazy val apps = (project in file("apps"))
       val internals = Set((naogateway / Compile / classDirectory).value, (sim / Compile / classDirectory).value)
       (Compile / dependencyClasspath).value.filterNot(entry => internals(entry.data))
     },
-    libraryDependencies ++= Seq(jline, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
+    libraryDependencies ++= Seq(jline, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++
+      testLibs ++ akkaTestLibs,
     // scala-compiler in tests: ModuleLayersSpec compiles the apps that see only the api without the gateway's classes.
     libraryDependencies += "org.scala-lang" % "scala-compiler" % V.scala % Test
   )

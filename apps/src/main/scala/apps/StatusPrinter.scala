@@ -79,7 +79,8 @@ object StatusPrinter {
    * The printer of the `apps.launcher` block `c`, writing where its `view` says; `notes` are lines shown above the
    * status (the web view's address once it listens), printed once each in line mode.
    */
-  def fromConfig(gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty): Behavior[Command] = {
+  def fromConfig(gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty)
+      : Behavior[Command] = {
     val s = settings(c)
     apply(gateway, s.refresh, output(s.view), notes)
   }
@@ -109,7 +110,8 @@ object StatusPrinter {
       notes: () => Vector[String] = () => Vector.empty): Behavior[Command] =
     Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
-  private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output, notes: () => Vector[String]): Behavior[Command] =
+  private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output,
+      notes: () => Vector[String]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         timers.startTimerWithFixedDelay(Refresh, refresh)

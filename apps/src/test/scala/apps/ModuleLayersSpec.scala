@@ -122,7 +122,8 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
   private def appsSources: Seq[(String, String)] = {
     val root = Seq(Paths.get("src/main/scala/apps"), Paths.get("apps/src/main/scala/apps")).find(Files.isDirectory(_))
       .getOrElse(fail("apps sources not found"))
-    Using.resource(Files.walk(root))(_.iterator.asScala.filter(_.toString.endsWith(".scala")).toVector).sortBy(_.toString).map { p =>
+    val files = Using.resource(Files.walk(root))(_.iterator.asScala.filter(_.toString.endsWith(".scala")).toVector)
+    files.sortBy(_.toString).map { p =>
       root.relativize(p).toString -> new String(Files.readAllBytes(p), java.nio.charset.StandardCharsets.UTF_8)
     }
   }
@@ -130,15 +131,16 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
   "The apps" should {
     "all compile without the gateway's and the simulator's classes (as the build compiles them)" in {
       val sources = appsSources
-      sources.map(_._1) should contain allOf ("StatusPrinter.scala", "web/WebServer.scala", "control/ControlServer.scala",
-        "zeromq/ZeroMqEndpoint.scala")
+      sources.map(_._1) should contain allOf ("StatusPrinter.scala", "web/WebServer.scala",
+        "control/ControlServer.scala", "zeromq/ZeroMqEndpoint.scala")
       compileErrors(withoutGateway, sources) shouldBe empty
     }
 
     "refuse, against that class path, a probe that names a gateway internal or the simulator" in {
       val probes = Seq(
         "naogateway.Gateway" -> "object Probe { val g = naogateway.Gateway }",
-        "GatewaySettings" -> "object Probe { def s(system: akka.actor.typed.ActorSystem[_]) = naogateway.GatewaySettings(system) }",
+        "GatewaySettings" ->
+          "object Probe { def s(system: akka.actor.typed.ActorSystem[_]) = naogateway.GatewaySettings(system) }",
         "Fleet" -> "import naogateway.sim.Fleet\nobject Probe { val f = Fleet }")
       probes.foreach { case (name, text) =>
         val errors = compileErrors(withoutGateway, Seq("Probe.scala" -> s"package probe\n$text\n"))

@@ -53,7 +53,8 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val lines = new ConcurrentLinkedQueue[String]()
-        spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
+        val view = naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system)
+        spawn(StatusPrinter(view, 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
         fixture.robot(1)
         def printed = lines.asScala.toVector
         awaitTrue("robot 1 online")(printed.exists(l => l.startsWith("robot 1") && l.contains("online")))

@@ -212,11 +212,13 @@ object Launcher {
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     val view = GatewayReadView(gateway, ViewTimeout)(context.system)
     val doctor = () => Doctor.gather(gateway, config)(context.system).map(Doctor.findings)(context.executionContext)
-    apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(apps.control.ControlServer.GatewaySide(view, doctor)))
+    val control = apps.control.ControlServer.GatewaySide(view, doctor)
+    apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(control))
     // The web view (docs/web.md), when enabled: its address goes on the status view's first line.
     val webAddress = new java.util.concurrent.atomic.AtomicReference(Vector.empty[String])
     val gatewaySettings = GatewaySettings(context.system)
-    val web = apps.web.WebServer.GatewaySide(view, gatewaySettings.competition, id => gatewaySettings.signingOf(id).name)
+    val web =
+      apps.web.WebServer.GatewaySide(view, gatewaySettings.competition, id => gatewaySettings.signingOf(id).name)
     apps.web.WebServer.spawnIfEnabled(context, web, middleware,
       bound => webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
     context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get), "status")

@@ -319,14 +319,16 @@ object ControlServer {
       implicit system: ActorSystem[_]): Future[List[String]] = {
     implicit val ec: ExecutionContext = system.executionContext
     gateway.fold(Future.successful(List.empty[String])) { g =>
-      within(g.view.gameState(), timeout).zip(within(g.view.traffic(), timeout)).map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
+      within(g.view.gameState(), timeout).zip(within(g.view.traffic(), timeout))
+        .map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
         .recover { case NonFatal(_) => Nil }
     }
   }
 
   /** `answer`, or a failure when it has not come within `timeout` (the view's own limit may be longer). */
   private def within[T](answer: Future[T], timeout: FiniteDuration)(implicit system: ActorSystem[_]): Future[T] =
-    Future.firstCompletedOf(Seq(answer, akka.pattern.after(timeout)(Future.failed(new TimeoutException(s"no answer within $timeout")))))(
+    Future.firstCompletedOf(Seq(answer,
+      akka.pattern.after(timeout)(Future.failed(new TimeoutException(s"no answer within $timeout")))))(
       ExecutionContext.parasitic)
 
   /** The robot's next link figures, or None when none come within `timeout`. */

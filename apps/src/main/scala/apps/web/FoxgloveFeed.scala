@@ -75,23 +75,24 @@ object FoxgloveFeed {
   private val BudgetInterval: FiniteDuration = 1.second
 
   /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the budget. */
-  def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: GatewayView): Behavior[Command] = Behaviors.setup { context =>
-    implicit val mat: Materializer = Materializer(context)
-    val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
-    hub.runWith(Sink.ignore)
-    middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
-    middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
-    middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
-    val askTraffic: () => Unit = () =>
-      context.pipeToSelf(gateway.traffic()) {
-        case Success(t) => Traffic(t)
-        case Failure(_) => Unanswered
+  def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: GatewayView): Behavior[Command] =
+    Behaviors.setup { context =>
+      implicit val mat: Materializer = Materializer(context)
+      val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
+      hub.runWith(Sink.ignore)
+      middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
+      middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
+      middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
+      val askTraffic: () => Unit = () =>
+        context.pipeToSelf(gateway.traffic()) {
+          case Success(t) => Traffic(t)
+          case Failure(_) => Unanswered
+        }
+      Behaviors.withTimers[Command] { timers =>
+        timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
+        running(queue, hub, Map.empty, Vector(Decisions), askTraffic)
       }
-    Behaviors.withTimers[Command] { timers =>
-      timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
-      running(queue, hub, Map.empty, Vector(Decisions), askTraffic)
     }
-  }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Channel, Channel)],
       channels: Vector[Channel], askTraffic: () => Unit): Behavior[Command] =

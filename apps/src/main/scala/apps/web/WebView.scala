@@ -72,7 +72,8 @@ object WebView {
   )
 
   /** The view of `gateway` and `middleware`'s robots with `settings`. */
-  def apply(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings): Behavior[Command] =
+  def apply(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
+      settings: WebSettings): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         implicit val mat: Materializer = Materializer(context)
@@ -90,7 +91,8 @@ object WebView {
       }
     }
 
-  private final class View(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings,
+  private final class View(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
+      settings: WebSettings,
       context: ActorContext[Command], queue: BoundedSourceQueue[String], hub: Source[String, NotUsed]) {
     private val started = System.nanoTime()
     private def ask[T](question: Future[T])(answer: T => Command): Unit =
@@ -151,7 +153,8 @@ object WebView {
         // the watch when the camera watcher stops).
         val fresh = s.camera.fold(Vector.empty[Int])(_ => robots.map(_.robotId).filterNot(s.watched))
         s.camera.foreach(camera => fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, camera, grid = true)))
-        val model = s.model.withRobots(robots).copy(signing = robots.map(r => r.robotId -> gateway.signing(r.robotId)).toMap)
+        val signing = robots.map(r => r.robotId -> gateway.signing(r.robotId)).toMap
+        val model = s.model.withRobots(robots).copy(signing = signing)
         running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
       case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
       case Traffic(stats) => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))

@@ -120,7 +120,8 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
         def gameState() = scala.concurrent.Future.successful(None)
         def gameSource() = scala.concurrent.Future.successful(naogateway.GameSource("10.0.0.5/32", None, 0,
           Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
-          Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)")))
+          Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; " +
+            "10.0.0.6:3838 (untrusted, ignored)")))
       }
       val gateway = ControlServer.GatewaySide(view, () => scala.concurrent.Future.successful(Vector.empty))
       val withGateway = spawn(ControlServer.withInterface(new FleetStub(2), settings, Some(gateway)))

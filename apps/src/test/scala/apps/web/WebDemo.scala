@@ -62,7 +62,7 @@ final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int =
   }
 }
 
-/** The config the web view's tests run with, and the launcher's wiring of the web view beside a gateway of their own. */
+/** The config the web view's tests run with, and the launcher's wiring of the web view beside their own gateway. */
 object WebDemo {
 
   /** Gateway on loopback ports of its own, no recording, the web view on a free loopback port. */
@@ -75,9 +75,11 @@ object WebDemo {
       |apps.web { enabled = on, port = 0, push-interval = 200ms, sample-interval = 500ms }
       |""".stripMargin).withFallback(ConfigFactory.load())
 
-  /** What the web view reads of `gateway`, as the launcher hands it: the view, the competition flag, the signing rules. */
-  def gatewaySide(gateway: ActorRef[Gateway.Query], competition: Option[Boolean] = None)(implicit system: ActorSystem[_]): WebServer.GatewaySide = {
+  /** What the web view reads of `gateway`, as the launcher hands it: view, competition flag, signing rules. */
+  def gatewaySide(gateway: ActorRef[Gateway.Query], competition: Option[Boolean] = None)(
+      implicit system: ActorSystem[_]): WebServer.GatewaySide = {
     val settings = GatewaySettings(system)
-    WebServer.GatewaySide(GatewayReadView(gateway, 3.seconds), competition.getOrElse(settings.competition), id => settings.signingOf(id).name)
+    WebServer.GatewaySide(GatewayReadView(gateway, 3.seconds), competition.getOrElse(settings.competition),
+      id => settings.signingOf(id).name)
   }
 }
