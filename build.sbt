@@ -68,8 +68,17 @@ lazy val api = (project in file("api"))
     libraryDependencies ++= testLibs :+ ("org.scala-lang" % "scala-compiler" % V.scala % Test)
   )
 
+// The ZeroMQ socket loop (one thread owning its sockets, woken through a pipe): the gateway's ZeroMQ robot link and
+// the apps' ZeroMQ endpoint both run on it, so it is a module of its own that apps may see without the gateway.
+lazy val zeromq = (project in file("zeromq"))
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-zeromq",
+    libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j, jeromq) ++ testLibs
+  )
+
 lazy val naogateway = (project in file("naogateway"))
-  .dependsOn(proto, wire, api)
+  .dependsOn(proto, wire, api, zeromq)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
@@ -113,17 +122,40 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
     libraryDependencies += "com.thesamet.scalapb" %% "scalapb-runtime" % V.scalapb % "protobuf"
   )
 
+// The apps: the status and web views, the control port, the ZeroMQ endpoint, the ball follower, teleop. They see the
+// middleware and the api; the launcher hands them what they read of the gateway.
 lazy val apps = (project in file("apps"))
-  .dependsOn(robotmiddleware % "compile->compile;test->test", sim % "compile->compile;test->test", integration % "test->test")
-  .enablePlugins(JavaAppPackaging)
+  .dependsOn(api, zeromq, robotmiddleware % "compile->compile;test->test", sim % "test->test",
+    integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
+    // The boundary the compiler keeps: apps' main code compiles without the gateway's and the simulator's classes, so
+    // an app that imports a gateway internal (naogateway.Gateway, an actor, the settings) does not build. What apps
+    // may see is the api, the wire format, the middleware and the ZeroMQ loop; the launcher hands them the rest.
+    Compile / dependencyClasspath := {
+      val internals = Set((naogateway / Compile / classDirectory).value, (sim / Compile / classDirectory).value)
+      (Compile / dependencyClasspath).value.filterNot(entry => internals(entry.data))
+    },
+    libraryDependencies ++= Seq(jline, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++
+      testLibs ++ akkaTestLibs,
+    // scala-compiler in tests: ModuleLayersSpec compiles the apps that see only the api without the gateway's classes.
+    libraryDependencies += "org.scala-lang" % "scala-compiler" % V.scala % Test
+  )
+
+// The launcher: the one module that sees everything (gateway, simulator, middleware, apps). It wires the demo node
+// (Launcher), checks the machine before it starts (Preflight) and while it runs (Doctor), hands the apps the gateway's
+// read-only view, and is the package (./sbt dist): bin/naogateway, bin/robotctl (whose offline doctor reads the
+// launcher's config) and bin/teleop, with the Python client.
+lazy val launcher = (project in file("launcher"))
+  .dependsOn(apps % "compile->compile;test->test", sim, integration % "test->test")
+  .enablePlugins(JavaAppPackaging)
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-launcher",
     // The launcher is the one module with a logging backend at compile scope (its logback.xml); the libraries log
     // through SLF4J only.
-    libraryDependencies ++= Seq(jline, logback, akkaHttp, akkaHttpSprayJson, uplot, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
-    // scala-compiler in tests: ModuleLayersSpec compiles the apps that see only the api without the gateway's classes.
-    libraryDependencies += "org.scala-lang" % "scala-compiler" % V.scala % Test,
+    libraryDependencies ++= Seq(logback) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := Some("apps.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
     Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),
@@ -134,10 +166,10 @@ lazy val apps = (project in file("apps"))
       case (file, "bin/robot-ctl.bat") => file -> "bin/robotctl.bat"
       case other                       => other
     },
-    // The Python client (python/, installable with pip) with the .proto files it generates its classes from: in the
-    // repository naogateway_client/proto links to proto/src/main/protobuf, in the package it is a copy.
+    // The Python client (apps/python, installable with pip) with the .proto files it generates its classes from: in
+    // the repository naogateway_client/proto links to proto/src/main/protobuf, in the package it is a copy.
     Universal / mappings ++= {
-      val python = baseDirectory.value / "python"
+      val python = (apps / baseDirectory).value / "python"
       val sources = (python ** ("*.py" || "*.toml" || "*.md" || "*.txt" || "py.typed")).get
         .filterNot(f => Seq("build", "proto", "__pycache__").exists(d => f.getPath.contains(s"/$d/")) || f.getPath.contains(".egg-info"))
       val protos = (proto / Compile / PB.protoSources).value.head
@@ -157,14 +189,14 @@ lazy val apps = (project in file("apps"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, api, naogateway, sim, integration, robotmiddleware, apps)
-  .dependsOn(apps % "compile->compile;test->test")
+  .aggregate(proto, wire, api, zeromq, naogateway, sim, integration, robotmiddleware, apps, launcher)
+  .dependsOn(launcher % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-root",
     // The bench's web figures (bench.WebBench) drive the web view with these, as the apps tests do.
     libraryDependencies ++= Seq(akkaHttp, akkaHttpSprayJson, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
-    Compile / mainClass := (apps / Compile / mainClass).value,
+    Compile / mainClass := (launcher / Compile / mainClass).value,
     terminalEnv,
     run / fork := true,
     run / connectInput := true,
@@ -176,14 +208,14 @@ lazy val root = (project in file("."))
 // ./sbt dist: the installable package, one .tgz archive; its path is printed.
 dist / aggregate := false
 dist := {
-  val archive = (apps / Universal / packageZipTarball).value
+  val archive = (launcher / Universal / packageZipTarball).value
   println(s"package: ${archive.getAbsolutePath}")
   archive
 }
 
 // ./sbt "robotctl status": the command-line client of a running gateway's control port.
-addCommandAlias("robotctl", "apps/runMain apps.RobotCtl")
+addCommandAlias("robotctl", "launcher/runMain apps.RobotCtl")
 
 // ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table. It stages the package
 // first, because the soak (./sbt "bench soak [minutes]") runs the packaged gateway.
-addCommandAlias("bench", "apps/stage; root/Test/runMain bench.BenchSuite")
+addCommandAlias("bench", "launcher/stage; root/Test/runMain bench.BenchSuite")

@@ -1,13 +1,15 @@
 package apps
 
+import scala.concurrent.Future
 import scala.concurrent.duration._
+import scala.util.{Failure, Success}
 
 import akka.actor.typed.scaladsl.Behaviors
-import akka.actor.typed.{ActorRef, Behavior, PostStop, SupervisorStrategy}
+import akka.actor.typed.{Behavior, PostStop, SupervisorStrategy}
 import com.typesafe.config.Config
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{Gateway, Outbox, RobotSnapshot}
+import naogateway.{GameSource, GatewayStats, GatewayView, RobotLinks, RobotSnapshot, TrafficStats}
 
 /** Prints the launcher's status: a redrawn screen on a terminal, one line per change otherwise. */
 object StatusPrinter {
@@ -16,11 +18,13 @@ object StatusPrinter {
   sealed trait Command
   private case object Refresh extends Command
   private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
-  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private final case class Traffic(stats: TrafficStats) extends Command
   private final case class Game(game: Option[GameControlData]) extends Command
-  private final case class Source(source: Gateway.GameSource) extends Command
-  private final case class Links(links: Gateway.RobotLinks) extends Command
-  private final case class Stats(stats: Gateway.GatewayStats) extends Command
+  private final case class Source(source: GameSource) extends Command
+  private final case class Links(links: RobotLinks) extends Command
+  private final case class Stats(stats: GatewayStats) extends Command
+  // A question the gateway did not answer: the figures shown stay as they were until the next refresh.
+  private case object Unanswered extends Command
 
   /** How the status is shown: chosen from the terminal (`Auto`), or forced. */
   sealed trait ViewMode extends Product with Serializable
@@ -75,7 +79,8 @@ object StatusPrinter {
    * The printer of the `apps.launcher` block `c`, writing where its `view` says; `notes` are lines shown above the
    * status (the web view's address once it listens), printed once each in line mode.
    */
-  def fromConfig(gateway: ActorRef[Gateway.Query], c: Config, notes: () => Vector[String] = () => Vector.empty): Behavior[Command] = {
+  def fromConfig(gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty)
+      : Behavior[Command] = {
     val s = settings(c)
     apply(gateway, s.refresh, output(s.view), notes)
   }
@@ -101,22 +106,20 @@ object StatusPrinter {
    * A printer polling the gateway's read-only view every `refresh` and writing to `output`. It restarts (after a back-off, so a
    * failure repeating every refresh cannot flood the log) on any failure.
    */
-  def apply(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output,
+  def apply(gateway: GatewayView, refresh: FiniteDuration, output: Output,
       notes: () => Vector[String] = () => Vector.empty): Behavior[Command] =
     Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
-  private def printer(gateway: ActorRef[Gateway.Query], refresh: FiniteDuration, output: Output, notes: () => Vector[String]): Behavior[Command] =
+  private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output,
+      notes: () => Vector[String]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         timers.startTimerWithFixedDelay(Refresh, refresh)
-        // One adapter per reply class: Akka keeps one adapter per message class, so a second adapter for Option
-        // would replace the first.
-        val robotsAdapter = context.messageAdapter(Robots.apply)
-        val linksAdapter = context.messageAdapter(Links.apply)
-        val trafficAdapter = context.messageAdapter(Traffic.apply)
-        val gameAdapter = context.messageAdapter(Game.apply)
-        val sourceAdapter = context.messageAdapter(Source.apply)
-        val statsAdapter = context.messageAdapter(Stats.apply)
+        def ask[T](question: Future[T])(answer: T => Command): Unit =
+          context.pipeToSelf(question) {
+            case Success(a) => answer(a)
+            case Failure(_) => Unanswered
+          }
 
         var notesShown = Vector.empty[String]
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
@@ -131,12 +134,12 @@ object StatusPrinter {
         def running(model: StatusModel, shown: StatusModel): Behavior[Command] =
           Behaviors.receiveMessage[Command] {
             case Refresh =>
-              gateway ! Gateway.GetRobots(robotsAdapter)
-              gateway ! Gateway.GetLinkStats(linksAdapter)
-              gateway ! Gateway.GetTraffic(trafficAdapter)
-              gateway ! Gateway.GetGameState(gameAdapter)
-              gateway ! Gateway.GetGameSource(sourceAdapter)
-              gateway ! Gateway.GetStats(statsAdapter)
+              ask(gateway.robots())(Robots.apply)
+              ask(gateway.links())(Links.apply)
+              ask(gateway.traffic())(Traffic.apply)
+              ask(gateway.gameState())(Game.apply)
+              ask(gateway.gameSource())(Source.apply)
+              ask(gateway.stats())(Stats.apply)
               show(shown, model)
               running(model, model)
             case Robots(robots) => running(model.copy(robots = robots), shown)
@@ -146,6 +149,7 @@ object StatusPrinter {
             case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown)
             // The link figures of robots the gateway no longer knows are dropped with them.
             case Links(l)       => running(model.copy(links = l.links.map(s => s.robotId -> s).toMap), shown)
+            case Unanswered     => Behaviors.same
           }.receiveSignal { case (_, PostStop) =>
             output match {
               case screen: ScreenOutput => screen.close()

@@ -16,7 +16,8 @@ import org.scalatest.wordspec.AnyWordSpec
 
 /**
  * The modules the build separates stay separate in what it produces: the gateway ships no simulator class, the data
- * apps see is a module of its own (api) and the gateway's integration specs are not the simulator's tests.
+ * apps see is a module of its own (api), the gateway's integration specs are not the simulator's tests, and every
+ * app compiles without the gateway's and the simulator's classes (the build compiles apps so; scalac shows it here).
  */
 class ModuleLayersSpec extends AnyWordSpec with Matchers {
 
@@ -117,22 +118,41 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
     reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i => s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
   }
 
-  /** An apps source file's text, found from the module's or the repository's directory. */
-  private def appsSource(relative: String): (String, String) = {
-    val path = Seq(Paths.get("src/main/scala/apps", relative), Paths.get("apps/src/main/scala/apps", relative)).find(Files.exists(_))
-      .getOrElse(fail(s"apps source $relative not found"))
-    relative -> new String(Files.readAllBytes(path), java.nio.charset.StandardCharsets.UTF_8)
+  /** Every apps main source file's text, found from the module's or the repository's directory. */
+  private def appsSources: Seq[(String, String)] = {
+    val root = Seq(Paths.get("src/main/scala/apps"), Paths.get("apps/src/main/scala/apps")).find(Files.isDirectory(_))
+      .getOrElse(fail("apps sources not found"))
+    val files = Using.resource(Files.walk(root))(_.iterator.asScala.filter(_.toString.endsWith(".scala")).toVector)
+    files.sortBy(_.toString).map { p =>
+      root.relativize(p).toString -> new String(Files.readAllBytes(p), java.nio.charset.StandardCharsets.UTF_8)
+    }
   }
 
-  "The apps that see only the api" should {
-    "compile without the gateway's and the simulator's classes" in {
-      compileErrors(withoutGateway, Seq(appsSource("StatusView.scala"), appsSource("web/WebModel.scala"), appsSource("RobotRow.scala"))) shouldBe empty
+  "The apps" should {
+    "all compile without the gateway's and the simulator's classes (as the build compiles them)" in {
+      val sources = appsSources
+      sources.map(_._1) should contain allOf ("StatusPrinter.scala", "web/WebServer.scala",
+        "control/ControlServer.scala", "zeromq/ZeroMqEndpoint.scala")
+      compileErrors(withoutGateway, sources) shouldBe empty
     }
 
-    "refuse, against that class path, a probe that names naogateway.Gateway" in {
-      val errors = compileErrors(withoutGateway, Seq("Probe.scala" -> "package probe\nobject Probe { val g = naogateway.Gateway }\n"))
-      errors should not be empty
-      errors.head should include("Gateway")
+    "refuse, against that class path, a probe that names a gateway internal or the simulator" in {
+      val probes = Seq(
+        "naogateway.Gateway" -> "object Probe { val g = naogateway.Gateway }",
+        "GatewaySettings" ->
+          "object Probe { def s(system: akka.actor.typed.ActorSystem[_]) = naogateway.GatewaySettings(system) }",
+        "Fleet" -> "import naogateway.sim.Fleet\nobject Probe { val f = Fleet }")
+      probes.foreach { case (name, text) =>
+        val errors = compileErrors(withoutGateway, Seq("Probe.scala" -> s"package probe\n$text\n"))
+        withClue(text)(errors should not be empty)
+        errors.mkString("\n") should include(name.split('.').last)
+      }
+    }
+
+    "still compile a probe that reads the gateway through the api's view" in {
+      compileErrors(withoutGateway, Seq("Probe.scala" -> ("package probe\nobject Probe {\n" +
+        "  def robots(view: naogateway.GatewayView) = view.robots()\n" +
+        "  def line(s: naogateway.GatewayStats) = s.toString\n}\n"))) shouldBe empty
     }
   }
 }

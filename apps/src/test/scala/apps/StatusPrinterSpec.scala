@@ -53,7 +53,8 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val lines = new ConcurrentLinkedQueue[String]()
-        spawn(StatusPrinter(fixture.gateway, 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
+        val view = naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system)
+        spawn(StatusPrinter(view, 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
         fixture.robot(1)
         def printed = lines.asScala.toVector
         awaitTrue("robot 1 online")(printed.exists(l => l.startsWith("robot 1") && l.contains("online")))
@@ -77,7 +78,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val screen = new RecordingScreen
-        spawn(StatusPrinter(fixture.gateway, 100.millis, screen))
+        spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
         fixture.robot(1)
         def frame = screen.frame.get
         // "loss" shows a figure only once the gateway's read-only view answered GetLinkStats with the robot's link figures.
@@ -105,7 +106,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
             if (draws.incrementAndGet() == 1) throw new IllegalStateException("the terminal went away")
           def close(): Unit = ()
         }
-        spawn(StatusPrinter(fixture.gateway, 100.millis, screen))
+        spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
         awaitTrue("drawn after the restart")(draws.get >= 3)
       } finally fixture.stop()
     }

@@ -20,7 +20,7 @@ import akka.util.ByteString
 import akka.{Done, NotUsed}
 
 import apps.control.ControlProtocol.{Answer, Request}
-import naogateway.{LinkStats, RobotSnapshot}
+import naogateway.{GameSource, GatewayView, LinkStats, RobotSnapshot}
 import robotmiddleware.{Operation, RobotClient, RobotInterface, RobotMiddleware}
 
 /**
@@ -41,9 +41,15 @@ object ControlServer {
   private final case class Bound(binding: Tcp.ServerBinding) extends Command
   private final case class BindFailed(reason: Throwable) extends Command
 
+  /**
+   * What the control port reads beside the robots, handed in by the launcher: the gateway's read-only view (for the
+   * game lines of `status`) and the doctor's checks (for `doctor`), which only the launcher can make.
+   */
+  final case class GatewaySide(view: GatewayView, doctor: () => Future[Vector[Finding]])
+
   /** The server for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ControlSettings,
-      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Behavior[Command] =
+      gateway: Option[GatewaySide] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(16) { stash =>
         context.pipeToSelf(RobotClient.connect(context.system, middleware, settings.appName, settings.priority)) {
@@ -64,18 +70,18 @@ object ControlServer {
 
   /** Spawns the server as a child of `context` when `apps.control.enabled` is on (it is, by default). */
   def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command],
-      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Option[ActorRef[Command]] = {
+      gateway: Option[GatewaySide] = None): Option[ActorRef[Command]] = {
     val settings = ControlSettings(context.system)
     if (settings.enabled) Some(context.spawn(apply(middleware, settings, gateway), "control")) else None
   }
 
   /** The server in front of `robots`, which the caller owns (and closes). */
   def withInterface(robots: RobotInterface, settings: ControlSettings,
-      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None): Behavior[Command] =
+      gateway: Option[GatewaySide] = None): Behavior[Command] =
     serving(robots, settings, ownsInterface = false, gateway)
 
   private def serving(robots: RobotInterface, settings: ControlSettings, ownsInterface: Boolean,
-      gateway: Option[ActorRef[naogateway.Gateway.Query]]): Behavior[Command] =
+      gateway: Option[GatewaySide]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(16) { stash =>
         implicit val system: ActorSystem[_] = context.system
@@ -222,7 +228,7 @@ object ControlServer {
 
   /** The answer to `request`: output lines, then exactly one `Ok` or `Error`, within the request's time limit. */
   def answer(robots: RobotInterface, settings: ControlSettings, request: Request,
-      gateway: Option[ActorRef[naogateway.Gateway.Query]] = None)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
+      gateway: Option[GatewaySide] = None)(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     val limit = request match {
       case Request.Watch(_, seconds) => settings.answerTimeout + seconds.seconds
       case _                         => settings.answerTimeout
@@ -246,7 +252,7 @@ object ControlServer {
   private val MaxFinalChars = 1000
 
   private def body(robots: RobotInterface, settings: ControlSettings, request: Request,
-      gateway: Option[ActorRef[naogateway.Gateway.Query]])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
+      gateway: Option[GatewaySide])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     implicit val ec: ExecutionContext = system.executionContext
     request match {
       case Request.Status =>
@@ -274,8 +280,7 @@ object ControlServer {
         gateway match {
           case None => Source.single(Answer.Error("doctor needs the gateway's view, which this control port was not given"))
           case Some(g) =>
-            Source.future(apps.Doctor.gather(g, system.settings.config)).mapConcat { facts =>
-              val found = apps.Doctor.findings(facts)
+            Source.future(g.doctor()).mapConcat { found =>
               val problems = found.count(_.problem)
               found.map(f => Answer.Line(f.line)) :+
                 (if (problems == 0) Answer.Ok("all is well") else Answer.Error(s"$problems problem(s), each with its fix above"))
@@ -298,13 +303,11 @@ object ControlServer {
    * Where game state comes from, for the status's final line, with the message budget and the warnings for the lines
    * before it; none without a gateway or when it does not answer.
    */
-  private def gameSource(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
-      implicit system: ActorSystem[_]): Future[Option[naogateway.Gateway.GameSource]] = {
-    import akka.actor.typed.scaladsl.AskPattern._
+  private def gameSource(gateway: Option[GatewaySide], timeout: FiniteDuration)(
+      implicit system: ActorSystem[_]): Future[Option[GameSource]] = {
     implicit val ec: ExecutionContext = system.executionContext
-    implicit val askTimeout: akka.util.Timeout = timeout
-    gateway.fold(Future.successful(Option.empty[naogateway.Gateway.GameSource])) { g =>
-      g.ask[naogateway.Gateway.GameSource](naogateway.Gateway.GetGameSource(_)).map(Option(_)).recover { case NonFatal(_) => None }
+    gateway.fold(Future.successful(Option.empty[GameSource])) { g =>
+      within(g.view.gameSource(), timeout).map(Option(_)).recover { case NonFatal(_) => None }
     }
   }
 
@@ -312,18 +315,21 @@ object ControlServer {
    * The game and the competition gate as the status screen shows them (with why a closed gate is closed), for the
    * lines before the status's final one; none without a gateway or when it does not answer.
    */
-  private def gameLines(gateway: Option[ActorRef[naogateway.Gateway.Query]], timeout: FiniteDuration)(
+  private def gameLines(gateway: Option[GatewaySide], timeout: FiniteDuration)(
       implicit system: ActorSystem[_]): Future[List[String]] = {
-    import akka.actor.typed.scaladsl.AskPattern._
     implicit val ec: ExecutionContext = system.executionContext
-    implicit val askTimeout: akka.util.Timeout = timeout
     gateway.fold(Future.successful(List.empty[String])) { g =>
-      val game = g.ask[Option[naogateway.wire.gamecontroller.GameControlData]](naogateway.Gateway.GetGameState(_))
-      val traffic = g.ask[naogateway.Outbox.TrafficStats](naogateway.Gateway.GetTraffic(_))
-      game.zip(traffic).map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
+      within(g.view.gameState(), timeout).zip(within(g.view.traffic(), timeout))
+        .map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
         .recover { case NonFatal(_) => Nil }
     }
   }
+
+  /** `answer`, or a failure when it has not come within `timeout` (the view's own limit may be longer). */
+  private def within[T](answer: Future[T], timeout: FiniteDuration)(implicit system: ActorSystem[_]): Future[T] =
+    Future.firstCompletedOf(Seq(answer,
+      akka.pattern.after(timeout)(Future.failed(new TimeoutException(s"no answer within $timeout")))))(
+      ExecutionContext.parasitic)
 
   /** The robot's next link figures, or None when none come within `timeout`. */
   private def linkStats(robots: RobotInterface, robotId: Int, timeout: FiniteDuration)(implicit mat: Materializer): Future[Option[LinkStats]] =

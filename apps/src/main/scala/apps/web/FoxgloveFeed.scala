@@ -4,7 +4,7 @@ import java.nio.{ByteBuffer, ByteOrder}
 import java.util.Base64
 
 import scala.concurrent.duration._
-import scala.util.Try
+import scala.util.{Failure, Success, Try}
 
 import akka.NotUsed
 import akka.actor.typed.scaladsl.Behaviors
@@ -16,8 +16,8 @@ import akka.util.ByteString
 import spray.json._
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{GameStateUpdated, Gateway, Outbox, RobotEvent, RobotSnapshot}
-import naogateway.recording.{Decision, DecisionJson, Recording}
+import naogateway.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, TrafficStats}
+import naogateway.recording.{Decision, DecisionJson, RecordingSchema}
 import robotmiddleware.RobotMiddleware
 
 /**
@@ -40,7 +40,7 @@ object FoxgloveFeed {
   final case class Channel(id: Int, topic: String, schemaName: String, encoding: String = "protobuf")
 
   /** The gateway's decisions as the recording writes them (JSON without a schema). */
-  private[web] val Decisions: Channel = Channel(1, Recording.Topics.Decisions, "", "json")
+  private[web] val Decisions: Channel = Channel(1, RecordingSchema.Topics.Decisions, "", "json")
 
   /** What the feed's hub hands its connections: channels appearing, and messages on them. */
   sealed trait Update
@@ -66,29 +66,36 @@ object FoxgloveFeed {
   private final case class Status(snapshot: RobotSnapshot) extends Command
   private final case class Event(event: RobotEvent) extends Command
   private final case class Game(data: GameControlData) extends Command
-  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private final case class Traffic(stats: TrafficStats) extends Command
+  // The gateway did not answer the budget question: the next tick asks again.
+  private case object Unanswered extends Command
   private case object BudgetTick extends Command
 
   /** How often the budget decision is published (the recording's outbox writes it at most this often). */
   private val BudgetInterval: FiniteDuration = 1.second
 
   /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the budget. */
-  def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: ActorRef[Gateway.Query]): Behavior[Command] = Behaviors.setup { context =>
-    implicit val mat: Materializer = Materializer(context)
-    val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
-    hub.runWith(Sink.ignore)
-    middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
-    middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
-    middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
-    val traffic = context.messageAdapter(Traffic.apply)
-    Behaviors.withTimers[Command] { timers =>
-      timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
-      running(queue, hub, Map.empty, Vector(Decisions), gateway, traffic)
+  def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: GatewayView): Behavior[Command] =
+    Behaviors.setup { context =>
+      implicit val mat: Materializer = Materializer(context)
+      val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
+      hub.runWith(Sink.ignore)
+      middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
+      middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
+      middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
+      val askTraffic: () => Unit = () =>
+        context.pipeToSelf(gateway.traffic()) {
+          case Success(t) => Traffic(t)
+          case Failure(_) => Unanswered
+        }
+      Behaviors.withTimers[Command] { timers =>
+        timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
+        running(queue, hub, Map.empty, Vector(Decisions), askTraffic)
+      }
     }
-  }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Channel, Channel)],
-      channels: Vector[Channel], gateway: ActorRef[Gateway.Query], traffic: ActorRef[Outbox.TrafficStats]): Behavior[Command] =
+      channels: Vector[Channel], askTraffic: () => Unit): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
         replyTo ! Feed(channels, hub)
@@ -100,7 +107,9 @@ object FoxgloveFeed {
         decided(queue, Decision.Published(GameStateUpdated(data)))
         Behaviors.same
       case BudgetTick =>
-        gateway ! Gateway.GetTraffic(traffic)
+        askTraffic()
+        Behaviors.same
+      case Unanswered =>
         Behaviors.same
       case Traffic(t) =>
         decided(queue, Decision.Budget(t.outBytesLastSecond, t.inBytesLastSecond, t.budgetBytesPerSecond, t.queued))
@@ -109,11 +118,11 @@ object FoxgloveFeed {
         val id = snapshot.robotId
         val known = robots.get(id)
         // As in a recording, at most MaxRobotChannels robots get channels: a flood of robot ids cannot grow the list.
-        if (known.isEmpty && robots.size >= Recording.MaxRobotChannels) Behaviors.same
+        if (known.isEmpty && robots.size >= RecordingSchema.MaxRobotChannels) Behaviors.same
         else {
           val ((status, health), more) = known.fold {
-            val status = Channel(channels.size + 1, Recording.Topics.status(id), "naogateway.proto.Status")
-            val health = Channel(channels.size + 2, Recording.Topics.health(id), "naogateway.proto.RobotHealth")
+            val status = Channel(channels.size + 1, RecordingSchema.Topics.status(id), "naogateway.proto.Status")
+            val health = Channel(channels.size + 2, RecordingSchema.Topics.health(id), "naogateway.proto.RobotHealth")
             queue.offer(Advertised(Vector(status, health)))
             ((status, health), Vector(status, health))
           }(pair => (pair, Vector.empty))
@@ -121,7 +130,7 @@ object FoxgloveFeed {
           val report = snapshot.report
           queue.offer(Published(status, nanos, report.status.toByteArray))
           queue.offer(Published(health, nanos, report.health.toByteArray))
-          running(queue, hub, robots.updated(id, (status, health)), channels ++ more, gateway, traffic)
+          running(queue, hub, robots.updated(id, (status, health)), channels ++ more, askTraffic)
         }
     }.receiveSignal { case (_, PostStop) =>
       queue.complete()
@@ -136,7 +145,7 @@ object FoxgloveFeed {
   }
 
   /** The schema data of every protobuf channel: the recording's descriptor set, base64 as the protocol wants it. */
-  private lazy val schemaBase64: String = Base64.getEncoder.encodeToString(Recording.descriptorSet)
+  private lazy val schemaBase64: String = Base64.getEncoder.encodeToString(RecordingSchema.descriptorSet)
 
   private[web] def serverInfo: String = JsObject(
     "op" -> JsString("serverInfo"), "name" -> JsString("naogateway"), "capabilities" -> JsArray(),

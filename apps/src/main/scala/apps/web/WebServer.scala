@@ -23,7 +23,7 @@ import akka.stream.{BufferOverflowException, Materializer, OverflowStrategy}
 import akka.util.Timeout
 import org.slf4j.LoggerFactory
 
-import naogateway.{Gateway, RateLimitedLog}
+import naogateway.{GatewayView, RateLimitedLog}
 import robotmiddleware.RobotMiddleware
 
 /**
@@ -67,8 +67,14 @@ object WebServer {
     s"web view: http://$host:${address.getPort}/" + (if (settings.token.nonEmpty) "?token=<apps.web.token>" else "")
   }
 
+  /**
+   * What the web view reads of the gateway, handed in by the launcher: its read-only view, whether the competition
+   * mode is on (which refuses the control panel), and each robot's signing rule by name.
+   */
+  final case class GatewaySide(view: GatewayView, competition: Boolean, signing: Int => String)
+
   /** Spawns the server (and its view) as a child of `context` when `apps.web.enabled` is on. */
-  def spawnIfEnabled(context: ActorContext[_], gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command],
+  def spawnIfEnabled(context: ActorContext[_], gateway: GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
       bound: Option[InetSocketAddress] => Unit = _ => ()): Option[ActorRef[Command]] = {
     val settings = WebSettings(context.system)
     if (!settings.enabled) None
@@ -81,14 +87,14 @@ object WebServer {
   }
 
   /** The server of `gateway`'s and `middleware`'s view; `bound` hears the address once (None if it did not bind). */
-  def apply(gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings,
-      bound: Option[InetSocketAddress] => Unit = _ => (), competition: Option[Boolean] = None): Behavior[Command] =
+  def apply(gateway: GatewaySide, middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings,
+      bound: Option[InetSocketAddress] => Unit = _ => ()): Behavior[Command] =
     Behaviors.setup { context =>
       require(settings.refusal.isEmpty, settings.refusal.getOrElse(""))
       implicit val system: ActorSystem[_] = context.system
       val view = context.spawn(WebView(gateway, middleware, settings), "view")
-      val foxglove = context.spawn(FoxgloveFeed(middleware, gateway), "foxglove")
-      val available = availability(settings, competition.getOrElse(naogateway.GatewaySettings(context.system).competition))
+      val foxglove = context.spawn(FoxgloveFeed(middleware, gateway.view), "foxglove")
+      val available = availability(settings, gateway.competition)
       if (settings.control.enabled && !available.enabled) context.log.warn("Web control panel refused: {}", available.reason)
       val control = context.spawn(WebControl(middleware, settings.control, available), "control")
       val connections = new Connections(settings)

@@ -1,6 +1,7 @@
 package apps.web
 
-import scala.concurrent.ExecutionContext
+import scala.concurrent.{ExecutionContext, Future}
+import scala.util.{Failure, Success}
 
 import akka.NotUsed
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
@@ -9,7 +10,7 @@ import akka.stream.scaladsl.{BroadcastHub, Keep, Sink, Source}
 import akka.stream.{BoundedSourceQueue, Materializer}
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{Gateway, GatewaySettings, Outbox, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.{GameSource, GatewayStats, RobotEvent, RobotLinks, RobotSnapshot, TrafficStats, VisionFrame}
 import robotmiddleware.RobotMiddleware
 
 /**
@@ -39,11 +40,13 @@ object WebView {
   private case object Tick extends Command
   private case object Sample extends Command
   private final case class Robots(robots: Vector[RobotSnapshot]) extends Command
-  private final case class Links(links: Gateway.RobotLinks) extends Command
-  private final case class Traffic(stats: Outbox.TrafficStats) extends Command
+  private final case class Links(links: RobotLinks) extends Command
+  private final case class Traffic(stats: TrafficStats) extends Command
   private final case class Game(game: Option[GameControlData]) extends Command
-  private final case class GameSourceIs(source: Gateway.GameSource) extends Command
-  private final case class Stats(stats: Gateway.GatewayStats) extends Command
+  private final case class GameSourceIs(source: GameSource) extends Command
+  private final case class Stats(stats: GatewayStats) extends Command
+  // A question the gateway did not answer: the next tick asks again.
+  private case object Unanswered extends Command
   private final case class Event(event: RobotEvent) extends Command
   private final case class Vision(frame: VisionFrame) extends Command
   private case object PageJoined extends Command
@@ -69,7 +72,8 @@ object WebView {
   )
 
   /** The view of `gateway` and `middleware`'s robots with `settings`. */
-  def apply(gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings): Behavior[Command] =
+  def apply(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
+      settings: WebSettings): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         implicit val mat: Materializer = Materializer(context)
@@ -82,21 +86,20 @@ object WebView {
         middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
         // The game comes as the GameController sends it, so a new state reaches the page at once, not at the next tick.
         middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
-        val signing = GatewaySettings(context.system)
-        new View(gateway, middleware, settings, context, queue, hub, signing).running(State(
+        new View(gateway, middleware, settings, context, queue, hub).running(State(
           WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, 0, None, Map.empty, 0L, 0L, Figures(0, 0, 0)))
       }
     }
 
-  private final class View(gateway: ActorRef[Gateway.Query], middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings,
-      context: ActorContext[Command], queue: BoundedSourceQueue[String], hub: Source[String, NotUsed], gatewaySettings: GatewaySettings) {
+  private final class View(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
+      settings: WebSettings,
+      context: ActorContext[Command], queue: BoundedSourceQueue[String], hub: Source[String, NotUsed]) {
     private val started = System.nanoTime()
-    // One adapter per reply class: Akka keeps one adapter per message class.
-    private val robotsAdapter = context.messageAdapter(Robots.apply)
-    private val linksAdapter = context.messageAdapter(Links.apply)
-    private val trafficAdapter = context.messageAdapter(Traffic.apply)
-    private val sourceAdapter = context.messageAdapter(GameSourceIs.apply)
-    private val statsAdapter = context.messageAdapter(Stats.apply)
+    private def ask[T](question: Future[T])(answer: T => Command): Unit =
+      context.pipeToSelf(question) {
+        case Success(a) => answer(a)
+        case Failure(_) => Unanswered
+      }
 
     // The view's own ref, for the page streams and the camera watcher (which must not touch this context).
     private val self = context.self
@@ -137,11 +140,11 @@ object WebView {
     /** The view with state `s`. */
     def running(s: State): Behavior[Command] = Behaviors.receiveMessage[Command] {
       case Tick =>
-        gateway ! Gateway.GetRobots(robotsAdapter)
-        gateway ! Gateway.GetLinkStats(linksAdapter)
-        gateway ! Gateway.GetTraffic(trafficAdapter)
-        gateway ! Gateway.GetGameSource(sourceAdapter)
-        gateway ! Gateway.GetStats(statsAdapter)
+        ask(gateway.view.robots())(Robots.apply)
+        ask(gateway.view.links())(Links.apply)
+        ask(gateway.view.traffic())(Traffic.apply)
+        ask(gateway.view.gameSource())(GameSourceIs.apply)
+        ask(gateway.view.stats())(Stats.apply)
         // The push follows the robots' answer, so a page sees what the gateway saw within about one interval; when the
         // answer is late (a robot actor slow to answer), the next tick pushes what there is.
         running(if (s.answered) s.copy(answered = false) else push(s))
@@ -150,7 +153,8 @@ object WebView {
         // the watch when the camera watcher stops).
         val fresh = s.camera.fold(Vector.empty[Int])(_ => robots.map(_.robotId).filterNot(s.watched))
         s.camera.foreach(camera => fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, camera, grid = true)))
-        val model = s.model.withRobots(robots).copy(signing = robots.map(r => r.robotId -> gatewaySettings.signingOf(r.robotId).name).toMap)
+        val signing = robots.map(r => r.robotId -> gateway.signing(r.robotId)).toMap
+        val model = s.model.withRobots(robots).copy(signing = signing)
         running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
       case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
       case Traffic(stats) => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
@@ -161,6 +165,7 @@ object WebView {
       case Vision(VisionFrame.Regions(id, frame, _, regions)) => running(s.copy(model = s.model.withRegions(id, frame, regions)))
       case Vision(VisionFrame.Grid(id, frame, _, grid))       => running(s.copy(model = s.model.withGrid(id, frame, grid.cells.toArray)))
       case Sample         => running(s.copy(model = s.model.sampled(t)))
+      case Unanswered     => Behaviors.same
       case Connect(replyTo) =>
         // A page counts from when its stream runs until it ends, however it ends.
         val pushes = hub.watchTermination() { (_, done) =>

@@ -109,19 +109,21 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
 
     "end a status with the game, the gate (why it is closed), the message budget, warnings and the game's source" in {
       val reason = "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00"
-      val gateway = spawn(Behaviors.receiveMessage[naogateway.Gateway.Command] {
-        case naogateway.Gateway.GetGameState(replyTo) => replyTo ! None; Behaviors.same
-        case naogateway.Gateway.GetTraffic(replyTo) =>
-          replyTo ! naogateway.Outbox.TrafficStats(0, 0, 125000, Map.empty, 0, 0, 0, 0, gameRunning = true, competition = true,
-            gateReason = Some(reason))
-          Behaviors.same
-        case naogateway.Gateway.GetGameSource(replyTo) =>
-          replyTo ! naogateway.Gateway.GameSource("10.0.0.5/32", None, 0,
-            Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
-            Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)"))
-          Behaviors.same
-        case _ => Behaviors.same
-      })
+      val view = new naogateway.GatewayView {
+        private def none = scala.concurrent.Future.failed(new UnsupportedOperationException("not asked by status"))
+        def addresses() = none
+        def robots() = none
+        def links() = none
+        def stats() = none
+        def traffic() = scala.concurrent.Future.successful(naogateway.TrafficStats(0, 0, 125000, Map.empty, 0, 0, 0, 0,
+          gameRunning = true, competition = true, gateReason = Some(reason)))
+        def gameState() = scala.concurrent.Future.successful(None)
+        def gameSource() = scala.concurrent.Future.successful(naogateway.GameSource("10.0.0.5/32", None, 0,
+          Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
+          Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; " +
+            "10.0.0.6:3838 (untrusted, ignored)")))
+      }
+      val gateway = ControlServer.GatewaySide(view, () => scala.concurrent.Future.successful(Vector.empty))
       val withGateway = spawn(ControlServer.withInterface(new FleetStub(2), settings, Some(gateway)))
       val lines = exchange("status", address(withGateway).getPort)
       lines.takeRight(5) shouldBe Vector(". game: no GameController heard",

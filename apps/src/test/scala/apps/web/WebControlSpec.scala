@@ -76,7 +76,7 @@ class WebControlSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
       WebServer.availability(settings.copy(control = settings.control.copy(enabled = false)), competition = false).enabled shouldBe false
       WebServer.availability(settings, competition = false).enabled shouldBe true
 
-      val competing = spawn(WebServer(demo.gateway, demo.middleware, settings, competition = Some(true)))
+      val competing = spawn(WebServer(demo.side.copy(competition = true), demo.middleware, settings))
       val probe = createTestProbe[Option[InetSocketAddress]]()
       competing ! WebServer.GetAddress(probe.ref)
       val port = probe.receiveMessage(10.seconds).get.getPort

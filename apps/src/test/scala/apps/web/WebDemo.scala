@@ -13,7 +13,7 @@ import com.typesafe.config.{Config, ConfigFactory}
 
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
 import naogateway.testkit.TestLoopback
-import naogateway.{Gateway, GatewaySettings}
+import naogateway.{Gateway, GatewayReadView, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /**
@@ -33,7 +33,9 @@ final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int =
     firstAddress = TestLoopback.block(robots))), 60.seconds)
   private val gc = system.systemActorOf(SimulatedGameController(SimulatedGameControllerSettings(addresses.gameController.get,
     initial = 2.seconds, ready = 2.seconds, set = 2.seconds, playing = 6.seconds, finished = 2.seconds, interval = 100.millis)), s"$name-gc")
-  val server: ActorRef[WebServer.Command] = system.systemActorOf(WebServer(gateway, middleware, settings), s"$name-web")
+  /** What the launcher hands the web view of this gateway. */
+  val side: WebServer.GatewaySide = WebDemo.gatewaySide(gateway)(system)
+  val server: ActorRef[WebServer.Command] = system.systemActorOf(WebServer(side, middleware, settings), s"$name-web")
 
   /** Where the web view listens. */
   val address: InetSocketAddress =
@@ -60,7 +62,7 @@ final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int =
   }
 }
 
-/** The config the web view's tests run with. */
+/** The config the web view's tests run with, and the launcher's wiring of the web view beside their own gateway. */
 object WebDemo {
 
   /** Gateway on loopback ports of its own, no recording, the web view on a free loopback port. */
@@ -72,4 +74,12 @@ object WebDemo {
       |}
       |apps.web { enabled = on, port = 0, push-interval = 200ms, sample-interval = 500ms }
       |""".stripMargin).withFallback(ConfigFactory.load())
+
+  /** What the web view reads of `gateway`, as the launcher hands it: view, competition flag, signing rules. */
+  def gatewaySide(gateway: ActorRef[Gateway.Query], competition: Option[Boolean] = None)(
+      implicit system: ActorSystem[_]): WebServer.GatewaySide = {
+    val settings = GatewaySettings(system)
+    WebServer.GatewaySide(GatewayReadView(gateway, 3.seconds), competition.getOrElse(settings.competition),
+      id => settings.signingOf(id).name)
+  }
 }

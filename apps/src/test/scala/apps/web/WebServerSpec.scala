@@ -114,7 +114,7 @@ class WebServerSpec
     }
 
     "refuse a WebSocket without the token when one is set, and serve one with it" in {
-      val guarded = spawn(WebServer(demo.gateway, demo.middleware, settings.copy(token = "s3cret-token")))
+      val guarded = spawn(WebServer(demo.side, demo.middleware, settings.copy(token = "s3cret-token")))
       val probe = createTestProbe[Option[InetSocketAddress]]()
       guarded ! WebServer.GetAddress(probe.ref)
       val port = probe.receiveMessage(10.seconds).get.getPort
@@ -136,7 +136,7 @@ class WebServerSpec
     "serve 50 pages at once, and refuse the ones beyond max-clients" in {
       // A server of its own whose clients may lag 20 s behind: this is about many clients, not slow ones (the 50
       // clients share this JVM, and a loaded machine makes some of them slow readers).
-      val many = spawn(WebServer(demo.gateway, demo.middleware, settings.copy(clientBuffer = 100)))
+      val many = spawn(WebServer(demo.side, demo.middleware, settings.copy(clientBuffer = 100)))
       val manyAt = createTestProbe[Option[InetSocketAddress]]()
       many ! WebServer.GetAddress(manyAt.ref)
       val manyPort = manyAt.receiveMessage(10.seconds).get.getPort
@@ -148,7 +148,7 @@ class WebServerSpec
         val counters = createTestProbe[WebServer.Counters]()
         many ! WebServer.GetCounters(counters.ref)
         counters.receiveMessage(10.seconds) shouldBe WebServer.Counters(50, 0, 0, 0)
-        val small = spawn(WebServer(demo.gateway, demo.middleware, settings.copy(maxClients = 2)))
+        val small = spawn(WebServer(demo.side, demo.middleware, settings.copy(maxClients = 2)))
         val probe = createTestProbe[Option[InetSocketAddress]]()
         small ! WebServer.GetAddress(probe.ref)
         val port = probe.receiveMessage(10.seconds).get.getPort

@@ -2,13 +2,8 @@ package naogateway.recording
 
 import java.net.InetSocketAddress
 
-import scala.collection.mutable
-
-import com.google.protobuf.DescriptorProtos.FileDescriptorSet
-import com.google.protobuf.Descriptors.FileDescriptor
-
 import naogateway._
-import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordedPort, RecordingProto, RpcProto}
+import naogateway.proto.RecordedPort
 
 /**
  * Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
@@ -42,25 +37,6 @@ final class RobotClockEstimates extends RobotTimeBase {
 
   def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long] =
     Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
-}
-
-/** A gateway decision worth recording, handed over as data and written as JSON by the writer thread. */
-sealed trait Decision extends Product with Serializable
-
-/** The decisions. */
-object Decision {
-
-  /** A robot or game event the gateway published (online, offline, restarted, link quality, game state). */
-  final case class Published(event: GatewayEvent) extends Decision
-
-  /** What the outbox did with one datagram for robot `robotId`: `sent`, `queued`, `refused-by-rule`, `dropped`. */
-  final case class Outgoing(robotId: Int, priority: Priority, outcome: String, bytes: Array[Byte]) extends Decision
-
-  /** The competition gate opened or closed on `reading` (a game state, or a packet that could not be read). */
-  final case class Gate(open: Boolean, reading: naogateway.GameReading) extends Decision
-
-  /** The team budget's state: bytes each way over the last second, the limit, the queues. */
-  final case class Budget(outBytes: Long, inBytes: Long, limit: Int, queued: Map[String, Int]) extends Decision
 }
 
 /**
@@ -103,29 +79,12 @@ object Recording {
   def apply(settings: RecordingSettings, threadName: String, clock: RobotTimeBase = RobotTimeBase.Unknown): Recording =
     if (settings.enabled) new Recorder(settings, threadName, clock) else Off
 
-  /** Topics of a recording (docs/recording.md). */
-  object Topics {
-    val Datagrams: String = "/gateway/datagrams"
-    val Decisions: String = "/gateway/decisions"
-    def status(robotId: Int): String = s"/robot/$robotId/status"
-    def health(robotId: Int): String = s"/robot/$robotId/health"
-    def message(robotId: Int): String = s"/robot/$robotId/message"
-  }
+  /** Topics of a recording (docs/recording.md): [[RecordingSchema.Topics]] (api), which the live feed names too. */
+  val Topics: RecordingSchema.Topics.type = RecordingSchema.Topics
 
-  /** Robots per file that get decoded channels of their own; datagrams of further robot ids are kept raw only. */
-  val MaxRobotChannels: Int = 64
+  /** Robots per file that get decoded channels of their own ([[RecordingSchema.MaxRobotChannels]], api). */
+  val MaxRobotChannels: Int = RecordingSchema.MaxRobotChannels
 
-  /** Every .proto file of the project with its imports, dependencies first: the schema data of every channel. */
-  lazy val descriptorSet: Array[Byte] = {
-    val ordered = mutable.LinkedHashMap.empty[String, FileDescriptor]
-    def add(f: FileDescriptor): Unit = if (!ordered.contains(f.getName)) {
-      f.getDependencies.forEach(d => add(d))
-      ordered(f.getName) = f
-    }
-    Seq(MessageProto.javaDescriptor, DebuggingProto.javaDescriptor, HavimoProto.javaDescriptor, RpcProto.javaDescriptor,
-      RecordingProto.javaDescriptor).foreach(add)
-    val set = FileDescriptorSet.newBuilder()
-    ordered.values.foreach(f => set.addFile(f.toProto))
-    set.build().toByteArray
-  }
+  /** The schema data of every channel ([[RecordingSchema.descriptorSet]], api). */
+  def descriptorSet: Array[Byte] = RecordingSchema.descriptorSet
 }

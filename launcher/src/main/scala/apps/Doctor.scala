@@ -23,12 +23,8 @@ import naogateway.{Gateway, GatewaySettings, LinkStats, Outbox, Rejection, Robot
  */
 object Doctor {
 
-  /** One check's result: `problem` None when all is well (then `text` says what was found), else the fix. */
-  final case class Finding(check: String, text: String, problem: Boolean, fix: String = "") {
-
-    /** The line robotctl prints: "ok   check: text" or "FAIL check: text; fix: ...". */
-    def line: String = if (problem) s"FAIL $check: $text; fix: $fix" else s"ok   $check: $text"
-  }
+  /** One check's result ([[apps.control.Finding]], which the control port sends). */
+  type Finding = apps.control.Finding; val Finding: apps.control.Finding.type = apps.control.Finding
 
   private def ok(check: String, text: String) = Finding(check, text, problem = false)
   private def fail(check: String, text: String, fix: String) = Finding(check, text, problem = true, fix)

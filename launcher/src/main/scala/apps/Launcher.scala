@@ -183,6 +183,9 @@ object Launcher {
     if (simulated <= settings.discovery.maxRobots) settings
     else settings.copy(discovery = settings.discovery.copy(maxRobots = simulated))
 
+  /** How long apps wait for the gateway's view to answer a question (each asks the robot actors in turn). */
+  val ViewTimeout: FiniteDuration = 3.seconds
+
   /** What the root of the gateway node accepts. */
   sealed trait Command
   private final case class Addresses(addresses: Gateway.Addresses) extends Command
@@ -207,12 +210,18 @@ object Launcher {
     context.watchWith(gateway, PartStopped("gateway"))
     context.watchWith(middleware, PartStopped("middleware"))
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
-    apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(gateway))
+    val view = GatewayReadView(gateway, ViewTimeout)(context.system)
+    val doctor = () => Doctor.gather(gateway, config)(context.system).map(Doctor.findings)(context.executionContext)
+    val control = apps.control.ControlServer.GatewaySide(view, doctor)
+    apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(control))
     // The web view (docs/web.md), when enabled: its address goes on the status view's first line.
     val webAddress = new java.util.concurrent.atomic.AtomicReference(Vector.empty[String])
-    apps.web.WebServer.spawnIfEnabled(context, gateway, middleware,
+    val gatewaySettings = GatewaySettings(context.system)
+    val web =
+      apps.web.WebServer.GatewaySide(view, gatewaySettings.competition, id => gatewaySettings.signingOf(id).name)
+    apps.web.WebServer.spawnIfEnabled(context, web, middleware,
       bound => webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
-    context.spawn(StatusPrinter.fromConfig(gateway, config.getConfig("apps.launcher"), () => webAddress.get), "status")
+    context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get), "status")
     gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
 
     Behaviors.receiveMessage {

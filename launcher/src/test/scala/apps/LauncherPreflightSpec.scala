@@ -113,7 +113,8 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
       block should include("# robots.conf")
       // Without a signing key in the environment: the README's robots must not need one.
       check(block) shouldBe ((Vector.empty, None))
-      val example = new String(java.nio.file.Files.readAllBytes(find("apps/src/universal/conf/robots.example.conf")), java.nio.charset.StandardCharsets.UTF_8)
+      val example = new String(java.nio.file.Files.readAllBytes(find("launcher/src/universal/conf/robots.example.conf")),
+        java.nio.charset.StandardCharsets.UTF_8)
       check(example) shouldBe ((Vector.empty, None))
     }
 

@@ -1,0 +1,27 @@
+package naogateway
+
+import scala.concurrent.Future
+import scala.concurrent.duration.FiniteDuration
+
+import akka.actor.typed.scaladsl.AskPattern._
+import akka.actor.typed.{ActorRef, ActorSystem}
+import akka.util.Timeout
+
+import naogateway.wire.gamecontroller.GameControlData
+
+/** The gateway's side of [[GatewayView]] (api): each question asked of the gateway actor's read-only queries. */
+object GatewayReadView {
+
+  /** A view of `gateway` whose every question fails when the gateway has not answered within `timeout`. */
+  def apply(gateway: ActorRef[Gateway.Query], timeout: FiniteDuration)(implicit system: ActorSystem[_]): GatewayView =
+    new GatewayView {
+      private implicit val askTimeout: Timeout = timeout
+      def addresses(): Future[GatewayAddresses] = gateway.ask(Gateway.GetAddresses(_))
+      def robots(): Future[Vector[RobotSnapshot]] = gateway.ask(Gateway.GetRobots(_))
+      def links(): Future[RobotLinks] = gateway.ask(Gateway.GetLinkStats(_))
+      def stats(): Future[GatewayStats] = gateway.ask(Gateway.GetStats(_))
+      def traffic(): Future[TrafficStats] = gateway.ask(Gateway.GetTraffic(_))
+      def gameState(): Future[Option[GameControlData]] = gateway.ask(Gateway.GetGameState(_))
+      def gameSource(): Future[GameSource] = gateway.ask(Gateway.GetGameSource(_))
+    }
+}
