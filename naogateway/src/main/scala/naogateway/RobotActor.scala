@@ -40,14 +40,38 @@ object RobotActor {
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
   private[naogateway] final case class Rebound(address: InetSocketAddress) extends Common
 
-  /** Answers with the children's refs once the robot is reachable (probing it first if needed). */
-  final case class Connect(replyTo: ActorRef[Connected]) extends Command
+  /**
+   * What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`): questions
+   * and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers, no way to its sender.
+   */
+  sealed trait Access extends Command
+
+  /** Asks for the children of a reachable robot: waits (stashed) while it is not reached, probing it. */
+  private[naogateway] sealed trait Reach extends Command {
+    private[naogateway] def answer(children: Connected): Unit
+  }
+
+  /** Answers with the children's refs once the robot is reachable (the gateway's own specs and the benches). */
+  final case class Connect(replyTo: ActorRef[Connected]) extends Reach {
+    private[naogateway] def answer(children: Connected): Unit = replyTo ! children
+  }
+
+  /** The middleware's `Connect`: answers with [[Opened]] once the robot is reachable (probing it first if needed). */
+  final case class Open(replyTo: ActorRef[Opened]) extends Reach with Access {
+    private[naogateway] def answer(c: Connected): Unit = replyTo ! Opened(c.robotId, c.response, c.vision)
+  }
+
+  /**
+   * A reachable robot as the middleware may use it: calls through its response actor, camera registrations through its
+   * vision actor. Both refs die with a restart of the robot actor: the holder's cue to open again.
+   */
+  final case class Opened(robotId: Int, response: ActorRef[ResponseActor.Call], vision: ActorRef[VisionActor.Register])
 
   /** Answers with the latest keep-alive contents and liveness. */
-  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Common
+  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Common with Access
 
   /** Answers with the link figures. */
-  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common
+  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common with Access
 
   /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
   private[naogateway] final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
@@ -115,7 +139,7 @@ object RobotActor {
     final case class ZeroMq(endpoint: String) extends Transport
   }
 
-  /** The robot's children, for callers that talk to it directly. */
+  /** The robot's children, for the gateway's own specs and the benches (the middleware gets [[Opened]]). */
   final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command],
       noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
       stream: ActorRef[StreamActor.Command])
@@ -186,7 +210,7 @@ object RobotActor {
     /** Not reached yet: Connect waits (stashed) until the heartbeat says the robot is there. */
     private def unreached(f: Family, s: RobotState): Behavior[Command] = receiveMessage {
       case m: Common => unreached(f, common(m, f, None, s, isOnline = false))
-      case c: Connect =>
+      case c: Reach =>
         if (stash.isFull) context.log.warn("Robot [{}]: too many connects waiting", robotId) else stash.stash(c)
         f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
@@ -200,8 +224,8 @@ object RobotActor {
 
     private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = receiveMessage {
       case m: Common => running(f, c, common(m, f, Some(c), s, isOnline), isOnline)
-      case Connect(replyTo) =>
-        replyTo ! Connected(robotId, f.response, f.sender, c.vision, c.stream)
+      case r: Reach =>
+        r.answer(Connected(robotId, f.response, f.sender, c.vision, c.stream))
         if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
       case Verdict(HeartBeatActor.CameOnline) => if (isOnline) Behaviors.same else online(f, c, s)
