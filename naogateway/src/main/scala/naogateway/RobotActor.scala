@@ -41,8 +41,9 @@ object RobotActor {
   private[naogateway] final case class Rebound(address: InetSocketAddress) extends Common
 
   /**
-   * What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`): questions
-   * and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers, no way to its sender.
+   * What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`):
+   * questions and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers; no way to its
+   * sender.
    */
   sealed trait Access extends Command
 
@@ -85,11 +86,11 @@ object RobotActor {
    * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
    * the robot port's reader has handed the actor, given back as each is handled.
    */
-  final case class Wiring(
+  private[naogateway] final case class Wiring(
       subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
 
   /** Wirings without a gateway. */
-  object Wiring {
+  private[naogateway] object Wiring {
 
     /** Events to `events` alone, no gateway to ask: for a robot actor on its own (tests). */
     def to(events: ActorRef[GatewayEvent]): Wiring = Wiring(Set(events), None, new Backlog(Int.MaxValue))
@@ -129,10 +130,10 @@ object RobotActor {
   private case object ForgetKey
 
   /** How a robot is reached. */
-  sealed trait Transport extends Product with Serializable
+  private[naogateway] sealed trait Transport extends Product with Serializable
 
   /** The two kinds of robot. */
-  object Transport {
+  private[naogateway] object Transport {
     /** FU-Remote frames in UDP datagrams through the gateway's outbox: the CM-530. */
     case object Datagrams extends Transport
     /** Serialized `Message`s to a ZeroMQ REP socket at `endpoint`: the original naogateway's robots. */
@@ -151,7 +152,8 @@ object RobotActor {
    * one or a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come
    * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
    */
-  def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings, outbox: ActorRef[Outbox.Command],
+  private[naogateway] def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings,
+      outbox: ActorRef[Outbox.Command],
       wiring: Wiring, heard: Boolean, transport: Transport = Transport.Datagrams, discovered: Boolean = false)
       : Behavior[Command] =
     Behaviors.setup { context =>

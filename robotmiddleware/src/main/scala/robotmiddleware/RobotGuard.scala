@@ -75,7 +75,8 @@ private[robotmiddleware] object RobotGuard {
   private case object StatsKey
 
   /** A guard for `robotId`, whose robot actor is `robot` (narrowed to what the middleware may send it). */
-  def apply(robotId: Int, robot: ActorRef[RobotActor.Access], settings: MiddlewareSettings, online: Boolean): Behavior[Command] =
+  def apply(robotId: Int, robot: ActorRef[RobotActor.Access], settings: MiddlewareSettings, online: Boolean)
+      : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.pendingLimit) { stash =>
@@ -404,7 +405,8 @@ private[robotmiddleware] object RobotGuard {
 
     // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
     // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
-    private def call(c: RobotActor.Opened, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
+    private def call(c: RobotActor.Opened, rpc: RpcCall, operation: Operation,
+        replyTo: ActorRef[RobotMiddleware.OperationResult],
         once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       val idempotent = if (once) Some(false) else None

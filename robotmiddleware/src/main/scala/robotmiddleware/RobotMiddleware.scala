@@ -77,8 +77,10 @@ object RobotMiddleware {
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
-  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Access]], retry: Command) extends Command
-  private final case class RobotReached(robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean, retry: Command)
+  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Access]], retry: Command)
+      extends Command
+  private final case class RobotReached(
+      robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean, retry: Command)
       extends Command
 
   /** The answer to `RegisterApp`. */
@@ -121,7 +123,8 @@ object RobotMiddleware {
       new Middleware(gateway, settings, context).running()
     }
 
-  private final class Middleware(gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings, context: ActorContext[Command]) {
+  private final class Middleware(
+      gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings, context: ActorContext[Command]) {
     private var apps = Map.empty[ActorRef[AppEvent], AppInfo]
     // No copy of any robot's state here: snapshots and online belong to the robot actors; this actor asks or forwards.
     private var guards = Map.empty[Int, ActorRef[RobotGuard.Command]]
@@ -147,7 +150,8 @@ object RobotMiddleware {
       guards.get(robotId) match {
         case Some(g) => use(g)
         case None =>
-          context.ask(gateway, (ref: ActorRef[Option[ActorRef[RobotActor.Access]]]) => Gateway.GetRobotAccess(robotId, ref)) {
+          val ask = (ref: ActorRef[Option[ActorRef[RobotActor.Access]]]) => Gateway.GetRobotAccess(robotId, ref)
+          context.ask(gateway, ask) {
             case scala.util.Success(found) => RobotFound(robotId, found, command)
             case scala.util.Failure(_)     => RobotFound(robotId, None, command)
           }
