@@ -268,14 +268,14 @@ object Gateway {
     }
 
     // The robot actor asks for the subscribers itself (RobotWantsSubscribers), on its first start and after restarts.
-    private def wiring(backlog: Backlog): RobotActor.Wiring = RobotActor.Wiring(Set.empty, Some(subscriptionRequests), backlog)
+    private def wiring(backlog: Backlog): RobotWiring = RobotWiring(Set.empty, Some(subscriptionRequests), backlog)
 
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
     private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
       val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
-          RobotActor.Transport.ZeroMq(robot.endpoint)))
+          RobotTransport.ZeroMq(robot.endpoint)))
           .onFailure(settings.supervision.robot.strategy),
         s"robot-${robot.robotId}",
         RobotDispatcher

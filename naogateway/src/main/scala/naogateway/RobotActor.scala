@@ -10,7 +10,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.RobotEffects.{Children, Family}
 import naogateway.RobotFrames.Outbound
-import naogateway.link.{Backlog, ZeroMqRobotLink}
+import naogateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
 
@@ -80,22 +80,6 @@ object RobotActor {
   /** A robot actor (re)started and asks the gateway for its current subscribers. */
   private[naogateway] final case class SubscribersWanted(robot: ActorRef[Subscribers])
 
-  /**
-   * How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start
-   * (a restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the
-   * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
-   * the robot port's reader has handed the actor, given back as each is handled.
-   */
-  private[naogateway] final case class Wiring(
-      subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
-
-  /** Wirings without a gateway. */
-  private[naogateway] object Wiring {
-
-    /** Events to `events` alone, no gateway to ask: for a robot actor on its own (tests). */
-    def to(events: ActorRef[GatewayEvent]): Wiring = Wiring(Set(events), None, new Backlog(Int.MaxValue))
-  }
-
   /** Messages from the robot's own children: only they hold the robot actor's ref as this type. */
   private[naogateway] sealed trait FromChild extends Common
 
@@ -129,17 +113,6 @@ object RobotActor {
   private final case class Forget(reason: String) extends Command
   private case object ForgetKey
 
-  /** How a robot is reached. */
-  private[naogateway] sealed trait Transport extends Product with Serializable
-
-  /** The two kinds of robot. */
-  private[naogateway] object Transport {
-    /** FU-Remote frames in UDP datagrams through the gateway's outbox: the CM-530. */
-    case object Datagrams extends Transport
-    /** Serialized `Message`s to a ZeroMQ REP socket at `endpoint`: the original naogateway's robots. */
-    final case class ZeroMq(endpoint: String) extends Transport
-  }
-
   /** The robot's children, for the gateway's own specs and the benches (the middleware gets [[Opened]]). */
   final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command],
       noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
@@ -153,8 +126,8 @@ object RobotActor {
    * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
    */
   private[naogateway] def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings,
-      outbox: ActorRef[Outbox.Command],
-      wiring: Wiring, heard: Boolean, transport: Transport = Transport.Datagrams, discovered: Boolean = false)
+      outbox: ActorRef[Outbox.Command], wiring: RobotWiring, heard: Boolean,
+      transport: RobotTransport = RobotTransport.Datagrams, discovered: Boolean = false)
       : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
@@ -168,15 +141,15 @@ object RobotActor {
       }
     }
 
-  private final class Robot(robotId: Int, settings: GatewaySettings, outbox: ActorRef[Outbox.Command], wiring: Wiring,
-      transport: Transport, discovered: Boolean, context: ActorContext[Command], stash: StashBuffer[Command],
-      timers: TimerScheduler[Command]) {
+  private final class Robot(robotId: Int, settings: GatewaySettings, outbox: ActorRef[Outbox.Command],
+      wiring: RobotWiring, transport: RobotTransport, discovered: Boolean, context: ActorContext[Command],
+      stash: StashBuffer[Command], timers: TimerScheduler[Command]) {
     private val heartbeatSettings = transport match {
-      case Transport.Datagrams => settings.heartbeat
-      case _: Transport.ZeroMq => settings.zeromq.heartbeat
+      case RobotTransport.Datagrams => settings.heartbeat
+      case _: RobotTransport.ZeroMq => settings.zeromq.heartbeat
     }
     // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
-    private val datagrams = transport == Transport.Datagrams
+    private val datagrams = transport == RobotTransport.Datagrams
     private val signs = datagrams && settings.signingOf(robotId) == RobotSigning.Required
     private val effects = new RobotEffects(robotId, settings, heartbeatSettings, datagrams, context.log,
       timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval), timers.cancel(PullKey))
@@ -188,11 +161,11 @@ object RobotActor {
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       val self = context.self
       val zeroMq = transport match {
-        case Transport.ZeroMq(endpoint) =>
+        case RobotTransport.ZeroMq(endpoint) =>
           val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
           Some(context.spawn(Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq,
             context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(restarts), "zeromq-link"))
-        case Transport.Datagrams => None
+        case RobotTransport.Datagrams => None
       }
       val reports = context.messageAdapter[HeartBeatActor.Report] {
         case v: HeartBeatActor.Verdict => Verdict(v)
