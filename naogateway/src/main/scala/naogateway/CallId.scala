@@ -4,7 +4,7 @@ package naogateway
  * Call ids (`uint32`, protocol.md 6.6; docs/architecture.md 5): the two top bits name the owner of the call, the
  * lower 30 bits count up per owner and wrap, so a reply reaches its owner by its id alone.
  */
-object CallId {
+private[naogateway] object CallId {
 
   /** The counting part of a call id: the lower 30 bits. */
   val Mask: Long = 0x3fffffffL

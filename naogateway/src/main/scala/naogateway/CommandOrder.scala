@@ -12,7 +12,7 @@ import naogateway.wire.ActuatorGroup
  * order, at most `maxWaiting` of them; a safety call never waits. So within a slot the robot gets calls in the
  * order they were given, and nothing older follows a newer one: no walk after a stop.
  */
-final case class CommandOrder[A] private (
+private[naogateway] final case class CommandOrder[A] private (
     inFlight: Vector[CommandOrder.Entry[A]],
     waiting: Vector[CommandOrder.Entry[A]],
     maxInFlight: Int,
@@ -73,7 +73,7 @@ final case class CommandOrder[A] private (
 }
 
 /** Entries and steps of the command order. */
-object CommandOrder {
+private[naogateway] object CommandOrder {
 
   /**
    * A call: its key (its first call id), its slot, whether it is a safety call, what the owner keeps with it, and

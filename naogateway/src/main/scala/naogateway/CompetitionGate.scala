@@ -6,7 +6,7 @@ import naogateway.wire.gamecontroller.{GameControlVersion, GameState}
  * The competition rule (docs/protocol.md §10.6) as one pure function, shared by the outbox and the ZeroMQ link: the
  * base station must not send to robots while the game runs, which every version says with the same three states.
  */
-object CompetitionGate {
+private[naogateway] object CompetitionGate {
 
   /** The rule that closes the gate, in words for errors and logs. */
   val NoSendingWhileGameRuns: String =

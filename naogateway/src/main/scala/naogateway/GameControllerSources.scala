@@ -11,7 +11,7 @@ import java.net.InetSocketAddress
  * @param heard  per sender: when it was last heard (gateway clock), its last packet number, whether it is trusted
  * @param chosen the trusted sender whose packets give the game state
  */
-final case class GameControllerSources(
+private[naogateway] final case class GameControllerSources(
     heard: Map[InetSocketAddress, GameControllerSources.Heard] = Map.empty,
     chosen: Option[InetSocketAddress] = None
 ) {
@@ -52,7 +52,7 @@ final case class GameControllerSources(
 }
 
 /** Constants and entries of [[GameControllerSources]]. */
-object GameControllerSources {
+private[naogateway] object GameControllerSources {
 
   /** What is known of one sender. */
   final case class Heard(lastNanos: Long, packetNumber: Option[Int], trusted: Boolean, packets: Long)

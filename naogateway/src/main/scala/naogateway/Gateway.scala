@@ -19,10 +19,16 @@ object Gateway {
   sealed trait Command
 
   /**
+   * What the middleware may send the gateway: the questions, event subscriptions and a robot's [[RobotActor.Access]];
+   * never a robot actor's whole protocol. `RobotMiddleware` takes an `ActorRef[Gateway.MiddlewareView]`.
+   */
+  sealed trait MiddlewareView extends Command
+
+  /**
    * The read-only view of the gateway: questions that change nothing. Operator tools (the status view, the control
    * port) hold an `ActorRef[Gateway.Query]`, so they can look but never reach a robot past the middleware.
    */
-  sealed trait Query extends Command
+  sealed trait Query extends MiddlewareView
 
   /** Answers with the bound addresses (the real ports when 0 was configured). */
   final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Query
@@ -30,8 +36,12 @@ object Gateway {
   /** Answers with every known robot's snapshot, asked of the robot actors (`snapshot-timeout` for each). */
   final case class GetRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Query
 
-  /** Answers with the robot actor of `robotId`, if the robot is known. */
+  /** Answers with the robot actor of `robotId`, if the robot is known (the gateway's own specs and the benches). */
   final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]]) extends Command
+
+  /** Answers with the robot actor of `robotId` narrowed to what the middleware may send it, if the robot is known. */
+  final case class GetRobotAccess(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Access]]])
+      extends MiddlewareView
 
   /** Answers with every known robot's link figures, asked of the robot actors (`snapshot-timeout` for each). */
   final case class GetLinkStats(replyTo: ActorRef[RobotLinks]) extends Query
@@ -40,10 +50,10 @@ object Gateway {
   type RobotLinks = naogateway.RobotLinks; val RobotLinks: naogateway.RobotLinks.type = naogateway.RobotLinks
 
   /** Sends every `GatewayEvent` to `subscriber` until it stops (robot events come straight from the robot actors). */
-  final case class Subscribe(subscriber: ActorRef[GatewayEvent]) extends Command
+  final case class Subscribe(subscriber: ActorRef[GatewayEvent]) extends MiddlewareView
 
   /** Stops sending events to `subscriber`. */
-  final case class Unsubscribe(subscriber: ActorRef[GatewayEvent]) extends Command
+  final case class Unsubscribe(subscriber: ActorRef[GatewayEvent]) extends MiddlewareView
 
   /** Answers with the gateway's own figures. */
   final case class GetStats(replyTo: ActorRef[GatewayStats]) extends Query
@@ -258,14 +268,14 @@ object Gateway {
     }
 
     // The robot actor asks for the subscribers itself (RobotWantsSubscribers), on its first start and after restarts.
-    private def wiring(backlog: Backlog): RobotActor.Wiring = RobotActor.Wiring(Set.empty, Some(subscriptionRequests), backlog)
+    private def wiring(backlog: Backlog): RobotWiring = RobotWiring(Set.empty, Some(subscriptionRequests), backlog)
 
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
     private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
       val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
-          RobotActor.Transport.ZeroMq(robot.endpoint)))
+          RobotTransport.ZeroMq(robot.endpoint)))
           .onFailure(settings.supervision.robot.strategy),
         s"robot-${robot.robotId}",
         RobotDispatcher
@@ -382,6 +392,9 @@ object Gateway {
           Behaviors.same
         case GetRobot(robotId, replyTo) =>
           replyTo ! byId.get(robotId).map(_.actor)
+          Behaviors.same
+        case GetRobotAccess(robotId, replyTo) =>
+          replyTo ! byId.get(robotId).map(_.actor.narrow[RobotActor.Access])
           Behaviors.same
         case GetStats(replyTo) =>
           val ledger = rejections.current

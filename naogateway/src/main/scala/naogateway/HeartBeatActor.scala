@@ -8,7 +8,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import naogateway.wire.RpcCall
 
 /** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. */
-object HeartBeatActor {
+private[naogateway] object HeartBeatActor {
 
   /** What the heartbeat accepts. */
   sealed trait Command

@@ -49,7 +49,7 @@ final case class TeamMessageSettings(
  * @param reported       the trusted GameController's own `messageBudget` for our team (version 19 only)
  * @param rateBuckets    counted messages per whole second of the gateway's clock, the last `rateWindowSeconds` of them
  */
-final case class MessageBudget(
+private[naogateway] final case class MessageBudget(
     settings: TeamMessageSettings,
     remaining: Int,
     counted: Long = 0L,
@@ -141,7 +141,7 @@ final case class MessageBudget(
 }
 
 /** Constructors and constants of message budgets. */
-object MessageBudget {
+private[naogateway] object MessageBudget {
 
   private val SecondNanos = 1000000000L
 

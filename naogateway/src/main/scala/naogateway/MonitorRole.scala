@@ -26,7 +26,7 @@ final case class MonitorSettings(
 }
 
 /** The robots' status messages the GameController forwarded, by team and player, bounded. */
-final case class ForwardedStatuses(byPlayer: Map[(Int, Int), ForwardedStatus] = Map.empty) {
+private[naogateway] final case class ForwardedStatuses(byPlayer: Map[(Int, Int), ForwardedStatus] = Map.empty) {
 
   /** After one forwarded status message; beyond [[ForwardedStatuses.MaxPlayers]] players the oldest makes room. */
   def add(f: ForwardedStatus): ForwardedStatuses = {
@@ -39,14 +39,14 @@ final case class ForwardedStatuses(byPlayer: Map[(Int, Int), ForwardedStatus] = 
 }
 
 /** Bounds of [[ForwardedStatuses]]. */
-object ForwardedStatuses {
+private[naogateway] object ForwardedStatuses {
 
   /** Players remembered: two teams of 20 slots. */
   val MaxPlayers: Int = 40
 }
 
 /** Checks of a monitor configuration. */
-object MonitorRole {
+private[naogateway] object MonitorRole {
 
   /**
    * Why `robots` would make this host send robot status messages itself, which the GameController answers by refusing

@@ -112,7 +112,8 @@ object NoResponseActor {
   private type Order = CommandOrder[Item]
 
   /** The sender of robot `robotId`; `robot` owns the route and counts what leaves. */
-  def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
+  private[naogateway] def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild])
+      : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>

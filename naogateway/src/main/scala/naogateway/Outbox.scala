@@ -27,7 +27,7 @@ object Outbox {
    * `bytes` is an unsigned FU-Remote frame of a robot that must sign, signed here at the moment it leaves. `via`: a
    * ZeroMQ robot's link, which takes the bytes instead of the datagram socket, behind the same gate and budget.
    */
-  final case class Send(
+  private[naogateway] final case class Send(
       robotId: Int,
       to: InetSocketAddress,
       bytes: Array[Byte],
@@ -46,43 +46,43 @@ object Outbox {
    * Takes back robot `robotId`'s datagrams marked with `tags` that still wait for the budget: a call superseded by a
    * newer one must not leave after it. A `Send` from the same sender after this one is processed after it.
    */
-  final case class Withdraw(robotId: Int, tags: Set[Long]) extends Command
+  private[naogateway] final case class Withdraw(robotId: Int, tags: Set[Long]) extends Command
 
   /** Robot `robotId` is gone (forgotten): its waiting datagrams and its traffic meter go too. */
-  final case class RobotGone(robotId: Int) extends Command
+  private[naogateway] final case class RobotGone(robotId: Int) extends Command
 
   /** Counts `datagrams` datagrams of `bytes` in all received from the team, for the two-way traffic figures. */
-  final case class Inbound(datagrams: Int, bytes: Int) extends Command
+  private[naogateway] final case class Inbound(datagrams: Int, bytes: Int) extends Command
 
   /** What the trusted GameController last said (or that it could not be read): the gate decides on it. */
-  final case class GameStateChanged(reading: GameReading) extends Command
+  private[naogateway] final case class GameStateChanged(reading: GameReading) extends Command
 
   /** Constructors of gate updates. */
-  object GameStateChanged {
+  private[naogateway] object GameStateChanged {
 
     /** A readable packet's state. */
     def apply(state: GameState): GameStateChanged = GameStateChanged(GameReading.Known(state))
   }
 
   /** Asks for the traffic figures. */
-  final case class GetStats(replyTo: ActorRef[TrafficStats]) extends Command
+  private[naogateway] final case class GetStats(replyTo: ActorRef[TrafficStats]) extends Command
 
   private case object Drain extends Command
   private case object DrainTimer
 
   /** Whether a datagram was taken; `tag` is the sender's mark from `Send`. */
-  sealed trait Outcome extends Product with Serializable {
+  private[naogateway] sealed trait Outcome extends Product with Serializable {
     def tag: Long
   }
 
   /** Sent, or queued behind the budget. */
-  final case class Accepted(tag: Long) extends Outcome
+  private[naogateway] final case class Accepted(tag: Long) extends Outcome
 
   /** Not sent because a competition rule forbids it now. */
-  final case class RefusedByRule(tag: Long, rule: String) extends Outcome
+  private[naogateway] final case class RefusedByRule(tag: Long, rule: String) extends Outcome
 
   /** Not sent because its class's queue is full. */
-  final case class Dropped(tag: Long, reason: String) extends Outcome
+  private[naogateway] final case class Dropped(tag: Long, reason: String) extends Outcome
 
   /** The rule that closes the gate, in words for errors and logs. */
   val NoSendingWhileGameRuns: String = CompetitionGate.NoSendingWhileGameRuns
@@ -97,8 +97,8 @@ object Outbox {
    * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
    * second while sending) go to `recording`.
    */
-  def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean, signer: Option[FrameSigner] = None,
-      recording: Recording = Recording.Off): Behavior[Command] =
+  private[naogateway] def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean,
+      signer: Option[FrameSigner] = None, recording: Recording = Recording.Off): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         new Outbox(link, budget, competition, signer, timers, context.log, recording).behavior()

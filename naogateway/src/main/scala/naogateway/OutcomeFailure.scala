@@ -1,7 +1,7 @@
 package naogateway
 
 /** What an outbox outcome means for the call it carried: the gateway's side of `RobotFailure` (api). */
-object OutcomeFailure {
+private[naogateway] object OutcomeFailure {
 
   /** The failure an outbox outcome means for the call it carried, if any (`Accepted` is none). */
   def of(robotId: Int, outcome: Outbox.Outcome): Option[RobotFailure] = outcome match {

@@ -11,7 +11,7 @@ import org.slf4j.{Logger, LoggerFactory}
  * are bounded: the kinds are a closed set, and addresses beyond `maxSources` share one counter ("other addresses").
  * Whether a count deserves a warning is [[RateLimitedLog]]'s rule, per kind, so a flood cannot flood the log.
  */
-final case class RejectionLedger(
+private[naogateway] final case class RejectionLedger(
     counts: Map[Rejection, Long] = Map.empty,
     bySource: Map[InetAddress, Long] = Map.empty,
     otherSources: Long = 0L,
@@ -49,7 +49,7 @@ final case class RejectionLedger(
 }
 
 /** The ledger's bound, and the ledger shared by the robot port's reader thread and the gateway actor. */
-object RejectionLedger {
+private[naogateway] object RejectionLedger {
 
   /** Source addresses whose rejections are counted one by one; the rest are counted together. */
   val SourceAddresses: Int = 64

@@ -56,7 +56,7 @@ object ResponseActor {
   )
 
   /** The response actor of robot `robotId`, submitting to `sender`; `robot` owns reachability, hears round trips. */
-  def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild],
+  private[naogateway] def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild],
       sender: ActorRef[NoResponseActor.Command], online: Boolean): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>

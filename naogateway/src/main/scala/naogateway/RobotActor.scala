@@ -10,7 +10,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.RobotEffects.{Children, Family}
 import naogateway.RobotFrames.Outbound
-import naogateway.link.{Backlog, ZeroMqRobotLink}
+import naogateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
 
@@ -40,36 +40,45 @@ object RobotActor {
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
   private[naogateway] final case class Rebound(address: InetSocketAddress) extends Common
 
-  /** Answers with the children's refs once the robot is reachable (probing it first if needed). */
-  final case class Connect(replyTo: ActorRef[Connected]) extends Command
+  /**
+   * What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`):
+   * questions and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers; no way to its
+   * sender.
+   */
+  sealed trait Access extends Command
+
+  /** Asks for the children of a reachable robot: waits (stashed) while it is not reached, probing it. */
+  private[naogateway] sealed trait Reach extends Command {
+    private[naogateway] def answer(children: Connected): Unit
+  }
+
+  /** Answers with the children's refs once the robot is reachable (the gateway's own specs and the benches). */
+  final case class Connect(replyTo: ActorRef[Connected]) extends Reach {
+    private[naogateway] def answer(children: Connected): Unit = replyTo ! children
+  }
+
+  /** The middleware's `Connect`: answers with [[Opened]] once the robot is reachable (probing it first if needed). */
+  final case class Open(replyTo: ActorRef[Opened]) extends Reach with Access {
+    private[naogateway] def answer(c: Connected): Unit = replyTo ! Opened(c.robotId, c.response, c.vision)
+  }
+
+  /**
+   * A reachable robot as the middleware may use it: calls through its response actor, camera registrations through its
+   * vision actor. Both refs die with a restart of the robot actor: the holder's cue to open again.
+   */
+  final case class Opened(robotId: Int, response: ActorRef[ResponseActor.Call], vision: ActorRef[VisionActor.Register])
 
   /** Answers with the latest keep-alive contents and liveness. */
-  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Common
+  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Common with Access
 
   /** Answers with the link figures. */
-  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common
+  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common with Access
 
   /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
   private[naogateway] final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
 
   /** A robot actor (re)started and asks the gateway for its current subscribers. */
   private[naogateway] final case class SubscribersWanted(robot: ActorRef[Subscribers])
-
-  /**
-   * How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start
-   * (a restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the
-   * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
-   * the robot port's reader has handed the actor, given back as each is handled.
-   */
-  final case class Wiring(
-      subscribers: Set[ActorRef[GatewayEvent]], gateway: Option[ActorRef[SubscribersWanted]], backlog: Backlog)
-
-  /** Wirings without a gateway. */
-  object Wiring {
-
-    /** Events to `events` alone, no gateway to ask: for a robot actor on its own (tests). */
-    def to(events: ActorRef[GatewayEvent]): Wiring = Wiring(Set(events), None, new Backlog(Int.MaxValue))
-  }
 
   /** Messages from the robot's own children: only they hold the robot actor's ref as this type. */
   private[naogateway] sealed trait FromChild extends Common
@@ -104,18 +113,7 @@ object RobotActor {
   private final case class Forget(reason: String) extends Command
   private case object ForgetKey
 
-  /** How a robot is reached. */
-  sealed trait Transport extends Product with Serializable
-
-  /** The two kinds of robot. */
-  object Transport {
-    /** FU-Remote frames in UDP datagrams through the gateway's outbox: the CM-530. */
-    case object Datagrams extends Transport
-    /** Serialized `Message`s to a ZeroMQ REP socket at `endpoint`: the original naogateway's robots. */
-    final case class ZeroMq(endpoint: String) extends Transport
-  }
-
-  /** The robot's children, for callers that talk to it directly. */
+  /** The robot's children, for the gateway's own specs and the benches (the middleware gets [[Opened]]). */
   final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command],
       noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
       stream: ActorRef[StreamActor.Command])
@@ -127,8 +125,9 @@ object RobotActor {
    * one or a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come
    * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
    */
-  def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings, outbox: ActorRef[Outbox.Command],
-      wiring: Wiring, heard: Boolean, transport: Transport = Transport.Datagrams, discovered: Boolean = false)
+  private[naogateway] def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings,
+      outbox: ActorRef[Outbox.Command], wiring: RobotWiring, heard: Boolean,
+      transport: RobotTransport = RobotTransport.Datagrams, discovered: Boolean = false)
       : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
@@ -142,15 +141,15 @@ object RobotActor {
       }
     }
 
-  private final class Robot(robotId: Int, settings: GatewaySettings, outbox: ActorRef[Outbox.Command], wiring: Wiring,
-      transport: Transport, discovered: Boolean, context: ActorContext[Command], stash: StashBuffer[Command],
-      timers: TimerScheduler[Command]) {
+  private final class Robot(robotId: Int, settings: GatewaySettings, outbox: ActorRef[Outbox.Command],
+      wiring: RobotWiring, transport: RobotTransport, discovered: Boolean, context: ActorContext[Command],
+      stash: StashBuffer[Command], timers: TimerScheduler[Command]) {
     private val heartbeatSettings = transport match {
-      case Transport.Datagrams => settings.heartbeat
-      case _: Transport.ZeroMq => settings.zeromq.heartbeat
+      case RobotTransport.Datagrams => settings.heartbeat
+      case _: RobotTransport.ZeroMq => settings.zeromq.heartbeat
     }
     // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
-    private val datagrams = transport == Transport.Datagrams
+    private val datagrams = transport == RobotTransport.Datagrams
     private val signs = datagrams && settings.signingOf(robotId) == RobotSigning.Required
     private val effects = new RobotEffects(robotId, settings, heartbeatSettings, datagrams, context.log,
       timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval), timers.cancel(PullKey))
@@ -162,11 +161,11 @@ object RobotActor {
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
       val self = context.self
       val zeroMq = transport match {
-        case Transport.ZeroMq(endpoint) =>
+        case RobotTransport.ZeroMq(endpoint) =>
           val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
           Some(context.spawn(Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq,
             context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(restarts), "zeromq-link"))
-        case Transport.Datagrams => None
+        case RobotTransport.Datagrams => None
       }
       val reports = context.messageAdapter[HeartBeatActor.Report] {
         case v: HeartBeatActor.Verdict => Verdict(v)
@@ -186,7 +185,7 @@ object RobotActor {
     /** Not reached yet: Connect waits (stashed) until the heartbeat says the robot is there. */
     private def unreached(f: Family, s: RobotState): Behavior[Command] = receiveMessage {
       case m: Common => unreached(f, common(m, f, None, s, isOnline = false))
-      case c: Connect =>
+      case c: Reach =>
         if (stash.isFull) context.log.warn("Robot [{}]: too many connects waiting", robotId) else stash.stash(c)
         f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
@@ -200,8 +199,8 @@ object RobotActor {
 
     private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = receiveMessage {
       case m: Common => running(f, c, common(m, f, Some(c), s, isOnline), isOnline)
-      case Connect(replyTo) =>
-        replyTo ! Connected(robotId, f.response, f.sender, c.vision, c.stream)
+      case r: Reach =>
+        r.answer(Connected(robotId, f.response, f.sender, c.vision, c.stream))
         if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
       case Verdict(HeartBeatActor.CameOnline) => if (isOnline) Behaviors.same else online(f, c, s)

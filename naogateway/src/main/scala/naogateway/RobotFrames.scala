@@ -13,7 +13,7 @@ import naogateway.wire.{FrameError, HaViMo, HeaderForm, MessageContents, RpcCall
  * frame from it carries. Pure: encoding reads the route and changes nothing (the option bookkeeping is
  * `RobotState`'s, done before anything is encoded).
  */
-object RobotFrames {
+private[naogateway] object RobotFrames {
 
   /** One thing a frame from the robot carries, for its owner in the robot actor's family. */
   sealed trait Arrival extends Product with Serializable

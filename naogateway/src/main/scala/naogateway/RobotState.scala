@@ -15,7 +15,7 @@ import naogateway.wire.HeaderForm
  * `keepAliveTimesKept`: with more than a window's worth the loss estimate is 0 anyway, so a flooding robot costs what a
  * punctual one costs.
  */
-final case class LinkFigures(
+private[naogateway] final case class LinkFigures(
     datagramsIn: Long = 0L,
     datagramsOut: Long = 0L,
     bytesIn: Long = 0L,
@@ -35,7 +35,7 @@ final case class LinkFigures(
 }
 
 /** The robot's debug options (protocol.md 8): what the gateway switched on, and this session's list once pushed. */
-final case class RobotOptions(
+private[naogateway] final case class RobotOptions(
     active: Set[String] = Set.empty,
     list: Option[Seq[DebuggingOption]] = None,
     pulling: Boolean = false,
@@ -54,7 +54,7 @@ final case class RobotOptions(
 }
 
 /** The option rules. */
-object RobotOptions {
+private[naogateway] object RobotOptions {
 
   /**
    * How often `optionPull` is repeated until the robot's `optionPush` arrives. Fixed, not a setting: protocol.md 8,
@@ -67,7 +67,7 @@ object RobotOptions {
 }
 
 /** What one keep-alive did: whether it completed a new session, and whether the heartbeat is to hear of it. */
-final case class KeepAliveOutcome(restarted: Boolean, heard: Boolean)
+private[naogateway] final case class KeepAliveOutcome(restarted: Boolean, heard: Boolean)
 
 /**
  * Everything a robot actor knows, as one immutable value: its address and header form, the latest keep-alive's
@@ -75,7 +75,7 @@ final case class KeepAliveOutcome(restarted: Boolean, heard: Boolean)
  * known), the camera streams, and the link figures. Each change is a named transition; `RobotActor` only carries
  * them out, so everything here is tested without actors (RobotStateSpec).
  */
-final case class RobotState(
+private[naogateway] final case class RobotState(
     robotId: Int,
     address: InetSocketAddress,
     form: HeaderForm,
@@ -208,7 +208,7 @@ final case class RobotState(
 }
 
 /** Robot states. */
-object RobotState {
+private[naogateway] object RobotState {
 
   /** Events a robot actor holds while it waits for the gateway's subscriber list. */
   val HeldEvents: Int = 64

@@ -13,7 +13,7 @@ import naogateway.wire._
  * changes whenever the module reconnects, while it receives on its own port (docs/protocol.md section 2), so the
  * source port says nothing about the robot.
  */
-object Routing {
+private[naogateway] object Routing {
 
   /** Robot `robotId`, bound to the IP address `address`, reached through `target`. */
   final case class Route[+A](robotId: Int, address: InetAddress, target: A)

@@ -4,7 +4,8 @@ package naogateway
  * What one keep-alive says about the robot's session: its `bootId` and uptime (either may be missing) and when the
  * gateway received it, in milliseconds of the gateway's monotonic clock.
  */
-final case class SessionMark(bootId: Option[Int], uptimeMillis: Option[Long], receivedAtMillis: Long) {
+private[naogateway] final case class SessionMark(
+    bootId: Option[Int], uptimeMillis: Option[Long], receivedAtMillis: Long) {
 
   /** Whether the keep-alive carries anything about the session at all. */
   def saysSomething: Boolean = bootId.isDefined || uptimeMillis.isDefined
@@ -17,7 +18,8 @@ final case class SessionMark(bootId: Option[Int], uptimeMillis: Option[Long], re
  * One session of a robot as the gateway believes it: its `bootId` (if it sends one), when it powered up by the
  * gateway's clock (`bootAtMillis`, if it sends an uptime) and the highest uptime seen in it.
  */
-final case class Session(bootId: Option[Int], bootAtMillis: Option[Long], lastUptimeMillis: Option[Long])
+private[naogateway] final case class Session(
+    bootId: Option[Int], bootAtMillis: Option[Long], lastUptimeMillis: Option[Long])
 
 /**
  * Restart recognition (docs/protocol.md 6.2, docs/architecture.md 10), pure: the session the gateway believes in and a
@@ -32,7 +34,8 @@ final case class Session(bootId: Option[Int], bootAtMillis: Option[Long], lastUp
  * session ends the candidate, and so does one that belongs to neither (an odd keep-alive, ignored otherwise). So one
  * odd keep-alive, or forged ones between the robot's own, never make a restart.
  */
-final case class SessionRule(current: Option[Session], candidate: Option[Session], candidateKeepAlives: Int) {
+private[naogateway] final case class SessionRule(
+    current: Option[Session], candidate: Option[Session], candidateKeepAlives: Int) {
   import SessionRule._
 
   /** The rule after one keep-alive, and whether that keep-alive completed a new session (the robot restarted). */
@@ -55,7 +58,7 @@ final case class SessionRule(current: Option[Session], candidate: Option[Session
 }
 
 /** The restart rule's constants and its start. */
-object SessionRule {
+private[naogateway] object SessionRule {
 
   /** Nothing heard yet. */
   val empty: SessionRule = SessionRule(None, None, 0)

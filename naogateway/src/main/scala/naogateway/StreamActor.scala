@@ -50,7 +50,8 @@ object StreamActor {
   private case object TickKey
 
   /** The endpoint for robot `robotId`, sending segments through the robot's one sender. */
-  def apply(robotId: Int, settings: StreamSettings, sender: ActorRef[NoResponseActor.Command]): Behavior[Command] =
+  private[naogateway] def apply(robotId: Int, settings: StreamSettings, sender: ActorRef[NoResponseActor.Command])
+      : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         val endpoint = new Endpoint(robotId, sender, timers, context)

@@ -3,7 +3,7 @@ package naogateway
 import scala.collection.mutable
 
 /** Bytes sent or received over a sliding window, exact to the datagram (not bucketed), so a budget holds in every window. */
-final class TrafficMeter(windowNanos: Long) {
+private[naogateway] final class TrafficMeter(windowNanos: Long) {
   private val times = mutable.ArrayDeque.empty[Long]
   private val sizes = mutable.ArrayDeque.empty[Int]
   private var sum = 0L

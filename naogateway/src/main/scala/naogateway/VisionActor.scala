@@ -21,7 +21,7 @@ object VisionActor {
   final case class Register(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
 
   /** The robot actor's registrations now, subscriber to whether it wants grid frames: on every change and every start. */
-  final case class Subscribers(subscribers: Map[ActorRef[VisionFrame], Boolean]) extends Command
+  private[naogateway] final case class Subscribers(subscribers: Map[ActorRef[VisionFrame], Boolean]) extends Command
 
   /** The robot restarted: switch the camera options on again if anyone is watching. */
   private[naogateway] case object Resync extends Command
@@ -33,7 +33,7 @@ object VisionActor {
    * A vision actor for robot `robotId`, switching camera options through `robot`, which owns the registrations: a new
    * incarnation asks it for them before it forwards any frame.
    */
-  def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
+  private[naogateway] def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
     Behaviors.setup { context =>
       robot ! RobotActor.VisionSubscribersWanted(context.self)
 

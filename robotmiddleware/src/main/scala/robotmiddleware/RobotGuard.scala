@@ -42,7 +42,7 @@ private[robotmiddleware] object RobotGuard {
   /** Sends the robot's link figures to `subscriber` at once and then every `link-stats-interval` (no lease needed). */
   final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
 
-  private final case class ChildrenReady(children: RobotActor.Connected) extends Command
+  private final case class ChildrenReady(children: RobotActor.Opened) extends Command
   private final case class SnapshotReceived(snapshot: RobotSnapshot) extends Command
   private final case class OperationDone(
       replyTo: ActorRef[RobotMiddleware.OperationResult],
@@ -74,15 +74,16 @@ private[robotmiddleware] object RobotGuard {
   private case object WalkKey
   private case object StatsKey
 
-  /** A guard for `robotId`, whose robot actor is `robot`. */
-  def apply(robotId: Int, robot: ActorRef[RobotActor.Command], settings: MiddlewareSettings, online: Boolean): Behavior[Command] =
+  /** A guard for `robotId`, whose robot actor is `robot` (narrowed to what the middleware may send it). */
+  def apply(robotId: Int, robot: ActorRef[RobotActor.Access], settings: MiddlewareSettings, online: Boolean)
+      : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.pendingLimit) { stash =>
           // `online` was right when the guard was first created; after a restart only the robot actor knows.
           robot ! RobotActor.GetSnapshot(context.messageAdapter(SnapshotReceived.apply))
           val childrenReady = context.messageAdapter(ChildrenReady.apply)
-          robot ! RobotActor.Connect(childrenReady)
+          robot ! RobotActor.Open(childrenReady)
           new Guard(robotId, robot, settings, context, timers, stash, childrenReady).connecting(online)
         }
       }
@@ -93,12 +94,12 @@ private[robotmiddleware] object RobotGuard {
 
   private final class Guard(
       robotId: Int,
-      robot: ActorRef[RobotActor.Command],
+      robot: ActorRef[RobotActor.Access],
       settings: MiddlewareSettings,
       context: ActorContext[Command],
       timers: TimerScheduler[Command],
       stash: StashBuffer[Command],
-      childrenReady: ActorRef[RobotActor.Connected]
+      childrenReady: ActorRef[RobotActor.Opened]
   ) {
     private var leases: Leases = Map.empty
     private var walking: Option[(Operation.Walk, AppInfo)] = None
@@ -177,7 +178,7 @@ private[robotmiddleware] object RobotGuard {
       case _ => ()
     }
 
-    private def ready(c: RobotActor.Connected): Behavior[Command] = Behaviors.receiveMessage {
+    private def ready(c: RobotActor.Opened): Behavior[Command] = Behaviors.receiveMessage {
       case SnapshotReceived(snapshot) =>
         // Any event that reached the guard before this answer is older than it, and later ones follow it.
         online = snapshot.online
@@ -309,13 +310,13 @@ private[robotmiddleware] object RobotGuard {
         // Nothing refreshes the walk meanwhile, so the robot stops by itself within its lease: forget the walk.
         timers.cancel(WalkKey)
         walking = None
-        robot ! RobotActor.Connect(childrenReady)
+        robot ! RobotActor.Open(childrenReady)
         connecting(online)
       case ChildGone(_) => Behaviors.same
     }
 
     /** Back from a lost link: puts the robot in a defined state before anyone moves it again. */
-    private def stopAfterReconnect(c: RobotActor.Connected): Unit = {
+    private def stopAfterReconnect(c: RobotActor.Opened): Unit = {
       reconnectedWhileConnecting = false
       safetyCall(c, SafetyStep.StopAfterReconnect, RpcMethod.Stop.call(), settings.callTimeout)
     }
@@ -333,7 +334,7 @@ private[robotmiddleware] object RobotGuard {
     private def isStop(step: SafetyStep): Boolean =
       step == SafetyStep.StopThenSit || step == SafetyStep.StopOnly || step == SafetyStep.StopAfterReconnect
 
-    private def safetyCall(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit =
+    private def safetyCall(c: RobotActor.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit =
       if (isStop(step) && stopInFlight) {
         if (step == SafetyStep.StopThenSit) sitAfterStop = true
       } else {
@@ -341,7 +342,7 @@ private[robotmiddleware] object RobotGuard {
         askSafety(c, step, rpc, timeout)
       }
 
-    private def askSafety(c: RobotActor.Connected, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
+    private def askSafety(c: RobotActor.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
@@ -372,7 +373,7 @@ private[robotmiddleware] object RobotGuard {
     // The latest battery readings, at most `batteryReadings` of them: the hold acts on a sustained reading only.
     private var readings = Vector.empty[Double]
 
-    private def checkBattery(c: RobotActor.Connected, snapshot: RobotSnapshot): Unit =
+    private def checkBattery(c: RobotActor.Opened, snapshot: RobotSnapshot): Unit =
       snapshot.batteryVoltage.foreach { volts =>
         readings = (readings :+ volts).takeRight(settings.batteryReadings)
         val sustained = readings.size == settings.batteryReadings
@@ -389,7 +390,7 @@ private[robotmiddleware] object RobotGuard {
         }
       }
 
-    private def stopWalking(c: RobotActor.Connected, why: String, thenSit: Boolean = false): Unit = {
+    private def stopWalking(c: RobotActor.Opened, why: String, thenSit: Boolean = false): Unit = {
       if (walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
       timers.cancel(WalkKey)
       walking = None
@@ -404,7 +405,8 @@ private[robotmiddleware] object RobotGuard {
 
     // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
     // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
-    private def call(c: RobotActor.Connected, rpc: RpcCall, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult],
+    private def call(c: RobotActor.Opened, rpc: RpcCall, operation: Operation,
+        replyTo: ActorRef[RobotMiddleware.OperationResult],
         once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       val idempotent = if (once) Some(false) else None
@@ -416,7 +418,7 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
-    private def run(c: RobotActor.Connected, app: AppInfo, operation: Operation,
+    private def run(c: RobotActor.Opened, app: AppInfo, operation: Operation,
         replyTo: ActorRef[RobotMiddleware.OperationResult], once: Boolean): Unit = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.

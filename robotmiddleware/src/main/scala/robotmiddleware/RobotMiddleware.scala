@@ -77,8 +77,10 @@ object RobotMiddleware {
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
-  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Command]], retry: Command) extends Command
-  private final case class RobotReached(robotId: Int, robot: ActorRef[RobotActor.Command], online: Boolean, retry: Command)
+  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Access]], retry: Command)
+      extends Command
+  private final case class RobotReached(
+      robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean, retry: Command)
       extends Command
 
   /** The answer to `RegisterApp`. */
@@ -103,8 +105,11 @@ object RobotMiddleware {
       LeaseResult(robotId, Set(group), result)
   }
 
-  /** The middleware in front of `gateway`, registered with the receptionist. */
-  def apply(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings): Behavior[Command] =
+  /**
+   * The middleware in front of `gateway`, registered with the receptionist. It holds the gateway's middleware view and
+   * each robot's `RobotActor.Access`: it can reach a robot only through the robot's response and vision actors.
+   */
+  def apply(gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings): Behavior[Command] =
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
       gateway ! Gateway.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
@@ -118,7 +123,8 @@ object RobotMiddleware {
       new Middleware(gateway, settings, context).running()
     }
 
-  private final class Middleware(gateway: ActorRef[Gateway.Command], settings: MiddlewareSettings, context: ActorContext[Command]) {
+  private final class Middleware(
+      gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings, context: ActorContext[Command]) {
     private var apps = Map.empty[ActorRef[AppEvent], AppInfo]
     // No copy of any robot's state here: snapshots and online belong to the robot actors; this actor asks or forwards.
     private var guards = Map.empty[Int, ActorRef[RobotGuard.Command]]
@@ -126,7 +132,7 @@ object RobotMiddleware {
     private var gameWatchers = Set.empty[ActorRef[GameControlData]]
     private var eventWatchers = Set.empty[ActorRef[RobotEvent]]
 
-    private def guard(robotId: Int, robot: ActorRef[RobotActor.Command], online: Boolean): ActorRef[RobotGuard.Command] =
+    private def guard(robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean): ActorRef[RobotGuard.Command] =
       guards.getOrElse(robotId, {
         val g = context.spawn(
           Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
@@ -144,7 +150,8 @@ object RobotMiddleware {
       guards.get(robotId) match {
         case Some(g) => use(g)
         case None =>
-          context.ask(gateway, (ref: ActorRef[Option[ActorRef[RobotActor.Command]]]) => Gateway.GetRobot(robotId, ref)) {
+          val ask = (ref: ActorRef[Option[ActorRef[RobotActor.Access]]]) => Gateway.GetRobotAccess(robotId, ref)
+          context.ask(gateway, ask) {
             case scala.util.Success(found) => RobotFound(robotId, found, command)
             case scala.util.Failure(_)     => RobotFound(robotId, None, command)
           }

@@ -129,7 +129,7 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         // A reply ref or route that is null stands in for any bug: the actor throws and its supervisor restarts it.
         stillWorks("robot actor")(f.robotActor(22) ! RobotActor.GetSnapshot(null))
         stillWorks("response actor")(f.connect(22).response ! ResponseActor.Call(null, createTestProbe[CallResult]().ref))
-        stillWorks("vision actor")(f.connect(22).vision ! VisionActor.Subscribers(null))
+        stillWorks("vision actor")(f.crashVision(22))
         stillWorks("stream actor")(f.connect(22).stream ! StreamActor.GetStats(null))
         // The sender hands a caller's send to the response actor for its call id: a null call fails there, once.
         stillWorks("no-response actor")(f.connect(22).noResponse ! NoResponseActor.Send(null))

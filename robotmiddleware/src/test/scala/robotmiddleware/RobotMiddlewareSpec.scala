@@ -21,26 +21,26 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
 
   /**
    * A gateway that knows robot 1 and hands out probes as the robot's children. With `holdConnect` the robot does not
-   * answer a guard's `Connect` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
+   * answer a guard's `Open` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
    * The robot answers `GetSnapshot` with the online state `snapshotOnline` (online unless a test says otherwise); with
    * `None` it does not answer.
    */
   private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = Some(true),
       middlewareSettings: MiddlewareSettings = settings, known: Vector[RobotSnapshot] = Vector.empty) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
-    val noResponse: TestProbe[NoResponseActor.Command] = createTestProbe[NoResponseActor.Command]()
     val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
-    val stream: TestProbe[StreamActor.Command] = createTestProbe[StreamActor.Command]()
     val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
-    val connects: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
-    /** Every `Connect` the robot got, held or answered. */
-    val connectsSeen: TestProbe[ActorRef[RobotActor.Connected]] = createTestProbe[ActorRef[RobotActor.Connected]]()
-    val connected: RobotActor.Connected = RobotActor.Connected(1, response.ref, noResponse.ref, vision.ref, stream.ref)
-    /** What the robot answers a `Connect` with: a test swaps it for new children to stand in for a restart. */
-    @volatile var current: RobotActor.Connected = connected
+    val connects: TestProbe[ActorRef[RobotActor.Opened]] = createTestProbe[ActorRef[RobotActor.Opened]]()
+    /** Every `Open` the robot got, held or answered. */
+    val connectsSeen: TestProbe[ActorRef[RobotActor.Opened]] = createTestProbe[ActorRef[RobotActor.Opened]]()
+    // All the middleware gets of the robot's children: no sender, stream or heartbeat to send to.
+    val connected: RobotActor.Opened = RobotActor.Opened(1, response.ref, vision.ref)
+    /** What the robot answers an `Open` with: a test swaps it for new children to stand in for a restart. */
+    @volatile var current: RobotActor.Opened = connected
 
-    private val robot: Behavior[RobotActor.Command] = Behaviors.receiveMessage {
-      case RobotActor.Connect(replyTo) =>
+    // The robot actor as the middleware sees it: only what RobotActor.Access lets it send.
+    private val robot: Behavior[RobotActor.Access] = Behaviors.receiveMessage {
+      case RobotActor.Open(replyTo) =>
         connectsSeen.ref ! replyTo
         if (holdConnect) connects.ref ! replyTo else replyTo ! current
         Behaviors.same
@@ -50,14 +50,13 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       case RobotActor.GetLinkStats(replyTo) =>
         replyTo ! linkStats
         Behaviors.same
-      case _ => Behaviors.same
     }
     private val robotRef = spawn(robot)
-    private val gateway: Behavior[Gateway.Command] = Behaviors.receiveMessage {
+    private val gateway: Behavior[Gateway.MiddlewareView] = Behaviors.receiveMessage {
       case Gateway.Subscribe(subscriber) =>
         events.ref ! subscriber
         Behaviors.same
-      case Gateway.GetRobot(id, replyTo) =>
+      case Gateway.GetRobotAccess(id, replyTo) =>
         replyTo ! (if (id == 1) Some(robotRef) else None)
         Behaviors.same
       case Gateway.GetRobots(replyTo) =>
@@ -227,7 +226,6 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       // Refreshes go through the robot's one command owner too, every 200 ms, each sent once (no retries).
       val refreshes = (1 to 3).map(_ => f.expectCall("motion.walk"))
       refreshes.foreach(_.idempotent shouldBe Some(false))
-      f.noResponse.expectNoMessage(Duration.Zero)
       testKit.stop(app)
       val stop = f.expectCall("motion.stop")
       stop.priority shouldBe Priority.Safety
@@ -322,7 +320,6 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
       f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result shouldBe Left(RobotFailure.RobotOffline(1))
       f.response.expectNoMessage(200.millis)
-      f.noResponse.expectNoMessage(200.millis)
     }
     "stop a robot that came back while its guard was still connecting, once the guard is ready" in {
       // The robot actor, asked by the new guard, knows the robot is offline.

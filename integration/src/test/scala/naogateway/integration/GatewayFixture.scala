@@ -80,6 +80,12 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     probe.receiveMessage(10.seconds)
   }
 
+  /**
+   * Makes robot `robotId`'s vision actor fail as a bug would (a null registration list), for restart specs outside the
+   * package: the message that does it is the robot actor's alone.
+   */
+  def crashVision(robotId: Int): Unit = connect(robotId).vision ! VisionActor.Subscribers(null)
+
   def stats(): Gateway.GatewayStats = {
     val probe = testKit.createTestProbe[Gateway.GatewayStats]()
     gateway ! Gateway.GetStats(probe.ref)

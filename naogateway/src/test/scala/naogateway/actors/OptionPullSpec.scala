@@ -56,7 +56,7 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
     "send optionPull first, repeat it every second until the push, then enable only what the robot offers" in {
       val outbox = createTestProbe[Outbox.Command]()
       val events = createTestProbe[GatewayEvent]()
-      val robot = spawn(RobotActor(6, address, settings, outbox.ref, RobotActor.Wiring.to(events.ref), heard = true))
+      val robot = spawn(RobotActor(6, address, settings, outbox.ref, RobotWiring.to(events.ref), heard = true))
       events.expectMessageType[RobotOnline]
       keepAlive(robot, boot = 1)
       // A camera subscriber wants an option before the list is known: it waits for the push.
@@ -78,7 +78,7 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
     "pull the list again after a restart and re-enable the active options once it arrives" in {
       val outbox = createTestProbe[Outbox.Command]()
       val events = createTestProbe[GatewayEvent]()
-      val robot = spawn(RobotActor(6, address, settings, outbox.ref, RobotActor.Wiring.to(events.ref), heard = true))
+      val robot = spawn(RobotActor(6, address, settings, outbox.ref, RobotWiring.to(events.ref), heard = true))
       keepAlive(robot, boot = 1)
       nextDebug(outbox) shouldBe pull
       robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))), HeaderForm.Legacy, 40)

@@ -41,7 +41,8 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       val first = createTestProbe[GatewayEvent]()
       val second = createTestProbe[GatewayEvent]()
       val backlog = new Backlog(8)
-      val robot = spawn(RobotActor(4, address, settings, outbox.ref, RobotActor.Wiring(Set(first.ref), None, backlog), heard = true))
+      val robot =
+        spawn(RobotActor(4, address, settings, outbox.ref, RobotWiring(Set(first.ref), None, backlog), heard = true))
       first.expectMessage(RobotOnline(4, address))
       backlog.add()
       robot ! keepAlive(1)
@@ -56,7 +57,7 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
     "derive the snapshot's online from its own state, offline before the robot is reached" in {
       val outbox = createTestProbe[Outbox.Command]()
       val events = createTestProbe[GatewayEvent]()
-      val robot = spawn(RobotActor(4, address, settings, outbox.ref, RobotActor.Wiring.to(events.ref), heard = false))
+      val robot = spawn(RobotActor(4, address, settings, outbox.ref, RobotWiring.to(events.ref), heard = false))
       val snapshots = createTestProbe[RobotSnapshot]()
       robot ! RobotActor.GetSnapshot(snapshots.ref)
       val before = snapshots.receiveMessage()
@@ -78,7 +79,7 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       val crash = new CrashOnce
       val robot = spawn(
         Behaviors.supervise(Behaviors.intercept(() => crash)(
-          RobotActor(4, address, settings, outbox.ref, RobotActor.Wiring(Set.empty, Some(gateway.ref), new Backlog(8)),
+          RobotActor(4, address, settings, outbox.ref, RobotWiring(Set.empty, Some(gateway.ref), new Backlog(8)),
             heard = true))
         ).onFailure(SupervisorStrategy.restartWithBackoff(50.millis, 200.millis, 0.0))
       )

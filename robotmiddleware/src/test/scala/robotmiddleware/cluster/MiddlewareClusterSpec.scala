@@ -50,12 +50,10 @@ class MiddlewareClusterSpec
   private val portA = clusterA.selfMember.address.port.get
 
   private val response = nodeA.createTestProbe[ResponseActor.Command]()
-  private val noResponse = nodeA.createTestProbe[NoResponseActor.Command]()
   private val vision = nodeA.createTestProbe[VisionActor.Command]()
-  private val stream = nodeA.createTestProbe[StreamActor.Command]()
   private val subscriptions = nodeA.createTestProbe[ActorRef[GatewayEvent]]()
   private val robot =
-    nodeA.spawn(fakeRobot(RobotActor.Connected(7, response.ref, noResponse.ref, vision.ref, stream.ref)), "robot-7")
+    nodeA.spawn(fakeRobot(RobotActor.Opened(7, response.ref, vision.ref)), "robot-7")
   private val gateway = nodeA.spawn(fakeGateway(robot, subscriptions.ref), "gateway")
   private val middleware = nodeA.spawn(RobotMiddleware(gateway, MiddlewareSettings(nodeA.system)), "middleware")
   private val gatewayEvents = subscriptions.receiveMessage()
@@ -277,8 +275,8 @@ object MiddlewareClusterSpec {
     ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort").withFallback(common)
 
   /** The robot actor as far as the middleware uses it: its children, its snapshot (online) and its link figures. */
-  def fakeRobot(children: RobotActor.Connected): Behavior[RobotActor.Command] = Behaviors.receiveMessage {
-    case RobotActor.Connect(replyTo) =>
+  def fakeRobot(children: RobotActor.Opened): Behavior[RobotActor.Access] = Behaviors.receiveMessage {
+    case RobotActor.Open(replyTo) =>
       replyTo ! children
       Behaviors.same
     case RobotActor.GetSnapshot(replyTo) =>
@@ -287,19 +285,18 @@ object MiddlewareClusterSpec {
     case RobotActor.GetLinkStats(replyTo) =>
       replyTo ! CrossNodeSerializationSpec.linkStats
       Behaviors.same
-    case _ => Behaviors.unhandled
   }
 
   /** The gateway as far as the middleware uses it: one robot, 7, its snapshot, and the subscription to its events. */
   def fakeGateway(
-      robot: ActorRef[RobotActor.Command],
+      robot: ActorRef[RobotActor.Access],
       subscriptions: ActorRef[ActorRef[GatewayEvent]]
-  ): Behavior[Gateway.Command] =
+  ): Behavior[Gateway.MiddlewareView] =
     Behaviors.receiveMessage {
       case Gateway.Subscribe(subscriber) =>
         subscriptions ! subscriber
         Behaviors.same
-      case Gateway.GetRobot(robotId, replyTo) =>
+      case Gateway.GetRobotAccess(robotId, replyTo) =>
         replyTo ! Some(robot).filter(_ => robotId == 7)
         Behaviors.same
       case Gateway.GetRobots(replyTo) =>

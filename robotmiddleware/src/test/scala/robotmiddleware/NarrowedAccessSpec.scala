@@ -1,0 +1,55 @@
+package robotmiddleware
+
+import akka.actor.typed.ActorRef
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway._
+
+/**
+ * What the middleware's package can send the gateway and a robot, checked by the compiler (ScalaTest's compile-time
+ * assertions typecheck each snippet here, outside package naogateway): the narrowed refs take exactly the middleware's
+ * messages, and the gateway's internal messages cannot even be built.
+ */
+class NarrowedAccessSpec extends AnyWordSpec with Matchers {
+
+  private val access: ActorRef[RobotActor.Access] = null
+  private val opened: RobotActor.Opened = null
+  private val gateway: ActorRef[Gateway.MiddlewareView] = null
+
+  "The middleware's refs" should {
+    "take the middleware's questions, Open, calls and camera registrations" in {
+      assertCompiles("access ! RobotActor.GetSnapshot(null)")
+      assertCompiles("access ! RobotActor.GetLinkStats(null)")
+      assertCompiles("access ! RobotActor.Open(null)")
+      assertCompiles("opened.response ! ResponseActor.Call(null, null)")
+      assertCompiles("opened.vision ! VisionActor.Register(null, grid = false)")
+      assertCompiles("gateway ! Gateway.GetRobotAccess(1, null)")
+      assertCompiles("gateway ! Gateway.GetRobots(null)")
+      assertCompiles("gateway ! Gateway.Subscribe(null)")
+    }
+    "not take the whole robot actor's or the gateway's other messages" in {
+      assertTypeError("access ! RobotActor.Connect(null)")
+      assertTypeError("gateway ! Gateway.GetRobot(1, null)")
+    }
+    "hold no ref to the robot's sender, stream or heartbeat" in {
+      assertTypeError("opened.noResponse")
+      assertTypeError("opened.stream")
+    }
+  }
+
+  "The gateway's internal messages" should {
+    "not be built outside package naogateway" in {
+      assertTypeError("RobotActor.FrameReceived(null, null, 0)")
+      assertTypeError("RobotActor.SegmentReceived(null)")
+      assertTypeError("RobotActor.DatagramRejected(null)")
+      assertTypeError("RobotActor.Rebound(null)")
+      assertTypeError("RobotActor.Subscribers(Set.empty)")
+      assertTypeError("VisionActor.Subscribers(Map.empty)")
+      assertTypeError("NoResponseActor.Finished(1L)")
+      assertTypeError("ResponseActor.Reachability(true)")
+      assertTypeError("Outbox.RobotGone(1)")
+      assertTypeError("HeartBeatActor.ProbeNow")
+    }
+  }
+}
