@@ -82,7 +82,8 @@ lazy val naogateway = (project in file("naogateway"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
-    libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j, jeromq) ++ testLibs ++ akkaTestLibs
+    libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j,
+      jeromq) ++ testLibs ++ akkaTestLibs
   )
 
 // The simulator: simulated robots and their firmware, the GS1500M model, the lossy network, the fleet and the
@@ -100,7 +101,8 @@ lazy val sim = (project in file("sim"))
 // cycle from naogateway's tests into sim). Test sources only, nothing to publish; its fixtures (GatewayFixture,
 // HostileTraffic, RelayCapture) serve the middleware's and the apps' specs and the bench too.
 lazy val integration = (project in file("integration"))
-  .dependsOn(naogateway % "compile->compile;test->test", sim % "compile->compile;test->test", wire % "compile->compile;test->test")
+  .dependsOn(naogateway % "compile->compile;test->test", sim % "compile->compile;test->test",
+    wire % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-integration",
@@ -109,7 +111,8 @@ lazy val integration = (project in file("integration"))
   )
 
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test", integration % "test->test")
+  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test",
+    integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",
@@ -171,7 +174,9 @@ lazy val launcher = (project in file("launcher"))
     Universal / mappings ++= {
       val python = (apps / baseDirectory).value / "python"
       val sources = (python ** ("*.py" || "*.toml" || "*.md" || "*.txt" || "py.typed")).get
-        .filterNot(f => Seq("build", "proto", "__pycache__").exists(d => f.getPath.contains(s"/$d/")) || f.getPath.contains(".egg-info"))
+        .filterNot(f =>
+          Seq("build", "proto", "__pycache__").exists(d => f.getPath.contains(s"/$d/")) || f.getPath.contains(
+            ".egg-info"))
       val protos = (proto / Compile / PB.protoSources).value.head
       sources.map(f => f -> s"python/${IO.relativize(python, f).get}") ++
         (protos ** "*.proto").get.map(f => f -> s"python/naogateway_client/proto/${IO.relativize(protos, f).get}")
@@ -195,7 +200,8 @@ lazy val root = (project in file("."))
   .settings(
     name := "naogateway-root",
     // The bench's web figures (bench.WebBench) drive the web view with these, as the apps tests do.
-    libraryDependencies ++= Seq(akkaHttp, akkaHttpSprayJson, seleniumChrome, seleniumSupport) ++ testLibs ++ akkaTestLibs,
+    libraryDependencies ++= Seq(akkaHttp, akkaHttpSprayJson, seleniumChrome,
+      seleniumSupport) ++ testLibs ++ akkaTestLibs,
     Compile / mainClass := (launcher / Compile / mainClass).value,
     terminalEnv,
     run / fork := true,

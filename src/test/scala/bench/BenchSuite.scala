@@ -23,7 +23,9 @@ object BenchSuite {
     Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, CallPathBench, ForgeryBench, RobotCtlBench,
       IdleCpuBench, FloodBench, WebBench, FirmwareBench)
 
-  /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the gateway's. */
+  /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the
+    * gateway's.
+    */
   val onRequest: Vector[Benchmark] = Vector(Soak)
 
   def main(args: Array[String]): Unit = {

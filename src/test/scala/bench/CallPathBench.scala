@@ -27,31 +27,30 @@ import naogateway.wire.{MessageContents, RpcCall}
 import robotmiddleware.cluster.MiddlewareCluster
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
-/**
- * The call path users feel: an app's `system.ping` to a robot and back through each door, all to one plain-socket robot
- * (a thread on a DatagramChannel answering the RPC frame at once, keep-alives from another: no simulator), beside the
- * raw UDP floor and the command round trip of a peer, MAVSDK, measured in the same run. Paced at one call per
- * millisecond after a warm-up, as `GatewayBench`'s round trips; nearest-rank percentiles in microseconds.
- *
- *  - `callpath_raw_udp_*`: the floor, a plain request/answer between two DatagramChannels (`GatewayBench`'s).
- *  - `callpath_gateway_*`: the gateway alone, the call asked of the robot's command owner (`ResponseActor`).
- *  - `callpath_interface_*`: a Scala app through `RobotInterface` in the gateway's JVM and actor system.
- *  - `callpath_cluster_*`: a Scala app on another cluster node (its own actor system in this JVM, Artery over
- *    loopback TCP), through `RobotInterface`.
- *  - `callpath_python_*`: the Python client (apps/python) over the ZeroMQ endpoint, a process of its own.
- *  - `callpath_python_door_*`: the same client and endpoint in front of a `RobotInterface` that answers every call
- *    at once: the ZeroMQ door's own part (sockets, the endpoint, the client), without middleware or robot.
- *  - `callpath_mavsdk_*`: MAVSDK (the `mavsdk` package) arming a pymavlink-played vehicle on loopback, each arm one
- *    COMMAND_LONG answered by a COMMAND_ACK (src/test/python/bench/mavsdk_peer.py); absent (null) when it cannot be
- *    installed or run here, the reason in the progress lines.
- *  - `callpath_mavsdk_grpc_*`: the same with MAVSDK's gRPC ground side (`mavsdk-grpc`, which the `mavsdk` package
- *    was up to version 3: Python asks the bundled mavsdk_server over gRPC), in a venv of its own.
- *  - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
- *    `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
- *
- * The gateway's actor system is a cluster node (the gateway role) for the whole group, so every door meets the same
- * gateway. The Python door and the peer need python3 and pip; both run in one venv under apps/target.
- */
+/** The call path users feel: an app's `system.ping` to a robot and back through each door, all to one plain-socket
+  * robot (a thread on a DatagramChannel answering the RPC frame at once, keep-alives from another: no simulator),
+  * beside the raw UDP floor and the command round trip of a peer, MAVSDK, measured in the same run. Paced at one call
+  * per millisecond after a warm-up, as `GatewayBench`'s round trips; nearest-rank percentiles in microseconds.
+  *
+  *   - `callpath_raw_udp_*`: the floor, a plain request/answer between two DatagramChannels (`GatewayBench`'s).
+  *   - `callpath_gateway_*`: the gateway alone, the call asked of the robot's command owner (`ResponseActor`).
+  *   - `callpath_interface_*`: a Scala app through `RobotInterface` in the gateway's JVM and actor system.
+  *   - `callpath_cluster_*`: a Scala app on another cluster node (its own actor system in this JVM, Artery over
+  *     loopback TCP), through `RobotInterface`.
+  *   - `callpath_python_*`: the Python client (apps/python) over the ZeroMQ endpoint, a process of its own.
+  *   - `callpath_python_door_*`: the same client and endpoint in front of a `RobotInterface` that answers every call at
+  *     once: the ZeroMQ door's own part (sockets, the endpoint, the client), without middleware or robot.
+  *   - `callpath_mavsdk_*`: MAVSDK (the `mavsdk` package) arming a pymavlink-played vehicle on loopback, each arm one
+  *     COMMAND_LONG answered by a COMMAND_ACK (src/test/python/bench/mavsdk_peer.py); absent (null) when it cannot be
+  *     installed or run here, the reason in the progress lines.
+  *   - `callpath_mavsdk_grpc_*`: the same with MAVSDK's gRPC ground side (`mavsdk-grpc`, which the `mavsdk` package was
+  *     up to version 3: Python asks the bundled mavsdk_server over gRPC), in a venv of its own.
+  *   - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
+  *     `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
+  *
+  * The gateway's actor system is a cluster node (the gateway role) for the whole group, so every door meets the same
+  * gateway. The Python door and the peer need python3 and pip; both run in one venv under apps/target.
+  */
 object CallPathBench extends Benchmark {
   val name = "callpath"
 
@@ -66,10 +65,9 @@ object CallPathBench extends Benchmark {
   /** The Python packages of the client's specs, plus the peer's (pinned). */
   private val PeerRequirements = Seq("mavsdk==4.1.0", "pymavlink==2.4.50")
 
-  /**
-   * The gRPC peer's own venv: mavsdk-grpc's generated code needs a grpcio newer than the one the client's protoc
-   * (grpcio-tools) pins, so the two cannot share one. Pinned as pip resolved them.
-   */
+  /** The gRPC peer's own venv: mavsdk-grpc's generated code needs a grpcio newer than the one the client's protoc
+    * (grpcio-tools) pins, so the two cannot share one. Pinned as pip resolved them.
+    */
   private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3",
     "protobuf==7.36.2", "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
 
@@ -94,14 +92,18 @@ object CallPathBench extends Benchmark {
         python.fold(why => progress(s"python client not measured: $why"),
           p => progress(f"python client: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val door = pythonCalls(gateway.zeroMqAnswering())
-        door.fold(why => progress(s"python door alone not measured: $why"),
-          p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        door.fold(
+          why => progress(s"python door alone not measured: $why"),
+          p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us")
+        )
         val peer = mavsdk()
         peer.fold(why => progress(s"MAVSDK not measured: $why"),
           p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
         val grpcPeer = mavsdkGrpc()
-        grpcPeer.fold(why => progress(s"MAVSDK over gRPC not measured: $why"),
-          p => progress(f"MAVSDK command over gRPC (mavsdk_server): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        grpcPeer.fold(
+          why => progress(s"MAVSDK over gRPC not measured: $why"),
+          p => progress(f"MAVSDK command over gRPC (mavsdk_server): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us")
+        )
         progress(s"done, load average ${GatewayBench.loadAverage()}")
         def p50(s: Array[Long]) = GatewayBench.percentile(s, 0.50) / 1e3
         def p99(s: Array[Long]) = GatewayBench.percentile(s, 0.99) / 1e3
@@ -189,12 +191,15 @@ object CallPathBench extends Benchmark {
   /** Runs a script of src/test/python/bench; its one JSON line as (p50, p99) in microseconds, or why not. */
   private def script(python: File, name: String, args: Seq[String]): Either[String, (Double, Double)] = {
     val log = new File(PythonEnv.root, s"target/bench/$name.log")
-    val env = Map("NAOGATEWAY_PY_GEN" -> new File(PythonEnv.root, "apps/target/python-gen").getPath,
-      "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath, "PYTHONDONTWRITEBYTECODE" -> "1")
+    val env = Map(
+      "NAOGATEWAY_PY_GEN" -> new File(PythonEnv.root, "apps/target/python-gen").getPath,
+      "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath,
+      "PYTHONDONTWRITEBYTECODE" -> "1"
+    )
     // stderr goes to the log too: only the last JSON line is read.
     val path = new File(PythonEnv.root, s"src/test/python/bench/$name").getPath
     Try(PythonEnv.run(Seq(python.getPath, "-u", path) ++ args,
-      10.minutes, log, env)) match {
+        10.minutes, log, env)) match {
       case Failure(e) => Left(s"$name did not finish: $e")
       case Success((code, output)) =>
         val Figure = """.*"p50_us": ([0-9.]+), "p99_us": ([0-9.]+).*""".r
@@ -207,14 +212,20 @@ object CallPathBench extends Benchmark {
   }
 
   private def pythonCalls(endpoint: ZeroMqEndpoint.Addresses): Either[String, (Double, Double)] =
-    venv().flatMap(python => script(python, "zeromq_calls.py", Seq("--endpoint", endpoint.requests,
-      "--publish", endpoint.publish,
-      "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)))
+    venv().flatMap(python =>
+      script(
+        python,
+        "zeromq_calls.py",
+        Seq("--endpoint", endpoint.requests,
+          "--publish", endpoint.publish,
+          "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)
+      ))
 
   private def mavsdkGrpc(): Either[String, (Double, Double)] =
     venvOf("python-peer-grpc-venv", GrpcPeerRequirements.mkString("", "\n", "\n"))
-      .flatMap(python => script(python, "mavsdk_peer.py",
-        Seq("--grpc", "--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
+      .flatMap(python =>
+        script(python, "mavsdk_peer.py",
+          Seq("--grpc", "--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
 
   private def mavsdk(): Either[String, (Double, Double)] =
     venv().flatMap(python =>
@@ -325,10 +336,9 @@ object CallPathBench extends Benchmark {
     def close(): Unit = ()
   }
 
-  /**
-   * Robot 1 as a bare UDP responder on a loopback address of its own, port 3838: one thread answers every request
-   * frame at once with a reply of the same call id, another sends a keep-alive every 200 ms. No simulator.
-   */
+  /** Robot 1 as a bare UDP responder on a loopback address of its own, port 3838: one thread answers every request
+    * frame at once with a reply of the same call id, another sends a keep-alive every 200 ms. No simulator.
+    */
   private final class PlainRobot(gateway: InetSocketAddress) {
     private val socket = DatagramChannel.open()
       .bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
@@ -336,27 +346,33 @@ object CallPathBench extends Benchmark {
     private val keepAlive = MessageContents
       .encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("PlainRobot")))))
       .fold(e => throw new IllegalStateException(e.describe), identity)
-    private val beats = new Thread(() => {
-      try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gateway); Thread.sleep(200) }
-      catch { case _: ClosedChannelException | _: InterruptedException => () }
-    }, "plain-robot-keep-alive")
-    private val answers = new Thread(() => {
-      val in = ByteBuffer.allocate(2048)
-      try
-        while (socket.isOpen) {
-          in.clear()
-          val from = socket.receive(in)
-          in.flip()
-          val bytes = new Array[Byte](in.remaining)
-          in.get(bytes)
-          MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
-            val answer = Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)
-            val reply = MessageContents(1, rpcResponse = Some(answer))
-            MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+    private val beats = new Thread(
+      () => {
+        try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gateway); Thread.sleep(200) }
+        catch { case _: ClosedChannelException | _: InterruptedException => () }
+      },
+      "plain-robot-keep-alive"
+    )
+    private val answers = new Thread(
+      () => {
+        val in = ByteBuffer.allocate(2048)
+        try
+          while (socket.isOpen) {
+            in.clear()
+            val from = socket.receive(in)
+            in.flip()
+            val bytes = new Array[Byte](in.remaining)
+            in.get(bytes)
+            MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
+              val answer = Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)
+              val reply = MessageContents(1, rpcResponse = Some(answer))
+              MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+            }
           }
-        }
-      catch { case _: ClosedChannelException => () }
-    }, "plain-robot-answers")
+        catch { case _: ClosedChannelException => () }
+      },
+      "plain-robot-answers"
+    )
     Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
 
     def close(): Unit = {

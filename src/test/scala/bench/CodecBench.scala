@@ -7,7 +7,9 @@ import com.google.protobuf.CodedInputStream
 import naogateway.proto.Status
 import naogateway.wire.MessageContents
 
-/** Frame + Message + Status codec throughput on the docs/protocol.md 9.1 keep-alive, against a hand-written protobuf-java floor. */
+/** Frame + Message + Status codec throughput on the docs/protocol.md 9.1 keep-alive, against a hand-written
+  * protobuf-java floor.
+  */
 object CodecBench extends Benchmark {
   val name = "codec"
 

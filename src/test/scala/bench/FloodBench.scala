@@ -9,19 +9,18 @@ import naogateway._
 import naogateway.integration.{GatewayFixture, HostileTraffic}
 import naogateway.wire.RpcCall
 
-/**
- * `./sbt "bench flood"`: a gateway with its default bounds (discovery.max-robots 16, forget-unreached-after 10 s) and
- * two simulated robots, under the hostile-network flood of `HostileTraffic.flood` at four times the test suite's size:
- * about 360,000 datagrams over 40 rounds (160,000 random and mutated datagrams, 24,000 keep-alives with invented robot
- * ids from one socket and 16,000 from 200 addresses, 4,000 untrusted GameController packets, forged keep-alives from
- * robot 1's address).
- *
- * `flood_robot_actors_max`: the most robot actors the gateway had (sampled twice a round; the cap plus the configured
- * robots is the bound). `flood_log_lines`: log lines at INFO and above during the flood. `flood_heap_growth_bytes`:
- * heap in use after a full collection, after the flood minus before. `flood_robots_answering`: the real robots that
- * answered `system.ping` afterwards (2 of 2). The signed-frames figure `forged_state_changes` belongs beside these once
- * the gateway requires signatures.
- */
+/** `./sbt "bench flood"`: a gateway with its default bounds (discovery.max-robots 16, forget-unreached-after 10 s) and
+  * two simulated robots, under the hostile-network flood of `HostileTraffic.flood` at four times the test suite's size:
+  * about 360,000 datagrams over 40 rounds (160,000 random and mutated datagrams, 24,000 keep-alives with invented robot
+  * ids from one socket and 16,000 from 200 addresses, 4,000 untrusted GameController packets, forged keep-alives from
+  * robot 1's address).
+  *
+  * `flood_robot_actors_max`: the most robot actors the gateway had (sampled twice a round; the cap plus the configured
+  * robots is the bound). `flood_log_lines`: log lines at INFO and above during the flood. `flood_heap_growth_bytes`:
+  * heap in use after a full collection, after the flood minus before. `flood_robots_answering`: the real robots that
+  * answered `system.ping` afterwards (2 of 2). The signed-frames figure `forged_state_changes` belongs beside these
+  * once the gateway requires signatures.
+  */
 object FloodBench extends Benchmark {
   val name = "flood"
 

@@ -30,37 +30,36 @@ import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings}
 import naogateway.wire.{MessageContents, RpcCall}
 
-/**
- * The gateway on this machine, over loopback, at its default settings (reference.conf) unless a figure says otherwise:
- *
- *  - `rpc_rtt_p50_us`, `rpc_rtt_p99_us`: sequential `system.ping` calls asked of a robot's ResponseActor from outside
- *    the gateway, to a simulated robot without the CM-530/GS1500M models (faithfulLink = false), so the gateway's own
- *    path and the network are measured; `raw_udp_rtt_*`: the floor, a plain DatagramChannel ping-pong between two
- *    threads; `sim_robot_rtt_*`: the same calls framed by hand and sent by a plain DatagramChannel straight to the same
- *    kind of simulated robot, which answers that channel: the simulator's own part of `rpc_rtt_*`. All paced at one
- *    exchange per millisecond (that keeps the calls far under the team budget of
- *    125 kB/s, which the gateway enforces and which would otherwise be what is measured), after a warm-up.
- *  - `ingest_datagrams_s`: pre-encoded keep-alives blasted by one thread from [[IngestRobots]] sockets (one robot id
- *    per socket: the gateway binds each id to the address it first came from and rejects other ids from that
- *    address) at the robot port; counted are the keep-alives the robot actors handled (their RobotStatusUpdated
- *    events), not merely received datagrams. `raw_udp_ingest_datagrams_s`: one thread's blocking receive loop fed
- *    the same way. On two cores the sending thread takes about one of them in both runs.
- *  - `recording_ingest_datagrams_s`: `ingest_datagrams_s` with `naogateway.recording` on (every datagram, each
- *    keep-alive's Status and the decisions into MCAP files in a temporary directory, deleted afterwards);
- *    `recording_ingest_ratio` = that ÷ the mean of `ingest_datagrams_s` and a second run without recording after it
- *    (goal ≥ 0.9).
- *  - `heartbeat_detect_ms`: from a partition of the robot's link (LossyNetwork) to RobotOffline, median of
- *    [[DetectTrials]] trials; the cut falls at a random phase of the 200 ms keep-alive period.
- *  - `heartbeat_false_offline_loss20`: RobotOffline events of one robot over 60 s at 20 % loss each way.
- *  - `fleet_*`: the largest fleet of [[FleetSizes]] (keep-alives at 5 Hz) that had no RobotOffline event over 60 s.
- *    The gateway and the simulated robots run in two actor systems of this JVM, so the gateway's part can be
- *    separated: `fleet_gateway_cpu_pct` is the CPU time of the gateway system's threads (dispatchers, scheduler,
- *    robot port reader, Akka IO selector of the GameController link) over the 60 s, in percent of one core; GC and JIT threads serve both systems and are not in
- *    it (the progress lines show them, the robots' threads and the whole process). `fleet_heap_bytes_per_robot` is
- *    the gateway's heap per robot: used heap after GC with the fleet minus used heap after GC once the gateway
- *    system is stopped (robots still running), less the empty gateway system, divided by the robots; the progress
- *    lines show the total with the simulated robots too.
- */
+/** The gateway on this machine, over loopback, at its default settings (reference.conf) unless a figure says otherwise:
+  *
+  *   - `rpc_rtt_p50_us`, `rpc_rtt_p99_us`: sequential `system.ping` calls asked of a robot's ResponseActor from outside
+  *     the gateway, to a simulated robot without the CM-530/GS1500M models (faithfulLink = false), so the gateway's own
+  *     path and the network are measured; `raw_udp_rtt_*`: the floor, a plain DatagramChannel ping-pong between two
+  *     threads; `sim_robot_rtt_*`: the same calls framed by hand and sent by a plain DatagramChannel straight to the
+  *     same kind of simulated robot, which answers that channel: the simulator's own part of `rpc_rtt_*`. All paced at
+  *     one exchange per millisecond (that keeps the calls far under the team budget of 125 kB/s, which the gateway
+  *     enforces and which would otherwise be what is measured), after a warm-up.
+  *   - `ingest_datagrams_s`: pre-encoded keep-alives blasted by one thread from [[IngestRobots]] sockets (one robot id
+  *     per socket: the gateway binds each id to the address it first came from and rejects other ids from that address)
+  *     at the robot port; counted are the keep-alives the robot actors handled (their RobotStatusUpdated events), not
+  *     merely received datagrams. `raw_udp_ingest_datagrams_s`: one thread's blocking receive loop fed the same way. On
+  *     two cores the sending thread takes about one of them in both runs.
+  *   - `recording_ingest_datagrams_s`: `ingest_datagrams_s` with `naogateway.recording` on (every datagram, each
+  *     keep-alive's Status and the decisions into MCAP files in a temporary directory, deleted afterwards);
+  *     `recording_ingest_ratio` = that ÷ the mean of `ingest_datagrams_s` and a second run without recording after it
+  *     (goal ≥ 0.9).
+  *   - `heartbeat_detect_ms`: from a partition of the robot's link (LossyNetwork) to RobotOffline, median of
+  *     [[DetectTrials]] trials; the cut falls at a random phase of the 200 ms keep-alive period.
+  *   - `heartbeat_false_offline_loss20`: RobotOffline events of one robot over 60 s at 20 % loss each way.
+  *   - `fleet_*`: the largest fleet of [[FleetSizes]] (keep-alives at 5 Hz) that had no RobotOffline event over 60 s.
+  *     The gateway and the simulated robots run in two actor systems of this JVM, so the gateway's part can be
+  *     separated: `fleet_gateway_cpu_pct` is the CPU time of the gateway system's threads (dispatchers, scheduler,
+  *     robot port reader, Akka IO selector of the GameController link) over the 60 s, in percent of one core; GC and
+  *     JIT threads serve both systems and are not in it (the progress lines show them, the robots' threads and the
+  *     whole process). `fleet_heap_bytes_per_robot` is the gateway's heap per robot: used heap after GC with the fleet
+  *     minus used heap after GC once the gateway system is stopped (robots still running), less the empty gateway
+  *     system, divided by the robots; the progress lines show the total with the simulated robots too.
+  */
 object GatewayBench extends Benchmark {
   val name = "gateway"
 
@@ -126,7 +125,8 @@ object GatewayBench extends Benchmark {
 
   private def roundTrips(): ListMap[String, Double] = {
     val rpc = withNodes("rtt") { (gw, sim) =>
-      sim.fleet(FleetSettings(gw.addresses.robots, Vector(1), faithfulLink = false, firstAddress = TestLoopback.address()))
+      sim.fleet(FleetSettings(gw.addresses.robots, Vector(1), faithfulLink = false,
+          firstAddress = TestLoopback.address()))
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
       pings(gw)
     }
@@ -153,35 +153,44 @@ object GatewayBench extends Benchmark {
     )
   }
 
-  /**
-   * The `rpc_rtt_*` calls to a robot that is one thread on a plain DatagramChannel (keep-alives from another thread
-   * every 200 ms, every request answered at once): the gateway's own round trip, without the simulator's actors.
-   */
+  /** The `rpc_rtt_*` calls to a robot that is one thread on a plain DatagramChannel (keep-alives from another thread
+    * every 200 ms, every request answered at once): the gateway's own round trip, without the simulator's actors.
+    */
   private def rawRobotRoundTrips(): Array[Long] = withNodes("rtt-raw") { (gw, sim) =>
-    val socket = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
+    val socket = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(),
+        naogateway.sim.SimulatedRobot.ReceivePort))
     val watchdog = closeAfter(60.seconds, socket)
-    val keepAlive = MessageContents.encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("RawRobot")))))
+    val keepAlive = MessageContents.encodeFrame(MessageContents(1,
+        status = Some(Status(teamID = Some(1), activeAgent = Some("RawRobot")))))
       .fold(e => throw new IllegalStateException(e.describe), identity)
-    val beats = new Thread(() => {
-      try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gw.addresses.robots); Thread.sleep(200) }
-      catch { case _: ClosedChannelException | _: InterruptedException => () }
-    }, "raw-robot-keep-alive")
-    val answers = new Thread(() => {
-      val in = ByteBuffer.allocate(2048)
-      try
-        while (socket.isOpen) {
-          in.clear()
-          val from = socket.receive(in)
-          in.flip()
-          val bytes = new Array[Byte](in.remaining)
-          in.get(bytes)
-          MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
-            val reply = MessageContents(1, rpcResponse = Some(Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)))
-            MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+    val beats = new Thread(
+      () => {
+        try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gw.addresses.robots); Thread.sleep(200) }
+        catch { case _: ClosedChannelException | _: InterruptedException => () }
+      },
+      "raw-robot-keep-alive"
+    )
+    val answers = new Thread(
+      () => {
+        val in = ByteBuffer.allocate(2048)
+        try
+          while (socket.isOpen) {
+            in.clear()
+            val from = socket.receive(in)
+            in.flip()
+            val bytes = new Array[Byte](in.remaining)
+            in.get(bytes)
+            MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
+              val reply = MessageContents(1,
+                rpcResponse =
+                  Some(Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)))
+              MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
+            }
           }
-        }
-      catch { case _: ClosedChannelException => () }
-    }, "raw-robot-answers")
+        catch { case _: ClosedChannelException => () }
+      },
+      "raw-robot-answers"
+    )
     Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
     try {
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
@@ -193,24 +202,25 @@ object GatewayBench extends Benchmark {
     }
   }
 
-  /**
-   * The same `system.ping` calls, framed by hand and sent by a plain DatagramChannel straight to the same kind of
-   * simulated robot, which answers that channel as its gateway: the part of `rpc_rtt_*` that is the simulator's.
-   */
+  /** The same `system.ping` calls, framed by hand and sent by a plain DatagramChannel straight to the same kind of
+    * simulated robot, which answers that channel as its gateway: the part of `rpc_rtt_*` that is the simulator's.
+    */
   private def simulatedRobotRoundTrips(): Array[Long] = {
     val client = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(), 0))
     val watchdog = closeAfter(60.seconds, client)
     val sim = new SimNode("sim-alone")
     try {
-      val fleet = sim.fleet(FleetSettings(client.getLocalAddress.asInstanceOf[InetSocketAddress], Vector(1), faithfulLink = false,
-        firstAddress = TestLoopback.address()))
+      val fleet =
+        sim.fleet(FleetSettings(client.getLocalAddress.asInstanceOf[InetSocketAddress], Vector(1), faithfulLink = false,
+            firstAddress = TestLoopback.address()))
       val robot = fleet.address(1).getOrElse(throw new IllegalStateException("the simulated robot did not start"))
       val in = ByteBuffer.allocate(2048)
       var id = 0L
       def once(): Long = {
         id += 1
         val request = RpcCall("system", "ping", Vector.empty).copy(callId = Some(id)).toProto
-        val frame = MessageContents.encodeFrame(MessageContents(1, rpcRequest = Some(request))).fold(e => throw new IllegalStateException(e.describe), identity)
+        val frame = MessageContents.encodeFrame(MessageContents(1, rpcRequest = Some(request))).fold(
+          e => throw new IllegalStateException(e.describe), identity)
         val start = System.nanoTime()
         client.send(ByteBuffer.wrap(frame), robot)
         var answered = false
@@ -240,17 +250,20 @@ object GatewayBench extends Benchmark {
     val serverAddress = server.getLocalAddress
     // Both channels close at the latest after a minute, so no thread can wait for ever on a lost datagram.
     val watchdog = closeAfter(60.seconds, client, server)
-    val echo = new Thread(() => {
-      val buffer = ByteBuffer.allocateDirect(2048)
-      try {
-        while (server.isOpen) {
-          buffer.clear()
-          val from = server.receive(buffer)
-          buffer.flip()
-          server.send(buffer, from)
-        }
-      } catch { case _: ClosedChannelException => () }
-    }, "raw-udp-echo")
+    val echo = new Thread(
+      () => {
+        val buffer = ByteBuffer.allocateDirect(2048)
+        try {
+          while (server.isOpen) {
+            buffer.clear()
+            val from = server.receive(buffer)
+            buffer.flip()
+            server.send(buffer, from)
+          }
+        } catch { case _: ClosedChannelException => () }
+      },
+      "raw-udp-echo"
+    )
     echo.setDaemon(true)
     echo.start()
     try {
@@ -299,7 +312,8 @@ object GatewayBench extends Benchmark {
   private def keepAliveFrames(): Array[Array[Byte]] =
     (1 to IngestRobots).toArray.map { id =>
       MessageContents
-        .encodeFrame(MessageContents(robotId = id, status = Some(Status(teamID = Some(1), activeAgent = Some("BenchAgent")))))
+        .encodeFrame(MessageContents(robotId = id,
+            status = Some(Status(teamID = Some(1), activeAgent = Some("BenchAgent")))))
         .fold(e => throw new IllegalStateException(s"cannot encode a keep-alive: $e"), identity)
     }
 
@@ -328,20 +342,23 @@ object GatewayBench extends Benchmark {
     }
 
     def blast(seconds: Double): Thread = {
-      val thread = new Thread(() => {
-        val end = System.nanoTime() + (seconds * 1e9).toLong
-        try {
-          while (System.nanoTime() < end) {
-            var i = 0
-            while (i < channels.length) {
-              buffers(i).rewind()
-              channels(i).send(buffers(i), target)
-              i += 1
+      val thread = new Thread(
+        () => {
+          val end = System.nanoTime() + (seconds * 1e9).toLong
+          try {
+            while (System.nanoTime() < end) {
+              var i = 0
+              while (i < channels.length) {
+                buffers(i).rewind()
+                channels(i).send(buffers(i), target)
+                i += 1
+              }
+              sent.addAndGet(channels.length.toLong)
             }
-            sent.addAndGet(channels.length.toLong)
-          }
-        } catch { case _: ClosedChannelException => () }
-      }, "ingest-blaster")
+          } catch { case _: ClosedChannelException => () }
+        },
+        "ingest-blaster"
+      )
       thread.setDaemon(true)
       thread.start()
       thread
@@ -365,8 +382,9 @@ object GatewayBench extends Benchmark {
     val routed = routedIngest("ingest", frames, ConfigFactory.empty())
     // The same blast with recording on: every datagram, each keep-alive's Status, and the decisions into MCAP files.
     val recordingDir = Files.createTempDirectory("bench-recording")
-    val recorded = routedIngest("ingest-recording", frames, ConfigFactory.parseString(
-      s"""naogateway.recording { enabled = on, directory = "${recordingDir.toString}" }"""))
+    val recorded = routedIngest("ingest-recording", frames,
+      ConfigFactory.parseString(
+        s"""naogateway.recording { enabled = on, directory = "${recordingDir.toString}" }"""))
     // Off again after it: on a shared machine the load drifts, so the ratio is taken against the mean of both.
     val routedAfter = routedIngest("ingest-again", frames, ConfigFactory.empty())
     val without = (routed + routedAfter) / 2
@@ -392,7 +410,9 @@ object GatewayBench extends Benchmark {
         val online = mutable.Set.empty[Int]
         val deadline = 20.seconds.fromNow
         while (online.size < IngestRobots && deadline.hasTimeLeft())
-          sim.sink.poll(deadline.timeLeft.max(1.milli)).foreach { case (_, e) => e match { case RobotOnline(id, _) => online += id; case _ => () } }
+          sim.sink.poll(deadline.timeLeft.max(1.milli)).foreach { case (_, e) =>
+            e match { case RobotOnline(id, _) => online += id; case _ => () }
+          }
         require(online.size == IngestRobots, s"only ${online.size} of $IngestRobots ingest robots came online")
         val before = gw.stats()
         val start = System.nanoTime()
@@ -402,14 +422,18 @@ object GatewayBench extends Benchmark {
         val (rate, counted) = windowRate(start, () => { gatewayCpu.sample(); sim.sink.statusUpdates.get })
         val window = System.nanoTime() - start
         thread.join()
-        progress(s"ingest: CPU of the gateway's threads over the blast in % of one core: ${gatewayCpu.breakdown(window)}")
+        progress(
+          s"ingest: CPU of the gateway's threads over the blast in % of one core: ${gatewayCpu.breakdown(window)}")
         val sentRate = (blaster.sent.get - sentAtStart) / blastSeconds
         val after = gw.stats()
         val waited = (System.nanoTime() - start) / 1e9 - blastSeconds
-        progress(f"$tag: sent ${sentRate}%.0f/s, routed ${rate}%.0f/s ($counted keep-alives in ${IngestSeconds}%.0f s); " +
-          f"gateway actor had taken ${after.datagramsIn - before.datagramsIn} datagrams ${waited}%.1f s after the blast, " +
-          s"rejected ${after.rejected.values.sum - before.rejected.values.sum}, status events so far ${sim.sink.statusUpdates.get}" +
-          (if (after.recording.enabled) s"; recording: ${after.recording.messages} messages, ${after.recording.dropped} dropped" else ""))
+        progress(
+          f"$tag: sent ${sentRate}%.0f/s, routed ${rate}%.0f/s ($counted keep-alives in ${IngestSeconds}%.0f s); " +
+            f"gateway actor had taken ${after.datagramsIn - before.datagramsIn} datagrams ${waited}%.1f s after the blast, " +
+            s"rejected ${after.rejected.values.sum - before.rejected.values.sum}, status events so far ${sim.sink.statusUpdates.get}" +
+            (if (after.recording.enabled)
+               s"; recording: ${after.recording.messages} messages, ${after.recording.dropped} dropped"
+             else ""))
         rate
       } finally blaster.close()
     }
@@ -422,15 +446,18 @@ object GatewayBench extends Benchmark {
     receiver.setOption[Integer](StandardSocketOptions.SO_RCVBUF, 4 * 1024 * 1024)
     val watchdog = closeAfter(60.seconds, receiver)
     val received = new AtomicLong
-    val loop = new Thread(() => {
-      val buffer = ByteBuffer.allocateDirect(2048)
-      try {
-        while (receiver.isOpen) {
-          buffer.clear()
-          if (receiver.receive(buffer) != null) received.lazySet(received.get + 1)
-        }
-      } catch { case _: ClosedChannelException => () }
-    }, "raw-udp-receiver")
+    val loop = new Thread(
+      () => {
+        val buffer = ByteBuffer.allocateDirect(2048)
+        try {
+          while (receiver.isOpen) {
+            buffer.clear()
+            if (receiver.receive(buffer) != null) received.lazySet(received.get + 1)
+          }
+        } catch { case _: ClosedChannelException => () }
+      },
+      "raw-udp-receiver"
+    )
     loop.setDaemon(true)
     loop.start()
     val blaster = new Blaster(receiver.getLocalAddress.asInstanceOf[InetSocketAddress], frames)
@@ -439,7 +466,8 @@ object GatewayBench extends Benchmark {
       val thread = blaster.blast(blastSeconds)
       val (rate, counted) = windowRate(start, () => received.get)
       thread.join()
-      progress(f"raw udp ingest: sent ${blaster.sent.get / blastSeconds}%.0f/s, received ${rate}%.0f/s ($counted in ${IngestSeconds}%.0f s)")
+      progress(
+        f"raw udp ingest: sent ${blaster.sent.get / blastSeconds}%.0f/s, received ${rate}%.0f/s ($counted in ${IngestSeconds}%.0f s)")
       rate
     } finally {
       blaster.close()
@@ -482,8 +510,9 @@ object GatewayBench extends Benchmark {
         ms
       }
       val sorted = times.sorted
-      progress(f"heartbeat detection: median ${sorted(sorted.size / 2)}%.0f ms, min ${sorted.head}%.0f, max ${sorted.last}%.0f " +
-        s"(configured worst case from the last keep-alive: 400 ms quiet + 3 x 150 ms probes)")
+      progress(
+        f"heartbeat detection: median ${sorted(sorted.size / 2)}%.0f ms, min ${sorted.head}%.0f, max ${sorted.last}%.0f " +
+          s"(configured worst case from the last keep-alive: 400 ms quiet + 3 x 150 ms probes)")
       sorted(sorted.size / 2)
     } finally network.stop()
   }
@@ -503,21 +532,23 @@ object GatewayBench extends Benchmark {
           case (_, RobotOffline(1, reason)) =>
             offline += 1
             progress(s"loss 20 %: false offline event $offline ($reason)")
-          case (_, RobotOnline(1, _))           => online += 1
-          case (_, LinkQualityChanged(1, _))    => quality += 1
-          case _                                => ()
+          case (_, RobotOnline(1, _))        => online += 1
+          case (_, LinkQualityChanged(1, _)) => quality += 1
+          case _                             => ()
         }
       val c = network.stats(proxy)
-      progress(s"loss 20 % over ${LossHold.toSeconds} s: $offline offline, $online back online, $quality quality changes, " +
-        s"${sim.sink.statusUpdates.get - statusBefore} keep-alives arrived; proxy uplink ${c.uplink.forwarded}/${c.uplink.received} " +
-        s"forwarded, downlink ${c.downlink.forwarded}/${c.downlink.received}")
+      progress(
+        s"loss 20 % over ${LossHold.toSeconds} s: $offline offline, $online back online, $quality quality changes, " +
+          s"${sim.sink.statusUpdates.get - statusBefore} keep-alives arrived; proxy uplink ${c.uplink.forwarded}/${c.uplink.received} " +
+          s"forwarded, downlink ${c.downlink.forwarded}/${c.downlink.received}")
       offline
     } finally network.stop()
   }
 
   // ---------------------------------------------------------------------------------------------- fleet
 
-  private final case class FleetRun(robots: Int, held: Boolean, falseOffline: Int, gatewayCpuPct: Double, heapPerRobot: Double)
+  private final case class FleetRun(robots: Int, held: Boolean, falseOffline: Int, gatewayCpuPct: Double,
+      heapPerRobot: Double)
 
   private def fleets(): ListMap[String, Double] = {
     var runs = Vector.empty[FleetRun]
@@ -544,8 +575,9 @@ object GatewayBench extends Benchmark {
         gw.subscribe(sim.sinkRef)
         val gatewayBase = usedHeapAfterGc()
         val ids = (1 to n).toVector
-        val handle = sim.fleet(FleetSettings(gw.addresses.robots, ids, faithfulLink = false, firstAddress = TestLoopback.block(n), startTimeout = 90.seconds,
-          stopTimeout = 60.seconds))
+        val handle = sim.fleet(FleetSettings(gw.addresses.robots, ids, faithfulLink = false,
+            firstAddress = TestLoopback.block(n), startTimeout = 90.seconds,
+            stopTimeout = 60.seconds))
         try {
           val online = mutable.Set.empty[Int]
           var startupOffline = 0
@@ -582,8 +614,9 @@ object GatewayBench extends Benchmark {
               robotsCpu.sample()
               if (System.nanoTime() >= nextReport) {
                 val s = (System.nanoTime() - t0) / 1e9
-                progress(f"fleet of $n: $s%.0f s, ${(sim.sink.statusUpdates.get - status0) / s}%.0f keep-alives/s routed, " +
-                  f"gateway threads ${gatewayCpu.total / 1e7 / s}%.1f %% of a core, no offline")
+                progress(
+                  f"fleet of $n: $s%.0f s, ${(sim.sink.statusUpdates.get - status0) / s}%.0f keep-alives/s routed, " +
+                    f"gateway threads ${gatewayCpu.total / 1e7 / s}%.1f %% of a core, no offline")
                 nextReport += 10000000000L
               }
             }
@@ -596,8 +629,9 @@ object GatewayBench extends Benchmark {
             val robotsPct = robotsCpu.total * 100.0 / wall
             val processPct = process * 100.0 / wall
             if (offline > 0) {
-              progress(f"fleet of $n: offline after ${wall / 1e9}%.1f s; not held (gateway threads $gatewayPct%.1f %%, " +
-                f"robots $robotsPct%.1f %%, whole process $processPct%.1f %% of a core)")
+              progress(
+                f"fleet of $n: offline after ${wall / 1e9}%.1f s; not held (gateway threads $gatewayPct%.1f %%, " +
+                  f"robots $robotsPct%.1f %%, whole process $processPct%.1f %% of a core)")
               FleetRun(n, held = false, offline, gatewayPct, Double.NaN)
             } else {
               val withFleet = usedHeapAfterGc()
@@ -606,13 +640,15 @@ object GatewayBench extends Benchmark {
               val robotsOnly = usedHeapAfterGc()
               val gatewayPerRobot = ((withFleet - robotsOnly) - (gatewayBase - emptyBase)).toDouble / n
               val totalPerRobot = (withFleet - gatewayBase).toDouble / n
-              progress(f"fleet of $n held ${wall / 1e9}%.0f s: $keepAlives%.0f keep-alives/s routed; CPU in %% of one core: " +
-                f"gateway threads $gatewayPct%.1f, simulated robots' threads $robotsPct%.1f, " +
-                f"whole process $processPct%.1f (rest: GC, JIT, bench ${processPct - gatewayPct - robotsPct}%.1f)")
+              progress(
+                f"fleet of $n held ${wall / 1e9}%.0f s: $keepAlives%.0f keep-alives/s routed; CPU in %% of one core: " +
+                  f"gateway threads $gatewayPct%.1f, simulated robots' threads $robotsPct%.1f, " +
+                  f"whole process $processPct%.1f (rest: GC, JIT, bench ${processPct - gatewayPct - robotsPct}%.1f)")
               progress(s"fleet of $n: gateway threads by kind, % of one core: ${gatewayCpu.breakdown(wall)}")
-              progress(f"fleet of $n heap after GC: gateway $gatewayPerRobot%.0f B/robot; gateway and simulated robots together " +
-                f"$totalPerRobot%.0f B/robot (empty ${emptyBase >> 20} MiB, +gateway ${gatewayBase >> 20} MiB, " +
-                f"+fleet ${withFleet >> 20} MiB, fleet without gateway ${robotsOnly >> 20} MiB)")
+              progress(
+                f"fleet of $n heap after GC: gateway $gatewayPerRobot%.0f B/robot; gateway and simulated robots together " +
+                  f"$totalPerRobot%.0f B/robot (empty ${emptyBase >> 20} MiB, +gateway ${gatewayBase >> 20} MiB, " +
+                  f"+fleet ${withFleet >> 20} MiB, fleet without gateway ${robotsOnly >> 20} MiB)")
               FleetRun(n, held = true, 0, gatewayPct, gatewayPerRobot)
             }
           }
@@ -701,7 +737,8 @@ object GatewayBench extends Benchmark {
     val sink = new EventSink
     val sinkRef: ActorRef[GatewayEvent] = system.systemActorOf(sink.behavior, "gateway-events")
 
-    def fleet(settings: FleetSettings): FleetHandle = Await.result(Fleet.start(system, settings), settings.startTimeout + 10.seconds)
+    def fleet(settings: FleetSettings): FleetHandle =
+      Await.result(Fleet.start(system, settings), settings.startTimeout + 10.seconds)
 
     def stop(): Unit = {
       system.terminate()
@@ -710,7 +747,8 @@ object GatewayBench extends Benchmark {
   }
 
   /** A gateway subscribed to the events sink of a robots' node; both stop afterwards. */
-  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty())(body: (GatewayNode, SimNode) => T): T = {
+  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty())(body: (GatewayNode,
+          SimNode) => T): T = {
     val sim = new SimNode(s"sim-$tag")
     try {
       val gw = new GatewayNode(s"gw-$tag", gatewayConfig)
@@ -734,7 +772,8 @@ object GatewayBench extends Benchmark {
       Behaviors.same
     }
 
-    def poll(within: FiniteDuration): Option[(Long, GatewayEvent)] = Option(queue.poll(within.toNanos, TimeUnit.NANOSECONDS))
+    def poll(within: FiniteDuration): Option[(Long, GatewayEvent)] =
+      Option(queue.poll(within.toNanos, TimeUnit.NANOSECONDS))
 
     /** The arrival time and value of the first event matching `pf`, skipping others. */
     def await[T](within: FiniteDuration)(pf: PartialFunction[GatewayEvent, T]): (Long, T) = {
@@ -774,7 +813,8 @@ object GatewayBench extends Benchmark {
   }
 
   private[bench] def loadAverage(): String =
-    Try(new String(Files.readAllBytes(Paths.get("/proc/loadavg")), StandardCharsets.US_ASCII).split(' ').take(3).mkString(" "))
+    Try(new String(Files.readAllBytes(Paths.get("/proc/loadavg")), StandardCharsets.US_ASCII).split(' ').take(3).mkString(
+        " "))
       .getOrElse("unknown")
 
   /** The test logging captures every event in memory for the whole run; the bench keeps only warnings and errors. */

@@ -21,21 +21,20 @@ import com.typesafe.config.ConfigFactory
 import naogateway.testkit.TestLoopback
 import naogateway.sim.{Fleet, FleetSettings}
 
-/**
- * What doing nothing costs, in percent of one core of this machine:
- *
- *  - `demo_idle_cpu_pct`: the demo as a user starts it, the staged package's `bin/naogateway` (falling back to the
- *    launcher's `main` in a JVM forked with this classpath when no package is staged): gateway, middleware, three
- *    simulated robots with the faithful link, the ball follower in its own actor system, the simulated GameController
- *    and the status printer, output piped. Once the launcher's log
- *    shows the three robots online, [[DemoSettle]] lets the JIT calm down, then the process's CPU time
- *    (user + system, from the operating system) is taken over [[Window]]. The ball follower keeps robot 1's camera on
- *    and steers it the whole time, so this is the demo's steady state rather than a process with nothing to do.
- *  - `sim_idle_cpu_pct_per_robot`: [[SimRobots]] simulated robots with the faithful link (the demo's mode) in an actor
- *    system of this JVM, sending their 5 Hz keep-alives to a sink (one thread reading and discarding), nothing else
- *    asked of them. The JVM's process CPU time over [[Window]] after [[SimSettle]], divided by the robots; the JVM's
- *    own share (GC, JIT, Akka's scheduler tick, the sink thread) is in it, so the figure errs high.
- */
+/** What doing nothing costs, in percent of one core of this machine:
+  *
+  *   - `demo_idle_cpu_pct`: the demo as a user starts it, the staged package's `bin/naogateway` (falling back to the
+  *     launcher's `main` in a JVM forked with this classpath when no package is staged): gateway, middleware, three
+  *     simulated robots with the faithful link, the ball follower in its own actor system, the simulated GameController
+  *     and the status printer, output piped. Once the launcher's log shows the three robots online, [[DemoSettle]] lets
+  *     the JIT calm down, then the process's CPU time (user + system, from the operating system) is taken over
+  *     [[Window]]. The ball follower keeps robot 1's camera on and steers it the whole time, so this is the demo's
+  *     steady state rather than a process with nothing to do.
+  *   - `sim_idle_cpu_pct_per_robot`: [[SimRobots]] simulated robots with the faithful link (the demo's mode) in an
+  *     actor system of this JVM, sending their 5 Hz keep-alives to a sink (one thread reading and discarding), nothing
+  *     else asked of them. The JVM's process CPU time over [[Window]] after [[SimSettle]], divided by the robots; the
+  *     JVM's own share (GC, JIT, Akka's scheduler tick, the sink thread) is in it, so the figure errs high.
+  */
 object IdleCpuBench extends Benchmark {
   val name = "idle"
 
@@ -51,7 +50,6 @@ object IdleCpuBench extends Benchmark {
 
   private def progress(line: String): Unit = println(s"  idle: $line")
 
-
   private def demoIdle(): Double = {
     val log = Paths.get("target", "bench", "demo-idle.log").toAbsolutePath
     Files.createDirectories(log.getParent)
@@ -63,7 +61,8 @@ object IdleCpuBench extends Benchmark {
       if (Packaged.isStaged) Seq(Packaged.bin("naogateway").toString)
       else {
         val javaBin = s"${System.getProperty("java.home")}/bin/java"
-        val logging = Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
+        val logging =
+          Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
         Seq(javaBin) ++ logging ++ Seq("-cp", System.getProperty("java.class.path"), "apps.Launcher")
       }
     progress(s"demo: ${command.head}")
@@ -112,19 +111,24 @@ object IdleCpuBench extends Benchmark {
   private def simIdlePerRobot(): Double = {
     val sink = DatagramChannel.open(StandardProtocolFamily.INET)
     sink.bind(new InetSocketAddress(InetAddress.getLoopbackAddress, 0))
-    val reader = new Thread(() => {
-      val buffer = ByteBuffer.allocate(2048)
-      try while (true) { buffer.clear(); sink.receive(buffer) }
-      catch { case _: AsynchronousCloseException => () }
-    }, "idle-bench-sink")
+    val reader = new Thread(
+      () => {
+        val buffer = ByteBuffer.allocate(2048)
+        try while (true) { buffer.clear(); sink.receive(buffer) }
+        catch { case _: AsynchronousCloseException => () }
+      },
+      "idle-bench-sink"
+    )
     reader.setDaemon(true)
     reader.start()
     val config = ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load())
     val system = ActorSystem[Nothing](Behaviors.empty, "idle-bench-robots", config)
     try {
       val target = sink.getLocalAddress.asInstanceOf[InetSocketAddress]
-      val fleet = Await.result(Fleet.start(system, FleetSettings(target, (1 to SimRobots).toVector, firstAddress = TestLoopback.block(SimRobots))), 60.seconds)
-      progress(s"${fleet.robots.size} simulated robots up; settling ${SimSettle.toSeconds} s, then measuring ${Window.toSeconds} s")
+      val fleet = Await.result(Fleet.start(system,
+          FleetSettings(target, (1 to SimRobots).toVector, firstAddress = TestLoopback.block(SimRobots))), 60.seconds)
+      progress(
+        s"${fleet.robots.size} simulated robots up; settling ${SimSettle.toSeconds} s, then measuring ${Window.toSeconds} s")
       Thread.sleep(SimSettle.toMillis)
       val os = ManagementFactory.getOperatingSystemMXBean.asInstanceOf[com.sun.management.OperatingSystemMXBean]
       val (c0, t0) = (os.getProcessCpuTime, System.nanoTime())

@@ -5,8 +5,8 @@ import java.nio.file.{Files, Path, Paths}
 
 import scala.jdk.OptionConverters._
 
-/** What the benchmarks that run the installed package share: where the staged package is, free loopback ports, and
-  * a process's CPU time.
+/** What the benchmarks that run the installed package share: where the staged package is, free loopback ports, and a
+  * process's CPU time.
   */
 object Packaged {
 
@@ -20,10 +20,18 @@ object Packaged {
   def isStaged: Boolean = Files.isExecutable(bin("naogateway"))
 
   /** A TCP port on loopback that was free a moment ago. */
-  def freeTcpPort(): Int = { val s = new ServerSocket(0, 1, InetAddress.getLoopbackAddress); try s.getLocalPort finally s.close() }
+  def freeTcpPort(): Int = {
+    val s = new ServerSocket(0, 1, InetAddress.getLoopbackAddress);
+    try s.getLocalPort
+    finally s.close()
+  }
 
   /** A UDP port on loopback that was free a moment ago. */
-  def freeUdpPort(): Int = { val s = new DatagramSocket(0, InetAddress.getLoopbackAddress); try s.getLocalPort finally s.close() }
+  def freeUdpPort(): Int = {
+    val s = new DatagramSocket(0, InetAddress.getLoopbackAddress);
+    try s.getLocalPort
+    finally s.close()
+  }
 
   /** A process's CPU time (user + system) so far, in nanoseconds, as the operating system reports it. */
   def cpuNanos(pid: Long): Option[Long] =

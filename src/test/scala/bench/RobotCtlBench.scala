@@ -22,17 +22,16 @@ import naogateway.sim.{Fleet, FleetSettings}
 import naogateway.{Gateway, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
-/**
- * `robotctl status` as an operator runs it: a fresh JVM (`java -cp <this classpath> apps.RobotCtl status`) against a
- * gateway, middleware and control port in this JVM, over loopback. Wall time from process start to exit, median of
- * [[Runs]] runs after one warm-up run:
- *
- *  - `robotctl_status_wall_ms`: three simulated robots (the demo's fleet), default JVM options.
- *  - `robotctl_status_wall_ms_c1`: the same with `-XX:TieredStopAtLevel=1 -XX:+UseSerialGC`, options that suit a
- *    short-lived client JVM.
- *  - `robotctl_status_1000_wall_ms`: a control port in front of 1,000 stand-in robots (the answer is 1,002 lines).
- *  - `robotctl_jvm_floor_ms`: robotctl with no gateway to reach (it fails at once): the JVM start and class loading.
- */
+/** `robotctl status` as an operator runs it: a fresh JVM (`java -cp <this classpath> apps.RobotCtl status`) against a
+  * gateway, middleware and control port in this JVM, over loopback. Wall time from process start to exit, median of
+  * [[Runs]] runs after one warm-up run:
+  *
+  *   - `robotctl_status_wall_ms`: three simulated robots (the demo's fleet), default JVM options.
+  *   - `robotctl_status_wall_ms_c1`: the same with `-XX:TieredStopAtLevel=1 -XX:+UseSerialGC`, options that suit a
+  *     short-lived client JVM.
+  *   - `robotctl_status_1000_wall_ms`: a control port in front of 1,000 stand-in robots (the answer is 1,002 lines).
+  *   - `robotctl_jvm_floor_ms`: robotctl with no gateway to reach (it fails at once): the JVM start and class loading.
+  */
 object RobotCtlBench extends Benchmark {
   val name = "robotctl"
 
@@ -40,7 +39,7 @@ object RobotCtlBench extends Benchmark {
 
   def run(): ListMap[String, Double] = {
     val config = ConfigFactory.load(ConfigFactory.parseString(
-      """naogateway.link.bind-address = "127.0.0.1"
+        """naogateway.link.bind-address = "127.0.0.1"
         |naogateway.link.robot-port = 0
         |naogateway.game-controller.enabled = off
         |akka.loglevel = "WARNING"
@@ -56,13 +55,22 @@ object RobotCtlBench extends Benchmark {
       val gateway = system.systemActorOf(Gateway(GatewaySettings(system)), "gateway")
       val middleware = system.systemActorOf(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
       val demo = addressOf(system.systemActorOf(ControlServer(middleware, settings), "control"))
-      val thousand = addressOf(system.systemActorOf(ControlServer.withInterface(new FleetStub(1000), settings), "control-1000"))
+      val thousand =
+        addressOf(system.systemActorOf(ControlServer.withInterface(new FleetStub(1000), settings), "control-1000"))
       val robots = Await.result(gateway.ask[Gateway.Addresses](Gateway.GetAddresses(_)), 30.seconds).robots
-      Await.result(Fleet.start(system, FleetSettings(new InetSocketAddress("127.0.0.1", robots.getPort), Vector(1, 2, 3),
-        faithfulLink = false, firstAddress = TestLoopback.block(3))), 60.seconds)
+      Await.result(
+        Fleet.start(system,
+          FleetSettings(new InetSocketAddress("127.0.0.1", robots.getPort), Vector(1, 2, 3),
+            faithfulLink = false, firstAddress = TestLoopback.block(3))),
+        60.seconds
+      )
       awaitOnline(demo, 3)
 
-      val floorPort = { val s = new java.net.ServerSocket(0); try s.getLocalPort finally s.close() }
+      val floorPort = {
+        val s = new java.net.ServerSocket(0);
+        try s.getLocalPort
+        finally s.close()
+      }
       val c1 = Seq("-XX:TieredStopAtLevel=1", "-XX:+UseSerialGC")
       ListMap(
         "robotctl_status_wall_ms" -> wallMillis(Nil, Seq("--control", demo, "status"), expectExit = 0),
@@ -105,12 +113,14 @@ object RobotCtlBench extends Benchmark {
         throw new IllegalStateException(s"robotctl ${args.mkString(" ")} did not end within 60 s")
       }
       val millis = (System.nanoTime() - start) / 1e6
-      if (process.exitValue() != expectExit) throw new IllegalStateException(s"robotctl ${args.mkString(" ")} exited ${process.exitValue()}")
+      if (process.exitValue() != expectExit)
+        throw new IllegalStateException(s"robotctl ${args.mkString(" ")} exited ${process.exitValue()}")
       millis
     }
     once()
     val times = Vector.fill(Runs)(once()).sorted
-    println(f"  robotctl ${(jvmOptions ++ args).mkString(" ")}: median ${times(Runs / 2)}%.0f ms, min ${times.head}%.0f, max ${times.last}%.0f")
+    println(
+      f"  robotctl ${(jvmOptions ++ args).mkString(" ")}: median ${times(Runs / 2)}%.0f ms, min ${times.head}%.0f, max ${times.last}%.0f")
     times(Runs / 2)
   }
 }

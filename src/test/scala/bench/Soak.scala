@@ -20,22 +20,21 @@ import naogateway.testkit.TestLoopback
 import naogateway.sim.network.{Direction, Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
 
-/**
- * `./sbt "bench soak [minutes]"`: the installed package's gateway for a game day in small.
- *
- * `bin/naogateway` from the staged package (`apps/target/universal/stage`, which the `bench` alias builds first) runs
- * in a JVM of its own with a config that turns its own simulated robots off. This JVM runs three simulated robots
- * (with the GS1500M and CM-530 models) behind a lossy loopback network, and the simulated GameController cycling
- * through a game. For the given minutes (default 20, past the 15-minute stop of the BSL Akka releases):
- * every few seconds `bin/robotctl` makes a call to a random robot and asks for the status; every minute one robot is
- * power-cycled; every few minutes one robot's link loses most of its datagrams for a while.
- *
- * Figures: `soak_minutes` (minutes run), `soak_alive` (1 if the gateway process lived and answered to the end),
- * `soak_heap_after_gc_growth_bytes_per_min` (least-squares slope of the gateway's used heap after a full GC, sampled
- * every minute from the third minute on), `soak_cpu_pct` (the gateway process's CPU time over the run, in percent of
- * one core), `soak_calls_unanswered` (robotctl calls that got no answer at all, neither result nor error, within
- * 20 s: goal 0), `soak_calls` (calls made), `soak_power_cycles`.
- */
+/** `./sbt "bench soak [minutes]"`: the installed package's gateway for a game day in small.
+  *
+  * `bin/naogateway` from the staged package (`apps/target/universal/stage`, which the `bench` alias builds first) runs
+  * in a JVM of its own with a config that turns its own simulated robots off. This JVM runs three simulated robots
+  * (with the GS1500M and CM-530 models) behind a lossy loopback network, and the simulated GameController cycling
+  * through a game. For the given minutes (default 20, past the 15-minute stop of the BSL Akka releases): every few
+  * seconds `bin/robotctl` makes a call to a random robot and asks for the status; every minute one robot is
+  * power-cycled; every few minutes one robot's link loses most of its datagrams for a while.
+  *
+  * Figures: `soak_minutes` (minutes run), `soak_alive` (1 if the gateway process lived and answered to the end),
+  * `soak_heap_after_gc_growth_bytes_per_min` (least-squares slope of the gateway's used heap after a full GC, sampled
+  * every minute from the third minute on), `soak_cpu_pct` (the gateway process's CPU time over the run, in percent of
+  * one core), `soak_calls_unanswered` (robotctl calls that got no answer at all, neither result nor error, within 20 s:
+  * goal 0), `soak_calls` (calls made), `soak_power_cycles`.
+  */
 object Soak extends Benchmark {
   val name = "soak"
 
@@ -64,11 +63,13 @@ object Soak extends Benchmark {
     val controlPort = freeTcpPort()
     val clusterPort = freeTcpPort()
     val conf = dir.resolve("soak.conf")
-    Files.write(conf, soakConfig(robotPort, gameControllerPort, controlPort, clusterPort).getBytes(StandardCharsets.UTF_8))
+    Files.write(conf,
+      soakConfig(robotPort, gameControllerPort, controlPort, clusterPort).getBytes(StandardCharsets.UTF_8))
 
     val gatewayLog = dir.resolve("naogateway.out").toFile
     val builder = new ProcessBuilder(bin("naogateway").toString, conf.toString)
-      .redirectErrorStream(true).redirectOutput(gatewayLog).redirectInput(ProcessBuilder.Redirect.from(new File("/dev/null")))
+      .redirectErrorStream(true).redirectOutput(gatewayLog).redirectInput(
+        ProcessBuilder.Redirect.from(new File("/dev/null")))
     builder.environment().put("NAOGATEWAY_LOG_FILE", dir.resolve("naogateway.log").toString)
     builder.environment().put("NAOGATEWAY_CONTROL", s"127.0.0.1:$controlPort")
     val gateway = builder.start()
@@ -76,17 +77,27 @@ object Soak extends Benchmark {
     progress(s"bin/naogateway started (pid $pid), log in $dir")
 
     implicit val system: ActorSystem[Nothing] =
-      ActorSystem[Nothing](Behaviors.empty, "soak", ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))
+      ActorSystem[Nothing](Behaviors.empty, "soak",
+        ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))
     val network = LossyNetwork.start(seed = 30)
     val random = new Random(30)
     val robotAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, robotPort)
     val gameControllerAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, gameControllerPort)
     try {
       val proxies = Robots.map(id => id -> network.addProxy(robotAddress, TestLoopback.address())).toMap
-      val fleet = Await.result(Fleet.start(system, FleetSettings(robotAddress, Robots, firstAddress = TestLoopback.block(Robots.size),
-        customize = s => s.copy(gateway = proxies(s.firmware.robotId).clientSide))), 60.seconds)
-      val gameController = ActorSystem(SimulatedGameController(SimulatedGameControllerSettings(gameControllerAddress)), "soak-gc",
-        ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load()))
+      val fleet = Await.result(
+        Fleet.start(
+          system,
+          FleetSettings(robotAddress, Robots, firstAddress = TestLoopback.block(Robots.size),
+            customize = s => s.copy(gateway = proxies(s.firmware.robotId).clientSide))
+        ),
+        60.seconds
+      )
+      val gameController = ActorSystem(
+        SimulatedGameController(SimulatedGameControllerSettings(gameControllerAddress)),
+        "soak-gc",
+        ConfigFactory.parseString("akka.loglevel = WARNING").withFallback(ConfigFactory.load())
+      )
 
       def robotctl(args: String*): Either[String, String] = {
         val b = new ProcessBuilder((bin("robotctl").toString +: args).asJava).redirectErrorStream(true)
@@ -104,7 +115,8 @@ object Soak extends Benchmark {
       val upBy = 120.seconds.fromNow
       var up = false
       while (!up && upBy.hasTimeLeft()) {
-        up = robotctl("status").toOption.exists(_.linesIterator.count(_.split("\\s+").contains("online")) >= Robots.size)
+        up =
+          robotctl("status").toOption.exists(_.linesIterator.count(_.split("\\s+").contains("online")) >= Robots.size)
         if (!up) Thread.sleep(1000)
       }
       require(up, s"the gateway did not report ${Robots.size} robots online within 2 minutes; see $gatewayLog")
@@ -137,7 +149,8 @@ object Soak extends Benchmark {
         }
         if (nextCycle.isOverdue() && System.nanoTime() - start > 30e9) {
           val id = Robots(random.nextInt(Robots.size))
-          Try(Await.result(fleet.powerCycle(id), 30.seconds)).fold(e => progress(s"power cycle of $id failed: $e"), _ => powerCycles += 1)
+          Try(Await.result(fleet.powerCycle(id), 30.seconds)).fold(e => progress(s"power cycle of $id failed: $e"),
+            _ => powerCycles += 1)
           nextCycle = PowerCycleEvery.fromNow
         }
         if (nextBurst.isOverdue() && burstEnds.isEmpty) {
@@ -158,7 +171,8 @@ object Soak extends Benchmark {
           val minute = (System.nanoTime() - start) / 60e9
           heapAfterGc(pid).foreach { bytes =>
             heap += minute -> bytes.toDouble
-            progress(f"minute $minute%.1f: heap after GC ${bytes / 1e6}%.1f MB, $calls calls, $unanswered unanswered, $powerCycles power cycles")
+            progress(
+              f"minute $minute%.1f: heap after GC ${bytes / 1e6}%.1f MB, $calls calls, $unanswered unanswered, $powerCycles power cycles")
           }
           nextHeap = HeapEvery.fromNow
         }
@@ -166,7 +180,8 @@ object Soak extends Benchmark {
         Thread.sleep(200)
       }
       val ranMinutes = (System.nanoTime() - start) / 60e9
-      val cpuPct = (for (a <- cpuStart; b <- Packaged.cpuNanos(pid)) yield (b - a) / (ranMinutes * 60e9) * 100).getOrElse(Double.NaN)
+      val cpuPct = (for (a <- cpuStart; b <- Packaged.cpuNanos(pid))
+        yield (b - a) / (ranMinutes * 60e9) * 100).getOrElse(Double.NaN)
       alive = alive && gateway.isAlive && robotctl("status").isRight
       gameController.terminate()
       Try(Await.result(fleet.stop(), 30.seconds))

@@ -6,12 +6,11 @@ import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
 import naogateway.wire.stream.{SecureStream, StreamSettings}
 
-/**
- * Secure-stream goodput on the seeded channel: 100 payloads of 1 kB queued at once over a link limited to the
- * robot's raw-datagram rate (docs/simulator.md 1.4, about 306 kbit/s), delivered bytes per simulated second, averaged over seeds;
- * each window at 10 % loss against its own lossless run, window 20 against window 1 at 10 % loss, and the link's
- * ceiling that bounds both.
- */
+/** Secure-stream goodput on the seeded channel: 100 payloads of 1 kB queued at once over a link limited to the robot's
+  * raw-datagram rate (docs/simulator.md 1.4, about 306 kbit/s), delivered bytes per simulated second, averaged over
+  * seeds; each window at 10 % loss against its own lossless run, window 20 against window 1 at 10 % loss, and the
+  * link's ceiling that bounds both.
+  */
 object StreamBench extends Benchmark {
   val name = "stream"
 

@@ -7,23 +7,22 @@ import naogateway.{ClockEstimate, ClockSync}
 import naogateway.sim.RobotClock
 import naogateway.sim.network.{Decision, Direction, Impairment, ImpairmentModel}
 
-/**
- * The gateway's estimate of robots' clocks from keep-alives alone (`naogateway.ClockSync`), against simulated robot
- * clocks of known offset and drift ([[RobotClock]]), their keep-alives passing the lossy network's impairment model
- * (20 % loss, 0-20 ms jitter, the `LossyNetwork`'s own decision function) in simulated time: [[Robots]] robots, each
- * with a random drift within ±200 ppm and offset, keep-alives every 200 ms for [[Minutes]] minutes, the robot's
- * send slot itself 0-2 ms late (its main loop).
- *
- *  - `timesync_error_ms_p95`: the 95th percentile of |estimate − truth| over every estimate after each robot's first
- *    30 s (the moment the robot's clock read the newest keep-alive's timestamp, on the gateway's clock).
- *  - `timesync_converge_s`: median over the robots of the time from the first keep-alive to the first estimate that
- *    is within its own bound and within 5 ms of the truth.
- *  - `timesync_bound_converge_s`: median time until the estimate's own bound is at most 5 ms.
- *  - `timesync_bound_misses`: estimates whose error exceeded their own bound (0 expected).
- *
- * Simulated time, because the figure is the estimator's against the network model, not the machine's speed: the
- * loopback path adds well under a millisecond (sim's ClockSyncIntegrationSpec runs the same over real sockets).
- */
+/** The gateway's estimate of robots' clocks from keep-alives alone (`naogateway.ClockSync`), against simulated robot
+  * clocks of known offset and drift ([[RobotClock]]), their keep-alives passing the lossy network's impairment model
+  * (20 % loss, 0-20 ms jitter, the `LossyNetwork`'s own decision function) in simulated time: [[Robots]] robots, each
+  * with a random drift within ±200 ppm and offset, keep-alives every 200 ms for [[Minutes]] minutes, the robot's send
+  * slot itself 0-2 ms late (its main loop).
+  *
+  *   - `timesync_error_ms_p95`: the 95th percentile of |estimate − truth| over every estimate after each robot's first
+  *     30 s (the moment the robot's clock read the newest keep-alive's timestamp, on the gateway's clock).
+  *   - `timesync_converge_s`: median over the robots of the time from the first keep-alive to the first estimate that
+  *     is within its own bound and within 5 ms of the truth.
+  *   - `timesync_bound_converge_s`: median time until the estimate's own bound is at most 5 ms.
+  *   - `timesync_bound_misses`: estimates whose error exceeded their own bound (0 expected).
+  *
+  * Simulated time, because the figure is the estimator's against the network model, not the machine's speed: the
+  * loopback path adds well under a millisecond (sim's ClockSyncIntegrationSpec runs the same over real sockets).
+  */
 object TimeSyncBench extends Benchmark {
   val name = "timesync"
 
@@ -78,9 +77,10 @@ object TimeSyncBench extends Benchmark {
     val converge = median(results.map(_._2).map(c => if (c.isNaN) Double.PositiveInfinity else c))
     val boundConverge = median(results.map(_._3).map(c => if (c.isNaN) Double.PositiveInfinity else c))
     val misses = results.map(_._4).sum
-    println(f"timesync: $Robots robots x $Minutes min at 20 %% loss, 0-20 ms jitter: error p50 ${errors(errors.size / 2)}%.2f ms, " +
-      f"p95 $p95%.2f ms, max ${errors.last}%.2f ms; converged (median) $converge%.1f s, bound <= 5 ms after $boundConverge%.1f s; " +
-      s"$misses of ${errors.size} estimates outside their bound (${ClockSync.DefaultWindow.toSeconds} s window)")
+    println(
+      f"timesync: $Robots robots x $Minutes min at 20 %% loss, 0-20 ms jitter: error p50 ${errors(errors.size / 2)}%.2f ms, " +
+        f"p95 $p95%.2f ms, max ${errors.last}%.2f ms; converged (median) $converge%.1f s, bound <= 5 ms after $boundConverge%.1f s; " +
+        s"$misses of ${errors.size} estimates outside their bound (${ClockSync.DefaultWindow.toSeconds} s window)")
     ListMap(
       "timesync_error_ms_p95" -> p95,
       "timesync_converge_s" -> converge,

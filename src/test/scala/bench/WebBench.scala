@@ -20,19 +20,18 @@ import spray.json._
 import apps.web.{Browser, FoxgloveFeed, WebDemo, WebSettings}
 import naogateway.{GameStateUpdated, Gateway, GatewayEvent}
 
-/**
- * What the web view costs (docs/web.md, "What it costs"): the demo of [[WebDemo]] (three simulated robots with the
- * faithful link, the simulated GameController, gateway and middleware) in one JVM, first without the web view's
- * clients, then with the page open in headless Chromium and a Foxglove-protocol client subscribed to every channel:
- *
- *  - `web_idle_cpu_pct_without` / `web_idle_cpu_pct`: this JVM's CPU time (user + system) over [[Window]], in percent
- *    of one core, without and with the clients (the Foxglove client runs in this JVM, so the second errs high;
- *    Chromium's own CPU is not counted: it is the viewer's machine's);
- *  - `web_heap_growth_mb`: heap in use after a full collection, at the end of the window with clients against before
- *    they connected;
- *  - `web_change_latency_ms_p50` / `_max`: from the gateway publishing a new game state (a subscriber's clock) to the
- *    page showing it (the page's clock, the same machine's).
- */
+/** What the web view costs (docs/web.md, "What it costs"): the demo of [[WebDemo]] (three simulated robots with the
+  * faithful link, the simulated GameController, gateway and middleware) in one JVM, first without the web view's
+  * clients, then with the page open in headless Chromium and a Foxglove-protocol client subscribed to every channel:
+  *
+  *   - `web_idle_cpu_pct_without` / `web_idle_cpu_pct`: this JVM's CPU time (user + system) over [[Window]], in percent
+  *     of one core, without and with the clients (the Foxglove client runs in this JVM, so the second errs high;
+  *     Chromium's own CPU is not counted: it is the viewer's machine's);
+  *   - `web_heap_growth_mb`: heap in use after a full collection, at the end of the window with clients against before
+  *     they connected;
+  *   - `web_change_latency_ms_p50` / `_max`: from the gateway publishing a new game state (a subscriber's clock) to the
+  *     page showing it (the page's clock, the same machine's).
+  */
 object WebBench extends Benchmark {
   val name = "web"
 
@@ -41,7 +40,8 @@ object WebBench extends Benchmark {
 
   private def progress(line: String): Unit = println(s"  web: $line")
 
-  private def cpuNanos(): Long = ManagementFactory.getOperatingSystemMXBean.asInstanceOf[com.sun.management.OperatingSystemMXBean].getProcessCpuTime
+  private def cpuNanos(): Long =
+    ManagementFactory.getOperatingSystemMXBean.asInstanceOf[com.sun.management.OperatingSystemMXBean].getProcessCpuTime
 
   private def heapAfterGc(): Long = {
     (1 to 3).foreach { _ => System.gc(); Thread.sleep(200) }
@@ -57,7 +57,8 @@ object WebBench extends Benchmark {
   }
 
   def run(): ListMap[String, Double] = {
-    val config = ConfigFactory.parseString("apps.web { push-interval = 250ms, sample-interval = 1s }").withFallback(WebDemo.config)
+    val config =
+      ConfigFactory.parseString("apps.web { push-interval = 250ms, sample-interval = 1s }").withFallback(WebDemo.config)
     val system = ActorSystem[Nothing](Behaviors.empty, "web-bench", config)
     implicit val s: ActorSystem[_] = system
     try {
@@ -65,18 +66,22 @@ object WebBench extends Benchmark {
       progress(s"demo up, web view at ${demo.page()}; settling ${Settle.toSeconds} s")
       Thread.sleep(Settle.toMillis)
       val without = cpuPercent(Window)
-      progress(f"without clients: $without%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f)")
+      progress(
+        f"without clients: $without%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f)")
       val heapBefore = heapAfterGc()
 
       // The gateway's own moment of each new game state.
       @volatile var published = Vector.empty[(String, Long)]
-      val events = system.systemActorOf(Behaviors.receiveMessage[GatewayEvent] {
-        case GameStateUpdated(d) =>
-          val state = apps.StatusView.stateName(d.gameState)
-          if (published.lastOption.forall(_._1 != state)) published :+= state -> System.currentTimeMillis()
-          Behaviors.same
-        case _ => Behaviors.same
-      }, "web-bench-events")
+      val events = system.systemActorOf(
+        Behaviors.receiveMessage[GatewayEvent] {
+          case GameStateUpdated(d) =>
+            val state = apps.StatusView.stateName(d.gameState)
+            if (published.lastOption.forall(_._1 != state)) published :+= state -> System.currentTimeMillis()
+            Behaviors.same
+          case _ => Behaviors.same
+        },
+        "web-bench-events"
+      )
       demo.gateway ! Gateway.Subscribe(events)
 
       // A Foxglove client that subscribes to every channel it is advertised.
@@ -88,13 +93,17 @@ object WebBench extends Benchmark {
           if (o.fields.get("op").contains(JsString("advertise"))) {
             val subs = o.fields("channels").asInstanceOf[JsArray].elements.map(_.asJsObject.fields("id"))
               .map(id => JsObject("id" -> id, "channelId" -> id))
-            outQueue.offer(TextMessage(JsObject("op" -> JsString("subscribe"), "subscriptions" -> JsArray(subs)).compactPrint))
+            outQueue.offer(TextMessage(JsObject("op" -> JsString("subscribe"), "subscriptions" -> JsArray(subs))
+                  .compactPrint))
           }
         case _: BinaryMessage.Strict => foxgloveMessages += 1
         case other                   => other.asInstanceOf[TextMessage].textStream.runWith(Sink.ignore)
       }
-      Http().singleWebSocketRequest(WebSocketRequest(s"ws://127.0.0.1:${demo.address.getPort}/foxglove",
-        subprotocol = Some(FoxgloveFeed.Subprotocol)), Flow.fromSinkAndSource(foxgloveIn, outSource))
+      Http().singleWebSocketRequest(
+        WebSocketRequest(s"ws://127.0.0.1:${demo.address.getPort}/foxglove",
+          subprotocol = Some(FoxgloveFeed.Subprotocol)),
+        Flow.fromSinkAndSource(foxgloveIn, outSource)
+      )
 
       val withClients = Browser.missing match {
         case Some(reason) =>
@@ -106,9 +115,11 @@ object WebBench extends Benchmark {
             Thread.sleep(Settle.toMillis)
             val cpu = cpuPercent(Window)
             val heapAfter = heapAfterGc()
-            progress(f"with the page and a Foxglove client: $cpu%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f), heap ${(heapAfter - heapBefore) / 1e6}%+.1f MB, " +
-              s"$foxgloveMessages Foxglove messages")
-            val changes = driver.executeScript("return window.naogateway.changes").asInstanceOf[java.util.List[java.util.Map[String, AnyRef]]]
+            progress(
+              f"with the page and a Foxglove client: $cpu%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f), heap ${(heapAfter - heapBefore) / 1e6}%+.1f MB, " +
+                s"$foxgloveMessages Foxglove messages")
+            val changes = driver.executeScript("return window.naogateway.changes").asInstanceOf[java.util.List[
+              java.util.Map[String, AnyRef]]]
               .asScala.toVector.map(m => m.get("state").toString -> m.get("at").asInstanceOf[Number].longValue)
             // Each change the page showed, against the gateway's publication of that state just before it.
             // The first entry is the state the page found when it opened, not a change it saw happen.

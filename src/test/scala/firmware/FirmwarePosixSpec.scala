@@ -27,10 +27,12 @@ import naogateway.{Gateway, GatewaySettings, RobotActor, RobotSnapshot, StreamAc
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** The gateway's configuration for the C robots: stream window 4 (the robots are built with WINDOW=4), one robot that
-  * must sign. */
+  * must sign.
+  */
 object FirmwarePosixSpec {
   val KeyHex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f"
   val SignedId = 63
+
   /** The signing robot's address, fixed before the gateway starts: the configuration names it. */
   lazy val signedAddress: String = TestLoopback.address().getHostAddress
 
@@ -45,12 +47,11 @@ object FirmwarePosixSpec {
        |""".stripMargin
 }
 
-/**
- * The C library's posix robot (firmware/examples/robot.c over host UDP sockets, built with `make native WINDOW=4`)
- * against a real gateway and middleware on loopback, each robot at its own 127.x address receiving on 3838, as the
- * Python conformance robot is driven in DocRobotConformanceSpec. Cancelled with the reason when make, a C compiler or
- * nanopb is missing (bash firmware/setup.sh installs them).
- */
+/** The C library's posix robot (firmware/examples/robot.c over host UDP sockets, built with `make native WINDOW=4`)
+  * against a real gateway and middleware on loopback, each robot at its own 127.x address receiving on 3838, as the
+  * Python conformance robot is driven in DocRobotConformanceSpec. Cancelled with the reason when make, a C compiler or
+  * nanopb is missing (bash firmware/setup.sh installs them).
+  */
 class FirmwarePosixSpec
     extends ScalaTestWithActorTestKit(FirmwarePosixSpec.config)
     with AnyWordSpecLike
@@ -79,15 +80,18 @@ class FirmwarePosixSpec
     gateway ! Gateway.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots.getPort
   }
-  private lazy val client: RobotInterface = Await.result(RobotClient.connect(system, middleware, "firmware", priority = 5), 15.seconds)
+  private lazy val client: RobotInterface =
+    Await.result(RobotClient.connect(system, middleware, "firmware", priority = 5), 15.seconds)
 
   /** One C robot process and what the gateway published about it. */
-  private final class CRobot(val id: Int, val address: String, args: Seq[String] = Nil, env: Map[String, String] = Map.empty) {
+  private final class CRobot(val id: Int, val address: String, args: Seq[String] = Nil,
+      env: Map[String, String] = Map.empty) {
     val log = new File(FirmwareBuild.dir, s"build/spec/robot-$id.log")
     log.getParentFile.mkdirs()
     val process: Process = {
-      val b = new ProcessBuilder((Seq(robotBinary.getPath, s"id=$id", "team=12", "player=3", s"gateway=127.0.0.1:$gatewayPort",
-        "run_ms=90000", "reset_ms=1000") ++ args).asJava).redirectErrorStream(true).redirectOutput(log)
+      val b = new ProcessBuilder((Seq(robotBinary.getPath, s"id=$id", "team=12", "player=3",
+          s"gateway=127.0.0.1:$gatewayPort",
+          "run_ms=90000", "reset_ms=1000") ++ args).asJava).redirectErrorStream(true).redirectOutput(log)
       b.environment().put("FR_POSIX_BIND", s"$address:${TestLoopback.RobotReceivePort}")
       env.foreach { case (k, v) => b.environment().put(k, v) }
       val p = b.start()
@@ -99,7 +103,8 @@ class FirmwarePosixSpec
     def output: String = Try(new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)).getOrElse("")
 
     def awaitOnline(): Unit = {
-      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(_.exists(r => r.robotId == id && r.online)))
+      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
+          _.exists(r => r.robotId == id && r.online)))
       withClue(s"robot $id never came online; its output:\n$output\n") { online shouldBe true }
       Await.result(client.acquire(id, ActuatorGroup.all.toSeq: _*), 10.seconds)
     }
@@ -156,7 +161,9 @@ class FirmwarePosixSpec
     "serve every RPC method of protocol.md 7.2 and answer with the errors of 7.4" in {
       val id = plain.id
       result(client.call(id, "system", "ping")) should matchPattern { case Right(Some(RpcValue.UInt(_))) => }
-      result(client.call(id, "system", "battery")) should matchPattern { case Right(Some(RpcValue.Number(v))) if v > 12f && v < 12.6f => }
+      result(client.call(id, "system", "battery")) should matchPattern {
+        case Right(Some(RpcValue.Number(v))) if v > 12f && v < 12.6f =>
+      }
       result(client.call(id, "motion", "getPosture")) shouldBe Right(Some(RpcValue.Text("sit")))
       robotError(result(client.walk(id, 0.1, 0, 0))) shouldBe "not standing: sit"
       robotError(result(client.head(id, 0, 0.8))) should startWith("out of range: pan 0.000")
@@ -166,7 +173,8 @@ class FirmwarePosixSpec
       robotError(result(client.call(id, "motion", "dance"))) shouldBe "unknown method: motion.dance"
       robotError(result(client.call(id, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f)))) shouldBe
         "bad parameters: expected 3 numbers, got 2 parameter(s)"
-      robotError(result(client.call(id, "motion", "posture", RpcValue.Text("fly")))) should startWith("bad parameters: ")
+      robotError(result(client.call(id, "motion", "posture", RpcValue.Text("fly")))) should startWith(
+        "bad parameters: ")
       result(client.posture(id, Posture.Stand)) shouldBe Right(Posture.Stand)
       val started = System.nanoTime()
       result(client.posture(id, Posture.Crouch)) shouldBe Right(Posture.Crouch)
@@ -219,7 +227,8 @@ class FirmwarePosixSpec
       "RGme".getBytes(StandardCharsets.US_ASCII).copyToArray(v19)
       v19(4) = 19; v19(10) = 3; v19(18) = 7; v19(18 + 90) = 12
       send(v19)
-      replies(gc3939) shouldBe Vector("52 47 72 74 04 03 0C 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 80 BF 00 00 00 00 00 00 00 00")
+      replies(gc3939) shouldBe Vector(
+        "52 47 72 74 04 03 0C 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 80 BF 00 00 00 00 00 00 00 00")
       // A packet for other teams only is not answered.
       v19(18) = 1; v19(18 + 90) = 2
       send(v19)
@@ -236,11 +245,14 @@ class FirmwarePosixSpec
       }
       // The gateway pulled the new session's option list and enabled havimo.regions again for the kept subscription.
       val after = new AtomicInteger()
-      val k = client.vision(r.id).viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(_ => after.incrementAndGet())).run()
+      val k =
+        client.vision(r.id).viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(_ => after.incrementAndGet())).run()
       poll(10.seconds)(after.get() > 2) shouldBe true
       k.shutdown()
       kept.shutdown()
-      result(client.call(r.id, "system", "ping")) should matchPattern { case Right(Some(RpcValue.UInt(v))) if v < 60000 => }
+      result(client.call(r.id, "system", "ping")) should matchPattern {
+        case Right(Some(RpcValue.UInt(v))) if v < 60000 =>
+      }
     }
 
     "sign every frame and act only on the gateway's signed ones when the robot requires signing" in {
@@ -270,18 +282,21 @@ class FirmwarePosixSpec
       Thread.sleep(500)
       linkFile.delete()
       withClue(s"robot output:\n${r.output}\n") {
-        poll(10.seconds)(result(client.call(r.id, "motion", "getPosture")) == Right(Some(RpcValue.Text("sit")))) shouldBe true
+        poll(10.seconds)(result(client.call(r.id, "motion", "getPosture")) == Right(
+          Some(RpcValue.Text("sit")))) shouldBe true
       }
     }
 
     "carry the stream both ways at 10 % loss with selective repeat: complete, in order, calls answered through it" in {
-      val r = new CRobot(62, TestLoopback.address().getHostAddress, env = Map("FR_POSIX_LOSS" -> "10", "FR_POSIX_SEED" -> "62"))
+      val r = new CRobot(62, TestLoopback.address().getHostAddress,
+        env = Map("FR_POSIX_LOSS" -> "10", "FR_POSIX_SEED" -> "62"))
       r.awaitOnline()
       val (stream, received) = streamOf(r.id)
       // 24 payloads of 1 to 1380 bytes to the robot, which echoes each through its own stream.
       val payloads = (0 until 24).map(i => Array.tabulate[Byte](1 + i * 60)(k => (0x50 + (i + k) % 40).toByte))
       val callId = 1000000 + scala.util.Random.nextInt(100000)
-      val ping = MessageContents.encodeFrame(MessageContents(r.id, rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
+      val ping = MessageContents.encodeFrame(MessageContents(r.id,
+          rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
       payloads.take(12).foreach(p => stream ! StreamActor.Send(p))
       stream ! StreamActor.Send(ping)
       payloads.drop(12).foreach(p => stream ! StreamActor.Send(p))

@@ -34,13 +34,12 @@ object FirmwareQemuSpec {
   val BaseStation: Remote = Remote("192.168.1.10", 11011)
 }
 
-/**
- * The qemu image of the board (port/qemu on the netduino2 machine, whose UART5 is the CM-530's) through
- * [[Gs1500mBridge]], the GS1500M on the host: first the AT start-up and the datagram path with the `echo` program,
- * which uses the port alone; then the example robot (firmware/examples/robot.c) against a real gateway and
- * middleware, the bridge routing the firmware's base station (192.168.1.10:11011) to the gateway's loopback port.
- * Cancelled with the reason when the ARM toolchain or qemu is missing (bash firmware/setup.sh installs them).
- */
+/** The qemu image of the board (port/qemu on the netduino2 machine, whose UART5 is the CM-530's) through
+  * [[Gs1500mBridge]], the GS1500M on the host: first the AT start-up and the datagram path with the `echo` program,
+  * which uses the port alone; then the example robot (firmware/examples/robot.c) against a real gateway and middleware,
+  * the bridge routing the firmware's base station (192.168.1.10:11011) to the gateway's loopback port. Cancelled with
+  * the reason when the ARM toolchain or qemu is missing (bash firmware/setup.sh installs them).
+  */
 class FirmwareQemuSpec
     extends ScalaTestWithActorTestKit(FirmwareQemuSpec.config)
     with AnyWordSpecLike
@@ -77,7 +76,7 @@ class FirmwareQemuSpec
       val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
       val peer = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
       val bridge = new Gs1500mBridge(Gs1500mBridge.Config(robot,
-        hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress])))
+          hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress])))
       val log = File.createTempFile("qemu-echo", ".log")
       val qemu = QemuBoard.start(elf, log, serialPort = Some(bridge.serialPort))
       try {
@@ -119,7 +118,7 @@ class FirmwareQemuSpec
       val robot = TestLoopback.address()
       val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
       val bridge = new Gs1500mBridge(Gs1500mBridge.Config(robot,
-        hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress])))
+          hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress])))
       val log = File.createTempFile("qemu-echo", ".log")
       val qemu = QemuBoard.start(elf, log, serialPort = Some(bridge.serialPort))
       try {
@@ -169,15 +168,18 @@ class FirmwareQemuSpec
     private val gatewayAt = gatewayAddress
     val bridge = new Gs1500mBridge(Gs1500mBridge.Config(address, hosts = Map(BaseStation -> gatewayAt)))
     val log: File = File.createTempFile(s"qemu-robot-$id", ".log")
-    val qemu: Process = QemuBoard.start(image("robot"), log, Seq(s"id=$id", "team=12", "player=3"), Some(bridge.serialPort))
+    val qemu: Process =
+      QemuBoard.start(image("robot"), log, Seq(s"id=$id", "team=12", "player=3"), Some(bridge.serialPort))
     cleanups.add(() => { QemuBoard.stop(qemu); bridge.close(); log.delete() })
     val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
     client.status(id).runWith(Sink.foreach(snapshots.add))
     def output: String = QemuBoard.output(log)
 
     def awaitOnline(): Unit = {
-      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(_.exists(r => r.robotId == id && r.online)))
-      withClue(s"robot $id never came online; qemu's output:\n$output\nmodule commands: ${bridge.commands.asScala.toVector}\n") {
+      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
+          _.exists(r => r.robotId == id && r.online)))
+      withClue(
+        s"robot $id never came online; qemu's output:\n$output\nmodule commands: ${bridge.commands.asScala.toVector}\n") {
         online shouldBe true
       }
       Await.result(client.acquire(id, ActuatorGroup.all.toSeq: _*), 10.seconds)
@@ -236,7 +238,7 @@ class FirmwareQemuSpec
       // The overflow experiment's payloads (thesis 6.1): byte 0 of payload i is i, the rest random. The example robot
       // sends each stream payload it receives back through its own stream, so what returns is what it received.
       val payloads = OverflowExperiment.datagrams(OverflowExperiment.Config()).map(_.payload.toArray)
-        .map(p => { if (p(0) == 0 && p(1) == 0x2A) p(1) = 0x2B; p }) // never an FU-Remote frame's 00 2A
+        .map(p => { if (p(0) == 0 && p(1) == 0x2a) p(1) = 0x2b; p }) // never an FU-Remote frame's 00 2A
       val started = System.nanoTime()
       payloads.foreach { p =>
         endpoint ! StreamActor.Send(p)

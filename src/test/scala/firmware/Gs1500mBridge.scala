@@ -1,7 +1,16 @@
 package firmware
 
 import java.io.{File, InputStream, OutputStream}
-import java.net.{DatagramPacket, DatagramSocket, InetAddress, InetSocketAddress, ServerSocket, Socket, SocketException, SocketTimeoutException}
+import java.net.{
+  DatagramPacket,
+  DatagramSocket,
+  InetAddress,
+  InetSocketAddress,
+  ServerSocket,
+  Socket,
+  SocketException,
+  SocketTimeoutException
+}
 import java.nio.charset.StandardCharsets
 import java.util.concurrent.{ConcurrentLinkedQueue, TimeUnit}
 import java.util.concurrent.atomic.{AtomicBoolean, AtomicLong, AtomicReference}
@@ -11,31 +20,40 @@ import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
 import scala.util.Try
 
-import naogateway.sim.gs1500m.{AirDatagram, Gs1500mConfig, Gs1500mModule, Gs1500mStats, ModuleEvent, ModuleStep, Remote, SerialDecoder, SerialEvent}
+import naogateway.sim.gs1500m.{
+  AirDatagram,
+  Gs1500mConfig,
+  Gs1500mModule,
+  Gs1500mStats,
+  ModuleEvent,
+  ModuleStep,
+  Remote,
+  SerialDecoder,
+  SerialEvent
+}
 
-/**
- * The robot's GS1500M WiFi module on the host, for a firmware image in qemu: qemu connects the board's UART5 (its
- * fifth `-serial`) to [[serialPort]], and the bridge plays the module at the other end of that line, as
- * docs/protocol.md section 12 describes it and the simulator models it:
- *
- *  - after power-up it is silent for `bootDelay`, prints its banner, then answers AT commands (echoing them until
- *    `ATE0`): `AT`, `ATE0`, `AT+BDATA=1`, `AT+NCUDP=<ip>,<port>` (a UDP client: `CONNECT <cid>`), `AT+NSUDP=<port>`
- *    (a UDP server), `AT+NCLOSE=<cid>`; anything else gets `ERROR: INVALID INPUT`;
- *  - `ESC Z <cid> <len4> <data>` from the firmware goes out as one UDP datagram from a socket of the robot's own
- *    loopback address (a client connection's own port; the server's is `robotAddress:port`);
- *  - datagrams arriving at the server come to the firmware as `ESC y <cid> <ip> <port> TAB <len4> <data>`, at a
- *    client connection as `ESC Z`, with `ESC O` after each packet the module sent;
- *  - the module's one 1400-byte buffer, shared by both directions and emptied at the serial line's rate, is the
- *    simulator's [[Gs1500mModule]]: what does not fit is lost or overwritten as the thesis observed (6.1).
- *
- * The firmware names hosts as a robot on a real network would (the base station at 192.168.1.10:11011); `hosts`
- * says where each is on the host (the gateway's loopback address), and the bridge translates both ways, as a NAT
- * would: a destination is looked up by address and port, then by address alone (the port kept); a sender on the
- * host is reported under its network name the same way. So the firmware sees one consistent network, answers the
- * gateway at the address it knows, and accepts its stream segments. The serial stream from the
- * firmware is read with the simulator's [[SerialDecoder]] (AT commands are its text lines, bulk data its `ESC Z`
- * items). Everything runs on the bridge's own threads, each ending when [[close]] is called.
- */
+/** The robot's GS1500M WiFi module on the host, for a firmware image in qemu: qemu connects the board's UART5 (its
+  * fifth `-serial`) to [[serialPort]], and the bridge plays the module at the other end of that line, as
+  * docs/protocol.md section 12 describes it and the simulator models it:
+  *
+  *   - after power-up it is silent for `bootDelay`, prints its banner, then answers AT commands (echoing them until
+  *     `ATE0`): `AT`, `ATE0`, `AT+BDATA=1`, `AT+NCUDP=<ip>,<port>` (a UDP client: `CONNECT <cid>`), `AT+NSUDP=<port>`
+  *     (a UDP server), `AT+NCLOSE=<cid>`; anything else gets `ERROR: INVALID INPUT`;
+  *   - `ESC Z <cid> <len4> <data>` from the firmware goes out as one UDP datagram from a socket of the robot's own
+  *     loopback address (a client connection's own port; the server's is `robotAddress:port`);
+  *   - datagrams arriving at the server come to the firmware as `ESC y <cid> <ip> <port> TAB <len4> <data>`, at a
+  *     client connection as `ESC Z`, with `ESC O` after each packet the module sent;
+  *   - the module's one 1400-byte buffer, shared by both directions and emptied at the serial line's rate, is the
+  *     simulator's [[Gs1500mModule]]: what does not fit is lost or overwritten as the thesis observed (6.1).
+  *
+  * The firmware names hosts as a robot on a real network would (the base station at 192.168.1.10:11011); `hosts` says
+  * where each is on the host (the gateway's loopback address), and the bridge translates both ways, as a NAT would: a
+  * destination is looked up by address and port, then by address alone (the port kept); a sender on the host is
+  * reported under its network name the same way. So the firmware sees one consistent network, answers the gateway at
+  * the address it knows, and accepts its stream segments. The serial stream from the firmware is read with the
+  * simulator's [[SerialDecoder]] (AT commands are its text lines, bulk data its `ESC Z` items). Everything runs on the
+  * bridge's own threads, each ending when [[close]] is called.
+  */
 final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
   import Gs1500mBridge._
 
@@ -100,7 +118,8 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
           socket.receive(packet)
           val from = packet.getSocketAddress.asInstanceOf[InetSocketAddress]
           val remote = if (destination.isEmpty) Some(config.nameOf(from)) else None
-          inbound.add(AirDatagram(cid, remote, ArraySeq.unsafeWrapArray(java.util.Arrays.copyOf(buffer, packet.getLength))))
+          inbound.add(AirDatagram(cid, remote,
+              ArraySeq.unsafeWrapArray(java.util.Arrays.copyOf(buffer, packet.getLength))))
         } catch {
           case _: SocketTimeoutException => ()
           case _: SocketException        => ()
@@ -114,7 +133,9 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
   private def run(): Unit = {
     var socket: Socket = null
     while (socket == null && !closed.get)
-      socket = try server.accept() catch { case _: SocketTimeoutException => null; case _: SocketException => null }
+      socket =
+        try server.accept()
+        catch { case _: SocketTimeoutException => null; case _: SocketException => null }
     if (socket != null) {
       connected.set(true)
       socket.setTcpNoDelay(true)
@@ -139,27 +160,30 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
     def loop(): Unit = {
       val buffer = new Array[Byte](4096)
       try while (!closed.get) {
-        val n = try in.read(buffer) catch { case _: SocketTimeoutException => 0 }
-        if (n < 0) return
-        if (n > 0) {
-          val (next, events) = decoder.feed(java.util.Arrays.copyOf(buffer, n))
-          decoder = next
-          events.foreach(fromFirmware)
+          val n =
+            try in.read(buffer)
+            catch { case _: SocketTimeoutException => 0 }
+          if (n < 0) return
+          if (n > 0) {
+            val (next, events) = decoder.feed(java.util.Arrays.copyOf(buffer, n))
+            decoder = next
+            events.foreach(fromFirmware)
+          }
+          Iterator.continually(requests.poll()).takeWhile(_ != null).foreach {
+            case Disassociate(rejoin) =>
+              connections.values.foreach(_.close())
+              connections.clear()
+              status("DISASSOCIATED")
+              silentUntil = now + rejoin.toNanos
+          }
+          Iterator.continually(inbound.poll()).takeWhile(_ != null).foreach { d =>
+            if (connections.contains(d.cid)) step(model.arrive(d, now)) else lostInbound.incrementAndGet()
+          }
+          step(model.advance(now))
+          if (!bannerDone && now >= silentUntil) { bannerDone = true; status("Serial2WiFi APP") }
+          toFirmware()
         }
-        Iterator.continually(requests.poll()).takeWhile(_ != null).foreach {
-          case Disassociate(rejoin) =>
-            connections.values.foreach(_.close())
-            connections.clear()
-            status("DISASSOCIATED")
-            silentUntil = now + rejoin.toNanos
-        }
-        Iterator.continually(inbound.poll()).takeWhile(_ != null).foreach { d =>
-          if (connections.contains(d.cid)) step(model.arrive(d, now)) else lostInbound.incrementAndGet()
-        }
-        step(model.advance(now))
-        if (!bannerDone && now >= silentUntil) { bannerDone = true; status("Serial2WiFi APP") }
-        toFirmware()
-      } finally {
+      finally {
         connections.values.foreach(_.close())
       }
     }
@@ -256,13 +280,17 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
 /** Settings, records and qemu itself. */
 object Gs1500mBridge {
 
-  /**
-   * @param robotAddress the robot's own loopback address: its UDP server listens there, its clients send from there
-   * @param hosts network name (as the firmware knows it) to where that host is on this machine
-   * @param module the module's buffer and serial line, as the simulator models them
-   * @param bootDelay silence after power-up (the real module: about 4 s; the board image waits less)
-   * @param seed the buffer model's overflow coin
-   */
+  /** @param robotAddress
+    *   the robot's own loopback address: its UDP server listens there, its clients send from there
+    * @param hosts
+    *   network name (as the firmware knows it) to where that host is on this machine
+    * @param module
+    *   the module's buffer and serial line, as the simulator models them
+    * @param bootDelay
+    *   silence after power-up (the real module: about 4 s; the board image waits less)
+    * @param seed
+    *   the buffer model's overflow coin
+    */
   final case class Config(
       robotAddress: InetAddress,
       hosts: Map[Remote, InetSocketAddress] = Map.empty,
@@ -271,11 +299,12 @@ object Gs1500mBridge {
       seed: Long = 1L
   ) {
 
-    /** Where a destination the firmware names is: its host by address and port, else by address (port kept), else
-      * where it says.
+    /** Where a destination the firmware names is: its host by address and port, else by address (port kept), else where
+      * it says.
       */
     def addressOf(r: Remote): InetSocketAddress =
-      hosts.get(r).orElse(hosts.collectFirst { case (n, a) if n.ip == r.ip => new InetSocketAddress(a.getAddress, r.port) })
+      hosts.get(r).orElse(
+        hosts.collectFirst { case (n, a) if n.ip == r.ip => new InetSocketAddress(a.getAddress, r.port) })
         .getOrElse(new InetSocketAddress(r.ip, r.port))
 
     /** How the firmware sees a sender on this machine: the reverse of [[addressOf]]. */
@@ -292,24 +321,44 @@ object Gs1500mBridge {
   private final case class Disassociate(rejoinAfter: FiniteDuration) extends Request
 }
 
-/**
- * qemu's `netduino2` as the robot's board: the image's UART5 on the bridge's serial port, its semihosting output in
- * a log file, its arguments through `-append`.
- */
+/** qemu's `netduino2` as the robot's board: the image's UART5 on the bridge's serial port, its semihosting output in a
+  * log file, its arguments through `-append`.
+  */
 object QemuBoard {
 
   /** The qemu binary. */
   val Binary = "qemu-system-arm"
 
-  /** Starts `elf`; `serialPort` is the bridge's (None: the UART goes nowhere); `icountShift` makes instruction
-    * counting deterministic (`-icount shift=N,sleep=off`).
+  /** Starts `elf`; `serialPort` is the bridge's (None: the UART goes nowhere); `icountShift` makes instruction counting
+    * deterministic (`-icount shift=N,sleep=off`).
     */
   def start(elf: File, log: File, arguments: Seq[String] = Nil, serialPort: Option[Int] = None,
       icountShift: Option[Int] = None): Process = {
     val uart5 = serialPort.fold("null")(p => s"tcp:127.0.0.1:$p,nodelay=on")
-    val command = Seq(Binary, "-M", "netduino2", "-display", "none", "-monitor", "none", "-nodefaults",
-      "-serial", "null", "-serial", "null", "-serial", "null", "-serial", "null", "-serial", uart5,
-      "-semihosting-config", "enable=on,target=native", "-kernel", elf.getPath) ++
+    val command = Seq(
+      Binary,
+      "-M",
+      "netduino2",
+      "-display",
+      "none",
+      "-monitor",
+      "none",
+      "-nodefaults",
+      "-serial",
+      "null",
+      "-serial",
+      "null",
+      "-serial",
+      "null",
+      "-serial",
+      "null",
+      "-serial",
+      uart5,
+      "-semihosting-config",
+      "enable=on,target=native",
+      "-kernel",
+      elf.getPath
+    ) ++
       icountShift.toSeq.flatMap(s => Seq("-icount", s"shift=$s,sleep=off")) ++
       (if (arguments.nonEmpty) Seq("-append", arguments.mkString(" ")) else Nil)
     new ProcessBuilder(command.asJava).redirectErrorStream(true).redirectOutput(log).start()

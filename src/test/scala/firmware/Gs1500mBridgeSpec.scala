@@ -14,10 +14,9 @@ import org.scalatest.wordspec.AnyWordSpec
 import naogateway.sim.gs1500m.{Gs1500mSerial, Remote, SerialDecoder, SerialEvent}
 import naogateway.testkit.TestLoopback
 
-/**
- * The host's GS1500M ([[Gs1500mBridge]]) without qemu: this spec plays the CM-530 on the serial socket itself, so
- * the module's side of docs/protocol.md section 12 is checked on every machine, tools or not.
- */
+/** The host's GS1500M ([[Gs1500mBridge]]) without qemu: this spec plays the CM-530 on the serial socket itself, so the
+  * module's side of docs/protocol.md section 12 is checked on every machine, tools or not.
+  */
 class Gs1500mBridgeSpec extends AnyWordSpec with Matchers {
 
   private val BaseStation = Remote("192.168.1.10", 11011)
@@ -41,7 +40,9 @@ class Gs1500mBridgeSpec extends AnyWordSpec with Matchers {
         pending.indexWhere(pf.isDefinedAt) match {
           case -1 =>
             pending = Vector.empty
-            val n = try in.read(buffer) catch { case _: SocketTimeoutException => 0 }
+            val n =
+              try in.read(buffer)
+              catch { case _: SocketTimeoutException => 0 }
             if (n > 0) {
               val (d, events) = decoder.feed(java.util.Arrays.copyOf(buffer, n))
               decoder = d
@@ -78,7 +79,8 @@ class Gs1500mBridgeSpec extends AnyWordSpec with Matchers {
       val robot = TestLoopback.address()
       val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
       val bridge = new Gs1500mBridge(Gs1500mBridge.Config(robot,
-        hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress]), bootDelay = 300.millis))
+          hosts = Map(BaseStation -> base.getLocalSocketAddress.asInstanceOf[InetSocketAddress]),
+          bootDelay = 300.millis))
       val fw = new Firmware(bridge.serialPort)
       try {
         // During its boot the module hears nothing.
@@ -111,7 +113,9 @@ class Gs1500mBridgeSpec extends AnyWordSpec with Matchers {
         // A datagram to the robot's 3838 comes as ESC y, its sender under the base station's network name.
         val reply = "from the gateway".getBytes(StandardCharsets.US_ASCII)
         base.send(new DatagramPacket(reply, reply.length, new InetSocketAddress(robot, 3838)))
-        fw.next() { case SerialEvent.Data(`server`, Some(r), bytes) => (r, bytes.toSeq) } shouldBe
+        fw.next() { case SerialEvent.Data(`server`, Some(r), bytes) =>
+          (r, bytes.toSeq)
+        } shouldBe
           (BaseStation -> reply.toSeq)
         // The base station answering the client's port comes back as ESC Z on the client's connection.
         base.send(new DatagramPacket(reply, reply.length, from))

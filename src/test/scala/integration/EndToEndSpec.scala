@@ -27,11 +27,11 @@ import naogateway.wire.Posture
 import robotmiddleware._
 import robotmiddleware.cluster.MiddlewareCluster
 
-/**
- * The whole stack as users meet it: a gateway node (gateway, middleware, simulated robots on loopback UDP) and
- * apps in actor systems of their own that reach it only through the cluster and `RobotInterface`.
- */
-class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Eventually with BeforeAndAfterAll with LogCapturing {
+/** The whole stack as users meet it: a gateway node (gateway, middleware, simulated robots on loopback UDP) and apps in
+  * actor systems of their own that reach it only through the cluster and `RobotInterface`.
+  */
+class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Eventually with BeforeAndAfterAll
+    with LogCapturing {
 
   implicit override val patienceConfig: PatienceConfig = PatienceConfig(30.seconds, 100.millis)
 
@@ -46,15 +46,20 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       |""".stripMargin)
 
   private val gatewayNode = ActorTestKit(
-    MiddlewareCluster.start(Behaviors.empty, MiddlewareCluster.GatewayRole,
-      ConfigFactory.parseString("robotmiddleware.cluster.gateway-port = 0\nakka.cluster.seed-nodes = []").withFallback(common))
+    MiddlewareCluster.start(
+      Behaviors.empty,
+      MiddlewareCluster.GatewayRole,
+      ConfigFactory.parseString("robotmiddleware.cluster.gateway-port = 0\nakka.cluster.seed-nodes = []").withFallback(
+        common)
+    )
   )
   private val cluster = Cluster(gatewayNode.system)
   cluster.manager ! Join(cluster.selfMember.address)
   private val gatewayPort = cluster.selfMember.address.port.get
 
   private val gateway = gatewayNode.spawn(Gateway(GatewaySettings(gatewayNode.system)), "gateway")
-  private val middleware = gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
+  private val middleware =
+    gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
   private val robotPort: InetSocketAddress = {
     val probe = gatewayNode.createTestProbe[Gateway.Addresses]()
     gateway ! Gateway.GetAddresses(probe.ref)
@@ -77,12 +82,17 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
   private def connect(node: ActorSystem[_], name: String, priority: Int): RobotInterface =
     RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, name, priority))(node.executionContext).futureValue
 
-  private def spawnRobot(id: Int, to: InetSocketAddress = robotPort, firmware: FirmwareSettings => FirmwareSettings = identity)
-      : ActorRef[SimulatedRobot.Command] = {
+  private def spawnRobot(id: Int, to: InetSocketAddress = robotPort,
+      firmware: FirmwareSettings => FirmwareSettings = identity): ActorRef[SimulatedRobot.Command] = {
     val probe = gatewayNode.createTestProbe[SimulatedRobot.StartResult]()
-    gatewayNode.spawn(SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(id)), to,
-      bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false), Some(probe.ref)),
-      s"robot-$id")
+    gatewayNode.spawn(
+      SimulatedRobot(
+        SimulatedRobotSettings(firmware(FirmwareSettings(id)), to,
+          bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false),
+        Some(probe.ref)
+      ),
+      s"robot-$id"
+    )
     probe.receiveMessage(10.seconds) match {
       case SimulatedRobot.Started(_, ref, _) => ref
       case other                             => fail(s"robot $id did not start: $other")
@@ -114,7 +124,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val walking = app.status(11).filter(_.posture.contains(Posture.Walking)).runWith(Sink.head)
       walking.futureValue.robotId shouldBe 11
       // The middleware keeps the walk alive past the robot's 500 ms lease: the robot walks on for well over the 0.1 m
-      // one lease carries it at 0.2 m/s. The distance adds up across a late refresh, which a look at the posture would not.
+      /* one lease carries it at 0.2 m/s. The distance adds up across a late refresh, which a look at the posture would
+       * not. */
       val start = view(sim).pose
       eventually(math.hypot(view(sim).pose.x - start.x, view(sim).pose.y - start.y) should be > 0.3)
       app.stop(11).futureValue
@@ -125,7 +136,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       spawnRobot(17)
       online(17)
       val control = gatewayNode.spawn(apps.control.ControlServer(middleware,
-        apps.control.ControlSettings(gatewayNode.system).copy(host = "127.0.0.1", port = 0)), "control")
+          apps.control.ControlSettings(gatewayNode.system).copy(host = "127.0.0.1", port = 0)), "control")
       val probe = gatewayNode.createTestProbe[InetSocketAddress]()
       control ! apps.control.ControlServer.GetAddress(probe.ref)
       val address = s"127.0.0.1:${probe.receiveMessage(10.seconds).getPort}"
@@ -140,8 +151,10 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val line = status.find(_.startsWith("17 ")).getOrElse(fail(status.mkString("\n")))
       // The robot at its own loopback address and receive port (docs/protocol.md section 2).
       Seq(":3838 ", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
-      robotctl("call", "17", "motion", "getPosture") shouldBe ((0, Vector("robot 17: motion.getPosture -> Text(sit)"), Vector.empty))
-      robotctl("call", "4711", "motion", "getPosture") shouldBe ((1, Vector.empty, Vector("robotctl: no robot 4711 is known")))
+      robotctl("call", "17", "motion", "getPosture") shouldBe ((0, Vector("robot 17: motion.getPosture -> Text(sit)"),
+        Vector.empty))
+      robotctl("call", "4711", "motion", "getPosture") shouldBe ((1, Vector.empty,
+        Vector("robotctl: no robot 4711 is known")))
       gatewayNode.stop(control)
     }
 
@@ -229,7 +242,8 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       val deadline = 60.seconds.fromNow
       var reached = false
       while (!reached && deadline.hasTimeLeft()) {
-        reached = follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue.reached
+        reached =
+          follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue.reached
         if (!reached) Thread.sleep(250)
       }
       reached shouldBe true

@@ -14,7 +14,11 @@ import org.scalatest.wordspec.AnyWordSpec
 /** `./sbt run` as a user sees it: a separate JVM running the launcher, its plain output, and Ctrl-C. */
 class LauncherSpec extends AnyWordSpec with Matchers {
 
-  private def freePort(): Int = { val s = new ServerSocket(0); try s.getLocalPort finally s.close() }
+  private def freePort(): Int = {
+    val s = new ServerSocket(0);
+    try s.getLocalPort
+    finally s.close()
+  }
 
   /** A launcher JVM and the lines it prints, read on a thread of their own. */
   private final class Launched(val process: Process, val clusterPort: Int) {
@@ -29,14 +33,19 @@ class LauncherSpec extends AnyWordSpec with Matchers {
 
   // The launcher's control port, for robotctl; picked like the cluster port.
   private val controlPort = freePort()
-  private val gameControllerPort = { val s = new java.net.DatagramSocket(0); try s.getLocalPort finally s.close() }
+  private val gameControllerPort = {
+    val s = new java.net.DatagramSocket(0);
+    try s.getLocalPort
+    finally s.close()
+  }
 
   private def launch(clusterPort: Int = freePort(), main: String = "apps.Launcher"): Launched = {
     val javaBin = s"${System.getProperty("java.home")}/bin/java"
     val command = Seq(javaBin, "-Xmx768m", "-cp", System.getProperty("java.class.path"), main)
     // A process started in the background of a non-interactive shell inherits SIGINT as ignored, and the JVM then
     // never installs its handler; python resets it to the default first, as an interactive terminal would have it.
-    val python = Seq("python3", "-c", "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])")
+    val python = Seq("python3", "-c",
+      "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])")
     val builder = new ProcessBuilder((python ++ command).asJava).redirectErrorStream(true)
     // The cluster port must be known beforehand (the launcher's app node joins it as its seed), so it is picked here;
     // the ZeroMQ endpoint takes free ports itself.
@@ -65,7 +74,8 @@ class LauncherSpec extends AnyWordSpec with Matchers {
 
   "The launcher" should {
     "start, show three robots online, and exit cleanly on SIGINT" in {
-      assume(new java.io.File("/bin/kill").exists || new java.io.File("/usr/bin/kill").exists, "no kill command to send SIGINT")
+      assume(new java.io.File("/bin/kill").exists || new java.io.File("/usr/bin/kill").exists,
+        "no kill command to send SIGINT")
       val hasPython = scala.util.Try(new ProcessBuilder("python3", "--version").start().waitFor() == 0).getOrElse(false)
       assume(hasPython, "python3 is needed to give the launcher a default SIGINT disposition")
       val seen = scala.collection.mutable.ArrayBuffer.empty[String]
@@ -76,8 +86,10 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         seen.clear()
         val launched = launch()
         val deadline = 90.seconds.fromNow
-        def portTaken = seen.exists(l => l.contains("Address already in use") || l.contains("is in use by another program"))
-        while (online.size < 3 && !portTaken && deadline.hasTimeLeft() && (launched.reader.isAlive || !launched.lines.isEmpty)) {
+        def portTaken =
+          seen.exists(l => l.contains("Address already in use") || l.contains("is in use by another program"))
+        while (online.size < 3 && !portTaken && deadline
+            .hasTimeLeft() && (launched.reader.isAlive || !launched.lines.isEmpty)) {
           Option(launched.lines.poll(1, TimeUnit.SECONDS)).foreach(seen += _)
         }
         if (online.size < 3 && portTaken && attempts > 1) {
@@ -94,9 +106,11 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         // The web view's address is printed, and the page is there. On a busy machine its line may come after the
         // robots' (the web server binds beside them): read on for it a while.
         val webDeadline = 30.seconds.fromNow
-        while (!seen.exists(_.startsWith("web view: ")) && webDeadline.hasTimeLeft() && (launched.reader.isAlive || !launched.lines.isEmpty))
+        while (!seen.exists(_.startsWith("web view: ")) && webDeadline
+            .hasTimeLeft() && (launched.reader.isAlive || !launched.lines.isEmpty))
           Option(launched.lines.poll(1, TimeUnit.SECONDS)).foreach(seen += _)
-        val web = seen.collectFirst { case l if l.startsWith("web view: http://127.0.0.1:") => l.stripPrefix("web view: ") }
+        val web =
+          seen.collectFirst { case l if l.startsWith("web view: http://127.0.0.1:") => l.stripPrefix("web view: ") }
         withClue(seen.mkString("\n"))(web shouldBe defined)
         val page = new java.net.URL(web.get).openConnection().asInstanceOf[java.net.HttpURLConnection]
         page.setConnectTimeout(5000)
@@ -107,14 +121,16 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         // robotctl reaches the running launcher through its control port.
         val out = Vector.newBuilder[String]
         val err = Vector.newBuilder[String]
-        val code = apps.RobotCtl.run(Seq("status"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get, out += _, err += _)
+        val code = apps.RobotCtl.run(Seq("status"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
+          out += _, err += _)
         withClue(err.result().mkString("\n")) { code shouldBe 0 }
         out.result().count(_.matches("[123] .* online .*")) shouldBe 3
 
         // robotctl doctor against the demo: the simulated GameController heard, three robots online, nothing wrong.
         val doctor = Vector.newBuilder[String]
         val doctorErr = Vector.newBuilder[String]
-        val doctorCode = apps.RobotCtl.run(Seq("doctor"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get, doctor += _, doctorErr += _)
+        val doctorCode = apps.RobotCtl.run(Seq("doctor"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
+          doctor += _, doctorErr += _)
         withClue((doctor.result() ++ doctorErr.result()).mkString("\n")) {
           doctor.result().exists(_.startsWith("ok   GameController: heard, version ")) shouldBe true
           doctor.result() should contain("ok   robots: 3 of 3 known robot(s) online, 0 configured")
@@ -128,14 +144,17 @@ class LauncherSpec extends AnyWordSpec with Matchers {
           helloExit shouldBe Some(0)
         }
 
-        // A second launcher beside the running one: one line per port it cannot have, naming the setting; no stack trace.
+        /* A second launcher beside the running one: one line per port it cannot have, naming the setting; no stack
+         * trace. */
         val (second, secondExit) = runToEnd(launch(launched.clusterPort), 60.seconds)
         withClue(second.mkString("\n")) {
           secondExit shouldBe Some(apps.Launcher.ExitPortInUse)
-          second should contain(s"naogateway: port ${launched.clusterPort} (TCP on 127.0.0.1, the cluster port of the gateway node, where " +
-            "apps join) is in use by another program; stop that program or move the port with robotmiddleware.cluster.gateway-port " +
-            "(ROBOTS_GATEWAY_PORT)")
-          second.exists(l => l.contains(s"port $controlPort ") && l.contains("apps.control.bind (NAOGATEWAY_CONTROL)")) shouldBe true
+          second should contain(
+            s"naogateway: port ${launched.clusterPort} (TCP on 127.0.0.1, the cluster port of the gateway node, where " +
+              "apps join) is in use by another program; stop that program or move the port with robotmiddleware.cluster.gateway-port " +
+              "(ROBOTS_GATEWAY_PORT)")
+          second.exists(l =>
+            l.contains(s"port $controlPort ") && l.contains("apps.control.bind (NAOGATEWAY_CONTROL)")) shouldBe true
           second.exists(_.contains("Exception")) shouldBe false
         }
 

@@ -1,21 +1,26 @@
 package naogateway
 
-/**
- * What the gateway knows of one robot's clock: when (on the gateway's clock) the robot's clock read `robotMillis`, how
- * fast it runs, and how far off that may be.
- *
- * The gateway's clock is its JVM's `System.nanoTime`, the base of `RobotSnapshot.receivedAtNanos`. One-way observation
- * cannot tell a constant part of the link's delay from an offset: the estimate places a robot reading at the moment
- * its fastest keep-alives would have been received, so the common least delay of the link (on loopback well under
- * 1 ms, on a base station's WiFi a few ms) is inside the offset and outside the bound.
- *
- * @param robotMillis the reading the estimate is anchored at (the newest keep-alive's robot time)
- * @param gatewayNanos when the robot's clock read `robotMillis`, on the gateway's clock
- * @param gatewayPerRobot gateway time per robot time (1.0: the clocks run alike)
- * @param errorBoundMillis how far `gatewayNanos` may be from the truth, in ms
- * @param boundGrowth how much the bound grows per ms of robot time away from `robotMillis`
- * @param samples keep-alives in the window the estimate rests on
- */
+/** What the gateway knows of one robot's clock: when (on the gateway's clock) the robot's clock read `robotMillis`, how
+  * fast it runs, and how far off that may be.
+  *
+  * The gateway's clock is its JVM's `System.nanoTime`, the base of `RobotSnapshot.receivedAtNanos`. One-way observation
+  * cannot tell a constant part of the link's delay from an offset: the estimate places a robot reading at the moment
+  * its fastest keep-alives would have been received, so the common least delay of the link (on loopback well under 1
+  * ms, on a base station's WiFi a few ms) is inside the offset and outside the bound.
+  *
+  * @param robotMillis
+  *   the reading the estimate is anchored at (the newest keep-alive's robot time)
+  * @param gatewayNanos
+  *   when the robot's clock read `robotMillis`, on the gateway's clock
+  * @param gatewayPerRobot
+  *   gateway time per robot time (1.0: the clocks run alike)
+  * @param errorBoundMillis
+  *   how far `gatewayNanos` may be from the truth, in ms
+  * @param boundGrowth
+  *   how much the bound grows per ms of robot time away from `robotMillis`
+  * @param samples
+  *   keep-alives in the window the estimate rests on
+  */
 final case class ClockEstimate(
     robotMillis: Long,
     gatewayNanos: Long,
@@ -33,5 +38,6 @@ final case class ClockEstimate(
     gatewayNanos + math.round((robotTime - robotMillis).toDouble * gatewayPerRobot * 1e6)
 
   /** The error bound of [[toGatewayNanos]] at `robotTime`, in ms. */
-  def errorBoundAt(robotTime: Long): Double = errorBoundMillis + boundGrowth * math.abs((robotTime - robotMillis).toDouble)
+  def errorBoundAt(robotTime: Long): Double =
+    errorBoundMillis + boundGrowth * math.abs((robotTime - robotMillis).toDouble)
 }

@@ -2,10 +2,9 @@ package naogateway
 
 import naogateway.wire.gamecontroller.{GameControlVersion, GameState}
 
-/**
- * What the competition gate decides on: the game state the trusted GameController last gave, or the fact that its
- * last packet could not be read. The outbox and every ZeroMQ robot's link hold one and ask [[CompetitionGate.closes]].
- */
+/** What the competition gate decides on: the game state the trusted GameController last gave, or the fact that its last
+  * packet could not be read. The outbox and every ZeroMQ robot's link hold one and ask [[CompetitionGate.closes]].
+  */
 sealed trait GameReading extends Product with Serializable
 
 /** The readings the gate knows. */

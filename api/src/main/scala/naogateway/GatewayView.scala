@@ -4,12 +4,11 @@ import scala.concurrent.Future
 
 import naogateway.wire.gamecontroller.GameControlData
 
-/**
- * What apps may read of a running gateway (the status view, the web view, the control port): questions that change
- * nothing, answered later with plain data. The launcher hands apps one, built over the gateway's read-only queries;
- * an app holding it can look but never reach a robot past the middleware. A question the gateway does not answer in
- * time fails its future.
- */
+/** What apps may read of a running gateway (the status view, the web view, the control port): questions that change
+  * nothing, answered later with plain data. The launcher hands apps one, built over the gateway's read-only queries; an
+  * app holding it can look but never reach a robot past the middleware. A question the gateway does not answer in time
+  * fails its future.
+  */
 trait GatewayView {
 
   /** Where the gateway listens (the real ports when 0 was configured). */

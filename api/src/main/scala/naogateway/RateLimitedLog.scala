@@ -1,6 +1,7 @@
 package naogateway
 
-/** When a counted event deserves a log line: at the 1st, 10th, 100th, ... occurrence, so floods cannot flood the log. */
+/** When a counted event deserves a log line: at the 1st, 10th, 100th, ... occurrence, so floods cannot flood the log.
+  */
 object RateLimitedLog {
 
   /** Whether the `n`-th occurrence (counting from 1) is logged. */
@@ -10,7 +11,8 @@ object RateLimitedLog {
     m == 1
   }
 
-  /** Whether any of the occurrences `before + 1` to `after` is logged: for counts that grow by more than one at a time. */
+  /** Whether any of the occurrences `before + 1` to `after` is logged: for counts that grow by more than one at a time.
+    */
   def dueBetween(before: Long, after: Long): Boolean =
     after > before && (before < 1 || after.toString.length > before.toString.length || due(after))
 }

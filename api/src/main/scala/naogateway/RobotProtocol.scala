@@ -4,7 +4,6 @@ import naogateway.wire.ActuatorGroup
 
 import java.net.InetSocketAddress
 
-
 import naogateway.wire.{Posture, RobotReport, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 
@@ -18,11 +17,10 @@ object LinkQuality {
   case object Offline extends LinkQuality("offline")
 }
 
-/**
- * What the gateway last heard from a robot's keep-alive. `receivedAtNanos` and `stampedAtNanos` are on the gateway's
- * clock (its JVM's `System.nanoTime`); `stampedAtNanos` is when the robot's clock read this keep-alive's timestamp,
- * by the robot's clock estimate `clock` (None until there is one, or when the keep-alive carries no robot time).
- */
+/** What the gateway last heard from a robot's keep-alive. `receivedAtNanos` and `stampedAtNanos` are on the gateway's
+  * clock (its JVM's `System.nanoTime`); `stampedAtNanos` is when the robot's clock read this keep-alive's timestamp, by
+  * the robot's clock estimate `clock` (None until there is one, or when the keep-alive carries no robot time).
+  */
 final case class RobotSnapshot(
     robotId: Int,
     address: InetSocketAddress,
@@ -49,12 +47,11 @@ final case class RobotSnapshot(
 /** How a keep-alive changes a robot's snapshot (the restart rule over it is the gateway's [[KeepAliveStep]]). */
 object RobotSnapshot {
 
-  /**
-   * `previous` after one keep-alive (docs/protocol.md §6.2): the keep-alive describes the robot as it is now, so every
-   * robot-reported field comes from it alone. A field it does not carry is unknown (`None`), never left over from an
-   * earlier keep-alive: a robot that restarts with firmware sending `Status` only must not show the battery, role,
-   * posture, position or `bootId` of its previous session. Link fields (address, online, quality) stay.
-   */
+  /** `previous` after one keep-alive (docs/protocol.md §6.2): the keep-alive describes the robot as it is now, so every
+    * robot-reported field comes from it alone. A field it does not carry is unknown (`None`), never left over from an
+    * earlier keep-alive: a robot that restarts with firmware sending `Status` only must not show the battery, role,
+    * posture, position or `bootId` of its previous session. Link fields (address, online, quality) stay.
+    */
   def afterKeepAlive(
       previous: RobotSnapshot,
       status: naogateway.proto.Status,
@@ -117,19 +114,17 @@ final case class RobotStatusUpdated(snapshot: RobotSnapshot) extends RobotEvent 
 /** The robot came back with a fresh session; the gateway has re-synced it. */
 final case class RobotRestarted(robotId: Int, bootId: Option[Int], resynced: Vector[String]) extends RobotEvent
 
-/**
- * A robot discovered from its keep-alives was forgotten (never online, or offline too long): its robot actor stopped,
- * its IP address and id are free. Its next keep-alive discovers it again. Configured robots are never forgotten.
- */
+/** A robot discovered from its keep-alives was forgotten (never online, or offline too long): its robot actor stopped,
+  * its IP address and id are free. Its next keep-alive discovers it again. Configured robots are never forgotten.
+  */
 final case class RobotForgotten(robotId: Int, reason: String) extends RobotEvent
 
 /** The GameController's latest packet. */
 final case class GameStateUpdated(data: GameControlData) extends GatewayEvent
 
-/**
- * Why a call or an operation failed: the one error type of every caller, from a robot's response actor up to an app
- * using `RobotInterface` (an exception, so a failed `Future` carries it as it is).
- */
+/** Why a call or an operation failed: the one error type of every caller, from a robot's response actor up to an app
+  * using `RobotInterface` (an exception, so a failed `Future` carries it as it is).
+  */
 sealed abstract class RobotFailure(message: String) extends Exception(message) with Product with Serializable {
 
   /** A sentence for logs and error replies. */
@@ -147,7 +142,8 @@ object RobotFailure {
 
   /** The app does not hold the lease the operation needs. */
   final case class LeaseNotHeld(robotId: Int, group: ActuatorGroup, holder: Option[String])
-      extends RobotFailure(s"lease '${group.name}' of robot $robotId is not held by this app" + holder.fold("")(h => s" (held by $h)"))
+      extends RobotFailure(
+        s"lease '${group.name}' of robot $robotId is not held by this app" + holder.fold("")(h => s" (held by $h)"))
 
   /** A competition rule forbids sending now. */
   final case class RuleGate(rule: String) extends RobotFailure(rule)
@@ -160,10 +156,12 @@ object RobotFailure {
   final case class RobotError(robotId: Int, error: String) extends RobotFailure(s"robot $robotId: $error")
 
   /** The middleware holds the robot in a safe state (low battery, lost link) and refuses motion. */
-  final case class SafetyHold(robotId: Int, reason: String) extends RobotFailure(s"robot $robotId is held safe: $reason")
+  final case class SafetyHold(robotId: Int, reason: String)
+      extends RobotFailure(s"robot $robotId is held safe: $reason")
 
   /** Too much is waiting for this robot. */
-  final case class Overloaded(robotId: Int, detail: String) extends RobotFailure(s"robot $robotId is overloaded: $detail")
+  final case class Overloaded(robotId: Int, detail: String)
+      extends RobotFailure(s"robot $robotId is overloaded: $detail")
 
   /** A newer command of the same slot replaced this one (latest wins). */
   final case class Superseded(robotId: Int, call: String)

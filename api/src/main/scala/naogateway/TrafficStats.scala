@@ -1,13 +1,15 @@
 package naogateway
 
-/**
- * The team's traffic: bytes in the last second each way, the budget, queues and counters, and the competition gate.
- *
- * @param gameRunning whether the gate's reading closes it: the GameController last said READY, SET or PLAYING, or
- *                    its last packet could not be read
- * @param competition whether the competition rule applies (`naogateway.competition.enabled`)
- * @param gateReason  why the gate's reading closes it (`CompetitionGate.why`)
- */
+/** The team's traffic: bytes in the last second each way, the budget, queues and counters, and the competition gate.
+  *
+  * @param gameRunning
+  *   whether the gate's reading closes it: the GameController last said READY, SET or PLAYING, or its last packet could
+  *   not be read
+  * @param competition
+  *   whether the competition rule applies (`naogateway.competition.enabled`)
+  * @param gateReason
+  *   why the gate's reading closes it (`CompetitionGate.why`)
+  */
 final case class TrafficStats(
     outBytesLastSecond: Long,
     inBytesLastSecond: Long,

@@ -9,11 +9,10 @@ import scala.tools.nsc.{Global, Settings}
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/**
- * The compiler holds the api's boundary: a source written against the api's classpath (this spec's JVM's, which is
- * the api module's test classpath) compiles when it uses the api's data and fails when it imports a gateway internal.
- * The same probe, run against the apps module's classpath, is how the build will show apps' boundary (issue 22).
- */
+/** The compiler holds the api's boundary: a source written against the api's classpath (this spec's JVM's, which is the
+  * api module's test classpath) compiles when it uses the api's data and fails when it imports a gateway internal. The
+  * same probe, run against the apps module's classpath, is how the build will show apps' boundary (issue 22).
+  */
 class ApiBoundarySpec extends AnyWordSpec with Matchers {
 
   /** The errors scalac reports for `source` (typer only, nothing written), against this JVM's class path. */

@@ -5,10 +5,9 @@ import java.io.File
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/**
- * The api module is plain data for apps: the build keeps Akka and the gateway off its classpath, and this spec fails
- * the day either comes back.
- */
+/** The api module is plain data for apps: the build keeps Akka and the gateway off its classpath, and this spec fails
+  * the day either comes back.
+  */
 class ApiLayerSpec extends AnyWordSpec with Matchers {
 
   private val loader = getClass.getClassLoader
@@ -25,21 +24,35 @@ class ApiLayerSpec extends AnyWordSpec with Matchers {
     }
 
     "not hold the gateway's actors" in {
-      Seq("naogateway.Gateway$", "naogateway.RobotActor$", "naogateway.Outbox$", "naogateway.SessionRule", "naogateway.KeepAliveStep")
+      Seq("naogateway.Gateway$", "naogateway.RobotActor$", "naogateway.Outbox$", "naogateway.SessionRule",
+        "naogateway.KeepAliveStep")
         .filter(loadable) shouldBe empty
     }
 
     "hold what apps see, in the gateway's packages, and the wire types it is built on" in {
-      Seq("naogateway.RobotSnapshot", "naogateway.RobotFailure", "naogateway.GatewayEvent", "naogateway.VisionFrame",
-        "naogateway.LinkStats", "naogateway.ClockEstimate", "naogateway.TrafficStats", "naogateway.GatewayStats",
-        "naogateway.GameSource", "naogateway.recording.RecordingStats", "naogateway.link.ReplayProgress",
-        "naogateway.wire.Posture", "naogateway.wire.ActuatorGroup", "naogateway.wire.RpcValue").filterNot(loadable) shouldBe empty
+      Seq(
+        "naogateway.RobotSnapshot",
+        "naogateway.RobotFailure",
+        "naogateway.GatewayEvent",
+        "naogateway.VisionFrame",
+        "naogateway.LinkStats",
+        "naogateway.ClockEstimate",
+        "naogateway.TrafficStats",
+        "naogateway.GatewayStats",
+        "naogateway.GameSource",
+        "naogateway.recording.RecordingStats",
+        "naogateway.link.ReplayProgress",
+        "naogateway.wire.Posture",
+        "naogateway.wire.ActuatorGroup",
+        "naogateway.wire.RpcValue"
+      ).filterNot(loadable) shouldBe empty
     }
   }
 
   "A robot's snapshot" should {
     "take a keep-alive's report and keep its link fields (the data half of the keep-alive step)" in {
-      val before = RobotSnapshot(7, new java.net.InetSocketAddress("127.0.0.1", 9000), batteryVoltage = Some(11.9), online = true)
+      val before =
+        RobotSnapshot(7, new java.net.InetSocketAddress("127.0.0.1", 9000), batteryVoltage = Some(11.9), online = true)
       val status = naogateway.proto.Status(teamID = Some(3))
       val after = RobotSnapshot.afterKeepAlive(before, status, None, receivedAtNanos = 42L)
       after.teamId shouldBe Some(3)

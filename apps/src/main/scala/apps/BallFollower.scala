@@ -52,7 +52,8 @@ object BallFollower {
               // A head that already looks where it should gets no command: at 16 frames a second, a still ball
               // would otherwise cost a datagram to the robot per frame.
               val head =
-                if (math.abs(t.pan - lastHead._1) > HeadDeadband || math.abs(t.tilt - lastHead._2) > HeadDeadband || lastHead._1.isNaN) {
+                if (math.abs(t.pan - lastHead._1) > HeadDeadband || math.abs(
+                    t.tilt - lastHead._2) > HeadDeadband || lastHead._1.isNaN) {
                   robot.head(robotId, t.pan, t.tilt)
                   (t.pan, t.tilt)
                 } else lastHead
@@ -63,7 +64,8 @@ object BallFollower {
                 context.pipeToSelf(sent)(WalkDone.apply)
               }
               if (next.reached && !state.reached) context.log.info("Robot [{}] reached the ball", robotId)
-              following(next, Progress(next.reached, t.ballDistance.orElse(progress.lastDistance), progress.frames + 1), walk, head)
+              following(next, Progress(next.reached, t.ballDistance.orElse(progress.lastDistance), progress.frames + 1),
+                walk, head)
             case WalkDone(Failure(e)) =>
               // The robot refused or missed it: send the current target again with the next frame.
               context.log.debug("Ball follower walk on robot [{}] failed: {}", robotId, e.getMessage)

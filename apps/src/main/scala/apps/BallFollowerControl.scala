@@ -18,7 +18,8 @@ object BallFollowerControl {
   val ReachedDistance: Double = 0.25
 
   /** What the follower currently wants. */
-  final case class State(pan: Double, tilt: Double, lostFrames: Int, scanDirection: Double, turn: Double, reached: Boolean)
+  final case class State(pan: Double, tilt: Double, lostFrames: Int, scanDirection: Double, turn: Double,
+      reached: Boolean)
 
   /** Head straight, looking slightly down. */
   val initial: State = State(0.0, -0.3, 0, 1.0, 1.0, reached = false)
@@ -28,7 +29,8 @@ object BallFollowerControl {
 
   private def clamp(v: Double, lo: Double, hi: Double) = math.max(lo, math.min(hi, v))
 
-  /** Where the ball is relative to the body (bearing in radians, distance in metres), seen with the head at pan/tilt. */
+  /** Where the ball is relative to the body (bearing in radians, distance in metres), seen with the head at pan/tilt.
+    */
   def locate(ball: HaViMoRegion, pan: Double, tilt: Double): (Double, Double) = {
     val halfW = HaViMo.ImageWidth / 2.0
     val halfH = HaViMo.ImageHeight / 2.0
@@ -46,11 +48,15 @@ object BallFollowerControl {
         val (bearing, distance) = locate(ball, state.pan, state.tilt)
         // Keep the ball in the image centre with the head; turn the body towards where the head looks.
         val pan = clamp(bearing, -2.0, 2.0)
-        val tilt = clamp(state.tilt + (HaViMo.ImageHeight / 2.0 - ball.centreY) / (HaViMo.ImageHeight / 2.0) * (VerticalFov / 2) * 0.7, -0.6, 0.5)
+        val tilt = clamp(
+          state.tilt + (HaViMo.ImageHeight / 2.0 - ball.centreY) / (HaViMo.ImageHeight / 2.0) * (VerticalFov / 2) * 0.7,
+          -0.6, 0.5)
         val reached = state.reached || distance < ReachedDistance
         val omega = if (reached) 0.0 else clamp(1.5 * bearing, -1.0, 1.0)
-        val vx = if (reached) 0.0 else if (math.abs(bearing) > 0.6) 0.0 else clamp(0.6 * (distance - ReachedDistance + 0.1), 0.05, 0.3)
-        (State(pan, tilt, 0, state.scanDirection, if (bearing < 0) -1.0 else 1.0, reached), Targets(pan, tilt, vx, omega, Some(distance)))
+        val vx = if (reached) 0.0
+        else if (math.abs(bearing) > 0.6) 0.0 else clamp(0.6 * (distance - ReachedDistance + 0.1), 0.05, 0.3)
+        (State(pan, tilt, 0, state.scanDirection, if (bearing < 0) -1.0 else 1.0, reached),
+          Targets(pan, tilt, vx, omega, Some(distance)))
       case None =>
         // Lost: sweep the head, and turn the body steadily towards where the ball was last seen.
         val lost = state.lostFrames + 1

@@ -3,12 +3,11 @@ package apps
 import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot}
 import naogateway.wire.{Posture, RobotReport}
 
-/**
- * What every status view shows of one robot (the launcher's status lines, robotctl's `status`, the web view's cards):
- * the one mapping from a robot's snapshot and link figures to shown values, so the views cannot disagree. The robot's
- * own part is its [[RobotReport]], as its keep-alive said it. Total over whatever a snapshot holds: a missing address
- * or quality, and a figure that is not finite (NaN, infinite), become `None`, which each view shows its way.
- */
+/** What every status view shows of one robot (the launcher's status lines, robotctl's `status`, the web view's cards):
+  * the one mapping from a robot's snapshot and link figures to shown values, so the views cannot disagree. The robot's
+  * own part is its [[RobotReport]], as its keep-alive said it. Total over whatever a snapshot holds: a missing address
+  * or quality, and a figure that is not finite (NaN, infinite), become `None`, which each view shows its way.
+  */
 final case class RobotRow(
     robotId: Int,
     address: Option[String],
@@ -33,11 +32,13 @@ object RobotRow {
 
   private def finite(d: Double): Boolean = !d.isNaN && !d.isInfinite
 
-  /** The row of robot `r` with its link figures `link`; the clock estimate is the link figures', else the snapshot's. */
+  /** The row of robot `r` with its link figures `link`; the clock estimate is the link figures', else the snapshot's.
+    */
   def of(r: RobotSnapshot, link: Option[LinkStats]): RobotRow = RobotRow(
     r.robotId,
     // The IP address when the robot's address is resolved (the gateway knows robots by IP), else the name it was given.
-    Option(r.address).map(a => s"${Option(a.getAddress).map(_.getHostAddress).orElse(Option(a.getHostString)).getOrElse("-")}:${a.getPort}"),
+    Option(r.address).map(a =>
+      s"${Option(a.getAddress).map(_.getHostAddress).orElse(Option(a.getHostString)).getOrElse("-")}:${a.getPort}"),
     r.online,
     Option(r.quality),
     r.report,

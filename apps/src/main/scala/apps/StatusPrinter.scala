@@ -46,7 +46,8 @@ object StatusPrinter {
       case "auto"   => Auto
       case "screen" => Screen
       case "lines"  => Lines
-      case other    => throw new IllegalArgumentException(s"apps.launcher.view must be auto, screen or lines, not '$other'")
+      case other =>
+        throw new IllegalArgumentException(s"apps.launcher.view must be auto, screen or lines, not '$other'")
     }
   }
 
@@ -75,20 +76,18 @@ object StatusPrinter {
   def settings(c: Config): Settings =
     Settings(c.getDuration("refresh").toNanos.nanos, ViewMode.parse(c.getString("view")))
 
-  /**
-   * The printer of the `apps.launcher` block `c`, writing where its `view` says; `notes` are lines shown above the
-   * status (the web view's address once it listens), printed once each in line mode.
-   */
-  def fromConfig(gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty)
-      : Behavior[Command] = {
+  /** The printer of the `apps.launcher` block `c`, writing where its `view` says; `notes` are lines shown above the
+    * status (the web view's address once it listens), printed once each in line mode.
+    */
+  def fromConfig(
+      gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty): Behavior[Command] = {
     val s = settings(c)
     apply(gateway, s.refresh, output(s.view), notes)
   }
 
-  /**
-   * Whether stdout is a terminal: `System.console()` in a JVM started on one, or what sbt says through
-   * `NAOGATEWAY_TERMINAL` when it forks the launcher with its stdout as a pipe.
-   */
+  /** Whether stdout is a terminal: `System.console()` in a JVM started on one, or what sbt says through
+    * `NAOGATEWAY_TERMINAL` when it forks the launcher with its stdout as a pipe.
+    */
   def onTerminal(env: String => Option[String] = sys.env.get): Boolean =
     System.console() != null || env("NAOGATEWAY_TERMINAL").exists(_.trim.equalsIgnoreCase("true"))
 
@@ -102,13 +101,13 @@ object StatusPrinter {
     if (screen) TerminalScreen.open() else LineOutput(line => println(line))
   }
 
-  /**
-   * A printer polling the gateway's read-only view every `refresh` and writing to `output`. It restarts (after a back-off, so a
-   * failure repeating every refresh cannot flood the log) on any failure.
-   */
+  /** A printer polling the gateway's read-only view every `refresh` and writing to `output`. It restarts (after a
+    * back-off, so a failure repeating every refresh cannot flood the log) on any failure.
+    */
   def apply(gateway: GatewayView, refresh: FiniteDuration, output: Output,
       notes: () => Vector[String] = () => Vector.empty): Behavior[Command] =
-    Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
+    Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](
+      SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
   private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output,
       notes: () => Vector[String]): Behavior[Command] =
@@ -148,8 +147,8 @@ object StatusPrinter {
             case Source(source) => running(model.copy(gameSource = Some(source)), shown)
             case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown)
             // The link figures of robots the gateway no longer knows are dropped with them.
-            case Links(l)       => running(model.copy(links = l.links.map(s => s.robotId -> s).toMap), shown)
-            case Unanswered     => Behaviors.same
+            case Links(l)   => running(model.copy(links = l.links.map(s => s.robotId -> s).toMap), shown)
+            case Unanswered => Behaviors.same
           }.receiveSignal { case (_, PostStop) =>
             output match {
               case screen: ScreenOutput => screen.close()

@@ -1,8 +1,17 @@
 package apps
 
 import naogateway.{GameSource, GatewayStats, LinkStats, RobotSnapshot, TrafficStats}
-import naogateway.wire.gamecontroller.{ControlData2014, GameControlData, GamePhase, GameState, HlControlData,
-  HlSecondaryState, HslControlData, SecondaryGameState, SetPlay}
+import naogateway.wire.gamecontroller.{
+  ControlData2014,
+  GameControlData,
+  GamePhase,
+  GameState,
+  HlControlData,
+  HlSecondaryState,
+  HslControlData,
+  SecondaryGameState,
+  SetPlay
+}
 
 /** What the launcher shows: robots, their links, the team's traffic with the competition gate, and the game. */
 final case class StatusModel(
@@ -21,11 +30,10 @@ object StatusModel {
   val empty: StatusModel = StatusModel(Vector.empty, Map.empty, None, None)
 }
 
-/**
- * Rendering of the live status: a screen for terminals, and plain change lines for logs and pipes. Every function
- * here is total: whatever a model holds, it renders (a value it cannot show becomes "-"), so the printer never dies
- * on a packet it did not expect.
- */
+/** Rendering of the live status: a screen for terminals, and plain change lines for logs and pipes. Every function here
+  * is total: whatever a model holds, it renders (a value it cannot show becomes "-"), so the printer never dies on a
+  * packet it did not expect.
+  */
 object StatusView {
 
   private def opt[A](a: Option[A])(f: A => String): String = a.fold("-")(f)
@@ -48,10 +56,9 @@ object StatusView {
     case known                   => known.toString.toUpperCase
   }
 
-  /**
-   * What a version says beside the main state, in words: the phase (shoot-out, extra time, time-out), the set play,
-   * and in version 19 whether play is stopped. Empty in regular play.
-   */
+  /** What a version says beside the main state, in words: the phase (shoot-out, extra time, time-out), the set play,
+    * and in version 19 whether play is stopped. Empty in regular play.
+    */
   def situation(game: GameControlData): Vector[String] = game match {
     case g: ControlData2014 =>
       Vector(g.secondaryGameState).filter(_ != SecondaryGameState.Normal).map(words)
@@ -82,10 +89,9 @@ object StatusView {
   def sourceLines(source: GameSource): Vector[String] =
     source.budget.toVector ++ source.warnings.map(w => s"WARNING: $w")
 
-  /**
-   * In the monitor role: the age of the true state, and each robot's status message as the GameController forwarded
-   * it (fallen, pose, ball age), shown beside the gateway's own robot lines.
-   */
+  /** In the monitor role: the age of the true state, and each robot's status message as the GameController forwarded it
+    * (fallen, pose, ball age), shown beside the gateway's own robot lines.
+    */
   def monitorLines(source: GameSource): Vector[String] =
     source.trueStateAgeMillis.map(ms => f"true game state from the GameController (monitor), ${ms / 1000.0}%.1f s old").toVector ++
       source.forwarded.map { f =>
@@ -118,7 +124,8 @@ object StatusView {
     }.orElse(Option.when(g.recording.enabled) {
       val r = g.recording
       s"recording: ${r.messages} messages in ${r.files} file(s), ${r.dropped} dropped" +
-        (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f => s", now ${f.split('/').last}") +
+        (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f =>
+          s", now ${f.split('/').last}") +
         r.retention.fold("")(k => s"; ${k.describe}")
     })
   }
@@ -127,16 +134,17 @@ object StatusView {
   def render(model: StatusModel): Vector[String] = {
     val online = model.robots.count(_.online)
     Vector(s"naogateway - ${model.robots.size} robot(s), $online online", gameLine(model.game)) ++
-      model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(gateLine(model.traffic),
-      trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
-      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ model.gameSource.toVector.flatMap(monitorLines) ++
+      model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(
+        gateLine(model.traffic),
+        trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
+      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ model.gameSource.toVector.flatMap(
+        monitorLines) ++
       Vector("", "Ctrl-C stops everything.")
   }
 
-  /**
-   * `lines` cut to a screen of `columns` × `rows`: long lines are cut (a wrapped line would shift the redrawn
-   * screen), and when rows run out the last one says how many lines are not shown.
-   */
+  /** `lines` cut to a screen of `columns` × `rows`: long lines are cut (a wrapped line would shift the redrawn screen),
+    * and when rows run out the last one says how many lines are not shown.
+    */
   def fit(lines: Vector[String], columns: Int, rows: Int): Vector[String] = {
     val cols = math.max(columns, 1)
     val shown =
@@ -146,18 +154,17 @@ object StatusView {
     shown.map(l => if (l.length > cols) l.take(cols) else l)
   }
 
-  /**
-   * Plain lines for what changed between two models: a robot's online state or posture, the game state (not every
-   * packet), and the competition gate.
-   */
+  /** Plain lines for what changed between two models: a robot's online state or posture, the game state (not every
+    * packet), and the competition gate.
+    */
   def changes(before: StatusModel, after: StatusModel): Vector[String] = {
     val old = before.robots.map(r => r.robotId -> r).toMap
     val robots = after.robots.flatMap { r =>
       old.get(r.robotId) match {
         case Some(o) if o.online == r.online && o.posture == r.posture => None
-        case Some(o) if o.online == r.online && !r.online               => None
-        case None if !r.online                                           => None
-        case _                                                           => Some(robotLine(r, after.links.get(r.robotId)))
+        case Some(o) if o.online == r.online && !r.online              => None
+        case None if !r.online                                         => None
+        case _                                                         => Some(robotLine(r, after.links.get(r.robotId)))
       }
     }
     val game =
@@ -166,15 +173,18 @@ object StatusView {
       else after.game.map(g => gameLine(Some(g)))
     // The first figures say nothing new unless the rule is on; after that, only a change of the gate is news.
     val gate = (before.traffic, after.traffic) match {
-      case (None, Some(t)) if t.competition                 => Some(gateLine(after.traffic))
+      case (None, Some(t)) if t.competition => Some(gateLine(after.traffic))
       // A new reason is news (the game running, or a packet that cannot be read); the state in it is the game line's.
-      case (Some(b), Some(a)) if b.gateOpen != a.gateOpen || (a.competition && kind(b.gateReason) != kind(a.gateReason)) => Some(gateLine(after.traffic))
-      case _                                                => None
+      case (Some(b), Some(a))
+          if b.gateOpen != a.gateOpen || (a.competition && kind(b.gateReason) != kind(a.gateReason)) =>
+        Some(gateLine(after.traffic))
+      case _ => None
     }
     // A warning is news when it first appears (not every refresh its figures change).
     def warningHeads(m: StatusModel) = m.gameSource.toVector.flatMap(_.warnings).map(_.takeWhile(_ != ':'))
-    val warnings = after.gameSource.toVector.flatMap(_.warnings).filterNot(w => warningHeads(before).contains(w.takeWhile(_ != ':')))
-      .map(w => s"WARNING: $w")
+    val warnings =
+      after.gameSource.toVector.flatMap(_.warnings).filterNot(w => warningHeads(before).contains(w.takeWhile(_ != ':')))
+        .map(w => s"WARNING: $w")
     robots ++ game ++ gate ++ warnings
   }
 }

@@ -22,14 +22,19 @@ object Teleop {
 
   /** The actions of the keyboard map. */
   object Action {
+
     /** Walk at this velocity (m/s, m/s, rad/s). */
     final case class Walk(vx: Double, vy: Double, omega: Double) extends Action
+
     /** Stop walking. */
     case object Stop extends Action
+
     /** Turn the head by these angles (rad). */
     final case class HeadBy(dPan: Double, dTilt: Double) extends Action
+
     /** Go to this posture. */
     final case class Posture(target: naogateway.wire.Posture.Target) extends Action
+
     /** Stop the robot and leave. */
     case object Quit extends Action
   }
@@ -59,13 +64,14 @@ object Teleop {
   def action(key: Char): Option[Action] = byKey.get(key.toLower)
 
   /** The key map as text. */
-  def help: String = keys.map { case (k, text, _) => s"  ${if (k == ' ') "space" else k.toString}  $text" }.mkString("\n")
+  def help: String =
+    keys.map { case (k, text, _) => s"  ${if (k == ' ') "space" else k.toString}  $text" }.mkString("\n")
 
-  /**
-   * Reads keys from `in` until `x` or the end of input, steering `robotId`; every outcome is printed, no failure ends
-   * the session. Reads block: run it on a thread of its own, never inside an actor.
-   */
-  def run(robot: RobotInterface, robotId: Int, in: InputStream, out: PrintStream)(implicit ec: ExecutionContext): Unit = {
+  /** Reads keys from `in` until `x` or the end of input, steering `robotId`; every outcome is printed, no failure ends
+    * the session. Reads block: run it on a thread of its own, never inside an actor.
+    */
+  def run(robot: RobotInterface, robotId: Int, in: InputStream, out: PrintStream)(
+      implicit ec: ExecutionContext): Unit = {
     // Outcomes are printed when they arrive; the key loop never waits for the robot.
     def report(what: String, f: Future[_]): Unit =
       f.onComplete {
@@ -84,8 +90,9 @@ object Teleop {
       else
         action(c.toChar).foreach {
           case Action.Quit => running = false
-          case Action.Walk(vx, vy, omega) => report(f"walk $vx%.1f $vy%.1f $omega%.1f", robot.walk(robotId, vx, vy, omega))
-          case Action.Stop                => report("stop", robot.stop(robotId))
+          case Action.Walk(vx, vy, omega) =>
+            report(f"walk $vx%.1f $vy%.1f $omega%.1f", robot.walk(robotId, vx, vy, omega))
+          case Action.Stop => report("stop", robot.stop(robotId))
           case Action.HeadBy(dp, dt) =>
             pan = math.max(-2.0, math.min(2.0, pan + dp))
             tilt = math.max(-0.6, math.min(0.5, tilt + dt))
@@ -97,10 +104,10 @@ object Teleop {
     robot.release(robotId, ActuatorGroup.Walk, ActuatorGroup.Head)
   }
 
-  /**
-   * `./sbt "apps/runMain apps.Teleop <robotId>"`: joins a running gateway as an app with priority 5 and steers the
-   * robot from the keyboard until `x`. On a terminal the keys act at once (raw mode); through sbt, end keys with Enter.
-   */
+  /** `./sbt "apps/runMain apps.Teleop <robotId>"`: joins a running gateway as an app with priority 5 and steers the
+    * robot from the keyboard until `x`. On a terminal the keys act at once (raw mode); through sbt, end keys with
+    * Enter.
+    */
   def main(args: Array[String]): Unit = {
     val robotId = args.headOption.flatMap(_.toIntOption).getOrElse {
       System.err.println("usage: teleop <robotId>")
@@ -116,13 +123,13 @@ object Teleop {
       case Success(robot) =>
         // The key loop blocks on stdin: it gets a thread of its own, never an actor's.
         val loop = new Thread(() => {
-          try run(robot, robotId, System.in, System.out)
-          finally {
-            if (raw) Try(stty("sane"))
-            robot.close()
-            node.terminate()
-          }
-        }, "teleop-keys")
+            try run(robot, robotId, System.in, System.out)
+            finally {
+              if (raw) Try(stty("sane"))
+              robot.close()
+              node.terminate()
+            }
+          }, "teleop-keys")
         loop.start()
       case Failure(e) =>
         System.err.println(s"teleop: ${e.getMessage}")

@@ -12,11 +12,11 @@ import org.jline.terminal.impl.DumbTerminal
 import org.jline.terminal.{Size, Terminal, TerminalBuilder}
 import org.jline.utils.{AttributedString, Display, InfoCmp}
 
-/**
- * The status screen on a terminal, redrawn with JLine's `Display`, which rewrites only what changed (no flicker).
- * Lines are fitted to the terminal's size, which is followed when the terminal is resized.
- */
-final class TerminalScreen private (terminal: Terminal, size: () => Size, stop: () => Unit) extends StatusPrinter.ScreenOutput {
+/** The status screen on a terminal, redrawn with JLine's `Display`, which rewrites only what changed (no flicker).
+  * Lines are fitted to the terminal's size, which is followed when the terminal is resized.
+  */
+final class TerminalScreen private (
+    terminal: Terminal, size: () => Size, stop: () => Unit) extends StatusPrinter.ScreenOutput {
   private val display = new Display(terminal, true)
   private var drawn: Option[Size] = None
 
@@ -48,11 +48,10 @@ object TerminalScreen {
   /** The size assumed when a terminal does not tell its own. */
   val DefaultSize: Size = new Size(120, 40)
 
-  /**
-   * A screen on the launcher's terminal. Started on a terminal, JLine's system terminal, whose size follows
-   * resizes (WINCH). Forked by sbt, stdout is a pipe that sbt copies to its terminal: a terminal of type `TERM`
-   * over stdout, whose size is read from the controlling terminal every two seconds.
-   */
+  /** A screen on the launcher's terminal. Started on a terminal, JLine's system terminal, whose size follows resizes
+    * (WINCH). Forked by sbt, stdout is a pipe that sbt copies to its terminal: a terminal of type `TERM` over stdout,
+    * whose size is read from the controlling terminal every two seconds.
+    */
   def open(): TerminalScreen =
     if (System.console() != null) {
       val terminal = TerminalBuilder.builder().system(true).build()
@@ -62,23 +61,24 @@ object TerminalScreen {
       // JLine's system terminal sets Ctrl-C (INT) to the operating system's default, which ends the JVM at once: no
       // shutdown hooks, so the robots are not stopped through the middleware, the cluster node does not leave and the
       // recording's file is left without its summary. Ended this way, the JVM runs its hooks (CoordinatedShutdown).
-      terminal.handle(Terminal.Signal.INT, _ => {
-        val exit = new Thread(() => sys.exit(130), "ctrl-c")
-        exit.start()
-      })
+      terminal.handle(Terminal.Signal.INT,
+        _ => {
+          val exit = new Thread(() => sys.exit(130), "ctrl-c")
+          exit.start()
+        })
       new TerminalScreen(terminal, () => size, () => ())
     } else over(System.out, sys.env.get("TERM"), fixedSize = None)
 
-  /**
-   * A screen over `out` for a terminal of type `term` (xterm-256color when unknown), of `fixedSize`, or else of the
-   * controlling terminal's size, read again every two seconds (one `stty` process each time).
-   */
+  /** A screen over `out` for a terminal of type `term` (xterm-256color when unknown), of `fixedSize`, or else of the
+    * controlling terminal's size, read again every two seconds (one `stty` process each time).
+    */
   def over(out: OutputStream, term: Option[String], fixedSize: Option[Size]): TerminalScreen = {
     val terminalType = term.map(_.trim).filter(t => t.nonEmpty && t != "dumb").getOrElse("xterm-256color")
     // A terminal of that type writing straight to `out`: no pty of its own, no threads, nothing read from stdin.
     def build(tpe: String): Terminal =
       new DumbTerminal("naogateway", tpe, new ByteArrayInputStream(Array.emptyByteArray), out, StandardCharsets.UTF_8)
-    // A TERM neither JLine nor infocmp describes falls back to xterm's, which every terminal emulator in use understands.
+    /* A TERM neither JLine nor infocmp describes falls back to xterm's, which every terminal emulator in use
+     * understands. */
     val known = Try(InfoCmp.getInfoCmp(terminalType)).toOption.exists(_.nonEmpty)
     val terminal = build(if (known) terminalType else "xterm-256color")
     val controlling = if (fixedSize.isEmpty) controllingTerminalSize() else None

@@ -14,11 +14,10 @@ import scala.util.Using
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/**
- * The modules the build separates stay separate in what it produces: the gateway ships no simulator class, the data
- * apps see is a module of its own (api), the gateway's integration specs are not the simulator's tests, and every
- * app compiles without the gateway's and the simulator's classes (the build compiles apps so; scalac shows it here).
- */
+/** The modules the build separates stay separate in what it produces: the gateway ships no simulator class, the data
+  * apps see is a module of its own (api), the gateway's integration specs are not the simulator's tests, and every app
+  * compiles without the gateway's and the simulator's classes (the build compiles apps so; scalac shows it here).
+  */
 class ModuleLayersSpec extends AnyWordSpec with Matchers {
 
   /** Where a class was loaded from: a classes directory or a jar. */
@@ -30,7 +29,8 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
   /** The class-file paths ('/'-separated) of a classes directory or a jar. */
   private def classEntries(at: Path): Seq[String] =
     if (Files.isDirectory(at))
-      Using.resource(Files.walk(at))(_.iterator.asScala.filter(p => Files.isRegularFile(p)).map(p => at.relativize(p).toString.replace(File.separatorChar, '/')).toVector)
+      Using.resource(Files.walk(at))(_.iterator.asScala.filter(p => Files.isRegularFile(p)).map(p =>
+          at.relativize(p).toString.replace(File.separatorChar, '/')).toVector)
     else
       Using.resource(new ZipFile(at.toFile))(_.entries.asScala.map(_.getName).toVector)
 
@@ -62,7 +62,8 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
     "keep the test-only experiments out of the simulator's main classes" in {
       val sim = origin(classOf[naogateway.sim.FleetSettings])
       origin(objectClass("naogateway.sim.StreamPairSimulation")) should not be sim
-      classEntries(sim).filter(e => e.contains("StreamPairSimulation") || e.contains("OverflowExperiment")) shouldBe empty
+      classEntries(sim).filter(e =>
+        e.contains("StreamPairSimulation") || e.contains("OverflowExperiment")) shouldBe empty
     }
   }
 
@@ -71,14 +72,17 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
       val api = origin(classOf[naogateway.RobotSnapshot])
       api should not be gateway
       val entries = classEntries(api)
-      entries should contain allOf ("naogateway/RobotSnapshot.class", "naogateway/TrafficStats.class", "naogateway/GatewayStats.class",
+      entries should contain allOf ("naogateway/RobotSnapshot.class",
+        "naogateway/TrafficStats.class", "naogateway/GatewayStats.class",
         "naogateway/VisionFrame.class", "naogateway/RobotFailure.class")
-      entries.filter(e => Seq("Gateway$", "RobotActor", "Outbox", "ResponseActor", "NoResponseActor", "VisionActor", "KeepAliveStep")
-        .exists(n => e.startsWith(s"naogateway/$n"))) shouldBe empty
+      entries.filter(e =>
+        Seq("Gateway$", "RobotActor", "Outbox", "ResponseActor", "NoResponseActor", "VisionActor", "KeepAliveStep")
+          .exists(n => e.startsWith(s"naogateway/$n"))) shouldBe empty
     }
 
     "not be in the gateway's classes a second time" in {
-      classEntries(gateway).filter(e => e == "naogateway/RobotSnapshot.class" || e == "naogateway/TrafficStats.class") shouldBe empty
+      classEntries(gateway).filter(e =>
+        e == "naogateway/RobotSnapshot.class" || e == "naogateway/TrafficStats.class") shouldBe empty
     }
 
     "be what the gateway's old nested names mean (aliases, so no import changes)" in {
@@ -96,15 +100,18 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
       val simTests = origin(classOf[naogateway.sim.TestGateway])
       integration should not be simTests
       classEntries(integration) should contain("naogateway/integration/GatewayIntegrationSpec.class")
-      classEntries(simTests).filter(e => e.startsWith("naogateway/integration/") || e.startsWith("naogateway/link/") ||
-        e.startsWith("naogateway/recording/") || e.startsWith("naogateway/MessageBudgetSpec")) shouldBe empty
+      classEntries(simTests).filter(e =>
+        e.startsWith("naogateway/integration/") || e.startsWith("naogateway/link/") ||
+          e.startsWith("naogateway/recording/") || e.startsWith("naogateway/MessageBudgetSpec")) shouldBe empty
     }
   }
 
   /** The class path of this JVM without the gateway's, the simulator's and the apps' own classes. */
   private def withoutGateway: Seq[String] = {
-    val dropped = Set(gateway, origin(classOf[naogateway.sim.FleetSettings]), origin(classOf[apps.StatusModel])).map(_.toAbsolutePath)
-    System.getProperty("java.class.path").split(File.pathSeparator).toSeq.filterNot(e => dropped(Paths.get(e).toAbsolutePath))
+    val dropped = Set(gateway, origin(classOf[naogateway.sim.FleetSettings]), origin(classOf[apps.StatusModel])).map(
+      _.toAbsolutePath)
+    System.getProperty("java.class.path").split(File.pathSeparator).toSeq.filterNot(e =>
+      dropped(Paths.get(e).toAbsolutePath))
   }
 
   /** The errors scalac reports (typer only, nothing written) for `sources` against `classpath`. */
@@ -115,7 +122,8 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
     val reporter = new StoreReporter(settings)
     val global = new Global(settings, reporter)
     new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
-    reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i => s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
+    reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i =>
+      s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
   }
 
   /** Every apps main source file's text, found from the module's or the repository's directory. */
@@ -141,7 +149,8 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
         "naogateway.Gateway" -> "object Probe { val g = naogateway.Gateway }",
         "GatewaySettings" ->
           "object Probe { def s(system: akka.actor.typed.ActorSystem[_]) = naogateway.GatewaySettings(system) }",
-        "Fleet" -> "import naogateway.sim.Fleet\nobject Probe { val f = Fleet }")
+        "Fleet" -> "import naogateway.sim.Fleet\nobject Probe { val f = Fleet }"
+      )
       probes.foreach { case (name, text) =>
         val errors = compileErrors(withoutGateway, Seq("Probe.scala" -> s"package probe\n$text\n"))
         withClue(text)(errors should not be empty)
@@ -150,9 +159,12 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
     }
 
     "still compile a probe that reads the gateway through the api's view" in {
-      compileErrors(withoutGateway, Seq("Probe.scala" -> ("package probe\nobject Probe {\n" +
-        "  def robots(view: naogateway.GatewayView) = view.robots()\n" +
-        "  def line(s: naogateway.GatewayStats) = s.toString\n}\n"))) shouldBe empty
+      compileErrors(
+        withoutGateway,
+        Seq("Probe.scala" -> ("package probe\nobject Probe {\n" +
+          "  def robots(view: naogateway.GatewayView) = view.robots()\n" +
+          "  def line(s: naogateway.GatewayStats) = s.toString\n}\n"))
+      ) shouldBe empty
     }
   }
 }

@@ -12,16 +12,27 @@ class RobotRowSpec extends AnyWordSpec with Matchers {
 
   private val address = new InetSocketAddress("127.0.0.1", 40000)
   private val clock = ClockEstimate(1000L, 5000000L, 1.00002, 0.7, 0.0, 12)
-  private val robot = RobotSnapshot(3, address, teamId = Some(1), role = Some("keeper"), posture = Some(Posture.Sit),
-    batteryVoltage = Some(12.4), uptimeMillis = Some(9000L), online = true, quality = LinkQuality.Degraded)
+  private val robot = RobotSnapshot(
+    3,
+    address,
+    teamId = Some(1),
+    role = Some("keeper"),
+    posture = Some(Posture.Sit),
+    batteryVoltage = Some(12.4),
+    uptimeMillis = Some(9000L),
+    online = true,
+    quality = LinkQuality.Degraded
+  )
   private val link = LinkStats(3, 10, 10, 300, 300, Some(0.4), 0.25, 0, Map("bad gzip" -> 2L), Some(clock))
 
   "A robot's row" should {
     "take the robot's report from its snapshot and the link figures, with the link's clock estimate" in {
       val row = RobotRow.of(robot, Some(link))
-      (row.robotId, row.address, row.online, row.quality) shouldBe ((3, Some("127.0.0.1:40000"), true, Some(LinkQuality.Degraded)))
+      (row.robotId, row.address, row.online, row.quality) shouldBe ((3, Some("127.0.0.1:40000"), true,
+        Some(LinkQuality.Degraded)))
       row.report shouldBe robot.report
-      (row.battery, row.posture, row.rttMillis, row.loss, row.clock) shouldBe ((Some(12.4), Some(Posture.Sit), Some(0.4), Some(0.25), Some(clock)))
+      (row.battery, row.posture, row.rttMillis, row.loss, row.clock) shouldBe ((Some(12.4), Some(Posture.Sit),
+        Some(0.4), Some(0.25), Some(clock)))
       row.refused shouldBe Map("bad gzip" -> 2L)
       RobotRow.of(robot.copy(clock = Some(clock)), None).clock shouldBe Some(clock)
     }

@@ -50,7 +50,8 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
 
   "The status printer" should {
     "print one line per change when piped: the robot, each game state of the real packets, and the competition gate" in {
-      val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
+      val fixture =
+        new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val lines = new ConcurrentLinkedQueue[String]()
         val view = naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system)
@@ -61,10 +62,12 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
         sendUntil(gc, "v8-initial.bin")(printed.exists(_.startsWith("game: INITIAL")))
         awaitTrue("gate open")(printed.contains("competition gate: open"))
-        sendUntil(gc, "v8-ready.bin")(printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
+        sendUntil(gc, "v8-ready.bin")(
+          printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
         awaitTrue("gate closed")(printed.exists(_.startsWith("competition gate: CLOSED")))
         sendUntil(gc, "v8-set.bin")(printed.exists(_.startsWith("game: SET")))
-        sendUntil(gc, "v8-playing.bin")(printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
+        sendUntil(gc, "v8-playing.bin")(
+          printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
         sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 5)
         sendUntil(gc, "v8-finished.bin")(printed.exists(_.startsWith("game: FINISHED, second half")))
         awaitTrue("gate open again")(printed.count(_ == "competition gate: open") == 2)
@@ -75,21 +78,27 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     }
 
     "redraw a screen showing the robot with its link figures, the game of the real packets, the gate and the traffic" in {
-      val fixture = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
+      val fixture =
+        new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
       try {
         val screen = new RecordingScreen
         spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
         fixture.robot(1)
         def frame = screen.frame.get
-        // "loss" shows a figure only once the gateway's read-only view answered GetLinkStats with the robot's link figures.
-        awaitTrue("robot 1 with link figures")(frame.exists(l => l.startsWith("robot 1") && l.contains("online") &&
-          l.matches(".*loss \\d+ %.*")))
+        /* "loss" shows a figure only once the gateway's read-only view answered GetLinkStats with the robot's link
+         * figures. */
+        awaitTrue("robot 1 with link figures")(frame.exists(l =>
+            l.startsWith("robot 1") && l.contains("online") &&
+              l.matches(".*loss \\d+ %.*")))
         val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
-        sendUntil(gc, "v8-playing.bin")(frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
+        sendUntil(gc, "v8-playing.bin")(
+          frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
         awaitTrue("gate closed")(frame.exists(_.startsWith("competition gate: CLOSED")))
-        awaitTrue("where game state comes from")(frame.exists(l => l.startsWith("game state from 127.0.0.1:") &&
-          l.contains("(trusted: 127.0.0.0/8)")))
-        frame.exists(_.matches("team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
+        awaitTrue("where game state comes from")(frame.exists(l =>
+            l.startsWith("game state from 127.0.0.1:") &&
+              l.contains("(trusted: 127.0.0.0/8)")))
+        frame.exists(
+          _.matches("team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
         sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 2)
         sendUntil(gc, "v8-finished.bin")(frame.exists(_.startsWith("game: FINISHED")))
         awaitTrue("gate open")(frame.contains("competition gate: open"))
@@ -129,7 +138,8 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     "draw the lines with JLine, rewrite only what changed, and nothing when nothing changed" in {
       val out = new ByteArrayOutputStream()
       val screen = TerminalScreen.over(out, Some("xterm-256color"), Some(new Size(100, 20)))
-      val frame = Vector("naogateway - 1 robot(s), 1 online", "game: PLAYING, first half, 587 s left, score 2 : 1", "robot 1 online")
+      val frame = Vector("naogateway - 1 robot(s), 1 online", "game: PLAYING, first half, 587 s left, score 2 : 1",
+        "robot 1 online")
       screen.draw(frame)
       val first = out.toString(StandardCharsets.UTF_8)
       frame.foreach(first should include(_))

@@ -7,8 +7,14 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway.wire.gamecontroller.{ControlData2014, GameControlData, GameControllerCodec, GameControllerGenerators, GameState,
-  SecondaryGameState}
+import naogateway.wire.gamecontroller.{
+  ControlData2014,
+  GameControlData,
+  GameControllerCodec,
+  GameControllerGenerators,
+  GameState,
+  SecondaryGameState
+}
 import naogateway.wire.Posture
 import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot}
 
@@ -16,10 +22,12 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
   import StatusViewSpec._
 
   private val address = new InetSocketAddress("127.0.0.1", 40000)
-  private val sitting = RobotSnapshot(1, address, role = Some("keeper"), posture = Some(Posture.Sit), batteryVoltage = Some(12.4),
-    online = true, quality = LinkQuality.Good)
+  private val sitting =
+    RobotSnapshot(1, address, role = Some("keeper"), posture = Some(Posture.Sit), batteryVoltage = Some(12.4),
+      online = true, quality = LinkQuality.Good)
   private val link = LinkStats(1, 10, 10, 300, 300, Some(0.4), 0.0, 0, Map.empty)
-  private val traffic = Outbox.TrafficStats(1500, 500, 125000, Map.empty, 10, 10, 0, 0, gameRunning = false, competition = false)
+  private val traffic =
+    Outbox.TrafficStats(1500, 500, 125000, Map.empty, 10, 10, 0, 0, gameRunning = false, competition = false)
 
   private def game(file: String): GameControlData =
     GameControllerCodec.decodeControl(vector(file)).fold(e => fail(s"$file does not decode: ${e.describe}"), identity)
@@ -27,7 +35,8 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
   "The status view" should {
     "show each robot's id, online state, link quality, battery, posture, role, round-trip time, loss and address" in {
       val line = StatusView.robotLine(sitting, Some(link.copy(lossEstimate = 0.25)))
-      Seq("robot 1", "online", "good", "12.40 V", "sit", "keeper", "0.4 ms", "25 %", "127.0.0.1:40000").foreach(line should include(_))
+      Seq("robot 1", "online", "good", "12.40 V", "sit", "keeper", "0.4 ms", "25 %", "127.0.0.1:40000").foreach(
+        line should include(_))
     }
     "print one plain line per robot and change of online state or posture, and nothing when nothing changed" in {
       val first = StatusModel(Vector(sitting), Map(1 -> link), None, None)
@@ -52,9 +61,11 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
         "recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
     }
     "show what the recording directory keeps and what retention deleted" in {
-      val kept = naogateway.recording.RetentionStatus(12, 96L * 1024 * 1024, 3, 30L * 1024 * 1024, "20.0 GiB, 14 days", None)
+      val kept =
+        naogateway.recording.RetentionStatus(12, 96L * 1024 * 1024, 3, 30L * 1024 * 1024, "20.0 GiB, 14 days", None)
       val stats = naogateway.Gateway.GatewayStats(10, 0, 0, Map.empty, 1).copy(recording =
-        naogateway.recording.RecordingStats(enabled = true, 2, 1234, 0, 0, Some("recordings/naogateway-20260101-120000-2.mcap"), Some(kept)))
+        naogateway.recording.RecordingStats(enabled = true, 2, 1234, 0, 0,
+          Some("recordings/naogateway-20260101-120000-2.mcap"), Some(kept)))
       StatusView.recordingLine(Some(stats)) shouldBe Some("recording: 1234 messages in 2 file(s), 0 dropped, now " +
         "naogateway-20260101-120000-2.mcap; kept 12 file(s), 96.0 MiB (limits 20.0 GiB, 14 days); 3 deleted so far")
     }
@@ -69,64 +80,93 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
     }
     "render each real GameController packet on the screen: state, half, seconds left, secondary clock, score" in {
       def gameLine(file: String) = StatusView.render(StatusModel(Vector.empty, Map.empty, None, Some(game(file))))(1)
-      gameLine("v8-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"
-      gameLine("v7-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 7"
-      gameLine("v8-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 30 s, score 0 : 0 (team 12 : team 7), version 8"
+      gameLine(
+        "v8-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"
+      gameLine(
+        "v7-playing.bin") shouldBe "game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 7"
+      gameLine(
+        "v8-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 30 s, score 0 : 0 (team 12 : team 7), version 8"
       gameLine("v8-set.bin") should startWith("game: SET, first half, 600 s left, score")
       gameLine("v8-initial.bin") should startWith("game: INITIAL, first half, 600 s left")
       gameLine("v7-initial.bin") should startWith("game: INITIAL, first half, 600 s left")
-      gameLine("v8-finished.bin") shouldBe "game: FINISHED, second half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"
-      gameLine("v19-playing.bin") shouldBe "game: PLAYING (goal kick, stopped), first half, 587 s left, secondary 30 s, score 2 : 1 " +
+      gameLine(
+        "v8-finished.bin") shouldBe "game: FINISHED, second half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"
+      gameLine(
+        "v19-playing.bin") shouldBe "game: PLAYING (goal kick, stopped), first half, 587 s left, secondary 30 s, score 2 : 1 " +
         "(team 12 : team 7), version 19"
-      gameLine("v19-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 45 s, score 0 : 0 (team 12 : team 7), version 19"
-      gameLine("v12-playing.bin") shouldBe "game: PLAYING (direct free kick), first half, 587 s left, score 2 : 1 (team 12 : team 7), version 12"
-      gameLine("v12-finished.bin") shouldBe "game: FINISHED, second half, 0 s left, score 2 : 1 (team 12 : team 7), version 12"
+      gameLine(
+        "v19-ready.bin") shouldBe "game: READY, first half, 600 s left, secondary 45 s, score 0 : 0 (team 12 : team 7), version 19"
+      gameLine(
+        "v12-playing.bin") shouldBe "game: PLAYING (direct free kick), first half, 587 s left, score 2 : 1 (team 12 : team 7), version 12"
+      gameLine(
+        "v12-finished.bin") shouldBe "game: FINISHED, second half, 0 s left, score 2 : 1 (team 12 : team 7), version 12"
     }
     "print a line for each change of game state from the real packets, and none for a repeated state" in {
-      val files = Seq("v8-initial.bin", "v7-initial.bin", "v8-ready.bin", "v8-set.bin", "v8-playing.bin", "v7-playing.bin",
-        "v8-finished.bin")
+      val files =
+        Seq("v8-initial.bin", "v7-initial.bin", "v8-ready.bin", "v8-set.bin", "v8-playing.bin", "v7-playing.bin",
+          "v8-finished.bin")
       val models = StatusModel.empty +: files.map(f => StatusModel.empty.copy(game = Some(game(f))))
       val lines = models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) }
-      lines.map(_.takeWhile(_ != ',')) shouldBe Vector("game: INITIAL", "game: READY", "game: SET", "game: PLAYING", "game: FINISHED")
+      lines.map(_.takeWhile(_ != ',')) shouldBe Vector("game: INITIAL", "game: READY", "game: SET", "game: PLAYING",
+        "game: FINISHED")
       lines(3) should include("587 s left, score 2 : 1")
     }
     "show the competition gate closing while the game runs, and print a line when it closes and opens" in {
       val open = traffic.copy(competition = true)
       val closed = open.copy(gameRunning = true)
-      StatusView.gateLine(Some(closed)) shouldBe "competition gate: CLOSED: the game is running: nothing is sent to the robots"
-      val unreadable = closed.copy(gateReason = Some("the trusted GameController's packet cannot be read: RGme packet of unknown version"))
-      StatusView.gateLine(Some(unreadable)) shouldBe "competition gate: CLOSED: the trusted GameController's packet cannot be " +
+      StatusView.gateLine(
+        Some(closed)) shouldBe "competition gate: CLOSED: the game is running: nothing is sent to the robots"
+      val unreadable = closed.copy(
+        gateReason = Some("the trusted GameController's packet cannot be read: RGme packet of unknown version"))
+      StatusView.gateLine(
+        Some(unreadable)) shouldBe "competition gate: CLOSED: the trusted GameController's packet cannot be " +
         "read: RGme packet of unknown version: nothing is sent to the robots"
-      StatusView.changes(StatusModel.empty.copy(traffic = Some(closed)), StatusModel.empty.copy(traffic = Some(unreadable))) shouldBe
+      StatusView.changes(StatusModel.empty.copy(traffic = Some(closed)),
+        StatusModel.empty.copy(traffic = Some(unreadable))) shouldBe
         Vector(StatusView.gateLine(Some(unreadable)))
       StatusView.gateLine(Some(open)) shouldBe "competition gate: open"
-      val models = Seq(None, Some(open), Some(open), Some(closed), Some(closed), Some(open)).map(t => StatusModel.empty.copy(traffic = t))
+      val models = Seq(None, Some(open), Some(open), Some(closed), Some(closed), Some(open)).map(t =>
+        StatusModel.empty.copy(traffic = t))
       models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe
         Vector(StatusView.gateLine(Some(open)), StatusView.gateLine(Some(closed)), StatusView.gateLine(Some(open)))
       // Without the rule the gate never closes, and the piped view says nothing about it.
-      val off = Seq(None, Some(traffic), Some(traffic.copy(gameRunning = true, gateReason = Some("the game is running (Ready)"))))
+      val off = Seq(None, Some(traffic),
+        Some(traffic.copy(gameRunning = true, gateReason = Some("the game is running (Ready)"))))
         .map(t => StatusModel.empty.copy(traffic = t))
       off.zip(off.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe empty
     }
     "show the message budget and the warnings on the screen, and print a warning line when one first appears" in {
-      val quiet = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0, Some("team messages (team 12, UDP 10012): 12000 of 12000 left"))
-      val twoGcs = quiet.copy(warnings = Vector("2 GameControllers on this field: game state from 127.0.0.1:3838 only; 127.0.0.2:3838 (untrusted, ignored)"))
+      val quiet = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0,
+        Some("team messages (team 12, UDP 10012): 12000 of 12000 left"))
+      val twoGcs = quiet.copy(warnings = Vector(
+        "2 GameControllers on this field: game state from 127.0.0.1:3838 only; 127.0.0.2:3838 (untrusted, ignored)"))
       val screen = StatusView.render(StatusModel.empty.copy(gameSource = Some(twoGcs)))
       screen should contain("team messages (team 12, UDP 10012): 12000 of 12000 left")
       screen should contain("WARNING: " + twoGcs.warnings.head)
       val models = Seq(quiet, twoGcs, twoGcs.copy(warnings = Vector(twoGcs.warnings.head + " ")), quiet)
         .map(g => StatusModel.empty.copy(gameSource = Some(g)))
-      models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe Vector("WARNING: " + twoGcs.warnings.head)
+      models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe Vector(
+        "WARNING: " + twoGcs.warnings.head)
     }
     "show, in the monitor role, the true state's age and each forwarded robot status beside the robot lines" in {
-      val status = naogateway.wire.gamecontroller.ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), 2f, (250f, -100f))
-      val source = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0, trueStateAgeMillis = Some(400),
-        forwarded = Vector(naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.23"), status, 0L),
-          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.24"), status.copy(player = 4, fallen = false, ballAge = -1f), 0L)))
+      val status =
+        naogateway.wire.gamecontroller.ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), 2f, (250f, -100f))
+      val source = naogateway.Gateway.GameSource(
+        "127.0.0.1/32",
+        None,
+        0,
+        trueStateAgeMillis = Some(400),
+        forwarded = Vector(
+          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.23"), status, 0L),
+          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.24"),
+            status.copy(player = 4, fallen = false, ballAge = -1f), 0L)
+        )
+      )
       StatusView.monitorLines(source) shouldBe Vector(
         "true game state from the GameController (monitor), 0.4 s old",
         "GameController hears team 12 player 3 (10.0.0.23): fallen, pose 1000 -500 mm 1.50 rad, ball seen 2.0 s ago",
-        "GameController hears team 12 player 4 (10.0.0.24): up, pose 1000 -500 mm 1.50 rad, ball never seen")
+        "GameController hears team 12 player 4 (10.0.0.24): up, pose 1000 -500 mm 1.50 rad, ball never seen"
+      )
       val screen = StatusView.render(StatusModel(Vector(sitting), Map.empty, None, None, Some(source)))
       val robot = screen.indexWhere(_.startsWith("robot 1"))
       screen.slice(robot + 1, robot + 4) shouldBe StatusView.monitorLines(source)
@@ -206,9 +246,15 @@ object StatusViewSpec {
       case Right(d: ControlData2014) => d
       case other                     => throw new IllegalStateException(s"$file: $other")
     }
-    g.copy(gameState = GameState.fromCode(state), secondaryGameState = SecondaryGameState.fromCode(secondaryState),
-      secsRemaining = secs, secondaryTime = secondary, firstHalf = firstHalf, team0 = g.team0.copy(score = score0),
-      team1 = g.team1.copy(score = score1))
+    g.copy(
+      gameState = GameState.fromCode(state),
+      secondaryGameState = SecondaryGameState.fromCode(secondaryState),
+      secsRemaining = secs,
+      secondaryTime = secondary,
+      firstHalf = firstHalf,
+      team0 = g.team0.copy(score = score0),
+      team1 = g.team1.copy(score = score1)
+    )
   }
 
   /** The 2014 vectors with arbitrary values where the view reads them, or any value of versions 19 and 12. */

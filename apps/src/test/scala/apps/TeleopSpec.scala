@@ -36,9 +36,12 @@ class TeleopSpec extends AnyWordSpec with Matchers {
       Future.failed(RobotFailure.RobotError(robotId, "out of range"))
     }
     def arms(robotId: Int, a: Double, b: Double, c: Double, d: Double): Future[Done] = ok("arms")
-    def posture(robotId: Int, target: Posture.Target): Future[Posture] = { log :+= s"posture ${target.name}"; Future.successful(target) }
+    def posture(robotId: Int, target: Posture.Target): Future[Posture] = {
+      log :+= s"posture ${target.name}"; Future.successful(target)
+    }
     def say(robotId: Int, text: String): Future[Done] = ok(s"say $text")
-    def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] = Future.successful(None)
+    def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
+      Future.successful(None)
     def send(robotId: Int, operation: robotmiddleware.Operation): Future[Done] = ok(s"send ${operation.name}")
     def status(robotId: Int): Source[RobotSnapshot, NotUsed] = Source.empty
     def allStatus: Source[RobotSnapshot, NotUsed] = Source.empty
@@ -54,8 +57,10 @@ class TeleopSpec extends AnyWordSpec with Matchers {
     "turn keys into commands, survive a failing command, and stop and release on quit" in {
       val robot = new Recorder
       val out = new ByteArrayOutputStream()
-      Teleop.run(robot, 2, new ByteArrayInputStream("2wa h? x w".getBytes), new PrintStream(out))(ExecutionContext.global)
-      robot.log shouldBe Vector("acquire walk,head", "posture stand", "walk 0.2 0.0 0.0", "walk 0.0 0.0 0.6", "stop", "head 0.2 0.0",
+      Teleop.run(robot, 2, new ByteArrayInputStream("2wa h? x w".getBytes), new PrintStream(out))(
+        ExecutionContext.global)
+      robot.log shouldBe Vector("acquire walk,head", "posture stand", "walk 0.2 0.0 0.0", "walk 0.0 0.0 0.6", "stop",
+        "head 0.2 0.0",
         "stop", "stop", "release walk,head") // the space before x stops, and quitting stops once more
       org.scalatest.concurrent.Eventually.eventually {
         out.toString should include("robot 2: head 0.2 0.0 failed: robot 2: out of range")
@@ -63,7 +68,8 @@ class TeleopSpec extends AnyWordSpec with Matchers {
     }
     "stop the robot when the input ends" in {
       val robot = new Recorder
-      Teleop.run(robot, 1, new ByteArrayInputStream("w".getBytes), new PrintStream(new ByteArrayOutputStream()))(ExecutionContext.global)
+      Teleop.run(robot, 1, new ByteArrayInputStream("w".getBytes), new PrintStream(new ByteArrayOutputStream()))(
+        ExecutionContext.global)
       robot.log.takeRight(2) shouldBe Vector("stop", "release walk,head")
     }
   }

@@ -13,9 +13,11 @@ class WritingAppsDocSpec extends AnyWordSpec with Matchers {
   "docs/writing-apps.md" should {
     "show the first app exactly as it is compiled, in under 30 lines of code" in {
       val doc = new String(Files.readAllBytes(find("docs/writing-apps.md")), StandardCharsets.UTF_8)
-      val source = new String(Files.readAllBytes(find("apps/src/main/scala/apps/examples/HelloRobot.scala")), StandardCharsets.UTF_8)
+      val source = new String(Files.readAllBytes(find("apps/src/main/scala/apps/examples/HelloRobot.scala")),
+        StandardCharsets.UTF_8)
       doc should include(source)
-      source.linesIterator.count(l => l.trim.nonEmpty && !l.trim.startsWith("import") && !l.trim.startsWith("/**")) should be < 30
+      source.linesIterator.count(l =>
+        l.trim.nonEmpty && !l.trim.startsWith("import") && !l.trim.startsWith("/**")) should be < 30
     }
   }
 }

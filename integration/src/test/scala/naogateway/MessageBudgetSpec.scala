@@ -7,20 +7,21 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.gamecontroller._
 
-/**
- * The team's message budget against sequences counted by hand with the GameController's rules (README "Message
- * Counting", its team_message and add_extra_time actions), and the check for a second GameController.
- */
+/** The team's message budget against sequences counted by hand with the GameController's rules (README "Message
+  * Counting", its team_message and add_extra_time actions), and the check for a second GameController.
+  */
 class MessageBudgetSpec extends AnyWordSpec with Matchers {
 
-  private def hsl: HslControlData = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v19-initial.bin")) match {
-    case Right(d: HslControlData) => d
-    case other                    => fail(s"$other")
-  }
-  private def hl: HlControlData = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v12-initial.bin")) match {
-    case Right(d: HlControlData) => d
-    case other                   => fail(s"$other")
-  }
+  private def hsl: HslControlData =
+    GameControllerCodec.decodeControl(GameControllerVectors.bytes("v19-initial.bin")) match {
+      case Right(d: HslControlData) => d
+      case other                    => fail(s"$other")
+    }
+  private def hl: HlControlData =
+    GameControllerCodec.decodeControl(GameControllerVectors.bytes("v12-initial.bin")) match {
+      case Right(d: HlControlData) => d
+      case other                   => fail(s"$other")
+    }
 
   private def v19(state: GameState, secs: Long, firstHalf: Boolean = true, phase: GamePhase = GamePhase.Normal,
       ours: Int = 12000): HslControlData =
@@ -37,26 +38,26 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
   "The message budget" should {
     "count in READY, SET and PLAYING only, and add a minute's messages when the GameController adds a minute" in {
       var b = MessageBudget(settings).game(v19(GameState.Initial, 600))
-      b = send(b, 2)                                              // INITIAL: not counted
+      b = send(b, 2) // INITIAL: not counted
       (b.remaining, b.counted, b.uncounted) shouldBe ((10, 0, 2))
-      b = send(b.game(v19(GameState.Ready, 600)), 3)              // 10 - 3
-      b = send(b.game(v19(GameState.Set, 600)), 1)                // 7 - 1
-      b = send(b.game(v19(GameState.Playing, 590)), 4)            // 6 - 4
+      b = send(b.game(v19(GameState.Ready, 600)), 3) // 10 - 3
+      b = send(b.game(v19(GameState.Set, 600)), 1) // 7 - 1
+      b = send(b.game(v19(GameState.Playing, 590)), 4) // 6 - 4
       (b.remaining, b.counted) shouldBe ((2, 8))
-      b = b.game(v19(GameState.Ready, 500))                       // a goal: READY again, clock stopped
-      b = b.game(v19(GameState.Ready, 560))                       // "+": a minute more, 3 messages more
+      b = b.game(v19(GameState.Ready, 500)) // a goal: READY again, clock stopped
+      b = b.game(v19(GameState.Ready, 560)) // "+": a minute more, 3 messages more
       (b.remaining, b.extraMinutes) shouldBe ((5, 1))
-      b = b.game(v19(GameState.Ready, 560))                       // the same clock again adds nothing
-      b = send(b, 5)                                              // 5 - 5 = 0
+      b = b.game(v19(GameState.Ready, 560)) // the same clock again adds nothing
+      b = send(b, 5) // 5 - 5 = 0
       (b.remaining, b.illegal) shouldBe ((0, false))
-      b = send(b.game(v19(GameState.Set, 560)), 1)                // over the budget: illegal
+      b = send(b.game(v19(GameState.Set, 560)), 1) // over the budget: illegal
       (b.remaining, b.overBudget, b.illegal, b.counted) shouldBe ((0, 1, true, 14))
       b = b.game(v19(GameState.Playing, 500)).game(v19(GameState.Set, 500)).game(v19(GameState.Set, 560))
-      (b.remaining, b.extraMinutes) shouldBe ((0, 2))             // a minute after illegal communication adds nothing
-      b = send(b.game(v19(GameState.Finished, 0)), 2)             // FINISHED: not counted
+      (b.remaining, b.extraMinutes) shouldBe ((0, 2)) // a minute after illegal communication adds nothing
+      b = send(b.game(v19(GameState.Finished, 0)), 2) // FINISHED: not counted
       b = b.game(v19(GameState.Initial, 600, firstHalf = false)).game(v19(GameState.Ready, 600, firstHalf = false))
       (b.remaining, b.uncounted, b.counted) shouldBe ((0, 4, 14)) // the second half keeps the game's budget
-      b = b.game(v19(GameState.Initial, 600))                     // the next game's first half: a fresh budget
+      b = b.game(v19(GameState.Initial, 600)) // the next game's first half: a fresh budget
       (b.remaining, b.counted, b.overBudget, b.extraMinutes) shouldBe ((10, 0, 0, 0))
     }
     "not count in a penalty shoot-out, of version 19 or 12" in {
@@ -84,8 +85,8 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
     }
     "warn when the budget would run out before the end of the half at the current rate, and show the GameController's own" in {
       var b = MessageBudget(settings.copy(perGame = 1000)).game(v19(GameState.Playing, 600, ours = 990))
-      b = (0 until 60).foldLeft(b)((acc, i) => acc.message(100, i * s / 2))    // 60 messages in 30 s
-      b.ratePerSecond(30 * s) shouldBe 1.0 +- 1e-9                           // over a 60 s window
+      b = (0 until 60).foldLeft(b)((acc, i) => acc.message(100, i * s / 2)) // 60 messages in 30 s
+      b.ratePerSecond(30 * s) shouldBe 1.0 +- 1e-9 // over a 60 s window
       // 940 left, 600 s of the half at 1/s: 600 needed, enough.
       b.warnings(30 * s) shouldBe empty
       b = (0 until 600).foldLeft(b)((acc, i) => acc.message(100, 30 * s + i * s / 20)) // 600 more in 30 s: 11/s
@@ -95,7 +96,8 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
       // The window at 60 s holds seconds 1 to 60: 658 messages (second 0 held 2), 10.97/s; 340 / 10.97 = 31 s.
       b.ratePerSecond(60 * s) shouldBe (658.0 / 60) +- 1e-9
       w.head shouldBe "at 11.0 messages/s the budget (340 left) runs out 31 s into the 600 s left of the half"
-      b.describe(60 * s) shouldBe "team messages (team 12, UDP 10012): 340 of 1000 left, 660 counted, 11.0/s, GameController says 990"
+      b.describe(
+        60 * s) shouldBe "team messages (team 12, UDP 10012): 340 of 1000 left, 660 counted, 11.0/s, GameController says 990"
       // The rate forgets what is older than the window.
       b.ratePerSecond(200 * s) shouldBe 0.0
     }
@@ -128,7 +130,8 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
       next.warnings(2 * s).head should include("10.0.0.6:3838 (untrusted, ignored)")
       next.warnings(7 * s) shouldBe empty
       // Bounded: however many senders, at most MaxSenders are remembered.
-      val many = (1 to 50).foldLeft(next)((acc, i) => acc.packet(new InetSocketAddress("10.0.1.1", i), Some(i), trusted = false, i * s)._1)
+      val many = (1 to 50).foldLeft(next)((acc, i) =>
+        acc.packet(new InetSocketAddress("10.0.1.1", i), Some(i), trusted = false, i * s)._1)
       many.heard.size shouldBe GameControllerSources.MaxSenders
     }
   }

@@ -16,11 +16,10 @@ import naogateway.recording.Retention
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion}
 import naogateway.{Gateway, GatewaySettings, LinkStats, Outbox, Rejection, RobotSnapshot}
 
-/**
- * `robotctl doctor`: what a team checks first when something does not work, each problem with its fix. The checks are
- * pure functions over facts gathered from the running gateway ([[gather]]) and the machine, so each can be provoked
- * in a test; the control port answers `doctor` with their lines (docs/architecture.md, "The control port").
- */
+/** `robotctl doctor`: what a team checks first when something does not work, each problem with its fix. The checks are
+  * pure functions over facts gathered from the running gateway ([[gather]]) and the machine, so each can be provoked in
+  * a test; the control port answers `doctor` with their lines (docs/architecture.md, "The control port").
+  */
 object Doctor {
 
   /** One check's result ([[apps.control.Finding]], which the control port sends). */
@@ -29,12 +28,12 @@ object Doctor {
   private def ok(check: String, text: String) = Finding(check, text, problem = false)
   private def fail(check: String, text: String, fix: String) = Finding(check, text, problem = true, fix)
 
-  /**
-   * What the gateway knows of the GameController: the latest packet, where game state comes from, the packets it
-   * refused by kind, and whether the competition gate applies. Read through [[gameSnapshot]], the one place that asks
-   * the gateway, so more GameController facts (versions, the fail-safe gate, the team message budget) join here.
-   */
-  final case class GameSnapshot(latest: Option[GameControlData], source: Gateway.GameSource, refused: Map[String, Long], competition: Boolean,
+  /** What the gateway knows of the GameController: the latest packet, where game state comes from, the packets it
+    * refused by kind, and whether the competition gate applies. Read through [[gameSnapshot]], the one place that asks
+    * the gateway, so more GameController facts (versions, the fail-safe gate, the team message budget) join here.
+    */
+  final case class GameSnapshot(latest: Option[GameControlData], source: Gateway.GameSource, refused: Map[String, Long],
+      competition: Boolean,
       gateReason: Option[String] = None)
 
   /** The disk of the recording directory: whether the gateway can write there, and the space left. */
@@ -66,80 +65,111 @@ object Doctor {
   val BudgetWarnShare: Double = 0.8
 
   private val SignatureRejections: Set[String] =
-    Set(Rejection.Unsigned, Rejection.SignatureNotLast, Rejection.MalformedSignature, Rejection.BadSignature, Rejection.Replayed).map(_.name)
+    Set(Rejection.Unsigned, Rejection.SignatureNotLast, Rejection.MalformedSignature, Rejection.BadSignature,
+      Rejection.Replayed).map(_.name)
 
   /** Every check over `facts`, in the order robotctl prints them. */
   def findings(facts: Facts): Vector[Finding] =
-    gameControllerFindings(facts.game) ++ robotFindings(facts) ++ signingFindings(facts) ++ clockFindings(facts.robots) ++
-      budgetFindings(facts.traffic) ++ recordingFindings(facts.stats.recording, facts.disk) ++ relayFindings(facts) ++ configFindings(facts.unknownKeys)
+    gameControllerFindings(facts.game) ++ robotFindings(facts) ++ signingFindings(facts) ++ clockFindings(
+      facts.robots) ++
+      budgetFindings(facts.traffic) ++ recordingFindings(facts.stats.recording, facts.disk) ++ relayFindings(
+        facts) ++ configFindings(facts.unknownKeys)
 
   /** The GameController: heard, from a trusted source, in a version the gateway reads, with the gate following it. */
   def gameControllerFindings(game: GameSnapshot): Vector[Finding] = {
     val unreadable = game.refused.getOrElse(Rejection.BadGameControllerPacket.name, 0L)
     val heard = game.latest match {
       case None =>
-        fail("GameController", "no packet heard from a trusted source",
+        fail(
+          "GameController",
+          "no packet heard from a trusted source",
           "start the GameController on the field's network (it broadcasts to UDP 3838); this machine must be on that subnet " +
-            "and listen on naogateway.game-controller.port")
+            "and listen on naogateway.game-controller.port"
+        )
       case Some(p) =>
         ok("GameController", s"heard, version ${p.version.number}, state ${p.gameState}, ${game.source.describe}")
     }
     val trusted =
       if (game.source.untrusted > 0)
-        Vector(fail("GameController source", s"${game.source.untrusted} packet(s) from addresses not in trusted-sources (${game.source.trusted}) ignored",
-          "put the GameController's address or subnet in naogateway.game-controller.trusted-sources (NAOGATEWAY_GAMECONTROLLER_TRUSTED)"))
+        Vector(fail(
+            "GameController source",
+            s"${game.source.untrusted} packet(s) from addresses not in trusted-sources (${game.source.trusted}) ignored",
+            "put the GameController's address or subnet in naogateway.game-controller.trusted-sources (NAOGATEWAY_GAMECONTROLLER_TRUSTED)"
+          ))
       else Vector.empty
     val versions =
       if (unreadable > 0)
-        Vector(fail("GameController version", s"$unreadable packet(s) the gateway cannot read (refused as ${Rejection.BadGameControllerPacket.name})",
-          s"the gateway reads versions ${GameControlVersion.all.map(_.number).mkString(", ")} (docs/protocol.md §10); " +
-            "a GameController of another version closes the competition gate (fail safe, §10.7) until the gateway is updated"))
+        Vector(fail(
+            "GameController version",
+            s"$unreadable packet(s) the gateway cannot read (refused as ${Rejection.BadGameControllerPacket.name})",
+            s"the gateway reads versions ${GameControlVersion.all.map(_.number).mkString(", ")} (docs/protocol.md §10); " +
+              "a GameController of another version closes the competition gate (fail safe, §10.7) until the gateway is updated"
+          ))
       else Vector.empty
     // A second GameController on the field, the team's message budget running out, messages over the size limit.
     val warnings = game.source.warnings.map(w =>
-      fail("GameController", w, "see docs/protocol.md §10.8; game state is taken only from naogateway.game-controller.trusted-sources"))
+      fail("GameController", w,
+        "see docs/protocol.md §10.8; game state is taken only from naogateway.game-controller.trusted-sources"))
     val budget = game.source.budget.toVector.map(b => ok("team messages", b))
     val gate =
-      if (!game.competition) Vector(ok("competition gate", "off (naogateway.competition.enabled = off): the gateway sends during games"))
+      if (!game.competition)
+        Vector(ok("competition gate", "off (naogateway.competition.enabled = off): the gateway sends during games"))
       else if (game.latest.isEmpty && game.gateReason.isDefined)
-        Vector(fail("competition gate", s"on and closed: ${game.gateReason.get}", "see the GameController checks above"))
-      else if (game.latest.isEmpty) Vector(fail("competition gate", "on, but no game state yet: it opens and closes only with trusted packets",
-        "see the GameController check above"))
-      else Vector(ok("competition gate", s"on, following the GameController (${game.latest.get.gameState})" +
-        game.gateReason.fold(", open now")(why => s", closed now: $why")))
+        Vector(fail("competition gate", s"on and closed: ${game.gateReason.get}",
+            "see the GameController checks above"))
+      else if (game.latest.isEmpty)
+        Vector(fail("competition gate", "on, but no game state yet: it opens and closes only with trusted packets",
+            "see the GameController check above"))
+      else Vector(ok("competition gate",
+          s"on, following the GameController (${game.latest.get.gameState})" +
+            game.gateReason.fold(", open now")(why => s", closed now: $why")))
     heard +: (trusted ++ versions ++ warnings ++ budget ++ gate)
   }
 
-  /** Robots configured but never heard, offline, heard but not configured, and ids claimed from an unexpected address. */
+  /** Robots configured but never heard, offline, heard but not configured, and ids claimed from an unexpected address.
+    */
   def robotFindings(facts: Facts): Vector[Finding] = {
     val byId = facts.robots.map(r => r.robotId -> r).toMap
     val configured = facts.settings.robots.flatMap { r =>
       byId.get(r.robotId) match {
         case Some(s) if s.online => None
         case Some(s) if s.receivedAtNanos != 0L =>
-          Some(fail(s"robot ${r.robotId}", s"offline (configured at ${host(r.address)}, heard before)",
-            "check its battery and WiFi module; it must keep sending keep-alives every 200 ms (robotctl status shows its loss)"))
+          Some(fail(
+              s"robot ${r.robotId}",
+              s"offline (configured at ${host(r.address)}, heard before)",
+              "check its battery and WiFi module; it must keep sending keep-alives every 200 ms (robotctl status shows its loss)"
+            ))
         case _ =>
-          Some(fail(s"robot ${r.robotId}", s"configured at ${host(r.address)} but never heard",
-            s"switch it on; its firmware must send keep-alives to this machine's UDP ${facts.settings.robotPort} from ${host(r.address)} " +
-              "(README, \"With real robots\": when a robot does not come online)"))
+          Some(fail(
+              s"robot ${r.robotId}",
+              s"configured at ${host(r.address)} but never heard",
+              s"switch it on; its firmware must send keep-alives to this machine's UDP ${facts.settings.robotPort} from ${host(r.address)} " +
+                "(README, \"With real robots\": when a robot does not come online)"
+            ))
       }
     }
     val strangers =
       if (facts.settings.robots.isEmpty) Vector.empty
       else facts.robots.filterNot(s => facts.settings.robots.exists(_.robotId == s.robotId)).map { s =>
-        fail(s"robot ${s.robotId}", s"heard from ${host(s.address)} but not configured",
-          s"if it is yours, add { id = ${s.robotId}, address = \"${host(s.address)}\" } to naogateway.robots; if not, another team's robot sends here")
+        fail(
+          s"robot ${s.robotId}",
+          s"heard from ${host(s.address)} but not configured",
+          s"if it is yours, add { id = ${s.robotId}, address = \"${host(s.address)}\" } to naogateway.robots; if not, another team's robot sends here"
+        )
       }
     val mismatched = facts.stats.rejected.getOrElse(Rejection.RobotIdMismatch.name, 0L)
     val unexpected =
       if (mismatched > 0) {
         val sources = facts.stats.rejectedBySource.keys.toVector.sorted.take(5).mkString(", ")
-        Vector(fail("robot addresses", s"$mismatched frame(s) whose robot id belongs to another address (sources: $sources)",
-          "a robot's IP address changed, or two robots share an id: give each robot its static address and fix naogateway.robots"))
+        Vector(fail(
+            "robot addresses",
+            s"$mismatched frame(s) whose robot id belongs to another address (sources: $sources)",
+            "a robot's IP address changed, or two robots share an id: give each robot its static address and fix naogateway.robots"
+          ))
       } else Vector.empty
     val online = facts.robots.count(_.online)
-    val summary = ok("robots", s"$online of ${facts.robots.size} known robot(s) online, ${facts.settings.robots.size} configured")
+    val summary =
+      ok("robots", s"$online of ${facts.robots.size} known robot(s) online, ${facts.settings.robots.size} configured")
     summary +: (configured ++ strangers ++ unexpected)
   }
 
@@ -148,14 +178,17 @@ object Doctor {
     val signing = facts.settings.robots.filter(_.signing == naogateway.RobotSigning.Required).map(_.robotId)
     val summary =
       if (signing.nonEmpty) ok("signing", s"robot(s) ${signing.mkString(", ")} sign their frames with the team key")
-      else if (facts.settings.signingKey.isDefined) ok("signing", "a team key is set, but no robot has signing = required: nothing is signed")
+      else if (facts.settings.signingKey.isDefined)
+        ok("signing", "a team key is set, but no robot has signing = required: nothing is signed")
       else ok("signing", "off: no robot has signing = required")
     summary +: facts.links.flatMap { l =>
       val failed = l.rejected.filter { case (k, _) => SignatureRejections(k) }
-      Option.when(failed.values.sum > 0)(fail(s"robot ${l.robotId} signing",
-        s"${failed.values.sum} frame(s) failed verification (${failed.toVector.sorted.map { case (k, n) => s"$k $n" }.mkString(", ")})",
-        "the robot's firmware must sign with the same team key as naogateway.signing.key (docs/protocol.md 6.7); " +
-          "a firmware that does not sign yet needs signing = off for this robot"))
+      Option.when(failed.values.sum > 0)(fail(
+          s"robot ${l.robotId} signing",
+          s"${failed.values.sum} frame(s) failed verification (${failed.toVector.sorted.map { case (k, n) => s"$k $n" }.mkString(", ")})",
+          "the robot's firmware must sign with the same team key as naogateway.signing.key (docs/protocol.md 6.7); " +
+            "a firmware that does not sign yet needs signing = off for this robot"
+        ))
     }
   }
 
@@ -163,9 +196,12 @@ object Doctor {
   def clockFindings(robots: Vector[RobotSnapshot]): Vector[Finding] =
     robots.filter(_.online).flatMap { r =>
       r.clock.filter(c => c.samples >= ClockJudgedAfter && c.errorBoundMillis > ClockBoundMillis).map { c =>
-        fail(s"robot ${r.robotId} clock", f"estimate does not converge (error bound ±${c.errorBoundMillis}%.0f ms over ${c.samples} keep-alives)",
+        fail(
+          s"robot ${r.robotId} clock",
+          f"estimate does not converge (error bound ±${c.errorBoundMillis}%.0f ms over ${c.samples} keep-alives)",
           "its keep-alives arrive irregularly (WiFi load, loss: robotctl status) or its clock jumps; the firmware must stamp each " +
-            "keep-alive with its uptime in ms (docs/protocol.md 6.2)")
+            "keep-alive with its uptime in ms (docs/protocol.md 6.2)"
+        )
       }
     }
 
@@ -173,8 +209,11 @@ object Doctor {
   def budgetFindings(traffic: Option[Outbox.TrafficStats]): Vector[Finding] = traffic.toVector.map { t =>
     val share = t.outBytesLastSecond.toDouble / t.budgetBytesPerSecond
     if (t.dropped > 0 || share >= BudgetWarnShare)
-      fail("team budget", f"${t.outBytesLastSecond} B/s of ${t.budgetBytesPerSecond} B/s (${share * 100}%.0f %%), ${t.dropped} datagram(s) dropped",
-        "the gateway sends too much: fewer debug options enabled, fewer apps walking robots, or a lower camera rate (docs/architecture.md, the traffic budget)")
+      fail(
+        "team budget",
+        f"${t.outBytesLastSecond} B/s of ${t.budgetBytesPerSecond} B/s (${share * 100}%.0f %%), ${t.dropped} datagram(s) dropped",
+        "the gateway sends too much: fewer debug options enabled, fewer apps walking robots, or a lower camera rate (docs/architecture.md, the traffic budget)"
+      )
     else ok("team budget", f"${t.outBytesLastSecond} B/s of ${t.budgetBytesPerSecond} B/s (${share * 100}%.0f %%)")
   }
 
@@ -182,13 +221,20 @@ object Doctor {
   def recordingFindings(r: naogateway.recording.RecordingStats, disk: Option[Disk]): Vector[Finding] =
     disk.toVector.flatMap { d =>
       val place =
-        if (!d.writable) Vector(fail("recording", s"${d.directory} is not writable", "make it writable, or set naogateway.recording.directory (NAOGATEWAY_RECORDING_DIR)"))
+        if (!d.writable) Vector(fail("recording", s"${d.directory} is not writable",
+            "make it writable, or set naogateway.recording.directory (NAOGATEWAY_RECORDING_DIR)"))
         else if (d.usableBytes < MinFreeBytes)
-          Vector(fail("recording", s"${Retention.bytesText(d.usableBytes)} free on the disk of ${d.directory}",
-            "free disk space, or lower naogateway.recording.retention.max-total-bytes so old recordings are deleted"))
-        else Vector(ok("recording", s"${d.directory} writable, ${Retention.bytesText(d.usableBytes)} free" + r.retention.fold("")(k => s"; ${k.describe}")))
+          Vector(fail(
+              "recording",
+              s"${Retention.bytesText(d.usableBytes)} free on the disk of ${d.directory}",
+              "free disk space, or lower naogateway.recording.retention.max-total-bytes so old recordings are deleted"
+            ))
+        else Vector(ok("recording",
+            s"${d.directory} writable, ${Retention.bytesText(d.usableBytes)} free" + r.retention.fold("")(k =>
+              s"; ${k.describe}")))
       val failing =
-        if (r.failed > 0) Vector(fail("recording writes", s"${r.failed} entries could not be written", s"check the disk of ${d.directory} (full? removed?)"))
+        if (r.failed > 0) Vector(fail("recording writes", s"${r.failed} entries could not be written",
+            s"check the disk of ${d.directory} (full? removed?)"))
         else Vector.empty
       place ++ failing
     }
@@ -196,8 +242,11 @@ object Doctor {
   /** FU-Remote behind the relay: something must listen where the relay sends. */
   def relayFindings(facts: Facts): Vector[Finding] = (facts.settings.relay, facts.fuRemoteListening) match {
     case (Some(to), Some(false)) =>
-      Vector(fail("FU-Remote relay", s"nothing listens on UDP ${host(to)}:${to.getPort}, where robot traffic is relayed",
-        s"start FU-Remote on port ${to.getPort} (it cannot have 11011, which the gateway holds), or turn naogateway.fu-remote-relay off"))
+      Vector(fail(
+          "FU-Remote relay",
+          s"nothing listens on UDP ${host(to)}:${to.getPort}, where robot traffic is relayed",
+          s"start FU-Remote on port ${to.getPort} (it cannot have 11011, which the gateway holds), or turn naogateway.fu-remote-relay off"
+        ))
     case (Some(to), _) => Vector(ok("FU-Remote relay", s"relaying to ${host(to)}:${to.getPort}"))
     case (None, _)     => Vector.empty
   }
@@ -205,14 +254,17 @@ object Doctor {
   /** Config keys that no reference knows. */
   def configFindings(unknownKeys: Vector[String]): Vector[Finding] =
     if (unknownKeys.isEmpty) Vector(ok("config", "every key set is a known setting"))
-    else unknownKeys.map(k => fail("config", s"$k is not a setting and is ignored", "correct the typo (every key with its default is in the reference.conf files)"))
+    else unknownKeys.map(k =>
+      fail("config", s"$k is not a setting and is ignored",
+        "correct the typo (every key with its default is in the reference.conf files)"))
 
   private def host(a: InetSocketAddress): String = Option(a.getAddress).fold(a.getHostString)(_.getHostAddress)
 
   // ------------------------------------------------------------------------------------------------- gathering
 
   /** The gateway's game snapshot for the GameController checks. */
-  def gameSnapshot(gateway: ActorRef[Gateway.Query], competition: Boolean)(implicit system: ActorSystem[_], timeout: Timeout): Future[GameSnapshot] = {
+  def gameSnapshot(gateway: ActorRef[Gateway.Query], competition: Boolean)(implicit system: ActorSystem[_],
+      timeout: Timeout): Future[GameSnapshot] = {
     implicit val ec: ExecutionContext = system.executionContext
     for {
       latest <- gateway.ask[Option[GameControlData]](Gateway.GetGameState(_))
@@ -225,14 +277,17 @@ object Doctor {
   def disk(directory: Path): Disk = {
     val existing = Iterator.iterate(directory.toAbsolutePath)(_.getParent).takeWhile(_ != null).find(Files.exists(_))
     val writable = existing.exists(p => Files.isDirectory(p) && Files.isWritable(p))
-    val usable = existing.map(p => try Files.getFileStore(p).getUsableSpace catch { case NonFatal(_) => 0L }).getOrElse(0L)
+    val usable = existing.map(p =>
+      try Files.getFileStore(p).getUsableSpace
+      catch { case NonFatal(_) => 0L }).getOrElse(0L)
     Disk(directory, writable, usable)
   }
 
   /** Whether a program listens on UDP `to` (on this machine): binding it fails when one does. None when not local. */
   def listening(to: InetSocketAddress): Option[Boolean] =
     Option(to.getAddress).filter(a => a.isLoopbackAddress || a.isAnyLocalAddress).map { _ =>
-      Preflight.probe(Preflight.PortUse(Preflight.Transport.Udp(reuse = false), host(to), to.getPort, "", "")) == Preflight.Probe.InUse
+      Preflight.probe(Preflight.PortUse(Preflight.Transport.Udp(reuse = false), host(to), to.getPort, "",
+          "")) == Preflight.Probe.InUse
     }
 
   /** Asks the gateway and looks at the machine; the facts for [[findings]]. */
@@ -244,7 +299,9 @@ object Doctor {
       robots <- gateway.ask[Vector[RobotSnapshot]](Gateway.GetRobots(_))
       links <- gateway.ask[Gateway.RobotLinks](Gateway.GetLinkStats(_))
       stats <- gateway.ask[Gateway.GatewayStats](Gateway.GetStats(_))
-      traffic <- gateway.ask[Outbox.TrafficStats](Gateway.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) => None }
+      traffic <- gateway.ask[Outbox.TrafficStats](Gateway.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) =>
+        None
+      }
       game <- gameSnapshot(gateway, settings.competition).map(_.copy(gateReason = traffic.flatMap(_.gateReason)))
       machine <- Future {
         (Preflight.unknownKeys(config, Preflight.knownKeys),

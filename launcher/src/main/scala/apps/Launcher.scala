@@ -39,7 +39,8 @@ object Launcher {
   /** The launcher's defaults (the demo's), unresolved: environment variables are read when the whole config is. */
   def defaults: Config = ConfigFactory.parseResources(DefaultsResource)
 
-  /** The config file given as argument (empty without one); it outranks application.conf and the launcher's defaults. */
+  /** The config file given as argument (empty without one); it outranks application.conf and the launcher's defaults.
+    */
   def config(args: Seq[String]): Config = {
     val file = args.headOption.map { path =>
       val f = new File(path)
@@ -49,28 +50,26 @@ object Launcher {
     file.getOrElse(ConfigFactory.empty())
   }
 
-  /**
-   * The gateway node's whole config: the file (`overrides`), then `application` (application.conf or -Dconfig.file),
-   * then the launcher's defaults with the environment variables they name, then the cluster settings and references.
-   */
+  /** The gateway node's whole config: the file (`overrides`), then `application` (application.conf or -Dconfig.file),
+    * then the launcher's defaults with the environment variables they name, then the cluster settings and references.
+    */
   def nodeConfig(overrides: Config, application: => Config = ConfigFactory.defaultApplication()): Config =
     MiddlewareCluster.config(MiddlewareCluster.GatewayRole, overrides, defaults, application)
 
   /** The command line: an optional config file, and a recording to replay instead of the sockets. */
   final case class Arguments(configFile: Option[String], replay: Option[Replay])
 
-  /**
-   * `[config-file] [--replay FILE-OR-DIRECTORY [--speed X]]`, in any order. A replay runs no simulated robot and no
-   * simulated GameController: the recording's robots and game are what the gateway sees.
-   */
+  /** `[config-file] [--replay FILE-OR-DIRECTORY [--speed X]]`, in any order. A replay runs no simulated robot and no
+    * simulated GameController: the recording's robots and game are what the gateway sees.
+    */
   def arguments(args: Seq[String]): Arguments = {
     def loop(rest: List[String], got: Arguments, speed: Option[Double]): Arguments = rest match {
       case "--replay" :: path :: more => loop(more, got.copy(replay = Some(Replay.of(Paths.get(path)))), speed)
       case "--speed" :: x :: more =>
         val v = x.toDoubleOption.getOrElse(throw new IllegalArgumentException(s"--speed $x is not a number"))
         loop(more, got, Some(v))
-      case ("--replay" | "--speed") :: Nil => throw new IllegalArgumentException(s"${rest.head} needs a value")
-      case flag :: _ if flag.startsWith("--") => throw new IllegalArgumentException(s"unknown option $flag")
+      case ("--replay" | "--speed") :: Nil        => throw new IllegalArgumentException(s"${rest.head} needs a value")
+      case flag :: _ if flag.startsWith("--")     => throw new IllegalArgumentException(s"unknown option $flag")
       case file :: more if got.configFile.isEmpty => loop(more, got.copy(configFile = Some(file)), speed)
       case extra :: _ => throw new IllegalArgumentException(s"one config file only (also got $extra)")
       case Nil =>
@@ -95,16 +94,19 @@ object Launcher {
         // Simulated robots on this host answer the GameController from it, and a GameController refuses a host that
         // ever sent a status message as a monitor: the two do not go together.
         val resolved = c.withFallback(ConfigFactory.load()).resolve()
-        require(!(resolved.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
+        require(
+          !(resolved.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
             resolved.getInt("apps.launcher.simulated-robots") > 0),
           "game-controller.monitor: the simulated robots on this host would answer the GameController from it, which " +
-            "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the monitor off")
+            "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the monitor off"
+        )
         (a, if (a.replay.isDefined) ReplayOverrides.withFallback(c) else c)
       } catch {
         // A wrong file name or a typo in the file is the operator's to fix: say what and where, without a stack trace.
         case e @ (_: IllegalArgumentException | _: com.typesafe.config.ConfigException) =>
           System.err.println(s"naogateway: ${e.getMessage.stripPrefix("requirement failed: ")}")
-          System.err.println("usage: naogateway [config-file] [--replay FILE-OR-DIRECTORY [--speed X]]   (no file: the demo with simulated robots)")
+          System.err.println(
+            "usage: naogateway [config-file] [--replay FILE-OR-DIRECTORY [--speed X]]   (no file: the demo with simulated robots)")
           sys.exit(2)
       }
     val nodeConfig = checked(overrides, code => sys.exit(code))
@@ -128,24 +130,24 @@ object Launcher {
   /** The exit code of a launcher whose gateway or middleware stopped while it ran. */
   val ExitPartStopped = 4
 
-  /**
-   * What the launcher does when its gateway or middleware stops: says so on the terminal and exits
-   * [[ExitPartStopped]], from a thread of its own (System.exit waits for the shutdown hooks, which wait for the actors).
-   */
+  /** What the launcher does when its gateway or middleware stops: says so on the terminal and exits
+    * [[ExitPartStopped]], from a thread of its own (System.exit waits for the shutdown hooks, which wait for the
+    * actors).
+    */
   private def exitWhenStopped(part: String): Unit = {
     System.err.println(s"naogateway: the $part stopped; exiting")
     new Thread(() => sys.exit(ExitPartStopped), "naogateway-exit").start()
   }
 
-  /**
-   * The gateway node's config once it passed the checks of [[Preflight]]: a config problem is one line naming the key
-   * (exit [[ExitConfig]]); a port held by another program one line each, naming the port, its use and the setting
-   * that moves it (exit [[ExitPortInUse]]; a warning for the GameController's port, without which the gateway runs
-   * with game state unknown); the demo's robots on a machine without their loopback addresses one line
-   * saying what to do (exit [[ExitConfig]]). Keys no reference knows are warned about. Lines go to `err`.
-   */
+  /** The gateway node's config once it passed the checks of [[Preflight]]: a config problem is one line naming the key
+    * (exit [[ExitConfig]]); a port held by another program one line each, naming the port, its use and the setting that
+    * moves it (exit [[ExitPortInUse]]; a warning for the GameController's port, without which the gateway runs with
+    * game state unknown); the demo's robots on a machine without their loopback addresses one line saying what to do
+    * (exit [[ExitConfig]]). Keys no reference knows are warned about. Lines go to `err`.
+    */
   def checked(overrides: Config, exit: Int => Nothing, err: String => Unit = System.err.println,
-      application: => Config = ConfigFactory.defaultApplication(), probe: Preflight.PortUse => Preflight.Probe = Preflight.probe,
+      application: => Config = ConfigFactory.defaultApplication(),
+      probe: Preflight.PortUse => Preflight.Probe = Preflight.probe,
       loopback: java.net.InetAddress => Boolean = Preflight.loopbackBindable): Config = {
     val c =
       try { val c = nodeConfig(overrides, application); Preflight.validate(c); c }
@@ -154,7 +156,8 @@ object Launcher {
           err(s"naogateway: ${Preflight.problem(e).get}")
           exit(ExitConfig)
       }
-    Preflight.unknownKeys(c, Preflight.knownKeys).foreach(k => err(s"naogateway: warning: config key $k is not a setting (a typo?); it is ignored"))
+    Preflight.unknownKeys(c, Preflight.knownKeys).foreach(k =>
+      err(s"naogateway: warning: config key $k is not a setting (a typo?); it is ignored"))
     val simulated = c.getInt("apps.launcher.simulated-robots")
     Preflight.missingLoopback(simulated, loopback).foreach { line =>
       err(s"naogateway: $line")
@@ -175,10 +178,9 @@ object Launcher {
   private def bindFailure(e: Throwable): Boolean =
     rootCause(e).isInstanceOf[java.net.BindException] || e.isInstanceOf[akka.remote.RemoteTransportException]
 
-  /**
-   * The demo's simulated robots introduce themselves with their keep-alives like strangers would: the discovery cap is
-   * raised to their number when it is smaller (a demo on loopback, not a shared WiFi).
-   */
+  /** The demo's simulated robots introduce themselves with their keep-alives like strangers would: the discovery cap is
+    * raised to their number when it is smaller (a demo on loopback, not a shared WiFi).
+    */
   private def demoDiscovery(settings: GatewaySettings, simulated: Int): GatewaySettings =
     if (simulated <= settings.discovery.maxRobots) settings
     else settings.copy(discovery = settings.discovery.copy(maxRobots = simulated))
@@ -192,12 +194,12 @@ object Launcher {
   private final case class FleetStarted(result: scala.util.Try[naogateway.sim.FleetHandle]) extends Command
   private final case class PartStopped(part: String) extends Command
 
-  /**
-   * The gateway node's root: gateway (on its sockets, or replaying), middleware, simulated robots, status view, app node.
-   * It watches the gateway and the middleware: when either stops (it failed, or lost its socket) outside a shutdown,
-   * nothing the node offers works any more, so the root calls `stopped` with its name ("gateway", "middleware") and
-   * stops, and the actor system with it. `makeMiddleware` makes the middleware in front of the gateway.
-   */
+  /** The gateway node's root: gateway (on its sockets, or replaying), middleware, simulated robots, status view, app
+    * node. It watches the gateway and the middleware: when either stops (it failed, or lost its socket) outside a
+    * shutdown, nothing the node offers works any more, so the root calls `stopped` with its name ("gateway",
+    * "middleware") and stops, and the actor system with it. `makeMiddleware` makes the middleware in front of the
+    * gateway.
+    */
   def Root(
       replay: Option[Replay] = None,
       stopped: String => Unit = _ => (),
@@ -205,7 +207,9 @@ object Launcher {
   ): Behavior[Command] = Behaviors.setup { context =>
     val config = context.system.settings.config
     val launcher = settings(config.getConfig("apps.launcher"))
-    val gateway = context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots), replay), "gateway")
+    val gateway =
+      context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots), replay),
+        "gateway")
     val middleware = context.spawn(makeMiddleware(gateway), "middleware")
     context.watchWith(gateway, PartStopped("gateway"))
     context.watchWith(middleware, PartStopped("middleware"))
@@ -220,7 +224,8 @@ object Launcher {
     val web =
       apps.web.WebServer.GatewaySide(view, gatewaySettings.competition, id => gatewaySettings.signingOf(id).name)
     apps.web.WebServer.spawnIfEnabled(context, web, middleware,
-      bound => webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
+      bound =>
+        webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
     context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get), "status")
     gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
 
@@ -228,9 +233,11 @@ object Launcher {
       case Addresses(addresses) =>
         if (launcher.simulatedRobots > 0) {
           val robots = addresses.robots
-          val target = if (robots.getAddress.isAnyLocalAddress) new InetSocketAddress("127.0.0.1", robots.getPort) else robots
+          val target =
+            if (robots.getAddress.isAnyLocalAddress) new InetSocketAddress("127.0.0.1", robots.getPort) else robots
           context.pipeToSelf(Fleet.start(context.system,
-            FleetSettings(target, (1 to launcher.simulatedRobots).toVector, faithfulLink = launcher.simulatedRobots <= 20)))(FleetStarted.apply)
+              FleetSettings(target, (1 to launcher.simulatedRobots).toVector,
+                faithfulLink = launcher.simulatedRobots <= 20)))(FleetStarted.apply)
         }
         if (launcher.ballFollowerRobot > 0) startBallFollower(context.system, launcher.ballFollowerRobot)
         startGameController(context, addresses)
@@ -257,40 +264,50 @@ object Launcher {
   /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the
     * gateway's GameController port, on loopback when the gateway listens on every address.
     */
-  private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command], addresses: Gateway.Addresses): Unit = {
+  private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command],
+      addresses: Gateway.Addresses): Unit = {
     val c = context.system.settings.config.getConfig("apps.launcher")
     // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
     for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
-      val target = if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
+      val target =
+        if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
       val number = c.getInt("game-controller-version")
       val version = naogateway.wire.gamecontroller.GameControlVersion.all.find(_.number == number).getOrElse(
-        throw new IllegalArgumentException(s"apps.launcher.game-controller-version $number: the simulation plays 19, 12, 8 or 7"))
+        throw new IllegalArgumentException(
+          s"apps.launcher.game-controller-version $number: the simulation plays 19, 12, 8 or 7"))
       context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target,
-        version = version)), "game-controller")
+            version = version)), "game-controller")
     }
   }
 
   /** The ball follower runs in an actor system of its own, a cluster node with role "app", as every app does. */
   private def startBallFollower(gatewayNode: ActorSystem[_], robotId: Int): Unit = {
-    val appNode = MiddlewareCluster.start(Behaviors.setup[BallFollowerNode] { context =>
-      context.pipeToSelf(RobotClient(context.system, "ball-follower", priority = 1))(BallFollowerNode.apply)
-      Behaviors.receiveMessage {
-        case BallFollowerNode(Success(robot)) =>
-          context.spawn(BallFollower(robot, robotId), "ball-follower")
-          Behaviors.same
-        case BallFollowerNode(Failure(e)) =>
-          context.log.error("Ball follower found no middleware", e)
-          Behaviors.stopped
-      }
-    }, MiddlewareCluster.AppRole, appNodeConfig(gatewayNode.settings.config))
+    val appNode = MiddlewareCluster.start(
+      Behaviors.setup[BallFollowerNode] { context =>
+        context.pipeToSelf(RobotClient(context.system, "ball-follower", priority = 1))(BallFollowerNode.apply)
+        Behaviors.receiveMessage {
+          case BallFollowerNode(Success(robot)) =>
+            context.spawn(BallFollower(robot, robotId), "ball-follower")
+            Behaviors.same
+          case BallFollowerNode(Failure(e)) =>
+            context.log.error("Ball follower found no middleware", e)
+            Behaviors.stopped
+        }
+      },
+      MiddlewareCluster.AppRole,
+      appNodeConfig(gatewayNode.settings.config)
+    )
     // The app node lives and dies with the gateway node.
-    CoordinatedShutdown(gatewayNode.classicSystem).addTask(CoordinatedShutdown.PhaseBeforeServiceUnbind, "stop-apps") { () =>
-      appNode.terminate()
-      appNode.whenTerminated
+    CoordinatedShutdown(gatewayNode.classicSystem).addTask(CoordinatedShutdown.PhaseBeforeServiceUnbind, "stop-apps") {
+      () =>
+        appNode.terminate()
+        appNode.whenTerminated
     }
   }
 
-  /** What the demo's app node takes over from the gateway node's config: where the cluster is, and the dispatcher's size. */
+  /** What the demo's app node takes over from the gateway node's config: where the cluster is, and the dispatcher's
+    * size.
+    */
   def appNodeConfig(gatewayNode: Config): Config =
     Seq("robotmiddleware.cluster", "akka.actor.default-dispatcher").foldLeft(ConfigFactory.empty()) { (c, path) =>
       c.withValue(path, gatewayNode.getValue(path))

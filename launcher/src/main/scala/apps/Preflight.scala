@@ -13,12 +13,11 @@ import naogateway.recording.RecordingSettings
 import naogateway.sim.FleetSettings
 import robotmiddleware.MiddlewareSettings
 
-/**
- * What the launcher checks before it starts anything, and `robotctl doctor` checks of a config: the settings are
- * valid, the ports they name are free, the demo's robot addresses exist, no key is a typo. Each problem is one line
- * for the terminal that names the key or the port and the setting that changes it: a stack trace in a log file
- * helps no operator at the field.
- */
+/** What the launcher checks before it starts anything, and `robotctl doctor` checks of a config: the settings are
+  * valid, the ports they name are free, the demo's robot addresses exist, no key is a typo. Each problem is one line
+  * for the terminal that names the key or the port and the setting that changes it: a stack trace in a log file helps
+  * no operator at the field.
+  */
 object Preflight {
 
   /** How a port is used: TCP (a server socket) or UDP. */
@@ -34,11 +33,11 @@ object Preflight {
     final case class Udp(reuse: Boolean) extends Transport("UDP")
   }
 
-  /**
-   * A port the configured gateway node binds: where, what for, and the setting (and variable) that moves it. A port
-   * that is not `essential` leaves the gateway running without it (the GameController's: game state stays unknown).
-   */
-  final case class PortUse(transport: Transport, host: String, port: Int, purpose: String, setting: String, essential: Boolean = true) {
+  /** A port the configured gateway node binds: where, what for, and the setting (and variable) that moves it. A port
+    * that is not `essential` leaves the gateway running without it (the GameController's: game state stays unknown).
+    */
+  final case class PortUse(transport: Transport, host: String, port: Int, purpose: String, setting: String,
+      essential: Boolean = true) {
 
     /** One line: the port is taken by another program. */
     def inUse: String =
@@ -53,8 +52,13 @@ object Preflight {
   def ports(c: Config): Vector[PortUse] = {
     val cluster =
       if (c.getString("akka.actor.provider") == "cluster")
-        Vector(PortUse(Transport.Tcp, bindHost(c), c.getInt("akka.remote.artery.canonical.port"),
-          "the cluster port of the gateway node, where apps join", "robotmiddleware.cluster.gateway-port (ROBOTS_GATEWAY_PORT)"))
+        Vector(PortUse(
+            Transport.Tcp,
+            bindHost(c),
+            c.getInt("akka.remote.artery.canonical.port"),
+            "the cluster port of the gateway node, where apps join",
+            "robotmiddleware.cluster.gateway-port (ROBOTS_GATEWAY_PORT)"
+          ))
       else Vector.empty
     val control =
       if (c.getBoolean("apps.control.enabled"))
@@ -64,20 +68,30 @@ object Preflight {
       else Vector.empty
     val zeromq =
       if (c.getBoolean("apps.zeromq.enabled"))
-        Vector("bind" -> "the ZeroMQ request socket", "publish" -> "the ZeroMQ publish socket").flatMap { case (key, purpose) =>
-          zeroMqTcp(c.getString(s"apps.zeromq.$key")).map { case (h, p) =>
-            PortUse(Transport.Tcp, h, p, purpose, s"apps.zeromq.$key (NAOGATEWAY_ZEROMQ_${key.toUpperCase})")
-          }
+        Vector("bind" -> "the ZeroMQ request socket", "publish" -> "the ZeroMQ publish socket").flatMap {
+          case (key, purpose) =>
+            zeroMqTcp(c.getString(s"apps.zeromq.$key")).map { case (h, p) =>
+              PortUse(Transport.Tcp, h, p, purpose, s"apps.zeromq.$key (NAOGATEWAY_ZEROMQ_${key.toUpperCase})")
+            }
         }
       else Vector.empty
-    val robots = Vector(PortUse(Transport.Udp(reuse = false), c.getString("naogateway.link.bind-address"), c.getInt("naogateway.link.robot-port"),
-      "the robots' port (FU-Remote's too: give FU-Remote another port and turn on naogateway.fu-remote-relay)",
-      "naogateway.link.robot-port (NAOGATEWAY_ROBOT_PORT)"))
+    val robots = Vector(PortUse(
+        Transport.Udp(reuse = false),
+        c.getString("naogateway.link.bind-address"),
+        c.getInt("naogateway.link.robot-port"),
+        "the robots' port (FU-Remote's too: give FU-Remote another port and turn on naogateway.fu-remote-relay)",
+        "naogateway.link.robot-port (NAOGATEWAY_ROBOT_PORT)"
+      ))
     val gameController =
       if (c.getBoolean("naogateway.game-controller.enabled"))
-        Vector(PortUse(Transport.Udp(c.getBoolean("naogateway.game-controller.reuse-address")), c.getString("naogateway.game-controller.bind-address"),
-          c.getInt("naogateway.game-controller.port"), "the GameController's broadcasts",
-          "naogateway.game-controller.port (NAOGATEWAY_GAMECONTROLLER_PORT) or naogateway.game-controller.reuse-address", essential = false))
+        Vector(PortUse(
+            Transport.Udp(c.getBoolean("naogateway.game-controller.reuse-address")),
+            c.getString("naogateway.game-controller.bind-address"),
+            c.getInt("naogateway.game-controller.port"),
+            "the GameController's broadcasts",
+            "naogateway.game-controller.port (NAOGATEWAY_GAMECONTROLLER_PORT) or naogateway.game-controller.reuse-address",
+            essential = false
+          ))
       else Vector.empty
     (cluster ++ control ++ zeromq ++ robots ++ gameController).filter(_.port > 0)
   }
@@ -89,7 +103,8 @@ object Preflight {
 
   // "tcp://127.0.0.1:5555" as host and port; a wildcard port ("*") or another transport binds nothing checkable.
   private def zeroMqTcp(endpoint: String): Option[(String, Int)] =
-    Some(endpoint).filter(_.startsWith("tcp://")).map(_.stripPrefix("tcp://")).flatMap(e => apps.control.ControlProtocol.address(e).toOption)
+    Some(endpoint).filter(_.startsWith("tcp://")).map(_.stripPrefix("tcp://")).flatMap(e =>
+      apps.control.ControlProtocol.address(e).toOption)
       .map { case (h, p) => (if (h == "*") "0.0.0.0" else h, p) }
 
   /** What binding a port found: free, taken, or an address this machine does not have. */
@@ -116,13 +131,15 @@ object Preflight {
         case Transport.Tcp =>
           Using.resource(new ServerSocket()) { s => s.setReuseAddress(true); s.bind(address) }
         case Transport.Udp(reuse) =>
-          Using.resource(new DatagramSocket(null: java.net.SocketAddress)) { s => s.setReuseAddress(reuse); s.bind(address) }
+          Using.resource(new DatagramSocket(null: java.net.SocketAddress)) { s =>
+            s.setReuseAddress(reuse); s.bind(address)
+          }
       }
       Probe.Free
     } catch {
       case e: BindException if Option(e.getMessage).exists(_.toLowerCase.contains("assign")) => Probe.NoSuchAddress
       case _: BindException                                                                  => Probe.InUse
-      case _: java.net.UnknownHostException                                                   => Probe.NoSuchAddress
+      case _: java.net.UnknownHostException                                                  => Probe.NoSuchAddress
     }
 
   /** One line for each port of `uses` that `probe` finds taken or unbindable. */
@@ -135,16 +152,16 @@ object Preflight {
       }
     }
 
-  /**
-   * Reads every setting the gateway node reads at start, so a wrong key or value fails here, before any actor runs.
-   * Throws what the settings throw (`ConfigException`, `IllegalArgumentException`); [[problem]] turns it into a line.
-   */
+  /** Reads every setting the gateway node reads at start, so a wrong key or value fails here, before any actor runs.
+    * Throws what the settings throw (`ConfigException`, `IllegalArgumentException`); [[problem]] turns it into a line.
+    */
   def validate(c: Config): Unit = {
     typesMatch(c)
     val gateway = GatewaySettings.fromConfig(c.getConfig("naogateway"))
     MiddlewareSettings.fromConfig(c.getConfig("robotmiddleware"))
     apps.control.ControlSettings.fromConfig(c.getConfig(apps.control.ControlSettings.ConfigPath))
-    apps.zeromq.ZeroMqSettings.fromConfig(c.getConfig(apps.zeromq.ZeroMqSettings.ConfigPath), s"${apps.zeromq.ZeroMqSettings.ConfigPath}.dispatcher")
+    apps.zeromq.ZeroMqSettings.fromConfig(c.getConfig(apps.zeromq.ZeroMqSettings.ConfigPath),
+      s"${apps.zeromq.ZeroMqSettings.ConfigPath}.dispatcher")
     Launcher.settings(c.getConfig("apps.launcher"))
     StatusPrinter.settings(c.getConfig("apps.launcher"))
     val _: RecordingSettings = gateway.recording
@@ -153,11 +170,10 @@ object Preflight {
   // Keys whose code reads another form than the reference's (a comma-separated string from the environment for a list).
   private val FlexibleKeys = Set("naogateway.game-controller.trusted-sources")
 
-  /**
-   * Every value under the project's roots that its reference default gives a number, a truth value, an object or a
-   * list reads as one. The settings would find a wrong type too, but name only the last part of its key; read here
-   * by its whole path, the error names the whole key and where it was set.
-   */
+  /** Every value under the project's roots that its reference default gives a number, a truth value, an object or a
+    * list reads as one. The settings would find a wrong type too, but name only the last part of its key; read here by
+    * its whole path, the error names the whole key and where it was set.
+    */
   def typesMatch(c: Config): Unit =
     ProjectRoots.filter(c.hasPath).foreach { root =>
       c.getConfig(root).entrySet().asScala.map(e => s"$root.${e.getKey}").toVector.sorted.foreach { path =>
@@ -173,20 +189,21 @@ object Preflight {
 
   /** One line naming the key and what is wrong with it, for a config problem; None for anything else. */
   def problem(e: Throwable): Option[String] = e match {
-    case c: ConfigException          => Some(s"config: ${c.getMessage}")
-    case i: IllegalArgumentException => Some(s"config: ${Option(i.getMessage).getOrElse("invalid value").stripPrefix("requirement failed: ")}")
-    case _                           => None
+    case c: ConfigException => Some(s"config: ${c.getMessage}")
+    case i: IllegalArgumentException =>
+      Some(s"config: ${Option(i.getMessage).getOrElse("invalid value").stripPrefix("requirement failed: ")}")
+    case _ => None
   }
 
-  /**
-   * The demo's simulated robots each need a loopback address of their own (robots are told apart by IP address):
-   * 127.0.0.11 and up. Linux has all of 127.0.0.0/8; macOS has only 127.0.0.1 unless told. One line saying exactly
-   * what to do when `bindable` finds any missing.
-   */
+  /** The demo's simulated robots each need a loopback address of their own (robots are told apart by IP address):
+    * 127.0.0.11 and up. Linux has all of 127.0.0.0/8; macOS has only 127.0.0.1 unless told. One line saying exactly
+    * what to do when `bindable` finds any missing.
+    */
   def missingLoopback(simulatedRobots: Int, bindable: InetAddress => Boolean = loopbackBindable): Option[String] =
     if (simulatedRobots <= 0) None
     else {
-      val settings = FleetSettings(new InetSocketAddress(InetAddress.getLoopbackAddress, 1), (1 to simulatedRobots).toVector)
+      val settings =
+        FleetSettings(new InetSocketAddress(InetAddress.getLoopbackAddress, 1), (1 to simulatedRobots).toVector)
       val missing = (0 until simulatedRobots).map(settings.addressOf).filterNot(bindable)
       missing.headOption.map { first =>
         val names = missing.map(_.getHostAddress)
@@ -206,11 +223,10 @@ object Preflight {
   /** The config roots of this project, whose every key has a default in some reference (or launcher) file. */
   val ProjectRoots: Vector[String] = Vector("naogateway", "robotmiddleware", "apps")
 
-  /**
-   * Keys under the project's roots that `c` sets but no reference file knows: most often a typo, which would
-   * otherwise leave the default in force without a word. Lists (such as `naogateway.robots`) are leaves: their
-   * elements are checked by the settings themselves.
-   */
+  /** Keys under the project's roots that `c` sets but no reference file knows: most often a typo, which would otherwise
+    * leave the default in force without a word. Lists (such as `naogateway.robots`) are leaves: their elements are
+    * checked by the settings themselves.
+    */
   def unknownKeys(c: Config, known: Config): Vector[String] =
     ProjectRoots.filter(c.hasPath).flatMap { root =>
       c.getConfig(root).entrySet().asScala.map(e => s"$root.${e.getKey}").toVector

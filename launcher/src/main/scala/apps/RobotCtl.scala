@@ -10,10 +10,9 @@ import apps.control.ControlProtocol
 import apps.control.ControlProtocol.Answer
 import naogateway.wire.RpcValue
 
-/**
- * `bin/robotctl` (or `./sbt "robotctl status"`): a command-line client of a running gateway's control port
- * (apps.control.ControlServer). It starts no actor system and loads no Akka, so it answers within about a second.
- */
+/** `bin/robotctl` (or `./sbt "robotctl status"`): a command-line client of a running gateway's control port
+  * (apps.control.ControlServer). It starts no actor system and loads no Akka, so it answers within about a second.
+  */
 object RobotCtl {
 
   /** What robotctl was asked to do. */
@@ -42,21 +41,22 @@ object RobotCtl {
   /** Parses the command (without `--control`); a clear message when it is wrong. */
   def parse(args: Seq[String]): Either[String, Request] = ControlProtocol.parse(args)
 
-  /** The control port's `host:port` (from `--control`, else `env(NAOGATEWAY_CONTROL)`, else the default) and the request. */
+  /** The control port's `host:port` (from `--control`, else `env(NAOGATEWAY_CONTROL)`, else the default) and the
+    * request.
+    */
   def invocation(args: Seq[String], env: String => Option[String]): Either[String, (String, Request)] = {
     val (address, rest) = args.toList match {
-      case "--control" :: a :: more => (Some(a), more)
-      case "--control" :: Nil       => (Some(""), Nil)
+      case "--control" :: a :: more                        => (Some(a), more)
+      case "--control" :: Nil                              => (Some(""), Nil)
       case first :: more if first.startsWith("--control=") => (Some(first.stripPrefix("--control=")), more)
-      case other                    => (None, other)
+      case other                                           => (None, other)
     }
     parse(rest).map(address.orElse(env(ControlProtocol.AddressVariable)).getOrElse(ControlProtocol.DefaultAddress) -> _)
   }
 
-  /**
-   * Runs one command: sends it to the control port and hands each output line to `out` as it arrives, and errors to
-   * `err`. Returns the exit code.
-   */
+  /** Runs one command: sends it to the control port and hands each output line to `out` as it arrives, and errors to
+    * `err`. Returns the exit code.
+    */
   def run(args: Seq[String], env: String => Option[String], out: String => Unit, err: String => Unit): Int =
     invocation(args, env) match {
       case Left(message) =>
@@ -87,7 +87,8 @@ object RobotCtl {
         }
     }
 
-  private def exchange(host: String, port: Int, request: String, readTimeout: Int, out: String => Unit, err: String => Unit,
+  private def exchange(host: String, port: Int, request: String, readTimeout: Int, out: String => Unit,
+      err: String => Unit,
       noGateway: String => Int): Int = {
     val where = s"$host:$port"
     val socket = new Socket()
@@ -106,7 +107,7 @@ object RobotCtl {
               case Right(Answer.Line(l))  => out(l); next()
               case Right(Answer.Ok(t))    => if (t.nonEmpty) out(t); ExitOk
               case Right(Answer.Error(t)) => err(s"robotctl: $t"); ExitFailed
-              case Left(problem)          => err(s"robotctl: the gateway at $where answered oddly: $problem"); ExitFailed
+              case Left(problem) => err(s"robotctl: the gateway at $where answered oddly: $problem"); ExitFailed
             }
         }
       next()
@@ -128,16 +129,19 @@ object RobotCtl {
     }
   }
 
-  /**
-   * `robotctl doctor` without a running gateway: that is the first problem, and the machine is checked against the
-   * config the launcher would read (`configFile`, application.conf, the demo's defaults): the config itself, keys no
-   * reference knows, the demo's loopback addresses, ports held by other programs, the recording directory.
-   */
+  /** `robotctl doctor` without a running gateway: that is the first problem, and the machine is checked against the
+    * config the launcher would read (`configFile`, application.conf, the demo's defaults): the config itself, keys no
+    * reference knows, the demo's loopback addresses, ports held by other programs, the recording directory.
+    */
   def offlineDoctor(where: String, configFile: Option[String], out: String => Unit, err: String => Unit,
       probe: Preflight.PortUse => Preflight.Probe = Preflight.probe): Int = {
     import Doctor.Finding
-    val gateway = Finding("gateway", s"no gateway answers at $where", problem = true,
-      s"start it (bin/naogateway ${configFile.getOrElse("[robots.conf]")}), or give its control port with --control")
+    val gateway = Finding(
+      "gateway",
+      s"no gateway answers at $where",
+      problem = true,
+      s"start it (bin/naogateway ${configFile.getOrElse("[robots.conf]")}), or give its control port with --control"
+    )
     val machine: Vector[Finding] =
       try {
         val c = Launcher.nodeConfig(Launcher.config(configFile.toSeq))
@@ -148,16 +152,20 @@ object RobotCtl {
         val ports = Preflight.portProblems(Preflight.ports(c), probe)
         val portFindings =
           if (ports.isEmpty) Vector(Finding("ports", "every port the gateway binds is free", problem = false))
-          else ports.map(p => Finding("ports", p.split("; ").head, problem = true, p.split("; ").drop(1).mkString("; ")))
+          else
+            ports.map(p => Finding("ports", p.split("; ").head, problem = true, p.split("; ").drop(1).mkString("; ")))
         val settings = naogateway.GatewaySettings.fromConfig(c.getConfig("naogateway"))
-        val disk = Option.when(settings.recording.enabled)(Doctor.disk(settings.recording.directory)).toVector.flatMap { d =>
-          Doctor.recordingFindings(naogateway.recording.Recording.Off.stats, Some(d))
-        }
-        val config = Finding("config", configFile.fold("the demo's defaults (no file given)")(f => s"$f reads without error"), problem = false)
+        val disk =
+          Option.when(settings.recording.enabled)(Doctor.disk(settings.recording.directory)).toVector.flatMap { d =>
+            Doctor.recordingFindings(naogateway.recording.Recording.Off.stats, Some(d))
+          }
+        val config = Finding("config",
+          configFile.fold("the demo's defaults (no file given)")(f => s"$f reads without error"), problem = false)
         config +: (keys ++ loopback ++ portFindings ++ disk)
       } catch {
         case e: Exception if Preflight.problem(e).isDefined =>
-          Vector(Finding("config", Preflight.problem(e).get.stripPrefix("config: "), problem = true, "correct the key named"))
+          Vector(Finding("config", Preflight.problem(e).get.stripPrefix("config: "), problem = true,
+              "correct the key named"))
       }
     val all = gateway +: machine
     all.foreach(f => out(f.line))
@@ -165,10 +173,9 @@ object RobotCtl {
     ExitFailed
   }
 
-  /**
-   * The next line of `in` (without its `\n`), None at the end of the stream; a line longer than the protocol allows
-   * is refused rather than read into memory without bound.
-   */
+  /** The next line of `in` (without its `\n`), None at the end of the stream; a line longer than the protocol allows is
+    * refused rather than read into memory without bound.
+    */
   private def readLine(in: InputStream): Option[Either[String, String]] = {
     val buffer = new ByteArrayOutputStream(128)
     var b = in.read()
@@ -178,14 +185,16 @@ object RobotCtl {
         buffer.write(b)
         b = in.read()
       }
-      if (buffer.size() > ControlProtocol.MaxAnswerBytes) Some(Left(s"an answer line is longer than ${ControlProtocol.MaxAnswerBytes} bytes"))
+      if (buffer.size() > ControlProtocol.MaxAnswerBytes)
+        Some(Left(s"an answer line is longer than ${ControlProtocol.MaxAnswerBytes} bytes"))
       else if (b < 0) None
       else Some(Right(new String(buffer.toByteArray, StandardCharsets.UTF_8)))
     }
   }
 
   def main(args: Array[String]): Unit = {
-    val code = run(args.toSeq, name => Option(System.getenv(name)), line => System.out.println(line), line => System.err.println(line))
+    val code = run(args.toSeq, name => Option(System.getenv(name)), line => System.out.println(line),
+      line => System.err.println(line))
     System.out.flush()
     System.exit(code)
   }

@@ -16,22 +16,34 @@ import naogateway._
 class DoctorSpec extends AnyWordSpec with Matchers {
 
   private def settingsOf(naogatewayBlock: String): GatewaySettings =
-    GatewaySettings.fromConfig(ConfigFactory.parseString(naogatewayBlock).withFallback(ConfigFactory.load()).getConfig("naogateway"))
+    GatewaySettings.fromConfig(
+      ConfigFactory.parseString(naogatewayBlock).withFallback(ConfigFactory.load()).getConfig("naogateway"))
 
-  private val team = settingsOf("""naogateway.robots = [ { id = 1, address = "10.0.0.101" }, { id = 2, address = "10.0.0.102" } ]""")
+  private val team =
+    settingsOf("""naogateway.robots = [ { id = 1, address = "10.0.0.101" }, { id = 2, address = "10.0.0.102" } ]""")
   private def robot(id: Int, online: Boolean = true, heard: Boolean = true, clockBound: Double = 2.0) =
-    RobotSnapshot(id, new InetSocketAddress(s"10.0.0.${100 + id}", 40000), online = online, receivedAtNanos = if (heard) 1L else 0L,
-      clock = Some(ClockEstimate(1000, 2000000000L, 1.0, clockBound, 0.0, 100)))
-  private def links(id: Int, rejected: Map[String, Long] = Map.empty) = LinkStats(id, 10, 10, 100, 100, Some(2.0), 0.0, 0, rejected)
+    RobotSnapshot(
+      id,
+      new InetSocketAddress(s"10.0.0.${100 + id}", 40000),
+      online = online,
+      receivedAtNanos = if (heard) 1L else 0L,
+      clock = Some(ClockEstimate(1000, 2000000000L, 1.0, clockBound, 0.0, 100))
+    )
+  private def links(id: Int, rejected: Map[String, Long] = Map.empty) =
+    LinkStats(id, 10, 10, 100, 100, Some(2.0), 0.0, 0, rejected)
   private val gcSettings = SimulatedGameControllerSettings(new InetSocketAddress("127.0.0.1", 3838))
-  private val packet = SimulatedGameController.controlData(gcSettings, GameControlVersion.V8, SimulatedGameController.momentAt(gcSettings, 0L), 1)
-  private val heardGame = GameSnapshot(Some(packet), Gateway.GameSource("10.0.0.0/24", Some(new InetSocketAddress("10.0.0.5", 3838)), 0), Map.empty, competition = true)
-  private val traffic = Outbox.TrafficStats(2000, 3000, 125000, Map.empty, 100, 100, 0, 0, gameRunning = false, competition = true)
+  private val packet = SimulatedGameController.controlData(gcSettings, GameControlVersion.V8,
+    SimulatedGameController.momentAt(gcSettings, 0L), 1)
+  private val heardGame = GameSnapshot(Some(packet),
+    Gateway.GameSource("10.0.0.0/24", Some(new InetSocketAddress("10.0.0.5", 3838)), 0), Map.empty, competition = true)
+  private val traffic =
+    Outbox.TrafficStats(2000, 3000, 125000, Map.empty, 100, 100, 0, 0, gameRunning = false, competition = true)
   private val stats = Gateway.GatewayStats(100, 0, 10, Map.empty, 2)
   private val wellDisk = Disk(Paths.get("recordings"), writable = true, 100L * 1024 * 1024 * 1024)
 
-  private val allWell = Facts(team, Vector(robot(1), robot(2)), Vector(links(1), links(2)), stats, Some(traffic), heardGame,
-    Vector.empty, Some(wellDisk), None)
+  private val allWell =
+    Facts(team, Vector(robot(1), robot(2)), Vector(links(1), links(2)), stats, Some(traffic), heardGame,
+      Vector.empty, Some(wellDisk), None)
 
   private def problems(facts: Facts): Vector[String] = Doctor.findings(facts).filter(_.problem).map(_.line)
 
@@ -55,26 +67,35 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     }
 
     "find GameController packets the gateway cannot read (a version it does not know)" in {
-      val p = problems(allWell.copy(game = heardGame.copy(refused = Map(Rejection.BadGameControllerPacket.name -> 40L))))
+      val p =
+        problems(allWell.copy(game = heardGame.copy(refused = Map(Rejection.BadGameControllerPacket.name -> 40L))))
       p should have size 1
       p.head should startWith("FAIL GameController version: 40 packet(s) the gateway cannot read")
     }
 
     "name the versions the gateway reads and the fail-safe gate for a GameController it cannot read" in {
-      val unreadable = heardGame.copy(latest = None, refused = Map(Rejection.BadGameControllerPacket.name -> 3L),
-        gateReason = Some("the trusted GameController's packet cannot be read: unknown version 20"))
+      val unreadable = heardGame.copy(
+        latest = None,
+        refused = Map(Rejection.BadGameControllerPacket.name -> 3L),
+        gateReason = Some("the trusted GameController's packet cannot be read: unknown version 20")
+      )
       val p = problems(allWell.copy(game = unreadable))
-      p.exists(l => l.startsWith("FAIL GameController version: 3 packet(s)") && l.contains("versions 19, 12, 8, 7") && l.contains("fail safe")) shouldBe true
-      p should contain("FAIL competition gate: on and closed: the trusted GameController's packet cannot be read: unknown version 20; " +
-        "fix: see the GameController checks above")
+      p.exists(l =>
+        l.startsWith("FAIL GameController version: 3 packet(s)") && l.contains("versions 19, 12, 8, 7") && l.contains(
+          "fail safe")) shouldBe true
+      p should contain(
+        "FAIL competition gate: on and closed: the trusted GameController's packet cannot be read: unknown version 20; " +
+          "fix: see the GameController checks above")
     }
 
     "find a second GameController and the team's message budget running out, and show the budget" in {
-      val warned = heardGame.copy(source = heardGame.source.copy(budget = Some("team messages (team 12, UDP 10012): 50 of 12000 left"),
-        warnings = Vector("two GameControllers heard: 10.0.0.5 and 10.0.0.9")))
+      val warned = heardGame.copy(
+        source = heardGame.source.copy(budget = Some("team messages (team 12, UDP 10012): 50 of 12000 left"),
+          warnings = Vector("two GameControllers heard: 10.0.0.5 and 10.0.0.9")))
       val lines = Doctor.gameControllerFindings(warned).map(_.line)
       lines should contain("ok   team messages: team messages (team 12, UDP 10012): 50 of 12000 left")
-      problems(allWell.copy(game = warned)).exists(_.startsWith("FAIL GameController: two GameControllers heard: 10.0.0.5 and 10.0.0.9")) shouldBe true
+      problems(allWell.copy(game = warned)).exists(
+        _.startsWith("FAIL GameController: two GameControllers heard: 10.0.0.5 and 10.0.0.9")) shouldBe true
     }
 
     "say whether the competition gate is closed now, and why" in {
@@ -84,7 +105,8 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     }
 
     "report the GameController's version and state when heard" in {
-      Doctor.gameControllerFindings(heardGame).head.line should startWith("ok   GameController: heard, version 8, state ")
+      Doctor.gameControllerFindings(heardGame).head.line should startWith(
+        "ok   GameController: heard, version 8, state ")
     }
 
     "find a robot configured but never heard, and one offline after being heard" in {
@@ -95,16 +117,21 @@ class DoctorSpec extends AnyWordSpec with Matchers {
         "FAIL robot 2: offline (configured at 10.0.0.102, heard before); fix: check its battery and WiFi module; it must keep " +
           "sending keep-alives every 200 ms (robotctl status shows its loss)")
       // A configured robot the gateway has no actor for yet is never heard too.
-      problems(allWell.copy(robots = Vector(robot(1)))).exists(_.startsWith("FAIL robot 2: configured at 10.0.0.102 but never heard")) shouldBe true
+      problems(allWell.copy(robots = Vector(robot(1)))).exists(
+        _.startsWith("FAIL robot 2: configured at 10.0.0.102 but never heard")) shouldBe true
     }
 
     "find a robot heard but not configured, and frames claiming a robot's id from an unexpected address" in {
       val stranger = robot(7).copy(address = new InetSocketAddress("10.0.0.150", 40000))
-      val mismatch = stats.copy(rejected = Map(Rejection.RobotIdMismatch.name -> 9L), rejectedBySource = Map("10.0.0.66" -> 9L))
+      val mismatch =
+        stats.copy(rejected = Map(Rejection.RobotIdMismatch.name -> 9L), rejectedBySource = Map("10.0.0.66" -> 9L))
       val p = problems(allWell.copy(robots = allWell.robots :+ stranger, stats = mismatch))
-      p should contain("FAIL robot 7: heard from 10.0.0.150 but not configured; fix: if it is yours, add { id = 7, address = \"10.0.0.150\" } " +
-        "to naogateway.robots; if not, another team's robot sends here")
-      p.exists(l => l.startsWith("FAIL robot addresses: 9 frame(s) whose robot id belongs to another address") && l.contains("10.0.0.66")) shouldBe true
+      p should contain(
+        "FAIL robot 7: heard from 10.0.0.150 but not configured; fix: if it is yours, add { id = 7, address = \"10.0.0.150\" } " +
+          "to naogateway.robots; if not, another team's robot sends here")
+      p.exists(l =>
+        l.startsWith("FAIL robot addresses: 9 frame(s) whose robot id belongs to another address") && l.contains(
+          "10.0.0.66")) shouldBe true
     }
 
     "find a robot whose frames fail signature verification" in {
@@ -123,9 +150,11 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     "find a clock estimate that does not converge" in {
       val p = problems(allWell.copy(robots = Vector(robot(1), robot(2, clockBound = 180.0))))
       p should have size 1
-      p.head should startWith("FAIL robot 2 clock: estimate does not converge (error bound ±180 ms over 100 keep-alives)")
+      p.head should startWith(
+        "FAIL robot 2 clock: estimate does not converge (error bound ±180 ms over 100 keep-alives)")
       // A young estimate is wide by design and not judged yet.
-      val young = robot(2, clockBound = 400.0).copy(clock = robot(2).clock.map(_.copy(errorBoundMillis = 400.0, samples = 12)))
+      val young =
+        robot(2, clockBound = 400.0).copy(clock = robot(2).clock.map(_.copy(errorBoundMillis = 400.0, samples = 12)))
       problems(allWell.copy(robots = Vector(robot(1), young))) shouldBe empty
     }
 
@@ -136,11 +165,13 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     }
 
     "find a recording directory that is not writable, a disk nearly full, and failing writes" in {
-      problems(allWell.copy(disk = Some(wellDisk.copy(writable = false)))).head should startWith("FAIL recording: recordings is not writable")
+      problems(allWell.copy(disk = Some(wellDisk.copy(writable = false)))).head should startWith(
+        "FAIL recording: recordings is not writable")
       problems(allWell.copy(disk = Some(wellDisk.copy(usableBytes = 300L * 1024 * 1024)))).head should startWith(
         "FAIL recording: 300.0 MiB free on the disk of recordings")
       val failing = stats.copy(recording = stats.recording.copy(enabled = true, failed = 7))
-      problems(allWell.copy(stats = failing)).head should startWith("FAIL recording writes: 7 entries could not be written")
+      problems(allWell.copy(stats = failing)).head should startWith(
+        "FAIL recording writes: 7 entries could not be written")
     }
 
     "look at a real directory: writable here, not writable below a file" in {
@@ -151,7 +182,8 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     }
 
     "find FU-Remote not listening where the relay sends, and see it when it listens" in {
-      val relayed = allWell.copy(settings = team.copy(relay = Some(new InetSocketAddress("127.0.0.1", 11012))), fuRemoteListening = Some(false))
+      val relayed = allWell.copy(settings = team.copy(relay = Some(new InetSocketAddress("127.0.0.1", 11012))),
+        fuRemoteListening = Some(false))
       problems(relayed).head should startWith("FAIL FU-Remote relay: nothing listens on UDP 127.0.0.1:11012")
       val fuRemote = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
       try Doctor.listening(new InetSocketAddress("127.0.0.1", fuRemote.getLocalPort)) shouldBe Some(true)
@@ -177,7 +209,8 @@ class DoctorSpec extends AnyWordSpec with Matchers {
       val closedPort = nothing.getLocalPort
       nothing.close()
       try {
-        val file = Files.writeString(dir.resolve("robots.conf"),
+        val file = Files.writeString(
+          dir.resolve("robots.conf"),
           s"""apps.control.bind = "127.0.0.1:${held.getLocalPort}"
              |apps.zeromq.enabled = off
              |apps.launcher.simulated-robots = 0
@@ -185,17 +218,21 @@ class DoctorSpec extends AnyWordSpec with Matchers {
              |naogateway.game-controller.enabled = off
              |naogateway.recording.directory = "${dir.resolve("rec")}"
              |naogateway.competiton.enabled = on
-             |""".stripMargin)
+             |""".stripMargin
+        )
         val out = Vector.newBuilder[String]
         val err = Vector.newBuilder[String]
-        val code = RobotCtl.run(Seq("--control", s"127.0.0.1:$closedPort", "doctor", file.toString), _ => None, out += _, err += _)
+        val code = RobotCtl.run(Seq("--control", s"127.0.0.1:$closedPort", "doctor", file.toString), _ => None,
+          out += _, err += _)
         code shouldBe RobotCtl.ExitFailed
         val lines = out.result()
         lines.head shouldBe s"FAIL gateway: no gateway answers at 127.0.0.1:$closedPort; fix: start it (bin/naogateway $file), or give its control port with --control"
-        lines should contain("FAIL config: naogateway.competiton.enabled is not a setting and is ignored; fix: correct the typo (every key " +
-          "with its default is in the reference.conf files)")
-        lines should contain(s"FAIL ports: port ${held.getLocalPort} (TCP on 127.0.0.1, the control port robotctl talks to) is in use by " +
-          "another program; fix: stop that program or move the port with apps.control.bind (NAOGATEWAY_CONTROL)")
+        lines should contain(
+          "FAIL config: naogateway.competiton.enabled is not a setting and is ignored; fix: correct the typo (every key " +
+            "with its default is in the reference.conf files)")
+        lines should contain(
+          s"FAIL ports: port ${held.getLocalPort} (TCP on 127.0.0.1, the control port robotctl talks to) is in use by " +
+            "another program; fix: stop that program or move the port with apps.control.bind (NAOGATEWAY_CONTROL)")
         lines.exists(_.startsWith(s"ok   recording: ${dir.resolve("rec")} writable")) shouldBe true
         err.result() shouldBe Vector("robotctl: 3 problem(s), each with its fix above")
       } finally held.close()

@@ -6,7 +6,8 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import robotmiddleware.cluster.MiddlewareCluster
 
-/** The launcher's config: the demo's defaults, what outranks them, and what its app node shares with the gateway node. */
+/** The launcher's config: the demo's defaults, what outranks them, and what its app node shares with the gateway node.
+  */
 class LauncherConfigSpec extends AnyWordSpec with Matchers {
 
   private val noApplication = ConfigFactory.empty()
@@ -30,7 +31,8 @@ class LauncherConfigSpec extends AnyWordSpec with Matchers {
     }
 
     "let application.conf override the launcher's defaults, and the config file override both" in {
-      val application = ConfigFactory.parseString("naogateway.link { bind-address = \"0.0.0.0\", robot-port = 11011 }\napps.launcher.simulated-robots = 0")
+      val application = ConfigFactory.parseString(
+        "naogateway.link { bind-address = \"0.0.0.0\", robot-port = 11011 }\napps.launcher.simulated-robots = 0")
       val c = Launcher.nodeConfig(ConfigFactory.empty(), application)
       c.getString("naogateway.link.bind-address") shouldBe "0.0.0.0"
       c.getInt("naogateway.link.robot-port") shouldBe 11011

@@ -18,9 +18,11 @@ import robotmiddleware.RobotMiddleware
 /** The launcher's gateway node when its gateway or its middleware stops: it says which, and stops rather than hang. */
 class LauncherWatchSpec extends AnyWordSpec with Matchers {
 
-  /** The launcher's config on `robots` (the gateway's robot port), with nothing else listening: no cluster, no views. */
-  private def config(robots: InetSocketAddress) = Launcher.nodeConfig(ConfigFactory.parseString(
-    s"""akka.actor.provider = local
+  /** The launcher's config on `robots` (the gateway's robot port), with nothing else listening: no cluster, no views.
+    */
+  private def config(robots: InetSocketAddress) = Launcher.nodeConfig(
+    ConfigFactory.parseString(
+      s"""akka.actor.provider = local
        |akka.loglevel = WARNING
        |apps.launcher { simulated-robots = 0, ball-follower-robot = 0, game-controller = off, view = lines, refresh = 10s }
        |apps.zeromq.enabled = off
@@ -29,10 +31,13 @@ class LauncherWatchSpec extends AnyWordSpec with Matchers {
        |naogateway.recording.enabled = off
        |naogateway.game-controller.enabled = off
        |naogateway.link { bind-address = "${robots.getAddress.getHostAddress}", robot-port = ${robots.getPort} }
-       |""".stripMargin), ConfigFactory.empty())
+       |""".stripMargin),
+    ConfigFactory.empty()
+  )
 
   /** The root `start` makes, on `robots`: the part it says stopped (if any, in time), and whether the node stopped. */
-  private def run(robots: InetSocketAddress)(start: (String => Unit) => Behavior[Launcher.Command]): (Option[String], Boolean) = {
+  private def run(robots: InetSocketAddress)(start: (
+          String => Unit) => Behavior[Launcher.Command]): (Option[String], Boolean) = {
     val said = Promise[String]()
     val node = ActorSystem(start(part => said.trySuccess(part)), "launcher-watch", config(robots))
     try {
@@ -56,7 +61,8 @@ class LauncherWatchSpec extends AnyWordSpec with Matchers {
       val robots = new InetSocketAddress(TestLoopback.address(0), 0)
       val failing = (_: ActorRef[naogateway.Gateway.Command]) =>
         Behaviors.setup[RobotMiddleware.Command](_ => throw new IllegalStateException("the middleware's test failure"))
-      run(robots)(stopped => Launcher.Root(stopped = stopped, makeMiddleware = failing)) shouldBe ((Some("middleware"), true))
+      run(robots)(stopped => Launcher.Root(stopped = stopped, makeMiddleware = failing)) shouldBe ((Some("middleware"),
+        true))
     }
 
     "stay up while both run" in {

@@ -13,10 +13,9 @@ import apps.zeromq.PythonClientSpec
 import naogateway.{Gateway, GatewaySettings, ZeroMqRobot}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
-/**
- * robotctl against a real gateway and the simulated firmware: every error a robot answers (protocol.md §7.4) ends the
- * control exchange with `error …` and robotctl with exit code 1, whatever the error's kind.
- */
+/** robotctl against a real gateway and the simulated firmware: every error a robot answers (protocol.md §7.4) ends the
+  * control exchange with `error …` and robotctl with exit code 1, whatever the error's kind.
+  */
 class RobotCtlRobotErrorSpec
     extends ScalaTestWithActorTestKit(PythonClientSpec.config + "\napps.zeromq.enabled = off\n")
     with AnyWordSpecLike
@@ -37,15 +36,19 @@ class RobotCtlRobotErrorSpec
       val robot = PythonClientSpec.startRobot()
       try {
         val configured = GatewaySettings(system)
-        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZeroMqRobot(20, robot.endpoint))))),
+        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZeroMqRobot(20,
+                robot.endpoint))))),
           "gateway")
         val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
-        val server = spawn(ControlServer(middleware, ControlSettings(system).copy(host = "127.0.0.1", port = 0)), "control")
+        val server =
+          spawn(ControlServer(middleware, ControlSettings(system).copy(host = "127.0.0.1", port = 0)), "control")
         val probe = createTestProbe[InetSocketAddress]()
         server ! ControlServer.GetAddress(probe.ref)
         val control = s"127.0.0.1:${probe.receiveMessage(10.seconds).getPort}"
 
-        eventually(timeout(20.seconds), interval(200.millis)) { robotctl(control, "call", "20", "system", "ping").code shouldBe 0 }
+        eventually(timeout(20.seconds), interval(200.millis)) {
+          robotctl(control, "call", "20", "system", "ping").code shouldBe 0
+        }
         // One call per error kind of §7.4 the simulated firmware can give from its starting posture (sit).
         val errors = Vector(
           Seq("call", "20", "motion", "head", "0.0", "0.8") -> "out of range: ",

@@ -17,7 +17,8 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
 
   private val fleet = new FleetStub(1000)
   private lazy val control: String = {
-    val server = spawn(ControlServer.withInterface(fleet, ControlSettings(system).copy(host = "127.0.0.1", port = 0)), "control")
+    val server =
+      spawn(ControlServer.withInterface(fleet, ControlSettings(system).copy(host = "127.0.0.1", port = 0)), "control")
     val probe = createTestProbe[InetSocketAddress]()
     server ! ControlServer.GetAddress(probe.ref)
     s"127.0.0.1:${probe.receiveMessage(10.seconds).getPort}"
@@ -34,7 +35,11 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
   }
 
   /** A loopback port with nothing listening on it. */
-  private def closedPort(): Int = { val s = new ServerSocket(0); try s.getLocalPort finally s.close() }
+  private def closedPort(): Int = {
+    val s = new ServerSocket(0);
+    try s.getLocalPort
+    finally s.close()
+  }
 
   "robotctl's command line" should {
     "read status, call with typed parameters, and watch with a default duration" in {
@@ -54,8 +59,10 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
     }
     "find the control port in --control, else in NAOGATEWAY_CONTROL, else at the default" in {
       val env = Map("NAOGATEWAY_CONTROL" -> "127.0.0.2:7000")
-      RobotCtl.invocation(Seq("--control", "127.0.0.3:8000", "status"), env.get) shouldBe Right("127.0.0.3:8000" -> RobotCtl.Request.Status)
-      RobotCtl.invocation(Seq("--control=127.0.0.3:8000", "status"), env.get) shouldBe Right("127.0.0.3:8000" -> RobotCtl.Request.Status)
+      RobotCtl.invocation(Seq("--control", "127.0.0.3:8000", "status"), env.get) shouldBe Right(
+        "127.0.0.3:8000" -> RobotCtl.Request.Status)
+      RobotCtl.invocation(Seq("--control=127.0.0.3:8000", "status"), env.get) shouldBe Right(
+        "127.0.0.3:8000" -> RobotCtl.Request.Status)
       RobotCtl.invocation(Seq("status"), env.get) shouldBe Right("127.0.0.2:7000" -> RobotCtl.Request.Status)
       RobotCtl.invocation(Seq("status"), _ => None) shouldBe Right("127.0.0.1:11019" -> RobotCtl.Request.Status)
     }
@@ -67,20 +74,26 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
       run.err shouldBe empty
       run.code shouldBe RobotCtl.ExitOk
       run.out.size shouldBe 1001
-      run.out.head.split("\\s+").toList shouldBe List("id", "address", "state", "link", "battery", "posture", "role", "rtt", "loss", "clock", "drift")
-      run.out(1).split("\\s+").toList shouldBe List("1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
+      run.out.head.split("\\s+").toList shouldBe List("id", "address", "state", "link", "battery", "posture", "role",
+        "rtt", "loss", "clock", "drift")
+      run.out(1).split("\\s+").toList shouldBe List("1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit",
+        "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
     }
 
     "make a call with its parameters typed as on the command line, the port taken from the environment" in {
       val run = robotctl(Seq("call", "3", "speech", "say", "hello world"), Map("NAOGATEWAY_CONTROL" -> control))
-      run shouldBe Run(RobotCtl.ExitOk, Vector("robot 3: speech.say -> Text(speech.say(Text(hello world)))"), Vector.empty)
+      run shouldBe Run(RobotCtl.ExitOk, Vector("robot 3: speech.say -> Text(speech.say(Text(hello world)))"),
+        Vector.empty)
       fleet.history should contain inOrderElementsOf Vector("acquire 3 speech", "call 3 speech.say", "release 3 speech")
     }
 
     "print the gateway's error and exit 1 for an unknown robot or a failing call" in {
-      robotctl(Seq("--control", control, "call", "5000", "system", "ping")) shouldBe Run(1, Vector.empty, Vector("robotctl: no robot 5000 is known"))
-      robotctl(Seq("--control", control, "call", "5", "system", "ping")) shouldBe Run(1, Vector.empty, Vector("robotctl: robot 5: no such method"))
-      robotctl(Seq("--control", control, "watch", "5000")) shouldBe Run(1, Vector.empty, Vector("robotctl: no robot 5000 is known"))
+      robotctl(Seq("--control", control, "call", "5000", "system", "ping")) shouldBe Run(1, Vector.empty,
+        Vector("robotctl: no robot 5000 is known"))
+      robotctl(Seq("--control", control, "call", "5", "system", "ping")) shouldBe Run(1, Vector.empty,
+        Vector("robotctl: robot 5: no such method"))
+      robotctl(Seq("--control", control, "watch", "5000")) shouldBe Run(1, Vector.empty,
+        Vector("robotctl: no robot 5000 is known"))
     }
 
     "stream a watch" in {
@@ -94,7 +107,8 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
       robotctl(Seq("dance")) shouldBe Run(2, Vector.empty, Vector(RobotCtl.usage))
       robotctl(Seq("--control", "nowhere", "status")) shouldBe
         Run(2, Vector.empty, Vector("robotctl: --control / NAOGATEWAY_CONTROL: 'nowhere' is not host:port"))
-      robotctl(Seq("call", "1", "m", "f", "x" * 5000)) shouldBe Run(2, Vector.empty, Vector("robotctl: the command is longer than 4096 bytes"))
+      robotctl(Seq("call", "1", "m", "f", "x" * 5000)) shouldBe Run(2, Vector.empty,
+        Vector("robotctl: the command is longer than 4096 bytes"))
     }
 
     "say that no gateway is running, and exit 1, when nothing listens" in {
@@ -105,15 +119,17 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
 
     "start no actor system and load no Akka, Typesafe config or Logback classes" in {
       val java = s"${System.getProperty("java.home")}/bin/java"
-      val process = new ProcessBuilder(Seq(java, "-verbose:class", "-cp", System.getProperty("java.class.path"), "apps.RobotCtl",
-        "--control", control, "call", "1", "system", "ping").asJava).redirectErrorStream(true).start()
+      val process =
+        new ProcessBuilder(Seq(java, "-verbose:class", "-cp", System.getProperty("java.class.path"), "apps.RobotCtl",
+            "--control", control, "call", "1", "system", "ping").asJava).redirectErrorStream(true).start()
       val output = scala.io.Source.fromInputStream(process.getInputStream).getLines().toVector
       process.waitFor(60, TimeUnit.SECONDS) shouldBe true
       withClue(output.filterNot(_.contains("[class,load]")).mkString("\n")) { process.exitValue() shouldBe 0 }
       output should contain("robot 1: system.ping -> Text(system.ping())")
       val loaded = output.filter(_.contains("[class,load]"))
       loaded.size should be > 100
-      loaded.filter(l => Seq(" akka.", " com.typesafe.config.", " ch.qos.logback.", " org.slf4j.").exists(l.contains)) shouldBe empty
+      loaded.filter(l =>
+        Seq(" akka.", " com.typesafe.config.", " ch.qos.logback.", " org.slf4j.").exists(l.contains)) shouldBe empty
     }
   }
 }

@@ -1,9 +1,8 @@
 package naogateway
 
-/**
- * Call ids (`uint32`, protocol.md 6.6; docs/architecture.md 5): the two top bits name the owner of the call, the
- * lower 30 bits count up per owner and wrap, so a reply reaches its owner by its id alone.
- */
+/** Call ids (`uint32`, protocol.md 6.6; docs/architecture.md 5): the two top bits name the owner of the call, the lower
+  * 30 bits count up per owner and wrap, so a reply reaches its owner by its id alone.
+  */
 private[naogateway] object CallId {
 
   /** The counting part of a call id: the lower 30 bits. */

@@ -7,30 +7,30 @@ final case class ClockSyncSettings(window: FiniteDuration = ClockSync.DefaultWin
   require(window >= 5.seconds && window <= 1.hour, s"clock-sync.window must be between 5 s and 1 h, is $window")
 }
 
-/**
- * The estimate of one robot's clock against the gateway's, from keep-alives alone (nothing is sent to the robot):
- * immutable, one value per robot session, advanced by [[add]].
- *
- * Each keep-alive gives a point (robot time r, gateway receive time g). With the robot's clock a line of the gateway's,
- * g = line(r) + delay, and the delay is never negative, so every point lies on or above the true line and the points
- * of the least delay lie closest to it. The fit is the line below every point of the window that lies highest at the
- * window's mean robot time: the edge of the points' lower convex hull over that mean (a linear programme whose answer
- * is that edge), its slope the drift. The slope is held within [[MaxDriftPpm]], which only a window of few points
- * can exceed.
- *
- * The error bound: the fit's line touches two points, and the error of the line is linear between what their delays
- * make it at each. Those delays are not seen; they are taken as at most a multiple of the `k`-th smallest distance of the
- * window's points above the line (`k` = [[BoundRank]], or half the points while fewer; the factor is
- * [[BoundFactor]]) plus [[ReadingMillis]] for the robot's whole-ms readings. Away from the two points the bound grows with the distance over their
- * span. It is a statistical bound for delays whose least values recur (the jitter of a LAN), not a proof: a link whose
- * every datagram of the window waited long shifts the offset by that wait (see [[ClockEstimate]]).
- *
- * Bounded memory: at most [[MaxSamples]] points within `window` of robot time. A robot clock that goes back by more
- * than a second starts a new session, as a restart does ([[restart]]); a point far below the line (beyond the bound
- * and [[OutlierMarginMillis]]) is set aside as an outlier, and three in a row mean the clock stepped: a new session
- * starts from them. The fit is computed again at most once per [[RefitEvery]] of robot time, or when a point lies below
- * the line, so a keep-alive costs little more than an append.
- */
+/** The estimate of one robot's clock against the gateway's, from keep-alives alone (nothing is sent to the robot):
+  * immutable, one value per robot session, advanced by [[add]].
+  *
+  * Each keep-alive gives a point (robot time r, gateway receive time g). With the robot's clock a line of the
+  * gateway's, g = line(r) + delay, and the delay is never negative, so every point lies on or above the true line and
+  * the points of the least delay lie closest to it. The fit is the line below every point of the window that lies
+  * highest at the window's mean robot time: the edge of the points' lower convex hull over that mean (a linear
+  * programme whose answer is that edge), its slope the drift. The slope is held within [[MaxDriftPpm]], which only a
+  * window of few points can exceed.
+  *
+  * The error bound: the fit's line touches two points, and the error of the line is linear between what their delays
+  * make it at each. Those delays are not seen; they are taken as at most a multiple of the `k`-th smallest distance of
+  * the window's points above the line (`k` = [[BoundRank]], or half the points while fewer; the factor is
+  * [[BoundFactor]]) plus [[ReadingMillis]] for the robot's whole-ms readings. Away from the two points the bound grows
+  * with the distance over their span. It is a statistical bound for delays whose least values recur (the jitter of a
+  * LAN), not a proof: a link whose every datagram of the window waited long shifts the offset by that wait (see
+  * [[ClockEstimate]]).
+  *
+  * Bounded memory: at most [[MaxSamples]] points within `window` of robot time. A robot clock that goes back by more
+  * than a second starts a new session, as a restart does ([[restart]]); a point far below the line (beyond the bound
+  * and [[OutlierMarginMillis]]) is set aside as an outlier, and three in a row mean the clock stepped: a new session
+  * starts from them. The fit is computed again at most once per [[RefitEvery]] of robot time, or when a point lies
+  * below the line, so a keep-alive costs little more than an append.
+  */
 final class ClockSync private (
     val settings: ClockSyncSettings,
     // The session's first point, subtracted from every point so that the doubles keep their precision.
@@ -84,10 +84,9 @@ final class ClockSync private (
       }
     }
 
-  /**
-   * A robot time from `RobotHealth.uptimeMs` (32 bits, wraps after about 49.7 days) for a keep-alive without
-   * `Status.timestamp`: the reading nearest this session's newest one, so a wrap is no step.
-   */
+  /** A robot time from `RobotHealth.uptimeMs` (32 bits, wraps after about 49.7 days) for a keep-alive without
+    * `Status.timestamp`: the reading nearest this session's newest one, so a wrap is no step.
+    */
   def unwrap32(uptimeMs: Long): Long =
     if (xs.isEmpty) uptimeMs & 0xffffffffL
     else {
@@ -169,10 +168,9 @@ object ClockSync {
   /** The factor on that distance. */
   val BoundFactor: Double = 2.5
 
-  /**
-   * What the robot's whole-ms readings add: each is up to 1 ms behind its clock, and as that cut sweeps along a window
-   * it can tilt the fit by up to half as much again.
-   */
+  /** What the robot's whole-ms readings add: each is up to 1 ms behind its clock, and as that cut sweeps along a window
+    * it can tilt the fit by up to half as much again.
+    */
   val ReadingMillis: Double = 1.5
 
   /** The largest drift a fit may show; crystals are within about 100 ppm. */
@@ -196,10 +194,9 @@ object ClockSync {
 
   private val NoPoints: Array[Double] = Array.emptyDoubleArray
 
-  /**
-   * The line y = c + s x fitted at robot time `at`; `v1`, `v2` the robot times of the points it touches (equal when
-   * the slope was held at the limit), `b` the bound on their delays.
-   */
+  /** The line y = c + s x fitted at robot time `at`; `v1`, `v2` the robot times of the points it touches (equal when
+    * the slope was held at the limit), `b` the bound on their delays.
+    */
   private final case class Fit(c: Double, s: Double, v1: Double, v2: Double, b: Double, at: Double) {
     private val limited = v2 <= v1
 

@@ -7,10 +7,9 @@ import akka.actor.typed.{ActorRef, Behavior}
 import scala.concurrent.duration.FiniteDuration
 import scala.reflect.ClassTag
 
-/**
- * One question to every robot actor (`GetRobots`, `GetLinkStats`): asks each, and answers once all did or
- * `timeout` (`snapshot-timeout`) passed. A robot actor that did not answer in time (restarting) is listed by `missing`.
- */
+/** One question to every robot actor (`GetRobots`, `GetLinkStats`): asks each, and answers once all did or `timeout`
+  * (`snapshot-timeout`) passed. A robot actor that did not answer in time (restarting) is listed by `missing`.
+  */
 private[naogateway] object Collector {
 
   /** What a collector receives: the robots' answers and its deadline. */
@@ -20,7 +19,8 @@ private[naogateway] object Collector {
 
   def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], timeout: FiniteDuration,
       replyTo: Vector[A] => Unit)(
-      ask: ActorRef[A] => RobotActor.Command, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A]): Behavior[Message] =
+      ask: ActorRef[A] => RobotActor.Command, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A])
+      : Behavior[Message] =
     Behaviors.setup[Message] { context =>
       Behaviors.withTimers { timers =>
         // One adapter for the one reply class this collector waits for.
@@ -28,7 +28,9 @@ private[naogateway] object Collector {
         robots.values.foreach { case (actor, _) => actor ! ask(got) }
         timers.startSingleTimer(TimedOut, timeout)
         def answer(known: Map[Int, A]): Behavior[Message] = {
-          replyTo(robots.toVector.sortBy(_._1).flatMap { case (id, (_, address)) => known.get(id).orElse(missing(id, address)) })
+          replyTo(robots.toVector.sortBy(_._1).flatMap { case (id, (_, address)) =>
+            known.get(id).orElse(missing(id, address))
+          })
           Behaviors.stopped
         }
         def collecting(known: Map[Int, A]): Behavior[Message] = Behaviors.receiveMessage {

@@ -2,16 +2,15 @@ package naogateway
 
 import naogateway.wire.ActuatorGroup
 
-/**
- * The order in which everything for one robot leaves: the pure core of `NoResponseActor`, the robot's one sender.
- *
- * Rules: a call of a slot supersedes every older call of that slot still waiting, and every older replaceable one in
- * flight (a target such as a walk's velocities or the head's angles: it gets no more retries and its held datagrams
- * are withdrawn); a stop or a posture once sent is never superseded: the robot carries it out, and its caller keeps
- * its answer; at most `maxInFlight` calls are in flight, later ones wait in arrival
- * order, at most `maxWaiting` of them; a safety call never waits. So within a slot the robot gets calls in the
- * order they were given, and nothing older follows a newer one: no walk after a stop.
- */
+/** The order in which everything for one robot leaves: the pure core of `NoResponseActor`, the robot's one sender.
+  *
+  * Rules: a call of a slot supersedes every older call of that slot still waiting, and every older replaceable one in
+  * flight (a target such as a walk's velocities or the head's angles: it gets no more retries and its held datagrams
+  * are withdrawn); a stop or a posture once sent is never superseded: the robot carries it out, and its caller keeps
+  * its answer; at most `maxInFlight` calls are in flight, later ones wait in arrival order, at most `maxWaiting` of
+  * them; a safety call never waits. So within a slot the robot gets calls in the order they were given, and nothing
+  * older follows a newer one: no walk after a stop.
+  */
 private[naogateway] final case class CommandOrder[A] private (
     inFlight: Vector[CommandOrder.Entry[A]],
     waiting: Vector[CommandOrder.Entry[A]],
@@ -22,9 +21,12 @@ private[naogateway] final case class CommandOrder[A] private (
 
   /** Takes call `e`: what it supersedes, then whether it leaves now, waits (no step) or is refused. */
   def submit(e: Entry[A]): (CommandOrder[A], Vector[Step[A]]) = {
-    val (sameFlying, otherFlying) = e.slot.fold((Vector.empty[Entry[A]], inFlight))(s => inFlight.partition(x => x.replaceable && x.slot.contains(s)))
-    val (sameWaiting, otherWaiting) = e.slot.fold((Vector.empty[Entry[A]], waiting))(s => waiting.partition(_.slot.contains(s)))
-    val superseded = sameFlying.map(Superseded(_, wasInFlight = true)) ++ sameWaiting.map(Superseded(_, wasInFlight = false))
+    val (sameFlying, otherFlying) =
+      e.slot.fold((Vector.empty[Entry[A]], inFlight))(s => inFlight.partition(x => x.replaceable && x.slot.contains(s)))
+    val (sameWaiting, otherWaiting) =
+      e.slot.fold((Vector.empty[Entry[A]], waiting))(s => waiting.partition(_.slot.contains(s)))
+    val superseded =
+      sameFlying.map(Superseded(_, wasInFlight = true)) ++ sameWaiting.map(Superseded(_, wasInFlight = false))
     val rest = copy(inFlight = otherFlying, waiting = otherWaiting)
     if (e.safety || (rest.inFlight.size < maxInFlight && rest.waiting.isEmpty))
       (rest.copy(inFlight = rest.inFlight :+ e), superseded :+ Transmit(e))
@@ -38,7 +40,8 @@ private[naogateway] final case class CommandOrder[A] private (
     }
   }
 
-  /** Call `key` has ended (answered, timed out, dropped, or given up waiting): it leaves, waiting calls take its room. */
+  /** Call `key` has ended (answered, timed out, dropped, or given up waiting): it leaves, waiting calls take its room.
+    */
   def complete(key: Long): (CommandOrder[A], Vector[Step[A]]) =
     copy(inFlight = inFlight.filterNot(_.key == key), waiting = waiting.filterNot(_.key == key)).admit
 
@@ -75,11 +78,11 @@ private[naogateway] final case class CommandOrder[A] private (
 /** Entries and steps of the command order. */
 private[naogateway] object CommandOrder {
 
-  /**
-   * A call: its key (its first call id), its slot, whether it is a safety call, what the owner keeps with it, and
-   * whether a newer call of its slot replaces it (targets do; a stop or a posture does not).
-   */
-  final case class Entry[A](key: Long, slot: Option[ActuatorGroup], safety: Boolean, payload: A, replaceable: Boolean = true)
+  /** A call: its key (its first call id), its slot, whether it is a safety call, what the owner keeps with it, and
+    * whether a newer call of its slot replaces it (targets do; a stop or a posture does not).
+    */
+  final case class Entry[A](key: Long, slot: Option[ActuatorGroup], safety: Boolean, payload: A,
+      replaceable: Boolean = true)
 
   /** What the owner must do. */
   sealed trait Step[A] extends Product with Serializable

@@ -9,14 +9,15 @@ import naogateway.link.UdpLink
 import naogateway.wire.Datagram
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
 
-/**
- * The gateway's GameController side, run inside the gateway actor (its state is the gateway's, touched only from its
- * messages): which packets count and from whom, the game state they give, the gates they set, the team's message
- * budget and, in the monitor role, the true game state and the robots' forwarded status messages.
- *
- * @param gate tells every gate (the outbox's, each ZeroMQ robot's) a reading
- * @param publish tells the gateway's subscribers an event
- */
+/** The gateway's GameController side, run inside the gateway actor (its state is the gateway's, touched only from its
+  * messages): which packets count and from whom, the game state they give, the gates they set, the team's message
+  * budget and, in the monitor role, the true game state and the robots' forwarded status messages.
+  *
+  * @param gate
+  *   tells every gate (the outbox's, each ZeroMQ robot's) a reading
+  * @param publish
+  *   tells the gateway's subscribers an event
+  */
 private[naogateway] final class GameControllerWatch(
     settings: GatewaySettings,
     context: ActorContext[Gateway.Command],
@@ -42,39 +43,52 @@ private[naogateway] final class GameControllerWatch(
 
   /** Where game state comes from, as `GetGameSource` answers. */
   def source(now: Long): Gateway.GameSource =
-    Gateway.GameSource(settings.gameControllerTrusted.describe, gameFrom, untrusted,
+    Gateway.GameSource(
+      settings.gameControllerTrusted.describe,
+      gameFrom,
+      untrusted,
       Option.when(settings.teamMessages.enabled)(budget.describe(now)),
       sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty),
-      trueStateAt.map(at => (now - at) / 1000000L), forwarded.sorted)
+      trueStateAt.map(at => (now - at) / 1000000L),
+      forwarded.sorted
+    )
 
-  /**
-   * The monitor role: the request for the true state, from the GameController socket, now and every request-interval
-   * (a child owns the timer); the forwarded status messages on a socket of their own.
-   */
+  /** The monitor role: the request for the true state, from the GameController socket, now and every request-interval
+    * (a child owns the timer); the forwarded status messages on a socket of their own.
+    */
   def startMonitor(gcLink: ActorRef[UdpLink.Command], m: MonitorSettings): Unit = {
-    context.log.info("Gateway monitoring the GameController at {}: asking for the true game state every {}", m.gameController,
+    context.log.info("Gateway monitoring the GameController at {}: asking for the true game state every {}",
+      m.gameController,
       m.requestInterval)
-    context.spawn(Behaviors.withTimers[String] { timers =>
-      gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
-      timers.startTimerWithFixedDelay("request", m.requestInterval)
-      Behaviors.receiveMessage { _ =>
+    context.spawn(
+      Behaviors.withTimers[String] { timers =>
         gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
-        Behaviors.same
-      }
-    }, "monitor-requests")
+        timers.startTimerWithFixedDelay("request", m.requestInterval)
+        Behaviors.receiveMessage { _ =>
+          gcLink ! UdpLink.Send(GameControllerCodec.monitorRequest, m.gameController)
+          Behaviors.same
+        }
+      },
+      "monitor-requests"
+    )
     val self = context.self
     val statusEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
-      self ! Gateway.MonitorStatusEvent(e)
-      Behaviors.same
-    }, "monitor-status-events")
-    context.spawn(UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, m.statusPort), statusEvents,
-      UdpLink.Options(reuseAddress = true, maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)), "monitor-status-link")
+        self ! Gateway.MonitorStatusEvent(e)
+        Behaviors.same
+      }, "monitor-status-events")
+    context.spawn(
+      UdpLink(
+        new InetSocketAddress(settings.gameControllerBindAddress, m.statusPort),
+        statusEvents,
+        UdpLink.Options(reuseAddress = true, maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)
+      ),
+      "monitor-status-link"
+    )
   }
 
-  /**
-   * A control packet from an address not trusted for game state: anyone on the field's WiFi can send one, and only the
-   * configured GameController steers the gate. A readable one is still noted, so a second GameController is named.
-   */
+  /** A control packet from an address not trusted for game state: anyone on the field's WiFi can send one, and only the
+    * configured GameController steers the gate. A readable one is still noted, so a second GameController is named.
+    */
   def untrustedPacket(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     untrusted += 1
     rejections.count(Rejection.UntrustedGameController, from)
@@ -88,7 +102,8 @@ private[naogateway] final class GameControllerWatch(
   def forwardedStatus(bytes: Array[Byte], from: InetSocketAddress): Unit =
     // Only the GameController forwards status messages; a stranger cannot fill the view.
     if (!settings.monitor.exists(_.gameController.getAddress == from.getAddress))
-      rejections.count(Rejection.UntrustedGameController, from, "status message from another host than the GameController")
+      rejections.count(Rejection.UntrustedGameController, from,
+        "status message from another host than the GameController")
     else
       GameControllerCodec.decodeForwardedStatus(bytes) match {
         case Right((robot, status)) => forwarded = forwarded.add(ForwardedStatus(robot, status, System.nanoTime()))
@@ -106,8 +121,9 @@ private[naogateway] final class GameControllerWatch(
         // The monitor role: the broadcast state may lag the true one by up to 10 s; the true one rules meanwhile.
         packets += 1
       case Right(data) => control(data, from, now)
-      case Left(_) if settings.monitor.exists(_.gameController.getAddress == from.getAddress) &&
-          GameControllerCodec.decodeTrueData(bytes).isRight =>
+      case Left(_)
+          if settings.monitor.exists(_.gameController.getAddress == from.getAddress) &&
+            GameControllerCodec.decodeTrueData(bytes).isRight =>
         control(GameControllerCodec.decodeTrueData(bytes).toOption.get, from, now)
         trueStateAt = Some(now)
       case Left(error) if Datagram.isGameControllerControl(bytes) =>

@@ -18,16 +18,14 @@ object Gateway {
   /** What the gateway accepts. */
   sealed trait Command
 
-  /**
-   * What the middleware may send the gateway: the questions, event subscriptions and a robot's [[RobotActor.Access]];
-   * never a robot actor's whole protocol. `RobotMiddleware` takes an `ActorRef[Gateway.MiddlewareView]`.
-   */
+  /** What the middleware may send the gateway: the questions, event subscriptions and a robot's [[RobotActor.Access]];
+    * never a robot actor's whole protocol. `RobotMiddleware` takes an `ActorRef[Gateway.MiddlewareView]`.
+    */
   sealed trait MiddlewareView extends Command
 
-  /**
-   * The read-only view of the gateway: questions that change nothing. Operator tools (the status view, the control
-   * port) hold an `ActorRef[Gateway.Query]`, so they can look but never reach a robot past the middleware.
-   */
+  /** The read-only view of the gateway: questions that change nothing. Operator tools (the status view, the control
+    * port) hold an `ActorRef[Gateway.Query]`, so they can look but never reach a robot past the middleware.
+    */
   sealed trait Query extends MiddlewareView
 
   /** Answers with the bound addresses (the real ports when 0 was configured). */
@@ -79,7 +77,8 @@ object Gateway {
   type GameSource = naogateway.GameSource; val GameSource: naogateway.GameSource.type = naogateway.GameSource
 
   /** Where the gateway listens ([[naogateway.GatewayAddresses]], api). */
-  type Addresses = naogateway.GatewayAddresses; val Addresses: naogateway.GatewayAddresses.type = naogateway.GatewayAddresses
+  type Addresses = naogateway.GatewayAddresses;
+  val Addresses: naogateway.GatewayAddresses.type = naogateway.GatewayAddresses
 
   /** The gateway's own figures ([[naogateway.GatewayStats]], api). */
   type GatewayStats = naogateway.GatewayStats; val GatewayStats: naogateway.GatewayStats.type = naogateway.GatewayStats
@@ -87,22 +86,21 @@ object Gateway {
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
 
-  /**
-    * A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
+  /** A known robot: `address` is where it receives (its IP at its receive port), and its IP is who it is; with
     * `signatures`, its frames count only when signed (the IP alone does not identify it then). A `discovered` one was
     * introduced by its keep-alive: it counts against `discovery.max-robots` and may be forgotten.
     */
   private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
       backlog: Backlog, signatures: Option[SignatureCheck] = None, discovered: Boolean = false)
 
-  /**
-   * The gateway with `configured` settings, on its sockets; or, with `replay`, fed from a recording instead: no socket
-   * is opened, nothing is sent anywhere, nothing is recorded.
-   */
+  /** The gateway with `configured` settings, on its sockets; or, with `replay`, fed from a recording instead: no socket
+    * is opened, nothing is sent anywhere, nothing is recorded.
+    */
   def apply(configured: GatewaySettings, replay: Option[Replay] = None): Behavior[Command] =
     Behaviors.setup { context =>
       // A replay reaches no robot: ZeroMQ robots, which would be called over their own sockets, are left out.
-      val settings = if (replay.isEmpty) configured else configured.copy(zeromq = configured.zeromq.copy(robots = Vector.empty))
+      val settings =
+        if (replay.isEmpty) configured else configured.copy(zeromq = configured.zeromq.copy(robots = Vector.empty))
       Behaviors.withStash(1024) { stash =>
         val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
         val port: RobotLink = replay match {
@@ -112,19 +110,25 @@ object Gateway {
           case None =>
             val p =
               try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
-              catch { case e: java.io.IOException => throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e) }
+              catch {
+                case e: java.io.IOException =>
+                  throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e)
+              }
             context.log.info("Gateway listening for robots on {}", p.localAddress)
             p
         }
         val clocks = new RobotClockEstimates
         val recording =
-          if (replay.isDefined) Recording.Off else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
+          if (replay.isDefined) Recording.Off
+          else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
         val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
         // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
-        val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(new FrameSigner(_))
+        val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(
+          new FrameSigner(_))
         val outbox = context.spawn(
-          Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress, routes), settings.budget,
-            settings.competition, signer, recording))
+          Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress,
+                routes), settings.budget,
+              settings.competition, signer, recording))
             .onFailure(settings.supervision.outbox.strategy),
           "outbox",
           RobotDispatcher
@@ -136,21 +140,27 @@ object Gateway {
           // class: a child of its own marks the team port's events instead.
           val self = context.self
           val teamEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
-            self ! TeamMessageEvent(e)
-            Behaviors.same
-          }, "team-message-events")
+              self ! TeamMessageEvent(e)
+              Behaviors.same
+            }, "team-message-events")
           context.spawn(
-            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port), teamEvents,
-              UdpLink.Options(reuseAddress = true, broadcast = true, maxDatagramsPerSecond = settings.teamMessages.maxDatagramsPerSecond)),
+            UdpLink(
+              new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port),
+              teamEvents,
+              UdpLink.Options(reuseAddress = true, broadcast = true,
+                maxDatagramsPerSecond = settings.teamMessages.maxDatagramsPerSecond)
+            ),
             "team-message-link"
           )
         }
         if (settings.gameControllerEnabled && replay.isEmpty) {
           context.spawn(
-            UdpLink(new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
+            UdpLink(
+              new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
               context.messageAdapter(GameControllerEvent.apply),
               UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true,
-                maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)),
+                maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)
+            ),
             "game-controller-link"
           )
           logic.bindingGameController
@@ -158,18 +168,18 @@ object Gateway {
       }
     }
 
-  /**
-   * Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only
-   * brings the robot's clock estimate, with which the recorder dates the robot's Status.
-   */
-  private def recordingEvents(recording: Recording, clocks: RobotClockEstimates): Behavior[GatewayEvent] = Behaviors.receiveMessage {
-    case RobotStatusUpdated(snapshot) =>
-      clocks.update(snapshot.robotId, snapshot.clock)
-      Behaviors.same
-    case event =>
-      recording.decision(Decision.Published(event))
-      Behaviors.same
-  }
+  /** Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only brings
+    * the robot's clock estimate, with which the recorder dates the robot's Status.
+    */
+  private def recordingEvents(recording: Recording, clocks: RobotClockEstimates): Behavior[GatewayEvent] =
+    Behaviors.receiveMessage {
+      case RobotStatusUpdated(snapshot) =>
+        clocks.update(snapshot.robotId, snapshot.clock)
+        Behaviors.same
+      case event =>
+        recording.decision(Decision.Published(event))
+        Behaviors.same
+    }
 
   /** The kernel receive buffer of the robot port: a burst of a few thousand datagrams waits there, not dropped. */
   private val ReceiveBufferBytes = 4 * 1024 * 1024
@@ -187,22 +197,24 @@ object Gateway {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
     private val rejections = new RejectionLedger.Shared
     private val gatewayBacklog = new Backlog(settings.gatewayBacklog)
-    private val reader = new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
+    private val reader =
+      new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
     private var gameControllerAddress: Option[InetSocketAddress] = None
     private var byId = Map.empty[Int, Entry]
     // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
     private var byAddress = Map.empty[InetAddress, Int]
     private var subscribers: Set[ActorRef[GatewayEvent]] =
-      // On the robot actors' own thread: every keep-alive's status event comes here, and a hand-over to another thread per
+      /* On the robot actors' own thread: every keep-alive's status event comes here, and a hand-over to another thread
+       * per */
       // keep-alive would cost more than the update itself.
-      if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events", RobotDispatcher)) else Set.empty
+      if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events", RobotDispatcher))
+      else Set.empty
     private val watch = new GameControllerWatch(settings, context, rejections, gate, publish)
 
-    /**
-     * Every packet, not only changes, reaches the one gate (the outbox's, for both transports): a restarted outbox
-     * learns the reading within one round; and it reaches it before any subscriber hears of the game, so a subscriber
-     * reacting to kick-off finds it closed.
-     */
+    /** Every packet, not only changes, reaches the one gate (the outbox's, for both transports): a restarted outbox
+      * learns the reading within one round; and it reaches it before any subscriber hears of the game, so a subscriber
+      * reacting to kick-off finds it closed.
+      */
     private def gate(reading: GameReading): Unit = {
       outbox ! Outbox.GameStateChanged(reading)
     }
@@ -244,7 +256,8 @@ object Gateway {
     /** The routing table the reader uses from now on: every datagram robot at its bound IP address. */
     private def publishRoutes(): Unit =
       routes.set(Routing.Table.of(byId.collect {
-        case (id, e) if !e.zeromq => Routing.Route(id, e.address.getAddress, PortReader.Inlet(e.actor, e.backlog, e.signatures))
+        case (id, e) if !e.zeromq =>
+          Routing.Route(id, e.address.getAddress, PortReader.Inlet(e.actor, e.backlog, e.signatures))
       }))
 
     private def robotRefs: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)] =
@@ -253,13 +266,15 @@ object Gateway {
     private def spawnRobot(robotId: Int, address: InetSocketAddress, discovered: Boolean): Entry = {
       val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
-        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false, discovered = discovered))
+        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false,
+            discovered = discovered))
           .onFailure(settings.supervision.robot.strategy),
         s"robot-$robotId",
         RobotDispatcher
       )
       context.watchWith(actor, RobotStopped(robotId, actor))
-      val signatures = settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
+      val signatures =
+        settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
       val entry = Entry(actor, address, zeromq = false, backlog, signatures, discovered)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address.getAddress, robotId)
@@ -275,7 +290,7 @@ object Gateway {
       val backlog = new Backlog(settings.robotBacklog)
       val actor = context.spawn(
         Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
-          RobotTransport.ZeroMq(robot.endpoint)))
+            RobotTransport.ZeroMq(robot.endpoint)))
           .onFailure(settings.supervision.robot.strategy),
         s"robot-${robot.robotId}",
         RobotDispatcher
@@ -284,11 +299,13 @@ object Gateway {
       byId = byId.updated(robot.robotId, Entry(actor, robot.address, zeromq = true, backlog))
     }
 
-    private def reject(kind: Rejection, from: InetSocketAddress, detail: => String): Unit = rejections.count(kind, from, detail)
+    private def reject(kind: Rejection, from: InetSocketAddress, detail: => String): Unit =
+      rejections.count(kind, from, detail)
 
     /** A link's datagrams over its cap, dropped unread: counted as the gateway being busy, with the last sender. */
     private def overCap(dropped: UdpLink.Dropped, port: String): Unit =
-      rejections.count(Rejection.GatewayBusy, dropped.lastFrom, s"${dropped.count} datagrams over the cap of the $port port", dropped.count)
+      rejections.count(Rejection.GatewayBusy, dropped.lastFrom,
+        s"${dropped.count} datagrams over the cap of the $port port", dropped.count)
 
     private def rejectFor(robotId: Option[Int], kind: Rejection, from: InetSocketAddress, detail: => String): Unit = {
       reject(kind, from, detail)
@@ -326,9 +343,11 @@ object Gateway {
         case u: Unrouted =>
           handleUnrouted(u)
           Behaviors.same
-        case GameControllerEvent(UdpLink.Received(bytes, from)) if recordGameController(bytes, from) && Datagram.isGameControllerReturn(bytes) =>
+        case GameControllerEvent(UdpLink.Received(bytes, from))
+            if recordGameController(bytes, from) && Datagram.isGameControllerReturn(bytes) =>
           Behaviors.same // robots' answers to the GameController share its port
-        case GameControllerEvent(UdpLink.Received(bytes, from)) if !settings.gameControllerTrusted.trusts(from.getAddress) =>
+        case GameControllerEvent(UdpLink.Received(bytes, from))
+            if !settings.gameControllerTrusted.trusts(from.getAddress) =>
           watch.untrustedPacket(bytes, from)
           Behaviors.same
         case GameControllerEvent(d: UdpLink.Dropped) =>
@@ -344,14 +363,16 @@ object Gateway {
           watch.teamMessage(bytes)
           Behaviors.same
         case TeamMessageEvent(UdpLink.BindFailed(address, reason)) =>
-          context.log.error("Team message listener cannot bind {}: {}; the message budget will not be counted", address, reason)
+          context.log.error("Team message listener cannot bind {}: {}; the message budget will not be counted", address,
+            reason)
           Behaviors.same
         case TeamMessageEvent(_) => Behaviors.same
         case MonitorStatusEvent(UdpLink.Received(bytes, from)) =>
           watch.forwardedStatus(bytes, from)
           Behaviors.same
         case MonitorStatusEvent(UdpLink.BindFailed(address, reason)) =>
-          context.log.error("Monitor status listener cannot bind {}: {}; forwarded robot statuses will not be shown", address, reason)
+          context.log.error("Monitor status listener cannot bind {}: {}; forwarded robot statuses will not be shown",
+            address, reason)
           Behaviors.same
         case MonitorStatusEvent(_) => Behaviors.same
         case GameControllerEvent(UdpLink.Received(bytes, from)) =>
@@ -381,14 +402,16 @@ object Gateway {
         case GetRobots(replyTo) =>
           if (byId.isEmpty) replyTo ! Vector.empty
           else
-            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, replyTo ! (_: Vector[RobotSnapshot]))(RobotActor.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
-              (id, address) => Some(RobotSnapshot(id, address))))
+            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, replyTo ! (_: Vector[RobotSnapshot]))(
+                RobotActor.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
+                (id, address) => Some(RobotSnapshot(id, address))))
           Behaviors.same
         case GetLinkStats(replyTo) =>
           if (byId.isEmpty) replyTo ! RobotLinks(Vector.empty)
           else
-            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotActor.GetLinkStats(_),
-              (l: LinkStats) => l.robotId, (_, _) => None))
+            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout,
+                (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotActor.GetLinkStats(_),
+                (l: LinkStats) => l.robotId, (_, _) => None))
           Behaviors.same
         case GetRobot(robotId, replyTo) =>
           replyTo ! byId.get(robotId).map(_.actor)
@@ -398,8 +421,16 @@ object Gateway {
           Behaviors.same
         case GetStats(replyTo) =>
           val ledger = rejections.current
-          replyTo ! GatewayStats(reader.datagramsIn, reader.relayed, watch.packetsCounted, ledger.byKind, byId.size, ledger.sources,
-            recording.stats, port match { case r: ReplayLink => Some(r.progress); case _ => None })
+          replyTo ! GatewayStats(
+            reader.datagramsIn,
+            reader.relayed,
+            watch.packetsCounted,
+            ledger.byKind,
+            byId.size,
+            ledger.sources,
+            recording.stats,
+            port match { case r: ReplayLink => Some(r.progress); case _ => None }
+          )
           Behaviors.same
         case GetTraffic(replyTo) =>
           outbox ! Outbox.GetStats(replyTo)
@@ -421,10 +452,9 @@ object Gateway {
           Behaviors.same
       }.receiveSignal { case (_, PostStop) => closePort() }
 
-    /**
-     * Decides a frame the reader's table could not place, binding a robot id to the IP address it first came from.
-     * Everything sent to the robot goes to that IP at the robot's receive port, never to the frame's source port.
-     */
+    /** Decides a frame the reader's table could not place, binding a robot id to the IP address it first came from.
+      * Everything sent to the robot goes to that IP at the robot's receive port, never to the frame's source port.
+      */
     private def frame(header: FrameHeader, contents: MessageContents, size: Int, from: InetSocketAddress): Unit = {
       val robotId = contents.robotId
       val ip = from.getAddress
@@ -438,16 +468,19 @@ object Gateway {
         // The reader saw the table before the gateway bound this IP (discovery in between).
         case Some(entry) if entry.address.getAddress == ip => deliver(entry)
         case Some(entry) =>
-          rejectFor(Some(robotId), Rejection.RobotIdMismatch, from, s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}")
+          rejectFor(Some(robotId), Rejection.RobotIdMismatch, from,
+            s"robot id $robotId claimed from another address than ${entry.address.getAddress.getHostAddress}")
         case None =>
           byAddress.get(ip) match {
-            case Some(other) => rejectFor(Some(other), Rejection.RobotIdMismatch, from, s"address of robot $other claims robot id $robotId")
+            case Some(other) => rejectFor(Some(other), Rejection.RobotIdMismatch, from,
+                s"address of robot $other claims robot id $robotId")
             case None if settings.discovery.enabled && contents.status.isDefined =>
               if (discoveredRobots >= settings.discovery.maxRobots)
                 // Anyone can invent robot ids: what they create is bounded, the rest is counted (and logged rarely).
                 reject(Rejection.RobotCapReached, from, s"robot id $robotId")
               else {
-                // The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port.
+                /* The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source
+                 * port. */
                 val at = new InetSocketAddress(ip, settings.robotReceivePort)
                 context.log.info("Discovered robot [{}] at {} (sending from {})", robotId, at, from)
                 deliver(spawnRobot(robotId, at, discovered = true))

@@ -13,10 +13,9 @@ import naogateway.recording.RecordingSettings
 import naogateway.wire.SigningKey
 import naogateway.wire.stream.StreamSettings
 
-/**
- * A robot known from configuration: its id, where it receives (its IP, which identifies it, at its receive port),
- * and whether its frames must be signed.
- */
+/** A robot known from configuration: its id, where it receives (its IP, which identifies it, at its receive port), and
+  * whether its frames must be signed.
+  */
 final case class StaticRobot(robotId: Int, address: InetSocketAddress, signing: RobotSigning = RobotSigning.Off)
 
 /** Liveness settings of the heartbeat. */
@@ -35,8 +34,10 @@ final case class HeartbeatSettings(
   require(probeTimeout > Duration.Zero, "heartbeat.probe-timeout must be positive")
   require(chances >= 1, "heartbeat.chances must be at least 1")
   require(qualityWindow >= keepAliveInterval * 2, "heartbeat.quality-window must cover at least two keep-alives")
-  require(0 < degradedBelow && degradedBelow <= goodAbove && goodAbove <= 1, "need 0 < degraded-below <= good-above <= 1")
-  require(probeBackoffMax >= probeTimeout * chances.toLong, "heartbeat.probe-backoff-max must be at least chances x probe-timeout")
+  require(0 < degradedBelow && degradedBelow <= goodAbove && goodAbove <= 1,
+    "need 0 < degraded-below <= good-above <= 1")
+  require(probeBackoffMax >= probeTimeout * chances.toLong,
+    "heartbeat.probe-backoff-max must be at least chances x probe-timeout")
 
   /** How long one round of probes lasts when none is answered: the first pause of the back-off. */
   def probeRound: FiniteDuration = probeTimeout * chances.toLong
@@ -46,7 +47,8 @@ final case class HeartbeatSettings(
     if (silentRounds <= 0) Duration.Zero
     else {
       val doublings = math.min(silentRounds - 1, 30)
-      val nanos = math.min(probeRound.toNanos.toDouble * math.pow(2, doublings.toDouble), probeBackoffMax.toNanos.toDouble)
+      val nanos =
+        math.min(probeRound.toNanos.toDouble * math.pow(2, doublings.toDouble), probeBackoffMax.toNanos.toDouble)
       nanos.toLong.nanos
     }
 
@@ -62,10 +64,12 @@ final case class CallSettings(timeout: FiniteDuration, idempotentRetries: Int, s
 }
 
 /** The team's traffic budget, and the datagrams each priority class may queue behind it. */
-final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: Int, warnAt: Double, probeShare: Double = 0.1,
+final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: Int, warnAt: Double,
+    probeShare: Double = 0.1,
     queueCapacity: Int = 1024) {
   require(teamBytesPerSecond >= 1400, "budget.team-bytes-per-second must allow at least one datagram")
-  require(robotBytesPerSecond == 0 || robotBytesPerSecond >= 1400, "budget.robot-bytes-per-second is 0 (none) or >= 1400")
+  require(robotBytesPerSecond == 0 || robotBytesPerSecond >= 1400,
+    "budget.robot-bytes-per-second is 0 (none) or >= 1400")
   require(warnAt > 0 && warnAt <= 1, "budget.warn-at must be in (0, 1]")
   require(probeShare > 0 && probeShare <= 1, "budget.probe-share must be in (0, 1]")
   require(probeBytesPerSecond >= 100, "budget.probe-share of the team budget must allow at least 100 bytes per second")
@@ -75,10 +79,9 @@ final case class BudgetSettings(teamBytesPerSecond: Int, robotBytesPerSecond: In
   def probeBytesPerSecond: Long = (teamBytesPerSecond * probeShare).toLong
 }
 
-/**
- * Robots the network introduces (`naogateway.discovery`): whether keep-alives create robots, how many discovered robots
- * may be known at once, and when a discovered robot that is not online is forgotten.
- */
+/** Robots the network introduces (`naogateway.discovery`): whether keep-alives create robots, how many discovered
+  * robots may be known at once, and when a discovered robot that is not online is forgotten.
+  */
 final case class DiscoverySettings(
     enabled: Boolean,
     maxRobots: Int,
@@ -101,7 +104,8 @@ final case class ZeroMqRobot(robotId: Int, endpoint: String) {
 
   /** The endpoint's host and port, for snapshots and events. */
   val address: InetSocketAddress = endpoint match {
-    case ZeroMqRobot.TcpEndpoint(host, port) if port.toInt > 0 && port.toInt <= 65535 => new InetSocketAddress(host, port.toInt)
+    case ZeroMqRobot.TcpEndpoint(host, port) if port.toInt > 0 && port.toInt <= 65535 =>
+      new InetSocketAddress(host, port.toInt)
     case _ =>
       throw new IllegalArgumentException(s"zeromq.robots: robot $robotId: '$endpoint' is not tcp://<host>:<port>")
   }
@@ -132,7 +136,8 @@ final case class ZeroMqLinkSettings(
 
 /** How a supervisor restarts a failed actor: the pause doubles from `minBackoff` up to `maxBackoff`, with jitter. */
 final case class RestartBackoff(minBackoff: FiniteDuration, maxBackoff: FiniteDuration, randomFactor: Double) {
-  require(minBackoff > Duration.Zero && maxBackoff >= minBackoff, "a restart back-off needs 0 < min-backoff <= max-backoff")
+  require(minBackoff > Duration.Zero && maxBackoff >= minBackoff,
+    "a restart back-off needs 0 < min-backoff <= max-backoff")
   require(randomFactor >= 0 && randomFactor <= 1, "a restart back-off's random-factor must be between 0 and 1")
 
   /** The supervisor strategy of these figures. */
@@ -146,8 +151,12 @@ object RestartBackoff {
   /** The back-off of block `c`; `key` names it in the error of a bad value. */
   def fromConfig(c: Config, key: String): RestartBackoff = {
     val b = c.getConfig(key)
-    try RestartBackoff(b.getDuration("min-backoff").toScala, b.getDuration("max-backoff").toScala, b.getDouble("random-factor"))
-    catch { case e: IllegalArgumentException => throw new IllegalArgumentException(s"$key: ${e.getMessage.stripPrefix("requirement failed: ")}") }
+    try RestartBackoff(b.getDuration("min-backoff").toScala, b.getDuration("max-backoff").toScala,
+        b.getDouble("random-factor"))
+    catch {
+      case e: IllegalArgumentException =>
+        throw new IllegalArgumentException(s"$key: ${e.getMessage.stripPrefix("requirement failed: ")}")
+    }
   }
 }
 
@@ -192,7 +201,8 @@ final case class GatewaySettings(
   require(gameControllerMaxDatagramsPerSecond > 0, "game-controller.max-datagrams-per-second must be positive")
   require(robotBacklog >= 1 && robotBacklog <= 100000, "link.robot-backlog must be between 1 and 100000")
   require(gatewayBacklog >= 1 && gatewayBacklog <= 100000, "link.gateway-backlog must be between 1 and 100000")
-  require(snapshotTimeout >= 10.millis && snapshotTimeout <= 1.minute, "snapshot-timeout must be between 10 ms and 1 min")
+  require(snapshotTimeout >= 10.millis && snapshotTimeout <= 1.minute,
+    "snapshot-timeout must be between 10 ms and 1 min")
   monitor.foreach { _ =>
     val conflicts = MonitorRole.conflicts(robots, bindAddress)
     require(conflicts.isEmpty, conflicts.mkString("; "))
@@ -200,22 +210,32 @@ final case class GatewaySettings(
   }
   require(newSessionKeepAlives >= 1 && newSessionKeepAlives <= 20, "new-session.keep-alives must be between 1 and 20")
   require(robotPort >= 0 && robotPort <= 65535, s"link.robot-port $robotPort is not a UDP port")
-  require(robotReceivePort > 0 && robotReceivePort <= 65535, s"link.robot-receive-port $robotReceivePort is not a UDP port")
-  require(gameControllerPort >= 0 && gameControllerPort <= 65535, s"game-controller.port $gameControllerPort is not a UDP port")
+  require(robotReceivePort > 0 && robotReceivePort <= 65535,
+    s"link.robot-receive-port $robotReceivePort is not a UDP port")
+  require(gameControllerPort >= 0 && gameControllerPort <= 65535,
+    s"game-controller.port $gameControllerPort is not a UDP port")
   require(robots.map(_.robotId).distinct.size == robots.size, "robots: every robot id may appear only once")
-  require(!(competition && gameControllerEnabled && !gameControllerTrusted.configured),
+  require(
+    !(competition && gameControllerEnabled && !gameControllerTrusted.configured),
     "competition mode needs game-controller.trusted-sources (the GameController's address or subnet, e.g. " +
-      "[\"10.0.0.0/24\"]; env NAOGATEWAY_GAMECONTROLLER_TRUSTED): otherwise anyone on the WiFi could start or end the game")
+      "[\"10.0.0.0/24\"]; env NAOGATEWAY_GAMECONTROLLER_TRUSTED): otherwise anyone on the WiFi could start or end the game"
+  )
   // A robot is known by its IP address (the gateway's routing), so two robots cannot share one.
-  require(robots.map(_.address.getAddress).distinct.size == robots.size, "robots: every robot address may appear only once")
-  require(robots.map(_.robotId).intersect(zeromq.robots.map(_.robotId)).isEmpty,
-    "a robot id may be a UDP robot (robots) or a ZeroMQ robot (zeromq.robots), not both")
-  require(signingKey.isDefined || !robots.exists(_.signing == RobotSigning.Required),
+  require(robots.map(_.address.getAddress).distinct.size == robots.size,
+    "robots: every robot address may appear only once")
+  require(
+    robots.map(_.robotId).intersect(zeromq.robots.map(_.robotId)).isEmpty,
+    "a robot id may be a UDP robot (robots) or a ZeroMQ robot (zeromq.robots), not both"
+  )
+  require(
+    signingKey.isDefined || !robots.exists(_.signing == RobotSigning.Required),
     s"robots: robot ${robots.find(_.signing == RobotSigning.Required).fold("")(_.robotId.toString)} has signing = required, " +
-      "but no signing key is set (signing.key, env NAOGATEWAY_SIGNING_KEY: the team key as 32 to 128 hexadecimal digits)")
+      "but no signing key is set (signing.key, env NAOGATEWAY_SIGNING_KEY: the team key as 32 to 128 hexadecimal digits)"
+  )
 
   /** Whether robot `robotId`'s frames must be signed; robots not configured (discovered ones) are `Off`. */
-  def signingOf(robotId: Int): RobotSigning = robots.find(_.robotId == robotId).fold[RobotSigning](RobotSigning.Off)(_.signing)
+  def signingOf(robotId: Int): RobotSigning =
+    robots.find(_.robotId == robotId).fold[RobotSigning](RobotSigning.Off)(_.signing)
 }
 
 /** Reading and validating the settings. */
@@ -269,7 +289,8 @@ object GatewaySettings {
         require(port > 0 && port <= 65535, s"robots: robot ${r.getInt("id")}: receive-port $port is not a UDP port")
         val signing =
           if (!r.hasPath("signing")) RobotSigning.Off
-          else RobotSigning.parse(r.getString("signing")).fold(e => throw new IllegalArgumentException(s"robots: robot ${r.getInt("id")}: $e"), identity)
+          else RobotSigning.parse(r.getString("signing")).fold(
+            e => throw new IllegalArgumentException(s"robots: robot ${r.getInt("id")}: $e"), identity)
         StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port), signing)
       },
       discovery = DiscoverySettings(
@@ -279,9 +300,15 @@ object GatewaySettings {
         forgetOfflineAfter = duration(discovery, "forget-offline-after")
       ),
       heartbeat = heartbeat,
-      calls = CallSettings(duration(calls, "timeout"), calls.getInt("idempotent-retries"), calls.getInt("stash-capacity")),
-      budget = BudgetSettings(budget.getInt("team-bytes-per-second"), budget.getInt("robot-bytes-per-second"),
-        budget.getDouble("warn-at"), budget.getDouble("probe-share"), budget.getInt("queue-capacity")),
+      calls =
+        CallSettings(duration(calls, "timeout"), calls.getInt("idempotent-retries"), calls.getInt("stash-capacity")),
+      budget = BudgetSettings(
+        budget.getInt("team-bytes-per-second"),
+        budget.getInt("robot-bytes-per-second"),
+        budget.getDouble("warn-at"),
+        budget.getDouble("probe-share"),
+        budget.getInt("queue-capacity")
+      ),
       competition = c.getBoolean("competition.enabled"),
       stream = StreamSettings(
         window = stream.getInt("window"),
@@ -289,7 +316,8 @@ object GatewaySettings {
         honourSkipNotices = stream.getBoolean("honour-skip-notices")
       ),
       zeromq = ZeroMqLinkSettings(
-        robots = zeroMq.getConfigList("robots").asScala.toVector.map(r => ZeroMqRobot(r.getInt("id"), r.getString("endpoint"))),
+        robots = zeroMq.getConfigList("robots").asScala.toVector.map(r =>
+          ZeroMqRobot(r.getInt("id"), r.getString("endpoint"))),
         statusInterval = duration(zeroMq, "status-interval"),
         statusTimeout = duration(zeroMq, "status-timeout"),
         sendQueue = zeroMq.getInt("send-queue"),
@@ -311,23 +339,33 @@ object GatewaySettings {
       recording = RecordingSettings.fromConfig(c.getConfig("recording")),
       teamMessages = {
         val t = gc.getConfig("team-messages")
-        TeamMessageSettings(t.getInt("team-number"), t.getInt("max-bytes"), t.getInt("per-game"), t.getInt("per-extra-minute"),
-          t.getDuration("rate-window").getSeconds.toInt, t.getInt("max-datagrams-per-second"))
+        TeamMessageSettings(
+          t.getInt("team-number"),
+          t.getInt("max-bytes"),
+          t.getInt("per-game"),
+          t.getInt("per-extra-minute"),
+          t.getDuration("rate-window").getSeconds.toInt,
+          t.getInt("max-datagrams-per-second")
+        )
       },
       gameControllerMaxDatagramsPerSecond = gc.getInt("max-datagrams-per-second"),
       snapshotTimeout = duration(c, "snapshot-timeout"),
       robotBacklog = link.getInt("robot-backlog"),
       gatewayBacklog = link.getInt("gateway-backlog"),
-      supervision = SupervisionSettings(RestartBackoff.fromConfig(c, "supervision.outbox"),
-        RestartBackoff.fromConfig(c, "supervision.robot"), RestartBackoff.fromConfig(c, "supervision.robot-children")),
+      supervision = SupervisionSettings(
+        RestartBackoff.fromConfig(c, "supervision.outbox"),
+        RestartBackoff.fromConfig(c, "supervision.robot"),
+        RestartBackoff.fromConfig(c, "supervision.robot-children")
+      ),
       monitor = {
         val m = gc.getConfig("monitor")
         if (!m.getBoolean("enabled")) None
         else {
           val address = m.getString("address").trim
-          require(address.nonEmpty, "game-controller.monitor.address: the GameController's address is needed for the monitor role")
+          require(address.nonEmpty,
+            "game-controller.monitor.address: the GameController's address is needed for the monitor role")
           Some(MonitorSettings(new InetSocketAddress(address, m.getInt("request-port")), m.getInt("status-port"),
-            duration(m, "request-interval"), duration(m, "true-state-fresh")))
+              duration(m, "request-interval"), duration(m, "true-state-fresh")))
         }
       }
     )
@@ -337,10 +375,12 @@ object GatewaySettings {
   private def signingKey(c: Config): Option[SigningKey] = {
     val hex = if (c.hasPath("signing.key")) c.getString("signing.key").trim else ""
     if (hex.isEmpty) None
-    else Some(SigningKey.fromHex(hex).fold(e => throw new IllegalArgumentException(s"signing.key (env NAOGATEWAY_SIGNING_KEY): $e"), identity))
+    else Some(SigningKey.fromHex(hex).fold(
+        e => throw new IllegalArgumentException(s"signing.key (env NAOGATEWAY_SIGNING_KEY): $e"), identity))
   }
 
-  /** `game-controller.trusted-sources`: a list of addresses or subnets, or one comma-separated string (the env form). */
+  /** `game-controller.trusted-sources`: a list of addresses or subnets, or one comma-separated string (the env form).
+    */
   private def trustedSources(gc: Config): TrustedSources = {
     val key = "trusted-sources"
     val texts =
@@ -348,6 +388,7 @@ object GatewaySettings {
       else if (gc.getValue(key).valueType == com.typesafe.config.ConfigValueType.STRING)
         gc.getString(key).split(",").toVector.map(_.trim).filter(_.nonEmpty)
       else gc.getStringList(key).asScala.toVector
-    TrustedSources(texts.map(t => Subnet.parse(t).fold(e => throw new IllegalArgumentException(s"game-controller.$key: $e"), identity)))
+    TrustedSources(texts.map(t =>
+        Subnet.parse(t).fold(e => throw new IllegalArgumentException(s"game-controller.$key: $e"), identity)))
   }
 }

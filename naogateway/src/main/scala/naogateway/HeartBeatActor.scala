@@ -101,7 +101,8 @@ private[naogateway] object HeartBeatActor {
 
   // Every step arms its timers before it reports: whoever reacts to a report (a test that then moves manual time,
   // say) finds the timers running already, so no timer starts late by the time that reaction took.
-  private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report], timers: TimerScheduler[Command]) {
+  private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report],
+      timers: TimerScheduler[Command]) {
     private var nextProbeId = 0L
     private var probeSentAt = 0L
     private var probeId = -1L
@@ -123,8 +124,8 @@ private[naogateway] object HeartBeatActor {
       case KeepAliveSeen =>
         armQuietCheck()
         onlineLoop(q.seen)
-      case QualityTick     => onlineLoop(q.tick(settings, report))
-      case QuietCheck      => probe(chance = 1, wasOnline = true, q)
+      case QualityTick            => onlineLoop(q.tick(settings, report))
+      case QuietCheck             => probe(chance = 1, wasOnline = true, q)
       case ProbeNow | BackoffOver => Behaviors.same
       case ProbeAnswered(id) =>
         if (isAwaited(id)) reportRoundTrip()
@@ -173,15 +174,17 @@ private[naogateway] object HeartBeatActor {
           wanted = false
           timers.startSingleTimer(BackoffKey, BackoffOver, settings.probeBackoff(silentRounds))
           if (wasOnline) {
-            report ! WentOffline(s"no keep-alive for ${settings.quietAfter.toMillis} ms and ${settings.chances} unanswered probes")
+            report ! WentOffline(
+              s"no keep-alive for ${settings.quietAfter.toMillis} ms and ${settings.chances} unanswered probes")
           }
           offline(q.copy(reported = LinkQuality.Offline, ticks = Queue.empty, current = 0))
         }
-      case QualityTick => probing(chance, wasOnline, q.tick(settings, report))
+      case QualityTick                         => probing(chance, wasOnline, q.tick(settings, report))
       case QuietCheck | ProbeNow | BackoffOver => Behaviors.same
     }
 
-    // Offline: the heartbeat stops probing; the next keep-alive or someone's request starts it again. A request starts a
+    /* Offline: the heartbeat stops probing; the next keep-alive or someone's request starts it again. A request starts
+     * a */
     // round only once the back-off after the silent rounds has passed (at once for a robot that answered last time).
     private def offline(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
       case KeepAliveSeen =>

@@ -6,12 +6,11 @@ final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, sess
 /** The restart rule over a robot's snapshot: the gateway's logic beside the data apps see (`RobotSnapshot`, api). */
 object KeepAliveStep {
 
-  /**
-   * One keep-alive applied to the gateway's view of a robot: the snapshot it publishes
-   * ([[RobotSnapshot.afterKeepAlive]]), and whether it completes a new session by the restart rule of
-   * docs/protocol.md §6.2 ([[SessionRule]]: `keepAlives` keep-alives in a row of one new session). The rule's state is
-   * kept apart from the snapshot, which shows only the latest keep-alive.
-   */
+  /** One keep-alive applied to the gateway's view of a robot: the snapshot it publishes
+    * ([[RobotSnapshot.afterKeepAlive]]), and whether it completes a new session by the restart rule of docs/protocol.md
+    * §6.2 ([[SessionRule]]: `keepAlives` keep-alives in a row of one new session). The rule's state is kept apart from
+    * the snapshot, which shows only the latest keep-alive.
+    */
   def keepAlive(
       previous: RobotSnapshot,
       sessions: SessionRule,
@@ -21,7 +20,8 @@ object KeepAliveStep {
       keepAlives: Int
   ): KeepAliveStep = {
     val current = RobotSnapshot.afterKeepAlive(previous, status, health, receivedAtNanos)
-    val (next, restarted) = sessions.step(SessionMark(current.bootId, current.uptimeMillis, receivedAtNanos / 1000000L), keepAlives)
+    val (next, restarted) =
+      sessions.step(SessionMark(current.bootId, current.uptimeMillis, receivedAtNanos / 1000000L), keepAlives)
     KeepAliveStep(current, restarted, next)
   }
 }

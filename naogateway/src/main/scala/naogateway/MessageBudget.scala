@@ -2,16 +2,20 @@ package naogateway
 
 import naogateway.wire.gamecontroller.{GameControlData, GameState, HslControlData}
 
-/**
- * The team-message rules of the Humanoid Soccer League's GameController (`naogateway.game-controller.team-messages`;
- * its `params.yaml` and README "Message Counting").
- *
- * @param teamNumber          our team number; its messages go to UDP 10000 + teamNumber. 0 = not counted
- * @param maxBytes            a message larger than this resets the team's score
- * @param perGame             messages a team may send in a game
- * @param perExtraMinute      added for each minute of additional time
- * @param rateWindowSeconds   the window over which the current rate is measured
- */
+/** The team-message rules of the Humanoid Soccer League's GameController (`naogateway.game-controller.team-messages`;
+  * its `params.yaml` and README "Message Counting").
+  *
+  * @param teamNumber
+  *   our team number; its messages go to UDP 10000 + teamNumber. 0 = not counted
+  * @param maxBytes
+  *   a message larger than this resets the team's score
+  * @param perGame
+  *   messages a team may send in a game
+  * @param perExtraMinute
+  *   added for each minute of additional time
+  * @param rateWindowSeconds
+  *   the window over which the current rate is measured
+  */
 final case class TeamMessageSettings(
     teamNumber: Int = 0,
     maxBytes: Int = 512,
@@ -21,8 +25,10 @@ final case class TeamMessageSettings(
     maxDatagramsPerSecond: Int = 2000
 ) {
   require(maxDatagramsPerSecond > 0, "team-messages.max-datagrams-per-second must be positive")
-  require(teamNumber >= 0 && teamNumber <= 254, s"game-controller.team-messages.team-number $teamNumber is not a team number (0 = off)")
-  require(maxBytes > 0 && perGame >= 0 && perGame <= 0xffff && perExtraMinute >= 0, "team-messages limits must be positive")
+  require(teamNumber >= 0 && teamNumber <= 254,
+    s"game-controller.team-messages.team-number $teamNumber is not a team number (0 = off)")
+  require(maxBytes > 0 && perGame >= 0 && perGame <= 0xffff && perExtraMinute >= 0,
+    "team-messages limits must be positive")
   require(rateWindowSeconds >= 5 && rateWindowSeconds <= 600, "team-messages.rate-window must be 5 s to 10 min")
 
   /** Whether the gateway counts team messages at all. */
@@ -32,23 +38,29 @@ final case class TeamMessageSettings(
   def port: Int = 10000 + teamNumber
 }
 
-/**
- * The team's message budget, counted as the GameController counts it, from the messages the gateway hears on the team
- * port and the trusted GameController's packets: a message counts in READY, SET and PLAYING but not in a penalty
- * shoot-out; one over `maxBytes`, or one when the budget is 0, is illegal (the GameController resets the score to 0);
- * the budget goes down by one for every counted message while above 0. A minute of additional time (the half's clock
- * jumping up by a minute outside PLAYING, as the GameController's "+" does) adds `perExtraMinute`, unless the team
- * communicated illegally. A new game (a first half after a second half) starts from `perGame` again. Pure; the
- * gateway holds one and feeds it.
- *
- * @param remaining      the budget as counted here
- * @param counted        messages counted (in READY, SET, PLAYING outside a shoot-out)
- * @param uncounted      messages heard outside those states
- * @param oversize       messages over `maxBytes`
- * @param overBudget     messages counted with the budget at 0
- * @param reported       the trusted GameController's own `messageBudget` for our team (version 19 only)
- * @param rateBuckets    counted messages per whole second of the gateway's clock, the last `rateWindowSeconds` of them
- */
+/** The team's message budget, counted as the GameController counts it, from the messages the gateway hears on the team
+  * port and the trusted GameController's packets: a message counts in READY, SET and PLAYING but not in a penalty
+  * shoot-out; one over `maxBytes`, or one when the budget is 0, is illegal (the GameController resets the score to 0);
+  * the budget goes down by one for every counted message while above 0. A minute of additional time (the half's clock
+  * jumping up by a minute outside PLAYING, as the GameController's "+" does) adds `perExtraMinute`, unless the team
+  * communicated illegally. A new game (a first half after a second half) starts from `perGame` again. Pure; the gateway
+  * holds one and feeds it.
+  *
+  * @param remaining
+  *   the budget as counted here
+  * @param counted
+  *   messages counted (in READY, SET, PLAYING outside a shoot-out)
+  * @param uncounted
+  *   messages heard outside those states
+  * @param oversize
+  *   messages over `maxBytes`
+  * @param overBudget
+  *   messages counted with the budget at 0
+  * @param reported
+  *   the trusted GameController's own `messageBudget` for our team (version 19 only)
+  * @param rateBuckets
+  *   counted messages per whole second of the gateway's clock, the last `rateWindowSeconds` of them
+  */
 private[naogateway] final case class MessageBudget(
     settings: TeamMessageSettings,
     remaining: Int,
@@ -70,7 +82,8 @@ private[naogateway] final case class MessageBudget(
   def illegal: Boolean = oversize > 0 || overBudget > 0
 
   /** Whether a message arriving now counts. */
-  def counting: Boolean = !shootOut && state.exists(s => s == GameState.Ready || s == GameState.Set || s == GameState.Playing)
+  def counting: Boolean =
+    !shootOut && state.exists(s => s == GameState.Ready || s == GameState.Set || s == GameState.Playing)
 
   /** One team message of `bytes` bytes heard at `nowNanos`. */
   def message(bytes: Int, nowNanos: Long): MessageBudget =
@@ -79,7 +92,7 @@ private[naogateway] final case class MessageBudget(
       val second = nowNanos / SecondNanos
       val buckets = rateBuckets.lastOption match {
         case Some((s, n)) if s == second => rateBuckets.init :+ (s -> (n + 1))
-        case _                           => (rateBuckets :+ (second -> 1)).filter(_._1 > second - settings.rateWindowSeconds)
+        case _ => (rateBuckets :+ (second -> 1)).filter(_._1 > second - settings.rateWindowSeconds)
       }
       copy(
         remaining = math.max(0, remaining - 1),
@@ -96,7 +109,8 @@ private[naogateway] final case class MessageBudget(
     val base = if (newGame) MessageBudget(settings, settings.perGame) else this
     // The "+" of the GameController: a minute more on the half's clock, only outside PLAYING, within one half.
     val extra = !newGame && firstHalf.contains(data.firstHalf) && data.gameState != GameState.Playing &&
-      secsRemaining.exists(before => data.secsRemaining - before >= ExtraMinuteSeconds - 1 && data.secsRemaining - before <= ExtraMinuteSeconds + 1)
+      secsRemaining.exists(before =>
+        data.secsRemaining - before >= ExtraMinuteSeconds - 1 && data.secsRemaining - before <= ExtraMinuteSeconds + 1)
     val ours = data match {
       case d: HslControlData => Seq(d.team0, d.team1).find(_.teamNumber == settings.teamNumber).map(_.messageBudget)
       case _                 => None
@@ -118,16 +132,17 @@ private[naogateway] final case class MessageBudget(
     rateBuckets.filter(_._1 > second - settings.rateWindowSeconds).map(_._2).sum.toDouble / settings.rateWindowSeconds
   }
 
-  /**
-   * What needs the team's attention at `nowNanos`: messages over the size limit, messages over the budget, and a budget
-   * that would run out before the end of the half at the current rate.
-   */
+  /** What needs the team's attention at `nowNanos`: messages over the size limit, messages over the budget, and a
+    * budget that would run out before the end of the half at the current rate.
+    */
   def warnings(nowNanos: Long): Vector[String] = {
     val rate = ratePerSecond(nowNanos)
     val left = secsRemaining.filter(_ > 0)
     Vector(
-      Option.when(oversize > 0)(s"$oversize team message(s) over ${settings.maxBytes} bytes: the GameController resets the score to 0"),
-      Option.when(overBudget > 0)(s"$overBudget team message(s) over the budget: the GameController resets the score to 0"),
+      Option.when(oversize > 0)(
+        s"$oversize team message(s) over ${settings.maxBytes} bytes: the GameController resets the score to 0"),
+      Option.when(overBudget > 0)(
+        s"$overBudget team message(s) over the budget: the GameController resets the score to 0"),
       left.filter(secs => counting && rate * secs > remaining).map(secs =>
         f"at $rate%.1f messages/s the budget ($remaining left) runs out ${(remaining / rate).toLong} s into the $secs s left of the half")
     ).flatten

@@ -4,17 +4,20 @@ import java.net.InetSocketAddress
 
 import scala.concurrent.duration._
 
-/**
- * The monitor role at a version-19 GameController (`naogateway.game-controller.monitor`, docs/protocol.md 10.9):
- * opt-in, for a field whose rules allow it. The gateway asks for the true game state with `RGTr` and keeps asking
- * every `requestInterval`; the GameController then sends it `RGTD` on the GameController port and forwards every
- * robot's status message to `statusPort`.
- *
- * @param gameController  the GameController's address and request port (3636)
- * @param statusPort      where the forwarded status messages arrive (3940)
- * @param requestInterval how often the request is sent again (a GameController restarts a monitor's senders on each)
- * @param trueStateFresh  how long after the last `RGTD` the broadcast `RGme` is not used for the gate and the view
- */
+/** The monitor role at a version-19 GameController (`naogateway.game-controller.monitor`, docs/protocol.md 10.9):
+  * opt-in, for a field whose rules allow it. The gateway asks for the true game state with `RGTr` and keeps asking
+  * every `requestInterval`; the GameController then sends it `RGTD` on the GameController port and forwards every
+  * robot's status message to `statusPort`.
+  *
+  * @param gameController
+  *   the GameController's address and request port (3636)
+  * @param statusPort
+  *   where the forwarded status messages arrive (3940)
+  * @param requestInterval
+  *   how often the request is sent again (a GameController restarts a monitor's senders on each)
+  * @param trueStateFresh
+  *   how long after the last `RGTD` the broadcast `RGme` is not used for the gate and the view
+  */
 final case class MonitorSettings(
     gameController: InetSocketAddress,
     statusPort: Int = 3940,
@@ -31,7 +34,8 @@ private[naogateway] final case class ForwardedStatuses(byPlayer: Map[(Int, Int),
   /** After one forwarded status message; beyond [[ForwardedStatuses.MaxPlayers]] players the oldest makes room. */
   def add(f: ForwardedStatus): ForwardedStatuses = {
     val updated = byPlayer.updated(f.status.team -> f.status.player, f)
-    ForwardedStatuses(if (updated.size <= ForwardedStatuses.MaxPlayers) updated else updated - updated.minBy(_._2.atNanos)._1)
+    ForwardedStatuses(
+      if (updated.size <= ForwardedStatuses.MaxPlayers) updated else updated - updated.minBy(_._2.atNanos)._1)
   }
 
   /** The statuses by team and player number. */
@@ -48,10 +52,9 @@ private[naogateway] object ForwardedStatuses {
 /** Checks of a monitor configuration. */
 private[naogateway] object MonitorRole {
 
-  /**
-   * Why `robots` would make this host send robot status messages itself, which the GameController answers by refusing
-   * it as a monitor for good: a robot on this host (a loopback address, or the address the gateway listens on).
-   */
+  /** Why `robots` would make this host send robot status messages itself, which the GameController answers by refusing
+    * it as a monitor for good: a robot on this host (a loopback address, or the address the gateway listens on).
+    */
   def conflicts(robots: Seq[StaticRobot], bindAddress: String): Vector[String] =
     robots.toVector.collect {
       case r if r.address.getAddress.isLoopbackAddress || r.address.getAddress.getHostAddress == bindAddress =>

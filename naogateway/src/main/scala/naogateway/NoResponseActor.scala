@@ -8,30 +8,27 @@ import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart, Signal}
 import naogateway.RobotFrames.{Outbound, Route}
 import naogateway.wire.{RpcCall, RpcMethod}
 
-/**
- * The one actor that sends to its robot. Everything for robot N passes here: the callers' calls (submitted by
- * `ResponseActor`, which correlates their answers), the heartbeat's probes, option commands, secure-stream segments
- * and a ZeroMQ robot's status polls. They leave in the order `CommandOrder` decides (safety first, latest wins within
- * a slot, never a walk after a stop), at most `MaxInFlight` of them taking room in the robot's buffer at once (the
- * rest wait, bounded), encoded by `RobotFrames`, through the outbox: the one competition gate and the team budget.
- */
+/** The one actor that sends to its robot. Everything for robot N passes here: the callers' calls (submitted by
+  * `ResponseActor`, which correlates their answers), the heartbeat's probes, option commands, secure-stream segments
+  * and a ZeroMQ robot's status polls. They leave in the order `CommandOrder` decides (safety first, latest wins within
+  * a slot, never a walk after a stop), at most `MaxInFlight` of them taking room in the robot's buffer at once (the
+  * rest wait, bounded), encoded by `RobotFrames`, through the outbox: the one competition gate and the team budget.
+  */
 object NoResponseActor {
 
   /** What the sender accepts. */
   sealed trait Command
 
-  /**
-   * Sends `call` in order, its reply dropped; `replyTo`, when given, learns how it ended (the robot's answer, an error
-   * or a drop). Sent once, never retried.
-   */
+  /** Sends `call` in order, its reply dropped; `replyTo`, when given, learns how it ended (the robot's answer, an error
+    * or a drop). Sent once, never retried.
+    */
   final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None,
       priority: Priority = Priority.Command) extends Command
 
-  /**
-   * Sends `out` in order. `key` names it while it takes room (a call's first call id; the sender picks one when
-   * `None`); `awaits` says whether it takes room until answered; `outcome` learns the outbox's word on each
-   * transmission (marked with its call id, or the key); `notices` learns what the order did with it.
-   */
+  /** Sends `out` in order. `key` names it while it takes room (a call's first call id; the sender picks one when
+    * `None`); `awaits` says whether it takes room until answered; `outcome` learns the outbox's word on each
+    * transmission (marked with its call id, or the key); `notices` learns what the order did with it.
+    */
   private[naogateway] final case class Submit(
       out: Outbound,
       priority: Priority,
@@ -112,8 +109,8 @@ object NoResponseActor {
   private type Order = CommandOrder[Item]
 
   /** The sender of robot `robotId`; `robot` owns the route and counts what leaves. */
-  private[naogateway] def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild])
-      : Behavior[Command] =
+  private[naogateway] def apply(
+      robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>
@@ -155,8 +152,8 @@ object NoResponseActor {
       .receiveSignal(signals(None))
 
     /** Sending: `nextKey` numbers the entries that come without a key of their own (below every call id). */
-    private def running(order: Order, route: Route, responder: ActorRef[ResponseActor.Command], nextKey: Long)
-        : Behavior[Command] =
+    private def running(
+        order: Order, route: Route, responder: ActorRef[ResponseActor.Command], nextKey: Long): Behavior[Command] =
       Behaviors
         .receiveMessage[Command] {
           case Send(call, replyTo, priority) =>
@@ -202,8 +199,8 @@ object NoResponseActor {
         .receiveSignal(signals(Some(order)))
 
     /** Carries out the order's steps: supersessions first (their withdrawals reach the outbox before any send). */
-    private def perform(order: Order, steps: Vector[CommandOrder.Step[Item]], route: Route, submitted: Option[Long])
-        : Order =
+    private def perform(
+        order: Order, steps: Vector[CommandOrder.Step[Item]], route: Route, submitted: Option[Long]): Order =
       steps.foldLeft(order) {
         case (o, CommandOrder.Superseded(e, wasInFlight)) =>
           if (wasInFlight) {
@@ -259,7 +256,7 @@ object NoResponseActor {
           case s: Send =>
             val why = RobotFailure.Interrupted(robotId, s.call.name)
             s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(why)))
-          case _         => ()
+          case _ => ()
         }
         Behaviors.same
     }

@@ -13,20 +13,18 @@ import naogateway.recording.{Decision, Recording}
 import naogateway.wire.{FrameSigning, WireLimits}
 import naogateway.wire.gamecontroller.GameState
 
-/**
- * The last gate before the air, for both transports: the competition rule (applied here alone), the team's traffic
- * budget and the priority classes. Every robot's sender (`NoResponseActor`) sends through it.
- */
+/** The last gate before the air, for both transports: the competition rule (applied here alone), the team's traffic
+  * budget and the priority classes. Every robot's sender (`NoResponseActor`) sends through it.
+  */
 object Outbox {
 
   /** What the outbox accepts. */
   sealed trait Command
 
-  /**
-   * Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns the outcome, marked with `tag`. `signed`:
-   * `bytes` is an unsigned FU-Remote frame of a robot that must sign, signed here at the moment it leaves. `via`: a
-   * ZeroMQ robot's link, which takes the bytes instead of the datagram socket, behind the same gate and budget.
-   */
+  /** Sends `bytes` to robot `robotId` at `to`; `replyTo`, when given, learns the outcome, marked with `tag`. `signed`:
+    * `bytes` is an unsigned FU-Remote frame of a robot that must sign, signed here at the moment it leaves. `via`: a
+    * ZeroMQ robot's link, which takes the bytes instead of the datagram socket, behind the same gate and budget.
+    */
   private[naogateway] final case class Send(
       robotId: Int,
       to: InetSocketAddress,
@@ -42,10 +40,9 @@ object Outbox {
     def size: Int = if (signed) bytes.length + FrameSigning.FieldBytes else bytes.length
   }
 
-  /**
-   * Takes back robot `robotId`'s datagrams marked with `tags` that still wait for the budget: a call superseded by a
-   * newer one must not leave after it. A `Send` from the same sender after this one is processed after it.
-   */
+  /** Takes back robot `robotId`'s datagrams marked with `tags` that still wait for the budget: a call superseded by a
+    * newer one must not leave after it. A `Send` from the same sender after this one is processed after it.
+    */
   private[naogateway] final case class Withdraw(robotId: Int, tags: Set[Long]) extends Command
 
   /** Robot `robotId` is gone (forgotten): its waiting datagrams and its traffic meter go too. */
@@ -92,11 +89,10 @@ object Outbox {
 
   private val Second = 1000000000L
 
-  /**
-   * An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs;
-   * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
-   * second while sending) go to `recording`.
-   */
+  /** An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs;
+    * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
+    * second while sending) go to `recording`.
+    */
   private[naogateway] def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean,
       signer: Option[FrameSigner] = None, recording: Recording = Recording.Off): Behavior[Command] =
     Behaviors.setup { context =>
@@ -141,7 +137,7 @@ private final class Outbox(
     if (now - lastBudgetRecord >= Second) {
       lastBudgetRecord = now
       recording.decision(Decision.Budget(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
-        Priority.all.map(p => p.name -> queues(p.rank).size).toMap))
+          Priority.all.map(p => p.name -> queues(p.rank).size).toMap))
     }
   }
 
@@ -173,7 +169,8 @@ private final class Outbox(
     robotMeter(s.robotId).record(now, s.size)
     if (s.priority == Priority.Heartbeat) probes.record(now, s.size)
     // Signed now, not when it was queued: the robot accepts only growing timestamps, and the queues reorder.
-    val bytes = if (!s.signed) Right(s.bytes) else signer.toRight("no signing key").flatMap(_.sign(s.bytes).left.map(_.describe))
+    val bytes =
+      if (!s.signed) Right(s.bytes) else signer.toRight("no signing key").flatMap(_.sign(s.bytes).left.map(_.describe))
     // Written here, on the outbox's own thread: no link actor between the decision and the socket. A full kernel
     // buffer takes nothing (UDP would lose the datagram further on anyway): counted as dropped. A ZeroMQ robot's link
     // reports itself whether its socket took the message.
@@ -181,7 +178,8 @@ private final class Outbox(
       case Some(zeroMq) => zeroMq ! ZeroMqRobotLink.Send(s.bytes, s.replyTo, s.tag)
       case None if !bytes.exists(link.send(_, s.to)) =>
         dropped += 1
-        if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
+        if (RateLimitedLog.due(dropped))
+          log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
       case None => ()
     }
     warnIfLoaded(now)
@@ -195,10 +193,9 @@ private final class Outbox(
     }
   }
 
-  /**
-   * Sends what the budget allows, most urgent class first, and sets a timer for the rest. A datagram that does not fit
-   * the budget holds back everything behind it; probes held back only by their share let the classes behind them go.
-   */
+  /** Sends what the budget allows, most urgent class first, and sets a timer for the rest. A datagram that does not fit
+    * the budget holds back everything behind it; probes held back only by their share let the classes behind them go.
+    */
   private def drain(now: Long): Unit = {
     var blocked = false
     var rank = 0
@@ -233,9 +230,11 @@ private final class Outbox(
       } else if (s.signed && (signer.isEmpty || s.size > WireLimits.MaxDatagramBytes)) {
         dropped += 1
         record(now, s, "dropped")
-        s.replyTo.foreach(_ ! Dropped(s.tag,
-          if (signer.isEmpty) "the frame must be signed, but the gateway has no signing key"
-          else s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"))
+        s.replyTo.foreach(_ ! Dropped(
+            s.tag,
+            if (signer.isEmpty) "the frame must be signed, but the gateway has no signing key"
+            else s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"
+          ))
       } else {
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {
@@ -246,7 +245,8 @@ private final class Outbox(
           dropped += 1
           droppedByClass(rank) += 1
           record(now, s, "dropped")
-          s.replyTo.foreach(_ ! Dropped(s.tag, s"the ${s.priority.name} queue holds ${budget.queueCapacity} datagrams already"))
+          s.replyTo.foreach(_ ! Dropped(s.tag,
+              s"the ${s.priority.name} queue holds ${budget.queueCapacity} datagrams already"))
           // Per class at its 1st, 10th, 100th ... drop: a flood of probes cannot flood the log.
           if (RateLimitedLog.due(droppedByClass(rank)))
             log.warn("Outbox dropped {} datagram(s) so far: {} queue full", droppedByClass(rank), s.priority.name)
@@ -256,7 +256,8 @@ private final class Outbox(
           s.replyTo.foreach(_ ! Accepted(s.tag))
           // Safety must not wait for the timer; other classes drain when the budget frees, or at once when only probes
           // held back by their share wait (they must not make the others wait for the timer).
-          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer) || queues(Priority.Heartbeat.rank).nonEmpty) drain(now)
+          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer) || queues(Priority.Heartbeat.rank).nonEmpty)
+            drain(now)
         }
       }
       Behaviors.same
@@ -301,9 +302,19 @@ private final class Outbox(
       Behaviors.same
     case GetStats(replyTo) =>
       val now = System.nanoTime()
-      replyTo ! TrafficStats(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
-        Priority.all.map(p => p.name -> queues(p.rank).size).toMap, out.totalDatagrams, in.totalDatagrams, refused,
-        dropped, gameIsRunning, competition, CompetitionGate.why(reading))
+      replyTo ! TrafficStats(
+        out.inWindow(now),
+        in.inWindow(now),
+        budget.teamBytesPerSecond,
+        Priority.all.map(p => p.name -> queues(p.rank).size).toMap,
+        out.totalDatagrams,
+        in.totalDatagrams,
+        refused,
+        dropped,
+        gameIsRunning,
+        competition,
+        CompetitionGate.why(reading)
+      )
       Behaviors.same
   }
 }

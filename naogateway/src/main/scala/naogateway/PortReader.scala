@@ -9,10 +9,9 @@ import naogateway.link.{Backlog, DatagramWriter, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
 import naogateway.recording.Recording
 
-/**
- * The robot port's reader side of the gateway: runs on the reader thread, routes each datagram with the table the
- * gateway last published, and hands the robot actors (or the gateway) their messages directly.
- */
+/** The robot port's reader side of the gateway: runs on the reader thread, routes each datagram with the table the
+  * gateway last published, and hands the robot actors (or the gateway) their messages directly.
+  */
 private[naogateway] final class PortReader(
     settings: GatewaySettings,
     port: RobotLink,
@@ -56,7 +55,8 @@ private[naogateway] final class PortReader(
       case Routing.SegmentToRobot(route, segment) =>
         deliver(route, RobotActor.SegmentReceived(segment), from)
       case unrouted: Routing.ToGateway =>
-        if (gatewayBacklog.tryAdd()) gateway ! Gateway.Unrouted(unrouted) else rejections.count(Rejection.GatewayBusy, from)
+        if (gatewayBacklog.tryAdd()) gateway ! Gateway.Unrouted(unrouted)
+        else rejections.count(Rejection.GatewayBusy, from)
       case Routing.Rejected(kind, detail, route) =>
         rejections.count(kind, from, detail)
         route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(kind))
@@ -83,13 +83,13 @@ private[naogateway] object PortReader {
   /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
   val InboundBatch: Int = 64
 
-  /**
-   * A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
-   * robot that must sign, the check every frame passes before it is handed on.
-   */
+  /** A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
+    * robot that must sign, the check every frame passes before it is handed on.
+    */
   final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
-  /** `link`, with every datagram it takes recorded as sent from `local` on `port` (`link` itself when not recording). */
+  /** `link`, with every datagram it takes recorded as sent from `local` on `port` (`link` itself when not recording).
+    */
   def recorded(link: DatagramWriter, recording: Recording, port: RecordedPort, local: InetSocketAddress,
       routes: AtomicReference[Routing.Table[Inlet]]): DatagramWriter =
     if (!recording.enabled) link
@@ -97,7 +97,8 @@ private[naogateway] object PortReader {
       new DatagramWriter {
         def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = {
           val sent = link.send(bytes, to)
-          if (sent) recording.datagram(port, received = false, local, to, bytes, routes.get.byAddress.get(to.getAddress).fold(-1)(_.robotId))
+          if (sent) recording.datagram(port, received = false, local, to, bytes,
+            routes.get.byAddress.get(to.getAddress).fold(-1)(_.robotId))
           sent
         }
       }

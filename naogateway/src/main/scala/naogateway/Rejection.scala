@@ -2,16 +2,17 @@ package naogateway
 
 import naogateway.wire.{Datagram, FrameError, SignatureError}
 
-/**
- * Why the gateway refused a datagram: a closed set, so counters stay bounded and a warning is rate-limited per kind.
- * The values a sender chose (byte prefixes, sizes, claimed ids) never become part of a kind; they go to the debug log.
- */
+/** Why the gateway refused a datagram: a closed set, so counters stay bounded and a warning is rate-limited per kind.
+  * The values a sender chose (byte prefixes, sizes, claimed ids) never become part of a kind; they go to the debug log.
+  */
 sealed abstract class Rejection(val name: String) extends Product with Serializable
 
 /** Every reason for refusing a datagram. */
 object Rejection {
 
-  /** Fewer than 2 or more than 1400 bytes, or first bytes that are neither a frame, a GameController packet nor a segment. */
+  /** Fewer than 2 or more than 1400 bytes, or first bytes that are neither a frame, a GameController packet nor a
+    * segment.
+    */
   case object Unclassifiable extends Rejection("unclassifiable")
 
   /** An FU-Remote frame shorter than its header or its declared payload. */
@@ -87,27 +88,52 @@ object Rejection {
   case object Replayed extends Rejection("replayed")
 
   /** Every kind, in the order the link figures list them. */
-  val all: Vector[Rejection] = Vector(Unclassifiable, TruncatedFrame, NotAFrame, BadFlags, LengthMismatch, BadGzip, BadProtobuf,
-    Oversize, GameControllerOnRobotPort, BadGameControllerPacket, UntrustedGameController, StreamFromUnknownAddress, UnknownSender,
-    RobotIdMismatch, ZeroMqRobotId, RobotCapReached, BadHaViMo, UnknownCallId, RobotBusy, GatewayBusy, Unsigned, SignatureNotLast, MalformedSignature,
-    BadSignature, Replayed)
+  val all: Vector[Rejection] = Vector(
+    Unclassifiable,
+    TruncatedFrame,
+    NotAFrame,
+    BadFlags,
+    LengthMismatch,
+    BadGzip,
+    BadProtobuf,
+    Oversize,
+    GameControllerOnRobotPort,
+    BadGameControllerPacket,
+    UntrustedGameController,
+    StreamFromUnknownAddress,
+    UnknownSender,
+    RobotIdMismatch,
+    ZeroMqRobotId,
+    RobotCapReached,
+    BadHaViMo,
+    UnknownCallId,
+    RobotBusy,
+    GatewayBusy,
+    Unsigned,
+    SignatureNotLast,
+    MalformedSignature,
+    BadSignature,
+    Replayed
+  )
 
   /** The kind for a frame the decoder refused. */
   def of(error: FrameError): Rejection = error match {
-    case _: FrameError.Truncated      => TruncatedFrame
-    case _: FrameError.WrongOperation => NotAFrame
+    case _: FrameError.Truncated        => TruncatedFrame
+    case _: FrameError.WrongOperation   => NotAFrame
     case _: FrameError.UnsupportedFlags => BadFlags
-    case _: FrameError.LengthMismatch => LengthMismatch
-    case _: FrameError.BadGzip        => BadGzip
-    case _: FrameError.BadProtobuf    => BadProtobuf
-    case _: FrameError.Oversize       => Oversize
+    case _: FrameError.LengthMismatch   => LengthMismatch
+    case _: FrameError.BadGzip          => BadGzip
+    case _: FrameError.BadProtobuf      => BadProtobuf
+    case _: FrameError.Oversize         => Oversize
   }
 
-  /** The kind for a datagram the classifier refused (protocol.md 3): `00 2A` too short for a header is a truncated frame. */
+  /** The kind for a datagram the classifier refused (protocol.md 3): `00 2A` too short for a header is a truncated
+    * frame.
+    */
   def of(rejected: Datagram.Rejection): Rejection = rejected match {
     case Datagram.Rejection.TooShort(_, needed) if needed == Datagram.FuRemoteMinBytes => TruncatedFrame
-    case _: Datagram.Rejection.Oversize                                              => Oversize
-    case _                                                                            => Unclassifiable
+    case _: Datagram.Rejection.Oversize                                                => Oversize
+    case _                                                                             => Unclassifiable
   }
 
   /** The kind for a signature the gateway did not accept. */

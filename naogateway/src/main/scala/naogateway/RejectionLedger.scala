@@ -5,12 +5,11 @@ import java.util.concurrent.atomic.AtomicReference
 
 import org.slf4j.{Logger, LoggerFactory}
 
-/**
- * Rejected datagrams counted by kind (the closed set [[Rejection]]) and, when the sender is known, by its IP address:
- * the one ledger of rejections, immutable, so an actor keeps it as state and tests read it without actors. Both maps
- * are bounded: the kinds are a closed set, and addresses beyond `maxSources` share one counter ("other addresses").
- * Whether a count deserves a warning is [[RateLimitedLog]]'s rule, per kind, so a flood cannot flood the log.
- */
+/** Rejected datagrams counted by kind (the closed set [[Rejection]]) and, when the sender is known, by its IP address:
+  * the one ledger of rejections, immutable, so an actor keeps it as state and tests read it without actors. Both maps
+  * are bounded: the kinds are a closed set, and addresses beyond `maxSources` share one counter ("other addresses").
+  * Whether a count deserves a warning is [[RateLimitedLog]]'s rule, per kind, so a flood cannot flood the log.
+  */
 private[naogateway] final case class RejectionLedger(
     counts: Map[Rejection, Long] = Map.empty,
     bySource: Map[InetAddress, Long] = Map.empty,
@@ -36,7 +35,8 @@ private[naogateway] final case class RejectionLedger(
   }
 
   /** Whether going from `before` to this ledger passed a count of `kind` that is logged (1st, 10th, 100th, ...). */
-  def warningDue(before: RejectionLedger, kind: Rejection): Boolean = RateLimitedLog.dueBetween(before(kind), apply(kind))
+  def warningDue(before: RejectionLedger, kind: Rejection): Boolean =
+    RateLimitedLog.dueBetween(before(kind), apply(kind))
 
   /** The counts by kind name, as the figures show them. */
   def byKind: Map[String, Long] = counts.map { case (k, n) => k.name -> n }
@@ -57,11 +57,10 @@ private[naogateway] object RejectionLedger {
   /** The key the addresses past [[SourceAddresses]] are counted under. */
   val OtherSources: String = "other addresses"
 
-  /**
-   * One ledger written by two threads (the port's reader and the gateway), so it is swapped atomically. A warning
-   * names the kind only; the sender and its values go to the debug log, so nothing a sender chooses can make the log
-   * grow faster.
-   */
+  /** One ledger written by two threads (the port's reader and the gateway), so it is swapped atomically. A warning
+    * names the kind only; the sender and its values go to the debug log, so nothing a sender chooses can make the log
+    * grow faster.
+    */
   private[naogateway] final class Shared(log: Logger = LoggerFactory.getLogger("naogateway.Gateway")) {
     private val ledger = new AtomicReference(RejectionLedger())
 

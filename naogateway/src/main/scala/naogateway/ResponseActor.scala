@@ -7,23 +7,21 @@ import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
 import naogateway.wire.{RpcCall, RpcMethod, RpcReply, RpcValue}
 
-/**
- * Request-reply for one robot: correlation ids (from [[CallId]]), per-call deadlines, retries of idempotent calls, and
- * exactly one answer per caller. It sends nothing itself: every attempt is submitted to the robot's one sender
- * (`NoResponseActor`), which orders it among everything else the robot gets.
- *
- * A retry is a new `Request` with a new call id (docs/protocol.md 7.1): a robot answers every request it gets once,
- * so a repeated call id would earn two answers to one request. An answer to any attempt of a call completes it.
- */
+/** Request-reply for one robot: correlation ids (from [[CallId]]), per-call deadlines, retries of idempotent calls, and
+  * exactly one answer per caller. It sends nothing itself: every attempt is submitted to the robot's one sender
+  * (`NoResponseActor`), which orders it among everything else the robot gets.
+  *
+  * A retry is a new `Request` with a new call id (docs/protocol.md 7.1): a robot answers every request it gets once, so
+  * a repeated call id would earn two answers to one request. An answer to any attempt of a call completes it.
+  */
 object ResponseActor {
 
   /** What the response actor accepts. */
   sealed trait Command
 
-  /**
-   * Calls the robot; `replyTo` gets exactly one `CallResult`. `timeout` overrides the configured one; `idempotent`
-   * overrides the method table's word on whether the call may be sent again (`Some(false)`: no retries).
-   */
+  /** Calls the robot; `replyTo` gets exactly one `CallResult`. `timeout` overrides the configured one; `idempotent`
+    * overrides the method table's word on whether the call may be sent again (`Some(false)`: no retries).
+    */
   final case class Call(
       call: RpcCall,
       replyTo: ActorRef[CallResult],
@@ -159,7 +157,7 @@ object ResponseActor {
             }
           case OrderNotice(notice) =>
             calls.get(notice.key) match {
-              case None => Behaviors.same
+              case None    => Behaviors.same
               case Some(p) =>
                 // The sender has let go of the call already (all but Queued and SentLate): nothing to tell it.
                 def drop(error: RobotFailure): Behavior[Command] = {
@@ -175,7 +173,7 @@ object ResponseActor {
                   case NoResponseActor.Notice.SentLate(key) => running(calls.updated(key, arm(key, p)), online, lastId)
                   case NoResponseActor.Notice.Superseded(_) => drop(RobotFailure.Superseded(robotId, p.call.name))
                   case NoResponseActor.Notice.Refused(_, reason) => drop(RobotFailure.Overloaded(robotId, reason))
-                  case NoResponseActor.Notice.Interrupted(_) => drop(RobotFailure.Interrupted(robotId, p.call.name))
+                  case NoResponseActor.Notice.Interrupted(_)     => drop(RobotFailure.Interrupted(robotId, p.call.name))
                 }
             }
           case Reachability(nowOnline) =>

@@ -14,11 +14,10 @@ import naogateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
 
-/**
- * The supervisor of one robot: carries out `RobotState`'s transitions (its address, liveness, subscribers, options and
- * link figures), hands what the robot sends to its owners, and re-syncs the robot after restarts. It sends nothing
- * itself: everything for the robot goes through its child `NoResponseActor`, the robot's one sender.
- */
+/** The supervisor of one robot: carries out `RobotState`'s transitions (its address, liveness, subscribers, options and
+  * link figures), hands what the robot sends to its owners, and re-syncs the robot after restarts. It sends nothing
+  * itself: everything for the robot goes through its child `NoResponseActor`, the robot's one sender.
+  */
 object RobotActor {
 
   /** What a robot actor accepts. */
@@ -40,11 +39,10 @@ object RobotActor {
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
   private[naogateway] final case class Rebound(address: InetSocketAddress) extends Common
 
-  /**
-   * What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`):
-   * questions and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers; no way to its
-   * sender.
-   */
+  /** What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`):
+    * questions and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers; no way to its
+    * sender.
+    */
   sealed trait Access extends Command
 
   /** Asks for the children of a reachable robot: waits (stashed) while it is not reached, probing it. */
@@ -62,10 +60,9 @@ object RobotActor {
     private[naogateway] def answer(c: Connected): Unit = replyTo ! Opened(c.robotId, c.response, c.vision)
   }
 
-  /**
-   * A reachable robot as the middleware may use it: calls through its response actor, camera registrations through its
-   * vision actor. Both refs die with a restart of the robot actor: the holder's cue to open again.
-   */
+  /** A reachable robot as the middleware may use it: calls through its response actor, camera registrations through its
+    * vision actor. Both refs die with a restart of the robot actor: the holder's cue to open again.
+    */
   final case class Opened(robotId: Int, response: ActorRef[ResponseActor.Call], vision: ActorRef[VisionActor.Register])
 
   /** Answers with the latest keep-alive contents and liveness. */
@@ -85,21 +82,29 @@ object RobotActor {
 
   /** A caller wants the robot while it is offline: probe it now. */
   private[naogateway] case object Wanted extends FromChild
+
   /** A clean round-trip sample. */
   private[naogateway] final case class RoundTrip(nanos: Long) extends FromChild
+
   /** A call was sent again. */
   private[naogateway] case object Retransmitted extends FromChild
+
   /** The sender (re)started and asks for the robot's route; every later change is pushed to it. */
   private[naogateway] final case class RouteWanted(replyTo: ActorRef[NoResponseActor.Command]) extends FromChild
+
   /** The sender handed the outbox a frame of `bytes` for this robot: counted here. */
   private[naogateway] final case class FrameSent(bytes: Int) extends FromChild
+
   /** A debug option command (the vision actor's): noted here, so a robot restart can re-enable it, then sent. */
   private[naogateway] final case class OptionCommand(commands: DebuggingCommands) extends FromChild
+
   /** A call actor (re)started and asks whether the robot is reachable now; a restart must not forget it is offline. */
   private[naogateway] final case class ReachabilityWanted(replyTo: ActorRef[Boolean]) extends FromChild
+
   /** A stream subscribes to this robot's camera frames (through the vision actor, which this actor outlives). */
   private[naogateway] final case class VisionSubscribe(subscriber: ActorRef[VisionFrame], grid: Boolean)
       extends FromChild
+
   /** The vision actor (re)started and asks for the registrations; every later change is pushed to it. */
   private[naogateway] final case class VisionSubscribersWanted(replyTo: ActorRef[VisionActor.Subscribers])
       extends FromChild
@@ -118,17 +123,15 @@ object RobotActor {
       noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
       stream: ActorRef[StreamActor.Command])
 
-  /**
-   * A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once).
-   * `transport` says how it is reached; everything above the transport is the same for both kinds. A `discovered`
-   * robot (introduced by its own keep-alive, `naogateway.discovery`) is not online from that one keep-alive: a second
-   * one or a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come
-   * online within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
-   */
+  /** A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once). `transport`
+    * says how it is reached; everything above the transport is the same for both kinds. A `discovered` robot
+    * (introduced by its own keep-alive, `naogateway.discovery`) is not online from that one keep-alive: a second one or
+    * a probe's answer brings it online, and it stops itself (publishing [[RobotForgotten]]) when it has not come online
+    * within `discovery.forget-unreached-after` or stayed offline for `discovery.forget-offline-after`.
+    */
   private[naogateway] def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings,
       outbox: ActorRef[Outbox.Command], wiring: RobotWiring, heard: Boolean,
-      transport: RobotTransport = RobotTransport.Datagrams, discovered: Boolean = false)
-      : Behavior[Command] =
+      transport: RobotTransport = RobotTransport.Datagrams, discovered: Boolean = false): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(64) { stash =>
@@ -151,8 +154,15 @@ object RobotActor {
     // Frames to a robot that must sign are signed by the outbox as they leave (secure-stream segments never are).
     private val datagrams = transport == RobotTransport.Datagrams
     private val signs = datagrams && settings.signingOf(robotId) == RobotSigning.Required
-    private val effects = new RobotEffects(robotId, settings, heartbeatSettings, datagrams, context.log,
-      timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval), timers.cancel(PullKey))
+    private val effects = new RobotEffects(
+      robotId,
+      settings,
+      heartbeatSettings,
+      datagrams,
+      context.log,
+      timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval),
+      timers.cancel(PullKey)
+    )
     // How every child is restarted (naogateway.supervision.robot-children).
     private val restarts = settings.supervision.robotChildren.strategy
     private def child[T](behavior: Behavior[T], name: String): ActorRef[T] =
@@ -163,8 +173,11 @@ object RobotActor {
       val zeroMq = transport match {
         case RobotTransport.ZeroMq(endpoint) =>
           val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
-          Some(context.spawn(Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq,
-            context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(restarts), "zeromq-link"))
+          Some(context.spawn(
+              Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq,
+                  context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(restarts),
+              "zeromq-link"
+            ))
         case RobotTransport.Datagrams => None
       }
       val reports = context.messageAdapter[HeartBeatActor.Report] {
@@ -277,7 +290,7 @@ object RobotActor {
             f.sender ! NoResponseActor.Submit(Outbound.CallOut(c), Priority.Heartbeat, c.callId, hold, Some(outcome)))
           s
         case ZeroMqLinkEvent(ZeroMqRobotLink.PollAnswered(id)) => f.sender ! NoResponseActor.Finished(id); s
-        case HeartbeatReport(report)                          => effects.heartbeat(report, f, s)
+        case HeartbeatReport(report)                           => effects.heartbeat(report, f, s)
       }
 
     /** Where the robot is reached now: this actor owns the address and header form, the sender follows them. */

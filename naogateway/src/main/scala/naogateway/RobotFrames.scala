@@ -8,11 +8,10 @@ import naogateway.link.ZeroMqRobotLink
 import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, Status}
 import naogateway.wire.{FrameError, HaViMo, HeaderForm, MessageContents, RpcCall, RpcReply, WireLimits}
 
-/**
- * What goes to a robot and the bytes it becomes (the one place that builds a robot's outbound frames), and what a
- * frame from it carries. Pure: encoding reads the route and changes nothing (the option bookkeeping is
- * `RobotState`'s, done before anything is encoded).
- */
+/** What goes to a robot and the bytes it becomes (the one place that builds a robot's outbound frames), and what a
+  * frame from it carries. Pure: encoding reads the route and changes nothing (the option bookkeeping is `RobotState`'s,
+  * done before anything is encoded).
+  */
 private[naogateway] object RobotFrames {
 
   /** One thing a frame from the robot carries, for its owner in the robot actor's family. */
@@ -113,9 +112,9 @@ private[naogateway] object RobotFrames {
     // No FU-Remote header over ZeroMQ: a ZeroMQ message carries exactly one serialized Message.
     case _: Route.ZeroMq =>
       out match {
-        case Outbound.CallOut(call)      => Right(MessageContents(robotId, rpcRequest = Some(call.toProto)).toProtobuf)
-        case Outbound.DebugOut(c)        => Right(MessageContents(robotId, debuggingCommands = Some(c)).toProtobuf)
-        case Outbound.SegmentOut(_)      => Left("the secure stream does not run over ZeroMQ")
+        case Outbound.CallOut(call) => Right(MessageContents(robotId, rpcRequest = Some(call.toProto)).toProtobuf)
+        case Outbound.DebugOut(c)   => Right(MessageContents(robotId, debuggingCommands = Some(c)).toProtobuf)
+        case Outbound.SegmentOut(_) => Left("the secure stream does not run over ZeroMQ")
       }
   }
 

@@ -10,11 +10,10 @@ import akka.actor.typed.ActorRef
 import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, Status}
 import naogateway.wire.HeaderForm
 
-/**
- * The link figures of one robot. `keepAliveTimes` holds the keep-alives' arrival times, oldest first, never more than
- * `keepAliveTimesKept`: with more than a window's worth the loss estimate is 0 anyway, so a flooding robot costs what a
- * punctual one costs.
- */
+/** The link figures of one robot. `keepAliveTimes` holds the keep-alives' arrival times, oldest first, never more than
+  * `keepAliveTimesKept`: with more than a window's worth the loss estimate is 0 anyway, so a flooding robot costs what
+  * a punctual one costs.
+  */
 private[naogateway] final case class LinkFigures(
     datagramsIn: Long = 0L,
     datagramsOut: Long = 0L,
@@ -56,10 +55,9 @@ private[naogateway] final case class RobotOptions(
 /** The option rules. */
 private[naogateway] object RobotOptions {
 
-  /**
-   * How often `optionPull` is repeated until the robot's `optionPush` arrives. Fixed, not a setting: protocol.md 8,
-   * step 1 gives robots this period ("about every second"), and a robot's firmware is written against it.
-   */
+  /** How often `optionPull` is repeated until the robot's `optionPush` arrives. Fixed, not a setting: protocol.md 8,
+    * step 1 gives robots this period ("about every second"), and a robot's firmware is written against it.
+    */
   val PullInterval: FiniteDuration = 1.second
 
   /** Whether option name `n` names option `o` or a group it belongs to (`havimo` covers `havimo.grid`). */
@@ -69,12 +67,11 @@ private[naogateway] object RobotOptions {
 /** What one keep-alive did: whether it completed a new session, and whether the heartbeat is to hear of it. */
 private[naogateway] final case class KeepAliveOutcome(restarted: Boolean, heard: Boolean)
 
-/**
- * Everything a robot actor knows, as one immutable value: its address and header form, the latest keep-alive's
- * snapshot, the restart rule and clock sync, the debug options, its event subscribers (and events held until they are
- * known), the camera streams, and the link figures. Each change is a named transition; `RobotActor` only carries
- * them out, so everything here is tested without actors (RobotStateSpec).
- */
+/** Everything a robot actor knows, as one immutable value: its address and header form, the latest keep-alive's
+  * snapshot, the restart rule and clock sync, the debug options, its event subscribers (and events held until they are
+  * known), the camera streams, and the link figures. Each change is a named transition; `RobotActor` only carries them
+  * out, so everything here is tested without actors (RobotStateSpec).
+  */
 private[naogateway] final case class RobotState(
     robotId: Int,
     address: InetSocketAddress,
@@ -117,10 +114,9 @@ private[naogateway] final case class RobotState(
   /** A call was sent again. */
   def retransmitted: RobotState = copy(link = link.copy(retransmissions = link.retransmissions + 1))
 
-  /**
-   * A keep-alive arrived at `now` (`window`: the quality window in nanoseconds). A discovered robot's first one (the
-   * one that introduced it) is not passed on to the heartbeat: anyone can send one.
-   */
+  /** A keep-alive arrived at `now` (`window`: the quality window in nanoseconds). A discovered robot's first one (the
+    * one that introduced it) is not passed on to the heartbeat: anyone can send one.
+    */
   def keepAliveSeen(status: Status, health: Option[RobotHealth], now: Long, window: Long, newSessionKeepAlives: Int)
       : (RobotState, KeepAliveOutcome) = {
     val times = (if (link.keepAliveTimes.size >= keepAliveTimesKept) link.keepAliveTimes.tail else link.keepAliveTimes)
@@ -157,9 +153,18 @@ private[naogateway] final case class RobotState(
 
   /** The link figures as `LinkStats` at `now`. */
   def linkStats(now: Long, window: Long, interval: Long): LinkStats =
-    LinkStats(robotId, link.datagramsIn, link.datagramsOut, link.bytesIn, link.bytesOut, link.rttNanos.map(_ / 1e6),
-      link.lossEstimate(now, window, interval), link.retransmissions, link.rejected.map { case (k, n) => k.name -> n },
-      clockSync.estimate)
+    LinkStats(
+      robotId,
+      link.datagramsIn,
+      link.datagramsOut,
+      link.bytesIn,
+      link.bytesOut,
+      link.rttNanos.map(_ / 1e6),
+      link.lossEstimate(now, window, interval),
+      link.retransmissions,
+      link.rejected.map { case (k, n) => k.name -> n },
+      clockSync.estimate
+    )
 
   /** An option command from a child: noted, and whether it goes now (not while the pulled list is awaited, step 4). */
   def optionCommand(commands: DebuggingCommands): (RobotState, Boolean) =
@@ -174,10 +179,9 @@ private[naogateway] final case class RobotState(
     (next, next.options.pullKey)
   }
 
-  /**
-   * The robot pushed its option list (steps 2, 3). The first push of a pull lets the options we want go out (step 4):
-   * those it offers, sorted; the others it does not offer are returned to be logged.
-   */
+  /** The robot pushed its option list (steps 2, 3). The first push of a pull lets the options we want go out (step 4):
+    * those it offers, sorted; the others it does not offer are returned to be logged.
+    */
   def optionsPushed(list: Seq[DebuggingOption]): (RobotState, Vector[String], Vector[String]) =
     if (!options.pulling) (copy(options = options.copy(list = Some(list))), Vector.empty, Vector.empty)
     else {
@@ -190,10 +194,10 @@ private[naogateway] final case class RobotState(
   def subscribersChanged(now: Set[ActorRef[GatewayEvent]]): (RobotState, Vector[GatewayEvent]) =
     (copy(subscribers = Some(now), held = Vector.empty), held)
 
-  /**
-   * `event` is published: to the subscribers returned, or held while they are unknown (at most `RobotState.HeldEvents`:
-   * the gateway answers within one of its messages, but a silent gateway must cost no memory).
-   */
+  /** `event` is published: to the subscribers returned, or held while they are unknown (at most
+    * `RobotState.HeldEvents`: the gateway answers within one of its messages, but a silent gateway must cost no
+    * memory).
+    */
   def publish(event: GatewayEvent): (RobotState, Set[ActorRef[GatewayEvent]]) = subscribers match {
     case Some(all) => (this, all)
     case None      => (if (held.size < RobotState.HeldEvents) copy(held = held :+ event) else this, Set.empty)
@@ -213,12 +217,24 @@ private[naogateway] object RobotState {
   /** Events a robot actor holds while it waits for the gateway's subscriber list. */
   val HeldEvents: Int = 64
 
-  /**
-   * The state of robot `robotId` at `address` before anything was heard; `subscribers` None when the gateway is still
-   * to say; a `discovered` robot's first keep-alive only introduces it. `keepAliveTimesKept` bounds the loss window.
-   */
+  /** The state of robot `robotId` at `address` before anything was heard; `subscribers` None when the gateway is still
+    * to say; a `discovered` robot's first keep-alive only introduces it. `keepAliveTimesKept` bounds the loss window.
+    */
   def initial(robotId: Int, address: InetSocketAddress, clockSync: ClockSync,
       subscribers: Option[Set[ActorRef[GatewayEvent]]], discovered: Boolean, keepAliveTimesKept: Int): RobotState =
-    RobotState(robotId, address, HeaderForm.Legacy, RobotSnapshot(robotId, address), SessionRule.empty, discovered,
-      clockSync, RobotOptions(), subscribers, Vector.empty, Map.empty, LinkFigures(), keepAliveTimesKept)
+    RobotState(
+      robotId,
+      address,
+      HeaderForm.Legacy,
+      RobotSnapshot(robotId, address),
+      SessionRule.empty,
+      discovered,
+      clockSync,
+      RobotOptions(),
+      subscribers,
+      Vector.empty,
+      Map.empty,
+      LinkFigures(),
+      keepAliveTimesKept
+    )
 }

@@ -4,12 +4,11 @@ import akka.actor.typed.ActorRef
 
 import naogateway.link.Backlog
 
-/**
- * How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start
- * (a restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the
- * gateway pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams
- * the robot port's reader has handed the actor, given back as each is handled.
- */
+/** How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start (a
+  * restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the gateway
+  * pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams the robot
+  * port's reader has handed the actor, given back as each is handled.
+  */
 private[naogateway] final case class RobotWiring(subscribers: Set[ActorRef[GatewayEvent]],
     gateway: Option[ActorRef[RobotActor.SubscribersWanted]], backlog: Backlog)
 
@@ -25,8 +24,10 @@ private[naogateway] sealed trait RobotTransport extends Product with Serializabl
 
 /** The two kinds of robot. */
 private[naogateway] object RobotTransport {
+
   /** FU-Remote frames in UDP datagrams through the gateway's outbox: the CM-530. */
   case object Datagrams extends RobotTransport
+
   /** Serialized `Message`s to a ZeroMQ REP socket at `endpoint`: the original naogateway's robots. */
   final case class ZeroMq(endpoint: String) extends RobotTransport
 }

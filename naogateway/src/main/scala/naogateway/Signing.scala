@@ -27,17 +27,18 @@ object RobotSigning {
     all.find(_.name == text.trim).toRight(s"signing is ${all.map(_.name).mkString(" or ")}, not '${text.trim}'")
 }
 
-/**
- * The gateway's check of one robot's signed frames: the team key and the robot's replay window, which lives here and
- * nowhere else. The gateway creates one per robot with `signing = required` and keeps it with the robot's route, so
- * it outlives restarts of the robot actor. Every frame for that robot passes it before anything acts on the frame:
- * on the robot port's reader thread, or in the gateway for the frames the reader leaves to it (a re-bind), hence
- * the window is an atomic value.
- */
+/** The gateway's check of one robot's signed frames: the team key and the robot's replay window, which lives here and
+  * nowhere else. The gateway creates one per robot with `signing = required` and keeps it with the robot's route, so it
+  * outlives restarts of the robot actor. Every frame for that robot passes it before anything acts on the frame: on the
+  * robot port's reader thread, or in the gateway for the frames the reader leaves to it (a re-bind), hence the window
+  * is an atomic value.
+  */
 final class SignatureCheck(key: SigningKey) {
   private val window = new AtomicReference(ReplayWindow.empty)
 
-  /** `Right` when `frame` (whose header decoded as `header`) is signed by the robot and newer than every frame accepted before. */
+  /** `Right` when `frame` (whose header decoded as `header`) is signed by the robot and newer than every frame accepted
+    * before.
+    */
   def check(frame: Array[Byte], header: FrameHeader): Either[Rejection, Unit] =
     FrameSigning.verifyFrame(frame, header, key, SignDirection.RobotToGateway) match {
       case Left(error)   => Left(Rejection.of(error))
@@ -58,12 +59,11 @@ final class SignatureCheck(key: SigningKey) {
   override def toString: String = "SignatureCheck"
 }
 
-/**
- * Signs frames to robots at the moment they leave (the outbox), so the gateway's timestamps grow in the order the
- * robot receives them: signed earlier but sent later (a lower priority class waiting for the budget), a frame would
- * fall below the robot's replay window. Timestamps are microseconds since the Unix epoch, always above the last one
- * used (docs/protocol.md 6.7); the gateway keeps one signer, so a restarted outbox continues where it was.
- */
+/** Signs frames to robots at the moment they leave (the outbox), so the gateway's timestamps grow in the order the
+  * robot receives them: signed earlier but sent later (a lower priority class waiting for the budget), a frame would
+  * fall below the robot's replay window. Timestamps are microseconds since the Unix epoch, always above the last one
+  * used (docs/protocol.md 6.7); the gateway keeps one signer, so a restarted outbox continues where it was.
+  */
 final class FrameSigner(key: SigningKey, nowMicros: () => Long = FrameSigner.epochMicros) {
   private val last = new AtomicLong(0L)
 

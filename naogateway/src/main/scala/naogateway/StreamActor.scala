@@ -7,14 +7,17 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
-/** The gateway's end of one robot's secure stream (docs/protocol.md §11): reliable, ordered payloads over the lossy link. */
+/** The gateway's end of one robot's secure stream (docs/protocol.md §11): reliable, ordered payloads over the lossy
+  * link.
+  */
 object StreamActor {
 
   /** What the stream endpoint accepts. */
   sealed trait Command
 
   /** Sends `payload` reliably; `deadline` (from now) lets stale data expire instead of being resent for ever. */
-  final case class Send(payload: Array[Byte], deadline: Option[FiniteDuration] = None, replyTo: Option[ActorRef[SendResult]] = None)
+  final case class Send(payload: Array[Byte], deadline: Option[FiniteDuration] = None,
+      replyTo: Option[ActorRef[SendResult]] = None)
       extends Command
 
   /** Delivers every payload received from the robot, in order, to `subscriber`. */
@@ -50,8 +53,8 @@ object StreamActor {
   private case object TickKey
 
   /** The endpoint for robot `robotId`, sending segments through the robot's one sender. */
-  private[naogateway] def apply(robotId: Int, settings: StreamSettings, sender: ActorRef[NoResponseActor.Command])
-      : Behavior[Command] =
+  private[naogateway] def apply(
+      robotId: Int, settings: StreamSettings, sender: ActorRef[NoResponseActor.Command]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         val endpoint = new Endpoint(robotId, sender, timers, context)
@@ -67,13 +70,14 @@ object StreamActor {
       timers: TimerScheduler[Command],
       context: akka.actor.typed.scaladsl.ActorContext[Command]
   ) {
-    private def apply(step: SecureStream.Step, waiting: Map[Long, ActorRef[SendResult]], subscribers: Set[ActorRef[Received]])
-        : Map[Long, ActorRef[SendResult]] = {
+    private def apply(step: SecureStream.Step, waiting: Map[Long, ActorRef[SendResult]],
+        subscribers: Set[ActorRef[Received]]): Map[Long, ActorRef[SendResult]] = {
       var left = waiting
       step.outputs.foreach {
         case SecureStream.Transmit(datagram) =>
           // A segment leaves the robot's buffer as it goes: the stream's own window bounds how many are unacknowledged.
-          sender ! NoResponseActor.Submit(RobotFrames.Outbound.SegmentOut(datagram), Priority.Command, None, NoResponseActor.Awaits.Nothing)
+          sender ! NoResponseActor.Submit(RobotFrames.Outbound.SegmentOut(datagram), Priority.Command, None,
+            NoResponseActor.Awaits.Nothing)
         case SecureStream.Deliver(payload) => subscribers.foreach(_ ! Received(robotId, payload))
         case SecureStream.Acknowledged(id) =>
           left.get(id).foreach(_ ! Acknowledged)
@@ -93,8 +97,8 @@ object StreamActor {
         case None     => timers.cancel(TickKey)
       }
 
-    def running(stream: SecureStream, lastId: Long, waiting: Map[Long, ActorRef[SendResult]], subscribers: Set[ActorRef[Received]])
-        : Behavior[Command] = Behaviors.receiveMessage[Command] {
+    def running(stream: SecureStream, lastId: Long, waiting: Map[Long, ActorRef[SendResult]],
+        subscribers: Set[ActorRef[Received]]): Behavior[Command] = Behaviors.receiveMessage[Command] {
       case Send(payload, deadline, replyTo) =>
         val now = System.nanoTime()
         val id = lastId + 1

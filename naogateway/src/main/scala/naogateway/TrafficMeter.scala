@@ -2,7 +2,9 @@ package naogateway
 
 import scala.collection.mutable
 
-/** Bytes sent or received over a sliding window, exact to the datagram (not bucketed), so a budget holds in every window. */
+/** Bytes sent or received over a sliding window, exact to the datagram (not bucketed), so a budget holds in every
+  * window.
+  */
 private[naogateway] final class TrafficMeter(windowNanos: Long) {
   private val times = mutable.ArrayDeque.empty[Long]
   private val sizes = mutable.ArrayDeque.empty[Int]

@@ -40,9 +40,9 @@ object Subnet {
         val address = InetAddress.getByName(host)
         val max = address.getAddress.length * 8
         bits.map(b => b.toIntOption.filter(n => n >= 0 && n <= max)) match {
-          case Some(None) => Left(s"'$text': the prefix must be a number from 0 to $max")
+          case Some(None)    => Left(s"'$text': the prefix must be a number from 0 to $max")
           case Some(Some(n)) => Right(Subnet(address, n))
-          case None => Right(Subnet(address, max))
+          case None          => Right(Subnet(address, max))
         }
       } catch { case _: UnknownHostException => Left(s"'$text' is not an IP address or subnet") }
   }

@@ -14,13 +14,13 @@ object VisionActor {
   /** A frame arrived from the robot. */
   private[naogateway] final case class FrameReceived(frame: VisionFrame) extends Command
 
-  /**
-   * Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). The robot
-   * actor keeps the registrations, so they outlive a restart of this actor.
-   */
+  /** Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). The robot
+    * actor keeps the registrations, so they outlive a restart of this actor.
+    */
   final case class Register(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
 
-  /** The robot actor's registrations now, subscriber to whether it wants grid frames: on every change and every start. */
+  /** The robot actor's registrations now, subscriber to whether it wants grid frames: on every change and every start.
+    */
   private[naogateway] final case class Subscribers(subscribers: Map[ActorRef[VisionFrame], Boolean]) extends Command
 
   /** The robot restarted: switch the camera options on again if anyone is watching. */
@@ -29,10 +29,9 @@ object VisionActor {
   val RegionsOption: String = "havimo.regions"
   val GridOption: String = "havimo.grid"
 
-  /**
-   * A vision actor for robot `robotId`, switching camera options through `robot`, which owns the registrations: a new
-   * incarnation asks it for them before it forwards any frame.
-   */
+  /** A vision actor for robot `robotId`, switching camera options through `robot`, which owns the registrations: a new
+    * incarnation asks it for them before it forwards any frame.
+    */
   private[naogateway] def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
     Behaviors.setup { context =>
       robot ! RobotActor.VisionSubscribersWanted(context.self)

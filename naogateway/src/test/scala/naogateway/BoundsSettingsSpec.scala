@@ -12,12 +12,14 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
   private def settings(overrides: String = ""): GatewaySettings =
-    GatewaySettings.fromConfig(ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("naogateway")))
+    GatewaySettings.fromConfig(
+      ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("naogateway")))
 
   "The gateway's settings" should {
     "bound discovery, probes and restarts by default" in {
       val s = settings()
-      s.discovery shouldBe DiscoverySettings(enabled = true, maxRobots = 16, forgetUnreachedAfter = 10.seconds, forgetOfflineAfter = 120.seconds)
+      s.discovery shouldBe DiscoverySettings(enabled = true, maxRobots = 16, forgetUnreachedAfter = 10.seconds,
+        forgetOfflineAfter = 120.seconds)
       s.budget.probeShare shouldBe 0.1
       s.budget.probeBytesPerSecond shouldBe 12500L
       s.heartbeat.probeBackoffMax shouldBe 30.seconds
@@ -52,7 +54,8 @@ class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckProper
         "requirement failed: snapshot-timeout must be between 10 ms and 1 min"
       the[IllegalArgumentException] thrownBy settings("supervision.robot.max-backoff = 100ms") should have message
         "supervision.robot: a restart back-off needs 0 < min-backoff <= max-backoff"
-      the[IllegalArgumentException] thrownBy settings("supervision.robot-children.random-factor = 2") should have message
+      the[IllegalArgumentException] thrownBy settings(
+        "supervision.robot-children.random-factor = 2") should have message
         "supervision.robot-children: a restart back-off's random-factor must be between 0 and 1"
     }
 

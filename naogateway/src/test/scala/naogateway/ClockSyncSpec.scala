@@ -10,19 +10,23 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 /** The clock estimate against generated robot clocks of known offset and drift, with random non-negative delays. */
 class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
-  implicit override val generatorDrivenConfig: PropertyCheckConfiguration = PropertyCheckConfiguration(minSuccessful = 60)
+  implicit override val generatorDrivenConfig: PropertyCheckConfiguration =
+    PropertyCheckConfiguration(minSuccessful = 60)
 
   /** A robot clock: reading r (whole ms, cut) at gateway time t is floor((t - off) * (1 + drift)). */
   private final case class Truth(offsetNanos: Long, driftPpm: Double) {
     private val rate = 1.0 + driftPpm * 1e-6
     def reading(gatewayNanos: Long): Long = math.floor((gatewayNanos - offsetNanos) / 1e6 * rate).toLong
+
     /** When the clock read `r` exactly, on the gateway's clock. */
     def gatewayNanosOf(r: Long): Double = offsetNanos + r / rate * 1e6
   }
 
   /** Delays in ms, drawn with a random source; every kind has values near 0 recurring (a LAN's jitter). */
   private sealed trait Delays { def draw(u: scala.util.Random): Double }
-  private final case class Uniform(maxMs: Double) extends Delays { def draw(u: scala.util.Random) = u.nextDouble() * maxMs }
+  private final case class Uniform(maxMs: Double) extends Delays {
+    def draw(u: scala.util.Random) = u.nextDouble() * maxMs
+  }
   private final case class Exponential(meanMs: Double) extends Delays {
     def draw(u: scala.util.Random) = -meanMs * math.log(1.0 - u.nextDouble())
   }
@@ -50,8 +54,10 @@ class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
     seed <- Gen.long
   } yield Run(truth, d, loss, seed)
 
-  /** Keep-alives every 200 ms for `seconds` (after a start well after the robot's power-up); the estimator after each. */
-  private def play(run: Run, seconds: Int, start: ClockSync = ClockSync(), from: Option[Long] = None): Vector[(Long, ClockSync)] = {
+  /** Keep-alives every 200 ms for `seconds` (after a start well after the robot's power-up); the estimator after each.
+    */
+  private def play(
+      run: Run, seconds: Int, start: ClockSync = ClockSync(), from: Option[Long] = None): Vector[(Long, ClockSync)] = {
     val u = new scala.util.Random(run.seed)
     val t0 = from.getOrElse(run.truth.offsetNanos + 5000000000L + u.nextInt(200) * 1000000L)
     Iterator.iterate(t0)(_ + 200000000L).take(seconds * 5).filter(_ => u.nextDouble() >= run.loss)
@@ -61,16 +67,16 @@ class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
       }.drop(1).toVector
   }
 
-  /**
-   * The same 60 generated runs every time (seeds 1 to 60): the bound is statistical, so over fresh random runs a claim
-   * that always holds would still fail now and then; the bench measures it over 50 robots of 10 minutes each.
-   */
+  /** The same 60 generated runs every time (seeds 1 to 60): the bound is statistical, so over fresh random runs a claim
+    * that always holds would still fail now and then; the bench measures it over 50 robots of 10 minutes each.
+    */
   private def fixed[T](gen: Gen[T], salt: Long): Vector[T] =
     (1L to 60L).map(i => gen.pureApply(Gen.Parameters.default, org.scalacheck.rng.Seed(i * 7919L + salt))).toVector
   private lazy val fixedRuns = fixed(runs, 0L)
   private lazy val fixedTruths = fixed(truths, 1L)
 
-  private def errorMs(truth: Truth, e: ClockEstimate): Double = (e.gatewayNanos - truth.gatewayNanosOf(e.robotMillis)) / 1e6
+  private def errorMs(truth: Truth, e: ClockEstimate): Double =
+    (e.gatewayNanos - truth.gatewayNanosOf(e.robotMillis)) / 1e6
 
   "ClockSync" should {
 
@@ -97,7 +103,8 @@ class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
             withClue(s"at reading $r with ${e.samples} samples: ") {
               math.abs(errorMs(run.truth, e)) should be <= e.errorBoundMillis
               val earlier = r - 2000
-              math.abs(e.toGatewayNanos(earlier) - run.truth.gatewayNanosOf(earlier)) / 1e6 should be <= e.errorBoundAt(earlier)
+              math.abs(e.toGatewayNanos(earlier) - run.truth.gatewayNanosOf(earlier)) / 1e6 should be <= e.errorBoundAt(
+                earlier)
             }
           }
         }
@@ -112,7 +119,9 @@ class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
     }
 
     "keep its memory bounded however fast keep-alives come" in {
-      val sync = (0 until 5000).foldLeft(ClockSync()) { (s, i) => s.add(i.toLong * 3, i * 3000000L + (i % 7) * 100000L) }
+      val sync = (0 until 5000).foldLeft(ClockSync()) { (s, i) =>
+        s.add(i.toLong * 3, i * 3000000L + (i % 7) * 100000L)
+      }
       sync.samples shouldBe ClockSync.MaxSamples
       sync.estimate should not be empty
     }
@@ -144,7 +153,8 @@ class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
       forged.estimate.get.gatewayNanos shouldBe e.gatewayNanos
       // The robot's clock itself jumps 500 ms ahead: after three such keep-alives the estimate follows.
       val stepped = Truth(run.truth.offsetNanos - 500000000L, 50.0)
-      val after = play(run.copy(truth = stepped, seed = 8L), 30, sync, Some(run.truth.gatewayNanosOf(r).toLong + 200000000L)).last._2
+      val after = play(run.copy(truth = stepped, seed = 8L), 30, sync,
+        Some(run.truth.gatewayNanosOf(r).toLong + 200000000L)).last._2
       after.sessions shouldBe sync.sessions + 1
       math.abs(errorMs(stepped, after.estimate.get)) should be <= after.estimate.get.errorBoundMillis
     }

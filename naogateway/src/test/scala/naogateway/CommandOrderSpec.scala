@@ -16,7 +16,8 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
   private final case class Answer(pick: Int) extends Op
 
   private val ops: Gen[Op] = Gen.frequency(
-    3 -> Gen.zip(Gen.option(Gen.oneOf(ActuatorGroup.slots)), Gen.frequency(1 -> true, 4 -> false), Gen.frequency(3 -> true, 1 -> false))
+    3 -> Gen.zip(Gen.option(Gen.oneOf(ActuatorGroup.slots)), Gen.frequency(1 -> true, 4 -> false),
+      Gen.frequency(3 -> true, 1 -> false))
       .map((Submit.apply _).tupled),
     2 -> Gen.choose(0, 7).map(Answer.apply)
   )
@@ -108,10 +109,17 @@ class CommandOrderSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     }
     "change nothing for a call it refuses: its slot's call in flight keeps going and a waiting stop still leaves" in {
       // The case the property above found (seed 1594188751653626614): one in flight, one waiting at most.
-      val (steps, _, states) = run(1, 1, List(Submit(None, safety = false, replaceable = true),
-        Submit(Some(ActuatorGroup.Arms), safety = false, replaceable = true), Answer(0),
-        Submit(Some(ActuatorGroup.Walk), safety = false, replaceable = false),
-        Submit(Some(ActuatorGroup.Arms), safety = false, replaceable = true)))
+      val (steps, _, states) = run(
+        1,
+        1,
+        List(
+          Submit(None, safety = false, replaceable = true),
+          Submit(Some(ActuatorGroup.Arms), safety = false, replaceable = true),
+          Answer(0),
+          Submit(Some(ActuatorGroup.Walk), safety = false, replaceable = false),
+          Submit(Some(ActuatorGroup.Arms), safety = false, replaceable = true)
+        )
+      )
       steps.map(_._2).collect { case Refused(e) => e.key } shouldBe Vector(3L)
       steps.map(_._2).collect { case Superseded(e, _) => e.key } shouldBe empty
       sent(steps).map(_.key) shouldBe Vector(0L, 1L, 2L)

@@ -26,7 +26,8 @@ class CompetitionGateSpec extends AnyWordSpec with Matchers {
       val reading = GameReading.Unreadable("RGme packet of unknown version: bytes from offset 4 are 14 00 00 00")
       CompetitionGate.closes(reading) shouldBe true
       CompetitionGate.why(reading) shouldBe
-        Some("the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00")
+        Some(
+          "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00")
       CompetitionGate.closes(GameReading.Nothing) shouldBe false
     }
     "let an unreadable packet outweigh readable ones for the hold time, then follow the readable ones again" in {

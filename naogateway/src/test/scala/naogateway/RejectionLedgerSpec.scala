@@ -23,7 +23,8 @@ class RejectionLedgerSpec extends AnyWordSpec with Matchers {
     }
 
     "keep at most its bound of addresses, counting the rest together" in {
-      val ledger = (1 to 200).foldLeft(RejectionLedger(maxSources = 8))((l, n) => l.count(Rejection.UnknownSender, Some(ip(n))))
+      val ledger =
+        (1 to 200).foldLeft(RejectionLedger(maxSources = 8))((l, n) => l.count(Rejection.UnknownSender, Some(ip(n))))
       ledger.bySource.size shouldBe 8
       ledger.sources(RejectionLedger.OtherSources) shouldBe 192
       ledger.sources.values.sum shouldBe 200

@@ -15,7 +15,8 @@ class RejectionSpec extends AnyWordSpec with Matchers {
 
   "Trusted sources" should {
     "match addresses inside their subnets only" in {
-      val trusted = TrustedSources(Vector(Subnet.parse("10.0.0.0/24").toOption.get, Subnet.parse("192.168.1.7").toOption.get))
+      val trusted =
+        TrustedSources(Vector(Subnet.parse("10.0.0.0/24").toOption.get, Subnet.parse("192.168.1.7").toOption.get))
       trusted.trusts(InetAddress.getByName("10.0.0.99")) shouldBe true
       trusted.trusts(InetAddress.getByName("10.0.1.1")) shouldBe false
       trusted.trusts(InetAddress.getByName("192.168.1.7")) shouldBe true

@@ -16,11 +16,13 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
   private val address = new InetSocketAddress("127.0.0.7", 3838)
   private val second = 1000000000L
   private val window = 5 * second
-  private def fresh(discovered: Boolean = false, subscribers: Option[Set[akka.actor.typed.ActorRef[GatewayEvent]]] = Some(Set.empty)) =
+  private def fresh(discovered: Boolean = false,
+      subscribers: Option[Set[akka.actor.typed.ActorRef[GatewayEvent]]] = Some(Set.empty)) =
     RobotState.initial(7, address, ClockSync(), subscribers, discovered, keepAliveTimesKept = 27)
 
   private def keepAlive(s: RobotState, at: Long, boot: Int, uptime: Int): (RobotState, KeepAliveOutcome) =
-    s.keepAliveSeen(Status(teamID = Some(1)), Some(RobotHealth(uptimeMs = Some(uptime), bootId = Some(boot))), at, window, 3)
+    s.keepAliveSeen(Status(teamID = Some(1)), Some(RobotHealth(uptimeMs = Some(uptime), bootId = Some(boot))), at,
+      window, 3)
 
   private def enable(names: String*) = DebuggingCommands(optionEnable = Some(DebuggingOptionNames(names)))
 
@@ -42,7 +44,8 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       val (s2, n2) = s1.refused(Rejection.BadProtobuf)
       val (s3, n3) = s2.refused(Rejection.UnknownCallId)
       (n1, n2, n3) shouldBe ((1L, 2L, 1L))
-      s3.linkStats(0L, window, second / 5).rejected shouldBe Map(Rejection.BadProtobuf.name -> 2L, Rejection.UnknownCallId.name -> 1L)
+      s3.linkStats(0L, window, second / 5).rejected shouldBe Map(Rejection.BadProtobuf.name -> 2L,
+        Rejection.UnknownCallId.name -> 1L)
     }
 
     "not pass a discovered robot's introducing keep-alive to the heartbeat, but every later one" in {
@@ -53,7 +56,9 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
     }
 
     "take a new session after three keep-alives of it, and start its clock estimate afresh" in {
-      val old = (1 to 10).foldLeft(fresh()) { (s, i) => keepAlive(s, i * second / 5, boot = 1, uptime = 100000 + i * 200)._1 }
+      val old = (1 to 10).foldLeft(fresh()) { (s, i) =>
+        keepAlive(s, i * second / 5, boot = 1, uptime = 100000 + i * 200)._1
+      }
       old.clockSync.samples should be > 1
       val (a, r1) = keepAlive(old, 3 * second, boot = 2, uptime = 100)
       val (b, r2) = keepAlive(a, 3 * second + second / 5, boot = 2, uptime = 300)
@@ -82,7 +87,8 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
     }
 
     "smooth round trips, count retransmissions, follow a rebound and show itself offline with an offline quality" in {
-      val s = fresh().roundTrip(8000000L).roundTrip(16000000L).retransmitted.rebound(new InetSocketAddress("127.0.0.8", 3838))
+      val s =
+        fresh().roundTrip(8000000L).roundTrip(16000000L).retransmitted.rebound(new InetSocketAddress("127.0.0.8", 3838))
       s.link.rttNanos shouldBe Some(9000000.0)
       s.link.retransmissions shouldBe 1
       s.address.getHostString shouldBe "127.0.0.8"
@@ -104,7 +110,8 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       Seq(k1, k2).foreach(_ should be < 0L)
       k1 should not be k2
       p2.options.pullKey shouldBe k2
-      val (pushed, known, unknown) = p2.optionsPushed(Seq("status.text", "havimo.regions", "havimo.grid").map(n => DebuggingOption(name = n)))
+      val (pushed, known, unknown) =
+        p2.optionsPushed(Seq("status.text", "havimo.regions", "havimo.grid").map(n => DebuggingOption(name = n)))
       known shouldBe Vector("havimo.regions")
       unknown shouldBe Vector("no.such")
       pushed.options.pulling shouldBe false
@@ -151,7 +158,8 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
 
     "encode a call as an FU-Remote frame over datagrams and as a bare message over ZeroMQ" in {
       val frame = RobotFrames.encode(7, call, datagrams).toOption.get
-      MessageContents.decodeFrame(frame).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto) shouldBe Some(call.call)
+      MessageContents.decodeFrame(frame).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto) shouldBe Some(
+        call.call)
       val bare = RobotFrames.encode(7, call, zeroMq).toOption.get
       MessageContents.parse(bare).toOption.flatMap(_.rpcRequest).map(RpcCall.fromProto) shouldBe Some(call.call)
     }
@@ -159,7 +167,8 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
     "refuse a segment over ZeroMQ and an oversize one over datagrams, and never sign a segment" in {
       RobotFrames.encode(7, Outbound.SegmentOut(Array[Byte](1)), zeroMq).isLeft shouldBe true
       RobotFrames.encode(7, Outbound.SegmentOut(new Array[Byte](WireLimits.MaxDatagramBytes + 1)), datagrams).isLeft shouldBe true
-      RobotFrames.send(7, Outbound.SegmentOut(Array[Byte](1)), Array[Byte](1), datagrams, Priority.Command, None, 1L).signed shouldBe false
+      RobotFrames.send(7, Outbound.SegmentOut(Array[Byte](1)), Array[Byte](1), datagrams, Priority.Command, None, 1L)
+        .signed shouldBe false
       RobotFrames.send(7, call, Array[Byte](1), datagrams, Priority.Command, None, 1L).signed shouldBe true
       val viaLink = RobotFrames.send(7, call, Array[Byte](1), zeroMq, Priority.Command, None, 1L)
       (viaLink.signed, viaLink.via) shouldBe ((false, Some(zeroMq.link)))

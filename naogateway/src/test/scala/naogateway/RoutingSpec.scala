@@ -46,7 +46,8 @@ class RoutingSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCheck
       val segment = Array[Byte](3, 0, 'h', 'i')
       Routing.decide(table, segment, from(hostTwo, 4002)) shouldBe Routing.SegmentToRobot(two, segment)
       Routing.decide(table, segment, from(hostTwo, 51000)) shouldBe Routing.SegmentToRobot(two, segment)
-      Routing.decide(table, segment, from(stranger, 4002)) shouldBe Routing.Rejected(Rejection.StreamFromUnknownAddress, "", None)
+      Routing.decide(table, segment, from(stranger, 4002)) shouldBe Routing.Rejected(Rejection.StreamFromUnknownAddress,
+        "", None)
     }
     "refuse bad frames, GameController packets and unclassifiable bytes, naming the robot bound to the sender" in {
       val truncated = keepAlive(1).dropRight(1)
@@ -67,7 +68,8 @@ class RoutingSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCheck
     }
     "decide for any bytes from any sender without throwing" in {
       forAll { (bytes: Array[Byte], port: Int) =>
-        noException should be thrownBy Routing.decide(table, bytes, from(if ((port & 1) == 0) hostOne else stranger, 4000 + (port & 3)))
+        noException should be thrownBy Routing.decide(table, bytes,
+          from(if ((port & 1) == 0) hostOne else stranger, 4000 + (port & 3)))
       }
     }
   }

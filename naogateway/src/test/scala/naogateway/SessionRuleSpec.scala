@@ -8,7 +8,8 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 /** docs/protocol.md 6.2, docs/architecture.md 10: a restart is a consistent new session, never one odd keep-alive. */
 class SessionRuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
-  implicit override val generatorDrivenConfig: PropertyCheckConfiguration = PropertyCheckConfiguration(minSuccessful = 300)
+  implicit override val generatorDrivenConfig: PropertyCheckConfiguration =
+    PropertyCheckConfiguration(minSuccessful = 300)
 
   /** The restarts a run of keep-alives makes, by the index of the keep-alive that completed each. */
   private def restarts(marks: Seq[SessionMark], keepAlives: Int): Vector[Int] =
@@ -17,11 +18,11 @@ class SessionRuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
       (next, if (restarted) found :+ i else found)
     }._2
 
-  /**
-   * One session's keep-alives as the gateway receives them: sent every 150-250 ms from power-up time `bootAt` (gateway
-   * clock), uptime counting from there, each delayed by 0-300 ms on the way. With or without bootId and clock.
-   */
-  private def session(bootId: Option[Int], bootAt: Long, firstUptime: Long, n: Int, clock: Boolean): Gen[Vector[SessionMark]] =
+  /** One session's keep-alives as the gateway receives them: sent every 150-250 ms from power-up time `bootAt` (gateway
+    * clock), uptime counting from there, each delayed by 0-300 ms on the way. With or without bootId and clock.
+    */
+  private def session(
+      bootId: Option[Int], bootAt: Long, firstUptime: Long, n: Int, clock: Boolean): Gen[Vector[SessionMark]] =
     for {
       gaps <- Gen.listOfN(n, Gen.choose(150L, 250L))
       delays <- Gen.listOfN(n, Gen.choose(0L, 300L))
@@ -42,7 +43,9 @@ class SessionRuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
 
   /** Anything a stranger might put in a keep-alive, received at `at`. */
   private def forged(at: Long): Gen[SessionMark] =
-    Gen.zip(bootIds, Gen.option(Gen.oneOf(Gen.choose(0L, 5000L), Gen.choose(0L, 1L << 33)))).map { case (b, u) => SessionMark(b, u, at) }
+    Gen.zip(bootIds, Gen.option(Gen.oneOf(Gen.choose(0L, 5000L), Gen.choose(0L, 1L << 33)))).map { case (b, u) =>
+      SessionMark(b, u, at)
+    }
 
   "The restart rule" should {
     "never see a restart in one session's keep-alives, delayed, reordered by neighbours, or lost" in {
@@ -95,7 +98,8 @@ class SessionRuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
 
     "keep a session across the uptime's wrap after 49.7 days" in {
       val wrap = SessionRule.UptimeWrapMillis
-      val marks = (0 until 20).map(i => SessionMark(Some(3), Some((wrap - 2000L + i * 200L) % wrap), 10000000L + i * 200L))
+      val marks =
+        (0 until 20).map(i => SessionMark(Some(3), Some((wrap - 2000L + i * 200L) % wrap), 10000000L + i * 200L))
       restarts(marks, 3) shouldBe empty
     }
 

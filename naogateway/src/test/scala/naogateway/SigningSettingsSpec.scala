@@ -12,7 +12,8 @@ class SigningSettingsSpec extends AnyWordSpec with Matchers {
   private val teamKey = SigningKey.fromHex(hex).toOption.get
 
   private def settings(overrides: String): GatewaySettings =
-    GatewaySettings.fromConfig(ConfigFactory.parseString(overrides).withFallback(ConfigFactory.defaultReference().getConfig("naogateway")))
+    GatewaySettings.fromConfig(
+      ConfigFactory.parseString(overrides).withFallback(ConfigFactory.defaultReference().getConfig("naogateway")))
 
   private def refusal(overrides: String): String = intercept[IllegalArgumentException](settings(overrides)).getMessage
 
@@ -41,7 +42,8 @@ class SigningSettingsSpec extends AnyWordSpec with Matchers {
       refusal("""robots = [ { id = 4, address = "10.0.0.4", signing = required } ]""") should
         (include("robot 4") and include("NAOGATEWAY_SIGNING_KEY"))
       refusal(s"""signing.key = "$hex"
-        |robots = [ { id = 5, address = "10.0.0.5", signing = maybe } ]""".stripMargin) should include("off or required")
+        |robots = [ { id = 5, address = "10.0.0.5", signing = maybe } ]""".stripMargin) should include(
+        "off or required")
     }
   }
 
@@ -49,7 +51,8 @@ class SigningSettingsSpec extends AnyWordSpec with Matchers {
     "sign with ever-growing timestamps, even when the clock goes back, frames the robot can check" in {
       var clock = 1000L
       val signer = new FrameSigner(teamKey, () => clock)
-      val frame = MessageContents.encodeFrame(MessageContents(1, debuggingCommands = Some(naogateway.proto.DebuggingCommands(optionPull = Some(true)))))
+      val frame = MessageContents.encodeFrame(MessageContents(1,
+          debuggingCommands = Some(naogateway.proto.DebuggingCommands(optionPull = Some(true)))))
         .toOption.get
       val stamps = (1 to 5).map { i =>
         clock = if (i == 3) 10L else clock + 1
@@ -66,7 +69,8 @@ class SigningSettingsSpec extends AnyWordSpec with Matchers {
     "accept each signed frame once, in growing order, and name the kind of every refusal" in {
       val check = new SignatureCheck(teamKey)
       val contents = MessageContents(3, status = Some(naogateway.proto.Status(teamID = Some(1))))
-      def frame(ts: Long, k: SigningKey = teamKey) = FrameSigning.signFrame(contents, HeaderForm.Compact, k, SignDirection.RobotToGateway, ts).toOption.get
+      def frame(ts: Long, k: SigningKey = teamKey) =
+        FrameSigning.signFrame(contents, HeaderForm.Compact, k, SignDirection.RobotToGateway, ts).toOption.get
       def run(bytes: Array[Byte]) = check.check(bytes, FumanoidsFrame.decodeHeader(bytes).toOption.get)
       run(frame(10)) shouldBe Right(())
       run(frame(10)) shouldBe Left(Rejection.Replayed)

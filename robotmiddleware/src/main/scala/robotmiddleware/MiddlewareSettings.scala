@@ -25,7 +25,8 @@ final case class MiddlewareSettings(
     clientFindRetry: FiniteDuration = 200.millis
 ) {
   require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
-  require(walkRefresh > Duration.Zero && walkRefresh < 500.millis, "walk-refresh must be inside the robot's 500 ms walk lease")
+  require(walkRefresh > Duration.Zero && walkRefresh < 500.millis,
+    "walk-refresh must be inside the robot's 500 ms walk lease")
   require(callTimeout > Duration.Zero && postureTimeout >= callTimeout, "need 0 < call-timeout <= posture-timeout")
   require(linkStatsInterval > Duration.Zero, "link-stats-interval must be positive")
   require(pendingLimit >= 1, "pending-limit must be at least 1")
@@ -40,7 +41,8 @@ final case class MiddlewareSettings(
 object MiddlewareSettings {
 
   /** The settings of this system's configuration. */
-  def apply(system: ActorSystem[_]): MiddlewareSettings = fromConfig(system.settings.config.getConfig("robotmiddleware"))
+  def apply(system: ActorSystem[_]): MiddlewareSettings =
+    fromConfig(system.settings.config.getConfig("robotmiddleware"))
 
   /** The settings of a `robotmiddleware` block. */
   def fromConfig(c: Config): MiddlewareSettings = MiddlewareSettings(

@@ -37,7 +37,8 @@ object Operation {
   }
 
   /** Set the four arm joints (radians). */
-  final case class Arms(leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double) extends Operation {
+  final case class Arms(
+      leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double) extends Operation {
     def group: Option[ActuatorGroup] = Some(ActuatorGroup.Arms)
     def name: String = RpcMethod.Arms.name
   }
@@ -57,9 +58,9 @@ object Operation {
   /** Any call of the robot's RPC interface; motion and speech calls need the matching lease. */
   final case class RawCall(module: String, method: String, params: Vector[RpcValue]) extends Operation {
     def group: Option[ActuatorGroup] = RpcMethod.find(module, method) match {
-      case Some(RpcMethod.Head)                  => Some(ActuatorGroup.Head)
-      case Some(RpcMethod.Arms)                  => Some(ActuatorGroup.Arms)
-      case Some(RpcMethod.Reset)                 => Some(ActuatorGroup.Walk)
+      case Some(RpcMethod.Head)  => Some(ActuatorGroup.Head)
+      case Some(RpcMethod.Arms)  => Some(ActuatorGroup.Arms)
+      case Some(RpcMethod.Reset) => Some(ActuatorGroup.Walk)
       // The rest of these modules, known or not, takes the walk or speech lease: an unknown one may move or speak.
       case _ if module == RpcMethod.MotionModule => Some(ActuatorGroup.Walk)
       case _ if module == RpcMethod.SpeechModule => Some(ActuatorGroup.Speech)

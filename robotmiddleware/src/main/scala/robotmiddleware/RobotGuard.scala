@@ -22,23 +22,31 @@ private[robotmiddleware] object RobotGuard {
   sealed trait Command
 
   /** Runs an app's operation if the app holds its lease, the robot is online and no safety hold forbids it. */
-  final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult]) extends Command
-  /**
-   * Sends an app's operation under the same checks as `Execute` and in the same order (one path to the robot's command
-   * owner, sent once): `replyTo` learns whether it was accepted; the robot's answer is the guard's alone.
-   */
+  final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult])
+      extends Command
+
+  /** Sends an app's operation under the same checks as `Execute` and in the same order (one path to the robot's command
+    * owner, sent once): `replyTo` learns whether it was accepted; the robot's answer is the guard's alone.
+    */
   final case class Send(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.SendResult])
       extends Command
+
   /** Asks for the leases of a set of actuator groups at the app's priority: all of them or none. */
-  final case class Acquire(app: AppInfo, groups: Set[ActuatorGroup], replyTo: ActorRef[RobotMiddleware.LeaseResult]) extends Command
+  final case class Acquire(app: AppInfo, groups: Set[ActuatorGroup], replyTo: ActorRef[RobotMiddleware.LeaseResult])
+      extends Command
+
   /** Gives a lease back. */
   final case class Release(app: ActorRef[AppEvent], group: ActuatorGroup) extends Command
+
   /** The app's system is gone: release its leases and stop what it left moving. */
   final case class AppGone(app: ActorRef[AppEvent]) extends Command
+
   /** An online, offline, quality or restart event of this robot. */
   final case class RobotEventReceived(event: RobotEvent) extends Command
+
   /** Sends the robot's camera frames to `subscriber` (no lease needed). */
   final case class WatchVision(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+
   /** Sends the robot's link figures to `subscriber` at once and then every `link-stats-interval` (no lease needed). */
   final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
 
@@ -61,12 +69,16 @@ private[robotmiddleware] object RobotGuard {
   /** The guard's own calls that keep a robot safe; each one's answer comes back with its own step. */
   private sealed abstract class SafetyStep(val describe: String) extends Product with Serializable
   private object SafetyStep {
+
     /** The stop of a safety hold, followed by a sit once the robot has stopped. */
     case object StopThenSit extends SafetyStep("stop")
+
     /** A stop that ends a walk (lease released or taken, app gone, a motion failed). */
     case object StopOnly extends SafetyStep("stop only")
+
     /** The stop a robot gets when it comes back online. */
     case object StopAfterReconnect extends SafetyStep("stop after reconnect")
+
     /** The sit of a safety hold. */
     case object Sit extends SafetyStep("sit")
   }
@@ -124,13 +136,15 @@ private[robotmiddleware] object RobotGuard {
       Behaviors.receiveMessage {
         case ChildrenReady(children) =>
           // The refs die with the robot actor's restart (or a child's stop): then the guard connects again.
-          Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref => context.watchWith(ref, ChildGone(ref)))
+          Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref =>
+            context.watchWith(ref, ChildGone(ref)))
           visionWatchers.foreach { case (subscriber, grid) => children.vision ! VisionActor.Register(subscriber, grid) }
           if (reconnectedWhileConnecting) stopAfterReconnect(children)
           stash.unstashAll(ready(children))
         case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
         case e: Execute if !online =>
-          e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
+          e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
+            Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
         case s: Send if !online =>
           s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name, Left(RobotFailure.RobotOffline(robotId)))
@@ -143,7 +157,7 @@ private[robotmiddleware] object RobotGuard {
           common(event)
           event match {
             // Only a robot the guard saw offline has come back; an online event older than its snapshot has not.
-            case RobotOnline(_, _)  => if (!wasOnline) reconnectedWhileConnecting = true
+            case RobotOnline(_, _) => if (!wasOnline) reconnectedWhileConnecting = true
             // Offline again before the guard is ready: the next RobotOnline, in ready, brings the stop.
             case RobotOffline(_, _) => reconnectedWhileConnecting = false
             case _                  => ()
@@ -157,8 +171,9 @@ private[robotmiddleware] object RobotGuard {
             case s: Send =>
               s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
-            case a: Acquire => a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.groups, Left(RobotFailure.Overloaded(robotId, "busy")))
-            case _          => ()
+            case a: Acquire =>
+              a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.groups, Left(RobotFailure.Overloaded(robotId, "busy")))
+            case _ => ()
           }
           else stash.stash(other)
           Behaviors.same
@@ -167,7 +182,7 @@ private[robotmiddleware] object RobotGuard {
 
     /** Events that change the guard's view in any state. */
     private def common(event: RobotEvent): Unit = event match {
-      case RobotOnline(_, _)  => online = true
+      case RobotOnline(_, _) => online = true
       case RobotOffline(_, _) =>
         online = false
         // The robot's own walk lease stops it; the middleware forgets the walk so it is not resumed by surprise.
@@ -203,15 +218,18 @@ private[robotmiddleware] object RobotGuard {
         // nothing, so no app is preempted (and no robot stopped) for a set that is refused. The first conflict in
         // the docs' group order is named, so the answer does not depend on a Set's iteration order.
         val conflict = ActuatorGroup.all.filter(groups).flatMap { group =>
-          leases.get(group).filter(holder => holder.events != app.events && holder.priority >= app.priority).map(group -> _)
+          leases.get(group).filter(holder => holder.events != app.events && holder.priority >= app.priority).map(
+            group -> _)
         }.headOption
         conflict match {
           case Some((group, holder)) =>
-            replyTo ! RobotMiddleware.LeaseResult(robotId, groups, Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
+            replyTo ! RobotMiddleware.LeaseResult(robotId, groups,
+              Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
           case None =>
             ActuatorGroup.all.filter(groups).foreach { group =>
               leases.get(group).filter(_.events != app.events).foreach { holder =>
-                context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name, holder.name, app.name)
+                context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name,
+                  holder.name, app.name)
                 holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
                 if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
               }
@@ -273,10 +291,12 @@ private[robotmiddleware] object RobotGuard {
         result.result match {
           // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
           case Right(_) | Left(_: RobotFailure.Superseded) if wantsSit && safety.isDefined =>
-            safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)), settings.postureTimeout)
+            safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)),
+              settings.postureTimeout)
           case Left(_: RobotFailure.Superseded) => () // a newer call of the slot took over: nothing failed
-          case Left(error) => context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
-          case Right(_)    => ()
+          case Left(error) =>
+            context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
+          case Right(_) => ()
         }
         Behaviors.same
       case WatchVision(subscriber, grid) =>
@@ -290,7 +310,8 @@ private[robotmiddleware] object RobotGuard {
       case WatchLinkStats(subscriber) =>
         context.watchWith(subscriber, StatsWatcherGone(subscriber))
         statsWatchers += subscriber
-        if (!timers.isTimerActive(StatsKey)) timers.startTimerWithFixedDelay(StatsKey, StatsTick, settings.linkStatsInterval)
+        if (!timers.isTimerActive(StatsKey))
+          timers.startTimerWithFixedDelay(StatsKey, StatsTick, settings.linkStatsInterval)
         // The first figures at once, not one interval later: robotctl status waits for them.
         robot ! RobotActor.GetLinkStats(statsAdapter)
         Behaviors.same
@@ -323,7 +344,6 @@ private[robotmiddleware] object RobotGuard {
 
     private lazy val statsAdapter = context.messageAdapter[LinkStats](StatsReceived.apply)
 
-
     /** One ask per step, not a message adapter: Akka keeps one adapter per message class, so labels would mix. */
     // One safety stop in flight at a time (the response actor resends it with new call ids when it is lost): events
     // anyone can provoke (a robot coming back, a battery reading) cannot be turned into a flood of stops. A hold that
@@ -344,9 +364,11 @@ private[robotmiddleware] object RobotGuard {
 
     private def askSafety(c: RobotActor.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
-      context.ask(c.response, (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
+      context.ask(c.response,
+        (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
-        case Failure(_)      => SafetyStepDone(step, CallResult(robotId, rpc.name, Left(RobotFailure.Timeout(robotId, rpc.name, (timeout).toMillis))))
+        case Failure(_) => SafetyStepDone(step,
+            CallResult(robotId, rpc.name, Left(RobotFailure.Timeout(robotId, rpc.name, (timeout).toMillis))))
       }
     }
 
@@ -365,9 +387,10 @@ private[robotmiddleware] object RobotGuard {
       case Operation.Posture(p)                  => p != Posture.Sit
       case r: Operation.RawCall =>
         (r.group.contains(ActuatorGroup.Walk) && !RpcMethod.find(r.module, r.method).contains(RpcMethod.Stop) &&
-          !(RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture) && r.params == Vector(RpcValue.Text(Posture.Sit.name)))) ||
-          r.group.contains(ActuatorGroup.Arms)
-      case _                                     => false
+          !(RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture) && r.params == Vector(
+            RpcValue.Text(Posture.Sit.name)))) ||
+        r.group.contains(ActuatorGroup.Arms)
+      case _ => false
     }
 
     // The latest battery readings, at most `batteryReadings` of them: the hold acts on a sustained reading only.
@@ -378,7 +401,8 @@ private[robotmiddleware] object RobotGuard {
         readings = (readings :+ volts).takeRight(settings.batteryReadings)
         val sustained = readings.size == settings.batteryReadings
         if (safety.isEmpty && sustained && readings.forall(_ < settings.lowBattery)) {
-          val reason = f"battery low: ${readings.max}%.2f V or less for ${readings.size} keep-alives (below ${settings.lowBattery}%.2f V)"
+          val reason =
+            f"battery low: ${readings.max}%.2f V or less for ${readings.size} keep-alives (below ${settings.lowBattery}%.2f V)"
           context.log.warn("Robot [{}]: {}; stopping and sitting down", robotId, reason)
           safety = Some(reason)
           leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))
@@ -394,14 +418,17 @@ private[robotmiddleware] object RobotGuard {
       if (walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
       timers.cancel(WalkKey)
       walking = None
-      safetyCall(c, if (thenSit) SafetyStep.StopThenSit else SafetyStep.StopOnly, RpcMethod.Stop.call(), settings.callTimeout)
+      safetyCall(c, if (thenSit) SafetyStep.StopThenSit else SafetyStep.StopOnly, RpcMethod.Stop.call(),
+        settings.callTimeout)
     }
 
     private def walkCall(w: Operation.Walk): RpcCall =
-      RpcMethod.Walk.call(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat), RpcValue.Number(w.omega.toFloat))
+      RpcMethod.Walk.call(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat),
+        RpcValue.Number(w.omega.toFloat))
 
-    private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation, result: Either[RobotFailure, Option[RpcValue]])
-        : Unit = replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
+    private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation,
+        result: Either[RobotFailure, Option[RpcValue]]): Unit =
+      replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
 
     // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
     // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
@@ -410,11 +437,14 @@ private[robotmiddleware] object RobotGuard {
         once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       val idempotent = if (once) Some(false) else None
-      context.ask(c.response, (ref: ActorRef[CallResult]) =>
-        ResponseActor.Call(rpc, ref, priority, Some(timeout), idempotent)) {
+      context.ask(c.response,
+        (ref: ActorRef[CallResult]) =>
+          ResponseActor.Call(rpc, ref, priority, Some(timeout), idempotent)) {
         case Success(result) =>
-          OperationDone(replyTo, operation, result.result.left.map(failure), result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
-        case Failure(_)      => OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
+          OperationDone(replyTo, operation, result.result.left.map(failure),
+            result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
+        case Failure(_) =>
+          OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
       }
     }
 
@@ -443,7 +473,8 @@ private[robotmiddleware] object RobotGuard {
         call(c, rpc, operation, replyTo, once, timeout = settings.postureTimeout)
       case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo, once)
       case r: Operation.RawCall =>
-        val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout else settings.callTimeout
+        val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout
+        else settings.callTimeout
         call(c, RpcCall(r.module, r.method, r.params), operation, replyTo, once, timeout = timeout)
     }
   }

@@ -21,14 +21,13 @@ import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 
-/**
- * What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor.
- *
- * Two doors to a robot (docs/writing-apps.md): a call (`walk` … `call`) completes with the robot's answer; a send
- * (`send`) completes once the middleware has accepted it and drops the robot's answer. Both go through the same
- * checks (lease, online, safety) and one ordered path, so a send followed by a call reaches the robot in that order.
- * Every future fails only with a `RobotFailure`; no method throws.
- */
+/** What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor.
+  *
+  * Two doors to a robot (docs/writing-apps.md): a call (`walk` … `call`) completes with the robot's answer; a send
+  * (`send`) completes once the middleware has accepted it and drops the robot's answer. Both go through the same checks
+  * (lease, online, safety) and one ordered path, so a send followed by a call reaches the robot in that order. Every
+  * future fails only with a `RobotFailure`; no method throws.
+  */
 trait RobotInterface {
 
   /** This app's name, as other apps and logs see it. */
@@ -37,10 +36,9 @@ trait RobotInterface {
   /** Every known robot's latest snapshot. */
   def robots(): Future[Vector[RobotSnapshot]]
 
-  /**
-   * Takes the leases of `groups` on a robot as one: all of them, or, failing with `LeaseNotHeld` when a holder of equal
-   * or higher priority has any of them, none.
-   */
+  /** Takes the leases of `groups` on a robot as one: all of them, or, failing with `LeaseNotHeld` when a holder of
+    * equal or higher priority has any of them, none.
+    */
   def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done]
 
   /** Gives leases back (releasing `walk` stops the robot). */
@@ -56,12 +54,12 @@ trait RobotInterface {
   def head(robotId: Int, pan: Double, tilt: Double): Future[Done]
 
   /** Sets the arm joints (radians); needs the `arms` lease. */
-  def arms(robotId: Int, leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double): Future[Done]
+  def arms(
+      robotId: Int, leftShoulder: Double, leftElbow: Double, rightShoulder: Double, rightElbow: Double): Future[Done]
 
-  /**
-   * Goes to a posture; completes with the posture reached when the motion has ended (normally `target`, `Fallen` if
-   * the robot fell on the way); needs `walk`.
-   */
+  /** Goes to a posture; completes with the posture reached when the motion has ended (normally `target`, `Fallen` if
+    * the robot fell on the way); needs `walk`.
+    */
   def posture(robotId: Int, target: Posture.Target): Future[Posture]
 
   /** Says a text; needs the `speech` lease. */
@@ -70,11 +68,10 @@ trait RobotInterface {
   /** Any call of the robot's RPC interface (motion and speech calls need their lease). */
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]]
 
-  /**
-   * Sends any call of the robot's RPC interface without waiting for the robot: completes with `Done` once the
-   * middleware accepted it (fails with the same `RobotFailure` a call would for a lease, an offline robot or a safety
-   * hold); the robot's answer, or its error, is dropped. Ordered with this app's calls and sends, sent once.
-   */
+  /** Sends any call of the robot's RPC interface without waiting for the robot: completes with `Done` once the
+    * middleware accepted it (fails with the same `RobotFailure` a call would for a lease, an offline robot or a safety
+    * hold); the robot's answer, or its error, is dropped. Ordered with this app's calls and sends, sent once.
+    */
   final def send(robotId: Int, module: String, method: String, params: RpcValue*): Future[Done] =
     send(robotId, Operation.RawCall(module, method, params.toVector))
 
@@ -115,7 +112,8 @@ object RobotClient {
     val deadline = within.fromNow
     val retry = MiddlewareSettings(system).clientFindRetry
     def attempt(): Future[ActorRef[RobotMiddleware.Command]] =
-      system.receptionist.ask[Receptionist.Listing](Receptionist.Find(RobotMiddleware.ServiceKey, _))(Timeout(within), system.scheduler)
+      system.receptionist.ask[Receptionist.Listing](Receptionist.Find(RobotMiddleware.ServiceKey, _))(Timeout(within),
+        system.scheduler)
         .flatMap { listing =>
           listing.serviceInstances(RobotMiddleware.ServiceKey).headOption match {
             case Some(ref) => Future.successful(ref)
@@ -127,11 +125,10 @@ object RobotClient {
     attempt()
   }
 
-  /**
-   * Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. Fails only
-   * with a `RobotFailure` (robot id 0, operation "connect"): `Timeout` when the middleware does not answer within
-   * `timeout`; then the session made for it is closed again.
-   */
+  /** Registers an app called `appName` with `priority` (higher preempts lower) and returns its interface. Fails only
+    * with a `RobotFailure` (robot id 0, operation "connect"): `Timeout` when the middleware does not answer within
+    * `timeout`; then the session made for it is closed again.
+    */
   def connect(system: ActorSystem[_], middleware: ActorRef[RobotMiddleware.Command], appName: String, priority: Int = 0,
       timeout: FiniteDuration = 10.seconds): Future[RobotInterface] =
     asRobotFailure(0, "connect", timeout) {
@@ -146,16 +143,17 @@ object RobotClient {
         ExecutionContext.parasitic)
     }
 
-  /**
-   * `f`, failing only with a `RobotFailure`: a timeout as `Timeout` after `waited`, anything else (a throw while
-   * starting `f`, a dead system, a message that could not be serialized) as `Overloaded` naming the cause.
-   */
+  /** `f`, failing only with a `RobotFailure`: a timeout as `Timeout` after `waited`, anything else (a throw while
+    * starting `f`, a dead system, a message that could not be serialized) as `Overloaded` naming the cause.
+    */
   private[robotmiddleware] def asRobotFailure[R](robotId: Int, operation: String, waited: FiniteDuration)(
       f: => Future[R]): Future[R] = {
-    val started = try f catch { case scala.util.control.NonFatal(e) => Future.failed(e) }
+    val started =
+      try f
+      catch { case scala.util.control.NonFatal(e) => Future.failed(e) }
     started.transform {
-      case ok @ scala.util.Success(_)                             => ok
-      case failed @ scala.util.Failure(_: RobotFailure)           => failed
+      case ok @ scala.util.Success(_)                   => ok
+      case failed @ scala.util.Failure(_: RobotFailure) => failed
       case scala.util.Failure(_: java.util.concurrent.TimeoutException) =>
         scala.util.Failure(RobotFailure.Timeout(robotId, operation, waited.toMillis))
       case scala.util.Failure(e) =>
@@ -182,16 +180,16 @@ object RobotClient {
     // dispatcher per step (a call's answer reaches the app sooner), and they still complete when the system is gone.
     private implicit val ec: ExecutionContext = ExecutionContext.parasitic
 
-    /**
-     * An ask of the middleware that fails only with a `RobotFailure`: a lost answer (Akka's `AskTimeoutException`) as
-     * `Timeout`; an ask that cannot even start (the app's actor system is shutting down) or any other error as
-     * `Overloaded` with the cause in words; never a synchronous throw.
-     */
+    /** An ask of the middleware that fails only with a `RobotFailure`: a lost answer (Akka's `AskTimeoutException`) as
+      * `Timeout`; an ask that cannot even start (the app's actor system is shutting down) or any other error as
+      * `Overloaded` with the cause in words; never a synchronous throw.
+      */
     private def ask[R](robotId: Int, operation: String)(message: ActorRef[R] => RobotMiddleware.Command): Future[R] =
       RobotClient.asRobotFailure(robotId, operation, askTimeout.duration)(middleware.ask[R](message))
 
     private def execute(robotId: Int, operation: Operation): Future[Option[RpcValue]] =
-      ask[RobotMiddleware.OperationResult](robotId, operation.name)(RobotMiddleware.Execute(session, robotId, operation, _)).flatMap { r =>
+      ask[RobotMiddleware.OperationResult](robotId, operation.name)(RobotMiddleware.Execute(session, robotId, operation,
+          _)).flatMap { r =>
         r.result.fold(Future.failed, Future.successful)
       }
 
@@ -206,7 +204,8 @@ object RobotClient {
       if (groups.isEmpty) Future.successful(Done)
       else {
         val set = groups.toSet
-        ask[RobotMiddleware.LeaseResult](robotId, s"acquire ${ActuatorGroup.all.filter(set).map(_.name).mkString(",")}")(
+        ask[RobotMiddleware.LeaseResult](robotId,
+          s"acquire ${ActuatorGroup.all.filter(set).map(_.name).mkString(",")}")(
           RobotMiddleware.Acquire(session, robotId, set, _)
         ).flatMap(r => r.result.fold(Future.failed, _ => Future.successful(Done)))
       }
@@ -219,7 +218,8 @@ object RobotClient {
       scala.util.Try(Operation.Walk(vx, vy, omega)) match {
         case scala.util.Success(walk) => done(execute(robotId, walk))
         case scala.util.Failure(e) =>
-          Future.failed(RobotFailure.RobotError(robotId, s"out of range: ${e.getMessage.stripPrefix("requirement failed: ")}"))
+          Future.failed(RobotFailure.RobotError(robotId,
+              s"out of range: ${e.getMessage.stripPrefix("requirement failed: ")}"))
       }
     def stop(robotId: Int): Future[Done] = done(execute(robotId, Operation.Stop()))
     def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done(execute(robotId, Operation.Head(pan, tilt)))

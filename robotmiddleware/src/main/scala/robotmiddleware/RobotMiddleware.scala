@@ -20,30 +20,32 @@ object RobotMiddleware {
   sealed trait Command
 
   /** An app introduces itself; its leases live as long as `events` does. */
-  final case class RegisterApp(name: String, priority: Int, events: ActorRef[AppEvent], replyTo: ActorRef[AppRegistered])
+  final case class RegisterApp(name: String, priority: Int, events: ActorRef[AppEvent],
+      replyTo: ActorRef[AppRegistered])
       extends Command
 
   /** Runs `operation` on robot `robotId` for the app whose event ref is `app`. */
-  final case class Execute(app: ActorRef[AppEvent], robotId: Int, operation: Operation, replyTo: ActorRef[OperationResult])
+  final case class Execute(app: ActorRef[AppEvent], robotId: Int, operation: Operation,
+      replyTo: ActorRef[OperationResult])
       extends Command
 
-  /**
-   * Sends `operation` to robot `robotId` for the app whose event ref is `app`, in the same order as its `Execute`s and
-   * through the same checks: `replyTo` learns at once whether it was accepted (lease, online, safety) or refused; the
-   * robot's own answer is dropped.
-   */
+  /** Sends `operation` to robot `robotId` for the app whose event ref is `app`, in the same order as its `Execute`s and
+    * through the same checks: `replyTo` learns at once whether it was accepted (lease, online, safety) or refused; the
+    * robot's own answer is dropped.
+    */
   final case class Send(app: ActorRef[AppEvent], robotId: Int, operation: Operation, replyTo: ActorRef[SendResult])
       extends Command
 
-  /**
-   * Asks for the leases of `groups` on robot `robotId` as one: all are granted (preempting lower-priority holders) or,
-   * when a holder of equal or higher priority has any of them, none is taken.
-   */
-  final case class Acquire(app: ActorRef[AppEvent], robotId: Int, groups: Set[ActuatorGroup], replyTo: ActorRef[LeaseResult])
+  /** Asks for the leases of `groups` on robot `robotId` as one: all are granted (preempting lower-priority holders) or,
+    * when a holder of equal or higher priority has any of them, none is taken.
+    */
+  final case class Acquire(app: ActorRef[AppEvent], robotId: Int, groups: Set[ActuatorGroup],
+      replyTo: ActorRef[LeaseResult])
       extends Command
 
   /** The single-group request, kept for callers that take one lease at a time. */
   object Acquire {
+
     /** Asks for the lease of `group` alone. */
     def apply(app: ActorRef[AppEvent], robotId: Int, group: ActuatorGroup, replyTo: ActorRef[LeaseResult]): Acquire =
       Acquire(app, robotId, Set(group), replyTo)
@@ -73,7 +75,8 @@ object RobotMiddleware {
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
   private final case class RobotsListed(replyTo: ActorRef[RobotList], robots: Option[Vector[RobotSnapshot]])
       extends Command
-  private final case class StatusKnown(subscriber: ActorRef[RobotSnapshot], robots: Vector[RobotSnapshot]) extends Command
+  private final case class StatusKnown(subscriber: ActorRef[RobotSnapshot], robots: Vector[RobotSnapshot])
+      extends Command
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
@@ -95,20 +98,22 @@ object RobotMiddleware {
   /** The answer to `ListRobots`: every known robot's latest snapshot (a named type, so nodes bind no library class). */
   final case class RobotList(robots: Vector[RobotSnapshot])
 
-  /** The answer to `Acquire`, for the groups it asked for together (a refusal's `LeaseNotHeld` names the one in conflict). */
+  /** The answer to `Acquire`, for the groups it asked for together (a refusal's `LeaseNotHeld` names the one in
+    * conflict).
+    */
   final case class LeaseResult(robotId: Int, groups: Set[ActuatorGroup], result: Either[RobotFailure, Unit])
 
   /** The single-group answer, kept for callers that take one lease at a time. */
   object LeaseResult {
+
     /** The answer for `group` alone. */
     def apply(robotId: Int, group: ActuatorGroup, result: Either[RobotFailure, Unit]): LeaseResult =
       LeaseResult(robotId, Set(group), result)
   }
 
-  /**
-   * The middleware in front of `gateway`, registered with the receptionist. It holds the gateway's middleware view and
-   * each robot's `RobotActor.Access`: it can reach a robot only through the robot's response and vision actors.
-   */
+  /** The middleware in front of `gateway`, registered with the receptionist. It holds the gateway's middleware view and
+    * each robot's `RobotActor.Access`: it can reach a robot only through the robot's response and vision actors.
+    */
   def apply(gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings): Behavior[Command] =
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
@@ -116,7 +121,8 @@ object RobotMiddleware {
       // In a cluster, an app whose node becomes unreachable loses its robots at once, not only when the node is
       // downed seconds later: a blind app must not keep a robot walking.
       if (context.system.settings.config.getString("akka.actor.provider") == "cluster") {
-        val unreachable = context.messageAdapter[akka.cluster.ClusterEvent.UnreachableMember](e => NodeUnreachable(e.member.address))
+        val unreachable =
+          context.messageAdapter[akka.cluster.ClusterEvent.UnreachableMember](e => NodeUnreachable(e.member.address))
         akka.cluster.typed.Cluster(context.system).subscriptions !
           akka.cluster.typed.Subscribe(unreachable, classOf[akka.cluster.ClusterEvent.UnreachableMember])
       }
@@ -133,15 +139,17 @@ object RobotMiddleware {
     private var eventWatchers = Set.empty[ActorRef[RobotEvent]]
 
     private def guard(robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean): ActorRef[RobotGuard.Command] =
-      guards.getOrElse(robotId, {
-        val g = context.spawn(
-          Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
-            .onFailure(settings.guardRestart.strategy),
-          s"guard-$robotId"
-        )
-        guards = guards.updated(robotId, g)
-        g
-      })
+      guards.getOrElse(
+        robotId, {
+          val g = context.spawn(
+            Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
+              .onFailure(settings.guardRestart.strategy),
+            s"guard-$robotId"
+          )
+          guards = guards.updated(robotId, g)
+          g
+        }
+      )
 
     private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(settings.lookupTimeout)
 
@@ -204,8 +212,9 @@ object RobotMiddleware {
             replyTo ! OperationResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
           case Send(_, _, operation, replyTo) =>
             replyTo ! SendResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
-          case Acquire(_, _, groups, replyTo) => replyTo ! LeaseResult(robotId, groups, Left(RobotFailure.UnknownRobot(robotId)))
-          case _                              => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
+          case Acquire(_, _, groups, replyTo) =>
+            replyTo ! LeaseResult(robotId, groups, Left(RobotFailure.UnknownRobot(robotId)))
+          case _ => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
         }
         Behaviors.same
       case ListRobots(replyTo) =>
@@ -225,7 +234,8 @@ object RobotMiddleware {
         context.ask(gateway, Gateway.GetRobots.apply)(tried => StatusKnown(subscriber, tried.getOrElse(Vector.empty)))
         Behaviors.same
       case StatusKnown(subscriber, robots) =>
-        statusWatchers.get(subscriber).foreach(filter => robots.filter(s => filter.forall(_ == s.robotId)).foreach(subscriber ! _))
+        statusWatchers.get(subscriber).foreach(filter =>
+          robots.filter(s => filter.forall(_ == s.robotId)).foreach(subscriber ! _))
         Behaviors.same
       case WatchGame(subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))
@@ -249,7 +259,8 @@ object RobotMiddleware {
         }
         Behaviors.same
       case AppTerminated(app) =>
-        context.log.info("App [{}] is gone: releasing its leases and stopping its robots", apps.get(app).map(_.name).getOrElse("?"))
+        context.log.info("App [{}] is gone: releasing its leases and stopping its robots",
+          apps.get(app).map(_.name).getOrElse("?"))
         apps -= app
         guards.values.foreach(_ ! RobotGuard.AppGone(app))
         Behaviors.same
@@ -257,8 +268,10 @@ object RobotMiddleware {
         event match {
           case e: RobotEvent =>
             e match {
-              case RobotStatusUpdated(s) => statusWatchers.foreach { case (w, filter) => if (filter.forall(_ == s.robotId)) w ! s }
-              case _                     => ()
+              case RobotStatusUpdated(s) => statusWatchers.foreach { case (w, filter) =>
+                  if (filter.forall(_ == s.robotId)) w ! s
+                }
+              case _ => ()
             }
             e match {
               case RobotForgotten(robotId, _) =>

@@ -13,10 +13,9 @@ import naogateway.integration.GatewayFixture
 import naogateway.sim.{ReceivedCall, SimulatedRobot}
 import naogateway.wire.{ActuatorGroup, RpcValue}
 
-/**
- * The two doors of `RobotInterface` in the gateway's own actor system, seen at a simulated robot's receive log: a send
- * keeps its place among the app's calls, its answer is dropped, and it is refused as a call is. Loopback only.
- */
+/** The two doors of `RobotInterface` in the gateway's own actor system, seen at a simulated robot's receive log: a send
+  * keeps its place among the app's calls, its answer is dropped, and it is refused as a call is. Loopback only.
+  */
 class BothDoorsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 64)
   private val Patience = 30.seconds

@@ -8,11 +8,14 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.RestartBackoff
 
-/** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key (architecture.md 15.2). */
+/** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key (architecture.md
+  * 15.2).
+  */
 class MiddlewareSettingsSpec extends AnyWordSpec with Matchers {
 
   private def settings(overrides: String = ""): MiddlewareSettings =
-    MiddlewareSettings.fromConfig(ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("robotmiddleware")))
+    MiddlewareSettings.fromConfig(
+      ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("robotmiddleware")))
 
   "The middleware's settings" should {
     "read every limit, back-off and ask timeout from reference.conf" in {

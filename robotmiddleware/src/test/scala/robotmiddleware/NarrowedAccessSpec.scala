@@ -6,11 +6,10 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway._
 
-/**
- * What the middleware's package can send the gateway and a robot, checked by the compiler (ScalaTest's compile-time
- * assertions typecheck each snippet here, outside package naogateway): the narrowed refs take exactly the middleware's
- * messages, and the gateway's internal messages cannot even be built.
- */
+/** What the middleware's package can send the gateway and a robot, checked by the compiler (ScalaTest's compile-time
+  * assertions typecheck each snippet here, outside package naogateway): the narrowed refs take exactly the middleware's
+  * messages, and the gateway's internal messages cannot even be built.
+  */
 class NarrowedAccessSpec extends AnyWordSpec with Matchers {
 
   private val access: ActorRef[RobotActor.Access] = null

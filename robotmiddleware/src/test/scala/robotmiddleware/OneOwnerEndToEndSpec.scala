@@ -17,10 +17,9 @@ import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{ReceivedCall, SimulatedRobot}
 import naogateway.wire.{Posture, RpcMethod, RpcValue}
 
-/**
- * A robot's command order end to end, seen where it counts: the simulated robot's receive log. Loopback only, ports
- * chosen by the system; generous timeouts, no timed assertions.
- */
+/** A robot's command order end to end, seen where it counts: the simulated robot's receive log. Loopback only, ports
+  * chosen by the system; generous timeouts, no timed assertions.
+  */
 class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 64)
   private val Patience = 30.seconds
@@ -80,7 +79,8 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
           log.drop(firstStop).exists(c => RpcMethod.of(c).contains(RpcMethod.Walk)) shouldBe false
         }
         numbers(log.filter(c => RpcMethod.of(c).contains(RpcMethod.Head)).last.params) shouldBe Vector(pan.toFloat, 0f)
-        numbers(log.filter(c => RpcMethod.of(c).contains(RpcMethod.Arms)).last.params) shouldBe Vector(shoulder.toFloat, 0f, 0f, 0f)
+        numbers(log.filter(c => RpcMethod.of(c).contains(RpcMethod.Arms)).last.params) shouldBe Vector(shoulder.toFloat,
+          0f, 0f, 0f)
         f.view(robot).head shouldBe ((pan.toFloat.toDouble, 0.0))
         app.close()
       } finally {
@@ -105,10 +105,12 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         var pan = 0.0
         // Supervisors' failure reports, counted at the root logger: proof that each crash below really happened.
         val failures = new java.util.concurrent.atomic.AtomicInteger()
-        val root = org.slf4j.LoggerFactory.getLogger(org.slf4j.Logger.ROOT_LOGGER_NAME).asInstanceOf[ch.qos.logback.classic.Logger]
+        val root = org.slf4j.LoggerFactory.getLogger(org.slf4j.Logger.ROOT_LOGGER_NAME).asInstanceOf[
+          ch.qos.logback.classic.Logger]
         val counter = new ch.qos.logback.core.AppenderBase[ch.qos.logback.classic.spi.ILoggingEvent] {
           override def append(e: ch.qos.logback.classic.spi.ILoggingEvent): Unit =
-            if (e.getLevel == ch.qos.logback.classic.Level.ERROR && e.getFormattedMessage.contains("saw failure")) failures.incrementAndGet()
+            if (e.getLevel == ch.qos.logback.classic.Level.ERROR && e.getFormattedMessage.contains("saw failure"))
+              failures.incrementAndGet()
         }
         counter.start()
         root.addAppender(counter)
@@ -128,7 +130,8 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         }
         // A reply ref or route that is null stands in for any bug: the actor throws and its supervisor restarts it.
         stillWorks("robot actor")(f.robotActor(22) ! RobotActor.GetSnapshot(null))
-        stillWorks("response actor")(f.connect(22).response ! ResponseActor.Call(null, createTestProbe[CallResult]().ref))
+        stillWorks("response actor")(f.connect(22).response ! ResponseActor.Call(null,
+          createTestProbe[CallResult]().ref))
         stillWorks("vision actor")(f.crashVision(22))
         stillWorks("stream actor")(f.connect(22).stream ! StreamActor.GetStats(null))
         // The sender hands a caller's send to the response actor for its call id: a null call fails there, once.

@@ -37,7 +37,8 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       val request = middleware.expectMessageType[RobotMiddleware.Acquire]
       request.groups shouldBe Set[ActuatorGroup](ActuatorGroup.Walk, ActuatorGroup.Head)
       middleware.expectNoMessage(100.millis)
-      request.replyTo ! RobotMiddleware.LeaseResult(4, request.groups, Left(RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))))
+      request.replyTo ! RobotMiddleware.LeaseResult(4, request.groups,
+        Left(RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))))
       acquired.failed.futureValue shouldBe RobotFailure.LeaseNotHeld(4, ActuatorGroup.Head, Some("referee"))
     }
 
@@ -79,8 +80,13 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       middleware.expectMessageType[RobotMiddleware.RegisterApp].replyTo ! RobotMiddleware.AppRegistered("gone")
       val interface = connecting.futureValue
       gone.shutdownTestKit()
-      val attempts = Seq(interface.stop(4), interface.send(4, "system", "battery"), interface.robots(),
-        interface.acquire(4, ActuatorGroup.Walk), interface.call(4, "system", "battery"))
+      val attempts = Seq(
+        interface.stop(4),
+        interface.send(4, "system", "battery"),
+        interface.robots(),
+        interface.acquire(4, ActuatorGroup.Walk),
+        interface.call(4, "system", "battery")
+      )
       attempts.foreach(_.failed.futureValue(timeout(Span(8, Seconds))) shouldBe a[RobotFailure])
     }
 
@@ -95,7 +101,8 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
     "fail a walk with velocities that are no numbers in the future, without sending it" in {
       val (interface, middleware) = connected()
       val walked = interface.walk(4, Double.NaN, 0.0, Double.PositiveInfinity)
-      walked.failed.futureValue shouldBe RobotFailure.RobotError(4, "out of range: walk velocities must be finite numbers")
+      walked.failed.futureValue shouldBe RobotFailure.RobotError(4,
+        "out of range: walk velocities must be finite numbers")
       middleware.expectNoMessage(100.millis)
     }
   }

@@ -19,22 +19,23 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 16)
   private val robotAddress = new InetSocketAddress("127.0.0.1", 3838)
 
-  /**
-   * A gateway that knows robot 1 and hands out probes as the robot's children. With `holdConnect` the robot does not
-   * answer a guard's `Open` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
-   * The robot answers `GetSnapshot` with the online state `snapshotOnline` (online unless a test says otherwise); with
-   * `None` it does not answer.
-   */
+  /** A gateway that knows robot 1 and hands out probes as the robot's children. With `holdConnect` the robot does not
+    * answer a guard's `Open` by itself: the test finds the guard's reply ref in `connects` and answers when it wants.
+    * The robot answers `GetSnapshot` with the online state `snapshotOnline` (online unless a test says otherwise); with
+    * `None` it does not answer.
+    */
   private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = Some(true),
       middlewareSettings: MiddlewareSettings = settings, known: Vector[RobotSnapshot] = Vector.empty) {
     val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
     val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
     val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
     val connects: TestProbe[ActorRef[RobotActor.Opened]] = createTestProbe[ActorRef[RobotActor.Opened]]()
+
     /** Every `Open` the robot got, held or answered. */
     val connectsSeen: TestProbe[ActorRef[RobotActor.Opened]] = createTestProbe[ActorRef[RobotActor.Opened]]()
     // All the middleware gets of the robot's children: no sender, stream or heartbeat to send to.
     val connected: RobotActor.Opened = RobotActor.Opened(1, response.ref, vision.ref)
+
     /** What the robot answers an `Open` with: a test swaps it for new children to stand in for a restart. */
     @volatile var current: RobotActor.Opened = connected
 
@@ -123,7 +124,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val result = f.execute(app, Operation.Head(0.2, 0.0))
       val call = fresh.fishForMessage(3.seconds) {
         case c: ResponseActor.Call if c.call.name == "motion.head" => akka.actor.testkit.typed.FishingOutcome.Complete
-        case _                                                     => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+        case _ => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }.last.asInstanceOf[ResponseActor.Call]
       call.replyTo ! CallResult(1, "motion.head", Right(None))
       result.receiveMessage().result shouldBe Right(None)
@@ -134,12 +135,14 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
       f.execute(app, Operation.Walk(0.2, 0, 0))
       f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(None))
-      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
+      (1 to settings.batteryReadings).foreach(_ =>
+        f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
       events.expectMessageType[AppEvent.SafetyStop]
       val first = f.expectCall("motion.stop")
       // The app lets go of the walk lease, and more low readings come: one stop in flight is enough.
       f.middleware ! RobotMiddleware.Release(app, 1, ActuatorGroup.Walk)
-      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.4), online = true)))
+      (1 to settings.batteryReadings).foreach(_ =>
+        f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.4), online = true)))
       f.response.expectNoMessage(300.millis)
       first.replyTo ! CallResult(1, "motion.stop", Right(None))
       f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
@@ -177,10 +180,12 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val (equal, _) = f.app("other", 1)
       val (high, _) = f.app("referee", 5)
       f.acquire(low, ActuatorGroup.Walk).result shouldBe Right(())
-      f.acquire(equal, ActuatorGroup.Walk).result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("follower")))
+      f.acquire(equal, ActuatorGroup.Walk).result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk,
+          Some("follower")))
       f.acquire(high, ActuatorGroup.Walk).result shouldBe Right(())
       lowEvents.expectMessage(AppEvent.LeasePreempted(1, ActuatorGroup.Walk, "referee"))
-      f.execute(low, Operation.Stop()).receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("referee")))
+      f.execute(low, Operation.Stop()).receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1,
+          ActuatorGroup.Walk, Some("referee")))
     }
     "take a set of groups as one: refused when one is held at higher priority, and then nothing is taken" in {
       val f = new Fixture
@@ -191,7 +196,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(referee, ActuatorGroup.Head).result shouldBe Right(())
       // Arms are free and walk would be preempted, but head is held above the coach's priority.
       val refused = f.acquireAll(coach, ActuatorGroup.Arms, ActuatorGroup.Walk, ActuatorGroup.Head)
-      refused shouldBe RobotMiddleware.LeaseResult(1, Set[ActuatorGroup](ActuatorGroup.Arms, ActuatorGroup.Walk, ActuatorGroup.Head),
+      refused shouldBe RobotMiddleware.LeaseResult(1,
+        Set[ActuatorGroup](ActuatorGroup.Arms, ActuatorGroup.Walk, ActuatorGroup.Head),
         Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Head, Some("referee"))))
       // Nothing was taken: the follower was not preempted nor its robot stopped, the free group is still free.
       followerEvents.expectNoMessage(200.millis)
@@ -266,15 +272,19 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
       f.execute(app, Operation.Walk(0.2, 0, 0)) // established a guard and a walk
       f.expectCall("motion.walk").replyTo ! CallResult(1, "motion.walk", Right(None))
-      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
+      (1 to settings.batteryReadings).foreach(_ =>
+        f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
       events.expectMessageType[AppEvent.SafetyStop].reason should include("battery low")
       f.expectCall("motion.stop").replyTo ! CallResult(1, "motion.stop", Right(None))
       f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
-      f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
-      f.execute(app, Operation.Posture(Posture.Stand)).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
+      f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result.left.toOption.get shouldBe a[
+        RobotFailure.SafetyHold]
+      f.execute(app, Operation.Posture(Posture.Stand)).receiveMessage().result.left.toOption.get shouldBe a[
+        RobotFailure.SafetyHold]
       f.execute(app, Operation.Head(0.1, 0.0))
       f.expectCall("motion.head")
-      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true)))
+      (1 to settings.batteryReadings).foreach(_ =>
+        f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true)))
       events.expectMessage(AppEvent.SafetyCleared(1))
       f.execute(app, Operation.Walk(0.1, 0, 0))
       f.expectCall("motion.walk")
@@ -297,7 +307,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val (app, events) = f.app("x", 1)
       f.acquire(app, ActuatorGroup.Arms).result shouldBe Right(())
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
-      (1 to settings.batteryReadings).foreach(_ => f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.0), online = true)))
+      (1 to settings.batteryReadings).foreach(_ =>
+        f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.0), online = true)))
       events.expectMessageType[AppEvent.SafetyStop]
       val arms = Operation.RawCall("motion", "arms", Vector.fill(4)(RpcValue.Number(0f)))
       f.execute(app, arms).receiveMessage().result.left.toOption.get shouldBe a[RobotFailure.SafetyHold]
@@ -350,8 +361,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val done = createTestProbe[RobotMiddleware.OperationResult]()
       f.middleware ! RobotMiddleware.Execute(app, 1, Operation.Posture(Posture.Stand), done.ref)
       val seen = f.response.fishForMessage(3.seconds) {
-        case c: ResponseActor.Call if c.call.name == "motion.posture" => akka.actor.testkit.typed.FishingOutcome.Complete
-        case _                                                       => akka.actor.testkit.typed.FishingOutcome.Continue
+        case c: ResponseActor.Call if c.call.name == "motion.posture" =>
+          akka.actor.testkit.typed.FishingOutcome.Complete
+        case _ => akka.actor.testkit.typed.FishingOutcome.Continue
       }
       seen.collect { case c: ResponseActor.Call => c.call.name } should not contain "motion.stop"
       val posture = seen.last.asInstanceOf[ResponseActor.Call]
@@ -360,7 +372,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       done.receiveMessage().result shouldBe Right(None)
     }
     "list robots as the gateway answers, keeping no copy that events could leave behind" in {
-      val configured = RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)
+      val configured =
+        RobotSnapshot(7, new InetSocketAddress("192.168.1.107", 3838), online = false, quality = LinkQuality.Offline)
       val f = new Fixture(known = Vector(configured))
       val robots = createTestProbe[RobotMiddleware.RobotList]()
       f.middleware ! RobotMiddleware.ListRobots(robots.ref)

@@ -18,12 +18,11 @@ import naogateway.sim.{ReceivedCall, SimulatedRobot}
 import naogateway.testkit.TestLoopback
 import naogateway.wire.{ActuatorGroup, Posture, SigningKey}
 
-/**
- * The issue's forged keep-alive, end to end through the middleware's battery safety: bursts of keep-alives claiming
- * 10.0 V from a robot's own address. Against a robot that signs, no app hears the reading and nothing stops or sits
- * it; against one that does not, the reading reaches the apps as the robot's (which is why signing exists).
- * Loopback only; generous timeouts.
- */
+/** The issue's forged keep-alive, end to end through the middleware's battery safety: bursts of keep-alives claiming
+  * 10.0 V from a robot's own address. Against a robot that signs, no app hears the reading and nothing stops or sits
+  * it; against one that does not, the reading reaches the apps as the robot's (which is why signing exists). Loopback
+  * only; generous timeouts.
+  */
 class SignedRobotSafetySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   private val settings = MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 64)
   private val Patience = 30.seconds
@@ -31,7 +30,8 @@ class SignedRobotSafetySpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
   private val Key = SigningKey.fromHex(KeyHex).toOption.get
 
   /** What the app heard and what the robot was sent after bursts of forged low-battery keep-alives. */
-  private final case class Outcome(safetyStop: Option[AppEvent.SafetyStop], lowReading: Option[RobotSnapshot], sentAfter: Vector[String],
+  private final case class Outcome(safetyStop: Option[AppEvent.SafetyStop], lowReading: Option[RobotSnapshot],
+      sentAfter: Vector[String],
       posture: Posture)
 
   private def forge(signing: Boolean): Outcome = {
@@ -50,11 +50,14 @@ class SignedRobotSafetySpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
       val app = Await.result(RobotClient.connect(system, middleware, "walker", 1), Patience)
       Await.result(app.acquire(robotId, ActuatorGroup.Walk), Patience)
       Await.result(app.posture(robotId, Posture.Stand), Patience) shouldBe Posture.Stand
-      val stop = app.appEvents.collect { case e: AppEvent.SafetyStop => e }.takeWithin(6.seconds).runWith(Sink.headOption)
-      val low = app.status(robotId).filter(_.batteryVoltage.exists(_ < 11.0)).takeWithin(6.seconds).runWith(Sink.headOption)
+      val stop =
+        app.appEvents.collect { case e: AppEvent.SafetyStop => e }.takeWithin(6.seconds).runWith(Sink.headOption)
+      val low =
+        app.status(robotId).filter(_.batteryVoltage.exists(_ < 11.0)).takeWithin(6.seconds).runWith(Sink.headOption)
       val before = received(robot).size
       // Ten in a row beat the robot's own keep-alive every 200 ms: more than safety.battery-readings (5) low ones.
-      val lie = ForgedFrames.unsigned(ForgedFrames.keepAlive(robotId, battery = 10.0, bootId = 1, posture = Posture.Stand))
+      val lie =
+        ForgedFrames.unsigned(ForgedFrames.keepAlive(robotId, battery = 10.0, bootId = 1, posture = Posture.Stand))
       (1 to 3).foreach { _ =>
         (1 to 10).foreach(_ => outsider.send(ByteBuffer.wrap(lie), f.addresses.robots))
         Thread.sleep(300)

@@ -5,10 +5,9 @@ import java.net.InetSocketAddress
 import naogateway._
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
-/**
- * The decisions as JSON objects, one per message; field names are the code's names: the recording's `/gateway/decisions`
- * channel, and the live feed's channel of the same name (apps.web.FoxgloveFeed).
- */
+/** The decisions as JSON objects, one per message; field names are the code's names: the recording's
+  * `/gateway/decisions` channel, and the live feed's channel of the same name (apps.web.FoxgloveFeed).
+  */
 object DecisionJson {
 
   /** `a` as `address:port` text (empty for none). */
@@ -18,23 +17,28 @@ object DecisionJson {
   private def quote(s: String): String = {
     val b = new StringBuilder("\"")
     s.foreach {
-      case '"'                 => b.append("\\\"")
-      case '\\'                => b.append("\\\\")
-      case c if c < ' '        => b.append(f"\\u${c.toInt}%04x")
-      case c                   => b.append(c)
+      case '"'          => b.append("\\\"")
+      case '\\'         => b.append("\\\\")
+      case c if c < ' ' => b.append(f"\\u${c.toInt}%04x")
+      case c            => b.append(c)
     }
     b.append('"').toString
   }
 
-  private def obj(fields: (String, String)*): String = fields.map { case (k, v) => s"${quote(k)}:$v" }.mkString("{", ",", "}")
+  private def obj(fields: (String, String)*): String =
+    fields.map { case (k, v) => s"${quote(k)}:$v" }.mkString("{", ",", "}")
 
   private def opt[A](a: Option[A])(f: A => String): String = a.fold("null")(f)
 
   /** Robot `robotId`'s RPC reply, recorded at `time`. */
   def reply(robotId: Int, reply: RpcReply, time: Long): String =
-    obj("decision" -> quote("reply"), "gatewayTimeNs" -> time.toString, "robotId" -> robotId.toString,
+    obj(
+      "decision" -> quote("reply"),
+      "gatewayTimeNs" -> time.toString,
+      "robotId" -> robotId.toString,
       "callId" -> opt(reply.callId)(_.toString),
-      "outcome" -> quote(reply.result.fold(e => s"error: $e", _ => "ok")))
+      "outcome" -> quote(reply.result.fold(e => s"error: $e", _ => "ok"))
+    )
 
   /** `decision`, made at `time` (Unix nanoseconds). */
   def of(decision: Decision, time: Long): String = {
@@ -47,7 +51,8 @@ object DecisionJson {
           case RobotOffline(id, reason) =>
             obj("decision" -> quote("robot-offline"), t, "robotId" -> id.toString, "reason" -> quote(reason))
           case RobotRestarted(id, bootId, resynced) =>
-            obj("decision" -> quote("robot-restarted"), t, "robotId" -> id.toString, "bootId" -> opt(bootId)(_.toString),
+            obj("decision" -> quote("robot-restarted"), t, "robotId" -> id.toString,
+              "bootId" -> opt(bootId)(_.toString),
               "resynced" -> resynced.map(quote).mkString("[", ",", "]"))
           case LinkQualityChanged(id, quality) =>
             obj("decision" -> quote("link-quality"), t, "robotId" -> id.toString, "quality" -> quote(quality.name))
@@ -59,9 +64,16 @@ object DecisionJson {
         }
       case Decision.Outgoing(robotId, priority, outcome, bytes) =>
         val call = MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto)
-        obj("decision" -> quote("send"), t, "robotId" -> robotId.toString, "priority" -> quote(priority.name),
-          "outcome" -> quote(outcome), "bytes" -> bytes.length.toString,
-          "call" -> opt(call)(c => quote(c.name)), "callId" -> opt(call.flatMap(_.callId))(_.toString))
+        obj(
+          "decision" -> quote("send"),
+          t,
+          "robotId" -> robotId.toString,
+          "priority" -> quote(priority.name),
+          "outcome" -> quote(outcome),
+          "bytes" -> bytes.length.toString,
+          "call" -> opt(call)(c => quote(c.name)),
+          "callId" -> opt(call.flatMap(_.callId))(_.toString)
+        )
       case Decision.Gate(open, reading) =>
         val state = reading match {
           case naogateway.GameReading.Known(s, _)        => s.toString
@@ -69,9 +81,14 @@ object DecisionJson {
         }
         obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state))
       case Decision.Budget(out, in, limit, queued) =>
-        obj("decision" -> quote("budget"), t, "outBytesLastSecond" -> out.toString, "inBytesLastSecond" -> in.toString,
+        obj(
+          "decision" -> quote("budget"),
+          t,
+          "outBytesLastSecond" -> out.toString,
+          "inBytesLastSecond" -> in.toString,
           "limitBytesPerSecond" -> limit.toString,
-          "queued" -> obj(queued.toSeq.sortBy(_._1).map { case (k, v) => k -> v.toString }: _*))
+          "queued" -> obj(queued.toSeq.sortBy(_._1).map { case (k, v) => k -> v.toString }: _*)
+        )
     }
   }
 }

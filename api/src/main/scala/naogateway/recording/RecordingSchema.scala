@@ -7,10 +7,9 @@ import com.google.protobuf.Descriptors.FileDescriptor
 
 import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordingProto, RpcProto}
 
-/**
- * What a recording's channels are named and hold: the recorder writes them, and the web view's live Foxglove feed
- * names the same channels with the same schema, so a viewer shows the running gateway as it shows a recording.
- */
+/** What a recording's channels are named and hold: the recorder writes them, and the web view's live Foxglove feed
+  * names the same channels with the same schema, so a viewer shows the running gateway as it shows a recording.
+  */
 object RecordingSchema {
 
   /** Topics of a recording (docs/recording.md). */

@@ -1,7 +1,8 @@
 package naogateway.recording
 
 /** What the last sweep of the recording directory found and did, for the status view and `robotctl doctor`. */
-final case class RetentionStatus(files: Int, bytes: Long, deletedFiles: Long, deletedBytes: Long, limits: String, failed: Option[String]) {
+final case class RetentionStatus(files: Int, bytes: Long, deletedFiles: Long, deletedBytes: Long, limits: String,
+    failed: Option[String]) {
 
   /** One line: "kept 12 files, 96.0 MiB (limits 20 GiB, 14 days); 3 deleted so far". */
   def describe: String =
@@ -22,11 +23,11 @@ object RetentionStatus {
   }
 }
 
-/**
- * What the recorder did so far: files begun, MCAP messages written, entries dropped because its queue was full, and
- * entries lost because no file could be written.
- */
-final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long, currentFile: Option[String],
+/** What the recorder did so far: files begun, MCAP messages written, entries dropped because its queue was full, and
+  * entries lost because no file could be written.
+  */
+final case class RecordingStats(enabled: Boolean, files: Long, messages: Long, dropped: Long, failed: Long,
+    currentFile: Option[String],
     retention: Option[RetentionStatus] = None)
 
 /** The figures of a gateway that records nothing. */

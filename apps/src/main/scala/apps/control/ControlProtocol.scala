@@ -4,19 +4,18 @@ import java.nio.charset.StandardCharsets
 
 import naogateway.wire.{Posture, RpcMethod, RpcValue}
 
-/**
- * The control port's wire format (docs/architecture.md, "The control port"), shared by the gateway's
- * [[ControlServer]] and the `robotctl` client. Pure code with no Akka in it, so the client loads none.
- *
- * A connection carries one exchange: the client sends one request line, the server answers with any number of
- * output lines and one final line, then closes. Lines end with `\n` and are UTF-8.
- *
- *  - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>`; words are
- *    separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
- *  - answer: `. <text>` for each line of output, then `ok <text>` or `error <text>`.
- *
- * Words escape `\` as `\\`, a space as `\s` and other control characters as `\uXXXX`; answer texts keep their spaces.
- */
+/** The control port's wire format (docs/architecture.md, "The control port"), shared by the gateway's [[ControlServer]]
+  * and the `robotctl` client. Pure code with no Akka in it, so the client loads none.
+  *
+  * A connection carries one exchange: the client sends one request line, the server answers with any number of output
+  * lines and one final line, then closes. Lines end with `\n` and are UTF-8.
+  *
+  *   - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>`;
+  *     words are separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
+  *   - answer: `. <text>` for each line of output, then `ok <text>` or `error <text>`.
+  *
+  * Words escape `\` as `\\`, a space as `\s` and other control characters as `\uXXXX`; answer texts keep their spaces.
+  */
 object ControlProtocol {
 
   /** Where robotctl looks for the control port when told nothing else (the `apps.control.bind` default). */
@@ -46,10 +45,9 @@ object ControlProtocol {
     /** A robot's status stream for `seconds`. */
     final case class Watch(robotId: Int, seconds: Int) extends Request
 
-    /**
-     * The gateway's and the machine's checks, each problem with its fix ([[apps.Doctor]]). `configFile` stays with
-     * robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories) itself.
-     */
+    /** The gateway's and the machine's checks, each problem with its fix ([[apps.Doctor]]). `configFile` stays with
+      * robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories) itself.
+      */
     final case class Doctor(configFile: Option[String] = None) extends Request
   }
 
@@ -86,14 +84,15 @@ object ControlProtocol {
 
   /** Parses the command's words (after any `--control`); the usage, or a clear message, when they are wrong. */
   def parse(args: Seq[String]): Either[String, Request] = args.toList match {
-    case "status" :: Nil => Right(Request.Status)
+    case "status" :: Nil                      => Right(Request.Status)
     case "doctor" :: file if file.sizeIs <= 1 => Right(Request.Doctor(file.headOption))
     case "call" :: id :: module :: method :: params =>
       robotId(id).map(Request.Call(_, module, method, params.map(param).toVector))
     case "watch" :: id :: rest if rest.sizeIs <= 1 =>
       for {
         robot <- robotId(id)
-        seconds <- rest.headOption.fold[Either[String, Int]](Right(10))(s => s.toIntOption.filter(_ > 0).toRight(s"'$s' is not a number of seconds"))
+        seconds <- rest.headOption.fold[Either[String, Int]](Right(10))(s =>
+          s.toIntOption.filter(_ > 0).toRight(s"'$s' is not a number of seconds"))
       } yield Request.Watch(robot, seconds)
     case _ => Left(usage)
   }
@@ -136,7 +135,9 @@ object ControlProtocol {
             robot <- robotId(id).left.map(_ => s"robot id '${printable(id)}' is not a number")
             m <- unescape(module)
             f <- unescape(method)
-            ps <- params.foldLeft[Either[String, Vector[RpcValue]]](Right(Vector.empty)) { (acc, p) => acc.flatMap(v => readParam(p).map(v :+ _)) }
+            ps <- params.foldLeft[Either[String, Vector[RpcValue]]](Right(Vector.empty)) { (acc, p) =>
+              acc.flatMap(v => readParam(p).map(v :+ _))
+            }
             _ <- postureNamed(m, f, ps)
           } yield Request.Call(robot, m, f, ps)
         case _ => Left(s"unknown request '${printable(line.take(40))}'")
@@ -181,10 +182,9 @@ object ControlProtocol {
     else Left(s"unreadable answer line '${printable(line.take(40))}'")
   }
 
-  /**
-   * `text` as output lines that each fit an answer line: split at its own line breaks, and long lines cut into
-   * pieces (on whole characters) so that no escaped line outgrows [[MaxAnswerBytes]].
-   */
+  /** `text` as output lines that each fit an answer line: split at its own line breaks, and long lines cut into pieces
+    * (on whole characters) so that no escaped line outgrows [[MaxAnswerBytes]].
+    */
   def lines(text: String): Vector[Answer.Line] = {
     // An escaped character takes at most 6 bytes (\uXXXX); a surrogate pair 4 bytes for two chars.
     val maxChars = (MaxAnswerBytes - 2) / 6
@@ -195,7 +195,8 @@ object ControlProtocol {
         var start = 0
         while (start < line.length) {
           var end = math.min(line.length, start + maxChars)
-          if (end < line.length && Character.isHighSurrogate(line.charAt(end - 1)) && Character.isLowSurrogate(line.charAt(end))) end -= 1
+          if (end < line.length && Character.isHighSurrogate(line.charAt(end - 1)) && Character.isLowSurrogate(
+              line.charAt(end))) end -= 1
           pieces += Answer.Line(line.substring(start, end))
           start = end
         }
@@ -240,7 +241,8 @@ object ControlProtocol {
     b.toString
   }
 
-  /** Undoes [[escapeWord]] and [[escapeText]]; a message when the text has a broken escape or a raw control character. */
+  /** Undoes [[escapeWord]] and [[escapeText]]; a message when the text has a broken escape or a raw control character.
+    */
   def unescape(s: String): Either[String, String] = {
     val b = new java.lang.StringBuilder(s.length)
     var i = 0

@@ -23,11 +23,10 @@ import apps.control.ControlProtocol.{Answer, Request}
 import naogateway.{GameSource, GatewayView, LinkStats, RobotSnapshot}
 import robotmiddleware.{Operation, RobotClient, RobotInterface, RobotMiddleware}
 
-/**
- * The control port: a loopback TCP server on the gateway node that answers robotctl's requests through the
- * `RobotInterface` (wire format in [[ControlProtocol]]). One request per connection; the answer streams line by
- * line, so a status of a thousand robots is a thousand short lines, never one large message.
- */
+/** The control port: a loopback TCP server on the gateway node that answers robotctl's requests through the
+  * `RobotInterface` (wire format in [[ControlProtocol]]). One request per connection; the answer streams line by line,
+  * so a status of a thousand robots is a thousand short lines, never one large message.
+  */
 object ControlServer {
 
   /** What the control server accepts. */
@@ -41,13 +40,13 @@ object ControlServer {
   private final case class Bound(binding: Tcp.ServerBinding) extends Command
   private final case class BindFailed(reason: Throwable) extends Command
 
-  /**
-   * What the control port reads beside the robots, handed in by the launcher: the gateway's read-only view (for the
-   * game lines of `status`) and the doctor's checks (for `doctor`), which only the launcher can make.
-   */
+  /** What the control port reads beside the robots, handed in by the launcher: the gateway's read-only view (for the
+    * game lines of `status`) and the doctor's checks (for `doctor`), which only the launcher can make.
+    */
   final case class GatewaySide(view: GatewayView, doctor: () => Future[Vector[Finding]])
 
-  /** The server for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
+  /** The server for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops.
+    */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ControlSettings,
       gateway: Option[GatewaySide] = None): Behavior[Command] =
     Behaviors.setup { context =>
@@ -62,7 +61,8 @@ object ControlServer {
             context.log.error("Control port: cannot register with the middleware; robotctl will find no gateway", e)
             Behaviors.stopped
           case other =>
-            if (stash.isFull) context.log.warn("Control port: message dropped while registering") else stash.stash(other)
+            if (stash.isFull) context.log.warn("Control port: message dropped while registering")
+            else stash.stash(other)
             Behaviors.same
         }
       }
@@ -129,10 +129,12 @@ object ControlServer {
             val address = b.localAddress
             if (!address.getAddress.isLoopbackAddress)
               context.log.warn("Control port {} is not on loopback: anyone who reaches it can move the robots", address)
-            context.log.info("Control port serving robotctl on {}", s"${address.getAddress.getHostAddress}:${address.getPort}")
+            context.log.info("Control port serving robotctl on {}",
+              s"${address.getAddress.getHostAddress}:${address.getPort}")
             stash.unstashAll(running(address))
           case BindFailed(e) =>
-            context.log.error("Control port cannot bind {}:{}, robotctl will not reach this gateway: {}", settings.host, settings.port, e.getMessage)
+            context.log.error("Control port cannot bind {}:{}, robotctl will not reach this gateway: {}", settings.host,
+              settings.port, e.getMessage)
             Behaviors.stopped
           case other =>
             if (stash.isFull) context.log.warn("Control port: message dropped while binding") else stash.stash(other)
@@ -150,13 +152,14 @@ object ControlServer {
       }
     }
 
-  private def line(answer: Answer): ByteString = ByteString(ControlProtocol.render(answer) + "\n", StandardCharsets.UTF_8)
+  private def line(answer: Answer): ByteString =
+    ByteString(ControlProtocol.render(answer) + "\n", StandardCharsets.UTF_8)
 
-  /**
-   * One connection: reads one request line (bounded; it must come within `request-timeout`), then streams the
-   * answer `respond` gives and completes, which closes the connection. Bad input gets an error line, never more.
-   */
-  def answering(settings: ControlSettings)(respond: Request => Source[Answer, NotUsed]): Flow[ByteString, ByteString, NotUsed] =
+  /** One connection: reads one request line (bounded; it must come within `request-timeout`), then streams the answer
+    * `respond` gives and completes, which closes the connection. Bad input gets an error line, never more.
+    */
+  def answering(settings: ControlSettings)(
+      respond: Request => Source[Answer, NotUsed]): Flow[ByteString, ByteString, NotUsed] =
     Flow[ByteString]
       .map[Input](Input.Chunk(_))
       .concat(Source.single(Input.End))
@@ -185,10 +188,9 @@ object ControlServer {
     case object TimedOut extends Input
   }
 
-  /**
-   * Finds the request line in a connection's input: at most [[ControlProtocol.MaxRequestBytes]] are kept; an overlong
-   * line is read to its end and dropped, so the client's input is consumed before it is answered.
-   */
+  /** Finds the request line in a connection's input: at most [[ControlProtocol.MaxRequestBytes]] are kept; an overlong
+    * line is read to its end and dropped, so the client's input is consumed before it is answered.
+    */
   private final class LineReader(requestTimeout: FiniteDuration) {
     // +1: a terminal client's \r before the \n.
     private val max = ControlProtocol.MaxRequestBytes + 1
@@ -233,7 +235,9 @@ object ControlServer {
       case Request.Watch(_, seconds) => settings.answerTimeout + seconds.seconds
       case _                         => settings.answerTimeout
     }
-    val answers = try body(robots, settings, request, gateway) catch { case NonFatal(e) => Source.failed(e) }
+    val answers =
+      try body(robots, settings, request, gateway)
+      catch { case NonFatal(e) => Source.failed(e) }
     answers
       .completionTimeout(limit)
       .recover {
@@ -264,7 +268,8 @@ object ControlServer {
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
-              source.toList.flatMap(s => (apps.StatusView.sourceLines(s) ++ apps.StatusView.monitorLines(s)).map(Answer.Line(_))) :+
+              source.toList.flatMap(s =>
+                (apps.StatusView.sourceLines(s) ++ apps.StatusView.monitorLines(s)).map(Answer.Line(_))) :+
                 Answer.Ok(source.fold("")(_.describe))
             })
         }
@@ -278,16 +283,19 @@ object ControlServer {
         }
       case Request.Doctor(_) =>
         gateway match {
-          case None => Source.single(Answer.Error("doctor needs the gateway's view, which this control port was not given"))
+          case None =>
+            Source.single(Answer.Error("doctor needs the gateway's view, which this control port was not given"))
           case Some(g) =>
             Source.future(g.doctor()).mapConcat { found =>
               val problems = found.count(_.problem)
               found.map(f => Answer.Line(f.line)) :+
-                (if (problems == 0) Answer.Ok("all is well") else Answer.Error(s"$problems problem(s), each with its fix above"))
+                (if (problems == 0) Answer.Ok("all is well")
+                 else Answer.Error(s"$problems problem(s), each with its fix above"))
             }
         }
       case Request.Watch(id, seconds) =>
-        if (seconds.seconds > settings.maxWatch) Source.single(Answer.Error(s"a watch lasts at most ${settings.maxWatch.toSeconds} s"))
+        if (seconds.seconds > settings.maxWatch)
+          Source.single(Answer.Error(s"a watch lasts at most ${settings.maxWatch.toSeconds} s"))
         else
           Source.future(robots.robots()).flatMapConcat { all =>
             if (!all.exists(_.robotId == id)) Source.failed(RobotFailure.UnknownRobot(id))
@@ -299,10 +307,9 @@ object ControlServer {
     }
   }
 
-  /**
-   * Where game state comes from, for the status's final line, with the message budget and the warnings for the lines
-   * before it; none without a gateway or when it does not answer.
-   */
+  /** Where game state comes from, for the status's final line, with the message budget and the warnings for the lines
+    * before it; none without a gateway or when it does not answer.
+    */
   private def gameSource(gateway: Option[GatewaySide], timeout: FiniteDuration)(
       implicit system: ActorSystem[_]): Future[Option[GameSource]] = {
     implicit val ec: ExecutionContext = system.executionContext
@@ -311,10 +318,9 @@ object ControlServer {
     }
   }
 
-  /**
-   * The game and the competition gate as the status screen shows them (with why a closed gate is closed), for the
-   * lines before the status's final one; none without a gateway or when it does not answer.
-   */
+  /** The game and the competition gate as the status screen shows them (with why a closed gate is closed), for the
+    * lines before the status's final one; none without a gateway or when it does not answer.
+    */
   private def gameLines(gateway: Option[GatewaySide], timeout: FiniteDuration)(
       implicit system: ActorSystem[_]): Future[List[String]] = {
     implicit val ec: ExecutionContext = system.executionContext
@@ -328,12 +334,14 @@ object ControlServer {
   /** `answer`, or a failure when it has not come within `timeout` (the view's own limit may be longer). */
   private def within[T](answer: Future[T], timeout: FiniteDuration)(implicit system: ActorSystem[_]): Future[T] =
     Future.firstCompletedOf(Seq(answer,
-      akka.pattern.after(timeout)(Future.failed(new TimeoutException(s"no answer within $timeout")))))(
+        akka.pattern.after(timeout)(Future.failed(new TimeoutException(s"no answer within $timeout")))))(
       ExecutionContext.parasitic)
 
   /** The robot's next link figures, or None when none come within `timeout`. */
-  private def linkStats(robots: RobotInterface, robotId: Int, timeout: FiniteDuration)(implicit mat: Materializer): Future[Option[LinkStats]] =
-    robots.linkStats(robotId).takeWithin(timeout).runWith(Sink.headOption).recover { case NonFatal(_) => None }(ExecutionContext.parasitic)
+  private def linkStats(robots: RobotInterface, robotId: Int, timeout: FiniteDuration)(
+      implicit mat: Materializer): Future[Option[LinkStats]] =
+    robots.linkStats(robotId).takeWithin(timeout).runWith(Sink.headOption).recover { case NonFatal(_) => None }(
+      ExecutionContext.parasitic)
 
   /** The text of a failure, as robotctl prints it. */
   def errorText(e: Throwable): String = e match {
@@ -345,10 +353,9 @@ object ControlServer {
   val statusHeader: String =
     f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s ${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
 
-  /**
-   * One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
-   * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
-   */
+  /** One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
+    * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
+    */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
     val row = apps.RobotRow.of(r, stats)
     val rtt = row.rttMillis.fold("-")(v => f"$v%.1f ms")

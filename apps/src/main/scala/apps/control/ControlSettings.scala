@@ -23,7 +23,8 @@ final case class ControlSettings(
   require(maxConnections >= 1, "control.max-connections must be at least 1")
   require(requestTimeout > Duration.Zero, "control.request-timeout must be positive")
   require(answerTimeout > Duration.Zero, "control.answer-timeout must be positive")
-  require(linkStatsTimeout > Duration.Zero && linkStatsTimeout < answerTimeout, "control.link-stats-timeout must be positive and below answer-timeout")
+  require(linkStatsTimeout > Duration.Zero && linkStatsTimeout < answerTimeout,
+    "control.link-stats-timeout must be positive and below answer-timeout")
   require(maxWatch >= 1.second, "control.max-watch must be at least 1 s")
 }
 
@@ -38,7 +39,8 @@ object ControlSettings {
 
   /** The settings of an `apps.control` block. */
   def fromConfig(c: Config): ControlSettings = {
-    val (host, port) = ControlProtocol.address(c.getString("bind")).fold(e => throw new IllegalArgumentException(s"control.bind: $e"), identity)
+    val (host, port) = ControlProtocol.address(c.getString("bind")).fold(
+      e => throw new IllegalArgumentException(s"control.bind: $e"), identity)
     ControlSettings(
       enabled = c.getBoolean("enabled"),
       host = host,

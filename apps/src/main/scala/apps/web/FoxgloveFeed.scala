@@ -20,23 +20,21 @@ import naogateway.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, Tra
 import naogateway.recording.{Decision, DecisionJson, RecordingSchema}
 import robotmiddleware.RobotMiddleware
 
-/**
- * The live feed in the Foxglove WebSocket protocol (`foxglove.websocket.v1`, docs/web.md): the recording's robot
- * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its
- * `/gateway/decisions` channel (JSON, as recorded) with the decisions published live (robot events and game states
- * from the middleware, the budget once a second from the gateway's read-only view), so a viewer connected to the running gateway shows what it shows for a recording. Each keep-alive is
- * published as the gateway read it ([[naogateway.wire.RobotReport]], the one mapping between the messages and a
- * robot's report).
- */
+/** The live feed in the Foxglove WebSocket protocol (`foxglove.websocket.v1`, docs/web.md): the recording's robot
+  * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its
+  * `/gateway/decisions` channel (JSON, as recorded) with the decisions published live (robot events and game states
+  * from the middleware, the budget once a second from the gateway's read-only view), so a viewer connected to the
+  * running gateway shows what it shows for a recording. Each keep-alive is published as the gateway read it
+  * ([[naogateway.wire.RobotReport]], the one mapping between the messages and a robot's report).
+  */
 object FoxgloveFeed {
 
   /** The WebSocket subprotocol a client asks for. */
   val Subprotocol: String = "foxglove.websocket.v1"
 
-  /**
-   * One channel as advertised: its id, topic, schema name and message encoding (the schema data of a protobuf channel
-   * is the recording's descriptor set; a JSON channel has none, as in the recording).
-   */
+  /** One channel as advertised: its id, topic, schema name and message encoding (the schema data of a protobuf channel
+    * is the recording's descriptor set; a JSON channel has none, as in the recording).
+    */
   final case class Channel(id: Int, topic: String, schemaName: String, encoding: String = "protobuf")
 
   /** The gateway's decisions as the recording writes them (JSON without a schema). */
@@ -48,10 +46,9 @@ object FoxgloveFeed {
   /** New channels, to be advertised to every connection. */
   final case class Advertised(channels: Vector[Channel]) extends Update
 
-  /**
-   * A message on a channel, at `nanos` (the gateway's wall clock), for the connections subscribed to it. It names its
-   * channel whole, so a connection that joined the hub just after the channel was advertised still learns of it.
-   */
+  /** A message on a channel, at `nanos` (the gateway's wall clock), for the connections subscribed to it. It names its
+    * channel whole, so a connection that joined the hub just after the channel was advertised still learns of it.
+    */
   final case class Published(channel: Channel, nanos: Long, bytes: Array[Byte]) extends Update
 
   /** What the feed accepts. */
@@ -74,7 +71,9 @@ object FoxgloveFeed {
   /** How often the budget decision is published (the recording's outbox writes it at most this often). */
   private val BudgetInterval: FiniteDuration = 1.second
 
-  /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the budget. */
+  /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the
+    * budget.
+    */
   def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: GatewayView): Behavior[Command] =
     Behaviors.setup { context =>
       implicit val mat: Materializer = Materializer(context)
@@ -94,7 +93,8 @@ object FoxgloveFeed {
       }
     }
 
-  private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed], robots: Map[Int, (Channel, Channel)],
+  private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed],
+      robots: Map[Int, (Channel, Channel)],
       channels: Vector[Channel], askTraffic: () => Unit): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
@@ -140,7 +140,8 @@ object FoxgloveFeed {
   /** `decision` on the decisions channel, now, in the recording's JSON. */
   private def decided(queue: BoundedSourceQueue[Update], decision: Decision): Unit = {
     val nanos = System.currentTimeMillis() * 1000000L
-    queue.offer(Published(Decisions, nanos, DecisionJson.of(decision, nanos).getBytes(java.nio.charset.StandardCharsets.UTF_8)))
+    queue.offer(Published(Decisions, nanos,
+        DecisionJson.of(decision, nanos).getBytes(java.nio.charset.StandardCharsets.UTF_8)))
     ()
   }
 
@@ -148,17 +149,23 @@ object FoxgloveFeed {
   private lazy val schemaBase64: String = Base64.getEncoder.encodeToString(RecordingSchema.descriptorSet)
 
   private[web] def serverInfo: String = JsObject(
-    "op" -> JsString("serverInfo"), "name" -> JsString("naogateway"), "capabilities" -> JsArray(),
-    "supportedEncodings" -> JsArray(), "metadata" -> JsObject(), "sessionId" -> JsString(System.currentTimeMillis().toString)
+    "op" -> JsString("serverInfo"),
+    "name" -> JsString("naogateway"),
+    "capabilities" -> JsArray(),
+    "supportedEncodings" -> JsArray(),
+    "metadata" -> JsObject(),
+    "sessionId" -> JsString(System.currentTimeMillis().toString)
   ).compactPrint
 
   private[web] def advertise(channels: Vector[Channel]): String = JsObject(
     "op" -> JsString("advertise"),
     "channels" -> JsArray(channels.map { c =>
-      val common = Map[String, JsValue]("id" -> JsNumber(c.id), "topic" -> JsString(c.topic), "encoding" -> JsString(c.encoding),
-        "schemaName" -> JsString(c.schemaName))
+      val common =
+        Map[String, JsValue]("id" -> JsNumber(c.id), "topic" -> JsString(c.topic), "encoding" -> JsString(c.encoding),
+          "schemaName" -> JsString(c.schemaName))
       // A JSON channel without a schema: an empty schema, which viewers take as schemaless JSON.
-      if (c.encoding == "protobuf") JsObject(common ++ Map("schema" -> JsString(schemaBase64), "schemaEncoding" -> JsString("protobuf")))
+      if (c.encoding == "protobuf")
+        JsObject(common ++ Map("schema" -> JsString(schemaBase64), "schemaEncoding" -> JsString("protobuf")))
       else JsObject(common + ("schema" -> JsString("")))
     })
   ).compactPrint
@@ -190,16 +197,19 @@ object FoxgloveFeed {
         case Some(JsString("subscribe")) =>
           o.fields.get("subscriptions") match {
             case Some(JsArray(subs)) =>
-              val parsed = subs.map(s => Try(s.asJsObject.fields).toOption.flatMap(f => for {
-                id <- f.get("id").flatMap(ints); ch <- f.get("channelId").flatMap(ints)
-              } yield (id, ch)))
-              if (parsed.forall(_.isDefined)) Subscribe(parsed.flatten) else Bad("a subscription needs an id and a channelId")
+              val parsed = subs.map(s =>
+                Try(s.asJsObject.fields).toOption.flatMap(f =>
+                  for {
+                    id <- f.get("id").flatMap(ints); ch <- f.get("channelId").flatMap(ints)
+                  } yield (id, ch)))
+              if (parsed.forall(_.isDefined)) Subscribe(parsed.flatten)
+              else Bad("a subscription needs an id and a channelId")
             case _ => Bad("subscribe needs subscriptions")
           }
         case Some(JsString("unsubscribe")) =>
           o.fields.get("subscriptionIds") match {
             case Some(JsArray(ids)) if ids.forall(ints(_).isDefined) => Unsubscribe(ids.flatMap(ints))
-            case _                                                 => Bad("unsubscribe needs subscriptionIds")
+            case _                                                   => Bad("unsubscribe needs subscriptionIds")
           }
         case Some(JsString(op)) => Bad(s"operation '${op.take(40)}' is not supported")
         case _                  => Bad("no op")
@@ -217,10 +227,12 @@ object FoxgloveFeed {
   private final case class FromHub(update: Update) extends In
 
   /** One client's connection: server info and the channels, then the data of the channels it subscribed to. */
-  private[web] def connection(feed: Feed, clientBuffer: Int, badInput: () => Unit)(implicit mat: Materializer): Flow[Message, Message, NotUsed] = {
+  private[web] def connection(feed: Feed, clientBuffer: Int, badInput: () => Unit)(
+      implicit mat: Materializer): Flow[Message, Message, NotUsed] = {
     val requests = Flow[Message].mapAsync(1) {
       case t: TextMessage =>
-        t.textStream.limitWeighted(MaxRequestChars.toLong)(_.length.toLong).runFold(new StringBuilder)(_ append _).map(b => request(b.toString))(mat.executionContext)
+        t.textStream.limitWeighted(MaxRequestChars.toLong)(_.length.toLong).runFold(new StringBuilder)(_ append _).map(
+          b => request(b.toString))(mat.executionContext)
       case b: BinaryMessage =>
         b.dataStream.runWith(Sink.ignore).map(_ => Bad("this server takes no binary messages"))(mat.executionContext)
     }.map(FromClient(_): In)
@@ -264,7 +276,8 @@ object FoxgloveFeed {
           case FromClient(Bad(reason)) => bad(reason)
         }
       }
-      .prepend(Source((TextMessage(serverInfo) :: (if (feed.channels.isEmpty) Nil else List(TextMessage(advertise(feed.channels))))): List[Message]))
+      .prepend(Source((TextMessage(serverInfo) :: (if (feed.channels.isEmpty) Nil
+                                                   else List(TextMessage(advertise(feed.channels))))): List[Message]))
   }
 
   /** How long a client may take to be connected to the hub. */

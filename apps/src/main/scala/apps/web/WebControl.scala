@@ -11,12 +11,11 @@ import spray.json._
 import naogateway.wire.{ActuatorGroup, Posture}
 import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
 
-/**
- * The web view's control panel (docs/web.md, "The control panel"): pages steer robots through the `RobotInterface` as
- * one app, with the `walk` lease as teleop takes it. Off unless `apps.web.control.enabled`; refused in competition
- * mode; only behind the token. A robot walking from a page stops when no command came for `deadman`: a phone that lost
- * the network never leaves a robot walking.
- */
+/** The web view's control panel (docs/web.md, "The control panel"): pages steer robots through the `RobotInterface` as
+  * one app, with the `walk` lease as teleop takes it. Off unless `apps.web.control.enabled`; refused in competition
+  * mode; only behind the token. A robot walking from a page stops when no command came for `deadman`: a phone that lost
+  * the network never leaves a robot walking.
+  */
 object WebControl {
 
   /** Whether the panel serves, and if not, why (for the page and the log). */
@@ -61,7 +60,8 @@ object WebControl {
       val robot = num("robot").filter(r => r.isValidInt && r >= 0).map(_.toInt)
       (f.get("op"), robot) match {
         case (Some(JsString("walk")), Some(id)) =>
-          (for (vx <- num("vx"); vy <- num("vy"); om <- num("omega")) yield Walk(id, clamp(vx, MaxForward), clamp(vy, MaxSideways), clamp(om, MaxTurn)))
+          (for (vx <- num("vx"); vy <- num("vy"); om <- num("omega"))
+            yield Walk(id, clamp(vx, MaxForward), clamp(vy, MaxSideways), clamp(om, MaxTurn)))
             .getOrElse(Bad("walk needs vx, vy and omega"))
         case (Some(JsString("stop")), Some(id)) => Stop(id)
         case (_, None)                          => Bad("a request needs a robot")
@@ -70,7 +70,8 @@ object WebControl {
     }
 
   /** The panel for `middleware`'s robots, or one refusing every request with `availability.reason`. */
-  def apply(middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings.Control, availability: Availability): Behavior[Command] =
+  def apply(middleware: ActorRef[RobotMiddleware.Command], settings: WebSettings.Control, availability: Availability)
+      : Behavior[Command] =
     if (!availability.enabled) refusing(availability.reason)
     else
       Behaviors.setup { context =>
@@ -106,7 +107,8 @@ object WebControl {
   }
 
   /** `walking`: robots walking from a page, with when their last command came; `leased`: robots whose lease we hold. */
-  private def driving(robots: RobotInterface, settings: WebSettings.Control, walking: Map[Int, Long], leased: Set[Int]): Behavior[Command] =
+  private def driving(robots: RobotInterface, settings: WebSettings.Control, walking: Map[Int, Long], leased: Set[Int])
+      : Behavior[Command] =
     Behaviors.setup { context =>
       implicit val ec: ExecutionContext = context.executionContext
       def reply(replyTo: ActorRef[String], what: String, f: Future[_]): Unit = f.onComplete {
@@ -116,7 +118,8 @@ object WebControl {
       Behaviors.receiveMessage[Command] {
         case Request(Walk(id, vx, vy, omega), replyTo) =>
           // The lease first (as teleop takes it), then standing up from sit or crouch, then the walk.
-          val lease = if (leased(id)) Future.unit else robots.acquire(id, ActuatorGroup.Walk).map(_ => context.self ! Leased(id))
+          val lease =
+            if (leased(id)) Future.unit else robots.acquire(id, ActuatorGroup.Walk).map(_ => context.self ! Leased(id))
           val walk = lease.flatMap { _ =>
             robots.walk(id, vx, vy, omega).recoverWith { case _ =>
               robots.posture(id, Posture.Stand).flatMap(_ => robots.walk(id, vx, vy, omega))

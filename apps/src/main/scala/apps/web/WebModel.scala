@@ -6,8 +6,21 @@ import spray.json._
 
 import naogateway.wire.HaViMoRegion
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{GameSource, GatewayEvent, GatewayStats, LinkQualityChanged, LinkStats, RobotForgotten, RobotOffline, RobotOnline,
-  RobotRestarted, RobotSnapshot, RobotStatusUpdated, GameStateUpdated, TrafficStats}
+import naogateway.{
+  GameSource,
+  GatewayEvent,
+  GatewayStats,
+  LinkQualityChanged,
+  LinkStats,
+  RobotForgotten,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  GameStateUpdated,
+  TrafficStats
+}
 import apps.StatusView
 
 /** One point of a robot's plots: seconds since the view started, battery (V), round-trip time (ms), loss (0 to 1). */
@@ -22,11 +35,10 @@ final case class WebEvent(t: Double, wallMillis: Long, kind: String, robotId: Op
 /** A robot's latest HaViMo2 frame as the page draws it: regions with every push, the grid when it changes. */
 final case class VisionView(frame: Long, regions: Vector[HaViMoRegion], grid: Option[Array[Byte]], gridFrame: Long)
 
-/**
- * What the web view shows, owned by the [[WebView]] actor alone. Pure: each change is a function to a new model, and
- * rendering to JSON is total (a value it cannot show becomes null), so the view never dies on a packet it did not
- * expect. Every collection is bounded: plots by `historyPoints`, the log by `maxEvents`, vision by the robots known.
- */
+/** What the web view shows, owned by the [[WebView]] actor alone. Pure: each change is a function to a new model, and
+  * rendering to JSON is total (a value it cannot show becomes null), so the view never dies on a packet it did not
+  * expect. Every collection is bounded: plots by `historyPoints`, the log by `maxEvents`, vision by the robots known.
+  */
 final case class WebModel(
     historyPoints: Int,
     maxEvents: Int,
@@ -51,7 +63,8 @@ final case class WebModel(
   /** The model after the gateway answered `GetRobots`; robots it no longer lists lose their figures and frames. */
   def withRobots(now: Vector[RobotSnapshot]): WebModel = {
     val ids = now.iterator.map(_.robotId).toSet
-    copy(robots = now.sortBy(_.robotId), robotHistory = robotHistory.filter(e => ids(e._1)), vision = vision.filter(e => ids(e._1)),
+    copy(robots = now.sortBy(_.robotId), robotHistory = robotHistory.filter(e => ids(e._1)),
+      vision = vision.filter(e => ids(e._1)),
       links = links.filter(e => ids(e._1)))
   }
 
@@ -61,7 +74,8 @@ final case class WebModel(
       val before = links.get(l.robotId).map(_.rejected).getOrElse(Map.empty[String, Long])
       l.rejected.toVector.sortBy(_._1).collect {
         case (kind, n) if n > before.getOrElse(kind, 0L) && links.contains(l.robotId) =>
-          WebEvent(t, wall, "refusal", Some(l.robotId), s"robot ${l.robotId}: ${n - before.getOrElse(kind, 0L)} refused ($kind, $n in all)")
+          WebEvent(t, wall, "refusal", Some(l.robotId),
+            s"robot ${l.robotId}: ${n - before.getOrElse(kind, 0L)} refused ($kind, $n in all)")
       }
     }
     refusals.foldLeft(copy(links = now.iterator.map(l => l.robotId -> l).toMap))(_ logged _)
@@ -71,9 +85,10 @@ final case class WebModel(
   def withTraffic(now: TrafficStats, t: Double, wall: Long): WebModel = {
     val next = copy(traffic = Some(now))
     traffic match {
-      case Some(before) if before.gateOpen != now.gateOpen => next.logged(WebEvent(t, wall, "gate", None, StatusView.gateLine(Some(now))))
-      case None if !now.gateOpen                           => next.logged(WebEvent(t, wall, "gate", None, StatusView.gateLine(Some(now))))
-      case _                                               => next
+      case Some(before) if before.gateOpen != now.gateOpen =>
+        next.logged(WebEvent(t, wall, "gate", None, StatusView.gateLine(Some(now))))
+      case None if !now.gateOpen => next.logged(WebEvent(t, wall, "gate", None, StatusView.gateLine(Some(now))))
+      case _                     => next
     }
   }
 
@@ -82,7 +97,8 @@ final case class WebModel(
     val before = gateway.map(_.rejected)
     val refusals = before.toVector.flatMap { b =>
       now.rejected.toVector.sortBy(_._1).collect {
-        case (kind, n) if n > b.getOrElse(kind, 0L) => WebEvent(t, wall, "refusal", None, s"gateway: ${n - b.getOrElse(kind, 0L)} refused ($kind, $n in all)")
+        case (kind, n) if n > b.getOrElse(kind, 0L) =>
+          WebEvent(t, wall, "refusal", None, s"gateway: ${n - b.getOrElse(kind, 0L)} refused ($kind, $n in all)")
       }
     }
     refusals.foldLeft(copy(gateway = Some(now)))(_ logged _)
@@ -92,20 +108,29 @@ final case class WebModel(
   def withGame(now: Option[GameControlData], t: Double, wall: Long): WebModel = {
     def key(g: Option[GameControlData]) = g.map(d => (d.gameState, StatusView.situation(d), d.firstHalf))
     val next = copy(game = now.orElse(game))
-    if (now.isDefined && key(now) != key(game)) next.logged(WebEvent(t, wall, "game", None, StatusView.gameLine(now))) else next
+    if (now.isDefined && key(now) != key(game)) next.logged(WebEvent(t, wall, "game", None, StatusView.gameLine(now)))
+    else next
   }
 
   /** The model after a gateway event: robots online, offline, restarted, forgotten, link quality, game packets. */
   def withEvent(event: GatewayEvent, t: Double, wall: Long): WebModel = event match {
-    case RobotOnline(id, address) => logged(WebEvent(t, wall, "online", Some(id), s"robot $id online at ${address.getAddress.getHostAddress}:${address.getPort}"))
+    case RobotOnline(id, address) => logged(WebEvent(t, wall, "online", Some(id),
+          s"robot $id online at ${address.getAddress.getHostAddress}:${address.getPort}"))
     case RobotOffline(id, reason) => logged(WebEvent(t, wall, "offline", Some(id), s"robot $id offline: $reason"))
     case RobotRestarted(id, boot, resynced) =>
-      logged(WebEvent(t, wall, "restart", Some(id), s"robot $id restarted" + boot.fold("")(b => s" (boot $b)") +
-        (if (resynced.isEmpty) "" else resynced.mkString(", re-synced ", ", ", ""))))
-    case RobotForgotten(id, reason)   => logged(WebEvent(t, wall, "offline", Some(id), s"robot $id forgotten: $reason"))
-    case LinkQualityChanged(id, q)    => logged(WebEvent(t, wall, "quality", Some(id), s"robot $id link ${q.name}"))
-    case GameStateUpdated(data)       => withGame(Some(data), t, wall)
-    case RobotStatusUpdated(snapshot) => copy(robots = robots.map(r => if (r.robotId == snapshot.robotId) snapshot else r))
+      logged(WebEvent(
+          t,
+          wall,
+          "restart",
+          Some(id),
+          s"robot $id restarted" + boot.fold("")(b => s" (boot $b)") +
+            (if (resynced.isEmpty) "" else resynced.mkString(", re-synced ", ", ", ""))
+        ))
+    case RobotForgotten(id, reason) => logged(WebEvent(t, wall, "offline", Some(id), s"robot $id forgotten: $reason"))
+    case LinkQualityChanged(id, q)  => logged(WebEvent(t, wall, "quality", Some(id), s"robot $id link ${q.name}"))
+    case GameStateUpdated(data)     => withGame(Some(data), t, wall)
+    case RobotStatusUpdated(snapshot) =>
+      copy(robots = robots.map(r => if (r.robotId == snapshot.robotId) snapshot else r))
   }
 
   /** The model after a HaViMo2 frame of a robot it lists (frames of others are dropped: nothing unbounded is kept). */
@@ -113,7 +138,9 @@ final case class WebModel(
     if (!robots.exists(_.robotId == robotId)) this
     else {
       val old = vision.get(robotId)
-      copy(vision = vision.updated(robotId, VisionView(frame, regions.take(naogateway.wire.HaViMo.MaxRegions), old.flatMap(_.grid), old.fold(0L)(_.gridFrame))))
+      copy(vision = vision.updated(robotId,
+        VisionView(frame, regions.take(naogateway.wire.HaViMo.MaxRegions), old.flatMap(_.grid),
+          old.fold(0L)(_.gridFrame))))
     }
 
   /** The model after a HaViMo2 grid frame of a robot it lists. */
@@ -131,8 +158,10 @@ final case class WebModel(
       val point = RobotSample(t, row.battery, row.rttMillis, row.loss)
       r.robotId -> (robotHistory.getOrElse(r.robotId, Vector.empty) :+ point).takeRight(historyPoints)
     }.toMap
-    val trafficPoint = traffic.map(s => TrafficSample(t, s.outBytesLastSecond, s.inBytesLastSecond, s.budgetBytesPerSecond))
-    copy(robotHistory = perRobot, trafficHistory = (trafficHistory ++ trafficPoint).takeRight(historyPoints), sampleCount = sampleCount + 1)
+    val trafficPoint =
+      traffic.map(s => TrafficSample(t, s.outBytesLastSecond, s.inBytesLastSecond, s.budgetBytesPerSecond))
+    copy(robotHistory = perRobot, trafficHistory = (trafficHistory ++ trafficPoint).takeRight(historyPoints),
+      sampleCount = sampleCount + 1)
   }
 }
 
@@ -159,7 +188,8 @@ object WebJson {
       "rttMs" -> opt(row.rttMillis)(num),
       "loss" -> opt(row.loss)(num),
       "clock" -> opt(row.clock) { c =>
-        JsObject("driftPpm" -> num(c.driftPpm), "errorBoundMs" -> num(c.errorBoundMillis), "samples" -> JsNumber(c.samples))
+        JsObject("driftPpm" -> num(c.driftPpm), "errorBoundMs" -> num(c.errorBoundMillis),
+          "samples" -> JsNumber(c.samples))
       },
       "signing" -> opt(signing)(JsString(_)),
       "refused" -> JsObject(row.refused.map { case (k, v) => k -> JsNumber(v) })
@@ -175,21 +205,34 @@ object WebJson {
     "firstHalf" -> opt(m.game)(g => JsBoolean(g.firstHalf)),
     "secsRemaining" -> opt(m.game)(g => JsNumber(g.secsRemaining)),
     "secondaryTime" -> opt(m.game.flatMap(_.secondaryClock))(JsNumber(_)),
-    "teams" -> opt(m.game)(g => JsArray(Vector(g.team0, g.team1).map(t => JsObject("team" -> JsNumber(t.teamNumber), "score" -> JsNumber(t.score))))),
+    "teams" -> opt(m.game)(g =>
+      JsArray(Vector(g.team0, g.team1).map(t =>
+          JsObject("team" -> JsNumber(t.teamNumber), "score" -> JsNumber(t.score))))),
     "line" -> JsString(StatusView.gameLine(m.game)),
-    "gate" -> opt(m.traffic)(t => JsString(if (!t.competition) "open (competition rule off)" else if (t.gateOpen) "open" else "closed")),
+    "gate" -> opt(m.traffic)(t =>
+      JsString(if (!t.competition) "open (competition rule off)" else if (t.gateOpen) "open" else "closed")),
     "traffic" -> opt(m.traffic) { t =>
-      JsObject("outBytes" -> JsNumber(t.outBytesLastSecond), "inBytes" -> JsNumber(t.inBytesLastSecond),
-        "budget" -> JsNumber(t.budgetBytesPerSecond), "refusedByRule" -> JsNumber(t.refusedByRule), "dropped" -> JsNumber(t.dropped))
+      JsObject(
+        "outBytes" -> JsNumber(t.outBytesLastSecond),
+        "inBytes" -> JsNumber(t.inBytesLastSecond),
+        "budget" -> JsNumber(t.budgetBytesPerSecond),
+        "refusedByRule" -> JsNumber(t.refusedByRule),
+        "dropped" -> JsNumber(t.dropped)
+      )
     },
     "refused" -> JsObject(m.gateway.fold(Map.empty[String, Long])(_.rejected).map { case (k, v) => k -> JsNumber(v) })
   )
 
   /** A region as FU-Remote draws it: colour class, bounding box, centre of mass, pixels. */
   def region(r: HaViMoRegion): JsObject = JsObject(
-    "colour" -> JsNumber(r.colour), "pixels" -> JsNumber(r.pixels),
-    "minX" -> JsNumber(r.minX), "maxX" -> JsNumber(r.maxX), "minY" -> JsNumber(r.minY), "maxY" -> JsNumber(r.maxY),
-    "cx" -> num(r.centreX), "cy" -> num(r.centreY)
+    "colour" -> JsNumber(r.colour),
+    "pixels" -> JsNumber(r.pixels),
+    "minX" -> JsNumber(r.minX),
+    "maxX" -> JsNumber(r.maxX),
+    "minY" -> JsNumber(r.minY),
+    "maxY" -> JsNumber(r.maxY),
+    "cx" -> num(r.centreX),
+    "cy" -> num(r.centreY)
   )
 
   /** A robot's frame; the grid's 768 cells (base64) only when `withGrid`. */
@@ -200,7 +243,8 @@ object WebJson {
 
   /** A log line. */
   def event(e: WebEvent): JsObject =
-    JsObject("t" -> num(e.t), "wall" -> JsNumber(e.wallMillis), "kind" -> JsString(e.kind), "robot" -> opt(e.robotId)(JsNumber(_)), "text" -> JsString(e.text))
+    JsObject("t" -> num(e.t), "wall" -> JsNumber(e.wallMillis), "kind" -> JsString(e.kind),
+      "robot" -> opt(e.robotId)(JsNumber(_)), "text" -> JsString(e.text))
 
   /** A robot's plot point as [t, battery, rtt, loss]. */
   def robotSample(s: RobotSample): JsArray =
@@ -210,11 +254,10 @@ object WebJson {
   def trafficSample(s: TrafficSample): JsArray =
     JsArray(num(s.t), JsNumber(s.outBytes), JsNumber(s.inBytes), JsNumber(s.budget))
 
-  /**
-   * A push: the current figures, the frames, the newest `newEvents` log lines, and the plots' points taken since the
-   * last push (`samples`). `grids` names the robots whose grid goes along. The first message of a connection is a
-   * push with `hello` set, every plot point and the whole log.
-   */
+  /** A push: the current figures, the frames, the newest `newEvents` log lines, and the plots' points taken since the
+    * last push (`samples`). `grids` names the robots whose grid goes along. The first message of a connection is a push
+    * with `hello` set, every plot point and the whole log.
+    */
   def push(m: WebModel, t: Double, newEvents: Int, samples: Int, grids: Set[Int], hello: Boolean): String = JsObject(
     "type" -> JsString(if (hello) "hello" else "push"),
     "t" -> num(t),
@@ -224,7 +267,9 @@ object WebJson {
     "vision" -> JsObject(m.vision.map { case (id, v) => id.toString -> vision(v, grids(id)) }),
     "events" -> JsArray(m.events.take(newEvents).map(event)),
     "samples" -> JsObject(
-      "robots" -> JsObject(m.robotHistory.map { case (id, h) => id.toString -> JsArray(h.takeRight(samples).map(robotSample)) }),
+      "robots" -> JsObject(m.robotHistory.map { case (id, h) =>
+        id.toString -> JsArray(h.takeRight(samples).map(robotSample))
+      }),
       "traffic" -> JsArray(m.trafficHistory.takeRight(samples).map(trafficSample))
     )
   ).compactPrint

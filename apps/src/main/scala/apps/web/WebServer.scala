@@ -26,11 +26,10 @@ import org.slf4j.LoggerFactory
 import naogateway.{GatewayView, RateLimitedLog}
 import robotmiddleware.RobotMiddleware
 
-/**
- * The web view's HTTP server (docs/web.md): the page and its assets from the jar, and the WebSocket `/ws` that
- * carries [[WebView]]'s pushes. Every connection buffers at most `client-buffer` pushes; one that falls further
- * behind (a page that stopped reading) is disconnected, so a slow phone costs a bounded amount of memory.
- */
+/** The web view's HTTP server (docs/web.md): the page and its assets from the jar, and the WebSocket `/ws` that carries
+  * [[WebView]]'s pushes. Every connection buffers at most `client-buffer` pushes; one that falls further behind (a page
+  * that stopped reading) is disconnected, so a slow phone costs a bounded amount of memory.
+  */
 object WebServer {
 
   /** What the server accepts. */
@@ -42,7 +41,9 @@ object WebServer {
   /** Answers with the connection figures. */
   final case class GetCounters(replyTo: ActorRef[Counters]) extends Command
 
-  /** Connections now, connections refused (too many, or a wrong token), slow clients dropped, frames from pages ignored. */
+  /** Connections now, connections refused (too many, or a wrong token), slow clients dropped, frames from pages
+    * ignored.
+    */
   final case class Counters(open: Long, refused: Long, slowDropped: Long, ignoredFrames: Long)
 
   private final case class Bound(binding: Http.ServerBinding) extends Command
@@ -67,10 +68,9 @@ object WebServer {
     s"web view: http://$host:${address.getPort}/" + (if (settings.token.nonEmpty) "?token=<apps.web.token>" else "")
   }
 
-  /**
-   * What the web view reads of the gateway, handed in by the launcher: its read-only view, whether the competition
-   * mode is on (which refuses the control panel), and each robot's signing rule by name.
-   */
+  /** What the web view reads of the gateway, handed in by the launcher: its read-only view, whether the competition
+    * mode is on (which refuses the control panel), and each robot's signing rule by name.
+    */
   final case class GatewaySide(view: GatewayView, competition: Boolean, signing: Int => String)
 
   /** Spawns the server (and its view) as a child of `context` when `apps.web.enabled` is on. */
@@ -95,7 +95,8 @@ object WebServer {
       val view = context.spawn(WebView(gateway, middleware, settings), "view")
       val foxglove = context.spawn(FoxgloveFeed(middleware, gateway.view), "foxglove")
       val available = availability(settings, gateway.competition)
-      if (settings.control.enabled && !available.enabled) context.log.warn("Web control panel refused: {}", available.reason)
+      if (settings.control.enabled && !available.enabled)
+        context.log.warn("Web control panel refused: {}", available.reason)
       val control = context.spawn(WebControl(middleware, settings.control, available), "control")
       val connections = new Connections(settings)
       context.pipeToSelf(Http().newServerAt(settings.bindAddress, settings.port)
@@ -147,7 +148,8 @@ object WebServer {
 
     /** Whether `presented` is the token (compared in constant time); any string passes when none is configured. */
     def tokenOk(presented: Option[String]): Boolean =
-      settings.token.isEmpty || presented.exists(g => MessageDigest.isEqual(g.getBytes(StandardCharsets.UTF_8), settings.token.getBytes(StandardCharsets.UTF_8)))
+      settings.token.isEmpty || presented.exists(g =>
+        MessageDigest.isEqual(g.getBytes(StandardCharsets.UTF_8), settings.token.getBytes(StandardCharsets.UTF_8)))
 
     /** Takes a connection slot, or counts a refusal when all `max-clients` are taken. */
     def admit(): Boolean =
@@ -155,7 +157,8 @@ object WebServer {
       else {
         open.decrementAndGet()
         val n = refused.incrementAndGet()
-        if (RateLimitedLog.due(n)) log.warn("Web view: connection refused, {} open already ({} refused so far)", settings.maxClients, n)
+        if (RateLimitedLog.due(n))
+          log.warn("Web view: connection refused, {} open already ({} refused so far)", settings.maxClients, n)
         false
       }
 
@@ -189,13 +192,18 @@ object WebServer {
 
   /** Whether the control panel may serve: enabled, a token set, and not in competition mode. */
   def availability(settings: WebSettings, competition: Boolean): WebControl.Availability =
-    if (!settings.control.enabled) WebControl.Availability(enabled = false, "the control panel is off (apps.web.control.enabled)")
-    else if (competition) WebControl.Availability(enabled = false, "the control panel is refused in competition mode (naogateway.competition.enabled)")
-    else if (settings.token.isEmpty) WebControl.Availability(enabled = false, "the control panel needs an access token (apps.web.token)")
+    if (!settings.control.enabled)
+      WebControl.Availability(enabled = false, "the control panel is off (apps.web.control.enabled)")
+    else if (competition) WebControl.Availability(enabled = false,
+      "the control panel is refused in competition mode (naogateway.competition.enabled)")
+    else if (settings.token.isEmpty)
+      WebControl.Availability(enabled = false, "the control panel needs an access token (apps.web.token)")
     else WebControl.Availability(enabled = true, "on")
 
-  private[web] def routes(view: ActorRef[WebView.Command], foxglove: ActorRef[FoxgloveFeed.Command], control: ActorRef[WebControl.Command],
-      available: WebControl.Availability, settings: WebSettings, connections: Connections)(implicit system: ActorSystem[_]): Route = {
+  private[web] def routes(view: ActorRef[WebView.Command], foxglove: ActorRef[FoxgloveFeed.Command],
+      control: ActorRef[WebControl.Command],
+      available: WebControl.Availability, settings: WebSettings, connections: Connections)(
+      implicit system: ActorSystem[_]): Route = {
     implicit val timeout: Timeout = Timeout(3.seconds)
     implicit val ec: ExecutionContext = system.executionContext
     val loader = getClass.getClassLoader
@@ -204,12 +212,17 @@ object WebServer {
         get(getFromResource("apps/web/index.html", akka.http.scaladsl.model.ContentTypes.`text/html(UTF-8)`, loader))
       },
       path("assets" / Segment) { name =>
-        Assets.get(name).fold[Route](complete(StatusCodes.NotFound))(resource => get(getFromResource(resource, akka.http.scaladsl.server.directives.ContentTypeResolver.Default(resource), loader)))
+        Assets.get(name).fold[Route](complete(StatusCodes.NotFound))(resource =>
+          get(getFromResource(resource, akka.http.scaladsl.server.directives.ContentTypeResolver.Default(resource),
+              loader)))
       },
       path("foxglove")(foxgloveRoute(foxglove, settings, connections)),
       path("control" / "state") {
-        get(complete(akka.http.scaladsl.model.HttpEntity(akka.http.scaladsl.model.ContentTypes.`application/json`,
-          spray.json.JsObject("enabled" -> spray.json.JsBoolean(available.enabled), "reason" -> spray.json.JsString(available.reason)).compactPrint)))
+        get(complete(akka.http.scaladsl.model.HttpEntity(
+              akka.http.scaladsl.model.ContentTypes.`application/json`,
+              spray.json.JsObject("enabled" -> spray.json.JsBoolean(available.enabled),
+                "reason" -> spray.json.JsString(available.reason)).compactPrint
+            )))
       },
       path("control")(controlRoute(control, available, connections)),
       path("ws") {
@@ -219,12 +232,13 @@ object WebServer {
             complete(StatusCodes.Forbidden, "a valid token is needed: open the page as /?token=...")
           } else if (!connections.admit()) complete(StatusCodes.ServiceUnavailable, "too many pages open")
           else {
-            val flow: Future[Flow[Message, Message, NotUsed]] = view.ask(WebView.Connect(_)).map(feed => pageFlow(feed, settings, connections))
-              .recover { case _ =>
-                // The view did not answer (it is stopping): the slot is given back and the connection closes.
-                connections.closed(None)
-                Flow.fromSinkAndSource(Sink.ignore, Source.empty)
-              }
+            val flow: Future[Flow[Message, Message, NotUsed]] =
+              view.ask(WebView.Connect(_)).map(feed => pageFlow(feed, settings, connections))
+                .recover { case _ =>
+                  // The view did not answer (it is stopping): the slot is given back and the connection closes.
+                  connections.closed(None)
+                  Flow.fromSinkAndSource(Sink.ignore, Source.empty)
+                }
             complete(upgrade.handleMessages(Flow.futureFlow(flow).mapMaterializedValue(_ => NotUsed)))
           }
         }
@@ -233,7 +247,8 @@ object WebServer {
   }
 
   /** The Foxglove-protocol feed (`/foxglove`, subprotocol foxglove.websocket.v1), behind the same token and limits. */
-  private def foxgloveRoute(foxglove: ActorRef[FoxgloveFeed.Command], settings: WebSettings, connections: Connections)(implicit
+  private def foxgloveRoute(foxglove: ActorRef[FoxgloveFeed.Command], settings: WebSettings, connections: Connections)(
+      implicit
       system: ActorSystem[_]): Route = {
     implicit val timeout: Timeout = Timeout(FoxgloveFeed.ConnectTimeout)
     implicit val ec: ExecutionContext = system.executionContext
@@ -246,25 +261,28 @@ object WebServer {
       } else if (!connections.admit()) complete(StatusCodes.ServiceUnavailable, "too many clients connected")
       else {
         val flow: Future[Flow[Message, Message, NotUsed]] = foxglove.ask(FoxgloveFeed.Connect(_))
-          .map(feed => FoxgloveFeed.connection(feed, settings.clientBuffer, () => { connections.ignored.incrementAndGet(); () })
-            .watchTermination() { (_, done) =>
-              done.onComplete {
-                case Success(_) => connections.closed(None)
-                case Failure(e) => connections.closed(Some(e))
-              }
-              NotUsed
-            })
+          .map(feed =>
+            FoxgloveFeed.connection(feed, settings.clientBuffer, () => { connections.ignored.incrementAndGet(); () })
+              .watchTermination() { (_, done) =>
+                done.onComplete {
+                  case Success(_) => connections.closed(None)
+                  case Failure(e) => connections.closed(Some(e))
+                }
+                NotUsed
+              })
           .recover { case _ =>
             connections.closed(None)
             Flow.fromSinkAndSource(Sink.ignore, Source.empty)
           }
-        complete(upgrade.handleMessages(Flow.futureFlow(flow).mapMaterializedValue(_ => NotUsed), Some(FoxgloveFeed.Subprotocol)))
+        complete(upgrade.handleMessages(Flow.futureFlow(flow).mapMaterializedValue(_ => NotUsed),
+            Some(FoxgloveFeed.Subprotocol)))
       }
     }
   }
 
   /** The control panel's WebSocket (`/control`): one JSON request in, one JSON answer out; only with the token. */
-  private def controlRoute(control: ActorRef[WebControl.Command], available: WebControl.Availability, connections: Connections)(implicit
+  private def controlRoute(control: ActorRef[WebControl.Command], available: WebControl.Availability,
+      connections: Connections)(implicit
       system: ActorSystem[_]): Route = {
     implicit val timeout: Timeout = Timeout(WebControl.RequestTimeout)
     (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
@@ -278,7 +296,8 @@ object WebServer {
           .mapAsync(1) {
             case t: TextMessage =>
               t.textStream.limitWeighted(4096L)(_.length.toLong).runFold(new StringBuilder)(_ append _)
-                .flatMap(text => control.ask[String](WebControl.Request(WebControl.drive(text.toString), _)))(system.executionContext)
+                .flatMap(text => control.ask[String](WebControl.Request(WebControl.drive(text.toString), _)))(
+                  system.executionContext)
             case b: BinaryMessage =>
               b.dataStream.runWith(Sink.ignore)
               Future.successful("""{"op":"result","ok":false,"message":"the control panel takes JSON text"}""")
@@ -297,7 +316,8 @@ object WebServer {
   }
 
   /** One page's connection: its first message, then the shared pushes through its own bounded buffer. */
-  private def pageFlow(feed: WebView.Feed, settings: WebSettings, connections: Connections)(implicit mat: Materializer): Flow[Message, Message, NotUsed] = {
+  private def pageFlow(feed: WebView.Feed, settings: WebSettings, connections: Connections)(
+      implicit mat: Materializer): Flow[Message, Message, NotUsed] = {
     val out: Source[Message, NotUsed] = feed.pushes
       .buffer(settings.clientBuffer, OverflowStrategy.fail)
       .prepend(Source.single(feed.hello))
@@ -312,12 +332,14 @@ object WebServer {
     Flow.fromSinkAndSourceCoupled(Sink.foreach[Message](connections.ignore), out)
   }
 
-  /** The version of the uPlot jar on the classpath, from its Maven metadata (the version is pinned in the build only). */
+  /** The version of the uPlot jar on the classpath, from its Maven metadata (the version is pinned in the build only).
+    */
   private[web] lazy val uplotVersion: String = {
     val props = new java.util.Properties
     val in = getClass.getClassLoader.getResourceAsStream("META-INF/maven/org.webjars.npm/uplot/pom.properties")
     require(in != null, "the uPlot jar is not on the classpath")
-    try props.load(in) finally in.close()
+    try props.load(in)
+    finally in.close()
     props.getProperty("version")
   }
 }

@@ -8,12 +8,12 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
-/**
- * Settings of the web view (`apps.web { ... }`, docs/web.md).
- *
- * @param token the access token every WebSocket must present (`?token=`); empty for none, which only a loopback
- *   address may go without
- */
+/** Settings of the web view (`apps.web { ... }`, docs/web.md).
+  *
+  * @param token
+  *   the access token every WebSocket must present (`?token=`); empty for none, which only a loopback address may go
+  *   without
+  */
 final case class WebSettings(
     enabled: Boolean,
     bindAddress: String,
@@ -42,12 +42,12 @@ final case class WebSettings(
   /** Whether the bind address is a loopback one, reachable from this machine only. */
   def loopbackOnly: Boolean = InetAddress.getByName(bindAddress).isLoopbackAddress
 
-  /**
-   * Why these settings must not serve, if they must not: a view reachable from other machines needs a token, so a
-   * stranger on the field's network cannot watch (or, with the control panel, steer).
-   */
+  /** Why these settings must not serve, if they must not: a view reachable from other machines needs a token, so a
+    * stranger on the field's network cannot watch (or, with the control panel, steer).
+    */
   def refusal: Option[String] =
-    Option.when(token.isEmpty && !loopbackOnly)(s"apps.web.bind-address $bindAddress is not loopback, so apps.web.token must be set")
+    Option.when(token.isEmpty && !loopbackOnly)(
+      s"apps.web.bind-address $bindAddress is not loopback, so apps.web.token must be set")
 }
 
 /** Reading the settings. */

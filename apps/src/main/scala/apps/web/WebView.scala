@@ -13,13 +13,12 @@ import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{GameSource, GatewayStats, RobotEvent, RobotLinks, RobotSnapshot, TrafficStats, VisionFrame}
 import robotmiddleware.RobotMiddleware
 
-/**
- * The one owner of what the web view shows ([[WebModel]]). It asks the gateway's read-only view as the status view
- * does, and subscribes at the middleware to robot events and, while at least one page is connected, to each robot's
- * HaViMo2 frames (the camera costs the robots' WiFi budget: with no page open nobody asks for it); every
- * `push-interval` it renders one JSON push that every connected page shares (a broadcast hub, so the cost does not
- * grow with pages).
- */
+/** The one owner of what the web view shows ([[WebModel]]). It asks the gateway's read-only view as the status view
+  * does, and subscribes at the middleware to robot events and, while at least one page is connected, to each robot's
+  * HaViMo2 frames (the camera costs the robots' WiFi budget: with no page open nobody asks for it); every
+  * `push-interval` it renders one JSON push that every connected page shares (a broadcast hub, so the cost does not
+  * grow with pages).
+  */
 object WebView {
 
   /** What the view accepts. */
@@ -52,11 +51,10 @@ object WebView {
   private case object PageJoined extends Command
   private case object PageLeft extends Command
 
-  /**
-   * The view's state between messages: the model, what the last push and grid carried, the pages connected, and the
-   * camera watcher (a child that forwards frames, there while `pages > 0`; stopping it ends its watches, and the
-   * robots switch the camera options off).
-   */
+  /** The view's state between messages: the model, what the last push and grid carried, the pages connected, and the
+    * camera watcher (a child that forwards frames, there while `pages > 0`; stopping it ends its watches, and the
+    * robots switch the camera options off).
+    */
   private final case class State(
       model: WebModel,
       pushedEvents: Long,
@@ -87,7 +85,8 @@ object WebView {
         // The game comes as the GameController sends it, so a new state reaches the page at once, not at the next tick.
         middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
         new View(gateway, middleware, settings, context, queue, hub).running(State(
-          WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, 0, None, Map.empty, 0L, 0L, Figures(0, 0, 0)))
+            WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, 0, None, Map.empty,
+            0L, 0L, Figures(0, 0, 0)))
       }
     }
 
@@ -112,7 +111,9 @@ object WebView {
       val gridsDue = now - s.gridsAtNanos >= settings.gridInterval.toNanos
       val grids =
         if (!gridsDue) Set.empty[Int]
-        else s.model.vision.collect { case (id, v) if v.grid.isDefined && !s.gridsSent.get(id).contains(v.gridFrame) => id }.toSet
+        else s.model.vision.collect {
+          case (id, v) if v.grid.isDefined && !s.gridsSent.get(id).contains(v.gridFrame) => id
+        }.toSet
       val newEvents = math.min(s.model.eventCount - s.pushedEvents, s.model.maxEvents.toLong).toInt
       val newSamples = math.min(s.model.sampleCount - s.pushedSamples, s.model.historyPoints.toLong).toInt
       val json = WebJson.push(s.model, t, newEvents, newSamples, grids, hello = false)
@@ -120,20 +121,26 @@ object WebView {
         case akka.stream.QueueOfferResult.Enqueued => 0
         case _                                     => 1
       }
-      s.copy(pushedEvents = s.model.eventCount, pushedSamples = s.model.sampleCount, answered = false,
+      s.copy(
+        pushedEvents = s.model.eventCount,
+        pushedSamples = s.model.sampleCount,
+        answered = false,
         gridsSent = s.gridsSent ++ grids.map(id => id -> s.model.vision(id).gridFrame),
-        gridsAtNanos = if (grids.nonEmpty) now else s.gridsAtNanos, pushedAtNanos = now,
-        figures = Figures(s.figures.pushes + 1, s.figures.dropped + dropped, json.length))
+        gridsAtNanos = if (grids.nonEmpty) now else s.gridsAtNanos,
+        pushedAtNanos = now,
+        figures = Figures(s.figures.pushes + 1, s.figures.dropped + dropped, json.length)
+      )
     }
 
-    /**
-     * The state with `model`; when the model logged something new (a robot online or offline, a new game state), it is
-     * pushed at once rather than at the next tick, yet never sooner than a fifth of `push-interval` after the last
-     * push, so a burst of events cannot raise the rate above five times the configured one.
-     */
+    /** The state with `model`; when the model logged something new (a robot online or offline, a new game state), it is
+      * pushed at once rather than at the next tick, yet never sooner than a fifth of `push-interval` after the last
+      * push, so a burst of events cannot raise the rate above five times the configured one.
+      */
     private def soon(s: State, model: WebModel): State = {
       val next = s.copy(model = model)
-      if (model.eventCount != s.model.eventCount && System.nanoTime() - s.pushedAtNanos >= settings.pushInterval.toNanos / 5) push(next)
+      if (model
+          .eventCount != s.model.eventCount && System.nanoTime() - s.pushedAtNanos >= settings.pushInterval.toNanos / 5)
+        push(next)
       else next
     }
 
@@ -152,20 +159,23 @@ object WebView {
         // While a page is open, each robot's frames are watched from the first time it is listed (the middleware ends
         // the watch when the camera watcher stops).
         val fresh = s.camera.fold(Vector.empty[Int])(_ => robots.map(_.robotId).filterNot(s.watched))
-        s.camera.foreach(camera => fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, camera, grid = true)))
+        s.camera.foreach(camera =>
+          fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, camera, grid = true)))
         val signing = robots.map(r => r.robotId -> gateway.signing(r.robotId)).toMap
         val model = s.model.withRobots(robots).copy(signing = signing)
         running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
-      case Links(l)       => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
-      case Traffic(stats) => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
-      case Game(game)     => running(soon(s, s.model.withGame(game, t, System.currentTimeMillis())))
-      case GameSourceIs(src)   => running(s.copy(model = s.model.copy(gameSource = Some(src))))
-      case Stats(stats)   => running(s.copy(model = s.model.withGatewayStats(stats, t, System.currentTimeMillis())))
-      case Event(event)   => running(soon(s, s.model.withEvent(event, t, System.currentTimeMillis())))
-      case Vision(VisionFrame.Regions(id, frame, _, regions)) => running(s.copy(model = s.model.withRegions(id, frame, regions)))
-      case Vision(VisionFrame.Grid(id, frame, _, grid))       => running(s.copy(model = s.model.withGrid(id, frame, grid.cells.toArray)))
-      case Sample         => running(s.copy(model = s.model.sampled(t)))
-      case Unanswered     => Behaviors.same
+      case Links(l)          => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
+      case Traffic(stats)    => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
+      case Game(game)        => running(soon(s, s.model.withGame(game, t, System.currentTimeMillis())))
+      case GameSourceIs(src) => running(s.copy(model = s.model.copy(gameSource = Some(src))))
+      case Stats(stats)      => running(s.copy(model = s.model.withGatewayStats(stats, t, System.currentTimeMillis())))
+      case Event(event)      => running(soon(s, s.model.withEvent(event, t, System.currentTimeMillis())))
+      case Vision(VisionFrame.Regions(id, frame, _, regions)) =>
+        running(s.copy(model = s.model.withRegions(id, frame, regions)))
+      case Vision(VisionFrame.Grid(id, frame, _, grid)) =>
+        running(s.copy(model = s.model.withGrid(id, frame, grid.cells.toArray)))
+      case Sample           => running(s.copy(model = s.model.sampled(t)))
+      case Unanswered       => Behaviors.same
       case Connect(replyTo) =>
         // A page counts from when its stream runs until it ends, however it ends.
         val pushes = hub.watchTermination() { (_, done) =>
@@ -173,7 +183,8 @@ object WebView {
           done.onComplete(_ => self ! PageLeft)(ExecutionContext.parasitic)
           NotUsed
         }
-        replyTo ! Feed(WebJson.push(s.model, t, s.model.maxEvents, s.model.historyPoints, s.model.vision.keySet, hello = true), pushes)
+        replyTo ! Feed(WebJson.push(s.model, t, s.model.maxEvents, s.model.historyPoints, s.model.vision.keySet,
+            hello = true), pushes)
         Behaviors.same
       case PageJoined =>
         // The first page starts a camera watcher; the robots it knows are watched at the next answer of the gateway.
@@ -183,7 +194,7 @@ object WebView {
         })))
         running(s.copy(pages = s.pages + 1, camera = camera))
       case PageLeft if s.pages > 1 => running(s.copy(pages = s.pages - 1))
-      case PageLeft =>
+      case PageLeft                =>
         // The last page left: the watcher stops, the middleware ends its watches, and the robots' cameras go quiet.
         s.camera.foreach(context.stop)
         running(s.copy(pages = 0, camera = None, watched = Set.empty))

@@ -43,10 +43,9 @@ object Route {
   /** A robot call: a `RobotInterface` operation, its lease taken on the clients' behalf. */
   final case class Execute(robotId: Int, operation: Operation) extends Route
 
-  /**
-   * `gateway.send`: the operation sent through `RobotInterface.send`, lease taken the same way; the reply says it was
-   * accepted, the robot's own answer is dropped.
-   */
+  /** `gateway.send`: the operation sent through `RobotInterface.send`, lease taken the same way; the reply says it was
+    * accepted, the robot's own answer is dropped.
+    */
   final case class Send(robotId: Int, operation: Operation) extends Route
 }
 
@@ -76,7 +75,8 @@ object EndpointProtocol {
     MessageContents.parse(body) match {
       case Left(error) =>
         val (robotId, callId) = salvage(body)
-        Left(Unreadable(robotId, callId, s"${Malformed}not a protobuf Message with robotID and a complete rpcRequest (${error.describe})"))
+        Left(Unreadable(robotId, callId,
+            s"${Malformed}not a protobuf Message with robotID and a complete rpcRequest (${error.describe})"))
       case Right(contents) =>
         contents.rpcRequest match {
           case None =>
@@ -85,10 +85,9 @@ object EndpointProtocol {
         }
     }
 
-  /**
-   * The robot id and call id of a body that did not parse, as far as they can be read, so that even the error
-   * reply carries the client's call id (e.g. a `Request` without its `method`).
-   */
+  /** The robot id and call id of a body that did not parse, as far as they can be read, so that even the error reply
+    * carries the client's call id (e.g. a `Request` without its `method`).
+    */
   def salvage(body: Array[Byte]): (Int, Option[Long]) = {
     var robotId = -1
     var callId = Option.empty[Long]
@@ -123,7 +122,8 @@ object EndpointProtocol {
       case RpcValue.UInt(i)   => i.toDouble
     }
     if (call.params.length != names.length || values.length != names.length)
-      Left(s"$Malformed${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got ${describe(call.params)}")
+      Left(
+        s"$Malformed${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got ${describe(call.params)}")
     else if (values.exists(v => v.isNaN || v.isInfinite)) Left(s"$Malformed${call.name}: numbers must be finite")
     else Right(values)
   }
@@ -139,7 +139,8 @@ object EndpointProtocol {
       Left(s"$Malformed${call.name} takes one or more group names (${ActuatorGroup.all.map(_.name).mkString(", ")})")
     else
       names.distinct
-        .foldLeft[Either[String, Vector[ActuatorGroup]]](Right(Vector.empty))((done, n) => done.flatMap(gs => ActuatorGroup.parse(n).map(gs :+ _)))
+        .foldLeft[Either[String, Vector[ActuatorGroup]]](Right(Vector.empty))((done, n) =>
+          done.flatMap(gs => ActuatorGroup.parse(n).map(gs :+ _)))
         .left.map(Malformed + _)
         .map(route)
   }
@@ -148,7 +149,8 @@ object EndpointProtocol {
   def route(request: EndpointRequest): Either[String, Route] = {
     val EndpointRequest(robotId, call) = request
     def noParams(route: => Either[String, Route]): Either[String, Route] =
-      if (call.params.isEmpty) route else Left(s"$Malformed${call.name} takes no parameters, got ${describe(call.params)}")
+      if (call.params.isEmpty) route
+      else Left(s"$Malformed${call.name} takes no parameters, got ${describe(call.params)}")
     def execute(operation: => Operation): Either[String, Route] =
       try Right(Route.Execute(robotId, operation))
       catch { case e: IllegalArgumentException => Left(Malformed + e.getMessage.stripPrefix("requirement failed: ")) }
@@ -157,7 +159,7 @@ object EndpointProtocol {
       case (GatewayModule, "status")  => noParams(Right(Route.Status(robotId)))
       case (GatewayModule, "acquire") => groups(call)(Route.Acquire(robotId, _))
       case (GatewayModule, "release") => groups(call)(Route.Release(robotId, _))
-      case (GatewayModule, "send") =>
+      case (GatewayModule, "send")    =>
         // The call to send is the parameters: its module, its method, then its own parameters, read as a call is.
         call.params match {
           case RpcValue.Text(module) +: RpcValue.Text(method) +: params if module != GatewayModule =>
@@ -170,7 +172,7 @@ object EndpointProtocol {
               "and its parameters, " +
               s"got ${describe(call.params)}")
         }
-      case (GatewayModule, _)         => Left(RpcReply.unknownMethod(call.module, call.method))
+      case (GatewayModule, _) => Left(RpcReply.unknownMethod(call.module, call.method))
       case ("motion", "walk") =>
         numbers(call, "vx", "vy", "omega").flatMap(v => execute(Operation.Walk(v(0), v(1), v(2))))
       case ("motion", "stop") => noParams(execute(Operation.Stop()))
@@ -183,7 +185,8 @@ object EndpointProtocol {
           case Vector(RpcValue.Text(name)) =>
             Posture.target(name).left.map(Malformed + _).flatMap(target => execute(Operation.Posture(target)))
           case other =>
-            Left(s"${Malformed}motion.posture takes one text (${Posture.targets.map(_.name).mkString(", ")}), got ${describe(other)}")
+            Left(
+              s"${Malformed}motion.posture takes one text (${Posture.targets.map(_.name).mkString(", ")}), got ${describe(other)}")
         }
       case ("speech", "say") =>
         call.params match {
@@ -196,20 +199,21 @@ object EndpointProtocol {
 
   /** The error text of a failed request: a category prefix (docs/zeromq.md), then the cause. */
   def errorText(failure: Throwable): String = failure match {
-    case f: RobotFailure.UnknownRobot          => s"unknown robot: ${f.getMessage}"
-    case f: RobotFailure.RobotOffline          => s"offline: ${f.getMessage}"
-    case f: RobotFailure.LeaseNotHeld          => s"lease: ${f.getMessage}"
-    case f: RobotFailure.RuleGate              => s"rule: ${f.getMessage}"
-    case f: RobotFailure.Timeout               => s"timeout: ${f.getMessage}"
-    case RobotFailure.RobotError(_, error)     => s"robot error: $error"
-    case f: RobotFailure.SafetyHold            => s"safety: ${f.getMessage}"
-    case f: RobotFailure.Overloaded            => s"overloaded: ${f.getMessage}"
+    case f: RobotFailure.UnknownRobot             => s"unknown robot: ${f.getMessage}"
+    case f: RobotFailure.RobotOffline             => s"offline: ${f.getMessage}"
+    case f: RobotFailure.LeaseNotHeld             => s"lease: ${f.getMessage}"
+    case f: RobotFailure.RuleGate                 => s"rule: ${f.getMessage}"
+    case f: RobotFailure.Timeout                  => s"timeout: ${f.getMessage}"
+    case RobotFailure.RobotError(_, error)        => s"robot error: $error"
+    case f: RobotFailure.SafetyHold               => s"safety: ${f.getMessage}"
+    case f: RobotFailure.Overloaded               => s"overloaded: ${f.getMessage}"
     case e: java.util.concurrent.TimeoutException => s"timeout: the middleware did not answer in time (${e.getMessage})"
-    case e: IllegalArgumentException          => Malformed + String.valueOf(e.getMessage).stripPrefix("requirement failed: ")
-    case e                                    => s"endpoint error: ${e.getClass.getSimpleName}: ${e.getMessage}"
+    case e: IllegalArgumentException => Malformed + String.valueOf(e.getMessage).stripPrefix("requirement failed: ")
+    case e                           => s"endpoint error: ${e.getClass.getSimpleName}: ${e.getMessage}"
   }
 
-  /** The reply to a request: a `Message` for `robotId` with the `rpcResponse` (and the snapshot for `gateway.status`). */
+  /** The reply to a request: a `Message` for `robotId` with the `rpcResponse` (and the snapshot for `gateway.status`).
+    */
   def reply(robotId: Int, callId: Option[Long], result: Either[String, Answer]): Array[Byte] = {
     val snapshot = result.toOption.flatMap(_.snapshot)
     MessageContents(
@@ -220,7 +224,9 @@ object EndpointProtocol {
     ).toProtobuf
   }
 
-  /** The frames of a status publication: topic, the keep-alive as `Message` with `status` and `robotHealth`, link quality. */
+  /** The frames of a status publication: topic, the keep-alive as `Message` with `status` and `robotHealth`, link
+    * quality.
+    */
   def statusFrames(s: RobotSnapshot): Vector[Array[Byte]] =
     Vector(
       utf8(statusTopic(s.robotId)),
@@ -239,7 +245,9 @@ object EndpointProtocol {
     case _: VisionFrame.Grid => None
   }
 
-  /** The frames of a game publication: topic and the GameController's control packet, byte for byte (docs/protocol.md 10). */
+  /** The frames of a game publication: topic and the GameController's control packet, byte for byte (docs/protocol.md
+    * 10).
+    */
   def gameFrames(data: GameControlData): Option[Vector[Array[Byte]]] =
     GameControllerCodec.encodeControl(data).toOption.map(packet => Vector(utf8(GameTopic), packet))
 

@@ -22,11 +22,10 @@ import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{RobotSnapshot, VisionFrame}
 import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
 
-/**
- * The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket
- * (docs/zeromq.md). The sockets live on a `ZeroMqLoop` on the endpoint's own dispatcher; this actor hands requests to
- * the `RobotInterface` and replies go back to the loop, so no actor ever blocks.
- */
+/** The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket
+  * (docs/zeromq.md). The sockets live on a `ZeroMqLoop` on the endpoint's own dispatcher; this actor hands requests to
+  * the `RobotInterface` and replies go back to the loop, so no actor ever blocks.
+  */
 object ZeroMqEndpoint {
 
   /** What the endpoint accepts. */
@@ -63,7 +62,9 @@ object ZeroMqEndpoint {
   // A request is a few hundred bytes; a client sending more is broken or hostile and is disconnected.
   private val MaxRequestBytes = 1024L * 1024L
 
-  /** The endpoint for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
+  /** The endpoint for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it
+    * stops.
+    */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ZeroMqSettings): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(64) { stash =>
@@ -73,16 +74,19 @@ object ZeroMqEndpoint {
         }
         Behaviors.receiveMessage {
           case Connected(robots) => stash.unstashAll(serving(robots, settings, ownsInterface = true))
-          case ConnectFailed(e)  => throw new IllegalStateException(s"ZeroMQ endpoint cannot register with the middleware: $e", e)
+          case ConnectFailed(e) =>
+            throw new IllegalStateException(s"ZeroMQ endpoint cannot register with the middleware: $e", e)
           case other =>
-            if (stash.isFull) context.log.warn("ZeroMQ endpoint: message dropped while registering") else stash.stash(other)
+            if (stash.isFull) context.log.warn("ZeroMQ endpoint: message dropped while registering")
+            else stash.stash(other)
             Behaviors.same
         }
       }
     }
 
   /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` is on (it is off in competition). */
-  def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command]): Option[ActorRef[Command]] = {
+  def spawnIfEnabled(
+      context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command]): Option[ActorRef[Command]] = {
     val settings = ZeroMqSettings(context.system)
     if (settings.enabled) Some(context.spawn(apply(middleware, settings), "zeromq-endpoint")) else None
   }
@@ -113,10 +117,9 @@ object ZeroMqEndpoint {
       }
   }
 
-  /**
-   * A request being worked on: where its reply goes and what it must echo. `answered` is taken by whoever replies
-   * first (the answer, the timeout, the shutdown), so a request is answered exactly once.
-   */
+  /** A request being worked on: where its reply goes and what it must echo. `answered` is taken by whoever replies
+    * first (the answer, the timeout, the shutdown), so a request is answered exactly once.
+    */
   private final case class Pending(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], name: String,
       answered: java.util.concurrent.atomic.AtomicBoolean = new java.util.concurrent.atomic.AtomicBoolean(false)) {
 
@@ -149,9 +152,10 @@ object ZeroMqEndpoint {
       loop.start(context.system.dispatchers.lookup(DispatcherSelector.fromConfig(settings.dispatcher)))
       context.pipeToSelf(loop.terminated)(_ => LoopEnded)
       // The sockets close early in a coordinated shutdown, before the actors are stopped.
-      shutdownTask = Some(CoordinatedShutdown(context.system).addCancellableTask(CoordinatedShutdown.PhaseServiceUnbind, LoopName) {
-        () => loop.stop()
-      })
+      shutdownTask =
+        Some(CoordinatedShutdown(context.system).addCancellableTask(CoordinatedShutdown.PhaseServiceUnbind, LoopName) {
+          () => loop.stop()
+        })
       bind()
       // The loop needs a thread of its own: with every thread of the dispatcher taken by other loops it never starts.
       timers.startSingleTimer(BindKey, BindTimedOut, BindTimeout)
@@ -188,7 +192,8 @@ object ZeroMqEndpoint {
             else {
               // XPUB hands up each new subscription (1 + prefix) and each last unsubscription (0 + prefix).
               if (frame.nonEmpty && (frame(0) == 0 || frame(0) == 1))
-                self ! SubscriptionChanged(new String(frame, 1, frame.length - 1, StandardCharsets.UTF_8), frame(0) == 1)
+                self ! SubscriptionChanged(new String(frame, 1, frame.length - 1, StandardCharsets.UTF_8),
+                  frame(0) == 1)
               true
             }
           }
@@ -210,7 +215,8 @@ object ZeroMqEndpoint {
     private def binding: Behavior[Command] = Behaviors.receiveMessage[Command] {
       case Bound(addresses) =>
         timers.cancel(BindKey)
-        context.log.info("ZeroMQ endpoint serving requests on {} and publishing on {}", addresses.requests, addresses.publish)
+        context.log.info("ZeroMQ endpoint serving requests on {} and publishing on {}", addresses.requests,
+          addresses.publish)
         startStreams()
         stash.unstashAll(running(addresses))
       case BindFailed(reason) =>
@@ -220,7 +226,8 @@ object ZeroMqEndpoint {
         context.log.error("ZeroMQ endpoint: the socket loop ended before binding")
         Behaviors.stopped
       case BindTimedOut =>
-        context.log.error("ZeroMQ endpoint: the socket loop did not start within {}; does dispatcher {} have a free thread?",
+        context.log.error(
+          "ZeroMQ endpoint: the socket loop did not start within {}; does dispatcher {} have a free thread?",
           BindTimeout, settings.dispatcher)
         Behaviors.stopped
       case other =>
@@ -247,7 +254,7 @@ object ZeroMqEndpoint {
               .viaMat(KillSwitches.single)(Keep.right)
               .map[Command](VisionSeen.apply)
               .to(ActorSink.actorRef[Command](context.self, StreamEnded(s"vision-$robotId", None),
-                (e: Throwable) => StreamEnded(s"vision-$robotId", Some(e))))
+                  (e: Throwable) => StreamEnded(s"vision-$robotId", Some(e))))
               .run()
             visionStreams = visionStreams.updated(robotId, killSwitch)
           case (false, Some(killSwitch)) =>
@@ -263,7 +270,8 @@ object ZeroMqEndpoint {
       ()
     }
 
-    private def reply(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], result: Either[String, Answer]): Unit =
+    private def reply(
+        envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], result: Either[String, Answer]): Unit =
       send(envelope :+ EndpointProtocol.reply(robotId, callId, result), toRouter = true)
 
     /** The envelope (routing id, and the empty delimiter of REQ clients) and the one body frame. */
@@ -282,26 +290,27 @@ object ZeroMqEndpoint {
     // all robots: it holds no per-robot entry a client could grow.
     private var dispatched: Future[Unit] = Future.unit
 
-    /**
-     * Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it needs
-     * one. When nothing waits and no lease is needed it starts at once, on this actor's thread.
-     */
-    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(operate: () => Future[Answer])
-        : Future[Answer] = {
+    /** Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it needs
+      * one. When nothing waits and no lease is needed it starts at once, on this actor's thread.
+      */
+    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(
+        operate: () => Future[Answer]): Future[Answer] = {
       val handedOn = scala.concurrent.Promise[Unit]()
       def start(ready: scala.util.Try[Any]): Future[Answer] = {
         val answer = ready match {
-          case Success(_) => try operate() catch { case NonFatal(e) => Future.failed(e) }
+          case Success(_) =>
+            try operate()
+            catch { case NonFatal(e) => Future.failed(e) }
           case Failure(e) => Future.failed(e)
         }
         handedOn.success(())
         answer
       }
       val answer = (dispatched.value, group) match {
-        case (Some(_), None) => start(Success(()))
+        case (Some(_), None)    => start(Success(()))
         case (Some(_), Some(g)) => robots.acquire(robotId, g).transformWith(start)
-        case (None, None) => dispatched.transformWith(_ => start(Success(())))
-        case (None, Some(g)) => dispatched.transformWith(_ => robots.acquire(robotId, g)).transformWith(start)
+        case (None, None)       => dispatched.transformWith(_ => start(Success(())))
+        case (None, Some(g))    => dispatched.transformWith(_ => robots.acquire(robotId, g)).transformWith(start)
       }
       dispatched = handedOn.future
       answer
@@ -310,35 +319,36 @@ object ZeroMqEndpoint {
     private def execute(route: Route): Future[Answer] = {
       val done = Answer(Some(RpcValue.Flag(true)))
       try route match {
-        case Route.Robots =>
-          robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
-        case Route.Status(robotId) =>
-          robots.robots().flatMap(_.find(_.robotId == robotId) match {
-            case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
-            case None    => Future.failed(naogateway.RobotFailure.UnknownRobot(robotId))
-          })
-        case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
-        case Route.Release(robotId, groups) =>
-          inOrder(robotId, None) { () =>
-            robots.release(robotId, groups: _*)
-            Future.successful(done)
-          }
-        case Route.Send(robotId, operation) =>
-          inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
-        case Route.Execute(robotId, operation) =>
-          import robotmiddleware.Operation._
-          inOrder(robotId, operation.group) { () =>
-            operation match {
-              case Walk(vx, vy, omega)    => robots.walk(robotId, vx, vy, omega).map(_ => done)
-              case Stop()                 => robots.stop(robotId).map(_ => done)
-              case Head(pan, tilt)        => robots.head(robotId, pan, tilt).map(_ => done)
-              case Arms(ls, le, rs, re)   => robots.arms(robotId, ls, le, rs, re).map(_ => done)
-              case Posture(p)             => robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached.name))))
-              case Say(text)              => robots.say(robotId, text).map(_ => done)
-              case RawCall(module, method, params) => robots.call(robotId, module, method, params: _*).map(Answer(_))
+          case Route.Robots =>
+            robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
+          case Route.Status(robotId) =>
+            robots.robots().flatMap(_.find(_.robotId == robotId) match {
+              case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
+              case None    => Future.failed(naogateway.RobotFailure.UnknownRobot(robotId))
+            })
+          case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
+          case Route.Release(robotId, groups) =>
+            inOrder(robotId, None) { () =>
+              robots.release(robotId, groups: _*)
+              Future.successful(done)
             }
-          }
-      } catch { case NonFatal(e) => Future.failed(e) }
+          case Route.Send(robotId, operation) =>
+            inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
+          case Route.Execute(robotId, operation) =>
+            import robotmiddleware.Operation._
+            inOrder(robotId, operation.group) { () =>
+              operation match {
+                case Walk(vx, vy, omega)  => robots.walk(robotId, vx, vy, omega).map(_ => done)
+                case Stop()               => robots.stop(robotId).map(_ => done)
+                case Head(pan, tilt)      => robots.head(robotId, pan, tilt).map(_ => done)
+                case Arms(ls, le, rs, re) => robots.arms(robotId, ls, le, rs, re).map(_ => done)
+                case Posture(p) => robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached.name))))
+                case Say(text)  => robots.say(robotId, text).map(_ => done)
+                case RawCall(module, method, params) => robots.call(robotId, module, method, params: _*).map(Answer(_))
+              }
+            }
+        }
+      catch { case NonFatal(e) => Future.failed(e) }
     }
 
     private def running(addresses: Addresses): Behavior[Command] = Behaviors.receiveMessage[Command] {
@@ -352,7 +362,8 @@ object ZeroMqEndpoint {
               case Right(request) =>
                 val callId = request.call.callId
                 if (pending.size >= settings.maxInFlight)
-                  reply(envelope, request.robotId, callId, Left(s"overloaded: ${pending.size} requests are in progress at the endpoint"))
+                  reply(envelope, request.robotId, callId,
+                    Left(s"overloaded: ${pending.size} requests are in progress at the endpoint"))
                 else
                   EndpointProtocol.route(request) match {
                     case Left(error) => reply(envelope, request.robotId, callId, Left(error))

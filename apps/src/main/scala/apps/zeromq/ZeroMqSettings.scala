@@ -19,7 +19,8 @@ final case class ZeroMqSettings(
     dispatcher: String
 ) {
   require(bind.nonEmpty && publish.nonEmpty, "zeromq.bind and zeromq.publish must be ZeroMQ endpoints")
-  require(bind != publish || bind.endsWith(":*"), "zeromq.bind and zeromq.publish must differ (or both take a free port, :*)")
+  require(bind != publish || bind.endsWith(":*"),
+    "zeromq.bind and zeromq.publish must differ (or both take a free port, :*)")
   require(appName.nonEmpty, "zeromq.app-name must not be empty")
   require(requestTimeout > Duration.Zero, "zeromq.request-timeout must be positive")
   require(maxInFlight >= 1, "zeromq.max-in-flight must be at least 1")
@@ -33,7 +34,8 @@ object ZeroMqSettings {
   val ConfigPath: String = "apps.zeromq"
 
   /** The settings of this system's configuration. */
-  def apply(system: ActorSystem[_]): ZeroMqSettings = fromConfig(system.settings.config.getConfig(ConfigPath), s"$ConfigPath.dispatcher")
+  def apply(system: ActorSystem[_]): ZeroMqSettings =
+    fromConfig(system.settings.config.getConfig(ConfigPath), s"$ConfigPath.dispatcher")
 
   /** The settings of an `apps.zeromq` block whose dispatcher is configured at `dispatcherPath`. */
   def fromConfig(c: Config, dispatcherPath: String): ZeroMqSettings = ZeroMqSettings(

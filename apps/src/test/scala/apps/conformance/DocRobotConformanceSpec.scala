@@ -27,30 +27,33 @@ import naogateway.testkit.TestLoopback
 import naogateway.{Gateway, GatewaySettings, LinkStats, RobotActor, RobotOffline, RobotSnapshot, StreamActor}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
-/** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result. */
+/** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result.
+  */
 final case class Finding(section: String, check: String, pass: Boolean, detail: String) {
 
   /** Section and check, the key of the known-disagreement lists. */
   def key: (String, String) = section -> check
 }
 
-/** The conformance robot's Python environment under apps/target, made once and reused while its requirements stay the same. */
+/** The conformance robot's Python environment under apps/target, made once and reused while its requirements stay the
+  * same.
+  */
 object ConformanceEnv {
 
   /** The checkout's root: the folder that holds the conformance robot. */
   lazy val root: File =
     Iterator.iterate(new File(".").getAbsoluteFile)(_.getParentFile).takeWhile(_ != null)
       .find(d => new File(d, "src/test/python/conformance/robot.py").isFile)
-      .getOrElse(throw new IllegalStateException("cannot find src/test/python/conformance from " + new File(".").getAbsolutePath))
+      .getOrElse(throw new IllegalStateException(
+          "cannot find src/test/python/conformance from " + new File(".").getAbsolutePath))
 
   val robotScript: File = new File(root, "src/test/python/conformance/robot.py")
   val target: File = new File(root, "apps/target/conformance")
 
-  /**
-   * The venv's python, or why there is none (python3 missing, no venv module, pip unable to install: the test is
-   * cancelled with the reason). The robot shares the Python tests' one venv (apps.zeromq.PythonEnv); it imports only
-   * protobuf and grpcio-tools' protoc from it, never the project's client.
-   */
+  /** The venv's python, or why there is none (python3 missing, no venv module, pip unable to install: the test is
+    * cancelled with the reason). The robot shares the Python tests' one venv (apps.zeromq.PythonEnv); it imports only
+    * protobuf and grpcio-tools' protoc from it, never the project's client.
+    */
   def python(): Either[String, File] = synchronized {
     apps.zeromq.PythonEnv.environment().map { python =>
       // Generated afresh each run, so the robot's classes always match proto/.
@@ -79,7 +82,9 @@ object ConformanceEnv {
 /** The gateway's configuration for the conformance run, the robot's modes and today's known disagreements. */
 object DocRobotConformanceSpec {
 
-  /** A gateway on free loopback ports; robots are discovered from their keep-alives, the GameController port stays shut. */
+  /** A gateway on free loopback ports; robots are discovered from their keep-alives, the GameController port stays
+    * shut.
+    */
   val config: String =
     """naogateway {
       |  link { bind-address = "127.0.0.1", robot-port = 0 }
@@ -96,27 +101,43 @@ object DocRobotConformanceSpec {
   /** Also acting on datagrams at the robot's sending socket (CONFORMANCE_COMPAT=1). */
   case object Compat extends Mode("compatibility", true)
 
-  /**
-   * The strict robot under loss and hostile input: it first sends hostile frames between its keep-alives (sections
-   * 4.3, 4.4, 5), then drops 20 % of what it receives and of the stream segments it sends (seeded), while calls (7.1)
-   * and stream data both ways (11) go through, all at its receive port as section 2 says.
-   */
+  /** The strict robot under loss and hostile input: it first sends hostile frames between its keep-alives (sections
+    * 4.3, 4.4, 5), then drops 20 % of what it receives and of the stream segments it sends (seeded), while calls (7.1)
+    * and stream data both ways (11) go through, all at its receive port as section 2 says.
+    */
   case object Lossy extends Mode("lossy", false)
 
   /** The lossy robot's arguments: keep-alives in the legacy form only, hostile frames from 2 s, loss from 9 s. */
-  val lossyArguments: Seq[String] = Seq("--forms", "legacy", "--hostile-start", "2", "--hostile-rounds", "2",
-    "--loss", "0.2", "--loss-seed", "7", "--loss-start", "9",
-    "--stream-sends", "12", "--stream-start", "10", "--stream-interval", "0.3", "--stream-queue")
+  val lossyArguments: Seq[String] = Seq(
+    "--forms",
+    "legacy",
+    "--hostile-start",
+    "2",
+    "--hostile-rounds",
+    "2",
+    "--loss",
+    "0.2",
+    "--loss-seed",
+    "7",
+    "--loss-start",
+    "9",
+    "--stream-sends",
+    "12",
+    "--stream-start",
+    "10",
+    "--stream-interval",
+    "0.3",
+    "--stream-queue"
+  )
 
   /** Stream pings the harness sends the lossy robot through the secure stream. */
   val lossyStreamPings = 12
 
-  /**
-   * Disagreements between the gateway and docs/protocol.md known today, per mode. Each must still be seen (the test
-   * fails when one passes, so this list shrinks with every fix); anything failing that is not listed fails the test.
-   * None are left: section 2 (the destination rule, identity by IP) is what the gateway does, and 4.1 and 7.2 now
-   * say what it does.
-   */
+  /** Disagreements between the gateway and docs/protocol.md known today, per mode. Each must still be seen (the test
+    * fails when one passes, so this list shrinks with every fix); anything failing that is not listed fails the test.
+    * None are left: section 2 (the destination rule, identity by IP) is what the gateway does, and 4.1 and 7.2 now say
+    * what it does.
+    */
   val knownDisagreements: Map[Mode, Set[(String, String)]] = Map(
     Strict -> Set.empty,
     Compat -> Set.empty,
@@ -124,11 +145,10 @@ object DocRobotConformanceSpec {
   )
 }
 
-/**
- * The second implementation: the conformance robot of src/test/python/conformance (written from docs/protocol.md
- * alone) against a real gateway and middleware, once strictly as section 2 describes the hardware and once in its
- * compatibility mode. Every disagreement fails the test naming its section, except the known ones listed above.
- */
+/** The second implementation: the conformance robot of src/test/python/conformance (written from docs/protocol.md
+  * alone) against a real gateway and middleware, once strictly as section 2 describes the hardware and once in its
+  * compatibility mode. Every disagreement fails the test naming its section, except the known ones listed above.
+  */
 class DocRobotConformanceSpec
     extends ScalaTestWithActorTestKit(DocRobotConformanceSpec.config)
     with AnyWordSpecLike
@@ -146,7 +166,8 @@ class DocRobotConformanceSpec
   }
 
   /** One robot process and the findings this harness makes about it. */
-  private final class RobotRun(val mode: Mode, val robotId: Int, val address: String, python: File, gateway: InetSocketAddress,
+  private final class RobotRun(val mode: Mode, val robotId: Int, val address: String, python: File,
+      gateway: InetSocketAddress,
       extra: Seq[String] = Nil) {
     val dir = new File(ConformanceEnv.target, mode.name)
     ConformanceEnv.deleteTree(dir.toPath)
@@ -156,11 +177,27 @@ class DocRobotConformanceSpec
     val output = new File(dir, "robot.out")
     private val findings = new ConcurrentLinkedQueue[Finding]()
     val process: Process = {
-      val b = new ProcessBuilder((Seq(python.getPath, "-u", ConformanceEnv.robotScript.getPath,
-        "--robot-id", robotId.toString, "--address", address, "--gateway", s"127.0.0.1:${gateway.getPort}",
-        "--report", report.getPath, "--log", datagrams.getPath, "--duration", "110",
-        "--proto", new File(ConformanceEnv.root, "proto/src/main/protobuf").getPath,
-        "--gen", new File(ConformanceEnv.target, s"gen-${mode.name}").getPath) ++ extra).asJava)
+      val b = new ProcessBuilder((Seq(
+          python.getPath,
+          "-u",
+          ConformanceEnv.robotScript.getPath,
+          "--robot-id",
+          robotId.toString,
+          "--address",
+          address,
+          "--gateway",
+          s"127.0.0.1:${gateway.getPort}",
+          "--report",
+          report.getPath,
+          "--log",
+          datagrams.getPath,
+          "--duration",
+          "110",
+          "--proto",
+          new File(ConformanceEnv.root, "proto/src/main/protobuf").getPath,
+          "--gen",
+          new File(ConformanceEnv.target, s"gen-${mode.name}").getPath
+        ) ++ extra).asJava)
         .directory(ConformanceEnv.root).redirectErrorStream(true).redirectOutput(output)
       b.environment().put("CONFORMANCE_COMPAT", if (mode.compat) "1" else "0")
       b.environment().put("PYTHONDONTWRITEBYTECODE", "1")
@@ -169,7 +206,8 @@ class DocRobotConformanceSpec
       p
     }
 
-    def note(section: String, check: String, pass: Boolean, detail: String): Unit = findings.add(Finding(section, check, pass, detail))
+    def note(section: String, check: String, pass: Boolean, detail: String): Unit =
+      findings.add(Finding(section, check, pass, detail))
 
     /** Keep-alive snapshots the gateway published for this robot. */
     val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
@@ -210,8 +248,8 @@ class DocRobotConformanceSpec
   }
 
   /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
-  private def streamOf(id: Int, gateway: akka.actor.typed.ActorRef[Gateway.Command])
-      : Option[(akka.actor.typed.ActorRef[StreamActor.Command], akka.actor.testkit.typed.scaladsl.TestProbe[StreamActor.Received])] = {
+  private def streamOf(id: Int, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Option[(akka.actor.typed.ActorRef[
+          StreamActor.Command], akka.actor.testkit.typed.scaladsl.TestProbe[StreamActor.Received])] = {
     val robot = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
     gateway ! Gateway.GetRobot(id, robot.ref)
     robot.receiveMessage(10.seconds).map { actor =>
@@ -225,13 +263,15 @@ class DocRobotConformanceSpec
   }
 
   /** The scenario through the public RobotInterface (and the robot's stream), noting what the robot answered. */
-  private def drive(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command], gcAddress: String): Unit = {
+  private def drive(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command],
+      gcAddress: String): Unit = {
     import run.{robotId => id}
     val agents = new ConcurrentLinkedQueue[String]()
     val boots = new ConcurrentLinkedQueue[Int]()
     client.status(id).runWith(Sink.foreach { s => s.agent.foreach(agents.add); s.bootId.foreach(boots.add) })
 
-    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(_.exists(r => r.robotId == id && r.online)))
+    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
+        _.exists(r => r.robotId == id && r.online)))
     run.note("6.2", "keep-alive-makes-robot-online", online, s"robot $id online: $online")
     if (!online) return
     await(client.acquire(id, ActuatorGroup.all.toSeq: _*))
@@ -257,21 +297,26 @@ class DocRobotConformanceSpec
       case _                                   => false
     }
 
-    step("7.2", "system.ping-returns-uint")(client.call(id, "system", "ping")) { case Right(Some(RpcValue.UInt(_))) => true; case _ => false }
+    step("7.2", "system.ping-returns-uint")(client.call(id, "system", "ping")) {
+      case Right(Some(RpcValue.UInt(_))) => true; case _ => false
+    }
     step("7.2", "system.battery-returns-volts")(client.call(id, "system", "battery")) {
       case Right(Some(RpcValue.Number(v))) => v >= 10.5f && v <= 12.6f
-      case _                                => false
+      case _                               => false
     }
-    step("7.2", "getPosture-sit-after-power-up")(client.call(id, "motion", "getPosture"))(_ == Right(Some(RpcValue.Text("sit"))))
+    step("7.2", "getPosture-sit-after-power-up")(client.call(id, "motion", "getPosture"))(
+      _ == Right(Some(RpcValue.Text("sit"))))
     step("7.4", "walk-while-sitting")(client.walk(id, 0.1, 0, 0))(robotError("not standing: sit"))
     step("7.4", "head-out-of-range")(client.head(id, 0, 0.8))(robotError("out of range: "))
     step("7.2", "head")(client.head(id, 0.5, 0.2))(_.isRight)
     step("7.2", "arms")(client.arms(id, 0.1, 0.2, 0.3, 0.4))(_.isRight)
     step("7.2", "speech.say")(client.say(id, "hello"))(_.isRight)
     step("7.4", "unknown-method")(client.call(id, "motion", "dance"))(robotError("unknown method: motion.dance"))
-    step("7.4", "walk-with-two-parameters")(client.call(id, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f)))(
+    step("7.4", "walk-with-two-parameters")(client.call(id, "motion", "walk", RpcValue.Number(0.1f),
+        RpcValue.Number(0f)))(
       robotError("bad parameters: "))
-    step("7.4", "unknown-posture")(client.call(id, "motion", "posture", RpcValue.Text("fly")))(robotError("bad parameters: "))
+    step("7.4", "unknown-posture")(client.call(id, "motion", "posture", RpcValue.Text("fly")))(
+      robotError("bad parameters: "))
     step("7.2", "posture-answers-when-reached")(client.posture(id, Posture.Stand))(_ == Right(Posture.Stand))
     if (answered) {
       // Alone, a posture call is answered when the motion has ended (crouch takes about 0.6 s).
@@ -282,20 +327,25 @@ class DocRobotConformanceSpec
       // when the robot has reached the first target (the gateway never supersedes a posture once sent).
       val standing = client.posture(id, Posture.Stand)
       Thread.sleep(300)
-      step("7.4", "posture-during-posture")(client.call(id, "motion", "posture", RpcValue.Text("sit")))(robotError("busy: moving"))
+      step("7.4", "posture-during-posture")(client.call(id, "motion", "posture", RpcValue.Text("sit")))(
+        robotError("busy: moving"))
       step("7.2", "posture-answers-when-reached-despite-a-second")(standing)(_ == Right(Posture.Stand))
-      val stood = poll(10.seconds)(await(client.call(id, "motion", "getPosture"), 5.seconds) == Right(Some(RpcValue.Text("stand"))))
+      val stood = poll(10.seconds)(await(client.call(id, "motion", "getPosture"), 5.seconds) == Right(
+        Some(RpcValue.Text("stand"))))
       run.note("7.2", "posture-reaches-target", stood, "getPosture after motion.posture(stand)")
     }
     step("7.2", "walk")(client.walk(id, 0.1, 0, 0))(_.isRight)
-    step("7.2", "getPosture-walking")(client.call(id, "motion", "getPosture"))(_ == Right(Some(RpcValue.Text("walking"))))
+    step("7.2", "getPosture-walking")(client.call(id, "motion", "getPosture"))(
+      _ == Right(Some(RpcValue.Text("walking"))))
     step("7.2", "stop")(client.stop(id))(_.isRight)
-    step("7.2", "getPosture-stand-after-stop")(client.call(id, "motion", "getPosture"))(_ == Right(Some(RpcValue.Text("stand"))))
+    step("7.2", "getPosture-stand-after-stop")(client.call(id, "motion", "getPosture"))(
+      _ == Right(Some(RpcValue.Text("stand"))))
 
     // Section 8 through the public path: watching vision enables havimo.regions, cancelling disables it.
     def visionFrames(within: FiniteDuration): (akka.stream.UniqueKillSwitch, Boolean) = {
       val count = new java.util.concurrent.atomic.AtomicInteger()
-      val kill = client.vision(id).viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(_ => count.incrementAndGet())).run()
+      val kill =
+        client.vision(id).viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(_ => count.incrementAndGet())).run()
       kill -> poll(within)(count.get() > 0)
     }
     if (answered) {
@@ -308,7 +358,8 @@ class DocRobotConformanceSpec
     // Section 11 both ways, and 7.1's "same transport": a ping frame through the stream is answered through it.
     if (answered) streamProbe.foreach { case (stream, received) =>
       val callId = 2000000000 + Random.nextInt(100000)
-      val frame = MessageContents.encodeFrame(MessageContents(id, rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
+      val frame = MessageContents.encodeFrame(MessageContents(id,
+          rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
       stream ! StreamActor.Send(frame)
       val deadline = 10.seconds.fromNow
       var answer = false
@@ -344,13 +395,15 @@ class DocRobotConformanceSpec
       try { gc.receive(p); Some(buf.take(p.getLength).map("%02X".format(_)).mkString(" ")) }
       catch { case _: SocketTimeoutException => None }
     }.takeWhile(_.isDefined).flatten.take(4).toVector
-    run.note("10.3", "one-alive-answer-per-round", replies == Vector("52 47 72 74 02 0C 03 02"), s"RGrt received: $replies")
+    run.note("10.3", "one-alive-answer-per-round", replies == Vector("52 47 72 74 02 0C 03 02"),
+      s"RGrt received: $replies")
     gc.close()
 
     // Section 4: each header form the robot's keep-alives take (named in activeAgent) was accepted by the gateway.
     Seq("legacy", "compact", "legacy-gzip", "compact-gzip").foreach { form =>
       val seen = poll(3.seconds)(agents.contains(s"conformance-$form"))
-      run.note(if (form.endsWith("gzip")) "4.3" else "4.1", s"keep-alive-accepted-$form", seen, s"agents seen: ${agents.asScala.toSet}")
+      run.note(if (form.endsWith("gzip")) "4.3" else "4.1", s"keep-alive-accepted-$form", seen,
+        s"agents seen: ${agents.asScala.toSet}")
     }
 
     // The restart: options active before it are on again after it (8, step 6), the new session is seen (6.2).
@@ -377,18 +430,19 @@ class DocRobotConformanceSpec
   /** The detail of the robot's "hostile-frame-sent" lines (a JSON string): case, what the document says, bytes. */
   private val HostileSent = """"?(\S+) \((refused|tolerated)\): ([0-9A-F ]*)"?""".r
 
-  /**
-   * The lossy robot's scenario: hostile frames between good keep-alives (4.3, 4.4, 5), judged by the keep-alives the
-   * gateway published; then calls (7.1) and stream data both ways (11) while the robot drops 20 % of what it receives
-   * and of the stream segments it sends.
-   */
-  private def driveLossy(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Unit = {
+  /** The lossy robot's scenario: hostile frames between good keep-alives (4.3, 4.4, 5), judged by the keep-alives the
+    * gateway published; then calls (7.1) and stream data both ways (11) while the robot drops 20 % of what it receives
+    * and of the stream segments it sends.
+    */
+  private def driveLossy(
+      run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Unit = {
     import run.{robotId => id}
     client.status(id).runWith(Sink.foreach(run.snapshots.add))
     val offline = new ConcurrentLinkedQueue[RobotOffline]()
     client.robotEvents.runWith(Sink.foreach { case o: RobotOffline if o.robotId == id => offline.add(o); case _ => () })
 
-    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(_.exists(r => r.robotId == id && r.online)))
+    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
+        _.exists(r => r.robotId == id && r.online)))
     run.note("6.2", "keep-alive-makes-robot-online", online, s"robot $id online: $online")
     if (!online) return
     // Subscribed once the gateway knows the robot: it pushes the robot's link figures every second.
@@ -404,8 +458,8 @@ class DocRobotConformanceSpec
         while (deadline.hasTimeLeft() && run.process.isAlive)
           Try(received.receiveMessage(1.second)).toOption.foreach { r =>
             MessageContents.decodeFrame(r.payload).toOption.foreach { case (_, c) =>
-              c.rpcResponse.flatMap(_.callId).foreach(cid => pingAnswers.add(cid.toLong & 0xFFFFFFFFL))
-              c.robotHealth.flatMap(_.uptimeMs).foreach(u => run.streamUptimes.add(u.toLong & 0xFFFFFFFFL))
+              c.rpcResponse.flatMap(_.callId).foreach(cid => pingAnswers.add(cid.toLong & 0xffffffffL))
+              c.robotHealth.flatMap(_.uptimeMs).foreach(u => run.streamUptimes.add(u.toLong & 0xffffffffL))
             }
           }
       }(scala.concurrent.ExecutionContext.global)
@@ -415,11 +469,13 @@ class DocRobotConformanceSpec
     val hostileDone = poll(40.seconds)(run.out.contains("hostile done"))
     run.note("4.4", "hostile-frames-sent", hostileDone, "the robot's hostile phase ended")
     val pings = (1 to 3).map(_ => await(client.call(id, "system", "ping")))
-    run.note("4.4", "answered-after-hostile-input", pings.forall { case Right(Some(RpcValue.UInt(_))) => true; case _ => false },
+    run.note("4.4", "answered-after-hostile-input",
+      pings.forall { case Right(Some(RpcValue.UInt(_))) => true; case _ => false },
       s"pings after the hostile frames: $pings")
     // Counted per robot under the kind of refusal (4.4, architecture.md 13); over 1400 bytes is "oversize" (3).
-    val counted = poll(10.seconds)(stats.get.exists(s => Seq("bad gzip", "bad protobuf", "length mismatch", "oversize")
-      .forall(e => s.rejected.keys.exists(_.contains(e)))))
+    val counted = poll(10.seconds)(stats.get.exists(s =>
+        Seq("bad gzip", "bad protobuf", "length mismatch", "oversize")
+          .forall(e => s.rejected.keys.exists(_.contains(e)))))
     run.note("4.4", "refused-frames-counted-per-robot", counted, s"rejected: ${stats.get.map(_.rejected)}")
     // A 7-byte datagram starting 00 2A is an FU-Remote frame (3) that the decoder refuses as Truncated(8, 7) (4.4).
     run.note("4.4", "short-frame-counted-as-truncated", stats.get.exists(_.rejected.contains("truncated frame")),
@@ -443,7 +499,9 @@ class DocRobotConformanceSpec
       }
     (1 to 8).foreach { i =>
       lossy("system.ping")(client.call(id, "system", "ping")) { case Some(RpcValue.UInt(_)) => true; case _ => false }
-      lossy("system.battery")(client.call(id, "system", "battery")) { case Some(RpcValue.Number(v)) => v >= 10.5f && v <= 12.6f; case _ => false }
+      lossy("system.battery")(client.call(id, "system", "battery")) {
+        case Some(RpcValue.Number(v)) => v >= 10.5f && v <= 12.6f; case _ => false
+      }
       lossy("motion.getPosture")(client.call(id, "motion", "getPosture"))(_ == Some(RpcValue.Text("sit")))
       lossy("motion.head")(client.head(id, 0.1 * (i % 3), 0.1))(_ => true)
       lossy("motion.arms")(client.arms(id, 0.1, 0.2, 0.3, 0.1 * i))(_ => true)
@@ -456,13 +514,18 @@ class DocRobotConformanceSpec
       val base = 3000000000L + Random.nextInt(100000)
       val ids = (0 until lossyStreamPings).map(base + _)
       ids.foreach { cid =>
-        val frame = MessageContents.encodeFrame(MessageContents(id, rpcRequest = Some(Request("system", "ping", callId = Some(cid.toInt))))).toOption.get
+        val frame = MessageContents.encodeFrame(MessageContents(id,
+            rpcRequest = Some(Request("system", "ping", callId = Some(cid.toInt))))).toOption.get
         stream ! StreamActor.Send(frame)
       }
       val all = poll(45.seconds)(pingAnswers.size >= ids.size && run.streamUptimes.size >= 12)
       val got = pingAnswers.asScala.toVector.filter(ids.contains)
-      run.note("11", "gateway-to-robot-complete-and-in-order", got == ids,
-        s"answers to ${ids.size} stream pings, in arrival order: ${got.map(_ - base)}${if (all) "" else " (waited 45 s)"}")
+      run.note(
+        "11",
+        "gateway-to-robot-complete-and-in-order",
+        got == ids,
+        s"answers to ${ids.size} stream pings, in arrival order: ${got.map(_ - base)}${if (all) "" else " (waited 45 s)"}"
+      )
     }
     run.note("2", "robot-stays-online", offline.isEmpty, s"offline events: ${offline.asScala.toVector}")
     collecting.foreach(_ => ())
@@ -476,21 +539,30 @@ class DocRobotConformanceSpec
         s"offered uptimeMs $offered, delivered $delivered")
       // Hostile frames: the keep-alive each carries counts exactly when the document says it is tolerated.
       val agents = run.snapshots.asScala.toVector.filter(_.agent.exists(_.startsWith("hostile-")))
-      reported.filter(_.check == "hostile-frame-sent").map(_.detail).collect { case HostileSent(c, verdict, bytes) => (c, verdict, bytes) }
+      reported.filter(_.check == "hostile-frame-sent").map(_.detail).collect { case HostileSent(c, verdict, bytes) =>
+        (c, verdict, bytes)
+      }
         .distinctBy(_._1).foreach { case (c, verdict, bytes) =>
           val seen = agents.filter(_.agent.exists(_.startsWith(s"hostile-$c")))
-          val section = if (c.startsWith("gzip")) "4.3" else if (c.startsWith("truncated") || c == "oversize") "4.4" else "5"
+          val section =
+            if (c.startsWith("gzip")) "4.3" else if (c.startsWith("truncated") || c == "oversize") "4.4" else "5"
           if (verdict == "refused")
-            run.note(section, s"hostile-$c-refused", seen.isEmpty, s"published: ${seen.take(1)}; sent: ${bytes.take(300)}")
+            run.note(section, s"hostile-$c-refused", seen.isEmpty,
+              s"published: ${seen.take(1)}; sent: ${bytes.take(300)}")
           else {
-            val whole = seen.exists(s => s.bootId.contains(1) && s.teamId.contains(12) && s.batteryVoltage.isDefined && s.role.contains("striker"))
+            val whole = seen.exists(s =>
+              s.bootId.contains(1) && s.teamId.contains(12) && s.batteryVoltage.isDefined && s.role.contains("striker"))
             run.note(section, s"hostile-$c-tolerated", whole, s"published: ${seen.take(1)}; sent: ${bytes.take(300)}")
           }
         }
       // Section 5: each malformed byte sequence reads as U+FFFD.
       val utf8 = agents.flatMap(_.agent).filter(_.startsWith("hostile-invalid-utf8"))
-      run.note("5", "invalid-utf8-reads-as-replacement-character", utf8.contains("hostile-invalid-utf8-\uFFFD\uFFFD-end"),
-        s"agents published: ${utf8.distinct.map(_.map(ch => if (ch < 128) ch.toString else f"\\u${ch.toInt}%04X").mkString)}")
+      run.note(
+        "5",
+        "invalid-utf8-reads-as-replacement-character",
+        utf8.contains("hostile-invalid-utf8-\uFFFD\uFFFD-end"),
+        s"agents published: ${utf8.distinct.map(_.map(ch => if (ch < 128) ch.toString else f"\\u${ch.toInt}%04X").mkString)}"
+      )
     }
   }
 
@@ -538,7 +610,8 @@ class DocRobotConformanceSpec
         }
         info(s"${run.mode.name} robot ${run.address}: ${findings.size} check results, " +
           s"${findings.map(_.key).distinct.size} checks, failing ${failing.keys.toVector.sorted.map(k => s"§${k._1} ${k._2}").mkString(", ")}")
-        if (findings.isEmpty) Vector(s"[${run.mode.name}] the robot wrote no report:\n${run.out}") else unexpected ++ fixed
+        if (findings.isEmpty) Vector(s"[${run.mode.name}] the robot wrote no report:\n${run.out}")
+        else unexpected ++ fixed
       }
       withClue(problems.mkString("\n", "\n", "\n")) { problems shouldBe empty }
     }

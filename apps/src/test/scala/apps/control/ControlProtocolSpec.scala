@@ -11,18 +11,21 @@ import naogateway.wire.RpcValue
 
 class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
-  implicit override val generatorDrivenConfig: PropertyCheckConfiguration = PropertyCheckConfiguration(minSuccessful = 500)
+  implicit override val generatorDrivenConfig: PropertyCheckConfiguration =
+    PropertyCheckConfiguration(minSuccessful = 500)
 
   // Any string, lone surrogates and control characters included, and now and then a long one.
   private val anyText: Gen[String] = Gen.frequency(
     10 -> Gen.asciiStr,
-    10 -> Gen.stringOf(Gen.oneOf(Gen.choose(Char.MinValue, Char.MaxValue), Gen.oneOf(' ', '\\', '\n', '\r', '\t', 'u', 's'))),
+    10 -> Gen.stringOf(Gen.oneOf(Gen.choose(Char.MinValue, Char.MaxValue),
+        Gen.oneOf(' ', '\\', '\n', '\r', '\t', 'u', 's'))),
     1 -> Gen.choose(1000, 3000).flatMap(n => Gen.listOfN(n, Gen.alphaNumChar).map(_.mkString))
   )
 
   private val anyParam: Gen[RpcValue] = Gen.oneOf(
     Gen.choose(-1e30f, 1e30f).map(RpcValue.Number(_)),
-    Gen.oneOf(Float.MinPositiveValue, Float.MaxValue, Float.PositiveInfinity, Float.NegativeInfinity, -0.0f).map(RpcValue.Number(_)),
+    Gen.oneOf(Float.MinPositiveValue, Float.MaxValue, Float.PositiveInfinity, Float.NegativeInfinity, -0.0f).map(
+      RpcValue.Number(_)),
     Gen.oneOf(true, false).map(RpcValue.Flag(_)),
     anyText.map(RpcValue.Text(_))
   )
@@ -45,13 +48,16 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       forAll(anyRequest) { request =>
         val line = ControlProtocol.render(request)
         line.exists(c => c == '\n' || c == '\r') shouldBe false
-        if (ControlProtocol.utf8Length(line) <= ControlProtocol.MaxRequestBytes) ControlProtocol.readRequest(line) shouldBe Right(request)
-        else ControlProtocol.readRequest(line) shouldBe Left(s"request line longer than ${ControlProtocol.MaxRequestBytes} bytes")
+        if (ControlProtocol.utf8Length(line) <= ControlProtocol.MaxRequestBytes)
+          ControlProtocol.readRequest(line) shouldBe Right(request)
+        else ControlProtocol.readRequest(line) shouldBe Left(
+          s"request line longer than ${ControlProtocol.MaxRequestBytes} bytes")
       }
     }
 
     "be read or refused with a message, whatever it holds" in {
-      val words = Gen.oneOf(Gen.oneOf("status", "call", "watch", "1", "n:1.0", "t:a\\sb", "f:true", "\\", "\\u12", ""), anyText)
+      val words =
+        Gen.oneOf(Gen.oneOf("status", "call", "watch", "1", "n:1.0", "t:a\\sb", "f:true", "\\", "\\u12", ""), anyText)
       forAll(Gen.oneOf(anyText, Gen.listOf(words).map(_.mkString(" ")))) { line =>
         ControlProtocol.readRequest(line) match {
           case Right(request) => ControlProtocol.readRequest(ControlProtocol.render(request)) shouldBe Right(request)
@@ -68,15 +74,18 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       ControlProtocol.readRequest("call 1 motion getPosture n:0x10") shouldBe Left("'n:0x10' is not a number parameter")
       ControlProtocol.readRequest("call 1 motion getPosture 3") shouldBe Left("parameter '3' is not n:, f: or t:")
       ControlProtocol.readRequest("watch 1 0") shouldBe Left("'0' is not a number of seconds")
-      ControlProtocol.readRequest("call 1 motion posture t:dance") shouldBe Left("unknown posture 'dance' (sit, stand, crouch)")
-      ControlProtocol.readRequest("call 1 motion posture t:walking") shouldBe Left("unknown posture 'walking' (sit, stand, crouch)")
+      ControlProtocol.readRequest("call 1 motion posture t:dance") shouldBe Left(
+        "unknown posture 'dance' (sit, stand, crouch)")
+      ControlProtocol.readRequest("call 1 motion posture t:walking") shouldBe Left(
+        "unknown posture 'walking' (sit, stand, crouch)")
       ControlProtocol.readRequest("call 1 motion posture t:crouch") shouldBe
         Right(Request.Call(1, "motion", "posture", Vector(RpcValue.Text("crouch"))))
       ControlProtocol.readRequest("status\r") shouldBe Right(Request.Status)
     }
 
     "keep spaces, backslashes and empty words of the command line" in {
-      val request = Request.Call(2, "speech", "", Vector(RpcValue.Text("hello world \\s"), RpcValue.Text(""), RpcValue.Number(0.5f)))
+      val request = Request.Call(2, "speech", "",
+        Vector(RpcValue.Text("hello world \\s"), RpcValue.Text(""), RpcValue.Number(0.5f)))
       ControlProtocol.render(request) shouldBe "call 2 speech  t:hello\\sworld\\s\\\\s t: n:0.5"
       ControlProtocol.readRequest(ControlProtocol.render(request)) shouldBe Right(request)
     }
@@ -87,7 +96,8 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       forAll(anyAnswer) { answer =>
         val line = ControlProtocol.render(answer)
         line.exists(c => c == '\n' || c == '\r') shouldBe false
-        if (ControlProtocol.utf8Length(line) <= ControlProtocol.MaxAnswerBytes) ControlProtocol.readAnswer(line) shouldBe Right(answer)
+        if (ControlProtocol.utf8Length(line) <= ControlProtocol.MaxAnswerBytes)
+          ControlProtocol.readAnswer(line) shouldBe Right(answer)
         else ControlProtocol.readAnswer(line).isLeft shouldBe true
       }
     }
@@ -102,10 +112,13 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     }
 
     "come out of any output text as lines that each fit, and give the text back" in {
-      forAll(Gen.oneOf(anyText, Gen.choose(5000, 30000).flatMap(n => Gen.listOfN(n, Gen.oneOf('a', '\u0001', '\ud83d', '\ude00')).map(_.mkString)))) {
+      forAll(Gen.oneOf(anyText,
+          Gen.choose(5000, 30000).flatMap(n =>
+            Gen.listOfN(n, Gen.oneOf('a', '\u0001', '\ud83d', '\ude00')).map(_.mkString)))) {
         text =>
           val lines = ControlProtocol.lines(text)
-          lines.foreach(l => ControlProtocol.utf8Length(ControlProtocol.render(l)) should be <= ControlProtocol.MaxAnswerBytes)
+          lines.foreach(l =>
+            ControlProtocol.utf8Length(ControlProtocol.render(l)) should be <= ControlProtocol.MaxAnswerBytes)
           lines.map(_.text).mkString shouldBe text.replaceAll("\r?\n", "")
       }
     }

@@ -49,7 +49,8 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
     linesOf(socket)
   }
 
-  private def exchange(line: String, serverPort: Int = port): Vector[String] = send((line + "\n").getBytes(StandardCharsets.UTF_8), serverPort)
+  private def exchange(line: String, serverPort: Int = port): Vector[String] =
+    send((line + "\n").getBytes(StandardCharsets.UTF_8), serverPort)
 
   "The control port" should {
     "stream a status of 1,000 robots as one short line per robot, then ok" in {
@@ -60,14 +61,17 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       val robots = lines.slice(1, 1001)
       robots.map(_.drop(2).split("\\s+")(0).toInt) shouldBe (1 to 1000)
       robots.foreach(l => l.length should be < 200)
-      robots.head.split("\\s+").toList shouldBe List(".", "1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit", "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
+      robots.head.split("\\s+").toList shouldBe List(".", "1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit",
+        "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
       robots(9) should include("offline  offline")
     }
 
     "take the lease a motion call needs and give it back; calls that need none take none" in {
-      exchange("call 2 motion walk n:0.2 n:0.0 n:0.0") shouldBe Vector(". robot 2: motion.walk -> Text(motion.walk(Number(0.2),Number(0.0),Number(0.0)))", "ok")
+      exchange("call 2 motion walk n:0.2 n:0.0 n:0.0") shouldBe Vector(
+        ". robot 2: motion.walk -> Text(motion.walk(Number(0.2),Number(0.0),Number(0.0)))", "ok")
       exchange("call 3 system ping") shouldBe Vector(". robot 3: system.ping -> Text(system.ping())", "ok")
-      fleet.history should contain inOrderElementsOf Vector("acquire 2 walk", "call 2 motion.walk", "release 2 walk", "call 3 system.ping")
+      fleet.history should contain inOrderElementsOf Vector("acquire 2 walk", "call 2 motion.walk", "release 2 walk",
+        "call 3 system.ping")
       fleet.history should not contain "acquire 3 system"
     }
 
@@ -83,7 +87,8 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
     "refuse an overlong request line, and an empty one" in {
       // One write, so that the whole line is read before the refusal: a client that goes on sending after it
       // may see its connection reset instead, as TCP does when a socket closes with input unread.
-      send(Array.fill[Byte](5000)('x'.toByte) :+ '\n'.toByte, port) shouldBe Vector("error request line longer than 4096 bytes")
+      send(Array.fill[Byte](5000)('x'.toByte) :+ '\n'.toByte, port) shouldBe Vector(
+        "error request line longer than 4096 bytes")
       send(Array.emptyByteArray, port, thenClose = true) shouldBe Vector("error no request line")
       send("status".getBytes(StandardCharsets.UTF_8), port, thenClose = true).last shouldBe "ok"
     }
@@ -96,7 +101,8 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
     }
 
     "serve at most max-connections at once, tell the others it is busy, and time out a silent client" in {
-      val small = spawn(ControlServer.withInterface(fleet, settings.copy(maxConnections = 1, requestTimeout = 3.seconds)))
+      val small =
+        spawn(ControlServer.withInterface(fleet, settings.copy(maxConnections = 1, requestTimeout = 3.seconds)))
       val smallPort = address(small).getPort
       val silent = connect(smallPort)
       // The silent client holds the one slot until its request timeout (3 s, far longer than a local connect takes).
@@ -108,7 +114,8 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
     }
 
     "end a status with the game, the gate (why it is closed), the message budget, warnings and the game's source" in {
-      val reason = "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00"
+      val reason =
+        "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00"
       val view = new naogateway.GatewayView {
         private def none = scala.concurrent.Future.failed(new UnsupportedOperationException("not asked by status"))
         def addresses() = none
@@ -116,21 +123,27 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
         def links() = none
         def stats() = none
         def traffic() = scala.concurrent.Future.successful(naogateway.TrafficStats(0, 0, 125000, Map.empty, 0, 0, 0, 0,
-          gameRunning = true, competition = true, gateReason = Some(reason)))
+            gameRunning = true, competition = true, gateReason = Some(reason)))
         def gameState() = scala.concurrent.Future.successful(None)
-        def gameSource() = scala.concurrent.Future.successful(naogateway.GameSource("10.0.0.5/32", None, 0,
-          Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
-          Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; " +
-            "10.0.0.6:3838 (untrusted, ignored)")))
+        def gameSource() = scala.concurrent.Future.successful(naogateway.GameSource(
+            "10.0.0.5/32",
+            None,
+            0,
+            Some("team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s"),
+            Vector("2 GameControllers on this field: game state from 10.0.0.5:3838 only; " +
+              "10.0.0.6:3838 (untrusted, ignored)")
+          ))
       }
       val gateway = ControlServer.GatewaySide(view, () => scala.concurrent.Future.successful(Vector.empty))
       val withGateway = spawn(ControlServer.withInterface(new FleetStub(2), settings, Some(gateway)))
       val lines = exchange("status", address(withGateway).getPort)
-      lines.takeRight(5) shouldBe Vector(". game: no GameController heard",
+      lines.takeRight(5) shouldBe Vector(
+        ". game: no GameController heard",
         s". competition gate: CLOSED: $reason: nothing is sent to the robots",
         ". team messages (team 12, UDP 10012): 11990 of 12000 left, 10 counted, 0.2/s",
         ". WARNING: 2 GameControllers on this field: game state from 10.0.0.5:3838 only; 10.0.0.6:3838 (untrusted, ignored)",
-        "ok game state from nowhere yet (trusted: 10.0.0.5/32)")
+        "ok game state from nowhere yet (trusted: 10.0.0.5/32)"
+      )
       testKit.stop(withGateway)
     }
 

@@ -18,10 +18,9 @@ import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
 
-/**
- * A `RobotInterface` of `robots` robots (ids 1 to `robots`) that answer at once, for the control port's tests:
- * robot 5's calls fail, robots above `robots` are unknown, and every lease taken and given back is recorded.
- */
+/** A `RobotInterface` of `robots` robots (ids 1 to `robots`) that answer at once, for the control port's tests: robot
+  * 5's calls fail, robots above `robots` are unknown, and every lease taken and given back is recorded.
+  */
 final class FleetStub(robots: Int) extends RobotInterface {
 
   /** Leases and calls in order: "acquire 2 walk", "call 2 motion.walk", "release 2 walk". */
@@ -30,11 +29,19 @@ final class FleetStub(robots: Int) extends RobotInterface {
   def history: Vector[String] = seen.asScala.toVector
 
   private def snapshot(id: Int) =
-    RobotSnapshot(id, new InetSocketAddress("127.0.0.1", 20000 + id), role = Some("striker"), posture = Some(Posture.Sit),
-      batteryVoltage = Some(12.25), online = id % 10 != 0, quality = if (id % 10 != 0) LinkQuality.Good else LinkQuality.Offline,
-      clock = if (id % 10 != 0) Some(ClockEstimate(5000L, 7000000000L, 1.0 / (1.0 + 250e-6), 1.4, 0.0001, 40)) else None)
+    RobotSnapshot(
+      id,
+      new InetSocketAddress("127.0.0.1", 20000 + id),
+      role = Some("striker"),
+      posture = Some(Posture.Sit),
+      batteryVoltage = Some(12.25),
+      online = id % 10 != 0,
+      quality = if (id % 10 != 0) LinkQuality.Good else LinkQuality.Offline,
+      clock = if (id % 10 != 0) Some(ClockEstimate(5000L, 7000000000L, 1.0 / (1.0 + 250e-6), 1.4, 0.0001, 40)) else None
+    )
 
-  private def known(id: Int): Either[Throwable, Int] = if (id >= 1 && id <= robots) Right(id) else Left(RobotFailure.UnknownRobot(id))
+  private def known(id: Int): Either[Throwable, Int] =
+    if (id >= 1 && id <= robots) Right(id) else Left(RobotFailure.UnknownRobot(id))
 
   def appName: String = "fleet-stub"
   def robots(): Future[Vector[RobotSnapshot]] = Future.successful((1 to robots).map(snapshot).toVector)
@@ -43,7 +50,9 @@ final class FleetStub(robots: Int) extends RobotInterface {
     seen.add(s"acquire $robotId ${groups.map(_.name).mkString(",")}")
     Future.fromTry(known(robotId).map(_ => Done).toTry)
   }
-  def release(robotId: Int, groups: ActuatorGroup*): Unit = { seen.add(s"release $robotId ${groups.map(_.name).mkString(",")}"); () }
+  def release(robotId: Int, groups: ActuatorGroup*): Unit = {
+    seen.add(s"release $robotId ${groups.map(_.name).mkString(",")}"); ()
+  }
 
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] = {
     seen.add(s"call $robotId $module.$method")

@@ -9,13 +9,16 @@ import org.openqa.selenium.chrome.{ChromeDriver, ChromeDriverService, ChromeOpti
 object Browser {
 
   /** Chromium's own binary (Debian's /usr/bin/chromium is a wrapper script), and the driver of the same package. */
-  private val Binaries = Vector("/usr/lib/chromium/chromium", "/usr/bin/chromium", "/usr/bin/chromium-browser").map(new File(_))
+  private val Binaries =
+    Vector("/usr/lib/chromium/chromium", "/usr/bin/chromium", "/usr/bin/chromium-browser").map(new File(_))
   private val Drivers = Vector("/usr/bin/chromedriver", "/usr/lib/chromium/chromedriver").map(new File(_))
 
   /** Why no browser can run here, if none can. */
   def missing: Option[String] =
-    if (!Binaries.exists(_.canExecute)) Some("no Chromium installed (Debian: apt-get install chromium chromium-driver; .ci/setup.d/browser.sh)")
-    else if (!Drivers.exists(_.canExecute)) Some("no chromedriver installed (Debian: apt-get install chromium-driver; .ci/setup.d/browser.sh)")
+    if (!Binaries.exists(_.canExecute))
+      Some("no Chromium installed (Debian: apt-get install chromium chromium-driver; .ci/setup.d/browser.sh)")
+    else if (!Drivers.exists(_.canExecute))
+      Some("no chromedriver installed (Debian: apt-get install chromium-driver; .ci/setup.d/browser.sh)")
     else None
 
   /** A headless Chromium with a fresh profile of its own, which it deletes when `use` ends. */
@@ -24,10 +27,21 @@ object Browser {
     val options = new ChromeOptions()
     options.setBinary(Binaries.find(_.canExecute).get)
     // Root needs --no-sandbox; the rest keep the browser off the network and quiet: only the gateway on loopback.
-    options.addArguments("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-      "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage",
-      s"--user-data-dir=$profile", s"--window-size=$width,$height")
-    val service = new ChromeDriverService.Builder().usingDriverExecutable(Drivers.find(_.canExecute).get).usingAnyFreePort().build()
+    options.addArguments(
+      "--headless",
+      "--no-sandbox",
+      "--disable-gpu",
+      "--disable-quic",
+      "--no-first-run",
+      "--disable-background-networking",
+      "--disable-component-update",
+      "--disable-sync",
+      "--disable-dev-shm-usage",
+      s"--user-data-dir=$profile",
+      s"--window-size=$width,$height"
+    )
+    val service =
+      new ChromeDriverService.Builder().usingDriverExecutable(Drivers.find(_.canExecute).get).usingAnyFreePort().build()
     val driver = new ChromeDriver(service, options)
     try use(driver)
     finally {

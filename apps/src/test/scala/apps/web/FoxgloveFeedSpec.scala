@@ -21,11 +21,11 @@ import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 import spray.json._
 
-/**
- * The Foxglove-protocol feed as a viewer uses it: server info, the advertised channels with their schemas, a
- * subscription to `/robot/1/status` decoded with the advertised schema alone; and what bad requests get.
- */
-class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing with Eventually {
+/** The Foxglove-protocol feed as a viewer uses it: server info, the advertised channels with their schemas, a
+  * subscription to `/robot/1/status` decoded with the advertised schema alone; and what bad requests get.
+  */
+class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing
+    with Eventually {
 
   private lazy val demo = new WebDemo(system, WebSettings(system))
 
@@ -35,7 +35,8 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
   }
 
   /** A client speaking foxglove.websocket.v1 that keeps what it gets and sends what it is given. */
-  private final class Client(uri: String = s"ws://127.0.0.1:${demo.address.getPort}/foxglove", protocol: Option[String] = Some(FoxgloveFeed.Subprotocol)) {
+  private final class Client(uri: String = s"ws://127.0.0.1:${demo.address.getPort}/foxglove",
+      protocol: Option[String] = Some(FoxgloveFeed.Subprotocol)) {
     @volatile var texts = Vector.empty[JsObject]
     @volatile var binaries = Vector.empty[ByteString]
     private val sink = Sink.foreach[Message] {
@@ -44,12 +45,14 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
       case other                   => other.asInstanceOf[TextMessage].textStream.runWith(Sink.ignore)
     }
     private val (out, outSource) = Source.queue[Message](16).preMaterialize()
-    val (upgrade, done) = Http().singleWebSocketRequest(WebSocketRequest(uri, subprotocol = protocol), Flow.fromSinkAndSourceMat(sink, outSource)(Keep.left))
+    val (upgrade, done) = Http().singleWebSocketRequest(WebSocketRequest(uri, subprotocol = protocol),
+      Flow.fromSinkAndSourceMat(sink, outSource)(Keep.left))
     def status: akka.http.scaladsl.model.StatusCode = Await.result(upgrade, 10.seconds).response.status
     def send(text: String): Unit = out.offer(TextMessage(text))
     def close(): Unit = out.complete()
     def ops(op: String): Vector[JsObject] = texts.filter(_.fields.get("op").contains(JsString(op)))
-    def channels: Vector[JsObject] = ops("advertise").flatMap(_.fields("channels").asInstanceOf[JsArray].elements.map(_.asJsObject))
+    def channels: Vector[JsObject] =
+      ops("advertise").flatMap(_.fields("channels").asInstanceOf[JsArray].elements.map(_.asJsObject))
   }
 
   /** The message type `name` of a protobuf FileDescriptorSet, built from the set alone (dependencies first). */
@@ -69,7 +72,8 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
         Await.result(client.upgrade, 10.seconds).response.headers.map(_.value) should contain(FoxgloveFeed.Subprotocol)
         eventually(timeout(30.seconds), interval(200.millis)) {
           client.ops("serverInfo") should have size 1
-          client.channels.map(_.fields("topic")) should contain allOf (JsString("/robot/1/status"), JsString("/robot/1/health"),
+          client.channels.map(_.fields("topic")) should contain allOf (JsString("/robot/1/status"),
+            JsString("/robot/1/health"),
             JsString("/robot/3/status"))
         }
         val channel = client.channels.find(_.fields("topic") == JsString("/robot/1/status")).get
@@ -146,7 +150,8 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
         client.send("""{"op":"subscribe","subscriptions":[{"id":"x"}]}""")
         eventually(timeout(10.seconds)) {
           client.ops("status").map(_.fields("message").asInstanceOf[JsString].value) shouldBe Vector(
-            "channel 99999 does not exist", "not a JSON object", "operation 'advertise' is not supported", "a subscription needs an id and a channelId")
+            "channel 99999 does not exist", "not a JSON object", "operation 'advertise' is not supported",
+            "a subscription needs an id and a channelId")
           client.ops("status").map(_.fields("level")).distinct shouldBe Vector(JsNumber(2))
         }
         // A request longer than any real one closes that connection only.
@@ -175,11 +180,14 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
     }
 
     "have a layout (docs/foxglove-layout.json) that names only topics and fields the feed has" in {
-      val layout = new String(java.nio.file.Files.readAllBytes(java.nio.file.Paths.get("..", "docs", "foxglove-layout.json")), "UTF-8").parseJson.asJsObject
+      val layout =
+        new String(java.nio.file.Files.readAllBytes(java.nio.file.Paths.get("..", "docs", "foxglove-layout.json")),
+          "UTF-8").parseJson.asJsObject
       val configs = layout.fields("configById").asJsObject.fields
       val paths = configs.values.toVector.flatMap { c =>
         val f = c.asJsObject.fields
-        f.get("topicPath").toVector ++ f.get("paths").toVector.flatMap(_.asInstanceOf[JsArray].elements.map(_.asJsObject.fields("value")))
+        f.get("topicPath").toVector ++ f.get("paths").toVector.flatMap(
+          _.asInstanceOf[JsArray].elements.map(_.asJsObject.fields("value")))
       }.map(_.asInstanceOf[JsString].value)
       paths should not be empty
       val Path = """/robot/(\d+)/(status|health)(?:\.(\w+))?""".r
@@ -189,7 +197,7 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
             if (topic == "status") "naogateway.proto.Status" else "naogateway.proto.RobotHealth")
           if (field != null) withClue(field)(schema.findFieldByName(field) should not be null)
         case "/gateway/decisions" => () // JSON without a schema: a raw-messages panel shows it whole
-        case other => fail(s"$other is no topic of the feed")
+        case other                => fail(s"$other is no topic of the feed")
       }
       // Every panel the layout places is configured.
       val placed = """"(\w+![\w]+)"""".r.findAllMatchIn(layout.fields("layout").compactPrint).map(_.group(1)).toSet
@@ -197,14 +205,18 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
     }
 
     "read requests totally" in {
-      FoxgloveFeed.request("""{"op":"subscribe","subscriptions":[{"id":1,"channelId":2},{"id":3,"channelId":4}]}""") shouldBe
+      FoxgloveFeed.request(
+        """{"op":"subscribe","subscriptions":[{"id":1,"channelId":2},{"id":3,"channelId":4}]}""") shouldBe
         FoxgloveFeed.Subscribe(Vector(1 -> 2, 3 -> 4))
-      FoxgloveFeed.request("""{"op":"unsubscribe","subscriptionIds":[1,2]}""") shouldBe FoxgloveFeed.Unsubscribe(Vector(1, 2))
-      FoxgloveFeed.request("""{"op":"subscribe","subscriptions":[{"id":1e40,"channelId":2}]}""") shouldBe a[FoxgloveFeed.Bad]
+      FoxgloveFeed.request("""{"op":"unsubscribe","subscriptionIds":[1,2]}""") shouldBe FoxgloveFeed.Unsubscribe(
+        Vector(1, 2))
+      FoxgloveFeed.request("""{"op":"subscribe","subscriptions":[{"id":1e40,"channelId":2}]}""") shouldBe a[
+        FoxgloveFeed.Bad]
       FoxgloveFeed.request("""[1,2]""") shouldBe a[FoxgloveFeed.Bad]
       FoxgloveFeed.request("""{"op":1}""") shouldBe a[FoxgloveFeed.Bad]
       FoxgloveFeed.messageData(5, 6L, Array[Byte](9, 8)).toArray shouldBe
-        ByteBuffer.allocate(15).order(ByteOrder.LITTLE_ENDIAN).put(1.toByte).putInt(5).putLong(6L).put(Array[Byte](9, 8)).array()
+        ByteBuffer.allocate(15).order(ByteOrder.LITTLE_ENDIAN).put(1.toByte).putInt(5).putLong(6L).put(Array[Byte](9,
+            8)).array()
     }
   }
 }

@@ -12,11 +12,11 @@ import org.openqa.selenium.{By, OutputType}
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 
-/**
- * The demo's page in a real browser (headless Chromium): robots online, a game state that changes, the traffic plot
- * moving and robot 1's regions on its canvas, read from the canvases' pixels. Cancelled where no browser is installed.
- */
-class WebBrowserSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing with Eventually {
+/** The demo's page in a real browser (headless Chromium): robots online, a game state that changes, the traffic plot
+  * moving and robot 1's regions on its canvas, read from the canvases' pixels. Cancelled where no browser is installed.
+  */
+class WebBrowserSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing
+    with Eventually {
 
   private lazy val demo = new WebDemo(system, WebSettings(system))
 

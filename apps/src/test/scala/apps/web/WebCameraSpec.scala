@@ -17,11 +17,11 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import naogateway.{Gateway, RobotSnapshot}
 import naogateway.VisionActor.{GridOption, RegionsOption}
 
-/**
- * The web view asks the robots' cameras for HaViMo2 frames only while a page is connected: checked at the simulated
- * robots' own option state (what they send over the WiFi), with no page, one page, two, one, and none again.
- */
-class WebCameraSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing with Eventually {
+/** The web view asks the robots' cameras for HaViMo2 frames only while a page is connected: checked at the simulated
+  * robots' own option state (what they send over the WiFi), with no page, one page, two, one, and none again.
+  */
+class WebCameraSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing
+    with Eventually {
 
   private lazy val demo = new WebDemo(system, WebSettings(system))
 
@@ -33,8 +33,12 @@ class WebCameraSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWo
   /** A page's WebSocket that reads and drops what it gets until `close`. */
   private final class Page {
     private val closer = Promise[Option[Message]]()
-    val (upgrade, done) = Http().singleWebSocketRequest(WebSocketRequest(demo.ws()), Flow.fromSinkAndSourceMat(Sink.ignore,
-      Source.maybe[Message].mapMaterializedValue(p => closer.future.foreach(p.success)(system.executionContext)))(Keep.left))
+    val (upgrade, done) = Http().singleWebSocketRequest(
+      WebSocketRequest(demo.ws()),
+      Flow.fromSinkAndSourceMat(Sink.ignore,
+        Source.maybe[Message].mapMaterializedValue(p => closer.future.foreach(p.success)(system.executionContext)))(
+        Keep.left)
+    )
     def status: akka.http.scaladsl.model.StatusCode = Await.result(upgrade, 10.seconds).response.status
     def close(): Unit = closer.trySuccess(None)
   }
@@ -46,7 +50,8 @@ class WebCameraSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWo
   "The web view" should {
     "switch the robots' cameras on while a page is connected, and off when the last page leaves" in {
       eventually(timeout(30.seconds), interval(200.millis)) {
-        val robots = Await.result(demo.gateway.ask[Vector[RobotSnapshot]](Gateway.GetRobots(_))(Timeout(10.seconds), system.scheduler), 10.seconds)
+        val robots = Await.result(demo.gateway.ask[Vector[RobotSnapshot]](Gateway.GetRobots(_))(Timeout(10.seconds),
+            system.scheduler), 10.seconds)
         robots.filter(_.online).map(_.robotId).toSet shouldBe Set(1, 2, 3)
       }
       // The view has listed the robots for many pushes (200 ms apart), with nobody looking: no camera is asked.
@@ -72,7 +77,8 @@ class WebCameraSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWo
       }
       // A page opened again switches them on again.
       val third = new Page
-      try eventually(timeout(15.seconds), interval(200.millis))(cameraOptions(2) shouldBe Set(RegionsOption, GridOption))
+      try
+        eventually(timeout(15.seconds), interval(200.millis))(cameraOptions(2) shouldBe Set(RegionsOption, GridOption))
       finally third.close()
       eventually(timeout(15.seconds), interval(200.millis))(cameraOptions(2) shouldBe Set.empty)
     }

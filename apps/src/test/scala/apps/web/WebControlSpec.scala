@@ -18,11 +18,11 @@ import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 import spray.json._
 
-/**
- * The control panel: in Chromium, a key press and a simulated gamepad walk robot 2 of the demo through the
- * middleware; refused in competition mode, without a token, and when off.
- */
-class WebControlSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing with Eventually {
+/** The control panel: in Chromium, a key press and a simulated gamepad walk robot 2 of the demo through the middleware;
+  * refused in competition mode, without a token, and when off.
+  */
+class WebControlSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing
+    with Eventually {
 
   private val Token = "panel-token"
   private val settings = {
@@ -73,28 +73,33 @@ class WebControlSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
       WebServer.availability(settings, competition = true).enabled shouldBe false
       WebServer.availability(settings, competition = true).reason should include("competition")
       WebServer.availability(settings.copy(token = ""), competition = false).reason should include("token")
-      WebServer.availability(settings.copy(control = settings.control.copy(enabled = false)), competition = false).enabled shouldBe false
+      WebServer.availability(settings.copy(control = settings.control.copy(enabled = false)), competition = false)
+        .enabled shouldBe false
       WebServer.availability(settings, competition = false).enabled shouldBe true
 
       val competing = spawn(WebServer(demo.side.copy(competition = true), demo.middleware, settings))
       val probe = createTestProbe[Option[InetSocketAddress]]()
       competing ! WebServer.GetAddress(probe.ref)
       val port = probe.receiveMessage(10.seconds).get.getPort
-      val state = Await.result(Http().singleRequest(HttpRequest(uri = s"http://127.0.0.1:$port/control/state")), 10.seconds)
-      Await.result(state.entity.toStrict(5.seconds), 5.seconds).data.utf8String.parseJson.asJsObject.fields("enabled") shouldBe JsFalse
+      val state =
+        Await.result(Http().singleRequest(HttpRequest(uri = s"http://127.0.0.1:$port/control/state")), 10.seconds)
+      Await.result(state.entity.toStrict(5.seconds), 5.seconds).data.utf8String.parseJson.asJsObject.fields(
+        "enabled") shouldBe JsFalse
       val (upgrade, _) = Http().singleWebSocketRequest(WebSocketRequest(s"ws://127.0.0.1:$port/control?token=$Token"),
         Flow.fromSinkAndSource(Sink.ignore, Source.maybe))
       Await.result(upgrade, 10.seconds).response.status shouldBe StatusCodes.Forbidden
       testKit.stop(competing)
 
       // On the demo's server, the panel is on but only with the token.
-      val (wrong, _) = Http().singleWebSocketRequest(WebSocketRequest(s"ws://127.0.0.1:${demo.address.getPort}/control?token=nope"),
-        Flow.fromSinkAndSource(Sink.ignore, Source.maybe))
+      val (wrong, _) =
+        Http().singleWebSocketRequest(WebSocketRequest(s"ws://127.0.0.1:${demo.address.getPort}/control?token=nope"),
+          Flow.fromSinkAndSource(Sink.ignore, Source.maybe))
       Await.result(wrong, 10.seconds).response.status shouldBe StatusCodes.Forbidden
     }
 
     "read a page's requests totally, clamping speeds to teleop's" in {
-      WebControl.drive("""{"op":"walk","robot":2,"vx":5,"vy":-5,"omega":0.1}""") shouldBe WebControl.Walk(2, 0.2, -0.1, 0.1)
+      WebControl.drive("""{"op":"walk","robot":2,"vx":5,"vy":-5,"omega":0.1}""") shouldBe WebControl.Walk(2, 0.2, -0.1,
+        0.1)
       WebControl.drive("""{"op":"stop","robot":3}""") shouldBe WebControl.Stop(3)
       WebControl.drive("""{"op":"walk","robot":2}""") shouldBe a[WebControl.Bad]
       WebControl.drive("""{"op":"walk","robot":-1,"vx":0,"vy":0,"omega":0}""") shouldBe a[WebControl.Bad]

@@ -16,10 +16,9 @@ import naogateway.testkit.TestLoopback
 import naogateway.{Gateway, GatewayReadView, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
-/**
- * The demo as the web view's tests and bench see it: a gateway on loopback, its middleware, three simulated robots on
- * addresses of their own, a simulated GameController with short phases, and the web view on a free port.
- */
+/** The demo as the web view's tests and bench see it: a gateway on loopback, its middleware, three simulated robots on
+  * addresses of their own, a simulated GameController with short phases, and the web view on a free port.
+  */
 final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int = 3) {
   private implicit val timeout: Timeout = Timeout(10.seconds)
   private implicit val s: ActorSystem[_] = system
@@ -29,17 +28,24 @@ final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int =
   val middleware: ActorRef[RobotMiddleware.Command] =
     system.systemActorOf(RobotMiddleware(gateway, MiddlewareSettings(system)), s"$name-middleware")
   private val addresses = Await.result(gateway.ask[Gateway.Addresses](Gateway.GetAddresses(_)), 10.seconds)
-  val fleet: FleetHandle = Await.result(Fleet.start(system, FleetSettings(addresses.robots, (1 to robots).toVector,
-    firstAddress = TestLoopback.block(robots))), 60.seconds)
-  private val gc = system.systemActorOf(SimulatedGameController(SimulatedGameControllerSettings(addresses.gameController.get,
-    initial = 2.seconds, ready = 2.seconds, set = 2.seconds, playing = 6.seconds, finished = 2.seconds, interval = 100.millis)), s"$name-gc")
+  val fleet: FleetHandle = Await.result(Fleet.start(system,
+      FleetSettings(addresses.robots, (1 to robots).toVector,
+        firstAddress = TestLoopback.block(robots))), 60.seconds)
+  private val gc = system.systemActorOf(
+    SimulatedGameController(SimulatedGameControllerSettings(addresses.gameController.get,
+        initial = 2.seconds, ready = 2.seconds, set = 2.seconds, playing = 6.seconds, finished = 2.seconds,
+        interval = 100.millis)),
+    s"$name-gc"
+  )
+
   /** What the launcher hands the web view of this gateway. */
   val side: WebServer.GatewaySide = WebDemo.gatewaySide(gateway)(system)
   val server: ActorRef[WebServer.Command] = system.systemActorOf(WebServer(side, middleware, settings), s"$name-web")
 
   /** Where the web view listens. */
   val address: InetSocketAddress =
-    Await.result(server.ask[Option[InetSocketAddress]](WebServer.GetAddress(_)), 10.seconds).getOrElse(sys.error("the web view did not bind"))
+    Await.result(server.ask[Option[InetSocketAddress]](WebServer.GetAddress(_)), 10.seconds).getOrElse(
+      sys.error("the web view did not bind"))
 
   /** The page's address, with `token` when given. */
   def page(token: Option[String] = None): String =

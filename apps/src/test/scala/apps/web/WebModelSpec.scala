@@ -14,7 +14,8 @@ class WebModelSpec extends AnyWordSpec with Matchers {
 
   private val address = new InetSocketAddress("127.0.0.1", 3838)
   private def robot(id: Int, battery: Option[Double] = Some(12.0)) =
-    RobotSnapshot(id, address, role = Some("striker"), batteryVoltage = battery, online = true, quality = LinkQuality.Good)
+    RobotSnapshot(id, address, role = Some("striker"), batteryVoltage = battery, online = true,
+      quality = LinkQuality.Good)
   private def link(id: Int, rejected: Map[String, Long] = Map.empty, rtt: Option[Double] = Some(1.5)) =
     LinkStats(id, 10, 10, 100, 100, rtt, 0.25, 0, rejected)
   private def traffic(competition: Boolean, running: Boolean) =
@@ -23,7 +24,8 @@ class WebModelSpec extends AnyWordSpec with Matchers {
 
   "The web view's model" should {
     "keep at most history-points points per plot and max events log lines, newest first" in {
-      val m = (1 to 20).foldLeft(blank.withRobots(Vector(robot(1))).withTraffic(traffic(false, false), 0, 0))((m, i) => m.sampled(i.toDouble))
+      val m = (1 to 20).foldLeft(blank.withRobots(Vector(robot(1))).withTraffic(traffic(false, false), 0, 0))((m, i) =>
+        m.sampled(i.toDouble))
       m.robotHistory(1).map(_.t) shouldBe Vector(16.0, 17.0, 18.0, 19.0, 20.0)
       m.trafficHistory.map(_.t) shouldBe Vector(16.0, 17.0, 18.0, 19.0, 20.0)
       m.sampleCount shouldBe 20
@@ -36,8 +38,10 @@ class WebModelSpec extends AnyWordSpec with Matchers {
       val m0 = blank.withRobots(Vector(robot(1))).withLinks(Vector(link(1, Map("bad-signature" -> 2))), 0, 0)
       m0.events shouldBe empty // the first figures are not news
       val m1 = m0.withLinks(Vector(link(1, Map("bad-signature" -> 5, "too-short" -> 1))), 1, 1)
-      m1.events.map(_.text) shouldBe Vector("robot 1: 1 refused (too-short, 1 in all)", "robot 1: 3 refused (bad-signature, 5 in all)")
-      val m2 = m1.withTraffic(traffic(competition = true, running = false), 2, 2).withTraffic(traffic(competition = true, running = true), 3, 3)
+      m1.events.map(_.text) shouldBe Vector("robot 1: 1 refused (too-short, 1 in all)",
+        "robot 1: 3 refused (bad-signature, 5 in all)")
+      val m2 = m1.withTraffic(traffic(competition = true, running = false), 2, 2).withTraffic(
+        traffic(competition = true, running = true), 3, 3)
       m2.events.head.kind shouldBe "gate"
       m2.events.head.text should include("CLOSED")
       val stats = Gateway.GatewayStats(0, 0, 0, Map("unknown-robot" -> 1), 1)
@@ -70,8 +74,10 @@ class WebModelSpec extends AnyWordSpec with Matchers {
       robots(1).fields("address") shouldBe JsNull
       robots(1).fields("quality") shouldBe JsNull
       json.fields("game").asJsObject.fields("state") shouldBe JsNull
-      json.fields("events").asInstanceOf[JsArray].elements.map(_.asJsObject.fields("kind")) shouldBe Vector(JsString("online"))
-      val samples = json.fields("samples").asJsObject.fields("robots").asJsObject.fields("1").asInstanceOf[JsArray].elements
+      json.fields("events").asInstanceOf[JsArray].elements.map(_.asJsObject.fields("kind")) shouldBe Vector(
+        JsString("online"))
+      val samples =
+        json.fields("samples").asJsObject.fields("robots").asJsObject.fields("1").asInstanceOf[JsArray].elements
       samples shouldBe Vector(JsArray(JsNumber(1), JsNull, JsNull, JsNumber(0.25)))
     }
 
@@ -82,7 +88,8 @@ class WebModelSpec extends AnyWordSpec with Matchers {
       val withGrid = WebJson.push(m, 0, 0, 0, Set(1), hello = false).parseJson.asJsObject
       def vision(j: JsObject) = j.fields("vision").asJsObject.fields("1").asJsObject
       vision(without).fields.keySet shouldBe Set("frame", "regions")
-      java.util.Base64.getDecoder.decode(vision(withGrid).fields("grid").asInstanceOf[JsString].value).toVector shouldBe Vector.fill[Byte](768)(3)
+      java.util.Base64.getDecoder.decode(vision(withGrid).fields("grid").asInstanceOf[JsString].value)
+        .toVector shouldBe Vector.fill[Byte](768)(3)
     }
   }
 }

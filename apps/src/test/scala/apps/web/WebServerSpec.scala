@@ -23,7 +23,8 @@ import spray.json._
 class WebServerSpec
     extends ScalaTestWithActorTestKit(
       // Small socket buffers, so a client that never reads holds the server back after kilobytes, not megabytes.
-      ConfigFactory.parseString("akka.http.server.socket-options.so-send-buffer-size = 8k").withFallback(WebDemo.config))
+      ConfigFactory.parseString("akka.http.server.socket-options.so-send-buffer-size = 8k").withFallback(
+        WebDemo.config))
     with AnyWordSpecLike
     with LogCapturing
     with Eventually {
@@ -50,8 +51,12 @@ class WebServerSpec
       case t: TextMessage.Strict => synchronized { messages :+= t.text.parseJson.asJsObject }
       case other                 => other.asInstanceOf[TextMessage].textStream.runWith(Sink.ignore)
     }
-    val (upgrade, done) = Http().singleWebSocketRequest(WebSocketRequest(uri), Flow.fromSinkAndSourceMat(sink, Source.maybe[Message].mapMaterializedValue(p =>
-      closer.future.foreach(p.success)(system.executionContext)))(Keep.left))
+    val (upgrade, done) = Http().singleWebSocketRequest(
+      WebSocketRequest(uri),
+      Flow.fromSinkAndSourceMat(sink,
+        Source.maybe[Message].mapMaterializedValue(p =>
+          closer.future.foreach(p.success)(system.executionContext)))(Keep.left)
+    )
     def status: akka.http.scaladsl.model.StatusCode = Await.result(upgrade, 10.seconds).response.status
     def close(): Unit = closer.trySuccess(None)
     def pushes: Vector[JsObject] = messages
@@ -61,7 +66,8 @@ class WebServerSpec
     m.fields("robots").asInstanceOf[JsArray].elements.count(_.asJsObject.fields("online") == JsTrue)
 
   private def field(m: JsObject, path: String*): JsValue =
-    // A page's first pushes have no frames yet (the cameras are asked once a page is connected): a missing part is JsNull.
+    /* A page's first pushes have no frames yet (the cameras are asked once a page is connected): a missing part is
+     * JsNull. */
     path.foldLeft[JsValue](m) {
       case (o: JsObject, k) => o.fields.getOrElse(k, JsNull)
       case _                => JsNull
@@ -74,7 +80,8 @@ class WebServerSpec
       contentType should startWith("text/html")
       val html = body.utf8String
       val assets = "(?:src|href)=\"(assets/[^\"]+)\"".r.findAllMatchIn(html).map(_.group(1)).toVector
-      assets should contain allOf ("assets/app.js", "assets/app.css", "assets/uPlot.iife.min.js", "assets/uPlot.min.css")
+      assets should contain allOf ("assets/app.js",
+        "assets/app.css", "assets/uPlot.iife.min.js", "assets/uPlot.min.css")
       // No address outside the gateway: the page must work at a field without internet.
       html should not include "http"
       assets.foreach { a =>
@@ -96,15 +103,19 @@ class WebServerSpec
           all.map(robotsOnline).max shouldBe 3
           all.map(field(_, "game", "state")).filter(_ != JsNull).distinct.size should be >= 2
           all.flatMap(m => field(m, "samples", "traffic").asInstanceOf[JsArray].elements).size should be >= 3
-          all.exists(m => field(m, "vision", "1", "regions") match {
-            case JsArray(regions) => regions.nonEmpty
-            case _                => false
-          }) shouldBe true
+          all.exists(m =>
+            field(m, "vision", "1", "regions") match {
+              case JsArray(regions) => regions.nonEmpty
+              case _                => false
+            }) shouldBe true
           all.exists(m => field(m, "vision", "1", "grid").isInstanceOf[JsString]) shouldBe true
-          all.flatMap(m => m.fields("events").asInstanceOf[JsArray].elements.map(e => field(e.asJsObject, "kind"))) should contain(JsString("online"))
+          all.flatMap(m =>
+            m.fields("events").asInstanceOf[JsArray].elements.map(e => field(e.asJsObject, "kind"))) should contain(
+            JsString("online"))
         }
         val robot = client.pushes.last.fields("robots").asInstanceOf[JsArray].elements.head.asJsObject
-        robot.fields.keySet should contain allOf ("battery", "posture", "role", "rttMs", "loss", "clock", "signing", "refused")
+        robot.fields.keySet should contain allOf ("battery",
+          "posture", "role", "rttMs", "loss", "clock", "signing", "refused")
         robot.fields("signing") shouldBe JsString("off")
         // Pushes come at the configured interval, not faster; a push that carries a new event (the simulated
         // GameController changes state on its own) may come sooner, as WebView documents, and is not counted.
@@ -175,9 +186,17 @@ class WebServerSpec
       val chatty = new Client(demo.ws())
       eventually(timeout(10.seconds))(chatty.pushes should not be empty)
       // Junk text and binary messages from a page are read, counted and dropped.
-      Http().singleWebSocketRequest(WebSocketRequest(demo.ws()), Flow.fromSinkAndSource(Sink.ignore,
-        Source(Vector[Message](TextMessage("{\"op\":\"subscribe\",\"channel\":\"nowhere\"}"), TextMessage("\u0000\uffff not json"),
-          akka.http.scaladsl.model.ws.BinaryMessage(ByteString(Array.fill[Byte](1000)(-1))))).concat(Source.maybe)))
+      Http().singleWebSocketRequest(
+        WebSocketRequest(demo.ws()),
+        Flow.fromSinkAndSource(
+          Sink.ignore,
+          Source(Vector[Message](
+              TextMessage("{\"op\":\"subscribe\",\"channel\":\"nowhere\"}"),
+              TextMessage("\u0000\uffff not json"),
+              akka.http.scaladsl.model.ws.BinaryMessage(ByteString(Array.fill[Byte](1000)(-1)))
+            )).concat(Source.maybe)
+        )
+      )
       eventually(timeout(10.seconds))(demo.counters.ignoredFrames should be >= before.ignoredFrames + 3)
 
       // A raw connection that upgrades, then sends bytes that are no WebSocket frame (unmasked, reserved opcode).

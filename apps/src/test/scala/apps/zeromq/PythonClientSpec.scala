@@ -30,7 +30,8 @@ object PythonEnv extends Assertions {
       .getOrElse(fail("cannot find apps/python from " + new File(".").getAbsolutePath))
 
   /** Runs `command` in the checkout's root; its exit code and everything it printed (also kept in `log`). */
-  def run(command: Seq[String], within: FiniteDuration, log: File, env: Map[String, String] = Map.empty): (Int, String) = {
+  def run(
+      command: Seq[String], within: FiniteDuration, log: File, env: Map[String, String] = Map.empty): (Int, String) = {
     val builder = new ProcessBuilder(command.asJava).directory(root).redirectErrorStream(true).redirectOutput(log)
     env.foreach { case (k, v) => builder.environment().put(k, v) }
     val process = builder.start()
@@ -45,11 +46,11 @@ object PythonEnv extends Assertions {
   lazy val venv: File = new File(root, "apps/target/python-venv")
   lazy val requirements: File = new File(root, "apps/python/requirements.txt")
 
-  /**
-   * A venv at `venv` with `requirements` installed (made once, reused while they stay the same), or why there is
-   * none: python3 missing, no venv module, or pip unable to install (no network, no registry). `env` is given to pip.
-   */
-  def environment(venv: File = venv, requirements: File = requirements, env: Map[String, String] = Map.empty): Either[String, File] =
+  /** A venv at `venv` with `requirements` installed (made once, reused while they stay the same), or why there is none:
+    * python3 missing, no venv module, or pip unable to install (no network, no registry). `env` is given to pip.
+    */
+  def environment(venv: File = venv, requirements: File = requirements, env: Map[String, String] = Map.empty)
+      : Either[String, File] =
     synchronized {
       venv.getParentFile.mkdirs()
       val log = new File(venv.getParentFile, s"${venv.getName}-setup.log")
@@ -57,19 +58,22 @@ object PythonEnv extends Assertions {
       val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
       val stamp = new File(venv, "requirements.installed")
       val current = Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption
-      if (!Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption.exists(_._1 == 0)) Left("python3 is not available")
+      if (!Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption.exists(_._1 == 0))
+        Left("python3 is not available")
       else if (python.isFile && current.contains(wanted)) Right(python)
       else {
         deleteTree(venv.toPath)
         val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
         if (venvCode != 0) Left(s"python3 -m venv failed (is the venv module installed?):\n${venvOut.takeRight(2000)}")
         else {
-          val (pipCode, pipOut) = run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r",
-            requirements.getPath), 8.minutes, log, env)
+          val (pipCode, pipOut) =
+            run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r",
+                requirements.getPath), 8.minutes, log, env)
           if (pipCode != 0) {
             // A half-made venv is not reused: the next run tries again.
             deleteTree(venv.toPath)
-            Left(s"pip could not install ${root.toPath.relativize(requirements.toPath)} (no network or no package registry?):\n${pipOut.takeRight(2000)}")
+            Left(
+              s"pip could not install ${root.toPath.relativize(requirements.toPath)} (no network or no package registry?):\n${pipOut.takeRight(2000)}")
           } else {
             Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
             Right(python)
@@ -87,8 +91,13 @@ object PythonEnv extends Assertions {
     val gen = new File(root, "apps/target/python-gen")
     // Generated afresh each run, so the classes always match proto/.
     deleteTree(gen.toPath)
-    run(py.getPath +: "-u" +: new File(root, s"apps/python/$name").getPath +: args, within, new File(root, s"apps/target/$name.log"),
-      Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(root, "apps/python").getPath, "PYTHONDONTWRITEBYTECODE" -> "1"))
+    run(
+      py.getPath +: "-u" +: new File(root, s"apps/python/$name").getPath +: args,
+      within,
+      new File(root, s"apps/target/$name.log"),
+      Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(root, "apps/python").getPath,
+        "PYTHONDONTWRITEBYTECODE" -> "1")
+    )
   }
 
   /** Deletes `path` and everything below it. */
@@ -107,10 +116,9 @@ object PythonClientSpec {
       |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 4
       |""".stripMargin
 
-  /**
-   * The simulated robot, started on a free port. It binds the endpoint it is given and cannot tell a port it picked
-   * itself, so the port is picked here; one that another process takes before the robot binds it is picked again.
-   */
+  /** The simulated robot, started on a free port. It binds the endpoint it is given and cannot tell a port it picked
+    * itself, so the port is picked here; one that another process takes before the robot binds it is picked again.
+    */
   @tailrec def startRobot(attempts: Int = 5): ZeroMqSimulatedRobot = {
     val port = {
       val s = new ServerSocket(0)
@@ -121,13 +129,15 @@ object PythonClientSpec {
     val started = Try(robot.start())
     started match {
       case Success(_) => robot
-      case Failure(e: ZMQException) if e.getErrorCode == ZMQ.Error.EADDRINUSE.getCode && attempts > 1 => startRobot(attempts - 1)
+      case Failure(e: ZMQException) if e.getErrorCode == ZMQ.Error.EADDRINUSE.getCode && attempts > 1 =>
+        startRobot(attempts - 1)
       case Failure(e) => throw e
     }
   }
 }
 
-class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config) with AnyWordSpecLike with LogCapturing {
+class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config) with AnyWordSpecLike
+    with LogCapturing {
   import PythonClientSpec._
 
   "The Python example" must {
@@ -136,7 +146,8 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
       val robot = startRobot()
       try {
         val configured = GatewaySettings(system)
-        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZeroMqRobot(20, robot.endpoint))))),
+        val gateway = spawn(Gateway(configured.copy(zeromq = configured.zeromq.copy(robots = Vector(ZeroMqRobot(20,
+                robot.endpoint))))),
           "gateway")
         val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
         val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq")
@@ -197,9 +208,13 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
              |""".stripMargin
         val gen = new File(PythonEnv.root, "apps/target/python-gen")
         val log = new File(PythonEnv.root, "apps/target/doors.log")
-        val (exit, output) = PythonEnv.run(Seq(python.getPath, "-u", "-c", code), 90.seconds, log,
+        val (exit, output) = PythonEnv.run(
+          Seq(python.getPath, "-u", "-c", code),
+          90.seconds,
+          log,
           Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath,
-            "PYTHONDONTWRITEBYTECODE" -> "1"))
+            "PYTHONDONTWRITEBYTECODE" -> "1")
+        )
         withClue(output) {
           exit shouldBe 0
           output.linesIterator.toVector shouldBe

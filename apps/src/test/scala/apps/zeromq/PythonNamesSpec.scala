@@ -13,12 +13,14 @@ import naogateway.wire.{ActuatorGroup, Posture, RpcMethod}
 class PythonNamesSpec extends AnyWordSpec with Matchers {
 
   private lazy val client: String =
-    new String(Files.readAllBytes(new File(PythonEnv.root, "apps/python/naogateway_client/__init__.py").toPath), StandardCharsets.UTF_8)
+    new String(Files.readAllBytes(new File(PythonEnv.root, "apps/python/naogateway_client/__init__.py").toPath),
+      StandardCharsets.UTF_8)
 
   /** The strings of the module-level tuple `name = ("a", "b", ...)` in the client's source. */
   private def tuple(name: String): Vector[String] = {
     val assignment = s"""(?m)^$name = \\(([^)]*)\\)""".r
-    val body = assignment.findFirstMatchIn(client).getOrElse(fail(s"apps/python/naogateway_client/__init__.py has no $name tuple")).group(1)
+    val body = assignment.findFirstMatchIn(client).getOrElse(
+      fail(s"apps/python/naogateway_client/__init__.py has no $name tuple")).group(1)
     "\"([^\"]*)\"".r.findAllMatchIn(body).map(_.group(1)).toVector
   }
 
@@ -43,7 +45,8 @@ class PythonNamesSpec extends AnyWordSpec with Matchers {
       all(called.map { case (module, method) => RpcMethod.find(module, method).map(_.name) }) shouldBe defined
       // The client's named commands: motion.walk, stop, head, arms, posture and speech.say at least.
       called.map { case (m, n) => s"$m.$n" }.toSet should contain allElementsOf
-        Set(RpcMethod.Walk, RpcMethod.Stop, RpcMethod.Head, RpcMethod.Arms, RpcMethod.Posture, RpcMethod.Say).map(_.name)
+        Set(RpcMethod.Walk, RpcMethod.Stop, RpcMethod.Head, RpcMethod.Arms, RpcMethod.Posture, RpcMethod.Say).map(
+          _.name)
     }
   }
 }

@@ -12,10 +12,13 @@ import scala.util.Try
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/** The Python client as a package: pip installs it from the repository, and the Python tests' environment says why it cannot be made. */
+/** The Python client as a package: pip installs it from the repository, and the Python tests' environment says why it
+  * cannot be made.
+  */
 class PythonPackageSpec extends AnyWordSpec with Matchers {
 
-  private def python3Present: Boolean = Try(new ProcessBuilder("python3", "--version").start().waitFor() == 0).getOrElse(false)
+  private def python3Present: Boolean =
+    Try(new ProcessBuilder("python3", "--version").start().waitFor() == 0).getOrElse(false)
 
   /** Runs `command` in `dir` with `env`; its exit code and output. */
   private def run(command: Seq[String], dir: File, env: Map[String, String], within: FiniteDuration): (Int, String) = {
@@ -23,7 +26,9 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
     val builder = new ProcessBuilder(command.asJava).directory(dir).redirectErrorStream(true).redirectOutput(log)
     env.foreach { case (k, v) => builder.environment().put(k, v) }
     val process = builder.start()
-    if (!process.waitFor(within.toSeconds, TimeUnit.SECONDS)) { process.destroyForcibly(); fail(s"${command.mkString(" ")} took over $within") }
+    if (!process.waitFor(within.toSeconds, TimeUnit.SECONDS)) {
+      process.destroyForcibly(); fail(s"${command.mkString(" ")} took over $within")
+    }
     process.exitValue() -> new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)
   }
 
@@ -38,7 +43,8 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
       result match {
         case Left(why) if why.startsWith("python3 -m venv failed") => cancel(why)
         case Left(why) =>
-          why should startWith("pip could not install apps/python/requirements.txt (no network or no package registry?)")
+          why should startWith(
+            "pip could not install apps/python/requirements.txt (no network or no package registry?)")
           venv.exists() shouldBe false // nothing half-made is left to be reused
         case Right(_) => fail("pip installed the requirements from an index that does not exist")
       }
@@ -50,8 +56,24 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
       val python = PythonEnv.python()
       val work: Path = Files.createTempDirectory("naogateway-client-install")
       val site = work.resolve("site")
-      val (code, out) = run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "--no-deps",
-        "--no-build-isolation", "--target", site.toString, new File(PythonEnv.root, "apps/python").getPath), PythonEnv.root, Map.empty, 3.minutes)
+      val (code, out) = run(
+        Seq(
+          python.getPath,
+          "-m",
+          "pip",
+          "install",
+          "--disable-pip-version-check",
+          "-q",
+          "--no-deps",
+          "--no-build-isolation",
+          "--target",
+          site.toString,
+          new File(PythonEnv.root, "apps/python").getPath
+        ),
+        PythonEnv.root,
+        Map.empty,
+        3.minutes
+      )
       withClue(out) { code shouldBe 0 }
       val protos = site.resolve("naogateway_client/proto/naogateway/proto")
       Files.isRegularFile(protos.resolve("rpc.proto")) shouldBe true
@@ -59,8 +81,13 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
       // Imported from the installed copy, away from the checkout.
       val check = "import naogateway_client, naogateway_recording; naogateway_client.load_protos(); " +
         "print(naogateway_client.__file__); print(naogateway_client.rpc_pb2.DESCRIPTOR.package)"
-      val (importCode, printed) = run(Seq(python.getPath, "-c", check), work.toFile,
-        Map("PYTHONPATH" -> site.toString, "NAOGATEWAY_PY_GEN" -> work.resolve("gen").toString, "PYTHONDONTWRITEBYTECODE" -> "1"), 2.minutes)
+      val (importCode, printed) = run(
+        Seq(python.getPath, "-c", check),
+        work.toFile,
+        Map("PYTHONPATH" -> site.toString, "NAOGATEWAY_PY_GEN" -> work.resolve("gen").toString,
+          "PYTHONDONTWRITEBYTECODE" -> "1"),
+        2.minutes
+      )
       withClue(printed) {
         importCode shouldBe 0
         val lines = printed.linesIterator.toVector

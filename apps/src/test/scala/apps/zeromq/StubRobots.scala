@@ -21,10 +21,9 @@ import naogateway.wire.{HaViMoRegion, Posture, RpcValue}
 import naogateway.{LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
 
-/**
- * A `RobotInterface` whose robots answer from a script: robot 7 works; the others fail in one way each, so the
- * endpoint's mapping, error texts, concurrency and publishing can be tested without a gateway.
- */
+/** A `RobotInterface` whose robots answer from a script: robot 7 works; the others fail in one way each, so the
+  * endpoint's mapping, error texts, concurrency and publishing can be tested without a gateway.
+  */
 final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   private implicit val ec: ExecutionContext = system.executionContext
   private val random = new scala.util.Random(7)
@@ -39,8 +38,17 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   val visionStarted = new AtomicInteger
   val visionEnded = new AtomicInteger
 
-  val snapshot: RobotSnapshot = RobotSnapshot(7, new InetSocketAddress("127.0.0.1", 3838), teamId = Some(1), role = Some("striker"),
-    posture = Some(Posture.Stand), batteryVoltage = Some(12.3), uptimeMillis = Some(5000L), online = true, quality = LinkQuality.Good)
+  val snapshot: RobotSnapshot = RobotSnapshot(
+    7,
+    new InetSocketAddress("127.0.0.1", 3838),
+    teamId = Some(1),
+    role = Some("striker"),
+    posture = Some(Posture.Stand),
+    batteryVoltage = Some(12.3),
+    uptimeMillis = Some(5000L),
+    online = true,
+    quality = LinkQuality.Good
+  )
 
   private def failure(robotId: Int, operation: String): Option[Throwable] = robotId match {
     case 99 => Some(RobotFailure.UnknownRobot(99))
@@ -56,7 +64,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   private def answer[T](robotId: Int, operation: String, value: => T): Future[T] = {
     calls.add(s"$operation $robotId")
     failure(robotId, operation) match {
-      case Some(e)            => Future.failed(e)
+      case Some(e)               => Future.failed(e)
       case None if robotId == 14 => robot14Answers.future.map(_ => value)
       case None => akka.pattern.after(random.synchronized(random.nextInt(15)).millis)(Future.successful(value))(system)
     }
@@ -64,7 +72,8 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
 
   def appName: String = "stub"
 
-  def robots(): Future[Vector[RobotSnapshot]] = Future.successful(Vector(snapshot, snapshot.copy(robotId = 8, online = false)))
+  def robots(): Future[Vector[RobotSnapshot]] =
+    Future.successful(Vector(snapshot, snapshot.copy(robotId = 8, online = false)))
 
   def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] = {
     calls.add(s"acquire $robotId ${groups.map(_.name).mkString(",")}")
@@ -75,14 +84,17 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
     }
   }
 
-  def release(robotId: Int, groups: ActuatorGroup*): Unit = { calls.add(s"release $robotId ${groups.map(_.name).mkString(",")}"); () }
+  def release(robotId: Int, groups: ActuatorGroup*): Unit = {
+    calls.add(s"release $robotId ${groups.map(_.name).mkString(",")}"); ()
+  }
 
   def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] =
     answer(robotId, f"walk $vx%.1f $vy%.1f $omega%.1f", Done)
   def stop(robotId: Int): Future[Done] = answer(robotId, "stop", Done)
   def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = answer(robotId, f"head $pan%.1f $tilt%.1f", Done)
   def arms(robotId: Int, ls: Double, le: Double, rs: Double, re: Double): Future[Done] = answer(robotId, "arms", Done)
-  def posture(robotId: Int, target: Posture.Target): Future[Posture] = answer(robotId, s"posture ${target.name}", target)
+  def posture(robotId: Int, target: Posture.Target): Future[Posture] =
+    answer(robotId, s"posture ${target.name}", target)
   def say(robotId: Int, text: String): Future[Done] = answer(robotId, s"say $text", Done)
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
     answer(robotId, s"call $module.$method", Some(RpcValue.Text(s"$robotId:$module.$method(${params.mkString(",")})")))
@@ -92,11 +104,14 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
     failure(robotId, operation.name).fold(Future.successful(Done): Future[Done])(Future.failed)
   }
   def status(robotId: Int): Source[RobotSnapshot, NotUsed] = allStatus.filter(_.robotId == robotId)
-  def allStatus: Source[RobotSnapshot, NotUsed] = Source.tick(0.millis, 50.millis, snapshot).mapMaterializedValue(_ => NotUsed)
+  def allStatus: Source[RobotSnapshot, NotUsed] =
+    Source.tick(0.millis, 50.millis, snapshot).mapMaterializedValue(_ => NotUsed)
 
   def vision(robotId: Int, grid: Boolean): Source[VisionFrame, NotUsed] =
     Source
-      .tick(0.millis, 50.millis, VisionFrame.Regions(robotId, 5L, Some(1234L), Vector(HaViMoRegion(1, 1, 20, 200, 300, 12, 8, 17, 13))): VisionFrame)
+      .tick(0.millis, 50.millis,
+        VisionFrame.Regions(robotId, 5L, Some(1234L),
+          Vector(HaViMoRegion(1, 1, 20, 200, 300, 12, 8, 17, 13))): VisionFrame)
       .watchTermination() { (_, done) =>
         visionStarted.incrementAndGet()
         done.onComplete(_ => visionEnded.incrementAndGet())

@@ -23,20 +23,21 @@ import naogateway.wire.{HaViMo, MessageContents, Posture, RpcCall, RpcReply, Rpc
 /** Requests and replies as a client sees them. */
 object EndpointClient {
 
-  /**
-   * Readies a jeromq client socket: jeromq 0.6.0 clients stall in the ZeroMQ handshake after about 1 in 100
-   * connects (libzmq clients, e.g. pyzmq, do not); a short handshake interval makes them connect again.
-   */
+  /** Readies a jeromq client socket: jeromq 0.6.0 clients stall in the ZeroMQ handshake after about 1 in 100 connects
+    * (libzmq clients, e.g. pyzmq, do not); a short handshake interval makes them connect again.
+    */
   def readyClient(socket: ZMQ.Socket): Unit = { socket.setHandshakeIvl(300); () }
 
   /** The body of a request for `module.method(params)` on `robotId` with `callId`. */
-  def request(robotId: Int, module: String, method: String, params: Vector[RpcValue] = Vector.empty, callId: Long = 1L): Array[Byte] =
+  def request(robotId: Int, module: String, method: String, params: Vector[RpcValue] = Vector.empty, callId: Long = 1L)
+      : Array[Byte] =
     MessageContents(robotId, rpcRequest = Some(RpcCall(module, method, params, Some(callId)).toProto)).toProtobuf
 
   /** The contents and the RPC reply of a reply body. */
   def decode(body: Array[Byte]): (MessageContents, RpcReply) = {
     val contents = MessageContents.parse(body).fold(e => throw new AssertionError(e.describe), identity)
-    contents -> RpcReply.fromProto(contents.rpcResponse.getOrElse(throw new AssertionError("reply without rpcResponse")))
+    contents -> RpcReply.fromProto(
+      contents.rpcResponse.getOrElse(throw new AssertionError("reply without rpcResponse")))
   }
 
   /** Sends one request on a DEALER (with the REQ-style empty delimiter) and waits for one reply. */
@@ -108,8 +109,9 @@ class ZeroMqEndpointSpec
   private def error(reply: RpcReply): String = reply.result.left.getOrElse(fail(s"expected an error, got $reply"))
 
   private def loopThreads(prefix: String): Set[String] =
-    Thread.getAllStackTraces.keySet.asScala.filter(t => t.isAlive && t.getName.startsWith(prefix) &&
-      t.getName.endsWith(ZeroMqEndpoint.LoopName)).map(_.getName).toSet
+    Thread.getAllStackTraces.keySet.asScala.filter(t =>
+      t.isAlive && t.getName.startsWith(prefix) &&
+        t.getName.endsWith(ZeroMqEndpoint.LoopName)).map(_.getName).toSet
 
   private def port(endpoint: String): Int = {
     endpoint should fullyMatch regex """tcp://127\.0\.0\.1:[0-9]+"""
@@ -137,7 +139,8 @@ class ZeroMqEndpointSpec
       }
       def hex(bytes: Array[Byte]): String = bytes.map(b => f"${b & 0xff}%02X").mkString(" ")
       hex(request(20, "motion", "posture", Vector(RpcValue.Text("stand")), callId = 1)) shouldBe example("zmq-request")
-      hex(EndpointProtocol.reply(20, Some(1L), Right(Answer(Some(RpcValue.Text("stand")))))) shouldBe example("zmq-reply")
+      hex(EndpointProtocol.reply(20, Some(1L), Right(Answer(Some(RpcValue.Text("stand")))))) shouldBe example(
+        "zmq-reply")
       EndpointProtocol.parse(request(20, "motion", "posture", Vector(RpcValue.Text("stand")), callId = 1))
         .flatMap(r => EndpointProtocol.route(r).left.map(e => Unreadable(20, None, e))) shouldBe
         Right(Route.Execute(20, robotmiddleware.Operation.Posture(Posture.Stand)))
@@ -247,16 +250,22 @@ class ZeroMqEndpointSpec
       askOne(7, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0.2f)).result shouldBe
         Right(Some(RpcValue.Flag(true)))
       askOne(7, "motion", "posture", RpcValue.Text("stand")).result shouldBe Right(Some(RpcValue.Text("stand")))
-      askOne(7, "motion", "head", RpcValue.Number(0.5f), RpcValue.UInt(0)).result shouldBe Right(Some(RpcValue.Flag(true)))
+      askOne(7, "motion", "head", RpcValue.Number(0.5f), RpcValue.UInt(0)).result shouldBe Right(
+        Some(RpcValue.Flag(true)))
       askOne(7, "speech", "say", RpcValue.Text("hello")).result shouldBe Right(Some(RpcValue.Flag(true)))
       askOne(7, "motion", "stop").result shouldBe Right(Some(RpcValue.Flag(true)))
       askOne(7, "system", "battery").result shouldBe Right(Some(RpcValue.Text("7:system.battery()")))
       stub.seen shouldBe Vector(
-        "acquire 7 walk", "walk 0.1 0.0 0.2 7",
-        "acquire 7 walk", "posture stand 7",
-        "acquire 7 head", "head 0.5 0.0 7",
-        "acquire 7 speech", "say hello 7",
-        "acquire 7 walk", "stop 7",
+        "acquire 7 walk",
+        "walk 0.1 0.0 0.2 7",
+        "acquire 7 walk",
+        "posture stand 7",
+        "acquire 7 head",
+        "head 0.5 0.0 7",
+        "acquire 7 speech",
+        "say hello 7",
+        "acquire 7 walk",
+        "stop 7",
         "call system.battery 7"
       )
     }
@@ -270,8 +279,10 @@ class ZeroMqEndpointSpec
           request(7, "gateway", "send", Vector(RpcValue.Text("speech"), RpcValue.Text("say"), RpcValue.Text("first")),
             callId = 1),
           request(7, "speech", "say", Vector(RpcValue.Text("second")), callId = 2),
-          request(7, "gateway", "send", Vector(RpcValue.Text("motion"), RpcValue.Text("head"), RpcValue.Number(0.5f),
-            RpcValue.Number(0f)), callId = 3))
+          request(7, "gateway", "send",
+            Vector(RpcValue.Text("motion"), RpcValue.Text("head"), RpcValue.Number(0.5f),
+              RpcValue.Number(0f)), callId = 3)
+        )
         bodies.foreach { b => s.send(Array.emptyByteArray, ZMQ.SNDMORE); s.send(b, 0) }
         val replies = (1 to 3).map(_ => decode(receive(s, 5.seconds).last)._2).sortBy(_.callId)
         replies.map(_.result) shouldBe Vector.fill(3)(Right(Some(RpcValue.Flag(true))))
@@ -292,7 +303,8 @@ class ZeroMqEndpointSpec
     }
 
     "serve its own methods: robots, status, acquire and release" in {
-      askOne(-1, "gateway", "robots").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.UInt(7), RpcValue.UInt(8)))))
+      askOne(-1, "gateway", "robots").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.UInt(7),
+              RpcValue.UInt(8)))))
       val s = dealer()
       try {
         val (contents, reply) = ask(s, request(7, "gateway", "status"))
@@ -304,15 +316,18 @@ class ZeroMqEndpointSpec
       askOne(8, "gateway", "status").result shouldBe Right(Some(RpcValue.Flag(false)))
       error(askOne(99, "gateway", "status")) shouldBe "unknown robot: no robot 99 is known"
       stub.calls.clear()
-      askOne(7, "gateway", "acquire", RpcValue.Text("head"), RpcValue.Text("arms")).result shouldBe Right(Some(RpcValue.Flag(true)))
+      askOne(7, "gateway", "acquire", RpcValue.Text("head"), RpcValue.Text("arms")).result shouldBe Right(
+        Some(RpcValue.Flag(true)))
       askOne(7, "gateway", "release", RpcValue.Text("head")).result shouldBe Right(Some(RpcValue.Flag(true)))
       stub.seen shouldBe Vector("acquire 7 head,arms", "release 7 head")
-      error(askOne(7, "gateway", "acquire", RpcValue.Text("legs"))) should startWith("malformed request: unknown actuator group 'legs'")
+      error(askOne(7, "gateway", "acquire", RpcValue.Text("legs"))) should startWith(
+        "malformed request: unknown actuator group 'legs'")
       error(askOne(7, "gateway", "reboot")) shouldBe "unknown method: gateway.reboot"
     }
 
     "name the cause of every failure: unknown robot, offline, lease, rule, timeout, robot error, safety" in {
-      def walkError(robotId: Int) = error(askOne(robotId, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)))
+      def walkError(robotId: Int) =
+        error(askOne(robotId, "motion", "walk", RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)))
       walkError(99) shouldBe "unknown robot: no robot 99 is known"
       walkError(8) shouldBe "offline: robot 8 is offline"
       walkError(9) shouldBe "lease: lease 'walk' of robot 9 is not held by this app (held by referee)"
@@ -399,7 +414,9 @@ class ZeroMqEndpointSpec
       val other = ActorSystem[Nothing](Behaviors.empty, "EndpointShutdown", system.settings.config)
       val endpointRef: ActorRef[ZeroMqEndpoint.Command] =
         other.systemActorOf(ZeroMqEndpoint.withInterface(new StubRobots(other), settings), "endpoint")
-      val replies = Await.result(endpointRef.ask(ZeroMqEndpoint.GetAddresses(_))(akka.util.Timeout(10.seconds), other.scheduler), 10.seconds)
+      val replies =
+        Await.result(endpointRef.ask(ZeroMqEndpoint.GetAddresses(_))(akka.util.Timeout(10.seconds), other.scheduler),
+          10.seconds)
       val requestPort = port(replies.requests)
       loopThreads("EndpointShutdown").size shouldBe 1
       other.terminate()

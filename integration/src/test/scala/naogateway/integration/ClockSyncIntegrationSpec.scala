@@ -39,7 +39,8 @@ class ClockSyncIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpe
           stamped should be <= snapshot.receivedAtNanos
           // Ten seconds back along the fitted drift, still within the bound that grows with the distance.
           val earlier = estimate.robotMillis - 10000
-          math.abs(estimate.toGatewayNanos(earlier) - truth.gatewayNanosOf(earlier)) / 1e6 should be <= estimate.errorBoundAt(earlier)
+          math.abs(estimate.toGatewayNanos(earlier) - truth.gatewayNanosOf(earlier)) / 1e6 should be <= estimate.errorBoundAt(
+            earlier)
         }
         // The link figures carry the same estimate.
         val stats = createTestProbe[LinkStats]()

@@ -13,11 +13,10 @@ import naogateway._
 import naogateway.wire.{RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
 
-/**
- * The competition gate in a real gateway for every GameController version a team may meet: READY, SET and PLAYING
- * close it, INITIAL and FINISHED open it, and a packet the trusted GameController sends that cannot be read closes
- * it and says why (fail safe), while one from elsewhere changes nothing.
- */
+/** The competition gate in a real gateway for every GameController version a team may meet: READY, SET and PLAYING
+  * close it, INITIAL and FINISHED open it, and a packet the trusted GameController sends that cannot be read closes it
+  * and says why (fail safe), while one from elsewhere changes nothing.
+  */
 class EveryVersionGateSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
   private def call(c: RobotActor.Connected, name: String, params: RpcValue*): CallResult = {
@@ -67,12 +66,15 @@ class EveryVersionGateSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
               t.gateOpen shouldBe false
               t.gateReason shouldBe Some(s"the game is running ($state)")
               eventually(timeout(10.seconds)) {
-                call(connected, "system.ping").result shouldBe Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
+                call(connected, "system.ping").result shouldBe Left(
+                  RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
               }
             }
           }
           send(inState(packet, GameState.Finished))
-          f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.version == version && d.gameState == GameState.Finished => () }
+          f.awaitEvent(10.seconds) {
+            case GameStateUpdated(d) if d.version == version && d.gameState == GameState.Finished => ()
+          }
           withClue(s"version ${version.number} FINISHED: ") {
             f.traffic().gateOpen shouldBe true
             eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
@@ -103,8 +105,9 @@ class EveryVersionGateSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         eventually(timeout(10.seconds)) {
           val t = f.traffic()
           t.gateOpen shouldBe false
-          t.gateReason shouldBe Some("the trusted GameController's packet cannot be read: RGme packet of unknown version: " +
-            "bytes from offset 4 are 14 00 00 00")
+          t.gateReason shouldBe Some(
+            "the trusted GameController's packet cannot be read: RGme packet of unknown version: " +
+              "bytes from offset 4 are 14 00 00 00")
         }
         eventually(timeout(10.seconds)) {
           call(connected, "system.ping").result shouldBe Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))

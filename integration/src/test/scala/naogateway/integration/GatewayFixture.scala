@@ -12,8 +12,8 @@ import naogateway._
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback
 
-/** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only.
-  * Call `stop()` at the end of each test: a fixture left running (robots streaming to their gateway) loads the next.
+/** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only. Call `stop()`
+  * at the end of each test: a fixture left running (robots streaming to their gateway) loads the next.
   */
 final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
   private val config = ConfigFactory
@@ -45,15 +45,16 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
       at: InetAddress = TestLoopback.address()): (ActorRef[SimulatedRobot.Command], InetSocketAddress) = {
     val started = testKit.createTestProbe[SimulatedRobot.StartResult]()
     testKit.spawn(
-      SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(robotId)), to, bindAddress = new InetSocketAddress(at, 0),
-        faithfulLink = faithful), Some(started.ref)),
+      SimulatedRobot(SimulatedRobotSettings(firmware(FirmwareSettings(robotId)), to,
+          bindAddress = new InetSocketAddress(at, 0),
+          faithfulLink = faithful), Some(started.ref)),
       s"sim-robot-$robotId-${System.nanoTime()}"
     )
     started.receiveMessage(10.seconds) match {
       case SimulatedRobot.Started(_, ref, address) =>
         robots :+= ref
         ref -> address
-      case other                                   => throw new IllegalStateException(s"robot $robotId did not start: $other")
+      case other => throw new IllegalStateException(s"robot $robotId did not start: $other")
     }
   }
 
@@ -80,10 +81,9 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     probe.receiveMessage(10.seconds)
   }
 
-  /**
-   * Makes robot `robotId`'s vision actor fail as a bug would (a null registration list), for restart specs outside the
-   * package: the message that does it is the robot actor's alone.
-   */
+  /** Makes robot `robotId`'s vision actor fail as a bug would (a null registration list), for restart specs outside the
+    * package: the message that does it is the robot actor's alone.
+    */
   def crashVision(robotId: Int): Unit = connect(robotId).vision ! VisionActor.Subscribers(null)
 
   def stats(): Gateway.GatewayStats = {

@@ -62,9 +62,9 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           (1 to 5).foreach(_ => sendGameState(stranger, f, GameState.Playing))
           val source = createTestProbe[Gateway.GameSource]()
           source.awaitAssert({
-            f.gateway ! Gateway.GetGameSource(source.ref)
-            source.receiveMessage().untrusted shouldBe 5L
-          }, 10.seconds)
+              f.gateway ! Gateway.GetGameSource(source.ref)
+              source.receiveMessage().untrusted shouldBe 5L
+            }, 10.seconds)
           val game = createTestProbe[Option[GameControlData]]()
           f.gateway ! Gateway.GetGameState(game.ref)
           game.receiveMessage() shouldBe None
@@ -125,11 +125,13 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         eventually(timeout(20.seconds), interval(100.millis)) { heard() should be >= counted + 15 }
         call(connected, "system.ping").result.isRight shouldBe true
         // Every event so far (status updates come five times a second, so a 100 ms pause means none is waiting).
-        val seen = Iterator.continually(scala.util.Try(f.events.receiveMessage(100.millis)).toOption).takeWhile(_.isDefined).flatten.toVector
+        val seen = Iterator.continually(scala.util.Try(f.events.receiveMessage(100.millis)).toOption).takeWhile(
+          _.isDefined).flatten.toVector
         seen.collect { case e: RobotOffline => e } shouldBe empty
         val robots = createTestProbe[Vector[RobotSnapshot]]()
         f.gateway ! Gateway.GetRobots(robots.ref)
-        robots.receiveMessage(10.seconds).map(s => (s.robotId, s.online, s.address)) shouldBe Vector((14, true, receivesAt))
+        robots.receiveMessage(10.seconds).map(s => (s.robotId, s.online, s.address)) shouldBe Vector((14, true,
+            receivesAt))
         f.stats().rejected.get(Rejection.RobotIdMismatch.name) shouldBe None
         f.view(robot).stats.ignoredAtSendingSocket shouldBe 0L
       }
@@ -157,62 +159,67 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
       all(figures.map(_.datagramsOut)) should be >= 2L
     }
 
-    "take a partitioned robot offline within its three chances and back online when the partition heals" in withGateway() { f =>
-      val network = LossyNetwork.start(seed = 3)
-      try {
-        val proxy = network.addProxy(f.addresses.robots, TestLoopback.address())
-        f.robot(7, to = proxy.clientSide)
-        f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
-        val connected = f.connect(7)
-        network.partition(proxy, on = true)
-        // The three chances themselves, in manual time, are HeartBeatActorSpec's; here the reason names them.
-        f.awaitEvent(10.seconds) { case RobotOffline(7, reason) => reason should include("3 unanswered probes") }
-        call(connected, "system.ping").result shouldBe Left(RobotFailure.RobotOffline(7))
-        network.partition(proxy, on = false)
-        f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
-        call(connected, "system.ping").result.isRight shouldBe true
-      } finally network.stop()
+    "take a partitioned robot offline within its three chances and back online when the partition heals" in withGateway() {
+      f =>
+        val network = LossyNetwork.start(seed = 3)
+        try {
+          val proxy = network.addProxy(f.addresses.robots, TestLoopback.address())
+          f.robot(7, to = proxy.clientSide)
+          f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+          val connected = f.connect(7)
+          network.partition(proxy, on = true)
+          // The three chances themselves, in manual time, are HeartBeatActorSpec's; here the reason names them.
+          f.awaitEvent(10.seconds) { case RobotOffline(7, reason) => reason should include("3 unanswered probes") }
+          call(connected, "system.ping").result shouldBe Left(RobotFailure.RobotOffline(7))
+          network.partition(proxy, on = false)
+          f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+          call(connected, "system.ping").result.isRight shouldBe true
+        } finally network.stop()
     }
 
-    "re-sync a power-cycled robot by itself: same address, new session, debug options enabled again" in withGateway() { f =>
-      val (robot, _) = f.robot(4)
-      f.awaitEvent(10.seconds) { case RobotOnline(4, _) => () }
-      val connected = f.connect(4)
-      connected.vision ! VisionActor.Register(createTestProbe[VisionFrame]().ref, grid = false)
-      eventually(timeout(5.seconds)) { f.view(robot).debugEnabled should contain("havimo.regions") }
-      robot ! SimulatedRobot.PowerCycle(1.second)
-      val restarted = f.awaitEvent(20.seconds) { case r: RobotRestarted if r.robotId == 4 => r }
-      restarted.bootId shouldBe Some(2)
-      restarted.resynced should contain("havimo.regions")
-      eventually(timeout(5.seconds)) {
-        val view = f.view(robot)
-        view.bootId shouldBe 2
-        view.debugEnabled should contain("havimo.regions")
-      }
+    "re-sync a power-cycled robot by itself: same address, new session, debug options enabled again" in withGateway() {
+      f =>
+        val (robot, _) = f.robot(4)
+        f.awaitEvent(10.seconds) { case RobotOnline(4, _) => () }
+        val connected = f.connect(4)
+        connected.vision ! VisionActor.Register(createTestProbe[VisionFrame]().ref, grid = false)
+        eventually(timeout(5.seconds)) { f.view(robot).debugEnabled should contain("havimo.regions") }
+        robot ! SimulatedRobot.PowerCycle(1.second)
+        val restarted = f.awaitEvent(20.seconds) { case r: RobotRestarted if r.robotId == 4 => r }
+        restarted.bootId shouldBe Some(2)
+        restarted.resynced should contain("havimo.regions")
+        eventually(timeout(5.seconds)) {
+          val view = f.view(robot)
+          view.bootId shouldBe 2
+          view.debugEnabled should contain("havimo.regions")
+        }
     }
 
-    "answer every call exactly once at 20 % loss each way, and keep fire-and-forget commands in order" in withGateway() { f =>
-      val network = LossyNetwork.start(seed = 11)
-      try {
-        val lossy = Impairment(loss = 0.2)
-        val proxy = network.addProxy(f.addresses.robots, TestLoopback.address(), uplink = lossy, downlink = lossy)
-        val (robot, _) = f.robot(5, to = proxy.clientSide)
-        f.awaitEvent(10.seconds) { case RobotOnline(5, _) => () }
-        val connected = f.connect(5)
-        val answers = createTestProbe[CallResult]()
-        (1 to 40).foreach(_ => connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), answers.ref))
-        val results = answers.receiveMessages(40, 60.seconds)
-        answers.expectNoMessage(3.seconds)
-        results.count(_.result.isRight) should be > 20
-        // In-order speech: only texts that arrived are recorded, and they arrive in the order sent.
-        val said = createTestProbe[CallResult]()
-        (1 to 10).foreach(i =>
-          connected.noResponse ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(said.ref)))
-        said.receiveMessages(10, 60.seconds)
-        val texts = f.view(robot).said.map(_.toInt)
-        texts shouldBe texts.sorted
-        texts.distinct shouldBe texts
-      } finally network.stop()
+    "answer every call exactly once at 20 % loss each way, and keep fire-and-forget commands in order" in withGateway() {
+      f =>
+        val network = LossyNetwork.start(seed = 11)
+        try {
+          val lossy = Impairment(loss = 0.2)
+          val proxy = network.addProxy(f.addresses.robots, TestLoopback.address(), uplink = lossy, downlink = lossy)
+          val (robot, _) = f.robot(5, to = proxy.clientSide)
+          f.awaitEvent(10.seconds) { case RobotOnline(5, _) => () }
+          val connected = f.connect(5)
+          val answers = createTestProbe[CallResult]()
+          (1 to 40).foreach(_ =>
+            connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), answers.ref))
+          val results = answers.receiveMessages(40, 60.seconds)
+          answers.expectNoMessage(3.seconds)
+          results.count(_.result.isRight) should be > 20
+          // In-order speech: only texts that arrived are recorded, and they arrive in the order sent.
+          val said = createTestProbe[CallResult]()
+          (1 to 10).foreach(i =>
+            connected.noResponse ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))),
+              Some(said.ref)))
+          said.receiveMessages(10, 60.seconds)
+          val texts = f.view(robot).said.map(_.toInt)
+          texts shouldBe texts.sorted
+          texts.distinct shouldBe texts
+        } finally network.stop()
     }
 
     "send nothing to a robot while the game runs in competition mode, and fail calls at once naming the rule" in
@@ -235,7 +242,8 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           (1 to 5).foreach { _ =>
             call(connected, "system.ping").result shouldBe Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
           }
-          // Two seconds of heartbeat probing, status traffic and calls: nothing may leave the outbox or reach the robot.
+          /* Two seconds of heartbeat probing, status traffic and calls: nothing may leave the outbox or reach the
+           * robot. */
           Thread.sleep(2000)
           val during = f.traffic()
           during.datagramsOut shouldBe atKickOff.datagramsOut
@@ -271,7 +279,8 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
           try {
             sendGameState(gc, f, GameState.Playing)
-            results.receiveMessage(10.seconds).result shouldBe Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
+            results.receiveMessage(10.seconds).result shouldBe Left(
+              RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
             sendGameState(gc, f, GameState.Finished)
             f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
             // Without status polls during the game the robot may have been taken offline; a call brings it back.

@@ -17,11 +17,10 @@ import naogateway.testkit.TestLoopback
 import naogateway.wire.RpcCall
 import naogateway.wire.gamecontroller.GameControlData
 
-/**
- * Issue "no traffic on the field's WiFi can fill the gateway, flood its log, or steer a robot": a real gateway with
- * simulated robots, and a stranger on loopback addresses of its own sending what docs/protocol.md lets anyone send.
- * Bounded in datagrams and time (each test well under 30 s). Signed frames are not part of this suite.
- */
+/** Issue "no traffic on the field's WiFi can fill the gateway, flood its log, or steer a robot": a real gateway with
+  * simulated robots, and a stranger on loopback addresses of its own sending what docs/protocol.md lets anyone send.
+  * Bounded in datagrams and time (each test well under 30 s). Signed frames are not part of this suite.
+  */
 class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing with Eventually {
 
   private def ping(f: GatewayFixture, robotId: Int): Either[RobotFailure, Option[naogateway.wire.RpcValue]] = {
@@ -32,17 +31,20 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
 
   /** Every event the fixture's subscriber holds now. */
   private def drainEvents(f: GatewayFixture): Vector[GatewayEvent] =
-    Iterator.continually(scala.util.Try(f.events.receiveMessage(5.millis)).toOption).takeWhile(_.isDefined).take(100000).flatten.toVector
+    Iterator.continually(scala.util.Try(f.events.receiveMessage(5.millis)).toOption).takeWhile(_.isDefined).take(100000)
+      .flatten.toVector
 
   "A gateway on a hostile network" must {
     "keep its robots online and answering, its robot actors under the cap, its log, heap and game state, whatever strangers send" in {
       val cap = 8
-      val f = new GatewayFixture(testKit,
+      val f = new GatewayFixture(
+        testKit,
         s"""discovery.max-robots = $cap
            |discovery.forget-unreached-after = 2s
            |discovery.forget-offline-after = 2s
            |competition.enabled = on
-           |game-controller.trusted-sources = ["127.0.0.1"]""".stripMargin)
+           |game-controller.trusted-sources = ["127.0.0.1"]""".stripMargin
+      )
       val log = new HostileTraffic.LogLines
       try {
         val at1 = HostileTraffic.twoRobotsOnline(f)
@@ -56,7 +58,9 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         ping(f, 1).isRight shouldBe true
         ping(f, 2).isRight shouldBe true
         val seen = drainEvents(f)
-        seen.collect { case e @ (RobotOffline(1 | 2, _) | RobotRestarted(1 | 2, _, _) | RobotForgotten(1 | 2, _)) => e } shouldBe empty
+        seen.collect { case e @ (RobotOffline(1 | 2, _) | RobotRestarted(1 | 2, _, _) | RobotForgotten(1 | 2, _)) =>
+          e
+        } shouldBe empty
         // One keep-alive of an invented id never makes an online robot.
         seen.collect { case e @ RobotOnline(id, _) if id >= 1000 => e } shouldBe empty
         // Robot actors never above the cap; what discovery refused is counted, and the strangers are forgotten.
@@ -98,7 +102,8 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         val forger = DatagramChannel.open(StandardProtocolFamily.INET).bind(new InetSocketAddress(at.getAddress, 0))
         val random = new Random(5)
         try {
-          // 3 s of odd keep-alives from the robot's own address: new bootIds, clocks gone back or far ahead, two at most
+          /* 3 s of odd keep-alives from the robot's own address: new bootIds, clocks gone back or far ahead, two at
+           * most */
           // in a row, while the robot keeps sending its own.
           (1 to 15).foreach { i =>
             val odd = i % 3 match {

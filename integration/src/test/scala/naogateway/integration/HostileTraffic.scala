@@ -18,17 +18,15 @@ import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller.{GameControllerCodec, GameState}
 import naogateway.wire.{HeaderForm, MessageContents}
 
-/**
- * What a stranger on the field's WiFi can send a gateway, written from docs/protocol.md: random bytes, mutated frames,
- * keep-alives with invented robot ids or forged contents, and GameController packets. Shared by the hostile-network
- * spec and the `flood` benchmark. Everything goes to loopback addresses only, in bounded loops.
- */
+/** What a stranger on the field's WiFi can send a gateway, written from docs/protocol.md: random bytes, mutated frames,
+  * keep-alives with invented robot ids or forged contents, and GameController packets. Shared by the hostile-network
+  * spec and the `flood` benchmark. Everything goes to loopback addresses only, in bounded loops.
+  */
 object HostileTraffic {
 
-  /**
-   * The two real robots of a flood: robots 1 and 2 started on `f`'s gateway, once both are online. Answers robot 1's
-   * receive address, whose IP a forger then sends from.
-   */
+  /** The two real robots of a flood: robots 1 and 2 started on `f`'s gateway, once both are online. Answers robot 1's
+    * receive address, whose IP a forger then sends from.
+    */
   def twoRobotsOnline(f: GatewayFixture): InetSocketAddress = {
     val (_, at1) = f.robot(1)
     f.robot(2)
@@ -38,19 +36,26 @@ object HostileTraffic {
   }
 
   /** A keep-alive of `robotId` as the simulated firmware sends it, with the values a forger chooses. */
-  def keepAlive(robotId: Int, bootId: Option[Int] = Some(1), uptimeMillis: Long = 1000L, battery: Float = 12.4f): Array[Byte] =
+  def keepAlive(
+      robotId: Int, bootId: Option[Int] = Some(1), uptimeMillis: Long = 1000L, battery: Float = 12.4f): Array[Byte] =
     MessageContents.encodeFrame(
-      MessageContents(robotId, status = Some(Status(timestamp = Some(uptimeMillis), teamID = Some(1), activeAgent = Some("forged"))),
-        robotHealth = Some(RobotHealth(batteryVoltage = Some(battery), posture = Some("stand"), uptimeMs = Some(uptimeMillis.toInt),
-          bootId = bootId))),
+      MessageContents(
+        robotId,
+        status = Some(Status(timestamp = Some(uptimeMillis), teamID = Some(1), activeAgent = Some("forged"))),
+        robotHealth =
+          Some(RobotHealth(batteryVoltage = Some(battery), posture = Some("stand"), uptimeMs = Some(uptimeMillis.toInt),
+              bootId = bootId))
+      ),
       HeaderForm.Legacy
     ).toOption.get
 
   /** A GameController control packet saying `state`, as any sender can make one. */
   def gameControllerPacket(state: GameState): Array[Byte] =
-    GameControllerCodec.encodeControl(GameControllerCodecSupport.playing(teamNumber = 1).copy(gameState = state)).toOption.get
+    GameControllerCodec.encodeControl(GameControllerCodecSupport.playing(teamNumber = 1).copy(gameState = state))
+      .toOption.get
 
-  /** `n` random datagrams, 0 to 1500 bytes, some starting like a frame (`00 2A`) or a GameController packet (`RGme`). */
+  /** `n` random datagrams, 0 to 1500 bytes, some starting like a frame (`00 2A`) or a GameController packet (`RGme`).
+    */
   def randomDatagrams(n: Int, random: Random): Iterator[Array[Byte]] = Iterator.fill(n) {
     val bytes = Array.fill[Byte](random.nextInt(1501))(0)
     random.nextBytes(bytes)
@@ -100,10 +105,9 @@ object HostileTraffic {
     def close(): Unit = channels.foreach(_.close())
   }
 
-  /**
-   * Counts the log events at INFO and above while it is installed (on the root logger), and raises the `naogateway`
-   * loggers to INFO meanwhile: their debug lines name each refused datagram by design, the operator's log does not.
-   */
+  /** Counts the log events at INFO and above while it is installed (on the root logger), and raises the `naogateway`
+    * loggers to INFO meanwhile: their debug lines name each refused datagram by design, the operator's log does not.
+    */
   final class LogLines extends AutoCloseable {
     private val context = LoggerFactory.getILoggerFactory.asInstanceOf[LoggerContext]
     private val root = context.getLogger(org.slf4j.Logger.ROOT_LOGGER_NAME)
@@ -146,14 +150,13 @@ object HostileTraffic {
   /** What a flood sent, and the most robot actors the gateway had while it ran. */
   final case class FloodResult(datagrams: Long, robotActorsMax: Int, gameControllerPackets: Int)
 
-  /**
-   * `rounds` rounds of what a stranger can send to the gateway of `f`, `scale` times this much each round: 1000 random
-   * datagrams and 1000 mutations of robot 1's keep-alive from 4 addresses; 150 keep-alives with invented robot ids
-   * from one socket and 100 from `50 x scale` addresses (at most 200); 25 GameController packets saying PLAYING or
-   * READY from an address the gateway must not trust; and two odd keep-alives from robot 1's own address `robot1`
-   * (another bootId, a clock far ahead, a flat battery), never three in a row. Between rounds it pauses 150-250 ms and
-   * samples the gateway's robot count.
-   */
+  /** `rounds` rounds of what a stranger can send to the gateway of `f`, `scale` times this much each round: 1000 random
+    * datagrams and 1000 mutations of robot 1's keep-alive from 4 addresses; 150 keep-alives with invented robot ids
+    * from one socket and 100 from `50 x scale` addresses (at most 200); 25 GameController packets saying PLAYING or
+    * READY from an address the gateway must not trust; and two odd keep-alives from robot 1's own address `robot1`
+    * (another bootId, a clock far ahead, a flat battery), never three in a row. Between rounds it pauses 150-250 ms and
+    * samples the gateway's robot count.
+    */
   def flood(f: GatewayFixture, robot1: InetAddress, rounds: Int, scale: Int, seed: Long): FloodResult = {
     val stranger = new Sender(addresses(TestLoopback.block(4, 0), 4))
     val spread = math.min(200, 50 * scale)
@@ -170,7 +173,9 @@ object HostileTraffic {
     try {
       (0 until rounds).foreach { round =>
         randomDatagrams(1000 * scale, random).zipWithIndex.foreach { case (d, i) => stranger.send(d, robotPort, i) }
-        mutatedFrames(frame, 1000 * scale, random).zipWithIndex.foreach { case (d, i) => stranger.send(d, robotPort, i) }
+        mutatedFrames(frame, 1000 * scale, random).zipWithIndex.foreach { case (d, i) =>
+          stranger.send(d, robotPort, i)
+        }
         (0 until 150 * scale).foreach { _ => lonely.send(keepAlive(nextId), robotPort); nextId += 1 }
         (0 until 100 * scale).foreach { i => idFlooders.send(keepAlive(nextId), robotPort, i); nextId += 1 }
         (0 until 25 * scale).foreach { i =>

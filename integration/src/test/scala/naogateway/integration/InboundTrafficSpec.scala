@@ -25,7 +25,8 @@ class InboundTrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         (1 to datagrams).foreach { _ =>
           sender.send(ByteBuffer.wrap(Array[Byte](1, 2, 3, 4, 5)), f.addresses.robots) // refused, but read and counted
         }
-        createTestProbe[Unit]().awaitAssert((f.traffic().datagramsIn - before.datagramsIn) shouldBe datagrams.toLong, 10.seconds)
+        createTestProbe[Unit]().awaitAssert((f.traffic().datagramsIn - before.datagramsIn) shouldBe datagrams.toLong,
+          10.seconds)
       } finally {
         sender.close()
         f.stop()

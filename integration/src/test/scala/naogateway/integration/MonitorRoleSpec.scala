@@ -13,17 +13,17 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import naogateway._
 import naogateway.wire.gamecontroller._
 
-/**
- * The monitor role against a stand-in version-19 GameController on loopback: the gateway's `RGTr` requests, kept
- * alive; the true state (`RGTD`) taken over the broadcast one for the gate and the view; the forwarded status messages
- * on their port shown; and a configuration that would make this host send status messages refused.
- */
+/** The monitor role against a stand-in version-19 GameController on loopback: the gateway's `RGTr` requests, kept
+  * alive; the true state (`RGTD`) taken over the broadcast one for the gate and the view; the forwarded status messages
+  * on their port shown; and a configuration that would make this host send status messages refused.
+  */
 class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
-  private val initial: HslControlData = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v19-initial.bin")) match {
-    case Right(d: HslControlData) => d
-    case other                    => fail(s"$other")
-  }
+  private val initial: HslControlData =
+    GameControllerCodec.decodeControl(GameControllerVectors.bytes("v19-initial.bin")) match {
+      case Right(d: HslControlData) => d
+      case other                    => fail(s"$other")
+    }
   private def broadcast(state: GameState): Array[Byte] =
     GameControllerCodec.encodeControl(initial.copy(gameState = state)).fold(e => fail(e.describe), identity)
   private def trueData(state: GameState): Array[Byte] =
@@ -31,7 +31,8 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
 
   private def freeUdpPort(): Int = {
     val c = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
-    try c.getLocalAddress.asInstanceOf[InetSocketAddress].getPort finally c.close()
+    try c.getLocalAddress.asInstanceOf[InetSocketAddress].getPort
+    finally c.close()
   }
 
   private def source(f: GatewayFixture): Gateway.GameSource = {
@@ -46,11 +47,13 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       val stranger = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.2", 0))
       val requestPort = standIn.getLocalAddress.asInstanceOf[InetSocketAddress].getPort
       val statusPort = freeUdpPort()
-      val f = new GatewayFixture(testKit,
+      val f = new GatewayFixture(
+        testKit,
         s"""competition.enabled = on
            |game-controller.trusted-sources = ["127.0.0.1"]
            |game-controller.monitor { enabled = on, address = "127.0.0.1", request-port = $requestPort, status-port = $statusPort,
-           |  request-interval = 300ms, true-state-fresh = 2s }""".stripMargin)
+           |  request-interval = 300ms, true-state-fresh = 2s }""".stripMargin
+      )
       val gcPort = f.addresses.gameController.get
       try {
         // The requests: RGTr and version 0, from the gateway's GameController socket, again and again.
@@ -81,10 +84,11 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
 
         // Forwarded status messages: the robot's address, then its RGrt version 4. Only from the GameController.
         val status = ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), 2f, (250f, -100f))
-        val forwarded = InetAddress.getByName("10.0.0.23").getAddress ++ GameControllerCodec.encodeStatus(status).toOption.get
+        val forwarded =
+          InetAddress.getByName("10.0.0.23").getAddress ++ GameControllerCodec.encodeStatus(status).toOption.get
         val statusAt = new InetSocketAddress("127.0.0.1", statusPort)
         stranger.send(ByteBuffer.wrap(InetAddress.getByName("10.0.0.99").getAddress ++
-          GameControllerCodec.encodeStatus(status.copy(player = 4)).toOption.get), statusAt)
+            GameControllerCodec.encodeStatus(status.copy(player = 4)).toOption.get), statusAt)
         standIn.send(ByteBuffer.wrap(forwarded), statusAt)
         eventually(timeout(10.seconds)) {
           source(f).forwarded.map(s => s.from.getHostAddress -> s.status) shouldBe Vector("10.0.0.23" -> status)
@@ -103,8 +107,10 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       val refused = intercept[IllegalArgumentException](GatewaySettings.fromConfig(config))
       refused.getMessage should include("robot 1 at 127.0.0.1 runs on this host")
       refused.getMessage should include("refuse this host as a monitor")
-      val noAddress = ConfigFactory.parseString("game-controller.monitor.enabled = on").withFallback(ConfigFactory.load().getConfig("naogateway"))
-      intercept[IllegalArgumentException](GatewaySettings.fromConfig(noAddress)).getMessage should include("game-controller.monitor.address")
+      val noAddress = ConfigFactory.parseString("game-controller.monitor.enabled = on").withFallback(
+        ConfigFactory.load().getConfig("naogateway"))
+      intercept[IllegalArgumentException](GatewaySettings.fromConfig(noAddress)).getMessage should include(
+        "game-controller.monitor.address")
       GatewaySettings.fromConfig(ConfigFactory.load().getConfig("naogateway")).monitor shouldBe None
     }
   }

@@ -7,7 +7,9 @@ import scala.concurrent.duration.FiniteDuration
 
 import naogateway.wire.MessageContents
 
-/** Real frames of a robot, caught where the gateway's FU-Remote relay sends its byte-identical copies: material for replays. */
+/** Real frames of a robot, caught where the gateway's FU-Remote relay sends its byte-identical copies: material for
+  * replays.
+  */
 object RelayCapture {
 
   /** The frames of robot `robotId` the relay passes to `recorder` within `window` (polling; the window bounds it). */

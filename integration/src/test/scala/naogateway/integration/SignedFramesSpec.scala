@@ -15,10 +15,9 @@ import naogateway.sim.network.ForgedFrames
 import naogateway.testkit.TestLoopback
 import naogateway.wire._
 
-/**
- * A gateway that requires signed frames of one robot (docs/protocol.md 6.7), with a simulated robot that signs, and
- * an outsider that sends from that robot's own IP address: what the robot really says counts, nothing forged does.
- */
+/** A gateway that requires signed frames of one robot (docs/protocol.md 6.7), with a simulated robot that signs, and an
+  * outsider that sends from that robot's own IP address: what the robot really says counts, nothing forged does.
+  */
 class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   import SignedFramesSpec._
 
@@ -31,11 +30,14 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
 
   /** A gateway requiring robot `robotId` at `ip` to sign, relaying every robot datagram to `relayPort` (a recorder). */
   private def withGateway[A](robotId: Int, ip: InetAddress, relayPort: Int = 0)(test: GatewayFixture => A): A = {
-    val relay = if (relayPort == 0) "" else s"fu-remote-relay { enabled = on, address = \"127.0.0.1\", port = $relayPort }"
-    val f = new GatewayFixture(testKit,
+    val relay =
+      if (relayPort == 0) "" else s"fu-remote-relay { enabled = on, address = \"127.0.0.1\", port = $relayPort }"
+    val f = new GatewayFixture(
+      testKit,
       s"""robots = [ { id = $robotId, address = "${ip.getHostAddress}", signing = required } ]
          |signing.key = "$TeamKeyHex"
-         |$relay""".stripMargin)
+         |$relay""".stripMargin
+    )
     try test(f)
     finally f.stop()
   }
@@ -64,7 +66,8 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         call(signed, "system.ping").result.isRight shouldBe true
         call(signed, "motion.posture", RpcValue.Text("stand")).result shouldBe Right(Some(RpcValue.Text("stand")))
         f.awaitEvent(10.seconds) {
-          case RobotStatusUpdated(s) if s.robotId == 31 && s.posture.contains(Posture.Stand) && s.batteryVoltage.exists(_ > 12.0) => ()
+          case RobotStatusUpdated(s)
+              if s.robotId == 31 && s.posture.contains(Posture.Stand) && s.batteryVoltage.exists(_ > 12.0) => ()
         }
         call(f.connect(32), "system.ping").result.isRight shouldBe true
         // The gateway signed every request and probe, and the robot took each one: nothing refused on either side.
@@ -84,39 +87,40 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val recorder = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
       val outsider = DatagramChannel.open().bind(new InetSocketAddress(ip, 0))
       try withGateway(33, ip, recorder.getLocalAddress.asInstanceOf[InetSocketAddress].getPort) { f =>
-        val (robot, _) = f.robot(33, firmware = signing, at = ip)
-        call(f.connect(33), "system.ping").result.isRight shouldBe true
-        val recorded = RelayCapture.frames(recorder, 33, 1.5.seconds)
-        recorded.size should be >= 3
-        val before = snapshot(f, 33)
-        before.bootId shouldBe Some(1)
-        val refusedBefore = f.stats().rejected.values.sum
-        val batch = ForgedFrames.batch(33, recorded, WrongKey, perKind = 20, new Random(7))
-        // Drain what came before, then send the forgeries and watch every event of the robot for a while.
-        collect(f, 300.millis)
-        batch.foreach(frame => outsider.send(ByteBuffer.wrap(frame), f.addresses.robots))
-        val seen = collect(f, 2.seconds).filter {
-          case e: RobotEvent => e.robotId == 33
-          case _             => false
+          val (robot, _) = f.robot(33, firmware = signing, at = ip)
+          call(f.connect(33), "system.ping").result.isRight shouldBe true
+          val recorded = RelayCapture.frames(recorder, 33, 1.5.seconds)
+          recorded.size should be >= 3
+          val before = snapshot(f, 33)
+          before.bootId shouldBe Some(1)
+          val refusedBefore = f.stats().rejected.values.sum
+          val batch = ForgedFrames.batch(33, recorded, WrongKey, perKind = 20, new Random(7))
+          // Drain what came before, then send the forgeries and watch every event of the robot for a while.
+          collect(f, 300.millis)
+          batch.foreach(frame => outsider.send(ByteBuffer.wrap(frame), f.addresses.robots))
+          val seen = collect(f, 2.seconds).filter {
+            case e: RobotEvent => e.robotId == 33
+            case _             => false
+          }
+          ForgedFrames.stateChanges(seen, truth = before) shouldBe 0
+          seen.collect { case RobotStatusUpdated(s) => s } should not be empty // the real keep-alives went on
+          val after = snapshot(f, 33)
+          (after.online, after.bootId, after.posture) shouldBe ((true, Some(1), before.posture))
+          after.batteryVoltage.get should be > 12.0
+          // Every forged datagram refused exactly once, by its kind; the robot counts the same kinds.
+          val refused = f.stats().rejected
+          refused.values.sum - refusedBefore shouldBe batch.size
+          refused("unsigned") shouldBe 20
+          refused("bad signature") should be >= 20L
+          refused("replayed") should be >= recorded.size.toLong
+          refused("signature not last") should be >= recorded.size.toLong
+          refused("malformed signature") should be >= recorded.size.toLong
+          linkStats(f, 33).rejected.keySet should contain allElementsOf SignatureKinds
+          // And the robot's calls still work.
+          call(f.connect(33), "system.ping").result.isRight shouldBe true
+          f.view(robot).firmware.refusedSignatures shouldBe empty
         }
-        ForgedFrames.stateChanges(seen, truth = before) shouldBe 0
-        seen.collect { case RobotStatusUpdated(s) => s } should not be empty // the real keep-alives went on
-        val after = snapshot(f, 33)
-        (after.online, after.bootId, after.posture) shouldBe ((true, Some(1), before.posture))
-        after.batteryVoltage.get should be > 12.0
-        // Every forged datagram refused exactly once, by its kind; the robot counts the same kinds.
-        val refused = f.stats().rejected
-        refused.values.sum - refusedBefore shouldBe batch.size
-        refused("unsigned") shouldBe 20
-        refused("bad signature") should be >= 20L
-        refused("replayed") should be >= recorded.size.toLong
-        refused("signature not last") should be >= recorded.size.toLong
-        refused("malformed signature") should be >= recorded.size.toLong
-        linkStats(f, 33).rejected.keySet should contain allElementsOf SignatureKinds
-        // And the robot's calls still work.
-        call(f.connect(33), "system.ping").result.isRight shouldBe true
-        f.view(robot).firmware.refusedSignatures shouldBe empty
-      } finally { recorder.close(); outsider.close() }
+      finally { recorder.close(); outsider.close() }
     }
 
     "leave a signing robot unmoved by requests the gateway did not sign" in {
@@ -126,11 +130,14 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         call(f.connect(34), "system.ping").result.isRight shouldBe true
         val outsider = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
         try {
-          val stand = MessageContents(34, rpcRequest = Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand"))).copy(callId = Some(5L)).toProto))
+          val stand = MessageContents(34,
+            rpcRequest =
+              Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand"))).copy(callId = Some(5L)).toProto))
           (1 to 5).foreach { i =>
             outsider.send(ByteBuffer.wrap(ForgedFrames.unsigned(stand)), receivesAt)
-            outsider.send(ByteBuffer.wrap(FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey, SignDirection.GatewayToRobot,
-              Long.MaxValue - i).toOption.get), receivesAt)
+            outsider.send(ByteBuffer.wrap(FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey,
+                  SignDirection.GatewayToRobot,
+                  Long.MaxValue - i).toOption.get), receivesAt)
           }
           eventually(timeout(10.seconds)) {
             f.view(robot).firmware.refusedSignatures shouldBe Map("unsigned" -> 5L, "bad signature" -> 5L)

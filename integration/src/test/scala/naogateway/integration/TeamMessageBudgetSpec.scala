@@ -20,7 +20,8 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
       case Right(d: HslControlData) => d
       case other                    => fail(s"$other")
     }
-    GameControllerCodec.encodeControl(d.copy(gameState = state, packetNumber = packetNumber)).fold(e => fail(e.describe), identity)
+    GameControllerCodec.encodeControl(d.copy(gameState = state, packetNumber = packetNumber)).fold(
+      e => fail(e.describe), identity)
   }
 
   private def source(f: GatewayFixture): Gateway.GameSource = {
@@ -32,9 +33,12 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
   "A gateway counting team 12's messages" must {
 
     "hand the gateway at most the cap a second from a flood on the GameController and team ports, counting the rest" in {
-      val f = new GatewayFixture(testKit, "game-controller.trusted-sources = [\"127.0.0.1\"]\n" +
-        "game-controller.team-messages.team-number = 12\ngame-controller.max-datagrams-per-second = 50\n" +
-        "game-controller.team-messages.max-datagrams-per-second = 50")
+      val f = new GatewayFixture(
+        testKit,
+        "game-controller.trusted-sources = [\"127.0.0.1\"]\n" +
+          "game-controller.team-messages.team-number = 12\ngame-controller.max-datagrams-per-second = 50\n" +
+          "game-controller.team-messages.max-datagrams-per-second = 50"
+      )
       val flood = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
       val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
       val gcPort = f.addresses.gameController.get
@@ -54,7 +58,8 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
         eventually(timeout(10.seconds)) {
           val rejected = f.stats().rejected
           rejected.getOrElse(Rejection.GatewayBusy.name, 0L) should be > 0L
-          // What passed the cap was read and refused as it always is: at most the cap for each second the flood spanned.
+          /* What passed the cap was read and refused as it always is: at most the cap for each second the flood
+           * spanned. */
           rejected.getOrElse(Rejection.BadGameControllerPacket.name, 0L) should be <= 150L
         }
         // The team's budget counted only what passed the cap; the game still follows the trusted GameController.
@@ -68,7 +73,8 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
     }
     "count what it hears on UDP 10000 + team number as the GameController does, and say so with warnings" in {
       // Team 12 plays in the vectors; its port is 10012.
-      val f = new GatewayFixture(testKit, "game-controller.trusted-sources = [\"127.0.0.1\"]\ngame-controller.team-messages.team-number = 12")
+      val f = new GatewayFixture(testKit,
+        "game-controller.trusted-sources = [\"127.0.0.1\"]\ngame-controller.team-messages.team-number = 12")
       val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
       val second = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
       val robot = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
@@ -100,7 +106,7 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
         }
         eventually(timeout(10.seconds)) {
           source(f).warnings.exists(_.startsWith("2 GameControllers on this field: game state from 127.0.0.1:" +
-            gc.getLocalAddress.asInstanceOf[InetSocketAddress].getPort + " only")) shouldBe true
+              gc.getLocalAddress.asInstanceOf[InetSocketAddress].getPort + " only")) shouldBe true
         }
         val game = createTestProbe[Option[GameControlData]]()
         f.gateway ! Gateway.GetGameState(game.ref)

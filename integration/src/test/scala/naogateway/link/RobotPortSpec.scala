@@ -16,14 +16,16 @@ class RobotPortSpec extends AnyWordSpec with Matchers {
 
   private final class Recorder extends RobotPort.Handler {
     val datagrams = new LinkedBlockingQueue[(Array[Byte], InetSocketAddress, String)]()
-    def received(bytes: Array[Byte], from: InetSocketAddress): Unit = datagrams.put((bytes, from, Thread.currentThread().getName))
+    def received(bytes: Array[Byte], from: InetSocketAddress): Unit =
+      datagrams.put((bytes, from, Thread.currentThread().getName))
     def caughtUp(): Unit = ()
     def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit = ()
     def next(): (Array[Byte], InetSocketAddress, String) =
       Option(datagrams.poll(10, TimeUnit.SECONDS)).getOrElse(fail("no datagram within 10 s"))
   }
 
-  private def readers(name: String): Int = Thread.getAllStackTraces.keySet.asScala.count(t => t.getName == name && t.isAlive)
+  private def readers(name: String): Int =
+    Thread.getAllStackTraces.keySet.asScala.count(t => t.getName == name && t.isAlive)
 
   "A robot port" must {
     "hand each datagram, at its own size, with its sender, to the handler on its named reader thread" in {

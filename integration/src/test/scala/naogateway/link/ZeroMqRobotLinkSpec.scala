@@ -36,7 +36,8 @@ object ZeroMqRobotLinkSpec {
        |""".stripMargin
 }
 
-class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.config) with AnyWordSpecLike with LogCapturing {
+class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.config) with AnyWordSpecLike
+    with LogCapturing {
   import ZeroMqRobotLinkSpec._
 
   /** The gateway's settings with one ZeroMQ robot, `robotId` at `endpoint`. */
@@ -49,11 +50,13 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
 
   private def call(connected: RobotActor.Connected, module: String, method: String, params: RpcValue*): CallResult = {
     val results = createTestProbe[CallResult]()
-    connected.response ! ResponseActor.Call(RpcCall(module, method, params.toVector), results.ref, timeout = Some(4.seconds))
+    connected.response ! ResponseActor.Call(RpcCall(module, method, params.toVector), results.ref,
+      timeout = Some(4.seconds))
     results.receiveMessage(6.seconds)
   }
 
-  private def expectEvent[T](events: TestProbe[GatewayEvent], within: FiniteDuration)(pf: PartialFunction[GatewayEvent, T]): T =
+  private def expectEvent[T](events: TestProbe[GatewayEvent], within: FiniteDuration)(
+      pf: PartialFunction[GatewayEvent, T]): T =
     events.fishForMessagePF(within) {
       case e if pf.isDefinedAt(e) => FishingOutcome.Complete
       case _                      => FishingOutcome.ContinueAndIgnore
@@ -97,7 +100,8 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
         req.setReceiveTimeOut(5000)
         req.connect(endpoint)
         def ask(module: String, method: String, params: RpcValue*): RpcReply = {
-          req.send(MessageContents(31, rpcRequest = Some(RpcCall(module, method, params.toVector, Some(9L)).toProto)).toProtobuf, 0)
+          req.send(MessageContents(31, rpcRequest = Some(RpcCall(module, method, params.toVector, Some(9L)).toProto)).toProtobuf,
+            0)
           val reply = MessageContents.parse(req.recv(0)).fold(e => fail(e.describe), identity)
           reply.robotId shouldBe 31
           RpcReply.fromProto(reply.rpcResponse.get)
@@ -111,7 +115,8 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
           Right(Some(RpcValue.Flag(true)))
         // Junk is answered too: a REP socket must answer every request to take the next.
         req.send(Array[Byte](1, 2, 3), 0)
-        MessageContents.parse(req.recv(0)).toOption.flatMap(_.rpcResponse).flatMap(_.error).get should startWith("bad parameters")
+        MessageContents.parse(req.recv(0)).toOption.flatMap(_.rpcResponse).flatMap(_.error).get should startWith(
+          "bad parameters")
       } finally {
         context.close()
         robot.stop()
@@ -147,7 +152,9 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
           Right(Some(RpcValue.Flag(true)))
         call(connected, "heartbeat", "probe").result shouldBe
           Left(RobotFailure.RobotError(20, RpcReply.unknownMethod("heartbeat", "probe")))
-        expectEvent(events, 2.seconds) { case RobotStatusUpdated(s) if s.posture.contains(Posture.Stand) || s.posture.contains(Posture.Walking) => () }
+        expectEvent(events, 2.seconds) {
+          case RobotStatusUpdated(s) if s.posture.contains(Posture.Stand) || s.posture.contains(Posture.Walking) => ()
+        }
 
         robot.stop()
         // quiet-after + 3 probes = 3.6 s after the last keep-alive; the rest is slack for a loaded machine.
@@ -183,7 +190,7 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
         val owner = createTestProbe[ZeroMqRobotLink.Event]()
         val outcomes = createTestProbe[Outbox.Outcome]()
         val link = spawn(ZeroMqRobotLink(21, s"tcp://127.0.0.1:${deaf.getLocalPort}", settings, owner.ref,
-          ZeroMqRobotLink.SharedLoop(system).loop))
+            ZeroMqRobotLink.SharedLoop(system).loop))
         // The gate and the in-flight cap are the sender's and the outbox's: the link only says a poll is due.
         val due = owner.expectMessageType[ZeroMqRobotLink.PollDue](settings.statusInterval * 3)
         due.calls.map(c => c.module -> c.method) shouldBe ZeroMqRobotLink.StatusCalls

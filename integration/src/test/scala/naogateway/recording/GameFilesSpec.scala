@@ -15,11 +15,13 @@ import naogateway.wire.gamecontroller._
 class GameFilesSpec extends AnyWordSpec with Matchers {
   import GameFiles._
 
-  private val v19: HslControlData = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v19-initial.bin")) match {
-    case Right(d: HslControlData) => d
-    case other                    => fail(s"$other")
-  }
-  private def at(state: GameState, firstHalf: Boolean = true): GameControlData = v19.copy(gameState = state, firstHalf = firstHalf)
+  private val v19: HslControlData =
+    GameControllerCodec.decodeControl(GameControllerVectors.bytes("v19-initial.bin")) match {
+      case Right(d: HslControlData) => d
+      case other                    => fail(s"$other")
+    }
+  private def at(state: GameState, firstHalf: Boolean = true): GameControlData =
+    v19.copy(gameState = state, firstHalf = firstHalf)
   private val s = 1000000000L
   private val first = Half(12, 7, firstHalf = true)
   private val second = Half(12, 7, firstHalf = false)
@@ -33,14 +35,24 @@ class GameFilesSpec extends AnyWordSpec with Matchers {
 
   "The plan of game files" should {
     "begin a file at each half's first READY and end it at FINISHED" in {
-      steps(Some(at(GameState.Initial)) -> 0L, Some(at(GameState.Ready)) -> 1L, Some(at(GameState.Ready)) -> 2L,
-        Some(at(GameState.Set)) -> 3L, Some(at(GameState.Playing)) -> 4L, Some(at(GameState.Ready)) -> 5L,
-        Some(at(GameState.Finished)) -> 6L, Some(at(GameState.Initial, firstHalf = false)) -> 7L,
-        Some(at(GameState.Ready, firstHalf = false)) -> 8L, Some(at(GameState.Finished, firstHalf = false)) -> 9L) shouldBe
-        Vector(Begin(first), End("team12-vs-team7-half1 finished"), Begin(second), End("team12-vs-team7-half2 finished"))
+      steps(
+        Some(at(GameState.Initial)) -> 0L,
+        Some(at(GameState.Ready)) -> 1L,
+        Some(at(GameState.Ready)) -> 2L,
+        Some(at(GameState.Set)) -> 3L,
+        Some(at(GameState.Playing)) -> 4L,
+        Some(at(GameState.Ready)) -> 5L,
+        Some(at(GameState.Finished)) -> 6L,
+        Some(at(GameState.Initial, firstHalf = false)) -> 7L,
+        Some(at(GameState.Ready, firstHalf = false)) -> 8L,
+        Some(at(GameState.Finished, firstHalf = false)) -> 9L
+      ) shouldBe
+        Vector(Begin(first), End("team12-vs-team7-half1 finished"), Begin(second),
+          End("team12-vs-team7-half2 finished"))
     }
     "end a half when its GameController goes quiet, and when the next half begins without a FINISHED heard" in {
-      steps(Some(at(GameState.Ready)) -> 0L, None -> 4L, Some(at(GameState.Playing)) -> 4L, None -> 8L, None -> 9L) shouldBe
+      steps(Some(at(GameState.Ready)) -> 0L, None -> 4L, Some(at(GameState.Playing)) -> 4L, None -> 8L,
+        None -> 9L) shouldBe
         Vector(Begin(first), End("team12-vs-team7-half1: no GameController packet for 5 s"))
       steps(Some(at(GameState.Ready)) -> 0L, Some(at(GameState.Ready, firstHalf = false)) -> 1L) shouldBe
         Vector(Begin(first), End("team12-vs-team7-half1 over: team12-vs-team7-half2 began"), Begin(second))
@@ -55,9 +67,12 @@ class GameFilesSpec extends AnyWordSpec with Matchers {
   "A recorder with game files" should {
     "write each half into a file of its own, named by teams and half, the game's packets in it" in {
       val dir = Files.createTempDirectory("game-files-spec")
-      val recording = Recording(RecordingSettings(enabled = true, dir, 64L * 1024 * 1024, 10.minutes, 65536, gameFiles = true,
-        gameQuiet = 5.seconds), "game-files-spec")
-      def publish(d: GameControlData): Unit = { recording.decision(Decision.Published(GameStateUpdated(d))); Thread.sleep(20) }
+      val recording =
+        Recording(RecordingSettings(enabled = true, dir, 64L * 1024 * 1024, 10.minutes, 65536, gameFiles = true,
+            gameQuiet = 5.seconds), "game-files-spec")
+      def publish(d: GameControlData): Unit = {
+        recording.decision(Decision.Published(GameStateUpdated(d))); Thread.sleep(20)
+      }
       publish(at(GameState.Initial))
       Seq(GameState.Ready, GameState.Set, GameState.Playing, GameState.Finished).foreach(st => publish(at(st)))
       publish(at(GameState.Initial, firstHalf = false))

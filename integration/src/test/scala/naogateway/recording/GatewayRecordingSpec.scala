@@ -29,10 +29,12 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       val dir = Files.createTempDirectory("recording-spec")
       val relayTarget = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
       val relayAt = relayTarget.getLocalAddress.asInstanceOf[InetSocketAddress]
-      val f = new GatewayFixture(testKit,
+      val f = new GatewayFixture(
+        testKit,
         s"""recording { enabled = on, directory = "${dir.toString}" }
            |fu-remote-relay { enabled = on, address = "${relayAt.getAddress.getHostAddress}", port = ${relayAt.getPort} }
-           |""".stripMargin)
+           |""".stripMargin
+      )
       val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
       val strangerAt = stranger.getLocalAddress.asInstanceOf[InetSocketAddress]
       val odd = "not a frame at all \u0000\u00ff".getBytes(StandardCharsets.ISO_8859_1)
@@ -40,7 +42,9 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         f.robot(7)
         f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
         // Until the robot's clock is estimated, and one more keep-alive after it (dated by that estimate).
-        f.awaitEvent(20.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 && snapshot.clock.isDefined => () }
+        f.awaitEvent(20.seconds) {
+          case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 && snapshot.clock.isDefined => ()
+        }
         f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
         stranger.send(ByteBuffer.wrap(odd), f.addresses.robots)
         val probe = createTestProbe[CallResult]()
@@ -58,7 +62,8 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       val recorded = files(dir)
       recorded should have size 1
       val contents = McapReader.read(Files.readAllBytes(recorded.head))
-      def channel(topic: String): Mcap.Channel = contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no channel $topic"))
+      def channel(topic: String): Mcap.Channel =
+        contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no channel $topic"))
       def on(topic: String): Vector[Mcap.Message] = contents.messages.filter(_.channelId == channel(topic).id)
 
       val datagrams = on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
@@ -68,10 +73,12 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       fromStranger.head.port shouldBe RecordedPort.ROBOT_PORT
       fromStranger.head.direction shouldBe RecordedDirection.RECEIVED
       // Relayed to FU-Remote, the same bytes.
-      datagrams.filter(d => d.port == RecordedPort.FU_REMOTE_RELAY).map(_.payload.toByteArray.toVector) should contain(odd.toVector)
+      datagrams.filter(d => d.port == RecordedPort.FU_REMOTE_RELAY).map(_.payload.toByteArray.toVector) should contain(
+        odd.toVector)
       // The robot's keep-alives, and what the gateway sent it (the debug option pull, the ping).
       datagrams.count(d => d.robotID.contains(7) && d.direction == RecordedDirection.RECEIVED) should be > 1
-      datagrams.count(d => d.robotID.contains(7) && d.direction == RecordedDirection.SENT && d.port == RecordedPort.ROBOT_PORT) should be >= 1
+      datagrams.count(d =>
+        d.robotID.contains(7) && d.direction == RecordedDirection.SENT && d.port == RecordedPort.ROBOT_PORT) should be >= 1
 
       val statusMessages = on(Recording.Topics.status(7))
       val statuses = statusMessages.map(m => Status.parseFrom(m.data))
@@ -84,11 +91,13 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       statuses.flatMap(_.teamID).distinct shouldBe Vector(1)
       contents.schemas(channel(Recording.Topics.status(7)).schemaId).name shouldBe "naogateway.proto.Status"
 
-      val decisions: Vector[String] = on(Recording.Topics.Decisions).map(m => new String(m.data, StandardCharsets.UTF_8))
+      val decisions: Vector[String] =
+        on(Recording.Topics.Decisions).map(m => new String(m.data, StandardCharsets.UTF_8))
       channel(Recording.Topics.Decisions).messageEncoding shouldBe "json"
       decisions.exists(d => d.contains("\"decision\":\"robot-online\"") && d.contains("\"robotId\":7")) shouldBe true
-      decisions.exists(d => d.contains("\"decision\":\"send\"") && d.contains("\"call\":\"system.ping\"") &&
-        d.contains("\"outcome\":\"sent\"")) shouldBe true
+      decisions.exists(d =>
+        d.contains("\"decision\":\"send\"") && d.contains("\"call\":\"system.ping\"") &&
+          d.contains("\"outcome\":\"sent\"")) shouldBe true
       withClue(decisions.mkString("\n")) {
         decisions.exists(d => d.contains("\"decision\":\"reply\"") && d.contains("\"outcome\":\"ok\"")) shouldBe true
       }
@@ -98,7 +107,8 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
 
     "rotate its files by size and close each properly" in {
       val dir = Files.createTempDirectory("recording-rotate-spec")
-      val f = new GatewayFixture(testKit, s"""recording { enabled = on, directory = "${dir.toString}", rotate-bytes = 64KiB }""")
+      val f = new GatewayFixture(testKit,
+        s"""recording { enabled = on, directory = "${dir.toString}", rotate-bytes = 64KiB }""")
       val sender = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
       try {
         val payload = new Array[Byte](1000)

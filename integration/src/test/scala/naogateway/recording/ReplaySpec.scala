@@ -15,11 +15,10 @@ import naogateway.sim.{SimulatedGameController, SimulatedGameControllerSettings,
 import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller.GameState
 
-/**
- * Records a run (two simulated robots, one behind 10 % loss each way, one power-cycled, a GameController going
- * through a whole half), replays the recording into a fresh gateway without sockets, and compares what both told
- * their subscribers.
- */
+/** Records a run (two simulated robots, one behind 10 % loss each way, one power-cycled, a GameController going through
+  * a whole half), replays the recording into a fresh gateway without sockets, and compares what both told their
+  * subscribers.
+  */
 class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
   /** Robot events (online, offline, restarted) by robot, and the game states as they changed. */
@@ -27,12 +26,13 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
 
   private def story(events: Vector[GatewayEvent]): Story = {
     val robots = events.collect {
-      case RobotOnline(id, _)        => id -> "online"
-      case RobotOffline(id, _)       => id -> "offline"
-      case RobotRestarted(id, _, _)  => id -> "restarted"
+      case RobotOnline(id, _)       => id -> "online"
+      case RobotOffline(id, _)      => id -> "offline"
+      case RobotRestarted(id, _, _) => id -> "restarted"
     }.groupBy(_._1).map { case (id, es) => id -> es.map(_._2) }
     val states = events.collect { case GameStateUpdated(d) => d.gameState }
-    Story(robots, states.foldLeft(Vector.empty[GameState])((acc, s) => if (acc.lastOption.contains(s)) acc else acc :+ s))
+    Story(robots,
+      states.foldLeft(Vector.empty[GameState])((acc, s) => if (acc.lastOption.contains(s)) acc else acc :+ s))
   }
 
   /** Everything `probe` got within `during`. */
@@ -58,8 +58,8 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
           f.robot(1, to = proxy.clientSide)
           val (two, _) = f.robot(2)
           val gc = spawn(SimulatedGameController(SimulatedGameControllerSettings(f.addresses.gameController.get,
-            initial = 500.millis, ready = 700.millis, set = 500.millis, playing = 2.seconds, finished = 700.millis,
-            interval = 100.millis)))
+                initial = 500.millis, ready = 700.millis, set = 500.millis, playing = 2.seconds, finished = 700.millis,
+                interval = 100.millis)))
           val first = collect(f.events, 2.seconds)
           two ! SimulatedRobot.PowerCycle(1500.millis)
           val rest = collect(f.events, 7.seconds)
@@ -73,7 +73,8 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
       // The run itself must hold what the replay is to show.
       original.robots.keySet shouldBe Set(1, 2)
       original.robots(2) should contain("restarted")
-      original.game should contain allOf (GameState.Initial, GameState.Ready, GameState.Set, GameState.Playing, GameState.Finished)
+      original.game should contain allOf (GameState.Initial, GameState.Ready, GameState.Set, GameState.Playing,
+        GameState.Finished)
 
       val settings = GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway"))
       val replaying = spawn(Gateway(settings, Some(Replay.of(dir, speed = 1.0))))

@@ -2,14 +2,13 @@ package naogateway.link
 
 import java.util.concurrent.atomic.AtomicInteger
 
-/**
- * A soft bound on the messages one thread hands an actor's unbounded mailbox: the sender takes a place before each
- * message ([[tryAdd]]), the actor gives it back when it handles one ([[done]]). When the actor falls behind, the
- * sender drops (and counts) instead of letting the mailbox grow without bound.
- *
- * Soft: an actor that restarts may lose messages that held places, so it calls [[reset]] on start, and [[done]]
- * never goes below zero; the bound can then be overshot by what was in flight across the restart, never for ever.
- */
+/** A soft bound on the messages one thread hands an actor's unbounded mailbox: the sender takes a place before each
+  * message ([[tryAdd]]), the actor gives it back when it handles one ([[done]]). When the actor falls behind, the
+  * sender drops (and counts) instead of letting the mailbox grow without bound.
+  *
+  * Soft: an actor that restarts may lose messages that held places, so it calls [[reset]] on start, and [[done]] never
+  * goes below zero; the bound can then be overshot by what was in flight across the restart, never for ever.
+  */
 final class Backlog(val limit: Int) {
   require(limit > 0, s"a backlog limit must be positive, not $limit")
   private val waiting = new AtomicInteger

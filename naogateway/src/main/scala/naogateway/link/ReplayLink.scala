@@ -15,11 +15,11 @@ import org.slf4j.LoggerFactory
 import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort}
 import naogateway.recording.{Mcap, McapReader, Recording}
 
-/**
- * A recording to play back instead of the sockets: its files, in order, at `speed` times the recorded pace.
- *
- * @param files MCAP files written by the gateway's recorder (docs/recording.md), played one after the other
- */
+/** A recording to play back instead of the sockets: its files, in order, at `speed` times the recorded pace.
+  *
+  * @param files
+  *   MCAP files written by the gateway's recorder (docs/recording.md), played one after the other
+  */
 final case class Replay(files: Vector[Path], speed: Double) {
   require(files.nonEmpty, "a replay needs at least one file")
   require(speed > 0 && speed <= 1000, s"replay speed $speed must be in (0, 1000]")
@@ -32,7 +32,8 @@ object Replay {
   def of(path: Path, speed: Double = 1.0): Replay = {
     val files =
       if (Files.isDirectory(path))
-        Using.resource(Files.list(path))(_.iterator().asScala.filter(_.getFileName.toString.endsWith(".mcap")).toVector.sortBy(_.getFileName.toString))
+        Using.resource(Files.list(path))(
+          _.iterator().asScala.filter(_.getFileName.toString.endsWith(".mcap")).toVector.sortBy(_.getFileName.toString))
       else Vector(path)
     require(files.nonEmpty, s"$path holds no .mcap file")
     files.foreach(f => require(Files.isRegularFile(f), s"recording $f does not exist"))
@@ -43,13 +44,12 @@ object Replay {
   type Progress = ReplayProgress; val Progress: ReplayProgress.type = ReplayProgress
 }
 
-/**
- * The gateway's robot link played back from a recording: the datagrams the gateway received on its robot port and
- * on its GameController port are handed to the gateway's usual handler at their recorded times (scaled by the
- * speed), on a thread of its own, as the robot port's reader hands live ones. Nothing is sent anywhere: what the
- * gateway sends is discarded and counted. When the recording ends the link stays open and quiet (the robots go
- * offline as their keep-alives stop).
- */
+/** The gateway's robot link played back from a recording: the datagrams the gateway received on its robot port and on
+  * its GameController port are handed to the gateway's usual handler at their recorded times (scaled by the speed), on
+  * a thread of its own, as the robot port's reader hands live ones. Nothing is sent anywhere: what the gateway sends is
+  * discarded and counted. When the recording ends the link stays open and quiet (the robots go offline as their
+  * keep-alives stop).
+  */
 final class ReplayLink(replay: Replay, threadName: String) extends RobotLink {
   private val log = LoggerFactory.getLogger(classOf[ReplayLink])
   private val fed = new AtomicLong
@@ -93,22 +93,24 @@ final class ReplayLink(replay: Replay, threadName: String) extends RobotLink {
       replay.files.iterator.takeWhile(_ => open).foreach { file =>
         log.info("Replaying {} at {}x", file, replay.speed)
         try Using.resource(new BufferedInputStream(Files.newInputStream(file), 256 * 1024)) { in =>
-          val stream = McapReader.stream(in)
-          var datagramChannels = Set.empty[Int]
-          stream.items.takeWhile(_ => open).foreach {
-            case McapReader.ChannelItem(c) if c.topic == Recording.Topics.Datagrams => datagramChannels += c.id
-            case McapReader.MessageItem(m) if datagramChannels(m.channelId) =>
-              if (firstTime == Long.MinValue) firstTime = m.logTime
-              waitUntil(wallStart + ((m.logTime - firstTime) / replay.speed).toLong, handler)
-              if (open) feed(RecordedDatagram.parseFrom(m.data), handler)
-            case _ => ()
+            val stream = McapReader.stream(in)
+            var datagramChannels = Set.empty[Int]
+            stream.items.takeWhile(_ => open).foreach {
+              case McapReader.ChannelItem(c) if c.topic == Recording.Topics.Datagrams => datagramChannels += c.id
+              case McapReader.MessageItem(m) if datagramChannels(m.channelId) =>
+                if (firstTime == Long.MinValue) firstTime = m.logTime
+                waitUntil(wallStart + ((m.logTime - firstTime) / replay.speed).toLong, handler)
+                if (open) feed(RecordedDatagram.parseFrom(m.data), handler)
+              case _ => ()
+            }
           }
-        } catch {
+        catch {
           // A file cut short (the gateway did not stop cleanly) is played as far as it goes.
           case e @ (_: IOException | _: Mcap.FormatException) => log.warn(s"Replay of $file ended early: $e")
         }
       }
-      log.info("Replay finished: {} datagrams handed to the gateway, {} outbound datagrams discarded", fed.get, discarded.get)
+      log.info("Replay finished: {} datagrams handed to the gateway, {} outbound datagrams discarded", fed.get,
+        discarded.get)
     } catch { case NonFatal(e) => log.error("Replay failed", e) }
     finally done = true
   }

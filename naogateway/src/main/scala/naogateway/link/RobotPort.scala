@@ -19,10 +19,9 @@ trait DatagramWriter {
   def send(bytes: Array[Byte], to: InetSocketAddress): Boolean
 }
 
-/**
- * Where the gateway's robot datagrams come from and go to: the robot port's socket ([[RobotPort]]), or a recording
- * played back ([[ReplayLink]]). Whatever it is, it hands every datagram to one [[RobotPort.Handler]] on one thread.
- */
+/** Where the gateway's robot datagrams come from and go to: the robot port's socket ([[RobotPort]]), or a recording
+  * played back ([[ReplayLink]]). Whatever it is, it hands every datagram to one [[RobotPort.Handler]] on one thread.
+  */
 trait RobotLink extends DatagramWriter {
 
   /** Where the link receives (the real port when 0 was asked for). */
@@ -35,15 +34,14 @@ trait RobotLink extends DatagramWriter {
   def close(joinMillis: Long = 2000L): Unit
 }
 
-/**
- * The gateway's robot UDP port: one non-blocking `DatagramChannel`, read by a dedicated daemon thread and written by
- * whoever holds the port (the outbox, the relay).
- *
- * Why a thread and not an actor: a datagram read by Akka IO passes its selector actor and a link actor before any
- * gateway code sees it, two mailboxes per datagram each way. The reader thread blocks in its own selector only, never
- * inside an actor, and hands each datagram to a [[RobotPort.Handler]] (the gateway's routing) on that same thread.
- * Writes need no thread of their own: a non-blocking send either takes the datagram or returns 0 at once.
- */
+/** The gateway's robot UDP port: one non-blocking `DatagramChannel`, read by a dedicated daemon thread and written by
+  * whoever holds the port (the outbox, the relay).
+  *
+  * Why a thread and not an actor: a datagram read by Akka IO passes its selector actor and a link actor before any
+  * gateway code sees it, two mailboxes per datagram each way. The reader thread blocks in its own selector only, never
+  * inside an actor, and hands each datagram to a [[RobotPort.Handler]] (the gateway's routing) on that same thread.
+  * Writes need no thread of their own: a non-blocking send either takes the datagram or returns 0 at once.
+  */
 final class RobotPort private (channel: DatagramChannel, threadName: String) extends RobotLink {
   import RobotPort._
 
@@ -98,7 +96,8 @@ final class RobotPort private (channel: DatagramChannel, threadName: String) ext
               case e: ClosedChannelException => throw e
               case e: IOException =>
                 failures += 1
-                if (RateLimitedLog.due(failures)) log.warn("Robot port {}: receive failed ({} so far): {}", localAddress, failures, e.toString)
+                if (RateLimitedLog.due(failures))
+                  log.warn("Robot port {}: receive failed ({} so far): {}", localAddress, failures, e.toString)
                 // A failure that repeats must not spin a core.
                 LockSupport.parkNanos(1000000L)
                 null
@@ -112,7 +111,8 @@ final class RobotPort private (channel: DatagramChannel, threadName: String) ext
             catch {
               case NonFatal(e) =>
                 failures += 1
-                if (RateLimitedLog.due(failures)) log.error(s"Robot port $localAddress: a datagram from $from failed ($failures so far)", e)
+                if (RateLimitedLog.due(failures))
+                  log.error(s"Robot port $localAddress: a datagram from $from failed ($failures so far)", e)
             }
           }
         }
@@ -136,10 +136,9 @@ object RobotPort {
     /** Nothing more to read for now: the reader is about to wait. */
     def caughtUp(): Unit
 
-    /**
-     * A GameController packet from `from`. The robot port never calls it (the GameController has a socket of its
-     * own); a replayed recording does, so the game states come back through the gateway's usual handling.
-     */
+    /** A GameController packet from `from`. The robot port never calls it (the GameController has a socket of its own);
+      * a replayed recording does, so the game states come back through the gateway's usual handling.
+      */
     def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit
   }
 
@@ -148,7 +147,9 @@ object RobotPort {
 
   private val log = LoggerFactory.getLogger(classOf[RobotPort])
 
-  /** A port bound to `address` with a kernel receive buffer of `receiveBufferBytes`; the reader starts with [[RobotPort.start]]. */
+  /** A port bound to `address` with a kernel receive buffer of `receiveBufferBytes`; the reader starts with
+    * [[RobotPort.start]].
+    */
   def open(address: InetSocketAddress, receiveBufferBytes: Int, threadName: String): RobotPort = {
     val channel = DatagramChannel.open()
     try {

@@ -38,24 +38,26 @@ object UdpLink {
   /** A datagram arrived. */
   final case class Received(bytes: Array[Byte], from: InetSocketAddress) extends Event
 
-  /**
-   * `count` datagrams arrived over the link's cap in a second that has ended and were dropped unread; `lastFrom` sent
-   * the last of them. Told with the first datagram after that second, so a flood costs the owner at most one message
-   * a second beside the datagrams within the cap.
-   */
+  /** `count` datagrams arrived over the link's cap in a second that has ended and were dropped unread; `lastFrom` sent
+    * the last of them. Told with the first datagram after that second, so a flood costs the owner at most one message a
+    * second beside the datagrams within the cap.
+    */
   final case class Dropped(count: Long, lastFrom: InetSocketAddress) extends Event
 
-  /**
-   * Options a link binds with. `maxDatagramsPerSecond` (0: no cap) bounds what the owner is handed, so a flood on
-   * a port anyone can send to (the GameController's, the team's) cannot grow the owner's mailbox without bound.
-   */
-  final case class Options(reuseAddress: Boolean = false, broadcast: Boolean = false, receiveBufferBytes: Int = 4 * 1024 * 1024,
+  /** Options a link binds with. `maxDatagramsPerSecond` (0: no cap) bounds what the owner is handed, so a flood on a
+    * port anyone can send to (the GameController's, the team's) cannot grow the owner's mailbox without bound.
+    */
+  final case class Options(reuseAddress: Boolean = false, broadcast: Boolean = false,
+      receiveBufferBytes: Int = 4 * 1024 * 1024,
       maxDatagramsPerSecond: Int = 0)
 
   /** The current second's count of datagrams handed on and dropped; a pure step per datagram. */
-  private[link] final case class RateWindow(startNanos: Long, passed: Int, dropped: Long, lastDropped: Option[InetSocketAddress]) {
+  private[link] final case class RateWindow(startNanos: Long, passed: Int, dropped: Long,
+      lastDropped: Option[InetSocketAddress]) {
 
-    /** The window after a datagram from `from` at `nowNanos` under `cap`: whether it passes, and what the closed window dropped. */
+    /** The window after a datagram from `from` at `nowNanos` under `cap`: whether it passes, and what the closed window
+      * dropped.
+      */
     def offer(nowNanos: Long, cap: Int, from: InetSocketAddress): (RateWindow, Boolean, Option[Dropped]) =
       if (cap <= 0) (this, true, None)
       else if (nowNanos - startNanos >= RateWindow.SecondNanos) {

@@ -7,28 +7,35 @@ import akka.Done
 import akka.actor.CoordinatedShutdown
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.scaladsl.adapter._
-import akka.actor.typed.{ActorRef, ActorSystem, Behavior, DispatcherSelector, Extension, ExtensionId, PostStop, PreRestart}
+import akka.actor.typed.{
+  ActorRef,
+  ActorSystem,
+  Behavior,
+  DispatcherSelector,
+  Extension,
+  ExtensionId,
+  PostStop,
+  PreRestart
+}
 import org.zeromq.{SocketType, ZMQ, ZMsg}
 
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.{CallId, Outbox, ZeroMqLinkSettings}
 
-/**
- * The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several
- * may wait in the robot's queue, answered in order), replies come back as decoded messages. Such a robot cannot push
- * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive. It sends
- * nothing of its own: its polls go out through the robot's sender and the outbox like every other request.
- */
+/** The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several may
+  * wait in the robot's queue, answered in order), replies come back as decoded messages. Such a robot cannot push
+  * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive. It sends
+  * nothing of its own: its polls go out through the robot's sender and the outbox like every other request.
+  */
 object ZeroMqRobotLink {
 
   /** What a link accepts. */
   sealed trait Command
 
-  /**
-   * Sends one serialized `Message` to the robot; `outcome`, when given, learns whether it went out, marked with `tag`.
-   * Only the outbox sends it, behind the competition gate and the team budget (`Outbox.Send.via`).
-   */
+  /** Sends one serialized `Message` to the robot; `outcome`, when given, learns whether it went out, marked with `tag`.
+    * Only the outbox sends it, behind the competition gate and the team budget (`Outbox.Send.via`).
+    */
   private[naogateway] final case class Send(bytes: Array[Byte], outcome: Option[ActorRef[Outbox.Outcome]], tag: Long)
       extends Command
 
@@ -46,17 +53,17 @@ object ZeroMqRobotLink {
   /** Something arrived that is not a `Message`. */
   final case class MessageRejected(reason: String) extends Event
 
-  /**
-   * A status poll is due: send `calls` (their call ids set) through the robot's sender, which counts them against the
-   * robot's in-flight cap; `outcome` learns whether each went out, so a refused poll is given up at once.
-   */
+  /** A status poll is due: send `calls` (their call ids set) through the robot's sender, which counts them against the
+    * robot's in-flight cap; `outcome` learns whether each went out, so a refused poll is given up at once.
+    */
   final case class PollDue(calls: Vector[RpcCall], outcome: ActorRef[Outbox.Outcome]) extends Event
 
   /** The poll call `callId` was answered: it no longer takes room in the robot's buffer. */
   final case class PollAnswered(callId: Long) extends Event
 
   /** The calls of one status poll, answered by every robot of the RPC contract (docs/protocol.md 7.2). */
-  val StatusCalls: Vector[(String, String)] = Vector("system" -> "ping", "system" -> "battery", "motion" -> "getPosture")
+  val StatusCalls: Vector[(String, String)] =
+    Vector("system" -> "ping", "system" -> "battery", "motion" -> "getPosture")
 
   /** A link to robot `robotId` at `endpoint`, reporting to `owner`; the socket lives on `loop`. */
   def apply(
@@ -101,7 +108,8 @@ object ZeroMqRobotLink {
             val socket = slot.socket
             val sent = socket != null && socket.send(Array.emptyByteArray, ZMQ.SNDMORE | ZMQ.DONTWAIT) &&
               socket.send(bytes, ZMQ.DONTWAIT)
-            outcome.foreach(_ ! (if (sent) Outbox.Accepted(tag) else Outbox.Dropped(tag, "no ZeroMQ connection to the robot")))
+            outcome.foreach(
+              _ ! (if (sent) Outbox.Accepted(tag) else Outbox.Dropped(tag, "no ZeroMQ connection to the robot")))
           }
           if (!accepted) outcome.foreach(_ ! Outbox.Dropped(tag, "the ZeroMQ link is closing"))
         }
@@ -113,8 +121,9 @@ object ZeroMqRobotLink {
                 transmit(bytes, outcome, tag)
                 Behaviors.same
               case PollSent(Outbox.Accepted(_)) => Behaviors.same
-              case PollSent(refused) =>
-                // Not sent (the gate is closed, or no connection), so never answered: give the poll up now and try again
+              case PollSent(refused)            =>
+                /* Not sent (the gate is closed, or no connection), so never answered: give the poll up now and try
+                 * again */
                 // at the next tick.
                 if (poll.exists(_.waiting.contains(refused.tag))) running(None, lastPollId) else Behaviors.same
               case StatusTick =>
@@ -175,7 +184,8 @@ object ZeroMqRobotLink {
   }
 
   /** One status poll: the calls still unanswered and the answers so far, by method. */
-  private final case class Poll(startedAt: Long, waiting: Map[Long, String], answers: Map[String, RpcValue], bytes: Int) {
+  private final case class Poll(startedAt: Long, waiting: Map[Long, String], answers: Map[String, RpcValue],
+      bytes: Int) {
     def answered(id: Long, reply: RpcReply, size: Int): Poll = {
       val method = waiting(id)
       // An error answer still proves the robot is there; only the value is missing then.
@@ -193,7 +203,8 @@ object ZeroMqRobotLink {
       val posture = answers.get("getPosture").collect { case RpcValue.Text(p) => p }
       MessageContents(
         robotId,
-        status = Some(Status(timestamp = uptime, timeOnline = uptime.map(ms => (ms / 1000L).toInt), currentState = posture)),
+        status =
+          Some(Status(timestamp = uptime, timeOnline = uptime.map(ms => (ms / 1000L).toInt), currentState = posture)),
         robotHealth = Some(RobotHealth(batteryVoltage = battery, posture = posture, uptimeMs = uptime.map(_.toInt)))
       )
     }
@@ -207,7 +218,8 @@ object ZeroMqRobotLink {
       val settings = system.settings.config.getConfig("naogateway.zeromq")
       val l = new ZeroMqLoop("zeromq-robots", settings.getDuration("poll-timeout").toScala)
       l.start(system.dispatchers.lookup(DispatcherSelector.fromConfig("naogateway.zeromq.dispatcher")))
-      CoordinatedShutdown(system.toClassic).addTask(CoordinatedShutdown.PhaseBeforeActorSystemTerminate, "zeromq-robot-links") { () =>
+      CoordinatedShutdown(system.toClassic).addTask(CoordinatedShutdown.PhaseBeforeActorSystemTerminate,
+        "zeromq-robot-links") { () =>
         l.stop()
       }
       system.whenTerminated.foreach(_ => l.stop())(scala.concurrent.ExecutionContext.parasitic)

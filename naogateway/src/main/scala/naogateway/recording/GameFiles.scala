@@ -2,15 +2,16 @@ package naogateway.recording
 
 import naogateway.wire.gamecontroller.{GameControlData, GameState}
 
-/**
- * When the recording begins and ends a game's file (docs/recording.md): with a GameController, one file per half,
- * begun at the half's first READY and ended at its FINISHED, or once no GameController packet came for `quietNanos`;
- * named by the teams and the half. Pure; the recorder's writer thread holds one and feeds it the game-state entries it
- * writes and the time.
- *
- * @param half        the half being recorded, if one is
- * @param lastPacket  when the last GameController packet was written (the gateway's clock)
- */
+/** When the recording begins and ends a game's file (docs/recording.md): with a GameController, one file per half,
+  * begun at the half's first READY and ended at its FINISHED, or once no GameController packet came for `quietNanos`;
+  * named by the teams and the half. Pure; the recorder's writer thread holds one and feeds it the game-state entries it
+  * writes and the time.
+  *
+  * @param half
+  *   the half being recorded, if one is
+  * @param lastPacket
+  *   when the last GameController packet was written (the gateway's clock)
+  */
 final case class GameFiles(quietNanos: Long, half: Option[GameFiles.Half] = None, lastPacket: Option[Long] = None) {
   import GameFiles._
 
@@ -19,14 +20,15 @@ final case class GameFiles(quietNanos: Long, half: Option[GameFiles.Half] = None
     val seen = copy(lastPacket = Some(nowNanos))
     val thisHalf = Half(data.team0.teamNumber, data.team1.teamNumber, data.firstHalf)
     half match {
-      case Some(h) if data.gameState == GameState.Finished => (seen.copy(half = None), Vector(End(s"${h.label} finished")))
+      case Some(h) if data.gameState == GameState.Finished =>
+        (seen.copy(half = None), Vector(End(s"${h.label} finished")))
       case Some(h) if h != thisHalf && data.gameState == GameState.Ready =>
         // The next half (or game) began without a FINISHED heard.
         (seen.copy(half = Some(thisHalf)), Vector(End(s"${h.label} over: ${thisHalf.label} began"), Begin(thisHalf)))
-      case Some(h) if h != thisHalf => (seen.copy(half = None), Vector(End(s"${h.label} over")))
-      case Some(_)                  => (seen, Vector.empty)
+      case Some(h) if h != thisHalf                  => (seen.copy(half = None), Vector(End(s"${h.label} over")))
+      case Some(_)                                   => (seen, Vector.empty)
       case None if data.gameState == GameState.Ready => (seen.copy(half = Some(thisHalf)), Vector(Begin(thisHalf)))
-      case None                     => (seen, Vector.empty)
+      case None                                      => (seen, Vector.empty)
     }
   }
 

@@ -4,16 +4,15 @@ import java.io.IOException
 import java.nio.charset.StandardCharsets
 import java.util.zip.CRC32
 
-/**
- * The MCAP container format (version 0), as far as the gateway's recordings need it: written and read from the
- * published specification. Little-endian numbers; strings, maps and arrays carry a `u32` byte length; every record is
- * `<u8 opcode><u64 content length><content>`.
- *
- * A file this writer makes: magic, Header, uncompressed Chunks (each holding the Schema, Channel and Message records
- * of its time, followed by one Message Index per channel in it), Data End (with the CRC of every byte before it),
- * the Summary (Schemas, Channels, Chunk Indexes, Statistics, each group once), the Summary Offsets, the Footer (with
- * the CRC of the summary) and the magic again. Pure code: no actor, no thread.
- */
+/** The MCAP container format (version 0), as far as the gateway's recordings need it: written and read from the
+  * published specification. Little-endian numbers; strings, maps and arrays carry a `u32` byte length; every record is
+  * `<u8 opcode><u64 content length><content>`.
+  *
+  * A file this writer makes: magic, Header, uncompressed Chunks (each holding the Schema, Channel and Message records
+  * of its time, followed by one Message Index per channel in it), Data End (with the CRC of every byte before it), the
+  * Summary (Schemas, Channels, Chunk Indexes, Statistics, each group once), the Summary Offsets, the Footer (with the
+  * CRC of the summary) and the magic again. Pure code: no actor, no thread.
+  */
 object Mcap {
 
   /** The 8 bytes that open and close every MCAP file: 0x89 "MCAP" '0' CR LF. */
@@ -38,7 +37,8 @@ object Mcap {
   final case class Schema(id: Int, name: String, encoding: String, data: Array[Byte])
 
   /** A channel: a topic with its message encoding and schema (0: none). */
-  final case class Channel(id: Int, schemaId: Int, topic: String, messageEncoding: String, metadata: Map[String, String])
+  final case class Channel(id: Int, schemaId: Int, topic: String, messageEncoding: String,
+      metadata: Map[String, String])
 
   /** One message: times are nanoseconds since the Unix epoch. */
   final case class Message(channelId: Int, sequence: Long, logTime: Long, publishTime: Long, data: Array[Byte])
@@ -85,10 +85,9 @@ object Mcap {
     def u32(v: Long): Buffer = { room(4); put32(v.toInt); this }
     def u64(v: Long): Buffer = { room(8); put32(v.toInt); put32((v >>> 32).toInt); this }
 
-    /**
-     * A Message record's head: opcode, content length (for `n` bytes of data), channel id, sequence, log time and
-     * publish time, with room for the data checked once.
-     */
+    /** A Message record's head: opcode, content length (for `n` bytes of data), channel id, sequence, log time and
+      * publish time, with room for the data checked once.
+      */
     def messageHead(channelId: Int, sequence: Long, logTime: Long, publishTime: Long, n: Int): Buffer = {
       room(1 + 8 + 2 + 4 + 8 + 8 + n)
       bytes(size) = Mcap.Op.Message.toByte
@@ -117,7 +116,9 @@ object Mcap {
       size = at + 4
     }
     def raw(b: Array[Byte]): Buffer = raw(b, 0, b.length)
-    def raw(b: Array[Byte], from: Int, n: Int): Buffer = { room(n); System.arraycopy(b, from, bytes, size, n); size += n; this }
+    def raw(b: Array[Byte], from: Int, n: Int): Buffer = {
+      room(n); System.arraycopy(b, from, bytes, size, n); size += n; this
+    }
     def string(s: String): Buffer = { val b = s.getBytes(StandardCharsets.UTF_8); u32(b.length.toLong); raw(b) }
     def setU64(at: Int, v: Long): Unit = { var i = 0; while (i < 8) { bytes(at + i) = (v >>> (8 * i)).toByte; i += 1 } }
 
@@ -180,7 +181,9 @@ object Mcap {
     def u64(): Long = le(8)
     def raw(n: Int): Array[Byte] = { need(n); val b = java.util.Arrays.copyOfRange(bytes, at, at + n); at += n; b }
     def rest(): Array[Byte] = raw(until - at)
-    def string(): String = { val n = lengthOf(u32()); need(n); val s = new String(bytes, at, n, StandardCharsets.UTF_8); at += n; s }
+    def string(): String = {
+      val n = lengthOf(u32()); need(n); val s = new String(bytes, at, n, StandardCharsets.UTF_8); at += n; s
+    }
     def stringMap(): Map[String, String] = {
       val length = lengthOf(u32())
       val end = at + length
@@ -198,7 +201,8 @@ object Mcap {
       m.result()
     }
     def lengthOf(n: Long): Int =
-      if (n < 0 || n > Int.MaxValue) throw new FormatException(s"length $n is beyond what this reader takes") else n.toInt
+      if (n < 0 || n > Int.MaxValue) throw new FormatException(s"length $n is beyond what this reader takes")
+      else n.toInt
   }
 
   /** The CRC-32 (ISO-HDLC, as zlib's) of `bytes[from, from + n)`. */

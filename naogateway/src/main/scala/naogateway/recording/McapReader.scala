@@ -5,11 +5,10 @@ import java.util.zip.CRC32
 
 import scala.collection.mutable
 
-/**
- * Reads MCAP files from start to end: the records of the data section, inside uncompressed chunks too, checking the
- * CRCs a file carries (chunks, data section, summary). Compressed chunks and other unknown content are refused with a
- * [[Mcap.FormatException]]; unknown record kinds are skipped, as the specification asks.
- */
+/** Reads MCAP files from start to end: the records of the data section, inside uncompressed chunks too, checking the
+  * CRCs a file carries (chunks, data section, summary). Compressed chunks and other unknown content are refused with a
+  * [[Mcap.FormatException]]; unknown record kinds are skipped, as the specification asks.
+  */
 object McapReader {
   import Mcap._
 
@@ -144,7 +143,8 @@ object McapReader {
           if (compression.nonEmpty) throw new FormatException(s"chunk compressed with $compression: not supported")
           if (size.toLong != uncompressedSize) throw new FormatException("chunk sizes disagree")
           val from = f.position
-          if (uncompressedCrc != 0 && Mcap.crc(content, from, size) != uncompressedCrc) throw new FormatException("chunk CRC mismatch")
+          if (uncompressedCrc != 0 && Mcap.crc(content, from, size) != uncompressedCrc)
+            throw new FormatException("chunk CRC mismatch")
           val items = List.newBuilder[Item]
           val inner = new Fields(content, from, from + size)
           while (inner.remaining > 0) {
@@ -183,16 +183,21 @@ object McapReader {
           val expected = new Array[Byte](4)
           val sum = summaryCrc.getValue
           var at = 0
-          while (at < 4) { val got = in.read(expected, at, 4 - at); if (got < 0) throw new EOFException("footer"); at += got }
+          while (at < 4) {
+            val got = in.read(expected, at, 4 - at); if (got < 0) throw new EOFException("footer"); at += got
+          }
           val crcField = new Fields(expected, 0, 4).u32()
           if (crcField != 0 && crcField != sum) throw new FormatException("summary CRC mismatch")
           val magic = new Array[Byte](8)
           at = 0
-          while (at < 8) { val got = in.read(magic, at, 8 - at); if (got < 0) throw new EOFException("closing magic"); at += got }
+          while (at < 8) {
+            val got = in.read(magic, at, 8 - at); if (got < 0) throw new EOFException("closing magic"); at += got
+          }
           if (!java.util.Arrays.equals(magic, Magic)) throw new FormatException("the file does not end with the magic")
           done = true
         } else {
-          if (length < 0 || length > MaxRecordBytes) throw new FormatException(s"summary record of opcode $op has length $length")
+          if (length < 0 || length > MaxRecordBytes)
+            throw new FormatException(s"summary record of opcode $op has length $length")
           val content = new Array[Byte](length.toInt)
           readFully(content, content.length)
           if (op == Op.Statistics) {

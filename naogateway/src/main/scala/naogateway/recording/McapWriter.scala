@@ -5,14 +5,15 @@ import java.util.zip.CRC32
 
 import scala.collection.mutable
 
-/**
- * Writes one MCAP file to `out`, which it owns and closes. Messages are gathered into uncompressed chunks of about
- * `chunkBytes`, each followed by its message indexes, so readers can seek by time; [[close]] writes the summary
- * and the footer. Not thread-safe: one writer thread.
- *
- * @param profile the Header's profile ("" for none)
- * @param library the Header's library text: who wrote the file
- */
+/** Writes one MCAP file to `out`, which it owns and closes. Messages are gathered into uncompressed chunks of about
+  * `chunkBytes`, each followed by its message indexes, so readers can seek by time; [[close]] writes the summary and
+  * the footer. Not thread-safe: one writer thread.
+  *
+  * @param profile
+  *   the Header's profile ("" for none)
+  * @param library
+  *   the Header's library text: who wrote the file
+  */
 final class McapWriter(out: OutputStream, profile: String, library: String, chunkBytes: Int = 256 * 1024) {
   import Mcap._
 
@@ -60,7 +61,8 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
   }
 
   /** Adds a channel on schema `schemaId` (0: none) and answers its id (1, 2, ...). */
-  def addChannel(topic: String, messageEncoding: String, schemaId: Int, metadata: Map[String, String] = Map.empty): Int = {
+  def addChannel(
+      topic: String, messageEncoding: String, schemaId: Int, metadata: Map[String, String] = Map.empty): Int = {
     require(schemaId == 0 || schemas.contains(schemaId), s"no schema $schemaId")
     require(channels.size < 65535, "an MCAP file holds at most 65535 channels")
     val c = Channel(channels.size + 1, schemaId, topic, messageEncoding, metadata)
@@ -70,7 +72,8 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
   }
 
   /** Writes one message on `channelId`; `data` is copied. */
-  def write(channelId: Int, logTime: Long, publishTime: Long, data: Array[Byte]): Unit = write(channelId, logTime, publishTime, data, 0, data.length)
+  def write(channelId: Int, logTime: Long, publishTime: Long, data: Array[Byte]): Unit =
+    write(channelId, logTime, publishTime, data, 0, data.length)
 
   /** Writes one message whose data are `data[from, from + n)`. */
   def write(channelId: Int, logTime: Long, publishTime: Long, data: Array[Byte], from: Int, n: Int): Unit = {
@@ -98,7 +101,9 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
     if (chunk.length >= chunkBytes) flushChunk()
   }
 
-  /** Ends the chunk being filled (if it holds anything) and flushes `out`: what was written so far is on its way to disk. */
+  /** Ends the chunk being filled (if it holds anything) and flushes `out`: what was written so far is on its way to
+    * disk.
+    */
   def flush(): Unit = if (!closed) {
     flushChunk()
     out.flush()
@@ -118,8 +123,12 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
         body
         if (written > start) offsets += ((op, start, written - start))
       }
-      group(Op.Schema)(schemas.values.foreach(s => { scratch.clear(); writeSchema(scratch, s); emit(scratch.array, scratch.length) }))
-      group(Op.Channel)(channels.values.foreach(c => { scratch.clear(); writeChannel(scratch, c); emit(scratch.array, scratch.length) }))
+      group(Op.Schema)(
+        schemas.values.foreach(s => { scratch.clear(); writeSchema(scratch, s); emit(scratch.array, scratch.length) }))
+      group(Op.Channel)(
+        channels.values.foreach(c => {
+          scratch.clear(); writeChannel(scratch, c); emit(scratch.array, scratch.length)
+        }))
       group(Op.ChunkIndex)(emit(chunkIndexes.array, chunkIndexes.length))
       group(Op.Statistics)(emitRecord(Op.Statistics) { b =>
         b.u64(messageCount).u16(schemas.size).u32(channels.size.toLong).u32(0L).u32(0L).u32(chunkCount.toLong)
@@ -130,7 +139,9 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
         b.setU32(start, (b.length - start - 4).toLong)
       })
       val summaryOffsetStart = written
-      offsets.result().foreach { case (op, start, length) => emitRecord(Op.SummaryOffset)(_.u8(op).u64(start).u64(length)) }
+      offsets.result().foreach { case (op, start, length) =>
+        emitRecord(Op.SummaryOffset)(_.u8(op).u64(start).u64(length))
+      }
       // The footer's CRC covers the summary, the summary offsets and the footer up to its own CRC field.
       scratch.clear()
       scratch.u8(Op.Footer).u64(8L + 8L + 4L).u64(summaryStart).u64(summaryOffsetStart)
@@ -166,7 +177,9 @@ final class McapWriter(out: OutputStream, profile: String, library: String, chun
       val entries = chunkIndex(channelId)
       indexOffsets(i) = written
       scratch.clear()
-      scratch.record(Op.MessageIndex) { r => r.u16(channelId).u32(entries.length.toLong).raw(entries.array, 0, entries.length) }
+      scratch.record(Op.MessageIndex) { r =>
+        r.u16(channelId).u32(entries.length.toLong).raw(entries.array, 0, entries.length)
+      }
       emit(scratch.array, scratch.length)
       entries.clear()
       i += 1

@@ -19,10 +19,9 @@ import naogateway._
 import naogateway.proto.{RecordedDirection, RecordedPort}
 import naogateway.wire.{MessageContents, RpcReply}
 
-/**
- * Protobuf bytes of the messages the writer thread writes, in one array reused from message to message (grown when
- * needed): the same bytes as the generated code's `toByteArray`, without an array, a `ByteString` and strings each.
- */
+/** Protobuf bytes of the messages the writer thread writes, in one array reused from message to message (grown when
+  * needed): the same bytes as the generated code's `toByteArray`, without an array, a `ByteString` and strings each.
+  */
 private[recording] final class Encoder {
   private var buffer = new Array[Byte](1024)
 
@@ -34,15 +33,16 @@ private[recording] final class Encoder {
     CodedOutputStream.newInstance(buffer, 0, size)
   }
 
-  /**
-   * `d` as a `RecordedDatagram` with `source` and `destination` (their address text in UTF-8), fields by number, the
-   * optional robot id only when known; answers the length.
-   */
+  /** `d` as a `RecordedDatagram` with `source` and `destination` (their address text in UTF-8), fields by number, the
+    * optional robot id only when known; answers the length.
+    */
   def datagram(d: DatagramEntry, source: Array[Byte], destination: Array[Byte]): Int = {
     val direction = if (d.received) RecordedDirection.RECEIVED.value else RecordedDirection.SENT.value
     val size = CodedOutputStream.computeEnumSize(1, d.port.value) + CodedOutputStream.computeEnumSize(2, direction) +
       CodedOutputStream.computeByteArraySize(3, source) + CodedOutputStream.computeByteArraySize(4, destination) +
-      CodedOutputStream.computeByteArraySize(5, d.bytes) + (if (d.robotId >= 0) CodedOutputStream.computeInt32Size(6, d.robotId) else 0)
+      CodedOutputStream.computeByteArraySize(5, d.bytes) + (if (d.robotId >= 0)
+                                                              CodedOutputStream.computeInt32Size(6, d.robotId)
+                                                            else 0)
     val out = room(size)
     out.writeEnum(1, d.port.value)
     out.writeEnum(2, direction)
@@ -66,16 +66,16 @@ private[recording] final class Encoder {
 
 /** One queued entry; `nanoTime` is `System.nanoTime` when it was handed over. */
 private[recording] sealed trait Entry { def nanoTime: Long }
-private[recording] final case class DatagramEntry(nanoTime: Long, port: RecordedPort, received: Boolean, source: InetSocketAddress,
+private[recording] final case class DatagramEntry(nanoTime: Long, port: RecordedPort, received: Boolean,
+    source: InetSocketAddress,
     destination: InetSocketAddress, bytes: Array[Byte], robotId: Int) extends Entry
 private[recording] final case class DecisionEntry(nanoTime: Long, decision: Decision) extends Entry
 
-/**
- * The recorder: a bounded queue that the gateway's threads only offer to, and one writer thread of its own that
- * drains it into MCAP files (decoding robot messages on the way, off the hot paths), rotating them by size and age.
- * A full queue drops the entry and counts it ([[RecordingStats.dropped]]). A file that cannot be written is closed;
- * entries are dropped (counted as failed) until a new file can be opened, tried every 5 s.
- */
+/** The recorder: a bounded queue that the gateway's threads only offer to, and one writer thread of its own that drains
+  * it into MCAP files (decoding robot messages on the way, off the hot paths), rotating them by size and age. A full
+  * queue drops the entry and counts it ([[RecordingStats.dropped]]). A file that cannot be written is closed; entries
+  * are dropped (counted as failed) until a new file can be opened, tried every 5 s.
+  */
 final class Recorder(settings: RecordingSettings, threadName: String, clock: RobotTimeBase) extends Recording {
   import Recording._
 
@@ -96,7 +96,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
   def enabled: Boolean = true
 
-  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
+  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
+      bytes: Array[Byte],
       robotId: Int): Unit =
     offer(DatagramEntry(System.nanoTime(), port, received, source, destination, bytes, robotId))
 
@@ -105,11 +106,13 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private def offer(e: Entry): Unit =
     if (running && !queue.offer(e)) {
       val n = droppedCount.incrementAndGet()
-      if (RateLimitedLog.due(n)) log.warn("Recording dropped {} entries so far: the writer is behind (queue of {})", n, settings.queueCapacity)
+      if (RateLimitedLog.due(n))
+        log.warn("Recording dropped {} entries so far: the writer is behind (queue of {})", n, settings.queueCapacity)
     }
 
   def stats: RecordingStats =
-    RecordingStats(enabled = true, fileCount.get, messageCount.get, droppedCount.get, failedCount.get, current, Some(retention.status))
+    RecordingStats(enabled = true, fileCount.get, messageCount.get, droppedCount.get, failedCount.get, current,
+      Some(retention.status))
 
   def close(): Unit = {
     running = false
@@ -196,7 +199,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   /** Takes the plan's next state; true when it has steps (each logged), i.e. the current file is to be closed. */
   private def gameSteps(next: (GameFiles, Vector[GameFiles.Step])): Boolean = {
     games = next._1
-    next._2.foreach(step => log.info("Recording: {}", step match { case GameFiles.Begin(h) => s"${h.label} begins"; case GameFiles.End(why) => why }))
+    next._2.foreach(step =>
+      log.info("Recording: {}",
+        step match { case GameFiles.Begin(h) => s"${h.label} begins"; case GameFiles.End(why) => why }))
     next._2.nonEmpty
   }
 
@@ -205,7 +210,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     val endAfter = e match {
       case DecisionEntry(at, Decision.Published(naogateway.GameStateUpdated(data))) if settings.gameFiles =>
         val steps = games.packet(data, at)
-        if (gameSteps(steps) && steps._2.exists(_.isInstanceOf[GameFiles.Begin])) { rotate(); false } else steps._2.nonEmpty
+        if (gameSteps(steps) && steps._2.exists(_.isInstanceOf[GameFiles.Begin])) { rotate(); false }
+        else steps._2.nonEmpty
       case _ => false
     }
     writeEntry(e)
@@ -232,7 +238,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     val path = settings.directory.resolve(name)
     try {
       Files.createDirectories(settings.directory)
-      val out = new BufferedOutputStream(Files.newOutputStream(path, StandardOpenOption.CREATE_NEW, StandardOpenOption.WRITE), 256 * 1024)
+      val out =
+        new BufferedOutputStream(Files.newOutputStream(path, StandardOpenOption.CREATE_NEW, StandardOpenOption.WRITE),
+          256 * 1024)
       file = Some(new FileWriter(path, new McapWriter(out, "", "naogateway recording"), System.nanoTime()))
       fileCount.incrementAndGet()
       current = Some(path.toString)
@@ -293,7 +301,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           writer.write(datagrams, time, time, encoder.bytes, 0, n)
           if (d.port == RecordedPort.ROBOT_PORT && d.received) decoded(d, time)
         case DecisionEntry(_, decision) =>
-          writer.write(decisions, time, time, DecisionJson.of(decision, time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
+          writer.write(decisions, time, time,
+            DecisionJson.of(decision, time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
       }
     }
 
@@ -316,7 +325,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
               writer.write(ids(2), time, time, c.toProtobuf)
           }
           c.rpcResponse.foreach { r =>
-            writer.write(decisions, time, time, DecisionJson.reply(c.robotId, RpcReply.fromProto(r), time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
+            writer.write(decisions, time, time,
+              DecisionJson.reply(c.robotId, RpcReply.fromProto(r), time).getBytes(
+                java.nio.charset.StandardCharsets.UTF_8))
           }
         case Left(_) => () // kept raw; the gateway counted the refusal
       }
@@ -357,5 +368,6 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           }
       }
 
-  private def addressText(a: InetSocketAddress): Array[Byte] = DecisionJson.address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
+  private def addressText(a: InetSocketAddress): Array[Byte] =
+    DecisionJson.address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
 }

@@ -5,10 +5,9 @@ import java.net.InetSocketAddress
 import naogateway._
 import naogateway.proto.RecordedPort
 
-/**
- * Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
- * as [[naogateway.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
- */
+/** Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
+  * as [[naogateway.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
+  */
 trait RobotTimeBase {
 
   /** The gateway time of robot `robotId`'s clock reading `robotMillis`, once the robot's clock is estimated. */
@@ -22,10 +21,9 @@ object RobotTimeBase {
   val Unknown: RobotTimeBase = (_: Int, _: Long) => None
 }
 
-/**
- * The robots' clock estimates as the robot actors last published them (`RobotSnapshot.clock`), read by the recorder's
- * thread: one entry per robot actor, replaced at every keep-alive, removed while a robot has no estimate.
- */
+/** The robots' clock estimates as the robot actors last published them (`RobotSnapshot.clock`), read by the recorder's
+  * thread: one entry per robot actor, replaced at every keep-alive, removed while a robot has no estimate.
+  */
 final class RobotClockEstimates extends RobotTimeBase {
   private val estimates = new java.util.concurrent.ConcurrentHashMap[Int, ClockEstimate]()
 
@@ -39,17 +37,18 @@ final class RobotClockEstimates extends RobotTimeBase {
     Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
 }
 
-/**
- * Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
- * reader thread and the outbox call it on their hot paths.
- */
+/** Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
+  * reader thread and the outbox call it on their hot paths.
+  */
 trait Recording {
 
   /** Whether anything is recorded. */
   def enabled: Boolean
 
-  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none). */
-  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
+  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none).
+    */
+  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
+      bytes: Array[Byte],
       robotId: Int): Unit
 
   /** A decision of the gateway. */
@@ -68,7 +67,8 @@ object Recording {
   /** Records nothing. */
   val Off: Recording = new Recording {
     def enabled: Boolean = false
-    def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress, bytes: Array[Byte],
+    def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
+        bytes: Array[Byte],
         robotId: Int): Unit = ()
     def decision(decision: Decision): Unit = ()
     def stats: RecordingStats = RecordingStats.Off

@@ -7,10 +7,9 @@ import scala.jdk.DurationConverters._
 
 import com.typesafe.config.Config
 
-/**
- * `naogateway.recording`: whether the gateway records, where, when a file is closed and the next begun, how many
- * entries may wait for the writer before more are dropped, and how much the directory keeps.
- */
+/** `naogateway.recording`: whether the gateway records, where, when a file is closed and the next begun, how many
+  * entries may wait for the writer before more are dropped, and how much the directory keeps.
+  */
 final case class RecordingSettings(
     enabled: Boolean,
     directory: Path,
@@ -31,7 +30,8 @@ final case class RecordingSettings(
 object RecordingSettings {
 
   /** Recording off (the default of every gateway built without a `recording` block). */
-  val Off: RecordingSettings = RecordingSettings(enabled = false, Paths.get("recordings"), 64L * 1024 * 1024, 10.minutes, 65536)
+  val Off: RecordingSettings =
+    RecordingSettings(enabled = false, Paths.get("recordings"), 64L * 1024 * 1024, 10.minutes, 65536)
 
   /** The settings of a `naogateway.recording` block. */
   def fromConfig(c: Config): RecordingSettings =

@@ -13,16 +13,19 @@ import scala.util.control.NonFatal
 import com.typesafe.config.Config
 import org.slf4j.LoggerFactory
 
-/**
- * `naogateway.recording.retention`: how much the recording directory may hold and for how long. Without a limit a
- * base station that records every game runs out of disk during a competition week.
- *
- * @param maxTotalBytes the recordings together; beyond it the oldest files are deleted (0 = no size limit)
- * @param maxAge a file older than this (by its last write) is deleted (0 = no age limit)
- */
+/** `naogateway.recording.retention`: how much the recording directory may hold and for how long. Without a limit a base
+  * station that records every game runs out of disk during a competition week.
+  *
+  * @param maxTotalBytes
+  *   the recordings together; beyond it the oldest files are deleted (0 = no size limit)
+  * @param maxAge
+  *   a file older than this (by its last write) is deleted (0 = no age limit)
+  */
 final case class RetentionSettings(maxTotalBytes: Long, maxAge: FiniteDuration) {
-  require(maxTotalBytes == 0 || maxTotalBytes >= 1024L * 1024, "recording.retention.max-total-bytes must be 0 (no limit) or at least 1 MiB")
-  require(maxAge == Duration.Zero || maxAge >= 1.minute, "recording.retention.max-age must be 0 (no limit) or at least 1 minute")
+  require(maxTotalBytes == 0 || maxTotalBytes >= 1024L * 1024,
+    "recording.retention.max-total-bytes must be 0 (no limit) or at least 1 MiB")
+  require(maxAge == Duration.Zero || maxAge >= 1.minute,
+    "recording.retention.max-age must be 0 (no limit) or at least 1 minute")
 
   /** The limits in words, for the status view: "20 GiB, 14 days". */
   def describe: String = {
@@ -35,10 +38,9 @@ final case class RetentionSettings(maxTotalBytes: Long, maxAge: FiniteDuration) 
 /** Reading the settings. */
 object RetentionSettings {
 
-  /**
-   * A competition week on a laptop: a team's five robots with debug output record well under 100 MB an hour, so a
-   * week of twelve-hour days is under 10 GB; 20 GiB and 14 days keep it with room to spare, and the travel home.
-   */
+  /** A competition week on a laptop: a team's five robots with debug output record well under 100 MB an hour, so a week
+    * of twelve-hour days is under 10 GB; 20 GiB and 14 days keep it with room to spare, and the travel home.
+    */
   val Default: RetentionSettings = RetentionSettings(20L * 1024 * 1024 * 1024, 14.days)
 
   /** The settings of a `naogateway.recording.retention` block. */
@@ -55,13 +57,13 @@ object Retention {
   /** The files of a recording directory the rule applies to: every MCAP file in it (not below it). */
   def isRecording(path: Path): Boolean = path.getFileName.toString.endsWith(".mcap")
 
-  /**
-   * The files to delete, oldest first: every file older than `maxAge`, then the oldest of the rest until the total
-   * is within `maxTotalBytes`. Files in `current` (the file being written, the current game's) are never deleted and
-   * count towards the total, so a current file larger than the limit leaves the others deleted and itself kept.
-   * Age is by last write; files written in the same instant go by name (the recorder's names sort by start time).
-   */
-  def toDelete(files: Seq[RecordingFile], current: Set[Path], now: Instant, settings: RetentionSettings): Vector[RecordingFile] = {
+  /** The files to delete, oldest first: every file older than `maxAge`, then the oldest of the rest until the total is
+    * within `maxTotalBytes`. Files in `current` (the file being written, the current game's) are never deleted and
+    * count towards the total, so a current file larger than the limit leaves the others deleted and itself kept. Age is
+    * by last write; files written in the same instant go by name (the recorder's names sort by start time).
+    */
+  def toDelete(files: Seq[RecordingFile], current: Set[Path], now: Instant, settings: RetentionSettings)
+      : Vector[RecordingFile] = {
     val oldestFirst = files.toVector.sortBy(f => (f.modified, f.path.getFileName.toString))
     val deletable = oldestFirst.filterNot(f => current.contains(f.path))
     val tooOld =
@@ -105,11 +107,10 @@ object Retention {
     else s"${age.toMinutes} min"
 }
 
-/**
- * Keeps one recording directory within its [[RetentionSettings]]: each `sweep` lists it and deletes what
- * [[Retention.toDelete]] names. Called by the recorder's writer thread whenever it begins a file (never on an actor);
- * its status is read from any thread.
- */
+/** Keeps one recording directory within its [[RetentionSettings]]: each `sweep` lists it and deletes what
+  * [[Retention.toDelete]] names. Called by the recorder's writer thread whenever it begins a file (never on an actor);
+  * its status is read from any thread.
+  */
 final class RetentionKeeper(directory: Path, settings: RetentionSettings) {
   private val log = LoggerFactory.getLogger(classOf[RetentionKeeper])
   @volatile private var last = RetentionStatus(0, 0L, 0L, 0L, settings.describe, None)
@@ -129,10 +130,12 @@ final class RetentionKeeper(directory: Path, settings: RetentionSettings) {
         }
         val deleted = doomed.filterNot(f => Files.exists(f.path))
         if (deleted.nonEmpty)
-          log.info("Recording retention ({}): deleted {} old file(s), {}", settings.describe, deleted.size, Retention.bytesText(deleted.map(_.bytes).sum))
+          log.info("Recording retention ({}): deleted {} old file(s), {}", settings.describe, deleted.size,
+            Retention.bytesText(deleted.map(_.bytes).sum))
         failures.foreach(f => log.warn("Recording retention: {}", f))
         val kept = files.filterNot(f => deleted.exists(_.path == f.path))
-        RetentionStatus(kept.size, kept.map(_.bytes).sum, last.deletedFiles + deleted.size, last.deletedBytes + deleted.map(_.bytes).sum,
+        RetentionStatus(kept.size, kept.map(_.bytes).sum, last.deletedFiles + deleted.size,
+          last.deletedBytes + deleted.map(_.bytes).sum,
           settings.describe, failures.headOption)
       } catch {
         case NonFatal(e) =>

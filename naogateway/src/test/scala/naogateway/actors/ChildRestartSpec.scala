@@ -37,7 +37,8 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(true) => true; case _ => false })
       val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
         wrapResponder = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
-      (1 to 5).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      (1 to 5).foreach(i =>
+        responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       outbox.receiveMessages(4) // four in flight, one waiting
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
@@ -53,8 +54,9 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       // The interrupted calls gave their room back to the sender: a new call goes out at once.
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       outbox.fishForMessage(3.seconds) {
-        case s: Outbox.Send if RobotStandIn.callIn(s).name == "system.ping" => akka.actor.testkit.typed.FishingOutcome.Complete
-        case _                                                              => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+        case s: Outbox.Send if RobotStandIn.callIn(s).name == "system.ping" =>
+          akka.actor.testkit.typed.FishingOutcome.Complete
+        case _ => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }
     }
 
@@ -62,7 +64,8 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(false) => true; case _ => false })
+      val crash =
+        new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(false) => true; case _ => false })
       val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
         wrapResponder = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       crash.arm()
@@ -88,7 +91,8 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       })
       val (responder, actor) = callActors(testKit, 2, settings, robot, outbox,
         wrapSender = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
-      (1 to 3).foreach(i => actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
+      (1 to 3).foreach(i =>
+        actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
       outbox.receiveMessages(3)
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
@@ -100,7 +104,8 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       robot.fishForMessage(3.seconds) {
         case _: RobotActor.RouteWanted => akka.actor.testkit.typed.FishingOutcome.Complete
         case _                         => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
-      }.last.asInstanceOf[RobotActor.RouteWanted].replyTo ! NoResponseActor.RouteChanged(RobotStandIn.route(outbox.ref), responder)
+      }.last.asInstanceOf[RobotActor.RouteWanted].replyTo ! NoResponseActor.RouteChanged(RobotStandIn.route(outbox.ref),
+        responder)
       actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
       RobotStandIn.sent(outbox)._1.params shouldBe Vector(RpcValue.Text("again"))
     }

@@ -12,7 +12,8 @@ import naogateway.link.UdpLink
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall, RpcValue}
 
 /** A walk never leaves after a later stop: not as a retry, not held by the outbox's budget. */
-class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
+class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike
+    with LogCapturing {
   private val manualTime = ManualTime()
   private val settings = CallSettings(2.seconds, idempotentRetries = 2, stashCapacity = 8)
   private val walk = RpcCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0.2f)))
@@ -22,15 +23,18 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
   private def drain[T](p: TestProbe[T]): Vector[T] = {
     var acc = Vector.empty[T]
     var more = true
-    while (more) try acc :+= p.receiveMessage(300.millis) catch { case _: AssertionError => more = false }
+    while (more)
+      try acc :+= p.receiveMessage(300.millis)
+      catch { case _: AssertionError => more = false }
     acc
   }
 
   /** A writer that hands every datagram to `link` as the send it is, and always takes it. */
-  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter = (bytes, to) => {
-    link ! UdpLink.Send(bytes, to)
-    true
-  }
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter =
+    (bytes, to) => {
+      link ! UdpLink.Send(bytes, to)
+      true
+    }
 
   "A walk" must {
     "never be retried after a later stop" in {
@@ -59,12 +63,14 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
       val caller = createTestProbe[CallResult]()
       val sender = spawn(NoResponseActor(3, settings, robot))
       val responder = spawn(ResponseActor(3, settings, robot, sender, online = true))
-      sender ! NoResponseActor.RouteChanged(RobotFrames.Route.Datagrams(outbox, RobotStandIn.RobotAddress, HeaderForm.Legacy), responder)
+      sender ! NoResponseActor.RouteChanged(RobotFrames.Route.Datagrams(outbox, RobotStandIn.RobotAddress,
+          HeaderForm.Legacy), responder)
       responder ! ResponseActor.Call(walk, caller.ref)
       responder ! ResponseActor.Call(stop, caller.ref, Priority.Safety)
       def name(m: UdpLink.Command): String = m match {
-        case UdpLink.Send(b, _) => MessageContents.decodeFrame(b).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto(_).name).getOrElse("?")
-        case _                  => "?"
+        case UdpLink.Send(b, _) =>
+          MessageContents.decodeFrame(b).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto(_).name).getOrElse("?")
+        case _ => "?"
       }
       name(link.receiveMessage(3.seconds)) shouldBe "motion.stop"
       // The budget frees after a second of real time (the meter reads the clock); the drain timer is manual.

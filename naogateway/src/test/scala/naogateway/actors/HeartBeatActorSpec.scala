@@ -27,7 +27,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
   /** A heartbeat whose keep-alives are acknowledged to the returned probe. */
   private def acknowledging(reports: TestProbe[Report], online: Boolean): (ActorRef[Command], TestProbe[Command]) = {
     val handled = createTestProbe[Command]()
-    val heartbeat = spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, online)))
+    val heartbeat =
+      spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, online)))
     heartbeat -> handled
   }
 

@@ -19,7 +19,8 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
   private val settings = CallSettings(1.second, idempotentRetries = 2, stashCapacity = 3)
 
   private def say(text: String) = RpcCall("speech", "say", Vector(RpcValue.Text(text)))
-  private def walk(v: Float) = RpcCall("motion", "walk", Vector(RpcValue.Number(v), RpcValue.Number(0), RpcValue.Number(0)))
+  private def walk(v: Float) =
+    RpcCall("motion", "walk", Vector(RpcValue.Number(v), RpcValue.Number(0), RpcValue.Number(0)))
   private def head(pan: Float) = RpcCall("motion", "head", Vector(RpcValue.Number(pan), RpcValue.Number(0)))
   private val stop = RpcCall("motion", "stop", Vector.empty)
   private def probe(id: Long) = RpcCall(HeartBeatActor.ProbeModule, HeartBeatActor.ProbeMethod, Vector.empty, Some(id))
@@ -32,7 +33,8 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
   }
 
   /** The robot's reply to the call in `send`. */
-  private def reply(responder: akka.actor.typed.ActorRef[ResponseActor.Command], send: Outbox.Send, value: RpcValue): Unit =
+  private def reply(
+      responder: akka.actor.typed.ActorRef[ResponseActor.Command], send: Outbox.Send, value: RpcValue): Unit =
     responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(value)), RobotStandIn.callIn(send).callId))
 
   "NoResponseActor" must {
@@ -81,8 +83,9 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val (_, outbox, _, sender) = fixture()
       val replies = createTestProbe[CallResult]()
       val probes = (1L to 4L).map(i => CallId(CallId.Owner.Heartbeat, i))
-      probes.foreach(id => sender ! NoResponseActor.Submit(Outbound.CallOut(probe(id)), Priority.Heartbeat, Some(id),
-        NoResponseActor.Awaits.Reply(Some(500.millis))))
+      probes.foreach(id =>
+        sender ! NoResponseActor.Submit(Outbound.CallOut(probe(id)), Priority.Heartbeat, Some(id),
+          NoResponseActor.Awaits.Reply(Some(500.millis))))
       (1 to 4).foreach(_ => sent(outbox)._1.name shouldBe "heartbeat.probe")
       // The buffer is full of probes: a caller's command and an option switch wait.
       sender ! NoResponseActor.Send(say("later"), Some(replies.ref))
@@ -107,7 +110,8 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val replies = createTestProbe[CallResult]()
       (1 to 8).foreach(i => sender ! NoResponseActor.Send(say(s"$i"), Some(replies.ref)))
       (1 to 4).foreach(_ => outbox.expectMessageType[Outbox.Send])
-      replies.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(4, "4 calls in flight and 3 waiting"))
+      replies.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(4,
+          "4 calls in flight and 3 waiting"))
     }
     "answer each waiting command exactly once when stopped" in {
       val (_, outbox, responder, sender) = fixture()

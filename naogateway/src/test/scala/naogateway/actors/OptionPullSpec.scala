@@ -8,7 +8,14 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWit
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway._
-import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionList, DebuggingOptionNames, RobotHealth, Status}
+import naogateway.proto.{
+  DebuggingCommands,
+  DebuggingOption,
+  DebuggingOptionList,
+  DebuggingOptionNames,
+  RobotHealth,
+  Status
+}
 import naogateway.wire.{HeaderForm, MessageContents}
 
 /** protocol.md 8: the gateway pulls a robot's option list first and enables options only once it has the answer. */
@@ -65,7 +72,8 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       remainingDebug(outbox) shouldBe empty
       passWhileAlive(robot, boot = 1, 1.second)
       nextDebug(outbox) shouldBe pull
-      robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("status.text", "havimo.regions", "havimo.grid"))),
+      robot ! RobotActor.FrameReceived(MessageContents(6,
+          debuggingCommands = Some(push("status.text", "havimo.regions", "havimo.grid"))),
         HeaderForm.Legacy, 80)
       nextDebug(outbox) shouldBe enable("havimo.regions")
       // The list is known: no more pulls, and later commands go out at once.
@@ -81,7 +89,8 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       val robot = spawn(RobotActor(6, address, settings, outbox.ref, RobotWiring.to(events.ref), heard = true))
       keepAlive(robot, boot = 1)
       nextDebug(outbox) shouldBe pull
-      robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))), HeaderForm.Legacy, 40)
+      robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))),
+        HeaderForm.Legacy, 40)
       robot ! RobotActor.OptionCommand(enable("havimo.regions"))
       nextDebug(outbox) shouldBe enable("havimo.regions")
       // A new session: three keep-alives in a row of it (new-session.keep-alives), then its list first, nothing enabled
@@ -89,7 +98,8 @@ class OptionPullSpec extends ScalaTestWithActorTestKit(ManualTime.config) with A
       (1 to settings.newSessionKeepAlives).foreach(_ => keepAlive(robot, boot = 2))
       nextDebug(outbox) shouldBe pull
       remainingDebug(outbox) shouldBe empty
-      robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))), HeaderForm.Legacy, 40)
+      robot ! RobotActor.FrameReceived(MessageContents(6, debuggingCommands = Some(push("havimo.regions"))),
+        HeaderForm.Legacy, 40)
       nextDebug(outbox) shouldBe enable("havimo.regions")
     }
   }

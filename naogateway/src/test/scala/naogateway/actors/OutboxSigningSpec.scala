@@ -14,18 +14,21 @@ import naogateway.wire._
 
 class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   private val robot = new InetSocketAddress("127.0.0.1", 3838)
-  private val teamKey = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+  private val teamKey =
+    SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
 
-  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter = (bytes, to) => {
-    link ! UdpLink.Send(bytes, to)
-    true
-  }
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter =
+    (bytes, to) => {
+      link ! UdpLink.Send(bytes, to)
+      true
+    }
 
   /** An unsigned frame to robot 1: an option pull, or a `say` call carrying `padding` characters. */
   private def frame(padding: Int): Array[Byte] = {
     val contents =
       if (padding == 0) MessageContents(1, debuggingCommands = Some(DebuggingCommands(optionPull = Some(true))))
-      else MessageContents(1, rpcRequest = Some(RpcCall("speech", "say", Vector(RpcValue.Text("x" * padding)), Some(1L)).toProto))
+      else MessageContents(1,
+        rpcRequest = Some(RpcCall("speech", "say", Vector(RpcValue.Text("x" * padding)), Some(1L)).toProto))
     MessageContents.encodeFrame(contents).toOption.get
   }
 
@@ -37,7 +40,8 @@ class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
   "An outbox with a signer" must {
     "sign frames as they leave, so timestamps grow in the order the robot gets them, whatever the queues reorder" in {
       val link = createTestProbe[UdpLink.Command]()
-      val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(1400, 0, 0.8), competition = false, Some(new FrameSigner(teamKey))))
+      val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(1400, 0, 0.8), competition = false,
+          Some(new FrameSigner(teamKey))))
       val outcomes = createTestProbe[Outbox.Outcome]()
       val big = frame(padding = 1300)
       // The first takes nearly the whole second of the budget; the debug frame waits; the safety frames overtake it.
@@ -49,7 +53,8 @@ class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
       // A stream segment is never signed.
       sent(2).toVector shouldBe Vector[Byte](3, 5, 1, 2)
       val frames = Vector(sent(0), sent(1), sent(3))
-      frames.map(_.length) shouldBe Vector(big.length, frame(0).length, frame(0).length).map(_ + FrameSigning.FieldBytes)
+      frames.map(_.length) shouldBe Vector(big.length, frame(0).length, frame(0).length).map(
+        _ + FrameSigning.FieldBytes)
       // Queued before the safety frame, sent after it: signed after it too, so the robot takes both.
       val stamps = frames.map(timestampOf)
       stamps.sliding(2).foreach(pair => pair(1) should be > pair(0))
@@ -57,7 +62,8 @@ class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
     "drop a frame that would exceed 1400 bytes with its signature, and one it has no key for" in {
       val link = createTestProbe[UdpLink.Command]()
       val outcomes = createTestProbe[Outbox.Outcome]()
-      val signing = spawn(Outbox(writer(link.ref), BudgetSettings(125000, 0, 0.8), competition = false, Some(new FrameSigner(teamKey))))
+      val signing = spawn(Outbox(writer(link.ref), BudgetSettings(125000, 0, 0.8), competition = false,
+          Some(new FrameSigner(teamKey))))
       val tooBig = frame(padding = 1400 - FrameSigning.FieldBytes - 20)
       tooBig.length should (be <= WireLimits.MaxDatagramBytes and be > WireLimits.MaxDatagramBytes - FrameSigning.FieldBytes)
       signing ! Outbox.Send(1, robot, tooBig, Priority.Command, Some(outcomes.ref), 7L, signed = true)

@@ -14,7 +14,8 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
   private val settings = CallSettings(2.seconds, idempotentRetries = 2, stashCapacity = 2)
 
   /** The next attempt the robot's sender handed the outbox; the robot actor only counts it. */
-  private def transmitted(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command]): (Long, RpcCall, Outbox.Send) = {
+  private def transmitted(
+      robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command]): (Long, RpcCall, Outbox.Send) = {
     robot.expectMessageType[RobotActor.FrameSent]
     val (call, send) = sent(outbox)
     send.tag shouldBe call.callId.get
@@ -59,7 +60,8 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       Seq(second, third).foreach(id => CallId.ownerOf(id) shouldBe Some(CallId.Owner.Response))
       c2 shouldBe RpcCall("motion", "stop", Vector.empty, Some(second))
       manualTime.timePasses(667.millis)
-      caller.expectMessage(CallResult(3, "motion.stop", Left(RobotFailure.Timeout(3, "motion.stop", (2.seconds).toMillis))))
+      caller.expectMessage(CallResult(3, "motion.stop",
+          Left(RobotFailure.Timeout(3, "motion.stop", (2.seconds).toMillis))))
       outbox.expectNoMessage(Duration.Zero)
     }
     "complete a resent call with the late answer to an earlier attempt, once" in {
@@ -109,9 +111,11 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
-      (1 to 7).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      (1 to 7).foreach(i =>
+        responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val ids = (1 to 4).map(_ => transmitted(robot, outbox)._1)
-      caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(3, "4 calls in flight and 2 waiting"))
+      caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(3,
+          "4 calls in flight and 2 waiting"))
       outbox.expectNoMessage(Duration.Zero)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(ids.head)))
       caller.expectMessageType[CallResult].result shouldBe Right(None)
@@ -123,7 +127,8 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
-      (1 to 4).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      (1 to 4).foreach(i =>
+        responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
       responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       outbox.expectNoMessage(100.millis)
@@ -183,7 +188,8 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
-      (1 to 4).foreach(i => responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+      (1 to 4).foreach(i =>
+        responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
       def head(pan: Float) = RpcCall("motion", "head", Vector(RpcValue.Number(pan), RpcValue.Number(0f)))
       responder ! ResponseActor.Call(head(0.1f), caller.ref)

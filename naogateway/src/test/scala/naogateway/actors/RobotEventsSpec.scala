@@ -78,9 +78,10 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       val current = createTestProbe[GatewayEvent]()
       val crash = new CrashOnce
       val robot = spawn(
-        Behaviors.supervise(Behaviors.intercept(() => crash)(
-          RobotActor(4, address, settings, outbox.ref, RobotWiring(Set.empty, Some(gateway.ref), new Backlog(8)),
-            heard = true))
+        Behaviors.supervise(
+          Behaviors.intercept(() => crash)(
+            RobotActor(4, address, settings, outbox.ref, RobotWiring(Set.empty, Some(gateway.ref), new Backlog(8)),
+              heard = true))
         ).onFailure(SupervisorStrategy.restartWithBackoff(50.millis, 200.millis, 0.0))
       )
       gateway.receiveMessage().robot ! RobotActor.Subscribers(Set(spawnedWith.ref))
@@ -94,7 +95,7 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       robot ! keepAlive(2)
       current.fishForMessage(5.seconds) {
         case RobotStatusUpdated(s) if s.teamId.contains(2) => akka.actor.testkit.typed.FishingOutcome.Complete
-        case _                                              => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+        case _                                             => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }
       spawnedWith.expectNoMessage(100.millis)
     }

@@ -16,17 +16,18 @@ object RobotStandIn {
   val RobotAddress: InetSocketAddress = new InetSocketAddress("127.0.0.1", 1)
 
   /** The datagram route to `outbox`. */
-  def route(outbox: ActorRef[Outbox.Command]): RobotFrames.Route = RobotFrames.Route.Datagrams(outbox, RobotAddress, HeaderForm.Legacy)
+  def route(outbox: ActorRef[Outbox.Command]): RobotFrames.Route =
+    RobotFrames.Route.Datagrams(outbox, RobotAddress, HeaderForm.Legacy)
 
   /** Answers a call actor's start-up question about the robot's reachability. */
   def reachable(robot: TestProbe[RobotActor.FromChild], online: Boolean = true): Unit =
     robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! online
 
-  /**
-   * Answers the start-up questions of a sender and its response actor, in whichever order they come: the response
-   * actor's reachability, and the sender's route to `outbox` with `responder` as its response actor.
-   */
-  def started(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command], responder: ActorRef[ResponseActor.Command],
+  /** Answers the start-up questions of a sender and its response actor, in whichever order they come: the response
+    * actor's reachability, and the sender's route to `outbox` with `responder` as its response actor.
+    */
+  def started(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command],
+      responder: ActorRef[ResponseActor.Command],
       online: Boolean = true): Unit = {
     var left = 2
     robot.fishForMessage(robot.remainingOrDefault) {
@@ -43,10 +44,9 @@ object RobotStandIn {
     ()
   }
 
-  /**
-   * A robot's call actors as its robot actor spawns them, `robot` standing in for it: the sender first, then the
-   * response actor (`wrap` puts a test's supervision around either), both started and routed to `outbox`.
-   */
+  /** A robot's call actors as its robot actor spawns them, `robot` standing in for it: the sender first, then the
+    * response actor (`wrap` puts a test's supervision around either), both started and routed to `outbox`.
+    */
   def callActors(kit: ActorTestKit, robotId: Int, settings: CallSettings, robot: TestProbe[RobotActor.FromChild],
       outbox: TestProbe[Outbox.Command], online: Boolean = true,
       wrapSender: Behavior[NoResponseActor.Command] => Behavior[NoResponseActor.Command] = identity,

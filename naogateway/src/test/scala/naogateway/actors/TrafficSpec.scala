@@ -13,7 +13,8 @@ import naogateway._
 import naogateway.link.UdpLink
 import naogateway.wire.gamecontroller.GameState
 
-class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing with ScalaCheckPropertyChecks {
+class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing
+    with ScalaCheckPropertyChecks {
   private val robot = new InetSocketAddress("127.0.0.1", 3838)
 
   "TrafficMeter" must {
@@ -35,15 +36,17 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
   }
 
   /** A writer that hands every datagram to `link` as the send it is, and always takes it. */
-  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter = (bytes, to) => {
-    link ! UdpLink.Send(bytes, to)
-    true
-  }
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter =
+    (bytes, to) => {
+      link ! UdpLink.Send(bytes, to)
+      true
+    }
 
   "Outbox" must {
     "never let probes take more than budget.probe-share of the budget in any second, and not hold back commands" in {
       val written = new java.util.concurrent.ConcurrentLinkedQueue[(Long, Int, Byte)]()
-      val recording: naogateway.link.DatagramWriter = (bytes, _) => { written.add((System.nanoTime(), bytes.length, bytes(0))); true }
+      val recording: naogateway.link.DatagramWriter =
+        (bytes, _) => { written.add((System.nanoTime(), bytes.length, bytes(0))); true }
       val budget = BudgetSettings(20000, 0, 0.8, probeShare = 0.1)
       val outbox = spawn(Outbox(recording, budget, competition = false))
       val probe = Array.fill[Byte](50)(1)
@@ -59,7 +62,8 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
       // The commands went out at once: the probes held back by their share do not stand in their way.
       all.filter(_._3 == 2).map(_._1 - start).max should be < 500000000L
       // The windows (0, 1 s], (1 s, 2 s], ... after `start` each hold at most 2000 bytes of probes, so by any instant t
-      // at most 2000 bytes for every second begun. A datagram is stamped here after the outbox decided to send it, never
+      /* at most 2000 bytes for every second begun. A datagram is stamped here after the outbox decided to send it,
+       * never */
       // before, so a late stamp (a busy machine) can only make this bound looser, never break it; a sliding window over
       // the stamps could, which is why the stamps are not read that way. Without the share all 300 would go at once.
       probes.foreach { case (t, _, _) =>

@@ -18,16 +18,20 @@ class McapSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
     channels <- Gen.choose(1, 6)
     topics <- Gen.listOfN(channels, Gen.zip(Gen.alphaStr.map("/" + _), Gen.oneOf("protobuf", "json", "")))
     count <- Gen.choose(0, 400)
-    messages <- Gen.listOfN(count, for {
-      channel <- Gen.choose(1, channels)
-      time <- Gen.choose(0L, Long.MaxValue / 2)
-      published <- Gen.choose(0L, Long.MaxValue / 2)
-      data <- Gen.containerOf[Vector, Byte](Gen.choose(Byte.MinValue, Byte.MaxValue))
-    } yield (channel, time, published, data))
+    messages <- Gen.listOfN(
+      count,
+      for {
+        channel <- Gen.choose(1, channels)
+        time <- Gen.choose(0L, Long.MaxValue / 2)
+        published <- Gen.choose(0L, Long.MaxValue / 2)
+        data <- Gen.containerOf[Vector, Byte](Gen.choose(Byte.MinValue, Byte.MaxValue))
+      } yield (channel, time, published, data)
+    )
   } yield Written(topics.toVector, messages.toVector)
 
   // Some channels without metadata: an empty map is a length of 0 and nothing else.
-  private def metadata(i: Int): Map[String, String] = if (i % 3 == 0) Map.empty else Map("index" -> i.toString, "k" -> "v")
+  private def metadata(i: Int): Map[String, String] =
+    if (i % 3 == 0) Map.empty else Map("index" -> i.toString, "k" -> "v")
 
   private def write(w: Written, chunkBytes: Int): Array[Byte] = {
     val out = new ByteArrayOutputStream()
@@ -50,11 +54,14 @@ class McapSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
         read.library shouldBe "McapSpec"
         read.schemas.values.toVector.map(s => (s.id, s.name, s.encoding, s.data.toVector)) shouldBe
           Vector((1, "test.Thing", "protobuf", Vector[Byte](1, 2, 3)))
-        read.channels.toVector.sortBy(_._1).map { case (id, c) => (id, c.topic, c.messageEncoding, c.schemaId, c.metadata) } shouldBe
+        read.channels.toVector.sortBy(_._1).map { case (id, c) =>
+          (id, c.topic, c.messageEncoding, c.schemaId, c.metadata)
+        } shouldBe
           w.topics.zipWithIndex.map { case ((t, e), i) => (i + 1, t, e, if (i % 2 == 0) 1 else 0, metadata(i)) }
         read.messages.map(m => (m.channelId, m.logTime, m.publishTime, m.data.toVector)) shouldBe w.messages
         // Sequence numbers count per channel from 1.
-        read.messages.groupBy(_.channelId).values.foreach(ms => ms.map(_.sequence) shouldBe (1L to ms.size.toLong).toVector)
+        read.messages.groupBy(_.channelId).values.foreach(ms =>
+          ms.map(_.sequence) shouldBe (1L to ms.size.toLong).toVector)
         val stats = read.statistics.getOrElse(fail("no statistics"))
         stats.messageCount shouldBe w.messages.size.toLong
         stats.channelCount shouldBe w.topics.size
@@ -82,7 +89,8 @@ class McapSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
     }
 
     "refuse a file whose bytes changed (CRCs) and one that is not MCAP" in {
-      val w = Written(Vector("/a" -> "json"), (1 to 50).toVector.map(i => (1, i.toLong, i.toLong, s"message $i".getBytes(StandardCharsets.UTF_8).toVector)))
+      val w = Written(Vector("/a" -> "json"),
+        (1 to 50).toVector.map(i => (1, i.toLong, i.toLong, s"message $i".getBytes(StandardCharsets.UTF_8).toVector)))
       val bytes = write(w, 1024)
       // A byte inside a message of the first chunk, and a byte of the summary.
       val inChunk = bytes.indexOfSlice("message 3".getBytes(StandardCharsets.UTF_8).toSeq)
@@ -92,7 +100,8 @@ class McapSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
       val summary = bytes.clone()
       summary(bytes.length - 8 - 29 - 5) = (summary(bytes.length - 8 - 29 - 5) ^ 1).toByte
       an[Mcap.FormatException] should be thrownBy McapReader.read(summary)
-      an[Mcap.FormatException] should be thrownBy McapReader.read("not an mcap file at all".getBytes(StandardCharsets.UTF_8))
+      an[Mcap.FormatException] should be thrownBy McapReader.read(
+        "not an mcap file at all".getBytes(StandardCharsets.UTF_8))
     }
 
     "leave what was flushed readable in a file that was never closed (a crash)" in {
@@ -120,7 +129,8 @@ class McapSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
         byName(f.getName) = com.google.protobuf.Descriptors.FileDescriptor.buildFrom(f, deps)
       }
       val status = byName("naogateway/proto/message.proto").findMessageTypeByName("Status")
-      val decoded = com.google.protobuf.DynamicMessage.parseFrom(status, Status(timestamp = Some(1234L), activeAgent = Some("keeper")).toByteArray)
+      val decoded = com.google.protobuf.DynamicMessage.parseFrom(status,
+        Status(timestamp = Some(1234L), activeAgent = Some("keeper")).toByteArray)
       decoded.getField(status.findFieldByName("timestamp")) shouldBe 1234L
       decoded.getField(status.findFieldByName("activeAgent")) shouldBe "keeper"
       byName.keySet should contain("naogateway/proto/recording.proto")

@@ -21,7 +21,8 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
   private val to = new InetSocketAddress("127.0.0.1", 3838)
 
   private def settings(dir: Path, queue: Int = 65536) =
-    RecordingSettings(enabled = true, dir, rotateBytes = 64L * 1024 * 1024, rotateInterval = 10.minutes, queueCapacity = queue)
+    RecordingSettings(enabled = true, dir, rotateBytes = 64L * 1024 * 1024, rotateInterval = 10.minutes,
+      queueCapacity = queue)
 
   private def files(dir: Path): Vector[Path] =
     Files.list(dir).iterator().asScala.filter(_.toString.endsWith(".mcap")).toVector.sortBy(_.getFileName.toString)
@@ -31,7 +32,8 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
       val dir = Files.createTempDirectory("recorder-spec")
       val recording = Recording(settings(dir, queue = 16), "recorder-spec-overflow")
       val offered = 20000
-      (1 to offered).foreach(i => recording.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
+      (1 to offered).foreach(i =>
+        recording.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
       recording.close()
       val stats = recording.stats
       stats.dropped should be > 0L
@@ -57,7 +59,8 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
     "count entries it cannot write when the directory cannot be made, without failing" in {
       val file = Files.createTempFile("recorder-spec", ".not-a-directory")
       val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed")
-      (1 to 10).foreach(_ => recording.decision(Decision.Gate(open = true, naogateway.GameReading.Known(GameState.Initial))))
+      (1 to 10).foreach(_ =>
+        recording.decision(Decision.Gate(open = true, naogateway.GameReading.Known(GameState.Initial))))
       recording.close()
       recording.stats.failed shouldBe 10L
       recording.stats.files shouldBe 0L
@@ -88,8 +91,14 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
         robotId <- Gen.oneOf(-1, 0, 1, 127, 128, 300, Int.MaxValue)
       } yield (DatagramEntry(0L, port, received, null, null, payload, robotId), source, destination)
       forAll(entries) { case (d, source, destination) =>
-        val expected = RecordedDatagram(d.port, if (d.received) RecordedDirection.RECEIVED else RecordedDirection.SENT, source,
-          destination, ByteString.copyFrom(d.bytes), if (d.robotId >= 0) Some(d.robotId) else None).toByteArray
+        val expected = RecordedDatagram(
+          d.port,
+          if (d.received) RecordedDirection.RECEIVED else RecordedDirection.SENT,
+          source,
+          destination,
+          ByteString.copyFrom(d.bytes),
+          if (d.robotId >= 0) Some(d.robotId) else None
+        ).toByteArray
         val n = encoder.datagram(d, source.getBytes("UTF-8"), destination.getBytes("UTF-8"))
         encoder.bytes.take(n) shouldBe expected
       }

@@ -26,11 +26,13 @@ class RetentionSpec extends AnyWordSpec with Matchers {
 
     "delete the oldest files first until the total is within the size limit" in {
       val files = Vector(file("c.mcap", 30, 1), file("a.mcap", 30, 3), file("b.mcap", 30, 2), file("d.mcap", 30, 0))
-      names(Retention.toDelete(files, Set.empty, now, RetentionSettings(70 * MiB, Duration.Zero))) shouldBe Vector("a.mcap", "b.mcap")
+      names(Retention.toDelete(files, Set.empty, now, RetentionSettings(70 * MiB, Duration.Zero))) shouldBe Vector(
+        "a.mcap", "b.mcap")
     }
 
     "delete every file older than the age limit, then by size" in {
-      val files = Vector(file("old1.mcap", 1, 400), file("old2.mcap", 1, 350), file("x.mcap", 50, 10), file("y.mcap", 50, 5))
+      val files =
+        Vector(file("old1.mcap", 1, 400), file("old2.mcap", 1, 350), file("x.mcap", 50, 10), file("y.mcap", 50, 5))
       names(Retention.toDelete(files, Set.empty, now, RetentionSettings(60 * MiB, 14.days))) shouldBe
         Vector("old1.mcap", "old2.mcap", "x.mcap")
     }
@@ -71,10 +73,10 @@ class RetentionSpec extends AnyWordSpec with Matchers {
       val keeper = new RetentionKeeper(dir, RetentionSettings(MiB, 25.hours))
       val status = keeper.sweep(Set(current))
       Files.exists(oldest) shouldBe false // older than 25 h
-      Files.exists(older) shouldBe false  // the oldest left while over 1 MiB
+      Files.exists(older) shouldBe false // the oldest left while over 1 MiB
       Files.exists(newer) shouldBe true
       Files.exists(current) shouldBe true // 40 h old, but being written
-      Files.exists(notes) shouldBe true   // not a recording
+      Files.exists(notes) shouldBe true // not a recording
       status.files shouldBe 2
       status.deletedFiles shouldBe 2
       status.bytes shouldBe 600L * 1024 + 100
@@ -97,7 +99,8 @@ class RetentionSpec extends AnyWordSpec with Matchers {
       val settings = RecordingSettings(enabled = true, dir, 64 * 1024, 1.minute, 1024, RetentionSettings(0, 14.days))
       val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown)
       try {
-        recorder.decision(Decision.Gate(open = true, naogateway.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
+        recorder.decision(Decision.Gate(open = true,
+            naogateway.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
         val deadline = 10.seconds.fromNow
         while (!recorder.stats.retention.exists(_.deletedFiles > 0) && deadline.hasTimeLeft()) Thread.sleep(20)
         Files.exists(stale) shouldBe false

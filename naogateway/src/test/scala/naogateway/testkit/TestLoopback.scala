@@ -4,15 +4,14 @@ import java.net.{DatagramSocket, InetAddress, InetSocketAddress}
 
 import scala.util.Try
 
-/**
- * Loopback addresses of their own for simulated robots and proxies in tests: Linux routes all of 127.0.0.0/8 to the
- * loopback interface, so each robot can receive on its own 127.a.b.c at UDP 3838, as a real robot does on its own IP.
- *
- * Every address is handed out once per test JVM. The JVMs of one build run side by side (one per module), so each
- * takes its block from its process id (127.<1 + pid mod 250>.x.y), and an address whose port is taken at the moment
- * of allocation (another JVM, an earlier run's leftover) is skipped. 127.0.0.x is never used: the demo and the
- * conformance robot live there.
- */
+/** Loopback addresses of their own for simulated robots and proxies in tests: Linux routes all of 127.0.0.0/8 to the
+  * loopback interface, so each robot can receive on its own 127.a.b.c at UDP 3838, as a real robot does on its own IP.
+  *
+  * Every address is handed out once per test JVM. The JVMs of one build run side by side (one per module), so each
+  * takes its block from its process id (127.<1 + pid mod 250>.x.y), and an address whose port is taken at the moment of
+  * allocation (another JVM, an earlier run's leftover) is skipped. 127.0.0.x is never used: the demo and the
+  * conformance robot live there.
+  */
 object TestLoopback {
 
   /** The port a robot receives on (docs/protocol.md section 2); on a robot's own address it is free to use. */
@@ -48,7 +47,8 @@ object TestLoopback {
   }
 
   private def plus(address: InetAddress, i: Int): InetAddress =
-    InetAddress.getByAddress(java.nio.ByteBuffer.allocate(4).putInt(java.nio.ByteBuffer.wrap(address.getAddress).getInt + i).array())
+    InetAddress.getByAddress(
+      java.nio.ByteBuffer.allocate(4).putInt(java.nio.ByteBuffer.wrap(address.getAddress).getInt + i).array())
 
   /** A fresh address at the robot receive port, as a socket address. */
   def robotAt(port: Int = RobotReceivePort): InetSocketAddress = new InetSocketAddress(address(port), port)

@@ -20,14 +20,13 @@ import naogateway.wire.{HaViMoGrid, HaViMoRegion, Posture, RpcValue}
 import robotmiddleware._
 import robotmiddleware.cluster.{proto => pb}
 
-/**
- * Akka serializer of every message that crosses the nodes of a robot cluster: protobuf through the
- * ScalaPB classes of `robotmiddleware/cluster/proto/cluster.proto`, one manifest per message class.
- * The bindings are in this module's `reference.conf`.
- *
- * GameController packets travel as their `RGme` bytes, the codec the gateway already has.
- * A `RobotFailure` arrives as the same case class without the sender's stack trace.
- */
+/** Akka serializer of every message that crosses the nodes of a robot cluster: protobuf through the ScalaPB classes of
+  * `robotmiddleware/cluster/proto/cluster.proto`, one manifest per message class. The bindings are in this module's
+  * `reference.conf`.
+  *
+  * GameController packets travel as their `RGme` bytes, the codec the gateway already has. A `RobotFailure` arrives as
+  * the same case class without the sender's stack trace.
+  */
 final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerWithStringManifest {
   import CrossNodeSerializer.{Manifest => M}
 
@@ -41,43 +40,43 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
   private def ref[T](text: String): ActorRef[T] = resolver.resolveActorRef[T](text)
 
   override def manifest(o: AnyRef): String = o match {
-    case _: RobotMiddleware.RegisterApp    => M.RegisterApp
-    case _: RobotMiddleware.Execute        => M.Execute
-    case _: RobotMiddleware.Send           => M.Send
-    case _: RobotMiddleware.Acquire        => M.Acquire
-    case _: RobotMiddleware.Release        => M.Release
-    case _: RobotMiddleware.ListRobots     => M.ListRobots
-    case _: RobotMiddleware.WatchStatus    => M.WatchStatus
-    case _: RobotMiddleware.WatchVision    => M.WatchVision
-    case _: RobotMiddleware.WatchLinkStats => M.WatchLinkStats
-    case _: RobotMiddleware.WatchGame      => M.WatchGame
-    case _: RobotMiddleware.WatchEvents    => M.WatchEvents
-    case _: RobotMiddleware.AppRegistered  => M.AppRegistered
-    case _: RobotMiddleware.OperationResult => M.OperationResult
-    case _: RobotMiddleware.LeaseResult    => M.LeaseResult
-    case _: RobotMiddleware.SendResult     => M.SendResult
-    case _: RobotMiddleware.RobotList      => M.RobotSnapshots
-    case _: Operation                      => M.Operation
-    case _: RobotFailure                   => M.RobotFailure
+    case _: RobotMiddleware.RegisterApp       => M.RegisterApp
+    case _: RobotMiddleware.Execute           => M.Execute
+    case _: RobotMiddleware.Send              => M.Send
+    case _: RobotMiddleware.Acquire           => M.Acquire
+    case _: RobotMiddleware.Release           => M.Release
+    case _: RobotMiddleware.ListRobots        => M.ListRobots
+    case _: RobotMiddleware.WatchStatus       => M.WatchStatus
+    case _: RobotMiddleware.WatchVision       => M.WatchVision
+    case _: RobotMiddleware.WatchLinkStats    => M.WatchLinkStats
+    case _: RobotMiddleware.WatchGame         => M.WatchGame
+    case _: RobotMiddleware.WatchEvents       => M.WatchEvents
+    case _: RobotMiddleware.AppRegistered     => M.AppRegistered
+    case _: RobotMiddleware.OperationResult   => M.OperationResult
+    case _: RobotMiddleware.LeaseResult       => M.LeaseResult
+    case _: RobotMiddleware.SendResult        => M.SendResult
+    case _: RobotMiddleware.RobotList         => M.RobotSnapshots
+    case _: Operation                         => M.Operation
+    case _: RobotFailure                      => M.RobotFailure
     case _: SessionMessage.SubscribeAppEvents => M.SubscribeAppEvents
-    case SessionMessage.Close              => M.Close
-    case _: AppEvent.LeasePreempted        => M.LeasePreempted
-    case _: AppEvent.SafetyStop            => M.SafetyStop
-    case _: AppEvent.SafetyCleared         => M.SafetyCleared
-    case _: RobotSnapshot                  => M.RobotSnapshot
-    case _: LinkStats                      => M.LinkStats
-    case _: VisionFrame.Regions            => M.VisionRegions
-    case _: VisionFrame.Grid               => M.VisionGrid
-    case _: RobotOnline                    => M.RobotOnline
-    case _: RobotOffline                   => M.RobotOffline
-    case _: LinkQualityChanged             => M.LinkQualityChanged
-    case _: RobotStatusUpdated             => M.RobotStatusUpdated
-    case _: RobotRestarted                 => M.RobotRestarted
-    case _: RobotForgotten                 => M.RobotForgotten
-    case _: GameStateUpdated               => M.GameStateUpdated
-    case _: GameControlData                => M.GameControlData
-    case _: RpcValue                       => M.RpcValue
-    case other                             => throw unknown(other)
+    case SessionMessage.Close                 => M.Close
+    case _: AppEvent.LeasePreempted           => M.LeasePreempted
+    case _: AppEvent.SafetyStop               => M.SafetyStop
+    case _: AppEvent.SafetyCleared            => M.SafetyCleared
+    case _: RobotSnapshot                     => M.RobotSnapshot
+    case _: LinkStats                         => M.LinkStats
+    case _: VisionFrame.Regions               => M.VisionRegions
+    case _: VisionFrame.Grid                  => M.VisionGrid
+    case _: RobotOnline                       => M.RobotOnline
+    case _: RobotOffline                      => M.RobotOffline
+    case _: LinkQualityChanged                => M.LinkQualityChanged
+    case _: RobotStatusUpdated                => M.RobotStatusUpdated
+    case _: RobotRestarted                    => M.RobotRestarted
+    case _: RobotForgotten                    => M.RobotForgotten
+    case _: GameStateUpdated                  => M.GameStateUpdated
+    case _: GameControlData                   => M.GameControlData
+    case _: RpcValue                          => M.RpcValue
+    case other                                => throw unknown(other)
   }
 
   override def toBinary(o: AnyRef): Array[Byte] = o match {
@@ -89,15 +88,15 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       bytes(pb.Send(refText(app), robotId, toProto(operation), refText(replyTo)))
     case RobotMiddleware.Acquire(app, robotId, groups, replyTo) =>
       bytes(pb.Acquire(refText(app), robotId, groupNames(groups), refText(replyTo)))
-    case RobotMiddleware.Release(app, robotId, group) => bytes(pb.Release(refText(app), robotId, group.name))
-    case RobotMiddleware.ListRobots(replyTo)          => bytes(pb.ListRobots(refText(replyTo)))
+    case RobotMiddleware.Release(app, robotId, group)     => bytes(pb.Release(refText(app), robotId, group.name))
+    case RobotMiddleware.ListRobots(replyTo)              => bytes(pb.ListRobots(refText(replyTo)))
     case RobotMiddleware.WatchStatus(robotId, subscriber) => bytes(pb.WatchStatus(robotId, refText(subscriber)))
     case RobotMiddleware.WatchVision(robotId, subscriber, grid) =>
       bytes(pb.WatchVision(robotId, refText(subscriber), grid))
     case RobotMiddleware.WatchLinkStats(robotId, subscriber) => bytes(pb.WatchLinkStats(robotId, refText(subscriber)))
-    case RobotMiddleware.WatchGame(subscriber)   => bytes(pb.Watch(refText(subscriber)))
-    case RobotMiddleware.WatchEvents(subscriber) => bytes(pb.Watch(refText(subscriber)))
-    case RobotMiddleware.AppRegistered(name)     => bytes(pb.AppRegistered(name))
+    case RobotMiddleware.WatchGame(subscriber)               => bytes(pb.Watch(refText(subscriber)))
+    case RobotMiddleware.WatchEvents(subscriber)             => bytes(pb.Watch(refText(subscriber)))
+    case RobotMiddleware.AppRegistered(name)                 => bytes(pb.AppRegistered(name))
     case RobotMiddleware.OperationResult(robotId, operation, result) =>
       val r = result.fold(
         f => pb.OperationResult.Result.Failure(toProto(f)),
@@ -108,32 +107,32 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       bytes(pb.LeaseResult(robotId, groupNames(groups), result.left.toOption.map(f => toProto(f))))
     case RobotMiddleware.SendResult(robotId, operation, result) =>
       bytes(pb.SendResult(robotId, operation, result.left.toOption.map(f => toProto(f))))
-    case RobotMiddleware.RobotList(robots) => bytes(pb.RobotSnapshots(robots.map(s => toProto(s))))
-    case o: Operation                           => bytes(toProto(o))
-    case f: RobotFailure                        => bytes(toProto(f))
-    case SessionMessage.SubscribeAppEvents(subscriber) => bytes(pb.SubscribeAppEvents(refText(subscriber)))
-    case SessionMessage.Close                   => Array.emptyByteArray
+    case RobotMiddleware.RobotList(robots)              => bytes(pb.RobotSnapshots(robots.map(s => toProto(s))))
+    case o: Operation                                   => bytes(toProto(o))
+    case f: RobotFailure                                => bytes(toProto(f))
+    case SessionMessage.SubscribeAppEvents(subscriber)  => bytes(pb.SubscribeAppEvents(refText(subscriber)))
+    case SessionMessage.Close                           => Array.emptyByteArray
     case AppEvent.LeasePreempted(robotId, group, byApp) => bytes(pb.LeasePreempted(robotId, group.name, byApp))
-    case AppEvent.SafetyStop(robotId, reason)   => bytes(pb.SafetyStop(robotId, reason))
-    case AppEvent.SafetyCleared(robotId)        => bytes(pb.SafetyCleared(robotId))
-    case s: RobotSnapshot                       => bytes(toProto(s))
+    case AppEvent.SafetyStop(robotId, reason)           => bytes(pb.SafetyStop(robotId, reason))
+    case AppEvent.SafetyCleared(robotId)                => bytes(pb.SafetyCleared(robotId))
+    case s: RobotSnapshot                               => bytes(toProto(s))
     case s: LinkStats =>
       bytes(pb.LinkStats(s.robotId, s.datagramsIn, s.datagramsOut, s.bytesIn, s.bytesOut, s.rttMillis, s.lossEstimate,
-        s.retransmissions, s.rejected))
+          s.retransmissions, s.rejected))
     case VisionFrame.Regions(robotId, frame, timestampMs, regions) =>
       bytes(pb.VisionRegions(robotId, frame, timestampMs, regions.map(r => toProto(r))))
     case VisionFrame.Grid(robotId, frame, timestampMs, grid) =>
       bytes(pb.VisionGrid(robotId, frame, timestampMs, ByteString.copyFrom(grid.cells.toArray)))
-    case RobotOnline(robotId, address)          => bytes(pb.RobotOnline(robotId, toProto(address)))
-    case RobotOffline(robotId, reason)          => bytes(pb.RobotOffline(robotId, reason))
-    case LinkQualityChanged(robotId, quality)   => bytes(pb.LinkQualityChanged(robotId, toProto(quality)))
-    case RobotStatusUpdated(snapshot)           => bytes(toProto(snapshot))
+    case RobotOnline(robotId, address)             => bytes(pb.RobotOnline(robotId, toProto(address)))
+    case RobotOffline(robotId, reason)             => bytes(pb.RobotOffline(robotId, reason))
+    case LinkQualityChanged(robotId, quality)      => bytes(pb.LinkQualityChanged(robotId, toProto(quality)))
+    case RobotStatusUpdated(snapshot)              => bytes(toProto(snapshot))
     case RobotRestarted(robotId, bootId, resynced) => bytes(pb.RobotRestarted(robotId, bootId, resynced))
-    case RobotForgotten(robotId, reason)        => bytes(pb.RobotForgotten(robotId, reason))
-    case GameStateUpdated(data)                 => gamePacket(data)
-    case data: GameControlData                  => gamePacket(data)
-    case v: RpcValue                            => bytes(v.toProto)
-    case other                                  => throw unknown(other)
+    case RobotForgotten(robotId, reason)           => bytes(pb.RobotForgotten(robotId, reason))
+    case GameStateUpdated(data)                    => gamePacket(data)
+    case data: GameControlData                     => gamePacket(data)
+    case v: RpcValue                               => bytes(v.toProto)
+    case other                                     => throw unknown(other)
   }
 
   override def fromBinary(bytes: Array[Byte], manifest: String): AnyRef = manifest match {
@@ -175,17 +174,18 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       RobotMiddleware.OperationResult(m.robotId, m.operation, result)
     case M.LeaseResult =>
       val m = pb.LeaseResult.parseFrom(bytes)
-      RobotMiddleware.LeaseResult(m.robotId, m.groups.map(group(M.LeaseResult, _)).toSet, m.failure.map(f => fromProto(f)).toLeft(()))
+      RobotMiddleware.LeaseResult(m.robotId, m.groups.map(group(M.LeaseResult, _)).toSet,
+        m.failure.map(f => fromProto(f)).toLeft(()))
     case M.SendResult =>
       val m = pb.SendResult.parseFrom(bytes)
       RobotMiddleware.SendResult(m.robotId, m.operation, m.failure.map(f => fromProto(f)).toLeft(()))
     case M.RobotSnapshots =>
       RobotMiddleware.RobotList(pb.RobotSnapshots.parseFrom(bytes).robots.iterator.map(s => fromProto(s)).toVector)
-    case M.Operation      => fromProto(pb.Operation.parseFrom(bytes))
-    case M.RobotFailure   => fromProto(pb.RobotFailure.parseFrom(bytes))
+    case M.Operation    => fromProto(pb.Operation.parseFrom(bytes))
+    case M.RobotFailure => fromProto(pb.RobotFailure.parseFrom(bytes))
     case M.SubscribeAppEvents =>
       SessionMessage.SubscribeAppEvents(ref(pb.SubscribeAppEvents.parseFrom(bytes).subscriber))
-    case M.Close          => SessionMessage.Close
+    case M.Close => SessionMessage.Close
     case M.LeasePreempted =>
       val m = pb.LeasePreempted.parseFrom(bytes)
       AppEvent.LeasePreempted(m.robotId, group(M.LeasePreempted, m.group), m.byApp)
@@ -268,13 +268,13 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
   private def fromProto(o: pb.Operation): Operation = {
     import pb.Operation.Kind
     o.kind match {
-      case Kind.Walk(w)    => robotmiddleware.Operation.Walk(w.vx, w.vy, w.omega)
-      case Kind.Stop(_)    => robotmiddleware.Operation.Stop()
-      case Kind.Head(h)    => robotmiddleware.Operation.Head(h.pan, h.tilt)
-      case Kind.Arms(a)    => robotmiddleware.Operation.Arms(a.leftShoulder, a.leftElbow, a.rightShoulder, a.rightElbow)
+      case Kind.Walk(w) => robotmiddleware.Operation.Walk(w.vx, w.vy, w.omega)
+      case Kind.Stop(_) => robotmiddleware.Operation.Stop()
+      case Kind.Head(h) => robotmiddleware.Operation.Head(h.pan, h.tilt)
+      case Kind.Arms(a) => robotmiddleware.Operation.Arms(a.leftShoulder, a.leftElbow, a.rightShoulder, a.rightElbow)
       case Kind.Posture(p) =>
         robotmiddleware.Operation.Posture(Posture.target(p.posture).fold(e => throw corrupt(M.Operation, e), identity))
-      case Kind.Say(s)     => robotmiddleware.Operation.Say(s.text)
+      case Kind.Say(s) => robotmiddleware.Operation.Say(s.text)
       case Kind.RawCall(r) =>
         val params = r.params.iterator.map(naogateway.wire.RpcValue.fromProto).toVector
         robotmiddleware.Operation.RawCall(r.module, r.method, params)
@@ -286,17 +286,17 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     import pb.RobotFailure.Kind
     import naogateway.{RobotFailure => F}
     pb.RobotFailure(f match {
-      case F.RobotOffline(robotId)                => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
-      case F.UnknownRobot(robotId)                => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
+      case F.RobotOffline(robotId) => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
+      case F.UnknownRobot(robotId) => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
       case F.LeaseNotHeld(robotId, group, holder) =>
         Kind.LeaseNotHeld(pb.RobotFailure.LeaseNotHeld(robotId, group.name, holder))
-      case F.RuleGate(rule)                       => Kind.RuleGate(pb.RobotFailure.RuleGate(rule))
-      case F.Timeout(robotId, operation, millis)  => Kind.Timeout(pb.RobotFailure.Timeout(robotId, operation, millis))
-      case F.RobotError(robotId, error)           => Kind.RobotError(pb.RobotFailure.RobotError(robotId, error))
-      case F.SafetyHold(robotId, reason)          => Kind.SafetyHold(pb.RobotFailure.SafetyHold(robotId, reason))
-      case F.Overloaded(robotId, detail)          => Kind.Overloaded(pb.RobotFailure.Overloaded(robotId, detail))
-      case F.Superseded(robotId, call)            => Kind.Superseded(pb.RobotFailure.Superseded(robotId, call))
-      case F.Interrupted(robotId, call)           => Kind.Interrupted(pb.RobotFailure.Interrupted(robotId, call))
+      case F.RuleGate(rule)                      => Kind.RuleGate(pb.RobotFailure.RuleGate(rule))
+      case F.Timeout(robotId, operation, millis) => Kind.Timeout(pb.RobotFailure.Timeout(robotId, operation, millis))
+      case F.RobotError(robotId, error)          => Kind.RobotError(pb.RobotFailure.RobotError(robotId, error))
+      case F.SafetyHold(robotId, reason)         => Kind.SafetyHold(pb.RobotFailure.SafetyHold(robotId, reason))
+      case F.Overloaded(robotId, detail)         => Kind.Overloaded(pb.RobotFailure.Overloaded(robotId, detail))
+      case F.Superseded(robotId, call)           => Kind.Superseded(pb.RobotFailure.Superseded(robotId, call))
+      case F.Interrupted(robotId, call)          => Kind.Interrupted(pb.RobotFailure.Interrupted(robotId, call))
     })
   }
 

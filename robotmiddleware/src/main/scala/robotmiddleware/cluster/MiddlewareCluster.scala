@@ -7,11 +7,10 @@ import akka.actor.typed.scaladsl.adapter._
 import akka.actor.typed.{ActorSystem, Behavior}
 import com.typesafe.config.{Config, ConfigFactory}
 
-/**
- * The gateway with the middleware, and apps in other actor systems or JVMs, as nodes of one Akka
- * Cluster (docs/cluster.md). Once a node has joined, the receptionist is cluster-wide, so
- * `RobotClient.find` and `RobotClient.connect` work on an app node exactly as in one JVM.
- */
+/** The gateway with the middleware, and apps in other actor systems or JVMs, as nodes of one Akka Cluster
+  * (docs/cluster.md). Once a node has joined, the receptionist is cluster-wide, so `RobotClient.find` and
+  * `RobotClient.connect` work on an app node exactly as in one JVM.
+  */
 object MiddlewareCluster {
 
   /** The role of the node that runs the gateway and the middleware; the split brain resolver keeps its side. */
@@ -23,12 +22,11 @@ object MiddlewareCluster {
   /** The resource with the cluster settings, kept out of `reference.conf` so one-JVM setups stay local. */
   val ConfigResource: String = "robotmiddleware-cluster.conf"
 
-  /**
-   * The config of a node with `role`: `overrides` first, then the application's config (`application`,
-   * `application.conf` unless given), then a program's own `defaults`, then the cluster settings of
-   * `ConfigResource`, then every module's reference. The role is the node's only cluster role, and picks
-   * its port: `robotmiddleware.cluster.gateway-port` or `app-port`.
-   */
+  /** The config of a node with `role`: `overrides` first, then the application's config (`application`,
+    * `application.conf` unless given), then a program's own `defaults`, then the cluster settings of `ConfigResource`,
+    * then every module's reference. The role is the node's only cluster role, and picks its port:
+    * `robotmiddleware.cluster.gateway-port` or `app-port`.
+    */
   def config(role: String, overrides: Config = ConfigFactory.empty(), defaults: Config = ConfigFactory.empty(),
       application: => Config = ConfigFactory.defaultApplication()): Config = {
     require(role == GatewayRole || role == AppRole, s"unknown role '$role' ($GatewayRole, $AppRole)")

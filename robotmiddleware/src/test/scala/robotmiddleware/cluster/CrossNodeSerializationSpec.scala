@@ -107,7 +107,8 @@ class CrossNodeSerializationSpec
       the[NotSerializableException] thrownBy serializer.fromBinary(dance.toByteArray, "Operation") should have message
         "CrossNodeSerializer: corrupt [Operation]: unknown posture 'dance' (sit, stand, crouch)"
       val legs = robotmiddleware.cluster.proto.LeasePreempted(7, "legs", "referee")
-      the[NotSerializableException] thrownBy serializer.fromBinary(legs.toByteArray, "LeasePreempted") should have message
+      the[NotSerializableException] thrownBy serializer.fromBinary(legs.toByteArray,
+        "LeasePreempted") should have message
         "CrossNodeSerializer: corrupt [LeasePreempted]: unknown actuator group 'legs' (walk, head, arms, speech)"
     }
   }
@@ -121,12 +122,42 @@ object CrossNodeSerializationSpec {
 
   /** Every manifest of CrossNodeSerializer: the samples must use all of them. */
   val manifests: Set[String] = Set(
-    "RegisterApp", "Execute", "Send", "SendResult", "Acquire", "Release", "ListRobots", "WatchStatus", "WatchVision",
+    "RegisterApp",
+    "Execute",
+    "Send",
+    "SendResult",
+    "Acquire",
+    "Release",
+    "ListRobots",
+    "WatchStatus",
+    "WatchVision",
     "WatchLinkStats",
-    "WatchGame", "WatchEvents", "AppRegistered", "OperationResult", "LeaseResult", "RobotSnapshots", "Operation",
-    "RobotFailure", "SubscribeAppEvents", "Close", "LeasePreempted", "SafetyStop", "SafetyCleared", "RobotSnapshot",
-    "LinkStats", "VisionRegions", "VisionGrid", "RobotOnline", "RobotOffline", "LinkQualityChanged",
-    "RobotStatusUpdated", "RobotRestarted", "RobotForgotten", "GameStateUpdated", "GameControlData", "RpcValue"
+    "WatchGame",
+    "WatchEvents",
+    "AppRegistered",
+    "OperationResult",
+    "LeaseResult",
+    "RobotSnapshots",
+    "Operation",
+    "RobotFailure",
+    "SubscribeAppEvents",
+    "Close",
+    "LeasePreempted",
+    "SafetyStop",
+    "SafetyCleared",
+    "RobotSnapshot",
+    "LinkStats",
+    "VisionRegions",
+    "VisionGrid",
+    "RobotOnline",
+    "RobotOffline",
+    "LinkQualityChanged",
+    "RobotStatusUpdated",
+    "RobotRestarted",
+    "RobotForgotten",
+    "GameStateUpdated",
+    "GameControlData",
+    "RpcValue"
   )
 
   val ipv4: InetSocketAddress = new InetSocketAddress(InetAddress.getByAddress(Array[Byte](127, 0, 0, 7)), 11011)
@@ -206,7 +237,8 @@ object CrossNodeSerializationSpec {
     Vector[AnyRef](
       RobotMiddleware.RegisterApp("teleop", 3, ref, ref),
       RobotMiddleware.Acquire(ref, 7, ActuatorGroup.Head, ref),
-      RobotMiddleware.Acquire(ref, 7, Set[ActuatorGroup](ActuatorGroup.Walk, ActuatorGroup.Head, ActuatorGroup.Speech), ref),
+      RobotMiddleware.Acquire(ref, 7, Set[ActuatorGroup](ActuatorGroup.Walk, ActuatorGroup.Head, ActuatorGroup.Speech),
+        ref),
       RobotMiddleware.Release(ref, 7, ActuatorGroup.Speech),
       RobotMiddleware.Send(ref, 7, Operation.Head(0.5, -0.1), ref),
       RobotMiddleware.Send(ref, 7, Operation.RawCall("speech", "say", Vector(RpcValue.Text("hi"))), ref),
@@ -234,7 +266,8 @@ object CrossNodeSerializationSpec {
       AppEvent.SafetyCleared(7),
       snapshot,
       snapshot.copy(address = named, quality = LinkQuality.Degraded),
-      snapshot.copy(posture = Some(Posture.reported("kneeling"))), // a posture this build does not know crosses as reported
+      snapshot.copy(
+        posture = Some(Posture.reported("kneeling"))), // a posture this build does not know crosses as reported
       RobotSnapshot(9, unresolved),
       linkStats,
       linkStats.copy(rttMillis = None, rejected = Map.empty),

@@ -27,10 +27,9 @@ import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 import robotmiddleware._
 
-/**
- * Nodes of one cluster on loopback, each its own actor system in this JVM: A runs the middleware in front
- * of a fake gateway and robot, B and C are app nodes that reach it only through the cluster.
- */
+/** Nodes of one cluster on loopback, each its own actor system in this JVM: A runs the middleware in front of a fake
+  * gateway and robot, B and C are app nodes that reach it only through the cluster.
+  */
 class MiddlewareClusterSpec
     extends AnyWordSpec
     with Matchers
@@ -83,18 +82,17 @@ class MiddlewareClusterSpec
       .collect { case c: ResponseActor.Call => c }
       .last
 
-  /**
-   * A stream subscription is a one-way message from the app's node: nothing says when the middleware has
-   * it. Publishing again until the first element arrives avoids guessing a delay.
-   */
+  /** A stream subscription is a one-way message from the app's node: nothing says when the middleware has it.
+    * Publishing again until the first element arrives avoids guessing a delay.
+    */
   private def publishUntilSeen[T](probe: TestProbe[T], within: FiniteDuration = 20.seconds)(publish: => Unit): T = {
     val deadline = within.fromNow
     @tailrec def loop(): T = {
       publish
       Try(probe.receiveMessage(300.millis)) match {
-        case Success(seen)                       => seen
+        case Success(seen)                        => seen
         case Failure(_) if deadline.hasTimeLeft() => loop()
-        case Failure(e)                          => throw e
+        case Failure(e)                           => throw e
       }
     }
     loop()

@@ -5,7 +5,17 @@ import java.net.{Inet4Address, InetAddress, InetSocketAddress}
 import scala.collection.immutable.{ArraySeq, Queue}
 import scala.collection.mutable.Builder
 
-import naogateway.sim.gs1500m.{Cm530Config, Cm530Costs, Cm530Firmware, FirmwareEvent, FirmwareStep, Gs1500mConfig, Gs1500mModule, ModuleEvent, Remote}
+import naogateway.sim.gs1500m.{
+  Cm530Config,
+  Cm530Costs,
+  Cm530Firmware,
+  FirmwareEvent,
+  FirmwareStep,
+  Gs1500mConfig,
+  Gs1500mModule,
+  ModuleEvent,
+  Remote
+}
 
 /** A simulated robot's WiFi path through the GS1500M module model and the CM-530 main loop model, as a pure value in
   * the robot's clock (nanoseconds); [[SimulatedRobot]] drives it with `faithfulLink = true`.
@@ -107,9 +117,12 @@ final case class FaithfulLink(
       case FirmwareEvent.Sent(_, _, _, _) =>
         // The CM-530 sends the head of its outbox; its destination moves on with it.
         sent = true
-        link.queued.dequeueOption.foreach { case (to, rest) => link = link.copy(queued = rest, onLine = link.onLine.enqueue(to)) }
+        link.queued.dequeueOption.foreach { case (to, rest) =>
+          link = link.copy(queued = rest, onLine = link.onLine.enqueue(to))
+        }
       case FirmwareEvent.Received(_, handledAt, _, remote, bytes) =>
-        link = link.copy(handling = link.handling.enqueue(Delivery(bytes.toArray, remote.flatMap(addressOf), handledAt)))
+        link =
+          link.copy(handling = link.handling.enqueue(Delivery(bytes.toArray, remote.flatMap(addressOf), handledAt)))
       case FirmwareEvent.StatusReceived(_, _, _) => ()
     }
     link.onModuleEvents(step.moduleEvents, transmitted, sent)
@@ -146,7 +159,8 @@ object FaithfulLink {
   /** Bounds the events one [[FaithfulLink.advance]] processes, so a wrong clock can never spin a driver forever. */
   val MaxEventsPerStep: Int = 100000
 
-  /** A received datagram the firmware has finished handling at `at`; `from` is `None` when its header named no sender. */
+  /** A received datagram the firmware has finished handling at `at`; `from` is `None` when its header named no sender.
+    */
   final case class Delivery(bytes: Array[Byte], from: Option[InetSocketAddress], at: Long)
 
   /** A datagram the module put on air at `at`. */
@@ -157,7 +171,8 @@ object FaithfulLink {
 
   /** An empty module and an idle CM-530 loop at `now`; the CM-530's own keep-alive is off (the firmware sends its own).
     *
-    * @param timeScale multiplies every modelled duration (serial line, encode, send, handling, loop period)
+    * @param timeScale
+    *   multiplies every modelled duration (serial line, encode, send, handling, loop period)
     */
   def apply(module: Gs1500mConfig, cpu: Cm530Config, timeScale: Double, seed: Long, now: Long): FaithfulLink =
     FaithfulLink(

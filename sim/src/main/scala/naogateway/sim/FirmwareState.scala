@@ -76,12 +76,11 @@ private[sim] final case class PostureChange(target: Posture, doneAt: Long, reply
 /** A walk command and the moment its lease runs out. */
 private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseUntil: Long)
 
-/**
- * The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`.
- * `bootId` doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and
- * resets. `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh
- * at every boot, as RAM does.
- */
+/** The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`. `bootId`
+  * doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and resets.
+  * `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh at every
+  * boot, as RAM does.
+  */
 final case class FirmwareState(
     settings: FirmwareSettings,
     bootId: Int,

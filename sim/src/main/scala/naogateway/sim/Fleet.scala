@@ -21,16 +21,23 @@ final case class FleetRobot(robotId: Int, address: InetSocketAddress, robot: Act
 
 /** Settings of a fleet of simulated robots of one team, all sending to one gateway.
   *
-  * @param gateway the gateway's robot port, where every robot sends keep-alives and debug output
-  * @param robotIds distinct robot ids; the first robot is the keeper
-  * @param faithfulLink each robot's datagrams pass the GS1500M and CM-530 models; switch off for hundreds of robots
-  * @param firstAddress the IP address of the fleet's first robot; the `i`-th robot has `firstAddress + i`, so every
-  *   robot is a host of its own (on loopback: Linux routes all of 127.0.0.0/8), as a team's robots are
-  * @param receivePort where each robot receives on its own address (3838, docs/protocol.md section 2); each sends
-  *   from a port the operating system picks
-  * @param spreadKeepAlives spread the robots' keep-alive phases over one interval, as real robots switched on one by
-  *   one would be, instead of every robot sending in the same instant
-  * @param customize a last change to each robot's settings (debug timings, battery, stream hook, …)
+  * @param gateway
+  *   the gateway's robot port, where every robot sends keep-alives and debug output
+  * @param robotIds
+  *   distinct robot ids; the first robot is the keeper
+  * @param faithfulLink
+  *   each robot's datagrams pass the GS1500M and CM-530 models; switch off for hundreds of robots
+  * @param firstAddress
+  *   the IP address of the fleet's first robot; the `i`-th robot has `firstAddress + i`, so every robot is a host of
+  *   its own (on loopback: Linux routes all of 127.0.0.0/8), as a team's robots are
+  * @param receivePort
+  *   where each robot receives on its own address (3838, docs/protocol.md section 2); each sends from a port the
+  *   operating system picks
+  * @param spreadKeepAlives
+  *   spread the robots' keep-alive phases over one interval, as real robots switched on one by one would be, instead of
+  *   every robot sending in the same instant
+  * @param customize
+  *   a last change to each robot's settings (debug timings, battery, stream hook, …)
   */
 final case class FleetSettings(
     gateway: InetSocketAddress,
@@ -68,8 +75,8 @@ final case class FleetSettings(
 /** Shorthands for [[FleetSettings]]. */
 object FleetSettings {
 
-  /** The demo's first robot address, 127.0.0.11: robots 127.0.0.11, .12, ... stay clear of 127.0.0.1, where the
-    * gateway listens.
+  /** The demo's first robot address, 127.0.0.11: robots 127.0.0.11, .12, ... stay clear of 127.0.0.1, where the gateway
+    * listens.
     */
   val DemoFirstAddress: InetAddress = InetAddress.getByAddress(Array[Byte](127, 0, 0, 11))
 
@@ -148,7 +155,8 @@ object Fleet {
         role = role(index),
         startPose = startPose(index, count)
       )
-      val phase = if (settings.spreadKeepAlives) firmware.keepAliveInterval * index.toLong / count.toLong else Duration.Zero
+      val phase =
+        if (settings.spreadKeepAlives) firmware.keepAliveInterval * index.toLong / count.toLong else Duration.Zero
       settings.customize(
         SimulatedRobotSettings(
           firmware = firmware,
@@ -165,7 +173,8 @@ object Fleet {
   }
 
   /** A fleet with `settings`; its robots start at once, and `reportTo` learns whether they all did. */
-  def apply(settings: FleetSettings, reportTo: Option[ActorRef[StatusReply[Vector[FleetRobot]]]] = None): Behavior[Command] =
+  def apply(
+      settings: FleetSettings, reportTo: Option[ActorRef[StatusReply[Vector[FleetRobot]]]] = None): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withStash(StashCapacity) { stash =>
         val started = context.messageAdapter[SimulatedRobot.StartResult](RobotStarted.apply)
@@ -193,13 +202,14 @@ object Fleet {
     )
     val fleet = system.systemActorOf(Fleet(settings, Some(reporter)), s"simulated-fleet-$n")
     val timer = akka.pattern.after(settings.startTimeout)(
-      Future.failed[Vector[FleetRobot]](new java.util.concurrent.TimeoutException(s"fleet did not start within ${settings.startTimeout}"))
+      Future.failed[Vector[FleetRobot]](
+        new java.util.concurrent.TimeoutException(s"fleet did not start within ${settings.startTimeout}"))
     )(system)
     Future
       .firstCompletedOf(Seq(outcome.future, timer))(system.executionContext)
       .transform {
         case Success(members) => Success(new FleetHandle(fleet, members, settings)(system))
-        case Failure(e) =>
+        case Failure(e)       =>
           // A fleet that failed stops by itself; one that timed out must be told, so no socket stays open.
           fleet ! Stop(system.ignoreRef)
           Failure(e)
@@ -226,7 +236,8 @@ private final class Fleet(
         if (next.size < robots.size) starting(next)
         else {
           val members = next.values.toVector.sortBy(m => order(m.robotId))
-          context.log.info("Fleet of {} simulated robots of team {} is up, sending to {}", members.size, settings.teamId,
+          context.log.info("Fleet of {} simulated robots of team {} is up, sending to {}", members.size,
+            settings.teamId,
             settings.gateway)
           reportTo.foreach(_ ! StatusReply.Success(members))
           stash.unstashAll(running(members))
@@ -283,7 +294,8 @@ private final class Fleet(
         replyTo ! StatusReply.Error(e)
         Behaviors.same
       case GetState(id, replyTo) =>
-        withRobot(id, replyTo)(member => context.ask(member.robot, SimulatedRobot.GetState.apply)(StateAnswered(_, replyTo)))
+        withRobot(id, replyTo)(member =>
+          context.ask(member.robot, SimulatedRobot.GetState.apply)(StateAnswered(_, replyTo)))
       case StateAnswered(result, replyTo) =>
         replyTo ! result.fold(StatusReply.Error(_), StatusReply.Success(_))
         Behaviors.same
@@ -299,11 +311,14 @@ private final class Fleet(
   }
 
   private def stopping(alive: Set[Int], waiting: Vector[ActorRef[Done]], failure: Option[String]): Behavior[Command] = {
-    robots.filter { case (id, _) => alive(id) }.foreach { case (_, robot) => robot ! SimulatedRobot.Stop(context.system.ignoreRef) }
+    robots.filter { case (id, _) => alive(id) }.foreach { case (_, robot) =>
+      robot ! SimulatedRobot.Stop(context.system.ignoreRef)
+    }
     awaitStopped(alive, waiting, failure)
   }
 
-  private def awaitStopped(alive: Set[Int], waiting: Vector[ActorRef[Done]], failure: Option[String]): Behavior[Command] =
+  private def awaitStopped(
+      alive: Set[Int], waiting: Vector[ActorRef[Done]], failure: Option[String]): Behavior[Command] =
     if (alive.isEmpty) {
       waiting.foreach(_ ! Done)
       Behaviors.stopped
@@ -323,7 +338,8 @@ private final class Fleet(
 }
 
 /** A started fleet, for tests and launchers: the robots' addresses, and futures for what the fleet does. */
-final class FleetHandle private[sim] (val fleet: ActorRef[Fleet.Command], val members: Vector[FleetRobot], settings: FleetSettings)(
+final class FleetHandle private[sim] (val fleet: ActorRef[Fleet.Command], val members: Vector[FleetRobot],
+    settings: FleetSettings)(
     implicit system: ActorSystem[_]
 ) {
   private implicit val timeout: Timeout = Timeout(settings.askTimeout)

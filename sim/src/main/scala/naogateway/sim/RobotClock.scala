@@ -2,15 +2,16 @@ package naogateway.sim
 
 import scala.concurrent.duration._
 
-/**
- * A simulated robot's own clock, the one its keep-alives' `Status.timestamp` (and `RobotHealth.uptimeMs`, debug data and
- * camera frames) read: whole milliseconds since power-up, starting at `offset` and running `driftPpm` parts per million
- * fast (negative: slow) against the simulator's clock (`System.nanoTime`). Tests that know it know the truth a clock
- * estimate is checked against ([[RobotView.gatewayNanosOf]]). The default is today's exact uptime clock.
- *
- * @param offset the reading at power-up (and after every restart): as if the clock had run before the firmware started
- * @param driftPpm how much faster the clock runs than real time, in parts per million; within ±10000
- */
+/** A simulated robot's own clock, the one its keep-alives' `Status.timestamp` (and `RobotHealth.uptimeMs`, debug data
+  * and camera frames) read: whole milliseconds since power-up, starting at `offset` and running `driftPpm` parts per
+  * million fast (negative: slow) against the simulator's clock (`System.nanoTime`). Tests that know it know the truth a
+  * clock estimate is checked against ([[RobotView.gatewayNanosOf]]). The default is today's exact uptime clock.
+  *
+  * @param offset
+  *   the reading at power-up (and after every restart): as if the clock had run before the firmware started
+  * @param driftPpm
+  *   how much faster the clock runs than real time, in parts per million; within ±10000
+  */
 final case class RobotClock(offset: FiniteDuration = Duration.Zero, driftPpm: Double = 0.0) {
   require(offset >= Duration.Zero, s"a robot clock starts at a reading of at least 0, not $offset")
   require(math.abs(driftPpm) <= 10000.0, s"a robot clock's drift must be within 10000 ppm, is $driftPpm")

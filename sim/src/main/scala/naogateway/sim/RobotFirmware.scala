@@ -8,7 +8,14 @@ import com.google.protobuf.ByteString
 
 import naogateway.proto._
 import naogateway.wire._
-import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec, ReturnData, ReturnMessage, ReturnStatus}
+import naogateway.wire.gamecontroller.{
+  GameControlData,
+  GameControlVersion,
+  GameControllerCodec,
+  ReturnData,
+  ReturnMessage,
+  ReturnStatus
+}
 
 /** The simulated CM-530 firmware as pure functions of state, input and time (nanoseconds). */
 object RobotFirmware {
@@ -85,7 +92,8 @@ object RobotFirmware {
       s = s.copy(nextKeepAliveAt = nextSlot(s.nextKeepAliveAt, s.settings.keepAliveInterval, now))
     }
     if (s.debugEnabled.exists(o => !CameraOptions(o)) && s.nextDebugAt <= now) {
-      debugData(s).foreach(d => out += Outgoing(encode(s, MessageContents(s.settings.robotId, debugData = Some(d))), Destination.Gateway))
+      debugData(s).foreach(d =>
+        out += Outgoing(encode(s, MessageContents(s.settings.robotId, debugData = Some(d))), Destination.Gateway))
       s = s.copy(nextDebugAt = nextSlot(s.nextDebugAt, s.settings.debugInterval, now))
     }
     if (s.debugEnabled.exists(CameraOptions) && s.nextCameraAt <= now) {
@@ -97,11 +105,10 @@ object RobotFirmware {
     (s.copy(stats = s.stats.copy(datagramsOut = s.stats.datagramsOut + sent.length)), sent)
   }
 
-  /**
-   * Handles one datagram from `from` at `now` (after advancing to `now`). With a signing key, a frame counts only when
-   * the gateway signed it and its timestamp is above the last one accepted this boot; the others are counted by kind
-   * and ignored. `viaStream`: the frame came as a secure-stream payload, which is not signed (docs/protocol.md 6.7).
-   */
+  /** Handles one datagram from `from` at `now` (after advancing to `now`). With a signing key, a frame counts only when
+    * the gateway signed it and its timestamp is above the last one accepted this boot; the others are counted by kind
+    * and ignored. `viaStream`: the frame came as a secure-stream payload, which is not signed (docs/protocol.md 6.7).
+    */
   def receive(state: FirmwareState, bytes: Array[Byte], from: InetSocketAddress, now: Long, viaStream: Boolean = false)
       : (FirmwareState, Vector[Outgoing]) = {
     val (advanced, due) = advanceUnsigned(state, now)
@@ -140,15 +147,15 @@ object RobotFirmware {
           case Right(window) => Right(s.copy(gatewayWindow = window))
           case Left(error) =>
             val counts = s.stats.refusedSignatures
-            Left(s.copy(stats = s.stats.copy(refusedSignatures = counts.updated(error.kind, counts.getOrElse(error.kind, 0L) + 1))))
+            Left(s.copy(stats = s.stats.copy(refusedSignatures = counts.updated(error.kind,
+                counts.getOrElse(error.kind, 0L) + 1))))
         }
     }
 
-  /**
-   * With a signing key, every FU-Remote frame of `out` signed in order under the robot's timestamps (boot counter in
-   * the high 32 bits, frame counter of this boot in the low); GameController answers are not frames and stay as
-   * they are.
-   */
+  /** With a signing key, every FU-Remote frame of `out` signed in order under the robot's timestamps (boot counter in
+    * the high 32 bits, frame counter of this boot in the low); GameController answers are not frames and stay as they
+    * are.
+    */
   private def signed(s: FirmwareState, out: Vector[Outgoing]): (FirmwareState, Vector[Outgoing]) =
     s.settings.signingKey match {
       case None => (s, out)
@@ -174,14 +181,16 @@ object RobotFirmware {
       onDebuggingCommands(state, c, form, replyTo)
     }
     contents.rpcRequest.fold(afterDebug) { request =>
-      val (s, out) = onCall(afterDebug._1, RpcCall.fromProto(request), PendingReply(request.callId.map(_ & 0xffffffffL), replyTo, form))
+      val (s, out) = onCall(afterDebug._1, RpcCall.fromProto(request),
+        PendingReply(request.callId.map(_ & 0xffffffffL), replyTo, form))
       (s, afterDebug._2 ++ out)
     }
   }
 
-  private def onGameController(s: FirmwareState, data: GameControlData, from: InetSocketAddress)
-      : (FirmwareState, Vector[Outgoing]) = {
-    val counted = s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))
+  private def onGameController(
+      s: FirmwareState, data: GameControlData, from: InetSocketAddress): (FirmwareState, Vector[Outgoing]) = {
+    val counted =
+      s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))
     // A robot answers the GameController it heard, as robots of that version do: the 2014 one (version 8; its
     // version-7 copy of the round needs no second answer) with RGrt version 2 to port 3838; the Humanoid League's
     // (version 12) with RGrt version 2 to 3939; the Humanoid Soccer League's (version 19) with its status message,
@@ -197,13 +206,19 @@ object RobotFirmware {
             .map(_ -> GameControllerCodec.ReturnPort)
         case GameControlVersion.V19 =>
           val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
-          val status = ReturnStatus(s.settings.playerNumber, s.settings.teamId, fallen = false,
-            ((s.pose.x * 1000).toFloat, (s.pose.y * 1000).toFloat, s.pose.theta.toFloat), ballAge = 0f,
-            ((ahead * 1000).toFloat, (left * 1000).toFloat))
+          val status = ReturnStatus(
+            s.settings.playerNumber,
+            s.settings.teamId,
+            fallen = false,
+            ((s.pose.x * 1000).toFloat, (s.pose.y * 1000).toFloat, s.pose.theta.toFloat),
+            ballAge = 0f,
+            ((ahead * 1000).toFloat, (left * 1000).toFloat)
+          )
           GameControllerCodec.encodeStatus(status).toOption.map(_ -> GameControllerCodec.ReturnPort)
         case GameControlVersion.V7 => None
       }
-      (counted, answer.map { case (b, port) => Outgoing(b, Destination.ReplyTo(new InetSocketAddress(from.getAddress, port))) }.toVector)
+      (counted,
+        answer.map { case (b, port) => Outgoing(b, Destination.ReplyTo(new InetSocketAddress(from.getAddress, port))) }.toVector)
     }
   }
 
@@ -247,10 +262,13 @@ object RobotFirmware {
               answer(Left(s"not standing: ${s.posture.name}"))
             else {
               val clamp = (v: Double, limit: Double) => math.max(-limit, math.min(limit, v))
-              val walk = Walk(clamp(vx, s.settings.maxSpeed), clamp(vy, s.settings.maxSpeed), clamp(omega, s.settings.maxTurn),
-                s.now + s.settings.walkLease.toNanos)
+              val walk =
+                Walk(clamp(vx, s.settings.maxSpeed), clamp(vy, s.settings.maxSpeed), clamp(omega, s.settings.maxTurn),
+                  s.now + s.settings.walkLease.toNanos)
               val standing = walk.vx == 0 && walk.vy == 0 && walk.omega == 0
-              answer(ok, if (standing) s.copy(walk = None, posture = Posture.Stand) else s.copy(walk = Some(walk), posture = Posture.Walking))
+              answer(ok,
+                if (standing) s.copy(walk = None, posture = Posture.Stand)
+                else s.copy(walk = Some(walk), posture = Posture.Walking))
             }
           case Right(_) => answer(Left(RpcReply.badParameters("walk takes vx, vy, omega")))
         }
@@ -272,17 +290,18 @@ object RobotFirmware {
         call.params match {
           case Vector(RpcValue.Text(name)) =>
             Posture.target(name) match {
-              case Left(unknown) => answer(Left(RpcReply.badParameters(unknown)))
-              case Right(_) if s.change.isDefined => answer(Left(s"busy: ${Posture.Moving.name}"))
+              case Left(unknown)                        => answer(Left(RpcReply.badParameters(unknown)))
+              case Right(_) if s.change.isDefined       => answer(Left(s"busy: ${Posture.Moving.name}"))
               case Right(target) if target == s.posture => answer(Right(Some(RpcValue.Text(target.name))))
               case Right(target) =>
                 val duration = target match {
-                  case Posture.Stand  => s.settings.standUpTime
-                  case Posture.Sit    => s.settings.sitDownTime
-                  case _              => s.settings.crouchTime
+                  case Posture.Stand => s.settings.standUpTime
+                  case Posture.Sit   => s.settings.sitDownTime
+                  case _             => s.settings.crouchTime
                 }
                 // The reply comes when the motion ends (advance), not now.
-                (s.copy(walk = None, posture = Posture.Moving, change = Some(PostureChange(target, s.now + duration.toNanos, pending))),
+                (s.copy(walk = None, posture = Posture.Moving,
+                    change = Some(PostureChange(target, s.now + duration.toNanos, pending))),
                   Vector.empty)
             }
           case _ => answer(Left(RpcReply.badParameters("posture takes one text: sit, stand or crouch")))
@@ -294,8 +313,8 @@ object RobotFirmware {
           case _                           => answer(Left(RpcReply.badParameters("say takes one text")))
         }
       case Some(RpcMethod.Battery) => answer(Right(Some(RpcValue.Number(s.battery.toFloat))))
-      case Some(RpcMethod.Ping) => answer(Right(Some(RpcValue.UInt(s.uptimeMillis & 0xffffffffL))))
-      case Some(RpcMethod.Reset) =>
+      case Some(RpcMethod.Ping)    => answer(Right(Some(RpcValue.UInt(s.uptimeMillis & 0xffffffffL))))
+      case Some(RpcMethod.Reset)   =>
         // Reply first, then come back as a new session (fresh uptime and sequence numbers, options off).
         val (_, out) = answer(ok)
         (restart(s, s.now), out)
@@ -349,23 +368,45 @@ object RobotFirmware {
     val ts = Some(s.uptimeMillis)
     val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
     s.debugEnabled.toVector.sorted.collect {
-      case o @ "status.text" => DebugData(o, ts, DebugData.Data.Text(DebugText(s"posture ${s.posture.name}, battery ${"%.2f".format(s.battery)} V")))
+      case o @ "status.text" => DebugData(o, ts,
+          DebugData.Data.Text(DebugText(s"posture ${s.posture.name}, battery ${"%.2f".format(s.battery)} V")))
       case o @ "status.table" =>
-        DebugData(o, ts, DebugData.Data.Table(DebugTable(Seq(
-          DebugTable.Row("battery", "%.2f".format(s.battery)),
-          DebugTable.Row("posture", s.posture.name),
-          DebugTable.Row("uptime", s"${s.uptimeMillis} ms")))))
+        DebugData(
+          o,
+          ts,
+          DebugData.Data.Table(DebugTable(Seq(
+                DebugTable.Row("battery", "%.2f".format(s.battery)),
+                DebugTable.Row("posture", s.posture.name),
+                DebugTable.Row("uptime", s"${s.uptimeMillis} ms"))))
+        )
       case o @ "motion.plot" =>
         val w = s.walk.getOrElse(Walk(0, 0, 0, 0))
-        DebugData(o, ts, DebugData.Data.Plot(DebugPlot(Seq(
-          DebugPlot.Sample("vx", w.vx.toFloat), DebugPlot.Sample("vy", w.vy.toFloat), DebugPlot.Sample("omega", w.omega.toFloat)))))
+        DebugData(
+          o,
+          ts,
+          DebugData.Data.Plot(DebugPlot(Seq(
+                DebugPlot.Sample("vx", w.vx.toFloat), DebugPlot.Sample("vy", w.vy.toFloat),
+                DebugPlot.Sample("omega", w.omega.toFloat))))
+        )
       case o @ "world.field" =>
-        DebugData(o, ts, DebugData.Data.FieldDrawing(DebugFieldDrawing(Seq(
-          Shape(Shape.Kind.CIRCLE, (s.pose.x * 1000).toInt, (s.pose.y * 1000).toInt, radius = Some(150), label = Some("robot")),
-          Shape(Shape.Kind.CIRCLE, (s.settings.scene.ballX * 1000).toInt, (s.settings.scene.ballY * 1000).toInt, radius = Some(50), label = Some("ball"))))))
+        DebugData(
+          o,
+          ts,
+          DebugData.Data.FieldDrawing(DebugFieldDrawing(Seq(
+                Shape(Shape.Kind.CIRCLE, (s.pose.x * 1000).toInt, (s.pose.y * 1000).toInt, radius = Some(150),
+                  label = Some("robot")),
+                Shape(Shape.Kind.CIRCLE, (s.settings.scene.ballX * 1000).toInt, (s.settings.scene.ballY * 1000).toInt,
+                  radius = Some(50), label = Some("ball"))
+              )))
+        )
       case o @ "world.relative" =>
-        DebugData(o, ts, DebugData.Data.RelativePosition(DebugRelativePosition(Seq(
-          DebugRelativePosition.RelativeObject("ball", (math.hypot(ahead, left) * 1000).toInt, math.atan2(left, ahead).toFloat)))))
+        DebugData(
+          o,
+          ts,
+          DebugData.Data.RelativePosition(DebugRelativePosition(Seq(
+                DebugRelativePosition.RelativeObject("ball", (math.hypot(ahead, left) * 1000).toInt,
+                  math.atan2(left, ahead).toFloat))))
+        )
     }
   }
 
@@ -376,14 +417,22 @@ object RobotFirmware {
     val out = Vector.newBuilder[Array[Byte]]
     if (s.debugEnabled("havimo.regions")) {
       val records = HaViMo.encodeRegions(regions).toOption.get
-      out += encode(s, MessageContents(s.settings.robotId, havimoRegions = Some(HaViMoRegionFrame(frame, ts, Some(ByteString.copyFrom(records))))))
+      out += encode(s,
+        MessageContents(s.settings.robotId,
+          havimoRegions = Some(HaViMoRegionFrame(frame, ts, Some(ByteString.copyFrom(records))))))
     }
     if (s.debugEnabled("havimo.grid"))
-      out += encode(s, MessageContents(s.settings.robotId, havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(Scene.grid(regions))))))
+      out += encode(s,
+        MessageContents(s.settings.robotId,
+          havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(Scene.grid(regions))))))
     if (s.debugEnabled("camera.image")) {
-      val shapes = regions.map(r => Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY), label = Some(s"colour ${r.colour}")))
-      val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES), Some(ByteString.copyFrom(Scene.grid(regions).map(b => (b & 0x0f).toByte))), shapes)
-      out += encode(s, MessageContents(s.settings.robotId, debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
+      val shapes = regions.map(r =>
+        Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY), label = Some(s"colour ${r.colour}")))
+      val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES),
+        Some(ByteString.copyFrom(Scene.grid(regions).map(b => (b & 0x0f).toByte))), shapes)
+      out += encode(s,
+        MessageContents(s.settings.robotId,
+          debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
     }
     (s.copy(frame = frame), out.result())
   }

@@ -4,10 +4,10 @@ package naogateway.sim
   * machine in the robot's clock (nanoseconds), like [[RobotFirmware]].
   *
   * The robot hands it every datagram classified as a stream segment, transmits what it returns (to the gateway's
-  * address, which is where segments from the robot go), treats every delivered payload as one FU-Remote frame from
-  * the gateway, and sends the replies to those frames back through [[send]] (a reply goes back the way its request
-  * came, §7.1). It calls [[tick]] when [[nextTimerAt]] has come. After a power cycle or `system.reset` the robot
-  * builds a fresh endpoint with its [[RobotStream.Factory]], so sequence numbers start afresh (§11.3).
+  * address, which is where segments from the robot go), treats every delivered payload as one FU-Remote frame from the
+  * gateway, and sends the replies to those frames back through [[send]] (a reply goes back the way its request came,
+  * §7.1). It calls [[tick]] when [[nextTimerAt]] has come. After a power cycle or `system.reset` the robot builds a
+  * fresh endpoint with its [[RobotStream.Factory]], so sequence numbers start afresh (§11.3).
   *
   * An adapter over the pure `SecureStream` state machine needs only to map its outputs: `Transmit` to
   * [[RobotStream.Step.transmit]], `Deliver` to [[RobotStream.Step.deliver]], and drop the rest.

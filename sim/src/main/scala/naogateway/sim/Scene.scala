@@ -103,7 +103,8 @@ object Scene {
         clip(Box(corners.map(_._1).min, corners.map(_._1).max, corners.map(_._2).min, corners.map(_._2).max))
           .map(b => (colour, b, 0.2))
     }
-    val seen = Vector(ball, goal(scene.fieldLength / 2, YellowGoalColour), goal(-scene.fieldLength / 2, BlueGoalColour)).flatten
+    val seen =
+      Vector(ball, goal(scene.fieldLength / 2, YellowGoalColour), goal(-scene.fieldLength / 2, BlueGoalColour)).flatten
     seen.zipWithIndex.take(HaViMo.MaxRegions).map { case ((colour, box, fill), i) => region(i + 1, colour, box, fill) }
   }
 

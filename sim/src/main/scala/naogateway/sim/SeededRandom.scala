@@ -3,8 +3,8 @@ package naogateway.sim
 import scala.collection.immutable.ArraySeq
 
 /** The simulator's one SplitMix64 generator: every draw returns the value and the next generator, so a model holding
-  * one stays a pure value and replays identically for the same seed (the radio model, the firmware model and the
-  * lossy network all draw from it).
+  * one stays a pure value and replays identically for the same seed (the radio model, the firmware model and the lossy
+  * network all draw from it).
   */
 final case class SeededRandom(state: Long) {
 

@@ -15,21 +15,28 @@ import naogateway.wire.gamecontroller._
   *
   * One cycle is a whole game of two halves; each half runs INITIAL, READY, SET, PLAYING and FINISHED for the given
   * durations. The half's clock (`secsRemaining`) starts at the PLAYING duration and counts down while PLAYING, so a
-  * half ends with the clock at 0, as a real half does. Within PLAYING, `setPlayAfter` into it, the referee stops play for
-  * `stoppedFor` (a goal kick for `teams[1]` is called: version 19 says `stopped` and the set play, version 12 the set
-  * play) and the set play then runs for `setPlayFor` with play going on; the half's clock runs throughout. No set play
-  * when they do not fit the PLAYING duration.
+  * half ends with the clock at 0, as a real half does. Within PLAYING, `setPlayAfter` into it, the referee stops play
+  * for `stoppedFor` (a goal kick for `teams[1]` is called: version 19 says `stopped` and the set play, version 12 the
+  * set play) and the set play then runs for `setPlayFor` with play going on; the half's clock runs throughout. No set
+  * play when they do not fit the PLAYING duration.
   *
-  * @param target where the packets go: the gateway's GameController port (a real GameController broadcasts to 3838)
-  * @param bindAddress the controller's own socket; port 0 lets the operating system pick one
-  * @param team0 the team number in the packets' `teams[0]` (blue)
-  * @param team1 the team number in `teams[1]` (red)
-  * @param playersPerTeam the packets' `playersPerTeam` (6 in the humanoid KidSize league)
-  * @param interval one round of packets this often; the real GameController sends two a second
-  * @param version the GameController to play: 19 (the Humanoid Soccer League's, the default), 12 (the Humanoid League's
-  *   until 2025), 8 (the 2014 one, which sends a version-8 and a version-7 packet each round) or 7 (its version-7
-  *   packets alone)
-  * @param messageBudget the version-19 `messageBudget` of both teams; the simulation hears no team message, so it stays
+  * @param target
+  *   where the packets go: the gateway's GameController port (a real GameController broadcasts to 3838)
+  * @param bindAddress
+  *   the controller's own socket; port 0 lets the operating system pick one
+  * @param team0
+  *   the team number in the packets' `teams[0]` (blue)
+  * @param team1
+  *   the team number in `teams[1]` (red)
+  * @param playersPerTeam
+  *   the packets' `playersPerTeam` (6 in the humanoid KidSize league)
+  * @param interval
+  *   one round of packets this often; the real GameController sends two a second
+  * @param version
+  *   the GameController to play: 19 (the Humanoid Soccer League's, the default), 12 (the Humanoid League's until 2025),
+  *   8 (the 2014 one, which sends a version-8 and a version-7 packet each round) or 7 (its version-7 packets alone)
+  * @param messageBudget
+  *   the version-19 `messageBudget` of both teams; the simulation hears no team message, so it stays
   */
 final case class SimulatedGameControllerSettings(
     target: InetSocketAddress,
@@ -64,12 +71,13 @@ final case class SimulatedGameControllerSettings(
   def halfNanos: Long = (initial + ready + set + playing + finished).toNanos
 }
 
-/**
- * The game as the simulated GameController sees it at one moment: what each round's packets say.
- *
- * @param stopped play is stopped by the referee (version 19's `stopped`)
- * @param setPlay the set play under way, taken by `teams[1]` (versions 19 and 12 say it; 8 and 7 do not)
- */
+/** The game as the simulated GameController sees it at one moment: what each round's packets say.
+  *
+  * @param stopped
+  *   play is stopped by the referee (version 19's `stopped`)
+  * @param setPlay
+  *   the set play under way, taken by `teams[1]` (versions 19 and 12 say it; 8 and 7 do not)
+  */
 final case class GameMoment(
     gameState: GameState,
     firstHalf: Boolean,
@@ -80,11 +88,11 @@ final case class GameMoment(
     setPlay: SetPlay = SetPlay.NoSetPlay
 )
 
-/** A simulated RoboCup GameController on loopback: real `RGme` packets of the version its settings name (19 by
-  * default: 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController
-  * broadcast them; 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and
-  * a set play) → FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo
-  * runs one against the gateway, so the game state and the competition gate can be seen without a field.
+/** A simulated RoboCup GameController on loopback: real `RGme` packets of the version its settings name (19 by default:
+  * 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController broadcast them;
+  * 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and a set play) →
+  * FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo runs one
+  * against the gateway, so the game state and the competition gate can be seen without a field.
   *
   * The schedule and the packets are pure ([[SimulatedGameController.momentAt]], [[SimulatedGameController.packets]]);
   * the actor only wakes at each round's timer and sends.
@@ -144,9 +152,9 @@ object SimulatedGameController {
             if (!settings.hasSetPlay || t < stopAt || t >= endAt) playing
             else if (t < runAt) playing.copy(stopped = true, setPlay = SetPlay.GoalKick)
             // The set play's own countdown runs on the secondary clock once play goes on.
-            else playing.copy(setPlay = SetPlay.GoalKick, secondaryTime = ((endAt - t + 999999999L) / 1000000000L).toInt)
-          }
-          else at(GameState.Finished, 0, 0)
+            else
+              playing.copy(setPlay = SetPlay.GoalKick, secondaryTime = ((endAt - t + 999999999L) / 1000000000L).toInt)
+          } else at(GameState.Finished, 0, 0)
         }
       }
     }
@@ -181,30 +189,74 @@ object SimulatedGameController {
   private def kickingTeam(settings: SimulatedGameControllerSettings, moment: GameMoment): Int =
     if (moment.setPlay != SetPlay.NoSetPlay || moment.kickOffTeam == KickOffTeam.Red) settings.team1 else settings.team0
 
-  /** The version-19 packet content of `moment`: players beyond `playersPerTeam` are substitutes, as the GameController lists them. */
-  def controlDataV19(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): HslControlData = {
-    def team(number: Int, colour: FieldColour, keeperColour: FieldColour) = HslTeamInfo(number, colour, keeperColour,
-      goalkeeper = 1, score = 0, penaltyShot = 0, singleShots = 0, messageBudget = settings.messageBudget,
+  /** The version-19 packet content of `moment`: players beyond `playersPerTeam` are substitutes, as the GameController
+    * lists them.
+    */
+  def controlDataV19(
+      settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): HslControlData = {
+    def team(number: Int, colour: FieldColour, keeperColour: FieldColour) = HslTeamInfo(
+      number,
+      colour,
+      keeperColour,
+      goalkeeper = 1,
+      score = 0,
+      penaltyShot = 0,
+      singleShots = 0,
+      messageBudget = settings.messageBudget,
       players = Vector.tabulate(HslPlayerInfo.Slots)(i =>
-        if (i < settings.playersPerTeam) HslPlayerInfo.Unpenalised else HslPlayerInfo(HslPenalty.Substitute, 0, 0, 0)))
-    HslControlData(packetNumber & 0xff, settings.playersPerTeam, CompetitionType.Small, moment.stopped, GamePhase.Normal,
-      moment.gameState, moment.setPlay, moment.firstHalf, Some(kickingTeam(settings, moment)), moment.secsRemaining,
-      moment.secondaryTime, team(settings.team0, FieldColour.Blue, FieldColour.Yellow),
-      team(settings.team1, FieldColour.Red, FieldColour.Black))
+        if (i < settings.playersPerTeam) HslPlayerInfo.Unpenalised else HslPlayerInfo(HslPenalty.Substitute, 0, 0, 0))
+    )
+    HslControlData(
+      packetNumber & 0xff,
+      settings.playersPerTeam,
+      CompetitionType.Small,
+      moment.stopped,
+      GamePhase.Normal,
+      moment.gameState,
+      moment.setPlay,
+      moment.firstHalf,
+      Some(kickingTeam(settings, moment)),
+      moment.secsRemaining,
+      moment.secondaryTime,
+      team(settings.team0, FieldColour.Blue, FieldColour.Yellow),
+      team(settings.team1, FieldColour.Red, FieldColour.Black)
+    )
   }
 
-  /** The version-12 packet content of `moment`: player 1 the goalkeeper, players beyond `playersPerTeam` substitutes. */
-  def controlDataV12(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): HlControlData = {
-    def team(number: Int, colour: FieldColour) = HlTeamInfo(number, colour, score = 0, penaltyShot = 0, singleShots = 0,
-      coachSequence = 0, ArraySeq.fill[Byte](HlPlayerInfo.CoachMessageBytes)(0), HlPlayerInfo.Unpenalised,
+  /** The version-12 packet content of `moment`: player 1 the goalkeeper, players beyond `playersPerTeam` substitutes.
+    */
+  def controlDataV12(
+      settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): HlControlData = {
+    def team(number: Int, colour: FieldColour) = HlTeamInfo(
+      number,
+      colour,
+      score = 0,
+      penaltyShot = 0,
+      singleShots = 0,
+      coachSequence = 0,
+      ArraySeq.fill[Byte](HlPlayerInfo.CoachMessageBytes)(0),
+      HlPlayerInfo.Unpenalised,
       Vector.tabulate(HlPlayerInfo.Slots)(i =>
         if (i >= settings.playersPerTeam) HlPlayerInfo.Unpenalised.copy(penalty = HlPenalty.Substitute)
-        else HlPlayerInfo.Unpenalised.copy(goalkeeper = i == 0)))
+        else HlPlayerInfo.Unpenalised.copy(goalkeeper = i == 0))
+    )
     val setPlay = moment.setPlay != SetPlay.NoSetPlay
-    HlControlData(packetNumber & 0xff, settings.playersPerTeam, HlGameType.KidSize, moment.gameState, moment.firstHalf,
-      Some(kickingTeam(settings, moment)), if (setPlay) HlSecondaryState.GoalKick else HlSecondaryState.Normal,
-      ArraySeq[Byte](if (setPlay) settings.team1.toByte else 0, 0, 0, 0), dropInTeam = 0, dropInTime = 0xffff,
-      moment.secsRemaining, moment.secondaryTime, team(settings.team0, FieldColour.Blue), team(settings.team1, FieldColour.Red))
+    HlControlData(
+      packetNumber & 0xff,
+      settings.playersPerTeam,
+      HlGameType.KidSize,
+      moment.gameState,
+      moment.firstHalf,
+      Some(kickingTeam(settings, moment)),
+      if (setPlay) HlSecondaryState.GoalKick else HlSecondaryState.Normal,
+      ArraySeq[Byte](if (setPlay) settings.team1.toByte else 0, 0, 0, 0),
+      dropInTeam = 0,
+      dropInTime = 0xffff,
+      moment.secsRemaining,
+      moment.secondaryTime,
+      team(settings.team0, FieldColour.Blue),
+      team(settings.team1, FieldColour.Red)
+    )
   }
 
   /** One round on the wire in the settings' version (version 8: the version-8 packet, then the version-7 one). */
@@ -217,7 +269,8 @@ object SimulatedGameController {
       case GameControlVersion.V7 => Vector(controlData(settings, GameControlVersion.V7, moment, packetNumber))
     }
     // The settings' checks keep every field in range, so encoding cannot fail; if it did, that is a bug here.
-    contents.map(c => GameControllerCodec.encodeControl(c).fold(e => throw new IllegalStateException(e.describe), identity))
+    contents.map(c =>
+      GameControllerCodec.encodeControl(c).fold(e => throw new IllegalStateException(e.describe), identity))
   }
 
   /** A controller sending to `settings.target` from a socket of its own, until it is stopped. */
@@ -252,9 +305,14 @@ object SimulatedGameController {
       packets(settings, moment, packetNumber).foreach(link ! UdpLink.Send(_, settings.target))
       val now = (moment.gameState, moment.stopped, moment.setPlay)
       if (!shown.contains(now))
-        context.log.info("Simulated GameController (version {}): {}{} ({} half)", settings.version.number.toString, moment.gameState,
-          (if (moment.stopped) ", stopped" else "") + (if (moment.setPlay != SetPlay.NoSetPlay) s", ${moment.setPlay}" else ""),
-          if (moment.firstHalf) "first" else "second")
+        context.log.info(
+          "Simulated GameController (version {}): {}{} ({} half)",
+          settings.version.number.toString,
+          moment.gameState,
+          (if (moment.stopped) ", stopped" else "") + (if (moment.setPlay != SetPlay.NoSetPlay) s", ${moment.setPlay}"
+                                                       else ""),
+          if (moment.firstHalf) "first" else "second"
+        )
       waiting((packetNumber + 1) & 0xff, Some(now))
     }
 

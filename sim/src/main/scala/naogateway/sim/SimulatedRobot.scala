@@ -10,21 +10,21 @@ import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.UdpLink
 
-/** One simulated CM-530 robot on real UDP sockets: [[RobotFirmware]] in real time, behind the GS1500M and CM-530
-  * models ([[FaithfulLink]]) or straight on the sockets.
+/** One simulated CM-530 robot on real UDP sockets: [[RobotFirmware]] in real time, behind the GS1500M and CM-530 models
+  * ([[FaithfulLink]]) or straight on the sockets.
   *
-  * Two sockets, as the thesis hardware has: the GS1500M keeps a UDP client connection for everything it sends and a
-  * UDP server on port 3838 for everything it receives. So the robot sends from one socket (its IP, a port of the
-  * system's choosing) and receives on another (its IP, the receive port); a datagram sent to the source port of its
-  * datagrams reaches the sending socket, is counted and is not acted on, exactly as a gateway that answered to the
-  * source port would find with a real robot. [[SimulatedRobot.Reconnect]] gives the sending socket a new port, as a
-  * module reconnect does.
+  * Two sockets, as the thesis hardware has: the GS1500M keeps a UDP client connection for everything it sends and a UDP
+  * server on port 3838 for everything it receives. So the robot sends from one socket (its IP, a port of the system's
+  * choosing) and receives on another (its IP, the receive port); a datagram sent to the source port of its datagrams
+  * reaches the sending socket, is counted and is not acted on, exactly as a gateway that answered to the source port
+  * would find with a real robot. [[SimulatedRobot.Reconnect]] gives the sending socket a new port, as a module
+  * reconnect does.
   *
   * The robot sends keep-alives and debug output to the configured gateway address and answers each request to its
   * sender. Time is `System.nanoTime` relative to the robot's start; the pure models run in that clock, and the actor
-  * wakes up with one keyed timer at the earliest moment any of them has something to do. Timers fire on the
-  * scheduler's tick (10 ms by default), so a datagram may leave up to one tick after the model put it on air; the
-  * models' own time order is unaffected, because every wake-up first catches them up to the present.
+  * wakes up with one keyed timer at the earliest moment any of them has something to do. Timers fire on the scheduler's
+  * tick (10 ms by default), so a datagram may leave up to one tick after the model put it on air; the models' own time
+  * order is unaffected, because every wake-up first catches them up to the present.
   */
 object SimulatedRobot {
 
@@ -60,8 +60,8 @@ object SimulatedRobot {
   /** Closes the robot's sockets and stops the robot; `Done` once both ports are free. */
   final case class Stop(replyTo: ActorRef[Done]) extends Command
 
-  /** The module reconnects its client connection: the robot sends from a new port from now on (it keeps receiving
-    * where it did); `replyTo` learns the new source address.
+  /** The module reconnects its client connection: the robot sends from a new port from now on (it keeps receiving where
+    * it did); `replyTo` learns the new source address.
     */
   final case class Reconnect(replyTo: ActorRef[InetSocketAddress]) extends Command
 
@@ -103,14 +103,18 @@ object SimulatedRobot {
           // Akka keeps one message adapter per message class, so the sending socket's events come through a relay.
           val self = context.self
           val fromSender = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { event =>
-            self ! FromSender(event)
-            Behaviors.same
-          }, "sending-socket-events")
+              self ! FromSender(event)
+              Behaviors.same
+            }, "sending-socket-events")
           // The receive socket shares its port with a GameController listener on the same host (the demo binds
           // 0.0.0.0:3838 with SO_REUSEADDR); the more specific address still gets the robot's unicast datagrams.
           val receiveOptions = UdpLink.Options(reuseAddress = true, receiveBufferBytes = settings.receiveBufferBytes)
-          val receiver = context.spawn(UdpLink(new InetSocketAddress(host, settings.receivePort), fromSocket, receiveOptions), "udp-receive")
-          val sender = context.spawn(UdpLink(settings.bindAddress, fromSender, UdpLink.Options(receiveBufferBytes = 64 * 1024)), "udp-send")
+          val receiver =
+            context.spawn(UdpLink(new InetSocketAddress(host, settings.receivePort), fromSocket, receiveOptions),
+              "udp-receive")
+          val sender =
+            context.spawn(UdpLink(settings.bindAddress, fromSender, UdpLink.Options(receiveBufferBytes = 64 * 1024)),
+              "udp-send")
           context.watchWith(receiver, SocketGone(receiver))
           context.watchWith(sender, SocketGone(sender))
           val origin = System.nanoTime()
@@ -120,12 +124,13 @@ object SimulatedRobot {
               case (Some(local), Some(from)) =>
                 context.log.debug("Simulated robot [{}] receives on {} and sends from {}", id, local, from)
                 reportTo.foreach(_ ! Started(id, context.self, local))
-                val robot = new SimulatedRobotRun(settings, context, timers, receiver, local, sender, from, fromSender, origin)
+                val robot =
+                  new SimulatedRobotRun(settings, context, timers, receiver, local, sender, from, fromSender, origin)
                 stash.unstashAll(robot.start())
               case _ =>
                 Behaviors.receiveMessage {
-                  case FromSocket(UdpLink.Bound(_, local)) => binding(Some(local), sending)
-                  case FromSender(UdpLink.Bound(_, local)) => binding(received, Some(local))
+                  case FromSocket(UdpLink.Bound(_, local))             => binding(Some(local), sending)
+                  case FromSender(UdpLink.Bound(_, local))             => binding(received, Some(local))
                   case FromSocket(UdpLink.BindFailed(address, reason)) => failed(address, reason)
                   case FromSender(UdpLink.BindFailed(address, reason)) => failed(address, reason)
                   case FromSocket(UdpLink.Received(_, _)) | FromSender(UdpLink.Received(_, _)) =>

@@ -35,7 +35,7 @@ private[sim] final class SimulatedRobotRun(
 
   /** Events of the sending socket, the same in every state: nothing that arrives there is acted on. */
   private def senderEvent(event: UdpLink.Event): Unit = event match {
-    case UdpLink.Received(_, _) => ignoredAtSender += 1
+    case UdpLink.Received(_, _)                                    => ignoredAtSender += 1
     case UdpLink.Bound(link, local) if reconnecting.contains(link) =>
       // The new connection is up: the old one closes, and everything from now on leaves from the new port.
       context.unwatch(sender)
@@ -61,8 +61,9 @@ private[sim] final class SimulatedRobotRun(
     if (reconnecting.isEmpty) {
       reconnects += 1
       reconnecting = Some(context.spawn(
-        UdpLink(new InetSocketAddress(address.getAddress, 0), fromSender, UdpLink.Options(receiveBufferBytes = 64 * 1024)),
-        s"udp-send-$reconnects"))
+          UdpLink(new InetSocketAddress(address.getAddress, 0), fromSender,
+            UdpLink.Options(receiveBufferBytes = 64 * 1024)),
+          s"udp-send-$reconnects"))
     }
   }
 
@@ -78,7 +79,8 @@ private[sim] final class SimulatedRobotRun(
       replyTo ! receivedCalls
       Some(Behaviors.same)
     case SocketGone(link) =>
-      context.log.error("Simulated robot [{}] lost its socket {} and stops", id, if (link == receiver) address else sendingFrom)
+      context.log.error("Simulated robot [{}] lost its socket {} and stops", id,
+        if (link == receiver) address else sendingFrom)
       Some(Behaviors.stopped)
     case _ => None
   }
@@ -160,20 +162,23 @@ private[sim] final class SimulatedRobotRun(
     if (!pending) goOffline(drained, settings.resetBootDelay, t)
     else {
       drained.link.flatMap(_.nextWakeUp).foreach(at => timers.startSingleTimer(WakeUpKey, WakeUp, delay(at, t)))
-      Behaviors.receiveMessage { message => always(message).getOrElse(message match {
-        case WakeUp => flushing(drained)
-        case FromSocket(UdpLink.Received(_, _)) =>
-          flushingCounted(drained)
-        case GetState(replyTo) =>
-          val at = now()
-          replyTo ! view(drained, at, online = false, upAt = Some(at + settings.resetBootDelay.toNanos))
-          Behaviors.same
-        case PowerCycle(bootDelay) => powerOff(drained, bootDelay, "power cycle")
-        case SetBattery(volts) => flushing(drained.copy(firmware = drained.firmware.copy(battery = math.max(0.0, volts))))
-        case MoveBall(x, y) => flushing(drained.copy(firmware = movedBall(drained.firmware, x, y)))
-        case Stop(replyTo) => stopping(Vector(replyTo))
-        case _ => Behaviors.same
-      })}
+      Behaviors.receiveMessage { message =>
+        always(message).getOrElse(message match {
+          case WakeUp => flushing(drained)
+          case FromSocket(UdpLink.Received(_, _)) =>
+            flushingCounted(drained)
+          case GetState(replyTo) =>
+            val at = now()
+            replyTo ! view(drained, at, online = false, upAt = Some(at + settings.resetBootDelay.toNanos))
+            Behaviors.same
+          case PowerCycle(bootDelay) => powerOff(drained, bootDelay, "power cycle")
+          case SetBattery(volts) =>
+            flushing(drained.copy(firmware = drained.firmware.copy(battery = math.max(0.0, volts))))
+          case MoveBall(x, y) => flushing(drained.copy(firmware = movedBall(drained.firmware, x, y)))
+          case Stop(replyTo)  => stopping(Vector(replyTo))
+          case _              => Behaviors.same
+        })
+      }
     }
   }
 
@@ -198,28 +203,30 @@ private[sim] final class SimulatedRobotRun(
 
   // Powered off, or the module is still booting: nothing goes out, nothing is answered.
   private def offline(robot: Robot, upAt: Long): Behavior[Command] =
-    Behaviors.receiveMessage { message => always(message).getOrElse(message match {
-      case ModuleUp =>
-        val t = now()
-        context.log.info("Simulated robot [{}] is back (boot {})", id, robot.firmware.bootId)
-        val up = robot.copy(link = freshLink(t), stream = settings.stream.map(_(t)))
-        online(proceed(up, t, None))
-      case FromSocket(UdpLink.Received(_, _)) =>
-        offline(robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1)), upAt)
-      case GetState(replyTo) =>
-        replyTo ! view(robot, now(), online = false, upAt = Some(upAt))
-        Behaviors.same
-      case PowerCycle(bootDelay) =>
-        powerOff(robot, bootDelay, "power cycle while off")
-      case SetBattery(volts) =>
-        offline(robot.copy(firmware = robot.firmware.copy(battery = math.max(0.0, volts))), upAt)
-      case MoveBall(x, y) =>
-        offline(robot.copy(firmware = movedBall(robot.firmware, x, y)), upAt)
-      case Stop(replyTo) =>
-        stopping(Vector(replyTo))
-      case _ =>
-        Behaviors.same
-    })}
+    Behaviors.receiveMessage { message =>
+      always(message).getOrElse(message match {
+        case ModuleUp =>
+          val t = now()
+          context.log.info("Simulated robot [{}] is back (boot {})", id, robot.firmware.bootId)
+          val up = robot.copy(link = freshLink(t), stream = settings.stream.map(_(t)))
+          online(proceed(up, t, None))
+        case FromSocket(UdpLink.Received(_, _)) =>
+          offline(robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1)), upAt)
+        case GetState(replyTo) =>
+          replyTo ! view(robot, now(), online = false, upAt = Some(upAt))
+          Behaviors.same
+        case PowerCycle(bootDelay) =>
+          powerOff(robot, bootDelay, "power cycle while off")
+        case SetBattery(volts) =>
+          offline(robot.copy(firmware = robot.firmware.copy(battery = math.max(0.0, volts))), upAt)
+        case MoveBall(x, y) =>
+          offline(robot.copy(firmware = movedBall(robot.firmware, x, y)), upAt)
+        case Stop(replyTo) =>
+          stopping(Vector(replyTo))
+        case _ =>
+          Behaviors.same
+      })
+    }
 
   private def stopping(waiting: Vector[ActorRef[Done]]): Behavior[Command] = {
     timers.cancel(WakeUpKey)
@@ -241,7 +248,8 @@ private[sim] final class SimulatedRobotRun(
         Behaviors.stopped
       case StopTimedOut =>
         // Stopping this actor stops the links and their socket adapters, which closes the ports soon after.
-        context.log.warn("Simulated robot [{}] did not see {} close within {}; stopping anyway", id, address, StopTimeout)
+        context.log.warn("Simulated robot [{}] did not see {} close within {}; stopping anyway", id, address,
+          StopTimeout)
         waiting.foreach(_ ! Done)
         Behaviors.stopped
       case Stop(replyTo) => waitForSockets(open, waiting :+ replyTo)
@@ -333,7 +341,7 @@ private[sim] final class SimulatedRobotRun(
           }
           val settled = queued.link.advance(t)
           deliveries = linkStep(FaithfulLink.Step(settled.link, queued.transmitted ++ settled.transmitted,
-            queued.delivered ++ settled.delivered))
+              queued.delivered ++ settled.delivered))
         case None =>
           out ++= plain
       }
@@ -348,7 +356,8 @@ private[sim] final class SimulatedRobotRun(
   }
 
   /** One datagram the firmware has read: a stream segment goes to the stream, anything else to the firmware. */
-  private def handle(robot: Robot, bytes: Array[Byte], from: InetSocketAddress, at: Long): (Robot, Vector[Out], Vector[Outgoing]) =
+  private def handle(
+      robot: Robot, bytes: Array[Byte], from: InetSocketAddress, at: Long): (Robot, Vector[Out], Vector[Outgoing]) =
     Datagram.classify(bytes) match {
       case Datagram.StreamSegment(segment) =>
         val counted = robot.copy(stats = robot.stats.copy(streamSegments = robot.stats.streamSegments + 1))
@@ -359,7 +368,8 @@ private[sim] final class SimulatedRobotRun(
           // Each delivered payload is one frame from the gateway; its replies go back through the stream.
           step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
             logCalls(frame, at)
-            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, math.max(at, next.firmware.now), viaStream = true)
+            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream,
+              math.max(at, next.firmware.now), viaStream = true)
             next = next.copy(firmware = firmware)
             app ++= out
           }

@@ -10,25 +10,36 @@ import naogateway.wire.stream.StreamSettings
 
 /** Settings of one simulated robot on a real UDP socket.
   *
-  * @param firmware the simulated CM-530 firmware (robot id, team, role, timings, battery, scene, …)
-  * @param gateway where keep-alives, debug output and secure-stream segments go (the gateway's robot port; 11011 in
-  *   production)
-  * @param bindAddress the robot's own IP address and the port it sends from (0: the operating system picks one, as
-  *   the GS1500M's client connection gets a new one whenever it connects)
-  * @param receivePort where the robot receives on its own IP address: requests, GameController packets and segments
-  *   arrive at `bindAddress`'s IP on this port (3838, docs/protocol.md section 2; 0 lets the system pick one)
-  * @param faithfulLink `true`: every datagram passes the GS1500M module and CM-530 models ([[FaithfulLink]]);
-  *   `false`: datagrams go straight between socket and firmware, the cheap mode for big fleets
-  * @param timeScale multiplies the modelled module and CM-530 durations (1.0 = the measured times)
-  * @param resetBootDelay how long the robot is silent after a `system.reset` call while its module boots
-  * @param module the GS1500M model; its own `timeScale` is replaced by `timeScale`
-  * @param cpu the CM-530 main-loop model; its costs are replaced by `timeScale`, its keep-alive is switched off
-  * @param seed the module's overflow coin and the main loop's random work
-  * @param receiveBufferBytes the socket's receive buffer in the operating system
-  * @param stream the robot's secure-stream endpoint, built afresh at every boot; `None`: segments are counted and
-  *   ignored
-  * @param keepAlivePhase the first keep-alive goes out this long after the start (at once after a power cycle), so
-  *   a fleet's keep-alives need not all leave in the same instant
+  * @param firmware
+  *   the simulated CM-530 firmware (robot id, team, role, timings, battery, scene, …)
+  * @param gateway
+  *   where keep-alives, debug output and secure-stream segments go (the gateway's robot port; 11011 in production)
+  * @param bindAddress
+  *   the robot's own IP address and the port it sends from (0: the operating system picks one, as the GS1500M's client
+  *   connection gets a new one whenever it connects)
+  * @param receivePort
+  *   where the robot receives on its own IP address: requests, GameController packets and segments arrive at
+  *   `bindAddress`'s IP on this port (3838, docs/protocol.md section 2; 0 lets the system pick one)
+  * @param faithfulLink
+  *   `true`: every datagram passes the GS1500M module and CM-530 models ([[FaithfulLink]]); `false`: datagrams go
+  *   straight between socket and firmware, the cheap mode for big fleets
+  * @param timeScale
+  *   multiplies the modelled module and CM-530 durations (1.0 = the measured times)
+  * @param resetBootDelay
+  *   how long the robot is silent after a `system.reset` call while its module boots
+  * @param module
+  *   the GS1500M model; its own `timeScale` is replaced by `timeScale`
+  * @param cpu
+  *   the CM-530 main-loop model; its costs are replaced by `timeScale`, its keep-alive is switched off
+  * @param seed
+  *   the module's overflow coin and the main loop's random work
+  * @param receiveBufferBytes
+  *   the socket's receive buffer in the operating system
+  * @param stream
+  *   the robot's secure-stream endpoint, built afresh at every boot; `None`: segments are counted and ignored
+  * @param keepAlivePhase
+  *   the first keep-alive goes out this long after the start (at once after a power cycle), so a fleet's keep-alives
+  *   need not all leave in the same instant
   */
 final case class SimulatedRobotSettings(
     firmware: FirmwareSettings,
@@ -73,9 +84,11 @@ object SimulatedRobotSettings {
 
 /** What a simulated robot counted on its sockets, over its whole life (power cycles included).
   *
-  * @param received datagrams that arrived at the receive socket (its IP at the receive port)
-  * @param ignoredAtSendingSocket datagrams that arrived at the sending socket instead: the module's client connection
-  *   passes nothing to the CM-530, so they are counted here and never acted on
+  * @param received
+  *   datagrams that arrived at the receive socket (its IP at the receive port)
+  * @param ignoredAtSendingSocket
+  *   datagrams that arrived at the sending socket instead: the module's client connection passes nothing to the CM-530,
+  *   so they are counted here and never acted on
   */
 final case class RobotStats(
     received: Long = 0,
@@ -92,16 +105,25 @@ final case class ReceivedCall(atNanos: Long, call: RpcCall)
 
 /** A snapshot of one simulated robot, for tests and tools.
   *
-  * @param online `false` while the robot is powered off or its module boots (it neither sends nor answers)
-  * @param onlineAgainIn while offline, the time left until the module answers again
-  * @param uptimeMillis since the last power-up (or reset)
-  * @param address where the robot receives (its IP at the receive port)
-  * @param module stats of the GS1500M model since the last power-up (`None` without the faithful link)
-  * @param cpu stats of the CM-530 main loop since the last power-up (`None` without the faithful link)
-  * @param sendingFrom where the robot's datagrams come from now (its IP at the sending socket's port)
-  * @param clock the robot's clock, which `uptimeMillis` and the keep-alives' timestamps read
-  * @param bootedAtNanos when the firmware last booted, on this JVM's `System.nanoTime` (the gateway's clock when the
-  *   gateway runs in the same JVM)
+  * @param online
+  *   `false` while the robot is powered off or its module boots (it neither sends nor answers)
+  * @param onlineAgainIn
+  *   while offline, the time left until the module answers again
+  * @param uptimeMillis
+  *   since the last power-up (or reset)
+  * @param address
+  *   where the robot receives (its IP at the receive port)
+  * @param module
+  *   stats of the GS1500M model since the last power-up (`None` without the faithful link)
+  * @param cpu
+  *   stats of the CM-530 main loop since the last power-up (`None` without the faithful link)
+  * @param sendingFrom
+  *   where the robot's datagrams come from now (its IP at the sending socket's port)
+  * @param clock
+  *   the robot's clock, which `uptimeMillis` and the keep-alives' timestamps read
+  * @param bootedAtNanos
+  *   when the firmware last booted, on this JVM's `System.nanoTime` (the gateway's clock when the gateway runs in the
+  *   same JVM)
   */
 final case class RobotView(
     robotId: Int,

@@ -12,15 +12,14 @@ import org.zeromq.{SocketType, ZContext, ZMQ, ZMsg}
 
 import naogateway.wire.{HeaderForm, MessageContents, RpcReply}
 
-/**
- * A simulated robot of the original naogateway kind: the simulated CM-530 firmware's RPC modules behind a ZeroMQ REP
- * socket. A REP socket answers one request at a time, so a posture call holds the socket until its motion has ended,
- * exactly as a robot whose calls block would. It has its own thread (it stands for a separate machine), can be
- * stopped and started again (a power cycle: a new session, battery and position kept), and binds `endpoint`; with a
- * port of `*` the system picks one at the first start ([[boundEndpoint]]), and every later start binds that one again,
- * as a power-cycled robot keeps its address.
- * `start` and `stop` block until the socket is bound or closed: call them from tests or tools, never from an actor.
- */
+/** A simulated robot of the original naogateway kind: the simulated CM-530 firmware's RPC modules behind a ZeroMQ REP
+  * socket. A REP socket answers one request at a time, so a posture call holds the socket until its motion has ended,
+  * exactly as a robot whose calls block would. It has its own thread (it stands for a separate machine), can be stopped
+  * and started again (a power cycle: a new session, battery and position kept), and binds `endpoint`; with a port of
+  * `*` the system picks one at the first start ([[boundEndpoint]]), and every later start binds that one again, as a
+  * power-cycled robot keeps its address. `start` and `stop` block until the socket is bound or closed: call them from
+  * tests or tools, never from an actor.
+  */
 final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) {
   private val log = LoggerFactory.getLogger(classOf[ZeroMqSimulatedRobot])
   // Replies of the firmware go to this marker; everything else it emits (keep-alives, debug data) has nowhere to go.
@@ -120,7 +119,8 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
     MessageContents.parse(body) match {
       case Left(error) =>
         val id = state.map(_.settings.robotId).getOrElse(settings.robotId)
-        MessageContents(id, rpcResponse = Some(RpcReply(Left(s"bad parameters: not a Message (${error.describe})")).toProto)).toProtobuf
+        MessageContents(id,
+          rpcResponse = Some(RpcReply(Left(s"bad parameters: not a Message (${error.describe})")).toProto)).toProtobuf
       case Right(contents) =>
         val (next, out) = RobotFirmware.onMessage(state.get, HeaderForm.Legacy, contents, ReplyMarker)
         state = Some(next)
@@ -128,11 +128,13 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
         val deadline = System.nanoTime() + LongestCall.toNanos
         // A posture call answers when its motion has ended: hold the request, as the socket forces us to.
         while (contents.rpcRequest.isDefined && !replies.exists(isRpcReply) && running && System.nanoTime() < deadline) {
-          val wait = math.max(0L, math.min(state.get.nextWakeUp - System.nanoTime(), TimeUnit.MILLISECONDS.toNanos(PollMillis)))
+          val wait =
+            math.max(0L, math.min(state.get.nextWakeUp - System.nanoTime(), TimeUnit.MILLISECONDS.toNanos(PollMillis)))
           if (wait > 0) Thread.sleep(wait / 1000000L, (wait % 1000000L).toInt)
           replies = replies ++ advanceTo(System.nanoTime())
         }
-        val merged = replies.flatMap(o => MessageContents.decodeFrame(o.bytes).toOption.map(_._2)).foldLeft(MessageContents(next.settings.robotId)) {
+        val merged = replies.flatMap(o => MessageContents.decodeFrame(o.bytes).toOption.map(_._2)).foldLeft(
+          MessageContents(next.settings.robotId)) {
           (acc, c) =>
             acc.copy(
               rpcResponse = acc.rpcResponse.orElse(c.rpcResponse),

@@ -45,7 +45,8 @@ class FaithfulLinkSpec extends AnyWordSpec with Matchers with LoneElement {
     Run(link, tx.result(), dl.result())
   }
 
-  private def payload(n: Int, first: Int): Array[Byte] = Array.tabulate[Byte](n)(i => if (i == 0) first.toByte else 'a'.toByte)
+  private def payload(n: Int, first: Int): Array[Byte] =
+    Array.tabulate[Byte](n)(i => if (i == 0) first.toByte else 'a'.toByte)
 
   "A faithful link" should {
     "need no wake-up while nothing is under way" in {

@@ -58,7 +58,8 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
     "run 20 robots that send keep-alives with distinct ids from distinct addresses, power-cycle one, stop cleanly" in {
       val gateway = new TestGateway
       try {
-        val fleet = Await.result(Fleet.start(system, FleetSettings.ofSize(20, gateway.address).copy(firstAddress = TestLoopback.block(20))), 30.seconds)
+        val fleet = Await.result(Fleet.start(system,
+            FleetSettings.ofSize(20, gateway.address).copy(firstAddress = TestLoopback.block(20))), 30.seconds)
         fleet.robots.map(_._1) shouldBe (1 to 20).toVector
         fleet.robots.map(_._2).distinct.size shouldBe 20
 
@@ -103,7 +104,8 @@ class FleetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogC
       val first = TestLoopback.block(3)
       val settings = FleetSettings.ofSize(3, gateway.address).copy(firstAddress = first)
       // Robot 2's receive port is taken on its host.
-      val taken = DatagramChannel.open(StandardProtocolFamily.INET).bind(new InetSocketAddress(settings.addressOf(1), 3838))
+      val taken =
+        DatagramChannel.open(StandardProtocolFamily.INET).bind(new InetSocketAddress(settings.addressOf(1), 3838))
       try {
         val failure = Try(Await.result(Fleet.start(system, settings), 30.seconds)).failed.get
         failure.getMessage should include("robot 2")

@@ -52,13 +52,19 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
     }
     "answer every documented call and an unknown method with an error" in {
       val s0 = RobotFirmware.boot(settings, 0)
-      call(s0, "system", "battery", Vector.empty, 5, 1 * ms)._2 shouldBe Vector(RpcReply(Right(Some(RpcValue.Number(12.4f))), Some(5)))
-      call(s0, "system", "ping", Vector.empty, 6, 1500 * ms)._2 shouldBe Vector(RpcReply(Right(Some(RpcValue.UInt(1500))), Some(6)))
-      call(s0, "motion", "getPosture", Vector.empty, 7, ms)._2 shouldBe Vector(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(7)))
+      call(s0, "system", "battery", Vector.empty, 5, 1 * ms)._2 shouldBe Vector(
+        RpcReply(Right(Some(RpcValue.Number(12.4f))), Some(5)))
+      call(s0, "system", "ping", Vector.empty, 6, 1500 * ms)._2 shouldBe Vector(
+        RpcReply(Right(Some(RpcValue.UInt(1500))), Some(6)))
+      call(s0, "motion", "getPosture", Vector.empty, 7, ms)._2 shouldBe Vector(
+        RpcReply(Right(Some(RpcValue.Text("sit"))), Some(7)))
       call(s0, "speech", "say", Vector(RpcValue.Text("hello")), 8, ms)._1.said shouldBe Vector("hello")
-      call(s0, "nothing", "here", Vector.empty, 9, ms)._2 shouldBe Vector(RpcReply(Left("unknown method: nothing.here"), Some(9)))
-      call(s0, "motion", "head", Vector(RpcValue.Text("x")), 10, ms)._2.head.result.left.value should startWith("bad parameters")
-      call(s0, "motion", "head", Vector(RpcValue.Number(3f), RpcValue.Number(0f)), 11, ms)._2.head.result.left.value should startWith("out of range")
+      call(s0, "nothing", "here", Vector.empty, 9, ms)._2 shouldBe Vector(RpcReply(Left("unknown method: nothing.here"),
+          Some(9)))
+      call(s0, "motion", "head", Vector(RpcValue.Text("x")), 10, ms)._2.head.result.left.value should startWith(
+        "bad parameters")
+      call(s0, "motion", "head", Vector(RpcValue.Number(3f), RpcValue.Number(0f)), 11, ms)._2.head.result.left
+        .value should startWith("out of range")
       val (headed, ok) = call(s0, "motion", "head", Vector(RpcValue.Number(0.5f), RpcValue.Number(-0.2f)), 12, ms)
       ok shouldBe Vector(RpcReply(Right(Some(RpcValue.Flag(true))), Some(12)))
       headed.head._1 shouldBe 0.5 +- 1e-6
@@ -73,12 +79,14 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       frames(none).flatMap(_.rpcResponse) shouldBe empty
       early.posture shouldBe Posture.Moving
       val (stood, out) = RobotFirmware.advance(early, 1510 * ms)
-      frames(out).flatMap(_.rpcResponse).map(RpcReply.fromProto) shouldBe Vector(RpcReply(Right(Some(RpcValue.Text("stand"))), Some(3)))
+      frames(out).flatMap(_.rpcResponse).map(RpcReply.fromProto) shouldBe Vector(
+        RpcReply(Right(Some(RpcValue.Text("stand"))), Some(3)))
       stood.posture shouldBe Posture.Stand
     }
     "refuse to walk while sitting" in {
       val s0 = RobotFirmware.boot(settings, 0)
-      call(s0, "motion", "walk", Vector(RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)), 1, ms)._2.head.result.left.value shouldBe "not standing: sit"
+      call(s0, "motion", "walk", Vector(RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)), 1, ms)._2.head
+        .result.left.value shouldBe "not standing: sit"
     }
     "stop walking by itself when the walk lease is not refreshed" in {
       val standing = stand(0)
@@ -86,7 +94,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val walkParams = Vector(RpcValue.Number(0.2f), RpcValue.Number(0f), RpcValue.Number(0f))
       val (walking, _) = call(standing, "motion", "walk", walkParams, 2, t0)
       walking.posture shouldBe Posture.Walking
-      val (refreshed, _) = call(RobotFirmware.advance(walking, t0 + 400 * ms)._1, "motion", "walk", walkParams, 3, t0 + 400 * ms)
+      val (refreshed, _) =
+        call(RobotFirmware.advance(walking, t0 + 400 * ms)._1, "motion", "walk", walkParams, 3, t0 + 400 * ms)
       RobotFirmware.advance(refreshed, t0 + 800 * ms)._1.posture shouldBe Posture.Walking
       val stopped = RobotFirmware.advance(refreshed, t0 + 901 * ms)._1
       stopped.posture shouldBe Posture.Stand
@@ -99,7 +108,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val idle = RobotFirmware.advance(standing, standing.now + 10000 * ms)._1
       var walking = standing
       (0 until 25).foreach { i =>
-        walking = call(walking, "motion", "walk", Vector(RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)), i.toLong,
+        walking = call(walking, "motion", "walk",
+          Vector(RpcValue.Number(0.1f), RpcValue.Number(0f), RpcValue.Number(0f)), i.toLong,
           standing.now + i * 400 * ms)._1
       }
       walking = RobotFirmware.advance(walking, standing.now + 10000 * ms)._1
@@ -108,10 +118,13 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
     "answer every optionPull with its whole list in one frame, to the sender, in the command's header form (protocol.md 8)" in {
       val fuRemote = new InetSocketAddress("127.0.0.9", 11012)
       val pull = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionPull = Some(true))))
-      val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))
-      val (on, _) = RobotFirmware.receive(RobotFirmware.boot(settings, 0), MessageContents.encodeFrame(enable).value, gateway, ms)
+      val enable = MessageContents(0,
+        debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))
+      val (on, _) =
+        RobotFirmware.receive(RobotFirmware.boot(settings, 0), MessageContents.encodeFrame(enable).value, gateway, ms)
       (1 to 2).foldLeft(on) { (s, i) =>
-        val (next, out) = RobotFirmware.receive(s, MessageContents.encodeFrame(pull, HeaderForm.Compact).value, fuRemote, (1 + i) * ms)
+        val (next, out) =
+          RobotFirmware.receive(s, MessageContents.encodeFrame(pull, HeaderForm.Compact).value, fuRemote, (1 + i) * ms)
         val pushes = out.filter(o => frames(Seq(o)).head.debuggingCommands.isDefined)
         pushes should have size 1
         MessageContents.decodeFrame(pushes.head.bytes).value._1.form shouldBe HeaderForm.Compact
@@ -132,9 +145,11 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val list = out.filter(o => frames(Seq(o)).head.debuggingCommands.isDefined)
       list should have size 1
       list.head.bytes.length should be <= WireLimits.MaxDatagramBytes
-      frames(list).head.debuggingCommands.get.optionPush.get.options.map(_.name) shouldBe RobotFirmware.OptionCatalogue.map(_._1)
+      frames(list).head.debuggingCommands.get.optionPush.get.options.map(_.name) shouldBe RobotFirmware.OptionCatalogue.map(
+        _._1)
 
-      val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("havimo"))))))
+      val enable = MessageContents(0,
+        debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("havimo"))))))
       val (on, _) = RobotFirmware.receive(s0, MessageContents.encodeFrame(enable).value, gateway, 2 * ms)
       on.debugEnabled shouldBe Set("havimo.regions", "havimo.grid")
       val (_, camera) = RobotFirmware.advance(on, 100 * ms)
@@ -146,7 +161,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
     "ask to be woken only when something is due, whichever debug options are on" in {
       // A wake-up in the past after `advance` would make its driver spin on zero-delay timers.
       def enabled(prefix: String, at: Long): FirmwareState = {
-        val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq(prefix))))))
+        val enable = MessageContents(0,
+          debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq(prefix))))))
         RobotFirmware.receive(RobotFirmware.boot(settings, 0), MessageContents.encodeFrame(enable).value, gateway, at)._1
       }
       for (prefix <- Seq("havimo", "camera", "status", "world", "motion")) {
@@ -159,7 +175,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
     }
     "come back from a reset as a new session with its debug options off" in {
       val s0 = RobotFirmware.boot(settings, 0)
-      val enable = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))
+      val enable = MessageContents(0,
+        debuggingCommands = Some(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))))
       val (on, _) = RobotFirmware.receive(s0, MessageContents.encodeFrame(enable).value, gateway, 5000 * ms)
       val (reset, replies) = call(on, "system", "reset", Vector.empty, 1, 6000 * ms)
       replies shouldBe Vector(RpcReply(Right(Some(RpcValue.Flag(true))), Some(1)))
@@ -191,7 +208,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").value
       val other = SigningKey.fromHex("ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").value
       val s0 = RobotFirmware.boot(settings.copy(signingKey = Some(key)), 0)
-      val stand = MessageContents(0, rpcRequest = Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand")), Some(4L)).toProto))
+      val stand = MessageContents(0,
+        rpcRequest = Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand")), Some(4L)).toProto))
       def signed(ts: Long, k: SigningKey = key, d: SignDirection = SignDirection.GatewayToRobot) =
         FrameSigning.signFrame(stand, HeaderForm.Legacy, k, d, ts).value
       val attempts = Vector(
@@ -208,7 +226,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val (replayed, _) = RobotFirmware.receive(moving, signed(100L), gateway, 3 * ms)
       replayed.stats.refusedSignatures.get("replayed") shouldBe Some(1L)
       // Through the secure stream nothing is signed (protocol.md 6.7): the stream's payloads count as they come.
-      val (viaStream, _) = RobotFirmware.receive(refused, MessageContents.encodeFrame(stand).value, gateway, 4 * ms, viaStream = true)
+      val (viaStream, _) =
+        RobotFirmware.receive(refused, MessageContents.encodeFrame(stand).value, gateway, 4 * ms, viaStream = true)
       viaStream.change.map(_.target) shouldBe Some(Posture.Stand)
     }
     "see the ball ahead in the middle of the image and lose it when looking away" in {
@@ -232,7 +251,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val gc = new InetSocketAddress("127.0.0.9", 40123)
       val robot = RobotFirmware.boot(settings.copy(playerNumber = 3), 0)
       def answers(file: String): Vector[Outgoing] =
-        RobotFirmware.receive(robot, GameControllerVectors.bytes(file), gc, 10 * ms)._2.filter(o => Datagram.isGameControllerReturn(o.bytes))
+        RobotFirmware.receive(robot, GameControllerVectors.bytes(file), gc, 10 * ms)._2.filter(o =>
+          Datagram.isGameControllerReturn(o.bytes))
       def to(o: Outgoing) = o.to match {
         case Destination.ReplyTo(a) => (a.getAddress.getHostAddress, a.getPort)
         case other                  => fail(s"not a reply: $other")
@@ -250,7 +270,8 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       GameControllerCodec.decodeReturn(v8.head.bytes) shouldBe Right(ReturnData(12, 3, ReturnMessage.Alive))
       answers("v7-playing.bin") shouldBe empty
       // A packet naming neither team as the robot's is not answered.
-      RobotFirmware.receive(RobotFirmware.boot(settings.copy(teamId = 99), 0), GameControllerVectors.bytes("v19-playing.bin"),
+      RobotFirmware.receive(RobotFirmware.boot(settings.copy(teamId = 99), 0),
+        GameControllerVectors.bytes("v19-playing.bin"),
         gc, 10 * ms)._2.filter(o => Datagram.isGameControllerReturn(o.bytes)) shouldBe empty
     }
   }

@@ -51,7 +51,8 @@ class SecureStreamRobotStreamSpec extends AnyWordSpec with Matchers {
     }
     "start every endpoint it builds afresh, at sequence number 0, whatever the previous one had reached" in {
       val factory = SecureStreamRobotStream.factory()
-      val used = (0 until 5).foldLeft(factory(0L): RobotStream)((s, i) => s.send(Array[Byte](1, i.toByte), i.toLong).stream)
+      val used =
+        (0 until 5).foldLeft(factory(0L): RobotStream)((s, i) => s.send(Array[Byte](1, i.toByte), i.toLong).stream)
       used.asInstanceOf[SecureStreamRobotStream].state.nextSequence shouldBe 1
       val fresh = factory(10L).asInstanceOf[SecureStreamRobotStream].state
       fresh.nextSequence shouldBe 0
@@ -60,7 +61,8 @@ class SecureStreamRobotStreamSpec extends AnyWordSpec with Matchers {
     }
     "be what withStream plugs into a robot and every robot of a fleet" in {
       val gateway = new InetSocketAddress(InetAddress.getLoopbackAddress, 11011)
-      val robot = SimulatedRobotSettings(FirmwareSettings(robotId = 1), gateway).withStream(StreamSettings.selectiveRepeat(4))
+      val robot =
+        SimulatedRobotSettings(FirmwareSettings(robotId = 1), gateway).withStream(StreamSettings.selectiveRepeat(4))
       robot.stream.map(_(0L)).collect { case s: SecureStreamRobotStream => s.state.settings.window } shouldBe Some(4)
       val fleet = Fleet.robotSettings(FleetSettings.ofSize(3, gateway).withStream())
       all(fleet.map(_.stream.map(_(0L).getClass))) shouldBe Some(classOf[SecureStreamRobotStream])

@@ -159,18 +159,29 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
       }
       // Each step of the game once, in order (a state seen again later is a step again).
       val steps = seen.map(d => (d.gameState, d.stopped, d.setPlay, d.firstHalf))
-        .foldLeft(Vector.empty[(GameState, Boolean, SetPlay, Boolean)])((acc, x) => if (acc.lastOption.contains(x)) acc else acc :+ x)
+        .foldLeft(Vector.empty[(GameState, Boolean, SetPlay, Boolean)])((acc, x) =>
+          if (acc.lastOption.contains(x)) acc else acc :+ x)
       steps shouldBe Vector(
-        (GameState.Initial, false, SetPlay.NoSetPlay, true), (GameState.Ready, false, SetPlay.NoSetPlay, true),
-        (GameState.Set, false, SetPlay.NoSetPlay, true), (GameState.Playing, false, SetPlay.NoSetPlay, true),
-        (GameState.Playing, true, SetPlay.GoalKick, true), (GameState.Playing, false, SetPlay.GoalKick, true),
-        (GameState.Playing, false, SetPlay.NoSetPlay, true), (GameState.Finished, false, SetPlay.NoSetPlay, true),
-        (GameState.Initial, false, SetPlay.NoSetPlay, false), (GameState.Ready, false, SetPlay.NoSetPlay, false),
-        (GameState.Set, false, SetPlay.NoSetPlay, false), (GameState.Playing, false, SetPlay.NoSetPlay, false),
-        (GameState.Playing, true, SetPlay.GoalKick, false), (GameState.Playing, false, SetPlay.GoalKick, false),
-        (GameState.Playing, false, SetPlay.NoSetPlay, false), (GameState.Finished, false, SetPlay.NoSetPlay, false))
+        (GameState.Initial, false, SetPlay.NoSetPlay, true),
+        (GameState.Ready, false, SetPlay.NoSetPlay, true),
+        (GameState.Set, false, SetPlay.NoSetPlay, true),
+        (GameState.Playing, false, SetPlay.NoSetPlay, true),
+        (GameState.Playing, true, SetPlay.GoalKick, true),
+        (GameState.Playing, false, SetPlay.GoalKick, true),
+        (GameState.Playing, false, SetPlay.NoSetPlay, true),
+        (GameState.Finished, false, SetPlay.NoSetPlay, true),
+        (GameState.Initial, false, SetPlay.NoSetPlay, false),
+        (GameState.Ready, false, SetPlay.NoSetPlay, false),
+        (GameState.Set, false, SetPlay.NoSetPlay, false),
+        (GameState.Playing, false, SetPlay.NoSetPlay, false),
+        (GameState.Playing, true, SetPlay.GoalKick, false),
+        (GameState.Playing, false, SetPlay.GoalKick, false),
+        (GameState.Playing, false, SetPlay.NoSetPlay, false),
+        (GameState.Finished, false, SetPlay.NoSetPlay, false)
+      )
       // The kicking team: team 12 kicks off the first half, team 7 the second, and team 7 takes the goal kick.
-      seen.filter(d => d.firstHalf && d.setPlay == SetPlay.NoSetPlay).map(_.kickingTeam).distinct shouldBe Vector(Some(12))
+      seen.filter(d => d.firstHalf && d.setPlay == SetPlay.NoSetPlay).map(_.kickingTeam).distinct shouldBe Vector(
+        Some(12))
       seen.filter(d => !d.firstHalf).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
       seen.filter(_.setPlay == SetPlay.GoalKick).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
       // The set play's countdown runs once play goes on; the half's clock runs throughout.
@@ -194,7 +205,8 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
       // No set play where it does not fit PLAYING.
       val short = s.copy(playing = 8.seconds)
       short.hasSetPlay shouldBe false
-      (0L until short.halfNanos by 250000000L).map(t => momentAt(short, t).setPlay).distinct shouldBe Vector(SetPlay.NoSetPlay)
+      (0L until short.halfNanos by 250000000L).map(t => momentAt(short, t).setPlay).distinct shouldBe Vector(
+        SetPlay.NoSetPlay)
     }
   }
 }

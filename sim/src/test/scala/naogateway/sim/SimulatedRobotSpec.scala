@@ -148,7 +148,8 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       result(gateway, address, "motion", "walk", Number(0.2f), Number(0f), Number(0f)) shouldBe ok
       // Standing again 0.1 m further on: exactly 0.5 s at 0.2 m/s, the lease and not a step more.
       val stood = gateway.await(3.seconds) { heard =>
-        keepAlive(heard).flatMap(_.status).filter(s => s.currentState.contains("stand") && s.getRobotPosition.getX > -1000)
+        keepAlive(heard).flatMap(_.status).filter(s =>
+          s.currentState.contains("stand") && s.getRobotPosition.getX > -1000)
       }
       stood.flatMap(_.robotPosition).flatMap(_.x) shouldBe Some(-900)
       val view = state(robot)
@@ -220,7 +221,8 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       val off = state(robot)
       off.online shouldBe false
       off.bootId shouldBe 2
-      gateway.await(5.seconds)(h => keepAlive(h).flatMap(_.robotHealth).flatMap(_.bootId).filter(_ == 2)) shouldBe Some(2)
+      gateway.await(5.seconds)(h => keepAlive(h).flatMap(_.robotHealth).flatMap(_.bootId).filter(_ == 2)) shouldBe Some(
+        2)
       state(robot).online shouldBe true
       stop(robot)
     }
@@ -303,7 +305,8 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         gateway.send(Array[Byte](0, 20) ++ TestGateway.request("system", "ping", Vector.empty, 77), address)
         val reply = gateway.await(3.seconds) { heard =>
           if (heard.bytes.length > 2 && heard.bytes(0) == 0 && heard.bytes(1) == 0)
-            MessageContents.decodeFrame(heard.bytes.drop(2)).toOption.flatMap(_._2.rpcResponse).filter(_.callId.contains(77))
+            MessageContents.decodeFrame(heard.bytes.drop(2)).toOption.flatMap(_._2.rpcResponse).filter(
+              _.callId.contains(77))
           else None
         }
         reply shouldBe defined
@@ -313,7 +316,8 @@ class SimulatedRobotSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         val (plain, plainAddress) = start(settings(gateway, FirmwareSettings(robotId = 13)))
         gateway.send(Array[Byte](0, 20) ++ TestGateway.request("system", "ping", Vector.empty, 78), plainAddress)
         val heard = gateway.collectFor(500.millis)
-        val frames = heard.flatMap(h => h.contents.toVector ++ MessageContents.decodeFrame(h.bytes.drop(2)).toOption.map(_._2))
+        val frames =
+          heard.flatMap(h => h.contents.toVector ++ MessageContents.decodeFrame(h.bytes.drop(2)).toOption.map(_._2))
         frames.flatMap(_.rpcResponse).flatMap(_.callId) should not contain 78
         state(plain).stats.streamSegments shouldBe 1
         stop(plain)

@@ -13,8 +13,8 @@ import naogateway.testkit.TestLoopback
 import naogateway.wire.{Datagram, MessageContents, RpcReply, RpcValue}
 import naogateway.wire.stream.{SecureStream, StreamSettings}
 
-/** A simulated robot running the secure stream, over real loopback UDP, against a gateway-side [[SecureStream]]
-  * driven by the test on a plain socket.
+/** A simulated robot running the secure stream, over real loopback UDP, against a gateway-side [[SecureStream]] driven
+  * by the test on a plain socket.
   */
 class SimulatedRobotStreamSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   import SimulatedRobotStreamSpec._
@@ -43,7 +43,7 @@ class SimulatedRobotStreamSpec extends ScalaTestWithActorTestKit with AnyWordSpe
       val gateway = new TestGateway
       try {
         val robot = spawn(SimulatedRobot(SimulatedRobotSettings(FirmwareSettings(robotId = 21), gateway.address,
-          bindAddress = new InetSocketAddress(TestLoopback.address(), 0)).withStream()))
+              bindAddress = new InetSocketAddress(TestLoopback.address(), 0)).withStream()))
         val address = state(robot).address
         val driver = new GatewayStream(gateway, address, StreamSettings.thesis)
 
@@ -53,7 +53,8 @@ class SimulatedRobotStreamSpec extends ScalaTestWithActorTestKit with AnyWordSpe
         chunks.zipWithIndex.foreach { case (chunk, i) =>
           driver.send(TestGateway.request("speech", "say", Vector(RpcValue.Text(chunk)), 100L + i), i.toLong)
         }
-        driver.pumpUntil(20.seconds)(driver.acknowledged.size == chunks.size && driver.replies.size == chunks.size) shouldBe true
+        driver.pumpUntil(20.seconds)(
+          driver.acknowledged.size == chunks.size && driver.replies.size == chunks.size) shouldBe true
 
         val view = state(robot)
         view.said shouldBe chunks
@@ -136,7 +137,8 @@ object SimulatedRobotStreamSpec {
       step.outputs.foreach {
         case SecureStream.Transmit(d) => gateway.send(d, robot)
         case SecureStream.Deliver(payload) =>
-          MessageContents.decodeFrame(payload).toOption.flatMap(_._2.rpcResponse).foreach(r => replies :+= RpcReply.fromProto(r))
+          MessageContents.decodeFrame(payload).toOption.flatMap(_._2.rpcResponse).foreach(r =>
+            replies :+= RpcReply.fromProto(r))
         case SecureStream.Acknowledged(id) => acknowledged :+= id
         case SecureStream.Expired(_)       => ()
       }

@@ -3,26 +3,35 @@ package naogateway.sim
 import scala.collection.immutable.{ArraySeq, Queue}
 import scala.concurrent.duration._
 
-import naogateway.sim.gs1500m.{Cm530Firmware, Cm530Stats, FirmwareEvent, Gs1500mStats, Gs1500mModule, ModuleEvent, OverflowExperiment, Outgoing}
+import naogateway.sim.gs1500m.{
+  Cm530Firmware,
+  Cm530Stats,
+  FirmwareEvent,
+  Gs1500mStats,
+  Gs1500mModule,
+  ModuleEvent,
+  OverflowExperiment,
+  Outgoing
+}
 import naogateway.wire.Datagram
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
-/** The thesis's overflow experiment (docs/simulator.md §6) over the secure stream, through the same GS1500M and CM-530 models
-  * as the raw run of [[OverflowExperiment]], in simulated time.
+/** The thesis's overflow experiment (docs/simulator.md §6) over the secure stream, through the same GS1500M and CM-530
+  * models as the raw run of [[OverflowExperiment]], in simulated time.
   *
   * The gateway side offers the 100 payloads of 1 kB to a gateway-side [[SecureStream]], one every 50 ms (byte 0 of
   * payload i, 0-based, is i, the rest is the raw run's random bytes). Its segments reach the module from the air and
-  * wait in its 1400-byte buffer until the CM-530 reads them; the robot-side [[SecureStream]] takes each segment
-  * when the firmware has finished handling it, and the robot sums byte 0 of every payload the stream delivers. The
-  * robot's ACKs go into the CM-530's send queue, are pushed to the module in the send phase of the next loop
-  * iteration (sharing the buffer with inbound data, with the serial send cost) and reach the gateway's stream when
-  * they go on air. The firmware's 24-byte keep-alive competes for the module as in the raw run; the gateway ignores
-  * it here. The radio takes `airLatency` each way (default none, as in the module model).
+  * wait in its 1400-byte buffer until the CM-530 reads them; the robot-side [[SecureStream]] takes each segment when
+  * the firmware has finished handling it, and the robot sums byte 0 of every payload the stream delivers. The robot's
+  * ACKs go into the CM-530's send queue, are pushed to the module in the send phase of the next loop iteration (sharing
+  * the buffer with inbound data, with the serial send cost) and reach the gateway's stream when they go on air. The
+  * firmware's 24-byte keep-alive competes for the module as in the raw run; the gateway ignores it here. The radio
+  * takes `airLatency` each way (default none, as in the module model).
   *
-  * Everything runs in one discrete-event loop over the pure pieces, so a configuration always gives the same run.
-  * On a tie, an arrival is in the module before the firmware acts (as in [[gs1500m.ReceivePath]]). The run ends once
-  * the robot has delivered every payload and the gateway has seen every one acknowledged, or at `timeLimit` of
-  * simulated time, or after `maxEvents` events.
+  * Everything runs in one discrete-event loop over the pure pieces, so a configuration always gives the same run. On a
+  * tie, an arrival is in the module before the firmware acts (as in [[gs1500m.ReceivePath]]). The run ends once the
+  * robot has delivered every payload and the gateway has seen every one acknowledged, or at `timeLimit` of simulated
+  * time, or after `maxEvents` events.
   *
   * With the defaults (the thesis firmware's window 1, sequence numbers 0..20, seed 1) the robot sums 4950: every
   * payload exactly once, in order, where the raw run sums 963. The stream pays in time, not in payloads: at window 1
@@ -32,12 +41,17 @@ object StreamOverflowExperiment {
 
   /** The experiment's parameters.
     *
-    * @param experiment the raw experiment's payloads, schedule, module, firmware and seed; its `timeScale` must be 1
-    *   because the stream's timers (RTO, idle ACK) are in real time
-    * @param stream both endpoints' settings
-    * @param airLatency the one-way radio delay in both directions
-    * @param timeLimit simulated time after which the run stops unfinished
-    * @param maxEvents a bound on processed events, so a run always stops
+    * @param experiment
+    *   the raw experiment's payloads, schedule, module, firmware and seed; its `timeScale` must be 1 because the
+    *   stream's timers (RTO, idle ACK) are in real time
+    * @param stream
+    *   both endpoints' settings
+    * @param airLatency
+    *   the one-way radio delay in both directions
+    * @param timeLimit
+    *   simulated time after which the run stops unfinished
+    * @param maxEvents
+    *   a bound on processed events, so a run always stops
     */
   final case class Config(
       experiment: OverflowExperiment.Config = OverflowExperiment.Config(),
@@ -46,7 +60,8 @@ object StreamOverflowExperiment {
       timeLimit: FiniteDuration = 10.minutes,
       maxEvents: Long = 1000000L
   ) {
-    require(experiment.timeScale == 1.0, s"the stream's timers are unscaled, so timeScale must be 1, was ${experiment.timeScale}")
+    require(experiment.timeScale == 1.0,
+      s"the stream's timers are unscaled, so timeScale must be 1, was ${experiment.timeScale}")
     require(airLatency >= Duration.Zero, s"airLatency must not be negative, was $airLatency")
     require(timeLimit > Duration.Zero, s"timeLimit must be positive, was $timeLimit")
     require(maxEvents > 0L, s"maxEvents must be positive, was $maxEvents")
@@ -54,18 +69,30 @@ object StreamOverflowExperiment {
 
   /** What the robot summed and what it cost.
     *
-    * @param sent payloads the gateway offered
-    * @param sum the robot's sum of byte 0 over every payload its stream delivered
-    * @param expectedSum the right sum (4950 for 100 payloads)
-    * @param delivered byte 0 of every delivered payload, in the order delivered
-    * @param completed whether every payload was delivered and acknowledged before a limit struck
-    * @param lastDeliveryAt simulated nanoseconds until the robot delivered its last payload (0 if none)
-    * @param finishedAt simulated nanoseconds at which the run ended (all acknowledged, or a limit)
-    * @param gateway the gateway-side endpoint's stats (retransmissions, timeouts, …)
-    * @param robot the robot-side endpoint's stats (duplicates dropped, ACKs sent, …)
-    * @param module the GS1500M's stats (losses, overwrites, peak buffer use)
-    * @param cpu the CM-530 loop's stats
-    * @param events events processed
+    * @param sent
+    *   payloads the gateway offered
+    * @param sum
+    *   the robot's sum of byte 0 over every payload its stream delivered
+    * @param expectedSum
+    *   the right sum (4950 for 100 payloads)
+    * @param delivered
+    *   byte 0 of every delivered payload, in the order delivered
+    * @param completed
+    *   whether every payload was delivered and acknowledged before a limit struck
+    * @param lastDeliveryAt
+    *   simulated nanoseconds until the robot delivered its last payload (0 if none)
+    * @param finishedAt
+    *   simulated nanoseconds at which the run ended (all acknowledged, or a limit)
+    * @param gateway
+    *   the gateway-side endpoint's stats (retransmissions, timeouts, …)
+    * @param robot
+    *   the robot-side endpoint's stats (duplicates dropped, ACKs sent, …)
+    * @param module
+    *   the GS1500M's stats (losses, overwrites, peak buffer use)
+    * @param cpu
+    *   the CM-530 loop's stats
+    * @param events
+    *   events processed
     */
   final case class Result(
       sent: Int,
@@ -96,7 +123,8 @@ object StreamOverflowExperiment {
   final case class Comparison(raw: OverflowExperiment.Result, stream: Result)
 
   /** Both runs: the raw one of [[OverflowExperiment]] and the one through the stream. */
-  def compare(config: Config = Config()): Comparison = Comparison(OverflowExperiment.run(config.experiment), run(config))
+  def compare(config: Config = Config()): Comparison =
+    Comparison(OverflowExperiment.run(config.experiment), run(config))
 
   /** Runs the payloads through the gateway's stream, the module, the CM-530 and the robot's stream. */
   def run(config: Config = Config()): Result = new Run(config).execute()
@@ -218,7 +246,8 @@ object StreamOverflowExperiment {
         firmware = step.firmware
         module = step.module
         step.events.foreach {
-          case FirmwareEvent.Received(_, handledAt, _, _, bytes) => handling = handling.enqueue(handledAt -> bytes.toArray)
+          case FirmwareEvent.Received(_, handledAt, _, _, bytes) =>
+            handling = handling.enqueue(handledAt -> bytes.toArray)
           case FirmwareEvent.StatusReceived(_, _, _) | FirmwareEvent.Sent(_, _, _, _) => ()
         }
         onModule(step.moduleEvents)
@@ -233,8 +262,8 @@ object StreamOverflowExperiment {
     private def fromGateway(step: SecureStream.Step, now: Long): Unit = {
       gateway = step.state
       step.outputs.foreach {
-        case SecureStream.Transmit(d)       => toModule = toModule.enqueue((now + latency) -> d)
-        case SecureStream.Acknowledged(_)   => acknowledged += 1
+        case SecureStream.Transmit(d)                          => toModule = toModule.enqueue((now + latency) -> d)
+        case SecureStream.Acknowledged(_)                      => acknowledged += 1
         case SecureStream.Deliver(_) | SecureStream.Expired(_) => ()
       }
     }

@@ -7,13 +7,13 @@ import scala.concurrent.duration._
 
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
 
-/** A deterministic discrete-event simulation of two secure-stream endpoints, A and B, joined by a seeded lossy
-  * channel, for tests and benchmarks.
+/** A deterministic discrete-event simulation of two secure-stream endpoints, A and B, joined by a seeded lossy channel,
+  * for tests and benchmarks.
   *
-  * Time is simulated (Long nanoseconds from 0); there are no threads and no sleeping, so a run of minutes of link
-  * time takes milliseconds, and the same configuration and seed always give the same result. Each direction of the
-  * channel loses, duplicates, delays (base delay plus uniform jitter) and reorders (a random extra delay for some
-  * datagrams) independently, can be cut completely during outages, and can have a limited bit rate.
+  * Time is simulated (Long nanoseconds from 0); there are no threads and no sleeping, so a run of minutes of link time
+  * takes milliseconds, and the same configuration and seed always give the same result. Each direction of the channel
+  * loses, duplicates, delays (base delay plus uniform jitter) and reorders (a random extra delay for some datagrams)
+  * independently, can be cut completely during outages, and can have a limited bit rate.
   *
   * A run ends when every scheduled payload is settled at its sender (acknowledged, expired or refused), when the
   * simulated time limit is reached, or after `maxEvents` events, whichever comes first.
@@ -58,8 +58,8 @@ object StreamPairSimulation {
     * @param reordering
     *   probability that a copy gets an extra delay, uniform in [0, reorderDelay], so later datagrams overtake it
     * @param reorderDelay
-    *   the largest extra delay of a reordered copy; keep it within about one round trip (see the segment lifetime
-    *   rule of SecureStream)
+    *   the largest extra delay of a reordered copy; keep it within about one round trip (see the segment lifetime rule
+    *   of SecureStream)
     * @param baseDelay
     *   the fixed one-way delay
     * @param jitter
@@ -94,8 +94,8 @@ object StreamPairSimulation {
     /** No loss, no duplication, no reordering, 5 ms each way. */
     val perfect: LinkSettings = LinkSettings()
 
-    /** The given loss plus the usual nuisances of a WLAN hop: 2 % duplicates, 5 % reordered by up to 5 ms, 2 ms
-      * jitter on a 5 ms base delay.
+    /** The given loss plus the usual nuisances of a WLAN hop: 2 % duplicates, 5 % reordered by up to 5 ms, 2 ms jitter
+      * on a 5 ms base delay.
       */
     def lossy(loss: Double): LinkSettings =
       LinkSettings(loss = loss, duplication = 0.02, reordering = 0.05, reorderDelay = 5.millis, jitter = 2.millis)
@@ -129,8 +129,8 @@ object StreamPairSimulation {
       SimConfig(settings, settings, link, link, seed)
   }
 
-  /** A payload `from` hands to its endpoint at simulated time `at`; its id in the results is its index in the
-    * sequence given to [[run]].
+  /** A payload `from` hands to its endpoint at simulated time `at`; its id in the results is its index in the sequence
+    * given to [[run]].
     */
   final case class ScheduledSend(from: Side, at: Long, payload: Array[Byte], deadline: Option[Long] = None)
 

@@ -15,13 +15,12 @@ import naogateway.proto._
 import naogateway.sim.{Destination, FirmwareSettings, FirmwareState, Outgoing, RobotFirmware}
 import naogateway.wire.gamecontroller.{GameControlVersion, GameControllerCodec, GameState, ReturnStatus}
 
-/**
- * Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every
- * `<!-- table: tag -->` offset table in the document is checked here: FU-Remote frames against the codecs (decode to
- * the expected contents, re-encode to the identical bytes), GameController bytes and tables against the real packets
- * in the test resources' vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules. The
- * keep-alive example and the debug option catalogue are checked against the simulated firmware as well.
- */
+/** Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every `<!--
+  * table: tag -->` offset table in the document is checked here: FU-Remote frames against the codecs (decode to the
+  * expected contents, re-encode to the identical bytes), GameController bytes and tables against the real packets in
+  * the test resources' vectors/gamecontroller, secure-stream datagrams against a reference model of the stream rules.
+  * The keep-alive example and the debug option catalogue are checked against the simulated firmware as well.
+  */
 class ProtocolDocSpec extends AnyWordSpec with Matchers {
   import ProtocolDocSpec._
 
@@ -47,14 +46,16 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     }
     "keep every datagram within the 1400-byte limit" in {
       for (block <- doc.blocks; datagram <- if (block.kind == "datagrams") block.lines else Vector(block.bytes))
-        if (!block.tag.startsWith("serial-")) withClue(block.tag) { datagram.length should be <= WireLimits.MaxDatagramBytes }
+        if (!block.tag.startsWith("serial-"))
+          withClue(block.tag) { datagram.length should be <= WireLimits.MaxDatagramBytes }
     }
   }
 
   "The byte tables below the examples" should {
     "exist for every example but the bare pure ACK, the stream RPC segment and the RGrt packet" in {
       doc.blocks.filter(b => b.annotation.exists(isByteTable)).map(_.tag).toSet shouldBe
-        (ExampleTags ++ DatagramTags -- Set("stream-pure-ack", "stream-data-rpc", "gc-return-alive", "gc-status-example"))
+        (ExampleTags ++ DatagramTags -- Set("stream-pure-ack", "stream-data-rpc", "gc-return-alive",
+          "gc-status-example"))
     }
     "give every byte of each example at its offset, in order, without gaps" in {
       for (block <- doc.blocks; table <- block.annotation if isByteTable(table)) withClue(s"${block.tag}: ") {
@@ -74,7 +75,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
               shown.isRight shouldBe true
               val quoted = shown.toOption.get
               datagram.slice(offset, offset + quoted.length).toVector shouldBe quoted.toVector
-              if (abbreviated) { i shouldBe table.length - 2; datagram.length } else offset + quoted.length
+              if (abbreviated) { i shouldBe table.length - 2; datagram.length }
+              else offset + quoted.length
             }
           }
           end shouldBe datagram.length
@@ -116,7 +118,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       val keepAlives = sent.filter(_.to == Destination.Gateway).map(_.bytes)
         .filter(b => MessageContents.decodeFrame(b).exists(_._2.status.isDefined))
       keepAlives.map(_.toVector) shouldBe Vector(bytes("keep-alive").toVector)
-      MessageContents.encodeFrame(RobotFirmware.keepAlive(state)).map(_.toVector) shouldBe Right(bytes("keep-alive").toVector)
+      MessageContents.encodeFrame(RobotFirmware.keepAlive(state)).map(_.toVector) shouldBe Right(
+        bytes("keep-alive").toVector)
     }
     "carry a region whose centre is (80, 60)" in {
       val records = contents("havimo-regions").havimoRegions.get.records.get.toByteArray
@@ -132,7 +135,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     val timestamp = FrameSigning.robotTimestamp(bootCounter = 3, frameCounter = 5)
     "be the Status of 9.2 signed by the robot under the documented key and timestamp" in {
       timestamp shouldBe 0x0000000300000005L
-      FrameSigning.signFrame(workedStatus, HeaderForm.Compact, key, SignDirection.RobotToGateway, timestamp).map(_.toVector) shouldBe
+      FrameSigning.signFrame(workedStatus, HeaderForm.Compact, key, SignDirection.RobotToGateway, timestamp).map(
+        _.toVector) shouldBe
         Right(bytes("signed-status").toVector)
       val header = FumanoidsFrame.decodeHeader(bytes("signed-status")).toOption.get
       FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.RobotToGateway) shouldBe
@@ -144,16 +148,19 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     "show the HMAC input, whose HMAC-SHA256 begins with the frame's mac" in {
       val input = bytes("signed-status-mac-input")
       input.toVector shouldBe (FrameSigning.Domain ++ Array[Byte](SignDirection.RobotToGateway.code) ++
-        java.nio.ByteBuffer.allocate(8).putLong(timestamp).array() ++ bytes("status-compact").drop(HeaderForm.Compact.headerBytes)).toVector
+        java.nio.ByteBuffer.allocate(8).putLong(timestamp).array() ++ bytes("status-compact").drop(
+          HeaderForm.Compact.headerBytes)).toVector
       // Computed here without the codec, as firmware would.
       val hmac = javax.crypto.Mac.getInstance("HmacSHA256")
       hmac.init(new javax.crypto.spec.SecretKeySpec(Array.tabulate[Byte](32)(_.toByte), "HmacSHA256"))
-      hmac.doFinal(input).take(FrameSigning.MacBytes).toVector shouldBe bytes("signed-status").takeRight(FrameSigning.MacBytes).toVector
+      hmac.doFinal(input).take(FrameSigning.MacBytes).toVector shouldBe bytes("signed-status").takeRight(
+        FrameSigning.MacBytes).toVector
     }
     "be refused as a copy, and not pass as the gateway's" in {
       ReplayWindow.empty.accept(timestamp).flatMap(_.accept(timestamp)) shouldBe Left(SignatureError.Replayed)
       val header = FumanoidsFrame.decodeHeader(bytes("signed-status")).toOption.get
-      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.GatewayToRobot) shouldBe Left(SignatureError.BadMac)
+      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.GatewayToRobot) shouldBe Left(
+        SignatureError.BadMac)
     }
   }
 
@@ -282,13 +289,16 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       contiguous(team, offsetColumn = 0, sizeColumn = 3) shouldBe 90
       teamOffsetsAgree(packet, team, fieldColumn = 2)
       val read = reader(v19, packet, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
-      (read("version"), read("packetNumber"), read("playersPerTeam"), read("stopped"), read("state"), read("setPlay")) shouldBe
+      (read("version"), read("packetNumber"), read("playersPerTeam"), read("stopped"), read("state"),
+        read("setPlay")) shouldBe
         ((19, 4, 7, 1, 3, 5))
       (read("kickingTeam"), read("secsRemaining"), read("secondaryTime")) shouldBe ((7, 587, 30))
       val team0 = reader(v19, team, offsetColumn = 1, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
       val team1 = reader(v19, team, offsetColumn = 2, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
-      (team0("teamNumber"), team0("goalkeeperColour"), team0("score"), team0("messageBudget")) shouldBe ((12, 2, 2, 11800))
-      (team1("teamNumber"), team1("fieldPlayerColour"), team1("score"), team1("messageBudget")) shouldBe ((7, 1, 1, 11790))
+      (team0("teamNumber"), team0("goalkeeperColour"), team0("score"), team0("messageBudget")) shouldBe ((12, 2, 2,
+        11800))
+      (team1("teamNumber"), team1("fieldPlayerColour"), team1("score"), team1("messageBudget")) shouldBe ((7, 1, 1,
+        11790))
       val player3 = offsetOf(team, "player[0..19]", 1) + 4 * (3 - 1)
       v19.slice(player3, player3 + 4).toVector shouldBe Vector[Byte](9, 25, 1, 1)
       GameControllerCodec.decodeControl(v19).map(_.version) shouldBe Right(GameControlVersion.V19)
@@ -300,7 +310,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       contiguous(team, offsetColumn = 0, sizeColumn = 3) shouldBe 332
       teamOffsetsAgree(packet, team, fieldColumn = 2)
       val read = reader(v12, packet, offsetColumn = 0, sizeColumn = 1, typeColumn = 3, fieldColumn = 2)
-      (read("version"), read("packetNumber"), read("playersPerTeam"), read("state"), read("kickOffTeam")) shouldBe ((12, 4, 4, 3, 7))
+      (read("version"), read("packetNumber"), read("playersPerTeam"), read("state"), read("kickOffTeam")) shouldBe ((12,
+        4, 4, 3, 7))
       (read("secondaryState"), read("dropInTime"), read("secsRemaining")) shouldBe ((4, 65535, 587))
       val team0 = reader(v12, team, offsetColumn = 1, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
       val team1 = reader(v12, team, offsetColumn = 2, sizeColumn = 3, typeColumn = 5, fieldColumn = 4)
@@ -343,7 +354,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       rows("true state")(1) should include("RGTD")
       rows("forwarded status")(2) should include("3940")
       val defaults = com.typesafe.config.ConfigFactory.load().getConfig("naogateway.game-controller.monitor")
-      (defaults.getInt("request-port"), defaults.getInt("status-port"), defaults.getBoolean("enabled")) shouldBe ((3636, 3940, false))
+      (defaults.getInt("request-port"), defaults.getInt("status-port"), defaults.getBoolean("enabled")) shouldBe ((3636,
+        3940, false))
     }
     "give the message budget rules the gateway counts with" in {
       val rules = table("gc-budget").rows.map(r => r(0) -> r(1)).toMap
@@ -351,7 +363,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       rules("budget per team per game") should startWith(s"${defaults.perGame} messages")
       rules("per minute of additional time") should startWith(s"${defaults.perExtraMinute} more")
       rules("largest message") shouldBe s"${defaults.maxBytes} bytes"
-      naogateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway")).teamMessages shouldBe defaults
+      naogateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway"))
+        .teamMessages shouldBe defaults
     }
   }
 
@@ -434,7 +447,8 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       def ms(n: Long): Long = n * 1000000L
       def sent(step: SecureStream.Step): Vector[Vector[Byte]] =
         step.outputs.collect { case SecureStream.Transmit(d) => d.toVector }
-      def ok(r: Either[SecureStream.SendRefused, SecureStream.Step]): SecureStream.Step = r.fold(e => fail(e.describe), identity)
+      def ok(r: Either[SecureStream.SendRefused, SecureStream.Step]): SecureStream.Step =
+        r.fold(e => fail(e.describe), identity)
       val settings = StreamSettings(window = 4, maxSeq = 20)
       val a = ok(SecureStream.initial(settings, 0L).send("a".getBytes(US_ASCII), 1L, Some(ms(100)), 0L))
       val b = ok(a.state.send("b".getBytes(US_ASCII), 2L, Some(ms(100)), 0L))
@@ -477,11 +491,11 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     hops.zip(docLines).zipWithIndex.foreach { case ((hop, line), i) =>
       val (from, to) = if (hop.from == G) (gateway, robot) else (robot, gateway)
       val segment = hop.action match {
-        case New(payload) => from.sendNew(payload)
-        case Resend(cause) => from.resend(cause)
+        case New(payload)      => from.sendNew(payload)
+        case Resend(cause)     => from.resend(cause)
         case Expire(seqs @ _*) => from.expire(seqs)
-        case Ack => from.ack(idle = false)
-        case IdleAck => from.ack(idle = true)
+        case Ack               => from.ack(idle = false)
+        case IdleAck           => from.ack(idle = true)
       }
       withClue(s"datagram ${i + 1} (${hop.from} ${hop.action}): ") {
         line.toVector shouldBe segment.toVector
@@ -551,63 +565,106 @@ object ProtocolDocSpec {
     "status-legacy" -> FrameExample(workedStatus),
     "status-compact" -> FrameExample(workedStatus, HeaderForm.Compact),
     "status-gzip" -> FrameExample(workedStatus, gzip = true),
-    "rpc-request-walk" -> FrameExample(MessageContents(robotId = 1, rpcRequest = Some(
-      Request("motion", "walk", Seq(float(0.2f), float(0.0f), float(0.5f)), callId = Some(7))
-    ))),
-    "rpc-response-walk" -> FrameExample(MessageContents(robotId = 1, rpcResponse = Some(
-      Response(returnval = Some(MixedValue(bool = Some(true))), callId = Some(7))
-    ))),
-    "rpc-request-probe" -> FrameExample(MessageContents(robotId = 1, rpcRequest = Some(
-      Request("heartbeat", "probe", callId = Some(8))
-    ))),
-    "rpc-response-unknown" -> FrameExample(MessageContents(robotId = 1, rpcResponse = Some(
-      Response(error = Some("unknown method: heartbeat.probe"), callId = Some(8))
-    ))),
-    "debug-option-pull" -> FrameExample(MessageContents(robotId = 1, debuggingCommands = Some(
-      DebuggingCommands(optionPull = Some(true))
-    ))),
-    "debug-option-push" -> FrameExample(MessageContents(robotId = 1, debuggingCommands = Some(
-      DebuggingCommands(optionPush = Some(DebuggingOptionList(Seq(
-        DebuggingOption("havimo.regions", Some(DebuggingOptionType.HAVIMO_REGIONS), Some(true)),
-        DebuggingOption("havimo.grid", Some(DebuggingOptionType.HAVIMO_GRID), Some(false)),
-        DebuggingOption("text", Some(DebuggingOptionType.TEXT), Some(false))
-      ))))
-    ))),
-    "debug-option-enable" -> FrameExample(MessageContents(robotId = 1, debuggingCommands = Some(
-      DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("havimo"))))
-    ))),
-    "debug-data-text" -> FrameExample(MessageContents(robotId = 1, debugData = Some(
-      DebugData("text", Some(5000L), DebugData.Data.Text(DebugText("ready")))
-    ))),
-    "keep-alive" -> FrameExample(MessageContents(robotId = 1,
-      status = Some(Status(timestamp = Some(5000L), teamID = Some(1), timeOnline = Some(5),
-        robotPosition = Some(Position(x = Some(-1000), y = Some(0), rotation = Some(0.0f))),
-        activeAgent = Some("SimAgent"), activeRole = Some("striker"), currentState = Some("sit"))),
-      robotHealth = Some(RobotHealth(batteryVoltage = Some(12.399f), posture = Some("sit"), uptimeMs = Some(5000),
-        bootId = Some(1)))
-    )),
-    "havimo-regions" -> FrameExample(MessageContents(robotId = 1, havimoRegions = Some(
-      HaViMoRegionFrame(42, Some(5000L), Some(ByteString.copyFrom(HaViMo.encodeRegions(Seq(exampleRegion)).toOption.get)))
-    )))
+    "rpc-request-walk" -> FrameExample(MessageContents(robotId = 1,
+        rpcRequest = Some(
+          Request("motion", "walk", Seq(float(0.2f), float(0.0f), float(0.5f)), callId = Some(7))
+        ))),
+    "rpc-response-walk" -> FrameExample(MessageContents(robotId = 1,
+        rpcResponse = Some(
+          Response(returnval = Some(MixedValue(bool = Some(true))), callId = Some(7))
+        ))),
+    "rpc-request-probe" -> FrameExample(MessageContents(robotId = 1,
+        rpcRequest = Some(
+          Request("heartbeat", "probe", callId = Some(8))
+        ))),
+    "rpc-response-unknown" -> FrameExample(MessageContents(robotId = 1,
+        rpcResponse = Some(
+          Response(error = Some("unknown method: heartbeat.probe"), callId = Some(8))
+        ))),
+    "debug-option-pull" -> FrameExample(MessageContents(robotId = 1,
+        debuggingCommands = Some(
+          DebuggingCommands(optionPull = Some(true))
+        ))),
+    "debug-option-push" -> FrameExample(MessageContents(
+        robotId = 1,
+        debuggingCommands = Some(
+          DebuggingCommands(optionPush = Some(DebuggingOptionList(Seq(
+                DebuggingOption("havimo.regions", Some(DebuggingOptionType.HAVIMO_REGIONS), Some(true)),
+                DebuggingOption("havimo.grid", Some(DebuggingOptionType.HAVIMO_GRID), Some(false)),
+                DebuggingOption("text", Some(DebuggingOptionType.TEXT), Some(false))
+              ))))
+        )
+      )),
+    "debug-option-enable" -> FrameExample(MessageContents(robotId = 1,
+        debuggingCommands = Some(
+          DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("havimo"))))
+        ))),
+    "debug-data-text" -> FrameExample(MessageContents(robotId = 1,
+        debugData = Some(
+          DebugData("text", Some(5000L), DebugData.Data.Text(DebugText("ready")))
+        ))),
+    "keep-alive" -> FrameExample(MessageContents(
+        robotId = 1,
+        status = Some(Status(
+            timestamp = Some(5000L),
+            teamID = Some(1),
+            timeOnline = Some(5),
+            robotPosition = Some(Position(x = Some(-1000), y = Some(0), rotation = Some(0.0f))),
+            activeAgent = Some("SimAgent"),
+            activeRole = Some("striker"),
+            currentState = Some("sit")
+          )),
+        robotHealth = Some(RobotHealth(batteryVoltage = Some(12.399f), posture = Some("sit"), uptimeMs = Some(5000),
+            bootId = Some(1)))
+      )),
+    "havimo-regions" -> FrameExample(MessageContents(robotId = 1,
+        havimoRegions = Some(
+          HaViMoRegionFrame(42, Some(5000L),
+            Some(ByteString.copyFrom(HaViMo.encodeRegions(Seq(exampleRegion)).toOption.get)))
+        )))
   )
 
   val ExampleTags: Set[String] = FrameExamples.keySet ++ Set(
-    "gc-v8-header", "gc-v7-header", "gc-return-alive", "gc-v19-header", "gc-v12-header", "gc-status-example",
-    "stream-data", "stream-pure-ack", "stream-data-rpc",
-    "serial-send-status", "serial-receive-udp-server",
-    "signed-status", "signed-status-mac-input"
+    "gc-v8-header",
+    "gc-v7-header",
+    "gc-return-alive",
+    "gc-v19-header",
+    "gc-v12-header",
+    "gc-status-example",
+    "stream-data",
+    "stream-pure-ack",
+    "stream-data-rpc",
+    "serial-send-status",
+    "serial-receive-udp-server",
+    "signed-status",
+    "signed-status-mac-input"
   )
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =
-    Set("extension-keys", "extension-numbers", "debug-options", "gc-v8", "gc-v8-team", "gc-v7", "gc-v7-team", "gc-return",
-      "gc-v19", "gc-v19-team", "gc-v12", "gc-v12-team", "gc-status", "gc-gate", "gc-budget", "gc-monitor")
+    Set(
+      "extension-keys",
+      "extension-numbers",
+      "debug-options",
+      "gc-v8",
+      "gc-v8-team",
+      "gc-v7",
+      "gc-v7-team",
+      "gc-return",
+      "gc-v19",
+      "gc-v19-team",
+      "gc-v12",
+      "gc-v12-team",
+      "gc-status",
+      "gc-gate",
+      "gc-budget",
+      "gc-monitor"
+    )
 
   // ---- reading the document ----
 
-  /**
-   * A hex block: `example` blocks are one datagram over any number of lines, `datagrams` blocks one per line.
-   * `annotation` is the table right below the block (before the next heading or marker), header row included.
-   */
+  /** A hex block: `example` blocks are one datagram over any number of lines, `datagrams` blocks one per line.
+    * `annotation` is the table right below the block (before the next heading or marker), header row included.
+    */
   final case class HexBlock(kind: String, tag: String, lines: Vector[Array[Byte]], lineNumber: Int,
       annotation: Option[Vector[Vector[String]]]) {
     def bytes: Array[Byte] = lines.flatten.toArray
@@ -648,7 +705,8 @@ object ProtocolDocSpec {
             val rows = text.drop(start).takeWhile(_.trim.startsWith("|"))
             if (start < 0 || rows.length < 3) problems += s"line ${at + 1}: table $tag has no rows"
             else tables += Table(tag, rows.drop(2).map(cells), at + 1)
-          } else if (start < 0 || text(start).trim != "```hex") problems += s"line ${at + 1}: $tag is not followed by ```hex"
+          } else if (start < 0 || text(start).trim != "```hex")
+            problems += s"line ${at + 1}: $tag is not followed by ```hex"
           else {
             val body = text.drop(start + 1).takeWhile(_.trim != "```")
             if (start + 1 + body.length >= text.length) problems += s"line ${at + 1}: $tag's hex block is not closed"
@@ -683,13 +741,14 @@ object ProtocolDocSpec {
     val tokens = line.trim.split("\\s+").toVector
     tokens.find(t => !t.matches("[0-9A-F]{2}")) match {
       case Some(bad) => Left(s"'$bad' is not a byte of two upper-case hex digits")
-      case None => Right(tokens.map(Integer.parseInt(_, 16).toByte).toArray)
+      case None      => Right(tokens.map(Integer.parseInt(_, 16).toByte).toArray)
     }
   }
 
   /** An annotation table with a column of bytes: `offset | bytes | …` or `# | from → to | bytes | …`. */
   def isByteTable(table: Vector[Vector[String]]): Boolean =
-    table.headOption.exists(h => h.headOption.contains("offset") && h.lift(1).contains("bytes") || h.lift(2).contains("bytes"))
+    table.headOption.exists(h =>
+      h.headOption.contains("offset") && h.lift(1).contains("bytes") || h.lift(2).contains("bytes"))
 
   def varint(value: Long): Array[Byte] = {
     val out = Array.newBuilder[Byte]
@@ -734,12 +793,14 @@ object ProtocolDocSpec {
   case object Timeout extends Cause
   case object DuplicateAcks extends Cause
   case object PartialAck extends Cause
+
   /** An ACK advanced base onto an expired segment: the skip notice for it goes out at once. */
   case object ExpiredHead extends Cause
 
   sealed trait Action
   final case class New(payload: String) extends Action
   final case class Resend(cause: Cause) extends Action
+
   /** The deadlines of these in-flight sequence numbers pass; the oldest is among them, so a skip notice goes out. */
   final case class Expire(seqs: Int*) extends Action
   case object Ack extends Action
@@ -747,10 +808,9 @@ object ProtocolDocSpec {
 
   final case class Hop(from: Side, action: Action, lost: Boolean = false)
 
-  /**
-   * One end of a stream: sender state (base, next, recovery, expired segments) and receiver state (last in order,
-   * kept segments). Skip notices are honoured, as by the gateway's endpoint.
-   */
+  /** One end of a stream: sender state (base, next, recovery, expired segments) and receiver state (last in order, kept
+    * segments). Skip notices are honoured, as by the gateway's endpoint.
+    */
   final class Endpoint(maxSeq: Int, window: Int, next: Int, last: Int) {
     private val m = maxSeq + 1
     require(2 * window <= m)
@@ -773,6 +833,7 @@ object ProtocolDocSpec {
     private def mod(x: Int) = ((x % m) + m) % m
     def inFlight: Int = mod(nextSeq - base)
     private def headExpired: Boolean = inFlight > 0 && expired(base)
+
     /** Byte 0 of a pure ACK: the last ACK received, or one past it when the oldest segment has expired (11.7). */
     def announced: Int = if (headExpired) base else mod(base - 1)
     private def header(first: Int): Array[Byte] = Array(first.toByte, lastInOrder.toByte)
@@ -796,7 +857,7 @@ object ProtocolDocSpec {
         case DuplicateAcks =>
           require(duplicateAcks >= 2 && !fastRetransmitDone, s"$duplicateAcks duplicate ACKs do not allow a resend")
           fastRetransmitDone = true
-        case PartialAck => require(partialAckPending, "no partial ACK to answer")
+        case PartialAck  => require(partialAckPending, "no partial ACK to answer")
         case ExpiredHead => require(noticeOwed, "no ACK advanced onto an expired segment")
       }
       partialAckPending = false

@@ -1,33 +1,30 @@
 package naogateway.wire
 
-/**
- * A datagram received on a robot's port, sorted by its first bytes (docs/protocol.md §3 and §10). The original array is
- * kept, not copied; decoding it is the job of the codec of its kind.
- */
+/** A datagram received on a robot's port, sorted by its first bytes (docs/protocol.md §3 and §10). The original array
+  * is kept, not copied; decoding it is the job of the codec of its kind.
+  */
 sealed trait Datagram extends Product with Serializable {
 
-  /**
-   * The datagram exactly as received: the same array instance, so do not modify it. Case-class equality
-   * of datagrams compares this array by reference.
-   */
+  /** The datagram exactly as received: the same array instance, so do not modify it. Case-class equality of datagrams
+    * compares this array by reference.
+    */
   def bytes: Array[Byte]
 }
 
-/**
- * Classification of any received datagram into exactly one kind, by prefix only (docs/protocol.md §3 and §10):
- *
- *  - every datagram larger than [[WireLimits.MaxDatagramBytes]] (1400) is rejected, whatever it starts with;
- *  - `00 2A` (operation 42, big-endian) and at least 8 bytes (the shorter, 2014 header form): an FU-Remote frame;
- *  - `R G m e`: a GameController control packet; `R G r t`: a GameController return packet;
- *  - at least 2 bytes with byte 0 and byte 1 (unsigned) both below [[WireLimits.StreamSequenceLimit]] (42):
- *    a secure-stream segment (sequence number, ACK, payload);
- *  - anything else is rejected with a [[Datagram.Rejection]]: empty, too short for the kind its prefix
- *    announces, oversize, `RG` followed by an unknown type, or an unknown prefix.
- *
- * The accepted kinds cannot overlap: byte 1 of an FU-Remote frame is 42, not below 42, and byte 0 of a
- * GameController packet is `R` (82); so the order of the tests in [[classify]] does not matter.
- * Classification is a few comparisons on the first four bytes, never copies and never throws.
- */
+/** Classification of any received datagram into exactly one kind, by prefix only (docs/protocol.md §3 and §10):
+  *
+  *   - every datagram larger than [[WireLimits.MaxDatagramBytes]] (1400) is rejected, whatever it starts with;
+  *   - `00 2A` (operation 42, big-endian) and at least 8 bytes (the shorter, 2014 header form): an FU-Remote frame;
+  *   - `R G m e`: a GameController control packet; `R G r t`: a GameController return packet;
+  *   - at least 2 bytes with byte 0 and byte 1 (unsigned) both below [[WireLimits.StreamSequenceLimit]] (42): a
+  *     secure-stream segment (sequence number, ACK, payload);
+  *   - anything else is rejected with a [[Datagram.Rejection]]: empty, too short for the kind its prefix announces,
+  *     oversize, `RG` followed by an unknown type, or an unknown prefix.
+  *
+  * The accepted kinds cannot overlap: byte 1 of an FU-Remote frame is 42, not below 42, and byte 0 of a GameController
+  * packet is `R` (82); so the order of the tests in [[classify]] does not matter. Classification is a few comparisons
+  * on the first four bytes, never copies and never throws.
+  */
 object Datagram {
 
   /** Fewest bytes of an FU-Remote frame: the 8-byte header of the 2014 form (docs/protocol.md §4). */

@@ -109,12 +109,11 @@ object ReplayWindow {
   val empty: ReplayWindow = ReplayWindow(None)
 }
 
-/**
- * Opt-in signed FU-Remote frames (docs/protocol.md 6.7): a `FrameSignature` extension (number 7199, always the last
- * field of the `Message`) carrying a strictly increasing timestamp and the first 8 bytes of
- * HMAC-SHA256(key, "FUSIG1" | direction | timestamp as 8 big-endian bytes | the Message's bytes before the field).
- * Peers that do not sign (FU-Remote, older firmware) skip the extension like any unknown one.
- */
+/** Opt-in signed FU-Remote frames (docs/protocol.md 6.7): a `FrameSignature` extension (number 7199, always the last
+  * field of the `Message`) carrying a strictly increasing timestamp and the first 8 bytes of HMAC-SHA256(key, "FUSIG1"
+  * \| direction | timestamp as 8 big-endian bytes | the Message's bytes before the field). Peers that do not sign
+  * (FU-Remote, older firmware) skip the extension like any unknown one.
+  */
 object FrameSigning {
 
   /** The signature's extension number: the last of the project's range, so protobuf libraries write it last. */
@@ -130,7 +129,8 @@ object FrameSigning {
   val FieldBytes: Int = 23
 
   /** The truncated MAC of `length` body bytes from `offset`. */
-  def mac(key: SigningKey, direction: SignDirection, timestamp: Long, body: Array[Byte], offset: Int, length: Int): Array[Byte] = {
+  def mac(key: SigningKey, direction: SignDirection, timestamp: Long, body: Array[Byte], offset: Int, length: Int)
+      : Array[Byte] = {
     val hmac = key.hmac()
     hmac.update(Domain)
     hmac.update(direction.code)
@@ -154,7 +154,8 @@ object FrameSigning {
     out
   }
 
-  /** `contents` as a signed frame in header form `form` (signed frames are never gzip-flagged: the MAC is the check). */
+  /** `contents` as a signed frame in header form `form` (signed frames are never gzip-flagged: the MAC is the check).
+    */
   def signFrame(
       contents: MessageContents,
       form: HeaderForm,
@@ -164,12 +165,12 @@ object FrameSigning {
   ): Either[FrameError.Oversize, Array[Byte]] =
     FumanoidsFrame.encodeProtobuf(sign(contents.toProtobuf, key, direction, timestamp), form, gzip = false)
 
-  /**
-   * An encoded, unsigned frame (either header form, never gzip-flagged) signed as it stands: the same header form,
-   * the length grown by [[FieldBytes]], the signature field appended. For senders that encode first and sign at the
-   * moment of sending, so timestamps follow the order frames leave in.
-   */
-  def signEncoded(frame: Array[Byte], key: SigningKey, direction: SignDirection, timestamp: Long): Either[FrameError, Array[Byte]] =
+  /** An encoded, unsigned frame (either header form, never gzip-flagged) signed as it stands: the same header form, the
+    * length grown by [[FieldBytes]], the signature field appended. For senders that encode first and sign at the moment
+    * of sending, so timestamps follow the order frames leave in.
+    */
+  def signEncoded(
+      frame: Array[Byte], key: SigningKey, direction: SignDirection, timestamp: Long): Either[FrameError, Array[Byte]] =
     FumanoidsFrame.decodeHeader(frame).flatMap { header =>
       if (header.gzip) Left(FrameError.UnsupportedFlags(FumanoidsFrame.GzipFlag))
       else {
@@ -178,11 +179,11 @@ object FrameSigning {
       }
     }
 
-  /**
-   * Checks the signature of a whole received frame whose header decoded as `header` (a gzip-flagged payload is
-   * checked after inflating; a frame that does not decode at all is `Malformed`). The replay rule is the caller's.
-   */
-  def verifyFrame(frame: Array[Byte], header: FrameHeader, key: SigningKey, direction: SignDirection): Either[SignatureError, SignedBody] =
+  /** Checks the signature of a whole received frame whose header decoded as `header` (a gzip-flagged payload is checked
+    * after inflating; a frame that does not decode at all is `Malformed`). The replay rule is the caller's.
+    */
+  def verifyFrame(frame: Array[Byte], header: FrameHeader, key: SigningKey, direction: SignDirection)
+      : Either[SignatureError, SignedBody] =
     if (!header.gzip) verify(frame, header.form.headerBytes, header.payloadLength, key, direction)
     else
       FumanoidsFrame.decodeRaw(frame) match {
@@ -190,12 +191,12 @@ object FrameSigning {
         case Left(_)    => Left(SignatureError.Malformed)
       }
 
-  /**
-   * Checks the signature of the `length` protobuf bytes at `offset` (a `Message`, after any gzip is undone):
-   * the last field must be the signature, and its MAC must match the bytes before it. The replay rule is the
-   * caller's ([[ReplayWindow]]), because only the caller knows the sender.
-   */
-  def verify(body: Array[Byte], offset: Int, length: Int, key: SigningKey, direction: SignDirection): Either[SignatureError, SignedBody] =
+  /** Checks the signature of the `length` protobuf bytes at `offset` (a `Message`, after any gzip is undone): the last
+    * field must be the signature, and its MAC must match the bytes before it. The replay rule is the caller's
+    * ([[ReplayWindow]]), because only the caller knows the sender.
+    */
+  def verify(body: Array[Byte], offset: Int, length: Int, key: SigningKey, direction: SignDirection)
+      : Either[SignatureError, SignedBody] =
     try {
       val in = CodedInputStream.newInstance(body, offset, length)
       var signatureAt = -1
@@ -253,5 +254,6 @@ object FrameSigning {
   def nextGatewayTimestamp(last: Long, nowMicros: Long): Long = math.max(last + 1, nowMicros)
 
   /** A robot's timestamp: its persisted boot counter in the high 32 bits, its frame counter of this boot in the low. */
-  def robotTimestamp(bootCounter: Long, frameCounter: Long): Long = ((bootCounter & 0xffffffffL) << 32) | (frameCounter & 0xffffffffL)
+  def robotTimestamp(bootCounter: Long, frameCounter: Long): Long =
+    ((bootCounter & 0xffffffffL) << 32) | (frameCounter & 0xffffffffL)
 }

@@ -160,8 +160,7 @@ object FumanoidsFrame {
     try {
       val (bytes, offset, length) = WireRules.normalize(protobuf, 0, protobuf.length)
       Right(Message.parseFrom(com.google.protobuf.CodedInputStream.newInstance(bytes, offset, length)))
-    }
-    catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
+    } catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
 
   private def u16(b: Array[Byte], at: Int): Int = ((b(at) & 0xff) << 8) | (b(at + 1) & 0xff)
 
@@ -176,8 +175,8 @@ object FumanoidsFrame {
     out.toByteArray
   }
 
-  /** Inflates exactly one gzip member (RFC 1952), as docs/protocol.md §4.3 demands: a second member or any byte
-    * after the member's trailer is refused, so every receiver reads the same payload.
+  /** Inflates exactly one gzip member (RFC 1952), as docs/protocol.md §4.3 demands: a second member or any byte after
+    * the member's trailer is refused, so every receiver reads the same payload.
     */
   private def inflate(bytes: Array[Byte]): Either[FrameError.BadGzip, Array[Byte]] = {
     def bad(reason: String) = Left(FrameError.BadGzip(reason))
@@ -190,7 +189,8 @@ object FumanoidsFrame {
     if (bytes.length < 18) bad(s"${bytes.length} bytes cannot hold a gzip member")
     else if (u8(0) != 0x1f || u8(1) != 0x8b) bad("not in gzip format")
     else if (u8(2) != 8) bad(s"compression method ${u8(2)} is not deflate")
-    else if ((u8(3) & ~(FText | FHcrc | FExtra | FName | FComment)) != 0) bad(s"reserved gzip flags 0x${Integer.toHexString(u8(3))}")
+    else if ((u8(3) & ~(FText | FHcrc | FExtra | FName | FComment)) != 0)
+      bad(s"reserved gzip flags 0x${Integer.toHexString(u8(3))}")
     else {
       val flags = u8(3)
       var at = 10
@@ -210,7 +210,8 @@ object FumanoidsFrame {
             val n = inflater.inflate(chunk)
             out.write(chunk, 0, n)
             if (out.size > MaxInflatedBytes) failure = Some(s"inflates beyond $MaxInflatedBytes bytes")
-            else if (n == 0 && !inflater.finished()) failure = Some("truncated deflate data") // no progress: input used up
+            else if (n == 0 && !inflater.finished())
+              failure = Some("truncated deflate data") // no progress: input used up
           }
           failure match {
             case Some(reason) => bad(reason)

@@ -2,7 +2,9 @@ package naogateway.wire
 
 import java.nio.{ByteBuffer, ByteOrder}
 
-/** One HaViMo2 region (docs/protocol.md 6.5): colour class, pixel count, coordinate sums and bounding box in the 160 × 120 image. */
+/** One HaViMo2 region (docs/protocol.md 6.5): colour class, pixel count, coordinate sums and bounding box in the 160 ×
+  * 120 image.
+  */
 final case class HaViMoRegion(
     index: Int,
     colour: Int,

@@ -10,9 +10,9 @@ import naogateway.proto.{Position, RobotHealth, Status}
   * once by the decoder. This reader applies the same rules while it decodes, straight from the array. It takes only
   * input whose reading is plain: each field with the wire type its schema declares, varints that fit their 32-bit
   * fields, each sub-message at most once, no unknown fields, no groups, well-formed framing. For anything else it
-  * answers `null` and the caller takes the general path (normalize, then decode), which gives the result or the
-  * error; so both paths agree by construction. A malformed string needs no detour: `new String(_, UTF_8)` puts
-  * U+FFFD for each bad sequence, which is the §5 reading.
+  * answers `null` and the caller takes the general path (normalize, then decode), which gives the result or the error;
+  * so both paths agree by construction. A malformed string needs no detour: `new String(_, UTF_8)` puts U+FFFD for each
+  * bad sequence, which is the §5 reading.
   */
 private[wire] object KeepAliveReader {
 
@@ -24,7 +24,8 @@ private[wire] object KeepAliveReader {
   /** Where a reading stands: a position in the array, and where the current message ends. */
   private final class Cursor(val bytes: Array[Byte], var at: Int, var end: Int) {
 
-    /** A varint of at most 10 bytes within `end` (a tenth byte only 01); -1 (with `at` past `end`) when it is not one. */
+    /** A varint of at most 10 bytes within `end` (a tenth byte only 01); -1 (with `at` past `end`) when it is not one.
+      */
     def varint(): Long = {
       var result = 0L
       var shift = 0
@@ -56,7 +57,8 @@ private[wire] object KeepAliveReader {
     def fixed32(): Int =
       if (end - at < 4) { at = Int.MaxValue; 0 }
       else {
-        val v = (bytes(at) & 0xff) | (bytes(at + 1) & 0xff) << 8 | (bytes(at + 2) & 0xff) << 16 | (bytes(at + 3) & 0xff) << 24
+        val v =
+          (bytes(at) & 0xff) | (bytes(at + 1) & 0xff) << 8 | (bytes(at + 2) & 0xff) << 16 | (bytes(at + 3) & 0xff) << 24
         at += 4
         v
       }

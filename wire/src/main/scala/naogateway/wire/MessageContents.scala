@@ -86,7 +86,8 @@ object MessageContents {
   val RpcResponseField: Int = 7111
 
   private val known =
-    Set(StatusField, RobotHealthField, DebuggingCommandsField, DebugDataField, HavimoRegionsField, HavimoGridField, RpcRequestField,
+    Set(StatusField, RobotHealthField, DebuggingCommandsField, DebugDataField, HavimoRegionsField, HavimoGridField,
+      RpcRequestField,
       RpcResponseField)
 
   /** Parses every known extension of `message`; a malformed one is a typed error, unknown ones are listed. */
@@ -132,7 +133,8 @@ object MessageContents {
     }
 
   /** Any `Message`: the rules of docs/protocol.md §5 applied by `WireRules.normalize`, then one decoding pass. */
-  private[wire] def general(bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
+  private[wire] def general(
+      bytes: Array[Byte], offset: Int, length: Int): Either[FrameError.BadProtobuf, MessageContents] =
     try {
       val (normalized, from, size) = WireRules.normalize(bytes, offset, length)
       fastParse(normalized, from, size)
@@ -157,13 +159,14 @@ object MessageContents {
           robotId = in.readInt32(); seenRobotId = true
         } else if (wireType == WireFormat.WIRETYPE_LENGTH_DELIMITED && known(field)) {
           field match {
-            case StatusField            => repeated ||= c.status.isDefined; c = c.copy(status = Some(nested(in, Status)))
+            case StatusField => repeated ||= c.status.isDefined; c = c.copy(status = Some(nested(in, Status)))
             case RobotHealthField =>
               repeated ||= c.robotHealth.isDefined; c = c.copy(robotHealth = Some(nested(in, RobotHealth)))
             case DebuggingCommandsField =>
               repeated ||= c.debuggingCommands.isDefined
               c = c.copy(debuggingCommands = Some(nested(in, DebuggingCommands)))
-            case DebugDataField => repeated ||= c.debugData.isDefined; c = c.copy(debugData = Some(nested(in, DebugData)))
+            case DebugDataField =>
+              repeated ||= c.debugData.isDefined; c = c.copy(debugData = Some(nested(in, DebugData)))
             case HavimoRegionsField =>
               repeated ||= c.havimoRegions.isDefined; c = c.copy(havimoRegions = Some(nested(in, HaViMoRegionFrame)))
             case HavimoGridField =>
@@ -187,7 +190,8 @@ object MessageContents {
     try of(Message.parseFrom(CodedInputStream.newInstance(bytes, offset, length))) // already normalized
     catch { case NonFatal(e) => Left(FrameError.BadProtobuf(String.valueOf(e.getMessage))) }
 
-  private def nested[A <: scalapb.GeneratedMessage](in: CodedInputStream, companion: scalapb.GeneratedMessageCompanion[A]): A = {
+  private def nested[A <: scalapb.GeneratedMessage](in: CodedInputStream,
+      companion: scalapb.GeneratedMessageCompanion[A]): A = {
     val limit = in.pushLimit(in.readRawVarint32())
     val message = companion.parseFrom(in)
     in.popLimit(limit)

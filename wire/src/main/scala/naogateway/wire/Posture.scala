@@ -1,9 +1,8 @@
 package naogateway.wire
 
-/**
- * A robot's posture as docs/protocol.md §7.2 names it: what `motion.getPosture`, the `motion.posture` reply,
- * `RobotHealth.posture` and the simulated robot's `Status.currentState` say.
- */
+/** A robot's posture as docs/protocol.md §7.2 names it: what `motion.getPosture`, the `motion.posture` reply,
+  * `RobotHealth.posture` and the simulated robot's `Status.currentState` say.
+  */
 sealed abstract class Posture(val name: String) extends Product with Serializable
 
 /** The postures of docs/protocol.md §7.2, and the way to carry one this build does not know. */
@@ -30,11 +29,10 @@ object Posture {
   /** The robot fell (the simulated robot never does). */
   case object Fallen extends Posture("fallen")
 
-  /**
-   * A posture a robot reported that this build does not know. A newer firmware may report one; the status that
-   * carries it must still reach its subscribers, so it is kept as reported rather than refused. Built only by
-   * [[reported]], so a known name never ends up here.
-   */
+  /** A posture a robot reported that this build does not know. A newer firmware may report one; the status that carries
+    * it must still reach its subscribers, so it is kept as reported rather than refused. Built only by [[reported]], so
+    * a known name never ends up here.
+    */
   final case class Unknown private (override val name: String) extends Posture(name)
 
   /** Every posture docs/protocol.md §7.2 names, in its order. */

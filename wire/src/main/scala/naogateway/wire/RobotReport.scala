@@ -2,12 +2,11 @@ package naogateway.wire
 
 import naogateway.proto.{Position, RobotHealth, Status}
 
-/**
- * What a robot says about itself in one keep-alive (docs/protocol.md §6.2): the fields of `Status` and `RobotHealth`
- * as values. The one mapping between those messages and the robot's reported state: the gateway reads keep-alives
- * with [[RobotReport.read]], and whoever sends one (the simulated firmware, the ZeroMQ endpoint) writes it with
- * [[status]] and [[health]].
- */
+/** What a robot says about itself in one keep-alive (docs/protocol.md §6.2): the fields of `Status` and `RobotHealth`
+  * as values. The one mapping between those messages and the robot's reported state: the gateway reads keep-alives with
+  * [[RobotReport.read]], and whoever sends one (the simulated firmware, the ZeroMQ endpoint) writes it with [[status]]
+  * and [[health]].
+  */
 final case class RobotReport(
     teamId: Option[Int] = None,
     role: Option[String] = None,
@@ -39,16 +38,16 @@ final case class RobotReport(
   )
 
   /** The keep-alive of robot `robotId`: a `Message` with `status` and `robotHealth`. */
-  def contents(robotId: Int): MessageContents = MessageContents(robotId, status = Some(status), robotHealth = Some(health))
+  def contents(robotId: Int): MessageContents =
+    MessageContents(robotId, status = Some(status), robotHealth = Some(health))
 }
 
 /** Reading a keep-alive. */
 object RobotReport {
 
-  /**
-   * What one keep-alive says: `RobotHealth` where it carries a field, else what `Status` has for it (posture from
-   * `currentState`, uptime from `timestamp`). A field neither carries is `None`.
-   */
+  /** What one keep-alive says: `RobotHealth` where it carries a field, else what `Status` has for it (posture from
+    * `currentState`, uptime from `timestamp`). A field neither carries is `None`.
+    */
   def read(status: Status, health: Option[RobotHealth]): RobotReport = RobotReport(
     teamId = status.teamID.map(_.toInt),
     role = status.activeRole,

@@ -1,18 +1,22 @@
 package naogateway.wire
 
-/**
- * One method of the RPC contract the robot serves (docs/protocol.md 7.2).
- *
- * @param idempotent whether it may run twice, so it may be called again when no answer came (protocol.md 7.1)
- * @param slot the actuator slot whose order it takes part in, if any
- */
-sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean, val slot: Option[ActuatorGroup])
+/** One method of the RPC contract the robot serves (docs/protocol.md 7.2).
+  *
+  * @param idempotent
+  *   whether it may run twice, so it may be called again when no answer came (protocol.md 7.1)
+  * @param slot
+  *   the actuator slot whose order it takes part in, if any
+  */
+sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean,
+    val slot: Option[ActuatorGroup])
     extends Product with Serializable {
 
   /** `module.method`, as in logs, errors and the docs. */
   def name: String = s"$module.$method"
 
-  /** Whether a newer call of its slot replaces it: a target (walk velocities, head or arm angles), not a stop or posture. */
+  /** Whether a newer call of its slot replaces it: a target (walk velocities, head or arm angles), not a stop or
+    * posture.
+    */
   def latestWins: Boolean = slot.isDefined && this != RpcMethod.Stop && this != RpcMethod.Posture
 
   /** A call of this method with `params`. */

@@ -11,10 +11,10 @@ import naogateway.proto._
 /** The decoding rules of docs/protocol.md §5 that ScalaPB alone does not follow, applied before it parses.
   *
   * ScalaPB refuses unknown groups, refuses a whole message for one string that is not UTF-8, and cuts a varint beyond
-  * 32 bits to its low bits. The document says instead: unknown fields of every wire type are skipped (groups
-  * included), a malformed string is read with U+FFFD for each bad sequence, and a 32-bit field whose varint does not
-  * fit is refused, as nanopb (the firmware's decoder) does. Both general decode paths run `normalize` first, so they
-  * agree; `KeepAliveReader` applies the same rules itself to the keep-alive's fields and leaves everything else here.
+  * 32 bits to its low bits. The document says instead: unknown fields of every wire type are skipped (groups included),
+  * a malformed string is read with U+FFFD for each bad sequence, and a 32-bit field whose varint does not fit is
+  * refused, as nanopb (the firmware's decoder) does. Both general decode paths run `normalize` first, so they agree;
+  * `KeepAliveReader` applies the same rules itself to the keep-alive's fields and leaves everything else here.
   */
 private[wire] object WireRules {
 
@@ -67,7 +67,7 @@ private[wire] object WireRules {
     def fields(d: Descriptor): Map[Int, Kind] = d.fields.iterator.map(f => f.number -> kindOf(f)).toMap
     @scala.annotation.tailrec
     def reach(todo: List[Descriptor], seen: Map[Descriptor, Schema]): Map[Descriptor, Schema] = todo match {
-      case Nil                          => seen
+      case Nil                           => seen
       case d :: rest if seen.contains(d) => reach(rest, seen)
       case d :: rest =>
         val kinds = fields(d)
@@ -77,21 +77,25 @@ private[wire] object WireRules {
   }
 
   private val messageSchema =
-    new Schema(Message.scalaDescriptor.fields.iterator.map(f => f.number -> kindOf(f)).toMap ++ extensions.map { case (n, d) => n -> Sub(d) })
+    new Schema(Message.scalaDescriptor.fields.iterator.map(f => f.number -> kindOf(f)).toMap ++ extensions.map {
+      case (n, d) => n -> Sub(d)
+    })
 
-  /** The bytes of a `Message` as ScalaPB may read them: the same slice when nothing needs rewriting, else a new
-    * array without groups and with malformed strings repaired. Throws `InvalidProtocolBufferException` for a 32-bit
-    * field whose varint does not fit, an end-group tag without its start, or malformed framing.
+  /** The bytes of a `Message` as ScalaPB may read them: the same slice when nothing needs rewriting, else a new array
+    * without groups and with malformed strings repaired. Throws `InvalidProtocolBufferException` for a 32-bit field
+    * whose varint does not fit, an end-group tag without its start, or malformed framing.
     */
   def normalize(bytes: Array[Byte], offset: Int, length: Int): (Array[Byte], Int, Int) =
-    if (!needsRewrite(CodedInputStream.newInstance(bytes, offset, length), bytes, offset, messageSchema, 0)) (bytes, offset, length)
+    if (!needsRewrite(CodedInputStream.newInstance(bytes, offset, length), bytes, offset, messageSchema, 0))
+      (bytes, offset, length)
     else {
       val out = rewrite(CodedInputStream.newInstance(bytes, offset, length), messageSchema)
       (out, 0, out.length)
     }
 
   /** Checks every field; true when a group or a malformed string must be rewritten. */
-  private def needsRewrite(in: CodedInputStream, bytes: Array[Byte], offset: Int, schema: Schema, depth: Int): Boolean = {
+  private def needsRewrite(
+      in: CodedInputStream, bytes: Array[Byte], offset: Int, schema: Schema, depth: Int): Boolean = {
     if (depth > MaxDepth) throw new InvalidProtocolBufferException("sub-messages nested too deeply")
     var rewrite = false
     var done = false
@@ -112,7 +116,8 @@ private[wire] object WireRules {
               case Text =>
                 // Checked in place: the stream reads `bytes` from `offset`, so no copy of the string is made.
                 val size = in.readRawVarint32()
-                if (size < 0 || size > in.getBytesUntilLimit) throw new InvalidProtocolBufferException("truncated string")
+                if (size < 0 || size > in.getBytesUntilLimit)
+                  throw new InvalidProtocolBufferException("truncated string")
                 rewrite |= !utf8(bytes, offset + in.getTotalBytesRead, size)
                 in.skipRawBytes(size)
               case _ => in.skipField(tag)

@@ -33,11 +33,11 @@ class DatagramSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
   )
 
   private def kindOf(datagram: Datagram): Option[String] = datagram match {
-    case Datagram.FuRemoteFrame(_) => Some("FU-Remote frame")
+    case Datagram.FuRemoteFrame(_)         => Some("FU-Remote frame")
     case Datagram.GameControllerControl(_) => Some("GameController control")
-    case Datagram.GameControllerReturn(_) => Some("GameController return")
-    case Datagram.StreamSegment(_) => Some("stream segment")
-    case Datagram.Rejected(_, _) => None
+    case Datagram.GameControllerReturn(_)  => Some("GameController return")
+    case Datagram.StreamSegment(_)         => Some("stream segment")
+    case Datagram.Rejected(_, _)           => None
   }
 
   private def rejection(bytes: Array[Byte]): Rejection = Datagram.classify(bytes) match {

@@ -9,8 +9,10 @@ import naogateway.proto.{Message, MessageProto}
 
 class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
-  private val teamKey = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
-  private val otherTeamKey = SigningKey.fromHex("ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+  private val teamKey =
+    SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+  private val otherTeamKey =
+    SigningKey.fromHex("ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
   private val R = SignDirection.RobotToGateway
 
   private val contents: Gen[MessageContents] = for {
@@ -19,7 +21,8 @@ class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
     health <- Gen.option(MessageGenerators.robotHealth)
   } yield MessageContents(id, status = status, robotHealth = health)
 
-  private def verify(body: Array[Byte], k: SigningKey = teamKey, d: SignDirection = R) = FrameSigning.verify(body, 0, body.length, k, d)
+  private def verify(body: Array[Byte], k: SigningKey = teamKey, d: SignDirection = R) =
+    FrameSigning.verify(body, 0, body.length, k, d)
 
   "A signed body" should {
     "verify with the same teamKey and direction, covering exactly the unsigned bytes" in {
@@ -74,15 +77,18 @@ class FrameSigningSpec extends AnyWordSpec with Matchers with ScalaCheckProperty
         val header = FumanoidsFrame.decodeHeader(signed.toOption.get).toOption.get
         header.form shouldBe form
         header.gzip shouldBe false
-        FrameSigning.verifyFrame(signed.toOption.get, header, teamKey, R) shouldBe Right(SignedBody(ts, c.toProtobuf.length))
-        MessageContents.decodeFrame(signed.toOption.get).map(_._2.copy(unknownExtensions = Vector.empty)) shouldBe Right(c)
+        FrameSigning.verifyFrame(signed.toOption.get, header, teamKey, R) shouldBe Right(SignedBody(ts,
+            c.toProtobuf.length))
+        MessageContents.decodeFrame(signed.toOption.get).map(
+          _._2.copy(unknownExtensions = Vector.empty)) shouldBe Right(c)
       }
     }
 
     "not be made from a gzip-flagged frame, and be checked after inflating one that arrives" in {
       val c = MessageContents(2, status = Some(naogateway.proto.Status(teamID = Some(1))))
       FrameSigning.signEncoded(MessageContents.encodeFrame(c, gzip = true).toOption.get, teamKey, R, 1L).isLeft shouldBe true
-      val zipped = FumanoidsFrame.encodeProtobuf(FrameSigning.sign(c.toProtobuf, teamKey, R, 3L), gzip = true).toOption.get
+      val zipped =
+        FumanoidsFrame.encodeProtobuf(FrameSigning.sign(c.toProtobuf, teamKey, R, 3L), gzip = true).toOption.get
       val header = FumanoidsFrame.decodeHeader(zipped).toOption.get
       FrameSigning.verifyFrame(zipped, header, teamKey, R).map(_.timestamp) shouldBe Right(3L)
     }

@@ -55,19 +55,24 @@ class FumanoidsFrameSpec extends AnyWordSpec with Matchers with ScalaCheckProper
         out.toByteArray
       }
       def gzipFrame(payload: Array[Byte]): Array[Byte] =
-        java.nio.ByteBuffer.allocate(12 + payload.length).putInt(0x002a0200).putInt(0).putInt(payload.length).put(payload).array()
+        java.nio.ByteBuffer.allocate(12 + payload.length).putInt(0x002a0200).putInt(0).putInt(payload.length).put(
+          payload).array()
       val half = workedProtobuf.length / 2
       val single = gzipFrame(gzip(workedProtobuf))
       MessageContents.decodeFrame(single).map(_._2) shouldBe Right(workedContents)
       // The two halves of the Message in two members: a concatenating reader would see the whole Message.
       val twoMembers = gzipFrame(gzip(workedProtobuf.take(half)) ++ gzip(workedProtobuf.drop(half)))
-      MessageContents.decodeFrame(twoMembers) should matchPattern { case Left(FrameError.BadGzip(r)) if r.contains("after the gzip member") => }
+      MessageContents.decodeFrame(twoMembers) should matchPattern {
+        case Left(FrameError.BadGzip(r)) if r.contains("after the gzip member") =>
+      }
       FumanoidsFrame.decode(twoMembers) should matchPattern { case Left(FrameError.BadGzip(_)) => }
       val trailing = gzipFrame(gzip(workedProtobuf) ++ Array[Byte](0x00, 0x13, 0x37))
       MessageContents.decodeFrame(trailing) shouldBe Left(FrameError.BadGzip("3 bytes after the gzip member"))
       // A member cut short, or with a wrong CRC, is refused as well.
       val member = gzip(workedProtobuf)
-      MessageContents.decodeFrame(gzipFrame(member.dropRight(1))) should matchPattern { case Left(FrameError.BadGzip(_)) => }
+      MessageContents.decodeFrame(gzipFrame(member.dropRight(1))) should matchPattern {
+        case Left(FrameError.BadGzip(_)) =>
+      }
       val badCrc = member.clone(); badCrc(member.length - 8) = (badCrc(member.length - 8) ^ 1).toByte
       MessageContents.decodeFrame(gzipFrame(badCrc)) shouldBe Left(FrameError.BadGzip("CRC-32 mismatch"))
     }
@@ -77,8 +82,10 @@ class FumanoidsFrameSpec extends AnyWordSpec with Matchers with ScalaCheckProper
       z.write(workedProtobuf); z.close()
       val member = plain.toByteArray
       // FLG = FNAME | FCOMMENT, then "a\0" and "b\0" after the 10-byte header.
-      val named = member.take(3) ++ Array[Byte](0x18) ++ member.slice(4, 10) ++ Array[Byte](0x61, 0, 0x62, 0) ++ member.drop(10)
-      val frame = java.nio.ByteBuffer.allocate(12 + named.length).putInt(0x002a0200).putInt(0).putInt(named.length).put(named).array()
+      val named =
+        member.take(3) ++ Array[Byte](0x18) ++ member.slice(4, 10) ++ Array[Byte](0x61, 0, 0x62, 0) ++ member.drop(10)
+      val frame = java.nio.ByteBuffer.allocate(12 + named.length).putInt(0x002a0200).putInt(0).putInt(named.length).put(
+        named).array()
       MessageContents.decodeFrame(frame).map(_._2) shouldBe Right(workedContents)
     }
     "refuse a truncated header" in {
@@ -199,7 +206,8 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       }
     }
     "merge an extension that occurs twice, as protobuf does" in {
-      val first = Message(robotID = 4).withExtension(naogateway.proto.MessageProto.status)(Some(Status(teamID = Some(3))))
+      val first =
+        Message(robotID = 4).withExtension(naogateway.proto.MessageProto.status)(Some(Status(teamID = Some(3))))
       val second = Message(robotID = 4).withExtension(naogateway.proto.MessageProto.status)(
         Some(Status(activeRole = Some("striker")))
       )
@@ -214,7 +222,8 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       both(bytes("08 01 93 03 08 05 5B 5C 94 03 BA 01 02 10 01")) shouldBe
         Right(MessageContents(1, status = Some(Status(teamID = Some(1)))))
       // A group inside a known extension: Status with teamID 1 and an unknown group in field 11.
-      both(bytes("08 01 BA 01 04 10 01 5B 5C")) shouldBe Right(MessageContents(1, status = Some(Status(teamID = Some(1)))))
+      both(bytes("08 01 BA 01 04 10 01 5B 5C")) shouldBe Right(MessageContents(1,
+          status = Some(Status(teamID = Some(1)))))
     }
     "still refuse malformed groups: an end without a start, or an end of another field" in {
       both(Array[Byte](0x08, 0x04, 0x5c)) should matchPattern { case Left(FrameError.BadProtobuf(_)) => }
@@ -224,14 +233,17 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     "read a display string that is not UTF-8 with U+FFFD, keeping the rest of the message (protocol.md §5)" in {
       // Status: teamID 1, activeAgent = 41 FF 42 ("A", a byte no UTF-8 text holds, "B").
       val bad = Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x07, 0x10, 0x01, 0x62, 0x03, 0x41, 0xff.toByte, 0x42)
-      both(bad) shouldBe Right(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("A\uFFFDB")))))
+      both(bad) shouldBe Right(MessageContents(1,
+          status = Some(Status(teamID = Some(1), activeAgent = Some("A\uFFFDB")))))
       // Valid text beyond ASCII is kept as it is; a sequence cut short is replaced like any malformed one.
       val text = "Müller ✓ 😀"
       val valid = Status(activeAgent = Some(text)).toByteArray
-      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, valid.length.toByte) ++ valid).map(_.status.flatMap(_.activeAgent)) shouldBe
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, valid.length.toByte) ++ valid).map(
+        _.status.flatMap(_.activeAgent)) shouldBe
         Right(Some(text))
       val cut = Array[Byte](0x62, 0x02, 0x41, 0xc3.toByte)
-      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, cut.length.toByte) ++ cut).map(_.status.flatMap(_.activeAgent)) shouldBe
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, cut.length.toByte) ++ cut).map(
+        _.status.flatMap(_.activeAgent)) shouldBe
         Right(Some("A\uFFFD"))
     }
     "refuse a varint that does not fit its 32-bit field instead of cutting it (protocol.md §5)" in {
@@ -244,11 +256,13 @@ class MessageContentsSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
         case Left(FrameError.BadProtobuf(_)) =>
       }
       // Status.teamID (uint32) 2^32 + 1.
-      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x06, 0x10, 0x81.toByte, 0x80.toByte, 0x80.toByte, 0x80.toByte, 0x10)) should
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x06, 0x10, 0x81.toByte, 0x80.toByte, 0x80.toByte, 0x80.toByte,
+          0x10)) should
         matchPattern { case Left(FrameError.BadProtobuf(_)) => }
       // −1 in its 10-byte form and the largest uint32 are in range.
       both(Array[Byte](0x08) ++ Array.fill(9)(0xff.toByte) :+ 0x01.toByte) shouldBe Right(MessageContents(-1))
-      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x06, 0x10, 0xff.toByte, 0xff.toByte, 0xff.toByte, 0xff.toByte, 0x0f)) shouldBe
+      both(Array[Byte](0x08, 0x01, 0xba.toByte, 0x01, 0x06, 0x10, 0xff.toByte, 0xff.toByte, 0xff.toByte, 0xff.toByte,
+          0x0f)) shouldBe
         Right(MessageContents(1, status = Some(Status(teamID = Some(0xffffffff)))))
     }
     "agree with the general path on arbitrary bytes after a valid robot id" in {

@@ -31,7 +31,9 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       at.map(i => bytes.take(i)),
       for { i <- at; b <- Gen.listOfN(3, Arbitrary.arbitrary[Byte]) } yield bytes.take(i) ++ b ++ bytes.drop(i),
       Gen.listOfN(6, Arbitrary.arbitrary[Byte]).map(bytes ++ _),
-      for { i <- at; b <- Gen.oneOf(0x80, 0xc0, 0xed, 0xff, 0xf8) } yield { val c = bytes.clone(); if (c.nonEmpty) c(i) = b.toByte; c }
+      for { i <- at; b <- Gen.oneOf(0x80, 0xc0, 0xed, 0xff, 0xf8) } yield {
+        val c = bytes.clone(); if (c.nonEmpty) c(i) = b.toByte; c
+      }
     )
   }
 
@@ -70,8 +72,10 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
 
     "read a keep-alive whose rotation is NaN as the general path does" in {
       // Found by the property above (shrunk): a Position whose rotation is NaN, and an unknown field in Status.
-      val bytes = Array(8, 0, -70, 1, 52, 24, -1, -1, 0, 58, 18, 8, 0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 29, 0, 0,
-        -1, -1, 65, 0, 0, 0, 0, 0, 0, 0, 0, 122, 6, 0, 0, 0, 0, 0, 0, -3, 0, 0, 0, 0, 0, -8, 0, 0, 24, 0).map(_.toByte)
+      val bytes =
+        Array(8, 0, -70, 1, 52, 24, -1, -1, 0, 58, 18, 8, 0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 29, 0, 0,
+          -1, -1, 65, 0, 0, 0, 0, 0, 0, 0, 0, 122, 6, 0, 0, 0, 0, 0, 0, -3, 0, 0, 0, 0, 0, -8, 0, 0, 24, 0).map(
+          _.toByte)
       val fast = MessageContents.parse(bytes)
       val slow = general(bytes)
       fast.isRight shouldBe true
@@ -82,15 +86,18 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     "leave an overlong ten-byte varint to the general path and agree with it" in {
       // Found by the property above (shrunk): Status.timestamp as nine FF bytes and a tenth 00. protobuf-java reads
       // the top bit of such a varint one way or the other depending on where it lies; the reader must not guess.
-      val bytes = Array(8, 0, -70, 1, 125, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 16, -1, -1, -1, -1, 0, 24, 0, 58, 16,
-        8, -1, -1, -1, -1, 0, 8, -1, -1, -1, 0, 29, 0, 0, 0, 0, 65, 0, 0, 0, 0, 0, 0, 0, 0, 98, 55) ++ Array.fill(55)(0) ++
-        Array(122, 13) ++ Array.fill(13)(0) ++ Array(-126, 1, 4, 0, 0, 0, 0)
+      val bytes =
+        Array(8, 0, -70, 1, 125, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 16, -1, -1, -1, -1, 0, 24, 0, 58, 16,
+          8, -1, -1, -1, -1, 0, 8, -1, -1, -1, 0, 29, 0, 0, 0, 0, 65, 0, 0, 0, 0, 0, 0, 0, 0, 98, 55) ++ Array.fill(55)(
+          0) ++
+          Array(122, 13) ++ Array.fill(13)(0) ++ Array(-126, 1, 4, 0, 0, 0, 0)
       val frame = bytes.map(_.toByte)
       KeepAliveReader.read(frame, 0, frame.length) shouldBe null
       MessageContents.parse(frame).map(_.toProtobuf.toVector) shouldBe general(frame).map(_.toProtobuf.toVector)
       // The canonical form of a number with the top bit set (tenth byte 01) is still read here.
       val negative = robot1 ++ delimited(23, varint(1, -1L))
-      KeepAliveReader.read(negative, 0, negative.length) shouldBe MessageContents(1, status = Some(Status(timestamp = Some(-1L))))
+      KeepAliveReader.read(negative, 0, negative.length) shouldBe MessageContents(1,
+        status = Some(Status(timestamp = Some(-1L))))
     }
 
     "read a malformed string as U+FFFD itself (protocol.md 5)" in {
@@ -106,13 +113,15 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
         "a uint32 beyond 32 bits" -> (robot1 ++ delimited(23, varint(2, 1L << 32))),
         "a robotID beyond int32" -> varint(1, 1L << 40),
         "no robotID" -> delimited(23, varint(2, 1)),
-        "a group inside Status" -> (robot1 ++ delimited(23, field(5, 3)(_ => ()) ++ field(5, 4)(_ => ()) ++ varint(2, 7))),
+        "a group inside Status" -> (robot1 ++ delimited(23,
+          field(5, 3)(_ => ()) ++ field(5, 4)(_ => ()) ++ varint(2, 7))),
         "an unknown field in Status" -> (robot1 ++ delimited(23, varint(40, 9))),
         "Status twice (merged)" -> (robot1 ++ delimited(23, varint(2, 1)) ++ delimited(23, varint(3, 2))),
         "Position twice (merged)" -> (robot1 ++ delimited(23, delimited(7, position) ++ delimited(7, varint(2, 5)))),
         "an unknown extension" -> (robot1 ++ varint(7150, 1)),
         "a truncated Status" -> (robot1 ++ delimited(23, varint(2, 1))).dropRight(1),
-        "a field of the wrong wire type" -> (robot1 ++ delimited(23, field(2, 2)(_.writeBytesNoTag(ByteString.copyFromUtf8("x")))))
+        "a field of the wrong wire type" -> (robot1 ++ delimited(23,
+          field(2, 2)(_.writeBytesNoTag(ByteString.copyFromUtf8("x")))))
       )
       cases.foreach { case (what, bytes) =>
         withClue(what) {
@@ -120,7 +129,8 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
           MessageContents.parse(bytes) shouldBe general(bytes)
         }
       }
-      MessageContents.parse(cases(5)._2).map(_.status) shouldBe Right(Some(Status(teamID = Some(1), timeOnline = Some(2))))
+      MessageContents.parse(cases(5)._2).map(_.status) shouldBe Right(Some(Status(teamID = Some(1),
+            timeOnline = Some(2))))
       MessageContents.parse(cases(0)._2).isLeft shouldBe true
     }
   }

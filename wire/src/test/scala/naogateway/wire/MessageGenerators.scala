@@ -54,8 +54,9 @@ object MessageGenerators {
     disable <- Gen.option(optionNames)
   } yield DebuggingCommands(pull, push, enable, disable)
 
-  val colour: Gen[Colour] = for { r <- Gen.choose(0, 255); g <- Gen.choose(0, 255); b <- Gen.choose(0, 255) } yield
-    Colour(r, g, b)
+  val colour: Gen[Colour] = for {
+    r <- Gen.choose(0, 255); g <- Gen.choose(0, 255); b <- Gen.choose(0, 255)
+  } yield Colour(r, g, b)
 
   val shape: Gen[Shape] = for {
     kind <- Gen.oneOf(Shape.Kind.values)
@@ -81,8 +82,7 @@ object MessageGenerators {
       .map(o =>
         DebugData.Data.RelativePosition(DebugRelativePosition(o.take(6).map { case (n, d, a) =>
           DebugRelativePosition.RelativeObject(n, d, a)
-        }))
-      )
+        })))
     val field = Gen.listOf(shape).map(s => DebugData.Data.FieldDrawing(DebugFieldDrawing(s.take(6))))
     val image = for {
       w <- Gen.choose(0, 160)

@@ -31,7 +31,8 @@ class RpcMethodDocSpec extends AnyWordSpec with Matchers {
       RpcMethod.all.map(_.name) shouldBe documented
     }
     "call again exactly the methods protocol.md 7.1 names as safe to call again" in {
-      val row = section("### 7.1 Rules").find(_.startsWith("| new call, new `callId`")).getOrElse(fail("no retry rule in 7.1"))
+      val row =
+        section("### 7.1 Rules").find(_.startsWith("| new call, new `callId`")).getOrElse(fail("no retry rule in 7.1"))
       val again = Name.findAllMatchIn(row).map(m => m.group(1) + "." + m.group(2)).toSet
       again should not be empty
       RpcMethod.all.filter(_.idempotent).map(_.name).toSet shouldBe again

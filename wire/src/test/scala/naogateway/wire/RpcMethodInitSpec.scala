@@ -10,7 +10,8 @@ class RpcMethodInitSpec extends AnyWordSpec with Matchers {
 
   /** A loader of its own for the table's classes, so their initialisation runs again, in the order a test picks. */
   private def freshLoader(): URLClassLoader =
-    new URLClassLoader(Array(classOf[RpcMethod].getProtectionDomain.getCodeSource.getLocation), getClass.getClassLoader) {
+    new URLClassLoader(Array(classOf[RpcMethod].getProtectionDomain.getCodeSource.getLocation),
+      getClass.getClassLoader) {
       override def loadClass(name: String, resolve: Boolean): Class[_] =
         if (name.startsWith("naogateway.wire.RpcMethod")) getClassLoadingLock(name).synchronized {
           Option(findLoadedClass(name)).getOrElse(findClass(name))

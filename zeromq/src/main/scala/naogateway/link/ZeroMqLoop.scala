@@ -13,11 +13,10 @@ import akka.Done
 import org.slf4j.LoggerFactory
 import org.zeromq.{SocketType, ZContext, ZMQ}
 
-/**
- * One thread of ZeroMQ: a context, its sockets and a poll loop. ZeroMQ sockets must stay on one thread, so
- * actors never touch them: they `submit` operations, which the loop runs on its own thread between polls.
- * The loop blocks in `poll`, so it runs on a dedicated dispatcher, never on the actors' one.
- */
+/** One thread of ZeroMQ: a context, its sockets and a poll loop. ZeroMQ sockets must stay on one thread, so actors
+  * never touch them: they `submit` operations, which the loop runs on its own thread between polls. The loop blocks in
+  * `poll`, so it runs on a dedicated dispatcher, never on the actors' one.
+  */
 final class ZeroMqLoop(val name: String, pollTimeout: FiniteDuration) extends Runnable {
   require(pollTimeout.toMillis >= 1, "the poll timeout must be at least 1 ms")
 
@@ -45,10 +44,9 @@ final class ZeroMqLoop(val name: String, pollTimeout: FiniteDuration) extends Ru
   def start(executor: java.util.concurrent.Executor): Unit =
     if (started.compareAndSet(false, true)) executor.execute(this)
 
-  /**
-   * Asks the loop to end: operations submitted before still run (so last replies go out), then the sockets and the
-   * context are closed. Completes when the thread has left the loop.
-   */
+  /** Asks the loop to end: operations submitted before still run (so last replies go out), then the sockets and the
+    * context are closed. Completes when the thread has left the loop.
+    */
   def stop(): Future[Done] = {
     stopping = true
     if (started.compareAndSet(false, true)) {
@@ -69,8 +67,10 @@ final class ZeroMqLoop(val name: String, pollTimeout: FiniteDuration) extends Ru
     }
 
   private def closePipe(): Unit = {
-    try wakeUp.sink.close() catch { case NonFatal(_) => () }
-    try wakeUp.source.close() catch { case NonFatal(_) => () }
+    try wakeUp.sink.close()
+    catch { case NonFatal(_) => () }
+    try wakeUp.source.close()
+    catch { case NonFatal(_) => () }
   }
 
   def run(): Unit = {
@@ -158,10 +158,9 @@ object ZeroMqLoop {
       s
     }
 
-    /**
-     * Calls `read` while `socket` has input; `read` takes one message with `ZMQ.DONTWAIT` and returns false when
-     * there was none.
-     */
+    /** Calls `read` while `socket` has input; `read` takes one message with `ZMQ.DONTWAIT` and returns false when there
+      * was none.
+      */
     def onReadable(socket: ZMQ.Socket)(read: ZMQ.Socket => Boolean): Unit = {
       if (!handlers.contains(socket)) order = order :+ socket
       handlers = handlers.updated(socket, read)

@@ -1,12 +1,12 @@
 package naogateway.sim.gs1500m
 
-/** The CM-530's measured costs (docs/simulator.md 1.4; thesis §7.3, table 4, figure 15) in unscaled milliseconds, and the same
-  * times in simulated nanoseconds multiplied by `timeScale` (1.0 = real time; 0.01 lets a real-time simulation run a
-  * hundred times faster while keeping every proportion).
+/** The CM-530's measured costs (docs/simulator.md 1.4; thesis §7.3, table 4, figure 15) in unscaled milliseconds, and
+  * the same times in simulated nanoseconds multiplied by `timeScale` (1.0 = real time; 0.01 lets a real-time simulation
+  * run a hundred times faster while keeping every proportion).
   *
   * The linear fits are the thesis's own coefficients (docs/simulator.md 1.4 rounds them to −0.81 and +0.18): encoding
-  * `0.0386·x − 0.8057` ms, serial send `0.0245·x + 0.184` ms, so a 1400-byte message costs ≈ 88 ms in all. A fit
-  * below zero (tiny messages) is taken as zero.
+  * `0.0386·x − 0.8057` ms, serial send `0.0245·x + 0.184` ms, so a 1400-byte message costs ≈ 88 ms in all. A fit below
+  * zero (tiny messages) is taken as zero.
   */
 final case class Cm530Costs(timeScale: Double = 1.0) {
   require(timeScale > 0.0 && !timeScale.isInfinite, s"timeScale must be positive, is $timeScale")

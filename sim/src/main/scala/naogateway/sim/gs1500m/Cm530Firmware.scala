@@ -19,7 +19,8 @@ object KeepAlive {
     */
   val StatusFrame: ArraySeq[Byte] =
     MessageContents
-      .encodeFrame(MessageContents(robotId = 1, status = Some(RobotReport(teamId = Some(1), uptimeMillis = Some(200L)).status)))
+      .encodeFrame(MessageContents(robotId = 1,
+          status = Some(RobotReport(teamId = Some(1), uptimeMillis = Some(200L)).status)))
       .fold(_ => ArraySeq.fill[Byte](24)(0), ArraySeq.unsafeWrapArray(_))
 }
 
@@ -107,17 +108,17 @@ final case class FirmwareStep(
     moduleEvents: Vector[ModuleEvent]
 )
 
-/** A pure model of the CM-530 firmware's single-threaded main loop as the thesis describes it (no scheduler; every
-  * slow task is polled): poll the module, handle what arrived, send what is due (keep-alive, queued packets), do the
-  * rest of the robot's work, wait for the next period.
+/** A pure model of the CM-530 firmware's single-threaded main loop as the thesis describes it (no scheduler; every slow
+  * task is polled): poll the module, handle what arrived, send what is due (keep-alive, queued packets), do the rest of
+  * the robot's work, wait for the next period.
   *
-  * The model is stepwise so that a driver can interleave it with the module's other inputs in time order: each
-  * [[act]] performs exactly one interaction with the module, at [[nextActionAt]], and charges the CPU time that
-  * follows it; in between, the module goes on receiving. [[ReceivePath.run]] is such a driver.
+  * The model is stepwise so that a driver can interleave it with the module's other inputs in time order: each [[act]]
+  * performs exactly one interaction with the module, at [[nextActionAt]], and charges the CPU time that follows it; in
+  * between, the module goes on receiving. [[ReceivePath.run]] is such a driver.
   *
   * The firmware's CPU time while reading equals the serial line time of the bytes read (it reads until the input is
-  * empty), then each datagram costs [[Cm530Config.handleMillis]] and each status line
-  * [[Cm530Config.statusLineMillis]]; replies and garbage cost nothing beyond their bytes.
+  * empty), then each datagram costs [[Cm530Config.handleMillis]] and each status line [[Cm530Config.statusLineMillis]];
+  * replies and garbage cost nothing beyond their bytes.
   */
 final case class Cm530Firmware(
     config: Cm530Config,
@@ -156,7 +157,7 @@ final case class Cm530Firmware(
         busy += ns(config.statusLineMillis)
         s = s.copy(statusLines = s.statusLines + 1)
         events += StatusReceived(read.doneAt, busy, text)
-      case _: SerialEvent.Reply => s = s.copy(replies = s.replies + 1)
+      case _: SerialEvent.Reply   => s = s.copy(replies = s.replies + 1)
       case SerialEvent.Garbage(n) => s = s.copy(garbageBytes = s.garbageBytes + n)
     }
     val withKeepAlive = config.keepAlive match {

@@ -3,8 +3,8 @@ package naogateway.sim.gs1500m
 import scala.collection.immutable.ArraySeq
 import naogateway.sim.SeededRandom
 
-/** A UDP datagram reaching the module from the air, on connection `cid`; `remote` is the sender when the connection
-  * is a UDP server (the module then frames it `ESC 'y'`), `None` for a direct connection (`ESC 'Z'`).
+/** A UDP datagram reaching the module from the air, on connection `cid`; `remote` is the sender when the connection is
+  * a UDP server (the module then frames it `ESC 'y'`), `None` for a direct connection (`ESC 'Z'`).
   */
 final case class AirDatagram(cid: Int, remote: Option[Remote], payload: ArraySeq[Byte])
 
@@ -148,21 +148,36 @@ object ModuleEvent {
 
 /** Running totals of the module.
   *
-  * @param arrived datagrams that reached the module (each is then buffered, lost or refused)
-  * @param buffered datagrams that entered the buffer
-  * @param lost datagrams dropped on arrival, oversize ones included
-  * @param lostOversize datagrams dropped for being larger than the buffer
-  * @param overwritten buffered datagrams that lost (at least) their beginning to a later arrival or send
-  * @param overwrittenBytes payload bytes overwritten
-  * @param readIntact datagrams the CM-530 read whole, header included
-  * @param readDamaged datagrams the CM-530 read only the tail of
-  * @param sends packets the CM-530 handed over, refused ones included
-  * @param onAir packets that went on air
-  * @param sendsLost packets that found no room
-  * @param refused inputs the module cannot represent
-  * @param bytesToFirmware serial bytes read by the CM-530
-  * @param bytesOnAir payload bytes that went on air
-  * @param peakBuffered the most buffer bytes ever in use
+  * @param arrived
+  *   datagrams that reached the module (each is then buffered, lost or refused)
+  * @param buffered
+  *   datagrams that entered the buffer
+  * @param lost
+  *   datagrams dropped on arrival, oversize ones included
+  * @param lostOversize
+  *   datagrams dropped for being larger than the buffer
+  * @param overwritten
+  *   buffered datagrams that lost (at least) their beginning to a later arrival or send
+  * @param overwrittenBytes
+  *   payload bytes overwritten
+  * @param readIntact
+  *   datagrams the CM-530 read whole, header included
+  * @param readDamaged
+  *   datagrams the CM-530 read only the tail of
+  * @param sends
+  *   packets the CM-530 handed over, refused ones included
+  * @param onAir
+  *   packets that went on air
+  * @param sendsLost
+  *   packets that found no room
+  * @param refused
+  *   inputs the module cannot represent
+  * @param bytesToFirmware
+  *   serial bytes read by the CM-530
+  * @param bytesOnAir
+  *   payload bytes that went on air
+  * @param peakBuffered
+  *   the most buffer bytes ever in use
   */
 final case class Gs1500mStats(
     arrived: Long = 0,
@@ -191,31 +206,30 @@ final case class ReadStep(module: Gs1500mModule, bytes: ArraySeq[Byte], doneAt: 
 /** A pure model of the robot's GainSpan GS1500M WiFi module in bulk data mode, as the thesis observed it (§6.1).
   *
   * '''One shared buffer.''' Incoming and outgoing payload share [[Gs1500mConfig.bufferBytes]] (1400) bytes. Only
-  * payload counts: the module keeps each datagram's serial header with it as bookkeeping, so a 1400-byte datagram
-  * fits an empty buffer, as the module's 1400-byte datagram limit requires. Replies and status lines come from the
-  * module's command processor and take no data buffer.
+  * payload counts: the module keeps each datagram's serial header with it as bookkeeping, so a 1400-byte datagram fits
+  * an empty buffer, as the module's 1400-byte datagram limit requires. Replies and status lines come from the module's
+  * command processor and take no data buffer.
   *
-  * '''The serial line is the bottleneck.''' The radio moves data far faster than 46080 bytes/s (thesis §6.1: a PC
-  * sends several MB/s, and "the serial interface for reading the buffer is not fast enough to empty it"), so the
-  * model gives the radio no time at all: an arriving datagram is in the buffer at once, and an outgoing packet
-  * goes on air the moment its last byte has crossed the serial line. Outgoing payload is reserved in full when the
-  * CM-530 starts sending it and freed when it goes on air; that errs towards a fuller buffer by at most one packet's
-  * transfer time.
+  * '''The serial line is the bottleneck.''' The radio moves data far faster than 46080 bytes/s (thesis §6.1: a PC sends
+  * several MB/s, and "the serial interface for reading the buffer is not fast enough to empty it"), so the model gives
+  * the radio no time at all: an arriving datagram is in the buffer at once, and an outgoing packet goes on air the
+  * moment its last byte has crossed the serial line. Outgoing payload is reserved in full when the CM-530 starts
+  * sending it and freed when it goes on air; that errs towards a fuller buffer by at most one packet's transfer time.
   *
   * '''The CM-530 reads only when it polls.''' Incoming data stay in the module until [[firmwareRead]]; a read takes
-  * everything queued at that instant over the line at the line rate (the thesis's `recvWlanData` reads until the
-  * input is empty), freeing its buffer space evenly while it crosses. Bytes arriving during a read wait for the next.
+  * everything queued at that instant over the line at the line rate (the thesis's `recvWlanData` reads until the input
+  * is empty), freeing its buffer space evenly while it crosses. Bytes arriving during a read wait for the next.
   *
   * '''Overflow.''' When a datagram does not fit into the free space, a seeded coin decides: with probability
   * [[Gs1500mConfig.overwriteProbability]] the module behaves like an overrunning ring buffer and writes the new
   * datagram over the oldest unread bytes, so the oldest queued datagram(s) lose their beginning (and with it the
-  * receive header; the CM-530 then reads a headerless tail, the thesis's "incomplete receive header"); otherwise,
-  * and whenever the unread bytes could not make enough room (bytes already crossing the line cannot be taken back),
-  * the new datagram is lost. An outgoing packet that does not fit overwrites unread incoming data the same way (the
-  * serial input has no flow control), or is lost if even that is not enough.
+  * receive header; the CM-530 then reads a headerless tail, the thesis's "incomplete receive header"); otherwise, and
+  * whenever the unread bytes could not make enough room (bytes already crossing the line cannot be taken back), the new
+  * datagram is lost. An outgoing packet that does not fit overwrites unread incoming data the same way (the serial
+  * input has no flow control), or is lost if even that is not enough.
   *
-  * Every input takes the current simulated time in nanoseconds; time never runs backwards (an earlier time is taken
-  * as the module's clock).
+  * Every input takes the current simulated time in nanoseconds; time never runs backwards (an earlier time is taken as
+  * the module's clock).
   */
 final case class Gs1500mModule(
     config: Gs1500mConfig,
@@ -339,9 +353,9 @@ final case class Gs1500mModule(
 
   /** The CM-530 starts handing `data` for connection `cid` to the module at `now`, as `ESC 'Z'` bulk data.
     *
-    * `transferNanos` is how long the CM-530 takes to push the frame out (its measured send cost is about eleven
-    * times the line time); the packet goes on air when that or the line time, whichever is longer, has passed after
-    * the line is free.
+    * `transferNanos` is how long the CM-530 takes to push the frame out (its measured send cost is about eleven times
+    * the line time); the packet goes on air when that or the line time, whichever is longer, has passed after the line
+    * is free.
     */
   def firmwareSend(cid: Int, data: ArraySeq[Byte], now: Long, transferNanos: Long = 0L): ModuleStep = {
     val ModuleStep(m, early) = advance(now)

@@ -84,14 +84,14 @@ object SerialError {
 
 /** Encoding of the GS1500M's serial framing in bulk data mode (docs/protocol.md §12; thesis §5.2.2, §5.3).
   *
-  * - Bulk send and direct receive: `ESC 'Z' <cid> <length as 4 ASCII digits> <data>`, no trailer.
-  * - UDP server receive: `ESC 'y' <cid> <ip> ' ' <port> TAB <length as 4 ASCII digits> <data>`. The thesis only says
-  *   that ip and port have variable length and that its parser waits for the TAB before the length; the separator
-  *   between them and their spelling are the GainSpan adapter guide's (`<IP address><space><port><horizontal tab>`):
-  *   the ip in dotted decimal without leading zeros, one space, the port in decimal without leading zeros. The decoder
-  *   is more lenient (see [[SerialDecoder]]).
-  * - Replies: `ESC` + one letter (`O` success, `F` failure).
-  * - Status lines: printable text ended by CR LF.
+  *   - Bulk send and direct receive: `ESC 'Z' <cid> <length as 4 ASCII digits> <data>`, no trailer.
+  *   - UDP server receive: `ESC 'y' <cid> <ip> ' ' <port> TAB <length as 4 ASCII digits> <data>`. The thesis only says
+  *     that ip and port have variable length and that its parser waits for the TAB before the length; the separator
+  *     between them and their spelling are the GainSpan adapter guide's (`<IP address><space><port><horizontal tab>`):
+  *     the ip in dotted decimal without leading zeros, one space, the port in decimal without leading zeros. The
+  *     decoder is more lenient (see [[SerialDecoder]]).
+  *   - Replies: `ESC` + one letter (`O` success, `F` failure).
+  *   - Status lines: printable text ended by CR LF.
   */
 object Gs1500mSerial {
 
@@ -113,8 +113,8 @@ object Gs1500mSerial {
   /** Bytes of `ESC 'Z' <cid> <len4>`. */
   val BulkHeaderBytes: Int = 7
 
-  /** The thesis sizes its receive buffer for "up to 39 bytes of receive header"; with the 8 fixed bytes of the
-    * `ESC 'y'` header that leaves 31 characters for ip, separator and port, so the decoder gives up beyond that.
+  /** The thesis sizes its receive buffer for "up to 39 bytes of receive header"; with the 8 fixed bytes of the `ESC
+    * 'y'` header that leaves 31 characters for ip, separator and port, so the decoder gives up beyond that.
     */
   val MaxAddressChars: Int = 31
 
@@ -155,10 +155,10 @@ object Gs1500mSerial {
   /** The bytes of one item on the serial line. */
   def encode(item: SerialItem): Either[SerialError, ArraySeq[Byte]] =
     item match {
-      case SerialEvent.Data(cid, None, bytes) => encodeBulk(cid, bytes)
+      case SerialEvent.Data(cid, None, bytes)         => encodeBulk(cid, bytes)
       case SerialEvent.Data(cid, Some(remote), bytes) => udpServerHeader(cid, remote, bytes.length).map(_ ++ bytes)
-      case SerialEvent.Ack => Right(reply('O'))
-      case SerialEvent.Fail => Right(reply('F'))
+      case SerialEvent.Ack                            => Right(reply('O'))
+      case SerialEvent.Fail                           => Right(reply('F'))
       case SerialEvent.OtherReply(letter) =>
         if (isReplyLetter(letter) && letter != 'O' && letter != 'F') Right(reply(letter))
         else Left(SerialError.BadReplyLetter(letter))

@@ -9,8 +9,8 @@ final case class Scheduled(at: Long, datagram: AirDatagram)
   * their scheduled times while the firmware loop runs, both in time order (on a tie the datagram is in the module
   * before the firmware polls). Pure: the same inputs always give the same run.
   *
-  * For interactive protocols (where the robot's replies shape what the peer sends next) drive
-  * [[Gs1500mModule.arrive]] and [[Cm530Firmware.act]] directly, the same way.
+  * For interactive protocols (where the robot's replies shape what the peer sends next) drive [[Gs1500mModule.arrive]]
+  * and [[Cm530Firmware.act]] directly, the same way.
   */
 object ReceivePath {
 

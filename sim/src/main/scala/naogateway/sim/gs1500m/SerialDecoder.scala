@@ -4,12 +4,12 @@ import scala.collection.immutable.ArraySeq
 
 import naogateway.sim.gs1500m.SerialEvent._
 
-/** An incremental, immutable parser of the byte stream the GS1500M writes to the CM-530 (docs/protocol.md §12), modelled on the
-  * thesis's polled state machine (§5.2.2).
+/** An incremental, immutable parser of the byte stream the GS1500M writes to the CM-530 (docs/protocol.md §12),
+  * modelled on the thesis's polled state machine (§5.2.2).
   *
   * Feed it chunks of any size; it returns the next decoder and the events completed by that chunk. It never throws:
-  * bytes that fit no item are counted and reported as one [[SerialEvent.Garbage]] in front of the next item.
-  * How it resynchronises:
+  * bytes that fit no item are counted and reported as one [[SerialEvent.Garbage]] in front of the next item. How it
+  * resynchronises:
   *   - an `ESC` always starts a new item, wherever it appears outside a datagram's data (bulk data carries no escaping,
   *     so inside the announced length nothing is special);
   *   - a header that turns out malformed (bad cid, non-digit in the length, a length over 1400, no TAB within
@@ -21,8 +21,8 @@ import naogateway.sim.gs1500m.SerialEvent._
   * Text lines end at LF; CRs before it are dropped and empty lines are skipped, because the module pads its replies
   * with extra line ends. A line with a non-printable byte is garbage.
   *
-  * Chunking never changes the result: the events of one call on the whole input equal the concatenated events of
-  * calls on any split of it.
+  * Chunking never changes the result: the events of one call on the whole input equal the concatenated events of calls
+  * on any split of it.
   */
 final class SerialDecoder private (
     private val mode: SerialDecoder.Mode,
@@ -42,7 +42,7 @@ final class SerialDecoder private (
   /** Decodes the next chunk of serial bytes. */
   def feed(chunk: ArraySeq[Byte]): (SerialDecoder, Vector[SerialEvent]) = chunk match {
     case bytes: ArraySeq.ofByte => run(bytes.unsafeArray)
-    case other => run(other.toArray)
+    case other                  => run(other.toArray)
   }
 
   // Local mutable machinery only: every call starts from this immutable snapshot and ends in a fresh one.
@@ -55,7 +55,7 @@ final class SerialDecoder private (
     var filled = 0
 
     state match {
-      case Text(s) => text.append(s)
+      case Text(s)       => text.append(s)
       case Address(_, s) => text.append(s)
       case Payload(_, _, need, got) =>
         payload = new Array[Byte](need)
@@ -110,7 +110,7 @@ final class SerialDecoder private (
           emit(b.toChar match {
             case 'O' => Ack
             case 'F' => Fail
-            case c => OtherReply(c)
+            case c   => OtherReply(c)
           })
           state = Idle
         } else { garbage += 1; state = Idle; idle(b) }
@@ -152,10 +152,10 @@ final class SerialDecoder private (
     }
 
     val snapshot: Mode = state match {
-      case Text(_) => Text(text.toString)
-      case Address(cid, _) => Address(cid, text.toString)
+      case Text(_)                       => Text(text.toString)
+      case Address(cid, _)               => Address(cid, text.toString)
       case Payload(cid, remote, need, _) => Payload(cid, remote, need, ArraySeq.unsafeWrapArray(payload.take(filled)))
-      case other => other
+      case other                         => other
     }
     (new SerialDecoder(snapshot, garbage, maxPayload), out.result())
   }
@@ -165,7 +165,7 @@ final class SerialDecoder private (
   // Value equality, so models holding a decoder compare (and replay-check) as values.
   override def equals(other: Any): Boolean = other match {
     case d: SerialDecoder => d.mode == mode && d.pendingGarbage == pendingGarbage && d.maxPayload == maxPayload
-    case _ => false
+    case _                => false
   }
 
   override def hashCode: Int = (mode, pendingGarbage, maxPayload).##

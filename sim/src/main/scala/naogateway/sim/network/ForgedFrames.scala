@@ -5,25 +5,33 @@ import scala.util.Random
 import naogateway.{GatewayEvent, RobotOffline, RobotOnline, RobotRestarted, RobotSnapshot, RobotStatusUpdated}
 import naogateway.wire._
 
-/**
- * Frames an outsider on the field's WiFi can make without the team key, as pure functions: a made-up keep-alive,
- * one signed with another key, copies of frames it recorded, and recorded frames with a bit flipped, a field added
- * after the signature, or a broken signature. Sent from a robot's own address (a forged source is easy on a shared
- * WiFi), none of them may change what the gateway believes about a robot that must sign (docs/protocol.md 6.7).
- */
+/** Frames an outsider on the field's WiFi can make without the team key, as pure functions: a made-up keep-alive, one
+  * signed with another key, copies of frames it recorded, and recorded frames with a bit flipped, a field added after
+  * the signature, or a broken signature. Sent from a robot's own address (a forged source is easy on a shared WiFi),
+  * none of them may change what the gateway believes about a robot that must sign (docs/protocol.md 6.7).
+  */
 object ForgedFrames {
 
   /** A keep-alive of robot `robotId` claiming an empty battery and a fresh session (boot `bootId`, uptime 0). */
   def keepAlive(robotId: Int, battery: Double, bootId: Int, posture: Posture = Posture.Stand): MessageContents =
-    RobotReport(teamId = Some(1), role = Some("striker"), agent = Some("SimAgent"), posture = Some(posture),
-      batteryVoltage = Some(battery), uptimeMillis = Some(0L), bootId = Some(bootId), position = Some((0, 0, 0.0))).contents(robotId)
+    RobotReport(
+      teamId = Some(1),
+      role = Some("striker"),
+      agent = Some("SimAgent"),
+      posture = Some(posture),
+      batteryVoltage = Some(battery),
+      uptimeMillis = Some(0L),
+      bootId = Some(bootId),
+      position = Some((0, 0, 0.0))
+    ).contents(robotId)
 
   /** `contents` as an unsigned frame. */
   def unsigned(contents: MessageContents, form: HeaderForm = HeaderForm.Legacy): Array[Byte] =
     MessageContents.encodeFrame(contents, form).fold(e => throw new IllegalArgumentException(e.describe), identity)
 
   /** `contents` signed with `key` (not the team's) under `timestamp`, which may be far above anything real. */
-  def signedWith(key: SigningKey, contents: MessageContents, timestamp: Long, form: HeaderForm = HeaderForm.Legacy): Array[Byte] =
+  def signedWith(
+      key: SigningKey, contents: MessageContents, timestamp: Long, form: HeaderForm = HeaderForm.Legacy): Array[Byte] =
     FrameSigning.signFrame(contents, form, key, SignDirection.RobotToGateway, timestamp)
       .fold(e => throw new IllegalArgumentException(e.describe), identity)
 
@@ -46,15 +54,15 @@ object ForgedFrames {
   def malformedSignature(frame: Array[Byte]): Array[Byte] =
     rewrap(frame) { body =>
       // Tag of field 7199, length-delimited (FA C1 03), 2 bytes: field 1 as a varint, where a fixed64 belongs.
-      body.dropRight(FrameSigning.FieldBytes) ++ Array[Byte](0xFA.toByte, 0xC1.toByte, 0x03, 0x02, 0x08, 0x01)
+      body.dropRight(FrameSigning.FieldBytes) ++ Array[Byte](0xfa.toByte, 0xc1.toByte, 0x03, 0x02, 0x08, 0x01)
     }
 
-  /**
-   * A batch of every kind against robot `robotId`, from the `recorded` real frames of that robot: `perKind` made-up
-   * keep-alives unsigned and signed with `wrongKey`, each recorded frame replayed as it was and with a bit flipped,
-   * and the recorded frames with a field after the signature or a broken signature.
-   */
-  def batch(robotId: Int, recorded: Vector[Array[Byte]], wrongKey: SigningKey, perKind: Int, random: Random): Vector[Array[Byte]] = {
+  /** A batch of every kind against robot `robotId`, from the `recorded` real frames of that robot: `perKind` made-up
+    * keep-alives unsigned and signed with `wrongKey`, each recorded frame replayed as it was and with a bit flipped,
+    * and the recorded frames with a field after the signature or a broken signature.
+    */
+  def batch(robotId: Int, recorded: Vector[Array[Byte]], wrongKey: SigningKey, perKind: Int, random: Random)
+      : Vector[Array[Byte]] = {
     val lie = keepAlive(robotId, battery = 10.0, bootId = 99)
     val made = (0 until perKind).flatMap { i =>
       Vector(unsigned(lie), signedWith(wrongKey, lie, (500L << 32) + i))
@@ -63,19 +71,18 @@ object ForgedFrames {
       recorded.map(malformedSignature)
   }
 
-  /**
-   * Events of one robot that no real keep-alive of it would cause while it sits idle: a status whose session,
-   * battery (beyond a few hundredths of a volt), posture, team or role differs from `truth`, a restart, or a change
-   * of liveness. The robot state changes a forgery caused, as every subscriber of the gateway (the middleware and its
-   * safety checks among them) would have seen them.
-   */
+  /** Events of one robot that no real keep-alive of it would cause while it sits idle: a status whose session, battery
+    * (beyond a few hundredths of a volt), posture, team or role differs from `truth`, a restart, or a change of
+    * liveness. The robot state changes a forgery caused, as every subscriber of the gateway (the middleware and its
+    * safety checks among them) would have seen them.
+    */
   def stateChanges(events: Seq[GatewayEvent], truth: RobotSnapshot): Int =
     events.count {
       case RobotStatusUpdated(s) =>
         s.bootId != truth.bootId || s.posture != truth.posture || s.teamId != truth.teamId || s.role != truth.role ||
-          !s.batteryVoltage.exists(v => truth.batteryVoltage.exists(t => math.abs(v - t) < 0.05))
+        !s.batteryVoltage.exists(v => truth.batteryVoltage.exists(t => math.abs(v - t) < 0.05))
       case _: RobotRestarted | _: RobotOffline | _: RobotOnline => true
-      case _                                                   => false
+      case _                                                    => false
     }
 
   private def rewrap(frame: Array[Byte])(change: Array[Byte] => Array[Byte]): Array[Byte] =

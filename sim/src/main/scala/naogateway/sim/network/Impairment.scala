@@ -20,13 +20,20 @@ object Direction {
 
 /** How one direction of a proxy mistreats its datagrams.
   *
-  * @param loss probability that a datagram is dropped
-  * @param duplication probability that a delivered datagram is sent twice
-  * @param reordering probability that a delivered datagram is held back by an extra delay, so later ones overtake it
-  * @param reorderMaxDelay the largest extra delay of a held-back datagram (drawn uniformly from (0, max])
-  * @param delay base delay of every delivered copy
-  * @param jitter each copy waits an extra delay drawn uniformly from [0, jitter)
-  * @param partitioned when set, every datagram in this direction is dropped
+  * @param loss
+  *   probability that a datagram is dropped
+  * @param duplication
+  *   probability that a delivered datagram is sent twice
+  * @param reordering
+  *   probability that a delivered datagram is held back by an extra delay, so later ones overtake it
+  * @param reorderMaxDelay
+  *   the largest extra delay of a held-back datagram (drawn uniformly from (0, max])
+  * @param delay
+  *   base delay of every delivered copy
+  * @param jitter
+  *   each copy waits an extra delay drawn uniformly from [0, jitter)
+  * @param partitioned
+  *   when set, every datagram in this direction is dropped
   */
 final case class Impairment(
     loss: Double = 0.0,

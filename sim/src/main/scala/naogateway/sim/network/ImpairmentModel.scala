@@ -47,8 +47,8 @@ object ImpairmentModel {
 
   /** Every datagram consumes exactly this many draws, whatever the settings and the outcome.
     *
-    * So the n-th datagram's fate depends only on the seed, n and the settings at that moment: changing a setting
-    * (or partitioning) never shifts the random values later datagrams see.
+    * So the n-th datagram's fate depends only on the seed, n and the settings at that moment: changing a setting (or
+    * partitioning) never shifts the random values later datagrams see.
     */
   val DrawsPerDatagram: Int = 6
 

@@ -16,24 +16,24 @@ import org.slf4j.LoggerFactory
 /** A seeded, impaired UDP network on loopback between a gateway and simulated robots.
   *
   * Each proxy stands for one robot host and owns three sockets: the client side P on 127.0.0.1, which the robot sends
-  * to; the upstream socket U on the proxy's own host address H (any port), which forwards the robot's datagrams to
-  * the gateway, so the gateway sees a host of its own per robot; and the receive side R on H at the robot receive port
+  * to; the upstream socket U on the proxy's own host address H (any port), which forwards the robot's datagrams to the
+  * gateway, so the gateway sees a host of its own per robot; and the receive side R on H at the robot receive port
   * (3838), where the gateway sends to reach the robot, as it would a real one. Datagrams at R go from P to the robot's
   * receive address (the one given at creation, or the robot receive port on the IP of the robot's latest datagram),
   * never to a source port. Datagrams at U are counted (`atSourcePort`) and dropped, as a robot's module drops them.
   * Each direction passes through [[ImpairmentModel]] with its own [[SeededRandom]] derived from the seed.
   *
-  * Design: java.nio with a single thread that owns one `Selector`, every socket and a deadline queue of delayed
-  * copies. That thread handles every datagram of every proxy in arrival order, so each direction's decisions come
-  * strictly in sequence (which makes them reproducible), delays need no timer per datagram, and any number of
-  * proxies costs one thread. Akka IO would add two classic actors per proxy and asynchronous bind/unbind handshakes,
-  * and its threads belong to an `ActorSystem`'s dispatchers, so releasing every thread would mean terminating that
-  * system; here `stop()` closes every socket and joins the one thread before it returns.
+  * Design: java.nio with a single thread that owns one `Selector`, every socket and a deadline queue of delayed copies.
+  * That thread handles every datagram of every proxy in arrival order, so each direction's decisions come strictly in
+  * sequence (which makes them reproducible), delays need no timer per datagram, and any number of proxies costs one
+  * thread. Akka IO would add two classic actors per proxy and asynchronous bind/unbind handshakes, and its threads
+  * belong to an `ActorSystem`'s dispatchers, so releasing every thread would mean terminating that system; here
+  * `stop()` closes every socket and joins the one thread before it returns.
   *
-  * Thread safety: every method may be called from any thread. Sockets and state are touched only by the network
-  * thread; a method hands it a task and waits for the answer (at most a few seconds), so when it returns its change
-  * applies to every later datagram. Methods block briefly, so an actor should not call them from its message handler.
-  * After `stop()` every method except `stats`, `stop` and `isRunning` throws `IllegalStateException`.
+  * Thread safety: every method may be called from any thread. Sockets and state are touched only by the network thread;
+  * a method hands it a task and waits for the answer (at most a few seconds), so when it returns its change applies to
+  * every later datagram. Methods block briefly, so an actor should not call them from its message handler. After
+  * `stop()` every method except `stats`, `stop` and `isRunning` throws `IllegalStateException`.
   */
 final class LossyNetwork private (val seed: Long, val name: String) {
   import LossyNetwork._
@@ -56,10 +56,11 @@ final class LossyNetwork private (val seed: Long, val name: String) {
 
   /** Starts a proxy on host address `host` that forwards to `gateway`.
     *
-    * @param robot the robot's receive address, where the gateway's datagrams go; `None`: the robot receive port on the
-    *   IP of the robot's latest datagram (nothing goes to the robot before its first one)
-    * @param receivePort the robot receive port: where the proxy listens on `host`, and where it delivers when
-    *   `robot` is not given
+    * @param robot
+    *   the robot's receive address, where the gateway's datagrams go; `None`: the robot receive port on the IP of the
+    *   robot's latest datagram (nothing goes to the robot before its first one)
+    * @param receivePort
+    *   the robot receive port: where the proxy listens on `host`, and where it delivers when `robot` is not given
     */
   def addProxy(
       gateway: InetSocketAddress,
@@ -171,7 +172,8 @@ final class LossyNetwork private (val seed: Long, val name: String) {
       val receiveChannel = openChannel(new InetSocketAddress(host, receivePort))
       opened += receiveChannel
       val index = nextProxyIndex
-      val handle = Proxy(index, gateway, localAddress(clientChannel), localAddress(upstreamChannel), localAddress(receiveChannel))
+      val handle =
+        Proxy(index, gateway, localAddress(clientChannel), localAddress(upstreamChannel), localAddress(receiveChannel))
       val state = new ProxyState(
         handle,
         clientChannel,

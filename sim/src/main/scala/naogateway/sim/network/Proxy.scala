@@ -6,11 +6,16 @@ import naogateway.sim.SeededRandom
 
 /** Handle of one proxy of a [[LossyNetwork]].
   *
-  * @param id the proxy's creation index within its network (it also selects the proxy's random streams)
-  * @param gateway where the proxy forwards the robot's datagrams
-  * @param clientSide the address the robot must send to (and where the gateway's datagrams come from, seen by the robot)
-  * @param upstream the address the gateway sees as the robot's source: the robot's IP as far as the gateway knows
-  * @param receiveSide where the gateway must send to reach the robot: `upstream`'s IP at the robot receive port
+  * @param id
+  *   the proxy's creation index within its network (it also selects the proxy's random streams)
+  * @param gateway
+  *   where the proxy forwards the robot's datagrams
+  * @param clientSide
+  *   the address the robot must send to (and where the gateway's datagrams come from, seen by the robot)
+  * @param upstream
+  *   the address the gateway sees as the robot's source: the robot's IP as far as the gateway knows
+  * @param receiveSide
+  *   where the gateway must send to reach the robot: `upstream`'s IP at the robot receive port
   */
 final case class Proxy(
     id: Int,
@@ -22,10 +27,10 @@ final case class Proxy(
 
 /** What one direction of one proxy did with its datagrams.
   *
-  * `received == forwarded + droppedLoss + droppedPartition + undeliverable` always holds. `duplicated` counts the
-  * extra copies, `reordered` the forwarded datagrams that were held back, and `sendFailures` the copies the operating
-  * system refused (full socket buffer or an I/O error). `atSourcePort` (downlink only) counts datagrams the gateway sent
-  * to the robot's source port instead of its receive port: like a real robot's module, the proxy never passes them on.
+  * `received == forwarded + droppedLoss + droppedPartition + undeliverable` always holds. `duplicated` counts the extra
+  * copies, `reordered` the forwarded datagrams that were held back, and `sendFailures` the copies the operating system
+  * refused (full socket buffer or an I/O error). `atSourcePort` (downlink only) counts datagrams the gateway sent to
+  * the robot's source port instead of its receive port: like a real robot's module, the proxy never passes them on.
   */
 final case class DirectionStats(
     received: Long = 0,

@@ -201,10 +201,10 @@ class Gs1500mModuleSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
           case ((m, t0), (dt, op)) =>
             val t = t0 + dt
             val next = op match {
-              case Arrive(n) => m.arrive(AirDatagram(0, peer, payload(n)), t).module
+              case Arrive(n)         => m.arrive(AirDatagram(0, peer, payload(n)), t).module
               case Send(n, transfer) => m.firmwareSend(1, payload(n), t, transfer).module
-              case Read => m.firmwareRead(t).module
-              case Advance => m.advance(t).module
+              case Read              => m.firmwareRead(t).module
+              case Advance           => m.advance(t).module
             }
             next.buffered should (be >= 0 and be <= 1400)
             (next, t)

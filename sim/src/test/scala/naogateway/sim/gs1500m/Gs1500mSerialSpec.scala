@@ -28,7 +28,7 @@ class Gs1500mSerialSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
     while (rest.nonEmpty) {
       val n = cuts match {
         case h :: t => cuts = t; math.max(1, h)
-        case Nil => rest.length
+        case Nil    => rest.length
       }
       val (chunk, tail) = rest.splitAt(n)
       val (next, events) = decoder.feed(chunk)
@@ -182,9 +182,9 @@ class Gs1500mSerialSpec extends AnyWordSpec with Matchers with ScalaCheckPropert
   // Bytes that exercise every branch: ESC, header letters, digits, TAB, line ends, plus anything at all.
   private val genNoise: Gen[ArraySeq[Byte]] = Gen
     .listOf(Gen.frequency(
-      5 -> Arbitrary.arbitrary[Byte],
-      3 -> Gen.oneOf("\u001bZyOF0123456789af. \t\r\nCONNECT".toSeq).map(_.toByte)
-    ))
+        5 -> Arbitrary.arbitrary[Byte],
+        3 -> Gen.oneOf("\u001bZyOF0123456789af. \t\r\nCONNECT".toSeq).map(_.toByte)
+      ))
     .map(bs => ArraySeq.unsafeWrapArray(bs.toArray))
 
   "Encoding then decoding" should {

@@ -3,35 +3,36 @@ package naogateway.sim.gs1500m
 import scala.collection.immutable.ArraySeq
 import naogateway.sim.SeededRandom
 
-/** The thesis's overflow experiment (§6.1; docs/simulator.md §6) through the module and firmware models, in simulated time.
+/** The thesis's overflow experiment (§6.1; docs/simulator.md §6) through the module and firmware models, in simulated
+  * time.
   *
-  * A peer sends 100 datagrams of 1 kB, one every 50 ms; byte 0 of the i-th (1-based) is i − 1, the rest is random.
-  * The firmware adds up byte 0 of every datagram it decodes; the right sum is 4950. On the real CM-530 the thesis got
-  * only about 900 to 1000 in several runs, because the module's 1400-byte buffer overflowed while the firmware was
-  * busy. (The thesis's sender was a TCP server; the model replays the same schedule as UDP datagrams on the robot's
-  * UDP server connection, the form docs/protocol.md §2 states and the one the robot uses on port 3838.)
+  * A peer sends 100 datagrams of 1 kB, one every 50 ms; byte 0 of the i-th (1-based) is i − 1, the rest is random. The
+  * firmware adds up byte 0 of every datagram it decodes; the right sum is 4950. On the real CM-530 the thesis got only
+  * about 900 to 1000 in several runs, because the module's 1400-byte buffer overflowed while the firmware was busy.
+  * (The thesis's sender was a TCP server; the model replays the same schedule as UDP datagrams on the robot's UDP
+  * server connection, the form docs/protocol.md §2 states and the one the robot uses on port 3838.)
   *
-  * '''Calibration of [[ThesisFirmware]].''' The buffer holds one 1 kB datagram, not two, so whatever arrives while
-  * an unread one waits is lost or overwrites it: the firmware gets about one datagram per main-loop iteration that
-  * handles one, and a sum near 950 means about 19 of 100, i.e. one such iteration per ≈ 250 ms. The parts:
+  * '''Calibration of [[ThesisFirmware]].''' The buffer holds one 1 kB datagram, not two, so whatever arrives while an
+  * unread one waits is lost or overwrites it: the firmware gets about one datagram per main-loop iteration that handles
+  * one, and a sum near 950 means about 19 of 100, i.e. one such iteration per ≈ 250 ms. The parts:
   *   - reading the 1 kB datagram: its serial line time, ≈ 22.3 ms at 460800 baud (1027 bytes with the `ESC 'y'`
   *     header);
-  *   - handling it: 5 ms fixed (docs/simulator.md 1.4, parse) plus 0.2 ms per payload byte, ≈ 205 ms for 1 kB. The per-byte
-  *     figure is fitted, not measured: the thesis only says that its example code spends its receive time on output to
-  *     the PC and that the raw 1 kB path was slow. It is of the order of echoing the bytes to the PC at the CM-530's
-  *     usual 57600 baud (0.17 ms per byte), which makes it plausible;
-  *   - the rest of the robot's work per iteration: uniform 0–60 ms (a HaViMo2 fetch takes up to 60 ms, docs/protocol.md 6.5),
-  *     drawn with the seed;
+  *   - handling it: 5 ms fixed (docs/simulator.md 1.4, parse) plus 0.2 ms per payload byte, ≈ 205 ms for 1 kB. The
+  *     per-byte figure is fitted, not measured: the thesis only says that its example code spends its receive time on
+  *     output to the PC and that the raw 1 kB path was slow. It is of the order of echoing the bytes to the PC at the
+  *     CM-530's usual 57600 baud (0.17 ms per byte), which makes it plausible;
+  *   - the rest of the robot's work per iteration: uniform 0–60 ms (a HaViMo2 fetch takes up to 60 ms, docs/protocol.md
+  *     6.5), drawn with the seed;
   *   - the keep-alive: a 24-byte `Status` encoded (0.12 ms) and sent (0.77 ms) every 200 ms;
   *   - a 10 ms main-loop period (reached only when idle).
   * The overflow coin is fair (loss and overwrite equally likely), as the thesis saw both without giving a ratio.
   *
-  * With these defaults and [[DefaultSeed]] the firmware sums 963: 20 datagrams arrive intact, 50 are lost on
-  * arrival, 30 lose their beginning in the buffer. Seeds 1 to 10 give sums from 960 to 1018 (always 20 intact; the
-  * seed decides which ones), matching the thesis's "between about 900 and 1000" over several runs.
+  * With these defaults and [[DefaultSeed]] the firmware sums 963: 20 datagrams arrive intact, 50 are lost on arrival,
+  * 30 lose their beginning in the buffer. Seeds 1 to 10 give sums from 960 to 1018 (always 20 intact; the seed decides
+  * which ones), matching the thesis's "between about 900 and 1000" over several runs.
   *
-  * What the model does not reproduce: the thesis "rarely" got the exact sum even with 500 ms between datagrams; in
-  * the model an iteration never takes that long, so at that spacing everything arrives.
+  * What the model does not reproduce: the thesis "rarely" got the exact sum even with 500 ms between datagrams; in the
+  * model an iteration never takes that long, so at that spacing everything arrives.
   */
 object OverflowExperiment {
 
@@ -86,12 +87,13 @@ object OverflowExperiment {
 
   /** The peer's datagrams: byte 0 of the i-th (0-based) is i, the rest random from the seed. */
   def datagrams(config: Config): Vector[AirDatagram] = {
-    val (_, out) = (0 until config.datagrams).foldLeft((SeededRandom(config.seed).split(3), Vector.empty[AirDatagram])) {
-      case ((rng, acc), i) =>
-        val (rest, next) = rng.nextBytes(math.max(0, config.payloadBytes - 1))
-        val payload = if (config.payloadBytes <= 0) ArraySeq.empty[Byte] else i.toByte +: rest
-        (next, acc :+ AirDatagram(config.cid, Some(config.peer), payload))
-    }
+    val (_, out) =
+      (0 until config.datagrams).foldLeft((SeededRandom(config.seed).split(3), Vector.empty[AirDatagram])) {
+        case ((rng, acc), i) =>
+          val (rest, next) = rng.nextBytes(math.max(0, config.payloadBytes - 1))
+          val payload = if (config.payloadBytes <= 0) ArraySeq.empty[Byte] else i.toByte +: rest
+          (next, acc :+ AirDatagram(config.cid, Some(config.peer), payload))
+      }
     out
   }
 

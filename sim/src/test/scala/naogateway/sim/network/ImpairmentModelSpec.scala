@@ -79,7 +79,8 @@ class ImpairmentModelSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     "never lose with probability 0 and always lose with probability 1" in {
       forAll(seeds) { seed =>
         decisions(Impairment(loss = 0.0), SeededRandom(seed), 500).count(_.isInstanceOf[Decision.Drop]) shouldBe 0
-        decisions(Impairment(loss = 1.0), SeededRandom(seed), 500).distinct shouldBe Vector(Decision.Drop(DropCause.Loss))
+        decisions(Impairment(loss = 1.0), SeededRandom(seed), 500).distinct shouldBe Vector(
+          Decision.Drop(DropCause.Loss))
       }
     }
 

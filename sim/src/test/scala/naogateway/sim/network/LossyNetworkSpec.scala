@@ -239,7 +239,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
     "hold every datagram back for at least the base delay" in withNetwork(9L) { network =>
       withGatewayAndRobot { (gateway, robot) =>
         val proxy =
-          network.addProxy(gateway.address, TestLoopback.address(), robot = Some(robot.address), downlink = Impairment(delay = 150.millis))
+          network.addProxy(gateway.address, TestLoopback.address(), robot = Some(robot.address),
+            downlink = Impairment(delay = 150.millis))
         val sent = System.nanoTime()
         gateway.send(numbered(1), proxy.receiveSide)
         robot.receive().map(numberOf) shouldBe Some(1)
@@ -257,7 +258,9 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
         val expectedSources = proxies.zipWithIndex.map { case (p, i) => i -> p.upstream }.toMap
         arrived.map(r => numberOf(r) -> r.from).toMap shouldBe expectedSources
         // Replies to each robot's receive port: its IP as the gateway saw it, at 3838.
-        arrived.foreach(r => gateway.send(numbered(100 + numberOf(r)), new InetSocketAddress(r.from.getAddress, TestLoopback.RobotReceivePort)))
+        arrived.foreach(r =>
+          gateway.send(numbered(100 + numberOf(r)),
+            new InetSocketAddress(r.from.getAddress, TestLoopback.RobotReceivePort)))
         robots.zipWithIndex.foreach { case (robot, i) => robot.receive().map(numberOf) shouldBe Some(100 + i) }
       }
     }
@@ -311,7 +314,8 @@ class LossyNetworkSpec extends AnyWordSpec with Matchers with Eventually {
 
     "release every port and its thread on stop, and stop only once" in withNetwork(14L) { network =>
       val proxies = withGatewayAndRobot { (gateway, robot) =>
-        val started = (0 until 3).map(_ => network.addProxy(gateway.address, TestLoopback.address(), uplink = Impairment(delay = 1.second)))
+        val started = (0 until 3).map(_ =>
+          network.addProxy(gateway.address, TestLoopback.address(), uplink = Impairment(delay = 1.second)))
         // A copy still waiting must not keep anything alive.
         robot.send(numbered(1), started.head.clientSide)
         eventually(network.stats(started.head).uplink.forwarded shouldBe 1)

@@ -9,8 +9,8 @@ import scala.concurrent.duration._
 /** A datagram a test peer received, with its source. */
 final case class Received(bytes: Vector[Byte], from: InetSocketAddress)
 
-/** A plain UDP endpoint standing in for the gateway or a robot (bound to `at`, 127.0.0.1 and a free port by
-  * default); a reader thread drains its socket. It sends and receives on one socket.
+/** A plain UDP endpoint standing in for the gateway or a robot (bound to `at`, 127.0.0.1 and a free port by default); a
+  * reader thread drains its socket. It sends and receives on one socket.
   */
 final class UdpPeer(label: String, at: InetSocketAddress = new InetSocketAddress(InetAddress.getLoopbackAddress, 0))
     extends AutoCloseable {

@@ -107,9 +107,9 @@ class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheck
   "Idle ACKs (protocol.md 11.4)" should {
     "follow only answered data: at most one per quiet spell after it, none from a fresh or idle endpoint" in {
       val events: Gen[List[Either[Array[Byte], Int]]] = Gen.listOf(Gen.frequency(
-        2 -> datagramGen(41).map(Left(_)),
-        3 -> Gen.frequency(3 -> Gen.choose(0, 400), 1 -> Gen.choose(400, 700000)).map(Right(_))
-      ))
+          2 -> datagramGen(41).map(Left(_)),
+          3 -> Gen.frequency(3 -> Gen.choose(0, 400), 1 -> Gen.choose(400, 700000)).map(Right(_))
+        ))
       forAll(settingsGen, events, minSuccessful(300)) { (settings, script) =>
         var state = SecureStream.initial(settings, 0L)
         var now = 0L
@@ -179,7 +179,8 @@ class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheck
           val data = datagrams(step).filter(_.length > HeaderBytes)
           if (a.stats.lostRetransmissions > before) {
             detections += 1
-            withClue(s"seed $seed window $window: resent seq ${data.head(0)} while its copy was ${lost(data.head(0))}: ") {
+            withClue(
+              s"seed $seed window $window: resent seq ${data.head(0)} while its copy was ${lost(data.head(0))}: ") {
               lost(data.head(0).toInt) shouldBe Some(true)
             }
           }

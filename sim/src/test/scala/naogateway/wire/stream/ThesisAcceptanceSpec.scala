@@ -70,7 +70,7 @@ class ThesisAcceptanceSpec extends AnyWordSpec with Matchers {
     delivered.foldLeft((0L, 0, Option.empty[(Long, Int)])) { case ((copy, count, claim), m) =>
       m(0).toChar match {
         case 'O' if m(1) == '+' => (copy + m(2), count + 1, claim)
-        case 'O' => (copy * m(2), count + 1, claim)
+        case 'O'                => (copy * m(2), count + 1, claim)
         case 'R' =>
           val b = ByteBuffer.wrap(m)
           b.get()

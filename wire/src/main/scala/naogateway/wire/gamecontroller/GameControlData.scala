@@ -2,14 +2,15 @@ package naogateway.wire.gamecontroller
 
 import scala.collection.immutable.ArraySeq
 
-/**
- * A layout of the `RGme` control packet, with its exact size on the wire and the width of its version field
- * (docs/protocol.md §10).
- */
+/** A layout of the `RGme` control packet, with its exact size on the wire and the width of its version field
+  * (docs/protocol.md §10).
+  */
 sealed abstract class GameControlVersion(val number: Int, val packetBytes: Int, val versionBytes: Int)
     extends Product with Serializable
 
-/** The layouts a team may meet: today's Humanoid Soccer League (19), the Humanoid League until 2025 (12), 2014's (8, 7). */
+/** The layouts a team may meet: today's Humanoid Soccer League (19), the Humanoid League until 2025 (12), 2014's (8,
+  * 7).
+  */
 object GameControlVersion {
 
   /** The Humanoid Soccer League's GameController from 2026: u8 version, 198 bytes. */
@@ -38,11 +39,10 @@ trait GameTeam {
   def score: Int
 }
 
-/**
- * The content of one `RGme` control packet of any version: what all versions say, as members; the rest in the
- * version's own type ([[ControlData2014]], [[HlControlData]], [[HslControlData]]), so no field is invented where a
- * version lacks it.
- */
+/** The content of one `RGme` control packet of any version: what all versions say, as members; the rest in the
+  * version's own type ([[ControlData2014]], [[HlControlData]], [[HslControlData]]), so no field is invented where a
+  * version lacks it.
+  */
 sealed trait GameControlData extends Product with Serializable {
 
   /** The layout the packet came in. */
@@ -82,11 +82,11 @@ sealed trait GameControlData extends Product with Serializable {
     else None
 }
 
-/**
- * One player's entry (`RobotInfo`): one byte each in version 8, two bytes each in version 7.
- *
- * @param secsTillUnpenalised the GameController's estimate; 0 when not penalised
- */
+/** One player's entry (`RobotInfo`): one byte each in version 8, two bytes each in version 7.
+  *
+  * @param secsTillUnpenalised
+  *   the GameController's estimate; 0 when not penalised
+  */
 final case class PlayerInfo(penalty: Penalty, secsTillUnpenalised: Int) {
 
   /** Whether the player is off the game for any reason. */
@@ -100,17 +100,22 @@ object PlayerInfo {
   val Unpenalised: PlayerInfo = PlayerInfo(Penalty.NoPenalty, 0)
 }
 
-/**
- * One team's entry (`TeamInfo`). Fields one version lacks are `None` in packets of that version, and
- * must be `None` to encode in it; fields it has must be present.
- *
- * @param goalColour   version 7 only
- * @param penaltyShot  version 8 only: penalty shot counter
- * @param singleShots  version 8 only: u16 whose bits are the successful penalty shots
- * @param coachMessage version 8 only: the 40 raw bytes of the coach message, usually zero-padded text
- * @param coach        version 8 only: the coach's penalty state
- * @param players      always all 11 slots of the wire, of which `playersPerTeam` are in use
- */
+/** One team's entry (`TeamInfo`). Fields one version lacks are `None` in packets of that version, and must be `None` to
+  * encode in it; fields it has must be present.
+  *
+  * @param goalColour
+  *   version 7 only
+  * @param penaltyShot
+  *   version 8 only: penalty shot counter
+  * @param singleShots
+  *   version 8 only: u16 whose bits are the successful penalty shots
+  * @param coachMessage
+  *   version 8 only: the 40 raw bytes of the coach message, usually zero-padded text
+  * @param coach
+  *   version 8 only: the coach's penalty state
+  * @param players
+  *   always all 11 slots of the wire, of which `playersPerTeam` are in use
+  */
 final case class TeamInfo(
     teamNumber: Int,
     teamColour: TeamColour,
@@ -133,20 +138,27 @@ object TeamInfo {
   val CoachMessageBytes: Int = 40
 }
 
-/**
- * The content of one `RGme` control packet of version 8 or 7 (2014), every wire field kept: decoding an
- * accepted packet and encoding the result gives back the same bytes. Fields one version lacks are
- * `None` in packets of that version.
- *
- * @param packetNumber  version 8 only: counts up with each packet, wrapping at 256
- * @param firstHalf     the wire's `firstHalf` byte, 1 or 0 (anything else is refused)
- * @param dropInTeam    the colour of the team that caused the last drop-in
- * @param dropInTime    seconds since the last drop-in, −1 before the first
- * @param secsRemaining seconds left in the half: i16 in version 8, u32 in version 7
- * @param secondaryTime version 8 only: seconds of the secondary clock (ready phase, time-out, …)
- * @param team0         the wire's `teams[0]`
- * @param team1         the wire's `teams[1]`
- */
+/** The content of one `RGme` control packet of version 8 or 7 (2014), every wire field kept: decoding an accepted
+  * packet and encoding the result gives back the same bytes. Fields one version lacks are `None` in packets of that
+  * version.
+  *
+  * @param packetNumber
+  *   version 8 only: counts up with each packet, wrapping at 256
+  * @param firstHalf
+  *   the wire's `firstHalf` byte, 1 or 0 (anything else is refused)
+  * @param dropInTeam
+  *   the colour of the team that caused the last drop-in
+  * @param dropInTime
+  *   seconds since the last drop-in, −1 before the first
+  * @param secsRemaining
+  *   seconds left in the half: i16 in version 8, u32 in version 7
+  * @param secondaryTime
+  *   version 8 only: seconds of the secondary clock (ready phase, time-out, …)
+  * @param team0
+  *   the wire's `teams[0]`
+  * @param team1
+  *   the wire's `teams[1]`
+  */
 final case class ControlData2014(
     version: GameControlVersion,
     packetNumber: Option[Int],
@@ -168,12 +180,13 @@ final case class ControlData2014(
   def penaltyShootOut: Boolean = secondaryGameState == SecondaryGameState.PenaltyShoot
 }
 
-/**
- * One player's entry of version 19 (`RobotInfo`, 4 bytes).
- *
- * @param secsTillUnpenalised the GameController's estimate; 0 when not penalised
- * @param cautions            yellow cards
- */
+/** One player's entry of version 19 (`RobotInfo`, 4 bytes).
+  *
+  * @param secsTillUnpenalised
+  *   the GameController's estimate; 0 when not penalised
+  * @param cautions
+  *   yellow cards
+  */
 final case class HslPlayerInfo(penalty: HslPenalty, secsTillUnpenalised: Int, warnings: Int, cautions: Int)
 
 /** Constructors of version-19 player entries. */
@@ -186,14 +199,17 @@ object HslPlayerInfo {
   val Slots: Int = 20
 }
 
-/**
- * One team's entry of version 19 (`TeamInfo`, 90 bytes).
- *
- * @param goalkeeper    the goalkeeper's player number; 0 for none
- * @param singleShots   bits are the successful penalty shots
- * @param messageBudget team messages the team may still send in this game (docs/protocol.md §10.5)
- * @param players       always all 20 slots of the wire
- */
+/** One team's entry of version 19 (`TeamInfo`, 90 bytes).
+  *
+  * @param goalkeeper
+  *   the goalkeeper's player number; 0 for none
+  * @param singleShots
+  *   bits are the successful penalty shots
+  * @param messageBudget
+  *   team messages the team may still send in this game (docs/protocol.md §10.5)
+  * @param players
+  *   always all 20 slots of the wire
+  */
 final case class HslTeamInfo(
     teamNumber: Int,
     fieldPlayerColour: FieldColour,
@@ -206,13 +222,15 @@ final case class HslTeamInfo(
     players: Vector[HslPlayerInfo]
 ) extends GameTeam
 
-/**
- * The content of one version-19 control packet (198 bytes, the Humanoid Soccer League's GameController from 2026),
- * every wire field kept. The same layout comes with header `RGme` (broadcast) or `RGTD` (the true state for a monitor).
- *
- * @param stopped     play is stopped (a foul, a set play being prepared) though the state may read PLAYING
- * @param kickingTeam the team number of the team taking the next kick-off or set play; `None` on the wire's 255
- */
+/** The content of one version-19 control packet (198 bytes, the Humanoid Soccer League's GameController from 2026),
+  * every wire field kept. The same layout comes with header `RGme` (broadcast) or `RGTD` (the true state for a
+  * monitor).
+  *
+  * @param stopped
+  *   play is stopped (a foul, a set play being prepared) though the state may read PLAYING
+  * @param kickingTeam
+  *   the team number of the team taking the next kick-off or set play; `None` on the wire's 255
+  */
 final case class HslControlData(
     packetNumber: Int,
     playersPerTeam: Int,
@@ -234,11 +252,11 @@ final case class HslControlData(
   def penaltyShootOut: Boolean = gamePhase == GamePhase.PenaltyShootOut
 }
 
-/**
- * One player's entry of version 12 (`HlRobotInfo`, 6 bytes).
- *
- * @param goalkeeper whether the player is the goalkeeper (the wire's flag, 0 or 1)
- */
+/** One player's entry of version 12 (`HlRobotInfo`, 6 bytes).
+  *
+  * @param goalkeeper
+  *   whether the player is the goalkeeper (the wire's flag, 0 or 1)
+  */
 final case class HlPlayerInfo(
     penalty: HlPenalty,
     secsTillUnpenalised: Int,
@@ -261,12 +279,13 @@ object HlPlayerInfo {
   val CoachMessageBytes: Int = 253
 }
 
-/**
- * One team's entry of version 12 (`HlTeamInfo`, 332 bytes).
- *
- * @param coachMessage the 253 raw bytes of the coach's message
- * @param players      always all 11 slots of the wire
- */
+/** One team's entry of version 12 (`HlTeamInfo`, 332 bytes).
+  *
+  * @param coachMessage
+  *   the 253 raw bytes of the coach's message
+  * @param players
+  *   always all 11 slots of the wire
+  */
 final case class HlTeamInfo(
     teamNumber: Int,
     fieldPlayerColour: FieldColour,
@@ -279,16 +298,19 @@ final case class HlTeamInfo(
     players: Vector[HlPlayerInfo]
 ) extends GameTeam
 
-/**
- * The content of one version-12 control packet (688 bytes, the Humanoid League's GameController until 2025), every
- * wire field kept.
- *
- * @param kickOffTeam        the team number of the team kicking off next; `None` on the wire's 255 (dropped ball)
- * @param secondaryStateInfo the 4 raw bytes of `secondaryStateInfo` (the GameController writes the set play's team
- *                           number and its phase in the first two)
- * @param dropInTime         the wire's u16; 65535 before the first drop-in
- * @param secsRemaining      read as the i16 the GameController writes (the header calls it u16)
- */
+/** The content of one version-12 control packet (688 bytes, the Humanoid League's GameController until 2025), every
+  * wire field kept.
+  *
+  * @param kickOffTeam
+  *   the team number of the team kicking off next; `None` on the wire's 255 (dropped ball)
+  * @param secondaryStateInfo
+  *   the 4 raw bytes of `secondaryStateInfo` (the GameController writes the set play's team number and its phase in the
+  *   first two)
+  * @param dropInTime
+  *   the wire's u16; 65535 before the first drop-in
+  * @param secsRemaining
+  *   read as the i16 the GameController writes (the header calls it u16)
+  */
 final case class HlControlData(
     packetNumber: Int,
     playersPerTeam: Int,

@@ -6,13 +6,12 @@ import scala.collection.immutable.ArraySeq
 
 import naogateway.wire.gamecontroller.GameControllerError._
 
-/**
- * Encoder and decoder of GameController packets (docs/protocol.md §10): the `RGme` control packet in versions 19
- * (198 bytes), 12 (688 bytes), 8 (158 bytes) and 7 (116 bytes), the same version-19 layout under `RGTD` (the true
- * state a monitor gets), and the `RGrt` return packet in versions 4 (32 bytes) and 2 (8 bytes). All numbers are
- * little-endian. Pure functions; decoding never throws and never guesses: a packet must have a known header, a known
- * version and exactly that version's size, or it is refused with a typed error.
- */
+/** Encoder and decoder of GameController packets (docs/protocol.md §10): the `RGme` control packet in versions 19 (198
+  * bytes), 12 (688 bytes), 8 (158 bytes) and 7 (116 bytes), the same version-19 layout under `RGTD` (the true state a
+  * monitor gets), and the `RGrt` return packet in versions 4 (32 bytes) and 2 (8 bytes). All numbers are little-endian.
+  * Pure functions; decoding never throws and never guesses: a packet must have a known header, a known version and
+  * exactly that version's size, or it is refused with a typed error.
+  */
 object GameControllerCodec {
 
   /** First four bytes of every control packet. */
@@ -48,11 +47,10 @@ object GameControllerCodec {
 
   private val U8Max = 0xffL
 
-  /**
-   * Decodes a control packet. The version decides the layout, and each version's field has its own width, all
-   * starting at byte 4: byte 4 = 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read
-   * the u16 12 for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
-   */
+  /** Decodes a control packet. The version decides the layout, and each version's field has its own width, all starting
+    * at byte 4: byte 4 = 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read the u16 12
+    * for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
+    */
   def decodeControl(bytes: Array[Byte]): Either[GameControllerError, GameControlData] =
     for {
       _ <- checkHeader(bytes, ControlHeaderBytes, ControlHeader)
@@ -103,10 +101,9 @@ object GameControllerCodec {
       _ <- checkSize(bytes, ReturnHeader, ReturnVersion, ReturnPacketBytes)
     } yield ReturnData(u8(bytes, 5), u8(bytes, 6), ReturnMessage.fromCode(u8(bytes, 7)))
 
-  /**
-   * Decodes a version-4 return packet (exactly 32 bytes). Like the GameController, it refuses a `fallen` byte other
-   * than 0 or 1 and a coordinate that is not a number (NaN).
-   */
+  /** Decodes a version-4 return packet (exactly 32 bytes). Like the GameController, it refuses a `fallen` byte other
+    * than 0 or 1 and a coordinate that is not a number (NaN).
+    */
   def decodeStatus(bytes: Array[Byte]): Either[GameControllerError, ReturnStatus] =
     for {
       _ <- returnVersion(bytes, StatusVersion)
@@ -166,11 +163,10 @@ object GameControllerCodec {
   /** Bytes of the IPv4 address before each status message the GameController forwards to a monitor (UDP 3940). */
   val ForwardPrefixBytes: Int = 4
 
-  /**
-   * Decodes a status message forwarded to a monitor: the IPv4 address of the robot that sent it, then its `RGrt`
-   * version-4 packet (36 bytes in all). The GameController forwards without checking; this decoder checks as
-   * [[decodeStatus]] does.
-   */
+  /** Decodes a status message forwarded to a monitor: the IPv4 address of the robot that sent it, then its `RGrt`
+    * version-4 packet (36 bytes in all). The GameController forwards without checking; this decoder checks as
+    * [[decodeStatus]] does.
+    */
   def decodeForwardedStatus(bytes: Array[Byte]): Either[GameControllerError, (java.net.InetAddress, ReturnStatus)] =
     if (bytes.length < ForwardPrefixBytes) Left(TooShort(ForwardPrefixBytes, bytes.length))
     else
@@ -212,8 +208,10 @@ object GameControllerCodec {
           else if (u8(bytes, VersionOffset + 1) == 0) Right(GameControlVersion.V12)
           else unknown
         case 7 =>
-          if (bytes.length < VersionOffset + V7VersionBytes) Left(TooShort(VersionOffset + V7VersionBytes, bytes.length))
-          else if (new LeReader(bytes, VersionOffset).u32() == GameControlVersion.V7.number.toLong) Right(GameControlVersion.V7)
+          if (bytes.length < VersionOffset + V7VersionBytes)
+            Left(TooShort(VersionOffset + V7VersionBytes, bytes.length))
+          else if (new LeReader(bytes, VersionOffset).u32() == GameControlVersion.V7.number.toLong)
+            Right(GameControlVersion.V7)
           else unknown
         case _ => unknown
       }
@@ -229,15 +227,16 @@ object GameControllerCodec {
 
   private[gamecontroller] def flag(field: String, value: Int): Either[GameControllerError, Boolean] =
     value match {
-      case 0 => Right(false)
-      case 1 => Right(true)
+      case 0     => Right(false)
+      case 1     => Right(true)
       case other => Left(InvalidField(field, other.toLong))
     }
 
   private[gamecontroller] def firstError(checks: Option[GameControllerError]*): Option[GameControllerError] =
     checks.collectFirst { case Some(error) => error }
 
-  private[gamecontroller] def range(v: Int, field: String, value: Long, min: Long, max: Long): Option[GameControllerError] =
+  private[gamecontroller] def range(
+      v: Int, field: String, value: Long, min: Long, max: Long): Option[GameControllerError] =
     if (value < min || value > max) Some(OutOfRange(v, field, value, min, max)) else None
 
   private[gamecontroller] def u8Range(v: Int, field: String, value: Long): Option[GameControllerError] =

@@ -24,10 +24,9 @@ object GameControllerError {
     def describe: String = s"expected header $expected, found ${hex(found)}"
   }
 
-  /**
-   * The version is not one this codec knows. `found` holds the raw bytes from offset 4 on (up to four),
-   * because the width of the version field is itself version-specific.
-   */
+  /** The version is not one this codec knows. `found` holds the raw bytes from offset 4 on (up to four), because the
+    * width of the version field is itself version-specific.
+    */
   final case class UnknownVersion(header: String, found: ArraySeq[Byte]) extends GameControllerError {
     def describe: String = s"$header packet of unknown version: bytes from offset 4 are ${hex(found)}"
   }

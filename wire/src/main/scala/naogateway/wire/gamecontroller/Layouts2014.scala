@@ -1,14 +1,21 @@
 package naogateway.wire.gamecontroller
 
-import naogateway.wire.gamecontroller.GameControllerCodec.{ControlHeaderBytes, V7VersionBytes, VersionOffset, firstError, flag, length,
-  range, u8Range}
+import naogateway.wire.gamecontroller.GameControllerCodec.{
+  ControlHeaderBytes,
+  V7VersionBytes,
+  VersionOffset,
+  firstError,
+  flag,
+  length,
+  range,
+  u8Range
+}
 import naogateway.wire.gamecontroller.GameControllerError._
 
-/**
- * The layouts of versions 8 and 7, the 2014 GameController's (docs/protocol.md §10.1, §10.2), for
- * [[GameControllerCodec]], which checks the header, the version and the size before these run. Writers run only after
- * their validation passed.
- */
+/** The layouts of versions 8 and 7, the 2014 GameController's (docs/protocol.md §10.1, §10.2), for
+  * [[GameControllerCodec]], which checks the header, the version and the size before these run. Writers run only after
+  * their validation passed.
+  */
 private[gamecontroller] object Layouts2014 {
 
   private val U8Max = 0xffL

@@ -2,10 +2,9 @@ package naogateway.wire.gamecontroller
 
 import naogateway.wire.gamecontroller.GameControllerCodec.{firstError, flag, length, range, u8Range}
 
-/**
- * The layouts of versions 19 and 12 (docs/protocol.md §10.2, §10.3), for [[GameControllerCodec]], which checks the
- * header, the version and the size before these run. Writers run only after their validation passed.
- */
+/** The layouts of versions 19 and 12 (docs/protocol.md §10.2, §10.3), for [[GameControllerCodec]], which checks the
+  * header, the version and the size before these run. Writers run only after their validation passed.
+  */
 private[gamecontroller] object ModernLayouts {
 
   private val KickingTeamNone = 255
@@ -139,7 +138,8 @@ private[gamecontroller] object ModernLayouts {
       h <- flag("firstHalf", firstHalf)
       team0 <- teamV12(r, "team0")
       team1 <- teamV12(r, "team1")
-    } yield HlControlData(packetNumber, playersPerTeam, gameType, state, h, kickOffTeam, secondaryState, info, dropInTeam,
+    } yield HlControlData(packetNumber, playersPerTeam, gameType, state, h, kickOffTeam, secondaryState, info,
+      dropInTeam,
       dropInTime, secsRemaining.toLong, secondaryTime, team0, team1)
   }
 

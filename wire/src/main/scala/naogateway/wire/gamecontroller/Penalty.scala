@@ -7,10 +7,9 @@ sealed trait Penalty extends Product with Serializable {
   def code: Int
 }
 
-/**
- * Penalties as the humanoid kid-size league numbers them. The same codes mean other fouls in the
- * standard-platform and teen-size leagues; this project's robots play kid-size, so that is the reading.
- */
+/** Penalties as the humanoid kid-size league numbers them. The same codes mean other fouls in the standard-platform and
+  * teen-size leagues; this project's robots play kid-size, so that is the reading.
+  */
 object Penalty {
 
   /** Not penalised. */

@@ -29,24 +29,29 @@ object ReturnMessage {
   def fromCode(code: Int): ReturnMessage = known.find(_.code == code).getOrElse(Unknown(code))
 }
 
-/**
- * The content of an `RGrt` return packet (version 2, 8 bytes).
- *
- * @param team   the robot's team number
- * @param player the robot's player number, counted from 1
- */
+/** The content of an `RGrt` return packet (version 2, 8 bytes).
+  *
+  * @param team
+  *   the robot's team number
+  * @param player
+  *   the robot's player number, counted from 1
+  */
 final case class ReturnData(team: Int, player: Int, message: ReturnMessage)
 
-/**
- * The content of an `RGrt` return packet of version 4 (32 bytes), the status message a robot sends the version-19
- * GameController on UDP 3939. Note the order: player, then team (version 2 has team, then player).
- *
- * @param player  the robot's player number, counted from 1
- * @param fallen  whether the robot is fallen (the wire's 1; 0 means it can play)
- * @param pose    x and y in mm from the field's centre, theta in radians
- * @param ballAge seconds since the robot last saw the ball; −1 if it never did
- * @param ball    the ball's x and y in mm relative to the robot
- */
+/** The content of an `RGrt` return packet of version 4 (32 bytes), the status message a robot sends the version-19
+  * GameController on UDP 3939. Note the order: player, then team (version 2 has team, then player).
+  *
+  * @param player
+  *   the robot's player number, counted from 1
+  * @param fallen
+  *   whether the robot is fallen (the wire's 1; 0 means it can play)
+  * @param pose
+  *   x and y in mm from the field's centre, theta in radians
+  * @param ballAge
+  *   seconds since the robot last saw the ball; −1 if it never did
+  * @param ball
+  *   the ball's x and y in mm relative to the robot
+  */
 final case class ReturnStatus(
     player: Int,
     team: Int,

@@ -1,9 +1,8 @@
 package naogateway.wire.gamecontroller
 
-/**
- * The closed set of values one wire code of versions 12 and 19 takes, with the value that keeps a code no known
- * value has (so decoding loses nothing and encoding gives the same byte back).
- */
+/** The closed set of values one wire code of versions 12 and 19 takes, with the value that keeps a code no known value
+  * has (so decoding loses nothing and encoding gives the same byte back).
+  */
 abstract class WireCodes[A] {
 
   /** The known values, in code order. */
@@ -24,26 +23,37 @@ sealed abstract class FieldColour(val code: Int) extends Product with Serializab
 
 /** Colour codes of versions 12 and 19 (versions 7 and 8 know only blue and red: [[TeamColour]]). */
 object FieldColour extends WireCodes[FieldColour] {
+
   /** Blue or cyan. */
   case object Blue extends FieldColour(0)
+
   /** Red, magenta or pink. */
   case object Red extends FieldColour(1)
+
   /** Yellow. */
   case object Yellow extends FieldColour(2)
+
   /** Black or dark grey. */
   case object Black extends FieldColour(3)
+
   /** White. */
   case object White extends FieldColour(4)
+
   /** Green. */
   case object Green extends FieldColour(5)
+
   /** Orange. */
   case object Orange extends FieldColour(6)
+
   /** Purple or violet. */
   case object Purple extends FieldColour(7)
+
   /** Brown. */
   case object Brown extends FieldColour(8)
+
   /** Lighter grey. */
   case object Gray extends FieldColour(9)
+
   /** A code no known colour has. */
   final case class Unknown(override val code: Int) extends FieldColour(code)
 
@@ -57,14 +67,19 @@ sealed abstract class GamePhase(val code: Int) extends Product with Serializable
 
 /** Game phases of version 19. */
 object GamePhase extends WireCodes[GamePhase] {
+
   /** A regular half. */
   case object Normal extends GamePhase(0)
+
   /** The penalty shoot-out: team messages are not counted. */
   case object PenaltyShootOut extends GamePhase(1)
+
   /** Extra time after a drawn game. */
   case object ExtraTime extends GamePhase(2)
+
   /** A time-out (the state reads INITIAL meanwhile). */
   case object Timeout extends GamePhase(3)
+
   /** A code no known phase has. */
   final case class Unknown(override val code: Int) extends GamePhase(code)
 
@@ -78,20 +93,28 @@ sealed abstract class SetPlay(val code: Int) extends Product with Serializable
 
 /** Set plays of version 19. */
 object SetPlay extends WireCodes[SetPlay] {
+
   /** No set play (a kick-off also reads so). */
   case object NoSetPlay extends SetPlay(0)
+
   /** A direct free kick. */
   case object DirectFreeKick extends SetPlay(1)
+
   /** An indirect free kick. */
   case object IndirectFreeKick extends SetPlay(2)
+
   /** A penalty kick. */
   case object PenaltyKick extends SetPlay(3)
+
   /** A throw-in. */
   case object ThrowIn extends SetPlay(4)
+
   /** A goal kick. */
   case object GoalKick extends SetPlay(5)
+
   /** A corner kick. */
   case object CornerKick extends SetPlay(6)
+
   /** A code no known set play has. */
   final case class Unknown(override val code: Int) extends SetPlay(code)
 
@@ -105,12 +128,16 @@ sealed abstract class CompetitionType(val code: Int) extends Product with Serial
 
 /** Competition types of version 19. */
 object CompetitionType extends WireCodes[CompetitionType] {
+
   /** The small division. */
   case object Small extends CompetitionType(0)
+
   /** The middle division. */
   case object Middle extends CompetitionType(1)
+
   /** The large division. */
   case object Large extends CompetitionType(2)
+
   /** A code no known type has. */
   final case class Unknown(override val code: Int) extends CompetitionType(code)
 
@@ -128,35 +155,60 @@ sealed abstract class HslPenalty(val code: Int) extends Product with Serializabl
 
 /** Penalties of version 19. */
 object HslPenalty extends WireCodes[HslPenalty] {
+
   /** Not penalised. */
   case object NoPenalty extends HslPenalty(0)
+
   /** Illegal positioning. */
   case object IllegalPositioning extends HslPenalty(1)
+
   /** Moved in SET. */
   case object MotionInSet extends HslPenalty(2)
+
   /** Local game stuck. */
   case object LocalGameStuck extends HslPenalty(3)
+
   /** Incapable robot. */
   case object IncapableRobot extends HslPenalty(4)
+
   /** Picked up. */
   case object PickUp extends HslPenalty(5)
+
   /** Ball holding. */
   case object BallHolding extends HslPenalty(6)
+
   /** Left the field. */
   case object LeavingTheField extends HslPenalty(7)
+
   /** Played with arms or hands. */
   case object PlayingWithArmsHands extends HslPenalty(8)
+
   /** Pushing. */
   case object Pushing extends HslPenalty(9)
+
   /** Sent off. */
   case object SentOff extends HslPenalty(10)
+
   /** A substitute, not on the field. */
   case object Substitute extends HslPenalty(11)
+
   /** A code no known penalty has. */
   final case class Unknown(override val code: Int) extends HslPenalty(code)
 
-  val known: Seq[HslPenalty] = Seq(NoPenalty, IllegalPositioning, MotionInSet, LocalGameStuck, IncapableRobot, PickUp,
-    BallHolding, LeavingTheField, PlayingWithArmsHands, Pushing, SentOff, Substitute)
+  val known: Seq[HslPenalty] = Seq(
+    NoPenalty,
+    IllegalPositioning,
+    MotionInSet,
+    LocalGameStuck,
+    IncapableRobot,
+    PickUp,
+    BallHolding,
+    LeavingTheField,
+    PlayingWithArmsHands,
+    Pushing,
+    SentOff,
+    Substitute
+  )
   def codeOf(value: HslPenalty): Int = value.code
   protected def unknown(code: Int): HslPenalty = Unknown(code)
 }
@@ -170,26 +222,37 @@ sealed abstract class HlPenalty(val code: Int) extends Product with Serializable
 
 /** Penalties the version-12 GameController writes. */
 object HlPenalty extends WireCodes[HlPenalty] {
+
   /** Not penalised. */
   case object NoPenalty extends HlPenalty(0)
+
   /** A substitute. */
   case object Substitute extends HlPenalty(14)
+
   /** Penalised by hand. */
   case object Manual extends HlPenalty(15)
+
   /** Ball manipulation. */
   case object BallManipulation extends HlPenalty(30)
+
   /** Physical contact (pushing). */
   case object PhysicalContact extends HlPenalty(31)
+
   /** An illegal attack. */
   case object IllegalAttack extends HlPenalty(32)
+
   /** An illegal defence. */
   case object IllegalDefense extends HlPenalty(33)
+
   /** Picked up, or incapable. */
   case object PickupOrIncapable extends HlPenalty(34)
+
   /** Service. */
   case object Service extends HlPenalty(35)
+
   /** A penalty the version-12 layout has no code for (the GameController writes 255). */
   case object Unspecified extends HlPenalty(255)
+
   /** A code no known penalty has. */
   final case class Unknown(override val code: Int) extends HlPenalty(code)
 
@@ -204,12 +267,16 @@ sealed abstract class HlGameType(val code: Int) extends Product with Serializabl
 
 /** Game types of version 12. */
 object HlGameType extends WireCodes[HlGameType] {
+
   /** Kid size. */
   case object KidSize extends HlGameType(0)
+
   /** Adult size. */
   case object AdultSize extends HlGameType(1)
+
   /** Drop-in. */
   case object DropIn extends HlGameType(2)
+
   /** A code no known type has. */
   final case class Unknown(override val code: Int) extends HlGameType(code)
 
@@ -223,26 +290,37 @@ sealed abstract class HlSecondaryState(val code: Int) extends Product with Seria
 
 /** Secondary states of version 12. */
 object HlSecondaryState extends WireCodes[HlSecondaryState] {
+
   /** Regular play. */
   case object Normal extends HlSecondaryState(0)
+
   /** The penalty shoot-out. */
   case object PenaltyShoot extends HlSecondaryState(1)
+
   /** Extra time. */
   case object Overtime extends HlSecondaryState(2)
+
   /** A time-out. */
   case object Timeout extends HlSecondaryState(3)
+
   /** A direct free kick. */
   case object DirectFreeKick extends HlSecondaryState(4)
+
   /** An indirect free kick. */
   case object IndirectFreeKick extends HlSecondaryState(5)
+
   /** A penalty kick. */
   case object PenaltyKick extends HlSecondaryState(6)
+
   /** A corner kick. */
   case object CornerKick extends HlSecondaryState(7)
+
   /** A goal kick. */
   case object GoalKick extends HlSecondaryState(8)
+
   /** A throw-in. */
   case object ThrowIn extends HlSecondaryState(9)
+
   /** A code no known state has. */
   final case class Unknown(override val code: Int) extends HlSecondaryState(code)
 

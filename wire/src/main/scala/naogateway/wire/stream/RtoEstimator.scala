@@ -2,8 +2,8 @@ package naogateway.wire.stream
 
 /** The adaptive retransmission timeout of RFC 6298, in nanoseconds, as an immutable value.
   *
-  * `srttNanos` and `rttvarNanos` are the smoothed round-trip time and its variation (both 0 before the first
-  * sample); `rtoNanos` is the timeout in force, including any back-off.
+  * `srttNanos` and `rttvarNanos` are the smoothed round-trip time and its variation (both 0 before the first sample);
+  * `rtoNanos` is the timeout in force, including any back-off.
   */
 final case class RtoEstimator(srttNanos: Long, rttvarNanos: Long, rtoNanos: Long, samples: Long) {
 
@@ -12,8 +12,8 @@ final case class RtoEstimator(srttNanos: Long, rttvarNanos: Long, rtoNanos: Long
 
   /** Takes one round-trip sample (the caller applies Karn's rule: never from a retransmitted segment).
     *
-    * The first sample sets SRTT = R and RTTVAR = R/2; later ones use alpha = 1/8 and beta = 1/4. The new RTO is
-    * SRTT + max(G, 4 * RTTVAR) within the configured bounds, which also ends any back-off.
+    * The first sample sets SRTT = R and RTTVAR = R/2; later ones use alpha = 1/8 and beta = 1/4. The new RTO is SRTT +
+    * max(G, 4 * RTTVAR) within the configured bounds, which also ends any back-off.
     */
   def sample(rttNanos: Long, settings: StreamSettings): RtoEstimator = {
     val r = math.max(0L, rttNanos)
@@ -29,10 +29,10 @@ final case class RtoEstimator(srttNanos: Long, rttvarNanos: Long, rtoNanos: Long
   /** The timeout after an ACK that acknowledged new data but gave no sample (Karn): at most one doubling of the
     * back-off is kept.
     *
-    * Keeping one doubling until a clean sample arrives stops a too-short timeout from firing again and again when
-    * the round trip has grown (the reason for Karn's back-off). Keeping all of them would let the timeout climb to
-    * maxRto and stay there under heavy loss, where clean samples are rare: at 30 % loss each way a segment and its
-    * ACK both arrive only half of the time, so the expected back-off grows without bound.
+    * Keeping one doubling until a clean sample arrives stops a too-short timeout from firing again and again when the
+    * round trip has grown (the reason for Karn's back-off). Keeping all of them would let the timeout climb to maxRto
+    * and stay there under heavy loss, where clean samples are rare: at 30 % loss each way a segment and its ACK both
+    * arrive only half of the time, so the expected back-off grows without bound.
     */
   def afterProgress(settings: StreamSettings): RtoEstimator = {
     val base = if (hasSample) RtoEstimator.fromEstimate(srttNanos, rttvarNanos, settings) else settings.initialRtoNanos

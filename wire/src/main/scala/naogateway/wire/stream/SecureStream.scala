@@ -4,86 +4,85 @@ import scala.collection.immutable.{Queue, TreeSet}
 
 import naogateway.wire.WireLimits
 
-/** One endpoint of the secure stream (docs/protocol.md §11): reliable, ordered delivery over UDP with the thesis's 2-byte header,
-  * as a pure state machine.
+/** One endpoint of the secure stream (docs/protocol.md §11): reliable, ordered delivery over UDP with the thesis's
+  * 2-byte header, as a pure state machine.
   *
-  * Every transition takes the current time in nanoseconds (simulated or monotonic; only differences matter) and
-  * returns a new state plus the outputs to act on: datagrams to transmit, payloads to deliver, and the fate of the
-  * payloads this side sent. The state is immutable and holds no clock, thread or timer: the owner calls [[tick]]
-  * when [[nextTimerAt]] has come.
+  * Every transition takes the current time in nanoseconds (simulated or monotonic; only differences matter) and returns
+  * a new state plus the outputs to act on: datagrams to transmit, payloads to deliver, and the fate of the payloads
+  * this side sent. The state is immutable and holds no clock, thread or timer: the owner calls [[tick]] when
+  * [[nextTimerAt]] has come.
   *
   * Bytes: a payload passed to [[send]] is copied, so the caller may reuse its array; [[receive]] only reads its
   * argument; every array in an output is fresh and belongs to the receiver of the output.
   *
   * ==Rules==
   *   1. A segment is a 2-byte header plus payload. Byte 0 is the sender's own sequence number, byte 1 the ACK: the
-  *      sequence number of the last segment received in order from the peer (cumulative). A segment without payload
-  *      is a pure ACK; every data segment acknowledges as well (piggybacking).
+  *      sequence number of the last segment received in order from the peer (cumulative). A segment without payload is
+  *      a pure ACK; every data segment acknowledges as well (piggybacking).
   *   1. Sequence numbers run from 0 to maxSeq (at most 41; the thesis firmware uses 20) and wrap. The first data
-  *      segment has number 0. Before anything has arrived the ACK byte is maxSeq ("the one before 0"), and the
-  *      sender's "last acknowledged" starts at maxSeq too.
-  *   1. A payload has 1 to 1398 bytes (header plus payload at most 1400). An empty or larger payload is refused when
-  *      it is sent, and so is a send while `sendQueueLimit` payloads are waiting. Nothing is dropped silently.
+  *      segment has number 0. Before anything has arrived the ACK byte is maxSeq ("the one before 0"), and the sender's
+  *      "last acknowledged" starts at maxSeq too.
+  *   1. A payload has 1 to 1398 bytes (header plus payload at most 1400). An empty or larger payload is refused when it
+  *      is sent, and so is a send while `sendQueueLimit` payloads are waiting. Nothing is dropped silently.
   *   1. The window W (1 to 20, with 2W <= maxSeq + 1) is the number of data segments that may be unacknowledged at
   *      once. At W = 1 segment n is sent only once n - 1 is acknowledged: the thesis protocol.
   *   1. A data segment numbered within [expected, expected + W - 1] is new: the expected one is delivered at once
-  *      (followed by any buffered successors), a later one is buffered (only possible at W > 1). One within
-  *      [expected - W, expected - 1] is a duplicate and is dropped. Every data segment received, new or duplicate,
-  *      is answered at once with an ACK, piggybacked on new data when this side has some to send at that moment,
-  *      otherwise as a pure ACK. A pure ACK is never answered, except a skip notice that was acted on (rule 11).
-  *   1. An ACK within [last acknowledged, last sent] acknowledges everything up to it. An ACK at most W behind the
-  *      last acknowledged one is stale (overtaken on the way): only its ACK byte is disregarded. A datagram that is
-  *      shorter than 2 or longer than 1400 bytes, carries a number above maxSeq, a sequence number outside both
-  *      ranges of rule 5 or an ACK for something never sent is misbehaving: it is ignored as a whole and counted.
-  *      Receiving never throws.
-  *   1. One retransmission timer runs for the oldest unacknowledged segment. When it expires only that segment is
-  *      sent again and the timeout doubles (up to maxRto). At W > 1 only: two duplicate pure ACKs resend the oldest
-  *      segment once per recovery (fast retransmit), and an ACK that advances but does not cover everything sent
-  *      before the loss was noticed resends the new oldest segment at once (partial ACK, as in NewReno). A resent
-  *      oldest segment is itself taken as lost, and sent again at once, when two more duplicate pure ACKs arrive
-  *      after it than the segments ahead of it can explain: those sent after the latest transmission among the
-  *      segments the last advancing ACK covered, and before the resend (the link keeps order, so earlier ones were
-  *      answered with an older ACK). So only missing segments are sent again, and a lost resend need not wait for
-  *      the timer. There is no fast retransmit at W = 1.
-  *   1. The timeout adapts as in RFC 6298: SRTT and RTTVAR with alpha 1/8 and beta 1/4, RTO = SRTT + max(1 ms,
-  *      4 RTTVAR) kept within [minRto, maxRto], initialRto before the first sample. Karn's rule: an ACK gives a
-  *      sample only from the newest segment it covers, and only if that segment was sent once and nothing else the
-  *      ACK covers was sent after it. A clean sample ends any back-off; an ACK that acknowledges new data without
-  *      giving a sample keeps at most one doubling (see [[RtoEstimator.afterProgress]]).
+  *      (followed by any buffered successors), a later one is buffered (only possible at W > 1). One within [expected -
+  *      W, expected - 1] is a duplicate and is dropped. Every data segment received, new or duplicate, is answered at
+  *      once with an ACK, piggybacked on new data when this side has some to send at that moment, otherwise as a pure
+  *      ACK. A pure ACK is never answered, except a skip notice that was acted on (rule 11).
+  *   1. An ACK within [last acknowledged, last sent] acknowledges everything up to it. An ACK at most W behind the last
+  *      acknowledged one is stale (overtaken on the way): only its ACK byte is disregarded. A datagram that is shorter
+  *      than 2 or longer than 1400 bytes, carries a number above maxSeq, a sequence number outside both ranges of rule
+  *      5 or an ACK for something never sent is misbehaving: it is ignored as a whole and counted. Receiving never
+  *      throws.
+  *   1. One retransmission timer runs for the oldest unacknowledged segment. When it expires only that segment is sent
+  *      again and the timeout doubles (up to maxRto). At W > 1 only: two duplicate pure ACKs resend the oldest segment
+  *      once per recovery (fast retransmit), and an ACK that advances but does not cover everything sent before the
+  *      loss was noticed resends the new oldest segment at once (partial ACK, as in NewReno). A resent oldest segment
+  *      is itself taken as lost, and sent again at once, when two more duplicate pure ACKs arrive after it than the
+  *      segments ahead of it can explain: those sent after the latest transmission among the segments the last
+  *      advancing ACK covered, and before the resend (the link keeps order, so earlier ones were answered with an older
+  *      ACK). So only missing segments are sent again, and a lost resend need not wait for the timer. There is no fast
+  *      retransmit at W = 1.
+  *   1. The timeout adapts as in RFC 6298: SRTT and RTTVAR with alpha 1/8 and beta 1/4, RTO = SRTT + max(1 ms, 4
+  *      RTTVAR) kept within [minRto, maxRto], initialRto before the first sample. Karn's rule: an ACK gives a sample
+  *      only from the newest segment it covers, and only if that segment was sent once and nothing else the ACK covers
+  *      was sent after it. A clean sample ends any back-off; an ACK that acknowledges new data without giving a sample
+  *      keeps at most one doubling (see [[RtoEstimator.afterProgress]]).
   *   1. Idle ACK: an endpoint that has received data (or acted on a skip notice) since its last idle ACK, and has
   *      nothing unacknowledged, sends one pure ACK once it has sent nothing for idleAckInterval. It repeats the last
   *      ACK in case that was lost, once: a fresh or reset endpoint, and one whose peer has sent nothing new since,
-  *      stays silent. Liveness is the keep-alive's job (protocol.md 6.2), so an idle stream costs the robot's
-  *      module buffer nothing.
+  *      stays silent. Liveness is the keep-alive's job (protocol.md 6.2), so an idle stream costs the robot's module
+  *      buffer nothing.
   *   1. A payload may carry a deadline. Once the deadline is reached, a payload still waiting in the queue is dropped
-  *      without using a sequence number, and a sent one is no longer retransmitted; both are reported `Expired`.
-  *      Byte 0 of every pure ACK is the sender's "settled" number, the last sequence number such that it and all
-  *      earlier ones are acknowledged or expired, announced at most one step past the peer's last ACK. Normally it
-  *      equals that ACK and means nothing new. When the oldest unacknowledged segment expires, a pure ACK naming it
-  *      goes out at once (a skip notice) and is repeated by the retransmission timer until the peer's ACK has
-  *      passed it; several expired segments in a row are announced one per round trip.
+  *      without using a sequence number, and a sent one is no longer retransmitted; both are reported `Expired`. Byte 0
+  *      of every pure ACK is the sender's "settled" number, the last sequence number such that it and all earlier ones
+  *      are acknowledged or expired, announced at most one step past the peer's last ACK. Normally it equals that ACK
+  *      and means nothing new. When the oldest unacknowledged segment expires, a pure ACK naming it goes out at once (a
+  *      skip notice) and is repeated by the retransmission timer until the peer's ACK has passed it; several expired
+  *      segments in a row are announced one per round trip.
   *   1. A receiver that honours skip notices (`honourSkipNotices`, default on) and gets a pure ACK whose byte 0 is
-  *      exactly its next expected number treats that segment as expired: it delivers it if it is buffered and
-  *      otherwise counts it as skipped, takes it as its last in-order number, delivers the buffered successors and
-  *      answers with an ACK. Only the next number is accepted, not the whole window, because byte 0 of an ordinary
-  *      pure ACK lags behind the receiver by up to W numbers (its sender has not heard the latest ACKs yet), and by
-  *      more when data segments overtake it; with 42 numbers and W = 20 such a lagging ACK falls into
-  *      [expected, expected + W - 1] and would skip data that is still on its way. A peer running the thesis
-  *      firmware puts its own, possibly unacknowledged, number into byte 0 of pure ACKs, so against it the setting
-  *      must be off, and payloads sent to it must carry no deadline: with nobody honouring the notice the stream
-  *      would stall behind an expired segment.
+  *      exactly its next expected number treats that segment as expired: it delivers it if it is buffered and otherwise
+  *      counts it as skipped, takes it as its last in-order number, delivers the buffered successors and answers with
+  *      an ACK. Only the next number is accepted, not the whole window, because byte 0 of an ordinary pure ACK lags
+  *      behind the receiver by up to W numbers (its sender has not heard the latest ACKs yet), and by more when data
+  *      segments overtake it; with 42 numbers and W = 20 such a lagging ACK falls into [expected, expected + W - 1] and
+  *      would skip data that is still on its way. A peer running the thesis firmware puts its own, possibly
+  *      unacknowledged, number into byte 0 of pure ACKs, so against it the setting must be off, and payloads sent to it
+  *      must carry no deadline: with nobody honouring the notice the stream would stall behind an expired segment.
   *   1. `Expired` means the sender stopped sending the payload before it was acknowledged. A copy already on its way
-  *      may still be delivered before the skip notice arrives, but never after it; no payload is delivered twice or
-  *      out of order.
-  *   1. Sequence numbers repeat every N = maxSeq + 1 segments, and a receiver that holds segment m accepts the
-  *      numbers of m + 1 to m + W as new; the last of them is also the number of segment m + W - N, acknowledged
-  *      long ago. A late copy of that old segment would pass for new data. Hence segment m is not sent while segment
-  *      m - (N - W) was sent again within the last smoothed round trip (minRto before the first sample). First
-  *      transmissions never wait, as a full round trip always lies between them, and at W = 1 the segment in
-  *      question is 20 segments old, so the rule does not delay the thesis protocol.
-  *   1. Beyond that, as with TCP's maximum segment lifetime, the protocol assumes that no copy of a segment stays
-  *      in the network much longer than about one round trip more than the datagrams sent after it. A single WLAN
-  *      hop does not hold datagrams that long.
+  *      may still be delivered before the skip notice arrives, but never after it; no payload is delivered twice or out
+  *      of order.
+  *   1. Sequence numbers repeat every N = maxSeq + 1 segments, and a receiver that holds segment m accepts the numbers
+  *      of m + 1 to m + W as new; the last of them is also the number of segment m + W - N, acknowledged long ago. A
+  *      late copy of that old segment would pass for new data. Hence segment m is not sent while segment m - (N - W)
+  *      was sent again within the last smoothed round trip (minRto before the first sample). First transmissions never
+  *      wait, as a full round trip always lies between them, and at W = 1 the segment in question is 20 segments old,
+  *      so the rule does not delay the thesis protocol.
+  *   1. Beyond that, as with TCP's maximum segment lifetime, the protocol assumes that no copy of a segment stays in
+  *      the network much longer than about one round trip more than the datagrams sent after it. A single WLAN hop does
+  *      not hold datagrams that long.
   *   1. `reset` puts the sequence state back to the start (for a peer that restarted, so both ends start afresh).
   *      Unacknowledged and queued payloads are kept and sent again from number 0: at-least-once across a restart.
   */
@@ -123,8 +122,8 @@ final class SecureStream private[stream] (
   /** The last sequence number received from the peer in order (the ACK byte this side sends). */
   def lastInOrder: Int = lastInOrderSeq
 
-  /** The last own sequence number such that it and every earlier one is acknowledged or expired; pure ACKs
-    * announce it at most one step past the peer's last ACK.
+  /** The last own sequence number such that it and every earlier one is acknowledged or expired; pure ACKs announce it
+    * at most one step past the peer's last ACK.
     */
   def settled: Int = {
     var k = 0
@@ -190,8 +189,8 @@ final class SecureStream private[stream] (
     work.result()
   }
 
-  /** Starts the sequence state afresh for a peer that restarted, keeping unacknowledged and queued payloads (they
-    * are sent again from sequence number 0), the round-trip estimate and the stats.
+  /** Starts the sequence state afresh for a peer that restarted, keeping unacknowledged and queued payloads (they are
+    * sent again from sequence number 0), the round-trip estimate and the stats.
     */
   def reset(now: Long): Step = {
     val carried: Vector[Pending] =
@@ -291,7 +290,8 @@ object SecureStream {
     }
   }
 
-  /** A fresh endpoint: nothing sent, nothing received, so nothing to send until a payload is offered or data arrives. */
+  /** A fresh endpoint: nothing sent, nothing received, so nothing to send until a payload is offered or data arrives.
+    */
   def initial(settings: StreamSettings, now: Long): SecureStream =
     new SecureStream(
       settings,

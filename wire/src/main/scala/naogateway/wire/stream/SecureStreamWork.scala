@@ -212,9 +212,9 @@ private[stream] final class SecureStreamWork(s: SecureStream, now: Long) {
       }
     }
 
-  /** A receiver holding the next segment m takes the number m + W as new, and that number was last carried by
-    * segment m - (N - W). If that one was sent again within the last round trip, a copy may still be on its way,
-    * so m waits until it is gone (the sequence-reuse rule).
+  /** A receiver holding the next segment m takes the number m + W as new, and that number was last carried by segment m
+    * \- (N - W). If that one was sent again within the last round trip, a copy may still be on its way, so m waits
+    * until it is gone (the sequence-reuse rule).
     */
   private def reuseSafeAt: Long = {
     val lastCopy = retransmittedAt(mod(nextSeq + w))

@@ -4,11 +4,11 @@ import scala.concurrent.duration._
 
 import naogateway.wire.WireLimits
 
-/** Configuration of one secure-stream endpoint (docs/protocol.md §11); both ends of a pair must agree on `window` and `maxSeq`.
+/** Configuration of one secure-stream endpoint (docs/protocol.md §11); both ends of a pair must agree on `window` and
+  * `maxSeq`.
   *
   * @param window
-  *   how many data segments may be unacknowledged at once (1 = the thesis's stop-and-wait, up to 20 = selective
-  *   repeat)
+  *   how many data segments may be unacknowledged at once (1 = the thesis's stop-and-wait, up to 20 = selective repeat)
   * @param maxSeq
   *   the highest sequence number before the counter wraps to 0; at most 41 so that a segment never starts with the
   *   bytes `00 2A` (FU-Remote) or `RG` (GameController)
@@ -23,8 +23,8 @@ import naogateway.wire.WireLimits
   * @param sendQueueLimit
   *   how many payloads may wait for a free window slot; a send beyond it is refused, never dropped
   * @param honourSkipNotices
-  *   whether byte 0 of a pure ACK that lies ahead of the last in-order sequence number is taken as "the sender gave
-  *   up on everything up to here". Switch it off for a peer running the thesis firmware: that firmware puts its own,
+  *   whether byte 0 of a pure ACK that lies ahead of the last in-order sequence number is taken as "the sender gave up
+  *   on everything up to here". Switch it off for a peer running the thesis firmware: that firmware puts its own,
   *   possibly unacknowledged, sequence number into byte 0 of its pure ACKs, and honouring it would skip data that is
   *   still on its way.
   */

@@ -148,8 +148,9 @@ class GameControllerCodecSpec extends AnyWordSpec with Matchers with ScalaCheckP
       val bytes = encoded(
         v7Sample.copy(
           secsRemaining = 0xfffffffeL,
-          team1 = v7Sample.team1.copy(players =
-            v7Sample.team1.players.updated(10, PlayerInfo(Penalty.Unknown(0x1234), 0xbeef))
+          team1 = v7Sample.team1.copy(
+            players =
+              v7Sample.team1.players.updated(10, PlayerInfo(Penalty.Unknown(0x1234), 0xbeef))
           )
         )
       )

@@ -57,61 +57,63 @@ object GameControllerGenerators {
     ps <- players(0xffff)
   } yield TeamInfo(number, colour, score, Some(goal), None, None, None, None, ps)
 
-  val controlV8: Gen[ControlData2014] = for {
-    packetNumber <- u8
-    playersPerTeam <- u8
-    state <- gameState
-    firstHalf <- Gen.oneOf(true, false)
-    kickOff <- kickOffTeam
-    secondary <- secondaryGameState
-    dropInTeam <- teamColour
-    dropInTime <- i16
-    secsRemaining <- i16
-    secondaryTime <- i16
-    team0 <- teamV8
-    team1 <- teamV8
-  } yield ControlData2014(
-    GameControlVersion.V8,
-    Some(packetNumber),
-    playersPerTeam,
-    state,
-    firstHalf,
-    kickOff,
-    secondary,
-    dropInTeam,
-    dropInTime,
-    secsRemaining.toLong,
-    Some(secondaryTime),
-    team0,
-    team1
-  )
+  val controlV8: Gen[ControlData2014] =
+    for {
+      packetNumber <- u8
+      playersPerTeam <- u8
+      state <- gameState
+      firstHalf <- Gen.oneOf(true, false)
+      kickOff <- kickOffTeam
+      secondary <- secondaryGameState
+      dropInTeam <- teamColour
+      dropInTime <- i16
+      secsRemaining <- i16
+      secondaryTime <- i16
+      team0 <- teamV8
+      team1 <- teamV8
+    } yield ControlData2014(
+      GameControlVersion.V8,
+      Some(packetNumber),
+      playersPerTeam,
+      state,
+      firstHalf,
+      kickOff,
+      secondary,
+      dropInTeam,
+      dropInTime,
+      secsRemaining.toLong,
+      Some(secondaryTime),
+      team0,
+      team1
+    )
 
-  val controlV7: Gen[ControlData2014] = for {
-    playersPerTeam <- u8
-    state <- gameState
-    firstHalf <- Gen.oneOf(true, false)
-    kickOff <- kickOffTeam
-    secondary <- secondaryGameState
-    dropInTeam <- teamColour
-    dropInTime <- i16
-    secsRemaining <- u32
-    team0 <- teamV7
-    team1 <- teamV7
-  } yield ControlData2014(
-    GameControlVersion.V7,
-    None,
-    playersPerTeam,
-    state,
-    firstHalf,
-    kickOff,
-    secondary,
-    dropInTeam,
-    dropInTime,
-    secsRemaining,
-    None,
-    team0,
-    team1
-  )
+  val controlV7: Gen[ControlData2014] =
+    for {
+      playersPerTeam <- u8
+      state <- gameState
+      firstHalf <- Gen.oneOf(true, false)
+      kickOff <- kickOffTeam
+      secondary <- secondaryGameState
+      dropInTeam <- teamColour
+      dropInTime <- i16
+      secsRemaining <- u32
+      team0 <- teamV7
+      team1 <- teamV7
+    } yield ControlData2014(
+      GameControlVersion.V7,
+      None,
+      playersPerTeam,
+      state,
+      firstHalf,
+      kickOff,
+      secondary,
+      dropInTeam,
+      dropInTime,
+      secsRemaining,
+      None,
+      team0,
+      team1
+    )
 
   private def codes[A](c: WireCodes[A]): Gen[A] = Gen.frequency(3 -> Gen.oneOf(c.known), 1 -> u8.map(c.fromCode))
 
@@ -135,27 +137,30 @@ object GameControllerGenerators {
     players <- Gen.listOfN(HslPlayerInfo.Slots, hslPlayer)
   } yield HslTeamInfo(number, colour, keeperColour, keeper, score, penaltyShot, singleShots, budget, players.toVector)
 
-  val controlV19: Gen[HslControlData] = for {
-    packetNumber <- u8
-    playersPerTeam <- u8
-    competition <- codes(CompetitionType)
-    stopped <- Gen.oneOf(true, false)
-    phase <- codes(GamePhase)
-    state <- gameState
-    setPlay <- codes(SetPlay)
-    firstHalf <- Gen.oneOf(true, false)
-    kicking <- teamOrNone
-    secs <- i16
-    secondary <- i16
-    team0 <- teamV19
-    team1 <- teamV19
-  } yield HslControlData(packetNumber, playersPerTeam, competition, stopped, phase, state, setPlay, firstHalf, kicking,
-    secs.toLong, secondary, team0, team1)
+  val controlV19: Gen[HslControlData] =
+    for {
+      packetNumber <- u8
+      playersPerTeam <- u8
+      competition <- codes(CompetitionType)
+      stopped <- Gen.oneOf(true, false)
+      phase <- codes(GamePhase)
+      state <- gameState
+      setPlay <- codes(SetPlay)
+      firstHalf <- Gen.oneOf(true, false)
+      kicking <- teamOrNone
+      secs <- i16
+      secondary <- i16
+      team0 <- teamV19
+      team1 <- teamV19
+    } yield HslControlData(packetNumber, playersPerTeam, competition, stopped, phase, state, setPlay, firstHalf,
+      kicking,
+      secs.toLong, secondary, team0, team1)
 
   val hlPlayer: Gen[HlPlayerInfo] = Gen.frequency(
     2 -> Gen.const(HlPlayerInfo.Unpenalised),
-    3 -> (for { p <- codes(HlPenalty); s <- u8; w <- u8; y <- u8; r <- u8; k <- Gen.oneOf(true, false) } yield
-      HlPlayerInfo(p, s, w, y, r, k))
+    3 -> (for {
+      p <- codes(HlPenalty); s <- u8; w <- u8; y <- u8; r <- u8; k <- Gen.oneOf(true, false)
+    } yield HlPlayerInfo(p, s, w, y, r, k))
   )
 
   private def rawBytes(n: Int): Gen[ArraySeq[Byte]] = Gen.listOfN(n, Arbitrary.arbitrary[Byte]).map(ArraySeq.from(_))
@@ -172,23 +177,25 @@ object GameControllerGenerators {
     players <- Gen.listOfN(HlPlayerInfo.Slots, hlPlayer)
   } yield HlTeamInfo(number, colour, score, penaltyShot, singleShots, sequence, message, coach, players.toVector)
 
-  val controlV12: Gen[HlControlData] = for {
-    packetNumber <- u8
-    playersPerTeam <- u8
-    gameType <- codes(HlGameType)
-    state <- gameState
-    firstHalf <- Gen.oneOf(true, false)
-    kickOff <- teamOrNone
-    secondary <- codes(HlSecondaryState)
-    info <- rawBytes(4)
-    dropInTeam <- u8
-    dropInTime <- u16
-    secs <- i16
-    secondaryTime <- i16
-    team0 <- teamV12
-    team1 <- teamV12
-  } yield HlControlData(packetNumber, playersPerTeam, gameType, state, firstHalf, kickOff, secondary, info, dropInTeam,
-    dropInTime, secs.toLong, secondaryTime, team0, team1)
+  val controlV12: Gen[HlControlData] =
+    for {
+      packetNumber <- u8
+      playersPerTeam <- u8
+      gameType <- codes(HlGameType)
+      state <- gameState
+      firstHalf <- Gen.oneOf(true, false)
+      kickOff <- teamOrNone
+      secondary <- codes(HlSecondaryState)
+      info <- rawBytes(4)
+      dropInTeam <- u8
+      dropInTime <- u16
+      secs <- i16
+      secondaryTime <- i16
+      team0 <- teamV12
+      team1 <- teamV12
+    } yield HlControlData(packetNumber, playersPerTeam, gameType, state, firstHalf, kickOff, secondary, info,
+      dropInTeam,
+      dropInTime, secs.toLong, secondaryTime, team0, team1)
 
   val control: Gen[GameControlData] = Gen.oneOf(controlV19, controlV12, controlV8, controlV7)
 

@@ -11,7 +11,8 @@ object GameControllerVectors {
   /** The bytes of vector `file`; a missing vector is a defect of the checkout, so it throws rather than cancels. */
   def bytes(file: String): Array[Byte] = {
     val in: InputStream = getClass.getResourceAsStream(Folder + file)
-    if (in == null) throw new IllegalStateException(s"GameController vector $file is not on the test classpath ($Folder)")
+    if (in == null)
+      throw new IllegalStateException(s"GameController vector $file is not on the test classpath ($Folder)")
     try in.readAllBytes()
     finally in.close()
   }

@@ -11,7 +11,9 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.wire.gamecontroller.GameControllerError._
 
-/** Versions 19 and 12 of the control packet, the monitor's `RGTD` and return packets of version 4: round trips and refusals. */
+/** Versions 19 and 12 of the control packet, the monitor's `RGTD` and return packets of version 4: round trips and
+  * refusals.
+  */
 class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
   import GameControllerGenerators._
 
@@ -53,7 +55,8 @@ class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
     }
     "refuse every size but 198" in {
       (5 to 800).filter(_ != 198).foreach { n =>
-        GameControllerCodec.decodeControl(java.util.Arrays.copyOf(v19Sample, n)) shouldBe Left(WrongSize("RGme", 19, 198, n))
+        GameControllerCodec.decodeControl(java.util.Arrays.copyOf(v19Sample, n)) shouldBe Left(WrongSize("RGme", 19,
+            198, n))
       }
     }
     "refuse stopped and firstHalf bytes other than 0 or 1" in {
@@ -103,7 +106,8 @@ class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
     }
     "refuse every size but 688" in {
       (6 to 1400).filter(_ != 688).foreach { n =>
-        GameControllerCodec.decodeControl(java.util.Arrays.copyOf(v12Sample, n)) shouldBe Left(WrongSize("RGme", 12, 688, n))
+        GameControllerCodec.decodeControl(java.util.Arrays.copyOf(v12Sample, n)) shouldBe Left(WrongSize("RGme", 12,
+            688, n))
       }
       GameControllerCodec.decodeControl(ascii("RGme") :+ 12.toByte) shouldBe Left(TooShort(6, 5))
     }
@@ -118,7 +122,8 @@ class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
     }
     "refuse values that do not fit and raw fields of the wrong length" in {
       val d = controlV12.sample.get
-      GameControllerCodec.encodeControl(d.copy(dropInTime = -1)) shouldBe Left(OutOfRange(12, "dropInTime", -1L, 0L, 65535L))
+      GameControllerCodec.encodeControl(d.copy(dropInTime = -1)) shouldBe Left(OutOfRange(12, "dropInTime", -1L, 0L,
+          65535L))
       GameControllerCodec.encodeControl(d.copy(secondaryStateInfo = seq(1, 2, 3))) shouldBe
         Left(WrongLength("secondaryStateInfo", 4, 3))
       GameControllerCodec.encodeControl(d.copy(team1 = d.team1.copy(coachMessage = seq(1)))) shouldBe
@@ -133,19 +138,24 @@ class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
         GameControllerCodec.decodeControl(bytes).map(_.version) shouldBe Right(data.version)
       }
       val v8 = controlV8.sample.get
-      GameControllerCodec.encodeControl(v8.copy(version = GameControlVersion.V19)) shouldBe Left(InvalidField("version", 19L))
+      GameControllerCodec.encodeControl(v8.copy(version = GameControlVersion.V19)) shouldBe Left(InvalidField("version",
+          19L))
     }
     "refuse the other versions' sizes as a wrong size of the version read" in {
       val sizes = GameControlVersion.all.map(_.packetBytes)
-      val samples: Map[GameControlVersion, GameControlData] = Map(GameControlVersion.V19 -> controlV19.sample.get,
-        GameControlVersion.V12 -> controlV12.sample.get, GameControlVersion.V8 -> controlV8.sample.get,
-        GameControlVersion.V7 -> controlV7.sample.get)
+      val samples: Map[GameControlVersion, GameControlData] = Map(
+        GameControlVersion.V19 -> controlV19.sample.get,
+        GameControlVersion.V12 -> controlV12.sample.get,
+        GameControlVersion.V8 -> controlV8.sample.get,
+        GameControlVersion.V7 -> controlV7.sample.get
+      )
       for {
         version <- GameControlVersion.all
         size <- sizes if size != version.packetBytes
       } {
         val bytes = java.util.Arrays.copyOf(encoded(samples(version)), size)
-        GameControllerCodec.decodeControl(bytes) shouldBe Left(WrongSize("RGme", version.number, version.packetBytes, size))
+        GameControllerCodec.decodeControl(bytes) shouldBe Left(WrongSize("RGme", version.number, version.packetBytes,
+            size))
       }
     }
   }
@@ -155,12 +165,14 @@ class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
       forAll(returnStatus) { status =>
         val bytes = GameControllerCodec.encodeStatus(status).fold(err => fail(err.describe), identity)
         bytes.length shouldBe 32
-        bytes.take(8).toSeq shouldBe (ascii("RGrt") ++ Array(4, status.player, status.team, if (status.fallen) 1 else 0).map(_.toByte)).toSeq
+        bytes.take(8).toSeq shouldBe (ascii("RGrt") ++ Array(4, status.player, status.team, if (status.fallen) 1 else 0)
+          .map(_.toByte)).toSeq
         GameControllerCodec.decodeStatus(bytes) shouldBe Right(status)
       }
     }
     "hold the floats little-endian at offsets 8 to 31" in {
-      val bytes = GameControllerCodec.encodeStatus(ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), -1f, (250f, 0f))).toOption.get
+      val bytes = GameControllerCodec.encodeStatus(ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), -1f,
+          (250f, 0f))).toOption.get
       bytes.slice(8, 12).toSeq shouldBe seq(0x00, 0x00, 0x7a, 0x44) // 1000.0f
       bytes.slice(20, 24).toSeq shouldBe seq(0x00, 0x00, 0x80, 0xbf) // -1.0f
     }

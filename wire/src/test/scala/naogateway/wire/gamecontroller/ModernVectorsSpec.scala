@@ -5,15 +5,15 @@ import scala.collection.immutable.ArraySeq
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-/**
- * The version-19 and version-12 packets in the test resources' `vectors/gamecontroller/` (built from the official
- * layouts by the folder's own script), decoded field by field against their README, and encoded back byte-exact.
- */
+/** The version-19 and version-12 packets in the test resources' `vectors/gamecontroller/` (built from the official
+  * layouts by the folder's own script), decoded field by field against their README, and encoded back byte-exact.
+  */
 class ModernVectorsSpec extends AnyWordSpec with Matchers {
   import ModernVectorsSpec._
 
   private def decoded(file: String): GameControlData =
-    GameControllerCodec.decodeControl(GameControllerVectors.bytes(file)).fold(err => fail(s"$file: ${err.describe}"), identity)
+    GameControllerCodec.decodeControl(GameControllerVectors.bytes(file)).fold(err => fail(s"$file: ${err.describe}"),
+      identity)
 
   private def v19(file: String): HslControlData = decoded(file) match {
     case d: HslControlData => d
@@ -28,18 +28,32 @@ class ModernVectorsSpec extends AnyWordSpec with Matchers {
   private val substitutesV19 = Vector.fill(13)(HslPlayerInfo(HslPenalty.Substitute, 0, 0, 0))
 
   private def hslTeam(number: Int, colour: FieldColour, keeperColour: FieldColour, score: Int, budget: Int) =
-    HslTeamInfo(number, colour, keeperColour, 1, score, 0, 0, budget, Vector.fill(7)(HslPlayerInfo.Unpenalised) ++ substitutesV19)
+    HslTeamInfo(number, colour, keeperColour, 1, score, 0, 0, budget,
+      Vector.fill(7)(HslPlayerInfo.Unpenalised) ++ substitutesV19)
 
-  private def hsl(packet: Int, state: GameState) = HslControlData(packet, 7, CompetitionType.Small, stopped = false,
-    GamePhase.Normal, state, SetPlay.NoSetPlay, firstHalf = true, Some(12), 600L, 0,
-    hslTeam(12, FieldColour.Blue, FieldColour.Yellow, 0, 12000), hslTeam(7, FieldColour.Red, FieldColour.Black, 0, 12000))
+  private def hsl(packet: Int, state: GameState) = HslControlData(
+    packet,
+    7,
+    CompetitionType.Small,
+    stopped = false,
+    GamePhase.Normal,
+    state,
+    SetPlay.NoSetPlay,
+    firstHalf = true,
+    Some(12),
+    600L,
+    0,
+    hslTeam(12, FieldColour.Blue, FieldColour.Yellow, 0, 12000),
+    hslTeam(7, FieldColour.Red, FieldColour.Black, 0, 12000)
+  )
 
   private def withBudget(d: HslControlData, b0: Int, b1: Int, s0: Int = 0, s1: Int = 0) =
     d.copy(team0 = d.team0.copy(messageBudget = b0, score = s0), team1 = d.team1.copy(messageBudget = b1, score = s1))
 
   private val expectedV19: Map[String, HslControlData] = {
-    val playing = withBudget(hsl(4, GameState.Playing), 11800, 11790, 2, 1).copy(stopped = true, setPlay = SetPlay.GoalKick,
-      kickingTeam = Some(7), secsRemaining = 587L, secondaryTime = 30)
+    val playing =
+      withBudget(hsl(4, GameState.Playing), 11800, 11790, 2, 1).copy(stopped = true, setPlay = SetPlay.GoalKick,
+        kickingTeam = Some(7), secsRemaining = 587L, secondaryTime = 30)
     Map(
       "v19-initial.bin" -> hsl(1, GameState.Initial),
       "v19-ready.bin" -> hsl(2, GameState.Ready).copy(secondaryTime = 45),
@@ -60,13 +74,32 @@ class ModernVectorsSpec extends AnyWordSpec with Matchers {
 
   private val noInfo = ArraySeq[Byte](0, 0, 0, 0)
 
-  private def hl(packet: Int, state: GameState) = HlControlData(packet, 4, HlGameType.KidSize, state, firstHalf = true,
-    Some(12), HlSecondaryState.Normal, noInfo, 0, 0xffff, 600L, 0, hlTeam(12, FieldColour.Blue, 0), hlTeam(7, FieldColour.Red, 0))
+  private def hl(packet: Int, state: GameState) = HlControlData(
+    packet,
+    4,
+    HlGameType.KidSize,
+    state,
+    firstHalf = true,
+    Some(12),
+    HlSecondaryState.Normal,
+    noInfo,
+    0,
+    0xffff,
+    600L,
+    0,
+    hlTeam(12, FieldColour.Blue, 0),
+    hlTeam(7, FieldColour.Red, 0)
+  )
 
   private val expectedV12: Map[String, HlControlData] = {
-    val playing = hl(4, GameState.Playing).copy(kickOffTeam = Some(7), secondaryState = HlSecondaryState.DirectFreeKick,
-      secondaryStateInfo = ArraySeq[Byte](7, 0, 0, 0), secsRemaining = 587L, team0 = hlTeam(12, FieldColour.Blue, 2),
-      team1 = hlTeam(7, FieldColour.Red, 1))
+    val playing = hl(4, GameState.Playing).copy(
+      kickOffTeam = Some(7),
+      secondaryState = HlSecondaryState.DirectFreeKick,
+      secondaryStateInfo = ArraySeq[Byte](7, 0, 0, 0),
+      secsRemaining = 587L,
+      team0 = hlTeam(12, FieldColour.Blue, 2),
+      team1 = hlTeam(7, FieldColour.Red, 1)
+    )
     Map(
       "v12-initial.bin" -> hl(1, GameState.Initial),
       "v12-ready.bin" -> hl(2, GameState.Ready).copy(secondaryTime = 30),
@@ -96,7 +129,8 @@ class ModernVectorsSpec extends AnyWordSpec with Matchers {
         v19(file) shouldBe expected
       }
       "encode back to the identical bytes" in {
-        GameControllerCodec.encodeControl(v19(file)).map(_.toSeq) shouldBe Right(GameControllerVectors.bytes(file).toSeq)
+        GameControllerCodec.encodeControl(v19(file)).map(_.toSeq) shouldBe Right(
+          GameControllerVectors.bytes(file).toSeq)
         GameControllerCodec.encodeControl(expected).map(_.toSeq) shouldBe Right(GameControllerVectors.bytes(file).toSeq)
       }
     }

@@ -36,7 +36,7 @@ object StreamTestKit {
     /** A send that the test expects to be accepted. */
     def offer(payload: String, id: Long, now: Long, deadline: Option[Long] = None): Step =
       state.send(bytes(payload), id, deadline, now) match {
-        case Right(step) => step
+        case Right(step)   => step
         case Left(refusal) => throw new AssertionError(s"unexpected refusal: ${refusal.describe}")
       }
   }
