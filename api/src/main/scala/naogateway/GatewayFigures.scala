@@ -28,7 +28,8 @@ final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress]
 
   /** One line: "game state from 10.0.0.5:3838 (trusted: 10.0.0.0/24), 3 packets from elsewhere ignored". */
   def describe: String =
-    s"game state from ${lastFrom.fold("nowhere yet")(a => s"${a.getAddress.getHostAddress}:${a.getPort}")} (trusted: $trusted)" +
+    s"game state from ${lastFrom.fold("nowhere yet")(a => s"${a.getAddress.getHostAddress}:${a.getPort}")} " +
+      s"(trusted: $trusted)" +
       (if (untrusted > 0) s", $untrusted packet(s) from elsewhere ignored" else "")
 }
 

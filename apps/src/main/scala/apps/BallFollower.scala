@@ -59,7 +59,8 @@ object BallFollower {
                 } else lastHead
               // Only changed velocities go out; the middleware keeps the current walk alive.
               val walk = (t.vx, t.omega)
-              if (math.abs(walk._1 - lastWalk._1) > 0.02 || math.abs(walk._2 - lastWalk._2) > 0.05 || lastWalk._1.isNaN) {
+              val changed = math.abs(walk._1 - lastWalk._1) > 0.02 || math.abs(walk._2 - lastWalk._2) > 0.05
+              if (changed || lastWalk._1.isNaN) {
                 val sent = if (walk == ((0.0, 0.0))) robot.stop(robotId) else robot.walk(robotId, t.vx, 0.0, t.omega)
                 context.pipeToSelf(sent)(WalkDone.apply)
               }

@@ -93,7 +93,9 @@ object StatusView {
     * (fallen, pose, ball age), shown beside the gateway's own robot lines.
     */
   def monitorLines(source: GameSource): Vector[String] =
-    source.trueStateAgeMillis.map(ms => f"true game state from the GameController (monitor), ${ms / 1000.0}%.1f s old").toVector ++
+    source.trueStateAgeMillis
+      .map(ms => f"true game state from the GameController (monitor), ${ms / 1000.0}%.1f s old")
+      .toVector ++
       source.forwarded.map { f =>
         val s = f.status
         val ball = if (s.ballAge < 0) "ball never seen" else f"ball seen ${s.ballAge}%.1f s ago"

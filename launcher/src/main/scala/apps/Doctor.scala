@@ -83,7 +83,8 @@ object Doctor {
         fail(
           "GameController",
           "no packet heard from a trusted source",
-          "start the GameController on the field's network (it broadcasts to UDP 3838); this machine must be on that subnet " +
+          "start the GameController on the field's network (it broadcasts to UDP 3838); this machine must be on " +
+            "that subnet " +
             "and listen on naogateway.game-controller.port"
         )
       case Some(p) =>
@@ -93,8 +94,10 @@ object Doctor {
       if (game.source.untrusted > 0)
         Vector(fail(
             "GameController source",
-            s"${game.source.untrusted} packet(s) from addresses not in trusted-sources (${game.source.trusted}) ignored",
-            "put the GameController's address or subnet in naogateway.game-controller.trusted-sources (NAOGATEWAY_GAMECONTROLLER_TRUSTED)"
+            s"${game.source.untrusted} packet(s) from addresses not in trusted-sources (${game.source.trusted}) " +
+              s"ignored",
+            "put the GameController's address or subnet in naogateway.game-controller.trusted-sources " +
+              "(NAOGATEWAY_GAMECONTROLLER_TRUSTED)"
           ))
       else Vector.empty
     val versions =
@@ -102,8 +105,10 @@ object Doctor {
         Vector(fail(
             "GameController version",
             s"$unreadable packet(s) the gateway cannot read (refused as ${Rejection.BadGameControllerPacket.name})",
-            s"the gateway reads versions ${GameControlVersion.all.map(_.number).mkString(", ")} (docs/protocol.md §10); " +
-              "a GameController of another version closes the competition gate (fail safe, §10.7) until the gateway is updated"
+            s"the gateway reads versions ${GameControlVersion.all.map(_.number).mkString(", ")} (docs/protocol.md " +
+              s"§10); " +
+              "a GameController of another version closes the competition gate (fail safe, §10.7) until the gateway " +
+              "is updated"
           ))
       else Vector.empty
     // A second GameController on the field, the team's message budget running out, messages over the size limit.
@@ -137,13 +142,15 @@ object Doctor {
           Some(fail(
               s"robot ${r.robotId}",
               s"offline (configured at ${host(r.address)}, heard before)",
-              "check its battery and WiFi module; it must keep sending keep-alives every 200 ms (robotctl status shows its loss)"
+              "check its battery and WiFi module; it must keep sending keep-alives every 200 ms (robotctl status " +
+                "shows its loss)"
             ))
         case _ =>
           Some(fail(
               s"robot ${r.robotId}",
               s"configured at ${host(r.address)} but never heard",
-              s"switch it on; its firmware must send keep-alives to this machine's UDP ${facts.settings.robotPort} from ${host(r.address)} " +
+              s"switch it on; its firmware must send keep-alives to this machine's UDP ${facts.settings.robotPort} " +
+                s"from ${host(r.address)} " +
                 "(README, \"With real robots\": when a robot does not come online)"
             ))
       }
@@ -154,7 +161,8 @@ object Doctor {
         fail(
           s"robot ${s.robotId}",
           s"heard from ${host(s.address)} but not configured",
-          s"if it is yours, add { id = ${s.robotId}, address = \"${host(s.address)}\" } to naogateway.robots; if not, another team's robot sends here"
+          s"if it is yours, add { id = ${s.robotId}, address = \"${host(s.address)}\" } to naogateway.robots; if " +
+            s"not, another team's robot sends here"
         )
       }
     val mismatched = facts.stats.rejected.getOrElse(Rejection.RobotIdMismatch.name, 0L)
@@ -164,7 +172,8 @@ object Doctor {
         Vector(fail(
             "robot addresses",
             s"$mismatched frame(s) whose robot id belongs to another address (sources: $sources)",
-            "a robot's IP address changed, or two robots share an id: give each robot its static address and fix naogateway.robots"
+            "a robot's IP address changed, or two robots share an id: give each robot its static address and fix " +
+              "naogateway.robots"
           ))
       } else Vector.empty
     val online = facts.robots.count(_.online)
@@ -185,7 +194,8 @@ object Doctor {
       val failed = l.rejected.filter { case (k, _) => SignatureRejections(k) }
       Option.when(failed.values.sum > 0)(fail(
           s"robot ${l.robotId} signing",
-          s"${failed.values.sum} frame(s) failed verification (${failed.toVector.sorted.map { case (k, n) => s"$k $n" }.mkString(", ")})",
+          s"${failed.values.sum} frame(s) failed verification " +
+            s"(${failed.toVector.sorted.map { case (k, n) => s"$k $n" }.mkString(", ")})",
           "the robot's firmware must sign with the same team key as naogateway.signing.key (docs/protocol.md 6.7); " +
             "a firmware that does not sign yet needs signing = off for this robot"
         ))
@@ -199,7 +209,8 @@ object Doctor {
         fail(
           s"robot ${r.robotId} clock",
           f"estimate does not converge (error bound ±${c.errorBoundMillis}%.0f ms over ${c.samples} keep-alives)",
-          "its keep-alives arrive irregularly (WiFi load, loss: robotctl status) or its clock jumps; the firmware must stamp each " +
+          "its keep-alives arrive irregularly (WiFi load, loss: robotctl status) or its clock jumps; the firmware " +
+            "must stamp each " +
             "keep-alive with its uptime in ms (docs/protocol.md 6.2)"
         )
       }
@@ -211,8 +222,10 @@ object Doctor {
     if (t.dropped > 0 || share >= BudgetWarnShare)
       fail(
         "team budget",
-        f"${t.outBytesLastSecond} B/s of ${t.budgetBytesPerSecond} B/s (${share * 100}%.0f %%), ${t.dropped} datagram(s) dropped",
-        "the gateway sends too much: fewer debug options enabled, fewer apps walking robots, or a lower camera rate (docs/architecture.md, the traffic budget)"
+        f"${t.outBytesLastSecond} B/s of ${t.budgetBytesPerSecond} B/s (${share * 100}%.0f %%), ${t.dropped} " +
+          f"datagram(s) dropped",
+        "the gateway sends too much: fewer debug options enabled, fewer apps walking robots, or a lower camera rate " +
+          "(docs/architecture.md, the traffic budget)"
       )
     else ok("team budget", f"${t.outBytesLastSecond} B/s of ${t.budgetBytesPerSecond} B/s (${share * 100}%.0f %%)")
   }
@@ -245,7 +258,8 @@ object Doctor {
       Vector(fail(
           "FU-Remote relay",
           s"nothing listens on UDP ${host(to)}:${to.getPort}, where robot traffic is relayed",
-          s"start FU-Remote on port ${to.getPort} (it cannot have 11011, which the gateway holds), or turn naogateway.fu-remote-relay off"
+          s"start FU-Remote on port ${to.getPort} (it cannot have 11011, which the gateway holds), or turn " +
+            s"naogateway.fu-remote-relay off"
         ))
     case (Some(to), _) => Vector(ok("FU-Remote relay", s"relaying to ${host(to)}:${to.getPort}"))
     case (None, _)     => Vector.empty

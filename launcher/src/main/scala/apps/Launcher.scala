@@ -98,7 +98,8 @@ object Launcher {
           !(resolved.getBoolean("naogateway.game-controller.monitor.enabled") && a.replay.isEmpty &&
             resolved.getInt("apps.launcher.simulated-robots") > 0),
           "game-controller.monitor: the simulated robots on this host would answer the GameController from it, which " +
-            "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the monitor off"
+            "then refuses this host as a monitor; set apps.launcher.simulated-robots = 0 (real robots) or turn the " +
+            "monitor off"
         )
         (a, if (a.replay.isDefined) ReplayOverrides.withFallback(c) else c)
       } catch {
@@ -106,7 +107,8 @@ object Launcher {
         case e @ (_: IllegalArgumentException | _: com.typesafe.config.ConfigException) =>
           System.err.println(s"naogateway: ${e.getMessage.stripPrefix("requirement failed: ")}")
           System.err.println(
-            "usage: naogateway [config-file] [--replay FILE-OR-DIRECTORY [--speed X]]   (no file: the demo with simulated robots)")
+            "usage: naogateway [config-file] [--replay FILE-OR-DIRECTORY [--speed X]]   (no file: the demo with " +
+              "simulated robots)")
           sys.exit(2)
       }
     val nodeConfig = checked(overrides, code => sys.exit(code))

@@ -41,7 +41,8 @@ object Preflight {
 
     /** One line: the port is taken by another program. */
     def inUse: String =
-      s"port $port (${transport.name} on $host, $purpose) is in use by another program; stop that program or move the port with $setting"
+      s"port $port (${transport.name} on $host, $purpose) is in use by another program; stop that program or move " +
+        s"the port with $setting"
 
     /** One line: the address to bind is not one of this machine's. */
     def noSuchAddress: String =
@@ -89,7 +90,8 @@ object Preflight {
             c.getString("naogateway.game-controller.bind-address"),
             c.getInt("naogateway.game-controller.port"),
             "the GameController's broadcasts",
-            "naogateway.game-controller.port (NAOGATEWAY_GAMECONTROLLER_PORT) or naogateway.game-controller.reuse-address",
+            "naogateway.game-controller.port (NAOGATEWAY_GAMECONTROLLER_PORT) or " +
+              "naogateway.game-controller.reuse-address",
             essential = false
           ))
       else Vector.empty
@@ -208,9 +210,11 @@ object Preflight {
       missing.headOption.map { first =>
         val names = missing.map(_.getHostAddress)
         val shown = if (names.size <= 3) names.mkString(", ") else s"${names.head} to ${names.last}"
-        s"the demo's $simulatedRobots simulated robots need loopback addresses of their own, and this machine lacks $shown " +
+        s"the demo's $simulatedRobots simulated robots need loopback addresses of their own, and this machine lacks " +
+          s"$shown " +
           s"(macOS has only 127.0.0.1): add them with " +
-          s"`for i in $$(seq ${first.getAddress()(3) & 0xff} ${missing.last.getAddress()(3) & 0xff}); do sudo ifconfig lo0 alias 127.0.0.$$i up; done`, " +
+          s"`for i in $$(seq ${first.getAddress()(3) & 0xff} ${missing.last.getAddress()(3) & 0xff}); do sudo " +
+          s"ifconfig lo0 alias 127.0.0.$$i up; done`, " +
           "or run without simulated robots (NAOGATEWAY_SIMULATED_ROBOTS=0)"
       }
     }
@@ -237,7 +241,8 @@ object Preflight {
     val parts = com.typesafe.config.ConfigUtil.splitPath(path).asScala.toVector
     (1 until parts.size).exists { n =>
       val prefix = com.typesafe.config.ConfigUtil.joinPath(parts.take(n).asJava)
-      known.hasPathOrNull(prefix) && !known.getIsNull(prefix) && known.getValue(prefix).valueType() == ConfigValueType.LIST
+      known.hasPathOrNull(prefix) && !known.getIsNull(prefix) &&
+      known.getValue(prefix).valueType() == ConfigValueType.LIST
     }
   }
 

@@ -48,10 +48,12 @@ private[naogateway] final case class GameControllerSources(
     else {
       def name(a: InetSocketAddress) = s"${a.getAddress.getHostAddress}:${a.getPort}"
       val from = chosen.filter(live(_, nowNanos)).fold("none of them")(c => name(c))
-      Vector(s"${rest.size + chosen.count(live(_, nowNanos))} GameControllers on this field: game state from $from only; " +
-        rest.map(a =>
-          s"${name(a)} (${if (heard(a).trusted) "trusted, ignored while the other sends" else "untrusted, ignored"})").mkString(
-          ", "))
+      Vector(s"${rest.size + chosen.count(live(_, nowNanos))} GameControllers on this field: game state from $from " +
+        s"only; " +
+        rest.map { a =>
+          val why = if (heard(a).trusted) "trusted, ignored while the other sends" else "untrusted, ignored"
+          s"${name(a)} ($why)"
+        }.mkString(", "))
     }
   }
 }

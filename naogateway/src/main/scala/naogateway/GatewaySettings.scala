@@ -218,7 +218,8 @@ final case class GatewaySettings(
   require(
     !(competition && gameControllerEnabled && !gameControllerTrusted.configured),
     "competition mode needs game-controller.trusted-sources (the GameController's address or subnet, e.g. " +
-      "[\"10.0.0.0/24\"]; env NAOGATEWAY_GAMECONTROLLER_TRUSTED): otherwise anyone on the WiFi could start or end the game"
+      "[\"10.0.0.0/24\"]; env NAOGATEWAY_GAMECONTROLLER_TRUSTED): otherwise anyone on the WiFi could start or end " +
+      "the game"
   )
   // A robot is known by its IP address (the gateway's routing), so two robots cannot share one.
   require(robots.map(_.address.getAddress).distinct.size == robots.size,
@@ -229,8 +230,10 @@ final case class GatewaySettings(
   )
   require(
     signingKey.isDefined || !robots.exists(_.signing == RobotSigning.Required),
-    s"robots: robot ${robots.find(_.signing == RobotSigning.Required).fold("")(_.robotId.toString)} has signing = required, " +
-      "but no signing key is set (signing.key, env NAOGATEWAY_SIGNING_KEY: the team key as 32 to 128 hexadecimal digits)"
+    s"robots: robot ${robots.find(_.signing == RobotSigning.Required).fold("")(_.robotId.toString)} has signing = " +
+      s"required, " +
+      "but no signing key is set (signing.key, env NAOGATEWAY_SIGNING_KEY: the team key as 32 to 128 hexadecimal " +
+      "digits)"
   )
 
   /** Whether robot `robotId`'s frames must be signed; robots not configured (discovered ones) are `Off`. */

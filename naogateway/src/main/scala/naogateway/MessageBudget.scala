@@ -144,13 +144,15 @@ private[naogateway] final case class MessageBudget(
       Option.when(overBudget > 0)(
         s"$overBudget team message(s) over the budget: the GameController resets the score to 0"),
       left.filter(secs => counting && rate * secs > remaining).map(secs =>
-        f"at $rate%.1f messages/s the budget ($remaining left) runs out ${(remaining / rate).toLong} s into the $secs s left of the half")
+        f"at $rate%.1f messages/s the budget ($remaining left) runs out ${(remaining / rate).toLong} s into the " +
+          f"$secs s left of the half")
     ).flatten
   }
 
   /** One line for the status view and `robotctl status`. */
   def describe(nowNanos: Long): String =
-    f"team messages (team ${settings.teamNumber}, UDP ${settings.port}): $remaining of ${settings.perGame + extraMinutes * settings.perExtraMinute} left, " +
+    f"team messages (team ${settings.teamNumber}, UDP ${settings.port}): $remaining of " +
+      f"${settings.perGame + extraMinutes * settings.perExtraMinute} left, " +
       f"$counted counted, ${ratePerSecond(nowNanos)}%.1f/s" +
       reported.fold("")(r => s", GameController says $r") + (if (counting) "" else " (not counting now)")
 }

@@ -59,6 +59,7 @@ private[naogateway] object MonitorRole {
     robots.toVector.collect {
       case r if r.address.getAddress.isLoopbackAddress || r.address.getAddress.getHostAddress == bindAddress =>
         s"robot ${r.robotId} at ${r.address.getAddress.getHostAddress} runs on this host: its status messages to the " +
-          "GameController would make it refuse this host as a monitor (game-controller.monitor needs every robot elsewhere)"
+          "GameController would make it refuse this host as a monitor (game-controller.monitor needs every robot " +
+          "elsewhere)"
     }
 }

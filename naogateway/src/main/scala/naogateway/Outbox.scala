@@ -256,8 +256,8 @@ private final class Outbox(
           s.replyTo.foreach(_ ! Accepted(s.tag))
           // Safety must not wait for the timer; other classes drain when the budget frees, or at once when only probes
           // held back by their share wait (they must not make the others wait for the timer).
-          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer) || queues(Priority.Heartbeat.rank).nonEmpty)
-            drain(now)
+          val probesHeld = queues(Priority.Heartbeat.rank).nonEmpty
+          if (s.priority == Priority.Safety || !timers.isTimerActive(DrainTimer) || probesHeld) drain(now)
         }
       }
       Behaviors.same

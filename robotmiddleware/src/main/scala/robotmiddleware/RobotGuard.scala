@@ -402,7 +402,8 @@ private[robotmiddleware] object RobotGuard {
         val sustained = readings.size == settings.batteryReadings
         if (safety.isEmpty && sustained && readings.forall(_ < settings.lowBattery)) {
           val reason =
-            f"battery low: ${readings.max}%.2f V or less for ${readings.size} keep-alives (below ${settings.lowBattery}%.2f V)"
+            f"battery low: ${readings.max}%.2f V or less for ${readings.size} keep-alives (below " +
+              f"${settings.lowBattery}%.2f V)"
           context.log.warn("Robot [{}]: {}; stopping and sitting down", robotId, reason)
           safety = Some(reason)
           leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))

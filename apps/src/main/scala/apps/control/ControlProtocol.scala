@@ -73,7 +73,8 @@ object ControlProtocol {
       |       robotctl [--control host:port] call <robotId> <module> <method> [param ...]
       |                                         (numbers become floats, true/false flags, else text)
       |       robotctl [--control host:port] watch <robotId> [seconds]   (the robot's status stream; default 10 s)
-      |       robotctl [--control host:port] doctor [config-file]        (what is wrong, each with its fix; exit 0 when all is well)
+      |       robotctl [--control host:port] doctor [config-file]        (what is wrong, each with its fix;
+      |                                                                   exit 0 when all is well)
       |The gateway's control port is --control, else $NAOGATEWAY_CONTROL, else 127.0.0.1:11019.""".stripMargin
 
   /** Reads a command-line parameter: a number, a truth value or a text. */

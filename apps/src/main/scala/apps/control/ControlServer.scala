@@ -351,7 +351,8 @@ object ControlServer {
 
   /** The column heads of [[statusLine]]. */
   val statusHeader: String =
-    f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s ${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
+    f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s " +
+      f"${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
 
   /** One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
     * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
@@ -363,7 +364,8 @@ object ControlServer {
     val clock = row.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
     val drift = row.clock.fold("-")(c => f"${c.driftPpm}%+.0f ppm")
     f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${if (row.online) "online" else "offline"}%-8s " +
-      f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s ${row.posture.fold("-")(_.name)}%-8s " +
+      f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
+      f"${row.posture.fold("-")(_.name)}%-8s " +
       f"${row.report.role.getOrElse("-")}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
   }
 }

@@ -123,7 +123,8 @@ object EndpointProtocol {
     }
     if (call.params.length != names.length || values.length != names.length)
       Left(
-        s"$Malformed${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got ${describe(call.params)}")
+        s"$Malformed${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got " +
+          s"${describe(call.params)}")
     else if (values.exists(v => v.isNaN || v.isInfinite)) Left(s"$Malformed${call.name}: numbers must be finite")
     else Right(values)
   }
@@ -186,7 +187,8 @@ object EndpointProtocol {
             Posture.target(name).left.map(Malformed + _).flatMap(target => execute(Operation.Posture(target)))
           case other =>
             Left(
-              s"${Malformed}motion.posture takes one text (${Posture.targets.map(_.name).mkString(", ")}), got ${describe(other)}")
+              s"${Malformed}motion.posture takes one text (${Posture.targets.map(_.name).mkString(", ")}), got " +
+                s"${describe(other)}")
         }
       case ("speech", "say") =>
         call.params match {

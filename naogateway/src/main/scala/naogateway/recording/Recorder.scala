@@ -320,8 +320,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
             }
             c.robotHealth.foreach(h => writer.write(ids(1), time, time, encoder.bytes, 0, encoder.message(h)))
             // Anything beyond a keep-alive's status and health goes on the message channel, whole.
-            if (c.debuggingCommands.isDefined || c.debugData.isDefined || c.havimoRegions.isDefined || c.havimoGrid.isDefined ||
-              c.rpcRequest.isDefined || c.rpcResponse.isDefined || c.unknownExtensions.nonEmpty)
+            if (c.debuggingCommands.isDefined || c.debugData.isDefined || c.havimoRegions.isDefined ||
+              c.havimoGrid.isDefined || c.rpcRequest.isDefined || c.rpcResponse.isDefined ||
+              c.unknownExtensions.nonEmpty)
               writer.write(ids(2), time, time, c.toProtobuf)
           }
           c.rpcResponse.foreach { r =>

@@ -197,13 +197,14 @@ object RobotFirmware {
     // RGrt version 4, to 3939.
     if (data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
     else {
+      def alive =
+        GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive))
+          .toOption
       val answer = data.version match {
         case GameControlVersion.V8 =>
-          GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive)).toOption
-            .map(_ -> 3838)
+          alive.map(_ -> 3838)
         case GameControlVersion.V12 =>
-          GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive)).toOption
-            .map(_ -> GameControllerCodec.ReturnPort)
+          alive.map(_ -> GameControllerCodec.ReturnPort)
         case GameControlVersion.V19 =>
           val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
           val status = ReturnStatus(
@@ -217,8 +218,8 @@ object RobotFirmware {
           GameControllerCodec.encodeStatus(status).toOption.map(_ -> GameControllerCodec.ReturnPort)
         case GameControlVersion.V7 => None
       }
-      (counted,
-        answer.map { case (b, port) => Outgoing(b, Destination.ReplyTo(new InetSocketAddress(from.getAddress, port))) }.toVector)
+      val to = (port: Int) => Destination.ReplyTo(new InetSocketAddress(from.getAddress, port))
+      (counted, answer.map { case (b, port) => Outgoing(b, to(port)) }.toVector)
     }
   }
 

@@ -127,7 +127,8 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
         var replies = out.filter(_.to == ReplyMarker)
         val deadline = System.nanoTime() + LongestCall.toNanos
         // A posture call answers when its motion has ended: hold the request, as the socket forces us to.
-        while (contents.rpcRequest.isDefined && !replies.exists(isRpcReply) && running && System.nanoTime() < deadline) {
+        def waiting = contents.rpcRequest.isDefined && !replies.exists(isRpcReply)
+        while (waiting && running && System.nanoTime() < deadline) {
           val wait =
             math.max(0L, math.min(state.get.nextWakeUp - System.nanoTime(), TimeUnit.MILLISECONDS.toNanos(PollMillis)))
           if (wait > 0) Thread.sleep(wait / 1000000L, (wait % 1000000L).toInt)
