@@ -86,10 +86,11 @@ class FirmwareQemuSpec
         hello.get._2.getAddress shouldBe robot
         bridge.commands.asScala.toVector.take(5) shouldBe
           Vector("AT", "ATE0", "AT+BDATA=1", "AT+NCUDP=192.168.1.10,11011", "AT+NSUDP=3838")
-        // A datagram to the robot's 3838 comes back to its sender (the firmware opens a connection to it first).
+        // A datagram to the robot's 3838 comes back to its sender (the firmware opens a connection to it first). The
+        // emulated board runs slowly on a loaded machine: its echo gets 15 s, returned as soon as it comes.
         val ping = "ping \u001bZ0005 \r\n binary-safe".getBytes(StandardCharsets.ISO_8859_1)
         peer.send(new DatagramPacket(ping, ping.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
-        val back = receive(peer, 5.seconds)
+        val back = receive(peer, 15.seconds)
         back.map(_._1) shouldBe Some(new String(ping, StandardCharsets.ISO_8859_1))
         back.get._2.getAddress shouldBe robot
         // The peer shares the base station's host, so the firmware knows it by that host's network address.
@@ -97,7 +98,7 @@ class FirmwareQemuSpec
         // The largest datagram the module takes crosses whole both ways.
         val big = Array.tabulate[Byte](1400)(i => (i * 7 + 1).toByte)
         peer.send(new DatagramPacket(big, big.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
-        receive(peer, 5.seconds).map(_._1.getBytes(StandardCharsets.ISO_8859_1).toSeq) shouldBe Some(big.toSeq)
+        receive(peer, 15.seconds).map(_._1.getBytes(StandardCharsets.ISO_8859_1).toSeq) shouldBe Some(big.toSeq)
         // "exit" ends the program: qemu exits with the program's status.
         val exit = "exit".getBytes(StandardCharsets.US_ASCII)
         peer.send(new DatagramPacket(exit, exit.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
