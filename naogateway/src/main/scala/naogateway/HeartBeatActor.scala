@@ -103,7 +103,9 @@ private[naogateway] object HeartBeatActor {
   // say) finds the timers running already, so no timer starts late by the time that reaction took.
   private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report],
       timers: TimerScheduler[Command]) {
-    private var nextProbeId = 0L
+    // A random start per incarnation, as the response actor's: a late answer to a probe of an earlier incarnation
+    // must not pass for an answer to this one's (protocol.md 7.1, a call id is never sent twice).
+    private var nextProbeId = CallId.randomStart()
     private var probeSentAt = 0L
     private var probeId = -1L
     // Rounds of probes in a row that ended without an answer to any probe (a keep-alive does not count: anyone can send

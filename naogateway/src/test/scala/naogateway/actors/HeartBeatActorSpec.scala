@@ -38,6 +38,19 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
   }
 
   "HeartBeatActor" must {
+    "start its probe ids at a random point in every incarnation" in {
+      val firsts = (1 to 2).map { _ =>
+        val reports = createTestProbe[Report]()
+        val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = false))
+        heartbeat ! ProbeNow
+        val id = probeId(reports.receiveMessage())
+        CallId.ownerOf(id) shouldBe Some(CallId.Owner.Heartbeat)
+        testKit.stop(heartbeat)
+        CallId.count(id)
+      }
+      // Equal only with a chance of 1 in 2^30; a counter starting at 0 would give 1 both times.
+      firsts.distinct.size shouldBe 2
+    }
     "probe a quiet robot three times and then report it offline" in {
       val reports = createTestProbe[Report]()
       spawn(HeartBeatActor(settings, reports.ref, online = true))
