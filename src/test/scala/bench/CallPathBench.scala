@@ -2,8 +2,7 @@ package bench
 
 import java.io.File
 import java.net.InetSocketAddress
-import java.nio.ByteBuffer
-import java.nio.channels.{ClosedChannelException, DatagramChannel}
+import java.nio.channels.DatagramChannel
 import java.nio.charset.StandardCharsets
 import java.nio.file.Files
 
@@ -21,7 +20,6 @@ import com.typesafe.config.{Config, ConfigFactory}
 
 import apps.zeromq.{PythonEnv, ZeroMqEndpoint, ZeroMqSettings}
 import naogateway._
-import naogateway.proto.{Response, Status}
 import naogateway.testkit.TestLoopback
 import naogateway.wire.{MessageContents, RpcCall}
 import robotmiddleware.cluster.MiddlewareCluster
@@ -77,7 +75,7 @@ object CallPathBench extends Benchmark {
     report("raw udp", raw)
     val gateway = new GatewayNode
     try {
-      val robot = new PlainRobot(gateway.addresses.robots)
+      val robot = new PlainRobot(gateway.addresses.robots, 15.minutes)
       try {
         gateway.awaitOnline(1)
         val alone = gateway.pings()
@@ -334,53 +332,5 @@ object CallPathBench extends Benchmark {
     def robotEvents: Source[RobotEvent, NotUsed] = Source.never
     def appEvents: Source[robotmiddleware.AppEvent, NotUsed] = Source.never
     def close(): Unit = ()
-  }
-
-  /** Robot 1 as a bare UDP responder on a loopback address of its own, port 3838: one thread answers every request
-    * frame at once with a reply of the same call id, another sends a keep-alive every 200 ms. No simulator.
-    */
-  private final class PlainRobot(gateway: InetSocketAddress) {
-    private val socket = DatagramChannel.open()
-      .bind(new InetSocketAddress(TestLoopback.address(), naogateway.sim.SimulatedRobot.ReceivePort))
-    private val watchdog = GatewayBench.closeAfter(15.minutes, socket)
-    private val keepAlive = MessageContents
-      .encodeFrame(MessageContents(1, status = Some(Status(teamID = Some(1), activeAgent = Some("PlainRobot")))))
-      .fold(e => throw new IllegalStateException(e.describe), identity)
-    private val beats = new Thread(
-      () => {
-        try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gateway); Thread.sleep(200) }
-        catch { case _: ClosedChannelException | _: InterruptedException => () }
-      },
-      "plain-robot-keep-alive"
-    )
-    private val answers = new Thread(
-      () => {
-        val in = ByteBuffer.allocate(2048)
-        try
-          while (socket.isOpen) {
-            in.clear()
-            val from = socket.receive(in)
-            in.flip()
-            val bytes = new Array[Byte](in.remaining)
-            in.get(bytes)
-            MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
-              val answer = Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)
-              val reply = MessageContents(1, rpcResponse = Some(answer))
-              MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
-            }
-          }
-        catch { case _: ClosedChannelException => () }
-      },
-      "plain-robot-answers"
-    )
-    Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
-
-    def close(): Unit = {
-      socket.close()
-      beats.interrupt()
-      answers.join(5000)
-      watchdog.shutdownNow()
-      ()
-    }
   }
 }

@@ -25,7 +25,7 @@ import org.slf4j.LoggerFactory
 
 import naogateway.testkit.TestLoopback
 import naogateway._
-import naogateway.proto.{Response, Status}
+import naogateway.proto.Status
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings}
 import naogateway.wire.{MessageContents, RpcCall}
@@ -157,49 +157,11 @@ object GatewayBench extends Benchmark {
     * every 200 ms, every request answered at once): the gateway's own round trip, without the simulator's actors.
     */
   private def rawRobotRoundTrips(): Array[Long] = withNodes("rtt-raw") { (gw, sim) =>
-    val socket = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(),
-        naogateway.sim.SimulatedRobot.ReceivePort))
-    val watchdog = closeAfter(60.seconds, socket)
-    val keepAlive = MessageContents.encodeFrame(MessageContents(1,
-        status = Some(Status(teamID = Some(1), activeAgent = Some("RawRobot")))))
-      .fold(e => throw new IllegalStateException(e.describe), identity)
-    val beats = new Thread(
-      () => {
-        try while (socket.isOpen) { socket.send(ByteBuffer.wrap(keepAlive), gw.addresses.robots); Thread.sleep(200) }
-        catch { case _: ClosedChannelException | _: InterruptedException => () }
-      },
-      "raw-robot-keep-alive"
-    )
-    val answers = new Thread(
-      () => {
-        val in = ByteBuffer.allocate(2048)
-        try
-          while (socket.isOpen) {
-            in.clear()
-            val from = socket.receive(in)
-            in.flip()
-            val bytes = new Array[Byte](in.remaining)
-            in.get(bytes)
-            MessageContents.decodeFrame(bytes).toOption.flatMap(_._2.rpcRequest).foreach { request =>
-              val reply = MessageContents(1,
-                rpcResponse =
-                  Some(Response(returnval = Some(naogateway.wire.RpcValue.UInt(0).toProto), callId = request.callId)))
-              MessageContents.encodeFrame(reply).foreach(b => socket.send(ByteBuffer.wrap(b), from))
-            }
-          }
-        catch { case _: ClosedChannelException => () }
-      },
-      "raw-robot-answers"
-    )
-    Seq(beats, answers).foreach { t => t.setDaemon(true); t.start() }
+    val robot = new PlainRobot(gw.addresses.robots, 60.seconds)
     try {
       sim.sink.await(20.seconds) { case RobotOnline(1, _) => () }
       pings(gw)
-    } finally {
-      socket.close()
-      beats.interrupt()
-      watchdog.shutdownNow()
-    }
+    } finally robot.close()
   }
 
   /** The same `system.ping` calls, framed by hand and sent by a plain DatagramChannel straight to the same kind of
