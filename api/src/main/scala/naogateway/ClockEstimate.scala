@@ -33,6 +33,14 @@ final case class ClockEstimate(
   /** How much faster the robot's clock runs than the gateway's, in parts per million (negative: slower). */
   def driftPpm: Double = (1.0 / gatewayPerRobot - 1.0) * 1e6
 
+  /** How far [[driftPpm]] may be from the truth, in ppm: the bound grows by the slope's own uncertainty. */
+  def driftBoundPpm: Double = boundGrowth * 1e6
+
+  /** Whether the drift is known well enough to show: right after a start its few points span seconds, and a fit over
+    * them may show anything up to the ±1000 ppm it is held within, which says nothing about the robot's crystal.
+    */
+  def driftSettled: Boolean = driftBoundPpm <= ClockEstimate.SettledDriftPpm
+
   /** When the robot's clock read `robotTime` (ms), on the gateway's clock (`System.nanoTime` of the gateway's JVM). */
   def toGatewayNanos(robotTime: Long): Long =
     gatewayNanos + math.round((robotTime - robotMillis).toDouble * gatewayPerRobot * 1e6)
@@ -40,4 +48,11 @@ final case class ClockEstimate(
   /** The error bound of [[toGatewayNanos]] at `robotTime`, in ms. */
   def errorBoundAt(robotTime: Long): Double =
     errorBoundMillis + boundGrowth * math.abs((robotTime - robotMillis).toDouble)
+}
+
+/** When a drift counts as known. */
+object ClockEstimate {
+
+  /** The drift's bound at which it is shown: crystals are within about 100 ppm, so a wider bound says nothing. */
+  val SettledDriftPpm: Double = 100.0
 }

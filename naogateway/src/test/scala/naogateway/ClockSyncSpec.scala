@@ -111,6 +111,25 @@ class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
       }
     }
 
+    "call its drift settled only within its drift bound, never in the first seconds, and most runs within a minute" in {
+      val settledAfter = fixedRuns.map { run =>
+        val steps = play(run, 90)
+        steps.foreach { case (r, sync) =>
+          sync.estimate.filter(_.driftSettled).foreach { e =>
+            withClue(s"at reading $r with ${e.samples} samples: ") {
+              e.driftPpm shouldBe run.truth.driftPpm +- e.driftBoundPpm
+              e.driftBoundPpm should be <= ClockEstimate.SettledDriftPpm
+            }
+          }
+        }
+        // Right after a start the points span seconds: a fit over them says nothing about the crystal.
+        steps.takeWhile { case (r, _) => r - steps.head._1 < 10000 }.flatMap(_._2.estimate).foreach(
+          _.driftSettled shouldBe false)
+        steps.collectFirst { case (r, sync) if sync.estimate.exists(_.driftSettled) => (r - steps.head._1) / 1000 }
+      }
+      settledAfter.count(_.exists(_ <= 60)) should be >= settledAfter.size / 2
+    }
+
     "give no estimate before it has enough keep-alives" in {
       val run = Run(Truth(0L, 0.0), Uniform(5.0), 0.0, 1L)
       val steps = play(run, 10)

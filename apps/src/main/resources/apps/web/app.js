@@ -74,8 +74,9 @@
     text(q(".robot-role"), robot.role);
     text(q(".robot-rtt"), fixed(robot.rttMs, 1, "ms"));
     text(q(".robot-loss"), robot.loss == null ? "-" : (robot.loss * 100).toFixed(0) + " %");
-    text(q(".robot-clock"), robot.clock ? robot.clock.driftPpm.toFixed(0) + " ppm ± " + fixed(robot.clock.errorBoundMs, 1, "ms") +
-      " (" + robot.clock.samples + " samples)" : "-");
+    const c = robot.clock;
+    const drift = c && (c.driftSettled ? c.driftPpm.toFixed(0) + " ± " + c.driftBoundPpm.toFixed(0) + " ppm" : "drift settling");
+    text(q(".robot-clock"), c ? drift + ", offset ± " + fixed(c.errorBoundMs, 1, "ms") + " (" + c.samples + " samples)" : "-");
     text(q(".robot-signing"), robot.signing);
     text(q(".robot-address"), robot.address);
     const refused = Object.entries(robot.refused || {}).map(([k, v]) => k + " " + v).join(", ");

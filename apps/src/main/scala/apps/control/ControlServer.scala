@@ -355,14 +355,15 @@ object ControlServer {
       f"${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
 
   /** One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
-    * robot's clock against the gateway's (the error bound of its estimate, and its drift; `-` until there is one).
+    * robot's clock against the gateway's (the error bound of its estimate, and its drift: `settling` until its bound is
+    * within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate).
     */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
     val row = apps.RobotRow.of(r, stats)
     val rtt = row.rttMillis.fold("-")(v => f"$v%.1f ms")
     val loss = row.loss.fold("-")(v => f"${v * 100}%.0f %%")
     val clock = row.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
-    val drift = row.clock.fold("-")(c => f"${c.driftPpm}%+.0f ppm")
+    val drift = row.clock.fold("-")(c => if (c.driftSettled) f"${c.driftPpm}%+.0f ppm" else "settling")
     f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${if (row.online) "online" else "offline"}%-8s " +
       f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
       f"${row.posture.fold("-")(_.name)}%-8s " +

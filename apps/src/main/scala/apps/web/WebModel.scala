@@ -188,8 +188,13 @@ object WebJson {
       "rttMs" -> opt(row.rttMillis)(num),
       "loss" -> opt(row.loss)(num),
       "clock" -> opt(row.clock) { c =>
-        JsObject("driftPpm" -> num(c.driftPpm), "errorBoundMs" -> num(c.errorBoundMillis),
-          "samples" -> JsNumber(c.samples))
+        JsObject(
+          "driftPpm" -> num(c.driftPpm),
+          "driftBoundPpm" -> num(c.driftBoundPpm),
+          "driftSettled" -> JsBoolean(c.driftSettled),
+          "errorBoundMs" -> num(c.errorBoundMillis),
+          "samples" -> JsNumber(c.samples)
+        )
       },
       "signing" -> opt(signing)(JsString(_)),
       "refused" -> JsObject(row.refused.map { case (k, v) => k -> JsNumber(v) })

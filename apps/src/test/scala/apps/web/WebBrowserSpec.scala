@@ -66,6 +66,13 @@ class WebBrowserSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
           js[Long](driver, RegionPixels) should be >= 8L
         }
         driver.findElements(By.cssSelector("#events li.event-online")).asScala.size should be >= 3
+        /* Each card's clock line, drawn by the page from the push: a drift (settled) or `drift settling`, and the
+         * offset. */
+        eventually(timeout(20.seconds), interval(250.millis)) {
+          val clocks = driver.findElements(By.cssSelector(".robot .robot-clock")).asScala.map(_.getText)
+          clocks.size shouldBe 3
+          all(clocks) should fullyMatch regex """(-?\d+ ± \d+ ppm|drift settling), offset ± [\d.]+ ms \(\d+ samples\)"""
+        }
 
         val shot = Paths.get("target", "web", "web-view.png")
         Files.createDirectories(shot.getParent)
