@@ -60,6 +60,34 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
       b = b.game(v19(GameState.Initial, 600)) // the next game's first half: a fresh budget
       (b.remaining, b.counted, b.overBudget, b.extraMinutes) shouldBe ((10, 0, 0, 0))
     }
+    "add the extra time's messages when a drawn game goes into extra time, through timeouts, not for an illegal team" in {
+      val withExtra = settings.copy(perExtraTime = 6)
+      var b = MessageBudget(withExtra).game(v19(GameState.Playing, 300, firstHalf = false))
+      b = send(b, 4) // 10 - 4
+      b = b.game(v19(GameState.Finished, 0, firstHalf = false))
+      // StartExtraTime: the first extra half follows the second half; the budget grows by 6, it is not a new game's.
+      b = b.game(v19(GameState.Initial, 300, phase = GamePhase.ExtraTime))
+      (b.remaining, b.counted, b.extraTimeGranted) shouldBe ((12, 4, true))
+      b.describe(0L) should include("12 of 16 left, 4 counted")
+      // A timeout in extra time hides the phase; ending it grants nothing more.
+      b = b.game(v19(GameState.Initial, 300, phase = GamePhase.Timeout))
+      b = b.game(v19(GameState.Ready, 300, phase = GamePhase.ExtraTime))
+      b = send(b, 2)
+      b = b.game(v19(GameState.Playing, 150, firstHalf = false, phase = GamePhase.ExtraTime))
+      (b.remaining, b.counted) shouldBe ((10, 6))
+      // A new game after extra time starts from the game's budget again.
+      b = b.game(v19(GameState.Initial, 600))
+      (b.remaining, b.counted, b.extraTimeGranted) shouldBe ((10, 0, false))
+
+      // A team that communicated illegally gets no extra time's messages, as with extra minutes.
+      var i = MessageBudget(withExtra).game(v19(GameState.Playing, 300, firstHalf = false))
+      i = i.message(600, 0L)
+      i.illegal shouldBe true
+      i = i.game(v19(GameState.Finished, 0, firstHalf = false)).game(v19(GameState.Initial, 300,
+          phase = GamePhase.ExtraTime))
+      (i.remaining, i.extraTimeGranted) shouldBe ((9, true))
+    }
+
     "not count in a penalty shoot-out, of version 19 or 12" in {
       var b = MessageBudget(settings).game(v19(GameState.Playing, 0, phase = GamePhase.PenaltyShootOut))
       b = send(b, 7)

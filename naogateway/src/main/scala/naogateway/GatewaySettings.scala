@@ -348,7 +348,8 @@ object GatewaySettings {
           t.getInt("per-game"),
           t.getInt("per-extra-minute"),
           t.getDuration("rate-window").getSeconds.toInt,
-          t.getInt("max-datagrams-per-second")
+          t.getInt("max-datagrams-per-second"),
+          t.getInt("per-extra-time")
         )
       },
       gameControllerMaxDatagramsPerSecond = gc.getInt("max-datagrams-per-second"),

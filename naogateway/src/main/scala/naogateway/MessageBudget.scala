@@ -1,6 +1,6 @@
 package naogateway
 
-import naogateway.wire.gamecontroller.{GameControlData, GameState, HslControlData}
+import naogateway.wire.gamecontroller.{GameControlData, GamePhase, GameState, HslControlData}
 
 /** The team-message rules of the Humanoid Soccer League's GameController (`naogateway.game-controller.team-messages`;
   * its `params.yaml` and README "Message Counting").
@@ -13,6 +13,9 @@ import naogateway.wire.gamecontroller.{GameControlData, GameState, HslControlDat
   *   messages a team may send in a game
   * @param perExtraMinute
   *   added for each minute of additional time
+  * @param perExtraTime
+  *   added when a drawn game goes into extra time (the HSL GameController's `StartExtraTime`: 6000, a figure its source
+  *   still marks to do, so it is a setting here)
   * @param rateWindowSeconds
   *   the window over which the current rate is measured
   */
@@ -22,12 +25,13 @@ final case class TeamMessageSettings(
     perGame: Int = 12000,
     perExtraMinute: Int = 600,
     rateWindowSeconds: Int = 60,
-    maxDatagramsPerSecond: Int = 2000
+    maxDatagramsPerSecond: Int = 2000,
+    perExtraTime: Int = 6000
 ) {
   require(maxDatagramsPerSecond > 0, "team-messages.max-datagrams-per-second must be positive")
   require(teamNumber >= 0 && teamNumber <= 254,
     s"game-controller.team-messages.team-number $teamNumber is not a team number (0 = off)")
-  require(maxBytes > 0 && perGame >= 0 && perGame <= 0xffff && perExtraMinute >= 0,
+  require(maxBytes > 0 && perGame >= 0 && perGame <= 0xffff && perExtraMinute >= 0 && perExtraTime >= 0,
     "team-messages limits must be positive")
   require(rateWindowSeconds >= 5 && rateWindowSeconds <= 600, "team-messages.rate-window must be 5 s to 10 min")
 
@@ -43,8 +47,9 @@ final case class TeamMessageSettings(
   * shoot-out; one over `maxBytes`, or one when the budget is 0, is illegal (the GameController resets the score to 0);
   * the budget goes down by one for every counted message while above 0. A minute of additional time (the half's clock
   * jumping up by a minute outside PLAYING, as the GameController's "+" does) adds `perExtraMinute`, unless the team
-  * communicated illegally. A new game (a first half after a second half) starts from `perGame` again. Pure; the gateway
-  * holds one and feeds it.
+  * communicated illegally; so does the start of extra time (the game phase turning from normal, in the second half, to
+  * extra time) with `perExtraTime`. A new game (a first half after a second half, in the normal phase) starts from
+  * `perGame` again. Pure; the gateway holds one and feeds it.
   *
   * @param remaining
   *   the budget as counted here
@@ -56,6 +61,10 @@ final case class TeamMessageSettings(
   *   messages over `maxBytes`
   * @param overBudget
   *   messages counted with the budget at 0
+  * @param phase
+  *   the game phase the last packet that told it said (a version-19 one outside a timeout)
+  * @param extraTimeGranted
+  *   whether this game's extra time has started (and `perExtraTime` was added, unless the team was illegal)
   * @param reported
   *   the trusted GameController's own `messageBudget` for our team (version 19 only)
   * @param rateBuckets
@@ -73,6 +82,8 @@ private[naogateway] final case class MessageBudget(
     firstHalf: Option[Boolean] = None,
     secsRemaining: Option[Long] = None,
     extraMinutes: Int = 0,
+    phase: Option[GamePhase] = None,
+    extraTimeGranted: Boolean = false,
     reported: Option[Int] = None,
     rateBuckets: Vector[(Long, Int)] = Vector.empty
 ) {
@@ -105,8 +116,17 @@ private[naogateway] final case class MessageBudget(
 
   /** A packet of the trusted GameController. */
   def game(data: GameControlData): MessageBudget = {
-    val newGame = firstHalf.contains(false) && data.firstHalf
+    // Only version 19 tells the phase; a timeout hides it, so the phase before it holds.
+    val told = data match {
+      case d: HslControlData if d.gamePhase != GamePhase.Timeout => Some(d.gamePhase)
+      case _                                                     => None
+    }
+    // StartExtraTime: from the normal phase's second half to extra time's first.
+    val extraTimeStarts =
+      phase.contains(GamePhase.Normal) && firstHalf.contains(false) && told.contains(GamePhase.ExtraTime)
+    val newGame = firstHalf.contains(false) && data.firstHalf && !told.contains(GamePhase.ExtraTime)
     val base = if (newGame) MessageBudget(settings, settings.perGame) else this
+    val granted = if (extraTimeStarts && !base.illegal) settings.perExtraTime else 0
     // The "+" of the GameController: a minute more on the half's clock, only outside PLAYING, within one half.
     val extra = !newGame && firstHalf.contains(data.firstHalf) && data.gameState != GameState.Playing &&
       secsRemaining.exists(before =>
@@ -116,8 +136,10 @@ private[naogateway] final case class MessageBudget(
       case _                 => None
     }
     base.copy(
-      remaining = if (extra && !base.illegal) base.remaining + settings.perExtraMinute else base.remaining,
+      remaining = (if (extra && !base.illegal) base.remaining + settings.perExtraMinute else base.remaining) + granted,
       extraMinutes = base.extraMinutes + (if (extra) 1 else 0),
+      phase = told.orElse(base.phase),
+      extraTimeGranted = base.extraTimeGranted || extraTimeStarts,
       state = Some(data.gameState),
       shootOut = data.penaltyShootOut,
       firstHalf = Some(data.firstHalf),
@@ -152,7 +174,8 @@ private[naogateway] final case class MessageBudget(
   /** One line for the status view and `robotctl status`. */
   def describe(nowNanos: Long): String =
     f"team messages (team ${settings.teamNumber}, UDP ${settings.port}): $remaining of " +
-      f"${settings.perGame + extraMinutes * settings.perExtraMinute} left, " +
+      f"${settings.perGame + extraMinutes * settings.perExtraMinute +
+          (if (extraTimeGranted) settings.perExtraTime else 0)} left, " +
       f"$counted counted, ${ratePerSecond(nowNanos)}%.1f/s" +
       reported.fold("")(r => s", GameController says $r") + (if (counting) "" else " (not counting now)")
 }

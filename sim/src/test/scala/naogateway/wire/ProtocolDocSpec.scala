@@ -362,6 +362,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       val defaults = naogateway.TeamMessageSettings()
       rules("budget per team per game") should startWith(s"${defaults.perGame} messages")
       rules("per minute of additional time") should startWith(s"${defaults.perExtraMinute} more")
+      rules("at the start of extra time") should startWith(s"${defaults.perExtraTime} more")
       rules("largest message") shouldBe s"${defaults.maxBytes} bytes"
       naogateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway"))
         .teamMessages shouldBe defaults
