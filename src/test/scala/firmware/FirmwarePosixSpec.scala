@@ -19,12 +19,13 @@ import akka.stream.scaladsl.{Keep, Sink}
 import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
+import apps.testkit.RobotRig
 import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller.GameControllerVectors
 import naogateway.proto.Request
-import naogateway.wire.{ActuatorGroup, MessageContents, Posture, RpcValue}
-import naogateway.{Gateway, GatewaySettings, RobotActor, RobotSnapshot, StreamActor, VisionFrame}
-import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
+import naogateway.wire.{MessageContents, Posture, RpcValue}
+import naogateway.{RobotSnapshot, StreamActor, VisionFrame}
+import robotmiddleware.RobotInterface
 
 /** The gateway's configuration for the C robots: stream window 4 (the robots are built with WINDOW=4), one robot that
   * must sign.
@@ -58,14 +59,10 @@ class FirmwarePosixSpec
     with LogCapturing
     with BeforeAndAfterAll {
   import FirmwarePosixSpec._
-  import RobotCalls._
-
-  private val processes = new ConcurrentLinkedQueue[Process]()
-  private val sockets = new ConcurrentLinkedQueue[DatagramSocket]()
+  import apps.testkit.RobotCalls._
 
   override def afterAll(): Unit = {
-    processes.asScala.foreach { p => p.destroy(); if (!p.waitFor(5, TimeUnit.SECONDS)) p.destroyForcibly() }
-    sockets.asScala.foreach(_.close())
+    rig.close()
     super.afterAll()
   }
 
@@ -73,15 +70,9 @@ class FirmwarePosixSpec
     FirmwareBuild.make(this, Seq("native"), Map("WINDOW" -> "4"))
     new File(FirmwareBuild.dir, "build/posix-w4/robot")
   }
-  private lazy val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
-  private lazy val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
-  private lazy val gatewayPort: Int = {
-    val probe = createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
-    probe.receiveMessage(10.seconds).robots.getPort
-  }
-  private lazy val client: RobotInterface =
-    Await.result(RobotClient.connect(system, middleware, "firmware", priority = 5), 15.seconds)
+  private val rig = new RobotRig(testKit, "firmware")
+  private def gatewayPort: Int = rig.gatewayAddress.getPort
+  private def client: RobotInterface = rig.client
 
   /** One C robot process and what the gateway published about it. */
   private final class CRobot(val id: Int, val address: String, args: Seq[String] = Nil,
@@ -94,19 +85,16 @@ class FirmwarePosixSpec
           "run_ms=90000", "reset_ms=1000") ++ args).asJava).redirectErrorStream(true).redirectOutput(log)
       b.environment().put("FR_POSIX_BIND", s"$address:${TestLoopback.RobotReceivePort}")
       env.foreach { case (k, v) => b.environment().put(k, v) }
-      val p = b.start()
-      processes.add(p)
-      p
+      rig.owned(b.start(), grace = 5.seconds)
     }
     val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
     client.status(id).runWith(Sink.foreach(snapshots.add))
     def output: String = Try(new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)).getOrElse("")
 
     def awaitOnline(): Unit = {
-      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
-          _.exists(r => r.robotId == id && r.online)))
+      val online = rig.awaitOnline(id, 20.seconds)
       withClue(s"robot $id never came online; its output:\n$output\n") { online shouldBe true }
-      Await.result(client.acquire(id, ActuatorGroup.all.toSeq: _*), 10.seconds)
+      rig.acquireAll(id, 10.seconds)
     }
   }
 
@@ -123,17 +111,8 @@ class FirmwarePosixSpec
   }
 
   /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
-  private def streamOf(id: Int): (ActorRef[StreamActor.Command], TestProbe[StreamActor.Received]) = {
-    val robot = createTestProbe[Option[ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(id, robot.ref)
-    val actor = robot.receiveMessage(10.seconds).getOrElse(fail(s"the gateway does not know robot $id"))
-    val connected = createTestProbe[RobotActor.Connected]()
-    actor ! RobotActor.Connect(connected.ref)
-    val stream = connected.receiveMessage(10.seconds).stream
-    val received = createTestProbe[StreamActor.Received]()
-    stream ! StreamActor.Subscribe(received.ref)
-    stream -> received
-  }
+  private def streamOf(id: Int): (ActorRef[StreamActor.Command], TestProbe[StreamActor.Received]) =
+    rig.streamOf(id).getOrElse(fail(s"the gateway does not know robot $id"))
 
   private lazy val plain: CRobot = {
     val r = new CRobot(61, TestLoopback.address().getHostAddress)
@@ -200,7 +179,7 @@ class FirmwarePosixSpec
       val gcAddress = TestLoopback.address().getHostAddress
       val gc = new DatagramSocket(new InetSocketAddress(gcAddress, 3838))
       val gc3939 = new DatagramSocket(new InetSocketAddress(gcAddress, 3939))
-      Seq(gc, gc3939).foreach { s => sockets.add(s); s.setSoTimeout(600) }
+      Seq(gc, gc3939).foreach { s => rig.owned(s); s.setSoTimeout(600) }
       val robotAt = new InetSocketAddress(r.address, 3838)
       def replies(on: DatagramSocket): Vector[String] = Iterator.continually {
         val buf = new Array[Byte](64)

@@ -6,7 +6,6 @@ import java.nio.charset.StandardCharsets
 import java.util.concurrent.ConcurrentLinkedQueue
 
 import scala.concurrent.duration._
-import scala.concurrent.Await
 import scala.jdk.CollectionConverters._
 import scala.util.Try
 
@@ -15,11 +14,12 @@ import akka.stream.scaladsl.Sink
 import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
+import apps.testkit.RobotRig
 import naogateway.sim.gs1500m.{OverflowExperiment, Remote}
 import naogateway.testkit.TestLoopback
-import naogateway.wire.{ActuatorGroup, Posture, RpcValue}
-import naogateway.{Gateway, GatewaySettings, RobotActor, RobotSnapshot, StreamActor}
-import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
+import naogateway.wire.{Posture, RpcValue}
+import naogateway.{RobotSnapshot, StreamActor}
+import robotmiddleware.RobotInterface
 
 /** The gateway's configuration for the board: its defaults (stream window 1, as the image is built). */
 object FirmwareQemuSpec {
@@ -46,7 +46,7 @@ class FirmwareQemuSpec
     with LogCapturing
     with BeforeAndAfterAll {
   import FirmwareQemuSpec._
-  import RobotCalls._
+  import apps.testkit.RobotCalls._
 
   private def image(name: String): File = {
     FirmwareBuild.make(this, Seq(s"build/qemu/$name.elf"), missing = () => FirmwareBuild.missingForArm())
@@ -145,46 +145,37 @@ class FirmwareQemuSpec
 
   // ---- the example robot against a real gateway ----------------------------------------------------------------
 
-  private val cleanups = new ConcurrentLinkedQueue[() => Unit]()
-
   override def afterAll(): Unit = {
-    cleanups.asScala.foreach(c => Try(c()))
+    rig.close()
     super.afterAll()
   }
 
-  private lazy val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
-  private lazy val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
-  private lazy val gatewayAddress: InetSocketAddress = {
-    val probe = createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
-    probe.receiveMessage(10.seconds).robots
-  }
-  private lazy val client: RobotInterface =
-    Await.result(RobotClient.connect(system, middleware, "firmware-qemu", priority = 5), 30.seconds)
+  private val rig = new RobotRig(testKit, "firmware-qemu", connectWithin = 30.seconds)
+  private def gatewayAddress: InetSocketAddress = rig.gatewayAddress
+  private def client: RobotInterface = rig.client
 
   /** The example robot in qemu, its module on the bridge, and what the gateway published about it. */
   private final class BoardRobot(val id: Int) {
     val address = TestLoopback.address()
-    // Taken here: the bridge's thread must not be the one to start the gateway (lazy values lock the spec).
+    // Taken here: the bridge's thread must not be the one to start the gateway (the rig's lazy values lock it).
     private val gatewayAt = gatewayAddress
     val bridge = new Gs1500mBridge(Gs1500mBridge.Config(address, hosts = Map(BaseStation -> gatewayAt)))
     val log: File = File.createTempFile(s"qemu-robot-$id", ".log")
     val qemu: Process =
       QemuBoard.start(image("robot"), log, Seq(s"id=$id", "team=12", "player=3"), Some(bridge.serialPort))
-    cleanups.add(() => { QemuBoard.stop(qemu); bridge.close(); log.delete() })
+    rig.onClose { QemuBoard.stop(qemu); bridge.close(); log.delete(); () }
     val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
     client.status(id).runWith(Sink.foreach(snapshots.add))
     def output: String = QemuBoard.output(log)
 
     def awaitOnline(): Unit = {
-      val online = poll(20.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
-          _.exists(r => r.robotId == id && r.online)))
+      val online = rig.awaitOnline(id, 20.seconds)
       withClue(
         s"robot $id never came online; qemu's output:\n$output\nmodule commands: ${bridge.commands.asScala.toVector}\n") {
         online shouldBe true
       }
       // Generous: on a loaded machine the first acquire also starts the middleware's lease for this client.
-      onBoard(this)(Await.result(client.acquire(id, ActuatorGroup.all.toSeq: _*), 30.seconds))
+      onBoard(this)(rig.acquireAll(id, 30.seconds))
     }
   }
 
@@ -198,17 +189,7 @@ class FirmwareQemuSpec
   private def robot: BoardRobot = started.get
 
   /** The gateway's stream endpoint for the robot, subscribed to what it delivers. */
-  private lazy val stream = {
-    val found = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(robot.id, found.ref)
-    val actor = found.receiveMessage(10.seconds).getOrElse(fail(s"the gateway has no robot ${robot.id}"))
-    val connected = createTestProbe[RobotActor.Connected]()
-    actor ! RobotActor.Connect(connected.ref)
-    val endpoint = connected.receiveMessage(10.seconds).stream
-    val received = createTestProbe[StreamActor.Received]()
-    endpoint ! StreamActor.Subscribe(received.ref)
-    endpoint -> received
-  }
+  private lazy val stream = rig.streamOf(robot.id).getOrElse(fail(s"the gateway has no robot ${robot.id}"))
 
   /** What a failure in `f` says about the board (its console, the module's figures) when it happened, not before. */
   private def onBoard(r: BoardRobot)(f: => Unit): Unit =

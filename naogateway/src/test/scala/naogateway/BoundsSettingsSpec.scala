@@ -2,18 +2,18 @@ package naogateway
 
 import scala.concurrent.duration._
 
-import com.typesafe.config.ConfigFactory
 import org.scalacheck.Gen
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
+import naogateway.testkit.SettingsTables
+
 /** The keys that bound what the network can make the gateway do (docs/architecture.md 13.1, 15.1). */
-class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
+class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks with SettingsTables {
 
   private def settings(overrides: String = ""): GatewaySettings =
-    GatewaySettings.fromConfig(
-      ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("naogateway")))
+    overriding("naogateway")(GatewaySettings.fromConfig)(overrides)
 
   "The gateway's settings" should {
     "bound discovery, probes and restarts by default" in {
@@ -44,33 +44,31 @@ class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckProper
     }
 
     "refuse a queue bound, backlog, snapshot timeout or back-off that bounds nothing, naming the key" in {
-      the[IllegalArgumentException] thrownBy settings("budget.queue-capacity = 0") should have message
-        "requirement failed: budget.queue-capacity must be between 1 and 1000000"
-      the[IllegalArgumentException] thrownBy settings("link.robot-backlog = 0") should have message
-        "requirement failed: link.robot-backlog must be between 1 and 100000"
-      the[IllegalArgumentException] thrownBy settings("link.gateway-backlog = 0") should have message
-        "requirement failed: link.gateway-backlog must be between 1 and 100000"
-      the[IllegalArgumentException] thrownBy settings("snapshot-timeout = 0s") should have message
-        "requirement failed: snapshot-timeout must be between 10 ms and 1 min"
-      the[IllegalArgumentException] thrownBy settings("supervision.robot.max-backoff = 100ms") should have message
-        "supervision.robot: a restart back-off needs 0 < min-backoff <= max-backoff"
-      the[IllegalArgumentException] thrownBy settings(
-        "supervision.robot-children.random-factor = 2") should have message
-        "supervision.robot-children: a restart back-off's random-factor must be between 0 and 1"
+      refusesWith(settings)(
+        "budget.queue-capacity = 0" -> "requirement failed: budget.queue-capacity must be between 1 and 1000000",
+        "link.robot-backlog = 0" -> "requirement failed: link.robot-backlog must be between 1 and 100000",
+        "link.gateway-backlog = 0" -> "requirement failed: link.gateway-backlog must be between 1 and 100000",
+        "snapshot-timeout = 0s" -> "requirement failed: snapshot-timeout must be between 10 ms and 1 min",
+        "supervision.robot.max-backoff = 100ms" ->
+          "supervision.robot: a restart back-off needs 0 < min-backoff <= max-backoff",
+        "supervision.robot-children.random-factor = 2" ->
+          "supervision.robot-children: a restart back-off's random-factor must be between 0 and 1"
+      )
     }
 
     "name the new key when a config still sets discover-from-keep-alive" in {
-      val e = intercept[IllegalArgumentException](settings("discover-from-keep-alive = off"))
-      e.getMessage should include("discovery.enabled")
+      messageOf(settings)("discover-from-keep-alive = off") should include("discovery.enabled")
       settings("discovery.enabled = off").discovery.enabled shouldBe false
     }
 
     "refuse bounds that bound nothing" in {
-      an[IllegalArgumentException] should be thrownBy settings("discovery.max-robots = -1")
-      an[IllegalArgumentException] should be thrownBy settings("discovery.forget-offline-after = 0s")
-      an[IllegalArgumentException] should be thrownBy settings("budget.probe-share = 0")
-      an[IllegalArgumentException] should be thrownBy settings("new-session.keep-alives = 0")
-      an[IllegalArgumentException] should be thrownBy settings("heartbeat.probe-backoff-max = 100ms")
+      refuses(settings)(
+        "discovery.max-robots = -1",
+        "discovery.forget-offline-after = 0s",
+        "budget.probe-share = 0",
+        "new-session.keep-alives = 0",
+        "heartbeat.probe-backoff-max = 100ms"
+      )
     }
   }
 

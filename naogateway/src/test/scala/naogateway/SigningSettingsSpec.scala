@@ -4,18 +4,18 @@ import com.typesafe.config.ConfigFactory
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.SettingsTables
 import naogateway.wire._
 
-class SigningSettingsSpec extends AnyWordSpec with Matchers {
+class SigningSettingsSpec extends AnyWordSpec with Matchers with SettingsTables {
 
   private val hex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f"
   private val teamKey = SigningKey.fromHex(hex).toOption.get
 
   private def settings(overrides: String): GatewaySettings =
-    GatewaySettings.fromConfig(
-      ConfigFactory.parseString(overrides).withFallback(ConfigFactory.defaultReference().getConfig("naogateway")))
+    overriding("naogateway", ConfigFactory.defaultReference())(GatewaySettings.fromConfig)(overrides)
 
-  private def refusal(overrides: String): String = intercept[IllegalArgumentException](settings(overrides)).getMessage
+  private def refusal(overrides: String): String = messageOf(settings)(overrides)
 
   "The signing settings" should {
     "read the key and each robot's setting, off by default, and never show the key" in {

@@ -2,20 +2,19 @@ package robotmiddleware
 
 import scala.concurrent.duration._
 
-import com.typesafe.config.ConfigFactory
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.RestartBackoff
+import naogateway.testkit.SettingsTables
 
 /** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key (architecture.md
   * 15.2).
   */
-class MiddlewareSettingsSpec extends AnyWordSpec with Matchers {
+class MiddlewareSettingsSpec extends AnyWordSpec with Matchers with SettingsTables {
 
   private def settings(overrides: String = ""): MiddlewareSettings =
-    MiddlewareSettings.fromConfig(
-      ConfigFactory.parseString(overrides).withFallback(ConfigFactory.load().getConfig("robotmiddleware")))
+    overriding("robotmiddleware")(MiddlewareSettings.fromConfig)(overrides)
 
   "The middleware's settings" should {
     "read every limit, back-off and ask timeout from reference.conf" in {
@@ -42,16 +41,14 @@ class MiddlewareSettingsSpec extends AnyWordSpec with Matchers {
     }
 
     "refuse a bad value with a message naming the key" in {
-      the[IllegalArgumentException] thrownBy settings("lookup-timeout = 0s") should have message
-        "requirement failed: lookup-timeout must be positive"
-      the[IllegalArgumentException] thrownBy settings("ask-margin = 0s") should have message
-        "requirement failed: ask-margin must be positive"
-      the[IllegalArgumentException] thrownBy settings("client.ask-margin = 0s") should have message
-        "requirement failed: client.ask-margin must be positive"
-      the[IllegalArgumentException] thrownBy settings("client.find-retry = 1ms") should have message
-        "requirement failed: client.find-retry must be at least 10 ms"
-      the[IllegalArgumentException] thrownBy settings("supervision.guard.min-backoff = 10s") should have message
-        "supervision.guard: a restart back-off needs 0 < min-backoff <= max-backoff"
+      refusesWith(settings)(
+        "lookup-timeout = 0s" -> "requirement failed: lookup-timeout must be positive",
+        "ask-margin = 0s" -> "requirement failed: ask-margin must be positive",
+        "client.ask-margin = 0s" -> "requirement failed: client.ask-margin must be positive",
+        "client.find-retry = 1ms" -> "requirement failed: client.find-retry must be at least 10 ms",
+        "supervision.guard.min-backoff = 10s" ->
+          "supervision.guard: a restart back-off needs 0 < min-backoff <= max-backoff"
+      )
       an[com.typesafe.config.ConfigException] should be thrownBy settings("lookup-timeout = soon")
     }
   }

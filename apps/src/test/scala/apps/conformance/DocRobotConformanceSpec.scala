@@ -2,8 +2,6 @@ package apps.conformance
 
 import naogateway.RobotFailure
 
-import naogateway.wire.ActuatorGroup
-
 import java.io.File
 import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress, SocketTimeoutException}
 import java.nio.charset.StandardCharsets
@@ -23,9 +21,10 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
+import apps.testkit.{RobotCalls, RobotRig}
 import naogateway.testkit.TestLoopback
-import naogateway.{Gateway, GatewaySettings, LinkStats, RobotActor, RobotOffline, RobotSnapshot, StreamActor}
-import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
+import naogateway.{LinkStats, RobotOffline, RobotSnapshot, StreamActor}
+import robotmiddleware.RobotInterface
 
 /** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result.
   */
@@ -156,12 +155,8 @@ class DocRobotConformanceSpec
     with BeforeAndAfterAll {
   import DocRobotConformanceSpec._
 
-  private val processes = new ConcurrentLinkedQueue[Process]()
-  private val sockets = new ConcurrentLinkedQueue[DatagramSocket]()
-
   override def afterAll(): Unit = {
-    processes.asScala.foreach { p => p.destroy(); if (!p.waitFor(10, TimeUnit.SECONDS)) p.destroyForcibly() }
-    sockets.asScala.foreach(_.close())
+    rig.close()
     super.afterAll()
   }
 
@@ -201,9 +196,7 @@ class DocRobotConformanceSpec
         .directory(ConformanceEnv.root).redirectErrorStream(true).redirectOutput(output)
       b.environment().put("CONFORMANCE_COMPAT", if (mode.compat) "1" else "0")
       b.environment().put("PYTHONDONTWRITEBYTECODE", "1")
-      val p = b.start()
-      processes.add(p)
-      p
+      rig.owned(b.start(), grace = 10.seconds)
     }
 
     def note(section: String, check: String, pass: Boolean, detail: String): Unit =
@@ -237,46 +230,27 @@ class DocRobotConformanceSpec
     }
   }
 
+  private val rig = new RobotRig(testKit, "conformance")
+
   private def await[T](f: Future[T], within: FiniteDuration = 15.seconds): Either[Throwable, T] =
-    Try(Await.result(f, within)).toEither
+    RobotCalls.result(f, within)
 
-  private def poll(within: FiniteDuration)(condition: => Boolean): Boolean = {
-    val deadline = within.fromNow
-    var ok = condition
-    while (!ok && deadline.hasTimeLeft()) { Thread.sleep(100); ok = condition }
-    ok
-  }
-
-  /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
-  private def streamOf(id: Int, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Option[(akka.actor.typed.ActorRef[
-          StreamActor.Command], akka.actor.testkit.typed.scaladsl.TestProbe[StreamActor.Received])] = {
-    val robot = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(id, robot.ref)
-    robot.receiveMessage(10.seconds).map { actor =>
-      val connected = createTestProbe[RobotActor.Connected]()
-      actor ! RobotActor.Connect(connected.ref)
-      val stream = connected.receiveMessage(10.seconds).stream
-      val received = createTestProbe[StreamActor.Received]()
-      stream ! StreamActor.Subscribe(received.ref)
-      stream -> received
-    }
-  }
+  private def poll(within: FiniteDuration)(condition: => Boolean): Boolean =
+    RobotCalls.poll(within, 100.millis)(condition)
 
   /** The scenario through the public RobotInterface (and the robot's stream), noting what the robot answered. */
-  private def drive(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command],
-      gcAddress: String): Unit = {
+  private def drive(run: RobotRun, client: RobotInterface, gcAddress: String): Unit = {
     import run.{robotId => id}
     val agents = new ConcurrentLinkedQueue[String]()
     val boots = new ConcurrentLinkedQueue[Int]()
     client.status(id).runWith(Sink.foreach { s => s.agent.foreach(agents.add); s.bootId.foreach(boots.add) })
 
-    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
-        _.exists(r => r.robotId == id && r.online)))
+    val online = rig.awaitOnline(id, 30.seconds, every = 100.millis)
     run.note("6.2", "keep-alive-makes-robot-online", online, s"robot $id online: $online")
     if (!online) return
-    await(client.acquire(id, ActuatorGroup.all.toSeq: _*))
+    Try(rig.acquireAll(id, 15.seconds))
     // Subscribed at once: the robot sends its stream payloads in the first seconds of each session.
-    val streamProbe = streamOf(id, gateway)
+    val streamProbe = rig.streamOf(id)
 
     var answered = true
     // One RPC step: `expect` judges the answer; an unanswered call is a section 2 finding, and ends the RPC steps.
@@ -378,7 +352,7 @@ class DocRobotConformanceSpec
 
     // Section 10.3: a version-8 and a version-7 control packet from the GameController's own address and port 3838.
     val gc = new DatagramSocket(new InetSocketAddress(gcAddress, 3838))
-    sockets.add(gc)
+    rig.owned(gc)
     gc.setSoTimeout(3000)
     val v8 = new Array[Byte](158)
     "RGme".getBytes(StandardCharsets.US_ASCII).copyToArray(v8)
@@ -434,22 +408,20 @@ class DocRobotConformanceSpec
     * gateway published; then calls (7.1) and stream data both ways (11) while the robot drops 20 % of what it receives
     * and of the stream segments it sends.
     */
-  private def driveLossy(
-      run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Unit = {
+  private def driveLossy(run: RobotRun, client: RobotInterface): Unit = {
     import run.{robotId => id}
     client.status(id).runWith(Sink.foreach(run.snapshots.add))
     val offline = new ConcurrentLinkedQueue[RobotOffline]()
     client.robotEvents.runWith(Sink.foreach { case o: RobotOffline if o.robotId == id => offline.add(o); case _ => () })
 
-    val online = poll(30.seconds)(Try(Await.result(client.robots(), 5.seconds)).toOption.exists(
-        _.exists(r => r.robotId == id && r.online)))
+    val online = rig.awaitOnline(id, 30.seconds, every = 100.millis)
     run.note("6.2", "keep-alive-makes-robot-online", online, s"robot $id online: $online")
     if (!online) return
     // Subscribed once the gateway knows the robot: it pushes the robot's link figures every second.
     val stats = new java.util.concurrent.atomic.AtomicReference[Option[LinkStats]](None)
     client.linkStats(id).runWith(Sink.foreach(s => stats.set(Some(s))))
-    await(client.acquire(id, ActuatorGroup.all.toSeq: _*))
-    val streamProbe = streamOf(id, gateway)
+    Try(rig.acquireAll(id, 15.seconds))
+    val streamProbe = rig.streamOf(id)
     // The robot's own stream payloads (robotHealth frames), in the order the gateway delivers them.
     val pingAnswers = new ConcurrentLinkedQueue[Long]()
     val collecting = streamProbe.map { case (_, received) =>
@@ -572,29 +544,23 @@ class DocRobotConformanceSpec
         case Left(why) => cancel(s"$why: the conformance robot cannot run")
         case Right(p)  => p
       }
-      val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
-      val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
-      val addresses = {
-        val probe = createTestProbe[Gateway.Addresses]()
-        gateway ! Gateway.GetAddresses(probe.ref)
-        probe.receiveMessage(10.seconds)
-      }
+      val (_, gatewayAddress) = rig.start()
       val strictAddress = ConformanceEnv.freeRobotAddress()
       val compatAddress = ConformanceEnv.freeRobotAddress()
       val gcStrict = ConformanceEnv.freeRobotAddress()
       val gcCompat = ConformanceEnv.freeRobotAddress()
       val lossyAddress = ConformanceEnv.freeRobotAddress()
       val runs = Seq(
-        new RobotRun(Strict, 43, strictAddress, python, addresses.robots) -> Some(gcStrict),
-        new RobotRun(Compat, 44, compatAddress, python, addresses.robots) -> Some(gcCompat),
-        new RobotRun(Lossy, 45, lossyAddress, python, addresses.robots, lossyArguments) -> None
+        new RobotRun(Strict, 43, strictAddress, python, gatewayAddress) -> Some(gcStrict),
+        new RobotRun(Compat, 44, compatAddress, python, gatewayAddress) -> Some(gcCompat),
+        new RobotRun(Lossy, 45, lossyAddress, python, gatewayAddress, lossyArguments) -> None
       )
       runs.foreach(_._1.awaitReady())
-      val client = Await.result(RobotClient.connect(system, middleware, "conformance", priority = 5), 15.seconds)
+      val client = rig.client
       // All robots at once, on threads of their own (every step blocks): the whole test stays well under two minutes.
       val driving = runs.map {
-        case (run, Some(gc)) => Future(drive(run, client, gateway, gc))(scala.concurrent.ExecutionContext.global)
-        case (run, None)     => Future(driveLossy(run, client, gateway))(scala.concurrent.ExecutionContext.global)
+        case (run, Some(gc)) => Future(drive(run, client, gc))(scala.concurrent.ExecutionContext.global)
+        case (run, None)     => Future(driveLossy(run, client))(scala.concurrent.ExecutionContext.global)
       }
       driving.foreach(d => Await.result(d, 100.seconds))
       val problems = runs.flatMap { case (run, _) =>

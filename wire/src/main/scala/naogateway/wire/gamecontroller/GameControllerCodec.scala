@@ -40,12 +40,16 @@ object GameControllerCodec {
 
   private val HeaderBytes = 4
   private[gamecontroller] val VersionOffset = 4
-  private[gamecontroller] val V7VersionBytes = 4
+  private val VersionFieldMaxBytes = GameControlVersion.all.map(_.versionBytes).max
   private[gamecontroller] val ControlHeaderBytes = ControlHeader.getBytes(StandardCharsets.US_ASCII)
   private val TrueDataHeaderBytes = TrueDataHeader.getBytes(StandardCharsets.US_ASCII)
   private val ReturnHeaderBytes = ReturnHeader.getBytes(StandardCharsets.US_ASCII)
 
-  private val U8Max = 0xffL
+  /** A layout of the `RGrt` return packet: its version byte and its exact size. */
+  private final case class ReturnLayout(version: Int, packetBytes: Int)
+
+  private val Return2 = ReturnLayout(ReturnVersion, ReturnPacketBytes)
+  private val Return4 = ReturnLayout(StatusVersion, StatusPacketBytes)
 
   /** Decodes a control packet. The version decides the layout, and each version's field has its own width, all starting
     * at byte 4: byte 4 = 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read the u16 12
@@ -59,21 +63,19 @@ object GameControllerCodec {
       data <- version match {
         case GameControlVersion.V19 => ModernLayouts.decodeV19(bytes)
         case GameControlVersion.V12 => ModernLayouts.decodeV12(bytes)
-        case GameControlVersion.V8  => Layouts2014.decodeV8(bytes)
-        case GameControlVersion.V7  => Layouts2014.decodeV7(bytes)
+        case GameControlVersion.V8  => Layouts2014.decode(Layouts2014.V8, bytes)
+        case GameControlVersion.V7  => Layouts2014.decode(Layouts2014.V7, bytes)
       }
     } yield data
 
   /** Encodes a control packet in its version's layout, refusing fields that do not fit that layout. */
   def encodeControl(data: GameControlData): Either[GameControllerError, Array[Byte]] =
     data match {
-      case d: ControlData2014 if d.version != GameControlVersion.V8 && d.version != GameControlVersion.V7 =>
-        Left(InvalidField("version", d.version.number.toLong))
       case d: ControlData2014 =>
-        Layouts2014.validate(d).toLeft(d.version match {
-          case GameControlVersion.V7 => Layouts2014.writeV7(d)
-          case _                     => Layouts2014.writeV8(d)
-        })
+        Layouts2014.of(d.version) match {
+          case Some(layout) => Layouts2014.validate(layout, d).toLeft(Layouts2014.write(layout, d))
+          case None         => Left(InvalidField("version", d.version.number.toLong))
+        }
       case d: HlControlData  => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
       case d: HslControlData => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, ControlHeaderBytes))
     }
@@ -96,19 +98,18 @@ object GameControllerCodec {
 
   /** Decodes a version-2 return packet (exactly 8 bytes). */
   def decodeReturn(bytes: Array[Byte]): Either[GameControllerError, ReturnData] =
-    for {
-      _ <- returnVersion(bytes, ReturnVersion)
-      _ <- checkSize(bytes, ReturnHeader, ReturnVersion, ReturnPacketBytes)
-    } yield ReturnData(u8(bytes, 5), u8(bytes, 6), ReturnMessage.fromCode(u8(bytes, 7)))
+    openReturn(bytes, Return2).map { r =>
+      val team = r.u8()
+      val player = r.u8()
+      ReturnData(team, player, ReturnMessage.fromCode(r.u8()))
+    }
 
   /** Decodes a version-4 return packet (exactly 32 bytes). Like the GameController, it refuses a `fallen` byte other
     * than 0 or 1 and a coordinate that is not a number (NaN).
     */
   def decodeStatus(bytes: Array[Byte]): Either[GameControllerError, ReturnStatus] =
     for {
-      _ <- returnVersion(bytes, StatusVersion)
-      _ <- checkSize(bytes, ReturnHeader, StatusVersion, StatusPacketBytes)
-      r = new LeReader(bytes, VersionOffset + 1)
+      r <- openReturn(bytes, Return4)
       player = r.u8()
       team = r.u8()
       fallen <- flag("fallen", r.u8())
@@ -124,9 +125,7 @@ object GameControllerCodec {
       u8Range(v, "player", data.player.toLong),
       u8Range(v, "message", data.message.code.toLong)
     ).toLeft {
-      val w = new LeWriter(ReturnPacketBytes)
-      w.raw(ReturnHeaderBytes)
-      w.u8(ReturnVersion)
+      val w = returnWriter(Return2)
       w.u8(data.team)
       w.u8(data.player)
       w.u8(data.message.code)
@@ -143,9 +142,7 @@ object GameControllerCodec {
       u8Range(v, "team", data.team.toLong),
       notNaN(floats).left.toOption
     ).toLeft {
-      val w = new LeWriter(StatusPacketBytes)
-      w.raw(ReturnHeaderBytes)
-      w.u8(StatusVersion)
+      val w = returnWriter(Return4)
       w.u8(data.player)
       w.u8(data.team)
       w.flag(data.fallen)
@@ -181,41 +178,54 @@ object GameControllerCodec {
       case i  => Left(NotANumber(FloatFields(i)))
     }
 
-  private def returnVersion(bytes: Array[Byte], version: Int): Either[GameControllerError, Unit] =
+  /** Checks a return packet's header, version and size against `layout`; the reader stands after the version byte. */
+  private def openReturn(bytes: Array[Byte], layout: ReturnLayout): Either[GameControllerError, LeReader] =
     for {
       _ <- checkHeader(bytes, ReturnHeaderBytes, ReturnHeader)
       _ <-
         if (bytes.length <= VersionOffset) Left(TooShort(VersionOffset + 1, bytes.length))
-        else if (u8(bytes, VersionOffset) != version)
+        else if (u8(bytes, VersionOffset) != layout.version)
           Left(UnknownVersion(ReturnHeader, slice(bytes, VersionOffset, VersionOffset + 1)))
         else Right(())
-    } yield ()
+      _ <- checkSize(bytes, ReturnHeader, layout.version, layout.packetBytes)
+    } yield new LeReader(bytes, VersionOffset + 1)
+
+  /** A writer of a return packet of `layout` with its header and version byte written. */
+  private def returnWriter(layout: ReturnLayout): LeWriter = {
+    val w = new LeWriter(layout.packetBytes)
+    w.raw(ReturnHeaderBytes)
+    w.u8(layout.version)
+    w
+  }
 
   private def checkHeader(bytes: Array[Byte], header: Array[Byte], name: String): Either[GameControllerError, Unit] =
     if (bytes.length < HeaderBytes) Left(TooShort(HeaderBytes, bytes.length))
     else if (java.util.Arrays.equals(bytes, 0, HeaderBytes, header, 0, HeaderBytes)) Right(())
     else Left(WrongHeader(name, slice(bytes, 0, HeaderBytes)))
 
+  // The first byte names the candidate (every version number fits a byte); its whole field, of the width its version
+  // gives, must then read that number.
   private def controlVersion(bytes: Array[Byte], header: String): Either[GameControllerError, GameControlVersion] = {
-    def unknown = Left(UnknownVersion(header, slice(bytes, VersionOffset, VersionOffset + V7VersionBytes)))
+    def unknown = Left(UnknownVersion(header, slice(bytes, VersionOffset, VersionOffset + VersionFieldMaxBytes)))
     if (bytes.length <= VersionOffset) Left(TooShort(VersionOffset + 1, bytes.length))
     else
-      u8(bytes, VersionOffset) match {
-        case 19 => Right(GameControlVersion.V19)
-        case 8  => Right(GameControlVersion.V8)
-        case 12 =>
-          if (bytes.length < VersionOffset + 2) Left(TooShort(VersionOffset + 2, bytes.length))
-          else if (u8(bytes, VersionOffset + 1) == 0) Right(GameControlVersion.V12)
+      GameControlVersion.all.find(_.number == u8(bytes, VersionOffset)) match {
+        case None => unknown
+        case Some(version) =>
+          val end = VersionOffset + version.versionBytes
+          if (bytes.length < end) Left(TooShort(end, bytes.length))
+          else if (versionField(version).read(new LeReader(bytes, VersionOffset)) == version.number.toLong)
+            Right(version)
           else unknown
-        case 7 =>
-          if (bytes.length < VersionOffset + V7VersionBytes)
-            Left(TooShort(VersionOffset + V7VersionBytes, bytes.length))
-          else if (new LeReader(bytes, VersionOffset).u32() == GameControlVersion.V7.number.toLong)
-            Right(GameControlVersion.V7)
-          else unknown
-        case _ => unknown
       }
   }
+
+  /** The width of `version`'s version field. */
+  private[gamecontroller] def versionField(version: GameControlVersion): Width = Width.unsigned(version.versionBytes)
+
+  /** Writes `version`'s number in its version field. */
+  private[gamecontroller] def writeVersion(w: LeWriter, version: GameControlVersion): Unit =
+    versionField(version).write(w, version.number.toLong)
 
   private[gamecontroller] def checkSize(
       bytes: Array[Byte],
@@ -239,8 +249,11 @@ object GameControllerCodec {
       v: Int, field: String, value: Long, min: Long, max: Long): Option[GameControllerError] =
     if (value < min || value > max) Some(OutOfRange(v, field, value, min, max)) else None
 
+  private[gamecontroller] def fits(v: Int, field: String, value: Long, width: Width): Option[GameControllerError] =
+    range(v, field, value, width.min, width.max)
+
   private[gamecontroller] def u8Range(v: Int, field: String, value: Long): Option[GameControllerError] =
-    range(v, field, value, 0L, U8Max)
+    fits(v, field, value, Width.U8)
 
   private[gamecontroller] def length(field: String, expected: Int, found: Int): Option[GameControllerError] =
     if (found != expected) Some(WrongLength(field, expected, found)) else None

@@ -2,31 +2,76 @@ package naogateway.wire.gamecontroller
 
 import naogateway.wire.gamecontroller.GameControllerCodec.{
   ControlHeaderBytes,
-  V7VersionBytes,
   VersionOffset,
   firstError,
+  fits,
   flag,
   length,
-  range,
-  u8Range
+  writeVersion
 }
 import naogateway.wire.gamecontroller.GameControllerError._
+import naogateway.wire.gamecontroller.Width.{I16, U16, U8}
 
-/** The layouts of versions 8 and 7, the 2014 GameController's (docs/protocol.md §10.1, §10.2), for
-  * [[GameControllerCodec]], which checks the header, the version and the size before these run. Writers run only after
-  * their validation passed.
+/** Where the two layouts of the 2014 GameController differ (docs/protocol.md §10.1, §10.2); everything else they share,
+  * in the same order. One decoder, one validation and one writer read this table, so the differences between versions 8
+  * and 7 are the rows below and nothing else.
+  *
+  * @param packetNumber
+  *   a u8 packet number follows the version field
+  * @param secsRemaining
+  *   the width of `secsRemaining`
+  * @param secondaryTime
+  *   an i16 `secondaryTime` follows `secsRemaining`
+  * @param goalColour
+  *   each team has a u8 `goalColour` after its colour
+  * @param shotsAndCoach
+  *   each team has `penaltyShot`, `singleShots`, the coach's message and the coach's entry after its score
+  * @param playerField
+  *   the width of both fields of a player's entry
+  */
+private[gamecontroller] final case class Layout2014(
+    version: GameControlVersion,
+    packetNumber: Boolean,
+    secsRemaining: Width,
+    secondaryTime: Boolean,
+    goalColour: Boolean,
+    shotsAndCoach: Boolean,
+    playerField: Width
+)
+
+/** The layouts of versions 8 and 7, the 2014 GameController's, for [[GameControllerCodec]], which checks the header,
+  * the version and the size before these run. Writers run only after their validation passed.
   */
 private[gamecontroller] object Layouts2014 {
 
-  private val U8Max = 0xffL
-  private val U16Max = 0xffffL
-  private val U32Max = 0xffffffffL
-  private val I16Min = Short.MinValue.toLong
-  private val I16Max = Short.MaxValue.toLong
+  /** Version 8: a packet number and a secondary clock, i16 seconds, the coach, one byte a player field. */
+  val V8: Layout2014 = Layout2014(
+    GameControlVersion.V8,
+    packetNumber = true,
+    secsRemaining = I16,
+    secondaryTime = true,
+    goalColour = false,
+    shotsAndCoach = true,
+    playerField = U8
+  )
 
-  def decodeV8(bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
-    val r = new LeReader(bytes, VersionOffset + 1)
-    val packetNumber = r.u8()
+  /** Version 7: neither packet number nor secondary clock, u32 seconds, a goal colour, two bytes a player field. */
+  val V7: Layout2014 = Layout2014(
+    GameControlVersion.V7,
+    packetNumber = false,
+    secsRemaining = Width.U32,
+    secondaryTime = false,
+    goalColour = true,
+    shotsAndCoach = false,
+    playerField = U16
+  )
+
+  /** The layout of a 2014 version, if `version` is one. */
+  def of(version: GameControlVersion): Option[Layout2014] = Seq(V8, V7).find(_.version == version)
+
+  def decode(layout: Layout2014, bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
+    val r = new LeReader(bytes, VersionOffset + layout.version.versionBytes)
+    val packetNumber = when(layout.packetNumber)(r.u8())
     val playersPerTeam = r.u8()
     val gameState = GameState.fromCode(r.u8())
     val firstHalf = r.u8()
@@ -34,72 +79,14 @@ private[gamecontroller] object Layouts2014 {
     val secondaryGameState = SecondaryGameState.fromCode(r.u8())
     val dropInTeam = TeamColour.fromCode(r.u8())
     val dropInTime = r.i16()
-    val secsRemaining = r.i16()
-    val secondaryTime = r.i16()
-    val team0 = teamV8(r)
-    val team1 = teamV8(r)
+    val secsRemaining = layout.secsRemaining.read(r)
+    val secondaryTime = when(layout.secondaryTime)(r.i16())
+    val team0 = team(layout, r)
+    val team1 = team(layout, r)
     flag("firstHalf", firstHalf).map { half =>
       ControlData2014(
-        version = GameControlVersion.V8,
-        packetNumber = Some(packetNumber),
-        playersPerTeam = playersPerTeam,
-        gameState = gameState,
-        firstHalf = half,
-        kickOffTeam = kickOffTeam,
-        secondaryGameState = secondaryGameState,
-        dropInTeam = dropInTeam,
-        dropInTime = dropInTime,
-        secsRemaining = secsRemaining.toLong,
-        secondaryTime = Some(secondaryTime),
-        team0 = team0,
-        team1 = team1
-      )
-    }
-  }
-
-  private def teamV8(r: LeReader): TeamInfo = {
-    val teamNumber = r.u8()
-    val teamColour = TeamColour.fromCode(r.u8())
-    val score = r.u8()
-    val penaltyShot = r.u8()
-    val singleShots = r.u16()
-    val coachMessage = r.take(TeamInfo.CoachMessageBytes)
-    val coach = playerV8(r)
-    val players = Vector.fill(TeamInfo.PlayerSlots)(playerV8(r))
-    TeamInfo(
-      teamNumber = teamNumber,
-      teamColour = teamColour,
-      score = score,
-      goalColour = None,
-      penaltyShot = Some(penaltyShot),
-      singleShots = Some(singleShots),
-      coachMessage = Some(coachMessage),
-      coach = Some(coach),
-      players = players
-    )
-  }
-
-  private def playerV8(r: LeReader): PlayerInfo = {
-    val penalty = Penalty.fromCode(r.u8())
-    PlayerInfo(penalty, r.u8())
-  }
-
-  def decodeV7(bytes: Array[Byte]): Either[GameControllerError, ControlData2014] = {
-    val r = new LeReader(bytes, VersionOffset + V7VersionBytes)
-    val playersPerTeam = r.u8()
-    val gameState = GameState.fromCode(r.u8())
-    val firstHalf = r.u8()
-    val kickOffTeam = KickOffTeam.fromCode(r.u8())
-    val secondaryGameState = SecondaryGameState.fromCode(r.u8())
-    val dropInTeam = TeamColour.fromCode(r.u8())
-    val dropInTime = r.i16()
-    val secsRemaining = r.u32()
-    val team0 = teamV7(r)
-    val team1 = teamV7(r)
-    flag("firstHalf", firstHalf).map { half =>
-      ControlData2014(
-        version = GameControlVersion.V7,
-        packetNumber = None,
+        version = layout.version,
+        packetNumber = packetNumber,
         playersPerTeam = playersPerTeam,
         gameState = gameState,
         firstHalf = half,
@@ -108,166 +95,126 @@ private[gamecontroller] object Layouts2014 {
         dropInTeam = dropInTeam,
         dropInTime = dropInTime,
         secsRemaining = secsRemaining,
-        secondaryTime = None,
+        secondaryTime = secondaryTime,
         team0 = team0,
         team1 = team1
       )
     }
   }
 
-  private def teamV7(r: LeReader): TeamInfo = {
+  private def team(layout: Layout2014, r: LeReader): TeamInfo = {
     val teamNumber = r.u8()
     val teamColour = TeamColour.fromCode(r.u8())
-    val goalColour = GoalColour.fromCode(r.u8())
+    val goalColour = when(layout.goalColour)(GoalColour.fromCode(r.u8()))
     val score = r.u8()
-    val players = Vector.fill(TeamInfo.PlayerSlots) {
-      val penalty = Penalty.fromCode(r.u16())
-      PlayerInfo(penalty, r.u16())
-    }
+    val penaltyShot = when(layout.shotsAndCoach)(r.u8())
+    val singleShots = when(layout.shotsAndCoach)(r.u16())
+    val coachMessage = when(layout.shotsAndCoach)(r.take(TeamInfo.CoachMessageBytes))
+    val coach = when(layout.shotsAndCoach)(player(layout, r))
+    val players = Vector.fill(TeamInfo.PlayerSlots)(player(layout, r))
     TeamInfo(
       teamNumber = teamNumber,
       teamColour = teamColour,
       score = score,
-      goalColour = Some(goalColour),
-      penaltyShot = None,
-      singleShots = None,
-      coachMessage = None,
-      coach = None,
+      goalColour = goalColour,
+      penaltyShot = penaltyShot,
+      singleShots = singleShots,
+      coachMessage = coachMessage,
+      coach = coach,
       players = players
     )
   }
 
+  private def player(layout: Layout2014, r: LeReader): PlayerInfo = {
+    val penalty = Penalty.fromCode(layout.playerField.read(r).toInt)
+    PlayerInfo(penalty, layout.playerField.read(r).toInt)
+  }
+
+  private def when[A](present: Boolean)(read: => A): Option[A] = if (present) Some(read) else None
+
   // Reading 2 as "true" would be a guess; only the two values the GameController writes are accepted.
-  def validate(d: ControlData2014): Option[GameControllerError] = {
-    val v = d.version.number
-    val common = List(
-      u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
-      u8Range(v, "gameState", d.gameState.code.toLong),
-      u8Range(v, "kickOffTeam", d.kickOffTeam.code.toLong),
-      u8Range(v, "secondaryGameState", d.secondaryGameState.code.toLong),
-      u8Range(v, "dropInTeam", d.dropInTeam.code.toLong),
-      range(v, "dropInTime", d.dropInTime.toLong, I16Min, I16Max)
-    )
-    val specific = d.version match {
-      case GameControlVersion.V8 =>
-        List(
-          required(v, "packetNumber", d.packetNumber),
-          d.packetNumber.flatMap(n => u8Range(v, "packetNumber", n.toLong)),
-          range(v, "secsRemaining", d.secsRemaining, I16Min, I16Max),
-          required(v, "secondaryTime", d.secondaryTime),
-          d.secondaryTime.flatMap(t => range(v, "secondaryTime", t.toLong, I16Min, I16Max))
-        )
-      case _ =>
-        List(
-          absent(v, "packetNumber", d.packetNumber),
-          range(v, "secsRemaining", d.secsRemaining, 0L, U32Max),
-          absent(v, "secondaryTime", d.secondaryTime)
-        )
-    }
-    val teams = validateTeam(d.version, "team0", d.team0) ++ validateTeam(d.version, "team1", d.team1)
-    firstError(common ++ specific ++ teams: _*)
+  def validate(layout: Layout2014, d: ControlData2014): Option[GameControllerError] = {
+    val v = layout.version.number
+    val top = List(
+      fits(v, "playersPerTeam", d.playersPerTeam.toLong, U8),
+      fits(v, "gameState", d.gameState.code.toLong, U8),
+      fits(v, "kickOffTeam", d.kickOffTeam.code.toLong, U8),
+      fits(v, "secondaryGameState", d.secondaryGameState.code.toLong, U8),
+      fits(v, "dropInTeam", d.dropInTeam.code.toLong, U8),
+      fits(v, "dropInTime", d.dropInTime.toLong, I16)
+    ) ++
+      field(v, layout.packetNumber, "packetNumber", d.packetNumber)(n => List(fits(v, "packetNumber", n.toLong, U8))) ++
+      List(fits(v, "secsRemaining", d.secsRemaining, layout.secsRemaining)) ++
+      field(v, layout.secondaryTime, "secondaryTime", d.secondaryTime)(t =>
+        List(fits(v, "secondaryTime", t.toLong, I16)))
+    firstError(top ++ validateTeam(layout, "team0", d.team0) ++ validateTeam(layout, "team1", d.team1): _*)
   }
 
-  private def validateTeam(
-      version: GameControlVersion,
-      name: String,
-      t: TeamInfo
-  ): List[Option[GameControllerError]] = {
-    val v = version.number
-    val common = List(
-      u8Range(v, s"$name.teamNumber", t.teamNumber.toLong),
-      u8Range(v, s"$name.teamColour", t.teamColour.code.toLong),
-      u8Range(v, s"$name.score", t.score.toLong),
-      length(s"$name.players", TeamInfo.PlayerSlots, t.players.size)
-    )
-    version match {
-      case GameControlVersion.V8 =>
-        common ++ List(
-          absent(v, s"$name.goalColour", t.goalColour),
-          required(v, s"$name.penaltyShot", t.penaltyShot),
-          t.penaltyShot.flatMap(p => u8Range(v, s"$name.penaltyShot", p.toLong)),
-          required(v, s"$name.singleShots", t.singleShots),
-          t.singleShots.flatMap(s => range(v, s"$name.singleShots", s.toLong, 0L, U16Max)),
-          required(v, s"$name.coachMessage", t.coachMessage),
-          t.coachMessage.flatMap(m => length(s"$name.coachMessage", TeamInfo.CoachMessageBytes, m.length)),
-          required(v, s"$name.coach", t.coach)
-        ) ++ t.coach.toList.flatMap(validatePlayer(v, s"$name.coach", U8Max, _)) ++ validatePlayers(v, name, U8Max, t)
-      case _ =>
-        common ++ List(
-          required(v, s"$name.goalColour", t.goalColour),
-          t.goalColour.flatMap(g => u8Range(v, s"$name.goalColour", g.code.toLong)),
-          absent(v, s"$name.penaltyShot", t.penaltyShot),
-          absent(v, s"$name.singleShots", t.singleShots),
-          absent(v, s"$name.coachMessage", t.coachMessage),
-          absent(v, s"$name.coach", t.coach)
-        ) ++ validatePlayers(v, name, U16Max, t)
-    }
-  }
-
-  private def validatePlayers(v: Int, team: String, max: Long, t: TeamInfo): List[Option[GameControllerError]] =
-    t.players.zipWithIndex.toList.flatMap { case (p, i) => validatePlayer(v, s"$team.players[$i]", max, p) }
-
-  private def validatePlayer(v: Int, name: String, max: Long, p: PlayerInfo): List[Option[GameControllerError]] =
+  private def validateTeam(layout: Layout2014, name: String, t: TeamInfo): List[Option[GameControllerError]] = {
+    val v = layout.version.number
+    val extras = layout.shotsAndCoach
     List(
-      range(v, s"$name.penalty", p.penalty.code.toLong, 0L, max),
-      range(v, s"$name.secsTillUnpenalised", p.secsTillUnpenalised.toLong, 0L, max)
+      fits(v, s"$name.teamNumber", t.teamNumber.toLong, U8),
+      fits(v, s"$name.teamColour", t.teamColour.code.toLong, U8),
+      fits(v, s"$name.score", t.score.toLong, U8),
+      length(s"$name.players", TeamInfo.PlayerSlots, t.players.size)
+    ) ++
+      field(v, layout.goalColour, s"$name.goalColour", t.goalColour)(g =>
+        List(fits(v, s"$name.goalColour", g.code.toLong, U8))) ++
+      field(v, extras, s"$name.penaltyShot", t.penaltyShot)(p => List(fits(v, s"$name.penaltyShot", p.toLong, U8))) ++
+      field(v, extras, s"$name.singleShots", t.singleShots)(s => List(fits(v, s"$name.singleShots", s.toLong, U16))) ++
+      field(v, extras, s"$name.coachMessage", t.coachMessage)(m =>
+        List(length(s"$name.coachMessage", TeamInfo.CoachMessageBytes, m.length))) ++
+      field(v, extras, s"$name.coach", t.coach)(validatePlayer(layout, s"$name.coach", _)) ++
+      t.players.zipWithIndex.toList.flatMap { case (p, i) => validatePlayer(layout, s"$name.players[$i]", p) }
+  }
+
+  private def validatePlayer(layout: Layout2014, name: String, p: PlayerInfo): List[Option[GameControllerError]] = {
+    val v = layout.version.number
+    List(
+      fits(v, s"$name.penalty", p.penalty.code.toLong, layout.playerField),
+      fits(v, s"$name.secsTillUnpenalised", p.secsTillUnpenalised.toLong, layout.playerField)
     )
-
-  private def required(v: Int, field: String, value: Option[Any]): Option[GameControllerError] =
-    if (value.isEmpty) Some(MissingField(v, field)) else None
-
-  private def absent(v: Int, field: String, value: Option[Any]): Option[GameControllerError] =
-    if (value.isDefined) Some(UnexpectedField(v, field)) else None
-
-  def writeV8(d: ControlData2014): Array[Byte] = {
-    val w = new LeWriter(GameControlVersion.V8.packetBytes)
-    w.raw(ControlHeaderBytes)
-    w.u8(GameControlVersion.V8.number)
-    w.u8(d.packetNumber.getOrElse(0))
-    writeCommon(w, d)
-    w.u16(d.secsRemaining.toInt)
-    w.u16(d.secondaryTime.getOrElse(0))
-    List(d.team0, d.team1).foreach { t =>
-      w.u8(t.teamNumber)
-      w.u8(t.teamColour.code)
-      w.u8(t.score)
-      w.u8(t.penaltyShot.getOrElse(0))
-      w.u16(t.singleShots.getOrElse(0))
-      t.coachMessage.foreach(m => w.raw(m.toArray))
-      (t.coach.toList ++ t.players).foreach { p =>
-        w.u8(p.penalty.code)
-        w.u8(p.secsTillUnpenalised)
-      }
-    }
-    w.out
   }
 
-  def writeV7(d: ControlData2014): Array[Byte] = {
-    val w = new LeWriter(GameControlVersion.V7.packetBytes)
-    w.raw(ControlHeaderBytes)
-    w.u32(GameControlVersion.V7.number.toLong)
-    writeCommon(w, d)
-    w.u32(d.secsRemaining)
-    List(d.team0, d.team1).foreach { t =>
-      w.u8(t.teamNumber)
-      w.u8(t.teamColour.code)
-      w.u8(t.goalColour.fold(0)(_.code))
-      w.u8(t.score)
-      t.players.foreach { p =>
-        w.u16(p.penalty.code)
-        w.u16(p.secsTillUnpenalised)
-      }
-    }
-    w.out
-  }
+  /** A field one layout has and the other lacks: present and valid where the layout has it, absent where it lacks it.
+    */
+  private def field[A](v: Int, inLayout: Boolean, name: String, value: Option[A])(
+      check: A => List[Option[GameControllerError]]
+  ): List[Option[GameControllerError]] =
+    if (!inLayout) List(value.map(_ => UnexpectedField(v, name)))
+    else if (value.isEmpty) List(Some(MissingField(v, name)))
+    else value.toList.flatMap(check)
 
-  private def writeCommon(w: LeWriter, d: ControlData2014): Unit = {
+  // Validation made every Option present exactly where the layout has its field, so writing what is present writes the
+  // layout.
+  def write(layout: Layout2014, d: ControlData2014): Array[Byte] = {
+    val w = new LeWriter(layout.version.packetBytes)
+    w.raw(ControlHeaderBytes)
+    writeVersion(w, layout.version)
+    d.packetNumber.foreach(w.u8)
     w.u8(d.playersPerTeam)
     w.u8(d.gameState.code)
-    w.u8(if (d.firstHalf) 1 else 0)
+    w.flag(d.firstHalf)
     w.u8(d.kickOffTeam.code)
     w.u8(d.secondaryGameState.code)
     w.u8(d.dropInTeam.code)
     w.u16(d.dropInTime)
+    layout.secsRemaining.write(w, d.secsRemaining)
+    d.secondaryTime.foreach(w.u16)
+    List(d.team0, d.team1).foreach { t =>
+      w.u8(t.teamNumber)
+      w.u8(t.teamColour.code)
+      t.goalColour.foreach(g => w.u8(g.code))
+      w.u8(t.score)
+      t.penaltyShot.foreach(w.u8)
+      t.singleShots.foreach(w.u16)
+      t.coachMessage.foreach(m => w.raw(m.toArray))
+      (t.coach.toList ++ t.players).foreach { p =>
+        layout.playerField.write(w, p.penalty.code.toLong)
+        layout.playerField.write(w, p.secsTillUnpenalised.toLong)
+      }
+    }
+    w.out
   }
 }

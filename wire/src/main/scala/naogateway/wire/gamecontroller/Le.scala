@@ -49,3 +49,46 @@ private[gamecontroller] final class LeWriter(size: Int) {
     position += bytes.length
   }
 }
+
+/** The width of one number on the wire with the range it holds: a layout names widths, so where versions differ in a
+  * field's width the difference is data, and reading, writing and the range check follow from it.
+  */
+private[gamecontroller] sealed abstract class Width(val bytes: Int, val min: Long, val max: Long) {
+
+  /** Reads one number of this width. */
+  def read(r: LeReader): Long
+
+  /** Writes one number of this width (a signed one as its two's complement). */
+  def write(w: LeWriter, value: Long): Unit
+}
+
+/** The widths of the GameController's numbers. */
+private[gamecontroller] object Width {
+
+  /** One unsigned byte. */
+  case object U8 extends Width(1, 0L, 0xffL) {
+    def read(r: LeReader): Long = r.u8().toLong
+    def write(w: LeWriter, value: Long): Unit = w.u8(value.toInt)
+  }
+
+  /** Two bytes, unsigned. */
+  case object U16 extends Width(2, 0L, 0xffffL) {
+    def read(r: LeReader): Long = r.u16().toLong
+    def write(w: LeWriter, value: Long): Unit = w.u16(value.toInt)
+  }
+
+  /** Two bytes, signed. */
+  case object I16 extends Width(2, Short.MinValue.toLong, Short.MaxValue.toLong) {
+    def read(r: LeReader): Long = r.i16().toLong
+    def write(w: LeWriter, value: Long): Unit = w.u16(value.toInt)
+  }
+
+  /** Four bytes, unsigned. */
+  case object U32 extends Width(4, 0L, 0xffffffffL) {
+    def read(r: LeReader): Long = r.u32()
+    def write(w: LeWriter, value: Long): Unit = w.u32(value)
+  }
+
+  /** The unsigned width of a version field of `bytes` bytes (1, 2 or 4). */
+  def unsigned(bytes: Int): Width = Seq(U8, U16, U32).find(_.bytes == bytes).getOrElse(U32)
+}

@@ -1,6 +1,17 @@
 package naogateway.wire.gamecontroller
 
-import naogateway.wire.gamecontroller.GameControllerCodec.{firstError, flag, length, range, u8Range}
+import naogateway.wire.gamecontroller.GameControllerCodec.{
+  ControlHeaderBytes,
+  VersionOffset,
+  firstError,
+  fits,
+  flag,
+  length,
+  range,
+  u8Range,
+  writeVersion
+}
+import naogateway.wire.gamecontroller.Width.{I16, U16}
 
 /** The layouts of versions 19 and 12 (docs/protocol.md §10.2, §10.3), for [[GameControllerCodec]], which checks the
   * header, the version and the size before these run. Writers run only after their validation passed.
@@ -9,14 +20,11 @@ private[gamecontroller] object ModernLayouts {
 
   private val KickingTeamNone = 255
   private val SecondaryStateInfoBytes = 4
-  private val I16Min = Short.MinValue.toLong
-  private val I16Max = Short.MaxValue.toLong
-  private val U16Max = 0xffffL
 
   private def teamOrNone(code: Int): Option[Int] = if (code == KickingTeamNone) None else Some(code)
 
   def decodeV19(bytes: Array[Byte]): Either[GameControllerError, HslControlData] = {
-    val r = new LeReader(bytes, 5)
+    val r = new LeReader(bytes, VersionOffset + GameControlVersion.V19.versionBytes)
     val packetNumber = r.u8()
     val playersPerTeam = r.u8()
     val competitionType = CompetitionType.fromCode(r.u8())
@@ -60,8 +68,8 @@ private[gamecontroller] object ModernLayouts {
       u8Range(v, "gameState", d.gameState.code.toLong),
       u8Range(v, "setPlay", d.setPlay.code.toLong),
       d.kickingTeam.flatMap(t => range(v, "kickingTeam", t.toLong, 0L, KickingTeamNone - 1L)),
-      range(v, "secsRemaining", d.secsRemaining, I16Min, I16Max),
-      range(v, "secondaryTime", d.secondaryTime.toLong, I16Min, I16Max)
+      fits(v, "secsRemaining", d.secsRemaining, I16),
+      fits(v, "secondaryTime", d.secondaryTime.toLong, I16)
     )
     def team(name: String, t: HslTeamInfo): List[Option[GameControllerError]] =
       List(
@@ -71,8 +79,8 @@ private[gamecontroller] object ModernLayouts {
         u8Range(v, s"$name.goalkeeper", t.goalkeeper.toLong),
         u8Range(v, s"$name.score", t.score.toLong),
         u8Range(v, s"$name.penaltyShot", t.penaltyShot.toLong),
-        range(v, s"$name.singleShots", t.singleShots.toLong, 0L, U16Max),
-        range(v, s"$name.messageBudget", t.messageBudget.toLong, 0L, U16Max),
+        fits(v, s"$name.singleShots", t.singleShots.toLong, U16),
+        fits(v, s"$name.messageBudget", t.messageBudget.toLong, U16),
         length(s"$name.players", HslPlayerInfo.Slots, t.players.size)
       ) ++ t.players.zipWithIndex.toList.flatMap { case (p, i) =>
         val n = s"$name.players[$i]"
@@ -89,7 +97,7 @@ private[gamecontroller] object ModernLayouts {
   def writeV19(d: HslControlData, header: Array[Byte]): Array[Byte] = {
     val w = new LeWriter(GameControlVersion.V19.packetBytes)
     w.raw(header)
-    w.u8(GameControlVersion.V19.number)
+    writeVersion(w, GameControlVersion.V19)
     w.u8(d.packetNumber)
     w.u8(d.playersPerTeam)
     w.u8(d.competitionType.code)
@@ -121,7 +129,7 @@ private[gamecontroller] object ModernLayouts {
   }
 
   def decodeV12(bytes: Array[Byte]): Either[GameControllerError, HlControlData] = {
-    val r = new LeReader(bytes, 6)
+    val r = new LeReader(bytes, VersionOffset + GameControlVersion.V12.versionBytes)
     val packetNumber = r.u8()
     val playersPerTeam = r.u8()
     val gameType = HlGameType.fromCode(r.u8())
@@ -182,9 +190,9 @@ private[gamecontroller] object ModernLayouts {
       u8Range(v, "secondaryState", d.secondaryState.code.toLong),
       length("secondaryStateInfo", SecondaryStateInfoBytes, d.secondaryStateInfo.size),
       u8Range(v, "dropInTeam", d.dropInTeam.toLong),
-      range(v, "dropInTime", d.dropInTime.toLong, 0L, U16Max),
-      range(v, "secsRemaining", d.secsRemaining, I16Min, I16Max),
-      range(v, "secondaryTime", d.secondaryTime.toLong, I16Min, I16Max)
+      fits(v, "dropInTime", d.dropInTime.toLong, U16),
+      fits(v, "secsRemaining", d.secsRemaining, I16),
+      fits(v, "secondaryTime", d.secondaryTime.toLong, I16)
     )
     def player(n: String, p: HlPlayerInfo): List[Option[GameControllerError]] =
       List(
@@ -200,7 +208,7 @@ private[gamecontroller] object ModernLayouts {
         u8Range(v, s"$name.fieldPlayerColour", t.fieldPlayerColour.code.toLong),
         u8Range(v, s"$name.score", t.score.toLong),
         u8Range(v, s"$name.penaltyShot", t.penaltyShot.toLong),
-        range(v, s"$name.singleShots", t.singleShots.toLong, 0L, U16Max),
+        fits(v, s"$name.singleShots", t.singleShots.toLong, U16),
         u8Range(v, s"$name.coachSequence", t.coachSequence.toLong),
         length(s"$name.coachMessage", HlPlayerInfo.CoachMessageBytes, t.coachMessage.size),
         length(s"$name.players", HlPlayerInfo.Slots, t.players.size)
@@ -211,8 +219,8 @@ private[gamecontroller] object ModernLayouts {
 
   def writeV12(d: HlControlData): Array[Byte] = {
     val w = new LeWriter(GameControlVersion.V12.packetBytes)
-    w.raw(GameControllerCodec.ControlHeader.getBytes(java.nio.charset.StandardCharsets.US_ASCII))
-    w.u16(GameControlVersion.V12.number)
+    w.raw(ControlHeaderBytes)
+    writeVersion(w, GameControlVersion.V12)
     w.u8(d.packetNumber)
     w.u8(d.playersPerTeam)
     w.u8(d.gameType.code)

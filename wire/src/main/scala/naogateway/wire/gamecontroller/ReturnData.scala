@@ -1,32 +1,26 @@
 package naogateway.wire.gamecontroller
 
 /** What a robot tells the GameController in an `RGrt` return packet. */
-sealed trait ReturnMessage extends Product with Serializable {
-
-  /** The value on the wire. */
-  def code: Int
-}
+sealed abstract class ReturnMessage(val code: Int) extends WireCode
 
 /** Messages of return-packet version 2. */
-object ReturnMessage {
+object ReturnMessage extends WireCodes[ReturnMessage] {
 
   /** The robot penalised itself (e.g. its button was pressed). */
-  case object ManualPenalise extends ReturnMessage { val code: Int = 0 }
+  case object ManualPenalise extends ReturnMessage(0)
 
   /** The robot lifted its own manual penalty. */
-  case object ManualUnpenalise extends ReturnMessage { val code: Int = 1 }
+  case object ManualUnpenalise extends ReturnMessage(1)
 
   /** The robot is alive and receiving control packets. */
-  case object Alive extends ReturnMessage { val code: Int = 2 }
+  case object Alive extends ReturnMessage(2)
 
   /** A value outside the known set; decoding produces it only for codes no known message has. */
-  final case class Unknown(code: Int) extends ReturnMessage
+  final case class Unknown(override val code: Int) extends ReturnMessage(code)
 
   /** The known messages, in code order. */
   val known: Seq[ReturnMessage] = Seq(ManualPenalise, ManualUnpenalise, Alive)
-
-  /** The message with this wire value, or `Unknown(code)`. */
-  def fromCode(code: Int): ReturnMessage = known.find(_.code == code).getOrElse(Unknown(code))
+  protected def unknown(code: Int): ReturnMessage = Unknown(code)
 }
 
 /** The content of an `RGrt` return packet (version 2, 8 bytes).

@@ -1,25 +1,30 @@
 package naogateway.wire.gamecontroller
 
-/** The closed set of values one wire code of versions 12 and 19 takes, with the value that keeps a code no known value
-  * has (so decoding loses nothing and encoding gives the same byte back).
+/** A value one wire code of the GameController's packets takes: the code is all the wire knows of it. */
+trait WireCode extends Product with Serializable {
+
+  /** The value on the wire. */
+  def code: Int
+}
+
+/** The closed set of values one wire code takes, in every version, with the value that keeps a code no known value has
+  * (so decoding loses nothing and encoding gives the same byte back). Each code's table is its `known` values; a
+  * value's code is its own (`isCode`: every value of such a set is a [[WireCode]]).
   */
-abstract class WireCodes[A] {
+abstract class WireCodes[A](implicit isCode: A <:< WireCode) {
 
   /** The known values, in code order. */
   def known: Seq[A]
-
-  /** The code on the wire of `value`. */
-  def codeOf(value: A): Int
 
   /** The value standing for `code` when no known value has it. */
   protected def unknown(code: Int): A
 
   /** The value with this wire code, or the unknown value carrying it. */
-  def fromCode(code: Int): A = known.find(codeOf(_) == code).getOrElse(unknown(code))
+  def fromCode(code: Int): A = known.find(isCode(_).code == code).getOrElse(unknown(code))
 }
 
 /** A colour of the 10 the GameController of versions 12 and 19 knows (`TEAM_BLUE` … `TEAM_GRAY`). */
-sealed abstract class FieldColour(val code: Int) extends Product with Serializable
+sealed abstract class FieldColour(val code: Int) extends WireCode
 
 /** Colour codes of versions 12 and 19 (versions 7 and 8 know only blue and red: [[TeamColour]]). */
 object FieldColour extends WireCodes[FieldColour] {
@@ -58,12 +63,11 @@ object FieldColour extends WireCodes[FieldColour] {
   final case class Unknown(override val code: Int) extends FieldColour(code)
 
   val known: Seq[FieldColour] = Seq(Blue, Red, Yellow, Black, White, Green, Orange, Purple, Brown, Gray)
-  def codeOf(value: FieldColour): Int = value.code
   protected def unknown(code: Int): FieldColour = Unknown(code)
 }
 
 /** The phase of a version-19 game (`gamePhase`). */
-sealed abstract class GamePhase(val code: Int) extends Product with Serializable
+sealed abstract class GamePhase(val code: Int) extends WireCode
 
 /** Game phases of version 19. */
 object GamePhase extends WireCodes[GamePhase] {
@@ -84,12 +88,11 @@ object GamePhase extends WireCodes[GamePhase] {
   final case class Unknown(override val code: Int) extends GamePhase(code)
 
   val known: Seq[GamePhase] = Seq(Normal, PenaltyShootOut, ExtraTime, Timeout)
-  def codeOf(value: GamePhase): Int = value.code
   protected def unknown(code: Int): GamePhase = Unknown(code)
 }
 
 /** The set play under way in a version-19 game (`setPlay`). */
-sealed abstract class SetPlay(val code: Int) extends Product with Serializable
+sealed abstract class SetPlay(val code: Int) extends WireCode
 
 /** Set plays of version 19. */
 object SetPlay extends WireCodes[SetPlay] {
@@ -119,12 +122,11 @@ object SetPlay extends WireCodes[SetPlay] {
   final case class Unknown(override val code: Int) extends SetPlay(code)
 
   val known: Seq[SetPlay] = Seq(NoSetPlay, DirectFreeKick, IndirectFreeKick, PenaltyKick, ThrowIn, GoalKick, CornerKick)
-  def codeOf(value: SetPlay): Int = value.code
   protected def unknown(code: Int): SetPlay = Unknown(code)
 }
 
 /** The division a version-19 game is played in (`competitionType`). */
-sealed abstract class CompetitionType(val code: Int) extends Product with Serializable
+sealed abstract class CompetitionType(val code: Int) extends WireCode
 
 /** Competition types of version 19. */
 object CompetitionType extends WireCodes[CompetitionType] {
@@ -142,12 +144,11 @@ object CompetitionType extends WireCodes[CompetitionType] {
   final case class Unknown(override val code: Int) extends CompetitionType(code)
 
   val known: Seq[CompetitionType] = Seq(Small, Middle, Large)
-  def codeOf(value: CompetitionType): Int = value.code
   protected def unknown(code: Int): CompetitionType = Unknown(code)
 }
 
 /** Why a version-19 player is off the game (`penalty`). */
-sealed abstract class HslPenalty(val code: Int) extends Product with Serializable {
+sealed abstract class HslPenalty(val code: Int) extends WireCode {
 
   /** Whether the player is off the game for any reason. */
   def isPenalised: Boolean = code != 0
@@ -209,12 +210,11 @@ object HslPenalty extends WireCodes[HslPenalty] {
     SentOff,
     Substitute
   )
-  def codeOf(value: HslPenalty): Int = value.code
   protected def unknown(code: Int): HslPenalty = Unknown(code)
 }
 
 /** Why a version-12 player is off the game (`penalty`, the Humanoid League's codes). */
-sealed abstract class HlPenalty(val code: Int) extends Product with Serializable {
+sealed abstract class HlPenalty(val code: Int) extends WireCode {
 
   /** Whether the player is off the game for any reason. */
   def isPenalised: Boolean = code != 0
@@ -258,12 +258,11 @@ object HlPenalty extends WireCodes[HlPenalty] {
 
   val known: Seq[HlPenalty] = Seq(NoPenalty, Substitute, Manual, BallManipulation, PhysicalContact, IllegalAttack,
     IllegalDefense, PickupOrIncapable, Service, Unspecified)
-  def codeOf(value: HlPenalty): Int = value.code
   protected def unknown(code: Int): HlPenalty = Unknown(code)
 }
 
 /** The kind of a version-12 game (`gameType`). */
-sealed abstract class HlGameType(val code: Int) extends Product with Serializable
+sealed abstract class HlGameType(val code: Int) extends WireCode
 
 /** Game types of version 12. */
 object HlGameType extends WireCodes[HlGameType] {
@@ -281,12 +280,11 @@ object HlGameType extends WireCodes[HlGameType] {
   final case class Unknown(override val code: Int) extends HlGameType(code)
 
   val known: Seq[HlGameType] = Seq(KidSize, AdultSize, DropIn)
-  def codeOf(value: HlGameType): Int = value.code
   protected def unknown(code: Int): HlGameType = Unknown(code)
 }
 
 /** Extra state of a version-12 game (`secondaryState`): the phase, or the set play under way. */
-sealed abstract class HlSecondaryState(val code: Int) extends Product with Serializable
+sealed abstract class HlSecondaryState(val code: Int) extends WireCode
 
 /** Secondary states of version 12. */
 object HlSecondaryState extends WireCodes[HlSecondaryState] {
@@ -326,6 +324,5 @@ object HlSecondaryState extends WireCodes[HlSecondaryState] {
 
   val known: Seq[HlSecondaryState] = Seq(Normal, PenaltyShoot, Overtime, Timeout, DirectFreeKick, IndirectFreeKick,
     PenaltyKick, CornerKick, GoalKick, ThrowIn)
-  def codeOf(value: HlSecondaryState): Int = value.code
   protected def unknown(code: Int): HlSecondaryState = Unknown(code)
 }

@@ -196,31 +196,7 @@ final class SecureStream private[stream] (
     val carried: Vector[Pending] =
       slots.filterNot(_.expired).map(s => Pending(s.serial, s.id, s.payload, s.deadline)) ++
         queue.filterNot(p => dropped.contains(p.serial))
-    val fresh = new SecureStream(
-      settings,
-      lastAckedSeq = settings.maxSeq,
-      nextSeqNo = 0,
-      slots = Vector.empty,
-      queue = Queue.from(carried),
-      queuedCount = carried.length,
-      dropped = Set.empty,
-      deadlines = deadlines,
-      nextSerial = nextSerial,
-      rtoEstimator = rtoEstimator,
-      rtxAt = NoTime,
-      dupAcks = 0,
-      recoverSeq = NoRecovery,
-      rtxAhead = NoMark,
-      dupAcksSinceRtx = 0,
-      coveredSentAt = NoTime,
-      lastInOrderSeq = settings.maxSeq,
-      buffer = Map.empty,
-      lastTransmitAt = now,
-      idleAckOwed = false,
-      retransmittedAt = retransmittedAt,
-      reuseBlockedUntil = NoTime,
-      stats = stats
-    )
+    val fresh = start(settings, now, Queue.from(carried), deadlines, nextSerial, rtoEstimator, retransmittedAt, stats)
     val work = new SecureStreamWork(fresh, now)
     work.tick()
     work.result()
@@ -293,17 +269,42 @@ object SecureStream {
   /** A fresh endpoint: nothing sent, nothing received, so nothing to send until a payload is offered or data arrives.
     */
   def initial(settings: StreamSettings, now: Long): SecureStream =
+    start(
+      settings,
+      now,
+      queue = Queue.empty,
+      deadlines = TreeSet.empty[DeadlineKey],
+      nextSerial = 0L,
+      rtoEstimator = RtoEstimator.initial(settings),
+      retransmittedAt = Vector.fill(settings.sequenceSpace)(NoTime),
+      stats = StreamStats.zero
+    )
+
+  /** The sequence state at its start (nothing in flight, nothing received, sequence numbers from 0), for a fresh
+    * endpoint and for one whose peer restarted alike; the arguments are what the second keeps and the first starts
+    * empty.
+    */
+  private def start(
+      settings: StreamSettings,
+      now: Long,
+      queue: Queue[Pending],
+      deadlines: TreeSet[DeadlineKey],
+      nextSerial: Long,
+      rtoEstimator: RtoEstimator,
+      retransmittedAt: Vector[Long],
+      stats: StreamStats
+  ): SecureStream =
     new SecureStream(
       settings,
       lastAckedSeq = settings.maxSeq,
       nextSeqNo = 0,
       slots = Vector.empty,
-      queue = Queue.empty,
-      queuedCount = 0,
+      queue = queue,
+      queuedCount = queue.length,
       dropped = Set.empty,
-      deadlines = TreeSet.empty[DeadlineKey],
-      nextSerial = 0L,
-      rtoEstimator = RtoEstimator.initial(settings),
+      deadlines = deadlines,
+      nextSerial = nextSerial,
+      rtoEstimator = rtoEstimator,
       rtxAt = NoTime,
       dupAcks = 0,
       recoverSeq = NoRecovery,
@@ -314,9 +315,9 @@ object SecureStream {
       buffer = Map.empty,
       lastTransmitAt = now,
       idleAckOwed = false,
-      retransmittedAt = Vector.fill(settings.sequenceSpace)(NoTime),
+      retransmittedAt = retransmittedAt,
       reuseBlockedUntil = NoTime,
-      stats = StreamStats.zero
+      stats = stats
     )
 
   private[stream] final val NoTime = Long.MinValue
