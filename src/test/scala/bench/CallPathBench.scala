@@ -43,6 +43,10 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   *     installed or run here, the reason in the progress lines.
   *   - `callpath_mavsdk_grpc_*`: the same with MAVSDK's gRPC ground side (`mavsdk-grpc`, which the `mavsdk` package was
   *     up to version 3: Python asks the bundled mavsdk_server over gRPC), in a venv of its own.
+  *   - `callpath_zeromq_floor_*`: the ZeroMQ transport alone, a pyzmq DEALER to a pyzmq ROUTER echo in a second Python
+  *     process (src/test/python/bench/zeromq_floor.py): the floor of any door over ZeroMQ.
+  *     `callpath_python_udp_floor_*`: a plain UDP echo between the same two Python processes, the floor of any Python
+  *     process-to-process exchange.
   *   - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
   *     `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
   *
@@ -94,6 +98,16 @@ object CallPathBench extends Benchmark {
           why => progress(s"python door alone not measured: $why"),
           p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us")
         )
+        val zeroMqFloor = floor("zeromq")
+        zeroMqFloor.fold(why => progress(s"ZeroMQ floor not measured: $why"),
+          p => progress(f"ZeroMQ floor (pyzmq to a pyzmq echo): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val udpFloor = floor("udp")
+        udpFloor.fold(
+          why => progress(s"Python UDP floor not measured: $why"),
+          p =>
+            progress(f"Python UDP floor (a UDP echo between two Python processes): p50 ${p._1}%.0f us, " +
+              f"p99 ${p._2}%.0f us")
+        )
         val peer = mavsdk()
         peer.fold(why => progress(s"MAVSDK not measured: $why"),
           p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
@@ -119,6 +133,10 @@ object CallPathBench extends Benchmark {
           "callpath_python_p99_us" -> python.fold(_ => nan, _._2),
           "callpath_python_door_p50_us" -> door.fold(_ => nan, _._1),
           "callpath_python_door_p99_us" -> door.fold(_ => nan, _._2),
+          "callpath_zeromq_floor_p50_us" -> zeroMqFloor.fold(_ => nan, _._1),
+          "callpath_zeromq_floor_p99_us" -> zeroMqFloor.fold(_ => nan, _._2),
+          "callpath_python_udp_floor_p50_us" -> udpFloor.fold(_ => nan, _._1),
+          "callpath_python_udp_floor_p99_us" -> udpFloor.fold(_ => nan, _._2),
           "callpath_mavsdk_p50_us" -> peer.fold(_ => nan, _._1),
           "callpath_mavsdk_p99_us" -> peer.fold(_ => nan, _._2),
           "callpath_mavsdk_grpc_p50_us" -> grpcPeer.fold(_ => nan, _._1),
@@ -128,6 +146,8 @@ object CallPathBench extends Benchmark {
           "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
           "callpath_python_over_mavsdk_p50" ->
             (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
+          "callpath_zeromq_floor_over_mavsdk_p50" ->
+            (for { z <- zeroMqFloor.toOption; mav <- peer.toOption } yield z._1 / mav._1).getOrElse(nan),
           "callpath_python_over_mavsdk_grpc_p50" ->
             (for { py <- python.toOption; mav <- grpcPeer.toOption } yield py._1 / mav._1).getOrElse(nan)
         )
@@ -218,6 +238,12 @@ object CallPathBench extends Benchmark {
           "--publish", endpoint.publish,
           "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)
       ))
+
+  /** A floor of the Python door (`zeromq` or `udp`): two Python processes and the transport, nothing else. */
+  private def floor(transport: String): Either[String, (Double, Double)] =
+    venv().flatMap(python =>
+      script(python, "zeromq_floor.py",
+        Seq("--transport", transport, "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)))
 
   private def mavsdkGrpc(): Either[String, (Double, Double)] =
     venvOf("python-peer-grpc-venv", GrpcPeerRequirements.mkString("", "\n", "\n"))
