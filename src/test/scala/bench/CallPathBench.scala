@@ -43,6 +43,10 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   *     installed or run here, the reason in the progress lines.
   *   - `callpath_mavsdk_grpc_*`: the same with MAVSDK's gRPC ground side (`mavsdk-grpc`, which the `mavsdk` package was
   *     up to version 3: Python asks the bundled mavsdk_server over gRPC), in a venv of its own.
+  *   - `callpath_zeromq_floor_*`: the ZeroMQ transport alone, a pyzmq DEALER to a pyzmq ROUTER echo in a second Python
+  *     process (src/test/python/bench/zeromq_floor.py): the floor of any door over ZeroMQ.
+  *     `callpath_python_udp_floor_*`: a plain UDP echo between the same two Python processes, the floor of any Python
+  *     process-to-process exchange.
   *   - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
   *     `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
   *
@@ -52,6 +56,11 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
 object CallPathBench extends Benchmark {
   val name = "callpath"
 
+  /** Calls through the gateway before anything is measured: the JIT's, for the path every door shares (the actors, the
+    * codecs, the port). With only the usual warm-up the gateway alone, measured first, came out 1.5-1.8 x slower than
+    * the same calls measured again a minute later in the same run.
+    */
+  private val JitWarmup = 10000
   private val PythonWarmup = 1000
   private val PythonSamples = 2000
   private val PeerWarmup = 200
@@ -78,6 +87,8 @@ object CallPathBench extends Benchmark {
       val robot = new PlainRobot(gateway.addresses.robots, 15.minutes)
       try {
         gateway.awaitOnline(1)
+        progress(s"warming up: $JitWarmup calls through the gateway")
+        gateway.pings(JitWarmup)
         val alone = gateway.pings()
         report("gateway alone", alone)
         val local = Await.result(RobotClient.connect(gateway.system, gateway.middleware, "bench-local"), 30.seconds)
@@ -93,6 +104,16 @@ object CallPathBench extends Benchmark {
         door.fold(
           why => progress(s"python door alone not measured: $why"),
           p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us")
+        )
+        val zeroMqFloor = floor("zeromq")
+        zeroMqFloor.fold(why => progress(s"ZeroMQ floor not measured: $why"),
+          p => progress(f"ZeroMQ floor (pyzmq to a pyzmq echo): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
+        val udpFloor = floor("udp")
+        udpFloor.fold(
+          why => progress(s"Python UDP floor not measured: $why"),
+          p =>
+            progress(f"Python UDP floor (a UDP echo between two Python processes): p50 ${p._1}%.0f us, " +
+              f"p99 ${p._2}%.0f us")
         )
         val peer = mavsdk()
         peer.fold(why => progress(s"MAVSDK not measured: $why"),
@@ -119,6 +140,10 @@ object CallPathBench extends Benchmark {
           "callpath_python_p99_us" -> python.fold(_ => nan, _._2),
           "callpath_python_door_p50_us" -> door.fold(_ => nan, _._1),
           "callpath_python_door_p99_us" -> door.fold(_ => nan, _._2),
+          "callpath_zeromq_floor_p50_us" -> zeroMqFloor.fold(_ => nan, _._1),
+          "callpath_zeromq_floor_p99_us" -> zeroMqFloor.fold(_ => nan, _._2),
+          "callpath_python_udp_floor_p50_us" -> udpFloor.fold(_ => nan, _._1),
+          "callpath_python_udp_floor_p99_us" -> udpFloor.fold(_ => nan, _._2),
           "callpath_mavsdk_p50_us" -> peer.fold(_ => nan, _._1),
           "callpath_mavsdk_p99_us" -> peer.fold(_ => nan, _._2),
           "callpath_mavsdk_grpc_p50_us" -> grpcPeer.fold(_ => nan, _._1),
@@ -128,6 +153,8 @@ object CallPathBench extends Benchmark {
           "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
           "callpath_python_over_mavsdk_p50" ->
             (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
+          "callpath_zeromq_floor_over_mavsdk_p50" ->
+            (for { z <- zeroMqFloor.toOption; mav <- peer.toOption } yield z._1 / mav._1).getOrElse(nan),
           "callpath_python_over_mavsdk_grpc_p50" ->
             (for { py <- python.toOption; mav <- grpcPeer.toOption } yield py._1 / mav._1).getOrElse(nan)
         )
@@ -219,6 +246,12 @@ object CallPathBench extends Benchmark {
           "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)
       ))
 
+  /** A floor of the Python door (`zeromq` or `udp`): two Python processes and the transport, nothing else. */
+  private def floor(transport: String): Either[String, (Double, Double)] =
+    venv().flatMap(python =>
+      script(python, "zeromq_floor.py",
+        Seq("--transport", transport, "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)))
+
   private def mavsdkGrpc(): Either[String, (Double, Double)] =
     venvOf("python-peer-grpc-venv", GrpcPeerRequirements.mkString("", "\n", "\n"))
       .flatMap(python =>
@@ -268,7 +301,7 @@ object CallPathBench extends Benchmark {
     }
 
     /** The gateway alone: `system.ping` asked of the robot's command owner. */
-    def pings(): Array[Long] = {
+    def pings(warmup: Int = GatewayBench.RttWarmup): Array[Long] = {
       val robotRef = robot(1).getOrElse(throw new IllegalStateException("the gateway does not know robot 1"))
       val connected = Await.result(robotRef.ask[RobotActor.Connected](RobotActor.Connect(_)), 30.seconds)
       val ping = RpcCall("system", "ping", Vector.empty)
@@ -279,7 +312,7 @@ object CallPathBench extends Benchmark {
         require(answer.result.isRight, s"system.ping failed: $answer")
         took
       }
-      GatewayBench.paced(GatewayBench.RttWarmup)(() => once())
+      GatewayBench.paced(warmup)(() => once())
       GatewayBench.paced(GatewayBench.RttSamples)(() => once())
     }
 

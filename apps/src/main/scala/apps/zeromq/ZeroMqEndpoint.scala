@@ -23,8 +23,10 @@ import naogateway.{RobotSnapshot, VisionFrame}
 import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
 
 /** The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket
-  * (docs/zeromq.md). The sockets live on a `ZeroMqLoop` on the endpoint's own dispatcher; this actor hands requests to
-  * the `RobotInterface` and replies go back to the loop, so no actor ever blocks.
+  * (docs/zeromq.md). The sockets live on a `ZeroMqLoop` on the endpoint's own dispatcher. The loop's thread owns the
+  * requests too (`Desk`): it reads each one, hands it to the `RobotInterface` and writes its reply, so a request passes
+  * no mailbox on its way in, and an answer that is there at once leaves without waking the loop again. This actor owns
+  * the rest (binding, the published streams, the subscriptions, the shutdown); nothing blocks anywhere.
   */
 object ZeroMqEndpoint {
 
@@ -41,10 +43,7 @@ object ZeroMqEndpoint {
   private final case class ConnectFailed(reason: Throwable) extends Command
   private final case class Bound(addresses: Addresses) extends Command
   private final case class BindFailed(reason: String) extends Command
-  private final case class RequestReceived(frames: Vector[Array[Byte]]) extends Command
   private final case class SubscriptionChanged(prefix: String, subscribed: Boolean) extends Command
-  private final case class Answered(requestId: Long) extends Command
-  private final case class RequestTimedOut(requestId: Long) extends Command
   private final case class StatusSeen(snapshot: RobotSnapshot) extends Command
   private final case class GameSeen(data: GameControlData) extends Command
   private final case class VisionSeen(frame: VisionFrame) extends Command
@@ -117,15 +116,11 @@ object ZeroMqEndpoint {
       }
   }
 
-  /** A request being worked on: where its reply goes and what it must echo. `answered` is taken by whoever replies
-    * first (the answer, the timeout, the shutdown), so a request is answered exactly once.
+  /** A request being worked on: where its reply goes, what it must echo, and its deadline's timer. Whoever takes it out
+    * of the desk first (the answer, the timeout, the shutdown) replies, so a request is answered exactly once.
     */
   private final case class Pending(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], name: String,
-      answered: java.util.concurrent.atomic.AtomicBoolean = new java.util.concurrent.atomic.AtomicBoolean(false)) {
-
-    /** Whether this caller is the one that replies. */
-    def take(): Boolean = answered.compareAndSet(false, true)
-  }
+      deadline: Cancellable)
 
   private final class Endpoint(
       robots: RobotInterface,
@@ -142,8 +137,7 @@ object ZeroMqEndpoint {
     private val io = new Io
     private val streams: SharedKillSwitch = KillSwitches.shared("zeromq-endpoint")
     private var visionStreams = Map.empty[Int, UniqueKillSwitch]
-    private var pending = Map.empty[Long, Pending]
-    private var nextRequestId = 0L
+    private val desk = new Desk
     private var prefixes = Set.empty[String]
     private var knownRobots = Set.empty[Int]
     private var shutdownTask: Option[Cancellable] = None
@@ -181,7 +175,7 @@ object ZeroMqEndpoint {
             val message = ZMsg.recvMsg(s, ZMQ.DONTWAIT)
             if (message == null) false
             else {
-              self ! RequestReceived(message.asScala.map(_.getData).toVector)
+              desk.received(message.asScala.map(_.getData).toVector)
               message.destroy()
               true
             }
@@ -270,89 +264,19 @@ object ZeroMqEndpoint {
       ()
     }
 
-    private def reply(
-        envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], result: Either[String, Answer]): Unit =
-      send(envelope :+ EndpointProtocol.reply(robotId, callId, result), toRouter = true)
-
-    /** The envelope (routing id, and the empty delimiter of REQ clients) and the one body frame. */
-    private def split(frames: Vector[Array[Byte]]): (Vector[Array[Byte]], Either[String, Array[Byte]]) = {
-      val delimiter = frames.indexWhere(_.isEmpty)
-      val (envelope, rest) = if (delimiter >= 0) frames.splitAt(delimiter + 1) else frames.splitAt(1)
-      rest match {
-        case Vector(body) => envelope -> Right(body)
-        case Vector()     => envelope -> Left(s"${EndpointProtocol.Malformed}no body frame")
-        case more         => envelope -> Left(s"${EndpointProtocol.Malformed}expected one body frame, got ${more.size}")
-      }
-    }
-
-    // Where the last robot request was handed to the interface: the next one starts only after it, so requests reach
-    // the middleware (and the robot) in the order they arrived, also when one first waits for its lease. One tail for
-    // all robots: it holds no per-robot entry a client could grow.
-    private var dispatched: Future[Unit] = Future.unit
-
-    /** Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it needs
-      * one. When nothing waits and no lease is needed it starts at once, on this actor's thread.
+    /** The requests being worked on, owned by the loop's thread: every method runs there (inside the loop's handlers
+      * and operations), so none of this state is shared. Answers that complete elsewhere come back as loop operations.
       */
-    private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(
-        operate: () => Future[Answer]): Future[Answer] = {
-      val handedOn = scala.concurrent.Promise[Unit]()
-      def start(ready: scala.util.Try[Any]): Future[Answer] = {
-        val answer = ready match {
-          case Success(_) =>
-            try operate()
-            catch { case NonFatal(e) => Future.failed(e) }
-          case Failure(e) => Future.failed(e)
-        }
-        handedOn.success(())
-        answer
-      }
-      val answer = (dispatched.value, group) match {
-        case (Some(_), None)    => start(Success(()))
-        case (Some(_), Some(g)) => robots.acquire(robotId, g).transformWith(start)
-        case (None, None)       => dispatched.transformWith(_ => start(Success(())))
-        case (None, Some(g))    => dispatched.transformWith(_ => robots.acquire(robotId, g)).transformWith(start)
-      }
-      dispatched = handedOn.future
-      answer
-    }
+    private final class Desk {
+      private val log = org.slf4j.LoggerFactory.getLogger(classOf[Desk])
+      // The interface's futures are composed on the thread that completes them: the steps are small, and an answer that
+      // is there at once stays there at once (it leaves on the loop's thread without waking it).
+      private implicit val ec: ExecutionContext = ExecutionContext.parasitic
+      private var pending = Map.empty[Long, Pending]
+      private var nextRequestId = 0L
 
-    private def execute(route: Route): Future[Answer] = {
-      val done = Answer(Some(RpcValue.Flag(true)))
-      try route match {
-          case Route.Robots =>
-            robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
-          case Route.Status(robotId) =>
-            robots.robots().flatMap(_.find(_.robotId == robotId) match {
-              case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
-              case None    => Future.failed(naogateway.RobotFailure.UnknownRobot(robotId))
-            })
-          case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
-          case Route.Release(robotId, groups) =>
-            inOrder(robotId, None) { () =>
-              robots.release(robotId, groups: _*)
-              Future.successful(done)
-            }
-          case Route.Send(robotId, operation) =>
-            inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
-          case Route.Execute(robotId, operation) =>
-            import robotmiddleware.Operation._
-            inOrder(robotId, operation.group) { () =>
-              operation match {
-                case Walk(vx, vy, omega)  => robots.walk(robotId, vx, vy, omega).map(_ => done)
-                case Stop()               => robots.stop(robotId).map(_ => done)
-                case Head(pan, tilt)      => robots.head(robotId, pan, tilt).map(_ => done)
-                case Arms(ls, le, rs, re) => robots.arms(robotId, ls, le, rs, re).map(_ => done)
-                case Posture(p) => robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached.name))))
-                case Say(text)  => robots.say(robotId, text).map(_ => done)
-                case RawCall(module, method, params) => robots.call(robotId, module, method, params: _*).map(Answer(_))
-              }
-            }
-        }
-      catch { case NonFatal(e) => Future.failed(e) }
-    }
-
-    private def running(addresses: Addresses): Behavior[Command] = Behaviors.receiveMessage[Command] {
-      case RequestReceived(frames) =>
+      /** One request read from the router. */
+      def received(frames: Vector[Array[Byte]]): Unit = {
         val (envelope, body) = split(frames)
         body match {
           case Left(error) => reply(envelope, -1, None, Left(error))
@@ -370,37 +294,138 @@ object ZeroMqEndpoint {
                     case Right(route) =>
                       val id = nextRequestId
                       nextRequestId += 1
-                      val p = Pending(envelope, request.robotId, callId, request.call.name)
-                      pending = pending.updated(id, p)
-                      timers.startSingleTimer(id, RequestTimedOut(id), settings.requestTimeout)
-                      if (context.log.isDebugEnabled) context.log.debug("ZeroMQ request [{}]: {}", id, request.call)
-                      // The answer goes to the socket loop from the thread that completes it (the loop's queue is
-                      // thread-safe), not through this actor's mailbox first: one wake-up less per call. The actor
-                      // only forgets the request afterwards.
-                      val self = context.self
-                      execute(route).onComplete { result =>
-                        if (p.take()) {
-                          reply(p.envelope, p.robotId, p.callId, result.toEither.left.map(EndpointProtocol.errorText))
-                          self ! Answered(id)
-                        }
-                      }(ExecutionContext.parasitic)
+                      val deadline = system.scheduler.scheduleOnce(settings.requestTimeout,
+                        () => {
+                          loop.submit(_ => timedOut(id))
+                          ()
+                        })
+                      pending =
+                        pending.updated(id, Pending(envelope, request.robotId, callId, request.call.name, deadline))
+                      if (log.isDebugEnabled) log.debug("ZeroMQ request [{}]: {}", id, request.call)
+                      val answer = execute(route)
+                      answer.value match {
+                        // Answered already (an error, or an interface that had it at hand): out now, on this thread.
+                        case Some(result) => answered(id, result)
+                        // The thread that completes it hands the reply to the loop (one wake-up), no mailbox between.
+                        case None => answer.onComplete(r => { loop.submit(_ => answered(id, r)); () })
+                      }
                   }
             }
         }
-        Behaviors.same
-      case Answered(id) =>
-        timers.cancel(id)
-        pending -= id
-        Behaviors.same
-      case RequestTimedOut(id) =>
+      }
+
+      private def answered(id: Long, result: scala.util.Try[Answer]): Unit =
         pending.get(id).foreach { p =>
           pending -= id
-          // The late answer, if it ever comes, finds the request taken: each request is answered once.
-          if (p.take())
-            reply(p.envelope, p.robotId, p.callId,
-              Left(s"timeout: no answer to ${p.name} within ${settings.requestTimeout.toMillis} ms at the endpoint"))
+          p.deadline.cancel()
+          reply(p.envelope, p.robotId, p.callId, result.toEither.left.map(EndpointProtocol.errorText))
         }
-        Behaviors.same
+
+      // The late answer, if it ever comes, finds the request gone: each request is answered once.
+      private def timedOut(id: Long): Unit =
+        pending.get(id).foreach { p =>
+          pending -= id
+          reply(p.envelope, p.robotId, p.callId,
+            Left(s"timeout: no answer to ${p.name} within ${settings.requestTimeout.toMillis} ms at the endpoint"))
+        }
+
+      /** Requests still being worked on get an answer while the socket is still there to carry it. */
+      def shutDown(): Unit = {
+        pending.values.foreach { p =>
+          p.deadline.cancel()
+          reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down"))
+        }
+        pending = Map.empty
+      }
+
+      private def reply(
+          envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], result: Either[String, Answer]): Unit =
+        io.send(io.router, envelope :+ EndpointProtocol.reply(robotId, callId, result))
+
+      /** The envelope (routing id, and the empty delimiter of REQ clients) and the one body frame. */
+      private def split(frames: Vector[Array[Byte]]): (Vector[Array[Byte]], Either[String, Array[Byte]]) = {
+        val delimiter = frames.indexWhere(_.isEmpty)
+        val (envelope, rest) = if (delimiter >= 0) frames.splitAt(delimiter + 1) else frames.splitAt(1)
+        rest match {
+          case Vector(body) => envelope -> Right(body)
+          case Vector()     => envelope -> Left(s"${EndpointProtocol.Malformed}no body frame")
+          case more => envelope -> Left(s"${EndpointProtocol.Malformed}expected one body frame, got ${more.size}")
+        }
+      }
+
+      // Where the last robot request was handed to the interface: the next one starts only after it, so requests reach
+      // the middleware (and the robot) in the order they arrived, also when one first waits for its lease. One tail for
+      // all robots: it holds no per-robot entry a client could grow.
+      private var dispatched: Future[Unit] = Future.unit
+
+      /** Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it
+        * needs one. When nothing waits and no lease is needed it starts at once, on the loop's thread.
+        */
+      private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(
+          operate: () => Future[Answer]): Future[Answer] = {
+        val handedOn = scala.concurrent.Promise[Unit]()
+        def start(ready: scala.util.Try[Any]): Future[Answer] = {
+          val answer = ready match {
+            case Success(_) =>
+              try operate()
+              catch { case NonFatal(e) => Future.failed(e) }
+            case Failure(e) => Future.failed(e)
+          }
+          handedOn.success(())
+          answer
+        }
+        val answer = (dispatched.value, group) match {
+          case (Some(_), None)    => start(Success(()))
+          case (Some(_), Some(g)) => robots.acquire(robotId, g).transformWith(start)
+          // Started on the endpoint's dispatcher, not on whatever thread handed the last one on.
+          case (None, None) => dispatched.transformWith(_ => start(Success(())))(Endpoint.this.ec)
+          case (None, Some(g)) =>
+            dispatched.transformWith(_ => robots.acquire(robotId, g))(Endpoint.this.ec).transformWith(start)
+        }
+        dispatched = handedOn.future
+        answer
+      }
+
+      private def execute(route: Route): Future[Answer] = {
+        val done = Answer(Some(RpcValue.Flag(true)))
+        try route match {
+            case Route.Robots =>
+              robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
+            case Route.Status(robotId) =>
+              robots.robots().flatMap(_.find(_.robotId == robotId) match {
+                case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
+                case None    => Future.failed(naogateway.RobotFailure.UnknownRobot(robotId))
+              })
+            case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
+            case Route.Release(robotId, groups) =>
+              inOrder(robotId, None) { () =>
+                robots.release(robotId, groups: _*)
+                Future.successful(done)
+              }
+            case Route.Send(robotId, operation) =>
+              inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
+            case Route.Execute(robotId, operation) =>
+              import robotmiddleware.Operation._
+              inOrder(robotId, operation.group) { () =>
+                operation match {
+                  case Walk(vx, vy, omega)  => robots.walk(robotId, vx, vy, omega).map(_ => done)
+                  case Stop()               => robots.stop(robotId).map(_ => done)
+                  case Head(pan, tilt)      => robots.head(robotId, pan, tilt).map(_ => done)
+                  case Arms(ls, le, rs, re) => robots.arms(robotId, ls, le, rs, re).map(_ => done)
+                  case Posture(p) =>
+                    robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached.name))))
+                  case Say(text) => robots.say(robotId, text).map(_ => done)
+                  case RawCall(module, method, params) =>
+                    robots.call(robotId, module, method, params: _*).map(Answer(_))
+                }
+              }
+          }
+        catch { case NonFatal(e) => Future.failed(e) }
+      }
+
+    }
+
+    private def running(addresses: Addresses): Behavior[Command] = Behaviors.receiveMessage[Command] {
       case StatusSeen(snapshot) =>
         send(EndpointProtocol.statusFrames(snapshot), toRouter = false)
         if (!knownRobots(snapshot.robotId)) {
@@ -435,12 +460,8 @@ object ZeroMqEndpoint {
     }.receiveSignal(cleanUp)
 
     private def stopEverything(): Unit = {
-      // Requests still being worked on get an answer while the socket is still there to carry it.
-      pending.values.foreach { p =>
-        if (p.take())
-          reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down"))
-      }
-      pending = Map.empty
+      // Before the loop stops: its operations submitted before `stop` still run, with the socket still there.
+      loop.submit(_ => desk.shutDown())
       streams.shutdown()
       visionStreams.values.foreach(_.shutdown())
       loop.stop()
