@@ -13,17 +13,16 @@ import scala.jdk.CollectionConverters._
 import scala.util.Try
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit, TestProbe}
-import akka.actor.typed.ActorRef
 import akka.stream.KillSwitches
 import akka.stream.scaladsl.{Keep, Sink}
 import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{GatewayInternals, TestLoopback, TestStream}
 import naogateway.wire.gamecontroller.GameControllerVectors
 import naogateway.proto.Request
 import naogateway.wire.{ActuatorGroup, MessageContents, Posture, RpcValue}
-import naogateway.{Gateway, GatewaySettings, RobotActor, RobotSnapshot, StreamActor, VisionFrame}
+import naogateway.{Gateway, GatewayAccess, GatewaySettings, RobotSnapshot, StreamActor, VisionFrame}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** The gateway's configuration for the C robots: stream window 4 (the robots are built with WINDOW=4), one robot that
@@ -77,7 +76,7 @@ class FirmwarePosixSpec
   private lazy val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
   private lazy val gatewayPort: Int = {
     val probe = createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
+    gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots.getPort
   }
   private lazy val client: RobotInterface =
@@ -123,15 +122,10 @@ class FirmwarePosixSpec
   }
 
   /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
-  private def streamOf(id: Int): (ActorRef[StreamActor.Command], TestProbe[StreamActor.Received]) = {
-    val robot = createTestProbe[Option[ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(id, robot.ref)
-    val actor = robot.receiveMessage(10.seconds).getOrElse(fail(s"the gateway does not know robot $id"))
-    val connected = createTestProbe[RobotActor.Connected]()
-    actor ! RobotActor.Connect(connected.ref)
-    val stream = connected.receiveMessage(10.seconds).stream
+  private def streamOf(id: Int): (TestStream, TestProbe[StreamActor.Received]) = {
+    val stream = GatewayInternals.stream(gateway, id).getOrElse(fail(s"the gateway does not know robot $id"))
     val received = createTestProbe[StreamActor.Received]()
-    stream ! StreamActor.Subscribe(received.ref)
+    stream.subscribe(received.ref)
     stream -> received
   }
 
@@ -297,9 +291,9 @@ class FirmwarePosixSpec
       val callId = 1000000 + scala.util.Random.nextInt(100000)
       val ping = MessageContents.encodeFrame(MessageContents(r.id,
           rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
-      payloads.take(12).foreach(p => stream ! StreamActor.Send(p))
-      stream ! StreamActor.Send(ping)
-      payloads.drop(12).foreach(p => stream ! StreamActor.Send(p))
+      payloads.take(12).foreach(p => stream.send(p))
+      stream.send(ping)
+      payloads.drop(12).foreach(p => stream.send(p))
       val echoes = Vector.newBuilder[Vector[Byte]]
       var answered = false
       val deadline = 30.seconds.fromNow
@@ -314,7 +308,7 @@ class FirmwarePosixSpec
         }
       }
       val stats = createTestProbe[naogateway.wire.stream.StreamStats]()
-      stream ! StreamActor.GetStats(stats.ref)
+      stream.stats(stats.ref)
       val seen = stats.receiveMessage(5.seconds)
       info(s"gateway's stream: $seen")
       withClue(s"robot output:\n${r.output}\n") {

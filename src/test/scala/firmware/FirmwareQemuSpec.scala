@@ -18,7 +18,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import naogateway.sim.gs1500m.{OverflowExperiment, Remote}
 import naogateway.testkit.TestLoopback
 import naogateway.wire.{ActuatorGroup, Posture, RpcValue}
-import naogateway.{Gateway, GatewaySettings, RobotActor, RobotSnapshot, StreamActor}
+import naogateway.{Gateway, GatewayAccess, GatewaySettings, RobotSnapshot, StreamActor}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** The gateway's configuration for the board: its defaults (stream window 1, as the image is built). */
@@ -156,7 +156,7 @@ class FirmwareQemuSpec
   private lazy val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
   private lazy val gatewayAddress: InetSocketAddress = {
     val probe = createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
+    gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots
   }
   private lazy val client: RobotInterface =
@@ -199,14 +199,10 @@ class FirmwareQemuSpec
 
   /** The gateway's stream endpoint for the robot, subscribed to what it delivers. */
   private lazy val stream = {
-    val found = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(robot.id, found.ref)
-    val actor = found.receiveMessage(10.seconds).getOrElse(fail(s"the gateway has no robot ${robot.id}"))
-    val connected = createTestProbe[RobotActor.Connected]()
-    actor ! RobotActor.Connect(connected.ref)
-    val endpoint = connected.receiveMessage(10.seconds).stream
+    val endpoint = naogateway.testkit.GatewayInternals.stream(gateway, robot.id)
+      .getOrElse(fail(s"the gateway has no robot ${robot.id}"))
     val received = createTestProbe[StreamActor.Received]()
-    endpoint ! StreamActor.Subscribe(received.ref)
+    endpoint.subscribe(received.ref)
     endpoint -> received
   }
 
@@ -269,7 +265,7 @@ class FirmwareQemuSpec
         .map(p => { if (p(0) == 0 && p(1) == 0x2a) p(1) = 0x2b; p }) // never an FU-Remote frame's 00 2A
       val started = System.nanoTime()
       payloads.foreach { p =>
-        endpoint ! StreamActor.Send(p)
+        endpoint.send(p)
         Thread.sleep(50)
       }
       val echoed = Vector.newBuilder[Array[Byte]]

@@ -24,7 +24,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
 import naogateway.testkit.TestLoopback
-import naogateway.{Gateway, GatewaySettings, LinkStats, RobotActor, RobotOffline, RobotSnapshot, StreamActor}
+import naogateway.{Gateway, GatewayAccess, GatewaySettings, LinkStats, RobotOffline, RobotSnapshot, StreamActor}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result.
@@ -248,22 +248,16 @@ class DocRobotConformanceSpec
   }
 
   /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
-  private def streamOf(id: Int, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Option[(akka.actor.typed.ActorRef[
-          StreamActor.Command], akka.actor.testkit.typed.scaladsl.TestProbe[StreamActor.Received])] = {
-    val robot = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(id, robot.ref)
-    robot.receiveMessage(10.seconds).map { actor =>
-      val connected = createTestProbe[RobotActor.Connected]()
-      actor ! RobotActor.Connect(connected.ref)
-      val stream = connected.receiveMessage(10.seconds).stream
+  private def streamOf(id: Int, gateway: akka.actor.typed.ActorRef[GatewayAccess.Command])
+      : Option[(naogateway.testkit.TestStream, akka.actor.testkit.typed.scaladsl.TestProbe[StreamActor.Received])] =
+    naogateway.testkit.GatewayInternals.stream(gateway, id).map { stream =>
       val received = createTestProbe[StreamActor.Received]()
-      stream ! StreamActor.Subscribe(received.ref)
+      stream.subscribe(received.ref)
       stream -> received
     }
-  }
 
   /** The scenario through the public RobotInterface (and the robot's stream), noting what the robot answered. */
-  private def drive(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command],
+  private def drive(run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[GatewayAccess.Command],
       gcAddress: String): Unit = {
     import run.{robotId => id}
     val agents = new ConcurrentLinkedQueue[String]()
@@ -360,7 +354,7 @@ class DocRobotConformanceSpec
       val callId = 2000000000 + Random.nextInt(100000)
       val frame = MessageContents.encodeFrame(MessageContents(id,
           rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
-      stream ! StreamActor.Send(frame)
+      stream.send(frame)
       val deadline = 10.seconds.fromNow
       var answer = false
       var fromRobot = 0
@@ -435,7 +429,7 @@ class DocRobotConformanceSpec
     * and of the stream segments it sends.
     */
   private def driveLossy(
-      run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[Gateway.Command]): Unit = {
+      run: RobotRun, client: RobotInterface, gateway: akka.actor.typed.ActorRef[GatewayAccess.Command]): Unit = {
     import run.{robotId => id}
     client.status(id).runWith(Sink.foreach(run.snapshots.add))
     val offline = new ConcurrentLinkedQueue[RobotOffline]()
@@ -516,7 +510,7 @@ class DocRobotConformanceSpec
       ids.foreach { cid =>
         val frame = MessageContents.encodeFrame(MessageContents(id,
             rpcRequest = Some(Request("system", "ping", callId = Some(cid.toInt))))).toOption.get
-        stream ! StreamActor.Send(frame)
+        stream.send(frame)
       }
       val all = poll(45.seconds)(pingAnswers.size >= ids.size && run.streamUptimes.size >= 12)
       val got = pingAnswers.asScala.toVector.filter(ids.contains)
@@ -576,7 +570,7 @@ class DocRobotConformanceSpec
       val middleware = spawn(RobotMiddleware(gateway, MiddlewareSettings(system)), "middleware")
       val addresses = {
         val probe = createTestProbe[Gateway.Addresses]()
-        gateway ! Gateway.GetAddresses(probe.ref)
+        gateway ! GatewayAccess.GetAddresses(probe.ref)
         probe.receiveMessage(10.seconds)
       }
       val strictAddress = ConformanceEnv.freeRobotAddress()
