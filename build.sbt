@@ -68,10 +68,10 @@ lazy val api = (project in file("api"))
     libraryDependencies ++= testLibs :+ ("org.scala-lang" % "scala-compiler" % V.scala % Test)
   )
 
-// What the middleware may send the gateway and its robots (GatewayAccess, RobotAccess) and the restart back-off it reads
-// from its settings: the gateway's public actor protocol, on the api and akka-actor-typed only. The middleware depends
-// on this, not on the gateway; the gateway implements it, wrapping each message into its actors' private commands as it
-// arrives (no extra actor). robotmiddleware's MiddlewareLayerSpec shows scalac refusing a gateway internal there.
+// The gateway's public actor protocol: what the middleware may send the gateway and its robots (GatewayAccess,
+// RobotAccess), and the restart back-off it reads from its settings; on the api and akka-actor-typed only. The
+// middleware depends on this, not on the gateway; the gateway implements it, wrapping each message into its actors'
+// private commands as it arrives (no extra actor). MiddlewareLayerSpec shows scalac refusing a gateway internal there.
 lazy val access = (project in file("access"))
   .dependsOn(api)
   .settings(strictScalac, testSettings)
@@ -159,7 +159,8 @@ lazy val apps = (project in file("apps"))
     name := "apps",
     // The boundary the compiler keeps: apps' main code compiles without the gateway's and the simulator's classes, so
     // an app that imports a gateway internal (naogateway.Gateway, an actor, the settings) does not build. What apps
-    // may see is the api, the wire format, the middleware and the ZeroMQ loop; the launcher hands them the rest.
+    // may see is the api, the wire format, the middleware (with the access protocol it speaks) and the ZeroMQ loop;
+    // the launcher hands them the rest. Since the middleware no longer brings the gateway, this drop is a second guard.
     Compile / dependencyClasspath := {
       val internals = Set((naogateway / Compile / classDirectory).value, (sim / Compile / classDirectory).value)
       (Compile / dependencyClasspath).value.filterNot(entry => internals(entry.data))
