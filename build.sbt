@@ -68,6 +68,18 @@ lazy val api = (project in file("api"))
     libraryDependencies ++= testLibs :+ ("org.scala-lang" % "scala-compiler" % V.scala % Test)
   )
 
+// The gateway's public actor protocol: what the middleware may send the gateway and its robots (GatewayAccess,
+// RobotAccess), and the restart back-off it reads from its settings; on the api and akka-actor-typed only. The
+// middleware depends on this, not on the gateway; the gateway implements it, wrapping each message into its actors'
+// private commands as it arrives (no extra actor). MiddlewareLayerSpec shows scalac refusing a gateway internal there.
+lazy val access = (project in file("access"))
+  .dependsOn(api)
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-access",
+    libraryDependencies ++= Seq(akkaActorTyped) ++ testLibs
+  )
+
 // The ZeroMQ socket loop (one thread owning its sockets, woken through a pipe): the gateway's ZeroMQ robot link and
 // the apps' ZeroMQ endpoint both run on it, so it is a module of its own that apps may see without the gateway.
 lazy val zeromq = (project in file("zeromq"))
@@ -78,7 +90,7 @@ lazy val zeromq = (project in file("zeromq"))
   )
 
 lazy val naogateway = (project in file("naogateway"))
-  .dependsOn(proto, wire, api, zeromq)
+  .dependsOn(proto, wire, api, access, zeromq)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
@@ -110,8 +122,11 @@ lazy val integration = (project in file("integration"))
     libraryDependencies ++= testLibs ++ akkaTestLibs
   )
 
+// The middleware: it sees the api and the gateway's access protocol, never the gateway itself (only its specs drive a
+// real gateway, at test scope). MiddlewareLayerSpec compiles a probe that names a gateway internal against the main
+// classpath and expects scalac to refuse it.
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(naogateway % "compile->compile;test->test", wire % "test->test", sim % "test->test",
+  .dependsOn(api, access, naogateway % "test->test", wire % "test->test", sim % "test->test",
     integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
@@ -121,8 +136,17 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
     // option, so the generator is told flat packages itself (both packages use them).
     Compile / PB.targets := Seq(scalapb.gen(flatPackage = true) -> (Compile / sourceManaged).value / "scalapb"),
     Compile / PB.includePaths ++= (proto / Compile / PB.protoSources).value,
-    libraryDependencies ++= Seq(akkaClusterTyped, scalaReflect) ++ testLibs ++ akkaTestLibs,
-    libraryDependencies += "com.thesamet.scalapb" %% "scalapb-runtime" % V.scalapb % "protobuf"
+    libraryDependencies ++= Seq(akkaClusterTyped, akkaStream, akkaStreamTyped, scalaReflect) ++ testLibs ++
+      akkaTestLibs,
+    libraryDependencies += "com.thesamet.scalapb" %% "scalapb-runtime" % V.scalapb % "protobuf",
+    // scala-compiler in tests: MiddlewareLayerSpec compiles probe sources against the main classpath.
+    libraryDependencies += "org.scala-lang" % "scala-compiler" % V.scala % Test,
+    // The main classpath, as a file the layer spec reads (the test JVM's own classpath holds the gateway).
+    Test / resourceGenerators += Def.task {
+      val out = (Test / resourceManaged).value / "robotmiddleware-main-classpath.txt"
+      IO.write(out, (Compile / fullClasspath).value.map(_.data.getAbsolutePath).mkString("\n"))
+      Seq(out)
+    }.taskValue
   )
 
 // The apps: the status and web views, the control port, the ZeroMQ endpoint, the ball follower, teleop. They see the
@@ -135,7 +159,8 @@ lazy val apps = (project in file("apps"))
     name := "apps",
     // The boundary the compiler keeps: apps' main code compiles without the gateway's and the simulator's classes, so
     // an app that imports a gateway internal (naogateway.Gateway, an actor, the settings) does not build. What apps
-    // may see is the api, the wire format, the middleware and the ZeroMQ loop; the launcher hands them the rest.
+    // may see is the api, the wire format, the middleware (with the access protocol it speaks) and the ZeroMQ loop;
+    // the launcher hands them the rest. Since the middleware no longer brings the gateway, this drop is a second guard.
     Compile / dependencyClasspath := {
       val internals = Set((naogateway / Compile / classDirectory).value, (sim / Compile / classDirectory).value)
       (Compile / dependencyClasspath).value.filterNot(entry => internals(entry.data))
@@ -194,7 +219,7 @@ lazy val launcher = (project in file("launcher"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, api, zeromq, naogateway, sim, integration, robotmiddleware, apps, launcher)
+  .aggregate(proto, wire, api, access, zeromq, naogateway, sim, integration, robotmiddleware, apps, launcher)
   .dependsOn(launcher % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(

@@ -276,24 +276,25 @@ object CallPathBench extends Benchmark {
         |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 2
         |""".stripMargin)
     private val config = MiddlewareCluster.config(MiddlewareCluster.GatewayRole, overrides)
-    val system: ActorSystem[Gateway.Command] =
+    val system: ActorSystem[GatewayAccess.Command] =
       MiddlewareCluster.start(Gateway(GatewaySettings.fromConfig(config.getConfig("naogateway"))), config)
     private val cluster = Cluster(system)
     cluster.manager ! Join(cluster.selfMember.address)
     val clusterPort: Int = cluster.selfMember.address.port.get
     private implicit val scheduler: Scheduler = system.scheduler
     private implicit val timeout: Timeout = Timeout(30.seconds)
-    val addresses: Gateway.Addresses = Await.result(system.ask(Gateway.GetAddresses(_)), 30.seconds)
+    val addresses: Gateway.Addresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
     val middleware: ActorRef[RobotMiddleware.Command] =
       system.systemActorOf(RobotMiddleware(system, MiddlewareSettings(system)), "middleware")
 
-    def robot(robotId: Int): Option[ActorRef[RobotActor.Command]] =
-      Await.result(system.ask[Option[ActorRef[RobotActor.Command]]](Gateway.GetRobot(robotId, _)), 30.seconds)
+    def robot(robotId: Int): Option[ActorRef[RobotAccess.Command]] =
+      Await.result(system.ask[Option[ActorRef[RobotAccess.Command]]](GatewayAccess.GetRobotAccess(robotId, _)),
+        30.seconds)
 
     def awaitOnline(robotId: Int): Unit = {
       val deadline = 30.seconds.fromNow
       def online =
-        robot(robotId).exists(r => Await.result(r.ask[RobotSnapshot](RobotActor.GetSnapshot(_)), 30.seconds).online)
+        robot(robotId).exists(r => Await.result(r.ask[RobotSnapshot](RobotAccess.GetSnapshot(_)), 30.seconds).online)
       while (!online) {
         if (deadline.isOverdue()) throw new IllegalStateException(s"robot $robotId did not come online")
         Thread.sleep(50)
@@ -303,11 +304,11 @@ object CallPathBench extends Benchmark {
     /** The gateway alone: `system.ping` asked of the robot's command owner. */
     def pings(warmup: Int = GatewayBench.RttWarmup): Array[Long] = {
       val robotRef = robot(1).getOrElse(throw new IllegalStateException("the gateway does not know robot 1"))
-      val connected = Await.result(robotRef.ask[RobotActor.Connected](RobotActor.Connect(_)), 30.seconds)
+      val connected = Await.result(robotRef.ask[RobotAccess.Opened](RobotAccess.Open(_)), 30.seconds)
       val ping = RpcCall("system", "ping", Vector.empty)
       def once(): Long = {
         val start = System.nanoTime()
-        val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
+        val answer = Await.result(connected.response.ask[CallResult](RobotAccess.Call(ping, _)), 10.seconds)
         val took = System.nanoTime() - start
         require(answer.result.isRight, s"system.ping failed: $answer")
         took

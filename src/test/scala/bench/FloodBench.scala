@@ -39,7 +39,7 @@ object FloodBench extends Benchmark {
         val lines = log.count - linesBefore
         val answering = Seq(1, 2).count { id =>
           val probe = testKit.createTestProbe[CallResult]()
-          f.connect(id).response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
+          f.open(id).response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
           probe.receiveMessage(10.seconds).result.isRight
         }
         val growth = HostileTraffic.usedHeapAfterGc() - heapBefore

@@ -74,27 +74,28 @@ object ForgeryBench extends Benchmark {
             Behaviors.same
           case _ => Behaviors.same
         }, "forgery-events")
-      system ! Gateway.Subscribe(sink)
-      val addresses = Await.result(system.ask(Gateway.GetAddresses(_)), 30.seconds)
+      system ! GatewayAccess.Subscribe(sink)
+      val addresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
       val robot = system.systemActorOf(
         SimulatedRobot(SimulatedRobotSettings(FirmwareSettings(RobotId, signingKey = Some(TeamKey)),
             addresses.robots, bindAddress = new InetSocketAddress(ip, 0))),
         "forgery-robot"
       )
       def view(): RobotView = Await.result(robot.ask[RobotView](SimulatedRobot.GetState(_)), 30.seconds)
-      val actor =
-        Await.result(system.ask[Option[ActorRef[RobotActor.Command]]](Gateway.GetRobot(RobotId, _)), 30.seconds).get
-      def snapshot(): RobotSnapshot = Await.result(actor.ask[RobotSnapshot](RobotActor.GetSnapshot(_)), 30.seconds)
-      val connected = Await.result(actor.ask[RobotActor.Connected](RobotActor.Connect(_)), 30.seconds)
+      val actor = Await
+        .result(system.ask[Option[ActorRef[RobotAccess.Command]]](GatewayAccess.GetRobotAccess(RobotId, _)), 30.seconds)
+        .get
+      def snapshot(): RobotSnapshot = Await.result(actor.ask[RobotSnapshot](RobotAccess.GetSnapshot(_)), 30.seconds)
+      val connected = Await.result(actor.ask[RobotAccess.Opened](RobotAccess.Open(_)), 30.seconds)
       val ping =
-        Await.result(connected.response.ask[CallResult](ResponseActor.Call(RpcCall("system", "ping", Vector.empty), _)),
+        Await.result(connected.response.ask[CallResult](RobotAccess.Call(RpcCall("system", "ping", Vector.empty), _)),
           30.seconds)
       require(ping.result.isRight, s"the signing robot did not answer: $ping")
       val recorded = RelayCapture.frames(recorder, RobotId, 2.seconds)
       require(recorded.size >= 3, s"only ${recorded.size} frames recorded")
       val truth = snapshot()
       val robotBefore = view()
-      val refusedBefore = Await.result(system.ask(Gateway.GetStats(_)), 30.seconds).rejected.values.sum
+      val refusedBefore = Await.result(system.ask(GatewayAccess.GetStats(_)), 30.seconds).rejected.values.sum
       events.clear()
       val random = new Random(11)
       val stand = MessageContents(RobotId,
@@ -119,7 +120,7 @@ object ForgeryBench extends Benchmark {
       val robotAfter = view()
       val changes = ForgedFrames.stateChanges(seen, truth) + (if (robotAfter.posture != robotBefore.posture) 1 else 0)
       val refusedByGateway =
-        Await.result(system.ask(Gateway.GetStats(_)), 30.seconds).rejected.values.sum - refusedBefore
+        Await.result(system.ask(GatewayAccess.GetStats(_)), 30.seconds).rejected.values.sum - refusedBefore
       val refusedByRobot =
         robotAfter.firmware.refusedSignatures.values.sum - robotBefore.firmware.refusedSignatures.values.sum
       println(

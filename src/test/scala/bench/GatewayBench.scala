@@ -114,7 +114,7 @@ object GatewayBench extends Benchmark {
     implicit val timeout: Timeout = Timeout(5.seconds)
     def once(): Long = {
       val start = System.nanoTime()
-      val answer = Await.result(connected.response.ask[CallResult](ResponseActor.Call(ping, _)), 10.seconds)
+      val answer = Await.result(connected.response.ask[CallResult](RobotAccess.Call(ping, _)), 10.seconds)
       val took = System.nanoTime() - start
       require(answer.result.isRight, s"system.ping failed: $answer")
       took
@@ -670,22 +670,22 @@ object GatewayBench extends Benchmark {
   /** A gateway as the guardian of its own actor system. */
   private final class GatewayNode(systemName: String, extra: Config = ConfigFactory.empty()) {
     private val config = extra.withFallback(nodeConfig)
-    val system: ActorSystem[Gateway.Command] =
+    val system: ActorSystem[GatewayAccess.Command] =
       ActorSystem(Gateway(GatewaySettings.fromConfig(config.getConfig("naogateway"))), systemName, config)
     private implicit val scheduler: Scheduler = system.scheduler
     private implicit val timeout: Timeout = Timeout(30.seconds)
-    val addresses: Gateway.Addresses = Await.result(system.ask(Gateway.GetAddresses(_)), 30.seconds)
+    val addresses: Gateway.Addresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
 
-    def subscribe(subscriber: ActorRef[GatewayEvent]): Unit = system ! Gateway.Subscribe(subscriber)
+    def subscribe(subscriber: ActorRef[GatewayEvent]): Unit = system ! GatewayAccess.Subscribe(subscriber)
 
-    def connect(robotId: Int): RobotActor.Connected = {
+    def connect(robotId: Int): RobotAccess.Opened = {
       val robot = Await
-        .result(system.ask[Option[ActorRef[RobotActor.Command]]](Gateway.GetRobot(robotId, _)), 30.seconds)
+        .result(system.ask[Option[ActorRef[RobotAccess.Command]]](GatewayAccess.GetRobotAccess(robotId, _)), 30.seconds)
         .getOrElse(throw new IllegalStateException(s"the gateway does not know robot $robotId"))
-      Await.result(robot.ask[RobotActor.Connected](RobotActor.Connect(_)), 30.seconds)
+      Await.result(robot.ask[RobotAccess.Opened](RobotAccess.Open(_)), 30.seconds)
     }
 
-    def stats(): Gateway.GatewayStats = Await.result(system.ask(Gateway.GetStats(_)), 30.seconds)
+    def stats(): Gateway.GatewayStats = Await.result(system.ask(GatewayAccess.GetStats(_)), 30.seconds)
 
     def stop(): Unit = {
       system.terminate()

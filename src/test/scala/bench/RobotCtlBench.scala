@@ -19,7 +19,7 @@ import apps.RobotCtl
 import apps.control.{ControlServer, ControlSettings, FleetStub}
 import naogateway.testkit.TestLoopback
 import naogateway.sim.{Fleet, FleetSettings}
-import naogateway.{Gateway, GatewaySettings}
+import naogateway.{Gateway, GatewayAccess, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** `robotctl status` as an operator runs it: a fresh JVM (`java -cp <this classpath> apps.RobotCtl status`) against a
@@ -57,7 +57,7 @@ object RobotCtlBench extends Benchmark {
       val demo = addressOf(system.systemActorOf(ControlServer(middleware, settings), "control"))
       val thousand =
         addressOf(system.systemActorOf(ControlServer.withInterface(new FleetStub(1000), settings), "control-1000"))
-      val robots = Await.result(gateway.ask[Gateway.Addresses](Gateway.GetAddresses(_)), 30.seconds).robots
+      val robots = Await.result(gateway.ask[Gateway.Addresses](GatewayAccess.GetAddresses(_)), 30.seconds).robots
       Await.result(
         Fleet.start(system,
           FleetSettings(new InetSocketAddress("127.0.0.1", robots.getPort), Vector(1, 2, 3),

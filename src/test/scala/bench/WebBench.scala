@@ -18,7 +18,7 @@ import com.typesafe.config.ConfigFactory
 import spray.json._
 
 import apps.web.{Browser, FoxgloveFeed, WebDemo, WebSettings}
-import naogateway.{GameStateUpdated, Gateway, GatewayEvent}
+import naogateway.{GameStateUpdated, GatewayAccess, GatewayEvent}
 
 /** What the web view costs (docs/web.md, "What it costs"): the demo of [[WebDemo]] (three simulated robots with the
   * faithful link, the simulated GameController, gateway and middleware) in one JVM, first without the web view's
@@ -82,7 +82,7 @@ object WebBench extends Benchmark {
         },
         "web-bench-events"
       )
-      demo.gateway ! Gateway.Subscribe(events)
+      demo.gateway ! GatewayAccess.Subscribe(events)
 
       // A Foxglove client that subscribes to every channel it is advertised.
       @volatile var foxgloveMessages = 0L

@@ -20,7 +20,7 @@ import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import apps.testkit.RobotRig
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{TestLoopback, TestStream}
 import naogateway.wire.gamecontroller.GameControllerVectors
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
@@ -111,7 +111,7 @@ class FirmwarePosixSpec
   }
 
   /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers. */
-  private def streamOf(id: Int): (ActorRef[StreamActor.Command], TestProbe[StreamActor.Received]) =
+  private def streamOf(id: Int): (TestStream, TestProbe[StreamActor.Received]) =
     rig.streamOf(id).getOrElse(fail(s"the gateway does not know robot $id"))
 
   private lazy val plain: CRobot = {
@@ -276,9 +276,9 @@ class FirmwarePosixSpec
       val callId = 1000000 + scala.util.Random.nextInt(100000)
       val ping = MessageContents.encodeFrame(MessageContents(r.id,
           rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
-      payloads.take(12).foreach(p => stream ! StreamActor.Send(p))
-      stream ! StreamActor.Send(ping)
-      payloads.drop(12).foreach(p => stream ! StreamActor.Send(p))
+      payloads.take(12).foreach(p => stream.send(p))
+      stream.send(ping)
+      payloads.drop(12).foreach(p => stream.send(p))
       val echoes = Vector.newBuilder[Vector[Byte]]
       var answered = false
       val deadline = 30.seconds.fromNow
@@ -293,7 +293,7 @@ class FirmwarePosixSpec
         }
       }
       val stats = createTestProbe[naogateway.wire.stream.StreamStats]()
-      stream ! StreamActor.GetStats(stats.ref)
+      stream.stats(stats.ref)
       val seen = stats.receiveMessage(5.seconds)
       info(s"gateway's stream: $seen")
       withClue(s"robot output:\n${r.output}\n") {

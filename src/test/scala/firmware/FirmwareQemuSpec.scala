@@ -250,7 +250,7 @@ class FirmwareQemuSpec
         .map(p => { if (p(0) == 0 && p(1) == 0x2a) p(1) = 0x2b; p }) // never an FU-Remote frame's 00 2A
       val started = System.nanoTime()
       payloads.foreach { p =>
-        endpoint ! StreamActor.Send(p)
+        endpoint.send(p)
         Thread.sleep(50)
       }
       val echoed = Vector.newBuilder[Array[Byte]]

@@ -62,7 +62,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
     gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
   private val robotPort: InetSocketAddress = {
     val probe = gatewayNode.createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
+    gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots
   }
   private var appNodes = List.empty[ActorSystem[_]]
@@ -107,7 +107,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
 
   private def online(id: Int): Unit = eventually {
     val probe = gatewayNode.createTestProbe[Vector[RobotSnapshot]]()
-    gateway ! Gateway.GetRobots(probe.ref)
+    gateway ! GatewayAccess.GetRobots(probe.ref)
     probe.receiveMessage().exists(r => r.robotId == id && r.online) shouldBe true
   }
 

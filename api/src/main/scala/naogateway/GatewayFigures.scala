@@ -5,7 +5,7 @@ import java.net.InetSocketAddress
 import naogateway.link.ReplayProgress
 import naogateway.recording.RecordingStats
 
-/** Where the game state comes from, for the status view and robotctl (the answer to `Gateway.GetGameSource`).
+/** Where the game state comes from, for the status view and robotctl (the answer to `GatewayAccess.GetGameSource`).
   *
   * @param trusted
   *   the configured GameController addresses or subnets, in words ("any source" when none is)
@@ -33,7 +33,7 @@ final case class GameSource(trusted: String, lastFrom: Option[InetSocketAddress]
       (if (untrusted > 0) s", $untrusted packet(s) from elsewhere ignored" else "")
 }
 
-/** Where the gateway listens (the answer to `Gateway.GetAddresses`). */
+/** Where the gateway listens (the answer to `GatewayAccess.GetAddresses`). */
 final case class GatewayAddresses(robots: InetSocketAddress, gameController: Option[InetSocketAddress])
 
 /** The link figures of every robot whose actor answered `GetLinkStats` in time, by robot id. */

@@ -14,7 +14,7 @@ import com.typesafe.config.Config
 
 import naogateway.recording.Retention
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion}
-import naogateway.{Gateway, GatewaySettings, LinkStats, Outbox, Rejection, RobotSnapshot}
+import naogateway.{Gateway, GatewayAccess, GatewaySettings, LinkStats, Outbox, Rejection, RobotSnapshot}
 
 /** `robotctl doctor`: what a team checks first when something does not work, each problem with its fix. The checks are
   * pure functions over facts gathered from the running gateway ([[gather]]) and the machine, so each can be provoked in
@@ -277,13 +277,13 @@ object Doctor {
   // ------------------------------------------------------------------------------------------------- gathering
 
   /** The gateway's game snapshot for the GameController checks. */
-  def gameSnapshot(gateway: ActorRef[Gateway.Query], competition: Boolean)(implicit system: ActorSystem[_],
+  def gameSnapshot(gateway: ActorRef[GatewayAccess.Query], competition: Boolean)(implicit system: ActorSystem[_],
       timeout: Timeout): Future[GameSnapshot] = {
     implicit val ec: ExecutionContext = system.executionContext
     for {
-      latest <- gateway.ask[Option[GameControlData]](Gateway.GetGameState(_))
-      source <- gateway.ask[Gateway.GameSource](Gateway.GetGameSource(_))
-      stats <- gateway.ask[Gateway.GatewayStats](Gateway.GetStats(_))
+      latest <- gateway.ask[Option[GameControlData]](GatewayAccess.GetGameState(_))
+      source <- gateway.ask[Gateway.GameSource](GatewayAccess.GetGameSource(_))
+      stats <- gateway.ask[Gateway.GatewayStats](GatewayAccess.GetStats(_))
     } yield GameSnapshot(latest, source, stats.rejected, competition)
   }
 
@@ -305,17 +305,18 @@ object Doctor {
     }
 
   /** Asks the gateway and looks at the machine; the facts for [[findings]]. */
-  def gather(gateway: ActorRef[Gateway.Query], config: Config)(implicit system: ActorSystem[_]): Future[Facts] = {
+  def gather(gateway: ActorRef[GatewayAccess.Query], config: Config)(implicit system: ActorSystem[_]): Future[Facts] = {
     implicit val ec: ExecutionContext = system.executionContext
     implicit val timeout: Timeout = 3.seconds
     val settings = GatewaySettings.fromConfig(config.getConfig("naogateway"))
     for {
-      robots <- gateway.ask[Vector[RobotSnapshot]](Gateway.GetRobots(_))
-      links <- gateway.ask[Gateway.RobotLinks](Gateway.GetLinkStats(_))
-      stats <- gateway.ask[Gateway.GatewayStats](Gateway.GetStats(_))
-      traffic <- gateway.ask[Outbox.TrafficStats](Gateway.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) =>
-        None
-      }
+      robots <- gateway.ask[Vector[RobotSnapshot]](GatewayAccess.GetRobots(_))
+      links <- gateway.ask[Gateway.RobotLinks](GatewayAccess.GetLinkStats(_))
+      stats <- gateway.ask[Gateway.GatewayStats](GatewayAccess.GetStats(_))
+      traffic <-
+        gateway.ask[Outbox.TrafficStats](GatewayAccess.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) =>
+          None
+        }
       game <- gameSnapshot(gateway, settings.competition).map(_.copy(gateReason = traffic.flatMap(_.gateReason)))
       machine <- Future {
         (Preflight.unknownKeys(config, Preflight.knownKeys),

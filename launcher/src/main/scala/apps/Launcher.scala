@@ -205,7 +205,7 @@ object Launcher {
   def Root(
       replay: Option[Replay] = None,
       stopped: String => Unit = _ => (),
-      makeMiddleware: ActorRef[Gateway.Command] => Behavior[RobotMiddleware.Command] = configuredMiddleware
+      makeMiddleware: ActorRef[GatewayAccess.Command] => Behavior[RobotMiddleware.Command] = configuredMiddleware
   ): Behavior[Command] = Behaviors.setup { context =>
     val config = context.system.settings.config
     val launcher = settings(config.getConfig("apps.launcher"))
@@ -229,7 +229,7 @@ object Launcher {
       bound =>
         webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
     context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get), "status")
-    gateway ! Gateway.GetAddresses(context.messageAdapter(Addresses.apply))
+    gateway ! GatewayAccess.GetAddresses(context.messageAdapter(Addresses.apply))
 
     Behaviors.receiveMessage {
       case Addresses(addresses) =>
@@ -260,7 +260,7 @@ object Launcher {
   }
 
   /** The middleware with the settings of the node's config. */
-  private def configuredMiddleware(gateway: ActorRef[Gateway.Command]): Behavior[RobotMiddleware.Command] =
+  private def configuredMiddleware(gateway: ActorRef[GatewayAccess.Command]): Behavior[RobotMiddleware.Command] =
     Behaviors.setup(context => RobotMiddleware(gateway, MiddlewareSettings(context.system)))
 
   /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the

@@ -17,9 +17,9 @@ private[naogateway] object Collector {
   private final case class Got[A](robotId: Int, answer: A) extends Message
   private case object TimedOut extends Message
 
-  def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)], timeout: FiniteDuration,
-      replyTo: Vector[A] => Unit)(
-      ask: ActorRef[A] => RobotActor.Command, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A])
+  def apply[A: ClassTag](robots: Map[Int, (ActorRef[RobotAccess.Question], InetSocketAddress)],
+      timeout: FiniteDuration, replyTo: Vector[A] => Unit)(
+      ask: ActorRef[A] => RobotAccess.Question, idOf: A => Int, missing: (Int, InetSocketAddress) => Option[A])
       : Behavior[Message] =
     Behaviors.setup[Message] { context =>
       Behaviors.withTimers { timers =>

@@ -10,60 +10,25 @@ import naogateway.link.{Backlog, Replay, ReplayLink, RobotLink, RobotPort, UdpLi
 import naogateway.proto.RecordedPort
 import naogateway.recording.{Decision, Recording, RobotClockEstimates}
 import naogateway.wire._
-import naogateway.wire.gamecontroller.GameControlData
 
 /** The robot side of the middleware: the robots' UDP port, the robot registry, the GameController and the relay. */
 object Gateway {
 
-  /** What the gateway accepts. */
-  sealed trait Command
-
-  /** What the middleware may send the gateway: the questions, event subscriptions and a robot's [[RobotActor.Access]];
-    * never a robot actor's whole protocol. `RobotMiddleware` takes an `ActorRef[Gateway.MiddlewareView]`.
+  /** What the gateway takes besides its public protocol ([[GatewayAccess]]): its own parts' messages, and the public
+    * protocol's, each wrapped into [[AccessRequest]] as it arrives. Only the gateway's package sends these.
     */
-  sealed trait MiddlewareView extends Command
+  private[naogateway] sealed trait Command
 
-  /** The read-only view of the gateway: questions that change nothing. Operator tools (the status view, the control
-    * port) hold an `ActorRef[Gateway.Query]`, so they can look but never reach a robot past the middleware.
+  /** A message of the public protocol, as the gateway takes it. */
+  private[naogateway] final case class AccessRequest(request: GatewayAccess.Command) extends Command
+
+  /** Answers with the robot actor of `robotId`, if the robot is known (the gateway's own specs, through its test kit).
     */
-  sealed trait Query extends MiddlewareView
-
-  /** Answers with the bound addresses (the real ports when 0 was configured). */
-  final case class GetAddresses(replyTo: ActorRef[Addresses]) extends Query
-
-  /** Answers with every known robot's snapshot, asked of the robot actors (`snapshot-timeout` for each). */
-  final case class GetRobots(replyTo: ActorRef[Vector[RobotSnapshot]]) extends Query
-
-  /** Answers with the robot actor of `robotId`, if the robot is known (the gateway's own specs and the benches). */
-  final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]]) extends Command
-
-  /** Answers with the robot actor of `robotId` narrowed to what the middleware may send it, if the robot is known. */
-  final case class GetRobotAccess(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Access]]])
-      extends MiddlewareView
-
-  /** Answers with every known robot's link figures, asked of the robot actors (`snapshot-timeout` for each). */
-  final case class GetLinkStats(replyTo: ActorRef[RobotLinks]) extends Query
+  private[naogateway] final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]])
+      extends Command
 
   /** The link figures of every robot ([[naogateway.RobotLinks]], api). */
   type RobotLinks = naogateway.RobotLinks; val RobotLinks: naogateway.RobotLinks.type = naogateway.RobotLinks
-
-  /** Sends every `GatewayEvent` to `subscriber` until it stops (robot events come straight from the robot actors). */
-  final case class Subscribe(subscriber: ActorRef[GatewayEvent]) extends MiddlewareView
-
-  /** Stops sending events to `subscriber`. */
-  final case class Unsubscribe(subscriber: ActorRef[GatewayEvent]) extends MiddlewareView
-
-  /** Answers with the gateway's own figures. */
-  final case class GetStats(replyTo: ActorRef[GatewayStats]) extends Query
-
-  /** Answers with the team traffic figures of the outbox. */
-  final case class GetTraffic(replyTo: ActorRef[Outbox.TrafficStats]) extends Query
-
-  /** Answers with the latest GameController packet, if any arrived. */
-  final case class GetGameState(replyTo: ActorRef[Option[GameControlData]]) extends Query
-
-  /** Answers with where game state comes from: the trusted sources, the last sender and the packets ignored. */
-  final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Query
 
   private[naogateway] final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class TeamMessageEvent(event: UdpLink.Event) extends Command
@@ -90,83 +55,90 @@ object Gateway {
     * `signatures`, its frames count only when signed (the IP alone does not identify it then). A `discovered` one was
     * introduced by its keep-alive: it counts against `discovery.max-robots` and may be forgotten.
     */
-  private final case class Entry(actor: ActorRef[RobotActor.Command], address: InetSocketAddress, zeromq: Boolean,
-      backlog: Backlog, signatures: Option[SignatureCheck] = None, discovered: Boolean = false)
+  private final case class Entry(actor: RobotRef, address: InetSocketAddress, zeromq: Boolean, backlog: Backlog,
+      signatures: Option[SignatureCheck] = None, discovered: Boolean = false)
 
   /** The gateway with `configured` settings, on its sockets; or, with `replay`, fed from a recording instead: no socket
-    * is opened, nothing is sent anywhere, nothing is recorded.
+    * is opened, nothing is sent anywhere, nothing is recorded. Whoever spawns it holds it as its public protocol; each
+    * message of that is wrapped into [[AccessRequest]] in the gateway's own mailbox, and the gateway's own parts'
+    * messages (not of that protocol) pass the wrapping untouched.
     */
-  def apply(configured: GatewaySettings, replay: Option[Replay] = None): Behavior[Command] =
-    Behaviors.setup { context =>
-      // A replay reaches no robot: ZeroMQ robots, which would be called over their own sockets, are left out.
-      val settings =
-        if (replay.isEmpty) configured else configured.copy(zeromq = configured.zeromq.copy(robots = Vector.empty))
-      Behaviors.withStash(1024) { stash =>
-        val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
-        val port: RobotLink = replay match {
-          case Some(r) =>
-            context.log.info("Gateway replaying {} at {}x: nothing is sent", r.files.mkString(", "), r.speed)
-            new ReplayLink(r, s"${context.system.name}-replay")
-          case None =>
-            val p =
-              try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
-              catch {
-                case e: java.io.IOException =>
-                  throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e)
-              }
-            context.log.info("Gateway listening for robots on {}", p.localAddress)
-            p
-        }
-        val clocks = new RobotClockEstimates
-        val recording =
-          if (replay.isDefined) Recording.Off
-          else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
-        val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
-        // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
-        val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(
-          new FrameSigner(_))
-        val outbox = context.spawn(
-          Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress,
-                routes), settings.budget,
-              settings.competition, signer, recording))
-            .onFailure(settings.supervision.outbox.strategy),
-          "outbox",
-          RobotDispatcher
-        )
-        val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
-        logic.start()
-        if (settings.gameControllerEnabled && settings.teamMessages.enabled && replay.isEmpty) {
-          // Akka keeps one message adapter per message class, and the GameController link's events are of the same
-          // class: a child of its own marks the team port's events instead.
-          val self = context.self
-          val teamEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
-              self ! TeamMessageEvent(e)
-              Behaviors.same
-            }, "team-message-events")
-          context.spawn(
-            UdpLink(
-              new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port),
-              teamEvents,
-              UdpLink.Options(reuseAddress = true, broadcast = true,
-                maxDatagramsPerSecond = settings.teamMessages.maxDatagramsPerSecond)
-            ),
-            "team-message-link"
-          )
-        }
-        if (settings.gameControllerEnabled && replay.isEmpty) {
-          context.spawn(
-            UdpLink(
-              new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
-              context.messageAdapter(GameControllerEvent.apply),
-              UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true,
-                maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)
-            ),
-            "game-controller-link"
-          )
-          logic.bindingGameController
-        } else stash.unstashAll(logic.running(Addresses(port.localAddress, None)))
-      }
+  def apply(configured: GatewaySettings, replay: Option[Replay] = None): Behavior[GatewayAccess.Command] =
+    Behaviors.setup[Command](context => start(configured, replay, context)).transformMessages[GatewayAccess.Command] {
+      case request => AccessRequest(request)
     }
+
+  private def start(
+      configured: GatewaySettings, replay: Option[Replay], context: ActorContext[Command]): Behavior[Command] = {
+    // A replay reaches no robot: ZeroMQ robots, which would be called over their own sockets, are left out.
+    val settings =
+      if (replay.isEmpty) configured else configured.copy(zeromq = configured.zeromq.copy(robots = Vector.empty))
+    Behaviors.withStash(1024) { stash =>
+      val bind = new InetSocketAddress(settings.bindAddress, settings.robotPort)
+      val port: RobotLink = replay match {
+        case Some(r) =>
+          context.log.info("Gateway replaying {} at {}x: nothing is sent", r.files.mkString(", "), r.speed)
+          new ReplayLink(r, s"${context.system.name}-replay")
+        case None =>
+          val p =
+            try RobotPort.open(bind, ReceiveBufferBytes, s"${context.system.name}-robot-port")
+            catch {
+              case e: java.io.IOException =>
+                throw new IllegalStateException(s"gateway cannot listen for robots on $bind: $e", e)
+            }
+          context.log.info("Gateway listening for robots on {}", p.localAddress)
+          p
+      }
+      val clocks = new RobotClockEstimates
+      val recording =
+        if (replay.isDefined) Recording.Off
+        else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
+      val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
+      // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
+      val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(
+        new FrameSigner(_))
+      val outbox = context.spawn(
+        Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress,
+              routes), settings.budget,
+            settings.competition, signer, recording))
+          .onFailure(settings.supervision.outbox.strategy),
+        "outbox",
+        RobotDispatcher
+      )
+      val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
+      logic.start()
+      if (settings.gameControllerEnabled && settings.teamMessages.enabled && replay.isEmpty) {
+        // Akka keeps one message adapter per message class, and the GameController link's events are of the same
+        // class: a child of its own marks the team port's events instead.
+        val self = context.self
+        val teamEvents = context.spawn(Behaviors.receiveMessage[UdpLink.Event] { e =>
+            self ! TeamMessageEvent(e)
+            Behaviors.same
+          }, "team-message-events")
+        context.spawn(
+          UdpLink(
+            new InetSocketAddress(settings.gameControllerBindAddress, settings.teamMessages.port),
+            teamEvents,
+            UdpLink.Options(reuseAddress = true, broadcast = true,
+              maxDatagramsPerSecond = settings.teamMessages.maxDatagramsPerSecond)
+          ),
+          "team-message-link"
+        )
+      }
+      if (settings.gameControllerEnabled && replay.isEmpty) {
+        context.spawn(
+          UdpLink(
+            new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
+            context.messageAdapter(GameControllerEvent.apply),
+            UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true,
+              maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)
+          ),
+          "game-controller-link"
+        )
+        logic.bindingGameController
+      } else stash.unstashAll(logic.running(Addresses(port.localAddress, None)))
+    }
+  }
 
   /** Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only brings
     * the robot's clock estimate, with which the recorder dates the robot's Status.
@@ -257,22 +229,22 @@ object Gateway {
     private def publishRoutes(): Unit =
       routes.set(Routing.Table.of(byId.collect {
         case (id, e) if !e.zeromq =>
-          Routing.Route(id, e.address.getAddress, PortReader.Inlet(e.actor, e.backlog, e.signatures))
+          Routing.Route(id, e.address.getAddress, PortReader.Inlet(e.actor.own, e.backlog, e.signatures))
       }))
 
-    private def robotRefs: Map[Int, (ActorRef[RobotActor.Command], InetSocketAddress)] =
-      byId.map { case (id, e) => id -> (e.actor -> e.address) }
+    private def robotRefs: Map[Int, (ActorRef[RobotAccess.Question], InetSocketAddress)] =
+      byId.map { case (id, e) => id -> (e.actor.access -> e.address) }
 
     private def spawnRobot(robotId: Int, address: InetSocketAddress, discovered: Boolean): Entry = {
       val backlog = new Backlog(settings.robotBacklog)
-      val actor = context.spawn(
-        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false,
-            discovered = discovered))
-          .onFailure(settings.supervision.robot.strategy),
-        s"robot-$robotId",
-        RobotDispatcher
-      )
-      context.watchWith(actor, RobotStopped(robotId, actor))
+      val actor = RobotRef(context.spawn(
+          Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false,
+              discovered = discovered))
+            .onFailure(settings.supervision.robot.strategy),
+          s"robot-$robotId",
+          RobotDispatcher
+        ))
+      context.watchWith(actor.own, RobotStopped(robotId, actor.own))
       val signatures =
         settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
       val entry = Entry(actor, address, zeromq = false, backlog, signatures, discovered)
@@ -288,14 +260,14 @@ object Gateway {
     /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
     private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
       val backlog = new Backlog(settings.robotBacklog)
-      val actor = context.spawn(
-        Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
-            RobotTransport.ZeroMq(robot.endpoint)))
-          .onFailure(settings.supervision.robot.strategy),
-        s"robot-${robot.robotId}",
-        RobotDispatcher
-      )
-      context.watchWith(actor, RobotStopped(robot.robotId, actor))
+      val actor = RobotRef(context.spawn(
+          Behaviors.supervise(RobotActor(robot.robotId, robot.address, settings, outbox, wiring(backlog), heard = false,
+              RobotTransport.ZeroMq(robot.endpoint)))
+            .onFailure(settings.supervision.robot.strategy),
+          s"robot-${robot.robotId}",
+          RobotDispatcher
+        ))
+      context.watchWith(actor.own, RobotStopped(robot.robotId, actor.own))
       byId = byId.updated(robot.robotId, Entry(actor, robot.address, zeromq = true, backlog))
     }
 
@@ -311,14 +283,14 @@ object Gateway {
       reject(kind, from, detail)
       robotId.flatMap(byId.get).foreach { e =>
         e.backlog.add()
-        e.actor ! RobotActor.DatagramRejected(kind)
+        e.actor.own ! RobotActor.DatagramRejected(kind)
       }
     }
 
     private def publish(event: GatewayEvent): Unit = subscribers.foreach(_ ! event)
 
     /** Every robot actor learns the new subscriber list: robot events go from them straight to the subscribers. */
-    private def subscribersChanged(): Unit = byId.values.foreach(_.actor ! RobotActor.Subscribers(subscribers))
+    private def subscribersChanged(): Unit = byId.values.foreach(_.actor.own ! RobotActor.Subscribers(subscribers))
 
     /** Records a GameController packet (every one, before any check); true, so it can guard the first case. */
     private def recordGameController(bytes: Array[Byte], from: InetSocketAddress): Boolean = {
@@ -379,71 +351,22 @@ object Gateway {
           watch.trustedPacket(bytes, from)
           Behaviors.same
         case GameControllerEvent(_) => Behaviors.same
-        case Subscribe(subscriber) =>
-          context.watchWith(subscriber, SubscriberGone(subscriber))
-          subscribers += subscriber
-          subscribersChanged()
-          Behaviors.same
-        case Unsubscribe(subscriber) =>
-          context.unwatch(subscriber)
-          subscribers -= subscriber
-          subscribersChanged()
+        case RobotWantsSubscribers(RobotActor.SubscribersWanted(robot)) =>
+          robot ! RobotActor.Subscribers(subscribers)
           Behaviors.same
         case SubscriberGone(subscriber) =>
           subscribers -= subscriber
           subscribersChanged()
           Behaviors.same
-        case RobotWantsSubscribers(RobotActor.SubscribersWanted(robot)) =>
-          robot ! RobotActor.Subscribers(subscribers)
-          Behaviors.same
-        case GetAddresses(replyTo) =>
-          replyTo ! addresses
-          Behaviors.same
-        case GetRobots(replyTo) =>
-          if (byId.isEmpty) replyTo ! Vector.empty
-          else
-            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, replyTo ! (_: Vector[RobotSnapshot]))(
-                RobotActor.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
-                (id, address) => Some(RobotSnapshot(id, address))))
-          Behaviors.same
-        case GetLinkStats(replyTo) =>
-          if (byId.isEmpty) replyTo ! RobotLinks(Vector.empty)
-          else
-            context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout,
-                (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotActor.GetLinkStats(_),
-                (l: LinkStats) => l.robotId, (_, _) => None))
+        case AccessRequest(request) =>
+          accessRequest(request, addresses)
           Behaviors.same
         case GetRobot(robotId, replyTo) =>
-          replyTo ! byId.get(robotId).map(_.actor)
-          Behaviors.same
-        case GetRobotAccess(robotId, replyTo) =>
-          replyTo ! byId.get(robotId).map(_.actor.narrow[RobotActor.Access])
-          Behaviors.same
-        case GetStats(replyTo) =>
-          val ledger = rejections.current
-          replyTo ! GatewayStats(
-            reader.datagramsIn,
-            reader.relayed,
-            watch.packetsCounted,
-            ledger.byKind,
-            byId.size,
-            ledger.sources,
-            recording.stats,
-            port match { case r: ReplayLink => Some(r.progress); case _ => None }
-          )
-          Behaviors.same
-        case GetTraffic(replyTo) =>
-          outbox ! Outbox.GetStats(replyTo)
-          Behaviors.same
-        case GetGameState(replyTo) =>
-          replyTo ! watch.state
-          Behaviors.same
-        case GetGameSource(replyTo) =>
-          replyTo ! watch.source(System.nanoTime())
+          replyTo ! byId.get(robotId).map(_.actor.own)
           Behaviors.same
         case RobotStopped(robotId, actor) =>
           // A forgotten robot: its IP address, its id and its traffic meter are free again.
-          byId.get(robotId).filter(_.actor == actor).foreach { e =>
+          byId.get(robotId).filter(_.actor.own == actor).foreach { e =>
             if (!e.zeromq) byAddress -= e.address.getAddress
             byId -= robotId
             outbox ! Outbox.RobotGone(robotId)
@@ -451,6 +374,52 @@ object Gateway {
           }
           Behaviors.same
       }.receiveSignal { case (_, PostStop) => closePort() }
+
+    /** A message of the public protocol: the middleware's and the operator tools'. */
+    private def accessRequest(request: GatewayAccess.Command, addresses: Addresses): Unit = request match {
+      case GatewayAccess.Subscribe(subscriber) =>
+        context.watchWith(subscriber, SubscriberGone(subscriber))
+        subscribers += subscriber
+        subscribersChanged()
+      case GatewayAccess.Unsubscribe(subscriber) =>
+        context.unwatch(subscriber)
+        subscribers -= subscriber
+        subscribersChanged()
+      case GatewayAccess.GetAddresses(replyTo) =>
+        replyTo ! addresses
+      case GatewayAccess.GetRobots(replyTo) =>
+        if (byId.isEmpty) replyTo ! Vector.empty
+        else
+          context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout, replyTo ! (_: Vector[RobotSnapshot]))(
+              RobotAccess.GetSnapshot(_), (s: RobotSnapshot) => s.robotId,
+              (id, address) => Some(RobotSnapshot(id, address))))
+      case GatewayAccess.GetLinkStats(replyTo) =>
+        if (byId.isEmpty) replyTo ! RobotLinks(Vector.empty)
+        else
+          context.spawnAnonymous(Collector(robotRefs, settings.snapshotTimeout,
+              (l: Vector[LinkStats]) => replyTo ! RobotLinks(l))(RobotAccess.GetLinkStats(_),
+              (l: LinkStats) => l.robotId, (_, _) => None))
+      case GatewayAccess.GetRobotAccess(robotId, replyTo) =>
+        replyTo ! byId.get(robotId).map(_.actor.access)
+      case GatewayAccess.GetStats(replyTo) =>
+        val ledger = rejections.current
+        replyTo ! GatewayStats(
+          reader.datagramsIn,
+          reader.relayed,
+          watch.packetsCounted,
+          ledger.byKind,
+          byId.size,
+          ledger.sources,
+          recording.stats,
+          port match { case r: ReplayLink => Some(r.progress); case _ => None }
+        )
+      case GatewayAccess.GetTraffic(replyTo) =>
+        outbox ! Outbox.GetStats(replyTo)
+      case GatewayAccess.GetGameState(replyTo) =>
+        replyTo ! watch.state
+      case GatewayAccess.GetGameSource(replyTo) =>
+        replyTo ! watch.source(System.nanoTime())
+    }
 
     /** Decides a frame the reader's table could not place, binding a robot id to the IP address it first came from.
       * Everything sent to the robot goes to that IP at the robot's receive port, never to the frame's source port.
@@ -460,7 +429,7 @@ object Gateway {
       val ip = from.getAddress
       def deliver(entry: Entry): Unit = {
         entry.backlog.add()
-        entry.actor ! RobotActor.FrameReceived(contents, header.form, size)
+        entry.actor.own ! RobotActor.FrameReceived(contents, header.form, size)
       }
       byId.get(robotId) match {
         case Some(entry) if entry.zeromq =>

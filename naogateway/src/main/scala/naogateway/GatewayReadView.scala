@@ -13,15 +13,16 @@ import naogateway.wire.gamecontroller.GameControlData
 object GatewayReadView {
 
   /** A view of `gateway` whose every question fails when the gateway has not answered within `timeout`. */
-  def apply(gateway: ActorRef[Gateway.Query], timeout: FiniteDuration)(implicit system: ActorSystem[_]): GatewayView =
+  def apply(gateway: ActorRef[GatewayAccess.Query], timeout: FiniteDuration)(
+      implicit system: ActorSystem[_]): GatewayView =
     new GatewayView {
       private implicit val askTimeout: Timeout = timeout
-      def addresses(): Future[GatewayAddresses] = gateway.ask(Gateway.GetAddresses(_))
-      def robots(): Future[Vector[RobotSnapshot]] = gateway.ask(Gateway.GetRobots(_))
-      def links(): Future[RobotLinks] = gateway.ask(Gateway.GetLinkStats(_))
-      def stats(): Future[GatewayStats] = gateway.ask(Gateway.GetStats(_))
-      def traffic(): Future[TrafficStats] = gateway.ask(Gateway.GetTraffic(_))
-      def gameState(): Future[Option[GameControlData]] = gateway.ask(Gateway.GetGameState(_))
-      def gameSource(): Future[GameSource] = gateway.ask(Gateway.GetGameSource(_))
+      def addresses(): Future[GatewayAddresses] = gateway.ask(GatewayAccess.GetAddresses(_))
+      def robots(): Future[Vector[RobotSnapshot]] = gateway.ask(GatewayAccess.GetRobots(_))
+      def links(): Future[RobotLinks] = gateway.ask(GatewayAccess.GetLinkStats(_))
+      def stats(): Future[GatewayStats] = gateway.ask(GatewayAccess.GetStats(_))
+      def traffic(): Future[TrafficStats] = gateway.ask(GatewayAccess.GetTraffic(_))
+      def gameState(): Future[Option[GameControlData]] = gateway.ask(GatewayAccess.GetGameState(_))
+      def gameSource(): Future[GameSource] = gateway.ask(GatewayAccess.GetGameSource(_))
     }
 }

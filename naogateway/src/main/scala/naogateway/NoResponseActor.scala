@@ -22,7 +22,7 @@ object NoResponseActor {
   /** Sends `call` in order, its reply dropped; `replyTo`, when given, learns how it ended (the robot's answer, an error
     * or a drop). Sent once, never retried.
     */
-  final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None,
+  private[naogateway] final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None,
       priority: Priority = Priority.Command) extends Command
 
   /** Sends `out` in order. `key` names it while it takes room (a call's first call id; the sender picks one when
@@ -158,7 +158,8 @@ object NoResponseActor {
         .receiveMessage[Command] {
           case Send(call, replyTo, priority) =>
             // Correlated like any call (its id, its deadline, one answer), then submitted back here in turn.
-            responder ! ResponseActor.Call(call, replyTo.getOrElse(dropReplies), priority, idempotent = Some(false))
+            responder ! ResponseActor.Called(
+              RobotAccess.Call(call, replyTo.getOrElse(dropReplies), priority, idempotent = Some(false)))
             Behaviors.same
           case Submit(out, priority, key, awaits, outcome, notices) =>
             val k = key.getOrElse(nextKey)

@@ -16,19 +16,13 @@ import naogateway.wire.{RpcCall, RpcMethod, RpcReply, RpcValue}
   */
 object ResponseActor {
 
-  /** What the response actor accepts. */
-  sealed trait Command
-
-  /** Calls the robot; `replyTo` gets exactly one `CallResult`. `timeout` overrides the configured one; `idempotent`
-    * overrides the method table's word on whether the call may be sent again (`Some(false)`: no retries).
+  /** What the response actor takes from its robot's actors, and the callers' [[RobotAccess.Call]] wrapped into
+    * [[Called]] as it arrives.
     */
-  final case class Call(
-      call: RpcCall,
-      replyTo: ActorRef[CallResult],
-      priority: Priority = Priority.Command,
-      timeout: Option[FiniteDuration] = None,
-      idempotent: Option[Boolean] = None
-  ) extends Command
+  private[naogateway] sealed trait Command
+
+  /** A caller's call (the middleware's, or the sender's `Send`). */
+  private[naogateway] final case class Called(call: RobotAccess.Call) extends Command
 
   /** A reply with one of this actor's call ids arrived. */
   private[naogateway] final case class ReplyReceived(reply: RpcReply) extends Command
@@ -53,10 +47,12 @@ object ResponseActor {
       sentAt: Long
   )
 
-  /** The response actor of robot `robotId`, submitting to `sender`; `robot` owns reachability, hears round trips. */
+  /** The response actor of robot `robotId`, submitting to `sender`; `robot` owns reachability, hears round trips.
+    * Spawned as both its protocols: the callers' calls are wrapped into its own as they arrive, in its own mailbox.
+    */
   private[naogateway] def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild],
-      sender: ActorRef[NoResponseActor.Command], online: Boolean): Behavior[Command] =
-    Behaviors.setup { context =>
+      sender: ActorRef[NoResponseActor.Command], online: Boolean): Behavior[Any] =
+    Behaviors.setup[Command] { context =>
       Behaviors.withTimers { timers =>
         val outcomes = context.messageAdapter[Outbox.Outcome](SendOutcome.apply)
         val notices = context.messageAdapter[NoResponseActor.Notice](OrderNotice.apply)
@@ -64,6 +60,9 @@ object ResponseActor {
         val responder = new Responder(robotId, settings, robot, sender, outcomes, notices, timers)
         responder.running(Map.empty, online, CallId.randomStart())
       }
+    }.transformMessages[Any] {
+      case call: RobotAccess.Call => Called(call)
+      case own: Command           => own
     }
 
   private final class Responder(
@@ -114,11 +113,11 @@ object ResponseActor {
     def running(calls: Calls, online: Boolean, lastId: Long): Behavior[Command] =
       Behaviors
         .receiveMessage[Command] {
-          case c: Call if !online =>
+          case Called(c) if !online =>
             c.replyTo ! CallResult(robotId, c.call.name, Left(RobotFailure.RobotOffline(robotId)))
             robot ! RobotActor.Wanted
             Behaviors.same
-          case Call(call, replyTo, priority, timeout, idempotent) =>
+          case Called(RobotAccess.Call(call, replyTo, priority, timeout, idempotent)) =>
             val id = nextId(lastId)
             val total = timeout.getOrElse(settings.timeout)
             val retries = if (idempotent.getOrElse(RpcMethod.idempotent(call))) settings.idempotentRetries else 0

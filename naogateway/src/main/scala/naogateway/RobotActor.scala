@@ -8,7 +8,7 @@ import akka.actor.typed.scaladsl.Behaviors.receiveMessage
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.RobotEffects.{Children, Family}
+import naogateway.RobotEffects.{Children, Connected, Family}
 import naogateway.RobotFrames.Outbound
 import naogateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
@@ -16,15 +16,16 @@ import naogateway.wire._
 
 /** The supervisor of one robot: carries out `RobotState`'s transitions (its address, liveness, subscribers, options and
   * link figures), hands what the robot sends to its owners, and re-syncs the robot after restarts. It sends nothing
-  * itself: everything for the robot goes through its child `NoResponseActor`, the robot's one sender.
+  * itself: everything for the robot goes through its child `NoResponseActor`, the robot's one sender. The middleware
+  * reaches it through [[RobotAccess]], whose messages it wraps into its own as they arrive ([[RobotRef]]).
   */
 object RobotActor {
 
-  /** What a robot actor accepts. */
-  sealed trait Command
+  /** What a robot actor takes from the gateway and its own children, and the middleware's messages wrapped. */
+  private[naogateway] sealed trait Command
 
   /** What a robot actor handles alike in every state (the rest: Connect, the heartbeat's verdicts, Forget). */
-  sealed trait Common extends Command
+  private[naogateway] sealed trait Common extends Command
 
   /** A decoded FU-Remote frame from this robot (`size` bytes on the wire). */
   private[naogateway] final case class FrameReceived(contents: MessageContents, form: HeaderForm, size: Int)
@@ -39,37 +40,24 @@ object RobotActor {
   /** The robot was re-bound to another IP address (it moved host); `address` is where it receives now. */
   private[naogateway] final case class Rebound(address: InetSocketAddress) extends Common
 
-  /** What the middleware may send a robot actor, whose ref it gets narrowed to this (`Gateway.GetRobotAccess`):
-    * questions and `Open`. Nothing that feeds the actor frames, refusals, re-bindings or subscribers; no way to its
-    * sender.
-    */
-  sealed trait Access extends Command
-
   /** Asks for the children of a reachable robot: waits (stashed) while it is not reached, probing it. */
   private[naogateway] sealed trait Reach extends Command {
     private[naogateway] def answer(children: Connected): Unit
   }
 
-  /** Answers with the children's refs once the robot is reachable (the gateway's own specs and the benches). */
-  final case class Connect(replyTo: ActorRef[Connected]) extends Reach {
+  /** Answers with the children's refs once the robot is reachable (the gateway's own specs, through its test kit). */
+  private[naogateway] final case class Connect(replyTo: ActorRef[Connected]) extends Reach {
     private[naogateway] def answer(children: Connected): Unit = replyTo ! children
   }
 
-  /** The middleware's `Connect`: answers with [[Opened]] once the robot is reachable (probing it first if needed). */
-  final case class Open(replyTo: ActorRef[Opened]) extends Reach with Access {
-    private[naogateway] def answer(c: Connected): Unit = replyTo ! Opened(c.robotId, c.response, c.vision)
+  /** The middleware's [[RobotAccess.Open]]: waits like `Connect`, and answers with the children it may use. */
+  private[naogateway] final case class Opening(open: RobotAccess.Open) extends Reach {
+    private[naogateway] def answer(c: Connected): Unit =
+      open.replyTo ! RobotAccess.Opened(c.robotId, c.response, c.registrations)
   }
 
-  /** A reachable robot as the middleware may use it: calls through its response actor, camera registrations through its
-    * vision actor. Both refs die with a restart of the robot actor: the holder's cue to open again.
-    */
-  final case class Opened(robotId: Int, response: ActorRef[ResponseActor.Call], vision: ActorRef[VisionActor.Register])
-
-  /** Answers with the latest keep-alive contents and liveness. */
-  final case class GetSnapshot(replyTo: ActorRef[RobotSnapshot]) extends Common with Access
-
-  /** Answers with the link figures. */
-  final case class GetLinkStats(replyTo: ActorRef[LinkStats]) extends Common with Access
+  /** The middleware's questions, answered alike in every state. */
+  private[naogateway] final case class Asked(question: RobotAccess.Question) extends Common
 
   /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
   private[naogateway] final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
@@ -118,11 +106,6 @@ object RobotActor {
   private final case class Forget(reason: String) extends Command
   private case object ForgetKey
 
-  /** The robot's children, for the gateway's own specs and the benches (the middleware gets [[Opened]]). */
-  final case class Connected(robotId: Int, response: ActorRef[ResponseActor.Command],
-      noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
-      stream: ActorRef[StreamActor.Command])
-
   /** A robot actor for `robotId` at `address`; `heard` says whether it has spoken already (online at once). `transport`
     * says how it is reached; everything above the transport is the same for both kinds. A `discovered` robot
     * (introduced by its own keep-alive, `naogateway.discovery`) is not online from that one keep-alive: a second one or
@@ -131,8 +114,8 @@ object RobotActor {
     */
   private[naogateway] def apply(robotId: Int, address: InetSocketAddress, settings: GatewaySettings,
       outbox: ActorRef[Outbox.Command], wiring: RobotWiring, heard: Boolean,
-      transport: RobotTransport = RobotTransport.Datagrams, discovered: Boolean = false): Behavior[Command] =
-    Behaviors.setup { context =>
+      transport: RobotTransport = RobotTransport.Datagrams, discovered: Boolean = false): Behavior[Any] =
+    Behaviors.setup[Command] { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(64) { stash =>
           // Datagrams handed to an earlier incarnation are gone with it; the count starts again.
@@ -142,6 +125,10 @@ object RobotActor {
           robot.start(address, heard)
         }
       }
+    }.transformMessages[Any] {
+      case open: RobotAccess.Open         => Opening(open)
+      case question: RobotAccess.Question => Asked(question)
+      case own: Command                   => own
     }
 
   private final class Robot(robotId: Int, settings: GatewaySettings, outbox: ActorRef[Outbox.Command],
@@ -169,7 +156,6 @@ object RobotActor {
       context.spawn(Behaviors.supervise(behavior).onFailure(restarts), name, Gateway.RobotDispatcher)
 
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
-      val self = context.self
       val zeroMq = transport match {
         case RobotTransport.ZeroMq(endpoint) =>
           val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
@@ -185,13 +171,13 @@ object RobotActor {
         case r                         => HeartbeatReport(r)
       }
       val heartbeat = child(HeartBeatActor(heartbeatSettings, reports, online = false), "heartbeat")
-      val sender = child(NoResponseActor(robotId, settings.calls, self), "no-response")
-      val response = child(ResponseActor(robotId, settings.calls, self, sender, online = false), "response")
+      val sender = child(NoResponseActor(robotId, settings.calls, context.self), "no-response")
+      val response = child(ResponseActor(robotId, settings.calls, context.self, sender, online = false), "response")
       if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
       forgetAfter(settings.discovery.forgetUnreachedAfter, "not online")
       val kept = (heartbeatSettings.qualityWindow / heartbeatSettings.keepAliveInterval).toInt + 2
       val subscribers = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
-      unreached(Family(heartbeat, sender, response, zeroMq),
+      unreached(Family(heartbeat, sender, response, response, zeroMq),
         RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept))
     }
 
@@ -205,7 +191,7 @@ object RobotActor {
       case Verdict(HeartBeatActor.CameOnline) =>
         val vision = child(VisionActor(robotId, context.self), "vision")
         val stream = child(StreamActor(robotId, settings.stream, f.sender), "stream")
-        stash.unstashAll(online(f, Children(vision, stream), s))
+        stash.unstashAll(online(f, Children(vision, vision, stream), s))
       case Verdict(HeartBeatActor.WentOffline(_)) => Behaviors.same // never online: nothing to report
       case Forget(reason)                         => forget(s, reason)
     }
@@ -213,7 +199,7 @@ object RobotActor {
     private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = receiveMessage {
       case m: Common => running(f, c, common(m, f, Some(c), s, isOnline), isOnline)
       case r: Reach =>
-        r.answer(Connected(robotId, f.response, f.sender, c.vision, c.stream))
+        r.answer(Connected(robotId, f.calls, f.sender, c.vision, c.registrations, c.stream))
         if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
       case Verdict(HeartBeatActor.CameOnline) => if (isOnline) Behaviors.same else online(f, c, s)
@@ -255,8 +241,8 @@ object RobotActor {
           val next = s.rebound(to)
           f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
           next
-        case GetSnapshot(replyTo)  => replyTo ! s.view(isOnline); s
-        case GetLinkStats(replyTo) => replyTo ! effects.linkStats(s); s
+        case Asked(RobotAccess.GetSnapshot(replyTo))  => replyTo ! s.view(isOnline); s
+        case Asked(RobotAccess.GetLinkStats(replyTo)) => replyTo ! effects.linkStats(s); s
         case Subscribers(now) =>
           val (next, held) = s.subscribersChanged(now)
           held.foreach(e => now.foreach(_ ! e))

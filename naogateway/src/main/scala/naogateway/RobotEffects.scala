@@ -150,9 +150,18 @@ private[naogateway] object RobotEffects {
       heartbeat: ActorRef[HeartBeatActor.Command],
       sender: ActorRef[NoResponseActor.Command],
       response: ActorRef[ResponseActor.Command],
+      calls: ActorRef[RobotAccess.Call],
       zeroMq: Option[ActorRef[ZeroMqRobotLink.Command]]
   )
 
+  /** The robot's children as the gateway's own specs reach them (`RobotActor.Connect`); `response` and `registrations`
+    * as in [[RobotAccess.Opened]].
+    */
+  final case class Connected(robotId: Int, response: ActorRef[RobotAccess.Call],
+      noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
+      registrations: ActorRef[RobotAccess.RegisterVision], stream: ActorRef[StreamActor.Command])
+
   /** The children spawned at first contact. */
-  final case class Children(vision: ActorRef[VisionActor.Command], stream: ActorRef[StreamActor.Command])
+  final case class Children(vision: ActorRef[VisionActor.Command], registrations: ActorRef[RobotAccess.RegisterVision],
+      stream: ActorRef[StreamActor.Command])
 }

@@ -19,6 +19,17 @@ private[naogateway] object RobotWiring {
   def to(events: ActorRef[GatewayEvent]): RobotWiring = RobotWiring(Set(events), None, new Backlog(Int.MaxValue))
 }
 
+/** A robot actor as the gateway holds it: one actor seen through two protocols, its own and the middleware's
+  * ([[RobotAccess]]). The actor wraps each message of the latter into its own as it arrives, in its own mailbox
+  * (`Behaviors.transformMessages`), so handing `access` out adds no actor and no hop, and only `own` reaches the rest.
+  */
+private[naogateway] final case class RobotRef(own: ActorRef[RobotActor.Command], access: ActorRef[RobotAccess.Command])
+
+/** The two views of one spawned robot actor. */
+private[naogateway] object RobotRef {
+  def apply(actor: ActorRef[Any]): RobotRef = RobotRef(actor, actor)
+}
+
 /** How a robot is reached: `RobotActor` is the same above the transport for both kinds. */
 private[naogateway] sealed trait RobotTransport extends Product with Serializable
 

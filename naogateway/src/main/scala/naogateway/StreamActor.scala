@@ -16,15 +16,15 @@ object StreamActor {
   sealed trait Command
 
   /** Sends `payload` reliably; `deadline` (from now) lets stale data expire instead of being resent for ever. */
-  final case class Send(payload: Array[Byte], deadline: Option[FiniteDuration] = None,
+  private[naogateway] final case class Send(payload: Array[Byte], deadline: Option[FiniteDuration] = None,
       replyTo: Option[ActorRef[SendResult]] = None)
       extends Command
 
   /** Delivers every payload received from the robot, in order, to `subscriber`. */
-  final case class Subscribe(subscriber: ActorRef[Received]) extends Command
+  private[naogateway] final case class Subscribe(subscriber: ActorRef[Received]) extends Command
 
   /** Answers with the stream's stats. */
-  final case class GetStats(replyTo: ActorRef[StreamStats]) extends Command
+  private[naogateway] final case class GetStats(replyTo: ActorRef[StreamStats]) extends Command
 
   /** A segment from the robot's address. */
   private[naogateway] final case class SegmentReceived(bytes: Array[Byte]) extends Command

@@ -8,16 +8,16 @@ import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
 /** HaViMo2 frames of one robot, fanned out newest-only to any number of stream subscribers. */
 object VisionActor {
 
-  /** What the vision actor accepts. */
-  sealed trait Command
+  /** What the vision actor takes from its robot actor, and the middleware's [[RobotAccess.RegisterVision]] wrapped into
+    * [[Registering]] as it arrives.
+    */
+  private[naogateway] sealed trait Command
 
   /** A frame arrived from the robot. */
   private[naogateway] final case class FrameReceived(frame: VisionFrame) extends Command
 
-  /** Registers a subscriber's stream; `grid` asks for grid frames too (they are large, ~790 bytes each). The robot
-    * actor keeps the registrations, so they outlive a restart of this actor.
-    */
-  final case class Register(subscriber: ActorRef[VisionFrame], grid: Boolean) extends Command
+  /** A subscriber's registration, handed on to the robot actor, which keeps the registrations. */
+  private[naogateway] final case class Registering(registration: RobotAccess.RegisterVision) extends Command
 
   /** The robot actor's registrations now, subscriber to whether it wants grid frames: on every change and every start.
     */
@@ -30,10 +30,11 @@ object VisionActor {
   val GridOption: String = "havimo.grid"
 
   /** A vision actor for robot `robotId`, switching camera options through `robot`, which owns the registrations: a new
-    * incarnation asks it for them before it forwards any frame.
+    * incarnation asks it for them before it forwards any frame. Spawned as both its protocols: a registration is
+    * wrapped into its own as it arrives.
     */
-  private[naogateway] def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
-    Behaviors.setup { context =>
+  private[naogateway] def apply(robotId: Int, robot: ActorRef[RobotActor.FromChild]): Behavior[Any] =
+    Behaviors.setup[Command] { context =>
       robot ! RobotActor.VisionSubscribersWanted(context.self)
 
       def options(subscribers: Map[ActorRef[VisionFrame], Boolean]): Set[String] =
@@ -61,7 +62,7 @@ object VisionActor {
             case _: VisionFrame.Grid    => subscribers.foreach { case (s, grid) => if (grid) s ! frame }
           }
           Behaviors.same
-        case Register(subscriber, grid) =>
+        case Registering(RobotAccess.RegisterVision(subscriber, grid)) =>
           robot ! RobotActor.VisionSubscribe(subscriber, grid)
           Behaviors.same
         case Subscribers(next) =>
@@ -75,5 +76,8 @@ object VisionActor {
       }
 
       running(Map.empty)
+    }.transformMessages[Any] {
+      case registration: RobotAccess.RegisterVision => Registering(registration)
+      case own: Command                             => own
     }
 }

@@ -50,7 +50,7 @@ private[robotmiddleware] object RobotGuard {
   /** Sends the robot's link figures to `subscriber` at once and then every `link-stats-interval` (no lease needed). */
   final case class WatchLinkStats(subscriber: ActorRef[LinkStats]) extends Command
 
-  private final case class ChildrenReady(children: RobotActor.Opened) extends Command
+  private final case class ChildrenReady(children: RobotAccess.Opened) extends Command
   private final case class SnapshotReceived(snapshot: RobotSnapshot) extends Command
   private final case class OperationDone(
       replyTo: ActorRef[RobotMiddleware.OperationResult],
@@ -87,15 +87,15 @@ private[robotmiddleware] object RobotGuard {
   private case object StatsKey
 
   /** A guard for `robotId`, whose robot actor is `robot` (narrowed to what the middleware may send it). */
-  def apply(robotId: Int, robot: ActorRef[RobotActor.Access], settings: MiddlewareSettings, online: Boolean)
+  def apply(robotId: Int, robot: ActorRef[RobotAccess.Command], settings: MiddlewareSettings, online: Boolean)
       : Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.pendingLimit) { stash =>
           // `online` was right when the guard was first created; after a restart only the robot actor knows.
-          robot ! RobotActor.GetSnapshot(context.messageAdapter(SnapshotReceived.apply))
+          robot ! RobotAccess.GetSnapshot(context.messageAdapter(SnapshotReceived.apply))
           val childrenReady = context.messageAdapter(ChildrenReady.apply)
-          robot ! RobotActor.Open(childrenReady)
+          robot ! RobotAccess.Open(childrenReady)
           new Guard(robotId, robot, settings, context, timers, stash, childrenReady).connecting(online)
         }
       }
@@ -106,12 +106,12 @@ private[robotmiddleware] object RobotGuard {
 
   private final class Guard(
       robotId: Int,
-      robot: ActorRef[RobotActor.Access],
+      robot: ActorRef[RobotAccess.Command],
       settings: MiddlewareSettings,
       context: ActorContext[Command],
       timers: TimerScheduler[Command],
       stash: StashBuffer[Command],
-      childrenReady: ActorRef[RobotActor.Opened]
+      childrenReady: ActorRef[RobotAccess.Opened]
   ) {
     private var leases: Leases = Map.empty
     private var walking: Option[(Operation.Walk, AppInfo)] = None
@@ -138,7 +138,9 @@ private[robotmiddleware] object RobotGuard {
           // The refs die with the robot actor's restart (or a child's stop): then the guard connects again.
           Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref =>
             context.watchWith(ref, ChildGone(ref)))
-          visionWatchers.foreach { case (subscriber, grid) => children.vision ! VisionActor.Register(subscriber, grid) }
+          visionWatchers.foreach { case (subscriber, grid) =>
+            children.vision ! RobotAccess.RegisterVision(subscriber, grid)
+          }
           if (reconnectedWhileConnecting) stopAfterReconnect(children)
           stash.unstashAll(ready(children))
         case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
@@ -193,7 +195,7 @@ private[robotmiddleware] object RobotGuard {
       case _ => ()
     }
 
-    private def ready(c: RobotActor.Opened): Behavior[Command] = Behaviors.receiveMessage {
+    private def ready(c: RobotAccess.Opened): Behavior[Command] = Behaviors.receiveMessage {
       case SnapshotReceived(snapshot) =>
         // Any event that reached the guard before this answer is older than it, and later ones follow it.
         online = snapshot.online
@@ -272,7 +274,7 @@ private[robotmiddleware] object RobotGuard {
       case WalkRefresh =>
         // Through the robot's one command owner, once (no retries): a later stop supersedes it wherever it is.
         walking.foreach { case (w, _) =>
-          c.response ! ResponseActor.Call(walkCall(w), context.system.ignoreRef, idempotent = Some(false))
+          c.response ! RobotAccess.Call(walkCall(w), context.system.ignoreRef, idempotent = Some(false))
         }
         Behaviors.same
       case RobotEventReceived(event) =>
@@ -302,7 +304,7 @@ private[robotmiddleware] object RobotGuard {
       case WatchVision(subscriber, grid) =>
         if (!visionWatchers.contains(subscriber)) context.watchWith(subscriber, VisionWatcherGone(subscriber))
         visionWatchers = visionWatchers.updated(subscriber, grid)
-        c.vision ! VisionActor.Register(subscriber, grid)
+        c.vision ! RobotAccess.RegisterVision(subscriber, grid)
         Behaviors.same
       case VisionWatcherGone(subscriber) =>
         visionWatchers -= subscriber
@@ -313,14 +315,14 @@ private[robotmiddleware] object RobotGuard {
         if (!timers.isTimerActive(StatsKey))
           timers.startTimerWithFixedDelay(StatsKey, StatsTick, settings.linkStatsInterval)
         // The first figures at once, not one interval later: robotctl status waits for them.
-        robot ! RobotActor.GetLinkStats(statsAdapter)
+        robot ! RobotAccess.GetLinkStats(statsAdapter)
         Behaviors.same
       case StatsWatcherGone(subscriber) =>
         statsWatchers -= subscriber
         if (statsWatchers.isEmpty) timers.cancel(StatsKey)
         Behaviors.same
       case StatsTick =>
-        robot ! RobotActor.GetLinkStats(statsAdapter)
+        robot ! RobotAccess.GetLinkStats(statsAdapter)
         Behaviors.same
       case StatsReceived(stats) =>
         statsWatchers.foreach(_ ! stats)
@@ -331,13 +333,13 @@ private[robotmiddleware] object RobotGuard {
         // Nothing refreshes the walk meanwhile, so the robot stops by itself within its lease: forget the walk.
         timers.cancel(WalkKey)
         walking = None
-        robot ! RobotActor.Open(childrenReady)
+        robot ! RobotAccess.Open(childrenReady)
         connecting(online)
       case ChildGone(_) => Behaviors.same
     }
 
     /** Back from a lost link: puts the robot in a defined state before anyone moves it again. */
-    private def stopAfterReconnect(c: RobotActor.Opened): Unit = {
+    private def stopAfterReconnect(c: RobotAccess.Opened): Unit = {
       reconnectedWhileConnecting = false
       safetyCall(c, SafetyStep.StopAfterReconnect, RpcMethod.Stop.call(), settings.callTimeout)
     }
@@ -354,7 +356,7 @@ private[robotmiddleware] object RobotGuard {
     private def isStop(step: SafetyStep): Boolean =
       step == SafetyStep.StopThenSit || step == SafetyStep.StopOnly || step == SafetyStep.StopAfterReconnect
 
-    private def safetyCall(c: RobotActor.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit =
+    private def safetyCall(c: RobotAccess.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit =
       if (isStop(step) && stopInFlight) {
         if (step == SafetyStep.StopThenSit) sitAfterStop = true
       } else {
@@ -362,10 +364,10 @@ private[robotmiddleware] object RobotGuard {
         askSafety(c, step, rpc, timeout)
       }
 
-    private def askSafety(c: RobotActor.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
+    private def askSafety(c: RobotAccess.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response,
-        (ref: ActorRef[CallResult]) => ResponseActor.Call(rpc, ref, Priority.Safety, Some(timeout))) {
+        (ref: ActorRef[CallResult]) => RobotAccess.Call(rpc, ref, Priority.Safety, Some(timeout))) {
         case Success(result) => SafetyStepDone(step, result)
         case Failure(_) => SafetyStepDone(step,
             CallResult(robotId, rpc.name, Left(RobotFailure.Timeout(robotId, rpc.name, (timeout).toMillis))))
@@ -396,7 +398,7 @@ private[robotmiddleware] object RobotGuard {
     // The latest battery readings, at most `batteryReadings` of them: the hold acts on a sustained reading only.
     private var readings = Vector.empty[Double]
 
-    private def checkBattery(c: RobotActor.Opened, snapshot: RobotSnapshot): Unit =
+    private def checkBattery(c: RobotAccess.Opened, snapshot: RobotSnapshot): Unit =
       snapshot.batteryVoltage.foreach { volts =>
         readings = (readings :+ volts).takeRight(settings.batteryReadings)
         val sustained = readings.size == settings.batteryReadings
@@ -415,7 +417,7 @@ private[robotmiddleware] object RobotGuard {
         }
       }
 
-    private def stopWalking(c: RobotActor.Opened, why: String, thenSit: Boolean = false): Unit = {
+    private def stopWalking(c: RobotAccess.Opened, why: String, thenSit: Boolean = false): Unit = {
       if (walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
       timers.cancel(WalkKey)
       walking = None
@@ -433,14 +435,14 @@ private[robotmiddleware] object RobotGuard {
 
     // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
     // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
-    private def call(c: RobotActor.Opened, rpc: RpcCall, operation: Operation,
+    private def call(c: RobotAccess.Opened, rpc: RpcCall, operation: Operation,
         replyTo: ActorRef[RobotMiddleware.OperationResult],
         once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       val idempotent = if (once) Some(false) else None
       context.ask(c.response,
         (ref: ActorRef[CallResult]) =>
-          ResponseActor.Call(rpc, ref, priority, Some(timeout), idempotent)) {
+          RobotAccess.Call(rpc, ref, priority, Some(timeout), idempotent)) {
         case Success(result) =>
           OperationDone(replyTo, operation, result.result.left.map(failure),
             result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
@@ -449,7 +451,7 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
-    private def run(c: RobotActor.Opened, app: AppInfo, operation: Operation,
+    private def run(c: RobotAccess.Opened, app: AppInfo, operation: Operation,
         replyTo: ActorRef[RobotMiddleware.OperationResult], once: Boolean): Unit = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.

@@ -80,10 +80,10 @@ object RobotMiddleware {
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
-  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotActor.Access]], retry: Command)
+  private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotAccess.Command]], retry: Command)
       extends Command
   private final case class RobotReached(
-      robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean, retry: Command)
+      robotId: Int, robot: ActorRef[RobotAccess.Command], online: Boolean, retry: Command)
       extends Command
 
   /** The answer to `RegisterApp`. */
@@ -112,12 +112,12 @@ object RobotMiddleware {
   }
 
   /** The middleware in front of `gateway`, registered with the receptionist. It holds the gateway's middleware view and
-    * each robot's `RobotActor.Access`: it can reach a robot only through the robot's response and vision actors.
+    * each robot's `RobotAccess.Command`: it can reach a robot only through the robot's response and vision actors.
     */
-  def apply(gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings): Behavior[Command] =
+  def apply(gateway: ActorRef[GatewayAccess.Command], settings: MiddlewareSettings): Behavior[Command] =
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
-      gateway ! Gateway.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
+      gateway ! GatewayAccess.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
       // In a cluster, an app whose node becomes unreachable loses its robots at once, not only when the node is
       // downed seconds later: a blind app must not keep a robot walking.
       if (context.system.settings.config.getString("akka.actor.provider") == "cluster") {
@@ -130,7 +130,7 @@ object RobotMiddleware {
     }
 
   private final class Middleware(
-      gateway: ActorRef[Gateway.MiddlewareView], settings: MiddlewareSettings, context: ActorContext[Command]) {
+      gateway: ActorRef[GatewayAccess.Command], settings: MiddlewareSettings, context: ActorContext[Command]) {
     private var apps = Map.empty[ActorRef[AppEvent], AppInfo]
     // No copy of any robot's state here: snapshots and online belong to the robot actors; this actor asks or forwards.
     private var guards = Map.empty[Int, ActorRef[RobotGuard.Command]]
@@ -138,7 +138,8 @@ object RobotMiddleware {
     private var gameWatchers = Set.empty[ActorRef[GameControlData]]
     private var eventWatchers = Set.empty[ActorRef[RobotEvent]]
 
-    private def guard(robotId: Int, robot: ActorRef[RobotActor.Access], online: Boolean): ActorRef[RobotGuard.Command] =
+    private def guard(
+        robotId: Int, robot: ActorRef[RobotAccess.Command], online: Boolean): ActorRef[RobotGuard.Command] =
       guards.getOrElse(
         robotId, {
           val g = context.spawn(
@@ -158,7 +159,7 @@ object RobotMiddleware {
       guards.get(robotId) match {
         case Some(g) => use(g)
         case None =>
-          val ask = (ref: ActorRef[Option[ActorRef[RobotActor.Access]]]) => Gateway.GetRobotAccess(robotId, ref)
+          val ask = (ref: ActorRef[Option[ActorRef[RobotAccess.Command]]]) => GatewayAccess.GetRobotAccess(robotId, ref)
           context.ask(gateway, ask) {
             case scala.util.Success(found) => RobotFound(robotId, found, command)
             case scala.util.Failure(_)     => RobotFound(robotId, None, command)
@@ -197,7 +198,7 @@ object RobotMiddleware {
         else
           // The new guard must know at once whether the robot is online (an Execute may reach it before its own
           // question to the robot is answered); the robot actor, which owns that, is asked.
-          context.ask(robot, RobotActor.GetSnapshot.apply) {
+          context.ask(robot, RobotAccess.GetSnapshot.apply) {
             case scala.util.Success(snapshot) => RobotReached(robotId, robot, snapshot.online, command)
             case scala.util.Failure(_)        => RobotReached(robotId, robot, online = false, command)
           }
@@ -219,7 +220,7 @@ object RobotMiddleware {
         Behaviors.same
       case ListRobots(replyTo) =>
         // A gateway that does not answer leaves the app's own ask to time out, which the facade reports as a Timeout.
-        context.ask(gateway, Gateway.GetRobots.apply) {
+        context.ask(gateway, GatewayAccess.GetRobots.apply) {
           case scala.util.Success(robots) => RobotsListed(replyTo, Some(robots))
           case scala.util.Failure(_)      => RobotsListed(replyTo, None)
         }
@@ -231,7 +232,8 @@ object RobotMiddleware {
         context.watchWith(subscriber, WatcherGone(subscriber))
         statusWatchers = statusWatchers.updated(subscriber, robotId)
         // The current snapshots first, asked of the gateway; keep-alives follow as they arrive.
-        context.ask(gateway, Gateway.GetRobots.apply)(tried => StatusKnown(subscriber, tried.getOrElse(Vector.empty)))
+        context.ask(gateway, GatewayAccess.GetRobots.apply)(tried =>
+          StatusKnown(subscriber, tried.getOrElse(Vector.empty)))
         Behaviors.same
       case StatusKnown(subscriber, robots) =>
         statusWatchers.get(subscriber).foreach(filter =>

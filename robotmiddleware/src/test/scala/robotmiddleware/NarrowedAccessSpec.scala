@@ -12,24 +12,26 @@ import naogateway._
   */
 class NarrowedAccessSpec extends AnyWordSpec with Matchers {
 
-  private val access: ActorRef[RobotActor.Access] = null
-  private val opened: RobotActor.Opened = null
-  private val gateway: ActorRef[Gateway.MiddlewareView] = null
+  private val access: ActorRef[RobotAccess.Command] = null
+  private val opened: RobotAccess.Opened = null
+  private val gateway: ActorRef[GatewayAccess.Command] = null
 
   "The middleware's refs" should {
     "take the middleware's questions, Open, calls and camera registrations" in {
-      assertCompiles("access ! RobotActor.GetSnapshot(null)")
-      assertCompiles("access ! RobotActor.GetLinkStats(null)")
-      assertCompiles("access ! RobotActor.Open(null)")
-      assertCompiles("opened.response ! ResponseActor.Call(null, null)")
-      assertCompiles("opened.vision ! VisionActor.Register(null, grid = false)")
-      assertCompiles("gateway ! Gateway.GetRobotAccess(1, null)")
-      assertCompiles("gateway ! Gateway.GetRobots(null)")
-      assertCompiles("gateway ! Gateway.Subscribe(null)")
+      assertCompiles("access ! RobotAccess.GetSnapshot(null)")
+      assertCompiles("access ! RobotAccess.GetLinkStats(null)")
+      assertCompiles("access ! RobotAccess.Open(null)")
+      assertCompiles("opened.response ! RobotAccess.Call(null, null)")
+      assertCompiles("opened.vision ! RobotAccess.RegisterVision(null, grid = false)")
+      assertCompiles("gateway ! GatewayAccess.GetRobotAccess(1, null)")
+      assertCompiles("gateway ! GatewayAccess.GetRobots(null)")
+      assertCompiles("gateway ! GatewayAccess.Subscribe(null)")
     }
     "not take the whole robot actor's or the gateway's other messages" in {
       assertTypeError("access ! RobotActor.Connect(null)")
       assertTypeError("gateway ! Gateway.GetRobot(1, null)")
+      assertTypeError("access ! RobotAccess.Call(null, null)")
+      assertTypeError("opened.response ! RobotAccess.GetSnapshot(null)")
     }
     "hold no ref to the robot's sender, stream or heartbeat" in {
       assertTypeError("opened.noResponse")
@@ -49,6 +51,13 @@ class NarrowedAccessSpec extends AnyWordSpec with Matchers {
       assertTypeError("ResponseActor.Reachability(true)")
       assertTypeError("Outbox.RobotGone(1)")
       assertTypeError("HeartBeatActor.ProbeNow")
+      assertTypeError("StreamActor.Send(Array.emptyByteArray)")
+      assertTypeError("NoResponseActor.Send(null)")
+      // The public protocol's wrappers are the gateway's own too: the middleware sends the access messages themselves.
+      assertTypeError("Gateway.AccessRequest(GatewayAccess.GetRobots(null))")
+      assertTypeError("RobotActor.Asked(RobotAccess.GetSnapshot(null))")
+      assertTypeError("ResponseActor.Called(null)")
+      assertTypeError("VisionActor.Registering(null)")
     }
   }
 }

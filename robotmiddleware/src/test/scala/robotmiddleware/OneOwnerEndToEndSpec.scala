@@ -129,13 +129,12 @@ class OneOwnerEndToEndSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
           eventually(timeout(Patience)) { failures.get shouldBe before + 1 }
         }
         // A reply ref or route that is null stands in for any bug: the actor throws and its supervisor restarts it.
-        stillWorks("robot actor")(f.robotActor(22) ! RobotActor.GetSnapshot(null))
-        stillWorks("response actor")(f.connect(22).response ! ResponseActor.Call(null,
-          createTestProbe[CallResult]().ref))
+        stillWorks("robot actor")(f.robotAccess(22) ! RobotAccess.GetSnapshot(null))
+        stillWorks("response actor")(f.open(22).response ! RobotAccess.Call(null, createTestProbe[CallResult]().ref))
         stillWorks("vision actor")(f.crashVision(22))
-        stillWorks("stream actor")(f.connect(22).stream ! StreamActor.GetStats(null))
+        stillWorks("stream actor")(f.crashStream(22))
         // The sender hands a caller's send to the response actor for its call id: a null call fails there, once.
-        stillWorks("no-response actor")(f.connect(22).noResponse ! NoResponseActor.Send(null))
+        stillWorks("no-response actor")(f.crashSender(22))
         app.close()
         root.detachAppender(counter)
       } finally f.stop()

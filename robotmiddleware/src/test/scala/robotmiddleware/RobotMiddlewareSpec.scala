@@ -26,41 +26,41 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     */
   private final class Fixture(holdConnect: Boolean = false, snapshotOnline: Option[Boolean] = Some(true),
       middlewareSettings: MiddlewareSettings = settings, known: Vector[RobotSnapshot] = Vector.empty) {
-    val response: TestProbe[ResponseActor.Command] = createTestProbe[ResponseActor.Command]()
-    val vision: TestProbe[VisionActor.Command] = createTestProbe[VisionActor.Command]()
+    val response: TestProbe[RobotAccess.Call] = createTestProbe[RobotAccess.Call]()
+    val vision: TestProbe[RobotAccess.RegisterVision] = createTestProbe[RobotAccess.RegisterVision]()
     val events: TestProbe[ActorRef[GatewayEvent]] = createTestProbe[ActorRef[GatewayEvent]]()
-    val connects: TestProbe[ActorRef[RobotActor.Opened]] = createTestProbe[ActorRef[RobotActor.Opened]]()
+    val connects: TestProbe[ActorRef[RobotAccess.Opened]] = createTestProbe[ActorRef[RobotAccess.Opened]]()
 
     /** Every `Open` the robot got, held or answered. */
-    val connectsSeen: TestProbe[ActorRef[RobotActor.Opened]] = createTestProbe[ActorRef[RobotActor.Opened]]()
+    val connectsSeen: TestProbe[ActorRef[RobotAccess.Opened]] = createTestProbe[ActorRef[RobotAccess.Opened]]()
     // All the middleware gets of the robot's children: no sender, stream or heartbeat to send to.
-    val connected: RobotActor.Opened = RobotActor.Opened(1, response.ref, vision.ref)
+    val connected: RobotAccess.Opened = RobotAccess.Opened(1, response.ref, vision.ref)
 
     /** What the robot answers an `Open` with: a test swaps it for new children to stand in for a restart. */
-    @volatile var current: RobotActor.Opened = connected
+    @volatile var current: RobotAccess.Opened = connected
 
-    // The robot actor as the middleware sees it: only what RobotActor.Access lets it send.
-    private val robot: Behavior[RobotActor.Access] = Behaviors.receiveMessage {
-      case RobotActor.Open(replyTo) =>
+    // The robot actor as the middleware sees it: only what RobotAccess.Command lets it send.
+    private val robot: Behavior[RobotAccess.Command] = Behaviors.receiveMessage {
+      case RobotAccess.Open(replyTo) =>
         connectsSeen.ref ! replyTo
         if (holdConnect) connects.ref ! replyTo else replyTo ! current
         Behaviors.same
-      case RobotActor.GetSnapshot(replyTo) =>
+      case RobotAccess.GetSnapshot(replyTo) =>
         snapshotOnline.foreach(online => replyTo ! RobotSnapshot(1, robotAddress, online = online))
         Behaviors.same
-      case RobotActor.GetLinkStats(replyTo) =>
+      case RobotAccess.GetLinkStats(replyTo) =>
         replyTo ! linkStats
         Behaviors.same
     }
     private val robotRef = spawn(robot)
-    private val gateway: Behavior[Gateway.MiddlewareView] = Behaviors.receiveMessage {
-      case Gateway.Subscribe(subscriber) =>
+    private val gateway: Behavior[GatewayAccess.Command] = Behaviors.receiveMessage {
+      case GatewayAccess.Subscribe(subscriber) =>
         events.ref ! subscriber
         Behaviors.same
-      case Gateway.GetRobotAccess(id, replyTo) =>
+      case GatewayAccess.GetRobotAccess(id, replyTo) =>
         replyTo ! (if (id == 1) Some(robotRef) else None)
         Behaviors.same
-      case Gateway.GetRobots(replyTo) =>
+      case GatewayAccess.GetRobots(replyTo) =>
         replyTo ! known
         Behaviors.same
       case _ => Behaviors.same
@@ -97,12 +97,12 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       result
     }
 
-    def expectCall(name: String): ResponseActor.Call = {
+    def expectCall(name: String): RobotAccess.Call = {
       val call = response.fishForMessage(3.seconds) {
-        case c: ResponseActor.Call if c.call.name == name => akka.actor.testkit.typed.FishingOutcome.Complete
-        case _                                            => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
+        case c: RobotAccess.Call if c.call.name == name => akka.actor.testkit.typed.FishingOutcome.Complete
+        case _                                          => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }
-      call.last.asInstanceOf[ResponseActor.Call]
+      call.last.asInstanceOf[RobotAccess.Call]
     }
   }
 
@@ -115,7 +115,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
       f.execute(app, Operation.Head(0.1, 0.0))
       f.expectCall("motion.head").replyTo ! CallResult(1, "motion.head", Right(None))
-      val fresh = createTestProbe[ResponseActor.Command]()
+      val fresh = createTestProbe[RobotAccess.Call]()
       f.current = f.connected.copy(response = fresh.ref)
       f.connectsSeen.receiveMessage() // the guard's first connect
       f.response.stop()
@@ -123,9 +123,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.connectsSeen.receiveMessage()
       val result = f.execute(app, Operation.Head(0.2, 0.0))
       val call = fresh.fishForMessage(3.seconds) {
-        case c: ResponseActor.Call if c.call.name == "motion.head" => akka.actor.testkit.typed.FishingOutcome.Complete
+        case c: RobotAccess.Call if c.call.name == "motion.head" => akka.actor.testkit.typed.FishingOutcome.Complete
         case _ => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
-      }.last.asInstanceOf[ResponseActor.Call]
+      }.last.asInstanceOf[RobotAccess.Call]
       call.replyTo ! CallResult(1, "motion.head", Right(None))
       result.receiveMessage().result shouldBe Right(None)
     }
@@ -361,12 +361,12 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       val done = createTestProbe[RobotMiddleware.OperationResult]()
       f.middleware ! RobotMiddleware.Execute(app, 1, Operation.Posture(Posture.Stand), done.ref)
       val seen = f.response.fishForMessage(3.seconds) {
-        case c: ResponseActor.Call if c.call.name == "motion.posture" =>
+        case c: RobotAccess.Call if c.call.name == "motion.posture" =>
           akka.actor.testkit.typed.FishingOutcome.Complete
         case _ => akka.actor.testkit.typed.FishingOutcome.Continue
       }
-      seen.collect { case c: ResponseActor.Call => c.call.name } should not contain "motion.stop"
-      val posture = seen.last.asInstanceOf[ResponseActor.Call]
+      seen.collect { case c: RobotAccess.Call => c.call.name } should not contain "motion.stop"
+      val posture = seen.last.asInstanceOf[RobotAccess.Call]
       f.response.expectNoMessage(300.millis)
       posture.replyTo ! CallResult(1, "motion.posture", Right(None))
       done.receiveMessage().result shouldBe Right(None)

@@ -334,7 +334,7 @@ class DocRobotConformanceSpec
       val callId = 2000000000 + Random.nextInt(100000)
       val frame = MessageContents.encodeFrame(MessageContents(id,
           rpcRequest = Some(Request("system", "ping", callId = Some(callId))))).toOption.get
-      stream ! StreamActor.Send(frame)
+      stream.send(frame)
       val deadline = 10.seconds.fromNow
       var answer = false
       var fromRobot = 0
@@ -488,7 +488,7 @@ class DocRobotConformanceSpec
       ids.foreach { cid =>
         val frame = MessageContents.encodeFrame(MessageContents(id,
             rpcRequest = Some(Request("system", "ping", callId = Some(cid.toInt))))).toOption.get
-        stream ! StreamActor.Send(frame)
+        stream.send(frame)
       }
       val all = poll(45.seconds)(pingAnswers.size >= ids.size && run.streamUptimes.size >= 12)
       val got = pingAnswers.asScala.toVector.filter(ids.contains)

@@ -41,10 +41,10 @@ class RecordingPythonSpec extends ScalaTestWithActorTestKit(RecordingPythonSpec.
       PythonEnv.python() // cancels here when Python is missing, before anything is started
       val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
       val addresses = createTestProbe[Gateway.Addresses]()
-      gateway ! Gateway.GetAddresses(addresses.ref)
+      gateway ! GatewayAccess.GetAddresses(addresses.ref)
       val bound = addresses.receiveMessage(10.seconds)
       val events = createTestProbe[GatewayEvent]()
-      gateway ! Gateway.Subscribe(events.ref)
+      gateway ! GatewayAccess.Subscribe(events.ref)
       val fleet = Await.result(Fleet.start(system,
           FleetSettings(bound.robots, Vector(1, 2), faithfulLink = false,
             firstAddress = TestLoopback.block(2))), 30.seconds)

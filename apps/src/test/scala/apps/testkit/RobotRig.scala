@@ -12,7 +12,8 @@ import akka.actor.testkit.typed.scaladsl.{ActorTestKit, TestProbe}
 import akka.actor.typed.ActorRef
 
 import naogateway.wire.ActuatorGroup
-import naogateway.{Gateway, GatewaySettings, RobotActor, RobotFailure, StreamActor}
+import naogateway.testkit.{GatewayInternals, TestStream}
+import naogateway.{Gateway, GatewayAccess, GatewaySettings, RobotFailure, StreamActor}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** A gateway and a middleware as the test kit's configuration sets them, one client of the middleware, and the steps
@@ -52,7 +53,7 @@ final class RobotRig(kit: ActorTestKit, clientName: String, connectWithin: Finit
   def close(): Unit = cleanups.asScala.foreach(c => Try(c()))
 
   /** The gateway, spawned as `gateway`. */
-  lazy val gateway: ActorRef[Gateway.Command] = kit.spawn(Gateway(GatewaySettings(kit.system)), "gateway")
+  lazy val gateway: ActorRef[GatewayAccess.Command] = kit.spawn(Gateway(GatewaySettings(kit.system)), "gateway")
 
   /** The middleware over the gateway, spawned as `middleware`. */
   lazy val middleware: ActorRef[RobotMiddleware.Command] =
@@ -61,7 +62,7 @@ final class RobotRig(kit: ActorTestKit, clientName: String, connectWithin: Finit
   /** Where the gateway receives the robots' datagrams. */
   lazy val gatewayAddress: InetSocketAddress = {
     val probe = kit.createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
+    gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots
   }
 
@@ -91,18 +92,12 @@ final class RobotRig(kit: ActorTestKit, clientName: String, connectWithin: Finit
   /** The gateway's stream endpoint for robot `id`, subscribed to what it delivers; `None` when the gateway does not
     * know the robot.
     */
-  def streamOf(id: Int): Option[(ActorRef[StreamActor.Command], TestProbe[StreamActor.Received])] = {
-    val robot = kit.createTestProbe[Option[ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(id, robot.ref)
-    robot.receiveMessage(10.seconds).map { actor =>
-      val connected = kit.createTestProbe[RobotActor.Connected]()
-      actor ! RobotActor.Connect(connected.ref)
-      val stream = connected.receiveMessage(10.seconds).stream
+  def streamOf(id: Int): Option[(TestStream, TestProbe[StreamActor.Received])] =
+    GatewayInternals.stream(gateway, id)(kit.system).map { stream =>
       val received = kit.createTestProbe[StreamActor.Received]()
-      stream ! StreamActor.Subscribe(received.ref)
+      stream.subscribe(received.ref)
       stream -> received
     }
-  }
 }
 
 /** Waiting and call results for the specs that drive a robot through the middleware. */

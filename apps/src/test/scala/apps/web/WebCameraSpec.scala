@@ -14,7 +14,7 @@ import akka.util.Timeout
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway.{Gateway, RobotSnapshot}
+import naogateway.{GatewayAccess, RobotSnapshot}
 import naogateway.VisionActor.{GridOption, RegionsOption}
 
 /** The web view asks the robots' cameras for HaViMo2 frames only while a page is connected: checked at the simulated
@@ -50,8 +50,9 @@ class WebCameraSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWo
   "The web view" should {
     "switch the robots' cameras on while a page is connected, and off when the last page leaves" in {
       eventually(timeout(30.seconds), interval(200.millis)) {
-        val robots = Await.result(demo.gateway.ask[Vector[RobotSnapshot]](Gateway.GetRobots(_))(Timeout(10.seconds),
-            system.scheduler), 10.seconds)
+        val robots =
+          Await.result(demo.gateway.ask[Vector[RobotSnapshot]](GatewayAccess.GetRobots(_))(Timeout(10.seconds),
+              system.scheduler), 10.seconds)
         robots.filter(_.online).map(_.robotId).toSet shouldBe Set(1, 2, 3)
       }
       // The view has listed the robots for many pushes (200 ms apart), with nobody looking: no camera is asked.

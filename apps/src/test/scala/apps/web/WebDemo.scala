@@ -13,7 +13,7 @@ import com.typesafe.config.{Config, ConfigFactory}
 
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
 import naogateway.testkit.TestLoopback
-import naogateway.{Gateway, GatewayReadView, GatewaySettings}
+import naogateway.{Gateway, GatewayAccess, GatewayReadView, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** The demo as the web view's tests and bench see it: a gateway on loopback, its middleware, three simulated robots on
@@ -24,10 +24,11 @@ final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int =
   private implicit val s: ActorSystem[_] = system
   private val name = s"web-demo-${System.nanoTime()}"
 
-  val gateway: ActorRef[Gateway.Command] = system.systemActorOf(Gateway(GatewaySettings(system)), s"$name-gateway")
+  val gateway: ActorRef[GatewayAccess.Command] =
+    system.systemActorOf(Gateway(GatewaySettings(system)), s"$name-gateway")
   val middleware: ActorRef[RobotMiddleware.Command] =
     system.systemActorOf(RobotMiddleware(gateway, MiddlewareSettings(system)), s"$name-middleware")
-  private val addresses = Await.result(gateway.ask[Gateway.Addresses](Gateway.GetAddresses(_)), 10.seconds)
+  private val addresses = Await.result(gateway.ask[Gateway.Addresses](GatewayAccess.GetAddresses(_)), 10.seconds)
   val fleet: FleetHandle = Await.result(Fleet.start(system,
       FleetSettings(addresses.robots, (1 to robots).toVector,
         firstAddress = TestLoopback.block(robots))), 60.seconds)
@@ -82,7 +83,7 @@ object WebDemo {
       |""".stripMargin).withFallback(ConfigFactory.load())
 
   /** What the web view reads of `gateway`, as the launcher hands it: view, competition flag, signing rules. */
-  def gatewaySide(gateway: ActorRef[Gateway.Query], competition: Option[Boolean] = None)(
+  def gatewaySide(gateway: ActorRef[GatewayAccess.Query], competition: Option[Boolean] = None)(
       implicit system: ActorSystem[_]): WebServer.GatewaySide = {
     val settings = GatewaySettings(system)
     WebServer.GatewaySide(GatewayReadView(gateway, 3.seconds), competition.getOrElse(settings.competition),

@@ -44,7 +44,7 @@ class ClockSyncIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpe
         }
         // The link figures carry the same estimate.
         val stats = createTestProbe[LinkStats]()
-        f.robotActor(9) ! RobotActor.GetLinkStats(stats.ref)
+        f.robotAccess(9) ! RobotAccess.GetLinkStats(stats.ref)
         stats.receiveMessage().clock should not be empty
 
         robot ! SimulatedRobot.PowerCycle(500.millis)

@@ -19,10 +19,10 @@ import naogateway.wire.gamecontroller._
   */
 class EveryVersionGateSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
-  private def call(c: RobotActor.Connected, name: String, params: RpcValue*): CallResult = {
+  private def call(c: RobotEffects.Connected, name: String, params: RpcValue*): CallResult = {
     val probe = createTestProbe[CallResult]()
     val (module, method) = name.span(_ != '.')
-    c.response ! ResponseActor.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
+    c.response ! RobotAccess.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
     probe.receiveMessage(10.seconds)
   }
 

@@ -10,7 +10,7 @@ import com.typesafe.config.ConfigFactory
 
 import naogateway._
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{GatewayInternals, TestLoopback}
 
 /** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only. Call `stop()`
   * at the end of each test: a fixture left running (robots streaming to their gateway) loads the next.
@@ -27,14 +27,14 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     .withFallback(ConfigFactory.load().getConfig("naogateway"))
 
   val settings: GatewaySettings = GatewaySettings.fromConfig(config)
-  val gateway: ActorRef[Gateway.Command] = testKit.spawn(Gateway(settings))
+  val gateway: ActorRef[GatewayAccess.Command] = testKit.spawn(Gateway(settings))
   val addresses: Gateway.Addresses = {
     val probe = testKit.createTestProbe[Gateway.Addresses]()
-    gateway ! Gateway.GetAddresses(probe.ref)
+    gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds)
   }
   val events: TestProbe[GatewayEvent] = testKit.createTestProbe[GatewayEvent]()
-  gateway ! Gateway.Subscribe(events.ref)
+  gateway ! GatewayAccess.Subscribe(events.ref)
   private var robots = Vector.empty[ActorRef[SimulatedRobot.Command]]
 
   /** Starts robot `robotId` on a loopback address of its own (`at`), sending to `to` (the gateway unless a proxy is
@@ -69,33 +69,49 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     found.get
   }
 
-  def robotActor(robotId: Int): ActorRef[RobotActor.Command] = {
-    val probe = testKit.createTestProbe[Option[ActorRef[RobotActor.Command]]]()
-    gateway ! Gateway.GetRobot(robotId, probe.ref)
-    probe.receiveMessage().getOrElse(throw new NoSuchElementException(s"robot $robotId unknown"))
-  }
+  def robotActor(robotId: Int): ActorRef[RobotActor.Command] =
+    GatewayInternals.robotActor(gateway, robotId)(testKit.system)
+      .getOrElse(throw new NoSuchElementException(s"robot $robotId unknown"))
 
-  def connect(robotId: Int): RobotActor.Connected = {
-    val probe = testKit.createTestProbe[RobotActor.Connected]()
-    robotActor(robotId) ! RobotActor.Connect(probe.ref)
-    probe.receiveMessage(10.seconds)
-  }
+  def connect(robotId: Int): RobotEffects.Connected =
+    GatewayInternals.connect(gateway, robotId)(testKit.system)
+      .getOrElse(throw new NoSuchElementException(s"robot $robotId unknown"))
 
   /** Makes robot `robotId`'s vision actor fail as a bug would (a null registration list), for restart specs outside the
     * package: the message that does it is the robot actor's alone.
     */
   def crashVision(robotId: Int): Unit = connect(robotId).vision ! VisionActor.Subscribers(null)
 
+  /** Makes robot `robotId`'s stream actor fail as a bug would (a null reply ref). */
+  def crashStream(robotId: Int): Unit = connect(robotId).stream ! StreamActor.GetStats(null)
+
+  /** Makes robot `robotId`'s sender hand a null call to the response actor, which fails on it once. */
+  def crashSender(robotId: Int): Unit = connect(robotId).noResponse ! NoResponseActor.Send(null)
+
+  /** Robot `robotId` as the middleware reaches it (its public protocol). */
+  def robotAccess(robotId: Int): ActorRef[RobotAccess.Command] = {
+    val probe = testKit.createTestProbe[Option[ActorRef[RobotAccess.Command]]]()
+    gateway ! GatewayAccess.GetRobotAccess(robotId, probe.ref)
+    probe.receiveMessage(10.seconds).getOrElse(throw new NoSuchElementException(s"robot $robotId unknown"))
+  }
+
+  /** Robot `robotId`, reachable, as the middleware uses it (its public protocol). */
+  def open(robotId: Int): RobotAccess.Opened = {
+    val probe = testKit.createTestProbe[RobotAccess.Opened]()
+    robotAccess(robotId) ! RobotAccess.Open(probe.ref)
+    probe.receiveMessage(10.seconds)
+  }
+
   def stats(): Gateway.GatewayStats = {
     val probe = testKit.createTestProbe[Gateway.GatewayStats]()
-    gateway ! Gateway.GetStats(probe.ref)
+    gateway ! GatewayAccess.GetStats(probe.ref)
     probe.receiveMessage()
   }
 
   /** The outbox's traffic figures, asked through the gateway. */
   def traffic(): Outbox.TrafficStats = {
     val probe = testKit.createTestProbe[Outbox.TrafficStats]()
-    gateway ! Gateway.GetTraffic(probe.ref)
+    gateway ! GatewayAccess.GetTraffic(probe.ref)
     probe.receiveMessage(10.seconds)
   }
 

@@ -20,10 +20,10 @@ import naogateway.wire.gamecontroller._
 
 class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
-  private def call(c: RobotActor.Connected, name: String, params: RpcValue*): CallResult = {
+  private def call(c: RobotEffects.Connected, name: String, params: RpcValue*): CallResult = {
     val probe = createTestProbe[CallResult]()
     val (module, method) = name.span(_ != '.')
-    c.response ! ResponseActor.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
+    c.response ! RobotAccess.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
     probe.receiveMessage(10.seconds)
   }
 
@@ -62,19 +62,19 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           (1 to 5).foreach(_ => sendGameState(stranger, f, GameState.Playing))
           val source = createTestProbe[Gateway.GameSource]()
           source.awaitAssert({
-              f.gateway ! Gateway.GetGameSource(source.ref)
+              f.gateway ! GatewayAccess.GetGameSource(source.ref)
               source.receiveMessage().untrusted shouldBe 5L
             }, 10.seconds)
           val game = createTestProbe[Option[GameControlData]]()
-          f.gateway ! Gateway.GetGameState(game.ref)
+          f.gateway ! GatewayAccess.GetGameState(game.ref)
           game.receiveMessage() shouldBe None
           val traffic = createTestProbe[Outbox.TrafficStats]()
-          f.gateway ! Gateway.GetTraffic(traffic.ref)
+          f.gateway ! GatewayAccess.GetTraffic(traffic.ref)
           traffic.receiveMessage().gateOpen shouldBe true
           // The trusted GameController's packet counts, and the view learns where game state comes from.
           sendGameState(gc, f, GameState.Playing)
           f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Playing => () }
-          f.gateway ! Gateway.GetGameSource(source.ref)
+          f.gateway ! GatewayAccess.GetGameSource(source.ref)
           val seen = source.receiveMessage()
           seen.lastFrom.map(_.getAddress.getHostAddress) shouldBe Some("127.0.0.1")
           seen.describe should include("trusted: 127.0.0.1/32")
@@ -95,7 +95,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         f.view(robot).sendingFrom.getPort should not be 3838
         val connected = f.connect(13)
         call(connected, "system.ping").result.isRight shouldBe true
-        connected.vision ! VisionActor.Register(createTestProbe[VisionFrame]().ref, grid = false)
+        connected.registrations ! RobotAccess.RegisterVision(createTestProbe[VisionFrame]().ref, grid = false)
         eventually(timeout(10.seconds)) { f.view(robot).debugEnabled should contain("havimo.regions") }
         val view = f.view(robot)
         view.stats.received should be >= 3L
@@ -110,7 +110,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         call(connected, "system.ping").result.isRight shouldBe true
         def heard(): Long = {
           val stats = createTestProbe[LinkStats]()
-          f.robotActor(14) ! RobotActor.GetLinkStats(stats.ref)
+          f.robotAccess(14) ! RobotAccess.GetLinkStats(stats.ref)
           stats.receiveMessage(5.seconds).datagramsIn
         }
         // The module reconnects: its client connection, and so the source port of everything it sends, is new.
@@ -129,7 +129,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           _.isDefined).flatten.toVector
         seen.collect { case e: RobotOffline => e } shouldBe empty
         val robots = createTestProbe[Vector[RobotSnapshot]]()
-        f.gateway ! Gateway.GetRobots(robots.ref)
+        f.gateway ! GatewayAccess.GetRobots(robots.ref)
         robots.receiveMessage(10.seconds).map(s => (s.robotId, s.online, s.address)) shouldBe Vector((14, true,
             receivesAt))
         f.stats().rejected.get(Rejection.RobotIdMismatch.name) shouldBe None
@@ -145,13 +145,13 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         call(f.connect(id), "motion.getPosture").result shouldBe Right(Some(RpcValue.Text("sit")))
       }
       val robotsProbe = createTestProbe[Vector[RobotSnapshot]]()
-      f.gateway ! Gateway.GetRobots(robotsProbe.ref)
+      f.gateway ! GatewayAccess.GetRobots(robotsProbe.ref)
       robotsProbe.receiveMessage().map(s => (s.robotId, s.online, s.quality)) shouldBe
         Vector((1, true, LinkQuality.Good), (2, true, LinkQuality.Good), (3, true, LinkQuality.Good))
       // The read-only view: the same robots' link figures, through a ref that can ask but not send.
-      val view: ActorRef[Gateway.Query] = f.gateway
+      val view: ActorRef[GatewayAccess.Query] = f.gateway
       val links = createTestProbe[Gateway.RobotLinks]()
-      view ! Gateway.GetLinkStats(links.ref)
+      view ! GatewayAccess.GetLinkStats(links.ref)
       val figures = links.receiveMessage().links
       figures.map(_.robotId) shouldBe Vector(1, 2, 3)
       // Each answered at least its two calls, so each received datagrams and sent some.
@@ -182,7 +182,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         val (robot, _) = f.robot(4)
         f.awaitEvent(10.seconds) { case RobotOnline(4, _) => () }
         val connected = f.connect(4)
-        connected.vision ! VisionActor.Register(createTestProbe[VisionFrame]().ref, grid = false)
+        connected.registrations ! RobotAccess.RegisterVision(createTestProbe[VisionFrame]().ref, grid = false)
         eventually(timeout(5.seconds)) { f.view(robot).debugEnabled should contain("havimo.regions") }
         robot ! SimulatedRobot.PowerCycle(1.second)
         val restarted = f.awaitEvent(20.seconds) { case r: RobotRestarted if r.robotId == 4 => r }
@@ -206,7 +206,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           val connected = f.connect(5)
           val answers = createTestProbe[CallResult]()
           (1 to 40).foreach(_ =>
-            connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), answers.ref))
+            connected.response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), answers.ref))
           val results = answers.receiveMessages(40, 60.seconds)
           answers.expectNoMessage(3.seconds)
           results.count(_.result.isRight) should be > 20
@@ -270,12 +270,12 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           val results = createTestProbe[CallResult]()
           val eager = spawn(Behaviors.receiveMessage[GatewayEvent] {
             case GameStateUpdated(d) if d.gameState == GameState.Playing =>
-              connected.response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), results.ref)
+              connected.response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), results.ref)
               Behaviors.stopped
             case _ => Behaviors.same
           })
           // Subscribed before the packet is sent, so the gateway knows the subscriber when kick-off arrives.
-          f.gateway ! Gateway.Subscribe(eager)
+          f.gateway ! GatewayAccess.Subscribe(eager)
           val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
           try {
             sendGameState(gc, f, GameState.Playing)

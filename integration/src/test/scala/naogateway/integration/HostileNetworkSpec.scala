@@ -25,7 +25,7 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
 
   private def ping(f: GatewayFixture, robotId: Int): Either[RobotFailure, Option[naogateway.wire.RpcValue]] = {
     val probe = createTestProbe[CallResult]()
-    f.connect(robotId).response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
+    f.connect(robotId).response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
     probe.receiveMessage(10.seconds).result
   }
 
@@ -72,11 +72,11 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         eventually(timeout(10.seconds), interval(200.millis)) { f.stats().robots shouldBe 2 }
         // No untrusted control packet changed the game state or the gate.
         val game = createTestProbe[Option[GameControlData]]()
-        f.gateway ! Gateway.GetGameState(game.ref)
+        f.gateway ! GatewayAccess.GetGameState(game.ref)
         game.receiveMessage() shouldBe None
         seen.collect { case e: GameStateUpdated => e } shouldBe empty
         val source = createTestProbe[Gateway.GameSource]()
-        f.gateway ! Gateway.GetGameSource(source.ref)
+        f.gateway ! GatewayAccess.GetGameSource(source.ref)
         source.receiveMessage().untrusted shouldBe flood.gameControllerPackets.toLong
         f.traffic().gateOpen shouldBe true
         // About 45,000 bad datagrams: a bounded number of log lines (the issue saw 80,000 warnings), and the heap
@@ -152,8 +152,8 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         f.awaitEvent(10.seconds) { case RobotOffline(6, _) => () }
         f.awaitEvent(10.seconds) { case RobotForgotten(6, reason) => reason should include("offline") }
         eventually(timeout(5.seconds)) {
-          val probe = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-          f.gateway ! Gateway.GetRobot(6, probe.ref)
+          val probe = createTestProbe[Option[akka.actor.typed.ActorRef[RobotAccess.Command]]]()
+          f.gateway ! GatewayAccess.GetRobotAccess(6, probe.ref)
           probe.receiveMessage() shouldBe None
         }
       } finally {

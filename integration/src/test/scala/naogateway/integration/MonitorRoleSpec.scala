@@ -37,7 +37,7 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
 
   private def source(f: GatewayFixture): Gateway.GameSource = {
     val probe = createTestProbe[Gateway.GameSource]()
-    f.gateway ! Gateway.GetGameSource(probe.ref)
+    f.gateway ! GatewayAccess.GetGameSource(probe.ref)
     probe.receiveMessage(10.seconds)
   }
 
@@ -78,7 +78,7 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
         standIn.send(ByteBuffer.wrap(trueData(GameState.Ready)), gcPort)
         eventually(timeout(10.seconds)) { source(f).trueStateAgeMillis.exists(_ < 2000) shouldBe true }
         val game = createTestProbe[Option[GameControlData]]()
-        f.gateway ! Gateway.GetGameState(game.ref)
+        f.gateway ! GatewayAccess.GetGameState(game.ref)
         game.receiveMessage().map(_.gameState) shouldBe Some(GameState.Ready)
         f.traffic().gateReason shouldBe Some("the game is running (Ready)")
 

@@ -21,10 +21,10 @@ import naogateway.wire._
 class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   import SignedFramesSpec._
 
-  private def call(c: RobotActor.Connected, name: String, params: RpcValue*): CallResult = {
+  private def call(c: RobotEffects.Connected, name: String, params: RpcValue*): CallResult = {
     val probe = createTestProbe[CallResult]()
     val (module, method) = name.span(_ != '.')
-    c.response ! ResponseActor.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
+    c.response ! RobotAccess.Call(RpcCall(module, method.drop(1), params.toVector), probe.ref)
     probe.receiveMessage(10.seconds)
   }
 
@@ -46,13 +46,13 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
 
   private def linkStats(f: GatewayFixture, robotId: Int): LinkStats = {
     val stats = createTestProbe[LinkStats]()
-    f.robotActor(robotId) ! RobotActor.GetLinkStats(stats.ref)
+    f.robotAccess(robotId) ! RobotAccess.GetLinkStats(stats.ref)
     stats.receiveMessage(5.seconds)
   }
 
   private def snapshot(f: GatewayFixture, robotId: Int): RobotSnapshot = {
     val probe = createTestProbe[RobotSnapshot]()
-    f.robotActor(robotId) ! RobotActor.GetSnapshot(probe.ref)
+    f.robotAccess(robotId) ! RobotAccess.GetSnapshot(probe.ref)
     probe.receiveMessage(5.seconds)
   }
 

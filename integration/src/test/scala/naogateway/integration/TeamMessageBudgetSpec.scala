@@ -26,7 +26,7 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
 
   private def source(f: GatewayFixture): Gateway.GameSource = {
     val probe = createTestProbe[Gateway.GameSource]()
-    f.gateway ! Gateway.GetGameSource(probe.ref)
+    f.gateway ! GatewayAccess.GetGameSource(probe.ref)
     probe.receiveMessage(10.seconds)
   }
 
@@ -109,7 +109,7 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
               gc.getLocalAddress.asInstanceOf[InetSocketAddress].getPort + " only")) shouldBe true
         }
         val game = createTestProbe[Option[GameControlData]]()
-        f.gateway ! Gateway.GetGameState(game.ref)
+        f.gateway ! GatewayAccess.GetGameState(game.ref)
         game.receiveMessage().map(_.gameState) shouldBe Some(GameState.Ready)
         f.traffic().gateReason shouldBe Some("the game is running (Ready)")
       } finally {

@@ -14,6 +14,7 @@ import org.zeromq.{SocketType, ZContext}
 import naogateway._
 import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
 import naogateway.wire.{MessageContents, Posture, RpcCall, RpcReply, RpcValue}
+import naogateway.testkit.GatewayInternals
 
 object ZeroMqRobotLinkSpec {
 
@@ -48,9 +49,9 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
         .withFallback(system.settings.config.getConfig("naogateway"))
     )
 
-  private def call(connected: RobotActor.Connected, module: String, method: String, params: RpcValue*): CallResult = {
+  private def call(connected: RobotEffects.Connected, module: String, method: String, params: RpcValue*): CallResult = {
     val results = createTestProbe[CallResult]()
-    connected.response ! ResponseActor.Call(RpcCall(module, method, params.toVector), results.ref,
+    connected.response ! RobotAccess.Call(RpcCall(module, method, params.toVector), results.ref,
       timeout = Some(4.seconds))
     results.receiveMessage(6.seconds)
   }
@@ -133,18 +134,13 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
         val events = createTestProbe[GatewayEvent]()
         // A restarted robot binds the same port again, where the gateway keeps looking for it.
         val gateway = spawn(Gateway(gatewaySettings(20, robot.boundEndpoint.get)))
-        gateway ! Gateway.Subscribe(events.ref)
+        gateway ! GatewayAccess.Subscribe(events.ref)
         expectEvent(events, 10.seconds) { case RobotOnline(20, _) => () }
         val snapshot = expectEvent(events, 3.seconds) { case RobotStatusUpdated(s) if s.robotId == 20 => s }
         snapshot.posture shouldBe Some(Posture.Sit)
         snapshot.batteryVoltage.get shouldBe 12.4 +- 0.1
 
-        val found = createTestProbe[Option[akka.actor.typed.ActorRef[RobotActor.Command]]]()
-        gateway ! Gateway.GetRobot(20, found.ref)
-        val robotActor = found.receiveMessage().get
-        val connects = createTestProbe[RobotActor.Connected]()
-        robotActor ! RobotActor.Connect(connects.ref)
-        val connected = connects.receiveMessage(3.seconds)
+        val connected = GatewayInternals.connect(gateway, 20).get
 
         // A posture motion holds the REP socket for 1.5 s; the heartbeat must not take that for a lost robot.
         call(connected, "motion", "posture", RpcValue.Text("stand")).result shouldBe Right(Some(RpcValue.Text("stand")))

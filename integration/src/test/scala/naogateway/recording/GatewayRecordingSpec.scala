@@ -48,7 +48,7 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
         f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
         stranger.send(ByteBuffer.wrap(odd), f.addresses.robots)
         val probe = createTestProbe[CallResult]()
-        f.connect(7).response ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
+        f.connect(7).response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
         probe.receiveMessage(10.seconds).result.isRight shouldBe true
         // Until the stranger's datagram has passed the reader (its refusal is counted).
         createTestProbe[Any]().awaitAssert(f.stats().rejected.values.sum should be >= 1L, 5.seconds)

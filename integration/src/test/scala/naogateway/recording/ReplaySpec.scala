@@ -79,14 +79,14 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
       val settings = GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway"))
       val replaying = spawn(Gateway(settings, Some(Replay.of(dir, speed = 1.0))))
       val events = createTestProbe[GatewayEvent]()
-      replaying ! Gateway.Subscribe(events.ref)
+      replaying ! GatewayAccess.Subscribe(events.ref)
       val stats = createTestProbe[Gateway.GatewayStats]()
       val replayed = Vector.newBuilder[GatewayEvent]
       var finished = false
       val deadline = 40.seconds.fromNow
       while (!finished && deadline.hasTimeLeft()) {
         replayed ++= collect(events, 500.millis)
-        replaying ! Gateway.GetStats(stats.ref)
+        replaying ! GatewayAccess.GetStats(stats.ref)
         val s = stats.receiveMessage(5.seconds)
         finished = s.replay.exists(_.finished)
         if (finished) {

@@ -34,11 +34,11 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val robot = createTestProbe[RobotActor.FromChild]()
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
-      val crash = new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(true) => true; case _ => false })
+      val crash = new CrashOn[Any]({ case ResponseActor.Reachability(true) => true; case _ => false })
       val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
         wrapResponder = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       (1 to 5).foreach(i =>
-        responder ! ResponseActor.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
+        responder ! RobotAccess.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
       outbox.receiveMessages(4) // four in flight, one waiting
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
@@ -52,7 +52,7 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         case _                                => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }.last.asInstanceOf[RobotActor.ReachabilityWanted].replyTo ! true
       // The interrupted calls gave their room back to the sender: a new call goes out at once.
-      responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
+      responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       outbox.fishForMessage(3.seconds) {
         case s: Outbox.Send if RobotStandIn.callIn(s).name == "system.ping" =>
           akka.actor.testkit.typed.FishingOutcome.Complete
@@ -65,7 +65,7 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash =
-        new CrashOn[ResponseActor.Command]({ case ResponseActor.Reachability(false) => true; case _ => false })
+        new CrashOn[Any]({ case ResponseActor.Reachability(false) => true; case _ => false })
       val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
         wrapResponder = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       crash.arm()
@@ -74,7 +74,7 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       }
       // The restarted actor starts from its spawn-time assumption (online) until the robot actor answers.
       RobotStandIn.reachable(robot, online = false)
-      responder ! ResponseActor.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
+      responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.RobotOffline(2))
       robot.expectMessage(RobotActor.Wanted)
     }

@@ -42,8 +42,8 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
-      responder ! ResponseActor.Call(walk, caller.ref)
-      responder ! ResponseActor.Call(stop, caller.ref, Priority.Safety)
+      responder ! RobotAccess.Call(walk, caller.ref)
+      responder ! RobotAccess.Call(stop, caller.ref, Priority.Safety)
       manualTime.timePasses(2.seconds)
       val names = drain(outbox).collect { case s: Outbox.Send => RobotStandIn.callIn(s).name }
       names.head shouldBe "motion.walk"
@@ -65,8 +65,8 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
       val responder = spawn(ResponseActor(3, settings, robot, sender, online = true))
       sender ! NoResponseActor.RouteChanged(RobotFrames.Route.Datagrams(outbox, RobotStandIn.RobotAddress,
           HeaderForm.Legacy), responder)
-      responder ! ResponseActor.Call(walk, caller.ref)
-      responder ! ResponseActor.Call(stop, caller.ref, Priority.Safety)
+      responder ! RobotAccess.Call(walk, caller.ref)
+      responder ! RobotAccess.Call(stop, caller.ref, Priority.Safety)
       def name(m: UdpLink.Command): String = m match {
         case UdpLink.Send(b, _) =>
           MessageContents.decodeFrame(b).toOption.flatMap(_._2.rpcRequest).map(RpcCall.fromProto(_).name).getOrElse("?")

@@ -23,10 +23,10 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
     RobotActor.FrameReceived(MessageContents(4, status = Some(Status(teamID = Some(battery)))), HeaderForm.Legacy, 30)
 
   /** Throws once, when armed, on the next keep-alive: a stand-in for any bug in the robot actor. */
-  private final class CrashOnce extends BehaviorInterceptor[RobotActor.Command, RobotActor.Command] {
+  private final class CrashOnce extends BehaviorInterceptor[Any, Any] {
     @volatile var armed = false
-    def aroundReceive(ctx: TypedActorContext[RobotActor.Command], msg: RobotActor.Command,
-        target: BehaviorInterceptor.ReceiveTarget[RobotActor.Command]): Behavior[RobotActor.Command] =
+    def aroundReceive(
+        ctx: TypedActorContext[Any], msg: Any, target: BehaviorInterceptor.ReceiveTarget[Any]): Behavior[Any] =
       msg match {
         case _: RobotActor.FrameReceived if armed =>
           armed = false
@@ -59,7 +59,7 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       val events = createTestProbe[GatewayEvent]()
       val robot = spawn(RobotActor(4, address, settings, outbox.ref, RobotWiring.to(events.ref), heard = false))
       val snapshots = createTestProbe[RobotSnapshot]()
-      robot ! RobotActor.GetSnapshot(snapshots.ref)
+      robot ! RobotAccess.GetSnapshot(snapshots.ref)
       val before = snapshots.receiveMessage()
       (before.online, before.quality) shouldBe ((false, LinkQuality.Offline))
       robot ! keepAlive(1)
@@ -67,7 +67,7 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
         case RobotOnline(4, _) => akka.actor.testkit.typed.FishingOutcome.Complete
         case _                 => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
       }
-      robot ! RobotActor.GetSnapshot(snapshots.ref)
+      robot ! RobotAccess.GetSnapshot(snapshots.ref)
       val after = snapshots.receiveMessage()
       (after.online, after.quality, after.teamId) shouldBe ((true, LinkQuality.Good, Some(1)))
     }

@@ -50,8 +50,7 @@ object RobotStandIn {
   def callActors(kit: ActorTestKit, robotId: Int, settings: CallSettings, robot: TestProbe[RobotActor.FromChild],
       outbox: TestProbe[Outbox.Command], online: Boolean = true,
       wrapSender: Behavior[NoResponseActor.Command] => Behavior[NoResponseActor.Command] = identity,
-      wrapResponder: Behavior[ResponseActor.Command] => Behavior[ResponseActor.Command] = identity)
-      : (ActorRef[ResponseActor.Command], ActorRef[NoResponseActor.Command]) = {
+      wrapResponder: Behavior[Any] => Behavior[Any] = identity): (ActorRef[Any], ActorRef[NoResponseActor.Command]) = {
     val sender = kit.spawn(wrapSender(NoResponseActor(robotId, settings, robot.ref)))
     val responder = kit.spawn(wrapResponder(ResponseActor(robotId, settings, robot.ref, sender, online = true)))
     started(robot, outbox, responder, online)

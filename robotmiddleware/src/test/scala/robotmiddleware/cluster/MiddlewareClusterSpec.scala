@@ -48,11 +48,11 @@ class MiddlewareClusterSpec
   clusterA.manager ! Join(clusterA.selfMember.address)
   private val portA = clusterA.selfMember.address.port.get
 
-  private val response = nodeA.createTestProbe[ResponseActor.Command]()
-  private val vision = nodeA.createTestProbe[VisionActor.Command]()
+  private val response = nodeA.createTestProbe[RobotAccess.Call]()
+  private val vision = nodeA.createTestProbe[RobotAccess.RegisterVision]()
   private val subscriptions = nodeA.createTestProbe[ActorRef[GatewayEvent]]()
   private val robot =
-    nodeA.spawn(fakeRobot(RobotActor.Opened(7, response.ref, vision.ref)), "robot-7")
+    nodeA.spawn(fakeRobot(RobotAccess.Opened(7, response.ref, vision.ref)), "robot-7")
   private val gateway = nodeA.spawn(fakeGateway(robot, subscriptions.ref), "gateway")
   private val middleware = nodeA.spawn(RobotMiddleware(gateway, MiddlewareSettings(nodeA.system)), "middleware")
   private val gatewayEvents = subscriptions.receiveMessage()
@@ -70,16 +70,16 @@ class MiddlewareClusterSpec
   }
 
   /** Answers the robot's calls (with `answer` for the one named `name`, nothing for others) until `name` came. */
-  private def answerUntil(name: String, answer: Option[RpcValue] = None): ResponseActor.Call =
+  private def answerUntil(name: String, answer: Option[RpcValue] = None): RobotAccess.Call =
     response
       .fishForMessage(30.seconds, s"a call of $name") {
-        case c: ResponseActor.Call =>
+        case c: RobotAccess.Call =>
           val wanted = c.call.name == name
           c.replyTo ! CallResult(7, c.call.name, Right(if (wanted) answer else None))
           if (wanted) FishingOutcome.Complete else FishingOutcome.Continue
         case _ => FishingOutcome.Continue
       }
-      .collect { case c: ResponseActor.Call => c }
+      .collect { case c: RobotAccess.Call => c }
       .last
 
   /** A stream subscription is a one-way message from the app's node: nothing says when the middleware has it.
@@ -159,7 +159,7 @@ class MiddlewareClusterSpec
 
       val frames = nodeB.createTestProbe[VisionFrame]()
       app.vision(7, grid = true).runWith(Sink.foreach(frames.ref ! _))
-      val register = vision.expectMessageType[VisionActor.Register](10.seconds)
+      val register = vision.expectMessageType[RobotAccess.RegisterVision](10.seconds)
       register.grid shouldBe true
       register.subscriber ! grid
       frames.expectMessage(10.seconds, grid)
@@ -228,19 +228,19 @@ class MiddlewareClusterSpec
       // The robot's one command owner gets both, the send first; the robot's error to the send goes nowhere.
       val seen = response
         .fishForMessage(30.seconds, "the send, then the call") {
-          case c: ResponseActor.Call if c.call.name == "motion.head" =>
+          case c: RobotAccess.Call if c.call.name == "motion.head" =>
             c.idempotent shouldBe Some(false) // a send is sent once
             c.replyTo ! CallResult(7, c.call.name, Left(RobotFailure.RobotError(7, "head is busy")))
             FishingOutcome.Continue
-          case c: ResponseActor.Call if c.call.name == "system.battery" =>
+          case c: RobotAccess.Call if c.call.name == "system.battery" =>
             c.replyTo ! CallResult(7, c.call.name, Right(Some(RpcValue.Number(11.9f))))
             FishingOutcome.Complete
-          case c: ResponseActor.Call =>
+          case c: RobotAccess.Call =>
             c.replyTo ! CallResult(7, c.call.name, Right(None))
             FishingOutcome.ContinueAndIgnore
           case _ => FishingOutcome.ContinueAndIgnore
         }
-        .collect { case c: ResponseActor.Call => c.call.name }
+        .collect { case c: RobotAccess.Call => c.call.name }
       seen shouldBe Seq("motion.head", "system.battery")
       sent.futureValue shouldBe Done
       called.futureValue shouldBe Some(RpcValue.Number(11.9f))
@@ -273,31 +273,31 @@ object MiddlewareClusterSpec {
     ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort").withFallback(common)
 
   /** The robot actor as far as the middleware uses it: its children, its snapshot (online) and its link figures. */
-  def fakeRobot(children: RobotActor.Opened): Behavior[RobotActor.Access] = Behaviors.receiveMessage {
-    case RobotActor.Open(replyTo) =>
+  def fakeRobot(children: RobotAccess.Opened): Behavior[RobotAccess.Command] = Behaviors.receiveMessage {
+    case RobotAccess.Open(replyTo) =>
       replyTo ! children
       Behaviors.same
-    case RobotActor.GetSnapshot(replyTo) =>
+    case RobotAccess.GetSnapshot(replyTo) =>
       replyTo ! CrossNodeSerializationSpec.snapshot
       Behaviors.same
-    case RobotActor.GetLinkStats(replyTo) =>
+    case RobotAccess.GetLinkStats(replyTo) =>
       replyTo ! CrossNodeSerializationSpec.linkStats
       Behaviors.same
   }
 
   /** The gateway as far as the middleware uses it: one robot, 7, its snapshot, and the subscription to its events. */
   def fakeGateway(
-      robot: ActorRef[RobotActor.Access],
+      robot: ActorRef[RobotAccess.Command],
       subscriptions: ActorRef[ActorRef[GatewayEvent]]
-  ): Behavior[Gateway.MiddlewareView] =
+  ): Behavior[GatewayAccess.Command] =
     Behaviors.receiveMessage {
-      case Gateway.Subscribe(subscriber) =>
+      case GatewayAccess.Subscribe(subscriber) =>
         subscriptions ! subscriber
         Behaviors.same
-      case Gateway.GetRobotAccess(robotId, replyTo) =>
+      case GatewayAccess.GetRobotAccess(robotId, replyTo) =>
         replyTo ! Some(robot).filter(_ => robotId == 7)
         Behaviors.same
-      case Gateway.GetRobots(replyTo) =>
+      case GatewayAccess.GetRobots(replyTo) =>
         // What the real gateway would collect from robot 7's actor.
         replyTo ! Vector(CrossNodeSerializationSpec.snapshot)
         Behaviors.same
