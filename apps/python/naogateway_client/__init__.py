@@ -1,8 +1,13 @@
-"""A client of the naogateway ZeroMQ endpoint (docs/zeromq.md).
+"""A client of the naogateway ZeroMQ endpoint and of its datagram door (docs/zeromq.md).
 
-Requests go to the endpoint's ROUTER socket from a DEALER socket: one serialized naogateway.proto.Message with an
-rpcRequest per ZeroMQ message, answered with a Message carrying the rpcResponse with the same callId. Robot data
-comes from the endpoint's publish socket on the topics status.<robotId>, vision.<robotId> and game.
+GatewayClient: requests go to the endpoint's ROUTER socket from a DEALER socket: one serialized
+naogateway.proto.Message with an rpcRequest per ZeroMQ message, answered with a Message carrying the rpcResponse with
+the same callId. Robot data comes from the endpoint's publish socket on the topics status.<robotId>, vision.<robotId>
+and game.
+
+DatagramGatewayClient: the same requests and replies, each one UDP datagram to and from the datagram door
+(apps.datagram-door): the lowest latency for calls from the same machine, no streams. A lost datagram is a timeout;
+only the requests that change nothing (robots, status) are sent again.
 
 The protobuf classes are generated from the .proto files the package carries (proto/, the repository's
 proto/src/main/protobuf) with grpcio-tools' protoc; see `load_protos`.
@@ -13,6 +18,7 @@ from __future__ import annotations
 import importlib
 import itertools
 import os
+import socket
 import sys
 import tempfile
 import time
@@ -124,21 +130,21 @@ def snapshot_of(message: Any, link: Optional[str] = None) -> Status:
     }
 
 
-class GatewayClient:
-    """Calls the endpoint's methods and robot calls; reads the published topics."""
+class _Calls:
+    """The calls both clients make: a request is built and its reply read here; each transport carries them."""
 
-    def __init__(self, endpoint: str = "tcp://127.0.0.1:5555", publish: str = "tcp://127.0.0.1:5556", timeout: float = 10.0) -> None:
+    timeout: float
+
+    def __init__(self, timeout: float) -> None:
         if rpc_pb2 is None:
             load_protos()
         self.timeout = timeout
-        self._context = zmq.Context()
-        self._dealer = self._context.socket(zmq.DEALER)
-        self._dealer.setsockopt(zmq.LINGER, 0)
-        self._dealer.connect(endpoint)
-        self._publish = publish
-        self._sub: Optional[zmq.Socket] = None
         self._ids = itertools.count(1)
         self.last_reply: Any = None
+
+    def _exchange(self, request: bytes, call_id: int, idempotent: bool, what: str) -> Any:
+        """Sends the request and returns the parsed reply Message with this call_id; raises a timeout GatewayError."""
+        raise NotImplementedError
 
     def call(self, robot_id: int, module: str, method: str, *params: Value) -> Value:
         """Calls module.method on robot robot_id; returns the value or raises GatewayError."""
@@ -150,22 +156,20 @@ class GatewayClient:
         request.callId = call_id
         for p in params:
             to_mixed(p, request.params.add())
-        self._dealer.send_multipart([b"", message.SerializeToString()])
-        deadline = time.monotonic() + self.timeout
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0 or not self._dealer.poll(int(left * 1000)):
-                raise GatewayError("timeout: no reply to %s.%s within %.1f s" % (module, method, self.timeout))
-            frames = self._dealer.recv_multipart()
-            reply = message_pb2.Message()
-            reply.ParseFromString(frames[-1])
-            response = reply.Extensions[rpc_pb2.rpcResponse]
-            if response.callId != call_id:
-                continue  # the late reply of an earlier call that timed out here
-            if response.HasField("error"):
-                raise GatewayError(response.error)
-            self.last_reply = reply
-            return from_mixed(response.returnval) if response.HasField("returnval") else None
+        idempotent = (module, method) in _IDEMPOTENT
+        reply = self._exchange(message.SerializeToString(), call_id, idempotent, "%s.%s" % (module, method))
+        response = reply.Extensions[rpc_pb2.rpcResponse]
+        if response.HasField("error"):
+            raise GatewayError(response.error)
+        self.last_reply = reply
+        return from_mixed(response.returnval) if response.HasField("returnval") else None
+
+    @staticmethod
+    def _reply_to(body: bytes, call_id: int) -> Any:
+        """The reply Message in body when it answers call_id, else None (the late reply of an earlier call)."""
+        reply = message_pb2.Message()
+        reply.ParseFromString(body)
+        return reply if reply.Extensions[rpc_pb2.rpcResponse].callId == call_id else None
 
     def send(self, robot_id: int, module: str, method: str, *params: Value) -> None:
         """Sends module.method to robot robot_id without waiting for the robot (the endpoint's gateway.send).
@@ -221,6 +225,35 @@ class GatewayClient:
         """Speaks the text."""
         return self.call(robot_id, "speech", "say", text)
 
+
+_IDEMPOTENT = frozenset([("gateway", "robots"), ("gateway", "status")])
+"""The requests that change nothing: the only ones DatagramGatewayClient sends again when no reply came."""
+
+
+class GatewayClient(_Calls):
+    """Calls the endpoint's methods and robot calls over ZeroMQ; reads the published topics."""
+
+    def __init__(self, endpoint: str = "tcp://127.0.0.1:5555", publish: str = "tcp://127.0.0.1:5556", timeout: float = 10.0) -> None:
+        super().__init__(timeout)
+        self._context = zmq.Context()
+        self._dealer = self._context.socket(zmq.DEALER)
+        self._dealer.setsockopt(zmq.LINGER, 0)
+        self._dealer.connect(endpoint)
+        self._publish = publish
+        self._sub: Optional[zmq.Socket] = None
+
+    def _exchange(self, request: bytes, call_id: int, idempotent: bool, what: str) -> Any:
+        # ZeroMQ loses nothing on a live connection: no request is sent twice.
+        self._dealer.send_multipart([b"", request])
+        deadline = time.monotonic() + self.timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not self._dealer.poll(int(left * 1000)):
+                raise GatewayError("timeout: no reply to %s within %.1f s" % (what, self.timeout))
+            reply = self._reply_to(self._dealer.recv_multipart()[-1], call_id)
+            if reply is not None:
+                return reply
+
     # Published data.
     def subscribe(self, *topics: str) -> None:
         """Subscribes to topics (prefixes), e.g. "status.20", "vision.20", "game"."""
@@ -255,3 +288,62 @@ class GatewayClient:
         if self._sub is not None:
             self._sub.close()
         self._context.term()
+
+
+class DatagramGatewayClient(_Calls):
+    """Calls the endpoint's methods and robot calls through the datagram door: one UDP datagram each way.
+
+    address is "host:port" or (host, port) of apps.datagram-door. A request without a reply within `timeout` seconds
+    raises a timeout GatewayError. Only robots() and status() (which change nothing) are sent again, up to `retries`
+    more times, `retry_interval` seconds apart, within the same `timeout`; a call, a send or a lease is never sent twice,
+    so a timeout does not say whether the robot got it.
+    """
+
+    def __init__(self, address: Union[str, tuple] = "127.0.0.1:5557", timeout: float = 10.0, retries: int = 2,
+                 retry_interval: float = 0.2) -> None:
+        super().__init__(timeout)
+        if isinstance(address, str):
+            host, _, port = address.rpartition(":")
+            address = (host or "127.0.0.1", int(port))
+        if retries < 0 or retry_interval <= 0:
+            raise ValueError("retries must be >= 0 and retry_interval > 0")
+        self.address = address
+        self.retries = retries
+        self.retry_interval = retry_interval
+        self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        # Connected: only the door's datagrams arrive here.
+        self._socket.connect(address)
+
+    def _exchange(self, request: bytes, call_id: int, idempotent: bool, what: str) -> Any:
+        start = time.monotonic()
+        deadline = start + self.timeout
+        sends = 1 + (self.retries if idempotent else 0)
+        self._socket.send(request)
+        sends -= 1
+        resend_at = start + self.retry_interval if sends > 0 else deadline
+        while True:
+            now = time.monotonic()
+            if now >= deadline:
+                raise GatewayError("timeout: no reply to %s within %.1f s from the datagram door at %s:%d" %
+                                   ((what, self.timeout) + tuple(self.address)))
+            if now >= resend_at:
+                self._socket.send(request)
+                sends -= 1
+                resend_at = now + self.retry_interval if sends > 0 else deadline
+            self._socket.settimeout(max(0.0005, min(deadline, resend_at) - now))
+            try:
+                body = self._socket.recv(65536)
+            except socket.timeout:
+                continue
+            except ConnectionRefusedError:
+                continue  # nothing listens yet (an ICMP answer to an earlier datagram): the deadline decides
+            try:
+                reply = self._reply_to(body, call_id)
+            except Exception:
+                continue  # not a reply: the door only ever sends Messages
+            if reply is not None:
+                return reply
+
+    def close(self) -> None:
+        """Closes the socket."""
+        self._socket.close()

@@ -1,4 +1,5 @@
-"""The bench's Python door (bench.CallPathBench): the client's call to a robot and back through the ZeroMQ endpoint.
+"""The bench's Python doors (bench.CallPathBench): the client's call to a robot and back through the ZeroMQ endpoint
+(GatewayClient, --endpoint and --publish) or through the datagram door (DatagramGatewayClient, --datagram host:port).
 
 `system.ping` on one robot, paced at one call per gap, after a warm-up; prints one JSON line with the nearest-rank
 p50 and p99 in microseconds: {"p50_us": ..., "p99_us": ..., "n": ...}.
@@ -11,7 +12,7 @@ import json
 import time
 from typing import List
 
-from naogateway_client import GatewayClient
+from naogateway_client import DatagramGatewayClient, GatewayClient
 
 
 def percentile(samples: List[int], p: float) -> float:
@@ -22,14 +23,20 @@ def percentile(samples: List[int], p: float) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--endpoint", required=True)
-    parser.add_argument("--publish", required=True)
+    parser.add_argument("--endpoint")
+    parser.add_argument("--publish")
+    parser.add_argument("--datagram", help="host:port of the datagram door, instead of the ZeroMQ endpoint")
     parser.add_argument("--robot", type=int, default=1)
     parser.add_argument("--warmup", type=int, default=1000)
     parser.add_argument("--samples", type=int, default=2000)
     parser.add_argument("--gap-ms", type=float, default=1.0)
     args = parser.parse_args()
-    client = GatewayClient(args.endpoint, args.publish)
+    if args.datagram:
+        client = DatagramGatewayClient(args.datagram)
+    elif args.endpoint and args.publish:
+        client = GatewayClient(args.endpoint, args.publish)
+    else:
+        parser.error("give --datagram, or --endpoint and --publish")
     samples: List[int] = []
     try:
         for i in range(args.warmup + args.samples):

@@ -18,6 +18,7 @@ import akka.cluster.typed.{Cluster, Join}
 import akka.util.Timeout
 import com.typesafe.config.{Config, ConfigFactory}
 
+import apps.datagram.{DatagramDoor, DatagramDoorSettings}
 import apps.zeromq.{PythonEnv, ZeroMqEndpoint, ZeroMqSettings}
 import naogateway._
 import naogateway.testkit.TestLoopback
@@ -38,6 +39,9 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   *   - `callpath_python_*`: the Python client (apps/python) over the ZeroMQ endpoint, a process of its own.
   *   - `callpath_python_door_*`: the same client and endpoint in front of a `RobotInterface` that answers every call at
   *     once: the ZeroMQ door's own part (sockets, the endpoint, the client), without middleware or robot.
+  *   - `callpath_python_datagram_*`: the same client's `DatagramGatewayClient` through the datagram door
+  *     (`apps.datagram.DatagramDoor`): the same requests, one UDP datagram each way, no I/O thread on either side.
+  *   - `callpath_python_datagram_door_*`: that client and door in front of the interface that answers at once.
   *   - `callpath_mavsdk_*`: MAVSDK (the `mavsdk` package) arming a pymavlink-played vehicle on loopback, each arm one
   *     COMMAND_LONG answered by a COMMAND_ACK (src/test/python/bench/mavsdk_peer.py); absent (null) when it cannot be
   *     installed or run here, the reason in the progress lines.
@@ -48,7 +52,8 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   *     `callpath_python_udp_floor_*`: a plain UDP echo between the same two Python processes, the floor of any Python
   *     process-to-process exchange.
   *   - ratios: `callpath_gateway_over_raw_udp_p50`, `callpath_interface_over_gateway_p50`,
-  *     `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`.
+  *     `callpath_cluster_over_gateway_p50`, `callpath_python_over_mavsdk_p50`, `callpath_python_over_mavsdk_grpc_p50`,
+  *     `callpath_python_datagram_over_mavsdk_p50`.
   *
   * The gateway's actor system is a cluster node (the gateway role) for the whole group, so every door meets the same
   * gateway. The Python door and the peer need python3 and pip; both run in one venv under apps/target.
@@ -105,6 +110,18 @@ object CallPathBench extends Benchmark {
           why => progress(s"python door alone not measured: $why"),
           p => progress(f"python client to an endpoint that answers at once: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us")
         )
+        val datagram = datagramCalls(gateway.datagram())
+        datagram.fold(
+          why => progress(s"python client over the datagram door not measured: $why"),
+          p => progress(f"python client over the datagram door: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us")
+        )
+        val datagramDoor = datagramCalls(gateway.datagramAnswering())
+        datagramDoor.fold(
+          why => progress(s"datagram door alone not measured: $why"),
+          p =>
+            progress(f"python client to a datagram door that answers at once: p50 ${p._1}%.0f us, " +
+              f"p99 ${p._2}%.0f us")
+        )
         val zeroMqFloor = floor("zeromq")
         zeroMqFloor.fold(why => progress(s"ZeroMQ floor not measured: $why"),
           p => progress(f"ZeroMQ floor (pyzmq to a pyzmq echo): p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
@@ -140,6 +157,10 @@ object CallPathBench extends Benchmark {
           "callpath_python_p99_us" -> python.fold(_ => nan, _._2),
           "callpath_python_door_p50_us" -> door.fold(_ => nan, _._1),
           "callpath_python_door_p99_us" -> door.fold(_ => nan, _._2),
+          "callpath_python_datagram_p50_us" -> datagram.fold(_ => nan, _._1),
+          "callpath_python_datagram_p99_us" -> datagram.fold(_ => nan, _._2),
+          "callpath_python_datagram_door_p50_us" -> datagramDoor.fold(_ => nan, _._1),
+          "callpath_python_datagram_door_p99_us" -> datagramDoor.fold(_ => nan, _._2),
           "callpath_zeromq_floor_p50_us" -> zeroMqFloor.fold(_ => nan, _._1),
           "callpath_zeromq_floor_p99_us" -> zeroMqFloor.fold(_ => nan, _._2),
           "callpath_python_udp_floor_p50_us" -> udpFloor.fold(_ => nan, _._1),
@@ -153,6 +174,8 @@ object CallPathBench extends Benchmark {
           "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
           "callpath_python_over_mavsdk_p50" ->
             (for { py <- python.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
+          "callpath_python_datagram_over_mavsdk_p50" ->
+            (for { py <- datagram.toOption; mav <- peer.toOption } yield py._1 / mav._1).getOrElse(nan),
           "callpath_zeromq_floor_over_mavsdk_p50" ->
             (for { z <- zeroMqFloor.toOption; mav <- peer.toOption } yield z._1 / mav._1).getOrElse(nan),
           "callpath_python_over_mavsdk_grpc_p50" ->
@@ -246,6 +269,15 @@ object CallPathBench extends Benchmark {
           "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)
       ))
 
+  private def datagramCalls(door: InetSocketAddress): Either[String, (Double, Double)] =
+    venv().flatMap(python =>
+      script(
+        python,
+        "zeromq_calls.py",
+        Seq("--datagram", s"${door.getAddress.getHostAddress}:${door.getPort}",
+          "--robot", "1", "--warmup", PythonWarmup.toString, "--samples", PythonSamples.toString)
+      ))
+
   /** A floor of the Python door (`zeromq` or `udp`): two Python processes and the transport, nothing else. */
   private def floor(transport: String): Either[String, (Double, Double)] =
     venv().flatMap(python =>
@@ -330,6 +362,20 @@ object CallPathBench extends Benchmark {
     def zeroMqAnswering(): ZeroMqEndpoint.Addresses =
       addresses(
         system.systemActorOf(ZeroMqEndpoint.withInterface(new AnsweringInterface, zeroMqSettings), "zeromq-answering"))
+
+    private val datagramSettings = DatagramDoorSettings(system).copy(port = 0)
+
+    private def address(door: ActorRef[DatagramDoor.Command]): InetSocketAddress =
+      Await.result(door.ask[InetSocketAddress](DatagramDoor.GetAddress(_)), 30.seconds)
+
+    /** Starts the datagram door on a free loopback port; its address. */
+    def datagram(): InetSocketAddress =
+      address(system.systemActorOf(DatagramDoor(middleware, datagramSettings), "datagram-door"))
+
+    /** A datagram door in front of an interface whose every call is answered at once: the datagram door's own part. */
+    def datagramAnswering(): InetSocketAddress =
+      address(system.systemActorOf(DatagramDoor.withInterface(new AnsweringInterface, datagramSettings),
+          "datagram-door-answering"))
 
     def stop(): Unit = {
       system.terminate()

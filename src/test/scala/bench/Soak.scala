@@ -209,6 +209,7 @@ object Soak extends Benchmark {
     s"""# Written by the soak: the package's gateway without its own simulated robots, on loopback.
        |apps.launcher { simulated-robots = 0, ball-follower-robot = 0, game-controller = off }
        |apps.zeromq.enabled = off
+       |apps.datagram-door.enabled = off
        |apps.control.bind = "127.0.0.1:$controlPort"
        |naogateway.link { bind-address = "127.0.0.1", robot-port = $robotPort }
        |naogateway.game-controller { bind-address = "127.0.0.1", port = $gameControllerPort }

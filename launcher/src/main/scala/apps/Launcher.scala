@@ -216,6 +216,7 @@ object Launcher {
     context.watchWith(gateway, PartStopped("gateway"))
     context.watchWith(middleware, PartStopped("middleware"))
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
+    apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware)
     val view = GatewayReadView(gateway, ViewTimeout)(context.system)
     val doctor = () => Doctor.gather(gateway, config)(context.system).map(Doctor.findings)(context.executionContext)
     val control = apps.control.ControlServer.GatewaySide(view, doctor)

@@ -76,6 +76,16 @@ object Preflight {
             }
         }
       else Vector.empty
+    val datagramDoor =
+      if (c.getBoolean("apps.datagram-door.enabled"))
+        Vector(PortUse(
+            Transport.Udp(reuse = false),
+            c.getString("apps.datagram-door.bind-address"),
+            c.getInt("apps.datagram-door.port"),
+            "the datagram door",
+            "apps.datagram-door.port (NAOGATEWAY_DATAGRAM_DOOR_PORT)"
+          ))
+      else Vector.empty
     val robots = Vector(PortUse(
         Transport.Udp(reuse = false),
         c.getString("naogateway.link.bind-address"),
@@ -95,7 +105,7 @@ object Preflight {
             essential = false
           ))
       else Vector.empty
-    (cluster ++ control ++ zeromq ++ robots ++ gameController).filter(_.port > 0)
+    (cluster ++ control ++ zeromq ++ datagramDoor ++ robots ++ gameController).filter(_.port > 0)
   }
 
   private def bindHost(c: Config): String = {

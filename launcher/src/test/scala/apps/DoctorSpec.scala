@@ -213,6 +213,7 @@ class DoctorSpec extends AnyWordSpec with Matchers {
           dir.resolve("robots.conf"),
           s"""apps.control.bind = "127.0.0.1:${held.getLocalPort}"
              |apps.zeromq.enabled = off
+             |apps.datagram-door.enabled = off
              |apps.launcher.simulated-robots = 0
              |robotmiddleware.cluster.gateway-port = 0
              |naogateway.game-controller.enabled = off

@@ -26,6 +26,7 @@ class LauncherWatchSpec extends AnyWordSpec with Matchers {
        |akka.loglevel = WARNING
        |apps.launcher { simulated-robots = 0, ball-follower-robot = 0, game-controller = off, view = lines, refresh = 10s }
        |apps.zeromq.enabled = off
+       |apps.datagram-door.enabled = off
        |apps.web.enabled = off
        |apps.control.enabled = off
        |naogateway.recording.enabled = off

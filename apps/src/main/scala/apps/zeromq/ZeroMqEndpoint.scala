@@ -3,7 +3,7 @@ package apps.zeromq
 import java.nio.charset.StandardCharsets
 
 import scala.concurrent.duration._
-import scala.concurrent.{ExecutionContext, Future}
+import scala.concurrent.ExecutionContext
 import scala.jdk.CollectionConverters._
 import scala.util.control.NonFatal
 import scala.util.{Failure, Success}
@@ -17,7 +17,6 @@ import akka.stream.{KillSwitches, SharedKillSwitch, UniqueKillSwitch}
 import org.zeromq.{SocketType, ZMQ, ZMsg}
 
 import naogateway.link.ZeroMqLoop
-import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{RobotSnapshot, VisionFrame}
 import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
@@ -115,12 +114,6 @@ object ZeroMqEndpoint {
         socket.send(frames.last, ZMQ.DONTWAIT)
       }
   }
-
-  /** A request being worked on: where its reply goes, what it must echo, and its deadline's timer. Whoever takes it out
-    * of the desk first (the answer, the timeout, the shutdown) replies, so a request is answered exactly once.
-    */
-  private final case class Pending(envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], name: String,
-      deadline: Cancellable)
 
   private final class Endpoint(
       robots: RobotInterface,
@@ -264,83 +257,40 @@ object ZeroMqEndpoint {
       ()
     }
 
-    /** The requests being worked on, owned by the loop's thread: every method runs there (inside the loop's handlers
-      * and operations), so none of this state is shared. Answers that complete elsewhere come back as loop operations.
+    /** The requests, owned by the loop's thread: every method runs there (inside the loop's handlers and operations),
+      * so none of this state is shared. Answers that complete elsewhere come back as loop operations.
       */
     private final class Desk {
-      private val log = org.slf4j.LoggerFactory.getLogger(classOf[Desk])
-      // The interface's futures are composed on the thread that completes them: the steps are small, and an answer that
-      // is there at once stays there at once (it leaves on the loop's thread without waking it).
-      private implicit val ec: ExecutionContext = ExecutionContext.parasitic
-      private var pending = Map.empty[Long, Pending]
-      private var nextRequestId = 0L
+      private val requests = new RequestDesk[Vector[Array[Byte]]](
+        robots,
+        "ZeroMQ endpoint",
+        settings.requestTimeout,
+        operation => { loop.submit(_ => operation()); () },
+        (envelope, body) => io.send(io.router, envelope :+ body),
+        Endpoint.this.ec,
+        system.scheduler
+      )
 
       /** One request read from the router. */
       def received(frames: Vector[Array[Byte]]): Unit = {
         val (envelope, body) = split(frames)
         body match {
-          case Left(error) => reply(envelope, -1, None, Left(error))
+          case Left(error) => requests.reply(envelope, -1, None, Left(error))
           case Right(bytes) =>
             EndpointProtocol.parse(bytes) match {
-              case Left(unreadable) => reply(envelope, unreadable.robotId, unreadable.callId, Left(unreadable.error))
+              case Left(unreadable) =>
+                requests.reply(envelope, unreadable.robotId, unreadable.callId, Left(unreadable.error))
               case Right(request) =>
-                val callId = request.call.callId
-                if (pending.size >= settings.maxInFlight)
-                  reply(envelope, request.robotId, callId,
-                    Left(s"overloaded: ${pending.size} requests are in progress at the endpoint"))
-                else
-                  EndpointProtocol.route(request) match {
-                    case Left(error) => reply(envelope, request.robotId, callId, Left(error))
-                    case Right(route) =>
-                      val id = nextRequestId
-                      nextRequestId += 1
-                      val deadline = system.scheduler.scheduleOnce(settings.requestTimeout,
-                        () => {
-                          loop.submit(_ => timedOut(id))
-                          ()
-                        })
-                      pending =
-                        pending.updated(id, Pending(envelope, request.robotId, callId, request.call.name, deadline))
-                      if (log.isDebugEnabled) log.debug("ZeroMQ request [{}]: {}", id, request.call)
-                      val answer = execute(route)
-                      answer.value match {
-                        // Answered already (an error, or an interface that had it at hand): out now, on this thread.
-                        case Some(result) => answered(id, result)
-                        // The thread that completes it hands the reply to the loop (one wake-up), no mailbox between.
-                        case None => answer.onComplete(r => { loop.submit(_ => answered(id, r)); () })
-                      }
-                  }
+                if (requests.inFlight >= settings.maxInFlight)
+                  requests.reply(envelope, request.robotId, request.call.callId,
+                    Left(s"overloaded: ${requests.inFlight} requests are in progress at the endpoint"))
+                else requests.accept(envelope, request)
             }
         }
       }
 
-      private def answered(id: Long, result: scala.util.Try[Answer]): Unit =
-        pending.get(id).foreach { p =>
-          pending -= id
-          p.deadline.cancel()
-          reply(p.envelope, p.robotId, p.callId, result.toEither.left.map(EndpointProtocol.errorText))
-        }
-
-      // The late answer, if it ever comes, finds the request gone: each request is answered once.
-      private def timedOut(id: Long): Unit =
-        pending.get(id).foreach { p =>
-          pending -= id
-          reply(p.envelope, p.robotId, p.callId,
-            Left(s"timeout: no answer to ${p.name} within ${settings.requestTimeout.toMillis} ms at the endpoint"))
-        }
-
       /** Requests still being worked on get an answer while the socket is still there to carry it. */
-      def shutDown(): Unit = {
-        pending.values.foreach { p =>
-          p.deadline.cancel()
-          reply(p.envelope, p.robotId, p.callId, Left("endpoint error: the ZeroMQ endpoint is shutting down"))
-        }
-        pending = Map.empty
-      }
-
-      private def reply(
-          envelope: Vector[Array[Byte]], robotId: Int, callId: Option[Long], result: Either[String, Answer]): Unit =
-        io.send(io.router, envelope :+ EndpointProtocol.reply(robotId, callId, result))
+      def shutDown(): Unit = requests.shutDown()
 
       /** The envelope (routing id, and the empty delimiter of REQ clients) and the one body frame. */
       private def split(frames: Vector[Array[Byte]]): (Vector[Array[Byte]], Either[String, Array[Byte]]) = {
@@ -352,77 +302,6 @@ object ZeroMqEndpoint {
           case more => envelope -> Left(s"${EndpointProtocol.Malformed}expected one body frame, got ${more.size}")
         }
       }
-
-      // Where the last robot request was handed to the interface: the next one starts only after it, so requests reach
-      // the middleware (and the robot) in the order they arrived, also when one first waits for its lease. One tail for
-      // all robots: it holds no per-robot entry a client could grow.
-      private var dispatched: Future[Unit] = Future.unit
-
-      /** Starts `operate` once every earlier robot request has been handed on, after taking `group`'s lease when it
-        * needs one. When nothing waits and no lease is needed it starts at once, on the loop's thread.
-        */
-      private def inOrder(robotId: Int, group: Option[naogateway.wire.ActuatorGroup])(
-          operate: () => Future[Answer]): Future[Answer] = {
-        val handedOn = scala.concurrent.Promise[Unit]()
-        def start(ready: scala.util.Try[Any]): Future[Answer] = {
-          val answer = ready match {
-            case Success(_) =>
-              try operate()
-              catch { case NonFatal(e) => Future.failed(e) }
-            case Failure(e) => Future.failed(e)
-          }
-          handedOn.success(())
-          answer
-        }
-        val answer = (dispatched.value, group) match {
-          case (Some(_), None)    => start(Success(()))
-          case (Some(_), Some(g)) => robots.acquire(robotId, g).transformWith(start)
-          // Started on the endpoint's dispatcher, not on whatever thread handed the last one on.
-          case (None, None) => dispatched.transformWith(_ => start(Success(())))(Endpoint.this.ec)
-          case (None, Some(g)) =>
-            dispatched.transformWith(_ => robots.acquire(robotId, g))(Endpoint.this.ec).transformWith(start)
-        }
-        dispatched = handedOn.future
-        answer
-      }
-
-      private def execute(route: Route): Future[Answer] = {
-        val done = Answer(Some(RpcValue.Flag(true)))
-        try route match {
-            case Route.Robots =>
-              robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
-            case Route.Status(robotId) =>
-              robots.robots().flatMap(_.find(_.robotId == robotId) match {
-                case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
-                case None    => Future.failed(naogateway.RobotFailure.UnknownRobot(robotId))
-              })
-            case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
-            case Route.Release(robotId, groups) =>
-              inOrder(robotId, None) { () =>
-                robots.release(robotId, groups: _*)
-                Future.successful(done)
-              }
-            case Route.Send(robotId, operation) =>
-              inOrder(robotId, operation.group)(() => robots.send(robotId, operation).map(_ => done))
-            case Route.Execute(robotId, operation) =>
-              import robotmiddleware.Operation._
-              inOrder(robotId, operation.group) { () =>
-                operation match {
-                  case Walk(vx, vy, omega)  => robots.walk(robotId, vx, vy, omega).map(_ => done)
-                  case Stop()               => robots.stop(robotId).map(_ => done)
-                  case Head(pan, tilt)      => robots.head(robotId, pan, tilt).map(_ => done)
-                  case Arms(ls, le, rs, re) => robots.arms(robotId, ls, le, rs, re).map(_ => done)
-                  case Posture(p) =>
-                    robots.posture(robotId, p).map(reached => Answer(Some(RpcValue.Text(reached.name))))
-                  case Say(text) => robots.say(robotId, text).map(_ => done)
-                  case RawCall(module, method, params) =>
-                    robots.call(robotId, module, method, params: _*).map(Answer(_))
-                }
-              }
-          }
-        catch { case NonFatal(e) => Future.failed(e) }
-      }
-
     }
 
     private def running(addresses: Addresses): Behavior[Command] = Behaviors.receiveMessage[Command] {

@@ -1,0 +1,58 @@
+package apps.datagram
+
+import scala.concurrent.duration._
+import scala.jdk.DurationConverters._
+
+import akka.actor.typed.ActorSystem
+import com.typesafe.config.Config
+
+/** Settings of the datagram door (`apps.datagram-door { ... }`). */
+final case class DatagramDoorSettings(
+    enabled: Boolean,
+    bindAddress: String,
+    port: Int,
+    appName: String,
+    priority: Int,
+    requestTimeout: FiniteDuration,
+    maxInFlight: Int,
+    maxInFlightPerSender: Int,
+    maxDatagramBytes: Int
+) {
+  require(bindAddress.nonEmpty, "datagram-door.bind-address must not be empty")
+  require(port >= 0 && port <= 65535, "datagram-door.port must be between 0 and 65535")
+  require(appName.nonEmpty, "datagram-door.app-name must not be empty")
+  require(requestTimeout > Duration.Zero, "datagram-door.request-timeout must be positive")
+  require(maxInFlight >= 1, "datagram-door.max-in-flight must be at least 1")
+  require(maxInFlightPerSender >= 1 && maxInFlightPerSender <= maxInFlight,
+    "datagram-door.max-in-flight-per-sender must be between 1 and max-in-flight")
+  require(
+    maxDatagramBytes >= 64 && maxDatagramBytes <= DatagramDoorSettings.MaxUdpPayload,
+    s"datagram-door.max-datagram-bytes must be between 64 and ${DatagramDoorSettings.MaxUdpPayload}"
+  )
+}
+
+/** Reading the settings. */
+object DatagramDoorSettings {
+
+  /** Where the settings live in the configuration. */
+  val ConfigPath: String = "apps.datagram-door"
+
+  /** The largest payload of a UDP datagram over IPv4. */
+  val MaxUdpPayload: Int = 65507
+
+  /** The settings of this system's configuration. */
+  def apply(system: ActorSystem[_]): DatagramDoorSettings = fromConfig(system.settings.config.getConfig(ConfigPath))
+
+  /** The settings of an `apps.datagram-door` block. */
+  def fromConfig(c: Config): DatagramDoorSettings = DatagramDoorSettings(
+    enabled = c.getBoolean("enabled"),
+    bindAddress = c.getString("bind-address"),
+    port = c.getInt("port"),
+    appName = c.getString("app-name"),
+    priority = c.getInt("priority"),
+    requestTimeout = c.getDuration("request-timeout").toScala,
+    maxInFlight = c.getInt("max-in-flight"),
+    maxInFlightPerSender = c.getInt("max-in-flight-per-sender"),
+    maxDatagramBytes = c.getInt("max-datagram-bytes")
+  )
+}
