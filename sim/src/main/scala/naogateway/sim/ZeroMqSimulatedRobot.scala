@@ -4,7 +4,6 @@ import java.net.InetSocketAddress
 import java.util.concurrent.TimeUnit
 
 import scala.concurrent.duration._
-import scala.concurrent.{Await, Promise}
 import scala.util.control.NonFatal
 
 import org.slf4j.LoggerFactory
@@ -17,8 +16,8 @@ import naogateway.wire.{HeaderForm, MessageContents, RpcReply}
   * exactly as a robot whose calls block would. It has its own thread (it stands for a separate machine), can be stopped
   * and started again (a power cycle: a new session, battery and position kept), and binds `endpoint`; with a port of
   * `*` the system picks one at the first start ([[boundEndpoint]]), and every later start binds that one again, as a
-  * power-cycled robot keeps its address. `start` and `stop` block until the socket is bound or closed: call them from
-  * tests or tools, never from an actor.
+  * power-cycled robot keeps its address. `start` binds on the caller's thread; `stop` waits for the robot's thread to
+  * end: call them from tests or tools, never from an actor.
   */
 final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: String) {
   private val log = LoggerFactory.getLogger(classOf[ZeroMqSimulatedRobot])
@@ -41,25 +40,29 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
   /** Whether the robot is serving. */
   def isRunning: Boolean = running
 
-  /** Binds the socket and starts serving; returns once bound, throws when the endpoint cannot be bound. */
+  /** Binds the socket and starts serving; returns once bound, throws when the endpoint cannot be bound. The socket is
+    * bound here, on the caller's thread, and handed to the robot's thread, whose start orders the two (ZeroMQ lets a
+    * socket move between threads across such a barrier), so nothing waits for the other thread.
+    */
   def start(): Unit = synchronized {
     require(!running, "the simulated robot is running already")
+    val context = new ZContext(1)
+    context.setLinger(0)
+    val socket =
+      try {
+        val s = context.createSocket(SocketType.REP)
+        s.setLinger(0)
+        s.bind(bound.getOrElse(endpoint))
+        s
+      } catch { case NonFatal(e) => context.close(); throw e }
+    bound = Some(socket.getLastEndpoint)
     val now = System.nanoTime()
     state = Some(state.fold(RobotFirmware.boot(settings, now))(s => RobotFirmware.restart(s, now)))
-    val bound = Promise[Unit]()
     running = true
-    val t = new Thread(() => serve(bound), s"zmq-sim-robot-${settings.robotId}")
+    val t = new Thread(() => serve(context, socket), s"zmq-sim-robot-${settings.robotId}")
     t.setDaemon(true)
     t.start()
     thread = Some(t)
-    try Await.result(bound.future, 10.seconds)
-    catch {
-      case NonFatal(e) =>
-        running = false
-        t.join(5000)
-        thread = None
-        throw e
-    }
   }
 
   /** Stops serving: the socket is closed and the thread has ended when this returns. */
@@ -72,15 +75,8 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
     thread = None
   }
 
-  private def serve(started: Promise[Unit]): Unit = {
-    val context = new ZContext(1)
-    context.setLinger(0)
+  private def serve(context: ZContext, socket: ZMQ.Socket): Unit =
     try {
-      val socket = context.createSocket(SocketType.REP)
-      socket.setLinger(0)
-      socket.bind(bound.getOrElse(endpoint))
-      bound = Some(socket.getLastEndpoint)
-      started.success(())
       log.info("Simulated ZeroMQ robot [{}] serving on {}", settings.robotId, socket.getLastEndpoint)
       val poller = context.createPoller(1)
       poller.register(socket, ZMQ.Poller.POLLIN)
@@ -100,13 +96,11 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
       }
       poller.close()
     } catch {
-      case NonFatal(e) =>
-        if (!started.tryFailure(e)) log.error("Simulated ZeroMQ robot [{}] failed", settings.robotId, e)
+      case NonFatal(e) => log.error("Simulated ZeroMQ robot [{}] failed", settings.robotId, e)
     } finally {
       context.close()
       log.info("Simulated ZeroMQ robot [{}] stopped", settings.robotId)
     }
-  }
 
   private def advanceTo(now: Long): Vector[Outgoing] = {
     val (next, out) = RobotFirmware.advance(state.get, now)
@@ -126,7 +120,9 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
         state = Some(next)
         var replies = out.filter(_.to == ReplyMarker)
         val deadline = System.nanoTime() + LongestCall.toNanos
-        // A posture call answers when its motion has ended: hold the request, as the socket forces us to.
+        /* A posture call answers when its motion has ended: hold the request, as the socket forces us to. The wait is
+         * on */
+        // this robot's own thread (it stands for the robot's blocking REP loop), never on a dispatcher's.
         def waiting = contents.rpcRequest.isDefined && !replies.exists(isRpcReply)
         while (waiting && running && System.nanoTime() < deadline) {
           val wait =
