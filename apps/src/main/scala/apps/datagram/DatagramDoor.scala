@@ -14,9 +14,9 @@ import akka.actor.CoordinatedShutdown
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, PostStop}
 
-import apps.zeromq.{EndpointProtocol, EndpointRequest, RequestDesk}
+import apps.zeromq.{EndpointProtocol, EndpointRequest, Registering, RequestDesk}
 import naogateway.RateLimitedLog
-import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
+import robotmiddleware.{RobotInterface, RobotMiddleware}
 
 /** The RobotInterface for programs on the same machine at the lowest latency: each request one UDP datagram, the same
   * serialized `Message` with an `rpcRequest` the ZeroMQ endpoint takes, each reply one datagram to the sender's address
@@ -72,29 +72,14 @@ object DatagramDoor {
   /** The reader thread's name suffix (tests look for it to see that the thread has ended). */
   val ReaderName: String = "datagram-door"
 
-  private final case class Connected(robots: RobotInterface) extends Command
-  private final case class ConnectFailed(reason: Throwable) extends Command
+  private final case class Registered(result: Try[RobotInterface]) extends Command
   private final case class ReaderEnded(failure: Option[Throwable]) extends Command
 
   /** The door for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: DatagramDoorSettings): Behavior[Command] =
-    Behaviors.setup { context =>
-      Behaviors.withStash(64) { stash =>
-        context.pipeToSelf(RobotClient.connect(context.system, middleware, settings.appName, settings.priority)) {
-          case Success(robots) => Connected(robots)
-          case Failure(e)      => ConnectFailed(e)
-        }
-        Behaviors.receiveMessage {
-          case Connected(robots) => stash.unstashAll(serving(robots, settings, ownsInterface = true))
-          case ConnectFailed(e) =>
-            throw new IllegalStateException(s"datagram door cannot register with the middleware: $e", e)
-          case other =>
-            if (stash.isFull) context.log.warn("datagram door: message dropped while registering")
-            else stash.stash(other)
-            Behaviors.same
-        }
-      }
-    }
+    Registering[Command](middleware, settings.appName, settings.priority, "datagram door")(Registered,
+      { case Registered(r) => r })(
+      serving(_, settings, ownsInterface = true))
 
   /** Spawns the door as a child of `context` when `apps.datagram-door.enabled` is on (it is off in competition). */
   def spawnIfEnabled(
@@ -145,7 +130,7 @@ object DatagramDoor {
                 case None    => context.log.info("datagram door: the socket closed; the door stops")
               }
               Behaviors.stopped
-            case Connected(_) | ConnectFailed(_) => Behaviors.unhandled
+            case Registered(_) => Behaviors.unhandled
           }.receiveSignal { case (_, PostStop) =>
             stop()
             Behaviors.same

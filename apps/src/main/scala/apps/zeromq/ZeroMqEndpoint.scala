@@ -6,7 +6,7 @@ import scala.concurrent.duration._
 import scala.concurrent.ExecutionContext
 import scala.jdk.CollectionConverters._
 import scala.util.control.NonFatal
-import scala.util.{Failure, Success}
+import scala.util.Try
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, ActorSystem, Behavior, DispatcherSelector, PostStop, Signal}
@@ -19,7 +19,7 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 import naogateway.link.ZeroMqLoop
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{RobotSnapshot, VisionFrame}
-import robotmiddleware.{RobotClient, RobotInterface, RobotMiddleware}
+import robotmiddleware.{RobotInterface, RobotMiddleware}
 
 /** The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket
   * (docs/zeromq.md). The sockets live on a `ZeroMqLoop` on the endpoint's own dispatcher. The loop's thread owns the
@@ -38,8 +38,7 @@ object ZeroMqEndpoint {
   /** Where the endpoint listens: requests (ROUTER) and publications (XPUB). */
   final case class Addresses(requests: String, publish: String)
 
-  private final case class Connected(robots: RobotInterface) extends Command
-  private final case class ConnectFailed(reason: Throwable) extends Command
+  private final case class Registered(result: Try[RobotInterface]) extends Command
   private final case class Bound(addresses: Addresses) extends Command
   private final case class BindFailed(reason: String) extends Command
   private final case class SubscriptionChanged(prefix: String, subscribed: Boolean) extends Command
@@ -64,23 +63,9 @@ object ZeroMqEndpoint {
     * stops.
     */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: ZeroMqSettings): Behavior[Command] =
-    Behaviors.setup { context =>
-      Behaviors.withStash(64) { stash =>
-        context.pipeToSelf(RobotClient.connect(context.system, middleware, settings.appName, settings.priority)) {
-          case Success(robots) => Connected(robots)
-          case Failure(e)      => ConnectFailed(e)
-        }
-        Behaviors.receiveMessage {
-          case Connected(robots) => stash.unstashAll(serving(robots, settings, ownsInterface = true))
-          case ConnectFailed(e) =>
-            throw new IllegalStateException(s"ZeroMQ endpoint cannot register with the middleware: $e", e)
-          case other =>
-            if (stash.isFull) context.log.warn("ZeroMQ endpoint: message dropped while registering")
-            else stash.stash(other)
-            Behaviors.same
-        }
-      }
-    }
+    Registering[Command](middleware, settings.appName, settings.priority, "ZeroMQ endpoint")(Registered,
+      { case Registered(r) => r })(
+      serving(_, settings, ownsInterface = true))
 
   /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` is on (it is off in competition). */
   def spawnIfEnabled(
@@ -335,7 +320,7 @@ object ZeroMqEndpoint {
       case LoopEnded =>
         context.log.info("ZeroMQ endpoint: socket loop ended; the endpoint stops")
         Behaviors.stopped
-      case Bound(_) | BindFailed(_) | Connected(_) | ConnectFailed(_) | BindTimedOut => Behaviors.unhandled
+      case Bound(_) | BindFailed(_) | Registered(_) | BindTimedOut => Behaviors.unhandled
     }.receiveSignal(cleanUp)
 
     private def stopEverything(): Unit = {
