@@ -197,7 +197,9 @@ object Gateway {
     def start(): Unit = {
       settings.robots.foreach(r => spawnRobot(r.robotId, r.address, discovered = false))
       settings.zeromq.robots.foreach(spawnZeroMqRobot)
-      port.start(reader)
+      // On the robot dispatcher's own thread when it is a port loop (reference.conf): a robot's answer then wakes one
+      // thread, the one that runs its actors.
+      port.startOn(reader, context.system.dispatchers.lookup(RobotDispatcher))
     }
 
     def bindingGameController: Behavior[Command] = Behaviors.receiveMessage[Command] {

@@ -5,6 +5,7 @@ import java.nio.ByteBuffer
 import java.nio.channels.DatagramChannel
 
 import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import akka.actor.typed.scaladsl.Behaviors
@@ -41,19 +42,34 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
   }
 
   "The gateway" must {
-    "free its robot port and stop its reader thread when it stops, however often it is started" in {
+    "free its robot port when it stops, however often it is started, with no reader thread of its own" in {
       def readers = Thread.getAllStackTraces.keySet.toArray(Array.empty[Thread])
         .count(t => t.isAlive && t.getName == s"${system.name}-robot-port")
       val before = readers
       (1 to 5).foreach { _ =>
         val f = new GatewayFixture(testKit)
-        readers shouldBe before + 1
+        // The default robot dispatcher is a port loop: its thread reads the port, no reader thread is started.
+        readers shouldBe before
         f.stop()
         readers shouldBe before
         // Closed with the gateway, not left to the garbage collector: the port can be bound again at once.
         DatagramChannel.open().bind(f.addresses.robots).close()
       }
     }
+    "read its robot port on the robot dispatcher's one thread, which waits in the port's selector when idle" in
+      withGateway() { f =>
+        f.robot(15)
+        f.awaitEvent(10.seconds) { case RobotOnline(15, _) => () }
+        def robotThreads = Thread.getAllStackTraces.asScala.filter { case (t, _) =>
+          t.isAlive && t.getName.startsWith(s"${system.name}-naogateway.dispatcher")
+        }
+        robotThreads.size shouldBe 1
+        // Between keep-alives the thread that runs the robot actors waits for the robot port, not in a task queue.
+        eventually(timeout(10.seconds)) {
+          val (_, stack) = robotThreads.head
+          stack.exists(e => e.getClassName.endsWith("SelectorImpl") && e.getMethodName == "select") shouldBe true
+        }
+      }
     "take game state only from its trusted GameController: a forged PLAYING from elsewhere changes nothing" in
       withGateway("competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]") { f =>
         val stranger = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.2", 0))

@@ -4,8 +4,10 @@ import java.io.IOException
 import java.net.{InetSocketAddress, StandardSocketOptions}
 import java.nio.ByteBuffer
 import java.nio.channels.{ClosedChannelException, ClosedSelectorException, DatagramChannel, SelectionKey, Selector}
+import java.util.concurrent.Executor
 import java.util.concurrent.locks.LockSupport
 
+import scala.annotation.unused
 import scala.util.control.NonFatal
 
 import org.slf4j.LoggerFactory
@@ -30,25 +32,34 @@ trait RobotLink extends DatagramWriter {
   /** Starts handing datagrams to `handler`; once only. */
   def start(handler: RobotPort.Handler): Unit
 
+  /** Starts handing datagrams to `handler`, on `executor`'s thread where the link can (a socket on a [[PortLoop]]); a
+    * link that cannot reads as [[start]] does. Once only.
+    */
+  def startOn(handler: RobotPort.Handler, @unused executor: Executor): Unit = start(handler)
+
   /** Stops handing datagrams (waiting at most `joinMillis` for the thread) and releases the link; safe to repeat. */
   def close(joinMillis: Long = 2000L): Unit
 }
 
-/** The gateway's robot UDP port: one non-blocking `DatagramChannel`, read by a dedicated daemon thread and written by
-  * whoever holds the port (the outbox, the relay).
+/** The gateway's robot UDP port: one non-blocking `DatagramChannel`, read on the robot dispatcher's own thread when
+  * that runs on a [[PortLoop]] ([[RobotPort.startOn]]), or by a dedicated daemon thread ([[RobotPort.start]]), and
+  * written by whoever holds the port (the outbox, the relay).
   *
-  * Why a thread and not an actor: a datagram read by Akka IO passes its selector actor and a link actor before any
-  * gateway code sees it, two mailboxes per datagram each way. The reader thread blocks in its own selector only, never
-  * inside an actor, and hands each datagram to a [[RobotPort.Handler]] (the gateway's routing) on that same thread.
+  * Why a loop or a thread and not an actor: a datagram read by Akka IO passes its selector actor and a link actor
+  * before any gateway code sees it, two mailboxes per datagram each way. The port is read where a selector waits, never
+  * inside an actor, and each datagram goes to a [[RobotPort.Handler]] (the gateway's routing) on that same thread.
   * Writes need no thread of their own: a non-blocking send either takes the datagram or returns 0 at once.
   */
-final class RobotPort private (channel: DatagramChannel, threadName: String) extends RobotLink {
+final class RobotPort private (private[link] val channel: DatagramChannel, threadName: String)
+    extends RobotLink
+    with PortLoop.Source {
   import RobotPort._
 
-  private val selector = Selector.open()
-  channel.register(selector, SelectionKey.OP_READ)
   @volatile private var open = true
-  @volatile private var reader: Option[Thread] = None
+  // Who reads the port; changed under the port's lock, acted on outside it (a detach waits for the loop's thread).
+  private var reading: Reading = NotStarted
+  @volatile private var handler: Handler = null
+  private var failures = 0L
 
   /** Where the port is bound (the real port when 0 was asked for). */
   val localAddress: InetSocketAddress = channel.getLocalAddress.asInstanceOf[InetSocketAddress]
@@ -58,69 +69,151 @@ final class RobotPort private (channel: DatagramChannel, threadName: String) ext
     catch { case _: IOException => false } // closed, or the kernel refused the destination: the datagram is dropped
 
   /** Starts the reader thread with `handler`; once only. */
-  def start(handler: Handler): Unit = synchronized {
-    require(reader.isEmpty, "the robot port's reader runs already")
-    val thread = new Thread(() => readLoop(handler), threadName)
-    thread.setDaemon(true)
-    reader = Some(thread)
-    thread.start()
+  def start(handler: Handler): Unit = {
+    val started = synchronized {
+      require(reading == NotStarted, "the robot port's reader runs already")
+      this.handler = handler
+      ownThread()
+    }
+    started.start()
   }
 
-  /** Stops the reader (waiting at most `joinMillis` for it) and closes the channel; safe to call more than once. */
+  /** Reads the port on `executor`'s thread when that is a [[PortLoop]]'s (the robot dispatcher's, so an answer wakes
+    * one thread, not two); on any other executor with a reader thread of its own, as [[start]]. Once only.
+    */
+  override def startOn(handler: Handler, executor: Executor): Unit = {
+    synchronized {
+      require(reading == NotStarted, "the robot port's reader runs already")
+      this.handler = handler
+      reading = Starting
+    }
+    executor.execute { () =>
+      val thread = synchronized {
+        // Closed before this ran: nothing to start.
+        if (reading != Starting) None
+        else
+          PortLoop.current match {
+            case Some(loop) =>
+              reading = Attached(loop.attach(this))
+              None
+            case None => Some(ownThread())
+          }
+      }
+      thread.foreach(_.start())
+    }
+  }
+
+  // Under the port's lock; the caller starts the thread outside it.
+  private def ownThread(): Thread = {
+    val selector = Selector.open()
+    try channel.register(selector, SelectionKey.OP_READ)
+    catch {
+      case NonFatal(e) =>
+        selector.close()
+        throw e
+    }
+    val thread = new Thread(() => readLoop(selector), threadName)
+    thread.setDaemon(true)
+    reading = OwnThread(thread, selector)
+    thread
+  }
+
+  /** Stops the reading (waiting at most `joinMillis` for the reader, never for the calling thread itself) and closes
+    * the channel; once it returns the handler is not called any more. Safe to call more than once.
+    */
   def close(joinMillis: Long): Unit = {
     open = false
-    try selector.wakeup()
-    catch { case NonFatal(_) => () }
-    reader.foreach(t => if (t ne Thread.currentThread()) t.join(joinMillis))
-    try channel.close()
-    finally selector.close()
+    val was = synchronized {
+      val r = reading
+      reading = Closed
+      r
+    }
+    try
+      was match {
+        case Attached(attachment) =>
+          if (!attachment.detach(joinMillis))
+            log.warn("Robot port {}: its loop did not let it go within {} ms", localAddress, joinMillis)
+        case OwnThread(thread, selector) =>
+          try selector.wakeup()
+          catch { case NonFatal(_) => () }
+          if (thread ne Thread.currentThread()) thread.join(joinMillis)
+        case _ => ()
+      }
+    finally
+      try channel.close()
+      finally
+        was match {
+          case OwnThread(_, selector) => selector.close()
+          case _                      => ()
+        }
   }
 
-  /** Whether the reader thread is running. */
-  def readerAlive: Boolean = reader.exists(_.isAlive)
+  /** Whether the port's own reader thread is running (false on a loop). */
+  def readerAlive: Boolean = synchronized {
+    reading match {
+      case OwnThread(thread, _) => thread.isAlive
+      case _                    => false
+    }
+  }
 
-  private def readLoop(handler: Handler): Unit = {
+  /** Whether the port is read on a [[PortLoop]]. */
+  def onLoop: Boolean = synchronized {
+    reading match {
+      case Attached(_) => true
+      case _           => false
+    }
+  }
+
+  private def readLoop(selector: Selector): Unit = {
     // One buffer for the port's whole life; each datagram is copied out at its own size.
     val buffer = ByteBuffer.allocateDirect(MaxDatagramBytes)
-    var failures = 0L
     try {
       while (open) {
         selector.select()
         selector.selectedKeys().clear()
-        var more = open
-        while (more) {
-          buffer.clear()
-          val from =
-            try channel.receive(buffer).asInstanceOf[InetSocketAddress]
-            catch {
-              case e: ClosedChannelException => throw e
-              case e: IOException =>
-                failures += 1
-                if (RateLimitedLog.due(failures))
-                  log.warn("Robot port {}: receive failed ({} so far): {}", localAddress, failures, e.toString)
-                // A failure that repeats must not spin a core.
-                LockSupport.parkNanos(1000000L)
-                null
-            }
-          if (from == null) more = false
-          else {
-            buffer.flip()
-            val bytes = new Array[Byte](buffer.remaining)
-            buffer.get(bytes)
-            try handler.received(bytes, from)
-            catch {
-              case NonFatal(e) =>
-                failures += 1
-                if (RateLimitedLog.due(failures))
-                  log.error(s"Robot port $localAddress: a datagram from $from failed ($failures so far)", e)
-            }
-          }
-        }
-        handler.caughtUp()
+        drain(buffer, Int.MaxValue)
       }
     } catch {
       case _: ClosedChannelException | _: ClosedSelectorException => () // closed by close(): the normal end
     }
+  }
+
+  /** Reads at most `max` datagrams (on the one thread that reads the port), then tells the handler it caught up if the
+    * channel is empty.
+    */
+  private[link] def drain(buffer: ByteBuffer, max: Int): Unit = {
+    var left = max
+    while (left > 0 && open) {
+      buffer.clear()
+      val from =
+        try channel.receive(buffer).asInstanceOf[InetSocketAddress]
+        catch {
+          case e: ClosedChannelException => throw e
+          case e: IOException =>
+            failures += 1
+            if (RateLimitedLog.due(failures))
+              log.warn("Robot port {}: receive failed ({} so far): {}", localAddress, failures, e.toString)
+            // A failure that repeats must not spin a core.
+            LockSupport.parkNanos(1000000L)
+            null
+        }
+      if (from == null) left = -1
+      else {
+        left -= 1
+        buffer.flip()
+        val bytes = new Array[Byte](buffer.remaining)
+        buffer.get(bytes)
+        try handler.received(bytes, from)
+        catch {
+          case NonFatal(e) =>
+            failures += 1
+            if (RateLimitedLog.due(failures))
+              log.error(s"Robot port $localAddress: a datagram from $from failed ($failures so far)", e)
+        }
+      }
+    }
+    // Empty (or closed from the handler): the handler may flush what it batched. A full batch leaves more to read.
+    if (left < 0 || !open) handler.caughtUp()
   }
 }
 
@@ -147,8 +240,16 @@ object RobotPort {
 
   private val log = LoggerFactory.getLogger(classOf[RobotPort])
 
-  /** A port bound to `address` with a kernel receive buffer of `receiveBufferBytes`; the reader starts with
-    * [[RobotPort.start]].
+  // Who reads the port.
+  private sealed trait Reading
+  private case object NotStarted extends Reading
+  private case object Starting extends Reading
+  private final case class OwnThread(thread: Thread, selector: Selector) extends Reading
+  private final case class Attached(attachment: PortLoop#Attachment) extends Reading
+  private case object Closed extends Reading
+
+  /** A port bound to `address` with a kernel receive buffer of `receiveBufferBytes`; reading starts with
+    * [[RobotPort.start]] or [[RobotPort.startOn]].
     */
   def open(address: InetSocketAddress, receiveBufferBytes: Int, threadName: String): RobotPort = {
     val channel = DatagramChannel.open()
