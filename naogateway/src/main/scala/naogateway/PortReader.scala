@@ -9,8 +9,9 @@ import naogateway.link.{Backlog, DatagramWriter, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
 import naogateway.recording.Recording
 
-/** The robot port's reader side of the gateway: runs on the reader thread, routes each datagram with the table the
-  * gateway last published, and hands the robot actors (or the gateway) their messages directly.
+/** The robot port's reader side of the gateway: runs where the port is read (the robot dispatcher's port loop, or a
+  * reader thread), routes each datagram with the table the gateway last published, and hands the robot actors (or the
+  * gateway) their messages directly.
   */
 private[naogateway] final class PortReader(
     settings: GatewaySettings,
@@ -24,7 +25,7 @@ private[naogateway] final class PortReader(
 ) extends RobotPort.Handler {
   import PortReader._
 
-  // Written by the reader thread only; read by the gateway for its figures.
+  // Written by the one thread that reads the port; read by the gateway for its figures.
   @volatile var datagramsIn, relayed = 0L
   // What the outbox has not been told yet: told in one message per InboundBatch datagrams or when the port is quiet.
   private var inboundDatagrams, inboundBytes = 0

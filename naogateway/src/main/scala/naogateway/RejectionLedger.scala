@@ -48,7 +48,7 @@ private[naogateway] final case class RejectionLedger(
   }
 }
 
-/** The ledger's bound, and the ledger shared by the robot port's reader thread and the gateway actor. */
+/** The ledger's bound, and the ledger shared by the robot port's reader and the gateway actor. */
 private[naogateway] object RejectionLedger {
 
   /** Source addresses whose rejections are counted one by one; the rest are counted together. */

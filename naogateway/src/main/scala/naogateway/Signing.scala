@@ -30,8 +30,8 @@ object RobotSigning {
 /** The gateway's check of one robot's signed frames: the team key and the robot's replay window, which lives here and
   * nowhere else. The gateway creates one per robot with `signing = required` and keeps it with the robot's route, so it
   * outlives restarts of the robot actor. Every frame for that robot passes it before anything acts on the frame: on the
-  * robot port's reader thread, or in the gateway for the frames the reader leaves to it (a re-bind), hence the window
-  * is an atomic value.
+  * robot port's reader, or in the gateway for the frames the reader leaves to it (a re-bind), hence the window is an
+  * atomic value.
   */
 final class SignatureCheck(key: SigningKey) {
   private val window = new AtomicReference(ReplayWindow.empty)

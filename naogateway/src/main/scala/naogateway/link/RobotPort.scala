@@ -220,7 +220,7 @@ final class RobotPort private (private[link] val channel: DatagramChannel, threa
 /** Opening the robot port. */
 object RobotPort {
 
-  /** Where the reader hands what it reads; called on the reader thread only. */
+  /** Where the reader hands what it reads; called on one thread at a time, the one that reads the port. */
   trait Handler {
 
     /** One datagram of `bytes` from `from`; `bytes` belongs to the handler. */

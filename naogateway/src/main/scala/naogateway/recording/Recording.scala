@@ -38,7 +38,7 @@ final class RobotClockEstimates extends RobotTimeBase {
 }
 
 /** Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
-  * reader thread and the outbox call it on their hot paths.
+  * reader and the outbox call it on their hot paths.
   */
 trait Recording {
 
