@@ -51,10 +51,10 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
   /** What a port on the loop handed on, with the thread it ran on. */
   private final class Recorder extends RobotPort.Handler {
     val events = new LinkedBlockingQueue[(String, String)]() // (datagram's first byte or "caught up", thread)
-    val received = new AtomicInteger
+    val count = new AtomicInteger
     @volatile var onReceived: () => Unit = () => ()
     def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
-      received.incrementAndGet()
+      count.incrementAndGet()
       events.put((bytes.headOption.fold("empty")(_.toString), Thread.currentThread().getName))
       onReceived()
     }
@@ -179,14 +179,14 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
         f.executor.execute(() => release.await(Wait, TimeUnit.SECONDS))
         val seenByTask = new LinkedBlockingQueue[Integer]()
         f.recorder.onReceived = { () =>
-          if (f.recorder.received.get == 1) f.executor.execute(() => seenByTask.put(f.recorder.received.get))
+          if (f.recorder.count.get == 1) f.executor.execute(() => seenByTask.put(f.recorder.count.get))
         }
         (1 to 100).foreach(i => f.send(i))
         release.countDown()
         val seen = Option(seenByTask.poll(Wait, TimeUnit.SECONDS)).getOrElse(fail("the task did not run"))
         // Given at the first datagram, it ran after that pass's batch, long before the 100th.
         seen.intValue shouldBe 4
-        eventually(f.recorder.received.get == 100, "all 100 datagrams arrive")
+        eventually(f.recorder.count.get == 100, "all 100 datagrams arrive")
       }
     "read datagrams while a stream of tasks keeps its queue full" in
       withFixture("loop-stream", tasks = 4) { f =>
@@ -251,11 +251,11 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
         })
         flood.start()
         try {
-          eventually(f.recorder.received.get > 50, "the flood arrives")
+          eventually(f.recorder.count.get > 50, "the flood arrives")
           f.port.close()
-          val atClose = f.recorder.received.get
+          val atClose = f.recorder.count.get
           Thread.sleep(100)
-          f.recorder.received.get shouldBe atClose
+          f.recorder.count.get shouldBe atClose
           // The loop goes on running tasks, and the address can be bound again at once: the channel is closed.
           on(f.executor)(PortLoop.current) shouldBe Some(f.factory)
           DatagramChannel.open().bind(f.port.localAddress).close()
@@ -272,7 +272,7 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
         (1 to 20).foreach(i => f.send(i))
         f.recorder.nextDatagram()._1 shouldBe "1"
         // Closed by the first datagram's handler: the other 19 are never handed on, and the loop runs on.
-        on(f.executor)(f.recorder.received.get) shouldBe 1
+        on(f.executor)(f.recorder.count.get) shouldBe 1
         DatagramChannel.open().bind(f.port.localAddress).close()
       }
     "read on a thread of its own when the executor is not a port loop's" in {
