@@ -304,6 +304,8 @@ object CallPathBench extends Benchmark {
         |akka.cluster.seed-nodes = []
         |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
         |akka.loglevel = "WARNING"
+        |# As the launcher runs it: the middleware on the gateway's robot dispatcher.
+        |robotmiddleware.dispatcher = "naogateway.dispatcher"
         |# A socket-loop thread for each of the bench's two endpoints.
         |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 2
         |""".stripMargin)
@@ -317,7 +319,8 @@ object CallPathBench extends Benchmark {
     private implicit val timeout: Timeout = Timeout(30.seconds)
     val addresses: Gateway.Addresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
     val middleware: ActorRef[RobotMiddleware.Command] =
-      system.systemActorOf(RobotMiddleware(system, MiddlewareSettings(system)), "middleware")
+      system.systemActorOf(RobotMiddleware(system, MiddlewareSettings(system)), "middleware",
+        RobotMiddleware.dispatcher(MiddlewareSettings(system)))
 
     def robot(robotId: Int): Option[ActorRef[RobotAccess.Command]] =
       Await.result(system.ask[Option[ActorRef[RobotAccess.Command]]](GatewayAccess.GetRobotAccess(robotId, _)),

@@ -212,7 +212,8 @@ object Launcher {
     val gateway =
       context.spawn(Gateway(demoDiscovery(GatewaySettings(context.system), launcher.simulatedRobots), replay),
         "gateway")
-    val middleware = context.spawn(makeMiddleware(gateway), "middleware")
+    val middleware = context.spawn(makeMiddleware(gateway), "middleware",
+      RobotMiddleware.dispatcher(MiddlewareSettings(context.system)))
     context.watchWith(gateway, PartStopped("gateway"))
     context.watchWith(middleware, PartStopped("middleware"))
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)

@@ -28,6 +28,11 @@ class LauncherConfigSpec extends AnyWordSpec with Matchers {
       val c = Launcher.nodeConfig(ConfigFactory.empty(), noApplication)
       c.getString("naogateway.link.bind-address") shouldBe "127.0.0.1"
       c.getInt("apps.launcher.simulated-robots") shouldBe 3
+      // The middleware beside the robot actors, on their dispatcher, which the same config defines.
+      c.getString("robotmiddleware.dispatcher") shouldBe "naogateway.dispatcher"
+      c.hasPath("naogateway.dispatcher.executor") shouldBe true
+      robotmiddleware.MiddlewareSettings.fromConfig(c.getConfig("robotmiddleware")).dispatcher shouldBe
+        "naogateway.dispatcher"
     }
 
     "let application.conf override the launcher's defaults, and the config file override both" in {

@@ -22,7 +22,8 @@ final case class MiddlewareSettings(
     askMargin: FiniteDuration = 1.second,
     guardRestart: RestartBackoff = RestartBackoff(200.millis, 5.seconds, 0.2),
     clientAskMargin: FiniteDuration = 5.seconds,
-    clientFindRetry: FiniteDuration = 200.millis
+    clientFindRetry: FiniteDuration = 200.millis,
+    dispatcher: String = MiddlewareSettings.DefaultDispatcher
 ) {
   require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
   require(walkRefresh > Duration.Zero && walkRefresh < 500.millis,
@@ -35,10 +36,14 @@ final case class MiddlewareSettings(
   require(askMargin > Duration.Zero, "ask-margin must be positive")
   require(clientAskMargin > Duration.Zero, "client.ask-margin must be positive")
   require(clientFindRetry >= 10.millis, "client.find-retry must be at least 10 ms")
+  require(dispatcher.trim.nonEmpty, "dispatcher must name a dispatcher's config path")
 }
 
 /** Reading the settings. */
 object MiddlewareSettings {
+
+  /** Akka's own dispatcher: where the middleware runs unless the node puts it beside the gateway's robot actors. */
+  val DefaultDispatcher: String = "akka.actor.default-dispatcher"
 
   /** The settings of this system's configuration. */
   def apply(system: ActorSystem[_]): MiddlewareSettings =
@@ -58,6 +63,7 @@ object MiddlewareSettings {
     c.getDuration("ask-margin").toScala,
     RestartBackoff.fromConfig(c, "supervision.guard"),
     c.getDuration("client.ask-margin").toScala,
-    c.getDuration("client.find-retry").toScala
+    c.getDuration("client.find-retry").toScala,
+    c.getString("dispatcher")
   )
 }

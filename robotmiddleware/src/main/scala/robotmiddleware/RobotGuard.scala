@@ -12,6 +12,20 @@ import akka.util.Timeout
 import naogateway._
 import naogateway.wire.{Posture, RpcCall, RpcMethod, RpcValue}
 
+/** How apps are told of a call that a newer one replaced or a restart interrupted: as an overload to retry, the one
+  * error type, in words for apps. Applied by the guard to the answers it relays and by `RobotInterface` to those the
+  * robot's command owner sends an app directly.
+  */
+private[robotmiddleware] object AppFailure {
+
+  /** `error` as an app sees it. */
+  def apply(robotId: Int, error: RobotFailure): RobotFailure = error match {
+    case RobotFailure.Superseded(_, call)  => RobotFailure.Overloaded(robotId, s"$call replaced by a newer one")
+    case RobotFailure.Interrupted(_, call) => RobotFailure.Overloaded(robotId, s"$call interrupted, try again")
+    case other                             => other
+  }
+}
+
 /** An app as the middleware knows it: its event ref (its identity), name and priority. */
 final case class AppInfo(events: ActorRef[AppEvent], name: String, priority: Int)
 
@@ -22,8 +36,7 @@ private[robotmiddleware] object RobotGuard {
   sealed trait Command
 
   /** Runs an app's operation if the app holds its lease, the robot is online and no safety hold forbids it. */
-  final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[RobotMiddleware.OperationResult])
-      extends Command
+  final case class Execute(app: AppInfo, operation: Operation, replyTo: ActorRef[CallResult]) extends Command
 
   /** Sends an app's operation under the same checks as `Execute` and in the same order (one path to the robot's command
     * owner, sent once): `replyTo` learns whether it was accepted; the robot's answer is the guard's alone.
@@ -53,7 +66,7 @@ private[robotmiddleware] object RobotGuard {
   private final case class ChildrenReady(children: RobotAccess.Opened) extends Command
   private final case class SnapshotReceived(snapshot: RobotSnapshot) extends Command
   private final case class OperationDone(
-      replyTo: ActorRef[RobotMiddleware.OperationResult],
+      replyTo: ActorRef[CallResult],
       operation: Operation,
       result: Either[RobotFailure, Option[RpcValue]],
       superseded: Boolean = false
@@ -124,13 +137,6 @@ private[robotmiddleware] object RobotGuard {
     // registrations died with it.
     private var visionWatchers = Map.empty[ActorRef[VisionFrame], Boolean]
 
-    // Apps are told of a replaced or interrupted call as an overload to retry: the one error type, in words for apps.
-    private def failure(error: RobotFailure): RobotFailure = error match {
-      case RobotFailure.Superseded(_, call)  => RobotFailure.Overloaded(robotId, s"$call replaced by a newer one")
-      case RobotFailure.Interrupted(_, call) => RobotFailure.Overloaded(robotId, s"$call interrupted, try again")
-      case other                             => other
-    }
-
     def connecting(initiallyOnline: Boolean): Behavior[Command] = {
       online = initiallyOnline
       Behaviors.receiveMessage {
@@ -145,8 +151,7 @@ private[robotmiddleware] object RobotGuard {
           stash.unstashAll(ready(children))
         case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
         case e: Execute if !online =>
-          e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
-            Left(RobotFailure.RobotOffline(robotId)))
+          e.replyTo ! CallResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
         case s: Send if !online =>
           s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name, Left(RobotFailure.RobotOffline(robotId)))
@@ -168,7 +173,7 @@ private[robotmiddleware] object RobotGuard {
         case other =>
           if (stash.isFull) other match {
             case e: Execute =>
-              e.replyTo ! RobotMiddleware.OperationResult(robotId, e.operation.name,
+              e.replyTo ! CallResult(robotId, e.operation.name,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
             case s: Send =>
               s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name,
@@ -255,7 +260,7 @@ private[robotmiddleware] object RobotGuard {
         }
         Behaviors.same
       case OperationDone(replyTo, operation, result, superseded) =>
-        replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
+        replyTo ! CallResult(robotId, operation.name, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
         // A superseded one is not undefined: the newer call of its slot decides the motion.
         if (result.isLeft && !superseded && operation.isInstanceOf[Operation.Posture] && online)
@@ -429,30 +434,34 @@ private[robotmiddleware] object RobotGuard {
       RpcMethod.Walk.call(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat),
         RpcValue.Number(w.omega.toFloat))
 
-    private def reply(replyTo: ActorRef[RobotMiddleware.OperationResult], operation: Operation,
+    private def reply(replyTo: ActorRef[CallResult], operation: Operation,
         result: Either[RobotFailure, Option[RpcValue]]): Unit =
-      replyTo ! RobotMiddleware.OperationResult(robotId, operation.name, result)
+      replyTo ! CallResult(robotId, operation.name, result)
 
-    // `once`: a send is sent once (no retries), as the seed's no-response sender does; its answer still comes back
-    // here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both doors.
-    private def call(c: RobotAccess.Opened, rpc: RpcCall, operation: Operation,
-        replyTo: ActorRef[RobotMiddleware.OperationResult],
+    // `once`: a send is sent once (no retries), as the seed's no-response sender does. A walk's or a posture's answer
+    // comes back here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both
+    // doors. Every other operation leaves nothing to keep: the robot's command owner answers its caller directly,
+    // which spares each call the hop back through this actor (and the thread it may wake).
+    private def call(c: RobotAccess.Opened, rpc: RpcCall, operation: Operation, replyTo: ActorRef[CallResult],
         once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
-      implicit val askTimeout: Timeout = timeout + settings.askMargin
       val idempotent = if (once) Some(false) else None
-      context.ask(c.response,
-        (ref: ActorRef[CallResult]) =>
-          RobotAccess.Call(rpc, ref, priority, Some(timeout), idempotent)) {
-        case Success(result) =>
-          OperationDone(replyTo, operation, result.result.left.map(failure),
-            result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
-        case Failure(_) =>
-          OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
+      operation match {
+        case _: Operation.Walk | _: Operation.Posture =>
+          implicit val askTimeout: Timeout = timeout + settings.askMargin
+          context.ask(c.response,
+            (ref: ActorRef[CallResult]) => RobotAccess.Call(rpc, ref, priority, Some(timeout), idempotent)) {
+            case Success(result) =>
+              OperationDone(replyTo, operation, result.result.left.map(AppFailure(robotId, _)),
+                result.result.left.exists(_.isInstanceOf[RobotFailure.Superseded]))
+            case Failure(_) =>
+              OperationDone(replyTo, operation, Left(RobotFailure.Timeout(robotId, operation.name, timeout.toMillis)))
+          }
+        case _ => c.response ! RobotAccess.Call(rpc, replyTo, priority, Some(timeout), idempotent)
       }
     }
 
     private def run(c: RobotAccess.Opened, app: AppInfo, operation: Operation,
-        replyTo: ActorRef[RobotMiddleware.OperationResult], once: Boolean): Unit = operation match {
+        replyTo: ActorRef[CallResult], once: Boolean): Unit = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.
         // Until then nothing is refreshed: neither this walk, unconfirmed, nor the one it replaces.

@@ -17,7 +17,7 @@ import akka.stream.typed.scaladsl.ActorSource
 import akka.util.Timeout
 import akka.{Done, NotUsed}
 
-import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.{CallResult, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
 
@@ -188,9 +188,8 @@ object RobotClient {
       RobotClient.asRobotFailure(robotId, operation, askTimeout.duration)(middleware.ask[R](message))
 
     private def execute(robotId: Int, operation: Operation): Future[Option[RpcValue]] =
-      ask[RobotMiddleware.OperationResult](robotId, operation.name)(RobotMiddleware.Execute(session, robotId, operation,
-          _)).flatMap { r =>
-        r.result.fold(Future.failed, Future.successful)
+      ask[CallResult](robotId, operation.name)(RobotMiddleware.Execute(session, robotId, operation, _)).flatMap { r =>
+        r.result.fold(error => Future.failed(AppFailure(robotId, error)), Future.successful)
       }
 
     private def done(f: Future[Option[RpcValue]]): Future[Done] = f.map(_ => Done)

@@ -4,10 +4,9 @@ import naogateway.wire.ActuatorGroup
 
 import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
-import akka.actor.typed.{ActorRef, Behavior}
+import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector}
 
 import naogateway._
-import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 
 /** The one middleware per gateway: apps register here, and every decision about a robot is taken by its guard. */
@@ -24,9 +23,12 @@ object RobotMiddleware {
       replyTo: ActorRef[AppRegistered])
       extends Command
 
-  /** Runs `operation` on robot `robotId` for the app whose event ref is `app`. */
-  final case class Execute(app: ActorRef[AppEvent], robotId: Int, operation: Operation,
-      replyTo: ActorRef[OperationResult])
+  /** Runs `operation` on robot `robotId` for the app whose event ref is `app`; `replyTo` gets exactly one `CallResult`,
+    * named after the operation. A plain operation's answer comes from the robot's command owner itself (no hop back
+    * through the guard), so it may be `Superseded` or `Interrupted`; `RobotInterface` tells apps of both as
+    * `Overloaded`.
+    */
+  final case class Execute(app: ActorRef[AppEvent], robotId: Int, operation: Operation, replyTo: ActorRef[CallResult])
       extends Command
 
   /** Sends `operation` to robot `robotId` for the app whose event ref is `app`, in the same order as its `Execute`s and
@@ -89,9 +91,6 @@ object RobotMiddleware {
   /** The answer to `RegisterApp`. */
   final case class AppRegistered(name: String)
 
-  /** The one answer every `Execute` gets. */
-  final case class OperationResult(robotId: Int, operation: String, result: Either[RobotFailure, Option[RpcValue]])
-
   /** The one answer every `Send` gets: accepted (`Right`) once the robot's command owner has it, or the refusal. */
   final case class SendResult(robotId: Int, operation: String, result: Either[RobotFailure, Unit])
 
@@ -110,6 +109,9 @@ object RobotMiddleware {
     def apply(robotId: Int, group: ActuatorGroup, result: Either[RobotFailure, Unit]): LeaseResult =
       LeaseResult(robotId, Set(group), result)
   }
+
+  /** Where the middleware and its guards run (`robotmiddleware.dispatcher`): spawn the middleware with it. */
+  def dispatcher(settings: MiddlewareSettings): DispatcherSelector = DispatcherSelector.fromConfig(settings.dispatcher)
 
   /** The middleware in front of `gateway`, registered with the receptionist. It holds the gateway's middleware view and
     * each robot's `RobotAccess.Command`: it can reach a robot only through the robot's response and vision actors.
@@ -145,7 +147,8 @@ object RobotMiddleware {
           val g = context.spawn(
             Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
               .onFailure(settings.guardRestart.strategy),
-            s"guard-$robotId"
+            s"guard-$robotId",
+            dispatcher(settings)
           )
           guards = guards.updated(robotId, g)
           g
@@ -210,7 +213,7 @@ object RobotMiddleware {
       case RobotFound(robotId, None, command) =>
         command match {
           case Execute(_, _, operation, replyTo) =>
-            replyTo ! OperationResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
+            replyTo ! CallResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
           case Send(_, _, operation, replyTo) =>
             replyTo ! SendResult(robotId, operation.name, Left(RobotFailure.UnknownRobot(robotId)))
           case Acquire(_, _, groups, replyTo) =>

@@ -60,6 +60,22 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       called.failed.futureValue(waited) shouldBe a[RobotFailure.Timeout]
     }
 
+    "tell the app of a superseded or interrupted call as Overloaded, and pass every other failure as it is" in {
+      val (interface, middleware) = connected()
+      val head = interface.head(4, 0.1, 0.0)
+      middleware.expectMessageType[RobotMiddleware.Execute].replyTo !
+        naogateway.CallResult(4, "motion.head", Left(RobotFailure.Superseded(4, "motion.head")))
+      head.failed.futureValue shouldBe RobotFailure.Overloaded(4, "motion.head replaced by a newer one")
+      val ping = interface.call(4, "system", "ping")
+      middleware.expectMessageType[RobotMiddleware.Execute].replyTo !
+        naogateway.CallResult(4, "system.ping", Left(RobotFailure.Interrupted(4, "system.ping")))
+      ping.failed.futureValue shouldBe RobotFailure.Overloaded(4, "system.ping interrupted, try again")
+      val said = interface.say(4, "hi")
+      middleware.expectMessageType[RobotMiddleware.Execute].replyTo !
+        naogateway.CallResult(4, "speech.say", Left(RobotFailure.RobotError(4, "muted")))
+      said.failed.futureValue shouldBe RobotFailure.RobotError(4, "muted")
+    }
+
     "complete a send once the middleware accepted it, and fail it with the middleware's refusal" in {
       val (interface, middleware) = connected()
       val accepted = interface.send(4, Operation.Head(0.1, 0.0))

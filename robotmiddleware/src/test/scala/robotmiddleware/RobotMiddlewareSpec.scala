@@ -91,8 +91,8 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       result.receiveMessage()
     }
 
-    def execute(session: ActorRef[SessionMessage], operation: Operation): TestProbe[RobotMiddleware.OperationResult] = {
-      val result = createTestProbe[RobotMiddleware.OperationResult]()
+    def execute(session: ActorRef[SessionMessage], operation: Operation): TestProbe[CallResult] = {
+      val result = createTestProbe[CallResult]()
       middleware ! RobotMiddleware.Execute(session, 1, operation, result.ref)
       result
     }
@@ -156,14 +156,41 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     "refuse an operation without the lease it needs, and run it once the lease is held" in {
       val f = new Fixture
       val (app, _) = f.app("teleop", 1)
-      f.execute(app, Operation.Head(0.3, 0.0)).expectMessageType[RobotMiddleware.OperationResult].result shouldBe
+      f.execute(app, Operation.Head(0.3, 0.0)).expectMessageType[CallResult].result shouldBe
         Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Head, None))
       f.acquire(app, ActuatorGroup.Head).result shouldBe Right(())
       val result = f.execute(app, Operation.Head(0.3, 0.0))
       val call = f.expectCall("motion.head")
       call.call.params shouldBe Vector(RpcValue.Number(0.3f), RpcValue.Number(0f))
       call.replyTo ! CallResult(1, "motion.head", Right(Some(RpcValue.Flag(true))))
-      result.expectMessage(RobotMiddleware.OperationResult(1, "motion.head", Right(Some(RpcValue.Flag(true)))))
+      result.expectMessage(CallResult(1, "motion.head", Right(Some(RpcValue.Flag(true)))))
+    }
+    "hand a plain operation's reply ref to the robot's command owner, and relay only a walk's and a posture's answer" in {
+      val f = new Fixture
+      val (app, _) = f.app("teleop", 1)
+      f.acquireAll(app, ActuatorGroup.Head, ActuatorGroup.Walk).result shouldBe Right(())
+      // Plain: no bookkeeping after the answer, so the owner answers the app itself (no hop back through the guard),
+      // and what it says, a superseded call included, reaches the app as it is (RobotInterface maps it for apps).
+      val head = f.execute(app, Operation.Head(0.1, 0.0))
+      val headCall = f.expectCall("motion.head")
+      headCall.replyTo shouldBe head.ref
+      headCall.replyTo ! CallResult(1, "motion.head", Left(RobotFailure.Superseded(1, "motion.head")))
+      head.expectMessage(CallResult(1, "motion.head", Left(RobotFailure.Superseded(1, "motion.head"))))
+      val raw = f.execute(app, Operation.RawCall("system", "ping", Vector.empty))
+      f.expectCall("system.ping").replyTo shouldBe raw.ref
+      // A walk's answer starts the refresh and a posture's failure stops the robot: both come back through the guard.
+      val walk = f.execute(app, Operation.Walk(0.2, 0, 0))
+      val walkCall = f.expectCall("motion.walk")
+      walkCall.replyTo should not be walk.ref
+      walkCall.replyTo ! CallResult(1, "motion.walk", Left(RobotFailure.Superseded(1, "motion.walk")))
+      walk.expectMessage(
+        CallResult(1, "motion.walk", Left(RobotFailure.Overloaded(1, "motion.walk replaced by a newer one"))))
+      val posture = f.execute(app, Operation.Posture(Posture.Stand))
+      val postureCall = f.expectCall("motion.posture")
+      postureCall.replyTo should not be posture.ref
+      postureCall.replyTo ! CallResult(1, "motion.posture", Left(RobotFailure.RobotError(1, "fell")))
+      posture.expectMessage(CallResult(1, "motion.posture", Left(RobotFailure.RobotError(1, "fell"))))
+      f.expectCall("motion.stop")
     }
     "let different apps hold different groups of one robot" in {
       val f = new Fixture
@@ -358,7 +385,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       f.acquire(app, ActuatorGroup.Walk).result shouldBe Right(())
       // The guard asked the robot actor: online. The gateway's RobotOnline of first contact reaches it afterwards.
       f.publish ! RobotOnline(1, robotAddress)
-      val done = createTestProbe[RobotMiddleware.OperationResult]()
+      val done = createTestProbe[CallResult]()
       f.middleware ! RobotMiddleware.Execute(app, 1, Operation.Posture(Posture.Stand), done.ref)
       val seen = f.response.fishForMessage(3.seconds) {
         case c: RobotAccess.Call if c.call.name == "motion.posture" =>
@@ -400,7 +427,7 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
     "answer for robots the gateway does not know" in {
       val f = new Fixture
       val (app, _) = f.app("x", 1)
-      val result = createTestProbe[RobotMiddleware.OperationResult]()
+      val result = createTestProbe[CallResult]()
       f.middleware ! RobotMiddleware.Execute(app, 99, Operation.Say("hi"), result.ref)
       result.receiveMessage().result shouldBe Left(RobotFailure.UnknownRobot(99))
     }

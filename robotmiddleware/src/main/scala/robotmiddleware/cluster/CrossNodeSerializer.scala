@@ -52,7 +52,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case _: RobotMiddleware.WatchGame         => M.WatchGame
     case _: RobotMiddleware.WatchEvents       => M.WatchEvents
     case _: RobotMiddleware.AppRegistered     => M.AppRegistered
-    case _: RobotMiddleware.OperationResult   => M.OperationResult
+    case _: CallResult                        => M.CallResult
     case _: RobotMiddleware.LeaseResult       => M.LeaseResult
     case _: RobotMiddleware.SendResult        => M.SendResult
     case _: RobotMiddleware.RobotList         => M.RobotSnapshots
@@ -97,12 +97,12 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case RobotMiddleware.WatchGame(subscriber)               => bytes(pb.Watch(refText(subscriber)))
     case RobotMiddleware.WatchEvents(subscriber)             => bytes(pb.Watch(refText(subscriber)))
     case RobotMiddleware.AppRegistered(name)                 => bytes(pb.AppRegistered(name))
-    case RobotMiddleware.OperationResult(robotId, operation, result) =>
+    case CallResult(robotId, operation, result) =>
       val r = result.fold(
-        f => pb.OperationResult.Result.Failure(toProto(f)),
-        v => pb.OperationResult.Result.Returned(pb.Returned(v.map(_.toProto)))
+        f => pb.CallResult.Result.Failure(toProto(f)),
+        v => pb.CallResult.Result.Returned(pb.Returned(v.map(_.toProto)))
       )
-      bytes(pb.OperationResult(robotId, operation, r))
+      bytes(pb.CallResult(robotId, operation, r))
     case RobotMiddleware.LeaseResult(robotId, groups, result) =>
       bytes(pb.LeaseResult(robotId, groupNames(groups), result.left.toOption.map(f => toProto(f))))
     case RobotMiddleware.SendResult(robotId, operation, result) =>
@@ -164,14 +164,14 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.WatchGame     => RobotMiddleware.WatchGame(ref(pb.Watch.parseFrom(bytes).subscriber))
     case M.WatchEvents   => RobotMiddleware.WatchEvents(ref(pb.Watch.parseFrom(bytes).subscriber))
     case M.AppRegistered => RobotMiddleware.AppRegistered(pb.AppRegistered.parseFrom(bytes).name)
-    case M.OperationResult =>
-      val m = pb.OperationResult.parseFrom(bytes)
+    case M.CallResult =>
+      val m = pb.CallResult.parseFrom(bytes)
       val result = m.result match {
-        case pb.OperationResult.Result.Failure(f)  => Left(fromProto(f))
-        case pb.OperationResult.Result.Returned(r) => Right(r.value.map(naogateway.wire.RpcValue.fromProto))
-        case pb.OperationResult.Result.Empty       => throw corrupt(manifest, "neither failure nor result")
+        case pb.CallResult.Result.Failure(f)  => Left(fromProto(f))
+        case pb.CallResult.Result.Returned(r) => Right(r.value.map(naogateway.wire.RpcValue.fromProto))
+        case pb.CallResult.Result.Empty       => throw corrupt(manifest, "neither failure nor result")
       }
-      RobotMiddleware.OperationResult(m.robotId, m.operation, result)
+      CallResult(m.robotId, m.operation, result)
     case M.LeaseResult =>
       val m = pb.LeaseResult.parseFrom(bytes)
       RobotMiddleware.LeaseResult(m.robotId, m.groups.map(group(M.LeaseResult, _)).toSet,
@@ -398,7 +398,7 @@ object CrossNodeSerializer {
     val WatchGame = "WatchGame"
     val WatchEvents = "WatchEvents"
     val AppRegistered = "AppRegistered"
-    val OperationResult = "OperationResult"
+    val CallResult = "CallResult"
     val LeaseResult = "LeaseResult"
     val SendResult = "SendResult"
     val RobotSnapshots = "RobotSnapshots"

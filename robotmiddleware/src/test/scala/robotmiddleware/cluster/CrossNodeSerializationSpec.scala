@@ -135,7 +135,7 @@ object CrossNodeSerializationSpec {
     "WatchGame",
     "WatchEvents",
     "AppRegistered",
-    "OperationResult",
+    "CallResult",
     "LeaseResult",
     "RobotSnapshots",
     "Operation",
@@ -250,8 +250,8 @@ object CrossNodeSerializationSpec {
       RobotMiddleware.WatchGame(ref),
       RobotMiddleware.WatchEvents(ref),
       RobotMiddleware.AppRegistered("teleop"),
-      RobotMiddleware.OperationResult(7, "motion.walk", Right(None)),
-      RobotMiddleware.OperationResult(7, "system.echo", Right(Some(rpcValues.last))),
+      CallResult(7, "motion.walk", Right(None)),
+      CallResult(7, "system.echo", Right(Some(rpcValues.last))),
       RobotMiddleware.LeaseResult(7, ActuatorGroup.Walk, Right(())),
       RobotMiddleware.LeaseResult(7, ActuatorGroup.all.toSet, Right(())),
       RobotMiddleware.RobotList(Vector(snapshot, snapshot.copy(robotId = 8, address = ipv6))),
@@ -288,7 +288,7 @@ object CrossNodeSerializationSpec {
     ) ++
       operations.map(o => RobotMiddleware.Execute(ref, 7, o, ref)) ++
       operations ++
-      failures.map(f => RobotMiddleware.OperationResult(7, "motion.walk", Left(f))) ++
+      failures.map(f => CallResult(7, "motion.walk", Left(f))) ++
       failures.map(f => RobotMiddleware.LeaseResult(7, ActuatorGroup.Walk, Left(f))) ++
       failures ++
       rpcValues
