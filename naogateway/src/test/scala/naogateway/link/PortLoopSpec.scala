@@ -176,7 +176,12 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
         on(f.executor)(f.port.onLoop) shouldBe true
         // Hold the loop while 100 datagrams wait in the kernel, so the loop finds them all at once.
         val release = new CountDownLatch(1)
-        f.executor.execute(() => release.await(Wait, TimeUnit.SECONDS))
+        val holding = new CountDownLatch(1)
+        f.executor.execute { () =>
+          holding.countDown()
+          release.await(Wait, TimeUnit.SECONDS)
+        }
+        await(holding, "the loop held")
         val seenByTask = new LinkedBlockingQueue[Integer]()
         f.recorder.onReceived = { () =>
           if (f.recorder.count.get == 1) f.executor.execute(() => seenByTask.put(f.recorder.count.get))
