@@ -199,7 +199,7 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
         loopThread.remove()
         finished.countDown()
         processDetaches()
-        if (attachedCount == 0) {
+        if (attachedCount == 0 && selector != null) {
           try selector.close()
           catch { case NonFatal(e) => log.warn("Port loop: closing its selector failed: {}", e.toString) }
         }
