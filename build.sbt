@@ -89,8 +89,19 @@ lazy val zeromq = (project in file("zeromq"))
     libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j, jeromq) ++ testLibs
   )
 
+// The datagram port and the loop that reads it (one thread that runs an Akka dispatcher's tasks and waits in the
+// selector of the ports attached to it): the gateway's robot port and the apps' datagram door both use it, so it is a
+// module of its own that apps may see without the gateway.
+lazy val port = (project in file("port"))
+  .dependsOn(api)
+  .settings(strictScalac, testSettings)
+  .settings(
+    name := "naogateway-port",
+    libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j) ++ testLibs
+  )
+
 lazy val naogateway = (project in file("naogateway"))
-  .dependsOn(proto, wire, api, access, zeromq)
+  .dependsOn(proto, wire, api, access, zeromq, port)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
@@ -152,14 +163,15 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
 // The apps: the status and web views, the control port, the ZeroMQ endpoint, the ball follower, teleop. They see the
 // middleware and the api; the launcher hands them what they read of the gateway.
 lazy val apps = (project in file("apps"))
-  .dependsOn(api, zeromq, robotmiddleware % "compile->compile;test->test", sim % "test->test",
+  .dependsOn(api, zeromq, port, robotmiddleware % "compile->compile;test->test", sim % "test->test",
     integration % "test->test")
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
     // The boundary the compiler keeps: apps' main code compiles without the gateway's and the simulator's classes, so
     // an app that imports a gateway internal (naogateway.Gateway, an actor, the settings) does not build. What apps
-    // may see is the api, the wire format, the middleware (with the access protocol it speaks) and the ZeroMQ loop;
+    // may see is the api, the wire format, the middleware (with the access protocol it speaks), the ZeroMQ loop and the
+    // datagram port with its loop;
     // the launcher hands them the rest. Since the middleware no longer brings the gateway, this drop is a second guard.
     Compile / dependencyClasspath := {
       val internals = Set((naogateway / Compile / classDirectory).value, (sim / Compile / classDirectory).value)
@@ -219,7 +231,7 @@ lazy val launcher = (project in file("launcher"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, api, access, zeromq, naogateway, sim, integration, robotmiddleware, apps, launcher)
+  .aggregate(proto, wire, api, access, zeromq, port, naogateway, sim, integration, robotmiddleware, apps, launcher)
   .dependsOn(launcher % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(

@@ -304,8 +304,9 @@ object CallPathBench extends Benchmark {
         |akka.cluster.seed-nodes = []
         |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
         |akka.loglevel = "WARNING"
-        |# As the launcher runs it: the middleware on the gateway's robot dispatcher.
+        |# As the launcher runs them: the middleware and the datagram door on the gateway's robot dispatcher.
         |robotmiddleware.dispatcher = "naogateway.dispatcher"
+        |apps.datagram-door.dispatcher = "naogateway.dispatcher"
         |# A socket-loop thread for each of the bench's two endpoints.
         |apps.zeromq.dispatcher.thread-pool-executor.fixed-pool-size = 2
         |""".stripMargin)

@@ -1,29 +1,28 @@
 package apps.datagram
 
-import java.io.IOException
 import java.net.InetSocketAddress
-import java.nio.ByteBuffer
-import java.nio.channels.{ClosedChannelException, ClosedSelectorException, DatagramChannel, SelectionKey, Selector}
 import java.util.concurrent.atomic.AtomicLong
 
 import scala.concurrent.Promise
-import scala.util.control.NonFatal
 import scala.util.{Failure, Success, Try}
 
 import akka.actor.CoordinatedShutdown
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
-import akka.actor.typed.{ActorRef, Behavior, PostStop}
+import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop}
 
 import apps.zeromq.{EndpointProtocol, EndpointRequest, Registering, RequestDesk}
 import naogateway.RateLimitedLog
+import naogateway.link.DatagramPort
 import robotmiddleware.{RobotInterface, RobotMiddleware}
 
 /** The RobotInterface for programs on the same machine at the lowest latency: each request one UDP datagram, the same
   * serialized `Message` with an `rpcRequest` the ZeroMQ endpoint takes, each reply one datagram to the sender's address
   * and port, carrying the request's `callId` (docs/zeromq.md, "The datagram door"). No I/O thread between the socket
-  * and the door: the reader thread reads, parses and hands each request on (`RequestDesk`, shared with the ZeroMQ
-  * endpoint), and a reply leaves from the thread that has the answer. Calls only: streams and subscriptions stay with
-  * the ZeroMQ endpoint.
+  * and the door: the socket is a [[DatagramPort]] read on the thread of the dispatcher `apps.datagram-door.dispatcher`
+  * names when that runs on a port loop (the launcher names the gateway's robot dispatcher: a request then runs through
+  * the middleware to the robot on the thread it woke), or by a reader thread of its own otherwise. That thread parses
+  * and hands each request on (`RequestDesk`, shared with the ZeroMQ endpoint), and a reply leaves from the thread that
+  * has the answer. Calls only: streams and subscriptions stay with the ZeroMQ endpoint.
   *
   * Everything is bounded: a datagram longer than `max-datagram-bytes`, one that is not a request, and one beyond the
   * requests in flight (in all, or from its sender) is dropped without a reply, counted by kind (`Drop`) and logged at
@@ -73,7 +72,7 @@ object DatagramDoor {
   val ReaderName: String = "datagram-door"
 
   private final case class Registered(result: Try[RobotInterface]) extends Command
-  private final case class ReaderEnded(failure: Option[Throwable]) extends Command
+  private case object SocketClosed extends Command
 
   /** The door for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops. */
   def apply(middleware: ActorRef[RobotMiddleware.Command], settings: DatagramDoorSettings): Behavior[Command] =
@@ -95,21 +94,21 @@ object DatagramDoor {
   private def serving(
       robots: RobotInterface, settings: DatagramDoorSettings, ownsInterface: Boolean): Behavior[Command] =
     Behaviors.setup { context =>
-      Try(open(settings)) match {
+      Try(open(settings, s"${context.system.name}-$ReaderName")) match {
         case Failure(e) =>
           context.log.error("datagram door cannot bind {}:{}: {}", settings.bindAddress, settings.port, e.toString)
           if (ownsInterface) robots.close()
           Behaviors.stopped
-        case Success((channel, selector)) =>
-          val door = new Door(robots, settings, channel, selector, context)
-          context.pipeToSelf(door.ended)(r => ReaderEnded(r.failed.toOption))
+        case Success(port) =>
+          val door = new Door(robots, settings, port, context)
+          context.pipeToSelf(door.ended)(_ => SocketClosed)
           val unbind = CoordinatedShutdown(context.system)
             .addCancellableTask(CoordinatedShutdown.PhaseServiceUnbind, s"$ReaderName-close") { () =>
               door.close()
               scala.concurrent.Future.successful(akka.Done)
             }
-          door.start()
-          val address = channel.getLocalAddress.asInstanceOf[InetSocketAddress]
+          door.start(context.system.dispatchers.lookup(DispatcherSelector.fromConfig(settings.dispatcher)))
+          val address = port.localAddress
           context.log.info("datagram door serving requests on {}", address)
           def stop(): Unit = {
             door.close()
@@ -124,11 +123,8 @@ object DatagramDoor {
             case GetStats(replyTo) =>
               replyTo ! door.stats
               Behaviors.same
-            case ReaderEnded(failure) =>
-              failure match {
-                case Some(e) => context.log.error("datagram door: the reader failed; the door stops", e)
-                case None    => context.log.info("datagram door: the socket closed; the door stops")
-              }
+            case SocketClosed =>
+              context.log.info("datagram door: the socket closed; the door stops")
               Behaviors.stopped
             case Registered(_) => Behaviors.unhandled
           }.receiveSignal { case (_, PostStop) =>
@@ -138,32 +134,22 @@ object DatagramDoor {
       }
     }
 
-  private def open(settings: DatagramDoorSettings): (DatagramChannel, Selector) = {
-    val channel = DatagramChannel.open()
-    try {
-      channel.bind(new InetSocketAddress(settings.bindAddress, settings.port))
-      channel.configureBlocking(false)
-      val selector = Selector.open()
-      channel.register(selector, SelectionKey.OP_READ)
-      channel -> selector
-    } catch {
-      case NonFatal(e) =>
-        channel.close()
-        throw e
-    }
-  }
+  /** The kernel receive buffer of the door's socket: a burst of requests waits there, not dropped. */
+  private val ReceiveBufferBytes = 1024 * 1024
 
-  /** The socket, its reader thread, the counters and the desk. The desk's state is guarded by the desk's lock, which
-    * the reader takes for each request and an answer's thread for its reply; nothing waits while holding it (the socket
-    * does not block).
+  private def open(settings: DatagramDoorSettings, readerName: String): DatagramPort =
+    DatagramPort.open(new InetSocketAddress(settings.bindAddress, settings.port), ReceiveBufferBytes, readerName)
+
+  /** The socket, the counters and the desk. The desk's state is guarded by the desk's lock, which the reading thread
+    * takes for each request and an answer's thread for its reply; nothing waits while holding it (the socket does not
+    * block).
     */
   private final class Door(
       robots: RobotInterface,
       settings: DatagramDoorSettings,
-      channel: DatagramChannel,
-      selector: Selector,
+      port: DatagramPort,
       context: ActorContext[Command]
-  ) {
+  ) extends DatagramPort.Handler {
     private val log = org.slf4j.LoggerFactory.getLogger(classOf[Door])
     private val accepted = new AtomicLong
     private val drops: Map[Drop, AtomicLong] = Drop.all.map(_ -> new AtomicLong).toMap
@@ -179,13 +165,12 @@ object DatagramDoor {
       context.executionContext,
       context.system.scheduler
     )
-    private val reader = new Thread(() => read(), s"${context.system.name}-$ReaderName")
-    reader.setDaemon(true)
 
-    /** Completes when the reader has ended: a failure when it failed, success when the socket closed. */
+    /** Completes when the socket has closed. */
     def ended: scala.concurrent.Future[Unit] = finished.future
 
-    def start(): Unit = reader.start()
+    /** Reads the socket on `executor`'s port loop, or with a reader thread of its own. */
+    def start(executor: java.util.concurrent.Executor): Unit = port.startOn(this, executor)
 
     def stats: Stats = Stats(accepted.get, drops.map { case (k, v) => k -> v.get })
 
@@ -200,45 +185,15 @@ object DatagramDoor {
         was
       }
       if (wasOpen) {
-        Try(channel.close())
-        Try(selector.wakeup())
+        Try(port.close(2000L))
+        finished.trySuccess(())
       }
       ()
     }
 
-    private def read(): Unit = {
-      // One more byte than the largest request: a datagram that fills it was longer (the rest of it was cut off).
-      val buffer = ByteBuffer.allocate(settings.maxDatagramBytes + 1)
-      try {
-        while (open) {
-          selector.select()
-          selector.selectedKeys().clear()
-          var more = open
-          while (more) {
-            buffer.clear()
-            channel.receive(buffer) match {
-              case null => more = false
-              case from: InetSocketAddress =>
-                buffer.flip()
-                received(buffer, from)
-              case _ => ()
-            }
-          }
-        }
-        finished.trySuccess(())
-      } catch {
-        case _: ClosedChannelException | _: ClosedSelectorException => finished.trySuccess(())
-        case _: IOException if !open                                => finished.trySuccess(())
-        case NonFatal(e)                                            => finished.tryFailure(e)
-      } finally Try(selector.close())
-      ()
-    }
-
-    private def received(buffer: ByteBuffer, from: InetSocketAddress): Unit =
-      if (buffer.remaining > settings.maxDatagramBytes) dropped(Drop.Oversize, from)
+    def received(bytes: Array[Byte], from: InetSocketAddress): Unit =
+      if (bytes.length > settings.maxDatagramBytes) dropped(Drop.Oversize, from)
       else {
-        val bytes = new Array[Byte](buffer.remaining)
-        buffer.get(bytes)
         EndpointProtocol.parse(bytes) match {
           case Left(_)        => dropped(Drop.Unreadable, from)
           case Right(request) => take(request, from)
@@ -259,12 +214,10 @@ object DatagramDoor {
       refused.foreach(dropped(_, from))
     }
 
-    private def send(to: InetSocketAddress, reply: Array[Byte]): Unit = {
-      val sent =
-        try channel.send(ByteBuffer.wrap(reply), to) > 0
-        catch { case NonFatal(_) => false }
-      if (!sent) dropped(Drop.ReplyNotSent, to)
-    }
+    def caughtUp(): Unit = ()
+
+    private def send(to: InetSocketAddress, reply: Array[Byte]): Unit =
+      if (!port.send(reply, to)) dropped(Drop.ReplyNotSent, to)
 
     private def dropped(kind: Drop, from: InetSocketAddress): Unit = {
       val n = drops(kind).incrementAndGet()

@@ -16,7 +16,8 @@ final case class DatagramDoorSettings(
     requestTimeout: FiniteDuration,
     maxInFlight: Int,
     maxInFlightPerSender: Int,
-    maxDatagramBytes: Int
+    maxDatagramBytes: Int,
+    dispatcher: String = "akka.actor.default-dispatcher"
 ) {
   require(bindAddress.nonEmpty, "datagram-door.bind-address must not be empty")
   require(port >= 0 && port <= 65535, "datagram-door.port must be between 0 and 65535")
@@ -29,6 +30,7 @@ final case class DatagramDoorSettings(
     maxDatagramBytes >= 64 && maxDatagramBytes <= DatagramDoorSettings.MaxUdpPayload,
     s"datagram-door.max-datagram-bytes must be between 64 and ${DatagramDoorSettings.MaxUdpPayload}"
   )
+  require(dispatcher.trim.nonEmpty, "datagram-door.dispatcher must name a dispatcher's config path")
 }
 
 /** Reading the settings. */
@@ -53,6 +55,7 @@ object DatagramDoorSettings {
     requestTimeout = c.getDuration("request-timeout").toScala,
     maxInFlight = c.getInt("max-in-flight"),
     maxInFlightPerSender = c.getInt("max-in-flight-per-sender"),
-    maxDatagramBytes = c.getInt("max-datagram-bytes")
+    maxDatagramBytes = c.getInt("max-datagram-bytes"),
+    dispatcher = c.getString("dispatcher")
   )
 }

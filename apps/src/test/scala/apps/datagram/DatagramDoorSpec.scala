@@ -18,8 +18,16 @@ import naogateway.wire.{MessageContents, RpcReply, RpcValue}
 
 /** The datagram door through real UDP sockets on loopback, in front of the ZeroMQ specs' scripted robots. */
 class DatagramDoorSpec
-    extends ScalaTestWithActorTestKit(ConfigFactory.parseString("apps.datagram-door.port = 0")
-        .withFallback(ConfigFactory.load()))
+    extends ScalaTestWithActorTestKit(ConfigFactory.parseString(
+        """apps.datagram-door.port = 0
+          |# A port loop of the spec's own: the door's socket read on the thread that runs this dispatcher's actors.
+          |door-loop {
+          |  type = Dispatcher
+          |  executor = "naogateway.link.PortLoopConfigurator"
+          |  port-loop { datagrams-per-pass = 256, tasks-per-pass = 64 }
+          |  throughput = 64
+          |}
+          |""".stripMargin).withFallback(ConfigFactory.load()))
     with AnyWordSpecLike
     with LogCapturing {
 
@@ -179,6 +187,30 @@ class DatagramDoorSpec
           finally again.close()
         }
       } finally client.close()
+    }
+
+    "read its socket on the port loop of the dispatcher it names, with no reader thread of its own" in {
+      val stub = new StubRobots(system)
+      val (ref, address) = door(stub, _.copy(dispatcher = "door-loop"))
+      val client = new Client(address)
+      try {
+        client.ask(request(7, "speech", "say", Vector(RpcValue.Text("on the loop")), callId = 51))._2.result shouldBe
+          Right(Some(RpcValue.Flag(true)))
+        stub.seen should contain("say on the loop 7")
+        // A door that could not attach falls back to a reader thread of its own, named after the door.
+        eventually {
+          val alive = Thread.getAllStackTraces.keySet.asScala.filter(_.isAlive).map(_.getName)
+          alive.exists(_.endsWith(DatagramDoor.ReaderName)) shouldBe false
+          alive.exists(_.contains("door-loop")) shouldBe true
+        }
+      } finally client.close()
+      testKit.stop(ref)
+      // Detached from the loop when it stops: the port is free again.
+      eventually {
+        val again = DatagramChannel.open()
+        try again.bind(address)
+        finally again.close()
+      }
     }
   }
 

@@ -1,25 +1,9 @@
 package naogateway.link
 
-import java.io.IOException
-import java.net.{InetSocketAddress, StandardSocketOptions}
-import java.nio.ByteBuffer
-import java.nio.channels.{ClosedChannelException, ClosedSelectorException, DatagramChannel, SelectionKey, Selector}
+import java.net.InetSocketAddress
 import java.util.concurrent.Executor
-import java.util.concurrent.locks.LockSupport
 
 import scala.annotation.unused
-import scala.util.control.NonFatal
-
-import org.slf4j.LoggerFactory
-
-import naogateway.RateLimitedLog
-
-/** Writes one datagram without blocking; false when it was not sent (kernel buffer full, port closed, send failed). */
-trait DatagramWriter {
-
-  /** Sends `bytes` to `to` now, or not at all. */
-  def send(bytes: Array[Byte], to: InetSocketAddress): Boolean
-}
 
 /** Where the gateway's robot datagrams come from and go to: the robot port's socket ([[RobotPort]]), or a recording
   * played back ([[ReplayLink]]). Whatever it is, it hands every datagram to one [[RobotPort.Handler]] on one thread.
@@ -41,193 +25,42 @@ trait RobotLink extends DatagramWriter {
   def close(joinMillis: Long = 2000L): Unit
 }
 
-/** The gateway's robot UDP port: one non-blocking `DatagramChannel`, read on the robot dispatcher's own thread when
-  * that runs on a [[PortLoop]] ([[RobotPort.startOn]]), or by a dedicated daemon thread ([[RobotPort.start]]), and
-  * written by whoever holds the port (the outbox, the relay).
-  *
-  * Why a loop or a thread and not an actor: a datagram read by Akka IO passes its selector actor and a link actor
-  * before any gateway code sees it, two mailboxes per datagram each way. The port is read where a selector waits, never
-  * inside an actor, and each datagram goes to a [[RobotPort.Handler]] (the gateway's routing) on that same thread.
-  * Writes need no thread of their own: a non-blocking send either takes the datagram or returns 0 at once.
+/** The gateway's robot UDP port: a [[DatagramPort]] read on the robot dispatcher's own thread (its [[PortLoop]]), so a
+  * robot's answer wakes the thread that runs the robot actors and nothing else; written by whoever holds the port (the
+  * outbox, the relay).
   */
-final class RobotPort private (private[link] val channel: DatagramChannel, threadName: String)
-    extends RobotLink
-    with PortLoop.Source {
-  import RobotPort._
-
-  @volatile private var open = true
-  // Who reads the port; changed under the port's lock, acted on outside it (a detach waits for the loop's thread).
-  private var reading: Reading = NotStarted
-  @volatile private var handler: Handler = null
-  private var failures = 0L
+final class RobotPort private (port: DatagramPort) extends RobotLink {
 
   /** Where the port is bound (the real port when 0 was asked for). */
-  val localAddress: InetSocketAddress = channel.getLocalAddress.asInstanceOf[InetSocketAddress]
+  val localAddress: InetSocketAddress = port.localAddress
 
-  def send(bytes: Array[Byte], to: InetSocketAddress): Boolean =
-    try channel.send(ByteBuffer.wrap(bytes), to) > 0 || bytes.isEmpty
-    catch { case _: IOException => false } // closed, or the kernel refused the destination: the datagram is dropped
+  def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = port.send(bytes, to)
 
   /** Starts the reader thread with `handler`; once only. */
-  def start(handler: Handler): Unit = {
-    val started = synchronized {
-      require(reading == NotStarted, "the robot port's reader runs already")
-      this.handler = handler
-      ownThread()
-    }
-    started.start()
-  }
+  def start(handler: RobotPort.Handler): Unit = port.start(handler)
 
-  /** Reads the port on `executor`'s thread when that is a [[PortLoop]]'s (the robot dispatcher's, so an answer wakes
-    * one thread, not two); on any other executor with a reader thread of its own, as [[start]]. Once only.
+  /** Reads the port on `executor`'s thread when that is a [[PortLoop]]'s (the robot dispatcher's); on any other
+    * executor with a reader thread of its own, as [[start]]. Once only.
     */
-  override def startOn(handler: Handler, executor: Executor): Unit = {
-    synchronized {
-      require(reading == NotStarted, "the robot port's reader runs already")
-      this.handler = handler
-      reading = Starting
-    }
-    executor.execute { () =>
-      val thread = synchronized {
-        // Closed before this ran: nothing to start.
-        if (reading != Starting) None
-        else
-          PortLoop.current match {
-            case Some(loop) =>
-              reading = Attached(loop.attach(this))
-              None
-            case None => Some(ownThread())
-          }
-      }
-      thread.foreach(_.start())
-    }
-  }
-
-  // Under the port's lock; the caller starts the thread outside it.
-  private def ownThread(): Thread = {
-    val selector = Selector.open()
-    try channel.register(selector, SelectionKey.OP_READ)
-    catch {
-      case NonFatal(e) =>
-        selector.close()
-        throw e
-    }
-    val thread = new Thread(() => readLoop(selector), threadName)
-    thread.setDaemon(true)
-    reading = OwnThread(thread, selector)
-    thread
-  }
+  override def startOn(handler: RobotPort.Handler, executor: Executor): Unit = port.startOn(handler, executor)
 
   /** Stops the reading (waiting at most `joinMillis` for the reader, never for the calling thread itself) and closes
     * the channel; once it returns the handler is not called any more. Safe to call more than once.
     */
-  def close(joinMillis: Long): Unit = {
-    open = false
-    val was = synchronized {
-      val r = reading
-      reading = Closed
-      r
-    }
-    try
-      was match {
-        case Attached(attachment) =>
-          if (!attachment.detach(joinMillis))
-            log.warn("Robot port {}: its loop did not let it go within {} ms", localAddress, joinMillis)
-        case OwnThread(thread, selector) =>
-          try selector.wakeup()
-          catch { case NonFatal(_) => () }
-          if (thread ne Thread.currentThread()) thread.join(joinMillis)
-        case _ => ()
-      }
-    finally
-      try channel.close()
-      finally
-        was match {
-          case OwnThread(_, selector) => selector.close()
-          case _                      => ()
-        }
-  }
+  def close(joinMillis: Long): Unit = port.close(joinMillis)
 
   /** Whether the port's own reader thread is running (false on a loop). */
-  def readerAlive: Boolean = synchronized {
-    reading match {
-      case OwnThread(thread, _) => thread.isAlive
-      case _                    => false
-    }
-  }
+  def readerAlive: Boolean = port.readerAlive
 
   /** Whether the port is read on a [[PortLoop]]. */
-  def onLoop: Boolean = synchronized {
-    reading match {
-      case Attached(_) => true
-      case _           => false
-    }
-  }
-
-  private def readLoop(selector: Selector): Unit = {
-    // One buffer for the port's whole life; each datagram is copied out at its own size.
-    val buffer = ByteBuffer.allocateDirect(MaxDatagramBytes)
-    try {
-      while (open) {
-        selector.select()
-        selector.selectedKeys().clear()
-        drain(buffer, Int.MaxValue)
-      }
-    } catch {
-      case _: ClosedChannelException | _: ClosedSelectorException => () // closed by close(): the normal end
-    }
-  }
-
-  /** Reads at most `max` datagrams (on the one thread that reads the port), then tells the handler it caught up if the
-    * channel is empty.
-    */
-  private[link] def drain(buffer: ByteBuffer, max: Int): Unit = {
-    var left = max
-    while (left > 0 && open) {
-      buffer.clear()
-      val from =
-        try channel.receive(buffer).asInstanceOf[InetSocketAddress]
-        catch {
-          case e: ClosedChannelException => throw e
-          case e: IOException =>
-            failures += 1
-            if (RateLimitedLog.due(failures))
-              log.warn("Robot port {}: receive failed ({} so far): {}", localAddress, failures, e.toString)
-            // A failure that repeats must not spin a core.
-            LockSupport.parkNanos(1000000L)
-            null
-        }
-      if (from == null) left = -1
-      else {
-        left -= 1
-        buffer.flip()
-        val bytes = new Array[Byte](buffer.remaining)
-        buffer.get(bytes)
-        try handler.received(bytes, from)
-        catch {
-          case NonFatal(e) =>
-            failures += 1
-            if (RateLimitedLog.due(failures))
-              log.error(s"Robot port $localAddress: a datagram from $from failed ($failures so far)", e)
-        }
-      }
-    }
-    // Empty (or closed from the handler): the handler may flush what it batched. A full batch leaves more to read.
-    if (left < 0 || !open) handler.caughtUp()
-  }
+  def onLoop: Boolean = port.onLoop
 }
 
 /** Opening the robot port. */
 object RobotPort {
 
   /** Where the reader hands what it reads; called on one thread at a time, the one that reads the port. */
-  trait Handler {
-
-    /** One datagram of `bytes` from `from`; `bytes` belongs to the handler. */
-    def received(bytes: Array[Byte], from: InetSocketAddress): Unit
-
-    /** Nothing more to read for now: the reader is about to wait. */
-    def caughtUp(): Unit
+  trait Handler extends DatagramPort.Handler {
 
     /** A GameController packet from `from`. The robot port never calls it (the GameController has a socket of its own);
       * a replayed recording does, so the game states come back through the gateway's usual handling.
@@ -236,32 +69,11 @@ object RobotPort {
   }
 
   /** The largest UDP payload; a longer datagram cannot arrive. */
-  val MaxDatagramBytes: Int = 65536
-
-  private val log = LoggerFactory.getLogger(classOf[RobotPort])
-
-  // Who reads the port.
-  private sealed trait Reading
-  private case object NotStarted extends Reading
-  private case object Starting extends Reading
-  private final case class OwnThread(thread: Thread, selector: Selector) extends Reading
-  private final case class Attached(attachment: PortLoop#Attachment) extends Reading
-  private case object Closed extends Reading
+  val MaxDatagramBytes: Int = DatagramPort.MaxDatagramBytes
 
   /** A port bound to `address` with a kernel receive buffer of `receiveBufferBytes`; reading starts with
     * [[RobotPort.start]] or [[RobotPort.startOn]].
     */
-  def open(address: InetSocketAddress, receiveBufferBytes: Int, threadName: String): RobotPort = {
-    val channel = DatagramChannel.open()
-    try {
-      channel.setOption[Integer](StandardSocketOptions.SO_RCVBUF, receiveBufferBytes)
-      channel.bind(address)
-      channel.configureBlocking(false)
-      new RobotPort(channel, threadName)
-    } catch {
-      case NonFatal(e) =>
-        channel.close()
-        throw e
-    }
-  }
+  def open(address: InetSocketAddress, receiveBufferBytes: Int, threadName: String): RobotPort =
+    new RobotPort(DatagramPort.open(address, receiveBufferBytes, threadName))
 }

@@ -25,7 +25,8 @@ import akka.dispatch.{
 import com.typesafe.config.Config
 import org.slf4j.LoggerFactory
 
-/** One thread that runs an Akka dispatcher's tasks and reads the robot ports attached to it.
+/** One thread that runs an Akka dispatcher's tasks and reads the datagram ports attached to it (the gateway's robot
+  * port, the apps' datagram door).
   *
   * Why: with the port read by a thread of its own, a robot's answer wakes that reader (epoll), and the reader wakes the
   * robot dispatcher's thread (a mailbox). Here the thread that runs the robot actors waits in the ports' selector
@@ -52,7 +53,7 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
   private val detaches = new ConcurrentLinkedQueue[Attachment]()
   private var attachedCount = 0
   // One buffer for the loop's life, used by the owning thread only; each datagram is copied out at its own size.
-  private lazy val buffer = ByteBuffer.allocateDirect(RobotPort.MaxDatagramBytes)
+  private lazy val buffer = ByteBuffer.allocateDirect(DatagramPort.MaxDatagramBytes)
 
   /** A new executor; its thread runs the loop once the previous executor's thread has let it go. */
   def createExecutorService: ExecutorService = {
@@ -177,7 +178,7 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
         left.add(t)
         t = tasks.poll()
       }
-      // No interrupt: a thread interrupted while it reads a channel closes that channel (the robot port).
+      // No interrupt: a thread interrupted while it reads a channel closes that channel (an attached port).
       wakeup()
       left
     }
