@@ -52,6 +52,8 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
   // Detaches asked for by threads other than the loop's; done by the owner.
   private val detaches = new ConcurrentLinkedQueue[Attachment]()
   private var attachedCount = 0
+  // Failed selects, by the owning thread only.
+  private var selectFailures = 0L
   // One buffer for the loop's life, used by the owning thread only; each datagram is copied out at its own size.
   private lazy val buffer = ByteBuffer.allocateDirect(DatagramPort.MaxDatagramBytes)
 
@@ -229,7 +231,17 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
           selecting = true
           val mustNotWait = !detaches.isEmpty ||
             (if (taking) shut || !tasks.isEmpty else latest ne this)
-          if (mustNotWait) selector.selectNow() else selector.select()
+          try {
+            if (mustNotWait) selector.selectNow() else selector.select()
+          } catch {
+            // The thread runs every robot actor: it must outlive a failing select. Counted, logged at a bounded rate,
+            // and not retried at once, so a failure that repeats cannot spin a core.
+            case e: java.io.IOException =>
+              selectFailures += 1
+              if (naogateway.RateLimitedLog.due(selectFailures))
+                log.warn("Port loop: select failed ({} so far): {}", selectFailures, e.toString)
+              java.util.concurrent.locks.LockSupport.parkNanos(1000000L)
+          }
           selecting = false
           // The selected keys, not select's count: a key still selected from an earlier select is not counted again.
           if (!selector.selectedKeys().isEmpty) readReady()
