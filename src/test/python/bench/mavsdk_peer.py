@@ -19,6 +19,7 @@ import sys
 import threading
 import time
 from typing import List
+from paced import figures, paced
 
 os.environ.setdefault("MAVLINK20", "1")
 
@@ -67,11 +68,6 @@ class Vehicle:
         self.link.close()
 
 
-def percentile(samples: List[int], p: float) -> float:
-    """Nearest-rank percentile, as the Scala bench computes it."""
-    ordered = sorted(samples)
-    return float(ordered[max(0, int(-(-p * len(ordered) // 1)) - 1)])
-
 
 def free_tcp_port() -> int:
     """A TCP port on loopback that nothing holds now (mavsdk_server's gRPC port)."""
@@ -94,7 +90,7 @@ def grpc_peer(args: argparse.Namespace) -> int:
     port = free_udp_port()
     vehicle = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--vehicle", str(port)], stdin=subprocess.PIPE)
 
-    async def arms() -> dict:
+    async def arms() -> List[int]:
         drone = mavsdk_grpc.System(port=free_tcp_port())
         await asyncio.wait_for(drone.connect(system_address="udpin://127.0.0.1:%d" % port), 30)
 
@@ -114,10 +110,10 @@ def grpc_peer(args: argparse.Namespace) -> int:
             rest = start + int(args.gap_ms * 1e6) - time.perf_counter_ns()
             if rest > 0:
                 await asyncio.sleep(rest / 1e9)
-        return {"p50_us": percentile(samples, 0.50) / 1e3, "p99_us": percentile(samples, 0.99) / 1e3, "n": len(samples)}
+        return samples
 
     try:
-        print(json.dumps(asyncio.run(arms())))
+        print(figures(asyncio.run(arms())))
     except Exception as e:  # noqa: BLE001 - reported, never a made-up figure
         print(json.dumps({"error": "mavsdk-grpc command failed: %s: %s" % (type(e).__name__, e)}))
     finally:
@@ -162,18 +158,8 @@ def main() -> int:
             print(json.dumps({"error": "MAVSDK saw no autopilot within 10 s (connection: %s)" % (result,)}))
             return 0
         action = Action(system)
-        samples: List[int] = []
-        for i in range(args.warmup + args.samples):
-            start = time.perf_counter_ns()
-            action.arm()
-            took = time.perf_counter_ns() - start
-            if i >= args.warmup:
-                samples.append(took)
-            rest = start + int(args.gap_ms * 1e6) - time.perf_counter_ns()
-            if rest > 0:
-                time.sleep(rest / 1e9)
-        print(json.dumps({"p50_us": percentile(samples, 0.50) / 1e3, "p99_us": percentile(samples, 0.99) / 1e3,
-                          "n": len(samples), "version": getattr(mavsdk, "__version__", "?")}))
+        samples = paced(action.arm, args.warmup, args.samples, args.gap_ms)
+        print(figures(samples, version=getattr(mavsdk, "__version__", "?")))
         return 0
     except Exception as e:  # noqa: BLE001 - reported, never a made-up figure
         print(json.dumps({"error": "MAVSDK command failed: %s: %s" % (type(e).__name__, e)}))

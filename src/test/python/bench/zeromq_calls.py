@@ -8,17 +8,10 @@ p50 and p99 in microseconds: {"p50_us": ..., "p99_us": ..., "n": ...}.
 from __future__ import annotations
 
 import argparse
-import json
-import time
-from typing import List
 
 from naogateway_client import DatagramGatewayClient, GatewayClient
+from paced import figures, paced
 
-
-def percentile(samples: List[int], p: float) -> float:
-    """Nearest-rank percentile, as the Scala bench computes it."""
-    ordered = sorted(samples)
-    return float(ordered[max(0, int(-(-p * len(ordered) // 1)) - 1)])
 
 
 def main() -> None:
@@ -37,20 +30,11 @@ def main() -> None:
         client = GatewayClient(args.endpoint, args.publish)
     else:
         parser.error("give --datagram, or --endpoint and --publish")
-    samples: List[int] = []
     try:
-        for i in range(args.warmup + args.samples):
-            start = time.perf_counter_ns()
-            client.call(args.robot, "system", "ping")
-            took = time.perf_counter_ns() - start
-            if i >= args.warmup:
-                samples.append(took)
-            rest = start + int(args.gap_ms * 1e6) - time.perf_counter_ns()
-            if rest > 0:
-                time.sleep(rest / 1e9)
+        samples = paced(lambda: client.call(args.robot, "system", "ping"), args.warmup, args.samples, args.gap_ms)
     finally:
         client.close()
-    print(json.dumps({"p50_us": percentile(samples, 0.50) / 1e3, "p99_us": percentile(samples, 0.99) / 1e3, "n": len(samples)}))
+    print(figures(samples))
 
 
 if __name__ == "__main__":

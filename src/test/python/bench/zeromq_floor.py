@@ -12,19 +12,12 @@ nearest-rank p50 and p99 in microseconds: {"p50_us": ..., "p99_us": ..., "n": ..
 from __future__ import annotations
 
 import argparse
-import json
 import multiprocessing
 import socket
-import time
-from typing import List
 
 import zmq
+from paced import figures, paced
 
-
-def percentile(samples: List[int], p: float) -> float:
-    """Nearest-rank percentile, as the Scala bench computes it."""
-    ordered = sorted(samples)
-    return float(ordered[max(0, int(-(-p * len(ordered) // 1)) - 1)])
 
 BODY = b"x" * 40
 
@@ -91,21 +84,12 @@ def main() -> None:
             udp.sendto(body, peer)
             udp.recvfrom(2048)
 
-    samples: List[int] = []
     try:
-        for i in range(args.warmup + args.samples):
-            start = time.perf_counter_ns()
-            exchange(BODY)
-            took = time.perf_counter_ns() - start
-            if i >= args.warmup:
-                samples.append(took)
-            rest = start + int(args.gap_ms * 1e6) - time.perf_counter_ns()
-            if rest > 0:
-                time.sleep(rest / 1e9)
+        samples = paced(lambda: exchange(BODY), args.warmup, args.samples, args.gap_ms)
         exchange(b"quit")
     finally:
         echo.join(10)
-    print(json.dumps({"p50_us": percentile(samples, 0.50) / 1e3, "p99_us": percentile(samples, 0.99) / 1e3, "n": len(samples)}))
+    print(figures(samples))
 
 
 if __name__ == "__main__":

@@ -151,7 +151,7 @@ private[robotmiddleware] object RobotGuard {
           stash.unstashAll(ready(children))
         case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
         case e: Execute if !online =>
-          e.replyTo ! CallResult(robotId, e.operation.name, Left(RobotFailure.RobotOffline(robotId)))
+          reply(e.replyTo, e.operation, Left(RobotFailure.RobotOffline(robotId)))
           Behaviors.same
         case s: Send if !online =>
           s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name, Left(RobotFailure.RobotOffline(robotId)))
@@ -173,7 +173,7 @@ private[robotmiddleware] object RobotGuard {
         case other =>
           if (stash.isFull) other match {
             case e: Execute =>
-              e.replyTo ! CallResult(robotId, e.operation.name,
+              reply(e.replyTo, e.operation,
                 Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
             case s: Send =>
               s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name,
@@ -260,7 +260,7 @@ private[robotmiddleware] object RobotGuard {
         }
         Behaviors.same
       case OperationDone(replyTo, operation, result, superseded) =>
-        replyTo ! CallResult(robotId, operation.name, result)
+        reply(replyTo, operation, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
         // A superseded one is not undefined: the newer call of its slot decides the motion.
         if (result.isLeft && !superseded && operation.isInstanceOf[Operation.Posture] && online)

@@ -1,5 +1,6 @@
 package naogateway.link
 
+import java.io.IOException
 import java.nio.ByteBuffer
 import java.nio.channels.{ClosedChannelException, SelectableChannel, SelectionKey, Selector}
 import java.util.concurrent.{
@@ -11,7 +12,7 @@ import java.util.concurrent.{
   ThreadFactory,
   TimeUnit
 }
-import java.util.concurrent.locks.ReentrantLock
+import java.util.concurrent.locks.{LockSupport, ReentrantLock}
 import java.{util => ju}
 
 import scala.util.control.NonFatal
@@ -24,6 +25,8 @@ import akka.dispatch.{
 }
 import com.typesafe.config.Config
 import org.slf4j.LoggerFactory
+
+import naogateway.RateLimitedLog
 
 /** One thread that runs an Akka dispatcher's tasks and reads the datagram ports attached to it (the gateway's robot
   * port, the apps' datagram door).
@@ -236,11 +239,11 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
           } catch {
             // The thread runs every robot actor: it must outlive a failing select. Counted, logged at a bounded rate,
             // and not retried at once, so a failure that repeats cannot spin a core.
-            case e: java.io.IOException =>
+            case e: IOException =>
               selectFailures += 1
-              if (naogateway.RateLimitedLog.due(selectFailures))
+              if (RateLimitedLog.due(selectFailures))
                 log.warn("Port loop: select failed ({} so far): {}", selectFailures, e.toString)
-              java.util.concurrent.locks.LockSupport.parkNanos(1000000L)
+              LockSupport.parkNanos(1000000L)
           }
           selecting = false
           // The selected keys, not select's count: a key still selected from an earlier select is not counted again.

@@ -120,9 +120,8 @@ final class ZeroMqSimulatedRobot(settings: FirmwareSettings, val endpoint: Strin
         state = Some(next)
         var replies = out.filter(_.to == ReplyMarker)
         val deadline = System.nanoTime() + LongestCall.toNanos
-        /* A posture call answers when its motion has ended: hold the request, as the socket forces us to. The wait is
-         * on */
-        // this robot's own thread (it stands for the robot's blocking REP loop), never on a dispatcher's.
+        // A posture call answers when its motion has ended: hold the request, as the REP socket forces us to. The wait
+        // is on this robot's own thread (it stands for the robot's blocking loop), never an actor's or a dispatcher's.
         def waiting = contents.rpcRequest.isDefined && !replies.exists(isRpcReply)
         while (waiting && running && System.nanoTime() < deadline) {
           val wait =
