@@ -227,6 +227,8 @@ typedef struct {
     uint32_t bad_frame;        /* refused header (protocol.md 4.4) */
     uint32_t gzip;             /* gzip-flagged frame: refused, the library has no inflater (4.3) */
     uint32_t bad_protobuf;
+    uint32_t stranger;         /* a frame or stream segment not from the paired gateway (its IP address and port) */
+    uint32_t wrong_robot;      /* a frame whose Message.robotID is not this robot's id */
     uint32_t unsigned_frames, signature_not_last, malformed_signature, bad_signature, replayed;
     uint32_t gc_ignored;       /* GameController packet not used (size, version, other team, source) */
     uint32_t stream_misbehaving;

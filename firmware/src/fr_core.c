@@ -33,7 +33,7 @@ const fr_stats_t *fr_stats(void) { return &fr_state.stats; }
 
 fr_route_t fr_route_gateway(void) {
     fr_route_t r;
-    r.to = fr_state.settings.gateway;
+    r.to = fr_state.gateway;
     r.form = fr_state.settings.form;
     r.via_stream = false;
     return r;
@@ -123,6 +123,10 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
     fr_frame_error_t e = fr_frame_parse(data, len, &payload, &payload_len, &form);
     if (e == FR_FRAME_GZIP) { fr_state.stats.gzip++; return; }
     if (e != FR_FRAME_OK) { fr_state.stats.bad_frame++; return; }
+    int32_t named = 0;
+    int found = fr_message_robot_id(payload, payload_len, &named);
+    if (found < 0) { fr_state.stats.bad_protobuf++; return; }
+    if (found == 0 || named != fr_state.settings.robot_id) { fr_state.stats.wrong_robot++; return; }
     if (fr_state.settings.require_signed && fr_state.settings.signing_key_len > 0) {
         size_t signed_len;
         switch (fr_sign_check(payload, payload_len, &signed_len)) {
@@ -135,8 +139,7 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
         }
     }
     fr_route_t route;
-    route.to = *from;
-    route.to.port = fr_state.settings.gateway.port; /* answers go to the sender's port 11011 (protocol.md 2) */
+    route.to = *from; /* the paired gateway: answers go back to its robot port (protocol.md 2) */
     route.form = form;
     route.via_stream = via_stream;
 
@@ -166,12 +169,14 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
 /** Tells datagrams apart by their first two bytes (protocol.md section 3). */
 static void handle_datagram(const fr_endpoint_t *from, const uint8_t *data, size_t len) {
     if (len < 2 || len > FR_DATAGRAM_MAX) { fr_state.stats.unclassifiable++; return; }
+    bool from_gateway = from->port == fr_state.gateway.port && memcmp(from->ip, fr_state.gateway.ip, 4) == 0;
     if (data[0] == 0 && data[1] == 42) {
+        if (!from_gateway) { fr_state.stats.stranger++; return; }
         fr_handle_frame(from, data, len, false);
     } else if (data[0] == 'R' && data[1] == 'G') {
         fr_gc_receive(from, data, len);
     } else if (data[0] < 42 && data[1] < 42) {
-        if (memcmp(from->ip, fr_state.settings.gateway.ip, 4) != 0) { fr_state.stats.stream_misbehaving++; return; }
+        if (!from_gateway) { fr_state.stats.stranger++; return; }
         fr_stream_receive(data, len);
     } else {
         fr_state.stats.unclassifiable++;
@@ -185,6 +190,7 @@ void fr_init(const fr_settings_t *settings) {
     fr_state.settings = *settings;
     if (fr_state.settings.signing_key_len > FR_SIGNING_KEY_MAX) fr_state.settings.signing_key_len = 0;
     fr_state.link_up = true;
+    fr_state.gateway = settings->gateway;
     fr_rpc_reset();
     fr_debug_reset();
     fr_gc_reset();

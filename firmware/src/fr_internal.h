@@ -47,6 +47,7 @@ typedef struct {
     uint32_t boot_ms;           /* fr_port_millis() at fr_init */
     uint32_t next_keepalive;    /* uptime of the next keep-alive */
     bool link_up;
+    fr_endpoint_t gateway;      /* the paired gateway: frames and segments are taken from it alone */
     uint32_t sign_counter;      /* frame counter of the robot's signature timestamps */
     bool gateway_ts_seen;       /* a signed gateway frame has been accepted since boot */
     uint64_t gateway_ts;        /* its timestamp: the replay window */
@@ -107,6 +108,9 @@ void fr_stream_poll(void);
 size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap);
 /** What a signature check found (protocol.md 6.7). */
 typedef enum { FR_SIG_OK, FR_SIG_UNSIGNED, FR_SIG_NOT_LAST, FR_SIG_MALFORMED, FR_SIG_BAD, FR_SIG_REPLAYED } fr_sig_result_t;
+/** The last Message.robotID in a Message's top-level fields into `*id`: 1 when found, 0 when there is none,
+ *  -1 when the bytes are no protobuf message (an end-group without its start, a truncated field). */
+int fr_message_robot_id(const uint8_t *payload, size_t len, int32_t *id);
 /** Checks a gateway frame's signature and moves the replay window on success; `*signed_len` gets the length of
  *  the bytes before the signature. */
 fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed_len);

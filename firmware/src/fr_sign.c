@@ -62,6 +62,26 @@ static const uint8_t *skip(const uint8_t *p, const uint8_t *end, unsigned wire, 
     }
 }
 
+int fr_message_robot_id(const uint8_t *payload, size_t len, int32_t *id) {
+    const uint8_t *p = payload, *end = payload + len;
+    int found = 0;
+    while (p < end) {
+        uint64_t key, v;
+        p = varint(p, end, &key);
+        if (!p) return -1;
+        if (key == 0x08) {
+            p = varint(p, end, &v);
+            if (!p) return -1;
+            *id = (int32_t)(uint32_t)v; /* an int32 on the wire: negative ones are sign-extended to 64 bits */
+            found = 1;
+            continue;
+        }
+        p = skip(p, end, (unsigned)(key & 7), key >> 3, 1);
+        if (!p) return -1;
+    }
+    return found;
+}
+
 fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed_len) {
     const uint8_t *p = payload, *end = payload + len, *sig = NULL, *sig_value = NULL;
     uint64_t sig_len = 0;

@@ -124,14 +124,14 @@ static void transmit(tx_slot_t *s, uint32_t now) {
     s->last_serial = ++st.serial;
     st.last_transmit = now;
     st.sent_data = true;
-    (void)fr_send_raw(&fr_state.settings.gateway, s->data, (size_t)s->len + 2u);
+    (void)fr_send_raw(&fr_state.gateway, s->data, (size_t)s->len + 2u);
 }
 
 /** Sends a pure ACK: byte 0 our last acknowledged number (no deadlines, so never a skip notice). */
 static void pure_ack(uint32_t now) {
     uint8_t seg[2] = {st.last_acked, st.last_in_order};
     st.last_transmit = now;
-    (void)fr_send_raw(&fr_state.settings.gateway, seg, 2);
+    (void)fr_send_raw(&fr_state.gateway, seg, 2);
 }
 
 /** The RTO from the round-trip estimate (the initial RTO before the first sample), within its bounds. */
@@ -267,7 +267,7 @@ static bool on_ack(uint8_t a, bool pure, uint32_t now) {
 /** Hands a payload received in order to the program, or to the frame handler when it is an FU-Remote frame. */
 static void deliver(const uint8_t *data, size_t len) {
     if (len >= 2 && data[0] == 0 && data[1] == 42) {
-        fr_handle_frame(&fr_state.settings.gateway, data, len, true);
+        fr_handle_frame(&fr_state.gateway, data, len, true);
     } else if (fr_state.settings.callbacks.stream) {
         fr_state.settings.callbacks.stream(data, len, fr_state.settings.callbacks.ctx);
     }
