@@ -198,18 +198,58 @@ typedef struct {
     const char *role;          /* Status.activeRole, may be NULL */
     uint32_t boot_id;          /* RobotHealth.bootId: one higher at every start (kept in flash) */
     fr_form_t form;
-    /* Signing (protocol.md 6.7): key_len 0 = off. With a key every frame is signed, and with
-     * `require_signed` frames from the gateway without a valid, newer signature are ignored. */
-    const uint8_t *signing_key;
+    /* Trust (protocol.md 6.7, docs/firmware.md "What the robot checks"). Signing is the default: without
+     * `development` a robot key is required, every frame is signed and only the gateway's valid, newer signed
+     * frames are acted on. */
+    const uint8_t *signing_key; /* the robot key (16 to 64 bytes; `robotctl keys <id>` prints it, fr_robot_key
+                                 * derives it from the team key) */
     size_t signing_key_len;
-    uint32_t boot_counter;     /* the high 32 bits of the robot's signature timestamps (kept in flash) */
-    bool require_signed;
+    bool development;          /* an unsigned development build, asked for by name: no key, nothing signed, and
+                                * RobotHealth.development set in every keep-alive */
+    bool pair_on_first_signed; /* learn the gateway's IP address and port from the first frame whose signature
+                                * verifies (frames go to `gateway` until then); needs signing */
     uint8_t gc_source[4];      /* the GameController's IP address; 0.0.0.0 = take control packets from anyone */
     fr_callbacks_t callbacks;
 } fr_settings_t;
 
-/** Starts (or restarts, for system.reset) the library: every option off, uptime from 0, a fresh stream. */
-void fr_init(const fr_settings_t *settings);
+/** Why fr_init refused the settings, or FR_INIT_OK. */
+typedef enum {
+    FR_INIT_OK = 0,
+    FR_INIT_NO_KEY,               /* signing (the default) without a key */
+    FR_INIT_KEY_LENGTH,           /* a key shorter than 16 or longer than 64 bytes */
+    FR_INIT_KEY_IN_DEVELOPMENT,   /* a development build that was given a key: which one was meant? */
+    FR_INIT_PAIRING_UNSIGNED,     /* pair on first signed frame in a development build */
+    FR_INIT_EPOCH                 /* the boot epoch could not be raised (fr_port_epoch_next failed) */
+} fr_init_result_t;
+
+/** Starts (or restarts, for system.reset) the library: every option off, uptime from 0, a fresh stream, and with
+ *  signing the next boot epoch (fr_port_epoch_next). On a refusal the library neither sends a frame nor acts on
+ *  one (GameController packets are still read); the program should report it and stop. */
+fr_init_result_t fr_init(const fr_settings_t *settings);
+
+/** One line saying what an fr_init refusal means (never the key). */
+const char *fr_init_error_text(fr_init_result_t result);
+
+/** Why a key given in hex was refused, or FR_KEY_OK. */
+typedef enum { FR_KEY_OK = 0, FR_KEY_TOO_SHORT, FR_KEY_TOO_LONG, FR_KEY_ODD_LENGTH, FR_KEY_NOT_HEX } fr_key_result_t;
+
+/** Reads a key of 16 to 64 bytes written as hexadecimal digits into `out` (FR_SIGNING_KEY_MAX bytes) and its
+ *  length into `*len`; nothing is written on a refusal. */
+fr_key_result_t fr_key_from_hex(const char *hex, uint8_t *out, size_t *len);
+
+/** One line saying what a key refusal means (never the key). */
+const char *fr_key_error_text(fr_key_result_t result);
+
+/** The robot key of robot `robot_id` from the team key (protocol.md 6.7): HKDF-SHA256 with salt
+ *  "naogateway robot key", info "FUSIG2" | id (4 bytes, big-endian), 32 bytes. */
+void fr_robot_key(const uint8_t *team_key, size_t team_key_len, int32_t robot_id, uint8_t out[32]);
+
+/** The boot epoch of this start (the high 32 bits of the robot's signature timestamps); 0 when unsigned. */
+uint32_t fr_epoch(void);
+
+/** The gateway the robot takes frames from now (the configured one, or the one learned by pairing), and whether
+ *  it is paired (always, unless pairing on the first signed frame and none has verified yet). */
+bool fr_gateway(fr_endpoint_t *out);
 
 /** Does what is due without blocking: receives and handles at most a few datagrams, sends the keep-alive,
  *  stream retransmissions and idle ACKs, notices link changes. Call it from the main loop. */
@@ -230,6 +270,8 @@ typedef struct {
     uint32_t stranger;         /* a frame or stream segment not from the paired gateway (its IP address and port) */
     uint32_t wrong_robot;      /* a frame whose Message.robotID is not this robot's id */
     uint32_t unsigned_frames, signature_not_last, malformed_signature, bad_signature, replayed;
+    uint32_t not_started;      /* a frame while fr_init's refusal stands: not acted on */
+    uint32_t sign_exhausted;   /* a frame not sent: the boot's 2^32 signature counters are used up */
     uint32_t gc_ignored;       /* GameController packet not used (size, version, other team, source) */
     uint32_t stream_misbehaving;
     uint32_t stream_backpressure; /* data not accepted while every send slot was taken */

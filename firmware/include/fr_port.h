@@ -29,4 +29,15 @@ bool fr_port_link_up(void);
 /** Nothing to do until the next interrupt or datagram: `wfi` on a board, a short bounded sleep on posix. */
 void fr_port_idle(void);
 
+/** Raises the persisted boot epoch by one and gives the new value, once per start of a signing robot (fr_init):
+ *  0 when done, < 0 when the store cannot be read or written (then the robot does not start). It must never
+ *  give a value it gave before: flash on the CM-530, a file on posix, a host file on qemu (docs/firmware.md). */
+int fr_port_epoch_next(uint32_t *epoch);
+
+/** One line of text for whoever watches the robot (stderr on posix, semihosting on qemu, nothing on a CM-530). */
+void fr_port_log(const char *text);
+
+/** A `key=value` argument meant for the port (posix: `epoch=<path>`); false when the port does not know it. */
+bool fr_port_option(const char *arg);
+
 #endif

@@ -20,6 +20,13 @@ void board_log(const char *text);
 /** The program ended with `status` (semihosting exit on qemu; a reset on a CM-530). */
 void board_exit(int status);
 
+/** fr_port_epoch_next of the board: raises the boot epoch in its persistent store (flash on a CM-530, a host file
+ *  through semihosting on qemu); 0 when done, < 0 when it cannot. */
+int board_epoch_next(uint32_t *epoch);
+
+/** fr_port_option of the board: a `key=value` argument it understands (qemu: `epoch=<host path>`). */
+int board_option(const char *arg);
+
 /** Starts the UART sending what waits in the driver's transmit ring, without waiting for it. */
 void board_tx_kick(void);
 

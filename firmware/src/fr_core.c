@@ -1,5 +1,7 @@
-/* firmware/src/fr_core.c: start-up, the poll loop, telling datagrams apart (docs/protocol.md section 3), the
- * keep-alive (6.2), decoding incoming frames and encoding, framing and signing outgoing ones. */
+/* firmware/src/fr_core.c: start-up (and its refusal of settings that would not be safe), the poll loop, telling
+ * datagrams apart (docs/protocol.md section 3), the checks before a frame is acted on (the paired gateway, the
+ * robot's id, the signature), the keep-alive (6.2), decoding incoming frames and encoding, framing and signing
+ * outgoing ones. */
 #include <string.h>
 #include "fr_internal.h"
 #include "naogateway/proto/debugging.pb.h"
@@ -49,11 +51,12 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
 }
 
 bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
+    if (!fr_state.started) return false; /* refused settings: the robot says nothing it cannot sign */
     uint8_t *payload = tx + FR_HEADER_MAX;
     size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
     size_t cap = FR_DATAGRAM_MAX - header;
     if (route->via_stream && cap > FR_STREAM_PAYLOAD_MAX - header) cap = FR_STREAM_PAYLOAD_MAX - header;
-    bool signing = fr_state.settings.signing_key_len > 0;
+    bool signing = fr_state.signing;
     pb_ostream_t out = pb_ostream_from_buffer(payload, signing ? cap - FR_SIGNATURE_FIELD_SIZE : cap);
     msg->robotID = fr_state.settings.robot_id;
     if (!pb_encode(&out, naogateway_proto_Message_fields, msg)) {
@@ -61,7 +64,10 @@ bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
         return false;
     }
     size_t len = out.bytes_written;
-    if (signing) len = fr_sign_append(payload, len, cap);
+    if (signing && (len = fr_sign_append(payload, len, cap)) == 0) {
+        fr_state.stats.send_failed++;
+        return false;
+    }
     uint8_t *frame = fr_frame_header(payload, len, route->form);
     if (route->via_stream) return fr_stream_send(frame, len + header);
     return fr_send_raw(&route->to, frame, len + header);
@@ -101,6 +107,10 @@ static void send_keepalive(void) {
     health.uptimeMs = up;
     health.has_bootId = true;
     health.bootId = fr_state.settings.boot_id;
+    if (fr_state.settings.development) {
+        health.has_development = true; /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
+        health.development = true;
+    }
     pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health, NULL, true};
     pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
     naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
@@ -127,7 +137,7 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
     int found = fr_message_robot_id(payload, payload_len, &named);
     if (found < 0) { fr_state.stats.bad_protobuf++; return; }
     if (found == 0 || named != fr_state.settings.robot_id) { fr_state.stats.wrong_robot++; return; }
-    if (fr_state.settings.require_signed && fr_state.settings.signing_key_len > 0) {
+    if (fr_state.signing) {
         size_t signed_len;
         switch (fr_sign_check(payload, payload_len, &signed_len)) {
         case FR_SIG_OK: break;
@@ -136,6 +146,10 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
         case FR_SIG_MALFORMED: fr_state.stats.malformed_signature++; return;
         case FR_SIG_BAD: fr_state.stats.bad_signature++; return;
         case FR_SIG_REPLAYED: fr_state.stats.replayed++; return;
+        }
+        if (!fr_state.paired) { /* pair on the first signed frame: this sender is the gateway until the restart */
+            fr_state.gateway = *from;
+            fr_state.paired = true;
         }
     }
     fr_route_t route;
@@ -171,12 +185,15 @@ static void handle_datagram(const fr_endpoint_t *from, const uint8_t *data, size
     if (len < 2 || len > FR_DATAGRAM_MAX) { fr_state.stats.unclassifiable++; return; }
     bool from_gateway = from->port == fr_state.gateway.port && memcmp(from->ip, fr_state.gateway.ip, 4) == 0;
     if (data[0] == 0 && data[1] == 42) {
-        if (!from_gateway) { fr_state.stats.stranger++; return; }
+        /* Until a pairing robot has paired, any sender may offer the first signed frame; only its signature counts. */
+        if (fr_state.paired && !from_gateway) { fr_state.stats.stranger++; return; }
+        if (!fr_state.started) { fr_state.stats.not_started++; return; }
         fr_handle_frame(from, data, len, false);
     } else if (data[0] == 'R' && data[1] == 'G') {
         fr_gc_receive(from, data, len);
     } else if (data[0] < 42 && data[1] < 42) {
-        if (!from_gateway) { fr_state.stats.stranger++; return; }
+        if (!fr_state.paired || !from_gateway) { fr_state.stats.stranger++; return; }
+        if (!fr_state.started) { fr_state.stats.not_started++; return; }
         fr_stream_receive(data, len);
     } else {
         fr_state.stats.unclassifiable++;
@@ -185,12 +202,24 @@ static void handle_datagram(const fr_endpoint_t *from, const uint8_t *data, size
 
 /* ---- start and poll ----------------------------------------------------------------------------------- */
 
-void fr_init(const fr_settings_t *settings) {
+/** Whether the settings' trust part is one the library can run safely. */
+static fr_init_result_t check_trust(const fr_settings_t *s) {
+    if (s->development) {
+        if (s->signing_key_len > 0) return FR_INIT_KEY_IN_DEVELOPMENT;
+        if (s->pair_on_first_signed) return FR_INIT_PAIRING_UNSIGNED;
+        return FR_INIT_OK;
+    }
+    if (s->signing_key == NULL || s->signing_key_len == 0) return FR_INIT_NO_KEY;
+    if (s->signing_key_len < 16 || s->signing_key_len > FR_SIGNING_KEY_MAX) return FR_INIT_KEY_LENGTH;
+    return FR_INIT_OK;
+}
+
+fr_init_result_t fr_init(const fr_settings_t *settings) {
     memset(&fr_state, 0, sizeof fr_state);
     fr_state.settings = *settings;
-    if (fr_state.settings.signing_key_len > FR_SIGNING_KEY_MAX) fr_state.settings.signing_key_len = 0;
     fr_state.link_up = true;
     fr_state.gateway = settings->gateway;
+    fr_state.paired = !settings->pair_on_first_signed;
     fr_rpc_reset();
     fr_debug_reset();
     fr_gc_reset();
@@ -200,6 +229,32 @@ void fr_init(const fr_settings_t *settings) {
     for (int k = 0; k < 64 && fr_port_recv(&from, rx, sizeof rx) != 0; k++) {}
     fr_state.boot_ms = fr_port_millis();
     fr_state.next_keepalive = 0;
+    fr_init_result_t r = check_trust(settings);
+    fr_state.signing = !settings->development;
+    /* A new epoch at every start of a signing robot, before its first frame: its timestamps rise above every
+     * earlier boot's, and the gateway's frames of an earlier boot no longer verify. */
+    if (r == FR_INIT_OK && fr_state.signing && fr_port_epoch_next(&fr_state.epoch) < 0) r = FR_INIT_EPOCH;
+    fr_state.started = r == FR_INIT_OK;
+    return r;
+}
+
+const char *fr_init_error_text(fr_init_result_t result) {
+    switch (result) {
+    case FR_INIT_OK: return "started";
+    case FR_INIT_NO_KEY: return "no signing key: a robot signs unless it is built or started as a development build";
+    case FR_INIT_KEY_LENGTH: return "signing key refused: it must be 16 to 64 bytes";
+    case FR_INIT_KEY_IN_DEVELOPMENT: return "a development build takes no signing key: give either a key or development";
+    case FR_INIT_PAIRING_UNSIGNED: return "pairing on the first signed frame needs signing: not in a development build";
+    case FR_INIT_EPOCH: return "the boot epoch could not be raised (its store cannot be read or written)";
+    }
+    return "settings refused";
+}
+
+uint32_t fr_epoch(void) { return fr_state.epoch; }
+
+bool fr_gateway(fr_endpoint_t *out) {
+    *out = fr_state.gateway;
+    return fr_state.paired;
 }
 
 void fr_poll(void) {
@@ -216,6 +271,7 @@ void fr_poll(void) {
         fr_state.stats.received++;
         handle_datagram(&from, rx, (size_t)n);
     }
+    if (!fr_state.started) return; /* refused settings: nothing to send, nothing to resend */
     uint32_t up_ms = fr_uptime_ms();
     if ((int32_t)(up_ms - fr_state.next_keepalive) >= 0) {
         fr_state.next_keepalive += FR_KEEPALIVE_MS;

@@ -48,9 +48,13 @@ typedef struct {
     uint32_t next_keepalive;    /* uptime of the next keep-alive */
     bool link_up;
     fr_endpoint_t gateway;      /* the paired gateway: frames and segments are taken from it alone */
+    bool paired;                /* false only while pairing on the first signed frame waits for one */
+    bool started;               /* fr_init accepted the settings */
+    bool signing;               /* not a development build: every frame signed, every gateway frame checked */
+    uint32_t epoch;             /* the boot epoch: high 32 bits of the robot's signature timestamps */
     uint32_t sign_counter;      /* frame counter of the robot's signature timestamps */
-    bool gateway_ts_seen;       /* a signed gateway frame has been accepted since boot */
-    uint64_t gateway_ts;        /* its timestamp: the replay window */
+    bool gateway_ts_seen;       /* a signed gateway frame has been accepted in this boot epoch */
+    uint64_t gateway_ts;        /* its timestamp: the replay window (RAM: a new epoch starts it empty) */
     fr_stats_t stats;
 } fr_state_t;
 
@@ -104,19 +108,20 @@ void fr_stream_poll(void);
 
 /* sign.c */
 /** Appends the signature field over payload[0 .. len) with the next robot timestamp; the new length, or 0 when
- *  it does not fit in `cap`. */
+ *  it does not fit in `cap` or the boot's counters are used up. */
 size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap);
 /** What a signature check found (protocol.md 6.7). */
 typedef enum { FR_SIG_OK, FR_SIG_UNSIGNED, FR_SIG_NOT_LAST, FR_SIG_MALFORMED, FR_SIG_BAD, FR_SIG_REPLAYED } fr_sig_result_t;
 /** The last Message.robotID in a Message's top-level fields into `*id`: 1 when found, 0 when there is none,
  *  -1 when the bytes are no protobuf message (an end-group without its start, a truncated field). */
 int fr_message_robot_id(const uint8_t *payload, size_t len, int32_t *id);
-/** Checks a gateway frame's signature and moves the replay window on success; `*signed_len` gets the length of
- *  the bytes before the signature. */
+/** Checks a gateway frame's signature (direction 02, this robot's id and boot epoch) and moves the replay window
+ *  on success; `*signed_len` gets the length of the bytes before the signature. */
 fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed_len);
-/** The first 8 bytes of HMAC-SHA256(key, "FUSIG1" | direction | timestamp | bytes) into `mac`. */
-void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, uint64_t timestamp, const uint8_t *bytes,
-                 size_t len, uint8_t mac[8]);
+/** The first 8 bytes of HMAC-SHA256(key, "FUSIG2" | direction | robot id | epoch | timestamp | bytes), the numbers
+ *  big-endian (4, 4 and 8 bytes), into `mac` (protocol.md 6.7). */
+void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t robot_id, uint32_t epoch,
+                 uint64_t timestamp, const uint8_t *bytes, size_t len, uint8_t mac[8]);
 
 /* sha256.c */
 /** SHA-256 state of one running hash. */
@@ -135,6 +140,10 @@ void fr_sha256_final(fr_sha256_t *s, uint8_t out[32]);
 /** HMAC-SHA-256 over the concatenation of `parts` (count of them). */
 void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *parts, const size_t *lens, size_t count,
                     uint8_t out[32]);
+
+/** HKDF-SHA256 (RFC 5869): extract with `salt` from `ikm`, expand with `info` into `out_len` (<= 255 * 32) bytes. */
+void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, size_t ikm_len, const uint8_t *info,
+                    size_t info_len, uint8_t *out, size_t out_len);
 
 /* pb helpers (core.c) */
 /** Encode callback for a zero-terminated string in `*arg`. */

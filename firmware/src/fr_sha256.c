@@ -1,4 +1,4 @@
-/* firmware/src/fr_sha256.c: SHA-256 (FIPS 180-4) and HMAC-SHA-256 (RFC 2104) for signed frames
+/* firmware/src/fr_sha256.c: SHA-256 (FIPS 180-4), HMAC-SHA-256 (RFC 2104) and HKDF-SHA256 (RFC 5869) for signed frames
  * (docs/protocol.md 6.7). Written here rather than taken from a package: the registries' SHA-256 libraries for
  * C either allocate, pull in a whole crypto suite (mbedTLS, wolfSSL: tens of KB of flash and a configuration
  * system of their own) or come as single files meant to be copied into the tree, which this project does not do
@@ -102,4 +102,25 @@ void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *pa
     fr_sha256_update(&s, pad, 64);
     fr_sha256_update(&s, out, 32);
     fr_sha256_final(&s, out);
+}
+
+void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, size_t ikm_len, const uint8_t *info,
+                    size_t info_len, uint8_t *out, size_t out_len) {
+    uint8_t prk[32], t[32];
+    const uint8_t *extract[1] = {ikm};
+    const size_t extract_len[1] = {ikm_len};
+    fr_hmac_sha256(salt, salt_len, extract, extract_len, 1, prk);
+    size_t done = 0, t_len = 0;
+    for (uint8_t block = 1; done < out_len && block != 0; block++) {
+        /* T(n) = HMAC(PRK, T(n-1) | info | n), T(0) empty */
+        const uint8_t *parts[3] = {t, info, &block};
+        const size_t lens[3] = {t_len, info_len, 1};
+        fr_hmac_sha256(prk, sizeof prk, parts, lens, 3, t);
+        t_len = sizeof t;
+        size_t n = out_len - done < sizeof t ? out_len - done : sizeof t;
+        memcpy(out + done, t, n);
+        done += n;
+    }
+    memset(prk, 0, sizeof prk);
+    memset(t, 0, sizeof t);
 }

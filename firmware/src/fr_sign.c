@@ -1,29 +1,80 @@
-/* firmware/src/fr_sign.c: signed frames (docs/protocol.md 6.7): the robot signs every frame it sends when a key
- * is set, and with `require_signed` acts only on gateway frames with a valid signature newer than the last. */
+/* firmware/src/fr_sign.c: signed frames, version 2 (docs/protocol.md 6.7): the robot key, the MAC over direction,
+ * robot id, boot epoch and timestamp, signing every frame the robot sends and checking the gateway's, whose
+ * timestamps must rise within the boot epoch (the window lives in RAM: a new epoch changes every MAC). */
 #include <string.h>
 #include "fr_internal.h"
 
-void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, uint64_t timestamp, const uint8_t *bytes,
-                 size_t len, uint8_t mac[8]) {
-    static const uint8_t prefix[6] = {'F', 'U', 'S', 'I', 'G', '1'};
-    uint8_t ts[8], full[32];
-    for (int k = 0; k < 8; k++) ts[k] = (uint8_t)(timestamp >> (56 - 8 * k));
-    const uint8_t *parts[4] = {prefix, &direction, ts, bytes};
-    const size_t lens[4] = {sizeof prefix, 1, sizeof ts, len};
-    fr_hmac_sha256(key, key_len, parts, lens, 4, full);
+/** Writes `v` big-endian into `out[0 .. bytes)`. */
+static void big_endian(uint64_t v, uint8_t *out, int bytes) {
+    for (int k = 0; k < bytes; k++) out[k] = (uint8_t)(v >> (8 * (bytes - 1 - k)));
+}
+
+void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t robot_id, uint32_t epoch,
+                 uint64_t timestamp, const uint8_t *bytes, size_t len, uint8_t mac[8]) {
+    static const uint8_t prefix[6] = {'F', 'U', 'S', 'I', 'G', '2'};
+    uint8_t head[1 + 4 + 4 + 8], full[32];
+    head[0] = direction;
+    big_endian((uint32_t)robot_id, head + 1, 4);
+    big_endian(epoch, head + 5, 4);
+    big_endian(timestamp, head + 9, 8);
+    const uint8_t *parts[3] = {prefix, head, bytes};
+    const size_t lens[3] = {sizeof prefix, sizeof head, len};
+    fr_hmac_sha256(key, key_len, parts, lens, 3, full);
     memcpy(mac, full, 8);
+}
+
+void fr_robot_key(const uint8_t *team_key, size_t team_key_len, int32_t robot_id, uint8_t out[32]) {
+    static const uint8_t salt[20] = {'n', 'a', 'o', 'g', 'a', 't', 'e', 'w', 'a', 'y', ' ',
+                                     'r', 'o', 'b', 'o', 't', ' ', 'k', 'e', 'y'};
+    uint8_t info[10] = {'F', 'U', 'S', 'I', 'G', '2'};
+    big_endian((uint32_t)robot_id, info + 6, 4);
+    fr_hkdf_sha256(salt, sizeof salt, team_key, team_key_len, info, sizeof info, out, 32);
+}
+
+/** The value of one hex digit, or -1. */
+static int hex_digit(char c) {
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                                                                                         : -1;
+}
+
+fr_key_result_t fr_key_from_hex(const char *hex, uint8_t *out, size_t *len) {
+    size_t digits = 0;
+    for (const char *c = hex; *c; c++, digits++)
+        if (hex_digit(*c) < 0) return FR_KEY_NOT_HEX;
+    if (digits % 2 != 0) return FR_KEY_ODD_LENGTH;
+    if (digits < 32) return FR_KEY_TOO_SHORT;
+    if (digits > 2 * FR_SIGNING_KEY_MAX) return FR_KEY_TOO_LONG;
+    for (size_t k = 0; k < digits / 2; k++) out[k] = (uint8_t)(hex_digit(hex[2 * k]) << 4 | hex_digit(hex[2 * k + 1]));
+    *len = digits / 2;
+    return FR_KEY_OK;
+}
+
+const char *fr_key_error_text(fr_key_result_t result) {
+    switch (result) {
+    case FR_KEY_OK: return "key accepted";
+    case FR_KEY_TOO_SHORT: return "signing key too short: it must be 16 to 64 bytes (32 to 128 hex digits)";
+    case FR_KEY_TOO_LONG: return "signing key too long: it must be 16 to 64 bytes (32 to 128 hex digits)";
+    case FR_KEY_ODD_LENGTH: return "signing key has an odd number of hex digits: two digits per byte";
+    case FR_KEY_NOT_HEX: return "signing key has a character that is not a hex digit (0-9, a-f)";
+    }
+    return "signing key refused";
 }
 
 size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap) {
     if (len + FR_SIGNATURE_FIELD_SIZE > cap) return 0;
-    uint64_t ts = (uint64_t)fr_state.settings.boot_counter << 32 | fr_state.sign_counter++;
+    if (fr_state.sign_counter == UINT32_MAX) { /* the next timestamp would leave this epoch: no frame at all */
+        fr_state.stats.sign_exhausted++;
+        return 0;
+    }
+    uint64_t ts = (uint64_t)fr_state.epoch << 32 | fr_state.sign_counter++;
     uint8_t *p = payload + len;
     /* key of field 7199, wire type 2 (FA C1 03), length 19, then FrameSignature: 09 + fixed64, 12 08 + mac */
     *p++ = 0xFA; *p++ = 0xC1; *p++ = 0x03; *p++ = 19;
     *p++ = 0x09;
     for (int k = 0; k < 8; k++) *p++ = (uint8_t)(ts >> (8 * k));
     *p++ = 0x12; *p++ = 8;
-    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 1, ts, payload, len, p);
+    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 1, fr_state.settings.robot_id,
+                fr_state.epoch, ts, payload, len, p);
     return len + FR_SIGNATURE_FIELD_SIZE;
 }
 
@@ -127,8 +178,8 @@ fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed
     }
     if (!has_ts || mac == NULL) return FR_SIG_MALFORMED;
     uint8_t want[8];
-    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 2, ts, payload, (size_t)(sig - payload),
-                want);
+    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 2, fr_state.settings.robot_id,
+                fr_state.epoch, ts, payload, (size_t)(sig - payload), want);
     uint8_t diff = 0;
     for (int k = 0; k < 8; k++) diff |= (uint8_t)(want[k] ^ mac[k]);
     if (diff != 0) return FR_SIG_BAD;

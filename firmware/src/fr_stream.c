@@ -186,6 +186,7 @@ static void send_queued(uint32_t now) {
 }
 
 bool fr_stream_send(const uint8_t *data, size_t len) {
+    if (!fr_state.started) return false;
     if (len < 1 || len > FR_STREAM_PAYLOAD_MAX) return false;
     tx_slot_t *s = NULL;
     for (int k = 0; k < Q && s == NULL; k++) if (!tx[k].used) s = &tx[k];

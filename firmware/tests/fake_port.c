@@ -6,6 +6,9 @@ fake_datagram_t fake_sent[64];
 size_t fake_sent_count;
 uint32_t fake_now;
 bool fake_link = true;
+uint32_t fake_epoch;
+bool fake_epoch_fails;
+char fake_log[160];
 
 static fake_datagram_t inbox[16];
 static size_t inbox_head, inbox_count;
@@ -46,3 +49,19 @@ int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap) {
 bool fr_port_link_up(void) { return fake_link; }
 
 void fr_port_idle(void) {}
+
+int fr_port_epoch_next(uint32_t *epoch) {
+    if (fake_epoch_fails) return -1;
+    *epoch = ++fake_epoch;
+    return 0;
+}
+
+void fr_port_log(const char *text) {
+    strncpy(fake_log, text, sizeof fake_log - 1);
+    fake_log[sizeof fake_log - 1] = '\0';
+}
+
+bool fr_port_option(const char *arg) {
+    (void)arg;
+    return false;
+}

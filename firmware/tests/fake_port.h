@@ -21,6 +21,12 @@ extern uint32_t fake_now;
 /** What fr_port_link_up returns. */
 extern bool fake_link;
 
+/** The boot epoch fr_port_epoch_next last gave (it raises it by one per call), and whether it fails. */
+extern uint32_t fake_epoch;
+extern bool fake_epoch_fails;
+/** The last line fr_port_log was given. */
+extern char fake_log[160];
+
 /** Queues a datagram for fr_port_recv. */
 void fake_receive(const fr_endpoint_t *from, const uint8_t *data, size_t len);
 /** Forgets what was sent. */

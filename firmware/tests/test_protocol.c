@@ -57,6 +57,7 @@ static fr_settings_t settings(void) {
     s.agent = "SimAgent";
     s.role = "striker";
     s.boot_id = 1;
+    s.development = true; /* the worked examples are unsigned; the signed ones set a key */
     s.callbacks.health = health;
     return s;
 }
@@ -116,11 +117,12 @@ static void test_keepalive(void) {
         fr_poll();
         CHECK(fake_sent_count == 1);
     }
-    /* 9.13, byte for byte, sent to the gateway's 11011 */
+    /* 9.13, byte for byte, sent to the gateway's 11011; a development build adds RobotHealth.development = true
+     * (field 5: 28 01), so the frame is 2 bytes longer (4E) and RobotHealth 17 bytes (11) */
     CHECK(fake_sent_count == 1 && same_bytes(fake_sent[0].data, fake_sent[0].len,
-        "00 2A 00 00 00 00 00 00 00 00 00 4C 08 01 BA 01 34 08 88 27 10 01 18 05 3A 12 08 98 F8 FF FF FF"
+        "00 2A 00 00 00 00 00 00 00 00 00 4E 08 01 BA 01 34 08 88 27 10 01 18 05 3A 12 08 98 F8 FF FF FF"
         "FF FF FF FF 01 10 00 1D 00 00 00 00 62 08 53 69 6D 41 67 65 6E 74 7A 07 73 74 72 69 6B 65 72 82"
-        "01 03 73 69 74 8A BC 03 0F 0D 4E 62 46 41 12 03 73 69 74 18 88 27 20 01"));
+        "01 03 73 69 74 8A BC 03 11 0D 4E 62 46 41 12 03 73 69 74 18 88 27 20 01 28 01"));
     CHECK(memcmp(&fake_sent[0].peer, &gateway, sizeof gateway) == 0);
     /* nothing more until 200 ms later */
     fake_clear_sent();
@@ -260,26 +262,53 @@ static void test_options(void) {
     CHECK(!fr_option_enabled(text));
 }
 
+/** The robot key of robot 1 for the team key 00 01 .. 1F, HKDF-SHA256 as protocol.md 6.7 says. Computed
+ *  independently with Python's hmac and hashlib (a few lines, see the commit); the gateway derives the same. */
+static const char *const robot1_key =
+    "d50faec98cd1be71f7448262e12d46bedeffc984c9b79c928b3afded70791be1";
+
 static void test_signing(void) {
-    /* 9.14: the MAC of the 33-byte input, and the signed Status frame */
-    uint8_t key[32];
-    for (int k = 0; k < 32; k++) key[k] = (uint8_t)k;
-    uint8_t mac[8], msg[64];
+    /* HKDF-SHA256 against RFC 5869 Appendix A.1, test case 1 (L = 42: two expand blocks) */
+    uint8_t ikm[22], salt[13], info[10], okm[42];
+    memset(ikm, 0x0b, sizeof ikm);
+    for (int k = 0; k < 13; k++) salt[k] = (uint8_t)k;
+    for (int k = 0; k < 10; k++) info[k] = (uint8_t)(0xf0 + k);
+    fr_hkdf_sha256(salt, sizeof salt, ikm, sizeof ikm, info, sizeof info, okm, sizeof okm);
+    CHECK(same_bytes(okm, 42, "3cb25f25faacd57a90434f64d0362f2a2d2d0a90cf1a5a4c5db02d56ecc4c5bf"
+                              "34007208d5b887185865"));
+    /* the robot key: robot 1 and robot 63 of one team differ, and match the independent computation */
+    uint8_t team[32], rk[32], rk63[32];
+    for (int k = 0; k < 32; k++) team[k] = (uint8_t)k;
+    fr_robot_key(team, sizeof team, 1, rk);
+    CHECK(same_bytes(rk, 32, robot1_key));
+    fr_robot_key(team, sizeof team, 63, rk63);
+    CHECK(same_bytes(rk63, 32, "5e4ab8a63047006c8522918f4540b7285b47c9bd7a21eb4e57f45debfb11efc6"));
+    /* FUSIG2: the MAC binds direction, robot id, epoch and timestamp; each changes it */
+    uint8_t mac[8], other[8], msg[64];
     size_t n = hex("08 01 BA 01 0D 10 01 62 09 41 67 65 6E 74 54 65 73 74", msg);
-    fr_sign_mac(key, 32, 1, 0x0000000300000005ull, msg, n, mac);
-    CHECK(same_bytes(mac, 8, "01 68 92 55 59 00 26 64"));
+    fr_sign_mac(rk, 32, 1, 1, 3, 0x0000000300000005ull, msg, n, mac);
+    CHECK(same_bytes(mac, 8, "b8 72 90 5f 6b a2 05 a0"));
+    fr_sign_mac(rk, 32, 2, 1, 3, 0x0000000300000005ull, msg, n, other);
+    CHECK(memcmp(mac, other, 8) != 0);
+    fr_sign_mac(rk, 32, 1, 2, 3, 0x0000000300000005ull, msg, n, other);
+    CHECK(memcmp(mac, other, 8) != 0);
+    fr_sign_mac(rk, 32, 1, 1, 4, 0x0000000300000005ull, msg, n, other);
+    CHECK(memcmp(mac, other, 8) != 0);
+    /* the robot's own signed frame: epoch 3 from the port, frame counter 5 */
     fr_settings_t s = settings();
-    s.signing_key = key;
+    s.development = false;
+    s.signing_key = rk;
     s.signing_key_len = 32;
-    s.boot_counter = 3;
+    fake_epoch = 2;
     start(&s); /* the first keep-alive took frame counter 0 */
+    CHECK(fr_epoch() == 3 && fake_epoch == 3);
     fr_state.sign_counter = 5;
     uint8_t buf[128];
     memcpy(buf + 12, msg, n);
     size_t len = fr_sign_append(buf + 12, n, 100);
     uint8_t *f = fr_frame_header(buf + 12, len, FR_FORM_COMPACT);
     CHECK(same_bytes(f, len + 8, "00 2A 00 00 00 00 00 29 08 01 BA 01 0D 10 01 62 09 41 67 65 6E 74 54 65 73 74 FA C1 03 13"
-                                 "09 05 00 00 00 03 00 00 00 12 08 01 68 92 55 59 00 26 64"));
+                                 "09 05 00 00 00 03 00 00 00 12 08 b8 72 90 5f 6b a2 05 a0"));
     /* SHA-256 of "abc" (FIPS 180-4's example) and HMAC-SHA-256 of RFC 4231 case 2 */
     fr_sha256_t sh;
     uint8_t digest[32];
@@ -293,15 +322,17 @@ static void test_signing(void) {
     CHECK(same_bytes(digest, 32, "5bdcc146bf60754e6a042426089575c75a003f089d2739839dec58b964ec3843"));
 }
 
-/** A gateway frame signed with direction 02 and `ts`, around the Request `body` (hex of the Message bytes). */
-static size_t signed_request(const uint8_t *key, uint64_t ts, const char *body, uint8_t *out) {
+/** A gateway frame for robot `id` in `epoch`, signed with direction 02 and `ts`, around the Request `body` (hex of
+ *  the Message bytes). */
+static size_t signed_request(const uint8_t *key, int32_t id, uint32_t epoch, uint64_t ts, const char *body,
+                             uint8_t *out) {
     uint8_t *payload = out + 12;
     size_t n = hex(body, payload);
     uint8_t *p = payload + n;
     *p++ = 0xFA; *p++ = 0xC1; *p++ = 0x03; *p++ = 19; *p++ = 0x09;
     for (int k = 0; k < 8; k++) *p++ = (uint8_t)(ts >> (8 * k));
     *p++ = 0x12; *p++ = 8;
-    fr_sign_mac(key, 32, 2, ts, payload, n, p);
+    fr_sign_mac(key, 32, 2, id, epoch, ts, payload, n, p);
     n += 23;
     fr_frame_header(payload, n, FR_FORM_LEGACY);
     return n + 12;
@@ -309,12 +340,14 @@ static size_t signed_request(const uint8_t *key, uint64_t ts, const char *body, 
 
 static void test_signed_receive(void) {
     uint8_t key[32];
-    for (int k = 0; k < 32; k++) key[k] = (uint8_t)k;
+    hex(robot1_key, key);
     fr_settings_t s = settings();
+    s.development = false;
     s.signing_key = key;
     s.signing_key_len = 32;
-    s.require_signed = true;
+    fake_epoch = 9;
     start(&s);
+    CHECK(fr_epoch() == 10);
     fr_rpc_register("motion", "walk", walk, NULL);
     const char *probe = "08 01 B2 BC 03 14 0A 09 68 65 61 72 74 62 65 61 74 12 05 70 72 6F 62 65 78 08";
     uint8_t frame[128];
@@ -323,8 +356,8 @@ static void test_signed_receive(void) {
             "72 6F 62 65 78 08");
     fr_poll();
     CHECK(fake_sent_count == 0 && fr_stats()->unsigned_frames == 1);
-    /* signed: answered, and the answer is signed (23 more bytes) */
-    size_t n = signed_request(key, 1000, probe, frame);
+    /* signed for this robot in its epoch: answered, and the answer is signed (23 more bytes) */
+    size_t n = signed_request(key, 1, 10, 1000, probe, frame);
     fake_receive(&gateway, frame, n);
     fr_poll();
     CHECK(fake_sent_count == 1 && fake_sent[0].len == 53 + 23);
@@ -333,13 +366,20 @@ static void test_signed_receive(void) {
     fr_poll();
     CHECK(fake_sent_count == 1 && fr_stats()->replayed == 1);
     /* a changed byte: bad signature */
-    n = signed_request(key, 1001, probe, frame);
+    n = signed_request(key, 1, 10, 1001, probe, frame);
     frame[20] ^= 1;
     fake_receive(&gateway, frame, n);
     fr_poll();
     CHECK(fake_sent_count == 1 && fr_stats()->bad_signature == 1);
+    /* signed for the previous epoch, or as if for robot 2 (the frame still names robot 1): bad signature */
+    n = signed_request(key, 1, 9, 1002, probe, frame);
+    fake_receive(&gateway, frame, n);
+    n = signed_request(key, 2, 10, 1002, probe, frame);
+    fake_receive(&gateway, frame, n);
+    fr_poll();
+    CHECK(fake_sent_count == 1 && fr_stats()->bad_signature == 3);
     /* a field after the signature */
-    n = signed_request(key, 1002, probe, frame);
+    n = signed_request(key, 1, 10, 1002, probe, frame);
     frame[n++] = 0x10;
     frame[n++] = 0x01;
     frame[11] = (uint8_t)(n - 12);
@@ -347,10 +387,22 @@ static void test_signed_receive(void) {
     fr_poll();
     CHECK(fake_sent_count == 1 && fr_stats()->signature_not_last == 1);
     /* newer and intact: answered */
-    n = signed_request(key, 1003, probe, frame);
+    n = signed_request(key, 1, 10, 1003, probe, frame);
     fake_receive(&gateway, frame, n);
     fr_poll();
     CHECK(fake_sent_count == 2);
+    /* after a restart (a new epoch) the frame captured before it no longer verifies, though its timestamp would
+     * pass the emptied window */
+    start(&s);
+    CHECK(fr_epoch() == 11);
+    fr_rpc_register("heartbeat", "probe", walk, NULL);
+    fake_receive(&gateway, frame, n);
+    fr_poll();
+    CHECK(fake_sent_count == 0 && fr_stats()->bad_signature == 1);
+    n = signed_request(key, 1, 11, 1, probe, frame);
+    fake_receive(&gateway, frame, n);
+    fr_poll();
+    CHECK(fake_sent_count == 1);
 }
 
 static int link_changes, link_last = -1;

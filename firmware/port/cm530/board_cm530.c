@@ -1,8 +1,9 @@
 /* firmware/port/cm530/board_cm530.c: the ROBOTIS CM-530 (STM32F103RE, 8 MHz crystal). Core at 72 MHz from the PLL,
  * the GS1500M on the "ZigBee" port: UART5, TX on PC12, RX on PD2, 460800 baud 8N1 (thesis 7.1), received by
  * interrupt into the driver's ring and sent by the transmit-empty interrupt, so a send never waits for the line.
- * The image starts at 0x08003000, behind ROBOTIS's bootloader (ld/stm32f103re.ld). It builds and links here; it cannot
- * run in the emulator (qemu has no STM32F1 with an RCC). */
+ * The image starts at 0x08003000, behind ROBOTIS's bootloader (ld/stm32f103re.ld), and ends before the last two
+ * 2 KB flash pages, 0x0807F000 and 0x0807F800, which keep the boot epoch (board_epoch_next). It builds and links
+ * here; it cannot run in the emulator (qemu has no STM32F1 with an RCC or a flash controller). */
 #include "board.h"
 #include "stm32.h"
 
@@ -66,6 +67,102 @@ void board_init(void) {
     SYST_RVR = CORE_HZ / 1000u - 1u;
     SYST_CVR = 0;
     SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_TICKINT | SYST_CSR_CORE_CLOCK;
+}
+
+/* ---- the boot epoch in flash ---------------------------------------------------------------------------------
+ * Two pages, each a log of 32-bit epochs written in rising order into erased words (0xFFFFFFFF). The epoch is the
+ * largest word written in either page. A start programs one word after the largest; when that page is full it
+ * erases the other page and writes there, so an erase never takes the largest value with it (it stays in the
+ * page not erased) and a power cut in between loses nothing. 512 starts per page erase: the F103's 10,000 erase
+ * cycles last about ten million starts. */
+#define EPOCH_PAGE_A 0x0807F000u
+#define EPOCH_PAGE_SIZE 2048u
+#define EPOCH_WORDS (EPOCH_PAGE_SIZE / 4u)
+#define FLASH_KEYR REG32(0x40022004u)
+#define FLASH_SR REG32(0x4002200Cu)
+#define FLASH_CR REG32(0x40022010u)
+#define FLASH_AR REG32(0x40022014u)
+#define FLASH_SR_BSY (1u << 0)
+#define FLASH_SR_PGERR (1u << 2)
+#define FLASH_SR_WRPRTERR (1u << 4)
+#define FLASH_SR_EOP (1u << 5)
+#define FLASH_CR_PG (1u << 0)
+#define FLASH_CR_PER (1u << 1)
+#define FLASH_CR_STRT (1u << 6)
+#define FLASH_CR_LOCK (1u << 7)
+
+/** Word `i` of epoch page `page` (0 or 1). */
+static volatile const uint32_t *epoch_word(uint32_t page, uint32_t i) {
+    return (volatile const uint32_t *)(uintptr_t)(EPOCH_PAGE_A + page * EPOCH_PAGE_SIZE + 4u * i);
+}
+
+/** Waits for the flash controller, boundedly (a page erase takes about 20 ms); false on a timeout or an error. */
+static int flash_wait(void) {
+    for (uint32_t i = 0; i < 20000000u; i++) {
+        if (!(FLASH_SR & FLASH_SR_BSY)) {
+            uint32_t sr = FLASH_SR;
+            FLASH_SR = FLASH_SR_EOP | FLASH_SR_PGERR | FLASH_SR_WRPRTERR; /* written 1s clear them */
+            return !(sr & (FLASH_SR_PGERR | FLASH_SR_WRPRTERR));
+        }
+    }
+    return 0;
+}
+
+/** Erases epoch page `page`. */
+static int flash_erase(uint32_t page) {
+    FLASH_CR |= FLASH_CR_PER;
+    FLASH_AR = EPOCH_PAGE_A + page * EPOCH_PAGE_SIZE;
+    FLASH_CR |= FLASH_CR_STRT;
+    int ok = flash_wait();
+    FLASH_CR &= ~FLASH_CR_PER;
+    return ok;
+}
+
+/** Programs `value` into the erased word `i` of page `page`, as two half-words (the F103 programs 16 bits). */
+static int flash_program(uint32_t page, uint32_t i, uint32_t value) {
+    volatile uint16_t *half = (volatile uint16_t *)(uintptr_t)(EPOCH_PAGE_A + page * EPOCH_PAGE_SIZE + 4u * i);
+    int ok = 1;
+    FLASH_CR |= FLASH_CR_PG;
+    half[0] = (uint16_t)value;
+    ok = ok && flash_wait();
+    half[1] = (uint16_t)(value >> 16);
+    ok = ok && flash_wait();
+    FLASH_CR &= ~FLASH_CR_PG;
+    return ok && *epoch_word(page, i) == value;
+}
+
+int board_epoch_next(uint32_t *epoch) {
+    uint32_t best = 0, best_page = 0, best_index = 0;
+    int found = 0;
+    for (uint32_t page = 0; page < 2; page++)
+        for (uint32_t i = 0; i < EPOCH_WORDS; i++) {
+            uint32_t w = *epoch_word(page, i);
+            if (w != 0xFFFFFFFFu && (!found || w > best)) { best = w; best_page = page; best_index = i; found = 1; }
+        }
+    if (found && best >= 0xFFFFFFFEu) return -1; /* used up: refuse rather than repeat an epoch */
+    uint32_t next = found ? best + 1u : 1u;
+    uint32_t page = best_page, index = found ? best_index + 1u : 0u;
+    if (FLASH_CR & FLASH_CR_LOCK) {
+        FLASH_KEYR = 0x45670123u;
+        FLASH_KEYR = 0xCDEF89ABu;
+    }
+    int ok;
+    if (found && index < EPOCH_WORDS && *epoch_word(page, index) == 0xFFFFFFFFu) {
+        ok = flash_program(page, index, next);
+    } else {
+        /* this page is full (or the word after the largest is not blank): start the other page afresh */
+        page = found ? 1u - best_page : 0u;
+        ok = flash_erase(page) && flash_program(page, 0, next);
+    }
+    FLASH_CR |= FLASH_CR_LOCK;
+    if (!ok) return -1;
+    *epoch = next;
+    return 0;
+}
+
+int board_option(const char *arg) {
+    (void)arg; /* a CM-530 has no command line */
+    return 0;
 }
 
 int board_args(char ***argv) {

@@ -4,10 +4,13 @@
  *   FR_POSIX_BIND   ip:port to receive on (default 0.0.0.0:3838); a test gives each robot its own loopback IP
  *   FR_POSIX_LOSS   percent of datagrams lost in each direction (default 0), for the stream's tests
  *   FR_POSIX_SEED   seed of that loss (default 1), so a run can be repeated
- *   FR_POSIX_LINK   a file: while it exists the module reports the network lost (the link-loss tests) */
+ *   FR_POSIX_LINK   a file: while it exists the module reports the network lost (the link-loss tests)
+ * The boot epoch lives in a file, `epoch=<path>` on the robot's command line (default: robot.epoch beside the
+ * binary); one file may serve several robots, each start taking the next number under a lock. */
 #define _POSIX_C_SOURCE 200809L
 #include <arpa/inet.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <stdio.h>
@@ -121,4 +124,77 @@ void fr_port_idle(void) {
     ensure_ready();
     struct pollfd p = {px.fd, POLLIN, 0};
     (void)poll(&p, 1, 2); /* at most 2 ms: a datagram wakes it at once */
+}
+
+/** The epoch file given with `epoch=`; empty = robot.epoch beside the binary. */
+static char epoch_path[512];
+
+bool fr_port_option(const char *arg) {
+    if (strncmp(arg, "epoch=", 6) != 0 || arg[6] == '\0' || strlen(arg + 6) >= sizeof epoch_path - 8) return false;
+    strcpy(epoch_path, arg + 6);
+    return true;
+}
+
+void fr_port_log(const char *text) {
+    fprintf(stderr, "%s\n", text);
+    fflush(stderr);
+}
+
+/** Reports an epoch file problem on stderr; always -1. */
+static int epoch_error(const char *path, const char *what) {
+    fprintf(stderr, "fr_port_posix: epoch file %s: %s\n", path, what);
+    return -1;
+}
+
+int fr_port_epoch_next(uint32_t *epoch) {
+    char path[sizeof epoch_path], lock[sizeof epoch_path + 8], tmp[sizeof epoch_path + 8];
+    if (epoch_path[0]) {
+        strcpy(path, epoch_path);
+    } else {
+        ssize_t n = readlink("/proc/self/exe", path, sizeof path - 16);
+        char *slash = n > 0 ? memchr(path, '/', (size_t)n) : NULL;
+        if (slash == NULL) strcpy(path, "robot.epoch");
+        else {
+            path[n] = '\0';
+            strcpy(strrchr(path, '/') + 1, "robot.epoch");
+        }
+    }
+    snprintf(lock, sizeof lock, "%s.lock", path);
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    /* One start at a time takes a number: an exclusive lock on a file beside it (the epoch file itself is replaced
+     * by rename, so it cannot carry the lock). */
+    int lfd = open(lock, O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+    if (lfd < 0) return epoch_error(lock, strerror(errno));
+    struct flock fl;
+    memset(&fl, 0, sizeof fl);
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    if (fcntl(lfd, F_SETLKW, &fl) != 0) { close(lfd); return epoch_error(lock, strerror(errno)); }
+    int result = -1;
+    uint64_t last = 0;
+    FILE *f = fopen(path, "r");
+    if (f == NULL && errno != ENOENT) { result = epoch_error(path, strerror(errno)); goto done; }
+    if (f != NULL) {
+        char text[24];
+        size_t n = fread(text, 1, sizeof text - 1, f);
+        fclose(f);
+        text[n] = '\0';
+        size_t k = 0;
+        for (; k < n && text[k] >= '0' && text[k] <= '9' && last <= UINT32_MAX; k++) last = last * 10u + (uint64_t)(text[k] - '0');
+        if (k == 0 || k > 10 || last > UINT32_MAX || (k < n && strcmp(text + k, "\n") != 0)) {
+            result = epoch_error(path, "damaged (not one decimal number): refusing to guess an epoch");
+            goto done;
+        }
+    }
+    if (last >= UINT32_MAX) { result = epoch_error(path, "used up (4294967295 starts)"); goto done; }
+    FILE *out = fopen(tmp, "w");
+    if (out == NULL) { result = epoch_error(tmp, strerror(errno)); goto done; }
+    bool ok = fprintf(out, "%lu\n", (unsigned long)(last + 1u)) > 0 && fflush(out) == 0 && fsync(fileno(out)) == 0;
+    ok = fclose(out) == 0 && ok;
+    if (!ok || rename(tmp, path) != 0) { result = epoch_error(path, strerror(errno)); goto done; }
+    *epoch = (uint32_t)(last + 1u);
+    result = 0;
+done:
+    close(lfd); /* releases the lock */
+    return result;
 }

@@ -2,7 +2,8 @@
  * address, registers and interrupt; it has no RCC (reads give 0), so there is no clock set-up; SysTick runs on the
  * 120 MHz core clock. The program's arguments, its log and its end go through semihosting
  * (-semihosting-config enable=on,target=native; `-append "id=2 run_ms=5000"` gives arguments). Bytes leave by
- * polling: the emulated UART takes each at once. */
+ * polling: the emulated UART takes each at once. The boot epoch lives in a file on the host, read and written
+ * through semihosting: `epoch=<path>` among the arguments, robot.epoch in qemu's working directory by default. */
 #include <string.h>
 
 #include "board.h"
@@ -20,6 +21,10 @@
 #define BOARD_BOOT_MS 50u
 #endif
 
+#define SYS_OPEN 0x01u
+#define SYS_CLOSE 0x02u
+#define SYS_WRITE 0x05u
+#define SYS_READ 0x06u
 #define SYS_WRITE0 0x04u
 #define SYS_GET_CMDLINE 0x15u
 #define SYS_EXIT 0x18u
@@ -90,4 +95,66 @@ void board_init(void) {
     SYST_RVR = BOARD_CORE_HZ / 1000u - 1u;
     SYST_CVR = 0;
     SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_TICKINT | SYST_CSR_CORE_CLOCK;
+}
+
+/** The host file of the boot epoch (`epoch=<path>`). */
+static char epoch_path[128] = "robot.epoch";
+
+int board_option(const char *arg) {
+    size_t n = strlen(arg);
+    if (strncmp(arg, "epoch=", 6) != 0 || n == 6 || n - 6 >= sizeof epoch_path) return 0;
+    memcpy(epoch_path, arg + 6, n - 5);
+    return 1;
+}
+
+/** Opens the epoch file on the host in semihosting `mode` (0 "r", 4 "w"); its handle, or -1. */
+static int32_t epoch_open(uint32_t mode) {
+    static uint32_t block[3];
+    block[0] = (uint32_t)(uintptr_t)epoch_path;
+    block[1] = mode;
+    block[2] = (uint32_t)strlen(epoch_path);
+    return (int32_t)semihost(SYS_OPEN, block);
+}
+
+int board_epoch_next(uint32_t *epoch) {
+    static uint32_t block[3];
+    char text[16];
+    uint32_t last = 0;
+    int32_t h = epoch_open(0);
+    if (h >= 0) {
+        block[0] = (uint32_t)h;
+        block[1] = (uint32_t)(uintptr_t)text;
+        block[2] = sizeof text - 1u;
+        uint32_t missing = semihost(SYS_READ, block); /* the bytes NOT read */
+        block[0] = (uint32_t)h;
+        semihost(SYS_CLOSE, block);
+        size_t n = missing <= sizeof text - 1u ? sizeof text - 1u - missing : 0;
+        size_t k = 0;
+        for (; k < n && text[k] >= '0' && text[k] <= '9' && k < 10; k++) {
+            uint64_t next = (uint64_t)last * 10u + (uint32_t)(text[k] - '0');
+            if (next >= 0xFFFFFFFFu) return -1;
+            last = (uint32_t)next;
+        }
+        if (k == 0 || (k < n && text[k] != '\n')) {
+            board_log("epoch file damaged: refusing to guess an epoch");
+            return -1;
+        }
+    }
+    uint32_t next = last + 1u;
+    size_t n = 0;
+    char digits[12];
+    for (uint32_t v = next; v > 0; v /= 10u) digits[n++] = (char)('0' + v % 10u);
+    for (size_t k = 0; k < n; k++) text[k] = digits[n - 1 - k];
+    text[n++] = '\n';
+    h = epoch_open(4);
+    if (h < 0) { board_log("epoch file cannot be written"); return -1; }
+    block[0] = (uint32_t)h;
+    block[1] = (uint32_t)(uintptr_t)text;
+    block[2] = (uint32_t)n;
+    uint32_t unwritten = semihost(SYS_WRITE, block);
+    block[0] = (uint32_t)h;
+    semihost(SYS_CLOSE, block);
+    if (unwritten != 0) { board_log("epoch file cannot be written"); return -1; }
+    *epoch = next;
+    return 0;
 }

@@ -57,3 +57,9 @@ void fr_port_idle(void) {
     if (!gs1500m_rx_ready(&board_gs)) cpu_wfi();
     cpu_irq_enable();
 }
+
+int fr_port_epoch_next(uint32_t *epoch) { return board_epoch_next(epoch); }
+
+void fr_port_log(const char *text) { board_log(text); }
+
+bool fr_port_option(const char *arg) { return board_option(arg) != 0; }
