@@ -224,7 +224,7 @@ typedef enum {
 
 /** Starts (or restarts, for system.reset) the library: every option off, uptime from 0, a fresh stream, and with
  *  signing the next boot epoch (fr_port_epoch_next). On a refusal the library neither sends a frame nor acts on
- *  one (GameController packets are still read); the program should report it and stop. */
+ *  one (GameController packets are still read and answered); the program should report it and stop. */
 fr_init_result_t fr_init(const fr_settings_t *settings);
 
 /** One line saying what an fr_init refusal means (never the key). */

@@ -162,7 +162,10 @@ class FirmwareQemuSpec
     val bridge = new Gs1500mBridge(Gs1500mBridge.Config(address, hosts = Map(BaseStation -> gatewayAt)))
     val log: File = File.createTempFile(s"qemu-robot-$id", ".log")
     val qemu: Process =
-      QemuBoard.start(image("robot"), log, Seq(s"id=$id", "team=12", "player=3"), Some(bridge.serialPort))
+      // A development image by name: the gateway here signs nothing (the signing path is FirmwarePosixSpec's and
+      // HostileRobotPortSpec's).
+      QemuBoard.start(image("robot"), log, Seq(s"id=$id", "team=12", "player=3", "development"),
+        Some(bridge.serialPort))
     rig.onClose { QemuBoard.stop(qemu); bridge.close(); log.delete(); () }
     val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
     client.status(id).runWith(Sink.foreach(snapshots.add))
