@@ -235,6 +235,8 @@ fr_init_result_t fr_init(const fr_settings_t *settings) {
      * earlier boot's, and the gateway's frames of an earlier boot no longer verify. */
     if (r == FR_INIT_OK && fr_state.signing && fr_port_epoch_next(&fr_state.epoch) < 0) r = FR_INIT_EPOCH;
     fr_state.started = r == FR_INIT_OK;
+    if (fr_state.started && fr_state.signing)
+        fr_hmac_key(&fr_state.mac_key, settings->signing_key, settings->signing_key_len);
     return r;
 }
 

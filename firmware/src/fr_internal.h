@@ -41,6 +41,12 @@ fr_frame_error_t fr_frame_parse(const uint8_t *data, size_t len, const uint8_t *
  *  frame starts (payload - 12 or payload - 8). `payload` must have FR_HEADER_MAX bytes before it. */
 uint8_t *fr_frame_header(uint8_t *payload, size_t payload_len, fr_form_t form);
 
+/** An HMAC-SHA-256 key made ready once: the hash states after its inner and outer padded key blocks, so each MAC
+ *  saves the two compressions of those blocks. */
+typedef struct {
+    uint32_t inner[8], outer[8];
+} fr_hmac_key_t;
+
 /** The library's state shared between its modules; one instance, static. */
 typedef struct {
     fr_settings_t settings;
@@ -52,6 +58,7 @@ typedef struct {
     bool started;               /* fr_init accepted the settings */
     bool signing;               /* not a development build: every frame signed, every gateway frame checked */
     uint32_t epoch;             /* the boot epoch: high 32 bits of the robot's signature timestamps */
+    fr_hmac_key_t mac_key;      /* the robot key, prepared once at fr_init */
     uint32_t sign_counter;      /* frame counter of the robot's signature timestamps */
     bool gateway_ts_seen;       /* a signed gateway frame has been accepted in this boot epoch */
     uint64_t gateway_ts;        /* its timestamp: the replay window (RAM: a new epoch starts it empty) */
@@ -122,6 +129,9 @@ fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed
  *  big-endian (4, 4 and 8 bytes), into `mac` (protocol.md 6.7). */
 void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t robot_id, uint32_t epoch,
                  uint64_t timestamp, const uint8_t *bytes, size_t len, uint8_t mac[8]);
+/** fr_sign_mac under a prepared key (the robot's own, fr_state.mac_key). */
+void fr_sign_mac_with(const fr_hmac_key_t *key, uint8_t direction, int32_t robot_id, uint32_t epoch, uint64_t timestamp,
+                      const uint8_t *bytes, size_t len, uint8_t mac[8]);
 
 /* sha256.c */
 /** SHA-256 state of one running hash. */
@@ -137,6 +147,10 @@ void fr_sha256_init(fr_sha256_t *s);
 void fr_sha256_update(fr_sha256_t *s, const uint8_t *data, size_t len);
 /** Ends the hash and writes the 32-byte digest. */
 void fr_sha256_final(fr_sha256_t *s, uint8_t out[32]);
+/** Prepares `key` (any length) for fr_hmac_with. */
+void fr_hmac_key(fr_hmac_key_t *k, const uint8_t *key, size_t key_len);
+/** HMAC-SHA-256 under a prepared key over the concatenation of `parts` (count of them). */
+void fr_hmac_with(const fr_hmac_key_t *k, const uint8_t *const *parts, const size_t *lens, size_t count, uint8_t out[32]);
 /** HMAC-SHA-256 over the concatenation of `parts` (count of them). */
 void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *parts, const size_t *lens, size_t count,
                     uint8_t out[32]);

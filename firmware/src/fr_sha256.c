@@ -80,8 +80,7 @@ void fr_sha256_final(fr_sha256_t *s, uint8_t out[32]) {
     }
 }
 
-void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *parts, const size_t *lens, size_t count,
-                    uint8_t out[32]) {
+void fr_hmac_key(fr_hmac_key_t *k, const uint8_t *key, size_t key_len) {
     uint8_t k0[64], pad[64];
     fr_sha256_t s;
     memset(k0, 0, sizeof k0);
@@ -95,13 +94,38 @@ void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *pa
     for (int i = 0; i < 64; i++) pad[i] = (uint8_t)(k0[i] ^ 0x36);
     fr_sha256_init(&s);
     fr_sha256_update(&s, pad, 64);
-    for (size_t i = 0; i < count; i++) fr_sha256_update(&s, parts[i], lens[i]);
-    fr_sha256_final(&s, out);
+    memcpy(k->inner, s.h, sizeof k->inner);
     for (int i = 0; i < 64; i++) pad[i] = (uint8_t)(k0[i] ^ 0x5c);
     fr_sha256_init(&s);
     fr_sha256_update(&s, pad, 64);
+    memcpy(k->outer, s.h, sizeof k->outer);
+    memset(k0, 0, sizeof k0);
+    memset(pad, 0, sizeof pad);
+}
+
+/** A running hash that has taken one whole 64-byte block and ended in state `h`. */
+static void resume(fr_sha256_t *s, const uint32_t h[8]) {
+    memcpy(s->h, h, sizeof s->h);
+    s->used = 0;
+    s->total = 64;
+}
+
+void fr_hmac_with(const fr_hmac_key_t *k, const uint8_t *const *parts, const size_t *lens, size_t count,
+                  uint8_t out[32]) {
+    fr_sha256_t s;
+    resume(&s, k->inner);
+    for (size_t i = 0; i < count; i++) fr_sha256_update(&s, parts[i], lens[i]);
+    fr_sha256_final(&s, out);
+    resume(&s, k->outer);
     fr_sha256_update(&s, out, 32);
     fr_sha256_final(&s, out);
+}
+
+void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *parts, const size_t *lens, size_t count,
+                    uint8_t out[32]) {
+    fr_hmac_key_t k;
+    fr_hmac_key(&k, key, key_len);
+    fr_hmac_with(&k, parts, lens, count, out);
 }
 
 void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, size_t ikm_len, const uint8_t *info,

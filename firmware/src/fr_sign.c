@@ -9,8 +9,8 @@ static void big_endian(uint64_t v, uint8_t *out, int bytes) {
     for (int k = 0; k < bytes; k++) out[k] = (uint8_t)(v >> (8 * (bytes - 1 - k)));
 }
 
-void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t robot_id, uint32_t epoch,
-                 uint64_t timestamp, const uint8_t *bytes, size_t len, uint8_t mac[8]) {
+void fr_sign_mac_with(const fr_hmac_key_t *key, uint8_t direction, int32_t robot_id, uint32_t epoch, uint64_t timestamp,
+                      const uint8_t *bytes, size_t len, uint8_t mac[8]) {
     static const uint8_t prefix[6] = {'F', 'U', 'S', 'I', 'G', '2'};
     uint8_t head[1 + 4 + 4 + 8], full[32];
     head[0] = direction;
@@ -19,8 +19,15 @@ void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t 
     big_endian(timestamp, head + 9, 8);
     const uint8_t *parts[3] = {prefix, head, bytes};
     const size_t lens[3] = {sizeof prefix, sizeof head, len};
-    fr_hmac_sha256(key, key_len, parts, lens, 3, full);
+    fr_hmac_with(key, parts, lens, 3, full);
     memcpy(mac, full, 8);
+}
+
+void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t robot_id, uint32_t epoch,
+                 uint64_t timestamp, const uint8_t *bytes, size_t len, uint8_t mac[8]) {
+    fr_hmac_key_t k;
+    fr_hmac_key(&k, key, key_len);
+    fr_sign_mac_with(&k, direction, robot_id, epoch, timestamp, bytes, len, mac);
 }
 
 void fr_robot_key(const uint8_t *team_key, size_t team_key_len, int32_t robot_id, uint8_t out[32]) {
@@ -73,8 +80,7 @@ size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap) {
     *p++ = 0x09;
     for (int k = 0; k < 8; k++) *p++ = (uint8_t)(ts >> (8 * k));
     *p++ = 0x12; *p++ = 8;
-    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 1, fr_state.settings.robot_id,
-                fr_state.epoch, ts, payload, len, p);
+    fr_sign_mac_with(&fr_state.mac_key, 1, fr_state.settings.robot_id, fr_state.epoch, ts, payload, len, p);
     return len + FR_SIGNATURE_FIELD_SIZE;
 }
 
@@ -178,8 +184,8 @@ fr_sig_result_t fr_sign_check(const uint8_t *payload, size_t len, size_t *signed
     }
     if (!has_ts || mac == NULL) return FR_SIG_MALFORMED;
     uint8_t want[8];
-    fr_sign_mac(fr_state.settings.signing_key, fr_state.settings.signing_key_len, 2, fr_state.settings.robot_id,
-                fr_state.epoch, ts, payload, (size_t)(sig - payload), want);
+    fr_sign_mac_with(&fr_state.mac_key, 2, fr_state.settings.robot_id, fr_state.epoch, ts, payload,
+                     (size_t)(sig - payload), want);
     uint8_t diff = 0;
     for (int k = 0; k < 8; k++) diff |= (uint8_t)(want[k] ^ mac[k]);
     if (diff != 0) return FR_SIG_BAD;
