@@ -56,7 +56,7 @@ void board_exit(int status) {
 }
 
 #define MAX_ARGS 16
-static char cmdline[256];
+static char cmdline[512];
 static char *args[MAX_ARGS + 1];
 
 int board_args(char ***argv) {

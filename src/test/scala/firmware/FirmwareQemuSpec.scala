@@ -17,7 +17,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import apps.testkit.RobotRig
 import naogateway.sim.gs1500m.{OverflowExperiment, Remote}
 import naogateway.testkit.TestLoopback
-import naogateway.wire.{Posture, RpcValue}
+import naogateway.wire.{MessageContents, Posture, RpcValue}
 import naogateway.{RobotSnapshot, StreamActor}
 import robotmiddleware.RobotInterface
 
@@ -269,6 +269,142 @@ class FirmwareQemuSpec
       info(f"${back.size} payloads back in ${(System.nanoTime() - started) / 1e9}%.1f s; module: ${robot.bridge.stats}")
       back.map(_(0) & 0xff).sum shouldBe 4950
       back.map(_.toSeq) shouldBe payloads.map(_.toSeq)
+    }
+  }
+
+  // ---- the example robot signing, with a gateway played by the spec ---------------------------------------------
+
+  /** A signing robot image in qemu behind its own bridge; the spec's sockets stand for the base station (and a second
+    * gateway the robot knows as 192.168.1.20:11011) and sign with the test-side signer (Fusig2).
+    */
+  private final class SignedBoard(val id: Int, epochFile: File, gateways: Map[Remote, DatagramSocket],
+      extra: Seq[String] = Nil) {
+    val key: Array[Byte] = Fusig2.robotKey(Fusig2.unhex(FirmwarePosixSpec.KeyHex), id)
+    val address = TestLoopback.address()
+    val bridge = new Gs1500mBridge(Gs1500mBridge.Config(address,
+        hosts = gateways.map { case (r, s) => r -> s.getLocalSocketAddress.asInstanceOf[InetSocketAddress] }))
+    val log: File = File.createTempFile(s"qemu-signed-$id", ".log")
+    val qemu: Process = QemuBoard.start(image("robot"), log,
+      Seq(s"id=$id", "team=12", "player=3",
+        s"key=${Fusig2.hex(key)}", s"epoch=${epochFile.getPath}") ++ extra, Some(bridge.serialPort))
+    def output: String = QemuBoard.output(log)
+    def robotAt = new InetSocketAddress(address, TestLoopback.RobotReceivePort)
+    def stop(): Unit = { QemuBoard.stop(qemu); bridge.close() }
+  }
+
+  /** The first datagram at `on` within `within` that `pick` takes. */
+  private def awaitOn[A](on: DatagramSocket, within: FiniteDuration)(pick: Array[Byte] => Option[A]): Option[A] = {
+    val deadline = within.fromNow
+    var found: Option[A] = None
+    while (found.isEmpty && deadline.hasTimeLeft()) {
+      val buf = new Array[Byte](2048)
+      val p = new DatagramPacket(buf, buf.length)
+      on.setSoTimeout(math.max(1, deadline.timeLeft.toMillis.toInt))
+      try { on.receive(p); found = pick(buf.take(p.getLength)) }
+      catch { case _: SocketTimeoutException => () }
+    }
+    found
+  }
+
+  /** The board's boot epoch from a signed keep-alive at `on` that verifies under its robot key. */
+  private def epochAt(b: SignedBoard, on: DatagramSocket): Int =
+    withClue(s"no signed keep-alive of robot ${b.id} verified; qemu's output:\n${b.output}\n") {
+      awaitOn(on, 20.seconds)(f => Fusig2.verifyRobotFrame(b.key, b.id, f).map(_._1)).get
+    }
+
+  /** Whether the board answers call `callId` at `on` (signed, verifying) within `within`. */
+  private def answeredAt(b: SignedBoard, on: DatagramSocket, callId: Int, within: FiniteDuration): Boolean =
+    awaitOn(on, within) { f =>
+      MessageContents.decodeFrame(f).toOption.collect {
+        case (_, c) if c.rpcResponse.exists(_.callId.contains(callId)) => Fusig2.verifyRobotFrame(b.key, b.id, f)
+      }
+    }.exists(_.isDefined)
+
+  private val callIds = new java.util.concurrent.atomic.AtomicInteger(9000)
+  private val gatewayClock = new java.util.concurrent.atomic.AtomicLong(System.currentTimeMillis() * 1000L)
+
+  /** A signed system.ping for board `b` in `epoch`. */
+  private def signedPing(b: SignedBoard, epoch: Int): (Int, Array[Byte]) = {
+    val callId = callIds.incrementAndGet()
+    val ts = gatewayClock.updateAndGet(t => math.max(t + 1, System.currentTimeMillis() * 1000L))
+    callId -> Fusig2.signedFrame(b.key, b.id, epoch, ts, Fusig2.request(b.id, "system", "ping", callId))
+  }
+
+  private def sendTo(from: DatagramSocket, b: SignedBoard, frame: Array[Byte]): Unit =
+    from.send(new DatagramPacket(frame, frame.length, b.robotAt))
+
+  "The example robot on the qemu board, signing" must {
+    "answer only its gateway's signed frames, and keep its boot epoch in a host file across a restart" in {
+      val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+      val stranger = new DatagramSocket(new InetSocketAddress(TestLoopback.address(0), 0))
+      val epochFile = File.createTempFile("qemu-robot", ".epoch")
+      epochFile.delete()
+      var board = new SignedBoard(73, epochFile, Map(BaseStation -> base))
+      try {
+        val epoch = epochAt(board, base)
+        epoch shouldBe 1
+        val (callId, frame) = signedPing(board, epoch)
+        sendTo(base, board, frame)
+        withClue(board.output) { answeredAt(board, base, callId, 15.seconds) shouldBe true }
+        // A stranger's correctly signed frame and the gateway's unsigned one: never answered.
+        val (fromStranger, f1) = signedPing(board, epoch)
+        sendTo(stranger, board, f1)
+        val unsignedCall = callIds.incrementAndGet()
+        sendTo(base, board, Fusig2.frame(Fusig2.request(board.id, "system", "ping", unsignedCall)))
+        answeredAt(board, stranger, fromStranger, 2.seconds) shouldBe false
+        answeredAt(board, base, unsignedCall, 2.seconds) shouldBe false
+        val deadline = 10.seconds.fromNow
+        def counters = board.output.linesIterator.filter(_.startsWith("counters:")).toVector.lastOption.getOrElse("")
+        while (!(counters.contains("stranger=1") && counters.contains("unsigned=1")) && deadline.hasTimeLeft())
+          Thread.sleep(100)
+        withClue(board.output) { counters should (include("stranger=1") and include("unsigned=1")) }
+        // A restart: the host file gives the next epoch, and a frame signed before it no longer verifies.
+        val (held, heldFrame) = signedPing(board, epoch)
+        board.stop()
+        board = new SignedBoard(73, epochFile, Map(BaseStation -> base))
+        epochAt(board, base) shouldBe 2
+        new String(java.nio.file.Files.readAllBytes(epochFile.toPath), StandardCharsets.US_ASCII).trim shouldBe "2"
+        sendTo(base, board, heldFrame)
+        answeredAt(board, base, held, 3.seconds) shouldBe false
+        val (fresh, freshFrame) = signedPing(board, 2)
+        sendTo(base, board, freshFrame)
+        withClue(board.output) { answeredAt(board, base, fresh, 15.seconds) shouldBe true }
+      } finally {
+        board.stop()
+        base.close()
+        stranger.close()
+        epochFile.delete()
+      }
+    }
+
+    "pair on the first signed frame: its sender becomes the gateway, the configured one a stranger" in {
+      val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+      val second = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+      val epochFile = File.createTempFile("qemu-robot", ".epoch")
+      epochFile.delete()
+      val board = new SignedBoard(74, epochFile, Map(BaseStation -> base, Remote("192.168.1.20", 11011) -> second),
+        Seq("pairing=first-signed"))
+      try {
+        // Until it pairs, it announces itself to its configured gateway, the base station.
+        val epoch = epochAt(board, base)
+        withClue(board.output) { board.output should include("pairing on the first signed frame") }
+        sendTo(second, board, signedPing(board, epoch)._2)
+        // Paired with the second gateway: its keep-alives go there (once the module has opened the connection), and
+        // it answers there.
+        epochAt(board, second) shouldBe epoch
+        val (callId, frame) = signedPing(board, epoch)
+        sendTo(second, board, frame)
+        withClue(board.output) { answeredAt(board, second, callId, 15.seconds) shouldBe true }
+        // The base station, though configured, is now a stranger.
+        val (fromBase, f) = signedPing(board, epoch)
+        sendTo(base, board, f)
+        answeredAt(board, base, fromBase, 2.seconds) shouldBe false
+      } finally {
+        board.stop()
+        base.close()
+        second.close()
+        epochFile.delete()
+      }
     }
   }
 }
