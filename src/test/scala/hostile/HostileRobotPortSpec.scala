@@ -245,5 +245,37 @@ class HostileRobotPortSpec extends AnyWordSpec with Matchers with BeforeAndAfter
       received(stranger, 300.millis) shouldBe empty
       received(otherPort, 100.millis) shouldBe empty
     }
+
+    "not start at all with no key, or a key that is short, long, of odd length or not hex: a message, never the key" in {
+      val address = TestLoopback.robotAt()
+      val cases = Seq(
+        Seq.empty[String] -> "no signing key",
+        Seq("key=" + "ab" * 15) -> "too short",
+        Seq("key=" + "ab" * 65) -> "too long",
+        Seq("key=" + "ab" * 16 + "c") -> "odd number",
+        Seq("key=" + "ab" * 15 + "zz") -> "not a hex digit",
+        Seq("key=" + "ab" * 16, "development") -> "development build takes no signing key"
+      )
+      cases.foreach { case (args, reason) =>
+        val log = new File(work, s"refused-${System.nanoTime()}.log")
+        val b = new ProcessBuilder((Seq(robotBinary.getPath, "id=75", "team=12", "player=3", s"gateway=$gatewayAt",
+            s"epoch=${new File(work, "robot-75.epoch").getPath}") ++ args).asJava)
+          .redirectErrorStream(true).redirectOutput(log)
+        b.environment().put("FR_POSIX_BIND", s"${address.getAddress.getHostAddress}:${address.getPort}")
+        val p = b.start()
+        processes.add(p)
+        withClue(s"arguments ${args.map(_.take(12))}: ") {
+          p.waitFor(5, TimeUnit.SECONDS) shouldBe true
+          p.exitValue() shouldBe 2
+          val out = new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)
+          out should include("cannot start")
+          out should include(reason)
+          args.filter(_.startsWith("key=")).foreach(k => out should not include k.stripPrefix("key=").take(20))
+        }
+      }
+      // None of them sent anything, and none took an epoch.
+      received(gateway, 300.millis).map(_._2).filter(_ == address) shouldBe empty
+      new File(work, "robot-75.epoch").exists() shouldBe false
+    }
   }
 }
