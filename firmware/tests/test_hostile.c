@@ -6,6 +6,7 @@
 #include "check.h"
 #include "fake_port.h"
 #include "fr.h"
+#include "../src/fr_internal.h"
 
 static const fr_endpoint_t gateway = {{192, 168, 1, 10}, 11011};
 static uint32_t rng = 12345;
@@ -118,5 +119,70 @@ int main(void) {
     CHECK(st->bad_frame + st->bad_protobuf + st->stream_misbehaving + st->gc_ignored > 1000);
     printf("hostile: %u received, %u bad frame, %u bad protobuf, %u stream misbehaving, %u gc ignored\n", st->received,
            st->bad_frame, st->bad_protobuf, st->stream_misbehaving, st->gc_ignored);
+
+    /* The same with signing on: mutated signed frames (and the seeds above) walk the signature parser, and a valid
+     * signed request is still answered afterwards. */
+    uint8_t key[32];
+    for (int k = 0; k < 32; k++) key[k] = (uint8_t)(k * 7);
+    s.development = false;
+    s.signing_key = key;
+    s.signing_key_len = sizeof key;
+    fake_now = 0;
+    CHECK(fr_init(&s) == FR_INIT_OK);
+    fr_rpc_register("heartbeat", "probe", ok, NULL);
+    uint64_t ts = 1;
+    floods = 0;
+    for (int round = 0; round < 20000; round++) {
+        if (next() % 2 == 0) {
+            /* a validly signed request for this robot, then mutated */
+            n = hex("08 01 B2 BC 03 14 0A 09 68 65 61 72 74 62 65 61 74 12 05 70 72 6F 62 65 78 08", d + 12);
+            uint8_t *p = d + 12 + n;
+            *p++ = 0xFA; *p++ = 0xC1; *p++ = 0x03; *p++ = 19; *p++ = 0x09;
+            ts++;
+            for (int k = 0; k < 8; k++) *p++ = (uint8_t)(ts >> (8 * k));
+            *p++ = 0x12; *p++ = 8;
+            fr_sign_mac(key, sizeof key, 2, 1, fr_epoch(), ts, d + 12, n, p);
+            n += 23;
+            fr_frame_header(d + 12, n, FR_FORM_LEGACY);
+            n += 12;
+        } else {
+            n = hex(seeds[next() % nseeds], d);
+        }
+        int edits = (int)(next() % 3);
+        for (int e = 0; e < edits; e++) {
+            uint32_t kind = next() % 3;
+            if (kind == 0 && n > 0) d[next() % n] = (uint8_t)next();
+            else if (kind == 1 && n > 0) n = next() % n;
+            else if (n < sizeof d - 8) for (int k = 0; k < 8; k++) d[n++] = (uint8_t)next();
+        }
+        fake_receive(&gateway, d, n);
+        fake_now += next() % 3 == 0 ? 50 : 0;
+        fake_clear_sent();
+        fr_poll();
+        if (fake_sent_count > 16) floods++;
+    }
+    CHECK(floods == 0);
+    st = fr_stats();
+    CHECK(st->bad_signature + st->malformed_signature + st->unsigned_frames + st->signature_not_last > 1000);
+    /* some unmutated signed requests were answered, and one more still is */
+    fake_now += 10000;
+    fake_clear_sent();
+    n = hex("08 01 B2 BC 03 14 0A 09 68 65 61 72 74 62 65 61 74 12 05 70 72 6F 62 65 78 08", d + 12);
+    uint8_t *p = d + 12 + n;
+    *p++ = 0xFA; *p++ = 0xC1; *p++ = 0x03; *p++ = 19; *p++ = 0x09;
+    ts += 1000;
+    for (int k = 0; k < 8; k++) *p++ = (uint8_t)(ts >> (8 * k));
+    *p++ = 0x12; *p++ = 8;
+    fr_sign_mac(key, sizeof key, 2, 1, fr_epoch(), ts, d + 12, n, p);
+    fr_frame_header(d + 12, n + 23, FR_FORM_LEGACY);
+    fake_receive(&gateway, d, n + 35);
+    fr_poll();
+    answered = 0;
+    for (size_t k = 0; k < fake_sent_count; k++)
+        if (fake_sent[k].len > 18 && fake_sent[k].data[14] == 0xBA && fake_sent[k].data[15] == 0xBC) answered = 1;
+    CHECK(answered);
+    printf("hostile, signed: %u bad signature, %u malformed, %u unsigned, %u not last, %u replayed, %u wrong robot\n",
+           st->bad_signature, st->malformed_signature, st->unsigned_frames, st->signature_not_last, st->replayed,
+           st->wrong_robot);
     return DONE();
 }
