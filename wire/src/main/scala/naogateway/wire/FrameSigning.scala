@@ -254,8 +254,8 @@ object FrameSigning {
       .putInt(link.robotId).putInt(link.epochOf(timestamp)).putLong(timestamp).array()
 
   /** The truncated MAC of `length` body bytes from `offset`. */
-  def mac(key: RobotKey, link: SignedLink, timestamp: Long, body: Array[Byte], offset: Int, length: Int)
-      : Array[Byte] = {
+  def mac(
+      key: RobotKey, link: SignedLink, timestamp: Long, body: Array[Byte], offset: Int, length: Int): Array[Byte] = {
     val hmac = key.hmac()
     hmac.update(macPrefix(link, timestamp))
     hmac.update(body, offset, length)
@@ -286,8 +286,8 @@ object FrameSigning {
     * length grown by [[FieldBytes]], the signature field appended. For senders that encode first and sign at the moment
     * of sending, so timestamps follow the order frames leave in.
     */
-  def signEncoded(frame: Array[Byte], key: RobotKey, link: SignedLink, timestamp: Long)
-      : Either[FrameError, Array[Byte]] =
+  def signEncoded(
+      frame: Array[Byte], key: RobotKey, link: SignedLink, timestamp: Long): Either[FrameError, Array[Byte]] =
     FumanoidsFrame.decodeHeader(frame).flatMap { header =>
       if (header.gzip) Left(FrameError.UnsupportedFlags(FumanoidsFrame.GzipFlag))
       else {
@@ -299,8 +299,8 @@ object FrameSigning {
   /** Checks the signature of a whole received frame whose header decoded as `header` (a gzip-flagged payload is checked
     * after inflating; a frame that does not decode at all is `Malformed`). The replay rule is the caller's.
     */
-  def verifyFrame(frame: Array[Byte], header: FrameHeader, key: RobotKey, link: SignedLink)
-      : Either[SignatureError, SignedBody] =
+  def verifyFrame(
+      frame: Array[Byte], header: FrameHeader, key: RobotKey, link: SignedLink): Either[SignatureError, SignedBody] =
     if (!header.gzip) verify(frame, header.form.headerBytes, header.payloadLength, key, link)
     else
       FumanoidsFrame.decodeRaw(frame) match {
