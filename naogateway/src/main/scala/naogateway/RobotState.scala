@@ -113,11 +113,20 @@ private[naogateway] final case class RobotState(
     else copy(snapshot = snapshot.copy(signing = SigningState.Signed))
 
   /** A datagram of a robot that must sign was refused for `kind`: unsigned or badly signed, the robot is shown as
-    * `unsigned` (a replay is not the robot's doing: anyone can send one, so it changes nothing shown).
+    * `unsigned` unless its own signed frames keep coming (anyone can send a forged frame from its address, and a
+    * replay is never the robot's doing: neither changes what is shown of a robot that signs).
     */
   def signatureRefused(kind: Rejection): RobotState =
-    if (snapshot.signing == SigningState.Off || !RobotState.UnsignedKinds(kind)) this
+    if (snapshot.signing == SigningState.Off || snapshot.signing == SigningState.Signed ||
+      !RobotState.UnsignedKinds(kind)) this
     else copy(snapshot = snapshot.copy(signing = SigningState.Unsigned))
+
+  /** The robot went offline: whether it still signs is open again (a robot restarted with a firmware that does not
+    * sign shows as `unsigned` from its next refused frame on).
+    */
+  def signatureUnconfirmed: RobotState =
+    if (snapshot.signing == SigningState.Signed) copy(snapshot = snapshot.copy(signing = SigningState.Awaited))
+    else this
 
   /** A clean round-trip sample, smoothed as TCP smooths its RTT. */
   def roundTrip(nanos: Long): RobotState =

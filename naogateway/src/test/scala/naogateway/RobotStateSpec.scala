@@ -48,7 +48,7 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
         Rejection.UnknownCallId.name -> 1L)
     }
 
-    "show a robot that must sign as unsigned after an unsigned or badly signed frame, as signed after a verified one" in {
+    "show a robot that must sign as unsigned after unsigned or badly signed frames, as signed after a verified one" in {
       val signing = RobotState.initial(7, address, ClockSync(), Some(Set.empty), discovered = false,
         keepAliveTimesKept = 27, signs = true)
       signing.view(online = false).signing shouldBe SigningState.Awaited
@@ -57,7 +57,11 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       // A replay is anyone's doing: it changes nothing shown.
       signing.signatureRefused(Rejection.Replayed).snapshot.signing shouldBe SigningState.Awaited
       unsigned.signatureAccepted.snapshot.signing shouldBe SigningState.Signed
-      unsigned.signatureAccepted.signatureRefused(Rejection.BadSignature).snapshot.signing shouldBe
+      // A forged frame beside the robot's own signed ones changes nothing shown; once it went offline, it does.
+      val signed = unsigned.signatureAccepted
+      signed.signatureRefused(Rejection.BadSignature).snapshot.signing shouldBe SigningState.Signed
+      signed.signatureUnconfirmed.snapshot.signing shouldBe SigningState.Awaited
+      signed.signatureUnconfirmed.signatureRefused(Rejection.BadSignature).snapshot.signing shouldBe
         SigningState.Unsigned
       // A robot that need not sign stays off, whatever arrives.
       fresh().signatureRefused(Rejection.Unsigned).signatureAccepted.snapshot.signing shouldBe SigningState.Off
