@@ -178,6 +178,18 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       hmac.doFinal(input).take(FrameSigning.MacBytes).toVector shouldBe bytes("signed-status").takeRight(
         FrameSigning.MacBytes).toVector
     }
+    "show the gateway's optionPull of 9.8 to robot 1 in epoch 3, good in that epoch only" in {
+      val toRobot = SignedLink.ToRobot(1, 3)
+      val gatewayTimestamp = 1764000000000000L
+      val frame = bytes("signed-option-pull")
+      FrameSigning.signEncoded(bytes("debug-option-pull"), key, toRobot, gatewayTimestamp).map(_.toVector) shouldBe
+        Right(frame.toVector)
+      val header = FumanoidsFrame.decodeHeader(frame).toOption.get
+      FrameSigning.verifyFrame(frame, header, key, toRobot).map(_.timestamp) shouldBe Right(gatewayTimestamp)
+      FrameSigning.verifyFrame(frame, header, key, SignedLink.ToRobot(1, 4)) shouldBe Left(SignatureError.BadMac)
+      FrameSigning.macPrefix(toRobot, gatewayTimestamp).map(b => f"${b & 0xff}%02X").mkString(" ") shouldBe
+        "46 55 53 49 47 32 02 00 00 00 01 00 00 00 03 00 06 44 59 41 62 40 00"
+    }
     "be refused as a copy, as robot 2's, and as the gateway's; a later epoch is above it" in {
       ReplayWindow.empty.accept(timestamp).flatMap(_.accept(timestamp)) shouldBe Left(SignatureError.Replayed)
       ReplayWindow(Some(timestamp)).accept(FrameSigning.robotTimestamp(4, 0)).isRight shouldBe true
@@ -666,6 +678,7 @@ object ProtocolDocSpec {
     "serial-receive-udp-server",
     "signed-status",
     "signed-status-mac-input",
+    "signed-option-pull",
     "robot-key-1"
   )
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
