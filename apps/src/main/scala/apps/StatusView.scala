@@ -157,8 +157,8 @@ object StatusView {
     shown.map(l => if (l.length > cols) l.take(cols) else l)
   }
 
-  /** Plain lines for what changed between two models: a robot's online state, posture or `unsigned` state, the game state (not every
-    * packet), and the competition gate.
+  /** Plain lines for what changed between two models: a robot's online state, posture or `unsigned` state, the game
+    * state (not every packet), and the competition gate.
     */
   def changes(before: StatusModel, after: StatusModel): Vector[String] = {
     val old = before.robots.map(r => r.robotId -> r).toMap

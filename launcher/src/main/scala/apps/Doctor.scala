@@ -193,17 +193,24 @@ object Doctor {
     val summary =
       if (settings.signingKey.isEmpty)
         if (competition)
-          fail("signing", "competition mode without a team key: no robot's frames are signed",
+          fail(
+            "signing",
+            "competition mode without a team key: no robot's frames are signed",
             "set naogateway.signing.key (env NAOGATEWAY_SIGNING_KEY) and build each robot with its key " +
-              "(robotctl keys <id>; docs/protocol.md 6.7)")
+              "(robotctl keys <id>; docs/protocol.md 6.7)"
+          )
         else ok("signing", "off: no team key (naogateway.signing.key)")
       else if (signing.nonEmpty)
-        ok("signing", s"robot(s) ${signing.mkString(", ")} sign their frames with their robot keys; " +
-          "robots not configured must sign too")
+        ok("signing",
+          s"robot(s) ${signing.mkString(", ")} sign their frames with their robot keys; " +
+            "robots not configured must sign too")
       else ok("signing", "a team key is set; robots not configured must sign")
     val offInCompetition = off.filter(_ => competition && settings.signingKey.isDefined).map { id =>
-      fail(s"robot $id signing", "signing = off in competition mode: anyone on the WiFi can command this robot",
-        s"build the robot with its key (robotctl keys $id) and remove signing = off from its entry in naogateway.robots")
+      fail(
+        s"robot $id signing",
+        "signing = off in competition mode: anyone on the WiFi can command this robot",
+        s"build the robot with its key (robotctl keys $id) and remove signing = off from its entry in naogateway.robots"
+      )
     }
     val development = facts.robots.filter(_.development).map { r =>
       val text = "runs a development build: it neither signs nor checks signatures (RobotHealth.development)"

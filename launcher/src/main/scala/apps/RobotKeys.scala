@@ -40,8 +40,8 @@ object RobotKeys {
   }
 
   /** The team key as the gateway reads it: [[KeyPath]] of the file or application.conf, else the environment. */
-  private def teamKey(file: Option[String], env: String => Option[String], application: => Config)
-      : Either[String, SigningKey] = {
+  private def teamKey(
+      file: Option[String], env: String => Option[String], application: => Config): Either[String, SigningKey] = {
     val variable = RobotCtl.TeamKeyVariable
     val configured =
       try {

@@ -113,16 +113,16 @@ private[naogateway] final case class RobotState(
     else copy(snapshot = snapshot.copy(signing = SigningState.Signed))
 
   /** A datagram of a robot that must sign was refused for `kind`: unsigned or badly signed, the robot is shown as
-    * `unsigned` unless its own signed frames keep coming (anyone can send a forged frame from its address, and a
-    * replay is never the robot's doing: neither changes what is shown of a robot that signs).
+    * `unsigned` unless its own signed frames keep coming (anyone can send a forged frame from its address, and a replay
+    * is never the robot's doing: neither changes what is shown of a robot that signs).
     */
   def signatureRefused(kind: Rejection): RobotState =
     if (snapshot.signing == SigningState.Off || snapshot.signing == SigningState.Signed ||
       !RobotState.UnsignedKinds(kind)) this
     else copy(snapshot = snapshot.copy(signing = SigningState.Unsigned))
 
-  /** The robot went offline: whether it still signs is open again (a robot restarted with a firmware that does not
-    * sign shows as `unsigned` from its next refused frame on).
+  /** The robot went offline: whether it still signs is open again (a robot restarted with a firmware that does not sign
+    * shows as `unsigned` from its next refused frame on).
     */
   def signatureUnconfirmed: RobotState =
     if (snapshot.signing == SigningState.Signed) copy(snapshot = snapshot.copy(signing = SigningState.Awaited))

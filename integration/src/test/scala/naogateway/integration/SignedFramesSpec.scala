@@ -141,8 +141,11 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
               Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand"))).copy(callId = Some(5L)).toProto))
           (1 to 5).foreach { i =>
             outsider.send(ByteBuffer.wrap(ForgedFrames.unsigned(stand)), receivesAt)
-            outsider.send(ByteBuffer.wrap(FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey.robotKey(34),
-                  SignedLink.ToRobot(34, 1), Long.MaxValue - i).toOption.get), receivesAt)
+            outsider.send(
+              ByteBuffer.wrap(FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey.robotKey(34),
+                  SignedLink.ToRobot(34, 1), Long.MaxValue - i).toOption.get),
+              receivesAt
+            )
           }
           eventually(timeout(10.seconds)) {
             f.view(robot).firmware.refusedSignatures shouldBe Map("unsigned" -> 5L, "bad signature" -> 5L)
