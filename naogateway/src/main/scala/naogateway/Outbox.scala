@@ -238,15 +238,14 @@ private final class Outbox(
         // Never sent unsigned: without the key, or before the robot's boot epoch is known, the frame is dropped.
         dropped += 1
         record(now, s, "dropped")
-        s.replyTo.foreach(_ ! Dropped(
-            s.tag,
-            signer match {
-              case None => "the frame must be signed, but the gateway has no signing key"
-              case Some(g) if !g.canSign(s.robotId) =>
-                s"the frame must be signed, but ${SignRefusal.EpochUnknown(s.robotId).describe}"
-              case Some(_) => s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"
-            }
-          ))
+        val why = signer match {
+          case None => "the frame must be signed, but the gateway has no signing key"
+          case Some(g) if !g.canSign(s.robotId) =>
+            s"the frame must be signed, but ${SignRefusal.EpochUnknown(s.robotId).describe}"
+          case Some(_) => s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"
+        }
+        if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: {}", dropped, why)
+        s.replyTo.foreach(_ ! Dropped(s.tag, why))
       } else {
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {
