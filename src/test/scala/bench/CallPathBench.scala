@@ -33,6 +33,9 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   *
   *   - `callpath_raw_udp_*`: the floor, a plain request/answer between two DatagramChannels (`GatewayBench`'s).
   *   - `callpath_gateway_*`: the gateway alone, the call asked of the robot's command owner (`ResponseActor`).
+  *   - `callpath_gateway_signed_*`: the same with signing on (protocol.md 6.7): the gateway signs each request with the
+  *     robot's key, the robot checks it and signs its reply, the gateway checks that; ratio
+  *     `callpath_gateway_signed_over_gateway_p50`.
   *   - `callpath_interface_*`: a Scala app through `RobotInterface` in the gateway's JVM and actor system.
   *   - `callpath_cluster_*`: a Scala app on another cluster node (its own actor system in this JVM, Artery over
   *     loopback TCP), through `RobotInterface`.
@@ -132,6 +135,8 @@ object CallPathBench extends Benchmark {
             progress(f"Python UDP floor (a UDP echo between two Python processes): p50 ${p._1}%.0f us, " +
               f"p99 ${p._2}%.0f us")
         )
+        val signed = signedGatewayCalls()
+        report("gateway alone, signed", signed)
         val peer = mavsdk()
         peer.fold(why => progress(s"MAVSDK not measured: $why"),
           p => progress(f"MAVSDK command: p50 ${p._1}%.0f us, p99 ${p._2}%.0f us"))
@@ -149,6 +154,8 @@ object CallPathBench extends Benchmark {
           "callpath_raw_udp_p99_us" -> p99(raw),
           "callpath_gateway_p50_us" -> p50(alone),
           "callpath_gateway_p99_us" -> p99(alone),
+          "callpath_gateway_signed_p50_us" -> p50(signed),
+          "callpath_gateway_signed_p99_us" -> p99(signed),
           "callpath_interface_p50_us" -> p50(interface),
           "callpath_interface_p99_us" -> p99(interface),
           "callpath_cluster_p50_us" -> p50(cluster),
@@ -170,6 +177,7 @@ object CallPathBench extends Benchmark {
           "callpath_mavsdk_grpc_p50_us" -> grpcPeer.fold(_ => nan, _._1),
           "callpath_mavsdk_grpc_p99_us" -> grpcPeer.fold(_ => nan, _._2),
           "callpath_gateway_over_raw_udp_p50" -> p50(alone) / p50(raw),
+          "callpath_gateway_signed_over_gateway_p50" -> p50(signed) / p50(alone),
           "callpath_interface_over_gateway_p50" -> p50(interface) / p50(alone),
           "callpath_cluster_over_gateway_p50" -> p50(cluster) / p50(alone),
           "callpath_python_over_mavsdk_p50" ->
@@ -295,9 +303,14 @@ object CallPathBench extends Benchmark {
       script(python, "mavsdk_peer.py", Seq("--warmup", PeerWarmup.toString, "--samples", PeerSamples.toString)))
 
   /** The gateway, its middleware and (on request) its ZeroMQ endpoint, in one actor system that is a cluster node. */
-  private final class GatewayNode {
+  /** The team key of the signed variant (protocol.md 9.14's test key). */
+  private val TeamKeyHex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f"
+
+  /** A gateway node; `signing`: with the team key, so robot 1 must sign and everything to it is signed. */
+  private final class GatewayNode(signing: Boolean = false) {
     private val overrides: Config = ConfigFactory.parseString(
-      """naogateway.link.bind-address = "127.0.0.1"
+      (if (signing) s"""naogateway.signing.key = "$TeamKeyHex"\n""" else "") +
+        """naogateway.link.bind-address = "127.0.0.1"
         |naogateway.link.robot-port = 0
         |naogateway.game-controller.enabled = off
         |robotmiddleware.cluster.gateway-port = 0
@@ -388,6 +401,23 @@ object CallPathBench extends Benchmark {
   }
 
   /** A `RobotInterface` without robots: every call answers `UInt(0)` at once, streams stay silent. */
+  /** The gateway alone with signing on (protocol.md 6.7): a second gateway node with the team key and a plain robot
+    * that signs with its robot key and checks the gateway's frames; warmed up and measured as the unsigned one.
+    */
+  private def signedGatewayCalls(): Array[Long] = {
+    val node = new GatewayNode(signing = true)
+    try {
+      val key = naogateway.wire.SigningKey.fromHex(TeamKeyHex).fold(e => throw new IllegalStateException(e), identity)
+      val robot = new PlainRobot(node.addresses.robots, 15.minutes, Some(key.robotKey(1)))
+      try {
+        node.awaitOnline(1)
+        progress(s"warming up: $JitWarmup signed calls through the gateway")
+        node.pings(JitWarmup)
+        node.pings()
+      } finally robot.close()
+    } finally node.stop()
+  }
+
   private final class AnsweringInterface extends RobotInterface {
     import scala.concurrent.Future
     import akka.{Done, NotUsed}

@@ -101,9 +101,12 @@ object ForgeryBench extends Benchmark {
       val stand = MessageContents(RobotId,
         rpcRequest = Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand")), Some(9L)).toProto))
       val toRobot = (1 to 100).flatMap(i =>
-        Vector(ForgedFrames.unsigned(stand),
-          FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey, SignDirection.GatewayToRobot, Long.MaxValue - i)
-            .toOption.get))
+        Vector(
+          ForgedFrames.unsigned(stand),
+          FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey.robotKey(RobotId), SignedLink.ToRobot(RobotId, 1),
+            Long.MaxValue - i)
+            .toOption.get
+        ))
       val toGateway = (1 to Rounds).flatMap(_ => ForgedFrames.batch(RobotId, recorded, WrongKey, perKind = 200, random))
       // Paced a little, so the kernel's buffers, not the test, decide nothing.
       toGateway.grouped(20).foreach { group =>

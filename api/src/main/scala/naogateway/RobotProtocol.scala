@@ -17,6 +17,30 @@ object LinkQuality {
   case object Offline extends LinkQuality("offline")
 }
 
+/** Whether a robot's frames come signed as the gateway requires (docs/protocol.md 6.7). */
+sealed abstract class SigningState(val name: String) extends Product with Serializable
+
+/** The signing states of a robot. */
+object SigningState {
+
+  /** The gateway does not require this robot to sign (`signing = off`, or no team key). */
+  case object Off extends SigningState("off")
+
+  /** The robot must sign; nothing of it has arrived yet. */
+  case object Awaited extends SigningState("awaited")
+
+  /** The robot must sign, and its latest frame verified. */
+  case object Signed extends SigningState("signed")
+
+  /** The robot must sign, and its latest frame came unsigned or badly signed (refused): a robot without the right key
+    * or a development build, not an offline one.
+    */
+  case object Unsigned extends SigningState("unsigned")
+
+  /** Every state. */
+  val all: Vector[SigningState] = Vector(Off, Awaited, Signed, Unsigned)
+}
+
 /** What the gateway last heard from a robot's keep-alive. `receivedAtNanos` and `stampedAtNanos` are on the gateway's
   * clock (its JVM's `System.nanoTime`); `stampedAtNanos` is when the robot's clock read this keep-alive's timestamp, by
   * the robot's clock estimate `clock` (None until there is one, or when the keep-alive carries no robot time).
@@ -36,12 +60,14 @@ final case class RobotSnapshot(
     quality: LinkQuality = LinkQuality.Offline,
     receivedAtNanos: Long = 0L,
     clock: Option[ClockEstimate] = None,
-    stampedAtNanos: Option[Long] = None
+    stampedAtNanos: Option[Long] = None,
+    development: Boolean = false,
+    signing: SigningState = SigningState.Off
 ) {
 
   /** What the robot reported about itself, as a keep-alive says it (the link fields are not part of it). */
   def report: RobotReport =
-    RobotReport(teamId, role, agent, posture, batteryVoltage, uptimeMillis, bootId, position)
+    RobotReport(teamId, role, agent, posture, batteryVoltage, uptimeMillis, bootId, position, development)
 }
 
 /** How a keep-alive changes a robot's snapshot (the restart rule over it is the gateway's [[KeepAliveStep]]). */
@@ -50,7 +76,7 @@ object RobotSnapshot {
   /** `previous` after one keep-alive (docs/protocol.md §6.2): the keep-alive describes the robot as it is now, so every
     * robot-reported field comes from it alone. A field it does not carry is unknown (`None`), never left over from an
     * earlier keep-alive: a robot that restarts with firmware sending `Status` only must not show the battery, role,
-    * posture, position or `bootId` of its previous session. Link fields (address, online, quality) stay.
+    * posture, position or `bootId` of its previous session. Link fields (address, online, quality, signing) stay.
     */
   def afterKeepAlive(
       previous: RobotSnapshot,
@@ -68,6 +94,7 @@ object RobotSnapshot {
       uptimeMillis = r.uptimeMillis,
       bootId = r.bootId,
       position = r.position,
+      development = r.development,
       receivedAtNanos = receivedAtNanos
     )
   }

@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot}
+import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
 import naogateway.wire.{Posture, RobotReport}
 
 /** What every status view shows of one robot (the launcher's status lines, robotctl's `status`, the web view's cards):
@@ -17,8 +17,15 @@ final case class RobotRow(
     rttMillis: Option[Double],
     loss: Option[Double],
     clock: Option[ClockEstimate],
-    refused: Map[String, Long]
+    refused: Map[String, Long],
+    signing: SigningState = SigningState.Off
 ) {
+
+  /** The link as shown: `online`, `unsigned` (a robot that must sign heard only with unsigned or badly signed frames:
+    * there, but nothing of it counts), or `offline`.
+    */
+  def linkState: String =
+    if (online) "online" else if (signing == SigningState.Unsigned) SigningState.Unsigned.name else "offline"
 
   /** The battery voltage, when reported and finite. */
   def battery: Option[Double] = report.batteryVoltage.filter(RobotRow.finite)
@@ -40,11 +47,13 @@ object RobotRow {
     Option(r.address).map(a =>
       s"${Option(a.getAddress).map(_.getHostAddress).orElse(Option(a.getHostString)).getOrElse("-")}:${a.getPort}"),
     r.online,
-    Option(r.quality),
+    // An unsigned robot's frames are all refused: it has no link quality to show, only its `unsigned` state.
+    Option(r.quality).filterNot(_ => !r.online && r.signing == SigningState.Unsigned),
     r.report,
     link.flatMap(_.rttMillis).filter(finite),
     link.map(_.lossEstimate).filter(finite),
     link.flatMap(_.clock).orElse(r.clock),
-    link.fold(Map.empty[String, Long])(_.rejected)
+    link.fold(Map.empty[String, Long])(_.rejected),
+    r.signing
   )
 }

@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{GameSource, GatewayStats, LinkStats, RobotSnapshot, TrafficStats}
+import naogateway.{GameSource, GatewayStats, LinkStats, RobotSnapshot, SigningState, TrafficStats}
 import naogateway.wire.gamecontroller.{
   ControlData2014,
   GameControlData,
@@ -44,10 +44,11 @@ object StatusView {
   /** One line describing a robot (its [[RobotRow]]), as both the screen and the plain lines use it. */
   def robotLine(r: RobotSnapshot, link: Option[LinkStats]): String = {
     val row = RobotRow.of(r, link)
-    f"robot ${row.robotId}%-3d ${if (row.online) "online " else "offline"} ${opt(row.quality)(_.name)}%-8s " +
+    f"robot ${row.robotId}%-3d ${row.linkState}%-7s ${opt(row.quality)(_.name)}%-8s " +
       f"battery ${opt(row.battery)(v => f"$v%.2f V")}%-8s posture ${opt(row.posture)(_.name)}%-8s " +
       f"role ${opt(row.report.role)(identity)}%-9s rtt ${opt(row.rttMillis)(v => f"$v%.1f ms")}%-9s " +
-      f"loss ${opt(row.loss)(v => f"${v * 100}%.0f %%")}%-5s " + row.address.getOrElse("-")
+      f"loss ${opt(row.loss)(v => f"${v * 100}%.0f %%")}%-5s " + row.address.getOrElse("-") +
+      (if (row.report.development) " development build" else "")
   }
 
   /** The game state as the GameController's display names it: PLAYING, READY, ... */
@@ -156,16 +157,17 @@ object StatusView {
     shown.map(l => if (l.length > cols) l.take(cols) else l)
   }
 
-  /** Plain lines for what changed between two models: a robot's online state or posture, the game state (not every
-    * packet), and the competition gate.
+  /** Plain lines for what changed between two models: a robot's online state, posture or `unsigned` state, the game
+    * state (not every packet), and the competition gate.
     */
   def changes(before: StatusModel, after: StatusModel): Vector[String] = {
     val old = before.robots.map(r => r.robotId -> r).toMap
     val robots = after.robots.flatMap { r =>
       old.get(r.robotId) match {
+        case Some(o) if o.signing != r.signing && !r.online            => Some(robotLine(r, after.links.get(r.robotId)))
         case Some(o) if o.online == r.online && o.posture == r.posture => None
         case Some(o) if o.online == r.online && !r.online              => None
-        case None if !r.online                                         => None
+        case None if !r.online && r.signing != SigningState.Unsigned   => None
         case _                                                         => Some(robotLine(r, after.links.get(r.robotId)))
       }
     }

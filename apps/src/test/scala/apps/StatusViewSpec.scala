@@ -16,7 +16,7 @@ import naogateway.wire.gamecontroller.{
   SecondaryGameState
 }
 import naogateway.wire.Posture
-import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot}
+import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot, SigningState}
 
 class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
   import StatusViewSpec._
@@ -46,6 +46,16 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       StatusView.changes(first, standing).head should include("stand")
       val offline = first.copy(robots = Vector(sitting.copy(online = false)))
       StatusView.changes(first, offline).head should include("offline")
+    }
+    "show a robot that must sign and does not as unsigned, not offline, and a development build beside the robot" in {
+      val unsigned = sitting.copy(online = false, quality = LinkQuality.Offline, signing = SigningState.Unsigned)
+      StatusView.robotLine(unsigned, None) should (include("unsigned") and not include "offline")
+      StatusView.robotLine(sitting.copy(online = false), None) should include("offline")
+      StatusView.robotLine(sitting, None) should not include "development"
+      StatusView.robotLine(sitting.copy(development = true), None) should include("development build")
+      val first = StatusModel(Vector(sitting.copy(online = false)), Map.empty, None, None)
+      StatusView.changes(first, first.copy(robots = Vector(unsigned))).head should include("unsigned")
+      StatusView.changes(StatusModel.empty, first.copy(robots = Vector(unsigned))).head should include("unsigned")
     }
     "show the recording's figures or the replay's progress on the screen, and nothing when neither runs" in {
       val plain = naogateway.Gateway.GatewayStats(10, 0, 0, Map.empty, 1)

@@ -182,24 +182,55 @@ object Doctor {
     summary +: (configured ++ strangers ++ unexpected)
   }
 
-  /** Which robots sign, and robots whose frames fail verification. */
+  /** Which robots sign; robots whose frames fail verification; in competition mode, robots that do not sign (no team
+    * key, `signing = off`) and robots running a development build (`RobotHealth.development`, docs/protocol.md 6.7).
+    */
   def signingFindings(facts: Facts): Vector[Finding] = {
-    val signing = facts.settings.robots.filter(_.signing == naogateway.RobotSigning.Required).map(_.robotId)
+    val settings = facts.settings
+    val competition = settings.competition
+    val signing = settings.robots.filter(_.signing == naogateway.RobotSigning.Required).map(_.robotId)
+    val off = settings.robots.filter(_.signing == naogateway.RobotSigning.Off).map(_.robotId)
     val summary =
-      if (signing.nonEmpty) ok("signing", s"robot(s) ${signing.mkString(", ")} sign their frames with the team key")
-      else if (facts.settings.signingKey.isDefined)
-        ok("signing", "a team key is set, but no robot has signing = required: nothing is signed")
-      else ok("signing", "off: no robot has signing = required")
-    summary +: facts.links.flatMap { l =>
+      if (settings.signingKey.isEmpty)
+        if (competition)
+          fail(
+            "signing",
+            "competition mode without a team key: no robot's frames are signed",
+            "set naogateway.signing.key (env NAOGATEWAY_SIGNING_KEY) and build each robot with its key " +
+              "(robotctl keys <id>; docs/protocol.md 6.7)"
+          )
+        else ok("signing", "off: no team key (naogateway.signing.key)")
+      else if (signing.nonEmpty)
+        ok("signing",
+          s"robot(s) ${signing.mkString(", ")} sign their frames with their robot keys; " +
+            "robots not configured must sign too")
+      else ok("signing", "a team key is set; robots not configured must sign")
+    val offInCompetition = off.filter(_ => competition && settings.signingKey.isDefined).map { id =>
+      fail(
+        s"robot $id signing",
+        "signing = off in competition mode: anyone on the WiFi can command this robot",
+        s"build the robot with its key (robotctl keys $id) and remove signing = off from its entry in naogateway.robots"
+      )
+    }
+    val development = facts.robots.filter(_.development).map { r =>
+      val text = "runs a development build: it neither signs nor checks signatures (RobotHealth.development)"
+      if (competition)
+        fail(s"robot ${r.robotId} firmware", text,
+          s"flash a field build with the robot's key (robotctl keys ${r.robotId}; docs/firmware.md)")
+      else ok(s"robot ${r.robotId} firmware", text)
+    }
+    val failures = facts.links.flatMap { l =>
       val failed = l.rejected.filter { case (k, _) => SignatureRejections(k) }
       Option.when(failed.values.sum > 0)(fail(
           s"robot ${l.robotId} signing",
           s"${failed.values.sum} frame(s) failed verification " +
             s"(${failed.toVector.sorted.map { case (k, n) => s"$k $n" }.mkString(", ")})",
-          "the robot's firmware must sign with the same team key as naogateway.signing.key (docs/protocol.md 6.7); " +
-            "a firmware that does not sign yet needs signing = off for this robot"
+          s"the robot's firmware must sign with its robot key (robotctl keys ${l.robotId}, from the team key " +
+            "naogateway.signing.key; docs/protocol.md 6.7); a firmware that does not sign yet needs signing = off " +
+            "for this robot"
         ))
     }
+    (summary +: offInCompetition) ++ development ++ failures
   }
 
   /** Online robots whose clock estimate has not converged. */

@@ -239,9 +239,18 @@ object Launcher {
           val robots = addresses.robots
           val target =
             if (robots.getAddress.isAnyLocalAddress) new InetSocketAddress("127.0.0.1", robots.getPort) else robots
-          context.pipeToSelf(Fleet.start(context.system,
-              FleetSettings(target, (1 to launcher.simulatedRobots).toVector,
-                faithfulLink = launcher.simulatedRobots <= 20)))(FleetStarted.apply)
+          // With a team key the simulated robots sign, each with its own robot key, as robots built with
+          // `robotctl keys` do (docs/protocol.md 6.7).
+          val teamKey = gatewaySettings.signingKey
+          context.pipeToSelf(Fleet.start(
+              context.system,
+              FleetSettings(
+                target,
+                (1 to launcher.simulatedRobots).toVector,
+                faithfulLink = launcher.simulatedRobots <= 20,
+                customize = s => s.copy(firmware = s.firmware.copy(signingKey = teamKey))
+              )
+            ))(FleetStarted.apply)
         }
         if (launcher.ballFollowerRobot > 0) startBallFollower(context.system, launcher.ballFollowerRobot)
         startGameController(context, addresses)

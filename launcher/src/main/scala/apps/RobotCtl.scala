@@ -32,14 +32,24 @@ object RobotCtl {
   /** Longest silence while waiting for the answer, above the server's own answer-timeout (a watch adds its seconds). */
   val ReadTimeoutMillis = 30000
 
-  /** The command line's help. */
-  val usage: String = ControlProtocol.usage
+  /** The help of `robotctl keys` ([[RobotKeys]]). */
+  val KeysUsage: String =
+    """usage: robotctl keys [--config config-file] <robotId> ...  (each robot's key, derived from the team key of
+      |                                                           naogateway.signing.key / $NAOGATEWAY_SIGNING_KEY,
+      |                                                           to build or flash that robot with; protocol.md 6.7)""".stripMargin
+
+  /** The environment variable the gateway reads its team key from (naogateway's reference.conf). */
+  val TeamKeyVariable = "NAOGATEWAY_SIGNING_KEY"
+
+  /** The command line's help: the control port's commands, and `keys`, which needs no gateway. */
+  val usage: String = ControlProtocol.usage + "\n" + KeysUsage
 
   /** Reads a parameter: a number, a truth value or a text. */
   def param(text: String): RpcValue = ControlProtocol.param(text)
 
   /** Parses the command (without `--control`); a clear message when it is wrong. */
-  def parse(args: Seq[String]): Either[String, Request] = ControlProtocol.parse(args)
+  def parse(args: Seq[String]): Either[String, Request] =
+    ControlProtocol.parse(args).left.map(m => if (m == ControlProtocol.usage) usage else m)
 
   /** The control port's `host:port` (from `--control`, else `env(NAOGATEWAY_CONTROL)`, else the default) and the
     * request.
@@ -58,7 +68,9 @@ object RobotCtl {
     * `err`. Returns the exit code.
     */
   def run(args: Seq[String], env: String => Option[String], out: String => Unit, err: String => Unit): Int =
-    invocation(args, env) match {
+    // `keys` needs no gateway, and its own object: only it loads the config library (robotctl's start stays light).
+    if (args.headOption.contains("keys")) RobotKeys.run(args.drop(1), env, out, err)
+    else invocation(args, env) match {
       case Left(message) =>
         err(message)
         ExitUsage

@@ -141,10 +141,37 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     }
 
     "say which robots sign" in {
-      val signed = settingsOf("naogateway.robots = [ { id = 1, address = \"10.0.0.101\", signing = required } ]\n" +
+      val signed = settingsOf("naogateway.robots = [ { id = 1, address = \"10.0.0.101\" } ]\n" +
         "naogateway.signing.key = \"00112233445566778899aabbccddeeff\"")
-      Doctor.signingFindings(allWell.copy(settings = signed)).head.line shouldBe "ok   signing: robot(s) 1 sign their frames with the team key"
-      Doctor.signingFindings(allWell).head.line shouldBe "ok   signing: off: no robot has signing = required"
+      Doctor.signingFindings(allWell.copy(settings = signed)).head.line shouldBe
+        "ok   signing: robot(s) 1 sign their frames with their robot keys; robots not configured must sign too"
+      Doctor.signingFindings(allWell).head.line shouldBe "ok   signing: off: no team key (naogateway.signing.key)"
+    }
+
+    "in competition mode, find robots that do not sign, no team key, and development builds" in {
+      val competition = "naogateway.competition.enabled = on\n" +
+        "naogateway.game-controller.trusted-sources = [\"10.0.0.5\"]\n"
+      val offRobot = settingsOf(competition +
+        "naogateway.robots = [ { id = 1, address = \"10.0.0.101\" }, " +
+        "{ id = 2, address = \"10.0.0.102\", signing = off } ]\n" +
+        "naogateway.signing.key = \"00112233445566778899aabbccddeeff\"")
+      val p = Doctor.signingFindings(allWell.copy(settings = offRobot)).filter(_.problem).map(_.line)
+      p shouldBe Vector("FAIL robot 2 signing: signing = off in competition mode: anyone on the WiFi can command " +
+        "this robot; fix: build the robot with its key (robotctl keys 2) and remove signing = off from its entry in " +
+        "naogateway.robots")
+      val keyless = settingsOf(competition + """naogateway.robots = [ { id = 1, address = "10.0.0.101" } ]""")
+      Doctor.signingFindings(allWell.copy(settings = keyless)).filter(_.problem).map(_.line).head should startWith(
+        "FAIL signing: competition mode without a team key")
+      val development = allWell.copy(settings = offRobot, robots = Vector(robot(1).copy(development = true), robot(2)))
+      Doctor.signingFindings(development).filter(_.problem).map(_.line) should contain(
+        "FAIL robot 1 firmware: runs a development build: it neither signs nor checks signatures " +
+          "(RobotHealth.development); fix: flash a field build with the robot's key (robotctl keys 1; docs/firmware.md)")
+      // Outside competition mode a development robot is named, not a problem.
+      val bench = allWell.copy(robots = Vector(robot(1).copy(development = true), robot(2)))
+      problems(bench) shouldBe empty
+      Doctor.signingFindings(bench).map(_.line) should contain(
+        "ok   robot 1 firmware: runs a development build: it neither signs nor checks signatures " +
+          "(RobotHealth.development)")
     }
 
     "find a clock estimate that does not converge" in {

@@ -94,9 +94,9 @@ object Gateway {
         if (replay.isDefined) Recording.Off
         else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
       val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
-      // One signer for the gateway's life: its timestamps keep growing across restarts of the outbox.
-      val signer = settings.signingKey.filter(_ => settings.robots.exists(_.signing == RobotSigning.Required)).map(
-        new FrameSigner(_))
+      // One for the gateway's life: the robots' replay windows and epochs, and timestamps that keep growing across
+      // restarts of the outbox and the robot actors.
+      val signer = settings.signingKey.map(new GatewaySigning(_))
       val outbox = context.spawn(
         Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress,
               routes), settings.budget,
@@ -105,7 +105,7 @@ object Gateway {
         "outbox",
         RobotDispatcher
       )
-      val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks)
+      val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks, signer)
       logic.start()
       if (settings.gameControllerEnabled && settings.teamMessages.enabled && replay.isEmpty) {
         // Akka keeps one message adapter per message class, and the GameController link's events are of the same
@@ -164,7 +164,8 @@ object Gateway {
       outbox: ActorRef[Outbox.Command],
       recording: Recording,
       routes: AtomicReference[Routing.Table[PortReader.Inlet]],
-      clocks: RobotClockEstimates
+      clocks: RobotClockEstimates,
+      signing: Option[GatewaySigning]
   ) {
     private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
     private val rejections = new RejectionLedger.Shared
@@ -247,8 +248,7 @@ object Gateway {
           RobotDispatcher
         ))
       context.watchWith(actor.own, RobotStopped(robotId, actor.own))
-      val signatures =
-        settings.signingKey.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(new SignatureCheck(_))
+      val signatures = signing.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(_.robot(robotId))
       val entry = Entry(actor, address, zeromq = false, backlog, signatures, discovered)
       byId = byId.updated(robotId, entry)
       byAddress = byAddress.updated(address.getAddress, robotId)
@@ -305,8 +305,16 @@ object Gateway {
     private def handleUnrouted(u: Unrouted): Unit = {
       gatewayBacklog.done()
       val f = u.frame
-      // A robot that must sign: the reader's check, here before any delivery or re-binding (an address proves nothing).
-      byId.get(f.contents.robotId).flatMap(_.signatures).map(_.check(f.bytes, f.header)) match {
+      // A robot that must sign: the reader's check, here before any delivery, re-binding or discovery (an address
+      // proves nothing). A robot not known yet is discovered only by a keep-alive signed with its own key.
+      val robotId = f.contents.robotId
+      val verdict = byId.get(robotId) match {
+        case Some(entry) => entry.signatures.map(_.check(f.bytes, f.header))
+        case None =>
+          signing.filter(_ => settings.signingOf(robotId) == RobotSigning.Required).map(
+            _.checkNew(robotId, f.bytes, f.header))
+      }
+      verdict match {
         case Some(Left(kind)) => rejectFor(Some(f.contents.robotId), kind, f.from, s"robot id ${f.contents.robotId}")
         case _                => frame(f.header, f.contents, f.size, f.from)
       }

@@ -210,9 +210,11 @@ final case class GatewaySettings(
       "digits)"
   )
 
-  /** Whether robot `robotId`'s frames must be signed; robots not configured (discovered ones) are `Off`. */
+  /** Whether robot `robotId`'s frames must be signed: a configured robot's own setting; any other robot (a discovered
+    * one) must sign exactly when a team key is set.
+    */
   def signingOf(robotId: Int): RobotSigning =
-    robots.find(_.robotId == robotId).fold[RobotSigning](RobotSigning.Off)(_.signing)
+    robots.find(_.robotId == robotId).fold(RobotSigning.defaultFor(signingKey))(_.signing)
 }
 
 /** Reading and validating the settings. */
@@ -246,6 +248,7 @@ object GatewaySettings {
       duration(hb, "probe-backoff-max")
     )
     val zeroMqHeartbeat = zeroMq.getConfig("heartbeat")
+    val teamKey = signingKey(c)
     GatewaySettings(
       bindAddress = link.getString("bind-address"),
       robotPort = link.getInt("robot-port"),
@@ -264,8 +267,9 @@ object GatewaySettings {
           else if (r.hasPath("port")) r.getInt("port")
           else link.getInt("robot-receive-port")
         require(port > 0 && port <= 65535, s"robots: robot ${r.getInt("id")}: receive-port $port is not a UDP port")
+        // With a team key, a robot signs unless its entry says `signing = off` by name (docs/protocol.md 6.7).
         val signing =
-          if (!r.hasPath("signing")) RobotSigning.Off
+          if (!r.hasPath("signing")) RobotSigning.defaultFor(teamKey)
           else RobotSigning.parse(r.getString("signing")).fold(
             e => throw new IllegalArgumentException(s"robots: robot ${r.getInt("id")}: $e"), identity)
         StaticRobot(r.getInt("id"), new InetSocketAddress(r.getString("address"), port), signing)
@@ -311,7 +315,7 @@ object GatewaySettings {
       ),
       gameControllerTrusted = trustedSources(gc),
       clockSync = ClockSyncSettings(duration(c.getConfig("clock-sync"), "window")),
-      signingKey = signingKey(c),
+      signingKey = teamKey,
       newSessionKeepAlives = c.getInt("new-session.keep-alives"),
       recording = RecordingSettings.fromConfig(c.getConfig("recording")),
       teamMessages = {

@@ -94,7 +94,7 @@ object Outbox {
     * second while sending) go to `recording`.
     */
   private[naogateway] def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean,
-      signer: Option[FrameSigner] = None, recording: Recording = Recording.Off): Behavior[Command] =
+      signer: Option[GatewaySigning] = None, recording: Recording = Recording.Off): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         new Outbox(link, budget, competition, signer, timers, context.log, recording).behavior()
@@ -109,7 +109,7 @@ private final class Outbox(
     link: DatagramWriter,
     budget: BudgetSettings,
     competition: Boolean,
-    signer: Option[FrameSigner],
+    signer: Option[GatewaySigning],
     timers: TimerScheduler[Outbox.Command],
     log: org.slf4j.Logger,
     recording: Recording
@@ -170,17 +170,24 @@ private final class Outbox(
     if (s.priority == Priority.Heartbeat) probes.record(now, s.size)
     // Signed now, not when it was queued: the robot accepts only growing timestamps, and the queues reorder.
     val bytes =
-      if (!s.signed) Right(s.bytes) else signer.toRight("no signing key").flatMap(_.sign(s.bytes).left.map(_.describe))
+      if (!s.signed) Right(s.bytes)
+      else signer.toRight("no signing key").flatMap(_.sign(s.robotId, s.bytes).left.map(_.describe))
     // Written here, on the outbox's own thread: no link actor between the decision and the socket. A full kernel
     // buffer takes nothing (UDP would lose the datagram further on anyway): counted as dropped. A ZeroMQ robot's link
-    // reports itself whether its socket took the message.
+    // reports itself whether its socket took the message. A frame that cannot be signed is never sent unsigned.
     s.via match {
       case Some(zeroMq) => zeroMq ! ZeroMqRobotLink.Send(s.bytes, s.replyTo, s.tag)
-      case None if !bytes.exists(link.send(_, s.to)) =>
-        dropped += 1
-        if (RateLimitedLog.due(dropped))
-          log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
-      case None => ()
+      case None =>
+        bytes match {
+          case Left(why) =>
+            dropped += 1
+            if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: {}", dropped, why)
+          case Right(b) if !link.send(b, s.to) =>
+            dropped += 1
+            if (RateLimitedLog.due(dropped))
+              log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
+          case Right(_) => ()
+        }
     }
     warnIfLoaded(now)
   }
@@ -227,14 +234,18 @@ private final class Outbox(
         refused += 1
         record(now, s, "refused-by-rule")
         s.replyTo.foreach(_ ! RefusedByRule(s.tag, NoSendingWhileGameRuns))
-      } else if (s.signed && (signer.isEmpty || s.size > WireLimits.MaxDatagramBytes)) {
+      } else if (s.signed && !signer.exists(_.canSign(s.robotId)) || s.signed && s.size > WireLimits.MaxDatagramBytes) {
+        // Never sent unsigned: without the key, or before the robot's boot epoch is known, the frame is dropped.
         dropped += 1
         record(now, s, "dropped")
-        s.replyTo.foreach(_ ! Dropped(
-            s.tag,
-            if (signer.isEmpty) "the frame must be signed, but the gateway has no signing key"
-            else s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"
-          ))
+        val why = signer match {
+          case None => "the frame must be signed, but the gateway has no signing key"
+          case Some(g) if !g.canSign(s.robotId) =>
+            s"the frame must be signed, but ${SignRefusal.EpochUnknown(s.robotId).describe}"
+          case Some(_) => s"signed, the frame would take ${s.size} bytes, more than ${WireLimits.MaxDatagramBytes}"
+        }
+        if (RateLimitedLog.due(dropped)) log.warn("Outbox dropped {} datagram(s) so far: {}", dropped, why)
+        s.replyTo.foreach(_ ! Dropped(s.tag, why))
       } else {
         val rank = s.priority.rank
         if (queues.forall(_.isEmpty) && allowed(now, s)) {

@@ -178,7 +178,7 @@ object RobotActor {
       val kept = (heartbeatSettings.qualityWindow / heartbeatSettings.keepAliveInterval).toInt + 2
       val subscribers = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
       unreached(Family(heartbeat, sender, response, response, zeroMq),
-        RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept))
+        RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept, signs))
     }
 
     /** Not reached yet: Connect waits (stashed) until the heartbeat says the robot is there. */
@@ -207,7 +207,7 @@ object RobotActor {
         context.log.info("Robot [{}] offline: {}", robotId, reason)
         forgetAfter(settings.discovery.forgetOfflineAfter, "offline")
         f.response ! ResponseActor.Reachability(false)
-        running(f, c, effects.publish(s, RobotOffline(robotId, reason)), isOnline = false)
+        running(f, c, effects.publish(s.signatureUnconfirmed, RobotOffline(robotId, reason)), isOnline = false)
       case Forget(reason) => forget(s, reason)
     }
 
@@ -225,7 +225,8 @@ object RobotActor {
       m match {
         case FrameReceived(contents, form, size) =>
           wiring.backlog.done()
-          val (next, formChanged) = s.frameReceived(size, form)
+          // Only a verified frame of a robot that must sign gets here (the port's reader checks it first).
+          val (next, formChanged) = (if (signs) s.signatureAccepted else s).frameReceived(size, form)
           if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
           effects.frame(contents, f, c, next, isOnline)
         case SegmentReceived(bytes) =>
@@ -235,7 +236,7 @@ object RobotActor {
         case DatagramRejected(kind) =>
           wiring.backlog.done()
           // The gateway warned of it already (per kind, for all robots): here it is counted, and logged at debug only.
-          effects.count(s, kind, "", warn = false)
+          effects.count(s.signatureRefused(kind), kind, "", warn = false)
         case Rebound(to) =>
           context.log.info("Robot [{}] re-bound from {} to {}", robotId, s.address, to)
           val next = s.rebound(to)

@@ -107,6 +107,27 @@ private[naogateway] final case class RobotState(
     (copy(link = link.copy(rejected = link.rejected.updated(kind, n))), n)
   }
 
+  /** A frame of a robot that must sign passed its signature check: the robot is shown as signing. */
+  def signatureAccepted: RobotState =
+    if (snapshot.signing == SigningState.Off || snapshot.signing == SigningState.Signed) this
+    else copy(snapshot = snapshot.copy(signing = SigningState.Signed))
+
+  /** A datagram of a robot that must sign was refused for `kind`: unsigned or badly signed, the robot is shown as
+    * `unsigned` unless its own signed frames keep coming (anyone can send a forged frame from its address, and a replay
+    * is never the robot's doing: neither changes what is shown of a robot that signs).
+    */
+  def signatureRefused(kind: Rejection): RobotState =
+    if (snapshot.signing == SigningState.Off || snapshot.signing == SigningState.Signed ||
+      !RobotState.UnsignedKinds(kind)) this
+    else copy(snapshot = snapshot.copy(signing = SigningState.Unsigned))
+
+  /** The robot went offline: whether it still signs is open again (a robot restarted with a firmware that does not sign
+    * shows as `unsigned` from its next refused frame on).
+    */
+  def signatureUnconfirmed: RobotState =
+    if (snapshot.signing == SigningState.Signed) copy(snapshot = snapshot.copy(signing = SigningState.Awaited))
+    else this
+
   /** A clean round-trip sample, smoothed as TCP smooths its RTT. */
   def roundTrip(nanos: Long): RobotState =
     copy(link = link.copy(rttNanos = Some(link.rttNanos.fold(nanos.toDouble)(r => r * 0.875 + nanos * 0.125))))
@@ -217,16 +238,22 @@ private[naogateway] object RobotState {
   /** Events a robot actor holds while it waits for the gateway's subscriber list. */
   val HeldEvents: Int = 64
 
+  /** The refusals that show a robot that must sign as `unsigned`: its frames carry no valid signature. */
+  val UnsignedKinds: Set[Rejection] =
+    Set(Rejection.Unsigned, Rejection.SignatureNotLast, Rejection.MalformedSignature, Rejection.BadSignature)
+
   /** The state of robot `robotId` at `address` before anything was heard; `subscribers` None when the gateway is still
     * to say; a `discovered` robot's first keep-alive only introduces it. `keepAliveTimesKept` bounds the loss window.
+    * `signs`: the robot must sign its frames.
     */
   def initial(robotId: Int, address: InetSocketAddress, clockSync: ClockSync,
-      subscribers: Option[Set[ActorRef[GatewayEvent]]], discovered: Boolean, keepAliveTimesKept: Int): RobotState =
+      subscribers: Option[Set[ActorRef[GatewayEvent]]], discovered: Boolean, keepAliveTimesKept: Int,
+      signs: Boolean = false): RobotState =
     RobotState(
       robotId,
       address,
       HeaderForm.Legacy,
-      RobotSnapshot(robotId, address),
+      RobotSnapshot(robotId, address, signing = if (signs) SigningState.Awaited else SigningState.Off),
       SessionRule.empty,
       discovered,
       clockSync,

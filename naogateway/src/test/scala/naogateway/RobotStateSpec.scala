@@ -48,6 +48,25 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
         Rejection.UnknownCallId.name -> 1L)
     }
 
+    "show a robot that must sign as unsigned after unsigned or badly signed frames, as signed after a verified one" in {
+      val signing = RobotState.initial(7, address, ClockSync(), Some(Set.empty), discovered = false,
+        keepAliveTimesKept = 27, signs = true)
+      signing.view(online = false).signing shouldBe SigningState.Awaited
+      val unsigned = signing.signatureRefused(Rejection.Unsigned)
+      unsigned.view(online = false).signing shouldBe SigningState.Unsigned
+      // A replay is anyone's doing: it changes nothing shown.
+      signing.signatureRefused(Rejection.Replayed).snapshot.signing shouldBe SigningState.Awaited
+      unsigned.signatureAccepted.snapshot.signing shouldBe SigningState.Signed
+      // A forged frame beside the robot's own signed ones changes nothing shown; once it went offline, it does.
+      val signed = unsigned.signatureAccepted
+      signed.signatureRefused(Rejection.BadSignature).snapshot.signing shouldBe SigningState.Signed
+      signed.signatureUnconfirmed.snapshot.signing shouldBe SigningState.Awaited
+      signed.signatureUnconfirmed.signatureRefused(Rejection.BadSignature).snapshot.signing shouldBe
+        SigningState.Unsigned
+      // A robot that need not sign stays off, whatever arrives.
+      fresh().signatureRefused(Rejection.Unsigned).signatureAccepted.snapshot.signing shouldBe SigningState.Off
+    }
+
     "not pass a discovered robot's introducing keep-alive to the heartbeat, but every later one" in {
       val (s1, first) = keepAlive(fresh(discovered = true), second, boot = 1, uptime = 1000)
       first.heard shouldBe false

@@ -28,13 +28,16 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
     probe.receiveMessage(10.seconds)
   }
 
-  /** A gateway requiring robot `robotId` at `ip` to sign, relaying every robot datagram to `relayPort` (a recorder). */
-  private def withGateway[A](robotId: Int, ip: InetAddress, relayPort: Int = 0)(test: GatewayFixture => A): A = {
+  /** A gateway with the team key, requiring robot `robotId` at `ip` to sign (by default: no `signing` in its entry),
+    * relaying every robot datagram to `relayPort` (a recorder); `more` are further entries of `robots`.
+    */
+  private def withGateway[A](robotId: Int, ip: InetAddress, relayPort: Int = 0, more: String = "")(
+      test: GatewayFixture => A): A = {
     val relay =
       if (relayPort == 0) "" else s"fu-remote-relay { enabled = on, address = \"127.0.0.1\", port = $relayPort }"
     val f = new GatewayFixture(
       testKit,
-      s"""robots = [ { id = $robotId, address = "${ip.getHostAddress}", signing = required } ]
+      s"""robots = [ { id = $robotId, address = "${ip.getHostAddress}" } $more ]
          |signing.key = "$TeamKeyHex"
          |$relay""".stripMargin
     )
@@ -57,11 +60,12 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
   }
 
   "A gateway requiring signatures" must {
-    "answer a signed robot's calls, take its keep-alives, and sign what it sends; an unsigned robot beside it works as before" in {
+    "answer a signed robot's calls, take its keep-alives, and sign what it sends; a robot set to off works unsigned" in {
       val ip = TestLoopback.address()
-      withGateway(31, ip) { f =>
+      val plainIp = TestLoopback.address()
+      withGateway(31, ip, more = s""", { id = 32, address = "${plainIp.getHostAddress}", signing = off }""") { f =>
         val (robot, _) = f.robot(31, firmware = signing, at = ip)
-        val (plain, _) = f.robot(32)
+        val (plain, _) = f.robot(32, at = plainIp)
         val signed = f.connect(31)
         call(signed, "system.ping").result.isRight shouldBe true
         call(signed, "motion.posture", RpcValue.Text("stand")).result shouldBe Right(Some(RpcValue.Text("stand")))
@@ -77,6 +81,8 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
         view.posture shouldBe Posture.Stand
         linkStats(f, 31).rejected shouldBe empty
         snapshot(f, 31).online shouldBe true
+        snapshot(f, 31).signing shouldBe SigningState.Signed
+        snapshot(f, 32).signing shouldBe SigningState.Off
         f.view(plain).firmware.refusedSignatures shouldBe empty
         f.stats().rejected.keySet.intersect(SignatureKinds) shouldBe empty
       }
@@ -135,15 +141,97 @@ class SignedFramesSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
               Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand"))).copy(callId = Some(5L)).toProto))
           (1 to 5).foreach { i =>
             outsider.send(ByteBuffer.wrap(ForgedFrames.unsigned(stand)), receivesAt)
-            outsider.send(ByteBuffer.wrap(FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey,
-                  SignDirection.GatewayToRobot,
-                  Long.MaxValue - i).toOption.get), receivesAt)
+            outsider.send(
+              ByteBuffer.wrap(FrameSigning.signFrame(stand, HeaderForm.Legacy, WrongKey.robotKey(34),
+                  SignedLink.ToRobot(34, 1), Long.MaxValue - i).toOption.get),
+              receivesAt
+            )
           }
           eventually(timeout(10.seconds)) {
             f.view(robot).firmware.refusedSignatures shouldBe Map("unsigned" -> 5L, "bad signature" -> 5L)
           }
           f.view(robot).posture shouldBe Posture.Sit
         } finally outsider.close()
+      }
+    }
+  }
+
+  "Per-robot keys and boot epochs" must {
+    "refuse a frame robot A signed when it comes as robot B's, and leave B as it was" in {
+      val ipA = TestLoopback.address()
+      val ipB = TestLoopback.address()
+      val recorder = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+      val outsider = DatagramChannel.open().bind(new InetSocketAddress(ipB, 0))
+      try withGateway(35, ipA, recorder.getLocalAddress.asInstanceOf[InetSocketAddress].getPort,
+          more = s""", { id = 36, address = "${ipB.getHostAddress}" }""") { f =>
+          f.robot(35, firmware = signing, at = ipA)
+          f.robot(36, firmware = signing, at = ipB)
+          call(f.connect(35), "system.ping").result.isRight shouldBe true
+          call(f.connect(36), "system.ping").result.isRight shouldBe true
+          val fromA = RelayCapture.frames(recorder, 35, 1.second)
+          fromA should not be empty
+          // A's frames from B's address, once as they are and once with B's id in them (robotID is the first field).
+          val asB = fromA.map { frame =>
+            val header = FumanoidsFrame.decodeHeader(frame).toOption.get
+            val relabelled = frame.clone()
+            relabelled(header.form.headerBytes + 1) shouldBe 35
+            relabelled(header.form.headerBytes + 1) = 36
+            relabelled
+          }
+          val before = linkStats(f, 36).rejected.getOrElse("bad signature", 0L)
+          (fromA ++ asB).foreach(frame => outsider.send(ByteBuffer.wrap(frame), f.addresses.robots))
+          eventually(timeout(10.seconds)) {
+            linkStats(f, 36).rejected.getOrElse("bad signature", 0L) - before shouldBe asB.size
+          }
+          val b = snapshot(f, 36)
+          (b.online, b.signing, b.bootId) shouldBe ((true, SigningState.Signed, Some(1)))
+          call(f.connect(36), "system.ping").result.isRight shouldBe true
+        }
+      finally { recorder.close(); outsider.close() }
+    }
+
+    "keep a robot online after it restarts with a higher boot epoch, signing to it under the new one" in {
+      val ip = TestLoopback.address()
+      withGateway(37, ip) { f =>
+        val (robot, _) = f.robot(37, firmware = signing, at = ip)
+        call(f.connect(37), "system.ping").result.isRight shouldBe true
+        call(f.connect(37), "system.reset").result shouldBe Right(Some(RpcValue.Flag(true)))
+        // Back after its module's boot delay, in boot epoch 2: its frames count again, and the gateway's reach it.
+        eventually(timeout(30.seconds), interval(200.millis)) {
+          val s = snapshot(f, 37)
+          (s.online, s.bootId, s.signing) shouldBe ((true, Some(2), SigningState.Signed))
+        }
+        call(f.connect(37), "motion.posture", RpcValue.Text("stand")).result shouldBe
+          Right(Some(RpcValue.Text("stand")))
+        f.view(robot).firmware.refusedSignatures shouldBe empty
+        linkStats(f, 37).rejected.get("replayed") shouldBe None
+      }
+    }
+
+    "show a robot that must sign but sends unsigned frames as unsigned, not as offline" in {
+      val ip = TestLoopback.address()
+      withGateway(38, ip) { f =>
+        f.robot(38, at = ip) // no key: every keep-alive unsigned
+        eventually(timeout(10.seconds)) {
+          val s = snapshot(f, 38)
+          (s.online, s.signing) shouldBe ((false, SigningState.Unsigned))
+          linkStats(f, 38).rejected.getOrElse("unsigned", 0L) should be > 0L
+        }
+      }
+    }
+
+    "not discover an unknown robot from unsigned keep-alives while a team key is set, but from signed ones" in {
+      val ip = TestLoopback.address()
+      withGateway(39, ip) { f =>
+        f.robot(40) // unsigned, not configured
+        f.robot(41, firmware = signing) // signed, not configured
+        eventually(timeout(10.seconds)) {
+          snapshot(f, 41).online shouldBe true
+          f.stats().rejected.getOrElse("unsigned", 0L) should be > 0L
+        }
+        val probe = createTestProbe[Option[akka.actor.typed.ActorRef[RobotAccess.Command]]]()
+        f.gateway ! GatewayAccess.GetRobotAccess(40, probe.ref)
+        probe.receiveMessage(5.seconds) shouldBe None
       }
     }
   }

@@ -34,14 +34,23 @@ class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
 
   private def timestampOf(bytes: Array[Byte]): Long = {
     val header = FumanoidsFrame.decodeHeader(bytes).toOption.get
-    FrameSigning.verifyFrame(bytes, header, teamKey, SignDirection.GatewayToRobot).toOption.get.timestamp
+    FrameSigning.verifyFrame(bytes, header, teamKey.robotKey(1), SignedLink.ToRobot(1, 6)).toOption.get.timestamp
+  }
+
+  /** The gateway's signing after robot 1's keep-alive of boot epoch 6 was accepted (robot 2's epoch is unknown). */
+  private def gatewaySigning(): GatewaySigning = {
+    val g = new GatewaySigning(teamKey)
+    val keepAlive = FrameSigning.signFrame(MessageContents(1), HeaderForm.Legacy, teamKey.robotKey(1),
+      SignedLink.FromRobot(1), FrameSigning.robotTimestamp(6, 0)).toOption.get
+    g.robot(1).check(keepAlive, FumanoidsFrame.decodeHeader(keepAlive).toOption.get) shouldBe Right(())
+    g
   }
 
   "An outbox with a signer" must {
     "sign frames as they leave, so timestamps grow in the order the robot gets them, whatever the queues reorder" in {
       val link = createTestProbe[UdpLink.Command]()
       val outbox = spawn(Outbox(writer(link.ref), BudgetSettings(1400, 0, 0.8), competition = false,
-          Some(new FrameSigner(teamKey))))
+          Some(gatewaySigning())))
       val outcomes = createTestProbe[Outbox.Outcome]()
       val big = frame(padding = 1300)
       // The first takes nearly the whole second of the budget; the debug frame waits; the safety frames overtake it.
@@ -59,15 +68,17 @@ class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
       val stamps = frames.map(timestampOf)
       stamps.sliding(2).foreach(pair => pair(1) should be > pair(0))
     }
-    "drop a frame that would exceed 1400 bytes with its signature, and one it has no key for" in {
+    "drop a frame that would exceed 1400 bytes with its signature, one it has no key for, and one to a robot whose epoch it does not know" in {
       val link = createTestProbe[UdpLink.Command]()
       val outcomes = createTestProbe[Outbox.Outcome]()
       val signing = spawn(Outbox(writer(link.ref), BudgetSettings(125000, 0, 0.8), competition = false,
-          Some(new FrameSigner(teamKey))))
+          Some(gatewaySigning())))
       val tooBig = frame(padding = 1400 - FrameSigning.FieldBytes - 20)
       tooBig.length should (be <= WireLimits.MaxDatagramBytes and be > WireLimits.MaxDatagramBytes - FrameSigning.FieldBytes)
       signing ! Outbox.Send(1, robot, tooBig, Priority.Command, Some(outcomes.ref), 7L, signed = true)
       outcomes.expectMessageType[Outbox.Dropped].tag shouldBe 7L
+      signing ! Outbox.Send(2, robot, frame(0), Priority.Command, Some(outcomes.ref), 9L, signed = true)
+      outcomes.expectMessageType[Outbox.Dropped].reason should include("boot epoch is not known")
       val keyless = spawn(Outbox(writer(link.ref), BudgetSettings(125000, 0, 0.8), competition = false))
       keyless ! Outbox.Send(1, robot, frame(0), Priority.Command, Some(outcomes.ref), 8L, signed = true)
       outcomes.expectMessageType[Outbox.Dropped].tag shouldBe 8L

@@ -327,6 +327,21 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case None     => InetSocketAddress.createUnresolved(a.host, a.port)
   }
 
+  private def toProto(s: SigningState): pb.SigningState = s match {
+    case SigningState.Off      => pb.SigningState.SIGNING_OFF
+    case SigningState.Awaited  => pb.SigningState.SIGNING_AWAITED
+    case SigningState.Signed   => pb.SigningState.SIGNING_SIGNED
+    case SigningState.Unsigned => pb.SigningState.SIGNING_UNSIGNED
+  }
+
+  private def fromProto(s: pb.SigningState): SigningState = s match {
+    case pb.SigningState.SIGNING_OFF      => SigningState.Off
+    case pb.SigningState.SIGNING_AWAITED  => SigningState.Awaited
+    case pb.SigningState.SIGNING_SIGNED   => SigningState.Signed
+    case pb.SigningState.SIGNING_UNSIGNED => SigningState.Unsigned
+    case pb.SigningState.Unrecognized(v)  => throw corrupt("SigningState", s"unknown value $v")
+  }
+
   private def toProto(q: LinkQuality): pb.LinkQuality = q match {
     case LinkQuality.Good     => pb.LinkQuality.GOOD
     case LinkQuality.Degraded => pb.LinkQuality.DEGRADED
@@ -354,7 +369,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       position = s.position.map { case (x, y, heading) => pb.Position(x, y, heading) },
       online = s.online,
       quality = toProto(s.quality),
-      receivedAtNanos = s.receivedAtNanos
+      receivedAtNanos = s.receivedAtNanos,
+      development = Option.when(s.development)(true),
+      signing = Some(toProto(s.signing))
     )
 
   private def fromProto(s: pb.RobotSnapshot): RobotSnapshot =
@@ -371,7 +388,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       position = s.position.map(p => (p.x, p.y, p.heading)),
       online = s.online,
       quality = fromProto(s.quality),
-      receivedAtNanos = s.receivedAtNanos
+      receivedAtNanos = s.receivedAtNanos,
+      development = s.development.contains(true),
+      signing = s.signing.fold[SigningState](SigningState.Off)(fromProto)
     )
 
   private def toProto(r: HaViMoRegion): pb.HaViMoRegion =

@@ -266,6 +266,10 @@ object CrossNodeSerializationSpec {
       AppEvent.SafetyCleared(7),
       snapshot,
       snapshot.copy(address = named, quality = LinkQuality.Degraded),
+      snapshot.copy(online = false, quality = LinkQuality.Offline, development = true,
+        signing = SigningState.Unsigned),
+      snapshot.copy(signing = SigningState.Signed),
+      snapshot.copy(signing = SigningState.Awaited),
       snapshot.copy(
         posture = Some(Posture.reported("kneeling"))), // a posture this build does not know crosses as reported
       RobotSnapshot(9, unresolved),

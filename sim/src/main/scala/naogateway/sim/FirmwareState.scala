@@ -32,9 +32,15 @@ final case class FirmwareSettings(
     scene: Scene = Scene(0.5, 0.3),
     headerForm: HeaderForm = HeaderForm.Legacy,
     clock: RobotClock = RobotClock.Exact,
-    signingKey: Option[SigningKey] = None
+    signingKey: Option[SigningKey] = None,
+    development: Boolean = false
 ) {
   require(robotId >= 0, s"robotId must not be negative, got $robotId")
+
+  /** The robot's own key, as `robotctl keys` derives it from the team key `signingKey` and a real robot is flashed
+    * with: the simulator holds the team key only to derive this one.
+    */
+  lazy val robotKey: Option[RobotKey] = signingKey.map(_.robotKey(robotId))
   require(keepAliveInterval > Duration.Zero, "keepAliveInterval must be positive")
   require(walkLease > Duration.Zero, "walkLease must be positive")
   require(cameraInterval.toNanos >= 1000000000L / HaViMo.MaxFramesPerSecond,

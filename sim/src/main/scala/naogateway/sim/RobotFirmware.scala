@@ -139,10 +139,11 @@ object RobotFirmware {
   /** The state after accepting a frame from the gateway, or (`Left`) after refusing it for its signature. */
   private def authenticated(s: FirmwareState, frame: Array[Byte], header: FrameHeader, viaStream: Boolean)
       : Either[FirmwareState, FirmwareState] =
-    s.settings.signingKey.filterNot(_ => viaStream) match {
-      case None => Right(s)
+    s.settings.robotKey.filterNot(_ => viaStream) match {
+      case None      => Right(s)
       case Some(key) =>
-        FrameSigning.verifyFrame(frame, header, key, SignDirection.GatewayToRobot)
+        // The robot's current boot epoch is in the MAC: the gateway's frames of an earlier boot fail here.
+        FrameSigning.verifyFrame(frame, header, key, SignedLink.ToRobot(s.settings.robotId, s.bootId))
           .flatMap(body => s.gatewayWindow.accept(body.timestamp)) match {
           case Right(window) => Right(s.copy(gatewayWindow = window))
           case Left(error) =>
@@ -152,12 +153,11 @@ object RobotFirmware {
         }
     }
 
-  /** With a signing key, every FU-Remote frame of `out` signed in order under the robot's timestamps (boot counter in
-    * the high 32 bits, frame counter of this boot in the low); GameController answers are not frames and stay as they
-    * are.
+  /** With a signing key, every FU-Remote frame of `out` signed in order under the robot's timestamps (boot epoch in the
+    * high 32 bits, frame counter of this boot in the low); GameController answers are not frames and stay as they are.
     */
   private def signed(s: FirmwareState, out: Vector[Outgoing]): (FirmwareState, Vector[Outgoing]) =
-    s.settings.signingKey match {
+    s.settings.robotKey match {
       case None => (s, out)
       case Some(key) =>
         var frames = s.framesSigned
@@ -167,7 +167,7 @@ object RobotFirmware {
             val timestamp = FrameSigning.robotTimestamp(s.bootId.toLong, frames)
             frames += 1
             // The firmware leaves room for the signature in everything it builds; no room is a bug in the simulator.
-            o.copy(bytes = FrameSigning.signEncoded(o.bytes, key, SignDirection.RobotToGateway, timestamp)
+            o.copy(bytes = FrameSigning.signEncoded(o.bytes, key, SignedLink.FromRobot(s.settings.robotId), timestamp)
               .fold(e => throw new IllegalStateException(e.describe), identity))
           }
         }
@@ -362,7 +362,8 @@ object RobotFirmware {
       batteryVoltage = Some(s.battery),
       uptimeMillis = Some(s.uptimeMillis),
       bootId = Some(s.bootId),
-      position = Some(((s.pose.x * 1000).round.toInt, (s.pose.y * 1000).round.toInt, s.pose.theta))
+      position = Some(((s.pose.x * 1000).round.toInt, (s.pose.y * 1000).round.toInt, s.pose.theta)),
+      development = s.settings.development
     ).contents(s.settings.robotId)
 
   private def debugData(s: FirmwareState): Vector[DebugData] = {

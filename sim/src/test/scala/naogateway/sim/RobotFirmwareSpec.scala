@@ -184,15 +184,15 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       reset.uptimeMillis shouldBe 0
       reset.debugEnabled shouldBe empty
     }
-    "with a key, sign every frame it sends under boot counter and frame counter, the boot counter surviving a reset" in {
+    "with a key, sign every frame it sends with its robot key under boot epoch and frame counter, the epoch rising at a reset" in {
       val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").value
       val signing = settings.copy(signingKey = Some(key))
       def stamps(out: Seq[Outgoing]): Seq[Long] = out.filter(o => Datagram.isFuRemoteFrame(o.bytes)).map { o =>
         val header = FumanoidsFrame.decodeHeader(o.bytes).value
-        FrameSigning.verifyFrame(o.bytes, header, key, SignDirection.RobotToGateway).value.timestamp
+        FrameSigning.verifyFrame(o.bytes, header, key.robotKey(7), SignedLink.FromRobot(7)).value.timestamp
       }
       def request(c: MessageContents, ts: Long) =
-        FrameSigning.signFrame(c, HeaderForm.Legacy, key, SignDirection.GatewayToRobot, ts).value
+        FrameSigning.signFrame(c, HeaderForm.Legacy, key.robotKey(7), SignedLink.ToRobot(7, 1), ts).value
       val (s1, first) = RobotFirmware.advance(RobotFirmware.boot(signing, 0), 0)
       val (s2, second) = RobotFirmware.advance(s1, 200 * ms)
       stamps(first ++ second) shouldBe Seq(FrameSigning.robotTimestamp(1, 0), FrameSigning.robotTimestamp(1, 1))
@@ -210,16 +210,22 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val s0 = RobotFirmware.boot(settings.copy(signingKey = Some(key)), 0)
       val stand = MessageContents(0,
         rpcRequest = Some(RpcCall("motion", "posture", Vector(RpcValue.Text("stand")), Some(4L)).toProto))
-      def signed(ts: Long, k: SigningKey = key, d: SignDirection = SignDirection.GatewayToRobot) =
-        FrameSigning.signFrame(stand, HeaderForm.Legacy, k, d, ts).value
+      def signed(ts: Long, k: RobotKey = key.robotKey(7), l: SignedLink = SignedLink.ToRobot(7, 1)) =
+        FrameSigning.signFrame(stand, HeaderForm.Legacy, k, l, ts).value
+      // Unsigned; another team's key; the robot's own direction; an earlier boot epoch; robot 5's key and id.
       val attempts = Vector(
-        MessageContents.encodeFrame(stand).value, signed(50L, other), signed(50L, d = SignDirection.RobotToGateway))
+        MessageContents.encodeFrame(stand).value,
+        signed(50L, other.robotKey(7)),
+        signed(50L, l = SignedLink.FromRobot(7)),
+        signed(50L, l = SignedLink.ToRobot(7, 0)),
+        signed(50L, key.robotKey(5), SignedLink.ToRobot(5, 1))
+      )
       val refused = attempts.foldLeft(s0) { (s, bytes) =>
         val (next, out) = RobotFirmware.receive(s, bytes, gateway, ms)
         out.flatMap(o => MessageContents.decodeFrame(o.bytes).toOption).flatMap(_._2.rpcResponse) shouldBe empty
         next
       }
-      refused.stats.refusedSignatures shouldBe Map("unsigned" -> 1L, "bad signature" -> 2L)
+      refused.stats.refusedSignatures shouldBe Map("unsigned" -> 1L, "bad signature" -> 4L)
       refused.change shouldBe None
       val (moving, _) = RobotFirmware.receive(refused, signed(100L), gateway, 2 * ms)
       moving.change.map(_.target) shouldBe Some(Posture.Stand)

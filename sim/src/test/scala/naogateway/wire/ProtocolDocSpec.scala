@@ -130,36 +130,75 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     }
   }
 
+  "The robot key vector of 6.7" should {
+    "be robot 1's key derived from the documented team key, computed here with the JDK's HMAC as firmware would" in {
+      val team = Array.tabulate[Byte](32)(_.toByte)
+      SigningKey.fromBytes(team).toOption.get.robotKey(1).toHex shouldBe
+        bytes("robot-key-1").map(b => f"${b & 0xff}%02x").mkString
+      def hmac(key: Array[Byte], data: Array[Byte]*): Array[Byte] = {
+        val mac = javax.crypto.Mac.getInstance("HmacSHA256")
+        mac.init(new javax.crypto.spec.SecretKeySpec(key, "HmacSHA256"))
+        data.foreach(d => mac.update(d))
+        mac.doFinal()
+      }
+      // RFC 5869 by hand: extract with the salt, then one expand block (L = 32).
+      val prk = hmac("naogateway robot key".getBytes(US_ASCII), team)
+      val info = "FUSIG2".getBytes(US_ASCII) ++ Array[Byte](0, 0, 0, 1)
+      hmac(prk, info, Array[Byte](1)).toVector shouldBe bytes("robot-key-1").toVector
+      prk.map(b => f"${b & 0xff}%02X").mkString(" ") shouldBe
+        "2D 19 E5 7F C5 DD 4C 97 AC C2 E1 45 F9 92 AE 62 FF 10 0D 7D 6D 51 DE B1 8B CB A9 80 23 24 A5 F6"
+    }
+  }
+
   "The signed frame example of 9.14" should {
-    val key = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
-    val timestamp = FrameSigning.robotTimestamp(bootCounter = 3, frameCounter = 5)
-    "be the Status of 9.2 signed by the robot under the documented key and timestamp" in {
+    val team = SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
+    val key = team.robotKey(1)
+    val link = SignedLink.FromRobot(1)
+    val timestamp = FrameSigning.robotTimestamp(bootEpoch = 3, frameCounter = 5)
+    "be the Status of 9.2 signed by robot 1 under its documented key and timestamp" in {
       timestamp shouldBe 0x0000000300000005L
-      FrameSigning.signFrame(workedStatus, HeaderForm.Compact, key, SignDirection.RobotToGateway, timestamp).map(
-        _.toVector) shouldBe
+      FrameSigning.signFrame(workedStatus, HeaderForm.Compact, key, link, timestamp).map(_.toVector) shouldBe
         Right(bytes("signed-status").toVector)
       val header = FumanoidsFrame.decodeHeader(bytes("signed-status")).toOption.get
-      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.RobotToGateway) shouldBe
+      FrameSigning.verifyFrame(bytes("signed-status"), header, key, link) shouldBe
         Right(SignedBody(timestamp, bytes("status-compact").length - HeaderForm.Compact.headerBytes))
       // A peer that does not sign reads 9.2 with one unknown extension.
       MessageContents.decodeFrame(bytes("signed-status")).map(_._2) shouldBe
         Right(workedStatus.copy(unknownExtensions = Vector(FrameSigning.Field)))
     }
-    "show the HMAC input, whose HMAC-SHA256 begins with the frame's mac" in {
+    "show the HMAC input, whose HMAC-SHA256 under robot 1's key begins with the frame's mac" in {
       val input = bytes("signed-status-mac-input")
       input.toVector shouldBe (FrameSigning.Domain ++ Array[Byte](SignDirection.RobotToGateway.code) ++
-        java.nio.ByteBuffer.allocate(8).putLong(timestamp).array() ++ bytes("status-compact").drop(
-          HeaderForm.Compact.headerBytes)).toVector
+        java.nio.ByteBuffer.allocate(16).putInt(1).putInt(3).putLong(timestamp).array() ++
+        bytes("status-compact").drop(HeaderForm.Compact.headerBytes)).toVector
+      FrameSigning.macPrefix(link, timestamp).toVector shouldBe input.take(23).toVector
       // Computed here without the codec, as firmware would.
       val hmac = javax.crypto.Mac.getInstance("HmacSHA256")
-      hmac.init(new javax.crypto.spec.SecretKeySpec(Array.tabulate[Byte](32)(_.toByte), "HmacSHA256"))
+      hmac.init(new javax.crypto.spec.SecretKeySpec(bytes("robot-key-1"), "HmacSHA256"))
       hmac.doFinal(input).take(FrameSigning.MacBytes).toVector shouldBe bytes("signed-status").takeRight(
         FrameSigning.MacBytes).toVector
     }
-    "be refused as a copy, and not pass as the gateway's" in {
+    "show the gateway's optionPull of 9.8 to robot 1 in epoch 3, good in that epoch only" in {
+      val toRobot = SignedLink.ToRobot(1, 3)
+      val gatewayTimestamp = 1764000000000000L
+      val frame = bytes("signed-option-pull")
+      FrameSigning.signEncoded(bytes("debug-option-pull"), key, toRobot, gatewayTimestamp).map(_.toVector) shouldBe
+        Right(frame.toVector)
+      val header = FumanoidsFrame.decodeHeader(frame).toOption.get
+      FrameSigning.verifyFrame(frame, header, key, toRobot).map(_.timestamp) shouldBe Right(gatewayTimestamp)
+      FrameSigning.verifyFrame(frame, header, key, SignedLink.ToRobot(1, 4)) shouldBe Left(SignatureError.BadMac)
+      FrameSigning.macPrefix(toRobot, gatewayTimestamp).map(b => f"${b & 0xff}%02X").mkString(" ") shouldBe
+        "46 55 53 49 47 32 02 00 00 00 01 00 00 00 03 00 06 44 59 41 62 40 00"
+    }
+    "be refused as a copy, as robot 2's, and as the gateway's; a later epoch is above it" in {
       ReplayWindow.empty.accept(timestamp).flatMap(_.accept(timestamp)) shouldBe Left(SignatureError.Replayed)
+      ReplayWindow(Some(timestamp)).accept(FrameSigning.robotTimestamp(4, 0)).isRight shouldBe true
       val header = FumanoidsFrame.decodeHeader(bytes("signed-status")).toOption.get
-      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignDirection.GatewayToRobot) shouldBe Left(
+      FrameSigning.verifyFrame(bytes("signed-status"), header, key, SignedLink.ToRobot(1, 3)) shouldBe Left(
+        SignatureError.BadMac)
+      val asRobot2 = bytes("signed-status").clone()
+      asRobot2(9) = 2
+      FrameSigning.verifyFrame(asRobot2, header, team.robotKey(2), SignedLink.FromRobot(2)) shouldBe Left(
         SignatureError.BadMac)
     }
   }
@@ -638,7 +677,9 @@ object ProtocolDocSpec {
     "serial-send-status",
     "serial-receive-udp-server",
     "signed-status",
-    "signed-status-mac-input"
+    "signed-status-mac-input",
+    "signed-option-pull",
+    "robot-key-1"
   )
   val DatagramTags: Set[String] = Set("stream-window1", "stream-window4", "stream-skip")
   val TableTags: Set[String] =

@@ -10,14 +10,57 @@ import scala.util.control.NonFatal
 
 import com.google.protobuf.{CodedInputStream, CodedOutputStream, WireFormat}
 
-/** A team's secret for signed frames (docs/protocol.md 6.7); it never appears in `toString`, so never in a log. */
+/** HKDF with HMAC-SHA256 (RFC 5869), on the JDK's own HMAC: how a robot's key comes from its team's key. */
+object Hkdf {
+
+  /** Bytes of one SHA-256 output, the most one expand step gives. */
+  val HashBytes: Int = 32
+
+  private def hmac(key: Array[Byte]): Mac = {
+    val mac = Mac.getInstance("HmacSHA256")
+    // An empty salt is HashLen zero bytes (RFC 5869 2.2); SecretKeySpec refuses an empty key.
+    mac.init(new SecretKeySpec(if (key.isEmpty) new Array[Byte](HashBytes) else key, "HmacSHA256"))
+    mac
+  }
+
+  /** HKDF-Extract: the pseudorandom key of `ikm` under `salt`. */
+  def extract(salt: Array[Byte], ikm: Array[Byte]): Array[Byte] = hmac(salt).doFinal(ikm)
+
+  /** HKDF-Expand: `length` bytes (at most 255 blocks) of output keying material from `prk` and `info`. */
+  def expand(prk: Array[Byte], info: Array[Byte], length: Int): Array[Byte] = {
+    require(length >= 0 && length <= 255 * HashBytes, s"HKDF gives at most ${255 * HashBytes} bytes")
+    val mac = hmac(prk)
+    val out = new Array[Byte](length)
+    var block = Array.emptyByteArray
+    var done = 0
+    var counter = 1
+    while (done < length) {
+      mac.update(block)
+      mac.update(info)
+      mac.update(counter.toByte)
+      block = mac.doFinal()
+      val n = math.min(block.length, length - done)
+      System.arraycopy(block, 0, out, done, n)
+      done += n
+      counter += 1
+    }
+    out
+  }
+
+  /** Extract then expand: `length` bytes of keying material. */
+  def apply(salt: Array[Byte], ikm: Array[Byte], info: Array[Byte], length: Int): Array[Byte] =
+    expand(extract(salt, ikm), info, length)
+}
+
+/** A team's key for signed frames (docs/protocol.md 6.7): the gateway's only secret, from which every robot's key is
+  * derived. It never appears in `toString`, so never in a log, and nothing prints it.
+  */
 final class SigningKey private (private val secret: Array[Byte]) {
 
-  /** A fresh HMAC-SHA256 instance keyed with this secret (instances are not thread-safe, so one per use). */
-  private[wire] def hmac(): Mac = {
-    val mac = Mac.getInstance("HmacSHA256")
-    mac.init(new SecretKeySpec(secret, "HmacSHA256"))
-    mac
+  /** Robot `robotId`'s key: HKDF-SHA256(salt "naogateway robot key", this key, "FUSIG2" | id as 4 bytes big-endian). */
+  def robotKey(robotId: Int): RobotKey = {
+    val info = java.nio.ByteBuffer.allocate(FrameSigning.Domain.length + 4).put(FrameSigning.Domain).putInt(robotId)
+    new RobotKey(robotId, Hkdf(SigningKey.RobotKeySalt, secret, info.array(), RobotKey.Bytes))
   }
 
   override def toString: String = "SigningKey(<secret>)"
@@ -28,14 +71,17 @@ final class SigningKey private (private val secret: Array[Byte]) {
   override def hashCode(): Int = 0
 }
 
-/** Reading a signing key from config or the environment. */
+/** Reading a team key from config or the environment: fails closed, never turning signing off. */
 object SigningKey {
 
   /** The shortest key accepted: 128 bits. */
   val MinBytes: Int = 16
 
-  /** The longest key accepted: one SHA-256 block (longer keys would be hashed first, which firmware need not do). */
+  /** The longest key accepted: one SHA-256 block, as the firmware's HMAC takes it without hashing it first. */
   val MaxBytes: Int = 64
+
+  /** HKDF's salt for robot keys: the 20 ASCII bytes of "naogateway robot key". */
+  val RobotKeySalt: Array[Byte] = "naogateway robot key".getBytes(StandardCharsets.US_ASCII)
 
   /** A key from raw bytes, refused when shorter than [[MinBytes]] or longer than [[MaxBytes]]. */
   def fromBytes(bytes: Array[Byte]): Either[String, SigningKey] =
@@ -43,13 +89,56 @@ object SigningKey {
     else if (bytes.length > MaxBytes) Left(s"a signing key has at most $MaxBytes bytes, this one has ${bytes.length}")
     else Right(new SigningKey(bytes.clone()))
 
-  /** A key written as hexadecimal digits (32 to 128 of them); the error never repeats the digits. */
-  def fromHex(hex: String): Either[String, SigningKey] = {
+  /** A key written as hexadecimal digits (32 to 128 of them); the error names the length only, never the digits. */
+  def fromHex(hex: String): Either[String, SigningKey] = Hex.decode(hex).flatMap(fromBytes)
+}
+
+/** Hexadecimal key text, shared by team and robot keys. */
+private[wire] object Hex {
+
+  /** The bytes of `hex` (surrounding blanks ignored), or why not, without repeating any digit. */
+  def decode(hex: String): Either[String, Array[Byte]] = {
     val digits = hex.trim
     if (digits.length % 2 != 0 || !digits.forall(c => Character.digit(c, 16) >= 0))
       Left(s"a signing key is an even number of hexadecimal digits (got ${digits.length} characters)")
-    else fromBytes(digits.grouped(2).map(Integer.parseInt(_, 16).toByte).toArray)
+    else Right(digits.grouped(2).map(Integer.parseInt(_, 16).toByte).toArray)
   }
+}
+
+/** One robot's key (docs/protocol.md 6.7): what the robot is built or flashed with, and what the gateway derives from
+  * the team key to sign and check that robot's frames. Opens no other robot. Never in `toString`.
+  */
+final class RobotKey private[wire] (val robotId: Int, private val secret: Array[Byte]) {
+
+  /** A fresh HMAC-SHA256 instance keyed with this key (instances are not thread-safe, so one per use). */
+  private[wire] def hmac(): Mac = {
+    val mac = Mac.getInstance("HmacSHA256")
+    mac.init(new SecretKeySpec(secret, "HmacSHA256"))
+    mac
+  }
+
+  /** The key as 64 lowercase hexadecimal digits: only for `robotctl keys`, which a team runs to build a robot. */
+  def toHex: String = secret.map(b => f"${b & 0xff}%02x").mkString
+
+  override def toString: String = s"RobotKey($robotId, <secret>)"
+  override def equals(other: Any): Boolean = other match {
+    case k: RobotKey => k.robotId == robotId && MessageDigest.isEqual(secret, k.secret)
+    case _           => false
+  }
+  override def hashCode(): Int = robotId
+}
+
+/** Robot keys. */
+object RobotKey {
+
+  /** Bytes of a robot key (HKDF's L). */
+  val Bytes: Int = 32
+
+  /** Robot `robotId`'s key written as 64 hexadecimal digits (as `robotctl keys` prints it). */
+  def fromHex(robotId: Int, hex: String): Either[String, RobotKey] =
+    Hex.decode(hex).flatMap { b =>
+      if (b.length == Bytes) Right(new RobotKey(robotId, b)) else Left(s"a robot key has $Bytes bytes, not ${b.length}")
+    }
 }
 
 /** Who signed a frame: part of the MAC, so a robot's frame cannot be reflected back to it as the gateway's. */
@@ -63,6 +152,37 @@ object SignDirection {
 
   /** Frames the gateway sends (requests, option commands). */
   case object GatewayToRobot extends SignDirection(2)
+}
+
+/** The link a signature belongs to, all of which the MAC covers besides the bytes: the direction, the robot (which
+  * sends or is addressed) and its boot epoch.
+  */
+sealed trait SignedLink extends Product with Serializable {
+
+  /** Which way the frame goes. */
+  def direction: SignDirection
+
+  /** The robot that sends the frame or that it is addressed to. */
+  def robotId: Int
+
+  /** The boot epoch in the MAC of a frame with `timestamp`. */
+  def epochOf(timestamp: Long): Int
+}
+
+/** The two kinds of link. */
+object SignedLink {
+
+  /** Frames of robot `robotId`: the epoch is the timestamp's high 32 bits. */
+  final case class FromRobot(robotId: Int) extends SignedLink {
+    def direction: SignDirection = SignDirection.RobotToGateway
+    def epochOf(timestamp: Long): Int = (timestamp >>> 32).toInt
+  }
+
+  /** Frames to robot `robotId` in its boot epoch `epoch` (the high 32 bits of its last accepted timestamp). */
+  final case class ToRobot(robotId: Int, epoch: Int) extends SignedLink {
+    def direction: SignDirection = SignDirection.GatewayToRobot
+    def epochOf(timestamp: Long): Int = epoch
+  }
 }
 
 /** Why a frame's signature was not accepted: a closed set, so counts per kind stay bounded. */
@@ -109,10 +229,10 @@ object ReplayWindow {
   val empty: ReplayWindow = ReplayWindow(None)
 }
 
-/** Opt-in signed FU-Remote frames (docs/protocol.md 6.7): a `FrameSignature` extension (number 7199, always the last
-  * field of the `Message`) carrying a strictly increasing timestamp and the first 8 bytes of HMAC-SHA256(key, "FUSIG1"
-  * \| direction | timestamp as 8 big-endian bytes | the Message's bytes before the field). Peers that do not sign
-  * (FU-Remote, older firmware) skip the extension like any unknown one.
+/** Signed FU-Remote frames, "FUSIG2" (docs/protocol.md 6.7): a `FrameSignature` extension (number 7199, always the last
+  * field of the `Message`) carrying a timestamp and the first 8 bytes of HMAC-SHA256(robot key, "FUSIG2" | direction
+  * (1) | robot id (4) | boot epoch (4) | timestamp (8), all big-endian | the Message's bytes before the field). Peers
+  * that do not sign (FU-Remote) skip the extension like any unknown one.
   */
 object FrameSigning {
 
@@ -122,27 +242,29 @@ object FrameSigning {
   /** Bytes of the truncated MAC (64 bits, as much as MAVLink 2's 48 and then some). */
   val MacBytes: Int = 8
 
-  /** The domain separator at the start of every MAC input, so no other HMAC use of the key can be replayed here. */
-  val Domain: Array[Byte] = "FUSIG1".getBytes(StandardCharsets.US_ASCII)
+  /** The domain separator at the start of every MAC input and of every robot key's HKDF info. */
+  val Domain: Array[Byte] = "FUSIG2".getBytes(StandardCharsets.US_ASCII)
 
   /** The encoded length of the signature field: tag (3) + length (1) + fixed64 (1 + 8) + mac (1 + 1 + 8). */
   val FieldBytes: Int = 23
 
+  /** The bytes the MAC covers before the signed bytes: domain, direction, robot id, epoch, timestamp. */
+  def macPrefix(link: SignedLink, timestamp: Long): Array[Byte] =
+    java.nio.ByteBuffer.allocate(Domain.length + 1 + 4 + 4 + 8).put(Domain).put(link.direction.code)
+      .putInt(link.robotId).putInt(link.epochOf(timestamp)).putLong(timestamp).array()
+
   /** The truncated MAC of `length` body bytes from `offset`. */
-  def mac(key: SigningKey, direction: SignDirection, timestamp: Long, body: Array[Byte], offset: Int, length: Int)
-      : Array[Byte] = {
+  def mac(
+      key: RobotKey, link: SignedLink, timestamp: Long, body: Array[Byte], offset: Int, length: Int): Array[Byte] = {
     val hmac = key.hmac()
-    hmac.update(Domain)
-    hmac.update(direction.code)
-    var i = 7
-    while (i >= 0) { hmac.update((timestamp >>> (8 * i)).toByte); i -= 1 }
+    hmac.update(macPrefix(link, timestamp))
     hmac.update(body, offset, length)
     java.util.Arrays.copyOf(hmac.doFinal(), MacBytes)
   }
 
   /** `body` (the protobuf bytes of a `Message`) with the signature field appended. */
-  def sign(body: Array[Byte], key: SigningKey, direction: SignDirection, timestamp: Long): Array[Byte] = {
-    val tag = mac(key, direction, timestamp, body, 0, body.length)
+  def sign(body: Array[Byte], key: RobotKey, link: SignedLink, timestamp: Long): Array[Byte] = {
+    val tag = mac(key, link, timestamp, body, 0, body.length)
     val out = new Array[Byte](body.length + FieldBytes)
     System.arraycopy(body, 0, out, 0, body.length)
     val coded = CodedOutputStream.newInstance(out, body.length, FieldBytes)
@@ -156,46 +278,42 @@ object FrameSigning {
 
   /** `contents` as a signed frame in header form `form` (signed frames are never gzip-flagged: the MAC is the check).
     */
-  def signFrame(
-      contents: MessageContents,
-      form: HeaderForm,
-      key: SigningKey,
-      direction: SignDirection,
-      timestamp: Long
-  ): Either[FrameError.Oversize, Array[Byte]] =
-    FumanoidsFrame.encodeProtobuf(sign(contents.toProtobuf, key, direction, timestamp), form, gzip = false)
+  def signFrame(contents: MessageContents, form: HeaderForm, key: RobotKey, link: SignedLink, timestamp: Long)
+      : Either[FrameError.Oversize, Array[Byte]] =
+    FumanoidsFrame.encodeProtobuf(sign(contents.toProtobuf, key, link, timestamp), form, gzip = false)
 
   /** An encoded, unsigned frame (either header form, never gzip-flagged) signed as it stands: the same header form, the
     * length grown by [[FieldBytes]], the signature field appended. For senders that encode first and sign at the moment
     * of sending, so timestamps follow the order frames leave in.
     */
   def signEncoded(
-      frame: Array[Byte], key: SigningKey, direction: SignDirection, timestamp: Long): Either[FrameError, Array[Byte]] =
+      frame: Array[Byte], key: RobotKey, link: SignedLink, timestamp: Long): Either[FrameError, Array[Byte]] =
     FumanoidsFrame.decodeHeader(frame).flatMap { header =>
       if (header.gzip) Left(FrameError.UnsupportedFlags(FumanoidsFrame.GzipFlag))
       else {
         val body = java.util.Arrays.copyOfRange(frame, header.form.headerBytes, frame.length)
-        FumanoidsFrame.encodeProtobuf(sign(body, key, direction, timestamp), header.form, gzip = false)
+        FumanoidsFrame.encodeProtobuf(sign(body, key, link, timestamp), header.form, gzip = false)
       }
     }
 
   /** Checks the signature of a whole received frame whose header decoded as `header` (a gzip-flagged payload is checked
     * after inflating; a frame that does not decode at all is `Malformed`). The replay rule is the caller's.
     */
-  def verifyFrame(frame: Array[Byte], header: FrameHeader, key: SigningKey, direction: SignDirection)
-      : Either[SignatureError, SignedBody] =
-    if (!header.gzip) verify(frame, header.form.headerBytes, header.payloadLength, key, direction)
+  def verifyFrame(
+      frame: Array[Byte], header: FrameHeader, key: RobotKey, link: SignedLink): Either[SignatureError, SignedBody] =
+    if (!header.gzip) verify(frame, header.form.headerBytes, header.payloadLength, key, link)
     else
       FumanoidsFrame.decodeRaw(frame) match {
-        case Right(raw) => verify(raw.protobuf, 0, raw.protobuf.length, key, direction)
+        case Right(raw) => verify(raw.protobuf, 0, raw.protobuf.length, key, link)
         case Left(_)    => Left(SignatureError.Malformed)
       }
 
   /** Checks the signature of the `length` protobuf bytes at `offset` (a `Message`, after any gzip is undone): the last
-    * field must be the signature, and its MAC must match the bytes before it. The replay rule is the caller's
-    * ([[ReplayWindow]]), because only the caller knows the sender.
+    * field must be the signature, and its MAC must match the bytes before it under `key` and `link` (a frame of another
+    * robot, direction or epoch is `BadMac`). The replay rule is the caller's ([[ReplayWindow]]), because only the
+    * caller knows the sender.
     */
-  def verify(body: Array[Byte], offset: Int, length: Int, key: SigningKey, direction: SignDirection)
+  def verify(body: Array[Byte], offset: Int, length: Int, key: RobotKey, link: SignedLink)
       : Either[SignatureError, SignedBody] =
     try {
       val in = CodedInputStream.newInstance(body, offset, length)
@@ -226,7 +344,7 @@ object FrameSigning {
         signature match {
           case None => Left(SignatureError.Missing)
           case Some((timestamp, tag)) =>
-            val expected = mac(key, direction, timestamp, body, offset, signatureAt)
+            val expected = mac(key, link, timestamp, body, offset, signatureAt)
             if (MessageDigest.isEqual(expected, tag)) Right(SignedBody(timestamp, signatureAt))
             else Left(SignatureError.BadMac)
         }
@@ -253,7 +371,10 @@ object FrameSigning {
   /** The gateway's next timestamp: microseconds since the Unix epoch, but always above the last one it used. */
   def nextGatewayTimestamp(last: Long, nowMicros: Long): Long = math.max(last + 1, nowMicros)
 
-  /** A robot's timestamp: its persisted boot counter in the high 32 bits, its frame counter of this boot in the low. */
-  def robotTimestamp(bootCounter: Long, frameCounter: Long): Long =
-    ((bootCounter & 0xffffffffL) << 32) | (frameCounter & 0xffffffffL)
+  /** A robot's timestamp: its boot epoch in the high 32 bits, its frame counter of this boot in the low. */
+  def robotTimestamp(bootEpoch: Long, frameCounter: Long): Long =
+    ((bootEpoch & 0xffffffffL) << 32) | (frameCounter & 0xffffffffL)
+
+  /** The boot epoch a robot's timestamp carries (its high 32 bits). */
+  def epochOf(robotTimestamp: Long): Int = (robotTimestamp >>> 32).toInt
 }

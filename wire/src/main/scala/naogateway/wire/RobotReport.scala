@@ -15,7 +15,8 @@ final case class RobotReport(
     batteryVoltage: Option[Double] = None,
     uptimeMillis: Option[Long] = None,
     bootId: Option[Int] = None,
-    position: Option[(Int, Int, Double)] = None
+    position: Option[(Int, Int, Double)] = None,
+    development: Boolean = false
 ) {
 
   /** The `Status` part: team, position (mm, mm, rad), agent, role, uptime and the posture as `currentState`. */
@@ -29,12 +30,13 @@ final case class RobotReport(
     currentState = posture.map(_.name)
   )
 
-  /** The `RobotHealth` part: battery, posture, uptime (32 bits on the wire) and `bootId`. */
+  /** The `RobotHealth` part: battery, posture, uptime (32 bits on the wire), `bootId`, and `development` when set. */
   def health: RobotHealth = RobotHealth(
     batteryVoltage = batteryVoltage.map(_.toFloat),
     posture = posture.map(_.name),
     uptimeMs = uptimeMillis.map(ms => (ms & 0xffffffffL).toInt),
-    bootId = bootId
+    bootId = bootId,
+    development = if (development) Some(true) else None
   )
 
   /** The keep-alive of robot `robotId`: a `Message` with `status` and `robotHealth`. */
@@ -56,6 +58,7 @@ object RobotReport {
     batteryVoltage = health.flatMap(_.batteryVoltage).map(_.toDouble),
     uptimeMillis = health.flatMap(_.uptimeMs).map(_ & 0xffffffffL).orElse(status.timestamp),
     bootId = health.flatMap(_.bootId),
-    position = status.robotPosition.map(p => (p.getX, p.getY, p.getRotation.toDouble))
+    position = status.robotPosition.map(p => (p.getX, p.getY, p.getRotation.toDouble)),
+    development = health.exists(_.development.contains(true))
   )
 }

@@ -29,10 +29,13 @@ object ForgedFrames {
   def unsigned(contents: MessageContents, form: HeaderForm = HeaderForm.Legacy): Array[Byte] =
     MessageContents.encodeFrame(contents, form).fold(e => throw new IllegalArgumentException(e.describe), identity)
 
-  /** `contents` signed with `key` (not the team's) under `timestamp`, which may be far above anything real. */
+  /** `contents` signed as its robot's frame with that robot's key from team key `key` (not the team's) under
+    * `timestamp`, which may be far above anything real.
+    */
   def signedWith(
       key: SigningKey, contents: MessageContents, timestamp: Long, form: HeaderForm = HeaderForm.Legacy): Array[Byte] =
-    FrameSigning.signFrame(contents, form, key, SignDirection.RobotToGateway, timestamp)
+    FrameSigning.signFrame(contents, form, key.robotKey(contents.robotId), SignedLink.FromRobot(contents.robotId),
+      timestamp)
       .fold(e => throw new IllegalArgumentException(e.describe), identity)
 
   /** A recorded frame with one bit of its protobuf bytes flipped (the header stays valid). */
