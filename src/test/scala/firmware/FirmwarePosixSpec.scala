@@ -28,7 +28,8 @@ import naogateway.{RobotSnapshot, StreamActor, VisionFrame}
 import robotmiddleware.RobotInterface
 
 /** The gateway's configuration for the C robots: stream window 4 (the robots are built with WINDOW=4), one robot that
-  * must sign.
+  * must sign (the team key makes `required` every robot's default) and three development builds named with `signing =
+  * off` (protocol.md 6.7: an unsigned robot is accepted only where the config says so by name).
   */
 object FirmwarePosixSpec {
   val KeyHex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f"
@@ -37,13 +38,24 @@ object FirmwarePosixSpec {
   /** The signing robot's address, fixed before the gateway starts: the configuration names it. */
   lazy val signedAddress: String = TestLoopback.address().getHostAddress
 
+  /** The development builds' ids and addresses, fixed before the gateway starts for the same reason. */
+  val PlainId = 61
+  val StreamId = 62
+  val LinkId = 64
+  lazy val developmentAddresses: Map[Int, String] =
+    Seq(PlainId, StreamId, LinkId).map(id => id -> TestLoopback.address().getHostAddress).toMap
+
+  private def developmentEntries: String =
+    developmentAddresses.map { case (id, a) => "{ id = " + id + ", address = \"" + a + "\", signing = off }" }.mkString(
+      ", ")
+
   def config: String =
     s"""naogateway {
        |  link { bind-address = "127.0.0.1", robot-port = 0 }
        |  game-controller.enabled = off
        |  stream.window = 4
        |  signing.key = "$KeyHex"
-       |  robots = [ { id = $SignedId, address = "$signedAddress", signing = required } ]
+       |  robots = [ { id = $SignedId, address = "$signedAddress", signing = required }, $developmentEntries ]
        |}
        |""".stripMargin
 }
@@ -119,7 +131,7 @@ class FirmwarePosixSpec
     rig.streamOf(id).getOrElse(fail(s"the gateway does not know robot $id"))
 
   private lazy val plain: CRobot = {
-    val r = new CRobot(61, TestLoopback.address().getHostAddress)
+    val r = new CRobot(PlainId, developmentAddresses(PlainId))
     r.awaitOnline()
     r
   }
@@ -239,13 +251,6 @@ class FirmwarePosixSpec
     }
 
     "sign every frame and act only on the gateway's signed ones when the robot requires signing" in {
-      // The robot signs FUSIG2 (per-robot keys, boot epoch); the gateway on this branch may still speak FUSIG1.
-      // Until the gateway's half of the agreement is merged, this scenario cannot pass and is cancelled, not passed.
-      val protocol = new String(Files.readAllBytes(new File(FirmwareBuild.dir, "../docs/protocol.md").toPath),
-        StandardCharsets.UTF_8)
-      if (!protocol.contains("FUSIG2"))
-        cancel("the gateway in this checkout signs FUSIG1 (docs/protocol.md 6.7); the robot signs FUSIG2: runs once " +
-          "the gateway's FUSIG2 branch is merged")
       // With another key its frames are refused by the gateway (bad signature): it never comes online.
       val stranger = new CRobot(SignedId, signedAddress, Seq(s"key=${"5a" * 32}"))
       Thread.sleep(1500)
@@ -266,7 +271,7 @@ class FirmwarePosixSpec
     "tell the program when the module reports the network lost, which then stops and sits" in {
       val linkFile = Files.createTempFile("firmware-link", ".lost").toFile
       linkFile.delete()
-      val r = new CRobot(64, TestLoopback.address().getHostAddress, env = Map("FR_POSIX_LINK" -> linkFile.getPath))
+      val r = new CRobot(LinkId, developmentAddresses(LinkId), env = Map("FR_POSIX_LINK" -> linkFile.getPath))
       r.awaitOnline()
       result(client.posture(r.id, Posture.Stand)) shouldBe Right(Posture.Stand)
       // The module reports the network lost for half a second (the posix port: the file exists), then back.
@@ -280,7 +285,7 @@ class FirmwarePosixSpec
     }
 
     "carry the stream both ways at 10 % loss with selective repeat: complete, in order, calls answered through it" in {
-      val r = new CRobot(62, TestLoopback.address().getHostAddress,
+      val r = new CRobot(StreamId, developmentAddresses(StreamId),
         env = Map("FR_POSIX_LOSS" -> "10", "FR_POSIX_SEED" -> "62"))
       r.awaitOnline()
       val (stream, received) = streamOf(r.id)
