@@ -1,6 +1,12 @@
 package hostile
 
+import java.io.IOException
+import java.net.SocketTimeoutException
+import java.nio.charset.StandardCharsets
 import java.nio.file.{Files, Path}
+import java.security.KeyStore
+import java.security.cert.X509Certificate
+import javax.net.ssl.{KeyManagerFactory, SSLContext, SSLSocket, TrustManager, X509TrustManager}
 
 import scala.concurrent.duration._
 
@@ -25,7 +31,7 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotMiddleware}
   * team's files (made by keytool as docs/cluster.md shows), on loopback. An app with the team's files joins and talks
   * to the middleware; a node with a key of its own (under the team's name, trusting the team's captured certificate)
   * and a node speaking plain TCP never become members, never find the middleware, never deliver a message, and the
-  * gateway stays Up.
+  * gateway stays Up; a hand-made TLS client gets no session without the team's certificate.
   */
 class HostileClusterSpec
     extends AnyWordSpec
@@ -82,6 +88,44 @@ class HostileClusterSpec
     from.system.classicSystem.actorSelection(inbox.ref.path.toStringWithAddress(gatewayCluster.selfMember.address)) !
       text
 
+  /** What the gateway's cluster port does with a TLS connection that presents `keys`' certificate (none without), the
+    * way a hand-made client would try it: it trusts whatever the gateway presents, completes its side of the
+    * handshake and sends Artery's magic bytes. "refused" when the session ends in an alert or a close; "open" when it
+    * still stands after `open` (the server waits for the rest of Artery's header).
+    */
+  private def rawTls(keys: Option[TeamKeys.Stores], open: FiniteDuration = 2.seconds): String = {
+    val keyManagers = keys.map { s =>
+      val store = KeyStore.getInstance(KeyStore.getDefaultType)
+      val in = Files.newInputStream(s.keyStore)
+      try store.load(in, s.keyStorePassword.toCharArray)
+      finally in.close()
+      val factory = KeyManagerFactory.getInstance(KeyManagerFactory.getDefaultAlgorithm)
+      factory.init(store, s.keyStorePassword.toCharArray)
+      factory.getKeyManagers
+    }
+    val trustAnything: TrustManager = new X509TrustManager {
+      def checkClientTrusted(chain: Array[X509Certificate], authType: String): Unit = ()
+      def checkServerTrusted(chain: Array[X509Certificate], authType: String): Unit = ()
+      def getAcceptedIssuers: Array[X509Certificate] = Array.empty
+    }
+    val context = SSLContext.getInstance("TLSv1.3")
+    context.init(keyManagers.orNull, Array(trustAnything), null)
+    val socket = context.getSocketFactory.createSocket("127.0.0.1", gatewayPort).asInstanceOf[SSLSocket]
+    try {
+      // The refusal comes as an alert after the client's side of a TLS 1.3 handshake: a long wait for it, a short
+      // one for a session that stays open.
+      socket.setSoTimeout(15000)
+      socket.startHandshake()
+      socket.getOutputStream.write("AKKA".getBytes(StandardCharsets.US_ASCII))
+      socket.getOutputStream.flush()
+      if (keys.contains(team.stores)) socket.setSoTimeout(open.toMillis.toInt)
+      if (socket.getInputStream.read() < 0) "refused" else "answered"
+    } catch {
+      case _: SocketTimeoutException => "open"
+      case _: IOException            => "refused" // SSLException is one
+    } finally socket.close()
+  }
+
   override protected def afterAll(): Unit = {
     nodes.foreach(_.shutdownTestKit())
     TeamKeys.delete(dir)
@@ -123,6 +167,15 @@ class HostileClusterSpec
       }
       gatewayCluster.selfMember.status shouldBe MemberStatus.Up
       gatewayCluster.state.members.count(_.status == MemberStatus.Up) shouldBe 2 // the gateway and the team's app
+    }
+
+    "end a hand-made TLS session that presents a stranger's certificate or none, and keep the team's open" in {
+      // Akka's own handshake would fail anyway on the gateway's connection back to the stranger; a hand-made client
+      // needs none, so only the gateway's demand for the team's certificate stops it.
+      rawTls(Some(stranger)) shouldBe "refused"
+      rawTls(None) shouldBe "refused"
+      rawTls(Some(team.stores)) shouldBe "open"
+      gatewayCluster.selfMember.status shouldBe MemberStatus.Up
     }
   }
 }
