@@ -89,9 +89,9 @@ class HostileClusterSpec
       text
 
   /** What the gateway's cluster port does with a TLS connection that presents `keys`' certificate (none without), the
-    * way a hand-made client would try it: it trusts whatever the gateway presents, completes its side of the
-    * handshake and sends Artery's magic bytes. "refused" when the session ends in an alert or a close; "open" when it
-    * still stands after `open` (the server waits for the rest of Artery's header).
+    * way a hand-made client would try it: it trusts whatever the gateway presents, completes its side of the handshake
+    * and sends Artery's magic bytes. "refused" when the session ends in an alert or a close; "open" when it still
+    * stands after `open` (the server waits for the rest of Artery's header).
     */
   private def rawTls(keys: Option[TeamKeys.Stores], open: FiniteDuration = 2.seconds): String = {
     val keyManagers = keys.map { s =>

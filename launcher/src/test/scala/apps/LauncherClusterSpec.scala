@@ -55,6 +55,24 @@ class LauncherClusterSpec extends AnyWordSpec with Matchers {
         appNode.getString("akka.remote.artery.ssl.config-ssl-engine.trust-store") shouldBe team.stores.trustStore
           .toString
         appNode.getBoolean("akka.remote.artery.ssl.config-ssl-engine.require-mutual-authentication") shouldBe true
+        Doctor.clusterFinding(gatewayNode).line shouldBe "ok   cluster: TLSv1.3 with mutual authentication: only " +
+          s"nodes with a certificate of ${team.stores.trustStore} can join"
+      } finally TeamKeys.delete(dir)
+    }
+  }
+
+  "robotctl doctor" should {
+    "say how the cluster runs: plain TCP on loopback, or the refusal off loopback without the team's files" in {
+      Doctor.clusterFinding(Launcher.nodeConfig(ConfigFactory.empty(), ConfigFactory.empty())).line shouldBe
+        "ok   cluster: plain TCP, every cluster address on loopback: only this machine can join"
+      val dir = Files.createTempDirectory("doctor-cluster")
+      try {
+        val file = Files.writeString(dir.resolve("robots.conf"), "robotmiddleware.cluster.hostname = \"10.1.2.3\"\n")
+        val out = Vector.newBuilder[String]
+        RobotCtl.offlineDoctor("127.0.0.1:1", Some(file.toString), out += _, _ => ()) shouldBe RobotCtl.ExitFailed
+        out.result().exists(_.startsWith(
+            "FAIL config: cluster: robotmiddleware.cluster.hostname (ROBOTS_HOSTNAME) is 10.1.2.3, off loopback")) shouldBe
+          true
       } finally TeamKeys.delete(dir)
     }
   }

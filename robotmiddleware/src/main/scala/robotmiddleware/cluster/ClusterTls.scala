@@ -121,8 +121,8 @@ object ClusterTls {
           case None => Right(Transport.PlainLoopback)
           case Some(off) =>
             Left(s"${off.setting} is ${off.host}, off loopback, where anyone who reaches the cluster port could join " +
-              s"and command the robots: set $KeyStoreSetting and $TrustStoreSetting to the team's files (docs/cluster.md " +
-              "makes them with keytool)")
+              s"and command the robots: set $KeyStoreSetting and $TrustStoreSetting to the team's files " +
+              "(docs/cluster.md makes them with keytool)")
         }
       case (false, true) => Left(s"$TrustStoreSetting is not set, but the key store is: TLS needs both")
       case (true, false) => Left(s"$KeyStoreSetting is not set, but the trust store is: TLS needs both")
@@ -224,12 +224,13 @@ object ClusterTls {
       case Left(line)       => throw new IllegalArgumentException(s"cluster: $line")
     }
 
-  /** One line for the operator: how the node of `c` talks to the others (for the doctor and the start banner). */
-  def describe(c: Config): String =
-    decide(c, storeProblem) match {
-      case Right(Transport.PlainLoopback) => "plain TCP, every cluster address on loopback"
-      case Right(Transport.Tls(s)) =>
-        s"${s.protocol} with mutual authentication: only nodes with a certificate of ${s.trustStore} may join"
-      case Left(line) => s"refused: $line"
+  /** How the node of `c` talks to the others, in one line for the operator (`robotctl doctor`): Right for a transport
+    * it may start with, Left for the refusal.
+    */
+  def describe(c: Config): Either[String, String] =
+    decide(c, storeProblem).map {
+      case Transport.PlainLoopback => "plain TCP, every cluster address on loopback: only this machine can join"
+      case Transport.Tls(s) =>
+        s"${s.protocol} with mutual authentication: only nodes with a certificate of ${s.trustStore} can join"
     }
 }
