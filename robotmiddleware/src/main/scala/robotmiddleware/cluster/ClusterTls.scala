@@ -193,11 +193,11 @@ object ClusterTls {
 
   /** The Akka settings of `transport`, to lay over the node's config: for TLS, Artery's `tls-tcp` with the team's
     * stores, mutual authentication and no hostname verification (one team certificate serves every node, and the trust
-    * store, not an address, says who belongs to the team); for plain loopback, Artery's `tcp`.
+    * store, not an address, says who belongs to the team); for plain loopback nothing, so the cluster file's `tcp`
+    * stays (and a transport an app set itself on loopback is not turned down to it).
     */
   def akkaConfig(transport: Transport): Config = transport match {
-    case Transport.PlainLoopback =>
-      ConfigFactory.parseString("akka.remote.artery.transport = tcp")
+    case Transport.PlainLoopback => ConfigFactory.empty()
     case Transport.Tls(s) =>
       val engine = "akka.remote.artery.ssl.config-ssl-engine"
       Map[String, AnyRef](
