@@ -1,6 +1,5 @@
 package robotmiddleware.cluster
 
-import java.net.InetAddress
 import java.nio.file.{Files, Path, Paths}
 import java.security.KeyStore
 import java.security.cert.X509Certificate
@@ -86,6 +85,7 @@ object ClusterTls {
   }
 
   private val Ipv4 = """(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3})""".r
+  private val Ipv6Loopback = """[0:]*:0*1""".r
 
   /** Whether `host` is certainly a loopback address: `localhost`, 127.0.0.0/8 or ::1, written as such. Any other name
     * counts as off loopback, since what it resolves to can change (and resolving it is no pure decision).
@@ -94,9 +94,9 @@ object ClusterTls {
     val h = host.trim.stripPrefix("[").stripSuffix("]")
     h.equalsIgnoreCase("localhost") || (h match {
       case Ipv4(a, b, c, d) => Seq(a, b, c, d).forall(_.toInt <= 255) && a.toInt == 127
-      // An IPv6 literal is parsed, never looked up.
-      case v6 if v6.contains(':') => Try(InetAddress.getByName(v6).isLoopbackAddress).getOrElse(false)
-      case _                      => false
+      // ::1 in any of its spellings (zeros and colons, then a final 1); nothing is looked up.
+      case Ipv6Loopback() => true
+      case _              => false
     })
   }
 

@@ -35,7 +35,7 @@ class ClusterTlsSpec extends AnyWordSpec with Matchers with BeforeAndAfterAll {
 
   "ClusterTls.isLoopback" should {
     "take only addresses written as loopback, never a name that could resolve elsewhere" in {
-      Seq("127.0.0.1", "127.1.2.3", "localhost", "LOCALHOST", "::1", "[::1]", "0:0:0:0:0:0:0:1")
+      Seq("127.0.0.1", "127.1.2.3", "localhost", "LOCALHOST", "::1", "[::1]", "0:0:0:0:0:0:0:1", "0000::0001")
         .filterNot(ClusterTls.isLoopback) shouldBe empty
       Seq(
         "0.0.0.0",
@@ -45,6 +45,10 @@ class ClusterTlsSpec extends AnyWordSpec with Matchers with BeforeAndAfterAll {
         "",
         "::",
         "base-station.local",
+        "::2",
+        "fe80::1",
+        "::ffff:127.0.0.1",
+        "abc:1",
         "<getHostAddress>",
         "<getHostName>",
         "localhost.example.org",
