@@ -116,7 +116,14 @@ object Teleop {
     // Logback is set up before the actor systems' threads log at once; otherwise SLF4J queues their first lines and
     // prints a warning about replaying them on every start.
     org.slf4j.LoggerFactory.getILoggerFactory
-    val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole)
+    // A node off loopback without the team's TLS files does not start (docs/cluster.md): one line, no stack trace.
+    val node =
+      try MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole)
+      catch {
+        case e: IllegalArgumentException =>
+          System.err.println(s"teleop: ${e.getMessage}")
+          sys.exit(2)
+      }
     implicit val ec: ExecutionContext = node.executionContext
     val raw = System.console() != null && Try(stty("-icanon -echo min 1")).isSuccess
     RobotClient(node, "teleop", priority = 5).onComplete {

@@ -303,6 +303,17 @@ object Doctor {
       fail("config", s"$k is not a setting and is ignored",
         "correct the typo (every key with its default is in the reference.conf files)"))
 
+  /** The cluster's transport ([[robotmiddleware.cluster.ClusterTls]]): plain TCP on loopback, or TLS with the team's
+    * certificate; a node that would be refused is a problem.
+    */
+  def clusterFinding(c: Config): Finding =
+    robotmiddleware.cluster.ClusterTls.describe(c) match {
+      case Right(how) => ok("cluster", how)
+      case Left(line) =>
+        fail("cluster", line,
+          "give the node the team's key store and trust store (docs/cluster.md), or keep it on loopback")
+    }
+
   private def host(a: InetSocketAddress): String = Option(a.getAddress).fold(a.getHostString)(_.getHostAddress)
 
   // ------------------------------------------------------------------------------------------------- gathering

@@ -219,7 +219,9 @@ object Launcher {
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
     apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware)
     val view = GatewayReadView(gateway, ViewTimeout)(context.system)
-    val doctor = () => Doctor.gather(gateway, config)(context.system).map(Doctor.findings)(context.executionContext)
+    val doctor = () =>
+      Doctor.gather(gateway, config)(context.system).map(f => Doctor.findings(f) :+ Doctor.clusterFinding(config))(
+        context.executionContext)
     val control = apps.control.ControlServer.GatewaySide(view, doctor)
     apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(control))
     // The web view (docs/web.md), when enabled: its address goes on the status view's first line.

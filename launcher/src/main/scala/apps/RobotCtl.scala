@@ -173,7 +173,7 @@ object RobotCtl {
           }
         val config = Finding("config",
           configFile.fold("the demo's defaults (no file given)")(f => s"$f reads without error"), problem = false)
-        config +: (keys ++ loopback ++ portFindings ++ disk)
+        config +: (keys ++ loopback ++ portFindings ++ disk) :+ Doctor.clusterFinding(c)
       } catch {
         case e: Exception if Preflight.problem(e).isDefined =>
           Vector(Finding("config", Preflight.problem(e).get.stripPrefix("config: "), problem = true,

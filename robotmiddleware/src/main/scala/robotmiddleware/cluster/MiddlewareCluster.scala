@@ -25,10 +25,16 @@ object MiddlewareCluster {
   /** The config of a node with `role`: `overrides` first, then the application's config (`application`,
     * `application.conf` unless given), then a program's own `defaults`, then the cluster settings of `ConfigResource`,
     * then every module's reference. The role is the node's only cluster role, and picks its port:
-    * `robotmiddleware.cluster.gateway-port` or `app-port`.
+    * `robotmiddleware.cluster.gateway-port` or `app-port`. The transport is [[ClusterTls]]'s: TLS with the team's
+    * stores, or plain TCP on loopback; a node off loopback without the stores throws `IllegalArgumentException` with
+    * one line naming the setting.
     */
   def config(role: String, overrides: Config = ConfigFactory.empty(), defaults: Config = ConfigFactory.empty(),
-      application: => Config = ConfigFactory.defaultApplication()): Config = {
+      application: => Config = ConfigFactory.defaultApplication()): Config =
+    ClusterTls.secured(layered(role, overrides, defaults, application))
+
+  /** The layers of [[config]], before [[ClusterTls]] decides the transport. */
+  private[cluster] def layered(role: String, overrides: Config, defaults: Config, application: => Config): Config = {
     require(role == GatewayRole || role == AppRole, s"unknown role '$role' ($GatewayRole, $AppRole)")
     val portKey = if (role == GatewayRole) "gateway-port" else "app-port"
     val roles = ConfigFactory.parseString(s"""akka.cluster.roles = ["$role"]""")
@@ -48,9 +54,12 @@ object MiddlewareCluster {
       defaults: Config = ConfigFactory.empty()): ActorSystem[T] =
     start(guardian, config(role, overrides, defaults))
 
-  /** Starts a node running `guardian` with a config made by [[config]]. */
+  /** Starts a node running `guardian` with a config made by [[config]]; its transport is checked again, so no config
+    * starts a node off loopback without TLS.
+    */
   def start[T](guardian: Behavior[T], c: Config): ActorSystem[T] = {
-    ActorSystem(guardian, c.getString("robotmiddleware.cluster.system-name"), c)
+    val secured = ClusterTls.secured(c)
+    ActorSystem(guardian, secured.getString("robotmiddleware.cluster.system-name"), secured)
   }
 
   /** Completes when `system` is an `Up` member of the cluster; never, if it cannot join (bound the wait). */
