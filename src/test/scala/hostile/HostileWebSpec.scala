@@ -21,8 +21,8 @@ import naogateway.VisionActor.{GridOption, RegionsOption}
 import naogateway.{GatewayAccess, RobotSnapshot}
 
 /** The web view against what a stranger can do from the operator's own browser: a page of another origin (another
-  * loopback port) cannot open `/ws` (checked in headless Chromium), no WebSocket opens with a foreign `Origin`, and with
-  * a token set a page without it switches no robot's camera on.
+  * loopback port) cannot open `/ws` (checked in headless Chromium), no WebSocket opens with a foreign `Origin`, and
+  * with a token set a page without it switches no robot's camera on.
   */
 class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing
     with Eventually {
@@ -44,7 +44,8 @@ class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
   private def handshake(uri: String, origin: Option[String], subprotocol: Option[String] = None): StatusCode = {
     val (upgrade, closer) = Http().singleWebSocketRequest(
       WebSocketRequest(uri, extraHeaders = origin.map(RawHeader("Origin", _)).toList, subprotocol = subprotocol),
-      Flow.fromSinkAndSourceMat(Sink.ignore, Source.maybe[Message])(Keep.right))
+      Flow.fromSinkAndSourceMat(Sink.ignore, Source.maybe[Message])(Keep.right)
+    )
     try Await.result(upgrade, 10.seconds).response.status
     finally { closer.trySuccess(None); () }
   }
@@ -131,7 +132,8 @@ class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
         WebSocketRequest(guarded.ws(), extraHeaders = List(RawHeader("Origin", s"http://127.0.0.1:$port"))),
         Flow.fromSinkAndSourceMat(Sink.ignore,
           Source.maybe[Message].mapMaterializedValue(p => closer.future.foreach(p.success)(system.executionContext)))(
-          Keep.left))
+          Keep.left)
+      )
       try {
         Await.result(upgrade, 10.seconds).response.status shouldBe StatusCodes.SwitchingProtocols
         eventually(timeout(15.seconds), interval(200.millis)) {

@@ -31,8 +31,8 @@ object DoorSwitch {
     case other                  => Left(s"'$other' is not on, off or auto")
   }
 
-  /** The switch at `key` of `c` (a door's block, whose own path is `path`); a value that is none of the three names
-    * the whole key in the error.
+  /** The switch at `key` of `c` (a door's block, whose own path is `path`); a value that is none of the three names the
+    * whole key in the error.
     */
   def read(c: Config, key: String, path: String): DoorSwitch =
     parse(c.getString(key)).fold(e => throw new IllegalArgumentException(s"$path.$key: $e"), identity)

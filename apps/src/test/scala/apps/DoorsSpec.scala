@@ -54,7 +54,8 @@ class DoorsSpec extends AnyWordSpec with Matchers {
 
   "The doors without a token" should {
     "tell loopback from other addresses without a name that does not resolve passing" in {
-      Seq("127.0.0.1", "127.0.0.42", "::1", "[::1]", "localhost").foreach(h => (h, Doors.loopback(h)) shouldBe ((h, true)))
+      Seq("127.0.0.1", "127.0.0.42", "::1", "[::1]", "localhost").foreach(h =>
+        (h, Doors.loopback(h)) shouldBe ((h, true)))
       Seq("0.0.0.0", "*", "", "192.168.1.5", "::", "no-such-host.invalid").foreach(h =>
         (h, Doors.loopback(h)) shouldBe ((h, false)))
     }

@@ -103,7 +103,7 @@ object RobotCtl {
         readLine(in) match {
           case None => err(s"robotctl: the gateway at $where closed the connection without an answer"); ExitFailed
           case Some(Left(problem)) => err(s"robotctl: $problem"); ExitFailed
-          case Some(Right(text)) =>
+          case Some(Right(text))   =>
             // The wire's escapes undone give back what the gateway sent, robots' strings included: their control
             // characters are shown escaped, so no escape sequence reaches the terminal.
             ControlProtocol.readAnswer(text) match {

@@ -32,8 +32,8 @@ final case class DatagramDoorSettings(
   )
   require(dispatcher.trim.nonEmpty, "datagram-door.dispatcher must name a dispatcher's config path")
 
-  /** Why the door must not serve, if it must not: it has no token and UDP senders are not authenticated, so only
-    * this machine may reach it.
+  /** Why the door must not serve, if it must not: it has no token and UDP senders are not authenticated, so only this
+    * machine may reach it.
     */
   def refusal: Option[String] =
     Option.when(!apps.Doors.loopback(bindAddress))(

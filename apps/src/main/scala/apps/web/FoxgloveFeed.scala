@@ -21,12 +21,12 @@ import naogateway.recording.{Decision, DecisionJson, RecordingSchema}
 import robotmiddleware.RobotMiddleware
 
 /** The live feed in the Foxglove WebSocket protocol (subprotocol `foxglove.sdk.v1` of the Foxglove SDK, or
-  * `foxglove.websocket.v1` of the earlier ws-protocol; docs/web.md): the recording's robot
-  * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its
-  * `/gateway/decisions` channel (JSON, as recorded) with the decisions published live (robot events and game states
-  * from the middleware, the budget once a second from the gateway's read-only view), so a viewer connected to the
-  * running gateway shows what it shows for a recording. Each keep-alive is published as the gateway read it
-  * ([[naogateway.wire.RobotReport]], the one mapping between the messages and a robot's report).
+  * `foxglove.websocket.v1` of the earlier ws-protocol; docs/web.md): the recording's robot channels
+  * `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its `/gateway/decisions`
+  * channel (JSON, as recorded) with the decisions published live (robot events and game states from the middleware, the
+  * budget once a second from the gateway's read-only view), so a viewer connected to the running gateway shows what it
+  * shows for a recording. Each keep-alive is published as the gateway read it ([[naogateway.wire.RobotReport]], the one
+  * mapping between the messages and a robot's report).
   */
 object FoxgloveFeed {
 
@@ -42,8 +42,8 @@ object FoxgloveFeed {
   /** Every name the feed answers to, the one it prefers first. */
   val Subprotocols: Vector[String] = Vector(SdkSubprotocol, Subprotocol)
 
-  /** The subprotocol to answer a client that asked for `requested`: the SDK's name when offered, else the ws-protocol's;
-    * None when it offered neither.
+  /** The subprotocol to answer a client that asked for `requested`: the SDK's name when offered, else the
+    * ws-protocol's; None when it offered neither.
     */
   def chosen(requested: Seq[String]): Option[String] = Subprotocols.find(p => requested.exists(_.trim == p))
 

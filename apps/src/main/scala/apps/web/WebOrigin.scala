@@ -8,8 +8,8 @@ import scala.util.Try
 final case class WebOrigin(scheme: String, host: String, port: Int)
 
 /** The rule every WebSocket of the web view applies to its handshake (docs/web.md, "Who may connect"): a browser's
-  * handshake must come from the page's own origin or a configured one, so a page of another site open in the
-  * operator's browser can neither read the feed nor switch a camera on.
+  * handshake must come from the page's own origin or a configured one, so a page of another site open in the operator's
+  * browser can neither read the feed nor switch a camera on.
   */
 object WebOrigin {
 
@@ -51,7 +51,7 @@ object WebOrigin {
   }
 
   /** The verdict on a handshake with `origin` (its Origin header, if any) sent to `host` (its Host header) over
-    * `scheme`, given the `allowed` origins and whether a token is set:
+    * `scheme` (the request's: `ws`, `wss`, `http` or `https`), given the `allowed` origins and whether a token is set:
     *   - no Origin: allowed (not a browser: a browser sends Origin with every WebSocket handshake), on the token alone;
     *   - without a token, the page's address must be loopback (`127.x`, `localhost`, `[::1]`): a stranger's name made
     *     to point at this machine (DNS rebinding) has an origin of its own that matches its Host;
@@ -64,10 +64,15 @@ object WebOrigin {
     case Some(text) =>
       val shown = naogateway.Printable.text(text.take(200))
       parse(text) match {
-        case None                               => Refused(s"origin '$shown' is not one")
-        case Some(o) if allowed.contains(o)     => Allowed
+        case None                           => Refused(s"origin '$shown' is not one")
+        case Some(o) if allowed.contains(o) => Allowed
         case Some(o) =>
-          val own = host.flatMap(ofHost(scheme, _))
+          // A WebSocket request's own scheme is ws or wss; the page it came from was fetched over http or https.
+          val pageScheme = scheme.toLowerCase match {
+            case "wss" | "https" => "https"
+            case _               => "http"
+          }
+          val own = host.flatMap(ofHost(pageScheme, _))
           if (!own.contains(o)) Refused(s"origin '$shown' is not this page's")
           else if (!tokenSet && !loopbackLiteral(o.host))
             Refused(s"origin '$shown' is not loopback, and without apps.web.token only loopback pages may connect")

@@ -112,9 +112,12 @@ object WebServer {
             bound(Some(binding.localAddress))
             context.log.info(describe(binding.localAddress, settings))
             if (!binding.localAddress.getAddress.isLoopbackAddress)
-              context.log.warn("Web view {} is not on loopback: every machine that reaches it and has the token can " +
-                "watch the robots{}", binding.localAddress,
-                if (available.enabled) " and steer them from the control panel" else "")
+              context.log.warn(
+                "Web view {} is not on loopback: every machine that reaches it and has the token can " +
+                  "watch the robots{}",
+                binding.localAddress,
+                if (available.enabled) " and steer them from the control panel" else ""
+              )
             stash.unstashAll(serving(binding, connections))
           case BindFailed(e) =>
             bound(None)
@@ -272,7 +275,7 @@ object WebServer {
     (optionalHeaderValueByName("Origin") & optionalHeaderValueByName("Host") & extractUri).tflatMap {
       case (origin, host, uri) =>
         if (connections.originOk(origin, host, uri.scheme)) pass
-        else complete(StatusCodes.Forbidden, "this WebSocket is only for the web view's own page (apps.web.allowed-origins)")
+        else complete(StatusCodes.Forbidden, "this WebSocket is for the web view's own page (apps.web.allowed-origins)")
     }
 
   /** The Foxglove-protocol feed (`/foxglove`, subprotocol foxglove.sdk.v1 or foxglove.websocket.v1, answered with the

@@ -40,8 +40,10 @@ final case class WebSettings(
   require(control.appName.nonEmpty, "apps.web.control.app-name must not be empty")
   require(control.deadman >= 200.millis, "apps.web.control.deadman must be at least 200 ms")
 
-  require(allowedOrigins.forall(o => WebOrigin.parse(o).isDefined),
-    s"apps.web.allowed-origins: each entry is scheme://host[:port], got ${allowedOrigins.mkString(", ")}")
+  require(
+    allowedOrigins.forall(o => WebOrigin.parse(o).isDefined),
+    s"apps.web.allowed-origins: each entry is scheme://host[:port], got ${allowedOrigins.mkString(", ")}"
+  )
 
   /** Whether the bind address is a loopback one, reachable from this machine only. */
   def loopbackOnly: Boolean = InetAddress.getByName(bindAddress).isLoopbackAddress

@@ -67,8 +67,8 @@ object ZeroMqEndpoint {
       { case Registered(r) => r })(
       serving(_, settings, ownsInterface = true))
 
-  /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` opens it ([[apps.Doors.open]]: `auto`
-    * keeps it shut while `realRobots`) and its endpoints are loopback; a refused endpoint is logged, not started.
+  /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` opens it ([[apps.Doors.open]]: `auto` keeps
+    * it shut while `realRobots`) and its endpoints are loopback; a refused endpoint is logged, not started.
     */
   def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command],
       realRobots: Boolean): Option[ActorRef[Command]] = {

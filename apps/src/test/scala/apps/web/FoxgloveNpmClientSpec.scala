@@ -13,11 +13,11 @@ import spray.json._
 
 import apps.zeromq.PythonEnv
 
-/** The client of the Foxglove WebSocket protocol we did not write: `@foxglove/ws-protocol`'s FoxgloveClient from the npm
-  * registry under Node (pinned, installed at test time under apps/target/), which subscribes to `/robot/1/status` and
-  * decodes it with the advertised schema (protobufjs); and a bare WebSocket (`ws`) offering `foxglove.sdk.v1` first,
-  * as the Foxglove SDK's viewers do, whose handshake and first message are checked against the SDK's description of
-  * them (its handshake answers with `foxglove.sdk.v1`; its ServerInfo has a name, capabilities from its list, and
+/** The client of the Foxglove WebSocket protocol we did not write: `@foxglove/ws-protocol`'s FoxgloveClient from the
+  * npm registry under Node (pinned, installed at test time under apps/target/), which subscribes to `/robot/1/status`
+  * and decodes it with the advertised schema (protobufjs); and a bare WebSocket (`ws`) offering `foxglove.sdk.v1`
+  * first, as the Foxglove SDK's viewers do, whose handshake and first message are checked against the SDK's description
+  * of them (its handshake answers with `foxglove.sdk.v1`; its ServerInfo has a name, capabilities from its list, and
   * optional supportedEncodings, metadata and sessionId). Cancelled where Node, npm or the registry are missing.
   */
 class FoxgloveNpmClientSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing {

@@ -8,7 +8,8 @@ class WebOriginSpec extends AnyWordSpec with Matchers {
 
   private val lichtblick = WebOrigin.parse("https://app.lichtblick.example").toVector
 
-  private def verdict(origin: Option[String], host: String = "127.0.0.1:8019", allowed: Vector[WebOrigin] = Vector.empty,
+  private def verdict(origin: Option[String], host: String = "127.0.0.1:8019",
+      allowed: Vector[WebOrigin] = Vector.empty,
       token: Boolean = false) = WebOrigin.check(origin, Some(host), "http", allowed, token)
 
   "An origin" should {
@@ -32,6 +33,11 @@ class WebOriginSpec extends AnyWordSpec with Matchers {
   "A WebSocket handshake" should {
     "pass from the page's own origin, on 127.0.0.1 and on localhost" in {
       verdict(Some("http://127.0.0.1:8019")) shouldBe WebOrigin.Allowed
+      // The server sees a WebSocket request's scheme as ws (wss): the page's was http (https).
+      WebOrigin.check(Some("http://127.0.0.1:8019"), Some("127.0.0.1:8019"), "ws", Vector.empty, tokenSet = false) shouldBe
+        WebOrigin.Allowed
+      WebOrigin.check(Some("http://127.0.0.1:8019"), Some("127.0.0.1:8019"), "wss", Vector.empty,
+        tokenSet = false) shouldBe a[WebOrigin.Refused]
       verdict(Some("http://localhost:8019"), host = "localhost:8019") shouldBe WebOrigin.Allowed
     }
 
