@@ -66,7 +66,7 @@ object WebOrigin {
       parse(text) match {
         case None                           => Refused(s"origin '$shown' is not one")
         case Some(o) if allowed.contains(o) => Allowed
-        case Some(o) =>
+        case Some(o)                        =>
           // A WebSocket request's own scheme is ws or wss; the page it came from was fetched over http or https.
           val pageScheme = scheme.toLowerCase match {
             case "wss" | "https" => "https"

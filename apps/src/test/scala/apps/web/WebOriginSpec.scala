@@ -34,7 +34,8 @@ class WebOriginSpec extends AnyWordSpec with Matchers {
     "pass from the page's own origin, on 127.0.0.1 and on localhost" in {
       verdict(Some("http://127.0.0.1:8019")) shouldBe WebOrigin.Allowed
       // The server sees a WebSocket request's scheme as ws (wss): the page's was http (https).
-      WebOrigin.check(Some("http://127.0.0.1:8019"), Some("127.0.0.1:8019"), "ws", Vector.empty, tokenSet = false) shouldBe
+      WebOrigin.check(Some("http://127.0.0.1:8019"), Some("127.0.0.1:8019"), "ws", Vector.empty,
+        tokenSet = false) shouldBe
         WebOrigin.Allowed
       WebOrigin.check(Some("http://127.0.0.1:8019"), Some("127.0.0.1:8019"), "wss", Vector.empty,
         tokenSet = false) shouldBe a[WebOrigin.Refused]
