@@ -16,13 +16,17 @@ import akka.util.Timeout
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 
+import apps.control.{ControlServer, ControlSettings}
 import apps.web.{Browser, WebDemo, WebSettings}
 import naogateway.VisionActor.{GridOption, RegionsOption}
-import naogateway.{GatewayAccess, RobotSnapshot}
+import naogateway.proto.{RobotHealth, Status}
+import naogateway.wire.{HeaderForm, MessageContents}
+import naogateway.{Gateway, GatewayAccess, Printable, RobotSnapshot}
 
 /** The web view against what a stranger can do from the operator's own browser: a page of another origin (another
   * loopback port) cannot open `/ws` (checked in headless Chromium), no WebSocket opens with a foreign `Origin`, and
-  * with a token set a page without it switches no robot's camera on.
+  * with a token set a page without it switches no robot's camera on. And a stranger posing as a robot, whose role
+  * carries terminal escape sequences: the page, robotctl and the status lines show it with them replaced.
   */
 class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing
     with Eventually {
@@ -140,6 +144,90 @@ class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
           (1 to 3).map(cameraOptions(guarded, _)) shouldBe Vector.fill(3)(Set(RegionsOption, GridOption))
         }
       } finally { closer.trySuccess(None); () }
+    }
+
+    "show a forged robot's role with escape sequences with its control characters replaced: page, robotctl, lines" in {
+      allOnline(guarded)
+      val role = "keeper\u001b[2J\u001b]0;owned\u0007\u009b31m"
+      val forged = MessageContents.encodeFrame(
+        MessageContents(
+          42,
+          status = Some(Status(timestamp = Some(1000L), teamID = Some(1), activeRole = Some(role))),
+          robotHealth = Some(RobotHealth(batteryVoltage = Some(12.4f), posture = Some("stand"), uptimeMs = Some(1000),
+              bootId = Some(1)))
+        ),
+        HeaderForm.Legacy
+      ).toOption.get
+      val robotPort = Await.result(guarded.gateway.ask[Gateway.Addresses](GatewayAccess.GetAddresses(_))(
+          Timeout(10.seconds), system.scheduler), 10.seconds).robots.getPort
+      // The stranger, on a loopback address of its own, keeps sending the robot's keep-alive.
+      val stranger = new java.net.DatagramSocket(new java.net.InetSocketAddress("127.0.0.250", 0))
+      val target = new java.net.InetSocketAddress("127.0.0.1", robotPort)
+      def forge(): Unit = stranger.send(new java.net.DatagramPacket(forged, forged.length, target))
+
+      // The status lines, as the launcher prints them when piped.
+      val lines = new java.util.concurrent.ConcurrentLinkedQueue[String]()
+      val printer = spawn(apps.StatusPrinter(guarded.side.view, 200.millis,
+          apps.StatusPrinter.LineOutput(l => { lines.add(l); () })))
+      // robotctl, through a control port in front of the same middleware.
+      val control = spawn(ControlServer(
+          guarded.middleware,
+          ControlSettings(system).copy(host = "127.0.0.1", port = 0),
+          Some(ControlServer.GatewaySide(guarded.side.view, () => scala.concurrent.Future.successful(Vector.empty)))
+        ))
+      // The page's WebSocket, with the token from the page's own origin.
+      val port = guarded.address.getPort
+      val pushes = new java.util.concurrent.ConcurrentLinkedQueue[String]()
+      val (upgrade, closer) = Http().singleWebSocketRequest(
+        WebSocketRequest(guarded.ws(), extraHeaders = List(RawHeader("Origin", s"http://127.0.0.1:$port"))),
+        Flow.fromSinkAndSourceMat(
+          Sink.foreach[Message] {
+            case t: akka.http.scaladsl.model.ws.TextMessage.Strict => pushes.add(t.text); ()
+            case t: akka.http.scaladsl.model.ws.TextMessage        => t.textStream.runWith(Sink.ignore); ()
+            case b: akka.http.scaladsl.model.ws.BinaryMessage      => b.dataStream.runWith(Sink.ignore); ()
+          },
+          Source.maybe[Message]
+        )(Keep.right)
+      )
+      try {
+        Await.result(upgrade, 10.seconds).response.status shouldBe StatusCodes.SwitchingProtocols
+        val shown = Printable.text(role)
+        import scala.jdk.CollectionConverters._
+        eventually(timeout(20.seconds), interval(250.millis)) {
+          forge()
+          val robot42 = pushes.asScala.toVector.flatMap { text =>
+            import spray.json._
+            text.parseJson.asJsObject.fields.get("robots").toVector.flatMap(_.asInstanceOf[JsArray].elements)
+              .map(_.asJsObject).filter(_.fields.get("id").contains(JsNumber(42)))
+          }
+          robot42 should not be empty
+          robot42.last.fields("role") shouldBe spray.json.JsString(shown)
+        }
+        pushes.asScala.exists(_.exists(Printable.control)) shouldBe false
+
+        eventually(timeout(20.seconds), interval(250.millis)) {
+          forge()
+          lines.asScala.exists(l => l.startsWith("robot 42") && l.contains(shown)) shouldBe true
+        }
+        lines.asScala.exists(_.exists(Printable.control)) shouldBe false
+
+        val probe = createTestProbe[java.net.InetSocketAddress]()
+        control ! ControlServer.GetAddress(probe.ref)
+        val controlPort = probe.receiveMessage(10.seconds).getPort
+        forge()
+        val out = Vector.newBuilder[String]
+        val err = Vector.newBuilder[String]
+        apps.RobotCtl.run(Seq("--control", s"127.0.0.1:$controlPort", "status"), _ => None, out += _,
+          err += _) shouldBe apps.RobotCtl.ExitOk
+        val printed = out.result()
+        printed.exists(l => l.startsWith("42") && l.contains(shown)) shouldBe true
+        (printed ++ err.result()).exists(_.exists(Printable.control)) shouldBe false
+      } finally {
+        closer.trySuccess(None)
+        stranger.close()
+        testKit.stop(printer)
+        testKit.stop(control)
+      }
     }
   }
 }
