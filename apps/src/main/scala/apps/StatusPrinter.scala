@@ -9,7 +9,7 @@ import akka.actor.typed.{Behavior, PostStop, SupervisorStrategy}
 import com.typesafe.config.Config
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{GameSource, GatewayStats, GatewayView, RobotLinks, RobotSnapshot, TrafficStats}
+import naogateway.{GameSource, GatewayStats, GatewayView, Printable, RobotLinks, RobotSnapshot, TrafficStats}
 
 /** Prints the launcher's status: a redrawn screen on a terminal, one line per change otherwise. */
 object StatusPrinter {
@@ -122,12 +122,13 @@ object StatusPrinter {
 
         var notesShown = Vector.empty[String]
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
-          case screen: ScreenOutput => screen.draw(notes() ++ StatusView.render(model))
+          // Robots' and peers' strings are in these lines: no control character reaches the terminal.
+          case screen: ScreenOutput => screen.draw((notes() ++ StatusView.render(model)).map(Printable.text))
           case LineOutput(write) =>
             val now = notes()
-            now.filterNot(notesShown.contains).foreach(write)
+            now.filterNot(notesShown.contains).foreach(l => write(Printable.text(l)))
             notesShown = now
-            StatusView.changes(shown, model).foreach(write)
+            StatusView.changes(shown, model).foreach(l => write(Printable.text(l)))
         }
 
         def running(model: StatusModel, shown: StatusModel): Behavior[Command] =

@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{GameSource, GatewayStats, LinkStats, RobotSnapshot, SigningState, TrafficStats}
+import naogateway.{GameSource, GatewayStats, LinkStats, Printable, RobotSnapshot, SigningState, TrafficStats}
 import naogateway.wire.gamecontroller.{
   ControlData2014,
   GameControlData,
@@ -46,7 +46,7 @@ object StatusView {
     val row = RobotRow.of(r, link)
     f"robot ${row.robotId}%-3d ${row.linkState}%-7s ${opt(row.quality)(_.name)}%-8s " +
       f"battery ${opt(row.battery)(v => f"$v%.2f V")}%-8s posture ${opt(row.posture)(_.name)}%-8s " +
-      f"role ${opt(row.report.role)(identity)}%-9s rtt ${opt(row.rttMillis)(v => f"$v%.1f ms")}%-9s " +
+      f"role ${opt(row.report.role)(Printable.text)}%-9s rtt ${opt(row.rttMillis)(v => f"$v%.1f ms")}%-9s " +
       f"loss ${opt(row.loss)(v => f"${v * 100}%.0f %%")}%-5s " + row.address.getOrElse("-") +
       (if (row.report.development) " development build" else "")
   }

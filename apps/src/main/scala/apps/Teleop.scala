@@ -76,7 +76,9 @@ object Teleop {
     def report(what: String, f: Future[_]): Unit =
       f.onComplete {
         case scala.util.Success(_) => out.println(s"robot $robotId: $what")
-        case scala.util.Failure(e) => out.println(s"robot $robotId: $what failed: ${e.getMessage}")
+        // The failure may carry the robot's own error text: shown with its control characters replaced.
+        case scala.util.Failure(e) =>
+          out.println(s"robot $robotId: $what failed: ${naogateway.Printable.text(e.getMessage)}")
       }
 
     report("leases taken", robot.acquire(robotId, ActuatorGroup.Walk, ActuatorGroup.Head))

@@ -160,6 +160,7 @@ object Launcher {
       }
     Preflight.unknownKeys(c, Preflight.knownKeys).foreach(k =>
       err(s"naogateway: warning: config key $k is not a setting (a typo?); it is ignored"))
+    Preflight.doorWarnings(c).foreach(l => err(s"naogateway: warning: $l"))
     val simulated = c.getInt("apps.launcher.simulated-robots")
     Preflight.missingLoopback(simulated, loopback).foreach { line =>
       err(s"naogateway: $line")
@@ -216,8 +217,10 @@ object Launcher {
       RobotMiddleware.dispatcher(MiddlewareSettings(context.system)))
     context.watchWith(gateway, PartStopped("gateway"))
     context.watchWith(middleware, PartStopped("middleware"))
-    apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware)
-    apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware)
+    // The doors open by name, or (auto) only beside simulated robots.
+    val realRobots = Doors.realRobots(config)
+    apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware, realRobots)
+    apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware, realRobots)
     val view = GatewayReadView(gateway, ViewTimeout)(context.system)
     val doctor = () =>
       Doctor.gather(gateway, config)(context.system).map(f => Doctor.findings(f) :+ Doctor.clusterFinding(config))(
@@ -229,7 +232,7 @@ object Launcher {
     val gatewaySettings = GatewaySettings(context.system)
     val web =
       apps.web.WebServer.GatewaySide(view, gatewaySettings.competition, id => gatewaySettings.signingOf(id).name)
-    apps.web.WebServer.spawnIfEnabled(context, web, middleware,
+    apps.web.WebServer.spawnIfEnabled(context, web, middleware, realRobots,
       bound =>
         webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
     context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get), "status")

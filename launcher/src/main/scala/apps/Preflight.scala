@@ -68,7 +68,7 @@ object Preflight {
         }
       else Vector.empty
     val zeromq =
-      if (c.getBoolean("apps.zeromq.enabled"))
+      if (doorOpen(c, apps.zeromq.ZeroMqSettings.ConfigPath))
         Vector("bind" -> "the ZeroMQ request socket", "publish" -> "the ZeroMQ publish socket").flatMap {
           case (key, purpose) =>
             zeroMqTcp(c.getString(s"apps.zeromq.$key")).map { case (h, p) =>
@@ -77,7 +77,7 @@ object Preflight {
         }
       else Vector.empty
     val datagramDoor =
-      if (c.getBoolean("apps.datagram-door.enabled"))
+      if (doorOpen(c, apps.datagram.DatagramDoorSettings.ConfigPath))
         Vector(PortUse(
             Transport.Udp(reuse = false),
             c.getString("apps.datagram-door.bind-address"),
@@ -85,6 +85,11 @@ object Preflight {
             "the datagram door",
             "apps.datagram-door.port (NAOGATEWAY_DATAGRAM_DOOR_PORT)"
           ))
+      else Vector.empty
+    val web =
+      if (doorOpen(c, apps.web.WebSettings.ConfigPath))
+        Vector(PortUse(Transport.Tcp, c.getString("apps.web.bind-address"), c.getInt("apps.web.port"),
+            "the web view", "apps.web.port (NAOGATEWAY_WEB_PORT)", essential = false))
       else Vector.empty
     val robots = Vector(PortUse(
         Transport.Udp(reuse = false),
@@ -105,7 +110,7 @@ object Preflight {
             essential = false
           ))
       else Vector.empty
-    (cluster ++ control ++ zeromq ++ datagramDoor ++ robots ++ gameController).filter(_.port > 0)
+    (cluster ++ control ++ zeromq ++ datagramDoor ++ web ++ robots ++ gameController).filter(_.port > 0)
   }
 
   private def bindHost(c: Config): String = {
@@ -177,6 +182,37 @@ object Preflight {
     Launcher.settings(c.getConfig("apps.launcher"))
     StatusPrinter.settings(c.getConfig("apps.launcher"))
     val _: RecordingSettings = gateway.recording
+    doorRefusals(c).headOption.foreach(r => throw new IllegalArgumentException(r))
+  }
+
+  /** What an operator should know about the doors `c` opens: the web view off loopback (it passes on its token). */
+  def doorWarnings(c: Config): Vector[String] = {
+    val path = apps.web.WebSettings.ConfigPath
+    Option.when(doorOpen(c, path)) {
+      val web = apps.web.WebSettings.fromConfig(c.getConfig(path))
+      Option.when(web.refusal.isEmpty && !Doors.loopback(web.bindAddress))(
+        s"the web view listens on ${web.bindAddress}, not loopback: every machine that reaches it and has the token " +
+          "(apps.web.token) can watch the robots")
+    }.flatten.toVector
+  }
+
+  /** Whether the door configured at `path` (its `enabled` switch) is served by the gateway node of `c`. */
+  def doorOpen(c: Config, path: String): Boolean =
+    Doors.open(DoorSwitch.read(c.getConfig(path), "enabled", path), Doors.realRobots(c))
+
+  /** Why each door that `c` opens must not serve: the datagram door and the ZeroMQ endpoint off loopback (they have no
+    * token), the web view off loopback without its token.
+    */
+  def doorRefusals(c: Config): Vector[String] = {
+    val zeromq = apps.zeromq.ZeroMqSettings.ConfigPath
+    val door = apps.datagram.DatagramDoorSettings.ConfigPath
+    val web = apps.web.WebSettings.ConfigPath
+    Vector(
+      Option.when(doorOpen(c, zeromq))(
+        apps.zeromq.ZeroMqSettings.fromConfig(c.getConfig(zeromq), s"$zeromq.dispatcher").refusal).flatten,
+      Option.when(doorOpen(c, door))(apps.datagram.DatagramDoorSettings.fromConfig(c.getConfig(door)).refusal).flatten,
+      Option.when(doorOpen(c, web))(apps.web.WebSettings.fromConfig(c.getConfig(web)).refusal).flatten
+    ).flatten
   }
 
   // Keys whose code reads another form than the reference's (a comma-separated string from the environment for a list).

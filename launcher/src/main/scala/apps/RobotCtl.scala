@@ -8,6 +8,7 @@ import scala.util.control.NonFatal
 
 import apps.control.ControlProtocol
 import apps.control.ControlProtocol.Answer
+import naogateway.Printable
 import naogateway.wire.RpcValue
 
 /** `bin/robotctl` (or `./sbt "robotctl status"`): a command-line client of a running gateway's control port
@@ -114,11 +115,13 @@ object RobotCtl {
         readLine(in) match {
           case None => err(s"robotctl: the gateway at $where closed the connection without an answer"); ExitFailed
           case Some(Left(problem)) => err(s"robotctl: $problem"); ExitFailed
-          case Some(Right(text)) =>
+          case Some(Right(text))   =>
+            // The wire's escapes undone give back what the gateway sent, robots' strings included: their control
+            // characters are shown escaped, so no escape sequence reaches the terminal.
             ControlProtocol.readAnswer(text) match {
-              case Right(Answer.Line(l))  => out(l); next()
-              case Right(Answer.Ok(t))    => if (t.nonEmpty) out(t); ExitOk
-              case Right(Answer.Error(t)) => err(s"robotctl: $t"); ExitFailed
+              case Right(Answer.Line(l))  => out(Printable.text(l)); next()
+              case Right(Answer.Ok(t))    => if (t.nonEmpty) out(Printable.text(t)); ExitOk
+              case Right(Answer.Error(t)) => err(s"robotctl: ${Printable.text(t)}"); ExitFailed
               case Left(problem) => err(s"robotctl: the gateway at $where answered oddly: $problem"); ExitFailed
             }
         }

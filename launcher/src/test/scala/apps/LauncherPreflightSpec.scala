@@ -109,6 +109,7 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
         5555 -> "apps.zeromq.bind",
         5556 -> "apps.zeromq.publish",
         5557 -> "apps.datagram-door.port",
+        8019 -> "apps.web.port",
         3838 -> "naogateway.game-controller.port"
       )
     }

@@ -243,6 +243,8 @@ object ControlProtocol {
   }
 
   /** Undoes [[escapeWord]] and [[escapeText]]; a message when the text has a broken escape or a raw control character.
+    * What it gives back is what was sent, control characters included (a robot's role may hold an escape sequence):
+    * whatever shows it on a terminal passes it through [[naogateway.Printable.text]] first, as robotctl does.
     */
   def unescape(s: String): Either[String, String] = {
     val b = new java.lang.StringBuilder(s.length)

@@ -367,6 +367,6 @@ object ControlServer {
     f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${if (row.online) "online" else "offline"}%-8s " +
       f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
       f"${row.posture.fold("-")(_.name)}%-8s " +
-      f"${row.report.role.getOrElse("-")}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
+      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
   }
 }

@@ -80,11 +80,19 @@ object DatagramDoor {
       { case Registered(r) => r })(
       serving(_, settings, ownsInterface = true))
 
-  /** Spawns the door as a child of `context` when `apps.datagram-door.enabled` is on (it is off in competition). */
-  def spawnIfEnabled(
-      context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command]): Option[ActorRef[Command]] = {
+  /** Spawns the door as a child of `context` when `apps.datagram-door.enabled` opens it ([[apps.Doors.open]]: `auto`
+    * keeps it shut while `realRobots`) and its bind address is loopback; a refused door is logged, not started.
+    */
+  def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command],
+      realRobots: Boolean): Option[ActorRef[Command]] = {
     val settings = DatagramDoorSettings(context.system)
-    if (settings.enabled) Some(context.spawn(apply(middleware, settings), "datagram-door")) else None
+    if (!apps.Doors.open(settings.enabled, realRobots)) None
+    else settings.refusal match {
+      case Some(reason) =>
+        context.log.error("Datagram door not started: {}", reason)
+        None
+      case None => Some(context.spawn(apply(middleware, settings), "datagram-door"))
+    }
   }
 
   /** The door in front of `robots`, which the caller owns (and closes). */
@@ -94,7 +102,10 @@ object DatagramDoor {
   private def serving(
       robots: RobotInterface, settings: DatagramDoorSettings, ownsInterface: Boolean): Behavior[Command] =
     Behaviors.setup { context =>
-      Try(open(settings, s"${context.system.name}-$ReaderName")) match {
+      Try {
+        settings.refusal.foreach(r => throw new IllegalArgumentException(r))
+        open(settings, s"${context.system.name}-$ReaderName")
+      } match {
         case Failure(e) =>
           context.log.error("datagram door cannot bind {}:{}: {}", settings.bindAddress, settings.port, e.toString)
           if (ownsInterface) robots.close()

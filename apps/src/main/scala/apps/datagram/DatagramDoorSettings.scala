@@ -8,7 +8,7 @@ import com.typesafe.config.Config
 
 /** Settings of the datagram door (`apps.datagram-door { ... }`). */
 final case class DatagramDoorSettings(
-    enabled: Boolean,
+    enabled: apps.DoorSwitch,
     bindAddress: String,
     port: Int,
     appName: String,
@@ -31,6 +31,14 @@ final case class DatagramDoorSettings(
     s"datagram-door.max-datagram-bytes must be between 64 and ${DatagramDoorSettings.MaxUdpPayload}"
   )
   require(dispatcher.trim.nonEmpty, "datagram-door.dispatcher must name a dispatcher's config path")
+
+  /** Why the door must not serve, if it must not: it has no token and UDP senders are not authenticated, so only this
+    * machine may reach it.
+    */
+  def refusal: Option[String] =
+    Option.when(!apps.Doors.loopback(bindAddress))(
+      s"apps.datagram-door.bind-address $bindAddress is not loopback, and the datagram door has no token: it serves " +
+        "this machine only (use the ZeroMQ endpoint through an SSH tunnel, or the cluster, from other machines)")
 }
 
 /** Reading the settings. */
@@ -47,7 +55,7 @@ object DatagramDoorSettings {
 
   /** The settings of an `apps.datagram-door` block. */
   def fromConfig(c: Config): DatagramDoorSettings = DatagramDoorSettings(
-    enabled = c.getBoolean("enabled"),
+    enabled = apps.DoorSwitch.read(c, "enabled", ConfigPath),
     bindAddress = c.getString("bind-address"),
     port = c.getInt("port"),
     appName = c.getString("app-name"),

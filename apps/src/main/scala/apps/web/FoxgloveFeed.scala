@@ -20,17 +20,32 @@ import naogateway.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, Tra
 import naogateway.recording.{Decision, DecisionJson, RecordingSchema}
 import robotmiddleware.RobotMiddleware
 
-/** The live feed in the Foxglove WebSocket protocol (`foxglove.websocket.v1`, docs/web.md): the recording's robot
-  * channels `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its
-  * `/gateway/decisions` channel (JSON, as recorded) with the decisions published live (robot events and game states
-  * from the middleware, the budget once a second from the gateway's read-only view), so a viewer connected to the
-  * running gateway shows what it shows for a recording. Each keep-alive is published as the gateway read it
-  * ([[naogateway.wire.RobotReport]], the one mapping between the messages and a robot's report).
+/** The live feed in the Foxglove WebSocket protocol (subprotocol `foxglove.sdk.v1` of the Foxglove SDK, or
+  * `foxglove.websocket.v1` of the earlier ws-protocol; docs/web.md): the recording's robot channels
+  * `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its `/gateway/decisions`
+  * channel (JSON, as recorded) with the decisions published live (robot events and game states from the middleware, the
+  * budget once a second from the gateway's read-only view), so a viewer connected to the running gateway shows what it
+  * shows for a recording. Each keep-alive is published as the gateway read it ([[naogateway.wire.RobotReport]], the one
+  * mapping between the messages and a robot's report).
   */
 object FoxgloveFeed {
 
-  /** The WebSocket subprotocol a client asks for. */
+  /** The subprotocol of the Foxglove WebSocket protocol as the ws-protocol libraries name it. */
   val Subprotocol: String = "foxglove.websocket.v1"
+
+  /** The same protocol as the Foxglove SDK's servers name it (and Foxglove's and Lichtblick's current viewers ask). The
+    * SDK's message set is the ws-protocol's; the part this feed uses (server info, status, advertise, subscribe,
+    * unsubscribe, message data) reads the same under both names.
+    */
+  val SdkSubprotocol: String = "foxglove.sdk.v1"
+
+  /** Every name the feed answers to, the one it prefers first. */
+  val Subprotocols: Vector[String] = Vector(SdkSubprotocol, Subprotocol)
+
+  /** The subprotocol to answer a client that asked for `requested`: the SDK's name when offered, else the
+    * ws-protocol's; None when it offered neither.
+    */
+  def chosen(requested: Seq[String]): Option[String] = Subprotocols.find(p => requested.exists(_.trim == p))
 
   /** One channel as advertised: its id, topic, schema name and message encoding (the schema data of a protobuf channel
     * is the recording's descriptor set; a JSON channel has none, as in the recording).

@@ -97,7 +97,9 @@ object WebControl {
       }
 
   private def answer(ok: Boolean, message: String): String =
-    JsObject("op" -> JsString("result"), "ok" -> JsBoolean(ok), "message" -> JsString(message)).compactPrint
+    // A failure's message may carry a robot's error text: no control character reaches the page.
+    JsObject("op" -> JsString("result"), "ok" -> JsBoolean(ok),
+      "message" -> JsString(naogateway.Printable.text(message))).compactPrint
 
   private def refusing(reason: String): Behavior[Command] = Behaviors.receiveMessage {
     case Request(_, replyTo) =>

@@ -170,6 +170,8 @@ object WebJson {
 
   private def num(d: Double): JsValue = if (d.isNaN || d.isInfinite) JsNull else JsNumber(d)
   private def opt[A](a: Option[A])(f: A => JsValue): JsValue = a.fold[JsValue](JsNull)(f)
+  // A string a robot or a peer wrote, with its control characters replaced before it reaches the page.
+  private def text(s: String): JsValue = JsString(naogateway.Printable.text(s))
 
   /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind. */
   def robot(r: RobotSnapshot, link: Option[LinkStats], signing: Option[String]): JsObject = {
@@ -181,8 +183,8 @@ object WebJson {
       "address" -> opt(row.address)(JsString(_)),
       "battery" -> opt(row.battery)(num),
       "posture" -> opt(row.posture)(p => JsString(p.name)),
-      "role" -> opt(row.report.role)(JsString(_)),
-      "agent" -> opt(row.report.agent)(JsString(_)),
+      "role" -> opt(row.report.role)(text),
+      "agent" -> opt(row.report.agent)(text),
       "team" -> opt(row.report.teamId)(JsNumber(_)),
       "uptimeMs" -> opt(row.report.uptimeMillis)(JsNumber(_)),
       "rttMs" -> opt(row.rttMillis)(num),
@@ -204,7 +206,7 @@ object WebJson {
   /** The game: GameController version and source, state, time, score, gate and traffic. */
   def game(m: WebModel): JsObject = JsObject(
     "version" -> opt(m.game)(g => JsNumber(g.version.number)),
-    "source" -> opt(m.gameSource)(s => JsString(s.describe)),
+    "source" -> opt(m.gameSource)(s => text(s.describe)),
     "state" -> opt(m.game)(g => JsString(StatusView.stateName(g.gameState))),
     "secondary" -> opt(m.game)(g => JsString(StatusView.situation(g).mkString(", "))),
     "firstHalf" -> opt(m.game)(g => JsBoolean(g.firstHalf)),
@@ -248,8 +250,8 @@ object WebJson {
 
   /** A log line. */
   def event(e: WebEvent): JsObject =
-    JsObject("t" -> num(e.t), "wall" -> JsNumber(e.wallMillis), "kind" -> JsString(e.kind),
-      "robot" -> opt(e.robotId)(JsNumber(_)), "text" -> JsString(e.text))
+    JsObject("t" -> num(e.t), "wall" -> JsNumber(e.wallMillis), "kind" -> text(e.kind),
+      "robot" -> opt(e.robotId)(JsNumber(_)), "text" -> text(e.text))
 
   /** A robot's plot point as [t, battery, rtt, loss]. */
   def robotSample(s: RobotSample): JsArray =

@@ -17,7 +17,7 @@ import akka.http.scaladsl.Http
 import akka.http.scaladsl.model.ws.{BinaryMessage, Message, TextMessage}
 import akka.http.scaladsl.model.StatusCodes
 import akka.http.scaladsl.server.Directives._
-import akka.http.scaladsl.server.Route
+import akka.http.scaladsl.server.{Directive0, Route}
 import akka.stream.scaladsl.{Flow, Sink, Source}
 import akka.stream.{BufferOverflowException, Materializer, OverflowStrategy}
 import akka.util.Timeout
@@ -42,9 +42,9 @@ object WebServer {
   final case class GetCounters(replyTo: ActorRef[Counters]) extends Command
 
   /** Connections now, connections refused (too many, or a wrong token), slow clients dropped, frames from pages
-    * ignored.
+    * ignored, and WebSocket handshakes refused for their `Origin` ([[WebOrigin.check]]).
     */
-  final case class Counters(open: Long, refused: Long, slowDropped: Long, ignoredFrames: Long)
+  final case class Counters(open: Long, refused: Long, slowDropped: Long, ignoredFrames: Long, originRefused: Long = 0)
 
   private final case class Bound(binding: Http.ServerBinding) extends Command
   private final case class BindFailed(reason: Throwable) extends Command
@@ -73,11 +73,13 @@ object WebServer {
     */
   final case class GatewaySide(view: GatewayView, competition: Boolean, signing: Int => String)
 
-  /** Spawns the server (and its view) as a child of `context` when `apps.web.enabled` is on. */
+  /** Spawns the server (and its view) as a child of `context` when `apps.web.enabled` opens it ([[apps.Doors.open]]:
+    * `auto` keeps it shut while `realRobots`) and its settings may serve (a token off loopback).
+    */
   def spawnIfEnabled(context: ActorContext[_], gateway: GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
-      bound: Option[InetSocketAddress] => Unit = _ => ()): Option[ActorRef[Command]] = {
+      realRobots: Boolean, bound: Option[InetSocketAddress] => Unit = _ => ()): Option[ActorRef[Command]] = {
     val settings = WebSettings(context.system)
-    if (!settings.enabled) None
+    if (!apps.Doors.open(settings.enabled, realRobots)) None
     else settings.refusal match {
       case Some(reason) =>
         context.log.error("Web view not started: {}", reason)
@@ -109,6 +111,13 @@ object WebServer {
           case Bound(binding) =>
             bound(Some(binding.localAddress))
             context.log.info(describe(binding.localAddress, settings))
+            if (!binding.localAddress.getAddress.isLoopbackAddress)
+              context.log.warn(
+                "Web view {} is not on loopback: every machine that reaches it and has the token can " +
+                  "watch the robots{}",
+                binding.localAddress,
+                if (available.enabled) " and steer them from the control panel" else ""
+              )
             stash.unstashAll(serving(binding, connections))
           case BindFailed(e) =>
             bound(None)
@@ -141,10 +150,23 @@ object WebServer {
     val refused = new AtomicLong
     val slowDropped = new AtomicLong
     val ignored = new AtomicLong
+    val originRefused = new AtomicLong
     private val log = LoggerFactory.getLogger("apps.web.WebServer")
+    private val allowed = settings.allowedOrigins.flatMap(WebOrigin.parse)
 
     /** The counters now. */
-    def counters: Counters = Counters(open.get, refused.get, slowDropped.get, ignored.get)
+    def counters: Counters = Counters(open.get, refused.get, slowDropped.get, ignored.get, originRefused.get)
+
+    /** The verdict on a WebSocket handshake's `Origin`; a refusal is counted and logged at a bounded rate. */
+    def originOk(origin: Option[String], host: Option[String], scheme: String): Boolean =
+      WebOrigin.check(origin, host, scheme, allowed, settings.token.nonEmpty) match {
+        case WebOrigin.Allowed => true
+        case WebOrigin.Refused(reason) =>
+          val n = originRefused.incrementAndGet()
+          if (RateLimitedLog.due(n))
+            log.warn("Web view: WebSocket refused: {} ({} refused for their origin so far)", reason, n)
+          false
+      }
 
     /** Whether `presented` is the token (compared in constant time); any string passes when none is configured. */
     def tokenOk(presented: Option[String]): Boolean =
@@ -216,7 +238,7 @@ object WebServer {
           get(getFromResource(resource, akka.http.scaladsl.server.directives.ContentTypeResolver.Default(resource),
               loader)))
       },
-      path("foxglove")(foxgloveRoute(foxglove, settings, connections)),
+      path("foxglove")(sameOrigin(connections)(foxgloveRoute(foxglove, settings, connections))),
       path("control" / "state") {
         get(complete(akka.http.scaladsl.model.HttpEntity(
               akka.http.scaladsl.model.ContentTypes.`application/json`,
@@ -224,9 +246,9 @@ object WebServer {
                 "reason" -> spray.json.JsString(available.reason)).compactPrint
             )))
       },
-      path("control")(controlRoute(control, available, connections)),
+      path("control")(sameOrigin(connections)(controlRoute(control, available, connections))),
       path("ws") {
-        (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
+        (sameOrigin(connections) & extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
           if (!connections.tokenOk(token)) {
             connections.refuse()
             complete(StatusCodes.Forbidden, "a valid token is needed: open the page as /?token=...")
@@ -246,15 +268,29 @@ object WebServer {
     )
   }
 
-  /** The Foxglove-protocol feed (`/foxglove`, subprotocol foxglove.websocket.v1), behind the same token and limits. */
+  /** Passes a request whose `Origin` the rule allows ([[WebOrigin.check]]); any other is answered 403 before its
+    * WebSocket opens, so a page of another site cannot read a feed or make the view watch a camera.
+    */
+  private def sameOrigin(connections: Connections): Directive0 =
+    (optionalHeaderValueByName("Origin") & optionalHeaderValueByName("Host") & extractUri).tflatMap {
+      case (origin, host, uri) =>
+        if (connections.originOk(origin, host, uri.scheme)) pass
+        else complete(StatusCodes.Forbidden, "this WebSocket is for the web view's own page (apps.web.allowed-origins)")
+    }
+
+  /** The Foxglove-protocol feed (`/foxglove`, subprotocol foxglove.sdk.v1 or foxglove.websocket.v1, answered with the
+    * one the client asked for), behind the same origin rule, token and limits.
+    */
   private def foxgloveRoute(foxglove: ActorRef[FoxgloveFeed.Command], settings: WebSettings, connections: Connections)(
       implicit
       system: ActorSystem[_]): Route = {
     implicit val timeout: Timeout = Timeout(FoxgloveFeed.ConnectTimeout)
     implicit val ec: ExecutionContext = system.executionContext
     (extractWebSocketUpgrade & parameter("token".optional)) { (upgrade, token) =>
-      if (!upgrade.requestedProtocols.contains(FoxgloveFeed.Subprotocol))
-        complete(StatusCodes.BadRequest, s"this feed speaks the WebSocket subprotocol ${FoxgloveFeed.Subprotocol}")
+      val subprotocol = FoxgloveFeed.chosen(upgrade.requestedProtocols)
+      if (subprotocol.isEmpty)
+        complete(StatusCodes.BadRequest,
+          s"this feed speaks the WebSocket subprotocols ${FoxgloveFeed.Subprotocols.mkString(" and ")}")
       else if (!connections.tokenOk(token)) {
         connections.refuse()
         complete(StatusCodes.Forbidden, "a valid token is needed: /foxglove?token=...")
@@ -275,7 +311,7 @@ object WebServer {
             Flow.fromSinkAndSource(Sink.ignore, Source.empty)
           }
         complete(upgrade.handleMessages(Flow.futureFlow(flow).mapMaterializedValue(_ => NotUsed),
-            Some(FoxgloveFeed.Subprotocol)))
+            subprotocol))
       }
     }
   }

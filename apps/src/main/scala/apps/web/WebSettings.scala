@@ -15,7 +15,7 @@ import com.typesafe.config.Config
   *   without
   */
 final case class WebSettings(
-    enabled: Boolean,
+    enabled: apps.DoorSwitch,
     bindAddress: String,
     port: Int,
     token: String,
@@ -26,7 +26,8 @@ final case class WebSettings(
     maxClients: Int,
     clientBuffer: Int,
     gridInterval: FiniteDuration,
-    control: WebSettings.Control
+    control: WebSettings.Control,
+    allowedOrigins: Vector[String] = Vector.empty
 ) {
   require(port >= 0 && port <= 65535, "apps.web.port must be 0 to 65535")
   require(pushInterval >= 50.millis, "apps.web.push-interval must be at least 50 ms")
@@ -38,6 +39,11 @@ final case class WebSettings(
   require(gridInterval >= pushInterval, "apps.web.grid-interval must be at least push-interval")
   require(control.appName.nonEmpty, "apps.web.control.app-name must not be empty")
   require(control.deadman >= 200.millis, "apps.web.control.deadman must be at least 200 ms")
+
+  require(
+    allowedOrigins.forall(o => WebOrigin.parse(o).isDefined),
+    s"apps.web.allowed-origins: each entry is scheme://host[:port], got ${allowedOrigins.mkString(", ")}"
+  )
 
   /** Whether the bind address is a loopback one, reachable from this machine only. */
   def loopbackOnly: Boolean = InetAddress.getByName(bindAddress).isLoopbackAddress
@@ -65,7 +71,7 @@ object WebSettings {
   /** The settings of an `apps.web` block. */
   def fromConfig(c: Config): WebSettings =
     WebSettings(
-      enabled = c.getBoolean("enabled"),
+      enabled = apps.DoorSwitch.read(c, "enabled", ConfigPath),
       bindAddress = c.getString("bind-address"),
       port = c.getInt("port"),
       token = c.getString("token").trim,
@@ -77,6 +83,7 @@ object WebSettings {
       clientBuffer = c.getInt("client-buffer"),
       gridInterval = c.getDuration("grid-interval").toScala,
       control = Control(c.getBoolean("control.enabled"), c.getString("control.app-name"), c.getInt("control.priority"),
-        c.getDuration("control.deadman").toScala)
+        c.getDuration("control.deadman").toScala),
+      allowedOrigins = apps.Doors.strings(c, "allowed-origins")
     )
 }

@@ -67,11 +67,19 @@ object ZeroMqEndpoint {
       { case Registered(r) => r })(
       serving(_, settings, ownsInterface = true))
 
-  /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` is on (it is off in competition). */
-  def spawnIfEnabled(
-      context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command]): Option[ActorRef[Command]] = {
+  /** Spawns the endpoint as a child of `context` when `apps.zeromq.enabled` opens it ([[apps.Doors.open]]: `auto` keeps
+    * it shut while `realRobots`) and its endpoints are loopback; a refused endpoint is logged, not started.
+    */
+  def spawnIfEnabled(context: ActorContext[_], middleware: ActorRef[RobotMiddleware.Command],
+      realRobots: Boolean): Option[ActorRef[Command]] = {
     val settings = ZeroMqSettings(context.system)
-    if (settings.enabled) Some(context.spawn(apply(middleware, settings), "zeromq-endpoint")) else None
+    if (!apps.Doors.open(settings.enabled, realRobots)) None
+    else settings.refusal match {
+      case Some(reason) =>
+        context.log.error("ZeroMQ endpoint not started: {}", reason)
+        None
+      case None => Some(context.spawn(apply(middleware, settings), "zeromq-endpoint"))
+    }
   }
 
   /** The endpoint in front of `robots`, which the caller owns (and closes). */
@@ -139,6 +147,8 @@ object ZeroMqEndpoint {
       loop.submit { sockets =>
         var opened = List.empty[ZMQ.Socket]
         try {
+          // Refused off loopback whoever spawns it: the endpoint has no token.
+          settings.refusal.foreach(r => throw new IllegalArgumentException(r))
           val router = sockets.socket(SocketType.ROUTER)
           opened ::= router
           router.setLinger(FlushOnCloseMillis)

@@ -8,7 +8,7 @@ import com.typesafe.config.Config
 
 /** Settings of the ZeroMQ endpoint (`apps.zeromq { ... }`). */
 final case class ZeroMqSettings(
-    enabled: Boolean,
+    enabled: apps.DoorSwitch,
     bind: String,
     publish: String,
     appName: String,
@@ -25,6 +25,16 @@ final case class ZeroMqSettings(
   require(requestTimeout > Duration.Zero, "zeromq.request-timeout must be positive")
   require(maxInFlight >= 1, "zeromq.max-in-flight must be at least 1")
   require(pollTimeout >= 1.milli && pollTimeout <= 1.second, "zeromq.poll-timeout must be between 1 ms and 1 s")
+
+  /** Why the endpoint must not serve, if it must not: it has no token (no CURVE, no ZAP), so only this machine may
+    * reach its TCP sockets.
+    */
+  def refusal: Option[String] =
+    Vector("bind" -> bind, "publish" -> publish).collectFirst {
+      case (key, endpoint) if apps.Doors.zeroMqHost(endpoint).exists(h => !apps.Doors.loopback(h)) =>
+        s"apps.zeromq.$key $endpoint is not loopback, and the ZeroMQ endpoint has no token: it serves this machine " +
+          "only (reach it from other machines through an SSH tunnel)"
+    }
 }
 
 /** Reading the settings. */
@@ -39,7 +49,7 @@ object ZeroMqSettings {
 
   /** The settings of an `apps.zeromq` block whose dispatcher is configured at `dispatcherPath`. */
   def fromConfig(c: Config, dispatcherPath: String): ZeroMqSettings = ZeroMqSettings(
-    enabled = c.getBoolean("enabled"),
+    enabled = apps.DoorSwitch.read(c, "enabled", ConfigPath),
     bind = c.getString("bind"),
     publish = c.getString("publish"),
     appName = c.getString("app-name"),

@@ -177,6 +177,29 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
 
     "refuse a client that does not speak the protocol" in {
       new Client(protocol = None).status shouldBe StatusCodes.BadRequest
+      new Client(protocol = Some("foxglove.websocket.v2")).status shouldBe StatusCodes.BadRequest
+    }
+
+    "answer a client asking for foxglove.sdk.v1 (the Foxglove SDK's name) with that name, and serve it the same feed" in {
+      val client = new Client(protocol = Some(FoxgloveFeed.SdkSubprotocol))
+      try {
+        client.status shouldBe StatusCodes.SwitchingProtocols
+        Await.result(client.upgrade, 10.seconds).response.headers.collect {
+          case h if h.is("sec-websocket-protocol") => h.value
+        } shouldBe Seq(FoxgloveFeed.SdkSubprotocol)
+        eventually(timeout(30.seconds), interval(200.millis)) {
+          client.ops("serverInfo") should have size 1
+          client.channels.map(_.fields("topic")) should contain(JsString("/robot/1/status"))
+        }
+      } finally client.close()
+    }
+
+    "choose the subprotocol a client asked for, the SDK's when it offers both" in {
+      FoxgloveFeed.chosen(Seq("foxglove.websocket.v1")) shouldBe Some("foxglove.websocket.v1")
+      FoxgloveFeed.chosen(Seq("foxglove.sdk.v1")) shouldBe Some("foxglove.sdk.v1")
+      FoxgloveFeed.chosen(Seq("foxglove.websocket.v1", "foxglove.sdk.v1")) shouldBe Some("foxglove.sdk.v1")
+      FoxgloveFeed.chosen(Seq("chat", "superchat")) shouldBe None
+      FoxgloveFeed.chosen(Nil) shouldBe None
     }
 
     "have a layout (docs/foxglove-layout.json) that names only topics and fields the feed has" in {
