@@ -32,7 +32,7 @@ private[naogateway] object CompetitionGate {
     case GameReading.HeaderOnly(state, version, _) if gameRunning(state) =>
       Some(s"the game is running ($state, read from the shared header of unknown version $version)")
     case _: GameReading.Known | _: GameReading.HeaderOnly => None
-    case GameReading.Unreadable(reason)                   => Some(s"the trusted GameController's packet cannot be read ($reason)")
+    case GameReading.Unreadable(reason) => Some(s"the trusted GameController's packet cannot be read ($reason)")
     case GameReading.Opening(state, leftMillis, contradictions) =>
       Some(s"opening once the game has not run for a while ($state, ${(leftMillis + 999) / 1000} s more, " +
         s"$contradictions contradiction(s) so far)")
@@ -100,8 +100,12 @@ private[naogateway] final case class GateLatch(
           copy(reading = GameReading.Opening(state, (since + openAfterNanos - nowNanos) / 1000000L, contradictions),
             lastPacketNumber = packetNumber)
         case Some(_) =>
-          copy(reading = GameReading.Opening(state, openAfterNanos / 1000000L, contradictions + 1),
-            quietSince = Some(nowNanos), lastPacketNumber = packetNumber, contradictions = contradictions + 1)
+          copy(
+            reading = GameReading.Opening(state, openAfterNanos / 1000000L, contradictions + 1),
+            quietSince = Some(nowNanos),
+            lastPacketNumber = packetNumber,
+            contradictions = contradictions + 1
+          )
         case None =>
           copy(reading = GameReading.Opening(state, openAfterNanos / 1000000L, contradictions),
             quietSince = Some(nowNanos), lastPacketNumber = packetNumber)

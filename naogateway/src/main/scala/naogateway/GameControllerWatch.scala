@@ -50,7 +50,8 @@ private[naogateway] final class GameControllerWatch(
   /** The latest game state that counted, if any. */
   def state: Option[GameControlData] = game
 
-  /** The gate's reading at the gateway's start: closed in competition mode until the trusted GameController is heard. */
+  /** The gate's reading at the gateway's start: closed in competition mode until the trusted GameController is heard.
+    */
   def start(): Unit = gate(latch.reading)
 
   /** The gate's present reading (the outbox holds the same). */
@@ -174,7 +175,7 @@ private[naogateway] final class GameControllerWatch(
       case Left(error) if Datagram.isGameControllerControl(bytes) =>
         GameControllerCodec.decodeSharedHeader(bytes) match {
           case Right(header) => sharedHeader(header, from, now)
-          case Left(_) =>
+          case Left(_)       =>
             // The trusted GameController sends what this gateway cannot read: it may well be running a game, so the
             // gate closes (fail safe) and says why, in words that stay the same from packet to packet.
             rejections.count(Rejection.BadGameControllerPacket, from, error.describe)
@@ -205,10 +206,10 @@ private[naogateway] final class GameControllerWatch(
           h.versionNumber, h.packetBytes)
       headerOnly = Some(now -> h)
       advance(latch.packet(GameReading.HeaderOnly(h.gameState, h.versionNumber, h.packetBytes), Some(h.packetNumber),
-        now))
+          now))
     } else if (CompetitionGate.gameRunning(h.gameState) && (latch.open || latch.quietSince.isDefined))
       advance(latch.packet(GameReading.HeaderOnly(h.gameState, h.versionNumber, h.packetBytes), Some(h.packetNumber),
-        now))
+          now))
 
   /** The gate after one more trusted packet: every packet's reading reaches the outbox. */
   private def advance(next: GateLatch): Unit = {

@@ -130,10 +130,13 @@ object Gateway {
           UdpLink(
             new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
             context.messageAdapter(GameControllerEvent.apply),
-            UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true,
+            UdpLink.Options(
+              reuseAddress = settings.gameControllerReuseAddress,
+              broadcast = true,
               maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond,
               // Trust before the cap (docs/protocol.md 10.7): a stranger's flood cannot crowd out the GameController.
-              trusted = a => settings.gameControllerTrusted.configured && settings.gameControllerTrusted.trusts(a))
+              trusted = a => settings.gameControllerTrusted.configured && settings.gameControllerTrusted.trusts(a)
+            )
           ),
           "game-controller-link"
         )

@@ -119,7 +119,7 @@ private[naogateway] final case class MessageBudget(
     // Only versions 19 and 20 tell the phase; a timeout hides it, so the phase before it holds.
     val told = data match {
       case d: HslGameData if d.gamePhase != GamePhase.Timeout => Some(d.gamePhase)
-      case _                                                     => None
+      case _                                                  => None
     }
     // StartExtraTime: from the normal phase's second half to extra time's first.
     val extraTimeStarts =
@@ -133,7 +133,7 @@ private[naogateway] final case class MessageBudget(
         data.secsRemaining - before >= ExtraMinuteSeconds - 1 && data.secsRemaining - before <= ExtraMinuteSeconds + 1)
     val ours = data match {
       case d: HslGameData => Seq(d.team0, d.team1).find(_.teamNumber == settings.teamNumber).map(_.messageBudget)
-      case _                 => None
+      case _              => None
     }
     base.copy(
       remaining = (if (extra && !base.illegal) base.remaining + settings.perExtraMinute else base.remaining) + granted,

@@ -71,8 +71,14 @@ class CompetitionGateSpec extends AnyWordSpec with Matchers {
       }
     }
     "open only once every packet for the whole time said the game does not run, in sequence" in {
-      val waiting = after(closedInPlaying, (GameState.Initial, 2, 500L), (GameState.Initial, 3, 1000L),
-        (GameState.Initial, 4, 1500L), (GameState.Initial, 5, 2000L), (GameState.Initial, 6, 3000L))
+      val waiting = after(
+        closedInPlaying,
+        (GameState.Initial, 2, 500L),
+        (GameState.Initial, 3, 1000L),
+        (GameState.Initial, 4, 1500L),
+        (GameState.Initial, 5, 2000L),
+        (GameState.Initial, 6, 3000L)
+      )
       waiting.open shouldBe false
       waiting.reading shouldBe GameReading.Opening(GameState.Initial, 500L, 0L)
       val opened = after(waiting, (GameState.Initial, 7, 3500L))
@@ -107,7 +113,8 @@ class CompetitionGateSpec extends AnyWordSpec with Matchers {
       after(unread, (GameState.Initial, 3, 1000L), (GameState.Initial, 4, 4000L)).open shouldBe true
     }
     "open without packet numbers (version 7) by time alone, and on a shared header's state" in {
-      val v7 = closedInPlaying.packet(GameReading.Known(GameState.Finished, Some(GameControlVersion.V7)), None, 500 * ms)
+      val v7 =
+        closedInPlaying.packet(GameReading.Known(GameState.Finished, Some(GameControlVersion.V7)), None, 500 * ms)
       v7.packet(GameReading.Known(GameState.Finished, Some(GameControlVersion.V7)), None, 3500 * ms).open shouldBe true
       val h = closedInPlaying.packet(GameReading.HeaderOnly(GameState.Initial, 21, 170), Some(2), 500 * ms)
       h.packet(GameReading.HeaderOnly(GameState.Initial, 21, 170), Some(3), 3500 * ms).open shouldBe true

@@ -318,9 +318,9 @@ object ControlServer {
     }
   }
 
-  /** The game, the competition gate (with why a closed gate is closed) and each robot the GameController penalised,
-    * as the status screen shows them, for the lines before the status's final one; none without a gateway or when it
-    * does not answer.
+  /** The game, the competition gate (with why a closed gate is closed) and each robot the GameController penalised, as
+    * the status screen shows them, for the lines before the status's final one; none without a gateway or when it does
+    * not answer.
     */
   private def gameLines(gateway: Option[GatewaySide], timeout: FiniteDuration, robots: Seq[RobotSnapshot])(
       implicit system: ActorSystem[_]): Future[List[String]] = {
@@ -329,7 +329,8 @@ object ControlServer {
       within(g.view.gameState(), timeout).zip(within(g.view.traffic(), timeout))
         .map { case (gm, t) =>
           List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) ++ robots.flatMap(r =>
-            apps.StatusView.penalty(r, gm).map(p => s"robot ${r.robotId} penalised by the GameController: ${p.describe}"))
+            apps.StatusView.penalty(r, gm).map(p =>
+              s"robot ${r.robotId} penalised by the GameController: ${p.describe}"))
         }
         .recover { case NonFatal(_) => Nil }
     }

@@ -102,27 +102,27 @@ object UdpLink {
 
         def ready(socket: classic.ActorRef, window: RateWindow, trustedWindow: RateWindow): Behavior[Command] =
           Behaviors.receiveMessage {
-          case Send(bytes, to) =>
-            socket ! Udp.Send(ByteString.fromArrayUnsafe(bytes), to)
-            Behaviors.same
-          case SocketReceived(data, from) if options.trusted(from.getAddress) =>
-            val (next, passes, closed) = trustedWindow.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
-            closed.foreach(d => owner ! d.copy(trusted = true))
-            if (passes) owner ! Received(data.toArrayUnsafe(), from)
-            if (next eq trustedWindow) Behaviors.same else ready(socket, window, next)
-          case SocketReceived(data, from) =>
-            val (next, passes, closed) = window.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
-            closed.foreach(owner ! _)
-            if (passes) owner ! Received(data.toArrayUnsafe(), from)
-            if (next eq window) Behaviors.same else ready(socket, next, trustedWindow)
-          case Unbind =>
-            adapter ! Udp.Unbind
-            Behaviors.same
-          case SocketClosed =>
-            Behaviors.stopped
-          case SocketReady(_, _) | SocketFailed(_) =>
-            Behaviors.unhandled
-        }
+            case Send(bytes, to) =>
+              socket ! Udp.Send(ByteString.fromArrayUnsafe(bytes), to)
+              Behaviors.same
+            case SocketReceived(data, from) if options.trusted(from.getAddress) =>
+              val (next, passes, closed) = trustedWindow.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
+              closed.foreach(d => owner ! d.copy(trusted = true))
+              if (passes) owner ! Received(data.toArrayUnsafe(), from)
+              if (next eq trustedWindow) Behaviors.same else ready(socket, window, next)
+            case SocketReceived(data, from) =>
+              val (next, passes, closed) = window.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
+              closed.foreach(owner ! _)
+              if (passes) owner ! Received(data.toArrayUnsafe(), from)
+              if (next eq window) Behaviors.same else ready(socket, next, trustedWindow)
+            case Unbind =>
+              adapter ! Udp.Unbind
+              Behaviors.same
+            case SocketClosed =>
+              Behaviors.stopped
+            case SocketReady(_, _) | SocketFailed(_) =>
+              Behaviors.unhandled
+          }
 
         binding
       }

@@ -89,7 +89,7 @@ class UdpLinkCapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with
       val trustedAt = TestLoopback.address()
       val strangerAt = TestLoopback.address()
       val link = spawn(UdpLink(new InetSocketAddress(trustedAt, 0), owner.ref,
-        Options(maxDatagramsPerSecond = 20, trusted = _ == trustedAt)))
+          Options(maxDatagramsPerSecond = 20, trusted = _ == trustedAt)))
       val local = owner.expectMessageType[Bound](5.seconds).local
       val trusted = new DatagramSocket(new InetSocketAddress(trustedAt, 0))
       val stranger = new DatagramSocket(new InetSocketAddress(strangerAt, 0))

@@ -90,10 +90,10 @@ final case class GameMoment(
 )
 
 /** A simulated RoboCup GameController on loopback: real `RGme` packets of the version its settings name (20 by default:
-  * 158 bytes; 19: 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController broadcast them;
-  * 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and a set play) →
-  * FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo runs one
-  * against the gateway, so the game state and the competition gate can be seen without a field.
+  * 158 bytes; 19: 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController
+  * broadcast them; 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and a
+  * set play) → FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo
+  * runs one against the gateway, so the game state and the competition gate can be seen without a field.
   *
   * The schedule and the packets are pure ([[SimulatedGameController.momentAt]], [[SimulatedGameController.packets]]);
   * the actor only wakes at each round's timer and sends.
@@ -230,14 +230,34 @@ object SimulatedGameController {
   def controlDataV20(
       settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): Hsl20ControlData = {
     val v19 = controlDataV19(settings, moment, packetNumber)
-    def team(t: HslTeamInfo) = Hsl20TeamInfo(t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper,
-      t.score, t.penaltyShot, t.singleShots, t.messageBudget,
+    def team(t: HslTeamInfo) = Hsl20TeamInfo(
+      t.teamNumber,
+      t.fieldPlayerColour,
+      t.goalkeeperColour,
+      t.goalkeeper,
+      t.score,
+      t.penaltyShot,
+      t.singleShots,
+      t.messageBudget,
       Vector.tabulate(Hsl20PlayerInfo.Slots)(i =>
         if (i < settings.playersPerTeam) Hsl20PlayerInfo.Unpenalised
-        else Hsl20PlayerInfo(Hsl20Penalty.Substitute, 0, 0)))
-    Hsl20ControlData(v19.packetNumber, v19.playersPerTeam, v19.competitionType, v19.stopped, v19.gamePhase,
-      v19.gameState, v19.setPlay, v19.firstHalf, v19.kickingTeam, v19.secsRemaining, v19.secondaryTime,
-      team(v19.team0), team(v19.team1))
+        else Hsl20PlayerInfo(Hsl20Penalty.Substitute, 0, 0))
+    )
+    Hsl20ControlData(
+      v19.packetNumber,
+      v19.playersPerTeam,
+      v19.competitionType,
+      v19.stopped,
+      v19.gamePhase,
+      v19.gameState,
+      v19.setPlay,
+      v19.firstHalf,
+      v19.kickingTeam,
+      v19.secsRemaining,
+      v19.secondaryTime,
+      team(v19.team0),
+      team(v19.team1)
+    )
   }
 
   /** The version-12 packet content of `moment`: player 1 the goalkeeper, players beyond `playersPerTeam` substitutes.

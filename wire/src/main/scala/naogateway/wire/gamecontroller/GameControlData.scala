@@ -254,9 +254,9 @@ final case class HslTeamInfo(
     players: Vector[HslPlayerInfo]
 ) extends HslTeam
 
-/** What the Humanoid Soccer League's packets of versions 18, 19 and 20 say in their shared first 18 bytes (docs/protocol.md
-  * §10.2), as members: the gateway reads both versions alike through it, and a later version by its header alone
-  * ([[SharedHeader]]).
+/** What the Humanoid Soccer League's packets of versions 18, 19 and 20 say in their shared first 18 bytes
+  * (docs/protocol.md §10.2), as members: the gateway reads both versions alike through it, and a later version by its
+  * header alone ([[SharedHeader]]).
   */
 sealed trait HslHeaderFields {
 

@@ -53,8 +53,8 @@ object GameControllerCodec {
   private val Return4 = ReturnLayout(StatusVersion, StatusPacketBytes)
 
   /** Decodes a control packet. The version decides the layout, and each version's field has its own width, all starting
-    * at byte 4: byte 4 = 20, 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read the u16 12
-    * for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
+    * at byte 4: byte 4 = 20, 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read the u16
+    * 12 for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
     */
   def decodeControl(bytes: Array[Byte]): Either[GameControllerError, GameControlData] =
     for {
@@ -78,7 +78,7 @@ object GameControllerCodec {
           case Some(layout) => Layouts2014.validate(layout, d).toLeft(Layouts2014.write(layout, d))
           case None         => Left(InvalidField("version", d.version.number.toLong))
         }
-      case d: HlControlData  => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
+      case d: HlControlData    => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
       case d: HslControlData   => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, ControlHeaderBytes))
       case d: Hsl20ControlData => ModernLayouts.validateV20(d).toLeft(ModernLayouts.writeV20(d, ControlHeaderBytes))
     }
@@ -122,8 +122,8 @@ object GameControllerCodec {
       }
     } yield header
 
-  /** Decodes the true game state a version-20 or -19 GameController sends its monitors: `RGTD` in that version's
-    * layout (158 or 198 bytes).
+  /** Decodes the true game state a version-20 or -19 GameController sends its monitors: `RGTD` in that version's layout
+    * (158 or 198 bytes).
     */
   def decodeTrueData(bytes: Array[Byte]): Either[GameControllerError, HslGameData] =
     for {
@@ -133,7 +133,8 @@ object GameControllerCodec {
       data <- version match {
         case GameControlVersion.V20 => ModernLayouts.decodeV20(bytes)
         case GameControlVersion.V19 => ModernLayouts.decodeV19(bytes)
-        case _ => Left(UnknownVersion(TrueDataHeader, slice(bytes, VersionOffset, VersionOffset + version.versionBytes)))
+        case _ =>
+          Left(UnknownVersion(TrueDataHeader, slice(bytes, VersionOffset, VersionOffset + version.versionBytes)))
       }
     } yield data
 

@@ -110,8 +110,21 @@ private[gamecontroller] object ModernLayouts {
       val r = new LeReader(bytes, SharedHeaderBytes)
       val team0 = teamV19(r)
       val team1 = teamV19(r)
-      HslControlData(h.packetNumber, h.playersPerTeam, h.competitionType, h.stopped, h.gamePhase, h.gameState,
-        h.setPlay, h.firstHalf, h.kickingTeam, h.secsRemaining, h.secondaryTime, team0, team1)
+      HslControlData(
+        h.packetNumber,
+        h.playersPerTeam,
+        h.competitionType,
+        h.stopped,
+        h.gamePhase,
+        h.gameState,
+        h.setPlay,
+        h.firstHalf,
+        h.kickingTeam,
+        h.secsRemaining,
+        h.secondaryTime,
+        team0,
+        team1
+      )
     }
 
   private def teamV19(r: LeReader): HslTeamInfo = {
@@ -131,14 +144,15 @@ private[gamecontroller] object ModernLayouts {
     val v = 19
     def team(name: String, t: HslTeamInfo): List[Option[GameControllerError]] =
       validateTeamHead(v, name, t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper, t.score,
-        t.penaltyShot, t.singleShots, t.messageBudget, t.players.size) ++ t.players.zipWithIndex.toList.flatMap { case (p, i) =>
-        val n = s"$name.players[$i]"
-        List(
-          u8Range(v, s"$n.penalty", p.penalty.code.toLong),
-          u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
-          u8Range(v, s"$n.warnings", p.warnings.toLong),
-          u8Range(v, s"$n.cautions", p.cautions.toLong)
-        )
+        t.penaltyShot, t.singleShots, t.messageBudget, t.players.size) ++ t.players.zipWithIndex.toList.flatMap {
+        case (p, i) =>
+          val n = s"$name.players[$i]"
+          List(
+            u8Range(v, s"$n.penalty", p.penalty.code.toLong),
+            u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
+            u8Range(v, s"$n.warnings", p.warnings.toLong),
+            u8Range(v, s"$n.cautions", p.cautions.toLong)
+          )
       }
     firstError(validateHeader(v, d) ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
   }
@@ -164,8 +178,21 @@ private[gamecontroller] object ModernLayouts {
       val r = new LeReader(bytes, SharedHeaderBytes)
       val team0 = teamV20(r)
       val team1 = teamV20(r)
-      Hsl20ControlData(h.packetNumber, h.playersPerTeam, h.competitionType, h.stopped, h.gamePhase, h.gameState,
-        h.setPlay, h.firstHalf, h.kickingTeam, h.secsRemaining, h.secondaryTime, team0, team1)
+      Hsl20ControlData(
+        h.packetNumber,
+        h.playersPerTeam,
+        h.competitionType,
+        h.stopped,
+        h.gamePhase,
+        h.gameState,
+        h.setPlay,
+        h.firstHalf,
+        h.kickingTeam,
+        h.secsRemaining,
+        h.secondaryTime,
+        team0,
+        team1
+      )
     }
 
   private def teamV20(r: LeReader): Hsl20TeamInfo = {
@@ -185,13 +212,14 @@ private[gamecontroller] object ModernLayouts {
     val v = 20
     def team(name: String, t: Hsl20TeamInfo): List[Option[GameControllerError]] =
       validateTeamHead(v, name, t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper, t.score,
-        t.penaltyShot, t.singleShots, t.messageBudget, t.players.size) ++ t.players.zipWithIndex.toList.flatMap { case (p, i) =>
-        val n = s"$name.players[$i]"
-        List(
-          u8Range(v, s"$n.penalty", p.penalty.code.toLong),
-          u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
-          u8Range(v, s"$n.cautions", p.cautions.toLong)
-        )
+        t.penaltyShot, t.singleShots, t.messageBudget, t.players.size) ++ t.players.zipWithIndex.toList.flatMap {
+        case (p, i) =>
+          val n = s"$name.players[$i]"
+          List(
+            u8Range(v, s"$n.penalty", p.penalty.code.toLong),
+            u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
+            u8Range(v, s"$n.cautions", p.cautions.toLong)
+          )
       }
     firstError(validateHeader(v, d) ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
   }

@@ -37,7 +37,8 @@ class LayoutTablesSpec extends AnyWordSpec with Matchers {
         width.bytes shouldBe v.versionBytes
         v.number.toLong should (be >= width.min and be <= width.max)
       }
-      GameControlVersion.all.map(v => v.number -> v.versionBytes) shouldBe Seq(20 -> 1, 19 -> 1, 12 -> 2, 8 -> 1, 7 -> 4)
+      GameControlVersion.all.map(v => v.number -> v.versionBytes) shouldBe Seq(20 -> 1, 19 -> 1, 12 -> 2, 8 -> 1,
+        7 -> 4)
     }
   }
 

@@ -11,8 +11,8 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.wire.gamecontroller.GameControllerError._
 
-/** Version 20 of the control packet (the Humanoid Soccer League's GameController 7, RoboCup 2026): the built vectors
-  * of `vectors/gamecontroller/` against their README, byte-exact round trips, refusals, `RGTD`, and the reading of an
+/** Version 20 of the control packet (the Humanoid Soccer League's GameController 7, RoboCup 2026): the built vectors of
+  * `vectors/gamecontroller/` against their README, byte-exact round trips, refusals, `RGTD`, and the reading of an
   * unknown later version by its shared header (docs/protocol.md §10.2, §10.8).
   */
 class Version20CodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
@@ -33,12 +33,25 @@ class Version20CodecSpec extends AnyWordSpec with Matchers with ScalaCheckProper
   private val substitutes = Vector.fill(13)(Hsl20PlayerInfo(Hsl20Penalty.Substitute, 0, 0))
 
   private def team(number: Int, colour: FieldColour, keeperColour: FieldColour) =
-    Hsl20TeamInfo(number, colour, keeperColour, 1, 0, 0, 0, 12000, Vector.fill(7)(Hsl20PlayerInfo.Unpenalised) ++
-      substitutes)
+    Hsl20TeamInfo(number, colour, keeperColour, 1, 0, 0, 0, 12000,
+      Vector.fill(7)(Hsl20PlayerInfo.Unpenalised) ++
+        substitutes)
 
-  private val base = Hsl20ControlData(1, 7, CompetitionType.Small, stopped = false, GamePhase.Normal, GameState.Initial,
-    SetPlay.NoSetPlay, firstHalf = true, Some(12), 600L, 0, team(12, FieldColour.Blue, FieldColour.Yellow),
-    team(7, FieldColour.Red, FieldColour.Black))
+  private val base = Hsl20ControlData(
+    1,
+    7,
+    CompetitionType.Small,
+    stopped = false,
+    GamePhase.Normal,
+    GameState.Initial,
+    SetPlay.NoSetPlay,
+    firstHalf = true,
+    Some(12),
+    600L,
+    0,
+    team(12, FieldColour.Blue, FieldColour.Yellow),
+    team(7, FieldColour.Red, FieldColour.Black)
+  )
 
   private def scoreAndBudget(d: Hsl20ControlData, b0: Int, b1: Int): Hsl20ControlData =
     d.copy(team0 = d.team0.copy(score = 2, messageBudget = b0), team1 = d.team1.copy(score = 1, messageBudget = b1))
@@ -146,7 +159,8 @@ class Version20CodecSpec extends AnyWordSpec with Matchers with ScalaCheckProper
       forAll(controlV20) { d =>
         val bytes = GameControllerCodec.encodeControl(d).toOption.get
         val header = GameControllerCodec.decodeSharedHeader(bytes.updated(4, 21.toByte))
-        if (d.gameState.isInstanceOf[GameState.Unknown]) header shouldBe Left(InvalidField("state", d.gameState.code.toLong))
+        if (d.gameState.isInstanceOf[GameState.Unknown])
+          header shouldBe Left(InvalidField("state", d.gameState.code.toLong))
         else
           header.map(h => (h.gameState, h.stopped, h.setPlay, h.firstHalf, h.secsRemaining, h.packetNumber)) shouldBe
             Right((d.gameState, d.stopped, d.setPlay, d.firstHalf, d.secsRemaining, d.packetNumber))
