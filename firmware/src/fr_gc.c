@@ -1,7 +1,8 @@
 /* firmware/src/fr_gc.c: GameController control packets and the robot's return packet (docs/protocol.md
  * section 10). Versions 7 and 8 as protocol.md 10.1 and 10.2 give them; 12 (the humanoid league's
- * HL_RoboCupGameControlData.h, 2017-2019: 11 players, a 253-byte coach message) and 19 (the humanoid league's
- * RoboCupGameControlData.h today: 20 players of 4 bytes) as their official headers lay them out, little-endian
+ * HL_RoboCupGameControlData.h, 2017-2019: 11 players, a 253-byte coach message), 19 (the Humanoid Soccer
+ * League's RoboCupGameControlData.h of early 2026: 20 players of 4 bytes) and 20 (its GameController 7, RoboCup
+ * 2026: the same 18-byte header, 20 players of 3 bytes) as their official headers lay them out, little-endian
  * and without padding beyond the headers' natural alignment. Every field is read by offset, never through a
  * C struct, so the compiler's packing cannot change what is read. */
 #include <string.h>
@@ -11,7 +12,7 @@
 typedef struct {
     uint8_t version;
     uint16_t size;
-    uint8_t version_width;   /* bytes of the version field: 4 (v7), 2 (v12), 1 (v8, v19) */
+    uint8_t version_width;   /* bytes of the version field: 4 (v7), 2 (v12), 1 (v8, v19, v20) */
     int8_t packet_number;    /* offset, -1 when absent */
     uint8_t game_state, first_half, kick_off, secondary_state;
     uint8_t secs_remaining, secs_width; /* offset and width (2 or 4) */
@@ -36,6 +37,8 @@ static const layout_t layouts[] = {
     /* v19: packetNumber 5, state 10, firstHalf 12, kickingTeam 13, gamePhase 9, secsRemaining i16 14,
      * secondaryTime 16, teams at 18 of 90 bytes (20 players of 4 bytes at 10) */
     {19, 198, 1, 5, 10, 12, 13, 9, 14, 2, 16, 18, 90, 0, 4, 10, 4, 20, 3939, 4},
+    /* v20 (protocol.md 10.11): v19's header; teams at 18 of 70 bytes (20 players of 3 bytes at 10) */
+    {20, 158, 1, 5, 10, 12, 13, 9, 14, 2, 16, 18, 70, 0, 4, 10, 3, 20, 3939, 4},
 };
 
 /** How long a higher version, once used, keeps lower versions ignored: two GameController rounds. */
@@ -110,7 +113,7 @@ static bool send_return(uint8_t message) {
         p[7] = message;
         n = 8;
     } else {
-        /* version 4 (with 19): playerNum, teamNum, fallen, pose[3], ballAge, ball[2] as floats. Alive means
+        /* version 4 (with 19 and 20): playerNum, teamNum, fallen, pose[3], ballAge, ball[2] as floats. Alive means
          * "not fallen"; no pose or ball is known to the library: zeros and ballAge -1 (never seen). */
         static const uint8_t minus_one[4] = {0x00, 0x00, 0x80, 0xBF};
         p[5] = fr_state.settings.player_number;

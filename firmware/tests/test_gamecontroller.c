@@ -1,6 +1,6 @@
 /* firmware/tests/test_gamecontroller.c: GameController packets (docs/protocol.md section 10): the real packets
  * of wire/src/test/resources/vectors/gamecontroller, versions 12 and 19 built field by field from
- * their official layouts, the version preference and the return packets. */
+ * their official layouts, the gateway's version-20 vectors, the version preference and the return packets. */
 #include <stdio.h>
 #include <string.h>
 #include "check.h"
@@ -140,6 +140,60 @@ static void test_gateway_vectors(void) {
     CHECK(fr_gc_parse(p, n, 12, 1, &g) && g.game_state == 4 && !g.first_half && g.secs_remaining == 0);
 }
 
+/* The gateway's version-20 vectors (docs/protocol.md 10.11): every state in both halves, every penalty by its
+ * code, and the answer: RGrt version 4 (32 bytes) to 3939, as for version 19. */
+static void test_v20(void) {
+    uint8_t p[1024];
+    fr_game_t g;
+    static const char *names[] = {"initial", "ready", "set", "playing", "finished"};
+    for (uint8_t state = 0; state < 5; state++)
+        for (int half = 1; half >= 0; half--) {
+            char file[64];
+            snprintf(file, sizeof file, "v20-%s%s.bin", names[state], half ? "" : "-second-half");
+            size_t n = load(file, p, sizeof p);
+            CHECK(n == 158);
+            CHECK(fr_gc_parse(p, n, 12, 3, &g) && g.version == 20 && g.game_state == state && g.first_half == half &&
+                  g.packet_number == state + (half ? 1 : 11) && g.team_index == 0);
+            CHECK(g.secs_remaining == (state == 3 ? 587 : state == 4 ? 0 : 600));
+            CHECK(g.secondary_time == (state == 1 ? 45 : state == 3 ? 30 : 0));
+            CHECK(g.score == (state >= 3 ? 2 : 0) && g.opponent_score == (state >= 3 ? 1 : 0));
+            /* player 3 of team 12 pushed in PLAYING: 10 in version 20, 25 s */
+            CHECK(g.penalty == (state == 3 ? 10 : 0) && g.secs_till_unpenalised == (state == 3 ? 25 : 0));
+            CHECK(fr_gc_parse(p, n, 7, 8, &g) && g.team_index == 1 && g.penalty == 13); /* a substitute */
+            CHECK(!fr_gc_parse(p, n - 1, 12, 3, &g) && !fr_gc_parse(p, n, 12, 21, &g));
+        }
+    /* every penalty: player i + 1 of team 12 has code i, motion in stop (3) and cautioned (11) among them */
+    size_t n = load("v20-penalties.bin", p, sizeof p);
+    for (uint8_t code = 0; code <= 13; code++) {
+        CHECK(fr_gc_parse(p, n, 12, (uint8_t)(code + 1), &g) && g.penalty == code);
+        CHECK(g.secs_till_unpenalised == (code == 0 || code == 12 || code == 13 ? 0 : 10 + code));
+    }
+    /* a version-8 packet is 158 bytes too: byte 4 tells them apart */
+    n = load("v8-playing.bin", p, sizeof p);
+    CHECK(fr_gc_parse(p, n, 12, 3, &g) && g.version == 8);
+    /* answered with RGrt version 4 at the sender's 3939 */
+    n = load("v20-playing.bin", p, sizeof p);
+    start(12, 3);
+    fake_receive(&gc_at, p, n);
+    fr_poll();
+    CHECK(games == 1 && last_game.version == 20 && last_game.game_state == 3);
+    CHECK(fake_sent_count == 1 && fake_sent[0].peer.port == 3939 && memcmp(fake_sent[0].peer.ip, gc_at.ip, 4) == 0);
+    CHECK(same_bytes(fake_sent[0].data, fake_sent[0].len,
+                     "52 47 72 74 04 03 0C 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 80 BF 00 00 00 00 00 00 00 00"));
+    /* a version-19 copy of the same round is the older one: neither used nor answered */
+    uint8_t v19[256];
+    size_t n19 = load("v19-playing.bin", v19, sizeof v19);
+    fake_clear_sent();
+    fake_receive(&gc_at, v19, n19);
+    fr_poll();
+    CHECK(games == 1 && fake_sent_count == 0);
+    /* an unknown later version is not read by the library: ignored, not answered */
+    p[4] = 21;
+    fake_receive(&gc_at, p, n);
+    fr_poll();
+    CHECK(games == 1 && fake_sent_count == 0);
+}
+
 static void test_answers(void) {
     uint8_t v8[200], v7[200];
     size_t n8 = load("v8-playing.bin", v8, sizeof v8), n7 = load("v7-playing.bin", v7, sizeof v7);
@@ -208,6 +262,7 @@ int main(void) {
     test_vectors();
     test_v12_v19();
     test_gateway_vectors();
+    test_v20();
     test_answers();
     return DONE();
 }

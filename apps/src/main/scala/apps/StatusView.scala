@@ -8,7 +8,8 @@ import naogateway.wire.gamecontroller.{
   GameState,
   HlControlData,
   HlSecondaryState,
-  HslControlData,
+  HslGameData,
+  PlayerPenalty,
   SecondaryGameState,
   SetPlay
 }
@@ -41,14 +42,27 @@ object StatusView {
   /** A number that is not finite shows as "-" rather than as "NaN" or "Infinity". */
   private def finite(d: Double)(f: Double => String): String = if (d.isNaN || d.isInfinite) "-" else f(d)
 
-  /** One line describing a robot (its [[RobotRow]]), as both the screen and the plain lines use it. */
-  def robotLine(r: RobotSnapshot, link: Option[LinkStats]): String = {
+  /** The GameController's penalty of robot `r` in `game`: the robot is player number `robotId` of the team its
+    * keep-alive names (docs/protocol.md 10.11).
+    */
+  def penalty(r: RobotSnapshot, game: Option[GameControlData]): Option[PlayerPenalty] =
+    for {
+      g <- game
+      team <- r.teamId
+      p <- g.penaltyOf(team, r.robotId)
+    } yield p
+
+  /** One line describing a robot (its [[RobotRow]]), as both the screen and the plain lines use it, with its penalty
+    * when the GameController has taken it off the game.
+    */
+  def robotLine(r: RobotSnapshot, link: Option[LinkStats], game: Option[GameControlData] = None): String = {
     val row = RobotRow.of(r, link)
     f"robot ${row.robotId}%-3d ${row.linkState}%-7s ${opt(row.quality)(_.name)}%-8s " +
       f"battery ${opt(row.battery)(v => f"$v%.2f V")}%-8s posture ${opt(row.posture)(_.name)}%-8s " +
       f"role ${opt(row.report.role)(Printable.text)}%-9s rtt ${opt(row.rttMillis)(v => f"$v%.1f ms")}%-9s " +
       f"loss ${opt(row.loss)(v => f"${v * 100}%.0f %%")}%-5s " + row.address.getOrElse("-") +
-      (if (row.report.development) " development build" else "")
+      (if (row.report.development) " development build" else "") +
+      penalty(r, game).fold("")(p => s" PENALISED: ${p.describe}")
   }
 
   /** The game state as the GameController's display names it: PLAYING, READY, ... */
@@ -58,14 +72,14 @@ object StatusView {
   }
 
   /** What a version says beside the main state, in words: the phase (shoot-out, extra time, time-out), the set play,
-    * and in version 19 whether play is stopped. Empty in regular play.
+    * and in versions 20 and 19 whether play is stopped. Empty in regular play.
     */
   def situation(game: GameControlData): Vector[String] = game match {
     case g: ControlData2014 =>
       Vector(g.secondaryGameState).filter(_ != SecondaryGameState.Normal).map(words)
     case g: HlControlData =>
       Vector(g.secondaryState).filter(_ != HlSecondaryState.Normal).map(words)
-    case g: HslControlData =>
+    case g: HslGameData =>
       Vector(g.gamePhase).filter(_ != GamePhase.Normal).map(words) ++
         Vector(g.setPlay).filter(_ != SetPlay.NoSetPlay).map(words) ++ Option.when(g.stopped)("stopped").toVector
   }
@@ -84,7 +98,13 @@ object StatusView {
       s"(team ${g.team0.teamNumber} : team ${g.team1.teamNumber}), version ${g.version.number}"
   }
 
-  private def kind(reason: Option[String]): Option[String] = reason.map(_.takeWhile(_ != '('))
+  /** What a gate reason says, without its figures (in parentheses); "the game is running" and "opening once the game
+    * has not run for a while" are one kind, so forged packets flipping between them print no line per packet.
+    */
+  private def kind(reason: Option[String]): Option[String] = reason.map(_.takeWhile(_ != '(').trim).map {
+    case r if r.startsWith("opening once") || r.startsWith("the game is running") => "the game"
+    case r                                                                        => r
+  }
 
   /** The team's message budget and every warning (a second GameController, the budget), each on a line of its own. */
   def sourceLines(source: GameSource): Vector[String] =
@@ -140,7 +160,7 @@ object StatusView {
       model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(
         gateLine(model.traffic),
         trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
-      model.robots.map(r => robotLine(r, model.links.get(r.robotId))) ++ model.gameSource.toVector.flatMap(
+      model.robots.map(r => robotLine(r, model.links.get(r.robotId), model.game)) ++ model.gameSource.toVector.flatMap(
         monitorLines) ++
       Vector("", "Ctrl-C stops everything.")
   }
@@ -162,13 +182,17 @@ object StatusView {
     */
   def changes(before: StatusModel, after: StatusModel): Vector[String] = {
     val old = before.robots.map(r => r.robotId -> r).toMap
+    // A penalty is news when it starts, ends or changes kind, not each second its clock counts down.
+    def penaltyName(r: RobotSnapshot, m: StatusModel) = penalty(r, m.game).map(_.name)
     val robots = after.robots.flatMap { r =>
+      val line = Some(robotLine(r, after.links.get(r.robotId), after.game))
       old.get(r.robotId) match {
-        case Some(o) if o.signing != r.signing && !r.online            => Some(robotLine(r, after.links.get(r.robotId)))
+        case Some(o) if penaltyName(o, before) != penaltyName(r, after)    => line
+        case Some(o) if o.signing != r.signing && !r.online            => line
         case Some(o) if o.online == r.online && o.posture == r.posture => None
         case Some(o) if o.online == r.online && !r.online              => None
         case None if !r.online && r.signing != SigningState.Unsigned   => None
-        case _                                                         => Some(robotLine(r, after.links.get(r.robotId)))
+        case _                                                         => line
       }
     }
     val game =

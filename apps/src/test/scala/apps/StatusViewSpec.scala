@@ -145,6 +145,54 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
         .map(t => StatusModel.empty.copy(traffic = t))
       off.zip(off.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe empty
     }
+    "print one line per change of the gate's reason, not one per packet: its figures and forged flips are no news" in {
+      val playing = traffic.copy(competition = true, gameRunning = true,
+        gateReason = Some("the game is running (Playing)"))
+      val opening = playing.copy(gateReason =
+        Some("opening once the game has not run for a while (Initial, 3 s more, 1 contradiction(s) so far)"))
+      def unreadable(n: Int) = playing.copy(gateReason =
+        Some(s"the trusted GameController's packet cannot be read (RGme of unknown version 14, 200 bytes; $n so far)"))
+      val seen = Seq(playing, opening, playing, opening, playing) ++ (1 to 20).map(unreadable) :+
+        traffic.copy(competition = true)
+      val models = (None +: seen.map(Some(_))).map(t => StatusModel.empty.copy(traffic = t))
+      models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) } shouldBe Vector(
+        StatusView.gateLine(Some(playing)),
+        StatusView.gateLine(Some(unreadable(1))),
+        "competition gate: open"
+      )
+      StatusView.gateLine(Some(unreadable(1))) should include("(RGme of unknown version 14, 200 bytes; 1 so far)")
+    }
+    "show a robot the GameController penalised beside it, by name with the seconds left, and print a line when it is" in {
+      def game(file: String) = naogateway.wire.gamecontroller.GameControllerCodec.decodeControl(
+        StatusViewSpec.vector(file)).toOption
+      // v20-playing.bin: player 3 of team 12 pushed, 25 s left; v20-penalties.bin: player 4 moved while play stopped.
+      val three = sitting.copy(robotId = 3, teamId = Some(12))
+      val four = sitting.copy(robotId = 4, teamId = Some(12))
+      StatusView.robotLine(three, None, game("v20-playing.bin")) should endWith(" PENALISED: pushing, 25 s left")
+      StatusView.robotLine(four, None, game("v20-penalties.bin")) should endWith(
+        " PENALISED: motion in stop, 13 s left")
+      StatusView.robotLine(three.copy(robotId = 12), None, game("v20-penalties.bin")) should endWith(
+        " PENALISED: cautioned, 21 s left")
+      StatusView.robotLine(four, None, game("v20-playing.bin")) should not include "PENALISED"
+      StatusView.robotLine(three.copy(teamId = Some(7)), None, game("v20-playing.bin")) should not include "PENALISED"
+      StatusView.robotLine(three.copy(teamId = None), None, game("v20-playing.bin")) should not include "PENALISED"
+      StatusView.robotLine(three, None, game("v19-playing.bin")) should endWith(" PENALISED: pushing, 25 s left")
+      StatusView.render(StatusModel(Vector(three), Map.empty, None, game("v20-playing.bin"))).exists(
+        _.endsWith("PENALISED: pushing, 25 s left")) shouldBe true
+      // The line view: one line when the penalty starts and one when it ends, none as its clock counts down.
+      val playing = game("v20-playing.bin").collect { case d: naogateway.wire.gamecontroller.Hsl20ControlData => d }.get
+      def left(secs: Int) = playing.copy(team0 = playing.team0.copy(players =
+        playing.team0.players.updated(2, playing.team0.players(2).copy(secsTillUnpenalised = secs))))
+      val free = playing.copy(team0 = playing.team0.copy(players = playing.team0.players.updated(2,
+        naogateway.wire.gamecontroller.Hsl20PlayerInfo.Unpenalised)))
+      val models = Seq(free, left(25), left(24), left(23), free).map(g =>
+        StatusModel(Vector(three), Map.empty, None, Some(g)))
+      val lines = models.zip(models.tail).flatMap { case (a, b) => StatusView.changes(a, b) }
+        .filter(_.startsWith("robot"))
+      lines.size shouldBe 2
+      lines.head should endWith("PENALISED: pushing, 25 s left")
+      lines(1) should not include "PENALISED"
+    }
     "show the message budget and the warnings on the screen, and print a warning line when one first appears" in {
       val quiet = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0,
         Some("team messages (team 12, UDP 10012): 12000 of 12000 left"))
@@ -269,7 +317,8 @@ object StatusViewSpec {
 
   /** The 2014 vectors with arbitrary values where the view reads them, or any value of versions 19 and 12. */
   private val genGame: Gen[GameControlData] =
-    Gen.oneOf(gen2014, GameControllerGenerators.controlV19, GameControllerGenerators.controlV12)
+    Gen.oneOf(gen2014, GameControllerGenerators.controlV20, GameControllerGenerators.controlV19,
+      GameControllerGenerators.controlV12)
 
   val genModel: Gen[StatusModel] = for {
     robots <- Gen.choose(0, 12).flatMap(Gen.listOfN(_, genRobot))

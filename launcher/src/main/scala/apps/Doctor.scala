@@ -106,15 +106,32 @@ object Doctor {
             "GameController version",
             s"$unreadable packet(s) the gateway cannot read (refused as ${Rejection.BadGameControllerPacket.name})",
             s"the gateway reads versions ${GameControlVersion.all.map(_.number).mkString(", ")} (docs/protocol.md " +
-              s"§10); " +
+              s"§10), and 18 or a later one by its shared header (§10.12); " +
               "a GameController of another version closes the competition gate (fail safe, §10.7) until the gateway " +
               "is updated"
           ))
       else Vector.empty
     // A second GameController on the field, the team's message budget running out, messages over the size limit.
-    val warnings = game.source.warnings.map(w =>
-      fail("GameController", w,
-        "see docs/protocol.md §10.8; game state is taken only from naogateway.game-controller.trusted-sources"))
+    // A GameController of a version read by its shared header only, contradictions the competition gate counted.
+    val warnings = game.source.warnings.map {
+      case w if w.startsWith("GameController version") =>
+        fail(
+          "GameController version",
+          w,
+          "the gate follows its shared header, the teams and penalties are not shown: update naogateway " +
+            "(docs/protocol.md §10.12)"
+        )
+      case w if w.startsWith("competition gate") =>
+        fail(
+          "competition gate",
+          w,
+          "someone on the WiFi may forge the GameController's packets, or a second GameController shares its " +
+            "address: the gate stays closed meanwhile (docs/protocol.md §10.7); find the sender"
+        )
+      case w =>
+        fail("GameController", w,
+          "see docs/protocol.md §10.8; game state is taken only from naogateway.game-controller.trusted-sources")
+    }
     val budget = game.source.budget.toVector.map(b => ok("team messages", b))
     val gate =
       if (!game.competition)

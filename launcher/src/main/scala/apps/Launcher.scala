@@ -292,7 +292,7 @@ object Launcher {
       val number = c.getInt("game-controller-version")
       val version = naogateway.wire.gamecontroller.GameControlVersion.all.find(_.number == number).getOrElse(
         throw new IllegalArgumentException(
-          s"apps.launcher.game-controller-version $number: the simulation plays 19, 12, 8 or 7"))
+          s"apps.launcher.game-controller-version $number: the simulation plays 20, 19, 12, 8 or 7"))
       context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target,
             version = version)), "game-controller")
     }

@@ -66,6 +66,19 @@ class DoctorSpec extends AnyWordSpec with Matchers {
       p.head should include("naogateway.game-controller.trusted-sources")
     }
 
+    "warn of a GameController read by its shared header only, and of contradictions the competition gate counted" in {
+      val later = "GameController version 21 (170 bytes) is not known to this gateway: only the header versions 18 " +
+        "to 20 share is read (Playing), the teams and penalties are not; update naogateway (docs/protocol.md 10.12)"
+      val forged = "competition gate: 7 contradiction(s) while it waited to open (a packet saying the game runs, ...)"
+      val p = problems(allWell.copy(game = heardGame.copy(source = heardGame.source.copy(warnings =
+          Vector(later, forged)))))
+      p should have size 2
+      p.head should startWith("FAIL GameController version: GameController version 21 (170 bytes) is not known")
+      p.head should include("§10.12")
+      p(1) should startWith("FAIL competition gate: competition gate: 7 contradiction(s)")
+      p(1) should include("§10.7")
+    }
+
     "find GameController packets the gateway cannot read (a version it does not know)" in {
       val p =
         problems(allWell.copy(game = heardGame.copy(refused = Map(Rejection.BadGameControllerPacket.name -> 40L))))
@@ -77,14 +90,15 @@ class DoctorSpec extends AnyWordSpec with Matchers {
       val unreadable = heardGame.copy(
         latest = None,
         refused = Map(Rejection.BadGameControllerPacket.name -> 3L),
-        gateReason = Some("the trusted GameController's packet cannot be read: unknown version 20")
+        gateReason = Some("the trusted GameController's packet cannot be read (RGme of unknown version 14, 200 bytes)")
       )
       val p = problems(allWell.copy(game = unreadable))
       p.exists(l =>
-        l.startsWith("FAIL GameController version: 3 packet(s)") && l.contains("versions 19, 12, 8, 7") && l.contains(
+        l.startsWith("FAIL GameController version: 3 packet(s)") && l.contains("versions 20, 19, 12, 8, 7") && l.contains(
           "fail safe")) shouldBe true
       p should contain(
-        "FAIL competition gate: on and closed: the trusted GameController's packet cannot be read: unknown version 20; " +
+        "FAIL competition gate: on and closed: the trusted GameController's packet cannot be read (RGme of unknown " +
+          "version 14, 200 bytes); " +
           "fix: see the GameController checks above")
     }
 

@@ -7,7 +7,13 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 
 import naogateway.link.UdpLink
 import naogateway.wire.Datagram
-import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion, GameControllerCodec}
+import naogateway.wire.gamecontroller.{
+  GameControlData,
+  GameControlVersion,
+  GameControllerCodec,
+  GameControllerError,
+  SharedHeader
+}
 
 /** The gateway's GameController side, run inside the gateway actor (its state is the gateway's, touched only from its
   * messages): which packets count and from whom, the game state they give, the gates they set, the team's message
@@ -29,7 +35,10 @@ private[naogateway] final class GameControllerWatch(
   private var game: Option[GameControlData] = None
   private var gameFrom: Option[InetSocketAddress] = None
   private var untrusted = 0L
-  private var lastUnreadable: Option[(Long, String)] = None
+  private var unreadable = 0L
+  private var latch = GateLatch.start(settings.competition, settings.gateOpenAfter.toNanos)
+  // The last packet read by its shared header only (docs/protocol.md 10.12): when, its version and size, its state.
+  private var headerOnly: Option[(Long, SharedHeader)] = None
   private var sources = GameControllerSources()
   private var trueStateAt: Option[Long] = None
   private var forwarded = ForwardedStatuses()
@@ -41,6 +50,13 @@ private[naogateway] final class GameControllerWatch(
   /** The latest game state that counted, if any. */
   def state: Option[GameControlData] = game
 
+  /** The gate's reading at the gateway's start: closed in competition mode until the trusted GameController is heard.
+    */
+  def start(): Unit = gate(latch.reading)
+
+  /** The gate's present reading (the outbox holds the same). */
+  def reading: GameReading = latch.reading
+
   /** Where game state comes from, as `GetGameSource` answers. */
   def source(now: Long): Gateway.GameSource =
     Gateway.GameSource(
@@ -48,7 +64,8 @@ private[naogateway] final class GameControllerWatch(
       gameFrom,
       untrusted,
       Option.when(settings.teamMessages.enabled)(budget.describe(now)),
-      sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty),
+      sources.warnings(now) ++ (if (settings.teamMessages.enabled) budget.warnings(now) else Vector.empty) ++
+        gateWarnings(now),
       trueStateAt.map(at => (now - at) / 1000000L),
       forwarded.sorted
     )
@@ -86,13 +103,34 @@ private[naogateway] final class GameControllerWatch(
     )
   }
 
+  /** What the gate's rule has seen that the operator should know: contradictions while it waited to open, and a
+    * GameController of a version this gateway reads only by its shared header.
+    */
+  private def gateWarnings(now: Long): Vector[String] =
+    Vector(
+      Option.when(latch.contradictions > 0)(
+        s"competition gate: ${latch.contradictions} contradiction(s) while it waited to open (a packet saying the " +
+          "game runs, unreadable, or out of sequence between packets saying it does not: a forged packet or a second " +
+          "GameController on the trusted address?)"),
+      headerOnly.filter { case (at, _) => now - at < GameControllerSources.QuietNanos }.map { case (_, h) =>
+        s"GameController version ${h.versionNumber} (${h.packetBytes} bytes) is not known to this gateway: only the " +
+          s"header versions 18 to 20 share is read (${h.gameState}), the teams and penalties are not; update " +
+          "naogateway (docs/protocol.md 10.12)"
+      }
+    ).flatten
+
+  /** The trusted GameController dropped over the port's rate cap: packets not read, so the gate closes (fail safe). */
+  def trustedDropped(count: Long): Unit =
+    advance(latch.unreadable(s"$count packet(s) from a trusted source dropped over the rate cap"))
+
   /** A control packet from an address not trusted for game state: anyone on the field's WiFi can send one, and only the
     * configured GameController steers the gate. A readable one is still noted, so a second GameController is named.
     */
   def untrustedPacket(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     untrusted += 1
     rejections.count(Rejection.UntrustedGameController, from)
-    GameControllerCodec.decodeControl(bytes).foreach(heard(_, from, trusted = false, System.nanoTime()))
+    GameControllerCodec.decodeControl(bytes).foreach(d =>
+      heard(d.packetNumberOnWire, from, trusted = false, System.nanoTime()))
   }
 
   /** A team message heard on the team port: it counts against the budget. */
@@ -110,16 +148,24 @@ private[naogateway] final class GameControllerWatch(
         case Left(error)            => rejections.count(Rejection.BadGameControllerPacket, from, error.describe)
       }
 
-  /** A packet on the GameController port from a trusted address. */
+  /** A packet on the GameController port from a trusted address. Whatever says the game runs closes the gate at once
+    * (docs/protocol.md 10.7), whichever trusted sender it came from.
+    */
   def trustedPacket(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     val now = System.nanoTime()
+    // Closes an open gate, or restarts a wait to open; a gate closed already keeps its reason.
+    def closing(data: GameControlData): Unit =
+      if (CompetitionGate.gameRunning(data.gameState) && (latch.open || latch.quietSince.isDefined))
+        advance(latch.packet(GateLatch.known(data.gameState, data.version), data.packetNumberOnWire, now))
     GameControllerCodec.decodeControl(bytes) match {
-      case Right(data) if !heard(data, from, trusted = true, now) =>
-        // A second trusted GameController while the first keeps sending: named in the warnings, never obeyed.
+      case Right(data) if !heard(data.packetNumberOnWire, from, trusted = true, now) =>
+        // A second trusted GameController while the first keeps sending: named in the warnings, obeyed only to close.
         rejections.count(Rejection.UntrustedGameController, from, "a second GameController")
-      case Right(_) if trueStateFresh(now) =>
+        closing(data)
+      case Right(data) if trueStateFresh(now) =>
         // The monitor role: the broadcast state may lag the true one by up to 10 s; the true one rules meanwhile.
         packets += 1
+        closing(data)
       case Right(data) => control(data, from, now)
       case Left(_)
           if settings.monitor.exists(_.gameController.getAddress == from.getAddress) &&
@@ -127,14 +173,48 @@ private[naogateway] final class GameControllerWatch(
         control(GameControllerCodec.decodeTrueData(bytes).toOption.get, from, now)
         trueStateAt = Some(now)
       case Left(error) if Datagram.isGameControllerControl(bytes) =>
-        // The trusted GameController sends what this gateway cannot read (a version yet to come): it may well be
-        // running a game, so the gate closes (fail safe) and says why, rather than stay open as if none were.
-        rejections.count(Rejection.BadGameControllerPacket, from, error.describe)
-        lastUnreadable = Some(now -> error.describe)
-        gate(GameReading.Unreadable(error.describe))
+        GameControllerCodec.decodeSharedHeader(bytes) match {
+          case Right(header) => sharedHeader(header, from, now)
+          case Left(_)       =>
+            // The trusted GameController sends what this gateway cannot read: it may well be running a game, so the
+            // gate closes (fail safe) and says why, in words that stay the same from packet to packet.
+            rejections.count(Rejection.BadGameControllerPacket, from, error.describe)
+            unreadable += 1
+            advance(latch.unreadable(s"${unreadableReason(error, bytes)}; $unreadable so far"))
+        }
       case Left(error) =>
         rejections.count(Rejection.BadGameControllerPacket, from, error.describe)
     }
+  }
+
+  /** Why a packet is unreadable, without what changes from packet to packet (its packet number). */
+  private def unreadableReason(error: GameControllerError, bytes: Array[Byte]): String = error match {
+    case GameControllerError.UnknownVersion(header, found) =>
+      s"$header of unknown version ${found.headOption.fold(-1)(_ & 0xff)}, ${bytes.length} bytes"
+    case other => other.describe
+  }
+
+  /** A packet of an unknown version read by its shared header: the gate follows it, with a warning; the view keeps the
+    * last fully read packet, since the teams cannot be read.
+    */
+  private def sharedHeader(h: SharedHeader, from: InetSocketAddress, now: Long): Unit =
+    if (heard(Some(h.packetNumber), from, trusted = true, now)) {
+      packets += 1
+      gameFrom = Some(from)
+      if (headerOnly.forall { case (_, last) => last.versionNumber != h.versionNumber })
+        context.log.warn("GameController version {} ({} bytes) is not known: reading only its shared header",
+          h.versionNumber, h.packetBytes)
+      headerOnly = Some(now -> h)
+      advance(latch.packet(GameReading.HeaderOnly(h.gameState, h.versionNumber, h.packetBytes), Some(h.packetNumber),
+          now))
+    } else if (CompetitionGate.gameRunning(h.gameState) && (latch.open || latch.quietSince.isDefined))
+      advance(latch.packet(GameReading.HeaderOnly(h.gameState, h.versionNumber, h.packetBytes), Some(h.packetNumber),
+          now))
+
+  /** The gate after one more trusted packet: every packet's reading reaches the outbox. */
+  private def advance(next: GateLatch): Unit = {
+    latch = next
+    gate(latch.reading)
   }
 
   /** Whether the monitor role's true state is fresh enough that the broadcast one is not used. */
@@ -147,7 +227,7 @@ private[naogateway] final class GameControllerWatch(
     gameFrom = Some(from)
     if (settings.teamMessages.enabled) budget = budget.game(data)
     val changed = !game.exists(_.gameState == data.gameState)
-    gate(CompetitionGate.reading(data.gameState, data.version, lastUnreadable, now))
+    advance(latch.packet(GateLatch.known(data.gameState, data.version), data.packetNumberOnWire, now))
     // The 2014 GameController sends versions 8 and 7 each round; the richer (newer) packet is the one to keep.
     if (game.forall(g => rank(data.version) <= rank(g.version)) || changed) {
       game = Some(data)
@@ -156,8 +236,8 @@ private[naogateway] final class GameControllerWatch(
   }
 
   /** Notes the sender of a readable control packet; true when its game state counts (see GameControllerSources). */
-  private def heard(data: GameControlData, from: InetSocketAddress, trusted: Boolean, now: Long): Boolean = {
-    val (next, use) = sources.packet(from, data.packetNumberOnWire, trusted, now)
+  private def heard(packetNumber: Option[Int], from: InetSocketAddress, trusted: Boolean, now: Long): Boolean = {
+    val (next, use) = sources.packet(from, packetNumber, trusted, now)
     if (next.others(now).nonEmpty && sources.others(now).isEmpty)
       context.log.warn("{}", next.warnings(now).mkString("; "))
     sources = next

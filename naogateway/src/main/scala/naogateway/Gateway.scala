@@ -130,8 +130,13 @@ object Gateway {
           UdpLink(
             new InetSocketAddress(settings.gameControllerBindAddress, settings.gameControllerPort),
             context.messageAdapter(GameControllerEvent.apply),
-            UdpLink.Options(reuseAddress = settings.gameControllerReuseAddress, broadcast = true,
-              maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond)
+            UdpLink.Options(
+              reuseAddress = settings.gameControllerReuseAddress,
+              broadcast = true,
+              maxDatagramsPerSecond = settings.gameControllerMaxDatagramsPerSecond,
+              // Trust before the cap (docs/protocol.md 10.7): a stranger's flood cannot crowd out the GameController.
+              trusted = a => settings.gameControllerTrusted.configured && settings.gameControllerTrusted.trusts(a)
+            )
           ),
           "game-controller-link"
         )
@@ -196,6 +201,7 @@ object Gateway {
 
     /** The configured robots, then the reader: it never sees a table without them. */
     def start(): Unit = {
+      watch.start()
       settings.robots.foreach(r => spawnRobot(r.robotId, r.address, discovered = false))
       settings.zeromq.robots.foreach(spawnZeroMqRobot)
       // On the robot dispatcher's own thread when it is a port loop (reference.conf): a robot's answer then wakes one
@@ -334,6 +340,7 @@ object Gateway {
           Behaviors.same
         case GameControllerEvent(d: UdpLink.Dropped) =>
           overCap(d, "GameController")
+          if (d.trusted) watch.trustedDropped(d.count)
           Behaviors.same
         case TeamMessageEvent(d: UdpLink.Dropped) =>
           overCap(d, "team message")

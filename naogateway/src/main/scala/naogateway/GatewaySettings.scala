@@ -170,8 +170,23 @@ final case class GatewaySettings(
     snapshotTimeout: FiniteDuration = 1.second,
     robotBacklog: Int = 256,
     gatewayBacklog: Int = 1024,
-    supervision: SupervisionSettings = SupervisionSettings()
+    supervision: SupervisionSettings = SupervisionSettings(),
+    gateOpenAfter: FiniteDuration = 3.seconds,
+    maxTrustedRange: Int = 32
 ) {
+  require(
+    gateOpenAfter >= 1.second && gateOpenAfter <= 1.minute,
+    "game-controller.gate-open-after must be 1 s to 60 s (longer than the GameController's 500 ms interval)"
+  )
+  require(maxTrustedRange >= 1 && maxTrustedRange <= 32,
+    "game-controller.max-trusted-range must be an IPv4 prefix length from 1 to 32 (32: a single address)")
+  require(
+    !competition || gameControllerTrusted.subnets.forall(TrustedSources.narrowEnough(_, maxTrustedRange)),
+    s"competition mode refuses a trusted GameController range wider than /$maxTrustedRange " +
+      s"(game-controller.trusted-sources = ${gameControllerTrusted.describe}): on a shared WiFi anyone in the range " +
+      "could start or end the game for the gateway. Name the GameController's own address, or confirm the range's " +
+      "width in game-controller.max-trusted-range (docs/protocol.md 10.7)"
+  )
   require(gameControllerMaxDatagramsPerSecond > 0, "game-controller.max-datagrams-per-second must be positive")
   require(robotBacklog >= 1 && robotBacklog <= 100000, "link.robot-backlog must be between 1 and 100000")
   require(gatewayBacklog >= 1 && gatewayBacklog <= 100000, "link.gateway-backlog must be between 1 and 100000")
@@ -331,6 +346,8 @@ object GatewaySettings {
         )
       },
       gameControllerMaxDatagramsPerSecond = gc.getInt("max-datagrams-per-second"),
+      gateOpenAfter = duration(gc, "gate-open-after"),
+      maxTrustedRange = gc.getInt("max-trusted-range"),
       snapshotTimeout = duration(c, "snapshot-timeout"),
       robotBacklog = link.getInt("robot-backlog"),
       gatewayBacklog = link.getInt("gateway-backlog"),

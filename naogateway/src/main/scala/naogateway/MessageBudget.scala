@@ -1,6 +1,6 @@
 package naogateway
 
-import naogateway.wire.gamecontroller.{GameControlData, GamePhase, GameState, HslControlData}
+import naogateway.wire.gamecontroller.{GameControlData, GamePhase, GameState, HslGameData}
 
 /** The team-message rules of the Humanoid Soccer League's GameController (`naogateway.game-controller.team-messages`;
   * its `params.yaml` and README "Message Counting").
@@ -62,11 +62,11 @@ final case class TeamMessageSettings(
   * @param overBudget
   *   messages counted with the budget at 0
   * @param phase
-  *   the game phase the last packet that told it said (a version-19 one outside a timeout)
+  *   the game phase the last packet that told it said (a version-19 or -20 one outside a timeout)
   * @param extraTimeGranted
   *   whether this game's extra time has started (and `perExtraTime` was added, unless the team was illegal)
   * @param reported
-  *   the trusted GameController's own `messageBudget` for our team (version 19 only)
+  *   the trusted GameController's own `messageBudget` for our team (versions 19 and 20)
   * @param rateBuckets
   *   counted messages per whole second of the gateway's clock, the last `rateWindowSeconds` of them
   */
@@ -116,10 +116,10 @@ private[naogateway] final case class MessageBudget(
 
   /** A packet of the trusted GameController. */
   def game(data: GameControlData): MessageBudget = {
-    // Only version 19 tells the phase; a timeout hides it, so the phase before it holds.
+    // Only versions 19 and 20 tell the phase; a timeout hides it, so the phase before it holds.
     val told = data match {
-      case d: HslControlData if d.gamePhase != GamePhase.Timeout => Some(d.gamePhase)
-      case _                                                     => None
+      case d: HslGameData if d.gamePhase != GamePhase.Timeout => Some(d.gamePhase)
+      case _                                                  => None
     }
     // StartExtraTime: from the normal phase's second half to extra time's first.
     val extraTimeStarts =
@@ -132,8 +132,8 @@ private[naogateway] final case class MessageBudget(
       secsRemaining.exists(before =>
         data.secsRemaining - before >= ExtraMinuteSeconds - 1 && data.secsRemaining - before <= ExtraMinuteSeconds + 1)
     val ours = data match {
-      case d: HslControlData => Seq(d.team0, d.team1).find(_.teamNumber == settings.teamNumber).map(_.messageBudget)
-      case _                 => None
+      case d: HslGameData => Seq(d.team0, d.team1).find(_.teamNumber == settings.teamNumber).map(_.messageBudget)
+      case _              => None
     }
     base.copy(
       remaining = (if (extra && !base.illegal) base.remaining + settings.perExtraMinute else base.remaining) + granted,

@@ -48,6 +48,18 @@ object Subnet {
   }
 }
 
+/** Checks of trusted ranges. */
+object TrustedSources {
+
+  /** Whether `subnet` is no wider than an IPv4 `/maxPrefix` holds (an IPv6 one: the same number of addresses, a prefix
+    * 96 longer); `0.0.0.0/0` and `::/0` never are.
+    */
+  def narrowEnough(subnet: Subnet, maxPrefix: Int): Boolean = {
+    val hostBits = subnet.network.getAddress.length * 8 - subnet.prefixBits
+    subnet.prefixBits > 0 && hostBits <= 32 - maxPrefix
+  }
+}
+
 /** The sources whose GameController packets count; empty means any source (not allowed in competition mode). */
 final case class TrustedSources(subnets: Vector[Subnet]) {
 

@@ -19,7 +19,7 @@ import akka.{Done, NotUsed}
 
 import naogateway.{CallResult, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.{Posture, RpcValue}
-import naogateway.wire.gamecontroller.GameControlData
+import naogateway.wire.gamecontroller.{GameControlData, PlayerPenalty}
 
 /** What apps program against: commands as futures, robot data as streams; no app ever sees a gateway actor.
   *
@@ -92,6 +92,16 @@ trait RobotInterface {
 
   /** GameController packets as they arrive. */
   def gameState: Source[GameControlData, NotUsed]
+
+  /** The GameController's penalty of player `player` of team `teamNumber`, read from [[gameState]]: `None` while the
+    * player plays, the penalty (by name, with the seconds left) while it is off the game; each change once, not each
+    * packet. A robot is the player numbered by its robot id in the team its keep-alive names (docs/protocol.md 10.11).
+    */
+  def penalty(teamNumber: Int, player: Int): Source[Option[PlayerPenalty], NotUsed] =
+    gameState.map(_.penaltyOf(teamNumber, player)).statefulMapConcat { () =>
+      var last: Option[Option[PlayerPenalty]] = None
+      now => if (last.contains(now)) Nil else { last = Some(now); List(now) }
+    }
 
   /** Robots going online, offline, restarting, changing link quality. */
   def robotEvents: Source[RobotEvent, NotUsed]

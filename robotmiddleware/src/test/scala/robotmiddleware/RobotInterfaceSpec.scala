@@ -21,6 +21,29 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
   }
 
   "RobotInterface" should {
+    "stream a player's GameController penalty from the game state: each change once, by name with the seconds left" in {
+      import naogateway.wire.gamecontroller._
+      val (interface, middleware) = connected()
+      val seen = createTestProbe[Option[PlayerPenalty]]()
+      interface.penalty(12, 3).runWith(akka.stream.scaladsl.Sink.foreach(seen.ref ! _))(
+        akka.stream.Materializer(system))
+      val games = middleware.expectMessageType[RobotMiddleware.WatchGame]
+      val playing = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v20-playing.bin")) match {
+        case Right(d: Hsl20ControlData) => d
+        case other                      => fail(s"v20-playing.bin: $other")
+      }
+      def player3(p: Hsl20PlayerInfo) =
+        playing.copy(team0 = playing.team0.copy(players = playing.team0.players.updated(2, p)))
+      val free = player3(Hsl20PlayerInfo.Unpenalised)
+      Seq(free, playing, playing, player3(Hsl20PlayerInfo(Hsl20Penalty.Pushing, 24, 0)), free).foreach(
+        games.subscriber ! _)
+      seen.expectMessage(None)
+      seen.expectMessage(Some(PlayerPenalty(Hsl20Penalty.Pushing, 25)))
+      seen.expectMessage(Some(PlayerPenalty(Hsl20Penalty.Pushing, 24)))
+      seen.expectMessage(None)
+      seen.expectNoMessage(200.millis)
+      PlayerPenalty(Hsl20Penalty.MotionInStop, 13).describe shouldBe "motion in stop, 13 s left"
+    }
     "fail an operation the middleware never answers with RobotFailure.Timeout, not an ask timeout" in {
       val (interface, middleware) = connected()
       val stopped = interface.stop(4)

@@ -76,8 +76,11 @@ object DecisionJson {
         )
       case Decision.Gate(open, reading) =>
         val state = reading match {
-          case naogateway.GameReading.Known(s, _)        => s.toString
-          case naogateway.GameReading.Unreadable(reason) => s"unreadable: $reason"
+          case naogateway.GameReading.Known(s, _)               => s.toString
+          case naogateway.GameReading.HeaderOnly(s, version, _) => s"$s (shared header of version $version)"
+          case naogateway.GameReading.Unreadable(reason)        => s"unreadable: $reason"
+          case naogateway.GameReading.Opening(s, leftMillis, _) => s"$s (opening in $leftMillis ms)"
+          case naogateway.GameReading.NotHeard                  => "not heard"
         }
         obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state))
       case Decision.Budget(out, in, limit, queued) =>

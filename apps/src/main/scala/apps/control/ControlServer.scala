@@ -266,7 +266,7 @@ object ControlServer {
           val stats = all.map(r => linkStats(robots, r.robotId, settings.linkStatsTimeout))
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
-            .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout)).mapConcat(_.map(Answer.Line(_))))
+            .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout, all)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
               source.toList.flatMap(s =>
                 (apps.StatusView.sourceLines(s) ++ apps.StatusView.monitorLines(s)).map(Answer.Line(_))) :+
@@ -318,15 +318,20 @@ object ControlServer {
     }
   }
 
-  /** The game and the competition gate as the status screen shows them (with why a closed gate is closed), for the
-    * lines before the status's final one; none without a gateway or when it does not answer.
+  /** The game, the competition gate (with why a closed gate is closed) and each robot the GameController penalised, as
+    * the status screen shows them, for the lines before the status's final one; none without a gateway or when it does
+    * not answer.
     */
-  private def gameLines(gateway: Option[GatewaySide], timeout: FiniteDuration)(
+  private def gameLines(gateway: Option[GatewaySide], timeout: FiniteDuration, robots: Seq[RobotSnapshot])(
       implicit system: ActorSystem[_]): Future[List[String]] = {
     implicit val ec: ExecutionContext = system.executionContext
     gateway.fold(Future.successful(List.empty[String])) { g =>
       within(g.view.gameState(), timeout).zip(within(g.view.traffic(), timeout))
-        .map { case (gm, t) => List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) }
+        .map { case (gm, t) =>
+          List(apps.StatusView.gameLine(gm), apps.StatusView.gateLine(Some(t))) ++ robots.flatMap(r =>
+            apps.StatusView.penalty(r, gm).map(p =>
+              s"robot ${r.robotId} penalised by the GameController: ${p.describe}"))
+        }
         .recover { case NonFatal(_) => Nil }
     }
   }

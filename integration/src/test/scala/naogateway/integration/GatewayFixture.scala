@@ -115,6 +115,28 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     probe.receiveMessage(10.seconds)
   }
 
+  /** In competition mode: sends version-20 packets in `state` (INITIAL unless said) from `gc`, numbered one after the
+    * other from `firstNumber`, every 200 ms, until the gate opens (docs/protocol.md 10.7: it opens only after
+    * `gate-open-after` of such packets); at most 60 packets (12 s). Returns the next packet number.
+    */
+  def openGate(gc: java.nio.channels.DatagramChannel, firstNumber: Int = 1,
+      state: naogateway.wire.gamecontroller.GameState = naogateway.wire.gamecontroller.GameState.Initial): Int = {
+    import naogateway.wire.gamecontroller._
+    val base = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v20-initial.bin")) match {
+      case Right(d: Hsl20ControlData) => d.copy(gameState = state)
+      case other                      => throw new IllegalStateException(s"v20-initial.bin: $other")
+    }
+    var n = firstNumber
+    while (!traffic().gateOpen) {
+      if (n - firstNumber >= 60) throw new IllegalStateException(s"the gate did not open after 60 packets in $state")
+      val bytes = GameControllerCodec.encodeControl(base.copy(packetNumber = n & 0xff)).toOption.get
+      gc.send(java.nio.ByteBuffer.wrap(bytes), addresses.gameController.get)
+      n += 1
+      Thread.sleep(200)
+    }
+    n
+  }
+
   /** Stops every robot started here, then the gateway; returns once all of them have terminated. */
   def stop(): Unit = {
     val watcher = testKit.createTestProbe[Any]()

@@ -86,7 +86,11 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           game.receiveMessage() shouldBe None
           val traffic = createTestProbe[Outbox.TrafficStats]()
           f.gateway ! GatewayAccess.GetTraffic(traffic.ref)
-          traffic.receiveMessage().gateOpen shouldBe true
+          // Competition mode starts closed, and a stranger's packets neither close nor open it.
+          val closed = traffic.receiveMessage()
+          closed.gateOpen shouldBe false
+          closed.gateReason shouldBe Some(
+            "no packet from the trusted GameController yet (competition mode starts closed)")
           // The trusted GameController's packet counts, and the view learns where game state comes from.
           sendGameState(gc, f, GameState.Playing)
           f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Playing => () }
@@ -97,9 +101,18 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           seen.describe should include("5 packet(s) from elsewhere ignored")
         } finally { stranger.close(); gc.close() }
       }
-    "refuse to start competition mode without a trusted GameController source" in {
+    "refuse to start competition mode without a trusted GameController source, or trusting too wide a range" in {
       val e = intercept[IllegalArgumentException](new GatewayFixture(testKit, "competition.enabled = on"))
       e.getMessage should include("trusted-sources")
+      Seq("0.0.0.0/0", "127.0.0.0/8", "10.0.0.0/31").foreach { range =>
+        val wide = intercept[IllegalArgumentException](new GatewayFixture(testKit,
+            s"competition.enabled = on\ngame-controller.trusted-sources = [\"$range\"]"))
+        wide.getMessage should include("max-trusted-range")
+      }
+      val zero = intercept[IllegalArgumentException](new GatewayFixture(testKit,
+          "competition.enabled = on\ngame-controller.trusted-sources = [\"0.0.0.0/0\"]\n" +
+            "game-controller.max-trusted-range = 1"))
+      zero.getMessage should include("max-trusted-range")
     }
     "send requests and option commands to the robot's receive port (its IP, 3838), nothing to where it sends from" in
       withGateway() { f =>
@@ -239,13 +252,15 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
     }
 
     "send nothing to a robot while the game runs in competition mode, and fail calls at once naming the rule" in
-      withGateway("competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]") { f =>
+      withGateway("competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]\n" +
+        "game-controller.max-trusted-range = 8\ngame-controller.gate-open-after = 1s") { f =>
         val (robot, _) = f.robot(6)
         f.awaitEvent(10.seconds) { case RobotOnline(6, _) => () }
         val connected = f.connect(6)
-        call(connected, "system.ping").result.isRight shouldBe true
         val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
         try {
+          val next = f.openGate(gc)
+          eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
           sendGameState(gc, f, GameState.Playing)
           f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Playing => () }
           // The gateway told the outbox before it published kick-off, so this question reaches the outbox after the
@@ -267,7 +282,10 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           f.view(robot).stats.received shouldBe atKickOff.datagramsOut
           sendGameState(gc, f, GameState.Finished)
           f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
-          call(connected, "system.ping").result.isRight shouldBe true
+          // FINISHED opens the gate only after gate-open-after of such packets (docs/protocol.md 10.7).
+          f.traffic().gateOpen shouldBe false
+          f.openGate(gc, next, GameState.Finished)
+          eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
         } finally gc.close()
       }
 
@@ -278,10 +296,18 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         val endpoint = zeroMqRobot.boundEndpoint.get
         withGateway(s"""competition.enabled = on
           |game-controller.trusted-sources = ["127.0.0.0/8"]
+          |game-controller.max-trusted-range = 8
+          |game-controller.gate-open-after = 1s
             |zeromq.robots = [{ id = 25, endpoint = "$endpoint" }]""".stripMargin) { f =>
+          // Competition mode starts closed, and a ZeroMQ robot comes online only through the gate (its status polls):
+          // the GameController that opens it is the one that runs the game (a second one would be ignored).
+          val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
+          val next =
+            try f.openGate(gc)
+            catch { case e: Throwable => gc.close(); throw e }
           f.awaitEvent(15.seconds) { case RobotOnline(25, _) => () }
           val connected = f.connect(25)
-          call(connected, "system.ping").result.isRight shouldBe true
+          eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
           // A subscriber that calls the robot in the very message that tells it of kick-off.
           val results = createTestProbe[CallResult]()
           val eager = spawn(Behaviors.receiveMessage[GatewayEvent] {
@@ -292,13 +318,13 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           })
           // Subscribed before the packet is sent, so the gateway knows the subscriber when kick-off arrives.
           f.gateway ! GatewayAccess.Subscribe(eager)
-          val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
           try {
             sendGameState(gc, f, GameState.Playing)
             results.receiveMessage(10.seconds).result shouldBe Left(
               RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))
             sendGameState(gc, f, GameState.Finished)
             f.awaitEvent(10.seconds) { case GameStateUpdated(d) if d.gameState == GameState.Finished => () }
+            f.openGate(gc, next, GameState.Finished)
             // Without status polls during the game the robot may have been taken offline; a call brings it back.
             eventually(timeout(20.seconds)) { call(connected, "system.ping").result.isRight shouldBe true }
           } finally gc.close()

@@ -43,11 +43,16 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
            |discovery.forget-unreached-after = 2s
            |discovery.forget-offline-after = 2s
            |competition.enabled = on
+           |game-controller.gate-open-after = 1s
            |game-controller.trusted-sources = ["127.0.0.1"]""".stripMargin
       )
       val log = new HostileTraffic.LogLines
       try {
         val at1 = HostileTraffic.twoRobotsOnline(f)
+        // Competition mode starts closed: the trusted GameController opens it, saying INITIAL for long enough.
+        val gc = java.nio.channels.DatagramChannel.open().bind(new java.net.InetSocketAddress("127.0.0.1", 0))
+        try f.openGate(gc)
+        finally gc.close()
         val heapBefore = HostileTraffic.usedHeapAfterGc()
         val linesBefore = log.count
         drainEvents(f)
@@ -73,7 +78,8 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         // No untrusted control packet changed the game state or the gate.
         val game = createTestProbe[Option[GameControlData]]()
         f.gateway ! GatewayAccess.GetGameState(game.ref)
-        game.receiveMessage() shouldBe None
+        // The trusted GameController's INITIAL, which opened the gate, and nothing since.
+        game.receiveMessage().map(_.gameState) shouldBe Some(naogateway.wire.gamecontroller.GameState.Initial)
         seen.collect { case e: GameStateUpdated => e } shouldBe empty
         val source = createTestProbe[Gateway.GameSource]()
         f.gateway ! GatewayAccess.GetGameSource(source.ref)

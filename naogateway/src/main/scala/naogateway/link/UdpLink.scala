@@ -42,14 +42,17 @@ object UdpLink {
     * the last of them. Told with the first datagram after that second, so a flood costs the owner at most one message a
     * second beside the datagrams within the cap.
     */
-  final case class Dropped(count: Long, lastFrom: InetSocketAddress) extends Event
+  final case class Dropped(count: Long, lastFrom: InetSocketAddress, trusted: Boolean = false) extends Event
 
   /** Options a link binds with. `maxDatagramsPerSecond` (0: no cap) bounds what the owner is handed, so a flood on a
     * port anyone can send to (the GameController's, the team's) cannot grow the owner's mailbox without bound.
+    * Datagrams from addresses `trusted` holds are sorted out before the cap and counted against a cap of their own, so
+    * a flood from anyone else cannot crowd them out (a `Dropped` of theirs says `trusted`).
     */
   final case class Options(reuseAddress: Boolean = false, broadcast: Boolean = false,
       receiveBufferBytes: Int = 4 * 1024 * 1024,
-      maxDatagramsPerSecond: Int = 0)
+      maxDatagramsPerSecond: Int = 0,
+      trusted: java.net.InetAddress => Boolean = _ => false)
 
   /** The current second's count of datagrams handed on and dropped; a pure step per datagram. */
   private[link] final case class RateWindow(startNanos: Long, passed: Int, dropped: Long,
@@ -84,7 +87,8 @@ object UdpLink {
         def binding: Behavior[Command] = Behaviors.receiveMessage {
           case SocketReady(socket, local) =>
             owner ! Bound(context.self, local)
-            stash.unstashAll(ready(socket, RateWindow.start(System.nanoTime())))
+            val now = System.nanoTime()
+            stash.unstashAll(ready(socket, RateWindow.start(now), RateWindow.start(now)))
           case SocketFailed(reason) =>
             owner ! BindFailed(address, reason)
             Behaviors.stopped
@@ -96,23 +100,29 @@ object UdpLink {
             Behaviors.same
         }
 
-        def ready(socket: classic.ActorRef, window: RateWindow): Behavior[Command] = Behaviors.receiveMessage {
-          case Send(bytes, to) =>
-            socket ! Udp.Send(ByteString.fromArrayUnsafe(bytes), to)
-            Behaviors.same
-          case SocketReceived(data, from) =>
-            val (next, passes, closed) = window.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
-            closed.foreach(owner ! _)
-            if (passes) owner ! Received(data.toArrayUnsafe(), from)
-            if (next eq window) Behaviors.same else ready(socket, next)
-          case Unbind =>
-            adapter ! Udp.Unbind
-            Behaviors.same
-          case SocketClosed =>
-            Behaviors.stopped
-          case SocketReady(_, _) | SocketFailed(_) =>
-            Behaviors.unhandled
-        }
+        def ready(socket: classic.ActorRef, window: RateWindow, trustedWindow: RateWindow): Behavior[Command] =
+          Behaviors.receiveMessage {
+            case Send(bytes, to) =>
+              socket ! Udp.Send(ByteString.fromArrayUnsafe(bytes), to)
+              Behaviors.same
+            case SocketReceived(data, from) if options.trusted(from.getAddress) =>
+              val (next, passes, closed) = trustedWindow.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
+              closed.foreach(d => owner ! d.copy(trusted = true))
+              if (passes) owner ! Received(data.toArrayUnsafe(), from)
+              if (next eq trustedWindow) Behaviors.same else ready(socket, window, next)
+            case SocketReceived(data, from) =>
+              val (next, passes, closed) = window.offer(System.nanoTime(), options.maxDatagramsPerSecond, from)
+              closed.foreach(owner ! _)
+              if (passes) owner ! Received(data.toArrayUnsafe(), from)
+              if (next eq window) Behaviors.same else ready(socket, next, trustedWindow)
+            case Unbind =>
+              adapter ! Udp.Unbind
+              Behaviors.same
+            case SocketClosed =>
+              Behaviors.stopped
+            case SocketReady(_, _) | SocketFailed(_) =>
+              Behaviors.unhandled
+          }
 
         binding
       }

@@ -69,7 +69,7 @@ class UdpLinkCapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with
         sender.send(new DatagramPacket(Array[Byte](1), 1, local))
         val events = owner.receiveMessages(1, 5.seconds) ++ drain(owner)
         val received = events.count(_.isInstanceOf[Received])
-        val dropped = events.collect { case Dropped(n, _) => n }.sum
+        val dropped = events.collect { case Dropped(n, _, _) => n }.sum
         // The kernel may lose some of the flood itself; what arrived was either handed on (within the cap, plus the
         // one after the second) or counted.
         received should be <= 21 + 20 // the cap in the flood's second, in case the flood spanned two, and the last one
@@ -78,6 +78,41 @@ class UdpLinkCapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with
         (received + dropped) should be <= (flood + 1).toLong
       } finally {
         sender.close()
+        link ! Unbind
+      }
+    }
+  }
+
+  "A UDP link with a cap and trusted addresses" should {
+    "hand on every trusted datagram within its own cap, whatever a stranger floods, and mark its drops trusted" in {
+      val owner = createTestProbe[Event]()
+      val trustedAt = TestLoopback.address()
+      val strangerAt = TestLoopback.address()
+      val link = spawn(UdpLink(new InetSocketAddress(trustedAt, 0), owner.ref,
+          Options(maxDatagramsPerSecond = 20, trusted = _ == trustedAt)))
+      val local = owner.expectMessageType[Bound](5.seconds).local
+      val trusted = new DatagramSocket(new InetSocketAddress(trustedAt, 0))
+      val stranger = new DatagramSocket(new InetSocketAddress(strangerAt, 0))
+      try {
+        // 10 trusted datagrams, each after 200 of the stranger's: 2000 in all, a hundred times the cap.
+        (1 to 10).foreach { i =>
+          (1 to 200).foreach(_ => stranger.send(new DatagramPacket(Array[Byte](0), 1, local)))
+          trusted.send(new DatagramPacket(Array[Byte](i.toByte), 1, local))
+        }
+        Thread.sleep(1100)
+        stranger.send(new DatagramPacket(Array[Byte](0), 1, local))
+        val events = owner.receiveMessages(1, 5.seconds) ++ drain(owner)
+        events.collect { case Received(b, f) if f.getAddress == trustedAt => b.head.toInt } shouldBe (1 to 10)
+        events.collect { case d: Dropped => d.trusted }.distinct shouldBe Seq(false)
+        // Over its own cap, the trusted sender's datagrams are dropped too, and said to be trusted.
+        (1 to 50).foreach(_ => trusted.send(new DatagramPacket(Array[Byte](1), 1, local)))
+        Thread.sleep(1100)
+        trusted.send(new DatagramPacket(Array[Byte](1), 1, local))
+        (owner.receiveMessages(1, 5.seconds) ++ drain(owner)).collect { case d: Dropped => d.trusted } should
+          contain(true)
+      } finally {
+        trusted.close()
+        stranger.close()
         link ! Unbind
       }
     }

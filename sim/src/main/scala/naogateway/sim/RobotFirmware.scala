@@ -193,8 +193,8 @@ object RobotFirmware {
       s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))
     // A robot answers the GameController it heard, as robots of that version do: the 2014 one (version 8; its
     // version-7 copy of the round needs no second answer) with RGrt version 2 to port 3838; the Humanoid League's
-    // (version 12) with RGrt version 2 to 3939; the Humanoid Soccer League's (version 19) with its status message,
-    // RGrt version 4, to 3939.
+    // (version 12) with RGrt version 2 to 3939; the Humanoid Soccer League's (versions 20 and 19) with its status
+    // message, RGrt version 4, to 3939.
     if (data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
     else {
       def alive =
@@ -205,7 +205,7 @@ object RobotFirmware {
           alive.map(_ -> 3838)
         case GameControlVersion.V12 =>
           alive.map(_ -> GameControllerCodec.ReturnPort)
-        case GameControlVersion.V19 =>
+        case GameControlVersion.V20 | GameControlVersion.V19 =>
           val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
           val status = ReturnStatus(
             s.settings.playerNumber,

@@ -33,10 +33,11 @@ import naogateway.wire.gamecontroller._
   * @param interval
   *   one round of packets this often; the real GameController sends two a second
   * @param version
-  *   the GameController to play: 19 (the Humanoid Soccer League's, the default), 12 (the Humanoid League's until 2025),
-  *   8 (the 2014 one, which sends a version-8 and a version-7 packet each round) or 7 (its version-7 packets alone)
+  *   the GameController to play: 20 (the Humanoid Soccer League's of RoboCup 2026, the default), 19 (its GameController
+  *   6, early 2026), 12 (the Humanoid League's until 2025), 8 (the 2014 one, which sends a version-8 and a version-7
+  *   packet each round) or 7 (its version-7 packets alone)
   * @param messageBudget
-  *   the version-19 `messageBudget` of both teams; the simulation hears no team message, so it stays
+  *   the version-20 and -19 `messageBudget` of both teams; the simulation hears no team message, so it stays
   */
 final case class SimulatedGameControllerSettings(
     target: InetSocketAddress,
@@ -50,7 +51,7 @@ final case class SimulatedGameControllerSettings(
     playing: FiniteDuration = 45.seconds,
     finished: FiniteDuration = 5.seconds,
     interval: FiniteDuration = 500.millis,
-    version: GameControlVersion = GameControlVersion.V19,
+    version: GameControlVersion = GameControlVersion.V20,
     setPlayAfter: FiniteDuration = 20.seconds,
     stoppedFor: FiniteDuration = 3.seconds,
     setPlayFor: FiniteDuration = 5.seconds,
@@ -61,7 +62,7 @@ final case class SimulatedGameControllerSettings(
   require(playing > Duration.Zero, "the PLAYING phase must last")
   require(playing.toSeconds <= Short.MaxValue, "secsRemaining must fit the version-8 i16")
   require(interval >= 10.millis, "interval must be at least 10 ms")
-  require(Seq(team0, team1).forall(_ != 255), "team number 255 means no team in versions 19 and 12")
+  require(Seq(team0, team1).forall(_ != 255), "team number 255 means no team in versions 20, 19 and 12")
   require(messageBudget >= 0 && messageBudget <= 0xffff, "messageBudget must fit a u16")
 
   /** Whether PLAYING holds the stopped pause and the set play. */
@@ -74,9 +75,9 @@ final case class SimulatedGameControllerSettings(
 /** The game as the simulated GameController sees it at one moment: what each round's packets say.
   *
   * @param stopped
-  *   play is stopped by the referee (version 19's `stopped`)
+  *   play is stopped by the referee (versions 20 and 19 say `stopped`)
   * @param setPlay
-  *   the set play under way, taken by `teams[1]` (versions 19 and 12 say it; 8 and 7 do not)
+  *   the set play under way, taken by `teams[1]` (versions 20, 19 and 12 say it; 8 and 7 do not)
   */
 final case class GameMoment(
     gameState: GameState,
@@ -88,11 +89,11 @@ final case class GameMoment(
     setPlay: SetPlay = SetPlay.NoSetPlay
 )
 
-/** A simulated RoboCup GameController on loopback: real `RGme` packets of the version its settings name (19 by default:
-  * 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController broadcast them;
-  * 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and a set play) →
-  * FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo runs one
-  * against the gateway, so the game state and the competition gate can be seen without a field.
+/** A simulated RoboCup GameController on loopback: real `RGme` packets of the version its settings name (20 by default:
+  * 158 bytes; 19: 198 bytes; 12: 688 bytes; 8: a version-8 and a version-7 packet each round, as 2014's GameController
+  * broadcast them; 7: the version-7 packets alone), cycling INITIAL → READY → SET → PLAYING (with a stopped pause and a
+  * set play) → FINISHED over both halves on the short schedule of its [[SimulatedGameControllerSettings]]. The demo
+  * runs one against the gateway, so the game state and the competition gate can be seen without a field.
   *
   * The schedule and the packets are pure ([[SimulatedGameController.momentAt]], [[SimulatedGameController.packets]]);
   * the actor only wakes at each round's timer and sends.
@@ -223,6 +224,42 @@ object SimulatedGameController {
     )
   }
 
+  /** The version-20 packet content of `moment`: version 19's, with version 20's team entries (players beyond
+    * `playersPerTeam` are substitutes, penalty 13).
+    */
+  def controlDataV20(
+      settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): Hsl20ControlData = {
+    val v19 = controlDataV19(settings, moment, packetNumber)
+    def team(t: HslTeamInfo) = Hsl20TeamInfo(
+      t.teamNumber,
+      t.fieldPlayerColour,
+      t.goalkeeperColour,
+      t.goalkeeper,
+      t.score,
+      t.penaltyShot,
+      t.singleShots,
+      t.messageBudget,
+      Vector.tabulate(Hsl20PlayerInfo.Slots)(i =>
+        if (i < settings.playersPerTeam) Hsl20PlayerInfo.Unpenalised
+        else Hsl20PlayerInfo(Hsl20Penalty.Substitute, 0, 0))
+    )
+    Hsl20ControlData(
+      v19.packetNumber,
+      v19.playersPerTeam,
+      v19.competitionType,
+      v19.stopped,
+      v19.gamePhase,
+      v19.gameState,
+      v19.setPlay,
+      v19.firstHalf,
+      v19.kickingTeam,
+      v19.secsRemaining,
+      v19.secondaryTime,
+      team(v19.team0),
+      team(v19.team1)
+    )
+  }
+
   /** The version-12 packet content of `moment`: player 1 the goalkeeper, players beyond `playersPerTeam` substitutes.
     */
   def controlDataV12(
@@ -262,6 +299,7 @@ object SimulatedGameController {
   /** One round on the wire in the settings' version (version 8: the version-8 packet, then the version-7 one). */
   def packets(settings: SimulatedGameControllerSettings, moment: GameMoment, packetNumber: Int): Vector[Array[Byte]] = {
     val contents: Vector[GameControlData] = settings.version match {
+      case GameControlVersion.V20 => Vector(controlDataV20(settings, moment, packetNumber))
       case GameControlVersion.V19 => Vector(controlDataV19(settings, moment, packetNumber))
       case GameControlVersion.V12 => Vector(controlDataV12(settings, moment, packetNumber))
       case GameControlVersion.V8 =>

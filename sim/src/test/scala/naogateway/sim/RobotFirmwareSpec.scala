@@ -263,11 +263,14 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
         case Destination.ReplyTo(a) => (a.getAddress.getHostAddress, a.getPort)
         case other                  => fail(s"not a reply: $other")
       }
-      val v19 = answers("v19-playing.bin")
-      v19.map(to) shouldBe Vector(("127.0.0.9", 3939))
-      val status = GameControllerCodec.decodeStatus(v19.head.bytes).fold(e => fail(e.describe), identity)
-      (status.player, status.team, status.fallen) shouldBe ((3, 12, false))
-      status.pose._1 shouldBe (robot.pose.x * 1000).toFloat
+      Seq("v20-playing.bin", "v20-initial-second-half.bin", "v19-playing.bin").foreach { file =>
+        val hsl = answers(file)
+        withClue(file) { hsl.map(to) shouldBe Vector(("127.0.0.9", 3939)) }
+        hsl.head.bytes.length shouldBe GameControllerCodec.StatusPacketBytes
+        val status = GameControllerCodec.decodeStatus(hsl.head.bytes).fold(e => fail(e.describe), identity)
+        (status.player, status.team, status.fallen) shouldBe ((3, 12, false))
+        status.pose._1 shouldBe (robot.pose.x * 1000).toFloat
+      }
       val v12 = answers("v12-playing.bin")
       v12.map(to) shouldBe Vector(("127.0.0.9", 3939))
       GameControllerCodec.decodeReturn(v12.head.bytes) shouldBe Right(ReturnData(12, 3, ReturnMessage.Alive))

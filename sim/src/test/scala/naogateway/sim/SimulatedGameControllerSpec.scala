@@ -126,8 +126,9 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
     }
   }
 
-  "The simulated GameController of versions 19 and 12" should {
-    val v19 = SimulatedGameControllerSettings(target, playersPerTeam = 7)
+  "The simulated GameController of versions 20, 19 and 12" should {
+    val v20 = SimulatedGameControllerSettings(target, playersPerTeam = 7)
+    val v19 = v20.copy(version = GameControlVersion.V19)
     val v12 = SimulatedGameControllerSettings(target, playersPerTeam = 4, version = GameControlVersion.V12)
     def one(s: SimulatedGameControllerSettings, moment: GameMoment, number: Int): Array[Byte] =
       packets(s, moment, number) match {
@@ -136,8 +137,13 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
       }
     val initial = GameMoment(GameState.Initial, firstHalf = true, KickOffTeam.Blue, 600, 0)
 
-    "speak version 19 by default, one packet a round, byte-equal to the built vectors for the same values" in {
-      SimulatedGameControllerSettings(target).version shouldBe GameControlVersion.V19
+    "speak version 20 by default, one packet a round, byte-equal to the built vectors for the same values" in {
+      SimulatedGameControllerSettings(target).version shouldBe GameControlVersion.V20
+      one(v20, initial, 1).toSeq shouldBe vector("v20-initial.bin").toSeq
+      one(v20, initial.copy(gameState = GameState.Ready, secondaryTime = 45), 2).toSeq shouldBe vector("v20-ready.bin").toSeq
+      one(v20, initial.copy(gameState = GameState.Set), 3).toSeq shouldBe vector("v20-set.bin").toSeq
+    }
+    "speak version 19 when set, byte-equal to the built vectors for the same values" in {
       one(v19, initial, 1).toSeq shouldBe vector("v19-initial.bin").toSeq
       one(v19, initial.copy(gameState = GameState.Ready, secondaryTime = 45), 2).toSeq shouldBe vector("v19-ready.bin").toSeq
     }
@@ -148,49 +154,51 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
       val v7only = packets(settings.copy(version = GameControlVersion.V7), initial, 1)
       v7only.map(_.toSeq) shouldBe Vector(vector("v7-initial.bin").toSeq)
     }
-    "go through every state of both halves, with a stopped pause and a goal kick for teams[1] in PLAYING" in {
-      val s = v19.copy(initial = 1.second, ready = 1.second, set = 1.second, playing = 12.seconds, finished = 1.second,
-        setPlayAfter = 4.seconds, stoppedFor = 2.seconds, setPlayFor = 3.seconds)
-      val seen = (0L until 2 * s.halfNanos by 250000000L).map { t =>
-        GameControllerCodec.decodeControl(one(s, momentAt(s, t), (t / 250000000L).toInt)) match {
-          case Right(d: HslControlData) => d
-          case other                    => fail(s"not version 19: $other")
+    "go through every state of both halves, with a stopped pause and a goal kick for teams[1] in PLAYING" in
+      Seq(v20, v19).foreach { version =>
+        val s =
+          version.copy(initial = 1.second, ready = 1.second, set = 1.second, playing = 12.seconds, finished = 1.second,
+            setPlayAfter = 4.seconds, stoppedFor = 2.seconds, setPlayFor = 3.seconds)
+        val seen = (0L until 2 * s.halfNanos by 250000000L).map { t =>
+          GameControllerCodec.decodeControl(one(s, momentAt(s, t), (t / 250000000L).toInt)) match {
+            case Right(d: HslGameData) if d.version == version.version => d
+            case other => fail(s"not version ${version.version.number}: $other")
+          }
         }
+        // Each step of the game once, in order (a state seen again later is a step again).
+        val steps = seen.map(d => (d.gameState, d.stopped, d.setPlay, d.firstHalf))
+          .foldLeft(Vector.empty[(GameState, Boolean, SetPlay, Boolean)])((acc, x) =>
+            if (acc.lastOption.contains(x)) acc else acc :+ x)
+        steps shouldBe Vector(
+          (GameState.Initial, false, SetPlay.NoSetPlay, true),
+          (GameState.Ready, false, SetPlay.NoSetPlay, true),
+          (GameState.Set, false, SetPlay.NoSetPlay, true),
+          (GameState.Playing, false, SetPlay.NoSetPlay, true),
+          (GameState.Playing, true, SetPlay.GoalKick, true),
+          (GameState.Playing, false, SetPlay.GoalKick, true),
+          (GameState.Playing, false, SetPlay.NoSetPlay, true),
+          (GameState.Finished, false, SetPlay.NoSetPlay, true),
+          (GameState.Initial, false, SetPlay.NoSetPlay, false),
+          (GameState.Ready, false, SetPlay.NoSetPlay, false),
+          (GameState.Set, false, SetPlay.NoSetPlay, false),
+          (GameState.Playing, false, SetPlay.NoSetPlay, false),
+          (GameState.Playing, true, SetPlay.GoalKick, false),
+          (GameState.Playing, false, SetPlay.GoalKick, false),
+          (GameState.Playing, false, SetPlay.NoSetPlay, false),
+          (GameState.Finished, false, SetPlay.NoSetPlay, false)
+        )
+        // The kicking team: team 12 kicks off the first half, team 7 the second, and team 7 takes the goal kick.
+        seen.filter(d => d.firstHalf && d.setPlay == SetPlay.NoSetPlay).map(_.kickingTeam).distinct shouldBe Vector(
+          Some(12))
+        seen.filter(d => !d.firstHalf).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
+        seen.filter(_.setPlay == SetPlay.GoalKick).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
+        // The set play's countdown runs once play goes on; the half's clock runs throughout.
+        val running = seen.filter(d => d.setPlay == SetPlay.GoalKick && !d.stopped)
+        running.map(_.secondaryTime).distinct shouldBe Vector(3, 2, 1)
+        val clocks = seen.filter(d => d.gameState == GameState.Playing && d.firstHalf).map(_.secsRemaining)
+        clocks shouldBe clocks.sorted.reverse
+        all(seen.map(_.team0.messageBudget)) shouldBe 12000
       }
-      // Each step of the game once, in order (a state seen again later is a step again).
-      val steps = seen.map(d => (d.gameState, d.stopped, d.setPlay, d.firstHalf))
-        .foldLeft(Vector.empty[(GameState, Boolean, SetPlay, Boolean)])((acc, x) =>
-          if (acc.lastOption.contains(x)) acc else acc :+ x)
-      steps shouldBe Vector(
-        (GameState.Initial, false, SetPlay.NoSetPlay, true),
-        (GameState.Ready, false, SetPlay.NoSetPlay, true),
-        (GameState.Set, false, SetPlay.NoSetPlay, true),
-        (GameState.Playing, false, SetPlay.NoSetPlay, true),
-        (GameState.Playing, true, SetPlay.GoalKick, true),
-        (GameState.Playing, false, SetPlay.GoalKick, true),
-        (GameState.Playing, false, SetPlay.NoSetPlay, true),
-        (GameState.Finished, false, SetPlay.NoSetPlay, true),
-        (GameState.Initial, false, SetPlay.NoSetPlay, false),
-        (GameState.Ready, false, SetPlay.NoSetPlay, false),
-        (GameState.Set, false, SetPlay.NoSetPlay, false),
-        (GameState.Playing, false, SetPlay.NoSetPlay, false),
-        (GameState.Playing, true, SetPlay.GoalKick, false),
-        (GameState.Playing, false, SetPlay.GoalKick, false),
-        (GameState.Playing, false, SetPlay.NoSetPlay, false),
-        (GameState.Finished, false, SetPlay.NoSetPlay, false)
-      )
-      // The kicking team: team 12 kicks off the first half, team 7 the second, and team 7 takes the goal kick.
-      seen.filter(d => d.firstHalf && d.setPlay == SetPlay.NoSetPlay).map(_.kickingTeam).distinct shouldBe Vector(
-        Some(12))
-      seen.filter(d => !d.firstHalf).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
-      seen.filter(_.setPlay == SetPlay.GoalKick).map(_.kickingTeam).distinct shouldBe Vector(Some(7))
-      // The set play's countdown runs once play goes on; the half's clock runs throughout.
-      val running = seen.filter(d => d.setPlay == SetPlay.GoalKick && !d.stopped)
-      running.map(_.secondaryTime).distinct shouldBe Vector(3, 2, 1)
-      val clocks = seen.filter(d => d.gameState == GameState.Playing && d.firstHalf).map(_.secsRemaining)
-      clocks shouldBe clocks.sorted.reverse
-      all(seen.map(_.team0.messageBudget)) shouldBe 12000
-    }
     "say the set play in version 12 as its secondary state, with the taking team in secondaryStateInfo" in {
       val s = v12.copy(playing = 12.seconds, setPlayAfter = 4.seconds, stoppedFor = 2.seconds, setPlayFor = 3.seconds)
       val during = momentAt(s, (s.initial + s.ready + s.set + 5.seconds).toNanos)

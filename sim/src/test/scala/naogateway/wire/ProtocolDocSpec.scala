@@ -13,7 +13,14 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.proto._
 import naogateway.sim.{Destination, FirmwareSettings, FirmwareState, Outgoing, RobotFirmware}
-import naogateway.wire.gamecontroller.{GameControlVersion, GameControllerCodec, GameState, ReturnStatus}
+import naogateway.wire.gamecontroller.{
+  GameControlVersion,
+  GameControllerCodec,
+  GameState,
+  Hsl20Penalty,
+  PlayerPenalty,
+  ReturnStatus
+}
 
 /** Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every `<!--
   * table: tag -->` offset table in the document is checked here: FU-Remote frames against the codecs (decode to the
@@ -342,6 +349,14 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       v19.slice(player3, player3 + 4).toVector shouldBe Vector[Byte](9, 25, 1, 1)
       GameControllerCodec.decodeControl(v19).map(_.version) shouldBe Right(GameControlVersion.V19)
     }
+    "give version 20 offsets that add up to 158 bytes, and its penalties by the codec's codes and names" in {
+      contiguous(table("gc-v20"), offsetColumn = 0, sizeColumn = 1) shouldBe 158
+      GameControlVersion.V20.packetBytes shouldBe 158
+      def letters(name: String) = name.takeWhile(_ != '(').replace(" or ", " ").filter(_.isLetter)
+      val rows = table("gc-v20-penalty").rows
+      rows.map(_(0).toInt) shouldBe Hsl20Penalty.known.map(_.code)
+      rows.map(r => letters(r(1))) shouldBe Hsl20Penalty.known.map(p => letters(PlayerPenalty(p, 0).name))
+    }
     "give version 12 offsets that add up to 688 bytes and read the packet right" in {
       val packet = table("gc-v12")
       val team = table("gc-v12-team")
@@ -373,7 +388,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     }
     "say which states close the gate, as CompetitionGate decides" in {
       val rows = table("gc-gate").rows
-      rows.map(_(0)) shouldBe Seq("19", "12", "8", "7", "unreadable")
+      rows.map(_(0)) shouldBe Seq("20", "19", "12", "8", "7", "shared header", "unreadable")
       rows.filter(_(0) != "unreadable").foreach { row =>
         val closing = "(\\d) [A-Z]+".r.findAllMatchIn(row(2)).map(_.group(1).toInt).toSet
         val opening = "(\\d) [A-Z]+".r.findAllMatchIn(row(3)).map(_.group(1).toInt).toSet
@@ -383,7 +398,12 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
         opening.foreach(c => naogateway.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe false)
       }
       naogateway.CompetitionGate.closes(naogateway.GameReading.Unreadable("any")) shouldBe true
-      rows.last(3) should include(s"${naogateway.CompetitionGate.UnreadableHoldNanos / 1000000000L} s")
+      rows.last(3) should include("never by itself")
+      // The rule's wait to open is the reference configuration's, and longer than the GameController's interval.
+      val openAfter = com.typesafe.config.ConfigFactory.load().getDuration("naogateway.game-controller.gate-open-after")
+      new String(java.nio.file.Files.readAllBytes(doc.path), "UTF-8") should include(
+        s"`naogateway.game-controller.gate-open-after` (${openAfter.getSeconds} s by default")
+      openAfter.toMillis should be > 500L
     }
     "give the monitor exchange with the bytes and ports the gateway uses" in {
       val rows = table("gc-monitor").rows.map(r => r(0) -> r).toMap
@@ -694,6 +714,8 @@ object ProtocolDocSpec {
       "gc-return",
       "gc-v19",
       "gc-v19-team",
+      "gc-v20",
+      "gc-v20-penalty",
       "gc-v12",
       "gc-v12-team",
       "gc-status",

@@ -8,12 +8,15 @@ import scala.collection.immutable.ArraySeq
 sealed abstract class GameControlVersion(val number: Int, val packetBytes: Int, val versionBytes: Int)
     extends Product with Serializable
 
-/** The layouts a team may meet: today's Humanoid Soccer League (19), the Humanoid League until 2025 (12), 2014's (8,
-  * 7).
+/** The layouts a team may meet: the Humanoid Soccer League's of RoboCup 2026 (20) and of early 2026 (19), the Humanoid
+  * League's until 2025 (12), 2014's (8, 7).
   */
 object GameControlVersion {
 
-  /** The Humanoid Soccer League's GameController from 2026: u8 version, 198 bytes. */
+  /** The Humanoid Soccer League's GameController 7 (RoboCup 2026): u8 version, 158 bytes. */
+  case object V20 extends GameControlVersion(20, 158, 1)
+
+  /** The Humanoid Soccer League's GameController 6 (early 2026, German Open 2026): u8 version, 198 bytes. */
   case object V19 extends GameControlVersion(19, 198, 1)
 
   /** The Humanoid League's GameController until 2025: u16 version, 688 bytes. */
@@ -26,7 +29,28 @@ object GameControlVersion {
   case object V7 extends GameControlVersion(7, 116, 4)
 
   /** Every version the codec reads, newest first. */
-  val all: Seq[GameControlVersion] = Seq(V19, V12, V8, V7)
+  val all: Seq[GameControlVersion] = Seq(V20, V19, V12, V8, V7)
+}
+
+/** A player the GameController has taken off the game, in any version: its penalty (the version's own code) by name,
+  * and the seconds left until it may play again (0: not timed, as for a substitute or a robot sent off).
+  */
+final case class PlayerPenalty(penalty: WireCode, secsTillUnpenalised: Int) {
+
+  /** The penalty in words, as the GameController's display names it: "pushing", "motion in stop", "unknown(42)". */
+  def name: String = penalty.toString.replaceAll("([a-z])([A-Z])", "$1 $2").toLowerCase
+
+  /** One phrase for screens: "pushing, 25 s left". */
+  def describe: String = if (secsTillUnpenalised > 0) s"$name, $secsTillUnpenalised s left" else name
+}
+
+/** Picking one player's entry out of a team list. */
+private[gamecontroller] object PenaltyLookup {
+
+  /** Player `player` (from 1) of the team numbered `teamNumber` among `teams`, as `penalty` reads its entry. */
+  def find[T <: GameTeam, P](teams: Seq[T], teamNumber: Int, player: Int)(players: T => Vector[P])(
+      penalty: P => Option[PlayerPenalty]): Option[PlayerPenalty] =
+    teams.find(_.teamNumber == teamNumber).flatMap(t => players(t).lift(player - 1)).flatMap(penalty)
 }
 
 /** What every team entry of every version says: who the team is and its score. */
@@ -74,6 +98,11 @@ sealed trait GameControlData extends Product with Serializable {
 
   /** Whether a penalty shoot-out is under way (team messages are not counted then). */
   def penaltyShootOut: Boolean
+
+  /** The penalty of player `player` (counted from 1) of team `teamNumber`, when the packet has that player and the
+    * GameController has taken it off the game (a substitute included); `None` otherwise.
+    */
+  def penaltyOf(teamNumber: Int, player: Int): Option[PlayerPenalty]
 
   /** The team with this team number, if it plays in this game. */
   def teamByNumber(teamNumber: Int): Option[GameTeam] =
@@ -178,6 +207,9 @@ final case class ControlData2014(
   def packetNumberOnWire: Option[Int] = packetNumber
   def secondaryClock: Option[Int] = secondaryTime
   def penaltyShootOut: Boolean = secondaryGameState == SecondaryGameState.PenaltyShoot
+  def penaltyOf(teamNumber: Int, player: Int): Option[PlayerPenalty] =
+    PenaltyLookup.find(Seq(team0, team1), teamNumber, player)(_.players)(p =>
+      Option.when(p.isPenalised)(PlayerPenalty(p.penalty, p.secsTillUnpenalised)))
 }
 
 /** One player's entry of version 19 (`RobotInfo`, 4 bytes).
@@ -220,16 +252,94 @@ final case class HslTeamInfo(
     singleShots: Int,
     messageBudget: Int,
     players: Vector[HslPlayerInfo]
-) extends GameTeam
+) extends HslTeam
 
-/** The content of one version-19 control packet (198 bytes, the Humanoid Soccer League's GameController from 2026),
-  * every wire field kept. The same layout comes with header `RGme` (broadcast) or `RGTD` (the true state for a
-  * monitor).
+/** What the Humanoid Soccer League's packets of versions 18, 19 and 20 say in their shared first 18 bytes
+  * (docs/protocol.md §10.2), as members: the gateway reads both versions alike through it, and a later version by its
+  * header alone ([[SharedHeader]]).
+  */
+sealed trait HslHeaderFields {
+
+  /** The packet number, counting up with each packet and wrapping at 256. */
+  def packetNumber: Int
+
+  /** Players per team in this game. */
+  def playersPerTeam: Int
+
+  /** The division the game is played in. */
+  def competitionType: CompetitionType
+
+  /** Play is stopped (a foul, a set play being prepared) though the state may read PLAYING. */
+  def stopped: Boolean
+
+  /** The phase: normal, penalty shoot-out, extra time, time-out. */
+  def gamePhase: GamePhase
+
+  /** The main state. */
+  def gameState: GameState
+
+  /** The set play under way. */
+  def setPlay: SetPlay
+
+  /** Whether the game is in its first half. */
+  def firstHalf: Boolean
+
+  /** The team number of the team taking the next kick-off or set play; `None` on the wire's 255. */
+  def kickingTeam: Option[Int]
+
+  /** Seconds left in the half (negative: over time). */
+  def secsRemaining: Long
+
+  /** Seconds of the secondary clock. */
+  def secondaryTime: Int
+}
+
+/** The shared first 18 bytes of an `RGme` packet of a Humanoid Soccer League version this codec does not know (18, or
+  * above 20), read by [[GameControllerCodec.decodeSharedHeader]]: enough for the competition gate, nothing about the
+  * teams (docs/protocol.md §10.8).
   *
-  * @param stopped
-  *   play is stopped (a foul, a set play being prepared) though the state may read PLAYING
-  * @param kickingTeam
-  *   the team number of the team taking the next kick-off or set play; `None` on the wire's 255
+  * @param versionNumber
+  *   the packet's version byte
+  * @param packetBytes
+  *   the packet's size
+  */
+final case class SharedHeader(
+    versionNumber: Int,
+    packetBytes: Int,
+    packetNumber: Int,
+    playersPerTeam: Int,
+    competitionType: CompetitionType,
+    stopped: Boolean,
+    gamePhase: GamePhase,
+    gameState: GameState,
+    setPlay: SetPlay,
+    firstHalf: Boolean,
+    kickingTeam: Option[Int],
+    secsRemaining: Long,
+    secondaryTime: Int
+) extends HslHeaderFields
+
+/** A team entry of the Humanoid Soccer League's versions 19 and 20: what both say of a team beyond its number. */
+sealed trait HslTeam extends GameTeam {
+
+  /** Team messages the team may still send in this game (docs/protocol.md §10.5). */
+  def messageBudget: Int
+}
+
+/** A control packet of the Humanoid Soccer League's versions 19 or 20, which the gateway treats alike: the header's
+  * fields and each team's message budget. The same layouts come with header `RGme` (broadcast) or `RGTD` (the true
+  * state for a monitor).
+  */
+sealed trait HslGameData extends GameControlData with HslHeaderFields {
+  def team0: HslTeam
+  def team1: HslTeam
+  def packetNumberOnWire: Option[Int] = Some(packetNumber)
+  def secondaryClock: Option[Int] = Some(secondaryTime)
+  def penaltyShootOut: Boolean = gamePhase == GamePhase.PenaltyShootOut
+}
+
+/** The content of one version-19 control packet (198 bytes, the Humanoid Soccer League's GameController 6, early 2026),
+  * every wire field kept.
   */
 final case class HslControlData(
     packetNumber: Int,
@@ -245,11 +355,75 @@ final case class HslControlData(
     secondaryTime: Int,
     team0: HslTeamInfo,
     team1: HslTeamInfo
-) extends GameControlData {
+) extends HslGameData {
   def version: GameControlVersion = GameControlVersion.V19
-  def packetNumberOnWire: Option[Int] = Some(packetNumber)
-  def secondaryClock: Option[Int] = Some(secondaryTime)
-  def penaltyShootOut: Boolean = gamePhase == GamePhase.PenaltyShootOut
+  def penaltyOf(teamNumber: Int, player: Int): Option[PlayerPenalty] =
+    PenaltyLookup.find(Seq(team0, team1), teamNumber, player)(_.players)(p =>
+      Option.when(p.penalty.isPenalised)(PlayerPenalty(p.penalty, p.secsTillUnpenalised)))
+}
+
+/** One player's entry of version 20 (`RobotInfo`, 3 bytes: version 19's `warnings` is gone).
+  *
+  * @param secsTillUnpenalised
+  *   the GameController's estimate; 0 when not penalised
+  * @param cautions
+  *   yellow cards
+  */
+final case class Hsl20PlayerInfo(penalty: Hsl20Penalty, secsTillUnpenalised: Int, cautions: Int)
+
+/** Constructors of version-20 player entries. */
+object Hsl20PlayerInfo {
+
+  /** A player in the game, with no caution. */
+  val Unpenalised: Hsl20PlayerInfo = Hsl20PlayerInfo(Hsl20Penalty.NoPenalty, 0, 0)
+
+  /** Player slots per team on the wire (`MAX_NUM_PLAYERS`). */
+  val Slots: Int = 20
+}
+
+/** One team's entry of version 20 (`TeamInfo`, 70 bytes), the fields of version 19's in the same order.
+  *
+  * @param goalkeeper
+  *   the goalkeeper's player number; 0 for none
+  * @param singleShots
+  *   bits are the successful penalty shots
+  * @param players
+  *   always all 20 slots of the wire
+  */
+final case class Hsl20TeamInfo(
+    teamNumber: Int,
+    fieldPlayerColour: FieldColour,
+    goalkeeperColour: FieldColour,
+    goalkeeper: Int,
+    score: Int,
+    penaltyShot: Int,
+    singleShots: Int,
+    messageBudget: Int,
+    players: Vector[Hsl20PlayerInfo]
+) extends HslTeam
+
+/** The content of one version-20 control packet (158 bytes, the Humanoid Soccer League's GameController 7, RoboCup
+  * 2026), every wire field kept. Its header is version 19's; its teams and penalties are its own.
+  */
+final case class Hsl20ControlData(
+    packetNumber: Int,
+    playersPerTeam: Int,
+    competitionType: CompetitionType,
+    stopped: Boolean,
+    gamePhase: GamePhase,
+    gameState: GameState,
+    setPlay: SetPlay,
+    firstHalf: Boolean,
+    kickingTeam: Option[Int],
+    secsRemaining: Long,
+    secondaryTime: Int,
+    team0: Hsl20TeamInfo,
+    team1: Hsl20TeamInfo
+) extends HslGameData {
+  def version: GameControlVersion = GameControlVersion.V20
+  def penaltyOf(teamNumber: Int, player: Int): Option[PlayerPenalty] =
+    PenaltyLookup.find(Seq(team0, team1), teamNumber, player)(_.players)(p =>
+      Option.when(p.penalty.isPenalised)(PlayerPenalty(p.penalty, p.secsTillUnpenalised)))
 }
 
 /** One player's entry of version 12 (`HlRobotInfo`, 6 bytes).
@@ -331,4 +505,7 @@ final case class HlControlData(
   def packetNumberOnWire: Option[Int] = Some(packetNumber)
   def secondaryClock: Option[Int] = Some(secondaryTime)
   def penaltyShootOut: Boolean = secondaryState == HlSecondaryState.PenaltyShoot
+  def penaltyOf(teamNumber: Int, player: Int): Option[PlayerPenalty] =
+    PenaltyLookup.find(Seq(team0, team1), teamNumber, player)(_.players)(p =>
+      Option.when(p.penalty.isPenalised)(PlayerPenalty(p.penalty, p.secsTillUnpenalised)))
 }

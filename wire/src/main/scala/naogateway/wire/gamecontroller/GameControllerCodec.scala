@@ -6,11 +6,12 @@ import scala.collection.immutable.ArraySeq
 
 import naogateway.wire.gamecontroller.GameControllerError._
 
-/** Encoder and decoder of GameController packets (docs/protocol.md §10): the `RGme` control packet in versions 19 (198
-  * bytes), 12 (688 bytes), 8 (158 bytes) and 7 (116 bytes), the same version-19 layout under `RGTD` (the true state a
-  * monitor gets), and the `RGrt` return packet in versions 4 (32 bytes) and 2 (8 bytes). All numbers are little-endian.
-  * Pure functions; decoding never throws and never guesses: a packet must have a known header, a known version and
-  * exactly that version's size, or it is refused with a typed error.
+/** Encoder and decoder of GameController packets (docs/protocol.md §10): the `RGme` control packet in versions 20 (158
+  * bytes), 19 (198 bytes), 12 (688 bytes), 8 (158 bytes) and 7 (116 bytes), the same version-20 and -19 layouts under
+  * `RGTD` (the true state a monitor gets), and the `RGrt` return packet in versions 4 (32 bytes) and 2 (8 bytes). All
+  * numbers are little-endian. Pure functions; decoding never throws and never guesses: a packet must have a known
+  * header, a known version and exactly that version's size, or it is refused with a typed error. The one reading of a
+  * version it does not know is [[decodeSharedHeader]], which the caller asks for on purpose.
   */
 object GameControllerCodec {
 
@@ -32,7 +33,7 @@ object GameControllerCodec {
   /** Exact size of a version-2 return packet. */
   val ReturnPacketBytes: Int = 8
 
-  /** The return-packet version robots send to the version-19 GameController (its status message). */
+  /** The return-packet version robots send to the version-20 and -19 GameControllers (their status message). */
   val StatusVersion: Int = 4
 
   /** Exact size of a version-4 return packet. */
@@ -52,8 +53,8 @@ object GameControllerCodec {
   private val Return4 = ReturnLayout(StatusVersion, StatusPacketBytes)
 
   /** Decodes a control packet. The version decides the layout, and each version's field has its own width, all starting
-    * at byte 4: byte 4 = 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read the u16 12
-    * for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
+    * at byte 4: byte 4 = 20, 19 or 8 is that version (a u8 field, a packet number follows); bytes 4–5 must read the u16
+    * 12 for version 12; bytes 4–7 the u32 7 for version 7. Then the size must be exactly the version's.
     */
   def decodeControl(bytes: Array[Byte]): Either[GameControllerError, GameControlData] =
     for {
@@ -61,6 +62,7 @@ object GameControllerCodec {
       version <- controlVersion(bytes, ControlHeader)
       _ <- checkSize(bytes, ControlHeader, version.number, version.packetBytes)
       data <- version match {
+        case GameControlVersion.V20 => ModernLayouts.decodeV20(bytes)
         case GameControlVersion.V19 => ModernLayouts.decodeV19(bytes)
         case GameControlVersion.V12 => ModernLayouts.decodeV12(bytes)
         case GameControlVersion.V8  => Layouts2014.decode(Layouts2014.V8, bytes)
@@ -76,25 +78,71 @@ object GameControllerCodec {
           case Some(layout) => Layouts2014.validate(layout, d).toLeft(Layouts2014.write(layout, d))
           case None         => Left(InvalidField("version", d.version.number.toLong))
         }
-      case d: HlControlData  => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
-      case d: HslControlData => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, ControlHeaderBytes))
+      case d: HlControlData    => ModernLayouts.validateV12(d).toLeft(ModernLayouts.writeV12(d))
+      case d: HslControlData   => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, ControlHeaderBytes))
+      case d: Hsl20ControlData => ModernLayouts.validateV20(d).toLeft(ModernLayouts.writeV20(d, ControlHeaderBytes))
     }
 
-  /** Decodes the true game state a version-19 GameController sends its monitors: `RGTD`, version 19, 198 bytes. */
-  def decodeTrueData(bytes: Array[Byte]): Either[GameControllerError, HslControlData] =
+  /** The versions whose shared first 18 bytes [[decodeSharedHeader]] reads: 18, and any above the newest known. */
+  def sharedHeaderVersion(version: Int): Boolean =
+    version == OldestSharedHeaderVersion || version > GameControlVersion.V20.number
+
+  /** The oldest version with the shared header of versions 18 to 20. */
+  val OldestSharedHeaderVersion: Int = 18
+
+  /** The least size a packet read by its shared header may have: the header and two team entries without players (10
+    * bytes each, as in versions 19 and 20).
+    */
+  val SharedHeaderMinPacketBytes: Int = 38
+
+  /** The greatest size a packet read by its shared header may have (the largest known `RGme` has 688). */
+  val SharedHeaderMaxPacketBytes: Int = 1024
+
+  /** Reads the first 18 bytes of an `RGme` packet of a version this codec does not know but that plausibly keeps the
+    * header versions 18, 19 and 20 share (docs/protocol.md §10.8): a u8 version of 18 or above 20, a size from
+    * [[SharedHeaderMinPacketBytes]] to [[SharedHeaderMaxPacketBytes]], `stopped` and `firstHalf` 0 or 1, and a known
+    * state (an unknown one cannot tell whether the game runs). Everything after the header is left unread.
+    */
+  def decodeSharedHeader(bytes: Array[Byte]): Either[GameControllerError, SharedHeader] =
+    for {
+      _ <- checkHeader(bytes, ControlHeaderBytes, ControlHeader)
+      _ <- if (bytes.length <= VersionOffset) Left(TooShort(VersionOffset + 1, bytes.length)) else Right(())
+      version = u8(bytes, VersionOffset)
+      _ <-
+        if (sharedHeaderVersion(version)) Right(())
+        else Left(UnknownVersion(ControlHeader, slice(bytes, VersionOffset, VersionOffset + 1)))
+      _ <-
+        if (bytes.length >= SharedHeaderMinPacketBytes && bytes.length <= SharedHeaderMaxPacketBytes) Right(())
+        else Left(ImplausibleSize(ControlHeader, version, SharedHeaderMinPacketBytes, SharedHeaderMaxPacketBytes,
+            bytes.length))
+      header <- ModernLayouts.readHeader(bytes)
+      _ <- header.gameState match {
+        case GameState.Unknown(code) => Left(InvalidField("state", code.toLong))
+        case _                       => Right(())
+      }
+    } yield header
+
+  /** Decodes the true game state a version-20 or -19 GameController sends its monitors: `RGTD` in that version's layout
+    * (158 or 198 bytes).
+    */
+  def decodeTrueData(bytes: Array[Byte]): Either[GameControllerError, HslGameData] =
     for {
       _ <- checkHeader(bytes, TrueDataHeaderBytes, TrueDataHeader)
       version <- controlVersion(bytes, TrueDataHeader)
-      _ <-
-        if (version == GameControlVersion.V19) Right(())
-        else Left(UnknownVersion(TrueDataHeader, slice(bytes, VersionOffset, VersionOffset + version.versionBytes)))
       _ <- checkSize(bytes, TrueDataHeader, version.number, version.packetBytes)
-      data <- ModernLayouts.decodeV19(bytes)
+      data <- version match {
+        case GameControlVersion.V20 => ModernLayouts.decodeV20(bytes)
+        case GameControlVersion.V19 => ModernLayouts.decodeV19(bytes)
+        case _ =>
+          Left(UnknownVersion(TrueDataHeader, slice(bytes, VersionOffset, VersionOffset + version.versionBytes)))
+      }
     } yield data
 
-  /** Encodes the true game state as a version-19 GameController sends it to a monitor (`RGTD`). */
-  def encodeTrueData(data: HslControlData): Either[GameControllerError, Array[Byte]] =
-    ModernLayouts.validateV19(data).toLeft(ModernLayouts.writeV19(data, TrueDataHeaderBytes))
+  /** Encodes the true game state as a version-20 or -19 GameController sends it to a monitor (`RGTD`). */
+  def encodeTrueData(data: HslGameData): Either[GameControllerError, Array[Byte]] = data match {
+    case d: HslControlData   => ModernLayouts.validateV19(d).toLeft(ModernLayouts.writeV19(d, TrueDataHeaderBytes))
+    case d: Hsl20ControlData => ModernLayouts.validateV20(d).toLeft(ModernLayouts.writeV20(d, TrueDataHeaderBytes))
+  }
 
   /** Decodes a version-2 return packet (exactly 8 bytes). */
   def decodeReturn(bytes: Array[Byte]): Either[GameControllerError, ReturnData] =
@@ -151,7 +199,9 @@ object GameControllerCodec {
     }
   }
 
-  /** First four bytes of a monitor's request for the true game state (to UDP 3636 of the version-19 GameController). */
+  /** First four bytes of a monitor's request for the true game state (to UDP 3636 of the version-20 and -19
+    * GameControllers).
+    */
   val MonitorRequestHeader: String = "RGTr"
 
   /** The monitor request: `RGTr` and version 0, 5 bytes. */

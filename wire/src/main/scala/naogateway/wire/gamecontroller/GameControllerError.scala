@@ -36,6 +36,14 @@ object GameControllerError {
     def describe: String = s"$header version $version packet must be $expected bytes, got $found"
   }
 
+  /** A packet read by its shared header only (docs/protocol.md §10.8) whose size is outside what any version could
+    * plausibly have.
+    */
+  final case class ImplausibleSize(header: String, version: Int, min: Int, max: Int, found: Int)
+      extends GameControllerError {
+    def describe: String = s"$header version $version packet of $found bytes: not $min to $max, so not read"
+  }
+
   /** A field holds a value its type cannot carry (e.g. `firstHalf` neither 0 nor 1). */
   final case class InvalidField(field: String, value: Long) extends GameControllerError {
     def describe: String = s"invalid value $value in field $field"

@@ -13,7 +13,7 @@ import naogateway.wire.gamecontroller.GameControllerCodec.{
 }
 import naogateway.wire.gamecontroller.Width.{I16, U16}
 
-/** The layouts of versions 19 and 12 (docs/protocol.md §10.2, §10.3), for [[GameControllerCodec]], which checks the
+/** The layouts of versions 20, 19 and 12 (docs/protocol.md §10.2, §10.3), for [[GameControllerCodec]], which checks the
   * header, the version and the size before these run. Writers run only after their validation passed.
   */
 private[gamecontroller] object ModernLayouts {
@@ -23,8 +23,13 @@ private[gamecontroller] object ModernLayouts {
 
   private def teamOrNone(code: Int): Option[Int] = if (code == KickingTeamNone) None else Some(code)
 
-  def decodeV19(bytes: Array[Byte]): Either[GameControllerError, HslControlData] = {
-    val r = new LeReader(bytes, VersionOffset + GameControlVersion.V19.versionBytes)
+  /** Bytes of the header versions 18, 19 and 20 share, from `RGme` to `secondaryTime`. */
+  val SharedHeaderBytes: Int = 18
+
+  /** Reads the shared header; the caller has checked that `bytes` holds at least [[SharedHeaderBytes]]. */
+  def readHeader(bytes: Array[Byte]): Either[GameControllerError, SharedHeader] = {
+    val r = new LeReader(bytes, VersionOffset)
+    val version = r.u8()
     val packetNumber = r.u8()
     val playersPerTeam = r.u8()
     val competitionType = CompetitionType.fromCode(r.u8())
@@ -36,14 +41,91 @@ private[gamecontroller] object ModernLayouts {
     val kickingTeam = teamOrNone(r.u8())
     val secsRemaining = r.i16()
     val secondaryTime = r.i16()
-    val team0 = teamV19(r)
-    val team1 = teamV19(r)
     for {
       s <- flag("stopped", stopped)
       h <- flag("firstHalf", firstHalf)
-    } yield HslControlData(packetNumber, playersPerTeam, competitionType, s, gamePhase, state, setPlay, h, kickingTeam,
-      secsRemaining.toLong, secondaryTime, team0, team1)
+    } yield SharedHeader(version, bytes.length, packetNumber, playersPerTeam, competitionType, s, gamePhase, state,
+      setPlay, h, kickingTeam, secsRemaining.toLong, secondaryTime)
   }
+
+  private def validateHeader(v: Int, d: HslHeaderFields): List[Option[GameControllerError]] = List(
+    u8Range(v, "packetNumber", d.packetNumber.toLong),
+    u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
+    u8Range(v, "competitionType", d.competitionType.code.toLong),
+    u8Range(v, "gamePhase", d.gamePhase.code.toLong),
+    u8Range(v, "gameState", d.gameState.code.toLong),
+    u8Range(v, "setPlay", d.setPlay.code.toLong),
+    d.kickingTeam.flatMap(t => range(v, "kickingTeam", t.toLong, 0L, KickingTeamNone - 1L)),
+    fits(v, "secsRemaining", d.secsRemaining, I16),
+    fits(v, "secondaryTime", d.secondaryTime.toLong, I16)
+  )
+
+  /** The checks of a team entry's fields before its players, in wire order (the same in versions 19 and 20). */
+  private def validateTeamHead(v: Int, name: String, number: Int, colour: FieldColour, keeperColour: FieldColour,
+      keeper: Int, score: Int, penaltyShot: Int, singleShots: Int, budget: Int, players: Int)
+      : List[Option[GameControllerError]] =
+    List(
+      u8Range(v, s"$name.teamNumber", number.toLong),
+      u8Range(v, s"$name.fieldPlayerColour", colour.code.toLong),
+      u8Range(v, s"$name.goalkeeperColour", keeperColour.code.toLong),
+      u8Range(v, s"$name.goalkeeper", keeper.toLong),
+      u8Range(v, s"$name.score", score.toLong),
+      u8Range(v, s"$name.penaltyShot", penaltyShot.toLong),
+      fits(v, s"$name.singleShots", singleShots.toLong, U16),
+      fits(v, s"$name.messageBudget", budget.toLong, U16),
+      length(s"$name.players", HslPlayerInfo.Slots, players)
+    )
+
+  private def writeHeader(w: LeWriter, header: Array[Byte], version: GameControlVersion, d: HslHeaderFields): Unit = {
+    w.raw(header)
+    writeVersion(w, version)
+    w.u8(d.packetNumber)
+    w.u8(d.playersPerTeam)
+    w.u8(d.competitionType.code)
+    w.flag(d.stopped)
+    w.u8(d.gamePhase.code)
+    w.u8(d.gameState.code)
+    w.u8(d.setPlay.code)
+    w.flag(d.firstHalf)
+    w.u8(d.kickingTeam.getOrElse(KickingTeamNone))
+    w.u16(d.secsRemaining.toInt)
+    w.u16(d.secondaryTime)
+  }
+
+  /** The fields of a team entry before its players, in wire order (the same in versions 19 and 20). */
+  private def writeTeamHead(w: LeWriter, number: Int, colour: FieldColour, keeperColour: FieldColour, keeper: Int,
+      score: Int, penaltyShot: Int, singleShots: Int, budget: Int): Unit = {
+    w.u8(number)
+    w.u8(colour.code)
+    w.u8(keeperColour.code)
+    w.u8(keeper)
+    w.u8(score)
+    w.u8(penaltyShot)
+    w.u16(singleShots)
+    w.u16(budget)
+  }
+
+  def decodeV19(bytes: Array[Byte]): Either[GameControllerError, HslControlData] =
+    readHeader(bytes).map { h =>
+      val r = new LeReader(bytes, SharedHeaderBytes)
+      val team0 = teamV19(r)
+      val team1 = teamV19(r)
+      HslControlData(
+        h.packetNumber,
+        h.playersPerTeam,
+        h.competitionType,
+        h.stopped,
+        h.gamePhase,
+        h.gameState,
+        h.setPlay,
+        h.firstHalf,
+        h.kickingTeam,
+        h.secsRemaining,
+        h.secondaryTime,
+        team0,
+        team1
+      )
+    }
 
   private def teamV19(r: LeReader): HslTeamInfo = {
     val number = r.u8()
@@ -60,68 +142,97 @@ private[gamecontroller] object ModernLayouts {
 
   def validateV19(d: HslControlData): Option[GameControllerError] = {
     val v = 19
-    val top = List(
-      u8Range(v, "packetNumber", d.packetNumber.toLong),
-      u8Range(v, "playersPerTeam", d.playersPerTeam.toLong),
-      u8Range(v, "competitionType", d.competitionType.code.toLong),
-      u8Range(v, "gamePhase", d.gamePhase.code.toLong),
-      u8Range(v, "gameState", d.gameState.code.toLong),
-      u8Range(v, "setPlay", d.setPlay.code.toLong),
-      d.kickingTeam.flatMap(t => range(v, "kickingTeam", t.toLong, 0L, KickingTeamNone - 1L)),
-      fits(v, "secsRemaining", d.secsRemaining, I16),
-      fits(v, "secondaryTime", d.secondaryTime.toLong, I16)
-    )
     def team(name: String, t: HslTeamInfo): List[Option[GameControllerError]] =
-      List(
-        u8Range(v, s"$name.teamNumber", t.teamNumber.toLong),
-        u8Range(v, s"$name.fieldPlayerColour", t.fieldPlayerColour.code.toLong),
-        u8Range(v, s"$name.goalkeeperColour", t.goalkeeperColour.code.toLong),
-        u8Range(v, s"$name.goalkeeper", t.goalkeeper.toLong),
-        u8Range(v, s"$name.score", t.score.toLong),
-        u8Range(v, s"$name.penaltyShot", t.penaltyShot.toLong),
-        fits(v, s"$name.singleShots", t.singleShots.toLong, U16),
-        fits(v, s"$name.messageBudget", t.messageBudget.toLong, U16),
-        length(s"$name.players", HslPlayerInfo.Slots, t.players.size)
-      ) ++ t.players.zipWithIndex.toList.flatMap { case (p, i) =>
-        val n = s"$name.players[$i]"
-        List(
-          u8Range(v, s"$n.penalty", p.penalty.code.toLong),
-          u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
-          u8Range(v, s"$n.warnings", p.warnings.toLong),
-          u8Range(v, s"$n.cautions", p.cautions.toLong)
-        )
+      validateTeamHead(v, name, t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper, t.score,
+        t.penaltyShot, t.singleShots, t.messageBudget, t.players.size) ++ t.players.zipWithIndex.toList.flatMap {
+        case (p, i) =>
+          val n = s"$name.players[$i]"
+          List(
+            u8Range(v, s"$n.penalty", p.penalty.code.toLong),
+            u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
+            u8Range(v, s"$n.warnings", p.warnings.toLong),
+            u8Range(v, s"$n.cautions", p.cautions.toLong)
+          )
       }
-    firstError(top ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
+    firstError(validateHeader(v, d) ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
   }
 
   def writeV19(d: HslControlData, header: Array[Byte]): Array[Byte] = {
     val w = new LeWriter(GameControlVersion.V19.packetBytes)
-    w.raw(header)
-    writeVersion(w, GameControlVersion.V19)
-    w.u8(d.packetNumber)
-    w.u8(d.playersPerTeam)
-    w.u8(d.competitionType.code)
-    w.flag(d.stopped)
-    w.u8(d.gamePhase.code)
-    w.u8(d.gameState.code)
-    w.u8(d.setPlay.code)
-    w.flag(d.firstHalf)
-    w.u8(d.kickingTeam.getOrElse(KickingTeamNone))
-    w.u16(d.secsRemaining.toInt)
-    w.u16(d.secondaryTime)
+    writeHeader(w, header, GameControlVersion.V19, d)
     List(d.team0, d.team1).foreach { t =>
-      w.u8(t.teamNumber)
-      w.u8(t.fieldPlayerColour.code)
-      w.u8(t.goalkeeperColour.code)
-      w.u8(t.goalkeeper)
-      w.u8(t.score)
-      w.u8(t.penaltyShot)
-      w.u16(t.singleShots)
-      w.u16(t.messageBudget)
+      writeTeamHead(w, t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper, t.score, t.penaltyShot,
+        t.singleShots, t.messageBudget)
       t.players.foreach { p =>
         w.u8(p.penalty.code)
         w.u8(p.secsTillUnpenalised)
         w.u8(p.warnings)
+        w.u8(p.cautions)
+      }
+    }
+    w.out
+  }
+
+  def decodeV20(bytes: Array[Byte]): Either[GameControllerError, Hsl20ControlData] =
+    readHeader(bytes).map { h =>
+      val r = new LeReader(bytes, SharedHeaderBytes)
+      val team0 = teamV20(r)
+      val team1 = teamV20(r)
+      Hsl20ControlData(
+        h.packetNumber,
+        h.playersPerTeam,
+        h.competitionType,
+        h.stopped,
+        h.gamePhase,
+        h.gameState,
+        h.setPlay,
+        h.firstHalf,
+        h.kickingTeam,
+        h.secsRemaining,
+        h.secondaryTime,
+        team0,
+        team1
+      )
+    }
+
+  private def teamV20(r: LeReader): Hsl20TeamInfo = {
+    val number = r.u8()
+    val fieldColour = FieldColour.fromCode(r.u8())
+    val goalkeeperColour = FieldColour.fromCode(r.u8())
+    val goalkeeper = r.u8()
+    val score = r.u8()
+    val penaltyShot = r.u8()
+    val singleShots = r.u16()
+    val budget = r.u16()
+    val players = Vector.fill(Hsl20PlayerInfo.Slots)(Hsl20PlayerInfo(Hsl20Penalty.fromCode(r.u8()), r.u8(), r.u8()))
+    Hsl20TeamInfo(number, fieldColour, goalkeeperColour, goalkeeper, score, penaltyShot, singleShots, budget, players)
+  }
+
+  def validateV20(d: Hsl20ControlData): Option[GameControllerError] = {
+    val v = 20
+    def team(name: String, t: Hsl20TeamInfo): List[Option[GameControllerError]] =
+      validateTeamHead(v, name, t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper, t.score,
+        t.penaltyShot, t.singleShots, t.messageBudget, t.players.size) ++ t.players.zipWithIndex.toList.flatMap {
+        case (p, i) =>
+          val n = s"$name.players[$i]"
+          List(
+            u8Range(v, s"$n.penalty", p.penalty.code.toLong),
+            u8Range(v, s"$n.secsTillUnpenalised", p.secsTillUnpenalised.toLong),
+            u8Range(v, s"$n.cautions", p.cautions.toLong)
+          )
+      }
+    firstError(validateHeader(v, d) ++ team("team0", d.team0) ++ team("team1", d.team1): _*)
+  }
+
+  def writeV20(d: Hsl20ControlData, header: Array[Byte]): Array[Byte] = {
+    val w = new LeWriter(GameControlVersion.V20.packetBytes)
+    writeHeader(w, header, GameControlVersion.V20, d)
+    List(d.team0, d.team1).foreach { t =>
+      writeTeamHead(w, t.teamNumber, t.fieldPlayerColour, t.goalkeeperColour, t.goalkeeper, t.score, t.penaltyShot,
+        t.singleShots, t.messageBudget)
+      t.players.foreach { p =>
+        w.u8(p.penalty.code)
+        w.u8(p.secsTillUnpenalised)
         w.u8(p.cautions)
       }
     }

@@ -66,10 +66,10 @@ object FieldColour extends WireCodes[FieldColour] {
   protected def unknown(code: Int): FieldColour = Unknown(code)
 }
 
-/** The phase of a version-19 game (`gamePhase`). */
+/** The phase of a version-19 or -20 game (`gamePhase`). */
 sealed abstract class GamePhase(val code: Int) extends WireCode
 
-/** Game phases of version 19. */
+/** Game phases of versions 19 and 20. */
 object GamePhase extends WireCodes[GamePhase] {
 
   /** A regular half. */
@@ -91,10 +91,10 @@ object GamePhase extends WireCodes[GamePhase] {
   protected def unknown(code: Int): GamePhase = Unknown(code)
 }
 
-/** The set play under way in a version-19 game (`setPlay`). */
+/** The set play under way in a version-19 or -20 game (`setPlay`). */
 sealed abstract class SetPlay(val code: Int) extends WireCode
 
-/** Set plays of version 19. */
+/** Set plays of versions 19 and 20. */
 object SetPlay extends WireCodes[SetPlay] {
 
   /** No set play (a kick-off also reads so). */
@@ -125,10 +125,10 @@ object SetPlay extends WireCodes[SetPlay] {
   protected def unknown(code: Int): SetPlay = Unknown(code)
 }
 
-/** The division a version-19 game is played in (`competitionType`). */
+/** The division a version-19 or -20 game is played in (`competitionType`). */
 sealed abstract class CompetitionType(val code: Int) extends WireCode
 
-/** Competition types of version 19. */
+/** Competition types of versions 19 and 20. */
 object CompetitionType extends WireCodes[CompetitionType] {
 
   /** The small division. */
@@ -211,6 +211,82 @@ object HslPenalty extends WireCodes[HslPenalty] {
     Substitute
   )
   protected def unknown(code: Int): HslPenalty = Unknown(code)
+}
+
+/** Why a version-20 player is off the game (`penalty`): version 19's set renumbered, with motion in stop (3) and
+  * cautioned (11) new.
+  */
+sealed abstract class Hsl20Penalty(val code: Int) extends WireCode {
+
+  /** Whether the player is off the game for any reason. */
+  def isPenalised: Boolean = code != 0
+}
+
+/** Penalties of version 20. */
+object Hsl20Penalty extends WireCodes[Hsl20Penalty] {
+
+  /** Not penalised. */
+  case object NoPenalty extends Hsl20Penalty(0)
+
+  /** Illegal positioning. */
+  case object IllegalPositioning extends Hsl20Penalty(1)
+
+  /** Moved in SET. */
+  case object MotionInSet extends Hsl20Penalty(2)
+
+  /** Moved while play was stopped. */
+  case object MotionInStop extends Hsl20Penalty(3)
+
+  /** Local game stuck. */
+  case object LocalGameStuck extends Hsl20Penalty(4)
+
+  /** Incapable robot. */
+  case object IncapableRobot extends Hsl20Penalty(5)
+
+  /** Picked up. */
+  case object PickUp extends Hsl20Penalty(6)
+
+  /** Ball holding. */
+  case object BallHolding extends Hsl20Penalty(7)
+
+  /** Left the field. */
+  case object LeavingTheField extends Hsl20Penalty(8)
+
+  /** Played with arms or hands. */
+  case object PlayingWithArmsHands extends Hsl20Penalty(9)
+
+  /** Pushing. */
+  case object Pushing extends Hsl20Penalty(10)
+
+  /** Cautioned (a yellow card) and off for its time. */
+  case object Cautioned extends Hsl20Penalty(11)
+
+  /** Sent off. */
+  case object SentOff extends Hsl20Penalty(12)
+
+  /** A substitute, not on the field. */
+  case object Substitute extends Hsl20Penalty(13)
+
+  /** A code no known penalty has. */
+  final case class Unknown(override val code: Int) extends Hsl20Penalty(code)
+
+  val known: Seq[Hsl20Penalty] = Seq(
+    NoPenalty,
+    IllegalPositioning,
+    MotionInSet,
+    MotionInStop,
+    LocalGameStuck,
+    IncapableRobot,
+    PickUp,
+    BallHolding,
+    LeavingTheField,
+    PlayingWithArmsHands,
+    Pushing,
+    Cautioned,
+    SentOff,
+    Substitute
+  )
+  protected def unknown(code: Int): Hsl20Penalty = Unknown(code)
 }
 
 /** Why a version-12 player is off the game (`penalty`, the Humanoid League's codes). */

@@ -156,6 +156,46 @@ object GameControllerGenerators {
       kicking,
       secs.toLong, secondary, team0, team1)
 
+  val hsl20Player: Gen[Hsl20PlayerInfo] = Gen.frequency(
+    2 -> Gen.const(Hsl20PlayerInfo.Unpenalised),
+    3 -> (for { p <- codes(Hsl20Penalty); s <- u8; c <- u8 } yield Hsl20PlayerInfo(p, s, c))
+  )
+
+  val teamV20: Gen[Hsl20TeamInfo] =
+    for {
+      number <- u8
+      colour <- codes(FieldColour)
+      keeperColour <- codes(FieldColour)
+      keeper <- u8
+      score <- u8
+      penaltyShot <- u8
+      singleShots <- u16
+      budget <- u16
+      players <- Gen.listOfN(Hsl20PlayerInfo.Slots, hsl20Player)
+    } yield Hsl20TeamInfo(number, colour, keeperColour, keeper, score, penaltyShot, singleShots, budget,
+      players.toVector)
+
+  val controlV20: Gen[Hsl20ControlData] =
+    for {
+      v19 <- controlV19
+      team0 <- teamV20
+      team1 <- teamV20
+    } yield Hsl20ControlData(
+      v19.packetNumber,
+      v19.playersPerTeam,
+      v19.competitionType,
+      v19.stopped,
+      v19.gamePhase,
+      v19.gameState,
+      v19.setPlay,
+      v19.firstHalf,
+      v19.kickingTeam,
+      v19.secsRemaining,
+      v19.secondaryTime,
+      team0,
+      team1
+    )
+
   val hlPlayer: Gen[HlPlayerInfo] = Gen.frequency(
     2 -> Gen.const(HlPlayerInfo.Unpenalised),
     3 -> (for {
@@ -197,7 +237,7 @@ object GameControllerGenerators {
       dropInTeam,
       dropInTime, secs.toLong, secondaryTime, team0, team1)
 
-  val control: Gen[GameControlData] = Gen.oneOf(controlV19, controlV12, controlV8, controlV7)
+  val control: Gen[GameControlData] = Gen.oneOf(controlV20, controlV19, controlV12, controlV8, controlV7)
 
   /** Any float but NaN, the special values included. */
   val float: Gen[Float] = Gen.frequency(

@@ -26,6 +26,7 @@ class LayoutTablesSpec extends AnyWordSpec with Matchers {
       Layouts2014.of(GameControlVersion.V7) shouldBe Some(Layouts2014.V7)
       Layouts2014.of(GameControlVersion.V12) shouldBe None
       Layouts2014.of(GameControlVersion.V19) shouldBe None
+      Layouts2014.of(GameControlVersion.V20) shouldBe None
     }
   }
 
@@ -36,7 +37,8 @@ class LayoutTablesSpec extends AnyWordSpec with Matchers {
         width.bytes shouldBe v.versionBytes
         v.number.toLong should (be >= width.min and be <= width.max)
       }
-      GameControlVersion.all.map(v => v.number -> v.versionBytes) shouldBe Seq(19 -> 1, 12 -> 2, 8 -> 1, 7 -> 4)
+      GameControlVersion.all.map(v => v.number -> v.versionBytes) shouldBe Seq(20 -> 1, 19 -> 1, 12 -> 2, 8 -> 1,
+        7 -> 4)
     }
   }
 

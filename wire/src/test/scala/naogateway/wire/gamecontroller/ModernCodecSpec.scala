@@ -144,6 +144,7 @@ class ModernCodecSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyC
     "refuse the other versions' sizes as a wrong size of the version read" in {
       val sizes = GameControlVersion.all.map(_.packetBytes)
       val samples: Map[GameControlVersion, GameControlData] = Map(
+        GameControlVersion.V20 -> controlV20.sample.get,
         GameControlVersion.V19 -> controlV19.sample.get,
         GameControlVersion.V12 -> controlV12.sample.get,
         GameControlVersion.V8 -> controlV8.sample.get,
