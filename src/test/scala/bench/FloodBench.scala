@@ -28,9 +28,17 @@ object FloodBench extends Benchmark {
     val testKit = ActorTestKit("flood")
     val log = new HostileTraffic.LogLines
     try {
-      val f = new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]")
+      val f = new GatewayFixture(
+        testKit,
+        "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]\n" +
+          "game-controller.gate-open-after = 1s"
+      )
       try {
         val at1 = HostileTraffic.twoRobotsOnline(f)
+        // Competition mode starts closed: the trusted GameController opens it (docs/protocol.md 10.7).
+        val gc = java.nio.channels.DatagramChannel.open().bind(new java.net.InetSocketAddress("127.0.0.1", 0))
+        try f.openGate(gc)
+        finally gc.close()
         val heapBefore = HostileTraffic.usedHeapAfterGc()
         val linesBefore = log.count
         val started = System.nanoTime()

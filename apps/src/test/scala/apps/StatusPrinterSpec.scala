@@ -42,6 +42,27 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     }
   }
 
+  /** As [[sendUntil]], from one socket, with the version-8 packet number (byte 5) counting up from 1: the competition
+    * gate opens only on a while of packets whose numbers follow one another (docs/protocol.md 10.7).
+    */
+  private def sendNumberedUntil(to: InetSocketAddress, file: String)(seen: => Boolean): Unit = {
+    val bytes = StatusViewSpec.vector(file)
+    Using.resource(new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))) { socket =>
+      val deadline = 20.seconds.fromNow
+      var n = 1
+      while (!seen && deadline.hasTimeLeft()) {
+        bytes(5) = (n & 0xff).toByte
+        socket.send(new DatagramPacket(bytes, bytes.length, to))
+        n += 1
+        Thread.sleep(200)
+      }
+      withClue(s"after sending $file: ")(assert(seen))
+    }
+  }
+
+  private val competition = "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]\n" +
+    "game-controller.max-trusted-range = 8\ngame-controller.gate-open-after = 1s"
+
   private def awaitTrue(what: String)(cond: => Boolean): Unit = {
     val deadline = 20.seconds.fromNow
     while (!cond && deadline.hasTimeLeft()) Thread.sleep(100)
@@ -50,8 +71,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
 
   "The status printer" should {
     "print one line per change when piped: the robot, each game state of the real packets, and the competition gate" in {
-      val fixture =
-        new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
+      val fixture = new GatewayFixture(testKit, competition)
       try {
         val lines = new ConcurrentLinkedQueue[String]()
         val view = naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system)
@@ -61,7 +81,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         awaitTrue("robot 1 online")(printed.exists(l => l.startsWith("robot 1") && l.contains("online")))
         val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
         sendUntil(gc, "v8-initial.bin")(printed.exists(_.startsWith("game: INITIAL")))
-        awaitTrue("gate open")(printed.contains("competition gate: open"))
+        sendNumberedUntil(gc, "v8-initial.bin")(printed.contains("competition gate: open"))
         sendUntil(gc, "v8-ready.bin")(
           printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
         awaitTrue("gate closed")(printed.exists(_.startsWith("competition gate: CLOSED")))
@@ -70,16 +90,18 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
           printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
         sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 5)
         sendUntil(gc, "v8-finished.bin")(printed.exists(_.startsWith("game: FINISHED, second half")))
-        awaitTrue("gate open again")(printed.count(_ == "competition gate: open") == 2)
+        sendNumberedUntil(gc, "v8-finished.bin")(printed.count(_ == "competition gate: open") == 2)
         // One line per change, not per packet: each packet above was sent at least once, some many times.
         printed.count(_.startsWith("game: PLAYING")) shouldBe 1
-        printed.count(_.startsWith("competition gate: CLOSED")) shouldBe 1
+        printed.count(_.startsWith("competition gate: CLOSED: the game is running")) shouldBe 1
+        // Competition mode started closed, and said so once.
+        printed.count(_.startsWith("competition gate: CLOSED: no packet from the trusted GameController yet")) shouldBe
+          1
       } finally fixture.stop()
     }
 
     "redraw a screen showing the robot with its link figures, the game of the real packets, the gate and the traffic" in {
-      val fixture =
-        new GatewayFixture(testKit, "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]")
+      val fixture = new GatewayFixture(testKit, competition)
       try {
         val screen = new RecordingScreen
         spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
@@ -101,7 +123,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
           _.matches("team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
         sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 2)
         sendUntil(gc, "v8-finished.bin")(frame.exists(_.startsWith("game: FINISHED")))
-        awaitTrue("gate open")(frame.contains("competition gate: open"))
+        sendNumberedUntil(gc, "v8-finished.bin")(frame.contains("competition gate: open"))
         frame.head shouldBe "naogateway - 1 robot(s), 1 online"
       } finally fixture.stop()
     }

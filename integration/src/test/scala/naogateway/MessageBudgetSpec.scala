@@ -111,6 +111,27 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
       b = b.game(v19(GameState.Ready, 500)).game(v19(GameState.Ready, 560))
       b.remaining shouldBe 8
     }
+    "read version 20 as version 19: its budget, its phase (extra time) and its states" in {
+      val v20 = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v20-set.bin")) match {
+        case Right(d: Hsl20ControlData) => d
+        case other                      => fail(s"$other")
+      }
+      def at(state: GameState, firstHalf: Boolean, phase: GamePhase = GamePhase.Normal) =
+        v20.copy(gameState = state, firstHalf = firstHalf, gamePhase = phase,
+          team0 = v20.team0.copy(messageBudget = 11900))
+      val settingsX = settings.copy(perExtraTime = 6)
+      var b = MessageBudget(settingsX).game(at(GameState.Set, firstHalf = true))
+      b.counting shouldBe true
+      b.reported shouldBe Some(11900)
+      b = send(b, 2)
+      b.remaining shouldBe 8
+      // A drawn second half goes into extra time: version 20 says so as version 19 does.
+      b = b.game(at(GameState.Finished, firstHalf = false)).game(at(GameState.Initial, firstHalf = true,
+          GamePhase.ExtraTime))
+      b.extraTimeGranted shouldBe true
+      b.remaining shouldBe 14
+      b.game(at(GameState.Playing, firstHalf = true, GamePhase.PenaltyShootOut)).counting shouldBe false
+    }
     "warn when the budget would run out before the end of the half at the current rate, and show the GameController's own" in {
       var b = MessageBudget(settings.copy(perGame = 1000)).game(v19(GameState.Playing, 600, ours = 990))
       b = (0 until 60).foldLeft(b)((acc, i) => acc.message(100, i * s / 2)) // 60 messages in 30 s
