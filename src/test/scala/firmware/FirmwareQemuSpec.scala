@@ -292,6 +292,16 @@ class FirmwareQemuSpec
     def stop(): Unit = { QemuBoard.stop(qemu); bridge.close() }
   }
 
+  /** Reads and drops every datagram already queued at `on`. */
+  private def drain(on: DatagramSocket): Unit = {
+    val buf = new Array[Byte](2048)
+    val before = on.getSoTimeout
+    on.setSoTimeout(50)
+    var left = 1000 // bounded: a sender that never stops cannot hold the spec here
+    try while (left > 0 && Try(on.receive(new DatagramPacket(buf, buf.length))).isSuccess) left -= 1
+    finally on.setSoTimeout(before)
+  }
+
   /** The first datagram at `on` within `within` that `pick` takes. */
   private def awaitOn[A](on: DatagramSocket, within: FiniteDuration)(pick: Array[Byte] => Option[A]): Option[A] = {
     val deadline = within.fromNow
@@ -361,6 +371,7 @@ class FirmwareQemuSpec
         // A restart: the host file gives the next epoch, and a frame signed before it no longer verifies.
         val (held, heldFrame) = signedPing(board, epoch)
         board.stop()
+        drain(base) // the stopped board's last keep-alives, still queued at the base station, carry epoch 1
         board = new SignedBoard(73, epochFile, Map(BaseStation -> base))
         epochAt(board, base) shouldBe 2
         new String(java.nio.file.Files.readAllBytes(epochFile.toPath), StandardCharsets.US_ASCII).trim shouldBe "2"

@@ -187,12 +187,12 @@ object StatusView {
     val robots = after.robots.flatMap { r =>
       val line = Some(robotLine(r, after.links.get(r.robotId), after.game))
       old.get(r.robotId) match {
-        case Some(o) if penaltyName(o, before) != penaltyName(r, after)    => line
-        case Some(o) if o.signing != r.signing && !r.online            => line
-        case Some(o) if o.online == r.online && o.posture == r.posture => None
-        case Some(o) if o.online == r.online && !r.online              => None
-        case None if !r.online && r.signing != SigningState.Unsigned   => None
-        case _                                                         => line
+        case Some(o) if penaltyName(o, before) != penaltyName(r, after) => line
+        case Some(o) if o.signing != r.signing && !r.online             => line
+        case Some(o) if o.online == r.online && o.posture == r.posture  => None
+        case Some(o) if o.online == r.online && !r.online               => None
+        case None if !r.online && r.signing != SigningState.Unsigned    => None
+        case _                                                          => line
       }
     }
     val game =

@@ -35,9 +35,9 @@ object RobotCtl {
 
   /** The help of `robotctl keys` ([[RobotKeys]]). */
   val KeysUsage: String =
-    """usage: robotctl keys [--config config-file] <robotId> ...  (each robot's key, derived from the team key of
-      |                                                           naogateway.signing.key / $NAOGATEWAY_SIGNING_KEY,
-      |                                                           to build or flash that robot with; protocol.md 6.7)""".stripMargin
+    """usage: robotctl keys [--config config-file] <robotId> ...
+      |  each robot's key, derived from the team key of naogateway.signing.key / $NAOGATEWAY_SIGNING_KEY,
+      |  to build or flash that robot with (protocol.md 6.7)""".stripMargin
 
   /** The environment variable the gateway reads its team key from (naogateway's reference.conf). */
   val TeamKeyVariable = "NAOGATEWAY_SIGNING_KEY"

@@ -66,7 +66,7 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
       try {
         val port = held.getLocalPort
         val (lines, code) = check(
-          s"apps.control.bind = \"127.0.0.1:$port\"\napps.zeromq.enabled = off\napps.datagram-door.enabled = off\nrobotmiddleware.cluster.gateway-port = 0\n" +
+          s"apps.control.bind = \"127.0.0.1:$port\"\napps.zeromq.enabled = off\napps.datagram-door.enabled = off\napps.web.enabled = off\nrobotmiddleware.cluster.gateway-port = 0\n" +
             "naogateway.game-controller.enabled = off",
           probe = Preflight.probe
         )
@@ -82,7 +82,8 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
       try {
         val port = fuRemote.getLocalPort
         val (lines, code) = check(
-          s"naogateway.link.robot-port = $port\napps.zeromq.enabled = off\napps.datagram-door.enabled = off\napps.control.enabled = off\n" +
+          s"naogateway.link.robot-port = $port\napps.zeromq.enabled = off\napps.datagram-door.enabled = off\napps.web.enabled = off\n" +
+            "apps.control.enabled = off\n" +
             "robotmiddleware.cluster.gateway-port = 0\nnaogateway.game-controller.enabled = off",
           probe = Preflight.probe
         )
