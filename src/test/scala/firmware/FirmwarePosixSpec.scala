@@ -190,7 +190,7 @@ class FirmwarePosixSpec
       grids should be > 2
     }
 
-    "answer GameController packets of versions 7, 8, 12 and 19 with the return packet of each" in {
+    "answer GameController packets of versions 7, 8, 12, 19 and 20 with the return packet of each" in {
       val r = plain
       val gcAddress = TestLoopback.address().getHostAddress
       val gc = new DatagramSocket(new InetSocketAddress(gcAddress, 3838))
@@ -224,9 +224,19 @@ class FirmwarePosixSpec
       send(v19)
       replies(gc3939) shouldBe Vector(
         "52 47 72 74 04 03 0C 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 80 BF 00 00 00 00 00 00 00 00")
+      // Version 20 (158 bytes, RoboCup 2026; protocol.md 10.11): the same return packet, version 4 to 3939.
+      val v20 = new Array[Byte](158)
+      "RGme".getBytes(StandardCharsets.US_ASCII).copyToArray(v20)
+      v20(4) = 20; v20(10) = 3; v20(18) = 7; v20(18 + 70) = 12
+      send(v20)
+      replies(gc3939) shouldBe Vector(
+        "52 47 72 74 04 03 0C 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 80 BF 00 00 00 00 00 00 00 00")
       // A packet for other teams only is not answered.
       v19(18) = 1; v19(18 + 90) = 2
       send(v19)
+      replies(gc3939) shouldBe empty
+      v20(18) = 1; v20(18 + 70) = 2
+      send(v20)
       replies(gc3939) shouldBe empty
     }
 

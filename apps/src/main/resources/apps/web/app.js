@@ -77,7 +77,9 @@
     const c = robot.clock;
     const drift = c && (c.driftSettled ? c.driftPpm.toFixed(0) + " ± " + c.driftBoundPpm.toFixed(0) + " ppm" : "drift settling");
     text(q(".robot-clock"), c ? drift + ", offset ± " + fixed(c.errorBoundMs, 1, "ms") + " (" + c.samples + " samples)" : "-");
-    text(q(".robot-signing"), robot.signing);
+    text(q(".robot-signing"), (robot.signing || "-") + (robot.development ? ", development build" : ""));
+    const p = robot.penalty;
+    text(q(".robot-penalty"), p ? "PENALISED: " + p.name + (p.secondsLeft > 0 ? ", " + p.secondsLeft + " s left" : "") : "");
     text(q(".robot-address"), robot.address);
     const refused = Object.entries(robot.refused || {}).map(([k, v]) => k + " " + v).join(", ");
     text(q(".robot-refused"), refused ? "refused: " + refused : "");

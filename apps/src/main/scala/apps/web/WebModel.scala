@@ -173,8 +173,11 @@ object WebJson {
   // A string a robot or a peer wrote, with its control characters replaced before it reaches the page.
   private def text(s: String): JsValue = JsString(naogateway.Printable.text(s))
 
-  /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind. */
-  def robot(r: RobotSnapshot, link: Option[LinkStats], signing: Option[String]): JsObject = {
+  /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind, and
+    * the GameController's penalty when `game` has taken it off the game (the status screen's rule, StatusView.penalty).
+    */
+  def robot(r: RobotSnapshot, link: Option[LinkStats], signing: Option[String],
+      game: Option[GameControlData] = None): JsObject = {
     val row = apps.RobotRow.of(r, link)
     JsObject(
       "id" -> JsNumber(row.robotId),
@@ -199,6 +202,10 @@ object WebJson {
         )
       },
       "signing" -> opt(signing)(JsString(_)),
+      "development" -> JsBoolean(row.report.development),
+      "penalty" -> opt(StatusView.penalty(r, game)) { p =>
+        JsObject("name" -> JsString(p.name), "secondsLeft" -> JsNumber(p.secsTillUnpenalised))
+      },
       "refused" -> JsObject(row.refused.map { case (k, v) => k -> JsNumber(v) })
     )
   }
@@ -269,7 +276,7 @@ object WebJson {
     "type" -> JsString(if (hello) "hello" else "push"),
     "t" -> num(t),
     "historyPoints" -> JsNumber(m.historyPoints),
-    "robots" -> JsArray(m.robots.map(r => robot(r, m.links.get(r.robotId), m.signing.get(r.robotId)))),
+    "robots" -> JsArray(m.robots.map(r => robot(r, m.links.get(r.robotId), m.signing.get(r.robotId), m.game))),
     "game" -> game(m),
     "vision" -> JsObject(m.vision.map { case (id, v) => id.toString -> vision(v, grids(id)) }),
     "events" -> JsArray(m.events.take(newEvents).map(event)),

@@ -49,6 +49,18 @@ class WebModelSpec extends AnyWordSpec with Matchers {
       m3.events.head.text shouldBe "gateway: 3 refused (unknown-robot, 4 in all)"
     }
 
+    "put the GameController's penalty and the development flag on a robot's card" in {
+      // v20-playing.bin: player 3 of team 12 pushed, 25 s left (the status screen's rule: player number = robot id).
+      val game = naogateway.wire.gamecontroller.GameControllerCodec.decodeControl(
+        apps.StatusViewSpec.vector("v20-playing.bin")).toOption
+      val three = robot(3).copy(teamId = Some(12))
+      val card = WebModel.robot(three, None, Some("signed"), game)
+      card.fields("penalty") shouldBe JsObject("name" -> JsString("pushing"), "secondsLeft" -> JsNumber(25))
+      card.fields("development") shouldBe JsBoolean(false)
+      WebModel.robot(three.copy(teamId = Some(7)), None, None, game).fields("penalty") shouldBe JsNull
+      WebModel.robot(three, None, None, None).fields("penalty") shouldBe JsNull
+    }
+
     "keep frames only of robots it lists, and drop a robot's plots and frame with it" in {
       val region = HaViMoRegion(1, 1, 20, 200, 300, 20, 5, 30, 10)
       val m = blank.withRobots(Vector(robot(1))).withRegions(1, 7, Vector(region)).withRegions(99, 1, Vector(region))
