@@ -54,11 +54,11 @@ class WebModelSpec extends AnyWordSpec with Matchers {
       val game = naogateway.wire.gamecontroller.GameControllerCodec.decodeControl(
         apps.StatusViewSpec.vector("v20-playing.bin")).toOption
       val three = robot(3).copy(teamId = Some(12))
-      val card = WebModel.robot(three, None, Some("signed"), game)
+      val card = WebJson.robot(three, None, Some("signed"), game)
       card.fields("penalty") shouldBe JsObject("name" -> JsString("pushing"), "secondsLeft" -> JsNumber(25))
       card.fields("development") shouldBe JsBoolean(false)
-      WebModel.robot(three.copy(teamId = Some(7)), None, None, game).fields("penalty") shouldBe JsNull
-      WebModel.robot(three, None, None, None).fields("penalty") shouldBe JsNull
+      WebJson.robot(three.copy(teamId = Some(7)), None, None, game).fields("penalty") shouldBe JsNull
+      WebJson.robot(three, None, None, None).fields("penalty") shouldBe JsNull
     }
 
     "keep frames only of robots it lists, and drop a robot's plots and frame with it" in {
