@@ -6,7 +6,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.Posture
-import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot}
+import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
 
 class RobotRowSpec extends AnyWordSpec with Matchers {
 
@@ -41,6 +41,20 @@ class RobotRowSpec extends AnyWordSpec with Matchers {
       val row = RobotRow.of(RobotSnapshot(4, null, batteryVoltage = Some(Double.NaN), quality = null),
         Some(link.copy(rttMillis = Some(Double.PositiveInfinity), lossEstimate = Double.NaN)))
       (row.address, row.quality, row.battery, row.rttMillis, row.loss) shouldBe ((None, None, None, None, None))
+    }
+
+    "show a robot that must sign and is heard only unsigned as unsigned, without a link quality, on both lines" in {
+      val unsigned = robot.copy(online = false, quality = LinkQuality.Offline, signing = SigningState.Unsigned)
+      val row = RobotRow.of(unsigned, None)
+      (row.linkState, row.quality) shouldBe (("unsigned", None))
+      RobotRow.of(robot.copy(online = false, quality = LinkQuality.Offline), None).linkState shouldBe "offline"
+      // Online, a robot that signs is online whatever a stranger sent meanwhile.
+      RobotRow.of(robot.copy(signing = SigningState.Signed), None).linkState shouldBe "online"
+      control.ControlServer.statusLine(unsigned, None).split("\\s+").toList.slice(2, 4) shouldBe
+        List("unsigned", "-")
+      StatusView.robotLine(unsigned, None) should include("unsigned")
+      control.ControlServer.statusLine(robot.copy(development = true), None) should endWith("development build")
+      control.ControlServer.statusLine(robot, None) should not include "development"
     }
 
     "be what the launcher's line, robotctl's line and the web card show alike" in {

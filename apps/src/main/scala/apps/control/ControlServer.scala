@@ -359,9 +359,10 @@ object ControlServer {
     f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s " +
       f"${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
 
-  /** One line per robot: id, address, online, link quality, battery, posture, role, round-trip time, loss, and the
-    * robot's clock against the gateway's (the error bound of its estimate, and its drift: `settling` until its bound is
-    * within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate).
+  /** One line per robot: id, address, online (or `unsigned`, RobotRow.linkState), link quality, battery, posture, role,
+    * round-trip time, loss, and the robot's clock against the gateway's (the error bound of its estimate, and its
+    * drift: `settling` until its bound is within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate);
+    * `development build` after a robot running one.
     */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
     val row = apps.RobotRow.of(r, stats)
@@ -369,9 +370,10 @@ object ControlServer {
     val loss = row.loss.fold("-")(v => f"${v * 100}%.0f %%")
     val clock = row.clock.fold("-")(c => f"±${c.errorBoundMillis}%.1f ms")
     val drift = row.clock.fold("-")(c => if (c.driftSettled) f"${c.driftPpm}%+.0f ppm" else "settling")
-    f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${if (row.online) "online" else "offline"}%-8s " +
+    f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${row.linkState}%-8s " +
       f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
       f"${row.posture.fold("-")(_.name)}%-8s " +
-      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift"
+      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift" +
+      (if (row.report.development) " development build" else "")
   }
 }
