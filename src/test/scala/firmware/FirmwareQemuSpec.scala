@@ -101,7 +101,8 @@ class FirmwareQemuSpec
           peer.send(new DatagramPacket(big, big.length, new InetSocketAddress(robot, TestLoopback.RobotReceivePort)))
         sendBig()
         // Sent once more if no echo came: in full CI runs (every module's tests at once on 2 cores) the emulated board
-        // missed the first copy in two runs of a clean clone, while alone it never did. UDP promises no delivery; what is
+        /* missed the first copy in two runs of a clean clone, while alone it never did. UDP promises no delivery; what
+         * is */
         // checked is that the largest datagram crosses whole both ways, and that the bridge lost nothing (below).
         val echoed = receive(peer, 15.seconds).orElse { sendBig(); receive(peer, 20.seconds) }
         withClue(QemuBoard.output(log)) {
