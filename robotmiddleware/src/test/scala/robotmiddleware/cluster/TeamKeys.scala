@@ -55,9 +55,8 @@ object TeamKeys {
     if (p.exitValue() != 0) throw new IllegalStateException(s"keytool ${args.head} failed: $out")
   }
 
-  /** The team's files in `dir`, made by docs/cluster.md's three commands. */
-  def team(tool: Path, dir: Path, keyStorePassword: String, trustStorePassword: String): Team = {
-    val passwords = (keyStorePassword, trustStorePassword)
+  /** docs/cluster.md's first command: an EC key pair under the team's name in `keyStore` (team and stranger alike). */
+  private def keyPair(tool: Path, dir: Path, passwords: (String, String), keyStore: String): Unit =
     run(
       tool,
       dir,
@@ -76,10 +75,15 @@ object TeamKeys {
       "-storetype",
       "PKCS12",
       "-keystore",
-      "team-keystore.p12",
+      keyStore,
       "-storepass:env",
       KeyPassword
     )
+
+  /** The team's files in `dir`, made by docs/cluster.md's three commands. */
+  def team(tool: Path, dir: Path, keyStorePassword: String, trustStorePassword: String): Team = {
+    val passwords = (keyStorePassword, trustStorePassword)
+    keyPair(tool, dir, passwords, "team-keystore.p12")
     run(tool, dir, passwords, "-exportcert", "-alias", "team", "-rfc", "-file", "team.crt", "-keystore",
       "team-keystore.p12", "-storepass:env", KeyPassword)
     run(
@@ -109,28 +113,7 @@ object TeamKeys {
     */
   def stranger(tool: Path, dir: Path, teamCertificate: Path, password: String): Stores = {
     val passwords = (password, password)
-    run(
-      tool,
-      dir,
-      passwords,
-      "-genkeypair",
-      "-alias",
-      "team",
-      "-keyalg",
-      "EC",
-      "-groupname",
-      "secp256r1",
-      "-validity",
-      "730",
-      "-dname",
-      Name,
-      "-storetype",
-      "PKCS12",
-      "-keystore",
-      "stranger-keystore.p12",
-      "-storepass:env",
-      KeyPassword
-    )
+    keyPair(tool, dir, passwords, "stranger-keystore.p12")
     run(
       tool,
       dir,
