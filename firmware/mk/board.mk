@@ -6,9 +6,10 @@
 #                   unsigned development image. One of the two is required: a field image always signs
 #   make qemu       netduino2 images (port/qemu): build/qemu/{robot,echo,measure}.elf, and build/qemu-w4/; their
 #                   robot takes `key=`, `team_key=` or `development` as an argument (or ROBOT_KEY / FR_DEVELOPMENT)
-#   make footprint  flash and static RAM of each CM-530 build, the largest stack of each entry point (stack
-#                   painting) and instructions per keep-alive and per request (qemu -icount); prints a table
-#                   and writes build/footprint.json
+#   make footprint  flash and static RAM of the library on the CM-530 (the stub build/cm530/footprint.elf, which
+#                   keeps every public function) and, apart, of the example robot; the largest stack of each entry
+#                   point (stack painting) and instructions per keep-alive and per request (qemu -icount); prints
+#                   a table and writes build/footprint.json
 #   make test-gs1500m   the GS1500M driver's unit tests alone (also part of `make test`)
 #
 # The toolchain is Debian's gcc-arm-none-eabi with newlib-nano; qemu is qemu-system-arm (setup.sh installs both).
@@ -96,6 +97,14 @@ $(eval $(call arm_variant,qemu,port/qemu/board_qemu.c,$(QEMU_TIMING),ld/qemu-net
 $(eval $(call arm_variant,qemu-w4,port/qemu/board_qemu.c,-DFR_STREAM_WINDOW=4 $(QEMU_TIMING),ld/qemu-netduino2.ld))
 $(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(FR_EXAMPLE_SRCS),$$($(v)_PORT))))
 $(foreach v,qemu qemu-w4,$(eval $(call arm_program,$(v),measure,port/qemu/measure.c,)))
+# The footprint stub (port/cm530/footprint.c): the library alone, every public function kept by a table generated
+# from the public headers (tools/footprint_keep.sh), so a function added to fr.h (or a new include/fr_*.h) is
+# measured without editing the stub.
+FOOTPRINT_HEADERS := $(filter-out include/fr_config.h include/fr_port.h,$(wildcard include/fr.h include/fr_*.h))
+$(GEN)/footprint_keep.c: tools/footprint_keep.sh $(FOOTPRINT_HEADERS)
+	@mkdir -p $(dir $@)
+	sh tools/footprint_keep.sh $(FOOTPRINT_HEADERS) > $@.new && mv $@.new $@
+$(foreach v,cm530 cm530-w4,$(eval $(call arm_program,$(v),footprint,port/cm530/footprint.c,$$($(v)_PORT) $(BUILD)/$(v)/obj/$(GEN)/footprint_keep.o)))
 $(eval $(call arm_program,qemu,echo,port/qemu/echo.c,$$(qemu_PORT)))
 
 arm: check-robot-key $(BUILD)/cm530/robot.elf $(BUILD)/cm530/robot.hex $(BUILD)/cm530/robot.bin $(BUILD)/cm530-w4/robot.elf
@@ -106,7 +115,7 @@ qemu: $(BUILD)/qemu/robot.elf $(BUILD)/qemu/echo.elf $(BUILD)/qemu/measure.elf $
 # The footprint is measured with a robot key built in (a fixed one, 32 bytes, unless ROBOT_KEY or FR_DEVELOPMENT is
 # given): the image a team flashes.
 footprint: ROBOT_KEY := $(if $(ROBOT_KEY)$(FR_DEVELOPMENT),$(ROBOT_KEY),000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f)
-footprint: arm qemu | check-qemu
+footprint: arm qemu $(BUILD)/cm530/footprint.elf $(BUILD)/cm530-w4/footprint.elf | check-qemu
 	@python3 port/qemu/footprint.py "$(QEMU)" "$(ARM_SIZE)" "$(BUILD)"
 
 # The driver's tests alone, without nanopb (the Makefile's `make test` runs them with the library's).

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """firmware/port/qemu/footprint.py: the footprint of `make footprint` (docs/firmware.md, "Footprint").
 
-Flash and static RAM of each CM-530 build, split by part from the linker's map, and the figures of the measurement
-program (port/qemu/measure.c) run in qemu with -icount: the largest stack of each entry point and its instructions.
-Prints a table and writes build/footprint.json (the bench suite reads it).
+The library's flash and static RAM on the CM-530, from the footprint stub (port/cm530/footprint.c: every public
+function kept, nothing else; the stub's own bytes are reported apart), and the example robot's image apart, each
+split by part from the linker's map; and the figures of the measurement program (port/qemu/measure.c) run in qemu
+with -icount: the largest stack of each entry point and its instructions. Prints a table and writes
+build/footprint.json (the bench suite reads its flat `figures`).
 
 Usage: footprint.py <qemu> <build dir>
 """
@@ -27,6 +29,8 @@ def part_of(path):
         return "message descriptors"
     if "/pb/" in path:
         return "nanopb runtime"
+    if "/obj/port/cm530/footprint.o" in path or "/footprint_keep.o" in path:
+        return "stub"
     if "/obj/port/" in path:
         return "board port"
     if "/obj/examples/" in path or "/obj/port/qemu/measure.o" in path:
@@ -101,50 +105,81 @@ def measure(qemu, elf):
     return figures
 
 
+def image(size_tool, build, variant, program):
+    """Flash and static RAM of one CM-530 image, with its parts."""
+    elf = "%s/%s/%s.elf" % (build, variant, program)
+    s = section_sizes(size_tool, elf)
+    flash_parts, ram_parts = sizes_from_map("%s/%s/%s.map" % (build, variant, program))
+    flash = s.get(".isr_vector", 0) + s.get(".text", 0) + s.get(".ARM.exidx", 0) + s.get(".data", 0)
+    ram = s.get(".data", 0) + s.get(".bss", 0)
+    return {"flash": flash, "static_ram": ram, "stack_reserved": s.get(".stack", 0),
+            "flash_parts": flash_parts, "ram_parts": ram_parts}
+
+
 def main():
     qemu, size_tool, build = sys.argv[1], sys.argv[2], sys.argv[3]
-    result = {"builds": {}, "entries": {}}
-    for name, variant in BUILDS:
-        elf = "%s/%s/robot.elf" % (build, variant)
-        s = section_sizes(size_tool, elf)
-        flash_parts, ram_parts = sizes_from_map("%s/%s/robot.map" % (build, variant))
-        flash = s.get(".isr_vector", 0) + s.get(".text", 0) + s.get(".ARM.exidx", 0) + s.get(".data", 0)
-        ram = s.get(".data", 0) + s.get(".bss", 0)
-        result["builds"][name] = {"flash": flash, "static_ram": ram, "stack_reserved": s.get(".stack", 0),
-                                  "flash_parts": flash_parts, "ram_parts": ram_parts}
+    result = {"builds": {}, "examples": {}, "entries": {}}
     for name, variant in MEASURES:
         result["entries"][name] = measure(qemu, "%s/%s/measure.elf" % (build, variant))
+    for (name, variant) in BUILDS:
+        stub = image(size_tool, build, variant, "footprint")
+        entries = result["entries"][name]
+        result["builds"][name] = {
+            # the library: library + GS1500M driver + nanopb + descriptors + libc + board port, the stub apart
+            "library_flash": stub["flash"] - stub["flash_parts"].get("stub", 0),
+            "library_ram": stub["static_ram"] - stub["ram_parts"].get("stub", 0),
+            "stack_max": max(e["stack"] for e in entries.values()),
+            "keepalive_instructions": entries["keepalive"]["instructions"],
+            "signed_keepalive_instructions": entries["keepalive_signed"]["instructions"],
+            "stub_flash": stub["flash_parts"].get("stub", 0),
+            "stub_ram": stub["ram_parts"].get("stub", 0),
+            "stack_reserved": stub["stack_reserved"],
+            "flash_parts": {k: v for k, v in stub["flash_parts"].items() if k != "stub"},
+            "ram_parts": {k: v for k, v in stub["ram_parts"].items() if k != "stub"},
+        }
+        result["examples"][name] = image(size_tool, build, variant, "robot")
 
     # The bench suite's figures (src/test/scala/bench/FirmwareBench.scala), flat.
     w1, w4 = result["builds"]["stop-and-wait"], result["builds"]["selective-repeat-w4"]
+    e1, e4 = result["examples"]["stop-and-wait"], result["examples"]["selective-repeat-w4"]
     entries = result["entries"]["stop-and-wait"]
     figures = {
-        "firmware_flash_bytes_w1": w1["flash"],
-        "firmware_flash_without_program_bytes_w1": w1["flash"] - w1["flash_parts"].get("program", 0),
-        "firmware_flash_bytes_w4": w4["flash"],
-        "firmware_static_ram_bytes_w1": w1["static_ram"],
-        "firmware_static_ram_bytes_w4": w4["static_ram"],
-        "firmware_static_ram_without_program_bytes_w1": w1["static_ram"] - w1["ram_parts"].get("program", 0),
-        "firmware_static_ram_without_program_bytes_w4": w4["static_ram"] - w4["ram_parts"].get("program", 0),
+        "firmware_library_flash_bytes_w1": w1["library_flash"],
+        "firmware_library_flash_bytes_w4": w4["library_flash"],
+        "firmware_library_static_ram_bytes_w1": w1["library_ram"],
+        "firmware_library_static_ram_bytes_w4": w4["library_ram"],
+        "firmware_example_flash_bytes_w1": e1["flash"],
+        "firmware_example_flash_bytes_w4": e4["flash"],
+        "firmware_example_static_ram_bytes_w1": e1["static_ram"],
+        "firmware_example_static_ram_bytes_w4": e4["static_ram"],
     }
     for entry, e in entries.items():
         figures["firmware_stack_%s_bytes" % entry] = e["stack"]
-    figures["firmware_stack_max_bytes"] = max(e["stack"] for e in entries.values())
+    figures["firmware_stack_max_bytes"] = max(w1["stack_max"], w4["stack_max"])
     for entry, e in entries.items():
         figures["firmware_%s_instructions" % entry] = e["instructions"]
+    figures["firmware_keepalive_instructions_w4"] = w4["keepalive_instructions"]
+    figures["firmware_keepalive_signed_instructions_w4"] = w4["signed_keepalive_instructions"]
     result["figures"] = figures
     with open("%s/footprint.json" % build, "w") as f:
         json.dump(result, f, indent=2)
 
-    print("Footprint of the example robot on the CM-530 (STM32F103RE; arm-none-eabi-gcc -Os, newlib-nano)")
-    print("%-24s %10s %14s" % ("build", "flash (B)", "static RAM (B)"))
+    print("The library on the CM-530 (STM32F103RE; arm-none-eabi-gcc, newlib-nano), measured with the footprint stub")
+    print("%-22s %10s %12s %10s %11s %11s" % ("build", "flash (B)", "static RAM", "stack max", "keep-alive",
+                                             "signed k-a"))
     for name, b in result["builds"].items():
-        print("%-24s %10d %14d" % (name, b["flash"], b["static_ram"]))
-    parts = sorted(set().union(*[set(b["flash_parts"]) | set(b["ram_parts"]) for b in result["builds"].values()]))
-    print("\nby part (%s)          flash (B)    RAM (B)" % BUILDS[0][0])
-    b = result["builds"][BUILDS[0][0]]
-    for p in parts:
-        print("  %-28s %10d %10d" % (p, b["flash_parts"].get(p, 0), b["ram_parts"].get(p, 0)))
+        print("%-22s %10d %12d %10d %11d %11d" % (name, b["library_flash"], b["library_ram"], b["stack_max"],
+                                                  b["keepalive_instructions"], b["signed_keepalive_instructions"]))
+    for name, b in result["builds"].items():
+        print("\nby part (%s)          flash (B)    RAM (B)" % name)
+        for p in sorted(set(b["flash_parts"]) | set(b["ram_parts"])):
+            print("  %-28s %10d %10d" % (p, b["flash_parts"].get(p, 0), b["ram_parts"].get(p, 0)))
+        print("  %-28s %10d %10d" % ("(the stub itself, not counted)", b["stub_flash"], b["stub_ram"]))
+    print("\nThe example robot's image (examples/robot.c), apart")
+    print("%-24s %10s %14s %16s" % ("build", "flash (B)", "static RAM (B)", "program's part"))
+    for name, b in result["examples"].items():
+        print("%-24s %10d %14d %8d / %5d" % (name, b["flash"], b["static_ram"], b["flash_parts"].get("program", 0),
+                                               b["ram_parts"].get("program", 0)))
     print("\nEntry points on the emulated Cortex-M3 (qemu netduino2, -icount shift=%d; stack by painting)" % ICOUNT_SHIFT)
     print("%-24s %-20s %12s %10s %8s" % ("build", "entry", "instructions", "stack (B)", "bytes"))
     for name, entries in result["entries"].items():
