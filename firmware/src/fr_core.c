@@ -76,7 +76,7 @@ bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
 /* ---- the keep-alive ---------------------------------------------------------------------------------- */
 
 /** Sends one keep-alive: Status and RobotHealth in one frame (protocol.md 6.2, 9.13). */
-static void send_keepalive(void) {
+static FR_NOINLINE void send_keepalive(void) {
     fr_health_t h;
     memset(&h, 0, sizeof h);
     h.posture = "sit";

@@ -41,6 +41,14 @@ fr_frame_error_t fr_frame_parse(const uint8_t *data, size_t len, const uint8_t *
  *  frame starts (payload - 12 or payload - 8). `payload` must have FR_HEADER_MAX bytes before it. */
 uint8_t *fr_frame_header(uint8_t *payload, size_t payload_len, fr_form_t form);
 
+/** Keeps a function out of its callers, so its locals are on the stack only while it runs (send_keepalive's Status
+ *  and RobotHealth would otherwise sit in every fr_poll frame, also on the request path). */
+#if defined(__GNUC__)
+#define FR_NOINLINE __attribute__((noinline))
+#else
+#define FR_NOINLINE
+#endif
+
 /** An HMAC-SHA-256 key made ready once: the hash states after its inner and outer padded key blocks, so each MAC
  *  saves the two compressions of those blocks. */
 typedef struct {

@@ -65,13 +65,19 @@ void fr_sha256_update(fr_sha256_t *s, const uint8_t *data, size_t len) {
 
 void fr_sha256_final(fr_sha256_t *s, uint8_t out[32]) {
     uint64_t bits = s->total * 8u;
-    uint8_t pad = 0x80;
-    fr_sha256_update(s, &pad, 1);
-    pad = 0;
-    while (s->used != 56) fr_sha256_update(s, &pad, 1);
-    uint8_t len[8];
-    for (int k = 0; k < 8; k++) len[k] = (uint8_t)(bits >> (56 - 8 * k));
-    fr_sha256_update(s, len, 8);
+    /* Padding written into the block in place: 0x80, zeros up to byte 56 (through one more block when the
+     * length no longer fits), then the length in bits, big-endian. */
+    size_t used = s->used;
+    s->block[used++] = 0x80;
+    if (used > 56) {
+        memset(s->block + used, 0, 64 - used);
+        compress(s->h, s->block);
+        used = 0;
+    }
+    memset(s->block + used, 0, 56 - used);
+    for (int k = 0; k < 8; k++) s->block[56 + k] = (uint8_t)(bits >> (56 - 8 * k));
+    compress(s->h, s->block);
+    s->used = 0;
     for (int k = 0; k < 8; k++) {
         out[4 * k] = (uint8_t)(s->h[k] >> 24);
         out[4 * k + 1] = (uint8_t)(s->h[k] >> 16);

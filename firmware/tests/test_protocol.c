@@ -316,6 +316,26 @@ static void test_signing(void) {
     fr_sha256_update(&sh, (const uint8_t *)"abc", 3);
     fr_sha256_final(&sh, digest);
     CHECK(same_bytes(digest, 32, "BA7816BF 8F01CFEA 414140DE 5DAE2223 B00361A3 96177A9C B410FF61 F20015AD"));
+    /* The padding at every boundary: a length that leaves 0x80 and the length field one block (55), that pushes
+     * the length field (56, 63) or all the padding (64, 119, 120) into a block of its own; fed in two pieces. */
+    {
+        static const struct { size_t n; const char *hex; } cases[] = {
+            {55, "16fa57a0a3423a715d594516339f36189d6b5f93754a9714fef202616a9fabfe"},
+            {56, "c37b44e5f1b18554b36966f4f8e08bfbf3164c4b6c10374d12d89850892073c5"},
+            {63, "bbba992d2c85af960fb2987a1fd05e0aa82a3db3c740dd8982a9e273b75e36a3"},
+            {64, "66bd4633ed6f71c4ecfa4763bf7ba1c8ec7612de9aa6c0578a7b675207c71e0b"},
+            {119, "a3ed307b730fa77c07531300c6e4a282330011d4d4caf6bb7b63ae05950f4b66"},
+            {120, "8e3b15d9fea7472655aa069620b7f8c2e55ee1499f763200a7515fe826e99d20"}};
+        uint8_t m[120];
+        for (size_t i = 0; i < sizeof m; i++) m[i] = (uint8_t)(i * 7u + 1u);
+        for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+            fr_sha256_init(&sh);
+            fr_sha256_update(&sh, m, cases[c].n / 3u);
+            fr_sha256_update(&sh, m + cases[c].n / 3u, cases[c].n - cases[c].n / 3u);
+            fr_sha256_final(&sh, digest);
+            CHECK(same_bytes(digest, 32, cases[c].hex));
+        }
+    }
     const uint8_t *parts[1] = {(const uint8_t *)"what do ya want for nothing?"};
     size_t lens[1] = {28};
     fr_hmac_sha256((const uint8_t *)"Jefe", 4, parts, lens, 1, digest);
