@@ -78,6 +78,14 @@
 #define FR_STREAM_QUEUE FR_STREAM_WINDOW
 #endif
 
+/** Reorder slots of the secure stream (W > 1): segments received ahead of the next expected one that are kept
+ *  until the gap is filled (1 .. W - 1). One keeps the nearest segment after a single loss, the common case; a
+ *  segment that finds no slot is acknowledged cumulatively and comes again. Each slot is FR_STREAM_PAYLOAD_MAX
+ *  bytes. */
+#ifndef FR_STREAM_REORDER
+#define FR_STREAM_REORDER 1
+#endif
+
 /** Largest payload of one secure-stream segment the robot keeps (protocol.md allows 1398). */
 #ifndef FR_STREAM_PAYLOAD_MAX
 #define FR_STREAM_PAYLOAD_MAX 1398
@@ -115,14 +123,21 @@
 #define GS1500M_MAX_DATAGRAM 1400
 
 #ifndef GS1500M_RX_RING
-/** Receive ring: one whole datagram with its longest header (1439 bytes, thesis 7.2) plus about 13 ms of
- *  460800 baud for the bytes that keep coming while the program works; must exceed 1439. */
-#define GS1500M_RX_RING 2048
+/** Receive ring: the bytes that arrive while the main loop works, about 11 ms of 460800 baud; a datagram's data
+ *  leave it for the program's buffer as they come (gs1500m.h), so it need not hold a whole datagram. */
+#define GS1500M_RX_RING 512
 #endif
 
 #ifndef GS1500M_TX_RING
-/** Transmit ring: one whole `ESC Z` frame of 1407 bytes, so a send never waits, plus room for an AT command. */
-#define GS1500M_TX_RING 1536
+/** Transmit ring: AT commands, datagram headers and short datagrams (GS1500M_TX_COPY_MAX); a longer datagram is
+ *  sent from the program's buffer. Must hold the longest command (about 40 bytes) with a header. */
+#define GS1500M_TX_RING 96
+#endif
+
+#ifndef GS1500M_TX_COPY_MAX
+/** Datagrams up to this length are copied into the transmit ring (acks, GameController returns); longer ones are
+ *  sent from the caller's buffer. */
+#define GS1500M_TX_COPY_MAX 40
 #endif
 
 #ifndef GS1500M_LINE_MAX
@@ -138,6 +153,9 @@
 
 #if FR_STREAM_QUEUE < FR_STREAM_WINDOW || FR_STREAM_QUEUE > FR_STREAM_MAX_SEQ + 1 - FR_STREAM_WINDOW
 #error "FR_STREAM_QUEUE must be FR_STREAM_WINDOW .. FR_STREAM_MAX_SEQ + 1 - FR_STREAM_WINDOW"
+#endif
+#if FR_STREAM_REORDER < 1 || (FR_STREAM_WINDOW > 1 && FR_STREAM_REORDER > FR_STREAM_WINDOW - 1)
+#error "FR_STREAM_REORDER must be 1 .. FR_STREAM_WINDOW - 1"
 #endif
 #if FR_STREAM_MAX_SEQ < 1 || FR_STREAM_MAX_SEQ > 41
 #error "FR_STREAM_MAX_SEQ must be 1 .. 41"

@@ -16,11 +16,18 @@ typedef struct {
 uint32_t fr_port_millis(void);
 
 /** Hands one UDP datagram for `to` to the network without blocking; 0 when accepted, < 0 when it cannot
- *  be sent now (module busy, buffer full, link down): the library counts the drop and goes on. */
+ *  be sent now (module busy, buffer full, link down): the library counts the drop and goes on. The port may send
+ *  straight from `data`: the library leaves it unchanged until fr_port_frame_free says true. */
 int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len);
 
+/** Whether the library may write into the memory of its datagrams now (docs/firmware.md, "Memory"): false while the
+ *  port still sends a datagram from the memory fr_port_send was given, or is copying a datagram that is arriving
+ *  into the buffer fr_port_recv was given. A port that copies both ways (posix) always says true. */
+bool fr_port_frame_free(void);
+
 /** Takes at most one received datagram without blocking: its length, 0 when none is waiting, < 0 when
- *  one was lost (too long for `cap`, framing error); `from` gets the sender. */
+ *  one was lost (too long for `cap`, framing error); `from` gets the sender. The port may copy a datagram into `buf`
+ *  over several calls (fr_port_frame_free is false meanwhile): the library always passes the same buffer. */
 int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap);
 
 /** Whether the module reports the network as associated; the library tells the program on a change. */

@@ -2,9 +2,16 @@
  * (docs/protocol.md section 12; thesis sections 4.3, 5.2, 5.3, 6.1).
  *
  * A non-blocking state machine. The board's UART receive interrupt pushes each byte into the driver's receive ring
- * (gs1500m_rx_push); its transmit side takes bytes from the driver's transmit ring (gs1500m_tx_pop). Everything
- * else runs from the robot's main loop: gs1500m_recv parses what has arrived and hands out one datagram at a time,
- * gs1500m_send frames one datagram `ESC Z <cid> <len4> <data>`, gs1500m_tick runs the start-up and its timers.
+ * (gs1500m_rx_push); its transmit side takes bytes with gs1500m_tx_pop. Everything else runs from the robot's main
+ * loop: gs1500m_recv parses what has arrived and copies a datagram's data out of the ring into the caller's buffer
+ * as it arrives (so the ring only covers the main loop's latency, not a whole datagram), gs1500m_send frames one
+ * datagram `ESC Z <cid> <len4> <data>`, gs1500m_tick runs the start-up and its timers.
+ *
+ * The buffers' rule (docs/firmware.md, "Memory"): a datagram longer than GS1500M_TX_COPY_MAX is sent straight from
+ * the caller's `data`, which must stay unchanged while gs1500m_tx_busy; shorter ones and the AT commands are copied
+ * into the small transmit ring. While a datagram is being received (gs1500m_rx_busy), every gs1500m_recv call must
+ * pass the same buffer, and nothing else may write into it; the driver copies nothing into any buffer while a
+ * datagram is going out, so the one buffer can serve both directions (the library's frame buffer).
  * No call waits for the module: the start-up (the module's boot, its silence while it joins, the AT commands that
  * open the UDP client towards the base station and the UDP server on 3838) advances one step per call.
  *
@@ -99,6 +106,12 @@ typedef struct {
     uint8_t tx[GS1500M_TX_RING];
     volatile uint16_t tx_head;
     volatile uint16_t tx_tail;
+    /* a datagram sent from the caller's memory: its bytes go when the ring's tail reaches tx_data_at; the UART
+     * side clears tx_data when the last one is out */
+    const uint8_t *volatile tx_data;
+    uint16_t tx_data_len;
+    volatile uint16_t tx_data_pos;
+    uint16_t tx_data_at;
     /* the parser */
     uint8_t parse;          /* parser state (gs1500m.c) */
     bool udp_server;        /* the header being read is `ESC y` */
@@ -106,6 +119,7 @@ typedef struct {
     uint8_t digits;         /* length digits read */
     uint16_t length;        /* announced length */
     uint16_t consumed;      /* header bytes of the current item, counted as garbage if it breaks */
+    uint16_t got;           /* data bytes of the current datagram copied out (or dropped) so far */
     uint32_t payload_since; /* when the header was complete */
     fr_endpoint_t sender;   /* sender of an `ESC y` datagram */
     bool sender_known;      /* whether the address field parsed */
@@ -132,19 +146,29 @@ bool gs1500m_rx_push(gs1500m_t *gs, uint8_t byte);
 /** Takes the next byte for the module from the transmit ring (for the UART); false when there is none. */
 bool gs1500m_tx_pop(gs1500m_t *gs, uint8_t *byte);
 
-/** Whether bytes wait in the transmit ring (the board enables its transmit interrupt while they do). */
+/** Whether bytes wait to go to the module (the board enables its transmit interrupt while they do). */
 bool gs1500m_tx_pending(const gs1500m_t *gs);
+
+/** Whether a datagram is still being sent from the caller's memory (its `data` must stay unchanged). */
+bool gs1500m_tx_busy(const gs1500m_t *gs);
+
+/** Whether a datagram's header has arrived and its data are being copied out (into the buffer of gs1500m_recv). */
+bool gs1500m_rx_busy(const gs1500m_t *gs);
 
 /** Reads the module's answers and notices that have arrived (leaving datagrams for gs1500m_recv) and runs the
  *  start-up's timers at `now_ms`; gs1500m_recv and gs1500m_send call it too. Never blocks. */
 void gs1500m_tick(gs1500m_t *gs, uint32_t now_ms);
 
 /** Parses what has arrived and hands out at most one datagram (fr_port_recv's contract): its length, 0 when none is
- *  complete yet, < 0 when one was lost (longer than `cap`, or garbage where a datagram was). */
+ *  complete yet, < 0 when one was lost (longer than `cap`, or garbage where a datagram was). A datagram's data are
+ *  copied into `buf` as they arrive, over as many calls as it takes, all with the same `buf` (gs1500m_rx_busy); none
+ *  while a datagram is going out (gs1500m_tx_busy), so `buf` may be the memory being sent. */
 int gs1500m_recv(gs1500m_t *gs, uint32_t now_ms, fr_endpoint_t *from, uint8_t *buf, size_t cap);
 
-/** Frames one datagram for `to` (fr_port_send's contract): 0 when it is in the transmit ring, < 0 when it cannot
- *  go now (module not ready, connection still opening, ring full, too long). A destination without a connection
+/** Frames one datagram for `to` (fr_port_send's contract): 0 when it is queued, < 0 when it cannot go now (module
+ *  not ready, connection still opening, ring full, another datagram still going out, too long). Up to
+ *  GS1500M_TX_COPY_MAX bytes are copied; a longer `data` is sent from where it is and must stay unchanged while
+ *  gs1500m_tx_busy. A destination without a connection
  *  gets one opened (AT+NCUDP) and its datagrams go once the module has named it. */
 int gs1500m_send(gs1500m_t *gs, uint32_t now_ms, const fr_endpoint_t *to, const uint8_t *data, size_t len);
 

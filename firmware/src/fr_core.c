@@ -12,8 +12,13 @@
 
 fr_state_t fr_state;
 
-static uint8_t rx[FR_DATAGRAM_MAX];
-static uint8_t tx[FR_HEADER_MAX + FR_DATAGRAM_MAX];
+/* The one frame buffer of both directions (docs/firmware.md, "Memory"): a received datagram at its start (decoded in
+ * place, its RPC parameters and option names copied out while decoding), an outgoing frame encoded at
+ * frame + FR_HEADER_MAX with its header written in front. So nothing is encoded while a received frame is still
+ * read: debug option callbacks run after decoding (fr_debug_after), and a stream callback's data are valid only
+ * until it sends. The port may still be sending from it or copying into it: fr_port_frame_free guards every
+ * write. */
+static uint8_t frame_buf[FR_HEADER_MAX + FR_DATAGRAM_MAX];
 
 bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
     const char *s = (const char *)*arg;
@@ -52,7 +57,11 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
 
 bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
     if (!fr_state.started) return false; /* refused settings: the robot says nothing it cannot sign */
-    uint8_t *payload = tx + FR_HEADER_MAX;
+    if (!fr_port_frame_free()) { /* the port still sends the last frame from the buffer, or receives into it */
+        fr_state.stats.send_failed++;
+        return false;
+    }
+    uint8_t *payload = frame_buf + FR_HEADER_MAX;
     size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
     size_t cap = FR_DATAGRAM_MAX - header;
     if (route->via_stream && cap > FR_STREAM_PAYLOAD_MAX - header) cap = FR_STREAM_PAYLOAD_MAX - header;
@@ -226,7 +235,7 @@ fr_init_result_t fr_init(const fr_settings_t *settings) {
     fr_stream_reset();
     /* What the module passed on before this start belongs to the previous session: drop it (bounded). */
     fr_endpoint_t from;
-    for (int k = 0; k < 64 && fr_port_recv(&from, rx, sizeof rx) != 0; k++) {}
+    for (int k = 0; k < 64 && fr_port_recv(&from, frame_buf, FR_DATAGRAM_MAX) != 0; k++) {}
     fr_state.boot_ms = fr_port_millis();
     fr_state.next_keepalive = 0;
     fr_init_result_t r = check_trust(settings);
@@ -267,15 +276,16 @@ void fr_poll(void) {
     }
     for (int k = 0; k < FR_POLL_DATAGRAMS; k++) {
         fr_endpoint_t from;
-        int n = fr_port_recv(&from, rx, sizeof rx);
+        int n = fr_port_recv(&from, frame_buf, FR_DATAGRAM_MAX);
         if (n == 0) break;
         if (n < 0) { fr_state.stats.recv_lost++; continue; }
         fr_state.stats.received++;
-        handle_datagram(&from, rx, (size_t)n);
+        handle_datagram(&from, frame_buf, (size_t)n);
     }
     if (!fr_state.started) return; /* refused settings: nothing to send, nothing to resend */
     uint32_t up_ms = fr_uptime_ms();
-    if ((int32_t)(up_ms - fr_state.next_keepalive) >= 0) {
+    /* A keep-alive due while the buffer is busy goes at the first poll it is free: late, never skipped. */
+    if ((int32_t)(up_ms - fr_state.next_keepalive) >= 0 && fr_port_frame_free()) {
         fr_state.next_keepalive += FR_KEEPALIVE_MS;
         if ((int32_t)(up_ms - fr_state.next_keepalive) >= 0) fr_state.next_keepalive = up_ms + FR_KEEPALIVE_MS;
         send_keepalive();

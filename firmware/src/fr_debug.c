@@ -12,6 +12,7 @@ typedef struct {
     const char *description;
     fr_option_type_t type;
     bool enabled;
+    bool notify; /* switched by the frame being decoded: its callback runs after decoding */
 } option_t;
 
 static option_t options[FR_OPTIONS_MAX];
@@ -57,8 +58,8 @@ static bool read_option_name(pb_istream_t *stream, const pb_field_t *field, void
     for (int k = 0; k < option_count; k++) {
         if (matches(name, n, options[k].name) && options[k].enabled != on) {
             options[k].enabled = on;
+            options[k].notify = true; /* told after decoding: the callback may send, which reuses the frame buffer */
             changed = true;
-            if (fr_state.settings.callbacks.option) fr_state.settings.callbacks.option(k, on, fr_state.settings.callbacks.ctx);
         }
     }
     return true;
@@ -109,6 +110,12 @@ static void push(const fr_route_t *route) {
 /* Every pull is answered with the list; so is every enable or disable, changed or not (section 8, step 5). */
 void fr_debug_after(const void *commands_struct, const fr_route_t *route) {
     const naogateway_proto_DebuggingCommands *c = (const naogateway_proto_DebuggingCommands *)commands_struct;
+    for (int k = 0; k < option_count; k++) {
+        if (!options[k].notify) continue;
+        options[k].notify = false;
+        if (fr_state.settings.callbacks.option)
+            fr_state.settings.callbacks.option(k, options[k].enabled, fr_state.settings.callbacks.ctx);
+    }
     if ((c->has_optionPull && c->optionPull) || c->has_optionEnable || c->has_optionDisable) push(route);
 }
 

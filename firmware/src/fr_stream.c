@@ -3,7 +3,7 @@
  * (RFC 6298 with Karn's rule), fast retransmit and partial ACKs (W > 1), one idle ACK, skip notices honoured.
  * The robot's own payloads carry no deadline, so it never sends a skip notice: byte 0 of its pure ACKs is its
  * last acknowledged number. Memory: FR_STREAM_QUEUE send slots (the window and any payloads waiting for it:
- * fr_stream_send refuses a payload when all are taken) and FR_STREAM_WINDOW - 1 reorder slots, all static.
+ * fr_stream_send refuses a payload when all are taken) and FR_STREAM_REORDER reorder slots (W > 1), all static.
  *
  * Flow control: a data segment that would be delivered while every send slot is taken is not accepted (neither
  * delivered nor acknowledged, counted as stream_backpressure), because the program's answer to it would have
@@ -36,8 +36,9 @@ typedef struct {
     uint8_t data[RX_PAYLOAD];
 } rx_slot_t;
 
-/** Reorder slots: a segment d ahead of the expected one (1 <= d <= W - 1) is kept. */
-#define RX_SLOTS (W > 1 ? W - 1 : 1)
+/** Reorder slots: a segment d ahead of the expected one (1 <= d <= W - 1) is kept while one is free, or in place
+ *  of a kept one farther ahead (the nearest fill the gap first). */
+#define RX_SLOTS (W > 1 ? FR_STREAM_REORDER : 1)
 #define Q FR_STREAM_QUEUE
 
 static tx_slot_t tx[Q];
@@ -146,6 +147,7 @@ static uint32_t estimate_rto(void) {
 
 /** Resends the oldest unacknowledged segment and starts (or continues) a recovery. */
 static void resend_oldest(uint32_t now) {
+    if (!fr_port_frame_free()) return; /* a segment may still go out from its slot: the timer resends it later */
     tx_slot_t *s = slot_of(inc(st.last_acked));
     uint32_t until;
     if (s == NULL) return;
@@ -172,7 +174,7 @@ static void resend_oldest(uint32_t now) {
 
 /** Sends queued payloads for the first time while the window has room. */
 static void send_queued(uint32_t now) {
-    while (in_flight() < W) {
+    while (in_flight() < W && fr_port_frame_free()) { /* a port sending from a slot takes one at a time */
         tx_slot_t *s = slot_of(st.next);
         uint32_t until;
         if (s == NULL || reuse_blocked(s->seq, now, &until)) return; /* fr_stream_poll tries again */
@@ -191,6 +193,7 @@ bool fr_stream_send(const uint8_t *data, size_t len) {
     tx_slot_t *s = NULL;
     for (int k = 0; k < Q && s == NULL; k++) if (!tx[k].used) s = &tx[k];
     if (s == NULL) return false;
+    if (!fr_port_frame_free()) return false; /* a freed slot may still be going out as a resend */
     s->used = true;
     s->seq = st.assign;
     s->sends = 0;
@@ -342,14 +345,18 @@ void fr_stream_receive(const uint8_t *data, size_t len) {
         } else {
             bool have = false;
             for (int k = 0; k < RX_SLOTS; k++) have = have || (rx[k].used && rx[k].seq == s);
-            for (int k = 0; k < RX_SLOTS && !have && len - 2 <= RX_PAYLOAD; k++) {
-                if (!rx[k].used) {
-                    rx[k].used = true;
-                    rx[k].seq = s;
-                    rx[k].len = (uint16_t)(len - 2);
-                    memcpy(rx[k].data, data + 2, len - 2);
-                    have = true;
-                }
+            /* a free slot, else the one kept farthest ahead when this segment is nearer */
+            int take = -1;
+            for (int k = 0; k < RX_SLOTS && !have; k++) {
+                if (!rx[k].used) { take = k; break; }
+                if (take < 0 || dist(rx[k].seq, expected) > dist(rx[take].seq, expected)) take = k;
+            }
+            if (take >= 0 && rx[take].used && dist(rx[take].seq, expected) < d) take = -1;
+            if (take >= 0 && len - 2 <= RX_PAYLOAD) {
+                rx[take].used = true;
+                rx[take].seq = s;
+                rx[take].len = (uint16_t)(len - 2);
+                memcpy(rx[take].data, data + 2, len - 2);
             }
         }
     }
@@ -367,7 +374,7 @@ void fr_stream_poll(void) {
         st.idle_ack_owed = true;
         pure_ack(now);
     }
-    if (st.timer && (int32_t)(now - st.rtx_at) >= 0) {
+    if (st.timer && (int32_t)(now - st.rtx_at) >= 0 && fr_port_frame_free()) {
         tx_slot_t *oldest = slot_of(inc(st.last_acked));
         uint32_t until;
         if (oldest != NULL && reuse_blocked(oldest->seq, now, &until)) {

@@ -25,7 +25,7 @@ enum {
     P_CID,      /* the connection id of a data header */
     P_ADDR,     /* `ESC y`: sender address up to the TAB */
     P_LEN,      /* four length digits */
-    P_PAYLOAD   /* the datagram's bytes, taken whole from the ring once all have arrived */
+    P_PAYLOAD   /* the datagram's bytes, copied out of the ring as they arrive */
 };
 
 /* Start-up commands, in order; the client's and the server's are filled in from the configuration. */
@@ -144,6 +144,15 @@ bool gs1500m_rx_push(gs1500m_t *gs, uint8_t byte) {
 
 bool gs1500m_tx_pop(gs1500m_t *gs, uint8_t *byte) {
     uint16_t t = gs->tx_tail;
+    const uint8_t *data = gs->tx_data;
+    if (data != NULL && t == gs->tx_data_at) {
+        /* the datagram sent from the caller's memory, between its header and what was queued after it */
+        uint16_t pos = gs->tx_data_pos;
+        *byte = data[pos++];
+        gs->tx_data_pos = pos;
+        if (pos == gs->tx_data_len) gs->tx_data = NULL;
+        return true;
+    }
     if (t == gs->tx_head) return false;
     RING_BARRIER();
     *byte = gs->tx[t];
@@ -151,7 +160,11 @@ bool gs1500m_tx_pop(gs1500m_t *gs, uint8_t *byte) {
     return true;
 }
 
-bool gs1500m_tx_pending(const gs1500m_t *gs) { return gs->tx_tail != gs->tx_head; }
+bool gs1500m_tx_pending(const gs1500m_t *gs) { return gs->tx_tail != gs->tx_head || gs->tx_data != NULL; }
+
+bool gs1500m_tx_busy(const gs1500m_t *gs) { return gs->tx_data != NULL; }
+
+bool gs1500m_rx_busy(const gs1500m_t *gs) { return gs->parse == P_PAYLOAD; }
 
 static int parse(gs1500m_t *gs, uint32_t now, bool deliver, fr_endpoint_t *from, uint8_t *buf, size_t cap);
 
@@ -446,6 +459,7 @@ static void step_byte(gs1500m_t *gs, uint8_t b, uint32_t now) {
                     gs->parse = P_IDLE; /* an empty datagram carries nothing the library could use */
                 } else {
                     gs->payload_since = now;
+                    gs->got = 0;
                     gs->parse = P_PAYLOAD;
                 }
             }
@@ -458,36 +472,43 @@ static void step_byte(gs1500m_t *gs, uint8_t b, uint32_t now) {
     }
 }
 
-/* Takes a complete datagram out of the ring into `buf`. */
+/* Copies what has arrived of the current datagram's data into `buf` (or drops it when the datagram is longer than
+ * `cap`); hands the datagram out once all of it is there: its length, -1 when it was too long, 0 while more must come. */
 static int take_payload(gs1500m_t *gs, fr_endpoint_t *from, uint8_t *buf, size_t cap) {
     uint16_t n = gs->length;
     uint16_t t = gs->rx_tail;
-    int result;
+    uint16_t avail = rx_count(gs);
+    uint16_t want = (uint16_t)(n - gs->got);
+    if (avail > want) avail = want;
+    if (n <= cap) {
+        uint16_t first = (uint16_t)(GS1500M_RX_RING - t);
+        if (first > avail) first = avail;
+        memcpy(buf + gs->got, &gs->rx[t], first);
+        memcpy(buf + gs->got + first, &gs->rx[0], (size_t)(avail - first));
+    }
+    t = (uint16_t)(t + avail);
+    if (t >= GS1500M_RX_RING) t = (uint16_t)(t - GS1500M_RX_RING);
+    RING_BARRIER();
+    gs->rx_tail = t;
+    gs->got = (uint16_t)(gs->got + avail);
+    if (gs->got < n) return 0;
     gs->parse = P_IDLE;
+    gs->got = 0;
     if (n > cap) {
         gs->stats.too_long++;
-        result = -1;
-    } else {
-        uint16_t first = (uint16_t)(GS1500M_RX_RING - t);
-        if (first > n) first = n;
-        memcpy(buf, &gs->rx[t], first);
-        memcpy(buf + first, &gs->rx[0], (size_t)(n - first));
-        if (from != NULL) {
-            if (gs->udp_server && gs->sender_known) *from = gs->sender;
-            else if (!gs->udp_server && gs->cid >= 0) {
-                /* `ESC Z`: a reply on a client connection, from that connection's destination */
-                memset(from, 0, sizeof *from);
-                for (int i = 0; i < GS1500M_PEERS; i++)
-                    if (gs->peers[i].used && gs->peers[i].cid == gs->cid) *from = gs->peers[i].to;
-            } else memset(from, 0, sizeof *from);
-        }
-        gs->stats.datagrams_in++;
-        result = (int)n;
+        return -1;
     }
-    t = (uint16_t)(t + n);
-    if (t >= GS1500M_RX_RING) t = (uint16_t)(t - GS1500M_RX_RING);
-    gs->rx_tail = t;
-    return result;
+    if (from != NULL) {
+        if (gs->udp_server && gs->sender_known) *from = gs->sender;
+        else if (!gs->udp_server && gs->cid >= 0) {
+            /* `ESC Z`: a reply on a client connection, from that connection's destination */
+            memset(from, 0, sizeof *from);
+            for (int i = 0; i < GS1500M_PEERS; i++)
+                if (gs->peers[i].used && gs->peers[i].cid == gs->cid) *from = gs->peers[i].to;
+        } else memset(from, 0, sizeof *from);
+    }
+    gs->stats.datagrams_in++;
+    return (int)n;
 }
 
 /* Runs the parser over what has arrived. With `deliver` it hands out the next datagram (or reports a loss); without
@@ -502,16 +523,21 @@ static int parse(gs1500m_t *gs, uint32_t now, bool deliver, fr_endpoint_t *from,
             return -2;
         }
         if (gs->parse == P_PAYLOAD) {
-            if (now - gs->payload_since >= GS1500M_PAYLOAD_MS && rx_count(gs) < gs->length) {
-                /* The data never came: the header was false. Its bytes are garbage; what follows is read anew. */
+            if (now - gs->payload_since >= GS1500M_PAYLOAD_MS && gs->got + rx_count(gs) < gs->length) {
+                /* The data never came: the header was false. Its bytes and the data copied out so far are garbage;
+                 * what is still in the ring is read anew. */
                 gs->stats.payload_timeouts++;
-                garbage(gs, gs->consumed);
+                garbage(gs, (uint32_t)gs->consumed + gs->got);
+                gs->got = 0;
                 gs->parse = P_IDLE;
                 continue;
             }
-            if (!deliver || rx_count(gs) < gs->length) return 0;
+            /* Nothing is copied while a datagram goes out: the caller's buffer may be the one being sent. */
+            if (!deliver || gs->tx_data != NULL || rx_count(gs) == 0) return 0;
             RING_BARRIER();
-            return take_payload(gs, from, buf, cap);
+            int r = take_payload(gs, from, buf, cap);
+            if (r == 0) return 0;
+            return r;
         }
         uint16_t t = gs->rx_tail;
         if (t == gs->rx_head) return 0;
@@ -557,7 +583,8 @@ int gs1500m_send(gs1500m_t *gs, uint32_t now, const fr_endpoint_t *to, const uin
         return -1;
     }
     gs1500m_peer_t *p = &gs->peers[slot];
-    if (p->cid < 0 || tx_free(gs) < len + 7u) {
+    bool copy = len <= GS1500M_TX_COPY_MAX;
+    if (p->cid < 0 || (copy ? tx_free(gs) < len + 7u : tx_free(gs) < 7u || gs->tx_data != NULL)) {
         gs->stats.send_busy++;
         return -1;
     }
@@ -570,7 +597,16 @@ int gs1500m_send(gs1500m_t *gs, uint32_t now, const fr_endpoint_t *to, const uin
     header[5] = (uint8_t)('0' + len / 10u % 10u);
     header[6] = (uint8_t)('0' + len % 10u);
     /* Header and data as one publication, so the UART never sends a header without its data. */
-    uint16_t head = tx_copy(gs, tx_copy(gs, gs->tx_head, header, sizeof header), data, len);
+    uint16_t head = tx_copy(gs, gs->tx_head, header, sizeof header);
+    if (copy) {
+        head = tx_copy(gs, head, data, len);
+    } else {
+        gs->tx_data_at = head;
+        gs->tx_data_len = (uint16_t)len;
+        gs->tx_data_pos = 0;
+        RING_BARRIER();
+        gs->tx_data = data;
+    }
     RING_BARRIER();
     gs->tx_head = head;
     gs->stats.datagrams_out++;
@@ -578,8 +614,7 @@ int gs1500m_send(gs1500m_t *gs, uint32_t now, const fr_endpoint_t *to, const uin
 }
 
 bool gs1500m_rx_ready(const gs1500m_t *gs) {
-    uint16_t n = rx_count(gs);
-    return n > 0 && (gs->parse != P_PAYLOAD || n >= gs->length);
+    return rx_count(gs) > 0 && (gs->parse != P_PAYLOAD || gs->tx_data == NULL);
 }
 
 bool gs1500m_link_up(const gs1500m_t *gs) { return gs->state == GS1500M_READY; }

@@ -48,6 +48,9 @@ int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap) {
 
 bool fr_port_link_up(void) { return fake_link; }
 
+bool fake_frame_busy;
+bool fr_port_frame_free(void) { return !fake_frame_busy; }
+
 void fr_port_idle(void) {}
 
 int fr_port_epoch_next(uint32_t *epoch) {

@@ -21,6 +21,10 @@ extern uint32_t fake_now;
 /** What fr_port_link_up returns. */
 extern bool fake_link;
 
+/** What fr_port_frame_free returns negated: a board port still sending from (or receiving into) the library's
+ *  buffer. */
+extern bool fake_frame_busy;
+
 /** The boot epoch fr_port_epoch_next last gave (it raises it by one per call), and whether it fails. */
 extern uint32_t fake_epoch;
 extern bool fake_epoch_fails;

@@ -303,10 +303,11 @@ static void test_byte_by_byte_equals_whole(void) {
     CHECK(!gs1500m_rx_ready(&gs));
     for (size_t i = 0; i < sizeof serial_receive_udp_server; i++) {
         gs1500m_rx_push(&gs, serial_receive_udp_server[i]);
-        /* a header byte is work for the parser; the start of the data is not, until all of it is there */
-        if (i < 26) CHECK(gs1500m_rx_ready(&gs));
-        else CHECK(gs1500m_rx_ready(&gs) == (i + 1 == sizeof serial_receive_udp_server));
+        /* every byte is work: a header byte for the parser, a data byte to copy out of the ring */
+        CHECK(gs1500m_rx_ready(&gs));
         int r = recv_at(now, &from, buf, sizeof buf);
+        /* from the end of the header to the last data byte the datagram is being copied into buf */
+        CHECK(gs1500m_rx_busy(&gs) == (i >= 25 && i + 1 < sizeof serial_receive_udp_server));
         if (i + 1 < sizeof serial_receive_udp_server) CHECK(r == 0);
         else got = r;
     }
@@ -394,6 +395,64 @@ static void test_link_loss(void) {
     CHECK(!gs1500m_link_up(&gs));
 }
 
+/* A datagram longer than the receive ring: its data leave the ring for the caller's buffer as they arrive, so it
+ * comes through whole as long as the caller keeps up (here: a recv after every ring's worth). */
+static void test_datagram_longer_than_ring(void) {
+    uint32_t now = bring_up();
+    static uint8_t buf[GS1500M_MAX_DATAGRAM], data[GS1500M_MAX_DATAGRAM];
+    fr_endpoint_t from;
+    for (size_t i = 0; i < sizeof data; i++) data[i] = (uint8_t)(i * 31u + 7u);
+    feeds("\x1bZ01400");
+    size_t fed = 0;
+    int r = 0;
+    while (fed < sizeof data) {
+        size_t n = sizeof data - fed < GS1500M_RX_RING / 2 ? sizeof data - fed : GS1500M_RX_RING / 2;
+        feed(data + fed, n);
+        fed += n;
+        r = recv_at(now, &from, buf, sizeof buf);
+        if (fed < sizeof data) CHECK(r == 0 && gs1500m_rx_busy(&gs));
+    }
+    CHECK(r == (int)sizeof data && memcmp(buf, data, sizeof data) == 0);
+    CHECK(!gs1500m_rx_busy(&gs) && gs1500m_stats(&gs)->rx_overruns == 0);
+    /* longer than the caller's buffer: its data are dropped as they come, then the loss is reported */
+    feeds("\x1bZ00300");
+    feed(data, 300);
+    CHECK(recv_at(now, &from, buf, 100) == -1);
+    CHECK(gs1500m_stats(&gs)->too_long == 1);
+    feed(serial_send_status, sizeof serial_send_status);
+    CHECK(recv_at(now, &from, buf, sizeof buf) == 30 && memcmp(buf, status_frame, 30) == 0);
+}
+
+/* A long datagram is sent from the caller's memory: the header goes through the ring, the data from `data`, and
+ * nothing is copied into a receive buffer meanwhile (it may be the same memory). */
+static void test_send_from_caller_memory(void) {
+    uint32_t now = bring_up();
+    static uint8_t frame[GS1500M_MAX_DATAGRAM];
+    static uint8_t out[2 * GS1500M_MAX_DATAGRAM];
+    uint8_t small[3] = {'a', 'b', 'c'};
+    fr_endpoint_t from;
+    for (size_t i = 0; i < 1000; i++) frame[i] = (uint8_t)(i ^ 0x5Au);
+    CHECK(gs1500m_send(&gs, now, &base, frame, 1000) == 0);
+    CHECK(gs1500m_tx_busy(&gs) && gs1500m_tx_pending(&gs));
+    /* a second long one waits for the first; a short one is copied and goes after it */
+    CHECK(gs1500m_send(&gs, now, &base, frame, 500) < 0);
+    CHECK(gs1500m_send(&gs, now, &base, small, sizeof small) == 0);
+    /* a datagram arriving meanwhile stays in the ring: the frame is not written while it goes out */
+    feed(serial_receive_udp_server, sizeof serial_receive_udp_server);
+    CHECK(recv_at(now, &from, frame, sizeof frame) == 0);
+    CHECK(gs1500m_rx_busy(&gs) && frame[0] == 0x5A);
+    size_t n = drain(out, sizeof out);
+    CHECK(!gs1500m_tx_busy(&gs) && !gs1500m_tx_pending(&gs));
+    CHECK(n == 7 + 1000 + 7 + 3);
+    CHECK(memcmp(out, "\x1bZ01000", 7) == 0);
+    int same = 1;
+    for (size_t i = 0; i < 1000; i++) same &= out[7 + i] == (uint8_t)(i ^ 0x5Au);
+    CHECK(same);
+    CHECK(memcmp(out + 1007, "\x1bZ00003abc", 10) == 0);
+    /* the line is free: the waiting datagram is copied into the frame now */
+    CHECK(recv_at(now, &from, frame, sizeof frame) == 20 && frame[0] == 0x00 && frame[1] == 0x2A);
+}
+
 static void test_rx_overrun(void) {
     bring_up();
     int accepted = 0;
@@ -475,6 +534,8 @@ int main(void) {
     test_damaged_frames();
     test_link_loss();
     test_rx_overrun();
+    test_datagram_longer_than_ring();
+    test_send_from_caller_memory();
     test_hostile_streams();
     printf("%d passed, %d failed\n", passed, failed);
     return failed == 0 ? 0 : 1;

@@ -195,6 +195,51 @@ static void test_rpc(void) {
     CHECK(fake_sent_count == 0 && fr_stats()->bad_protobuf == 2);
 }
 
+/* The one frame buffer's rule (docs/firmware.md, "Memory"): option callbacks run after the frame is decoded, so a
+ * callback that sends (and so encodes into the buffer the frame was received in) cannot spoil the names after it. */
+static int rule_text = -1;
+static int rule_calls;
+static char rule_long[301];
+static void send_on_switch(int index, bool on, void *ctx) {
+    (void)index; (void)on; (void)ctx;
+    rule_calls++;
+    (void)fr_debug_text(rule_text, rule_long);
+}
+
+static void test_frame_buffer_rule(void) {
+    fr_settings_t s = settings();
+    s.callbacks.option = send_on_switch;
+    start(&s);
+    int regions = fr_option_add("havimo.regions", FR_OPT_HAVIMO_REGIONS, NULL);
+    rule_text = fr_option_add("text", FR_OPT_TEXT, NULL);
+    memset(rule_long, 'x', sizeof rule_long - 1);
+    rule_calls = 0;
+    /* optionEnable "text", "havimo.regions": the first callback sends 300 bytes of text */
+    deliver("00 2A 00 00 00 00 00 00 00 00 00 1E 08 01 EA BB 03 18 1A 16 0A 04 74 65 78 74 0A 0E 68 61 76 69 6D 6F"
+            "2E 72 65 67 69 6F 6E 73");
+    fr_poll();
+    CHECK(fr_option_enabled(rule_text) && fr_option_enabled(regions) && rule_calls == 2);
+    /* both callbacks' texts, then the option list */
+    CHECK(fake_sent_count == 3 && fake_sent[0].len > 300 && fake_sent[1].len > 300);
+    /* While the port still sends from the buffer (or receives into it) nothing is encoded: a keep-alive due then goes
+     * at the first poll after, late but not skipped, and debug data are refused (counted). */
+    fake_clear_sent();
+    fake_now = 200;
+    fake_frame_busy = true;
+    uint32_t failed = fr_stats()->send_failed;
+    fr_poll();
+    CHECK(fake_sent_count == 0);
+    CHECK(!fr_debug_text(rule_text, "busy") && fr_stats()->send_failed == failed + 1);
+    fake_now = 230;
+    fake_frame_busy = false;
+    fr_poll();
+    CHECK(fake_sent_count == 1 && fake_sent[0].len > 60);
+    fake_now = 400;
+    fake_clear_sent();
+    fr_poll();
+    CHECK(fake_sent_count == 1);
+}
+
 static void test_options(void) {
     fr_settings_t s = settings();
     start(&s);
@@ -455,6 +500,7 @@ int main(void) {
     test_keepalive();
     test_rpc();
     test_options();
+    test_frame_buffer_rule();
     test_signing();
     test_signed_receive();
     test_link_policy();

@@ -230,7 +230,14 @@ static void test_skip(void) {
     /* out of order within the window, delivered in order */
     CHECK(step("05 14 66", "14 02"));
     CHECK(step("04 14 65", "14 02"));
+#if FR_STREAM_REORDER >= 2
     CHECK(step("03 14 64", "14 05"));
+#else
+    /* one reorder slot keeps the nearest segment: 4 took 5's place, so 5 must come again */
+    CHECK(step("03 14 64", "14 04"));
+    CHECK(strcmp(got, "cde") == 0);
+    CHECK(step("05 14 66", "14 05"));
+#endif
     CHECK(strcmp(got, "cdef") == 0);
 }
 #endif

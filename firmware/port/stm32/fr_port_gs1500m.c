@@ -37,6 +37,8 @@ int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
     return r;
 }
 
+bool fr_port_frame_free(void) { return !gs1500m_tx_busy(&board_gs) && !gs1500m_rx_busy(&board_gs); }
+
 int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap) {
     int r = gs1500m_recv(&board_gs, millis, from, buf, cap);
     board_tx_kick();
