@@ -20,6 +20,16 @@ uint32_t fr_port_millis(void);
  *  straight from `data`: the library leaves it unchanged until fr_port_frame_free says true. */
 int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len);
 
+/** What a board reports about itself in the keep-alive (RobotHealth.board, protocol.md 6.2). */
+typedef struct {
+    uint32_t core_clock_hz;    /**< the core clock it runs on */
+    bool stack_overflow_reset; /**< the previous run ended in a reset because its stack overflowed */
+    bool fault_reset;          /**< the previous run ended in a reset after a fault */
+} fr_board_health_t;
+
+/** Fills what the board reports about itself; false where there is no board of its own (posix, the emulator). */
+bool fr_port_board_health(fr_board_health_t *out);
+
 /** Whether the library may write into the memory of its datagrams now (docs/firmware.md, "Memory"): false while the
  *  port still sends a datagram from the memory fr_port_send was given, or is copying a datagram that is arriving
  *  into the buffer fr_port_recv was given. A port that copies both ways (posix) always says true. */

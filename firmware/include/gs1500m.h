@@ -45,6 +45,12 @@
 #define GS1500M_REPLY_MS 2000u
 #endif
 
+#ifndef GS1500M_BAUD_PROBES
+/** Unanswered `AT`s at one rate before the driver tries the module's factory rate (and back): a module that was
+ *  never set to the board's rate answers there, and is told the board's rate with ATB. */
+#define GS1500M_BAUD_PROBES 4u
+#endif
+
 #ifndef GS1500M_PAYLOAD_MS
 /** A datagram whose announced bytes do not all arrive within this time had a false or damaged header: its
  *  bytes are read again as if no header had been seen (1400 bytes take 30 ms at 460800 baud). */
@@ -84,6 +90,8 @@ typedef struct {
     fr_endpoint_t base;  /**< the base station's address and port 11011, opened as the first UDP client */
     uint16_t listen_port;/**< the UDP server's port (GS1500M_SERVER_PORT) */
     uint32_t boot_ms;    /**< GS1500M_BOOT_MS on a board; tests and the emulator may give less */
+    uint32_t baud;       /**< the rate the board runs the module at */
+    uint32_t factory_baud;/**< the module's own rate before it is told `baud` (ATB); 0: never try it */
 } gs1500m_config_t;
 
 /** One UDP client connection: a destination and the module's connection id for it. */
@@ -132,6 +140,9 @@ typedef struct {
     bool waiting;           /* a command was sent and its OK/ERROR has not come */
     int8_t opening;         /* peer slot whose AT+NCUDP is outstanding, or -1 */
     int8_t server_cid;      /* the UDP server's connection id, or -1 */
+    uint32_t uart_baud;     /* the rate the UART must run at now (gs1500m_uart_baud) */
+    uint8_t probes;         /* `AT`s unanswered at uart_baud */
+    bool setting_baud;      /* ATB sent at the factory rate, its OK not yet in */
     uint32_t since;         /* when the current state or command began */
     gs1500m_peer_t peers[GS1500M_PEERS];
 } gs1500m_t;
@@ -175,6 +186,11 @@ int gs1500m_send(gs1500m_t *gs, uint32_t now_ms, const fr_endpoint_t *to, const 
 /** Whether received bytes wait that the parser can use now (not only the start of a datagram still arriving):
  *  the board sleeps when not. */
 bool gs1500m_rx_ready(const gs1500m_t *gs);
+
+/** The rate the board's UART must run at now: config->baud, or config->factory_baud while the driver looks for a
+ *  module still at its factory rate. The board applies a change once nothing waits to be sent
+ *  (gs1500m_tx_pending). */
+uint32_t gs1500m_uart_baud(const gs1500m_t *gs);
 
 /** Whether the module is associated and both connections are open (fr_port_link_up's contract). */
 bool gs1500m_link_up(const gs1500m_t *gs);

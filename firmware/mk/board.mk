@@ -29,7 +29,7 @@ ARM_LDFLAGS := $(ARM_ARCH) -nostartfiles --specs=nano.specs -Wl,--gc-sections -L
 BOARD_INCLUDES := -Iport -Iport/stm32 -DFR_BOARD_IMAGE
 # Extra -D flags for the board images, e.g. BOARD_DEFS="-DBOARD_BASE_IP={10,0,0,5}" (the base station's address).
 BOARD_DEFS ?=
-BOARD_HEADERS := $(wildcard include/*.h port/*.h port/stm32/*.h)
+BOARD_HEADERS := $(wildcard include/*.h port/*.h port/stm32/*.h port/cm530/*.h)
 STM32_SRCS := port/stm32/startup.c
 # fr_port.h over the driver and the UART; the measurement program brings its own (a scripted module, its own clock).
 STM32_PORT_SRCS := port/stm32/fr_port_gs1500m.c

@@ -120,6 +120,17 @@ static FR_NOINLINE void send_keepalive(void) {
         health.has_development = true; /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
         health.development = true;
     }
+    fr_board_health_t board;
+    memset(&board, 0, sizeof board);
+    if (fr_port_board_health(&board)) {
+        health.has_board = true;
+        health.board.has_coreClockHz = true;
+        health.board.coreClockHz = board.core_clock_hz;
+        health.board.has_stackOverflowReset = board.stack_overflow_reset;
+        health.board.stackOverflowReset = board.stack_overflow_reset;
+        health.board.has_faultReset = board.fault_reset;
+        health.board.faultReset = board.fault_reset;
+    }
     pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health, NULL, true};
     pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
     naogateway_proto_Message msg = naogateway_proto_Message_init_zero;

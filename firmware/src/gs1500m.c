@@ -114,6 +114,8 @@ static void restart(gs1500m_t *gs, uint32_t now, bool link_lost) {
     gs->state = GS1500M_PROBING;
     gs->waiting = false;
     gs->step = 0;
+    gs->probes = 0;
+    gs->setting_baud = false;
     /* the next probe goes out one interval from now: a module that just reset is still busy */
     gs->since = now;
 }
@@ -127,7 +129,10 @@ void gs1500m_init(gs1500m_t *gs, const gs1500m_config_t *config, uint32_t now_ms
     forget_connections(gs);
     gs->peers[0].to = config->base;
     gs->peers[0].used = true;
+    gs->uart_baud = config->baud;
 }
+
+uint32_t gs1500m_uart_baud(const gs1500m_t *gs) { return gs->uart_baud; }
 
 bool gs1500m_rx_push(gs1500m_t *gs, uint8_t byte) {
     uint16_t h = gs->rx_head;
@@ -201,8 +206,20 @@ void gs1500m_tick(gs1500m_t *gs, uint32_t now) {
         }
         /* fall through */
     case GS1500M_PROBING:
-        /* No OK yet: the module is still booting or joining; ask again. */
-        if (now - gs->since >= GS1500M_PROBE_MS) (void)command(gs, "AT", 2, now);
+        if (gs->setting_baud) {
+            if (waited >= GS1500M_REPLY_MS) gs->setting_baud = false; /* ATB unanswered: probe again */
+            break;
+        }
+        /* No OK yet: the module is still booting or joining, or listens at another rate; ask again, after
+         * GS1500M_BAUD_PROBES silent ones at the other rate (once the last probe has left the UART). */
+        if (now - gs->since >= GS1500M_PROBE_MS) {
+            if (gs->config.factory_baud != 0u && gs->probes >= GS1500M_BAUD_PROBES) {
+                if (gs1500m_tx_pending(gs)) break;
+                gs->uart_baud = gs->uart_baud == gs->config.baud ? gs->config.factory_baud : gs->config.baud;
+                gs->probes = 0;
+            }
+            if (command(gs, "AT", 2, now) && gs->probes < 255u) gs->probes++;
+        }
         break;
     case GS1500M_CONFIGURING:
         if (gs->waiting) {
@@ -274,10 +291,23 @@ static void on_line(gs1500m_t *gs, const char *line, uint32_t now) {
     if (!ok && !error) return; /* echoes, banners, notices this driver has no use for */
     switch (gs->state) {
     case GS1500M_PROBING:
-        if (ok) {
+        if (gs->setting_baud) {
+            /* ATB's answer, at the factory rate; the module runs at the new one from now on */
+            gs->setting_baud = false;
+            gs->waiting = false;
+            if (ok) gs->uart_baud = gs->config.baud;
+            gs->probes = 0;
+            gs->since = now - GS1500M_PROBE_MS; /* the next probe at once, at the new rate */
+        } else if (ok && gs->uart_baud != gs->config.baud) {
+            /* a module at its factory rate: told the board's (not saved: a module reset brings this back) */
+            char text[20];
+            size_t n = put_uint(text, put_str(text, 0, "ATB="), gs->config.baud);
+            if (command(gs, text, n, now)) gs->setting_baud = true;
+        } else if (ok) {
             gs->state = GS1500M_CONFIGURING;
             gs->step = 0;
             gs->waiting = false;
+            gs->probes = 0;
         }
         break;
     case GS1500M_CONFIGURING:

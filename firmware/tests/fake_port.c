@@ -49,6 +49,13 @@ int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap) {
 bool fr_port_link_up(void) { return fake_link; }
 
 bool fake_frame_busy;
+bool fake_board_present;
+fr_board_health_t fake_board;
+bool fr_port_board_health(fr_board_health_t *out) {
+    *out = fake_board;
+    return fake_board_present;
+}
+
 bool fr_port_frame_free(void) { return !fake_frame_busy; }
 
 void fr_port_idle(void) {}

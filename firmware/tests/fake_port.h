@@ -25,6 +25,10 @@ extern bool fake_link;
  *  buffer. */
 extern bool fake_frame_busy;
 
+/** What fr_port_board_health reports, and whether it reports anything (false: no board, as on posix). */
+extern bool fake_board_present;
+extern fr_board_health_t fake_board;
+
 /** The boot epoch fr_port_epoch_next last gave (it raises it by one per call), and whether it fails. */
 extern uint32_t fake_epoch;
 extern bool fake_epoch_fails;

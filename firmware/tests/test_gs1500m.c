@@ -68,7 +68,7 @@ static int recv_at(uint32_t now, fr_endpoint_t *from, uint8_t *buf, size_t cap) 
 
 /* Runs the driver from power-up to READY against a scripted module; returns the time reached. */
 static uint32_t bring_up(void) {
-    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, GS1500M_BOOT_MS};
+    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, GS1500M_BOOT_MS, 460800u, 0u};
     uint8_t buf[8];
     gs1500m_init(&gs, &config, 0);
     recv_at(100, NULL, buf, sizeof buf);
@@ -93,7 +93,7 @@ static uint32_t bring_up(void) {
 }
 
 static void test_startup(void) {
-    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, GS1500M_BOOT_MS};
+    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, GS1500M_BOOT_MS, 460800u, 0u};
     uint8_t buf[64];
     gs1500m_init(&gs, &config, 0);
     CHECK(gs1500m_state(&gs) == GS1500M_BOOTING);
@@ -143,7 +143,7 @@ static void test_startup(void) {
 /* A program that only asks whether the link is up (fr_port_link_up) still brings the module up, and a datagram
  * that arrives meanwhile waits for gs1500m_recv. */
 static void test_startup_by_tick_alone(void) {
-    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, 10};
+    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, 10, 460800u, 0u};
     uint8_t buf[64];
     fr_endpoint_t from;
     gs1500m_init(&gs, &config, 0);
@@ -162,7 +162,7 @@ static void test_startup_by_tick_alone(void) {
 }
 
 static void test_startup_retries(void) {
-    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, 100};
+    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, 100, 460800u, 0u};
     uint8_t buf[64];
     gs1500m_init(&gs, &config, 1000);
     recv_at(1100, NULL, buf, sizeof buf);
@@ -230,7 +230,7 @@ static void test_send_matches_protocol_example(void) {
 }
 
 static void test_send_before_ready_and_new_destination(void) {
-    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, GS1500M_BOOT_MS};
+    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, GS1500M_BOOT_MS, 460800u, 0u};
     uint8_t buf[64];
     gs1500m_init(&gs, &config, 0);
     CHECK(gs1500m_send(&gs, 10, &base, status_frame, 30) < 0);
@@ -453,6 +453,51 @@ static void test_send_from_caller_memory(void) {
     CHECK(recv_at(now, &from, frame, sizeof frame) == 20 && frame[0] == 0x00 && frame[1] == 0x2A);
 }
 
+/* A module still at its factory rate answers nothing at the board's: after GS1500M_BAUD_PROBES silent probes the
+ * driver asks at the factory rate, tells the module the board's rate with ATB and goes on at it. */
+static void test_module_at_factory_rate(void) {
+    gs1500m_config_t config = {base, GS1500M_SERVER_PORT, 10, 460800u, 9600u};
+    uint8_t buf[8];
+    gs1500m_init(&gs, &config, 0);
+    CHECK(gs1500m_uart_baud(&gs) == 460800u);
+    uint32_t now = 10;
+    for (unsigned i = 0; i < GS1500M_BAUD_PROBES; i++, now += GS1500M_PROBE_MS) {
+        recv_at(now, NULL, buf, sizeof buf);
+        CHECK(drained_equals("AT\r\n") && gs1500m_uart_baud(&gs) == 460800u);
+    }
+    recv_at(now, NULL, buf, sizeof buf);
+    CHECK(gs1500m_uart_baud(&gs) == 9600u && drained_equals("AT\r\n"));
+    feeds("OK\r\n");
+    recv_at(now + 1, NULL, buf, sizeof buf);
+    CHECK(drained_equals("ATB=460800\r\n") && gs1500m_uart_baud(&gs) == 9600u);
+    feeds("OK\r\n");
+    recv_at(now + 2, NULL, buf, sizeof buf);
+    /* at the board's rate again: probed at once, then the usual start-up */
+    CHECK(gs1500m_uart_baud(&gs) == 460800u && drained_equals("AT\r\n"));
+    feeds("OK\r\n");
+    recv_at(now + 3, NULL, buf, sizeof buf);
+    recv_at(now + 4, NULL, buf, sizeof buf);
+    CHECK(drained_equals("ATE0\r\n") && gs1500m_state(&gs) == GS1500M_CONFIGURING);
+    /* a module silent at both rates (still booting) is asked at each in turn, never with ATB */
+    gs1500m_init(&gs, &config, 0);
+    now = 10;
+    int switches = 0;
+    uint32_t last = gs1500m_uart_baud(&gs);
+    for (unsigned i = 0; i < 4 * GS1500M_BAUD_PROBES + 2; i++, now += GS1500M_PROBE_MS) {
+        recv_at(now, NULL, buf, sizeof buf);
+        CHECK(drained_equals("AT\r\n"));
+        if (gs1500m_uart_baud(&gs) != last) switches++;
+        last = gs1500m_uart_baud(&gs);
+    }
+    CHECK(switches == 4);
+    /* without a factory rate the driver never leaves the board's */
+    config.factory_baud = 0u;
+    gs1500m_init(&gs, &config, 0);
+    for (now = 10; now < 10 + 10 * GS1500M_PROBE_MS; now += GS1500M_PROBE_MS) recv_at(now, NULL, buf, sizeof buf);
+    CHECK(gs1500m_uart_baud(&gs) == 460800u);
+    drain(buf, 0);
+}
+
 static void test_rx_overrun(void) {
     bring_up();
     int accepted = 0;
@@ -535,6 +580,7 @@ int main(void) {
     test_link_loss();
     test_rx_overrun();
     test_datagram_longer_than_ring();
+    test_module_at_factory_rate();
     test_send_from_caller_memory();
     test_hostile_streams();
     printf("%d passed, %d failed\n", passed, failed);

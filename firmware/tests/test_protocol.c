@@ -129,6 +129,20 @@ static void test_keepalive(void) {
     fake_now = 5199;
     fr_poll();
     CHECK(fake_sent_count == 0);
+    /* A board reports its clock and its last reset in RobotHealth.board (field 6): a CM-530 that fell back to
+     * 64 MHz after its stack overflowed. Posix and the emulator report nothing (the bytes above). */
+    fake_board_present = true;
+    fake_board.core_clock_hz = 64000000u;
+    fake_board.stack_overflow_reset = true;
+    fake_board.fault_reset = false;
+    fake_clear_sent();
+    fake_now = 5200;
+    fr_poll();
+    uint8_t board[9];
+    hex("32 07 08 80 A0 C2 1E 10 01", board);
+    CHECK(fake_sent_count == 1 && fake_sent[0].len == 0x4E + 12 + 9 &&
+          memcmp(fake_sent[0].data + fake_sent[0].len - 9, board, 9) == 0);
+    fake_board_present = false;
 }
 
 static void test_rpc(void) {

@@ -2,9 +2,12 @@
  * the GS1500M on the "ZigBee" port: UART5, TX on PC12, RX on PD2, 460800 baud 8N1 (thesis 7.1), received by
  * interrupt into the driver's ring and sent by the transmit-empty interrupt, so a send never waits for the line.
  * The image starts at 0x08003000, behind ROBOTIS's bootloader (ld/stm32f103re.ld), and ends before the last two
- * 2 KB flash pages, 0x0807F000 and 0x0807F800, which keep the boot epoch (board_epoch_next). It builds and links
- * here; it cannot run in the emulator (qemu has no STM32F1 with an RCC or a flash controller). */
+ * 2 KB flash pages, 0x0807F000 and 0x0807F800, which keep the boot epoch (board_epoch_next). If the crystal or the
+ * PLL fails the board runs on a slower clock with every divisor computed for it (cm530_clock.h) and says so in its
+ * keep-alive. It builds and links here; it cannot run in the emulator (qemu has no STM32F1 with an RCC or a flash
+ * controller), so its arithmetic is tested on the host (tests/test_board.c). */
 #include "board.h"
+#include "cm530_clock.h"
 #include "stm32.h"
 
 #ifndef BOARD_BASE_IP
@@ -17,54 +20,99 @@
 #define RCC_CFGR REG32(RCC_BASE + 0x04u)
 #define RCC_APB2ENR REG32(RCC_BASE + 0x18u)
 #define RCC_APB1ENR REG32(RCC_BASE + 0x1Cu)
+#define RCC_CR_HSION (1u << 0)
+#define RCC_CR_HSIRDY (1u << 1)
 #define RCC_CR_HSEON (1u << 16)
 #define RCC_CR_HSERDY (1u << 17)
 #define RCC_CR_PLLON (1u << 24)
 #define RCC_CR_PLLRDY (1u << 25)
+#define RCC_CFGR_SWS (3u << 2)
 #define FLASH_ACR REG32(0x40022000u)
+#define GPIOA_CRH REG32(0x40010804u)
+#define GPIOA_BRR REG32(0x40010814u)
 #define GPIOC_CRH REG32(0x40011004u)
 #define GPIOD_CRL REG32(0x40011400u)
-#define CORE_HZ 72000000u
-#define PCLK1_HZ 36000000u
+#define GPIOD_BSRR REG32(0x40011410u)
+/** The rate the port runs the GS1500M at (thesis 7.1); the module is set to it at start (gs1500m.h). */
 #define GS1500M_BAUD 460800u
+/** The module's own rate before it is told another (GainSpan's serial-to-WiFi firmware: 9600 8N1). */
+#define GS1500M_FACTORY_BAUD 9600u
 
-/** Waits for a clock to be ready, boundedly: a board whose crystal does not start runs on the 8 MHz HSI. */
+/** The plan the start-up reached, for the keep-alive's BoardHealth and the UART's divisor. */
+static cm530_clock_t clock;
+
+/** Waits for a bit of RCC_CR, boundedly (about 0.1 s on the RC oscillator). */
 static int wait_for(uint32_t bit) {
-    for (uint32_t i = 0; i < 1000000u; i++)
+    for (uint32_t i = 0; i < 200000u; i++)
         if (RCC_CR & bit) return 1;
     return 0;
 }
 
-static void clock_72mhz(void) {
-    /* ROBOTIS's bootloader may have started the PLL already; its settings cannot change while it runs. */
-    if ((RCC_CFGR & (3u << 2)) == (2u << 2)) return;
+/** Waits until the clock switch reports `sws`, boundedly. */
+static int wait_switch(uint32_t sws) {
+    for (uint32_t i = 0; i < 200000u; i++)
+        if ((RCC_CFGR & RCC_CFGR_SWS) == sws) return 1;
+    return 0;
+}
+
+/** Starts the fastest clock that comes up: the crystal through the PLL, else the RC oscillator through it, else
+ *  the RC oscillator alone; returns its plan, so every divisor matches the clock that really runs. */
+static cm530_clock_t clock_start(void) {
+    /* From the RC oscillator with the PLL off, whatever the bootloader left: the PLL cannot change while it runs. */
+    RCC_CR |= RCC_CR_HSION;
+    (void)wait_for(RCC_CR_HSIRDY);
+    RCC_CFGR &= ~3u;
+    (void)wait_switch(0u);
+    FLASH_ACR = 0x12u; /* the most wait states any plan needs, before a faster clock */
+    RCC_CR &= ~RCC_CR_PLLON;
     RCC_CR |= RCC_CR_HSEON;
-    if (!wait_for(RCC_CR_HSERDY)) return;
-    FLASH_ACR = 0x12u;                 /* prefetch on, two wait states above 48 MHz */
-    RCC_CFGR = (7u << 18)              /* PLL x9: 8 MHz x 9 = 72 MHz */
-               | (1u << 16)            /* PLL from HSE */
-               | (4u << 8);            /* APB1 = HCLK / 2 = 36 MHz (its limit); APB2 = AHB = 72 MHz */
+    cm530_clock_source_t source = wait_for(RCC_CR_HSERDY) ? CM530_CLOCK_HSE_PLL : CM530_CLOCK_HSI_PLL;
+    if (source == CM530_CLOCK_HSI_PLL) RCC_CR &= ~RCC_CR_HSEON;
+    cm530_clock_t plan = cm530_clock_plan(source, GS1500M_BAUD);
+    RCC_CFGR = plan.cfgr; /* SW = HSI still */
     RCC_CR |= RCC_CR_PLLON;
-    if (!wait_for(RCC_CR_PLLRDY)) return;
-    RCC_CFGR |= 2u;                    /* system clock from the PLL */
-    for (uint32_t i = 0; i < 1000000u && (RCC_CFGR & (3u << 2)) != (2u << 2); i++) {
+    if (wait_for(RCC_CR_PLLRDY)) {
+        RCC_CFGR = plan.cfgr | 2u; /* system clock from the PLL */
+        if (wait_switch(2u << 2)) {
+            FLASH_ACR = plan.flash_acr;
+            return plan;
+        }
+        RCC_CFGR = plan.cfgr; /* back to the RC oscillator */
+        (void)wait_switch(0u);
     }
+    RCC_CR &= ~(RCC_CR_PLLON | RCC_CR_HSEON);
+    plan = cm530_clock_plan(CM530_CLOCK_HSI, GS1500M_BAUD);
+    RCC_CFGR = plan.cfgr;
+    FLASH_ACR = plan.flash_acr;
+    return plan;
+}
+
+uint32_t board_core_clock_hz(void) { return clock.core_hz; }
+
+void board_uart_baud(uint32_t baud) {
+    /* Only between bytes: the driver asks once the transmit side is empty (gs1500m_uart_baud). */
+    UART5_BRR = (clock.pclk1_hz + baud / 2u) / baud;
 }
 
 void board_init(void) {
-    static const gs1500m_config_t config = {{BOARD_BASE_IP, 11011u}, GS1500M_SERVER_PORT, GS1500M_BOOT_MS};
-    clock_72mhz();
-    RCC_APB2ENR |= (1u << 0) | (1u << 4) | (1u << 5); /* AFIO, GPIOC, GPIOD */
+    static const gs1500m_config_t config = {{BOARD_BASE_IP, 11011u}, GS1500M_SERVER_PORT, GS1500M_BOOT_MS,
+                                            GS1500M_BAUD, GS1500M_FACTORY_BAUD};
+    clock = clock_start();
+    RCC_APB2ENR |= (1u << 2) | (1u << 4) | (1u << 5); /* GPIOA, GPIOC, GPIOD */
     RCC_APB1ENR |= (1u << 20);                        /* UART5 */
-    /* PC12: alternate function push-pull, 50 MHz; PD2: floating input */
+    /* PA12 drives the ZigBee port's reset/enable line; ROBOTIS's CM-530 code keeps it low to run the module.
+     * Output push-pull, 2 MHz, low. */
+    GPIOA_BRR = 1u << 12;
+    GPIOA_CRH = (GPIOA_CRH & ~(0xFu << 16)) | (0x2u << 16);
+    /* PC12: alternate function push-pull, 50 MHz; PD2: input with pull-up, so the line idles high without a module */
     GPIOC_CRH = (GPIOC_CRH & ~(0xFu << 16)) | (0xBu << 16);
-    GPIOD_CRL = (GPIOD_CRL & ~(0xFu << 8)) | (0x4u << 8);
+    GPIOD_CRL = (GPIOD_CRL & ~(0xFu << 8)) | (0x8u << 8);
+    GPIOD_BSRR = 1u << 2;
     gs1500m_init(&board_gs, &config, 0);
-    /* BRR = PCLK1 / baud, a 12.4 fixed-point divider: 36 MHz / 460800 = 78.1 -> 78 (0x4E), 461538 baud, +0.2 % */
-    UART5_BRR = (PCLK1_HZ + GS1500M_BAUD / 2u) / GS1500M_BAUD;
+    UART5_BRR = clock.uart_brr; /* 72 MHz: 36 MHz / 460800 = 78.1 -> 78, 461538 baud, +0.2 % */
     UART5_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
     irq_enable(UART5_IRQ);
-    SYST_RVR = CORE_HZ / 1000u - 1u;
+    SYST_RVR = clock.systick_reload;
     SYST_CVR = 0;
     SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_TICKINT | SYST_CSR_CORE_CLOCK;
 }

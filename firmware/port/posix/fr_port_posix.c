@@ -100,6 +100,12 @@ int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
     return n == (ssize_t)len ? 0 : -1;
 }
 
+/** A host is no board: nothing to report. */
+bool fr_port_board_health(fr_board_health_t *out) {
+    (void)out;
+    return false;
+}
+
 /** Sockets copy both ways: the library's buffer is always free. */
 bool fr_port_frame_free(void) { return true; }
 

@@ -86,8 +86,13 @@ void board_tx_kick(void) {
     while ((UART5_SR & USART_SR_TXE) && gs1500m_tx_pop(&board_gs, &b)) UART5_DR = b;
 }
 
+void board_uart_baud(uint32_t baud) { (void)baud; /* the emulator ignores the rate */ }
+
+uint32_t board_core_clock_hz(void) { return 0; /* the host's, not a board's */ }
+
 void board_init(void) {
-    static const gs1500m_config_t config = {{BOARD_BASE_IP, 11011u}, GS1500M_SERVER_PORT, BOARD_BOOT_MS};
+    static const gs1500m_config_t config = {{BOARD_BASE_IP, 11011u}, GS1500M_SERVER_PORT, BOARD_BOOT_MS, 460800u,
+                                            0u /* the emulator ignores the rate: nothing to set */};
     gs1500m_init(&board_gs, &config, 0);
     UART5_BRR = 0x10u; /* the emulator ignores the rate */
     UART5_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;

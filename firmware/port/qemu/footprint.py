@@ -74,7 +74,7 @@ def sizes_from_map(map_path):
             elif section.startswith(".data"):
                 flash[part] = flash.get(part, 0) + size
                 ram[part] = ram.get(part, 0) + size
-            elif section.startswith(".bss") or section == "COMMON":
+            elif section.startswith((".bss", ".noinit")) or section == "COMMON":
                 ram[part] = ram.get(part, 0) + size
     return flash, ram
 
@@ -111,7 +111,7 @@ def image(size_tool, build, variant, program):
     s = section_sizes(size_tool, elf)
     flash_parts, ram_parts = sizes_from_map("%s/%s/%s.map" % (build, variant, program))
     flash = s.get(".isr_vector", 0) + s.get(".text", 0) + s.get(".ARM.exidx", 0) + s.get(".data", 0)
-    ram = s.get(".data", 0) + s.get(".bss", 0)
+    ram = s.get(".data", 0) + s.get(".bss", 0) + s.get(".noinit", 0) + s.get(".stack_guard", 0)
     return {"flash": flash, "static_ram": ram, "stack_reserved": s.get(".stack", 0),
             "flash_parts": flash_parts, "ram_parts": ram_parts}
 

@@ -28,6 +28,10 @@ uint32_t fr_port_millis(void) { return fake_ms; }
 int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
     return gs1500m_send(&board_gs, fake_ms, to, data, len);
 }
+bool fr_port_board_health(fr_board_health_t *out) {
+    (void)out;
+    return false;
+}
 bool fr_port_frame_free(void) { return !gs1500m_tx_busy(&board_gs) && !gs1500m_rx_busy(&board_gs); }
 int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap) {
     return gs1500m_recv(&board_gs, fake_ms, from, buf, cap);

@@ -9,25 +9,23 @@ gs1500m_t board_gs;
 
 static volatile uint32_t millis;
 
-/** 1 kHz tick: the library's clock. */
+/** 1 kHz tick: the library's clock, and the stack's guard checked. */
 void SysTick_Handler(void);
-void SysTick_Handler(void) { millis++; }
+void SysTick_Handler(void) {
+    millis++;
+    board_stack_check();
+}
+
+static uint32_t uart_sr(void) { return UART5_SR; }
+static uint32_t uart_dr_read(void) { return UART5_DR; }
+static void uart_dr_write(uint8_t b) { UART5_DR = b; }
+static uint32_t uart_cr1(void) { return UART5_CR1; }
+static void uart_cr1_write(uint32_t v) { UART5_CR1 = v; }
+#include "uart_isr.h"
 
 /** UART5: every received byte into the driver's ring; the transmit side when the board sends by interrupt. */
 void UART5_IRQHandler(void);
-void UART5_IRQHandler(void) {
-    uint32_t sr = UART5_SR;
-    while (sr & (USART_SR_RXNE | USART_SR_ORE)) {
-        /* Reading DR clears RXNE and an overrun alike; an overrun's lost byte shows up as garbage later. */
-        (void)gs1500m_rx_push(&board_gs, (uint8_t)UART5_DR);
-        sr = UART5_SR;
-    }
-    if ((UART5_CR1 & USART_CR1_TXEIE) && (sr & USART_SR_TXE)) {
-        uint8_t b;
-        if (gs1500m_tx_pop(&board_gs, &b)) UART5_DR = b;
-        else UART5_CR1 &= ~USART_CR1_TXEIE;
-    }
-}
+void UART5_IRQHandler(void) { uart_isr(&board_gs); }
 
 uint32_t fr_port_millis(void) { return millis; }
 
@@ -39,14 +37,32 @@ int fr_port_send(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
 
 bool fr_port_frame_free(void) { return !gs1500m_tx_busy(&board_gs) && !gs1500m_rx_busy(&board_gs); }
 
+bool fr_port_board_health(fr_board_health_t *out) {
+    out->core_clock_hz = board_core_clock_hz();
+    if (out->core_clock_hz == 0u) return false; /* the emulator: no board of its own */
+    uint32_t note = board_reset_note();
+    out->stack_overflow_reset = note == BOARD_RESET_STACK;
+    out->fault_reset = note == BOARD_RESET_FAULT;
+    return true;
+}
+
 int fr_port_recv(fr_endpoint_t *from, uint8_t *buf, size_t cap) {
     int r = gs1500m_recv(&board_gs, millis, from, buf, cap);
     board_tx_kick();
     return r;
 }
 
+/** The UART's rate as last set; the driver's start-up may ask for the module's factory rate and back. */
+static uint32_t uart_baud;
+
 bool fr_port_link_up(void) {
     gs1500m_tick(&board_gs, millis);
+    uint32_t want = gs1500m_uart_baud(&board_gs);
+    if (uart_baud == 0u) uart_baud = want; /* board_init set the first */
+    if (want != uart_baud && !gs1500m_tx_pending(&board_gs) && (UART5_SR & USART_SR_TC)) {
+        board_uart_baud(want); /* between bytes: the last one has left the line */
+        uart_baud = want;
+    }
     board_tx_kick();
     return gs1500m_link_up(&board_gs);
 }

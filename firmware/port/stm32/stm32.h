@@ -5,7 +5,7 @@
 
 #include <stdint.h>
 
-#define REG32(addr) (*(volatile uint32_t *)(addr))
+#define REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))
 
 /* SysTick and the NVIC (ARMv7-M) */
 #define SYST_CSR REG32(0xE000E010u)
@@ -27,6 +27,7 @@
 #define USART_SR_ORE (1u << 3)
 #define USART_SR_RXNE (1u << 5)
 #define USART_SR_TXE (1u << 7)
+#define USART_SR_TC (1u << 6)
 #define USART_CR1_RE (1u << 2)
 #define USART_CR1_TE (1u << 3)
 #define USART_CR1_RXNEIE (1u << 5)
