@@ -11,6 +11,7 @@
 #                   point (stack painting) and instructions per keep-alive and per request (qemu -icount); prints
 #                   a table and writes build/footprint.json
 #   make test-gs1500m   the GS1500M driver's unit tests alone (also part of `make test`)
+#   make test-qemu-board  the board's start-up on qemu (vectors, bootloader leftovers, stack guard and its reset)
 #
 # The toolchain is Debian's gcc-arm-none-eabi with newlib-nano; qemu is qemu-system-arm (setup.sh installs both).
 
@@ -35,7 +36,7 @@ STM32_SRCS := port/stm32/startup.c
 STM32_PORT_SRCS := port/stm32/fr_port_gs1500m.c
 ARM_PB_SRCS := $(FR_PB_SRCS) $(FR_GEN_SRCS)
 
-.PHONY: arm qemu footprint test-gs1500m check-arm check-qemu check-robot-key FORCE
+.PHONY: arm qemu footprint test-gs1500m test-qemu-board check-arm check-qemu check-robot-key FORCE
 
 # The robot key of the board images: ROBOT_KEY=<hex> (what `robotctl keys <id>` prints), or FR_DEVELOPMENT=1 for an
 # unsigned development image. Checked here (16 to 64 bytes of hex digit pairs, never both) and again by the
@@ -111,10 +112,18 @@ $(GEN)/footprint_keep.c: tools/footprint_keep.sh $(FOOTPRINT_HEADERS)
 	sh tools/footprint_keep.sh $(FOOTPRINT_HEADERS) > $@.new && mv $@.new $@
 $(foreach v,cm530 cm530-w4,$(eval $(call arm_program,$(v),footprint,port/cm530/footprint.c,$$($(v)_PORT) $(BUILD)/$(v)/obj/$(GEN)/footprint_keep.o)))
 $(eval $(call arm_program,qemu,echo,port/qemu/echo.c,$$(qemu_PORT)))
+$(eval $(call arm_program,qemu,boardcheck,port/qemu/boardcheck.c,$$(qemu_PORT)))
 
 arm: check-robot-key $(BUILD)/cm530/robot.elf $(BUILD)/cm530/robot.hex $(BUILD)/cm530/robot.bin $(BUILD)/cm530-w4/robot.elf
 qemu: $(BUILD)/qemu/robot.elf $(BUILD)/qemu/echo.elf $(BUILD)/qemu/measure.elf $(BUILD)/qemu-w4/robot.elf \
-      $(BUILD)/qemu-w4/measure.elf
+      $(BUILD)/qemu-w4/measure.elf $(BUILD)/qemu/boardcheck.elf
+
+# The board's start-up on the emulated Cortex-M3 (port/qemu/boardcheck.c): vectors, interrupts a bootloader left
+# on, the stack's guard and the reset it causes. Prints "boardcheck: N passed, N failed".
+test-qemu-board: $(BUILD)/qemu/boardcheck.elf | check-qemu
+	@timeout 60 $(QEMU) -M netduino2 -display none -monitor none -nodefaults -serial null \
+	    -semihosting-config enable=on,target=native -kernel $< 2>&1 | tee $(BUILD)/qemu/boardcheck.log; \
+	grep -q "boardcheck: [0-9]* passed, 0 failed" $(BUILD)/qemu/boardcheck.log
 
 # Flash = .isr_vector + .text + .data's initial values; static RAM = .data + .bss (the reserved stack apart).
 # The footprint is measured with a robot key built in (a fixed one, 32 bytes, unless ROBOT_KEY or FR_DEVELOPMENT is

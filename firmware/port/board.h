@@ -20,6 +20,9 @@ void board_log(const char *text);
 /** The program ended with `status` (semihosting exit on qemu; a reset on a CM-530). */
 void board_exit(int status);
 
+/** On qemu only: when set, board_exit calls it first (the board check's stand-in for a reset). */
+extern void (*board_exit_hook)(int status);
+
 /** fr_port_epoch_next of the board: raises the boot epoch in its persistent store (flash on a CM-530, a host file
  *  through semihosting on qemu); 0 when done, < 0 when it cannot. */
 int board_epoch_next(uint32_t *epoch);

@@ -62,10 +62,10 @@ void Reset_Handler(void) {
     }
     /* Interrupts through this table wherever the image starts (after ROBOTIS's bootloader on a CM-530). */
     SCB_VTOR = (uint32_t)(uintptr_t)vectors;
-    previous_note = note_magic == NOTE_MAGIC ? note_reason : BOARD_RESET_NONE;
-    note_magic = 0;
     memcpy(&_sdata, &_sidata, (size_t)((uintptr_t)&_edata - (uintptr_t)&_sdata));
     memset(&_sbss, 0, (size_t)((uintptr_t)&_ebss - (uintptr_t)&_sbss));
+    previous_note = note_magic == NOTE_MAGIC ? note_reason : BOARD_RESET_NONE; /* after .bss is zeroed */
+    note_magic = 0;
     for (volatile uint32_t *p = &_sguard; p < &_eguard; p++) *p = GUARD_WORD;
     board_init();
     cpu_irq_enable();
