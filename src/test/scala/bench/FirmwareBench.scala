@@ -15,18 +15,18 @@ import firmware.FirmwareBuild
 /** The robot-side C library's footprint, measured as the thesis measured its firmware (§7): `make -C firmware
   * footprint` builds the CM-530 images and runs the measurement program in qemu (port/qemu/measure.c, footprint.py).
   *
-  *   - `firmware_library_flash_bytes_w1` / `_w4`, `firmware_library_static_ram_bytes_w1` / `_w4`: the library
-  *     (library, GS1500M driver, nanopb, descriptors, libc, board port) measured with a stub program that keeps
-  *     every public `fr.h` function, stream window 1 (stop-and-wait) and 4 (selective repeat);
-  *   - `firmware_example_flash_bytes_w1` / `_w4`, `firmware_example_static_ram_bytes_w1` / `_w4`: the example
-  *     robot's image, apart; static RAM is `.data` + `.bss` + `.noinit` + the stack guard, the stack apart;
+  *   - `firmware_library_flash_bytes_w1` / `_w4`, `firmware_library_static_ram_bytes_w1` / `_w4`: the library (library,
+  *     GS1500M driver, nanopb, descriptors, libc, board port) measured with a stub program that keeps every public
+  *     `fr.h` function, stream window 1 (stop-and-wait) and 4 (selective repeat);
+  *   - `firmware_example_flash_bytes_w1` / `_w4`, `firmware_example_static_ram_bytes_w1` / `_w4`: the example robot's
+  *     image, apart; static RAM is `.data` + `.bss` + `.noinit` + the stack guard, the stack apart;
   *   - `firmware_stack_<entry>_bytes`: the deepest stack of each entry point, by painting it (W = 1);
   *   - `firmware_<entry>_instructions`: instructions of each entry point under `-icount` (deterministic): a keep-alive
   *     (encode, frame; then signed), the framing alone, a request (parse, decode, dispatch, answer), an idle poll.
   *
   * Goals (docs/firmware.md): flash ≤ 20 KB, static RAM ≤ 6 KB (W = 1) / ≤ 14 KB (W = 4), stack ≤ 1 KB, keep-alive ≤
-  * 8,000 instructions / ≤ 20,000 signed. Without the ARM toolchain or qemu it is skipped with the reason, and gives
-  * no figures.
+  * 8,000 instructions / ≤ 20,000 signed. Without the ARM toolchain or qemu it is skipped with the reason, and gives no
+  * figures.
   */
 object FirmwareBench extends Benchmark {
   val name = "firmware"
