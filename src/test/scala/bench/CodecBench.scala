@@ -8,7 +8,8 @@ import naogateway.proto.Status
 import naogateway.wire.MessageContents
 
 /** Frame + Message + Status codec throughput on the docs/protocol.md 9.1 keep-alive, against a hand-written
-  * protobuf-java floor.
+  * protobuf-java floor; and what servo telemetry (6.8) costs: its bytes in the team's WiFi budget, and the decoding of
+  * a keep-alive that carries it.
   */
 object CodecBench extends Benchmark {
   val name = "codec"
@@ -30,10 +31,31 @@ object CodecBench extends Benchmark {
       MessageContents.encodeFrame(contents).fold(_ => -1, _.length)
     }
     val baseline = BenchSuite.opsPerSecond(3.0) { () => BaselineDecoder.decode(frame)._1 }
+    // The simulated robot's keep-alive with and without the telemetry of its 18 servos (the built-in model).
+    val firmware = naogateway.sim.FirmwareSettings(robotId = 1)
+    val robot = naogateway.sim.RobotFirmware.boot(firmware, 0L)
+    val keepAlive = naogateway.sim.RobotFirmware.keepAlive(robot)
+    val telemetry = naogateway.sim.RobotFirmware.servoTelemetry(robot)
+    require(telemetry.servos.size == 18, "the model has 18 servos")
+    val plain = MessageContents.encodeFrame(keepAlive).toOption.get
+    val withServos = MessageContents.encodeFrame(keepAlive.copy(servoTelemetry = Some(telemetry))).toOption.get
+    require(MessageContents.decodeFrame(withServos).map(_._2.servoTelemetry) == Right(Some(telemetry)),
+      "the codec must round-trip the telemetry")
+    val perSecond = (withServos.length - plain.length) * 1000.0 / firmware.servoTelemetryInterval.toMillis
+    val teamBudget = com.typesafe.config.ConfigFactory.load().getInt("naogateway.budget.team-bytes-per-second")
+    val decodeServos = BenchSuite.opsPerSecond(3.0) { () =>
+      MessageContents.decodeFrame(withServos) match {
+        case Right((_, c)) => c.robotId
+        case Left(_)       => -1
+      }
+    }
     ListMap(
       "codec_status_decode_ops_s" -> decode,
       "codec_status_encode_ops_s" -> encode,
-      "codec_status_decode_baseline_ops_s" -> baseline
+      "codec_status_decode_baseline_ops_s" -> baseline,
+      "codec_keepalive_servos_decode_ops_s" -> decodeServos,
+      "servo_telemetry_bytes_s_per_robot" -> perSecond,
+      "servo_telemetry_team_budget_share_per_robot" -> perSecond / teamBudget
     )
   }
 

@@ -43,7 +43,9 @@ object SigningState {
 
 /** What the gateway last heard from a robot's keep-alive. `receivedAtNanos` and `stampedAtNanos` are on the gateway's
   * clock (its JVM's `System.nanoTime`); `stampedAtNanos` is when the robot's clock read this keep-alive's timestamp, by
-  * the robot's clock estimate `clock` (None until there is one, or when the keep-alive carries no robot time).
+  * the robot's clock estimate `clock` (None until there is one, or when the keep-alive carries no robot time). `servos`
+  * is the latest servo telemetry of this session (docs/protocol.md 6.8), kept over keep-alives without one, gone when
+  * the robot goes offline or restarts.
   */
 final case class RobotSnapshot(
     robotId: Int,
@@ -62,7 +64,8 @@ final case class RobotSnapshot(
     clock: Option[ClockEstimate] = None,
     stampedAtNanos: Option[Long] = None,
     development: Boolean = false,
-    signing: SigningState = SigningState.Off
+    signing: SigningState = SigningState.Off,
+    servos: Option[ServoReadings] = None
 ) {
 
   /** What the robot reported about itself, as a keep-alive says it (the link fields are not part of it). */
@@ -76,15 +79,21 @@ object RobotSnapshot {
   /** `previous` after one keep-alive (docs/protocol.md §6.2): the keep-alive describes the robot as it is now, so every
     * robot-reported field comes from it alone. A field it does not carry is unknown (`None`), never left over from an
     * earlier keep-alive: a robot that restarts with firmware sending `Status` only must not show the battery, role,
-    * posture, position or `bootId` of its previous session. Link fields (address, online, quality, signing) stay.
+    * posture, position or `bootId` of its previous session. Link fields (address, online, quality, signing) stay. Servo
+    * telemetry is the one exception (§6.8): a keep-alive without it leaves the last one, unless the `bootId` changed.
     */
   def afterKeepAlive(
       previous: RobotSnapshot,
       status: naogateway.proto.Status,
       health: Option[naogateway.proto.RobotHealth],
-      receivedAtNanos: Long
+      receivedAtNanos: Long,
+      servos: Option[naogateway.proto.ServoTelemetry] = None
   ): RobotSnapshot = {
     val r = RobotReport.read(status, health)
+    val telemetry = servos.map(ServoReadings.read(_, receivedAtNanos)) match {
+      case None if r.bootId == previous.bootId => previous.servos
+      case other                               => other
+    }
     previous.copy(
       teamId = r.teamId,
       role = r.role,
@@ -95,7 +104,8 @@ object RobotSnapshot {
       bootId = r.bootId,
       position = r.position,
       development = r.development,
-      receivedAtNanos = receivedAtNanos
+      receivedAtNanos = receivedAtNanos,
+      servos = telemetry
     )
   }
 }

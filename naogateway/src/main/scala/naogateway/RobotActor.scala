@@ -207,7 +207,7 @@ object RobotActor {
         context.log.info("Robot [{}] offline: {}", robotId, reason)
         forgetAfter(settings.discovery.forgetOfflineAfter, "offline")
         f.response ! ResponseActor.Reachability(false)
-        running(f, c, effects.publish(s.signatureUnconfirmed, RobotOffline(robotId, reason)), isOnline = false)
+        running(f, c, effects.publish(s.wentOffline, RobotOffline(robotId, reason)), isOnline = false)
       case Forget(reason) => forget(s, reason)
     }
 

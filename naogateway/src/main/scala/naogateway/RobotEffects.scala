@@ -4,7 +4,7 @@ import akka.actor.typed.ActorRef
 
 import naogateway.RobotEffects.{Children, Family}
 import naogateway.RobotFrames.{Arrival, Outbound}
-import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames, RobotHealth, Status}
+import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames, RobotHealth, ServoTelemetry, Status}
 import naogateway.link.ZeroMqRobotLink
 import naogateway.wire.MessageContents
 
@@ -27,8 +27,8 @@ private[naogateway] final class RobotEffects(
   /** One FU-Remote message from the robot, over datagrams or ZeroMQ (counted already): each thing to its owner. */
   def frame(contents: MessageContents, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState =
     RobotFrames.arrivals(robotId, contents).foldLeft(s) {
-      case (st, Arrival.KeepAlive(status, health)) => keepAlive(status, health, f, c, st, isOnline)
-      case (st, Arrival.OptionsPushed(list))       => optionsPushed(list, f, st)
+      case (st, Arrival.KeepAlive(status, health, servos)) => keepAlive(status, health, servos, f, c, st, isOnline)
+      case (st, Arrival.OptionsPushed(list))               => optionsPushed(list, f, st)
       case (st, Arrival.Reply(CallId.Owner.Response, reply, _)) =>
         f.response ! ResponseActor.ReplyReceived(reply)
         st
@@ -44,9 +44,9 @@ private[naogateway] final class RobotEffects(
     }
 
   /** A keep-alive: the heartbeat hears of it (unless it only introduced the robot), a new session is re-synced. */
-  private def keepAlive(status: Status, health: Option[RobotHealth], f: Family, c: Option[Children], s0: RobotState,
-      isOnline: Boolean): RobotState = {
-    val (s, seen) = s0.keepAliveSeen(status, health, System.nanoTime(), window, settings.newSessionKeepAlives)
+  private def keepAlive(status: Status, health: Option[RobotHealth], servos: Option[ServoTelemetry], f: Family,
+      c: Option[Children], s0: RobotState, isOnline: Boolean): RobotState = {
+    val (s, seen) = s0.keepAliveSeen(status, health, System.nanoTime(), window, settings.newSessionKeepAlives, servos)
     if (seen.heard) f.heartbeat ! HeartBeatActor.KeepAliveSeen
     val resynced = if (seen.restarted) resync(f, c, s, isOnline) else s
     publish(resynced, RobotStatusUpdated(resynced.view(isOnline)))

@@ -5,7 +5,7 @@ import java.net.InetSocketAddress
 import akka.actor.typed.ActorRef
 
 import naogateway.link.ZeroMqRobotLink
-import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, Status}
+import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, ServoTelemetry, Status}
 import naogateway.wire.{FrameError, HaViMo, HeaderForm, MessageContents, RpcCall, RpcReply, WireLimits}
 
 /** What goes to a robot and the bytes it becomes (the one place that builds a robot's outbound frames), and what a
@@ -20,8 +20,9 @@ private[naogateway] object RobotFrames {
   /** The kinds of arrivals. */
   object Arrival {
 
-    /** A keep-alive. */
-    final case class KeepAlive(status: Status, health: Option[RobotHealth]) extends Arrival
+    /** A keep-alive, with the servo telemetry it carries (docs/protocol.md 6.8). */
+    final case class KeepAlive(status: Status, health: Option[RobotHealth], servos: Option[ServoTelemetry] = None)
+        extends Arrival
 
     /** The robot's option list (protocol.md 8). */
     final case class OptionsPushed(options: Seq[DebuggingOption]) extends Arrival
@@ -38,7 +39,7 @@ private[naogateway] object RobotFrames {
 
   /** What `contents` from robot `robotId` carries, in the order the robot actor hands it on. */
   def arrivals(robotId: Int, contents: MessageContents): Vector[Arrival] = {
-    val keepAlive = contents.status.map(Arrival.KeepAlive(_, contents.robotHealth)).toVector
+    val keepAlive = contents.status.map(Arrival.KeepAlive(_, contents.robotHealth, contents.servoTelemetry)).toVector
     val pushed = contents.debuggingCommands.flatMap(_.optionPush).map(l => Arrival.OptionsPushed(l.options)).toVector
     val replies = contents.rpcResponse.toVector.flatMap { response =>
       val reply = RpcReply.fromProto(response)

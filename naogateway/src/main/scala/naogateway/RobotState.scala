@@ -7,7 +7,7 @@ import scala.concurrent.duration._
 
 import akka.actor.typed.ActorRef
 
-import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, Status}
+import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, ServoTelemetry, Status}
 import naogateway.wire.HeaderForm
 
 /** The link figures of one robot. `keepAliveTimes` holds the keep-alives' arrival times, oldest first, never more than
@@ -128,6 +128,14 @@ private[naogateway] final case class RobotState(
     if (snapshot.signing == SigningState.Signed) copy(snapshot = snapshot.copy(signing = SigningState.Awaited))
     else this
 
+  /** The robot went offline: its servo telemetry is no longer known (docs/protocol.md 6.8), and whether it still signs
+    * is open again (`signatureUnconfirmed`).
+    */
+  def wentOffline: RobotState = {
+    val s = signatureUnconfirmed
+    if (s.snapshot.servos.isEmpty) s else s.copy(snapshot = s.snapshot.copy(servos = None))
+  }
+
   /** A clean round-trip sample, smoothed as TCP smooths its RTT. */
   def roundTrip(nanos: Long): RobotState =
     copy(link = link.copy(rttNanos = Some(link.rttNanos.fold(nanos.toDouble)(r => r * 0.875 + nanos * 0.125))))
@@ -138,11 +146,11 @@ private[naogateway] final case class RobotState(
   /** A keep-alive arrived at `now` (`window`: the quality window in nanoseconds). A discovered robot's first one (the
     * one that introduced it) is not passed on to the heartbeat: anyone can send one.
     */
-  def keepAliveSeen(status: Status, health: Option[RobotHealth], now: Long, window: Long, newSessionKeepAlives: Int)
-      : (RobotState, KeepAliveOutcome) = {
+  def keepAliveSeen(status: Status, health: Option[RobotHealth], now: Long, window: Long, newSessionKeepAlives: Int,
+      servos: Option[ServoTelemetry] = None): (RobotState, KeepAliveOutcome) = {
     val times = (if (link.keepAliveTimes.size >= keepAliveTimesKept) link.keepAliveTimes.tail else link.keepAliveTimes)
       .enqueue(now).dropWhile(_ < now - window)
-    val step = KeepAliveStep.keepAlive(snapshot, sessions, status, health, now, newSessionKeepAlives)
+    val step = KeepAliveStep.keepAlive(snapshot, sessions, status, health, now, newSessionKeepAlives, servos)
     val restartedSync = if (step.restarted) clockSync.restart else clockSync
     // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.
     val robotTime = status.timestamp.orElse(health.flatMap(_.uptimeMs).map(u => restartedSync.unwrap32(u.toLong)))

@@ -7,7 +7,16 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.RobotFrames.{Arrival, Outbound, Route}
-import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames, Response, RobotHealth, Status}
+import naogateway.proto.{
+  DebuggingCommands,
+  DebuggingOption,
+  DebuggingOptionNames,
+  Response,
+  RobotHealth,
+  ServoState,
+  ServoTelemetry,
+  Status
+}
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall, WireLimits}
 
 /** The robot actor's state and frames, without actors: each named transition, and the pure encoding. */
@@ -85,6 +94,48 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       Seq(r1, r2, r3).map(_.restarted) shouldBe Seq(false, false, true)
       c.snapshot.bootId shouldBe Some(2)
       c.clockSync.samples shouldBe 1
+    }
+
+    "keep the last servo telemetry over keep-alives without one, until the robot restarts or goes offline (6.8)" in {
+      val telemetry = ServoTelemetry(Vector(ServoState(1, Some(512), Some(-40), Some(121), Some(41)),
+          ServoState(2, silent = Some(true))), busErrors = Some(2))
+      def withServos(s: RobotState, at: Long, boot: Int, uptime: Int, t: Option[ServoTelemetry]) =
+        s.keepAliveSeen(Status(teamID = Some(1)), Some(RobotHealth(uptimeMs = Some(uptime), bootId = Some(boot))), at,
+          window, 3, t)._1
+      val s1 = withServos(fresh(), second, boot = 1, uptime = 1000, Some(telemetry))
+      val read = s1.snapshot.servos.get
+      read.receivedAtNanos shouldBe second
+      read.busErrors shouldBe Some(2L)
+      read.servos shouldBe Vector(ServoReading(1, Some(512), Some(-40), Some(12.1), Some(41)),
+        ServoReading(2, silent = true))
+      read.servos.head.degrees.get shouldBe 0.0 +- 1e-9
+      // The next keep-alives carry none: the last telemetry stays, with its own time.
+      val s2 = withServos(s1, second + second / 5, boot = 1, uptime = 1200, None)
+      s2.snapshot.servos shouldBe Some(read)
+      s2.snapshot.receivedAtNanos shouldBe second + second / 5
+      s2.view(online = true).servos shouldBe Some(read)
+      // Offline: gone.
+      s2.wentOffline.snapshot.servos shouldBe None
+      // A keep-alive of a new session (another bootId) without telemetry: gone at once.
+      withServos(s2, 2 * second, boot = 2, uptime = 100, None).snapshot.servos shouldBe None
+      // A new session by uptime alone (no bootId), confirmed after three keep-alives: gone then.
+      def noBoot(s: RobotState, at: Long, uptime: Int, t: Option[ServoTelemetry]) =
+        s.keepAliveSeen(Status(teamID = Some(1)), Some(RobotHealth(uptimeMs = Some(uptime))), at, window, 3, t)._1
+      val old = (1 to 5).foldLeft(noBoot(fresh(), second, 100000, Some(telemetry))) { (s, i) =>
+        noBoot(s, second + i * second / 5, 100000 + i * 200, None)
+      }
+      old.snapshot.servos.map(_.servos.size) shouldBe Some(2)
+      val restarted = (1 to 3).foldLeft(old)((s, i) => noBoot(s, 3 * second + i * second / 5, i * 200, None))
+      restarted.snapshot.servos shouldBe None
+      // A new telemetry replaces the old one.
+      val replaced = withServos(s2, 3 * second, boot = 1, uptime = 3000, Some(ServoTelemetry()))
+      replaced.snapshot.servos shouldBe Some(ServoReadings(Vector.empty, None, 3 * second))
+    }
+
+    "hand a keep-alive's servo telemetry on with it" in {
+      val t = ServoTelemetry(Vector(ServoState(3, Some(100))))
+      RobotFrames.arrivals(7, MessageContents(7, status = Some(Status()), servoTelemetry = Some(t))) shouldBe
+        Vector(Arrival.KeepAlive(Status(), None, Some(t)))
     }
 
     "keep a bounded number of keep-alive times and estimate the loss from them" in {

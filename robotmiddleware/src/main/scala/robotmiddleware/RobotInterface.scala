@@ -17,7 +17,7 @@ import akka.stream.typed.scaladsl.ActorSource
 import akka.util.Timeout
 import akka.{Done, NotUsed}
 
-import naogateway.{CallResult, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.{CallResult, LinkStats, RobotEvent, RobotSnapshot, ServoReadings, VisionFrame}
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.{GameControlData, PlayerPenalty}
 
@@ -83,6 +83,19 @@ trait RobotInterface {
 
   /** Snapshots of every robot. */
   def allStatus: Source[RobotSnapshot, NotUsed]
+
+  /** A robot's servo telemetry (docs/protocol.md 6.8), read from [[status]]: the latest known at once, then each new
+    * one as it arrives (about once a second), once each. `ServoLimits` (`MiddlewareSettings.servoLimits`) says which
+    * servos are hot or low on voltage. The telemetry is dropped, not emitted empty, when the robot goes offline or
+    * restarts; the next one comes with its next telemetry.
+    */
+  def servos(robotId: Int): Source[ServoReadings, NotUsed] =
+    status(robotId).map(_.servos).statefulMapConcat { () =>
+      var last: Option[ServoReadings] = None
+      now =>
+        if (now.isEmpty || now == last) { last = now; Nil }
+        else { last = now; now.toList }
+    }
 
   /** HaViMo2 frames of a robot, newest only; `grid` adds the (large) grid frames. */
   def vision(robotId: Int, grid: Boolean = false): Source[VisionFrame, NotUsed]

@@ -33,13 +33,15 @@ class MiddlewareSettingsSpec extends AnyWordSpec with Matchers with SettingsTabl
         guardRestart = RestartBackoff(200.millis, 5.seconds, 0.2),
         clientAskMargin = 5.seconds,
         clientFindRetry = 200.millis,
-        dispatcher = "akka.actor.default-dispatcher"
+        dispatcher = "akka.actor.default-dispatcher",
+        servoLimits = ServoLimits(hotCelsius = 65, lowVolts = 10.0)
       )
       // Code that builds the settings with the first seven figures (the specs) gets reference.conf's for the rest.
       MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 64) shouldBe s
       settings("lookup-timeout = 500ms").lookupTimeout shouldBe 500.millis
       settings("client.ask-margin = 20s").clientAskMargin shouldBe 20.seconds
       settings("dispatcher = \"naogateway.dispatcher\"").dispatcher shouldBe "naogateway.dispatcher"
+      settings("servos { hot = 60, low-voltage = 9.5 }").servoLimits shouldBe ServoLimits(60, 9.5)
     }
 
     "refuse a bad value with a message naming the key" in {
@@ -49,6 +51,8 @@ class MiddlewareSettingsSpec extends AnyWordSpec with Matchers with SettingsTabl
         "client.ask-margin = 0s" -> "requirement failed: client.ask-margin must be positive",
         "client.find-retry = 1ms" -> "requirement failed: client.find-retry must be at least 10 ms",
         "dispatcher = \" \"" -> "requirement failed: dispatcher must name a dispatcher's config path",
+        "servos.hot = 0" -> "requirement failed: servos.hot must be from 1 to 100 °C",
+        "servos.low-voltage = 0" -> "requirement failed: servos.low-voltage must be from 0 to 20 V",
         "supervision.guard.min-backoff = 10s" ->
           "supervision.guard: a restart back-off needs 0 < min-backoff <= max-backoff"
       )

@@ -44,6 +44,36 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       seen.expectNoMessage(200.millis)
       PlayerPenalty(Hsl20Penalty.MotionInStop, 13).describe shouldBe "motion in stop, 13 s left"
     }
+    "stream a robot's servo telemetry from its snapshots: each new one once, none while it has none" in {
+      import naogateway.{RobotSnapshot, ServoReading, ServoReadings}
+      val (interface, middleware) = connected()
+      val seen = createTestProbe[ServoReadings]()
+      interface.servos(2).runWith(akka.stream.scaladsl.Sink.foreach(seen.ref ! _))(akka.stream.Materializer(system))
+      val watch = middleware.expectMessageType[RobotMiddleware.WatchStatus]
+      watch.robotId shouldBe Some(2)
+      val robot = RobotSnapshot(2, new java.net.InetSocketAddress("127.0.0.1", 3838), online = true)
+      val first = ServoReadings(Vector(ServoReading(1, Some(512), Some(3), Some(12.0), Some(40))), Some(0L), 1L)
+      val second = first.copy(receivedAtNanos = 2L)
+      // Keep-alives without telemetry keep the last one in the snapshot: it is not emitted again.
+      Seq(
+        robot,
+        robot.copy(servos = Some(first)),
+        robot.copy(servos = Some(first)),
+        robot.copy(servos = Some(second)),
+        robot.copy(online = false),
+        robot.copy(servos = Some(first))
+      ).foreach(watch.subscriber ! _)
+      seen.expectMessage(first)
+      seen.expectMessage(second)
+      seen.expectMessage(first) // after the robot went offline, the next telemetry is news again
+      seen.expectNoMessage(200.millis)
+      MiddlewareSettings(system).servoLimits shouldBe ServoLimits(65, 10.0)
+      ServoLimits().hot(ServoReading(1, temperature = Some(65))) shouldBe true
+      ServoLimits().hot(ServoReading(1, temperature = Some(64))) shouldBe false
+      ServoLimits().lowVoltage(ServoReading(1, voltage = Some(9.9))) shouldBe true
+      ServoLimits().lowVoltage(ServoReading(1, silent = true)) shouldBe false
+    }
+
     "fail an operation the middleware never answers with RobotFailure.Timeout, not an ask timeout" in {
       val (interface, middleware) = connected()
       val stopped = interface.stop(4)

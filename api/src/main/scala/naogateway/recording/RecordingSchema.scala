@@ -5,7 +5,7 @@ import scala.collection.mutable
 import com.google.protobuf.DescriptorProtos.FileDescriptorSet
 import com.google.protobuf.Descriptors.FileDescriptor
 
-import naogateway.proto.{DebuggingProto, HavimoProto, MessageProto, RecordingProto, RpcProto}
+import naogateway.proto.{BodyProto, DebuggingProto, HavimoProto, MessageProto, RecordingProto, RpcProto}
 
 /** What a recording's channels are named and hold: the recorder writes them, and the web view's live Foxglove feed
   * names the same channels with the same schema, so a viewer shows the running gateway as it shows a recording.
@@ -19,6 +19,7 @@ object RecordingSchema {
     def status(robotId: Int): String = s"/robot/$robotId/status"
     def health(robotId: Int): String = s"/robot/$robotId/health"
     def message(robotId: Int): String = s"/robot/$robotId/message"
+    def servos(robotId: Int): String = s"/robot/$robotId/servos"
   }
 
   /** Robots per file that get decoded channels of their own; datagrams of further robot ids are kept raw only. */
@@ -31,8 +32,14 @@ object RecordingSchema {
       f.getDependencies.forEach(d => add(d))
       ordered(f.getName) = f
     }
-    Seq(MessageProto.javaDescriptor, DebuggingProto.javaDescriptor, HavimoProto.javaDescriptor, RpcProto.javaDescriptor,
-      RecordingProto.javaDescriptor).foreach(add)
+    Seq(
+      MessageProto.javaDescriptor,
+      DebuggingProto.javaDescriptor,
+      HavimoProto.javaDescriptor,
+      RpcProto.javaDescriptor,
+      RecordingProto.javaDescriptor,
+      BodyProto.javaDescriptor
+    ).foreach(add)
     val set = FileDescriptorSet.newBuilder()
     ordered.values.foreach(f => set.addFile(f.toProto))
     set.build().toByteArray

@@ -12,7 +12,8 @@
 
   // What the tests and the curious can read: pushes seen, the game state shown, points on the traffic plot.
   // `changes`: the last game-state changes with the page's clock when it showed them (the bench's latency figure).
-  const status = window.naogateway = { pushes: 0, gameState: null, trafficPoints: 0, robotsOnline: 0, lastPushAt: 0, changes: [] };
+  // `servoRows`: rows of each robot's servo table shown.
+  const status = window.naogateway = { pushes: 0, gameState: null, trafficPoints: 0, robotsOnline: 0, lastPushAt: 0, changes: [], servoRows: {} };
   let historyPoints = 180;
   const robots = new Map(); // id -> { el, plots, data }
   const traffic = { data: [[], [], [], []], plot: null };
@@ -83,6 +84,35 @@
     text(q(".robot-address"), robot.address);
     const refused = Object.entries(robot.refused || {}).map(([k, v]) => k + " " + v).join(", ");
     text(q(".robot-refused"), refused ? "refused: " + refused : "");
+    showServos(q(".robot-servos"), robot.id, robot.servos);
+  }
+
+  // The robot's servo table (docs/web.md): one row per servo; silent ones greyed, hot or low-voltage figures marked.
+  function showServos(table, id, servos) {
+    table.hidden = !servos;
+    const body = table.querySelector("tbody");
+    if (!servos) { body.replaceChildren(); status.servoRows[id] = 0; return; }
+    text(table.querySelector(".robot-servo-errors"), servos.busErrors ? servos.busErrors + " bus errors" : "");
+    body.replaceChildren(...servos.list.map(s => {
+      const tr = document.createElement("tr");
+      tr.dataset.servo = s.id;
+      if (s.silent) tr.className = "silent";
+      const cells = s.silent ? [s.id, "silent", "", "", ""] : [
+        s.id,
+        s.position == null ? "-" : s.position + (s.degrees == null ? "" : " (" + s.degrees.toFixed(0) + "°)"),
+        s.load == null ? "-" : s.load,
+        fixed(s.voltage, 1, "V"),
+        s.temperature == null ? "-" : s.temperature + " °C"];
+      cells.forEach((v, i) => {
+        const td = document.createElement("td");
+        td.textContent = String(v);
+        if (i === 3 && s.lowVoltage) { td.className = "bad low-voltage"; td.title = "low voltage"; }
+        if (i === 4 && s.hot) { td.className = "bad hot"; td.title = "hot"; }
+        tr.appendChild(td);
+      });
+      return tr;
+    }));
+    status.servoRows[id] = servos.list.length;
   }
 
   // Draws a frame as FU-Remote does: the grid's cells in their colour class (brighter with more pixels), then each

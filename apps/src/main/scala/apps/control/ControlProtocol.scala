@@ -10,8 +10,8 @@ import naogateway.wire.{Posture, RpcMethod, RpcValue}
   * A connection carries one exchange: the client sends one request line, the server answers with any number of output
   * lines and one final line, then closes. Lines end with `\n` and are UTF-8.
   *
-  *   - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>`;
-  *     words are separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
+  *   - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>` |
+  *     `servos <robotId>`; words are separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
   *   - answer: `. <text>` for each line of output, then `ok <text>` or `error <text>`.
   *
   * Words escape `\` as `\\`, a space as `\s` and other control characters as `\uXXXX`; answer texts keep their spaces.
@@ -45,6 +45,9 @@ object ControlProtocol {
     /** A robot's status stream for `seconds`. */
     final case class Watch(robotId: Int, seconds: Int) extends Request
 
+    /** A robot's servo table: its latest servo telemetry (docs/protocol.md 6.8), one line per servo. */
+    final case class Servos(robotId: Int) extends Request
+
     /** The gateway's and the machine's checks, each problem with its fix ([[apps.Doctor]]). `configFile` stays with
       * robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories) itself.
       */
@@ -73,6 +76,7 @@ object ControlProtocol {
       |       robotctl [--control host:port] call <robotId> <module> <method> [param ...]
       |                                         (numbers become floats, true/false flags, else text)
       |       robotctl [--control host:port] watch <robotId> [seconds]   (the robot's status stream; default 10 s)
+      |       robotctl [--control host:port] servos <robotId>            (the robot's servo table)
       |       robotctl [--control host:port] doctor [config-file]        (what is wrong, each with its fix;
       |                                                                   exit 0 when all is well)
       |The gateway's control port is --control, else $NAOGATEWAY_CONTROL, else 127.0.0.1:11019.""".stripMargin
@@ -87,6 +91,7 @@ object ControlProtocol {
   def parse(args: Seq[String]): Either[String, Request] = args.toList match {
     case "status" :: Nil                      => Right(Request.Status)
     case "doctor" :: file if file.sizeIs <= 1 => Right(Request.Doctor(file.headOption))
+    case "servos" :: id :: Nil                => robotId(id).map(Request.Servos(_))
     case "call" :: id :: module :: method :: params =>
       robotId(id).map(Request.Call(_, module, method, params.map(param).toVector))
     case "watch" :: id :: rest if rest.sizeIs <= 1 =>
@@ -105,6 +110,7 @@ object ControlProtocol {
     case Request.Status          => "status"
     case Request.Doctor(_)       => "doctor"
     case Request.Watch(id, secs) => s"watch $id $secs"
+    case Request.Servos(id)      => s"servos $id"
     case Request.Call(id, module, method, params) =>
       (Vector("call", id.toString, escapeWord(module), escapeWord(method)) ++ params.map(renderParam)).mkString(" ")
   }
@@ -126,6 +132,8 @@ object ControlProtocol {
       line.split(" ", -1).toList match {
         case "status" :: Nil => Right(Request.Status)
         case "doctor" :: Nil => Right(Request.Doctor(None))
+        case "servos" :: id :: Nil =>
+          robotId(id).left.map(_ => s"robot id '${printable(id)}' is not a number").map(Request.Servos(_))
         case "watch" :: id :: seconds :: Nil =>
           for {
             robot <- robotId(id)

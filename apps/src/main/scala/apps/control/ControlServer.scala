@@ -293,6 +293,14 @@ object ControlServer {
                  else Answer.Error(s"$problems problem(s), each with its fix above"))
             }
         }
+      case Request.Servos(id) =>
+        val limits = robotmiddleware.MiddlewareSettings(system).servoLimits
+        Source.future(robots.robots()).mapConcat { all =>
+          all.find(_.robotId == id) match {
+            case None    => List(Answer.Error(RobotFailure.UnknownRobot(id).getMessage))
+            case Some(r) => servoLines(r, limits, System.nanoTime()).map(Answer.Line(_)) :+ Answer.Ok("")
+          }
+        }
       case Request.Watch(id, seconds) =>
         if (seconds.seconds > settings.maxWatch)
           Source.single(Answer.Error(s"a watch lasts at most ${settings.maxWatch.toSeconds} s"))
@@ -376,4 +384,32 @@ object ControlServer {
       f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift" +
       (if (row.report.development) " development build" else "")
   }
+
+  /** A robot's servo table (docs/protocol.md 6.8) at `now` (the gateway's `System.nanoTime`): a line saying how old it
+    * is, then one line per servo (id, position raw and in degrees, load, voltage, temperature), `silent`, `HOT`, `LOW
+    * VOLTAGE` and a servo's error byte marked; one line saying so when the robot has sent none.
+    */
+  def servoLines(r: RobotSnapshot, limits: robotmiddleware.ServoLimits, now: Long): List[String] =
+    r.servos match {
+      case None => List(s"robot ${r.robotId}: no servo telemetry" + (if (r.online) " yet" else " (offline)"))
+      case Some(t) =>
+        val age = math.max(0L, now - t.receivedAtNanos) / 1000000L
+        s"robot ${r.robotId}: ${t.servos.size} servos, read $age ms ago" +
+          t.busErrors.fold("")(n => s", $n bus errors since power-up") ::
+          f"${"id"}%-4s ${"position"}%-14s ${"load"}%-6s ${"voltage"}%-8s ${"temp"}%-6s" ::
+          t.servos.toList.map { servo =>
+            if (servo.silent) f"${servo.id}%-4d silent"
+            else {
+              val position = servo.position.fold("-")(p => p.toString + servo.degrees.fold("")(d => f" ($d%+.0f°)"))
+              val marks = Vector(
+                Option.when(limits.hot(servo))("HOT"),
+                Option.when(limits.lowVoltage(servo))("LOW VOLTAGE"),
+                Option.when(servo.error != 0)(f"error 0x${servo.error}%02x")
+              ).flatten
+              f"${servo.id}%-4d $position%-14s ${servo.load.fold("-")(_.toString)}%-6s " +
+                f"${servo.voltage.fold("-")(v => f"$v%.1f V")}%-8s ${servo.temperature.fold("-")(c => s"$c °C")}%-6s" +
+                (if (marks.isEmpty) "" else marks.mkString(" ", ", ", ""))
+            }
+          }
+    }
 }

@@ -22,11 +22,12 @@ import robotmiddleware.RobotMiddleware
 
 /** The live feed in the Foxglove WebSocket protocol (subprotocol `foxglove.sdk.v1` of the Foxglove SDK, or
   * `foxglove.websocket.v1` of the earlier ws-protocol; docs/web.md): the recording's robot channels
-  * `/robot/<id>/status` and `/robot/<id>/health` with the recording's protobuf schemas, and its `/gateway/decisions`
-  * channel (JSON, as recorded) with the decisions published live (robot events and game states from the middleware, the
-  * budget once a second from the gateway's read-only view), so a viewer connected to the running gateway shows what it
-  * shows for a recording. Each keep-alive is published as the gateway read it ([[naogateway.wire.RobotReport]], the one
-  * mapping between the messages and a robot's report).
+  * `/robot/<id>/status`, `/robot/<id>/health` and `/robot/<id>/servos` (each new servo telemetry, docs/protocol.md 6.8)
+  * with the recording's protobuf schemas, and its `/gateway/decisions` channel (JSON, as recorded) with the decisions
+  * published live (robot events and game states from the middleware, the budget once a second from the gateway's
+  * read-only view), so a viewer connected to the running gateway shows what it shows for a recording. Each keep-alive
+  * is published as the gateway read it ([[naogateway.wire.RobotReport]], the one mapping between the messages and a
+  * robot's report).
   */
 object FoxgloveFeed {
 
@@ -51,6 +52,9 @@ object FoxgloveFeed {
     * is the recording's descriptor set; a JSON channel has none, as in the recording).
     */
   final case class Channel(id: Int, topic: String, schemaName: String, encoding: String = "protobuf")
+
+  /** A robot's channels, and when the servo telemetry last published was received (`RobotSnapshot.servos`). */
+  private final case class RobotChannels(status: Channel, health: Channel, servos: Channel, servosAt: Option[Long])
 
   /** The gateway's decisions as the recording writes them (JSON without a schema). */
   private[web] val Decisions: Channel = Channel(1, RecordingSchema.Topics.Decisions, "", "json")
@@ -109,7 +113,7 @@ object FoxgloveFeed {
     }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed],
-      robots: Map[Int, (Channel, Channel)],
+      robots: Map[Int, RobotChannels],
       channels: Vector[Channel], askTraffic: () => Unit): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
@@ -135,17 +139,23 @@ object FoxgloveFeed {
         // As in a recording, at most MaxRobotChannels robots get channels: a flood of robot ids cannot grow the list.
         if (known.isEmpty && robots.size >= RecordingSchema.MaxRobotChannels) Behaviors.same
         else {
-          val ((status, health), more) = known.fold {
+          val (robot, more) = known.fold {
             val status = Channel(channels.size + 1, RecordingSchema.Topics.status(id), "naogateway.proto.Status")
             val health = Channel(channels.size + 2, RecordingSchema.Topics.health(id), "naogateway.proto.RobotHealth")
-            queue.offer(Advertised(Vector(status, health)))
-            ((status, health), Vector(status, health))
-          }(pair => (pair, Vector.empty))
+            val servos =
+              Channel(channels.size + 3, RecordingSchema.Topics.servos(id), "naogateway.proto.ServoTelemetry")
+            queue.offer(Advertised(Vector(status, health, servos)))
+            (RobotChannels(status, health, servos, None), Vector(status, health, servos))
+          }(r => (r, Vector.empty))
           val nanos = System.currentTimeMillis() * 1000000L
           val report = snapshot.report
-          queue.offer(Published(status, nanos, report.status.toByteArray))
-          queue.offer(Published(health, nanos, report.health.toByteArray))
-          running(queue, hub, robots.updated(id, (status, health)), channels ++ more, askTraffic)
+          queue.offer(Published(robot.status, nanos, report.status.toByteArray))
+          queue.offer(Published(robot.health, nanos, report.health.toByteArray))
+          // Each telemetry once, as the robot sent it: the snapshot keeps it over keep-alives without one.
+          val servosAt = snapshot.servos.map(_.receivedAtNanos)
+          snapshot.servos.filter(_ => servosAt != robot.servosAt).foreach(t =>
+            queue.offer(Published(robot.servos, nanos, t.toProto.toByteArray)))
+          running(queue, hub, robots.updated(id, robot.copy(servosAt = servosAt)), channels ++ more, askTraffic)
         }
     }.receiveSignal { case (_, PostStop) =>
       queue.complete()

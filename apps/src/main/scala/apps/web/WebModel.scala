@@ -18,10 +18,12 @@ import naogateway.{
   RobotRestarted,
   RobotSnapshot,
   RobotStatusUpdated,
+  ServoReadings,
   GameStateUpdated,
   TrafficStats
 }
 import apps.StatusView
+import robotmiddleware.ServoLimits
 
 /** One point of a robot's plots: seconds since the view started, battery (V), round-trip time (ms), loss (0 to 1). */
 final case class RobotSample(t: Double, battery: Option[Double], rttMillis: Option[Double], loss: Option[Double])
@@ -54,7 +56,8 @@ final case class WebModel(
     events: Vector[WebEvent] = Vector.empty,
     vision: Map[Int, VisionView] = Map.empty,
     eventCount: Long = 0L,
-    sampleCount: Long = 0L
+    sampleCount: Long = 0L,
+    servoLimits: ServoLimits = ServoLimits()
 ) {
 
   /** The model with `event` at the head of the log (newest first), the oldest dropped past `maxEvents`. */
@@ -173,11 +176,12 @@ object WebJson {
   // A string a robot or a peer wrote, with its control characters replaced before it reaches the page.
   private def text(s: String): JsValue = JsString(naogateway.Printable.text(s))
 
-  /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind, and
-    * the GameController's penalty when `game` has taken it off the game (the status screen's rule, StatusView.penalty).
+  /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind, the
+    * GameController's penalty when `game` has taken it off the game (the status screen's rule, StatusView.penalty), and
+    * its servo table, each servo marked hot or low on voltage by `limits`.
     */
   def robot(r: RobotSnapshot, link: Option[LinkStats], signing: Option[String],
-      game: Option[GameControlData] = None): JsObject = {
+      game: Option[GameControlData] = None, limits: ServoLimits = ServoLimits()): JsObject = {
     val row = apps.RobotRow.of(r, link)
     JsObject(
       "id" -> JsNumber(row.robotId),
@@ -206,9 +210,31 @@ object WebJson {
       "penalty" -> opt(StatusView.penalty(r, game)) { p =>
         JsObject("name" -> JsString(p.name), "secondsLeft" -> JsNumber(p.secsTillUnpenalised))
       },
-      "refused" -> JsObject(row.refused.map { case (k, v) => k -> JsNumber(v) })
+      "refused" -> JsObject(row.refused.map { case (k, v) => k -> JsNumber(v) }),
+      "servos" -> opt(r.servos)(servos(_, limits))
     )
   }
+
+  /** A robot's servo table (docs/protocol.md 6.8): per servo its id, raw position and degrees from centre, load,
+    * voltage (V), temperature (°C), error byte, and whether it is silent, hot or low on voltage.
+    */
+  def servos(t: ServoReadings, limits: ServoLimits): JsObject = JsObject(
+    "busErrors" -> opt(t.busErrors)(JsNumber(_)),
+    "list" -> JsArray(t.servos.map { s =>
+      JsObject(
+        "id" -> JsNumber(s.id),
+        "position" -> opt(s.position)(JsNumber(_)),
+        "degrees" -> opt(s.degrees)(num),
+        "load" -> opt(s.load)(JsNumber(_)),
+        "voltage" -> opt(s.voltage)(num),
+        "temperature" -> opt(s.temperature)(JsNumber(_)),
+        "error" -> JsNumber(s.error),
+        "silent" -> JsBoolean(s.silent),
+        "hot" -> JsBoolean(limits.hot(s)),
+        "lowVoltage" -> JsBoolean(limits.lowVoltage(s))
+      )
+    })
+  )
 
   /** The game: GameController version and source, state, time, score, gate and traffic. */
   def game(m: WebModel): JsObject = JsObject(
@@ -276,7 +302,8 @@ object WebJson {
     "type" -> JsString(if (hello) "hello" else "push"),
     "t" -> num(t),
     "historyPoints" -> JsNumber(m.historyPoints),
-    "robots" -> JsArray(m.robots.map(r => robot(r, m.links.get(r.robotId), m.signing.get(r.robotId), m.game))),
+    "robots" -> JsArray(
+      m.robots.map(r => robot(r, m.links.get(r.robotId), m.signing.get(r.robotId), m.game, m.servoLimits))),
     "game" -> game(m),
     "vision" -> JsObject(m.vision.map { case (id, v) => id.toString -> vision(v, grids(id)) }),
     "events" -> JsArray(m.events.take(newEvents).map(event)),

@@ -85,8 +85,19 @@ object WebView {
         // The game comes as the GameController sends it, so a new state reaches the page at once, not at the next tick.
         middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
         new View(gateway, middleware, settings, context, queue, hub).running(State(
-            WebModel(settings.historyPoints, settings.events), 0L, 0L, answered = true, Set.empty, 0, None, Map.empty,
-            0L, 0L, Figures(0, 0, 0)))
+            WebModel(settings.historyPoints, settings.events,
+              servoLimits = robotmiddleware.MiddlewareSettings(context.system).servoLimits),
+            0L,
+            0L,
+            answered = true,
+            Set.empty,
+            0,
+            None,
+            Map.empty,
+            0L,
+            0L,
+            Figures(0, 0, 0)
+          ))
       }
     }
 

@@ -33,6 +33,7 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
   private val anyRequest: Gen[Request] = Gen.oneOf(
     Gen.const(Request.Status),
     for { id <- Gen.choose(Int.MinValue, Int.MaxValue); s <- Gen.choose(1, Int.MaxValue) } yield Request.Watch(id, s),
+    Gen.choose(Int.MinValue, Int.MaxValue).map(Request.Servos(_)),
     for {
       id <- Gen.choose(Int.MinValue, Int.MaxValue)
       module <- anyText
@@ -129,6 +130,36 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       ControlProtocol.parse(Seq("status")) shouldBe Right(Request.Status)
       ControlProtocol.parse(Seq("watch", "3", "5", "6")) shouldBe Left(ControlProtocol.usage)
       ControlProtocol.parse(Seq("call", "2", "motion")) shouldBe Left(ControlProtocol.usage)
+    }
+  }
+
+  "A servo table" should {
+    "show each servo's figures, silent, hot, low-voltage and error marks, and say when there is none" in {
+      val at = 5000000000L
+      val robot = naogateway.RobotSnapshot(
+        2,
+        new java.net.InetSocketAddress("127.0.0.1", 3838),
+        online = true,
+        servos = Some(naogateway.ServoReadings(
+            Vector(
+              naogateway.ServoReading(1, Some(512), Some(-40), Some(12.1), Some(41)),
+              naogateway.ServoReading(2, Some(614), Some(300), Some(9.8), Some(66), error = 32),
+              naogateway.ServoReading(3, silent = true)
+            ),
+            Some(4L),
+            at - 250000000L
+          ))
+      )
+      val lines = ControlServer.servoLines(robot, robotmiddleware.ServoLimits(65, 10.0), at)
+      lines.head shouldBe "robot 2: 3 servos, read 250 ms ago, 4 bus errors since power-up"
+      lines(2) should (startWith("1 ") and include("512 (+0°)") and include("-40") and include("12.1 V") and
+        include("41 °C"))
+      lines(2) should not include "HOT"
+      lines(3) should (include("614 (+30°)") and include("HOT, LOW VOLTAGE, error 0x20"))
+      lines(4) shouldBe "3    silent"
+      ControlServer.servoLines(robot.copy(servos = None), robotmiddleware.ServoLimits(), at) shouldBe List(
+        "robot 2: no servo telemetry yet")
+      ControlProtocol.parse(Seq("servos", "2")) shouldBe Right(Request.Servos(2))
     }
   }
 

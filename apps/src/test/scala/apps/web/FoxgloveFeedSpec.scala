@@ -105,6 +105,37 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
       } finally client.close()
     }
 
+    "advertise /robot/<id>/servos, and send robot 1's servo telemetry decodable with the advertised schema" in {
+      val client = new Client()
+      try {
+        eventually(timeout(30.seconds), interval(200.millis)) {
+          client.channels.map(_.fields("topic")) should contain(JsString("/robot/1/servos"))
+        }
+        val channel = client.channels.find(_.fields("topic") == JsString("/robot/1/servos")).get
+        channel.fields("encoding") shouldBe JsString("protobuf")
+        channel.fields("schemaName") shouldBe JsString("naogateway.proto.ServoTelemetry")
+        val channelId = channel.fields("id").asInstanceOf[JsNumber].value.toInt
+        client.send(s"""{"op":"subscribe","subscriptions":[{"id":9,"channelId":$channelId}]}""")
+        // The simulated robots send their telemetry once a second.
+        eventually(timeout(10.seconds), interval(100.millis))(client.binaries should not be empty)
+        val frame = client.binaries.head.toByteBuffer.order(ByteOrder.LITTLE_ENDIAN)
+        frame.get() shouldBe 1
+        frame.getInt() shouldBe 9
+        frame.getLong()
+        val payload = new Array[Byte](frame.remaining())
+        frame.get(payload)
+        val schema = Base64.getDecoder.decode(channel.fields("schema").asInstanceOf[JsString].value)
+        val telemetry = DynamicMessage.parseFrom(descriptor(schema, "naogateway.proto.ServoTelemetry"), payload)
+        val servos = telemetry.getField(telemetry.getDescriptorForType.findFieldByName("servos"))
+          .asInstanceOf[java.util.List[DynamicMessage]].asScala
+        servos.size shouldBe 18
+        val first = servos.head
+        first.getField(first.getDescriptorForType.findFieldByName("id")) shouldBe 1
+        val volts = first.getField(first.getDescriptorForType.findFieldByName("voltage")).asInstanceOf[Int]
+        volts should (be > 90 and be < 130) // tenths of a volt, as the robot sent them
+      } finally client.close()
+    }
+
     "advertise /gateway/decisions as JSON, and send game states and the budget as the recording writes them" in {
       val client = new Client()
       try {

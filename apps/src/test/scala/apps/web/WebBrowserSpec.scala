@@ -66,6 +66,13 @@ class WebBrowserSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
           js[Long](driver, RegionPixels) should be >= 8L
         }
         driver.findElements(By.cssSelector("#events li.event-online")).asScala.size should be >= 3
+        // Each simulated robot's 18 servos (its keep-alive's telemetry, once a second) in its card's servo table.
+        eventually(timeout(20.seconds), interval(250.millis)) {
+          js[Long](driver, "return window.naogateway.servoRows[1] || 0") shouldBe 18L
+          val rows = driver.findElements(By.cssSelector("#robot-1 table.robot-servos tbody tr")).asScala
+          rows.size shouldBe 18
+          rows.head.findElements(By.tagName("td")).asScala.map(_.getText).last should endWith("°C")
+        }
         /* Each card's clock line, drawn by the page from the push: a drift (settled) or `drift settling`, and the
          * offset. */
         eventually(timeout(20.seconds), interval(250.millis)) {

@@ -7,7 +7,18 @@ import org.scalatest.wordspec.AnyWordSpec
 import spray.json._
 
 import naogateway.wire.HaViMoRegion
-import naogateway.{Gateway, LinkQuality, LinkStats, Outbox, RobotOffline, RobotOnline, RobotSnapshot}
+import naogateway.{
+  Gateway,
+  LinkQuality,
+  LinkStats,
+  Outbox,
+  RobotOffline,
+  RobotOnline,
+  RobotSnapshot,
+  ServoReading,
+  ServoReadings
+}
+import robotmiddleware.ServoLimits
 
 /** The web view's model without actors: what it keeps, what it logs, and the JSON it renders. */
 class WebModelSpec extends AnyWordSpec with Matchers {
@@ -59,6 +70,44 @@ class WebModelSpec extends AnyWordSpec with Matchers {
       card.fields("development") shouldBe JsBoolean(false)
       WebJson.robot(three.copy(teamId = Some(7)), None, None, game).fields("penalty") shouldBe JsNull
       WebJson.robot(three, None, None, None).fields("penalty") shouldBe JsNull
+    }
+
+    "put the servo table on a robot's card, hot, low-voltage and silent servos marked" in {
+      val servos = ServoReadings(
+        Vector(
+          ServoReading(1, Some(512), Some(-40), Some(12.1), Some(41)),
+          ServoReading(2, Some(0), Some(300), Some(9.8), Some(65), error = 32),
+          ServoReading(3, silent = true)),
+        Some(4L),
+        0L
+      )
+      val card = WebJson.robot(robot(1).copy(servos = Some(servos)), None, None, None, ServoLimits(65, 10.0))
+      val table = card.fields("servos").asJsObject
+      table.fields("busErrors") shouldBe JsNumber(4)
+      val rows = table.fields("list").asInstanceOf[JsArray].elements.map(_.asJsObject.fields)
+      rows.map(_("id")) shouldBe Vector(JsNumber(1), JsNumber(2), JsNumber(3))
+      rows(0)("position") shouldBe JsNumber(512)
+      rows(0)("degrees") shouldBe JsNumber(0.0)
+      rows(0)("load") shouldBe JsNumber(-40)
+      rows(0)("voltage") shouldBe JsNumber(12.1)
+      rows(0)("temperature") shouldBe JsNumber(41)
+      rows.map(r => (r("hot"), r("lowVoltage"), r("silent"))) shouldBe Vector(
+        (JsFalse, JsFalse, JsFalse), (JsTrue, JsTrue, JsFalse), (JsFalse, JsFalse, JsTrue))
+      rows(1)("error") shouldBe JsNumber(32)
+      rows(2)("position") shouldBe JsNull
+      // Other limits, other marks; no telemetry, no table.
+      val lenient = WebJson.robot(robot(1).copy(servos = Some(servos)), None, None, None, ServoLimits(70, 9.0))
+      lenient.fields("servos").asJsObject.fields("list").asInstanceOf[JsArray].elements(1).asJsObject.fields(
+        "hot") shouldBe
+        JsFalse
+      WebJson.robot(robot(1), None, None).fields("servos") shouldBe JsNull
+      // The push renders with the model's limits.
+      val pushed =
+        blank.copy(servoLimits = ServoLimits(40, 10.0)).withRobots(Vector(robot(1).copy(servos = Some(servos))))
+      val first = WebJson.push(pushed, 0, 0, 0, Set.empty, hello = true).parseJson.asJsObject.fields("robots")
+        .asInstanceOf[JsArray].elements.head.asJsObject.fields("servos").asJsObject.fields("list")
+        .asInstanceOf[JsArray].elements.head.asJsObject.fields("hot")
+      first shouldBe JsTrue
     }
 
     "keep frames only of robots it lists, and drop a robot's plots and frame with it" in {

@@ -266,7 +266,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     private val statusSchema = writer.addSchema("naogateway.proto.Status", "protobuf", descriptorSet)
     private val healthSchema = writer.addSchema("naogateway.proto.RobotHealth", "protobuf", descriptorSet)
     private val messageSchema = writer.addSchema("naogateway.proto.Message", "protobuf", descriptorSet)
-    // Per robot id: its status, health and message channels, made when first needed; at most MaxRobotChannels robots.
+    private val servosSchema = writer.addSchema("naogateway.proto.ServoTelemetry", "protobuf", descriptorSet)
+    // Per robot id: its status, health, message and servos channels, made when first needed; at most MaxRobotChannels
+    // robots.
     private val robots = mutable.LongMap.empty[Array[Int]]
     private val encoder = new Encoder
 
@@ -278,7 +280,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
     def close(): Unit = writer.close()
 
-    /** Robot `robotId`'s status, health and message channels; null when the file has no room for another robot. */
+    /** Robot `robotId`'s status, health, message and servos channels; null when the file has no room for another robot.
+      */
     private def robotChannels(robotId: Int): Array[Int] = {
       val known = robots.getOrNull(robotId.toLong)
       if ((known ne null) || robots.size >= MaxRobotChannels) known
@@ -286,7 +289,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         val ids = Array(
           writer.addChannel(Topics.status(robotId), "protobuf", statusSchema, Map("robotID" -> robotId.toString)),
           writer.addChannel(Topics.health(robotId), "protobuf", healthSchema, Map("robotID" -> robotId.toString)),
-          writer.addChannel(Topics.message(robotId), "protobuf", messageSchema, Map("robotID" -> robotId.toString))
+          writer.addChannel(Topics.message(robotId), "protobuf", messageSchema, Map("robotID" -> robotId.toString)),
+          writer.addChannel(Topics.servos(robotId), "protobuf", servosSchema, Map("robotID" -> robotId.toString))
         )
         robots(robotId.toLong) = ids
         ids
@@ -319,7 +323,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
               writer.write(ids(0), time, published, encoder.bytes, 0, encoder.message(s))
             }
             c.robotHealth.foreach(h => writer.write(ids(1), time, time, encoder.bytes, 0, encoder.message(h)))
-            // Anything beyond a keep-alive's status and health goes on the message channel, whole.
+            c.servoTelemetry.foreach(t => writer.write(ids(3), time, time, encoder.bytes, 0, encoder.message(t)))
+            // Anything beyond a keep-alive's status, health and servo telemetry goes on the message channel, whole.
             if (c.debuggingCommands.isDefined || c.debugData.isDefined || c.havimoRegions.isDefined ||
               c.havimoGrid.isDefined || c.rpcRequest.isDefined || c.rpcResponse.isDefined ||
               c.unknownExtensions.nonEmpty)

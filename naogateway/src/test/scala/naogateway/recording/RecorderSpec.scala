@@ -12,7 +12,15 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort, RobotHealth, Status}
+import naogateway.proto.{
+  RecordedDatagram,
+  RecordedDirection,
+  RecordedPort,
+  RobotHealth,
+  ServoState,
+  ServoTelemetry,
+  Status
+}
 import naogateway.wire.gamecontroller.GameState
 
 class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
@@ -54,6 +62,30 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
       recording.stats.messages shouldBe 1L
       val contents = McapReader.read(Files.readAllBytes(files(dir).head))
       new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
+    }
+
+    "put a keep-alive's servo telemetry on /robot/<id>/servos, not on the message channel" in {
+      val dir = Files.createTempDirectory("recorder-spec")
+      val recording = Recording(settings(dir), "recorder-spec-servos")
+      val telemetry = ServoTelemetry(Vector(ServoState(1, Some(512), Some(-40), Some(121), Some(41)),
+          ServoState(2, silent = Some(true))), busErrors = Some(1))
+      val keepAlive = naogateway.wire.MessageContents(2, status = Some(Status(teamID = Some(1))),
+        robotHealth = Some(RobotHealth(uptimeMs = Some(1000))), servoTelemetry = Some(telemetry))
+      val plain = keepAlive.copy(servoTelemetry = None)
+      Seq(keepAlive, plain).foreach { c =>
+        recording.datagram(RecordedPort.ROBOT_PORT, received = true, from, to,
+          naogateway.wire.MessageContents.encodeFrame(c).toOption.get, 2)
+      }
+      recording.close()
+      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+      def channel(topic: String) = contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no $topic"))
+      def on(topic: String) = contents.messages.filter(_.channelId == channel(topic).id)
+      val servos = channel(Recording.Topics.servos(2))
+      servos.topic shouldBe "/robot/2/servos"
+      contents.schemas(servos.schemaId).name shouldBe "naogateway.proto.ServoTelemetry"
+      on("/robot/2/servos").map(m => ServoTelemetry.parseFrom(m.data)) shouldBe Vector(telemetry)
+      on("/robot/2/status") should have size 2
+      on("/robot/2/message") shouldBe empty
     }
 
     "count entries it cannot write when the directory cannot be made, without failing" in {

@@ -371,7 +371,15 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       quality = toProto(s.quality),
       receivedAtNanos = s.receivedAtNanos,
       development = Option.when(s.development)(true),
-      signing = Some(toProto(s.signing))
+      signing = Some(toProto(s.signing)),
+      servos = s.servos.map(t =>
+        pb.ServoReadings(
+          t.servos.map(r =>
+            pb.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, Option.when(r.error != 0)(r.error),
+              Option.when(r.silent)(true))),
+          t.busErrors,
+          t.receivedAtNanos
+        ))
     )
 
   private def fromProto(s: pb.RobotSnapshot): RobotSnapshot =
@@ -390,7 +398,15 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       quality = fromProto(s.quality),
       receivedAtNanos = s.receivedAtNanos,
       development = s.development.contains(true),
-      signing = s.signing.fold[SigningState](SigningState.Off)(fromProto)
+      signing = s.signing.fold[SigningState](SigningState.Off)(fromProto),
+      servos = s.servos.map(t =>
+        naogateway.ServoReadings(
+          t.servos.iterator.take(naogateway.ServoReadings.MaxServos).map(r =>
+            naogateway.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, r.error.getOrElse(0),
+              r.silent.contains(true))).toVector,
+          t.busErrors,
+          t.receivedAtNanos
+        ))
     )
 
   private def toProto(r: HaViMoRegion): pb.HaViMoRegion =

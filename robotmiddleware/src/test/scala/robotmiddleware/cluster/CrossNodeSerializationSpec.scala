@@ -273,6 +273,13 @@ object CrossNodeSerializationSpec {
       snapshot.copy(
         posture = Some(Posture.reported("kneeling"))), // a posture this build does not know crosses as reported
       RobotSnapshot(9, unresolved),
+      snapshot.copy(servos = Some(ServoReadings(
+          Vector(ServoReading(1, Some(512), Some(-40), Some(12.1), Some(41)), ServoReading(2, silent = true),
+            ServoReading(3, Some(0), Some(1023), Some(9.6), Some(70), error = 32)),
+          Some(4L),
+          987654000L
+        ))),
+      snapshot.copy(servos = Some(ServoReadings(Vector.empty, None, 1L))),
       linkStats,
       linkStats.copy(rttMillis = None, rejected = Map.empty),
       regions,

@@ -8,7 +8,10 @@ import naogateway.proto._
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameControlData
 
-/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. */
+/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. `servoTelemetryInterval`: one
+  * keep-alive per interval carries servo telemetry (docs/protocol.md 6.8; zero turns it off); `servoSource` gives the
+  * servos it reads (an emulated bus's `servos`), None the built-in model of 18 servos (`ServoModel`).
+  */
 final case class FirmwareSettings(
     robotId: Int,
     teamId: Int = 1,
@@ -33,7 +36,9 @@ final case class FirmwareSettings(
     headerForm: HeaderForm = HeaderForm.Legacy,
     clock: RobotClock = RobotClock.Exact,
     signingKey: Option[SigningKey] = None,
-    development: Boolean = false
+    development: Boolean = false,
+    servoTelemetryInterval: FiniteDuration = 1000.millis,
+    servoSource: Option[() => Seq[ServoState]] = None
 ) {
   require(robotId >= 0, s"robotId must not be negative, got $robotId")
 
@@ -43,6 +48,7 @@ final case class FirmwareSettings(
   lazy val robotKey: Option[RobotKey] = signingKey.map(_.robotKey(robotId))
   require(keepAliveInterval > Duration.Zero, "keepAliveInterval must be positive")
   require(walkLease > Duration.Zero, "walkLease must be positive")
+  require(servoTelemetryInterval >= Duration.Zero, "servoTelemetryInterval must not be negative")
   require(cameraInterval.toNanos >= 1000000000L / HaViMo.MaxFramesPerSecond,
     s"the HaViMo2 delivers at most ${HaViMo.MaxFramesPerSecond} frames/s")
 }
@@ -108,7 +114,8 @@ final case class FirmwareState(
     game: Option[GameControlData],
     stats: FirmwareStats,
     framesSigned: Long = 0L,
-    gatewayWindow: ReplayWindow = ReplayWindow.empty
+    gatewayWindow: ReplayWindow = ReplayWindow.empty,
+    nextServoTelemetryAt: Long = Long.MinValue
 ) {
 
   /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */

@@ -88,8 +88,17 @@ object RobotFirmware {
       s = s.copy(walk = None, posture = Posture.Stand)
     }
     if (s.nextKeepAliveAt <= now) {
-      out += Outgoing(encode(s, keepAlive(s)), Destination.Gateway)
+      // Servo telemetry rides on the first keep-alive of each telemetry period (protocol.md 6.8).
+      val period = s.settings.servoTelemetryInterval
+      val telemetry = period > Duration.Zero && s.nextServoTelemetryAt <= now
+      val contents = keepAlive(s)
+      out += Outgoing(encode(s, if (telemetry) contents.copy(servoTelemetry = Some(servoTelemetry(s))) else contents),
+        Destination.Gateway)
       s = s.copy(nextKeepAliveAt = nextSlot(s.nextKeepAliveAt, s.settings.keepAliveInterval, now))
+      if (telemetry)
+        s = s.copy(nextServoTelemetryAt =
+          if (s.nextServoTelemetryAt == Long.MinValue) now + period.toNanos
+          else nextSlot(s.nextServoTelemetryAt, period, now))
     }
     if (s.debugEnabled.exists(o => !CameraOptions(o)) && s.nextDebugAt <= now) {
       debugData(s).foreach(d =>
@@ -365,6 +374,13 @@ object RobotFirmware {
       position = Some(((s.pose.x * 1000).round.toInt, (s.pose.y * 1000).round.toInt, s.pose.theta)),
       development = s.settings.development
     ).contents(s.settings.robotId)
+
+  /** The servo telemetry of `s` (protocol.md 6.8): the configured source's servos, or the built-in model's; at most 32,
+    * as the firmware reads.
+    */
+  def servoTelemetry(s: FirmwareState): ServoTelemetry =
+    ServoTelemetry(s.settings.servoSource.fold[Seq[ServoState]](ServoModel.servos(s))(_()).take(32).toVector,
+      busErrors = Some(0))
 
   private def debugData(s: FirmwareState): Vector[DebugData] = {
     val ts = Some(s.uptimeMillis)

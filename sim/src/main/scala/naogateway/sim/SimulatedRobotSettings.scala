@@ -67,6 +67,13 @@ final case class SimulatedRobotSettings(
     */
   def withStream(settings: StreamSettings = StreamSettings.thesis): SimulatedRobotSettings =
     copy(stream = Some(SecureStreamRobotStream.factory(settings)))
+
+  /** These settings with the servo telemetry (docs/protocol.md 6.8) read from `servos` (an emulated bus's `servos`)
+    * once every `interval` instead of the built-in model.
+    */
+  def withServos(servos: () => Seq[naogateway.proto.ServoState],
+      interval: FiniteDuration = firmware.servoTelemetryInterval): SimulatedRobotSettings =
+    copy(firmware = firmware.copy(servoSource = Some(servos), servoTelemetryInterval = interval))
 }
 
 /** Defaults of [[SimulatedRobotSettings]]. */

@@ -211,7 +211,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
   }
 
   "The extension tables" should {
-    val extensions = Seq(MessageProto, DebuggingProto, HavimoProto, RpcProto)
+    val extensions = Seq(MessageProto, DebuggingProto, HavimoProto, RpcProto, BodyProto)
       .flatMap(_.javaDescriptor.getExtensions.asScala)
       .map(f => (f.getNumber, f.getName, f.getMessageType.getName, Paths.get(f.getFile.getName).getFileName.toString))
     "list exactly the extensions of the .proto files, with their numbers, messages and files" in {
@@ -227,6 +227,7 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
       byName("robotHealth") shouldBe MessageContents.RobotHealthField
       byName("rpcRequest") shouldBe MessageContents.RpcRequestField
       byName("rpcResponse") shouldBe MessageContents.RpcResponseField
+      byName("servoTelemetry") shouldBe MessageContents.ServoTelemetryField
       all((byName - "status").values) should (be >= MessageContents.ProjectRange.start and
         be <= MessageContents.ProjectRange.end)
     }
@@ -567,7 +568,10 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
 
   /** The simulated robot 1 with default settings, booted at 0 and advanced in 200 ms steps up to 5000 ms. */
   private def keepAliveAt5000: (FirmwareState, Vector[Outgoing]) =
-    (0 to 5000 by 200).foldLeft((RobotFirmware.boot(FirmwareSettings(robotId = 1), 0L), Vector.empty[Outgoing])) {
+    // Servo telemetry off, as 9.13 says: the example shows Status and RobotHealth alone.
+    (0 to 5000 by 200).foldLeft((RobotFirmware.boot(
+          FirmwareSettings(robotId = 1, servoTelemetryInterval = scala.concurrent.duration.Duration.Zero), 0L),
+        Vector.empty[Outgoing])) {
       case ((state, _), millis) => RobotFirmware.advance(state, millis * 1000000L)
     }
 

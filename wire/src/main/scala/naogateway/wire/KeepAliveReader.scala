@@ -2,9 +2,10 @@ package naogateway.wire
 
 import java.nio.charset.StandardCharsets
 
-import naogateway.proto.{Position, RobotHealth, Status}
+import naogateway.proto.{Position, RobotHealth, ServoState, ServoTelemetry, Status}
 
-/** The one-pass reading of the keep-alive's shape: `robotID`, `Status` (with its `Position`) and `RobotHealth`.
+/** The one-pass reading of the keep-alive's shape: `robotID`, `Status` (with its `Position`), `RobotHealth` and
+  * `ServoTelemetry`.
   *
   * Every keep-alive used to be read twice: once by `WireRules.normalize` to check the rules of docs/protocol.md §5,
   * once by the decoder. This reader applies the same rules while it decodes, straight from the array. It takes only
@@ -20,6 +21,7 @@ private[wire] object KeepAliveReader {
   private final val RobotIdTag = 8 // Message.robotID (1), varint
   private final val StatusTag = 186 // MessageContents.StatusField (23), length-delimited
   private final val RobotHealthTag = 56842 // MessageContents.RobotHealthField (7105), length-delimited
+  private final val ServoTelemetryTag = 56850 // MessageContents.ServoTelemetryField (7106), length-delimited
 
   /** Where a reading stands: a position in the array, and where the current message ends. */
   private final class Cursor(val bytes: Array[Byte], var at: Int, var end: Int) {
@@ -101,11 +103,14 @@ private[wire] object KeepAliveReader {
     var seenRobotId = false
     var status: Status = null
     var health: RobotHealth = null
+    var servos: ServoTelemetry = null
     while (true) {
       in.tag() match {
         case 0 =>
           return if (!seenRobotId) null
-          else MessageContents(robotId, status = Option(status), robotHealth = Option(health))
+          else
+            MessageContents(robotId, status = Option(status), robotHealth = Option(health),
+              servoTelemetry = Option(servos))
         case RobotIdTag =>
           val v = in.varint()
           if (!in.ok || !fitsInt32(v)) return null
@@ -117,6 +122,9 @@ private[wire] object KeepAliveReader {
         case RobotHealthTag if health eq null =>
           health = sub(in)(readRobotHealth)
           if (health eq null) return null
+        case ServoTelemetryTag if servos eq null =>
+          servos = sub(in)(readServoTelemetry)
+          if (servos eq null) return null
         case _ => return null
       }
     }
@@ -219,6 +227,64 @@ private[wire] object KeepAliveReader {
         case 32 =>
           val v = in.varint(); if (!in.ok || !fitsUInt32(v)) return null
           bootId = Some(v.toInt)
+        case _ => return null
+      }
+    }
+    null
+  }
+
+  private def readServoTelemetry(in: Cursor): ServoTelemetry = {
+    val servos = Vector.newBuilder[ServoState]
+    var busErrors: Option[Int] = None
+    while (true) {
+      in.tag() match {
+        case 0 => return ServoTelemetry(servos.result(), busErrors)
+        case 10 =>
+          val s = sub(in)(readServoState); if (s eq null) return null
+          servos += s
+        case 16 =>
+          val v = in.varint(); if (!in.ok || !fitsUInt32(v)) return null
+          busErrors = Some(v.toInt)
+        case _ => return null
+      }
+    }
+    null
+  }
+
+  private def readServoState(in: Cursor): ServoState = {
+    var id: Option[Int] = None
+    var position: Option[Int] = None
+    var load: Option[Int] = None
+    var voltage: Option[Int] = None
+    var temperature: Option[Int] = None
+    var error: Option[Int] = None
+    var silent: Option[Boolean] = None
+    def uint32(): Option[Int] = {
+      val v = in.varint()
+      if (!in.ok || !fitsUInt32(v)) None else Some(v.toInt)
+    }
+    while (true) {
+      in.tag() match {
+        // `id` is required: without it the general path gives the error.
+        case 0 => return id.fold[ServoState](null)(ServoState(_, position, load, voltage, temperature, error, silent))
+        case 8 =>
+          id = uint32(); if (id.isEmpty) return null
+        case 16 =>
+          position = uint32(); if (position.isEmpty) return null
+        case 24 =>
+          val v = in.varint()
+          val decoded = (v >>> 1) ^ -(v & 1) // zigzag (sint32)
+          if (!in.ok || !fitsInt32(decoded)) return null
+          load = Some(decoded.toInt)
+        case 32 =>
+          voltage = uint32(); if (voltage.isEmpty) return null
+        case 40 =>
+          temperature = uint32(); if (temperature.isEmpty) return null
+        case 48 =>
+          error = uint32(); if (error.isEmpty) return null
+        case 56 =>
+          val v = in.varint(); if (!in.ok) return null
+          silent = Some(v != 0L)
         case _ => return null
       }
     }

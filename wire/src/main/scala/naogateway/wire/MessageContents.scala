@@ -17,6 +17,7 @@ final case class MessageContents(
     havimoGrid: Option[HaViMoGridFrame] = None,
     rpcRequest: Option[Request] = None,
     rpcResponse: Option[Response] = None,
+    servoTelemetry: Option[ServoTelemetry] = None,
     unknownExtensions: Vector[Int] = Vector.empty
 ) {
 
@@ -29,6 +30,7 @@ final case class MessageContents(
       MessageContents.HavimoRegionsField -> havimoRegions,
       MessageContents.HavimoGridField -> havimoGrid,
       MessageContents.RobotHealthField -> robotHealth,
+      MessageContents.ServoTelemetryField -> servoTelemetry,
       MessageContents.RpcRequestField -> rpcRequest,
       MessageContents.RpcResponseField -> rpcResponse
     )
@@ -64,6 +66,7 @@ final case class MessageContents(
     havimoGrid.foreach(g => message = message.withExtension(HavimoProto.havimoGrid)(Some(g)))
     rpcRequest.foreach(r => message = message.withExtension(RpcProto.rpcRequest)(Some(r)))
     rpcResponse.foreach(r => message = message.withExtension(RpcProto.rpcResponse)(Some(r)))
+    servoTelemetry.foreach(t => message = message.withExtension(BodyProto.servoTelemetry)(Some(t)))
     message
   }
 }
@@ -82,13 +85,24 @@ object MessageContents {
   val HavimoRegionsField: Int = 7103
   val HavimoGridField: Int = 7104
   val RobotHealthField: Int = 7105
+
+  /** Servo telemetry in the keep-alive (docs/protocol.md 6.8). */
+  val ServoTelemetryField: Int = 7106
   val RpcRequestField: Int = 7110
   val RpcResponseField: Int = 7111
 
   private val known =
-    Set(StatusField, RobotHealthField, DebuggingCommandsField, DebugDataField, HavimoRegionsField, HavimoGridField,
+    Set(
+      StatusField,
+      RobotHealthField,
+      DebuggingCommandsField,
+      DebugDataField,
+      HavimoRegionsField,
+      HavimoGridField,
       RpcRequestField,
-      RpcResponseField)
+      RpcResponseField,
+      ServoTelemetryField
+    )
 
   /** Parses every known extension of `message`; a malformed one is a typed error, unknown ones are listed. */
   def of(message: Message): Either[FrameError.BadProtobuf, MessageContents] =
@@ -104,6 +118,7 @@ object MessageContents {
           havimoGrid = message.extension(HavimoProto.havimoGrid),
           rpcRequest = message.extension(RpcProto.rpcRequest),
           rpcResponse = message.extension(RpcProto.rpcResponse),
+          servoTelemetry = message.extension(BodyProto.servoTelemetry),
           unknownExtensions = message.unknownFields.asMap.keys.filterNot(known).toVector.sorted
         )
       )
@@ -173,6 +188,8 @@ object MessageContents {
               repeated ||= c.havimoGrid.isDefined; c = c.copy(havimoGrid = Some(nested(in, HaViMoGridFrame)))
             case RpcRequestField =>
               repeated ||= c.rpcRequest.isDefined; c = c.copy(rpcRequest = Some(nested(in, Request)))
+            case ServoTelemetryField =>
+              repeated ||= c.servoTelemetry.isDefined; c = c.copy(servoTelemetry = Some(nested(in, ServoTelemetry)))
             case _ => repeated ||= c.rpcResponse.isDefined; c = c.copy(rpcResponse = Some(nested(in, Response)))
           }
         } else {

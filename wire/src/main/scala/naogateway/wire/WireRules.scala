@@ -24,6 +24,7 @@ private[wire] object WireRules {
   private val extensions: Map[Int, Descriptor] = Map(
     MessageContents.StatusField -> Status.scalaDescriptor,
     MessageContents.RobotHealthField -> RobotHealth.scalaDescriptor,
+    MessageContents.ServoTelemetryField -> ServoTelemetry.scalaDescriptor,
     MessageContents.DebuggingCommandsField -> DebuggingCommands.scalaDescriptor,
     MessageContents.DebugDataField -> DebugData.scalaDescriptor,
     MessageContents.HavimoRegionsField -> HaViMoRegionFrame.scalaDescriptor,

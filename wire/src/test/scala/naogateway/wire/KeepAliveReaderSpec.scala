@@ -21,7 +21,8 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
     robotId <- Arbitrary.arbitrary[Int]
     s <- Gen.option(status)
     h <- Gen.option(robotHealth)
-  } yield MessageContents(robotId, status = s, robotHealth = h)
+    t <- Gen.option(servoTelemetry)
+  } yield MessageContents(robotId, status = s, robotHealth = h, servoTelemetry = t)
 
   /** Bytes a hostile or broken sender might make of a keep-alive: flipped, cut, grown, spliced. */
   private def mutated(bytes: Array[Byte]): Gen[Array[Byte]] = {
@@ -121,7 +122,10 @@ class KeepAliveReaderSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
         "an unknown extension" -> (robot1 ++ varint(7150, 1)),
         "a truncated Status" -> (robot1 ++ delimited(23, varint(2, 1))).dropRight(1),
         "a field of the wrong wire type" -> (robot1 ++ delimited(23,
-          field(2, 2)(_.writeBytesNoTag(ByteString.copyFromUtf8("x")))))
+          field(2, 2)(_.writeBytesNoTag(ByteString.copyFromUtf8("x"))))),
+        "a servo without its required id" -> (robot1 ++ delimited(7106, delimited(1, varint(2, 512)))),
+        "a servo load beyond sint32" -> (robot1 ++ delimited(7106, delimited(1, varint(1, 3) ++ varint(3, 1L << 33)))),
+        "an unknown field in a servo" -> (robot1 ++ delimited(7106, delimited(1, varint(1, 3) ++ varint(9, 1))))
       )
       cases.foreach { case (what, bytes) =>
         withClue(what) {

@@ -38,6 +38,24 @@ object MessageGenerators {
     boot <- Gen.option(uint32)
   } yield RobotHealth(battery, posture, uptime, boot)
 
+  val servoState: Gen[ServoState] =
+    for {
+      id <- Gen.choose(0, 253)
+      silent <- Gen.oneOf(false, false, true)
+      position <- Gen.option(Gen.choose(0, 1023))
+      load <- Gen.option(Gen.choose(-1023, 1023))
+      voltage <- Gen.option(Gen.choose(0, 255))
+      temperature <- Gen.option(Gen.choose(0, 255))
+      error <- Gen.option(Gen.choose(0, 127))
+    } yield
+      if (silent) ServoState(id, silent = Some(true))
+      else ServoState(id, position, load, voltage, temperature, error)
+
+  val servoTelemetry: Gen[ServoTelemetry] = for {
+    servos <- Gen.choose(0, 32).flatMap(Gen.listOfN(_, servoState))
+    errors <- Gen.option(uint32)
+  } yield ServoTelemetry(servos.toVector, errors)
+
   val debuggingOption: Gen[DebuggingOption] = for {
     name <- shortText
     kind <- Gen.option(Gen.oneOf(DebuggingOptionType.values))
@@ -160,7 +178,8 @@ object MessageGenerators {
     hg <- Gen.option(gridFrame)
     rq <- Gen.option(request)
     rs <- Gen.option(response)
-  } yield MessageContents(robotId, s, h, dc, dd, hr, hg, rq, rs)
+    st <- Gen.option(servoTelemetry)
+  } yield MessageContents(robotId, s, h, dc, dd, hr, hg, rq, rs, st)
 
   val headerForm: Gen[HeaderForm] = Gen.oneOf(HeaderForm.Legacy, HeaderForm.Compact)
 
