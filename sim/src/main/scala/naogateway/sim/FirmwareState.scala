@@ -5,6 +5,7 @@ import java.net.InetSocketAddress
 import scala.concurrent.duration._
 
 import naogateway.proto._
+import naogateway.sim.bus.BioloidBus
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameControlData
 
@@ -70,7 +71,8 @@ final case class FirmwareStats(
     rpcCalls: Long = 0,
     gameControllerPackets: Long = 0,
     rejected: Long = 0,
-    refusedSignatures: Map[String, Long] = Map.empty
+    refusedSignatures: Map[String, Long] = Map.empty,
+    busBridgeRequests: Long = 0
 )
 
 /** A call whose reply waits until a motion ends. */
@@ -85,7 +87,7 @@ private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseU
 /** The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`. `bootId`
   * doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and resets.
   * `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh at every
-  * boot, as RAM does.
+  * boot, as RAM does. `bus` is the robot's emulated Dynamixel bus (servos and HaViMo2), powered up at every boot.
   */
 final case class FirmwareState(
     settings: FirmwareSettings,
@@ -108,7 +110,8 @@ final case class FirmwareState(
     game: Option[GameControlData],
     stats: FirmwareStats,
     framesSigned: Long = 0L,
-    gatewayWindow: ReplayWindow = ReplayWindow.empty
+    gatewayWindow: ReplayWindow = ReplayWindow.empty,
+    bus: BioloidBus = BioloidBus(0L)
 ) {
 
   /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */
