@@ -131,7 +131,7 @@ private[naogateway] object BusBridgePort {
           case Success(c) => Stream(c)
           case Failure(_) => Stream(None)
         }
-        new BusBridgePort(robotId, settings, leases, context, timers).waiting(None, Vector.empty)
+        new BusBridgePort(robotId, settings, leases, binding, context, timers).waiting(None, Vector.empty)
       }
     }
 }
@@ -140,13 +140,13 @@ private[naogateway] final class BusBridgePort(
     robotId: Int,
     settings: BusBridgeSettings,
     leases: Option[ActorRef[BusBridgeClient]],
+    bound: Future[Tcp.ServerBinding],
     context: ActorContext[BusBridgePort.Command],
     timers: akka.actor.typed.scaladsl.TimerScheduler[BusBridgePort.Command]
 ) {
   import BusBridgePort._
 
   private implicit val system: akka.actor.typed.ActorSystem[Nothing] = context.system
-  private var binding = Option.empty[Tcp.ServerBinding]
   private var client = Option.empty[Client]
   private var clients = 0
   private var sequence = 0L
@@ -161,12 +161,12 @@ private[naogateway] final class BusBridgePort(
     client = None
     pending.foreach(_._2 ! ByteString.empty)
     pending = None
-    binding.foreach(_.unbind())
+    // A binding that completes after the stop is unbound too: the port is free for the next listener.
+    bound.foreach(_.unbind())(context.system.executionContext)
   }
 
   private def common(message: Command): Option[Behavior[Command]] = message match {
     case Bound(b) =>
-      binding = Some(b)
       context.log.info("Robot [{}]: bus bridge listens on {}", robotId, b.localAddress)
       Some(Behaviors.same)
     case BindFailed(e) =>
@@ -252,6 +252,9 @@ private[naogateway] final class BusBridgePort(
       val number = clients
       val self = context.self
       val timeout = Timeout(settings.requestTimeout * 2)
+      // The stream runs off this actor: it takes what it needs of the context now.
+      val scheduler = context.system.scheduler
+      val ec = context.system.executionContext
       val flow = Flow[ByteString]
         .statefulMapConcat { () =>
           var reassembly = Dynamixel.Reassembly(maxPacketBytes = Dynamixel.MaxRequestBytes)
@@ -264,8 +267,7 @@ private[naogateway] final class BusBridgePort(
         }
         // One request in flight; replies go back in order.
         .mapAsync(1)(packet =>
-          self.ask[ByteString](Request(packet, _))(timeout, context.system.scheduler)
-            .recover { case _ => ByteString.empty }(context.executionContext))
+          self.ask[ByteString](Request(packet, _))(timeout, scheduler).recover { case _ => ByteString.empty }(ec))
         .filter(_.nonEmpty)
         .viaMat(KillSwitches.single)(Keep.right)
         .watchTermination()(Keep.both)

@@ -383,7 +383,7 @@ private[sim] final class SimulatedRobotRun(
           }
           (next, step.transmit.map(Out(_, gateway)), app.result())
         }
-      case _ if BusBridgeFrame.decode(bytes).isDefined =>
+      case _ if BusBridgeFrame.mayCarry(bytes) && BusBridgeFrame.decode(bytes).isDefined =>
         // A bus bridge frame travels only in the secure stream (docs/protocol.md 6.9): a plain one is dropped, counted.
         (robot.copy(stats = robot.stats.copy(busBridgeDropped = robot.stats.busBridgeDropped + 1)), Vector.empty,
           Vector.empty)

@@ -30,6 +30,12 @@ object BusBridgeFrame {
     FumanoidsFrame.encodeProtobuf(bytes, form).toOption
   }
 
+  // The field's key bytes (7107 << 3 | 2 as a varint): a frame without them carries no busBridge.
+  private val Key = Array(0x9a.toByte, 0xbc.toByte, 0x03.toByte)
+
+  /** Whether `frame` may carry a `busBridge` (its key bytes occur): a cheap test before [[decode]]. */
+  def mayCarry(frame: Array[Byte]): Boolean = frame.indexOfSlice(Key) >= 0 && Datagram.isFuRemoteFrame(frame)
+
   /** The robot id and `busBridge` of a frame, if it is a readable frame that carries one. */
   def decode(frame: Array[Byte]): Option[(Int, BusBridge)] =
     FumanoidsFrame.decodeRaw(frame).toOption.flatMap { raw =>

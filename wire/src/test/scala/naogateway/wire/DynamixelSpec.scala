@@ -90,6 +90,8 @@ class DynamixelSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
       BusBridgeFrame.decode(BusBridgeFrame.encode(2, reply, HeaderForm.Compact).get) shouldBe Some(2 -> reply)
       MessageContents.decodeFrame(BusBridgeFrame.encode(2, reply).get).toOption.get._2.unknownExtensions shouldBe
         Vector(BusBridgeFrame.Field)
+      BusBridgeFrame.mayCarry(BusBridgeFrame.encode(2, reply).get) shouldBe true
+      BusBridgeFrame.mayCarry(MessageContents.encodeFrame(MessageContents(2)).toOption.get) shouldBe false
     }
   }
 }
