@@ -113,8 +113,14 @@ private[naogateway] object BusBridgePort {
       Behaviors.withTimers { timers =>
         implicit val system: akka.actor.typed.ActorSystem[Nothing] = context.system
         val self = context.self
+        // A connection the listener accepts after this actor stopped (its unbind is under way) is closed at once, so
+        // no tool waits on a connection nobody serves.
+        val stopped = new java.util.concurrent.atomic.AtomicBoolean(false)
         val binding = Tcp(context.system).bind(address.getHostString, address.getPort)
-          .to(Sink.foreach(c => self ! Incoming(c))).run()
+          .to(Sink.foreach { c =>
+            if (stopped.get) c.handleWith(Flow.fromSinkAndSource(Sink.cancelled[ByteString], Source.empty[ByteString]))
+            else self ! Incoming(c)
+          }).run()
         context.pipeToSelf(binding) {
           case Success(b) => Bound(b)
           case Failure(e) => BindFailed(e)
@@ -131,7 +137,7 @@ private[naogateway] object BusBridgePort {
           case Success(c) => Stream(c)
           case Failure(_) => Stream(None)
         }
-        new BusBridgePort(robotId, settings, leases, binding, context, timers).waiting(None, Vector.empty)
+        new BusBridgePort(robotId, settings, leases, binding, stopped, context, timers).waiting(None, Vector.empty)
       }
     }
 }
@@ -141,6 +147,7 @@ private[naogateway] final class BusBridgePort(
     settings: BusBridgeSettings,
     leases: Option[ActorRef[BusBridgeClient]],
     bound: Future[Tcp.ServerBinding],
+    stopped: java.util.concurrent.atomic.AtomicBoolean,
     context: ActorContext[BusBridgePort.Command],
     timers: akka.actor.typed.scaladsl.TimerScheduler[BusBridgePort.Command]
 ) {
@@ -154,6 +161,7 @@ private[naogateway] final class BusBridgePort(
   private var droppedPackets = 0L
 
   private def closeAll(): Unit = {
+    stopped.set(true)
     client.foreach { c =>
       c.kill.shutdown()
       leases.foreach(_ ! BusBridgeClient(robotId, connected = false))

@@ -7,7 +7,6 @@ import java.nio.file.Files
 import java.util.concurrent.TimeUnit
 
 import scala.concurrent.duration._
-import scala.jdk.CollectionConverters._
 import scala.util.Try
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
@@ -83,7 +82,7 @@ class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
     "do the same through the gateway's bus bridge, the secure stream and a simulated robot" in {
       PythonEnv.python()
       socat()
-      val f = new GatewayFixture(testKit)
+      val f = new GatewayFixture(testKit, naogateway.integration.BusBridgeSpec.Patient)
       val robotId = 2
       val base = {
         val s = new ServerSocket(0, 1, java.net.InetAddress.getLoopbackAddress)

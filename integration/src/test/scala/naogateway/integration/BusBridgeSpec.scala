@@ -8,7 +8,7 @@ import java.nio.channels.DatagramChannel
 import scala.concurrent.duration._
 import scala.util.Try
 
-import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
+import akka.actor.testkit.typed.scaladsl.{FishingOutcomes, LogCapturing, ScalaTestWithActorTestKit}
 import akka.actor.typed.ActorRef
 import com.google.protobuf.ByteString
 import org.scalatest.wordspec.AnyWordSpecLike
@@ -63,6 +63,28 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
     socket.get
   }
 
+  /** A client of the bridge at `port` whose ping servo 1 answers: a robot that went offline for a moment on a loaded
+    * machine closes its bridge, so a connection is tried again until one answers.
+    */
+  private def answering(port: Int): Socket = {
+    val deadline = 30.seconds.fromNow
+    var answered: Option[Socket] = None
+    while (answered.isEmpty) {
+      val socket = connectTo(port)
+      socket.setSoTimeout(3000)
+      socket.getOutputStream.write(packet(1, Ping, Nil))
+      if (Try(socket.getInputStream.readNBytes(6).toVector).toOption.contains(packet(1, 0, Nil).toVector)) {
+        socket.setSoTimeout(10000)
+        answered = Some(socket)
+      } else {
+        socket.close()
+        if (deadline.isOverdue()) fail(s"the bridge at $port never answered a ping")
+        Thread.sleep(200)
+      }
+    }
+    answered.get
+  }
+
   private def readStatus(in: InputStream, bytes: Int): Status = {
     val buffer = in.readNBytes(bytes)
     Dynamixel.status(buffer).getOrElse(fail(s"not a status packet: ${buffer.toSeq}"))
@@ -70,15 +92,18 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
 
   "the bus bridge" must {
     "carry the DynamixelSDK's packets to the robot's bus and its status packets back, one client at a time" in {
-      val f = new GatewayFixture(testKit)
+      val f = new GatewayFixture(testKit, BusBridgeSpec.Patient)
       val leases = createTestProbe[BusBridgeClient]()
       val base = freeBase()
       val bridge = spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), Some(leases.ref)))
       try {
         val (robot, address) = streamRobot(f)
         f.awaitEvent(10.seconds) { case RobotOnline(`robotId`, _) => () }
-        val client = connectTo(base + robotId)
-        leases.expectMessage(10.seconds, BusBridgeClient(robotId, connected = true))
+        val client = answering(base + robotId)
+        leases.fishForMessage(10.seconds) {
+          case BusBridgeClient(`robotId`, true) => FishingOutcomes.complete
+          case _                                => FishingOutcomes.continueAndIgnore
+        }
         val out = client.getOutputStream
         val in = client.getInputStream
         // Noise before the header, a packet with a bad checksum (dropped, nothing comes back), then a ping.
@@ -111,7 +136,10 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
         second.close()
 
         client.close()
-        leases.expectMessage(10.seconds, BusBridgeClient(robotId, connected = false))
+        leases.fishForMessage(10.seconds) {
+          case BusBridgeClient(`robotId`, false) => FishingOutcomes.complete
+          case _                                 => FishingOutcomes.continueAndIgnore
+        }
 
         // A busBridge frame as a plain datagram is dropped by the robot, and counted.
         val plain = BusBridgeFrame.encode(robotId, BusBridge(1, request = Some(ByteString.copyFrom(packet(1, Ping, Nil)))))
@@ -126,8 +154,8 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
     }
 
     "be closed while the competition gate is closed, and close its client when the game starts" in {
-      val f = new GatewayFixture(testKit,
-        "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]\n" +
+      val f = new GatewayFixture(testKit, BusBridgeSpec.Patient +
+        "\ncompetition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]\n" +
           "game-controller.gate-open-after = 1s")
       val base = freeBase()
       val bridge = spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), None))
@@ -139,9 +167,7 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
         Thread.sleep(1000)
         Try(new Socket("127.0.0.1", base + robotId)).isFailure shouldBe true
         val next = f.openGate(gc)
-        val client = connectTo(base + robotId)
-        client.getOutputStream.write(packet(1, Ping, Nil))
-        readStatus(client.getInputStream, 6).id shouldBe 1
+        val client = answering(base + robotId)
         // PLAYING: the gate closes, and with it the bridge's client.
         val playing = GameControllerCodec.decodeControl(GameControllerVectors.bytes("v20-playing.bin")) match {
           case Right(d: Hsl20ControlData) => d.copy(packetNumber = next & 0xff)
@@ -159,4 +185,9 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
       }
     }
   }
+}
+
+/** The fixture's settings for a loaded machine: a robot is given up only after 2 s of silence, not 0.85 s. */
+object BusBridgeSpec {
+  val Patient: String = "heartbeat.quiet-after = 1500ms\nheartbeat.probe-timeout = 500ms"
 }

@@ -36,7 +36,7 @@ final case class BioloidBus(now: Long, tables: Vector[Ax12], camera: HaViMo2Devi
   /** One transaction at [[now]]: the bus after `packet` and the status bytes that came back (empty when none). */
   def transact(packet: Array[Byte]): (BioloidBus, Array[Byte]) =
     instruction(packet) match {
-      case None                                  => (this, Array.emptyByteArray)
+      case None                                  => (this, checksumError(packet))
       case Some(i) if i.instruction == SyncWrite => (syncWrite(i.params), Array.emptyByteArray)
       case Some(i) if i.id == BroadcastId        => (broadcast(i), Array.emptyByteArray)
       case Some(i) if i.id == HaViMo2Device.Id   => cameraTransaction(i)
@@ -45,6 +45,18 @@ final case class BioloidBus(now: Long, tables: Vector[Ax12], camera: HaViMo2Devi
           case -1    => (this, Array.emptyByteArray)
           case index => servoTransaction(index, i)
         }
+    }
+
+  // A packet whole but for its checksum is answered with the checksum error bit by the device it names, as an AX-12A
+  // does; anything else damaged is noise nobody answers.
+  private def checksumError(packet: Array[Byte]): Array[Byte] =
+    if (packet.length < MinPacketBytes || (packet(0) & 0xff) != 0xff || (packet(1) & 0xff) != 0xff ||
+      packet.length != (packet(3) & 0xff) + 4) Array.emptyByteArray
+    else {
+      val id = packet(2) & 0xff
+      if ((id == HaViMo2Device.Id && camera.ready(now)) || tables.exists(_.id == id))
+        Status(id, ChecksumError, Vector.empty).bytes
+      else Array.emptyByteArray
     }
 
   private def answers(servo: Ax12, instruction: Int): Boolean = servo.table(Ax12.StatusReturnLevel) match {
@@ -107,10 +119,15 @@ final case class BioloidBus(now: Long, tables: Vector[Ax12], camera: HaViMo2Devi
         case Ping => (this, status(0, Vector.empty))
         case Read if i.params.length == 2 =>
           (this, camera.read(i.params(0), i.params(1)).fold(e => status(e, Vector.empty), b => status(0, b)))
-        case Write if i.params.length >= 2 =>
-          val (next, error) = camera.write(i.params(0), i.params.drop(1), now)
-          (copy(camera = next), status(error, Vector.empty))
-        case _ => (this, status(InstructionError, Vector.empty))
+        case HaViMo2Device.ReadGrid if i.params.length == 2 =>
+          (this, camera.readGrid(i.params(0), i.params(1)).fold(e => status(e, Vector.empty), b => status(0, b)))
+        // A capture answers nothing: the camera is busy from now on.
+        case HaViMo2Device.CapRegion | HaViMo2Device.CapGrid =>
+          (copy(camera = camera.capture(now)), Array.emptyByteArray)
+        case Write if i.params.length >= 2 && i.params(0) == HaViMo2Device.CaptureAddress =>
+          (copy(camera = camera.capture(now)), Array.emptyByteArray)
+        case Write => (this, status(RangeError, Vector.empty))
+        case _     => (this, status(InstructionError, Vector.empty))
       }
     }
 }

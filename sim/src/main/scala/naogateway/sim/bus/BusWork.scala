@@ -18,11 +18,11 @@ object BusWork {
     (next, Dynamixel.status(reply).filter(s => s.error == 0 && s.params.length == length).map(_.params))
   }
 
-  private def write(bus: BioloidBus, id: Int, address: Int, data: Int*): BioloidBus =
-    bus.transact(Dynamixel.packet(id, Dynamixel.Write, address +: data))._1
+  private val GridReadBytes = 192
 
   /** The camera's cycle, as the public CM-530 examples run it: a ping (no answer: the capture is still in progress, so no
-    * frame), the 15 region slots read, the 4 grid pages read when `withGrid`, and the next capture started.
+    * frame), the 15 region slots read, the grid read (READ_GRID, 4 × 192 cells) when `withGrid`, and the next capture
+    * started (CAP_REGION).
     */
   def cameraCycle(bus0: BioloidBus, withGrid: Boolean): (BioloidBus, Option[CameraFrame]) = {
     val (pinged, pong) = bus0.transact(Dynamixel.packet(HaViMo2Device.Id, Dynamixel.Ping, Nil))
@@ -37,18 +37,19 @@ object BusWork {
       }
       val grid = if (!withGrid) None
       else {
+        // READ_GRID in four reads of 192 cells (its address in 16-byte units).
         val cells = Array.newBuilder[Byte]
         var whole = true
-        (1 to HaViMo2Device.GridPages).foreach { page =>
-          bus = write(bus, HaViMo2Device.Id, HaViMo2Device.PageAddress, page)
-          val (next, bytes) = read(bus, HaViMo2Device.Id, HaViMo2Device.BufferAddress, HaViMo2Device.PageBytes)
+        (0 until 4).foreach { part =>
+          val (next, reply) = bus.transact(
+            Dynamixel.packet(HaViMo2Device.Id, HaViMo2Device.ReadGrid, Seq(part * GridReadBytes / 16, GridReadBytes)))
           bus = next
-          bytes.fold[Unit] { whole = false }(b => cells ++= b.map(_.toByte))
+          Dynamixel.status(reply).filter(s => s.error == 0 && s.params.length == GridReadBytes)
+            .fold[Unit] { whole = false }(s => cells ++= s.params.map(_.toByte))
         }
-        bus = write(bus, HaViMo2Device.Id, HaViMo2Device.PageAddress, 0)
         Some(cells.result()).filter(_ => whole)
       }
-      bus = write(bus, HaViMo2Device.Id, HaViMo2Device.CaptureAddress, 0)
+      bus = bus.transact(Dynamixel.packet(HaViMo2Device.Id, HaViMo2Device.CapRegion, Nil))._1
       (bus, Some(CameraFrame(records.result(), grid)))
     }
   }

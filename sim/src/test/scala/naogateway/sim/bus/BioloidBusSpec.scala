@@ -78,10 +78,11 @@ class BioloidBusSpec extends AnyWordSpec with Matchers {
       val (acted, _) = registered.transact(packet(BroadcastId, Action, Nil))
       acted.tables.find(_.id == 6).get.goal shouldBe 256
     }
-    "ignore a packet with a bad checksum" in {
+    "answer a packet with a bad checksum with the checksum error bit, and noise with nothing" in {
       val bad = packet(1, Ping, Nil)
       bad(bad.length - 1) = (bad.last + 1).toByte
-      bus.transact(bad)._2 shouldBe empty
+      status(bus.transact(bad)._2) shouldBe Status(1, ChecksumError, Vector.empty)
+      bus.transact(bad.drop(1))._2 shouldBe empty
     }
   }
 
@@ -96,9 +97,13 @@ class BioloidBusSpec extends AnyWordSpec with Matchers {
       status(bus.transact(packet(100, Read, Seq(16 * 15, 16)))._2).params.forall(_ == 0) shouldBe true
     }
     "answer nothing while a capture is processed, then show the new one" in {
-      val (capturing, ack) = bus.withVolts(12.0).seeing(Vector.empty).transact(packet(100, Write, Seq(0, 0)))
-      status(ack).id shouldBe 100
+      val (capturing, ack) =
+        bus.withVolts(12.0).seeing(Vector.empty).transact(packet(100, HaViMo2Device.CapRegion, Nil))
+      ack shouldBe empty
       capturing.transact(packet(100, Ping, Nil))._2 shouldBe empty
+      capturing.camera.captures shouldBe 1
+      // The public examples' capture, a write to address 0, answers nothing either.
+      bus.transact(packet(100, Write, Seq(0, 0))) match { case (b, a) => (a.length, b.camera.captures) shouldBe ((0, 1)) }
       val done = capturing.advance(HaViMo2Device.DefaultCaptureNanos)
       status(done.transact(packet(100, Ping, Nil))._2).id shouldBe 100
       status(done.transact(packet(100, Read, Seq(16, 16)))._2).params.forall(_ == 0) shouldBe true
@@ -107,6 +112,11 @@ class BioloidBusSpec extends AnyWordSpec with Matchers {
       val (next, frame) = BusWork.cameraCycle(bus, withGrid = true)
       frame.map(_.records.toVector) shouldBe Some(HaViMo.encodeRegions(view).toOption.get.toVector)
       frame.flatMap(_.grid).map(_.toVector) shouldBe Some(Scene.grid(view).toVector)
+      // Model number 0, as ROBOTIS's headers list the HaViMo2.
+      word(status(bus.transact(packet(100, Read, Seq(0, 2)))._2)) shouldBe 0
+      status(bus.transact(packet(100, HaViMo2Device.ReadGrid, Seq(47, 16)))._2).params shouldBe
+        Scene.grid(view).toVector.slice(752, 768).map(_ & 0xff)
+      status(bus.transact(packet(100, HaViMo2Device.ReadGrid, Seq(47, 17)))._2).error shouldBe RangeError
       next.camera.captures shouldBe 1
       BusWork.cameraCycle(next, withGrid = false)._2 shouldBe None
     }
