@@ -35,17 +35,25 @@ class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       .filter(p => p.waitFor(10, TimeUnit.SECONDS) && p.exitValue() == 0)
       .map(_ => "socat").getOrElse(cancel("socat is not installed (.ci/setup.d/socat.sh): the SDK test cannot run"))
 
-  /** socat's pseudo-terminal in front of 127.0.0.1:`port`, for the length of `body`. */
+  /** socat's pseudo-terminal in front of 127.0.0.1:`port`, for the length of `body`. socat connects at once; when the
+    * bridge refuses it (the one tool's place not yet free) it exits, and is started again.
+    */
   private def throughPty[T](port: Int)(body: File => T): T = {
     val dir = Files.createTempDirectory("dxl").toFile
     val link = new File(dir, "ttyDXL")
-    val process = new ProcessBuilder(socat(), s"pty,link=${link.getPath},raw,echo=0", s"tcp:127.0.0.1:$port")
+    def start() = new ProcessBuilder(socat(), s"pty,link=${link.getPath},raw,echo=0", s"tcp:127.0.0.1:$port")
       .redirectErrorStream(true).redirectOutput(new File(dir, "socat.log")).start()
+    var process = start()
     try {
-      val deadline = 10.seconds.fromNow
-      while (!link.exists() && deadline.hasTimeLeft()) Thread.sleep(50)
+      val deadline = 15.seconds.fromNow
+      // Up and staying up for a moment: a refused connection ends socat within milliseconds.
+      def up() = link.exists() && process.isAlive && { Thread.sleep(300); process.isAlive && link.exists() }
+      while (!up() && deadline.hasTimeLeft()) {
+        if (!process.isAlive) process = start()
+        Thread.sleep(100)
+      }
       withClue(Try(new String(Files.readAllBytes(new File(dir, "socat.log").toPath), StandardCharsets.UTF_8))) {
-        link.exists() shouldBe true
+        (link.exists() && process.isAlive) shouldBe true
       }
       body(link)
     } finally {
@@ -100,7 +108,9 @@ class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       }
       try {
         f.awaitEvent(10.seconds) { case RobotOnline(`robotId`, _) => () }
+        // The bridge listens once the robot's stream is known; socat's connection is tried until it is taken.
         eventually(timeout(20.seconds)) { new java.net.Socket("127.0.0.1", base + robotId).close() }
+        Thread.sleep(500)
         throughPty(base + robotId) { device =>
           // Over the bridge a round trip crosses the WiFi twice: the SDK's packet timeout is raised (README).
           val (code, out) = sdk(device, "--latency-ms", "250")
