@@ -221,7 +221,8 @@ object Launcher {
     val realRobots = Doors.realRobots(config)
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware, realRobots)
     apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware, realRobots)
-    // The bus bridge (docs/protocol.md 6.9), when enabled: an app at the middleware holds the leases while a tool is on.
+    /* The bus bridge (docs/protocol.md 6.9), when enabled: an app at the middleware holds the leases while a tool is
+     * on. */
     val busBridge = naogateway.BusBridgeSettings.fromConfig(config.getConfig("naogateway"))
     if (busBridge.enabled) {
       val leases = context.spawn(robotmiddleware.BusBridgeLeases(middleware), "bus-bridge-leases")

@@ -80,8 +80,10 @@ object BusBridgeServer {
             Behaviors.same
           case Gate(traffic) =>
             if (traffic.gateOpen != open)
-              context.log.info("Bus bridge {}", if (traffic.gateOpen) "open again" else
-                s"closed: ${traffic.gateReason.getOrElse(CompetitionGate.NoSendingWhileGameRuns)}")
+              context.log.info("Bus bridge {}",
+                if (traffic.gateOpen) "open again"
+                else
+                  s"closed: ${traffic.gateReason.getOrElse(CompetitionGate.NoSendingWhileGameRuns)}")
             sync(online, traffic.gateOpen); running(online, traffic.gateOpen)
         }
         // Closed until the outbox first says the gate is open.

@@ -23,9 +23,11 @@ final case class BusBridgeSettings(
   require(basePort > 0 && basePort <= 65535, s"naogateway.bus-bridge.base-port $basePort is not a TCP port")
   require(requestTimeout > Duration.Zero, "naogateway.bus-bridge.request-timeout must be positive")
   // The bridge has no token: like the datagram door and the ZeroMQ endpoint it is refused anywhere but on loopback.
-  require(BusBridgeSettings.loopback(bindAddress),
+  require(
+    BusBridgeSettings.loopback(bindAddress),
     s"naogateway.bus-bridge.bind-address \"$bindAddress\" is not a loopback address: the bus bridge has no token, so " +
-      "it is refused anywhere but on loopback (127.0.0.1 or ::1)")
+      "it is refused anywhere but on loopback (127.0.0.1 or ::1)"
+  )
 
   /** The port of robot `robotId`'s bridge, if it is a TCP port. */
   def portOf(robotId: Int): Option[Int] = Some(basePort + robotId).filter(p => robotId >= 0 && p <= 65535)

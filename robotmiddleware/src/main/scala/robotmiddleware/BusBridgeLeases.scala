@@ -26,12 +26,15 @@ object BusBridgeLeases {
   def apply(middleware: ActorRef[RobotMiddleware.Command]): Behavior[BusBridgeClient] =
     Behaviors.setup[Any] { context =>
       // The app's event ref is its identity at the middleware: its leases live as long as it does.
-      val events = context.spawn(Behaviors.receiveMessage[AppEvent] {
+      val events = context.spawn(
+        Behaviors.receiveMessage[AppEvent] {
           case AppEvent.LeasePreempted(robotId, group, by) =>
             context.log.warn("Bus bridge: robot {}'s {} lease was taken by {}", robotId, group.name, by)
             Behaviors.same
           case _ => Behaviors.same
-        }, "events")
+        },
+        "events"
+      )
       middleware ! RobotMiddleware.RegisterApp(Name, Priority, events, context.messageAdapter(Registered.apply))
       Behaviors.receiveMessage[Any] {
         case BusBridgeClient(robotId, true) =>

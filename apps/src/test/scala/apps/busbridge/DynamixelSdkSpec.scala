@@ -23,8 +23,8 @@ import naogateway.{BusBridgeServer, BusBridgeSettings, RobotOnline}
   * apps/python/requirements.txt) against what we wrote: first the emulated bus straight on a TCP port, which validates
   * the emulation (18 servos ping as AX-12A, the control table reads and writes, a goal position reads back as the
   * present position once reached, the HaViMo2 answers at id 100); then the same through the gateway's bus bridge and
-  * the secure stream to a simulated robot (docs/protocol.md 6.9). socat makes the pseudo-terminal the SDK opens, as
-  * the README's "Calibrating a HaViMo2 over WiFi" does. Cancelled when python3, venv, pip or socat is missing.
+  * the secure stream to a simulated robot (docs/protocol.md 6.9). socat makes the pseudo-terminal the SDK opens, as the
+  * README's "Calibrating a HaViMo2 over WiFi" does. Cancelled when python3, venv, pip or socat is missing.
   */
 class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
@@ -99,9 +99,11 @@ class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       }
       val bridge = spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), None))
       val started = createTestProbe[SimulatedRobot.StartResult]()
-      spawn(SimulatedRobot(SimulatedRobotSettings(FirmwareSettings(robotId), f.addresses.robots,
-          bindAddress = new InetSocketAddress(TestLoopback.address(), 0)).withStream(f.settings.stream),
-        Some(started.ref)))
+      spawn(SimulatedRobot(
+          SimulatedRobotSettings(FirmwareSettings(robotId), f.addresses.robots,
+            bindAddress = new InetSocketAddress(TestLoopback.address(), 0)).withStream(f.settings.stream),
+          Some(started.ref)
+        ))
       val robot = started.receiveMessage(10.seconds) match {
         case SimulatedRobot.Started(_, ref, _) => ref
         case other                             => fail(s"robot did not start: $other")

@@ -40,9 +40,12 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
 
   private def streamRobot(f: GatewayFixture): (ActorRef[SimulatedRobot.Command], InetSocketAddress) = {
     val started = createTestProbe[SimulatedRobot.StartResult]()
-    spawn(SimulatedRobot(SimulatedRobotSettings(FirmwareSettings(robotId), f.addresses.robots,
-        bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false)
-        .withStream(f.settings.stream), Some(started.ref)))
+    spawn(SimulatedRobot(
+        SimulatedRobotSettings(FirmwareSettings(robotId), f.addresses.robots,
+          bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false)
+          .withStream(f.settings.stream),
+        Some(started.ref)
+      ))
     started.receiveMessage(10.seconds) match {
       case SimulatedRobot.Started(_, ref, address) => ref -> address
       case other                                   => fail(s"robot did not start: $other")
@@ -95,7 +98,8 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
       val f = new GatewayFixture(testKit, BusBridgeSpec.Patient)
       val leases = createTestProbe[BusBridgeClient]()
       val base = freeBase()
-      val bridge = spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), Some(leases.ref)))
+      val bridge =
+        spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), Some(leases.ref)))
       try {
         val (robot, address) = streamRobot(f)
         f.awaitEvent(10.seconds) { case RobotOnline(`robotId`, _) => () }
@@ -142,7 +146,8 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
         }
 
         // A busBridge frame as a plain datagram is dropped by the robot, and counted.
-        val plain = BusBridgeFrame.encode(robotId, BusBridge(1, request = Some(ByteString.copyFrom(packet(1, Ping, Nil)))))
+        val plain =
+          BusBridgeFrame.encode(robotId, BusBridge(1, request = Some(ByteString.copyFrom(packet(1, Ping, Nil)))))
         val udp = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
         udp.send(ByteBuffer.wrap(plain.get), address)
         eventually(timeout(10.seconds)) { f.view(robot).stats.busBridgeDropped shouldBe 1L }
@@ -154,9 +159,12 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
     }
 
     "be closed while the competition gate is closed, and close its client when the game starts" in {
-      val f = new GatewayFixture(testKit, BusBridgeSpec.Patient +
-        "\ncompetition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]\n" +
-          "game-controller.gate-open-after = 1s")
+      val f = new GatewayFixture(
+        testKit,
+        BusBridgeSpec.Patient +
+          "\ncompetition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.1\"]\n" +
+          "game-controller.gate-open-after = 1s"
+      )
       val base = freeBase()
       val bridge = spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), None))
       val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
@@ -173,8 +181,10 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
           case Right(d: Hsl20ControlData) => d.copy(packetNumber = next & 0xff)
           case other                      => fail(s"v20-playing.bin: $other")
         }
-        gc.send(ByteBuffer.wrap(GameControllerCodec.encodeControl(playing).toOption.get), f.addresses.gameController.get)
-        val closed = Try(client.getInputStream.read()).fold({ case _: SocketTimeoutException => 0; case _ => -1 }, identity)
+        gc.send(ByteBuffer.wrap(GameControllerCodec.encodeControl(playing).toOption.get),
+          f.addresses.gameController.get)
+        val closed =
+          Try(client.getInputStream.read()).fold({ case _: SocketTimeoutException => 0; case _ => -1 }, identity)
         closed shouldBe -1
         client.close()
         Try(new Socket("127.0.0.1", base + robotId)).isFailure shouldBe true

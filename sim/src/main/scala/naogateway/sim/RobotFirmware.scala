@@ -435,10 +435,12 @@ object RobotFirmware {
         captured.grid.foreach { grid =>
           if (s.debugEnabled("havimo.grid"))
             out += encode(s,
-              MessageContents(s.settings.robotId, havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(grid)))))
+              MessageContents(s.settings.robotId,
+                havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(grid)))))
           if (s.debugEnabled("camera.image")) {
             val shapes = regions.map(r =>
-              Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY), label = Some(s"colour ${r.colour}")))
+              Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY),
+                label = Some(s"colour ${r.colour}")))
             val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES),
               Some(ByteString.copyFrom(grid.map(b => (b & 0x0f).toByte))), shapes)
             out += encode(s,
@@ -450,11 +452,12 @@ object RobotFirmware {
     }
   }
 
-  /** Whether the GameController packet the robot uses says the game runs (READY, SET, PLAYING): the bus bridge is closed
-    * then (docs/protocol.md 6.9).
+  /** Whether the GameController packet the robot uses says the game runs (READY, SET, PLAYING): the bus bridge is
+    * closed then (docs/protocol.md 6.9).
     */
   def gameRunning(s: FirmwareState): Boolean =
-    s.game.exists(g => g.gameState == GameState.Ready || g.gameState == GameState.Set || g.gameState == GameState.Playing)
+    s.game.exists(g =>
+      g.gameState == GameState.Ready || g.gameState == GameState.Set || g.gameState == GameState.Playing)
 
   /** Runs one bridged request that arrived through the secure stream on the robot's bus at `now`: the firmware after it
     * and the reply frame (signed when the robot signs), one per request (docs/protocol.md 6.9).

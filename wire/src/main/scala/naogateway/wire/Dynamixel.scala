@@ -1,7 +1,7 @@
 package naogateway.wire
 
-/** Dynamixel protocol 1.0 packets (docs/protocol.md 6.9): the robot's bus speaks them, the bus bridge carries them. Pure
-  * byte work shared by the gateway's bridge and the simulator's emulated bus.
+/** Dynamixel protocol 1.0 packets (docs/protocol.md 6.9): the robot's bus speaks them, the bus bridge carries them.
+  * Pure byte work shared by the gateway's bridge and the simulator's emulated bus.
   *
   * Instruction packet: `FF FF id length instruction params checksum`; status packet: `FF FF id length error params
   * checksum`; length = params + 2, checksum = ~(id + length + instruction or error + params) & 0xFF.
@@ -140,8 +140,8 @@ object Dynamixel {
     }
   }
 
-  /** How many status bytes a request is due to bring back (docs/protocol.md 6.9): none for broadcast and sync write, 6 +
-    * n for a read of n bytes, 6 otherwise. The device's status-return level may still make it answer nothing.
+  /** How many status bytes a request is due to bring back (docs/protocol.md 6.9): none for broadcast and sync write, 6
+    * + n for a read of n bytes, 6 otherwise. The device's status-return level may still make it answer nothing.
     */
   def statusBytesDue(request: Instruction): Int =
     if (request.id == BroadcastId || request.instruction == SyncWrite) 0

@@ -86,7 +86,8 @@ class DynamixelSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChe
     "carry a request and a reply through encoding and decoding" in {
       val request = BusBridge(7, request = Some(ByteString.copyFrom(Dynamixel.packet(1, Dynamixel.Ping, Nil))))
       BusBridgeFrame.decode(BusBridgeFrame.encode(2, request).get) shouldBe Some(2 -> request)
-      val reply = BusBridge(7, reply = Some(ByteString.copyFrom(hex("FF FF 01 02 00 FC"))), result = Some(BusResult.BUS_OK))
+      val reply =
+        BusBridge(7, reply = Some(ByteString.copyFrom(hex("FF FF 01 02 00 FC"))), result = Some(BusResult.BUS_OK))
       BusBridgeFrame.decode(BusBridgeFrame.encode(2, reply, HeaderForm.Compact).get) shouldBe Some(2 -> reply)
       MessageContents.decodeFrame(BusBridgeFrame.encode(2, reply).get).toOption.get._2.unknownExtensions shouldBe
         Vector(BusBridgeFrame.Field)

@@ -78,8 +78,8 @@ final case class Ax12(table: Vector[Int], position: Double, at: Long, registered
     else Right(readable(volts).slice(address, address + length))
 
   /** Writes `data` from `address`: the servo after it, and the error bits (0 when all was written). A write that
-    * touches a read-only byte or leaves the table writes nothing; goal position above 1023 is a range error. Writing the
-    * goal position turns the torque on, as the AX-12A does.
+    * touches a read-only byte or leaves the table writes nothing; goal position above 1023 is a range error. Writing
+    * the goal position turns the torque on, as the AX-12A does.
     */
   def write(address: Int, data: Vector[Int]): (Ax12, Int) =
     if (data.isEmpty || address + data.length > TableBytes ||

@@ -3,8 +3,8 @@ package naogateway.sim.bus
 import naogateway.proto.ServoState
 import naogateway.wire.{Dynamixel, HaViMoRegion}
 
-/** The emulated Dynamixel protocol 1.0 bus of a Bioloid-class humanoid: 18 AX-12A servos (ids 1-18) and a HaViMo2 at
-  * id 100 (docs/protocol.md 6.9). Pure and byte-level: [[transact]] takes one instruction packet and gives the status
+/** The emulated Dynamixel protocol 1.0 bus of a Bioloid-class humanoid: 18 AX-12A servos (ids 1-18) and a HaViMo2 at id
+  * 100 (docs/protocol.md 6.9). Pure and byte-level: [[transact]] takes one instruction packet and gives the status
   * bytes the bus returns (none for broadcast, sync write, a status-return level that answers nothing, an id nobody has,
   * a busy camera or a damaged packet). Time is the robot's clock in nanoseconds, moved on with [[advance]].
   *

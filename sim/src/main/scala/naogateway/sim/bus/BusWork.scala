@@ -20,9 +20,9 @@ object BusWork {
 
   private val GridReadBytes = 192
 
-  /** The camera's cycle, as the public CM-530 examples run it: a ping (no answer: the capture is still in progress, so no
-    * frame), the 15 region slots read, the grid read (READ_GRID, 4 × 192 cells) when `withGrid`, and the next capture
-    * started (CAP_REGION).
+  /** The camera's cycle, as the public CM-530 examples run it: a ping (no answer: the capture is still in progress, so
+    * no frame), the 15 region slots read, the grid read (READ_GRID, 4 × 192 cells) when `withGrid`, and the next
+    * capture started (CAP_REGION).
     */
   def cameraCycle(bus0: BioloidBus, withGrid: Boolean): (BioloidBus, Option[CameraFrame]) = {
     val (pinged, pong) = bus0.transact(Dynamixel.packet(HaViMo2Device.Id, Dynamixel.Ping, Nil))

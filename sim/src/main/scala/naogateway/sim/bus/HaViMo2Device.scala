@@ -3,11 +3,11 @@ package naogateway.sim.bus
 import naogateway.wire.{Dynamixel, HaViMo, HaViMoRegion}
 
 /** The emulated HaViMo2 camera on the bus (docs/protocol.md 6.9, the driver's model in docs/firmware.md "The HaViMo2
-  * driver"): a capture (instruction CAP_REGION 0x0E or CAP_GRID 0x15, or a write to address 0) takes what the lens
-  * sees and answers nothing; while it is processed the camera answers nothing at all (a ping that gets no answer means
-  * "not ready yet"); then its table holds the capture's regions, slot i (1-15) at address 16·i, 16 bytes each in the
-  * layout of docs/protocol.md 6.5, unused slots zero, and READ_GRID (0x16: address in 16-byte units, length) reads the
-  * 768 grid cells. Every capture here takes regions and grid. Pure, on the robot's clock (nanoseconds).
+  * driver"): a capture (instruction CAP_REGION 0x0E or CAP_GRID 0x15, or a write to address 0) takes what the lens sees
+  * and answers nothing; while it is processed the camera answers nothing at all (a ping that gets no answer means "not
+  * ready yet"); then its table holds the capture's regions, slot i (1-15) at address 16·i, 16 bytes each in the layout
+  * of docs/protocol.md 6.5, unused slots zero, and READ_GRID (0x16: address in 16-byte units, length) reads the 768
+  * grid cells. Every capture here takes regions and grid. Pure, on the robot's clock (nanoseconds).
   *
   * @param regions
   *   the region buffer of the last finished capture (240 bytes)
@@ -41,7 +41,7 @@ final case class HaViMo2Device(
     if (length < 1 || address + length > 256) Left(Dynamixel.RangeError)
     else
       Right((address until address + length).toVector.map(a =>
-        if (a < BufferAddress) 0 else regions(a - BufferAddress) & 0xff))
+          if (a < BufferAddress) 0 else regions(a - BufferAddress) & 0xff))
 
   /** READ_GRID: `length` cells from cell 16·`block`, or the error bits of a read past the 768 cells. */
   def readGrid(block: Int, length: Int): Either[Int, Vector[Int]] =
@@ -51,8 +51,8 @@ final case class HaViMo2Device(
   /** A capture of what the lens sees, started at `now`. */
   def capture(now: Long): HaViMo2Device = {
     val records = HaViMo.encodeRegions(lens.take(HaViMo.MaxRegions).zipWithIndex.map { case (r, i) =>
-        r.copy(index = i + 1)
-      }).getOrElse(Array.emptyByteArray)
+      r.copy(index = i + 1)
+    }).getOrElse(Array.emptyByteArray)
     val buffer = records.toVector ++ Vector.fill(RegionBufferBytes - records.length)(0.toByte)
     copy(regions = buffer, grid = naogateway.sim.Scene.grid(lens).toVector, busyUntil = now + captureNanos,
       captures = captures + 1)

@@ -103,7 +103,9 @@ class BioloidBusSpec extends AnyWordSpec with Matchers {
       capturing.transact(packet(100, Ping, Nil))._2 shouldBe empty
       capturing.camera.captures shouldBe 1
       // The public examples' capture, a write to address 0, answers nothing either.
-      bus.transact(packet(100, Write, Seq(0, 0))) match { case (b, a) => (a.length, b.camera.captures) shouldBe ((0, 1)) }
+      bus.transact(packet(100, Write, Seq(0, 0))) match {
+        case (b, a) => (a.length, b.camera.captures) shouldBe ((0, 1))
+      }
       val done = capturing.advance(HaViMo2Device.DefaultCaptureNanos)
       status(done.transact(packet(100, Ping, Nil))._2).id shouldBe 100
       status(done.transact(packet(100, Read, Seq(16, 16)))._2).params.forall(_ == 0) shouldBe true

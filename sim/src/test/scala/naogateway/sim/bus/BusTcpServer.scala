@@ -27,7 +27,8 @@ final class BusTcpServer(initial: BioloidBus) extends AutoCloseable {
   thread.start()
 
   private def serve(): Unit =
-    while (open) Try(server.accept()).foreach(client => Try(talk(client)).fold(_ => client.close(), _ => client.close()))
+    while (open)
+      Try(server.accept()).foreach(client => Try(talk(client)).fold(_ => client.close(), _ => client.close()))
 
   private def talk(client: Socket): Unit = {
     val in = client.getInputStream
