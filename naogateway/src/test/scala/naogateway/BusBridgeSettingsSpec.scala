@@ -21,7 +21,8 @@ class BusBridgeSettingsSpec extends AnyWordSpec with Matchers {
     }
     "refuse a bind address that is not loopback, naming the key" in {
       Seq("0.0.0.0", "192.0.2.7", "").foreach { address =>
-        val refused = intercept[IllegalArgumentException](settings(s"""naogateway.bus-bridge.bind-address = "$address""""))
+        val refused =
+          intercept[IllegalArgumentException](settings(s"""naogateway.bus-bridge.bind-address = "$address""""))
         refused.getMessage should include("naogateway.bus-bridge.bind-address")
       }
       settings("""naogateway.bus-bridge.bind-address = "::1"""").bindAddress shouldBe "::1"
