@@ -221,6 +221,13 @@ object Launcher {
     val realRobots = Doors.realRobots(config)
     apps.zeromq.ZeroMqEndpoint.spawnIfEnabled(context, middleware, realRobots)
     apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware, realRobots)
+    /* The bus bridge (docs/protocol.md 6.9), when enabled: an app at the middleware holds the leases while a tool is
+     * on. */
+    val busBridge = naogateway.BusBridgeSettings.fromConfig(config.getConfig("naogateway"))
+    if (busBridge.enabled) {
+      val leases = context.spawn(robotmiddleware.BusBridgeLeases(middleware), "bus-bridge-leases")
+      context.spawn(naogateway.BusBridgeServer(gateway, busBridge, Some(leases)), "bus-bridge")
+    }
     val view = GatewayReadView(gateway, ViewTimeout)(context.system)
     val doctor = () =>
       Doctor.gather(gateway, config)(context.system).map(f => Doctor.findings(f) :+ Doctor.clusterFinding(config))(
@@ -253,7 +260,11 @@ object Launcher {
                 target,
                 (1 to launcher.simulatedRobots).toVector,
                 faithfulLink = launcher.simulatedRobots <= 20,
-                customize = s => s.copy(firmware = s.firmware.copy(signingKey = teamKey))
+                // With the bus bridge on, the robots take part in the secure stream that carries it.
+                customize = s => {
+                  val signed = s.copy(firmware = s.firmware.copy(signingKey = teamKey))
+                  if (busBridge.enabled) signed.withStream(gatewaySettings.stream) else signed
+                }
               )
             ))(FleetStarted.apply)
         }

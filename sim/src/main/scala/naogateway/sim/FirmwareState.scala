@@ -5,12 +5,13 @@ import java.net.InetSocketAddress
 import scala.concurrent.duration._
 
 import naogateway.proto._
+import naogateway.sim.bus.BioloidBus
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameControlData
 
 /** Settings of one simulated CM-530 firmware; every figure can be changed per robot. `servoTelemetryInterval`: one
   * keep-alive per interval carries servo telemetry (docs/protocol.md 6.8; zero turns it off); `servoSource` gives the
-  * servos it reads (an emulated bus's `servos`), None the built-in model of 18 servos (`ServoModel`).
+  * servos it reads (an emulated bus's `servos`), None the robot's emulated bus (`bus`).
   */
 final case class FirmwareSettings(
     robotId: Int,
@@ -76,7 +77,8 @@ final case class FirmwareStats(
     rpcCalls: Long = 0,
     gameControllerPackets: Long = 0,
     rejected: Long = 0,
-    refusedSignatures: Map[String, Long] = Map.empty
+    refusedSignatures: Map[String, Long] = Map.empty,
+    busBridgeRequests: Long = 0
 )
 
 /** A call whose reply waits until a motion ends. */
@@ -91,7 +93,7 @@ private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseU
 /** The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`. `bootId`
   * doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and resets.
   * `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh at every
-  * boot, as RAM does.
+  * boot, as RAM does. `bus` is the robot's emulated Dynamixel bus (servos and HaViMo2), powered up at every boot.
   */
 final case class FirmwareState(
     settings: FirmwareSettings,
@@ -115,7 +117,8 @@ final case class FirmwareState(
     stats: FirmwareStats,
     framesSigned: Long = 0L,
     gatewayWindow: ReplayWindow = ReplayWindow.empty,
-    nextServoTelemetryAt: Long = Long.MinValue
+    nextServoTelemetryAt: Long = Long.MinValue,
+    bus: BioloidBus = BioloidBus(0L)
 ) {
 
   /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */

@@ -7,11 +7,13 @@ import scala.concurrent.duration._
 import com.google.protobuf.ByteString
 
 import naogateway.proto._
+import naogateway.sim.bus.{BioloidBus, BusWork}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.{
   GameControlData,
   GameControlVersion,
   GameControllerCodec,
+  GameState,
   ReturnData,
   ReturnMessage,
   ReturnStatus
@@ -63,7 +65,8 @@ object RobotFirmware {
       frame = 0,
       said = Vector.empty,
       game = None,
-      stats = FirmwareStats()
+      stats = FirmwareStats(),
+      bus = BioloidBus(now, Scene.regions(settings.scene, settings.startPose, 0.0, 0.0), settings.initialBattery)
     )
 
   /** The firmware after a restart: same settings and battery, fresh session, debug options off. */
@@ -375,11 +378,15 @@ object RobotFirmware {
       development = s.settings.development
     ).contents(s.settings.robotId)
 
-  /** The servo telemetry of `s` (protocol.md 6.8): the configured source's servos, or the built-in model's; at most 32,
-    * as the firmware reads.
+  /** The servo telemetry of `s` (protocol.md 6.8): the configured source's servos, or those of the robot's emulated
+    * bus read at the firmware's time on the battery's voltage; at most 32, as the firmware reads.
     */
   def servoTelemetry(s: FirmwareState): ServoTelemetry =
-    ServoTelemetry(s.settings.servoSource.fold[Seq[ServoState]](ServoModel.servos(s))(_()).take(32).toVector,
+    ServoTelemetry(
+      s.settings.servoSource
+        .fold[Seq[ServoState]](s.bus.advance(s.now).withVolts(s.battery).servos)(_())
+        .take(32)
+        .toVector,
       busErrors = Some(0))
 
   private def debugData(s: FirmwareState): Vector[DebugData] = {
@@ -428,30 +435,60 @@ object RobotFirmware {
     }
   }
 
+  // The camera is read over the bus (docs/protocol.md 6.9): the frame holds the capture started a cycle earlier, and
+  // no frame goes out while the camera is still busy with it.
   private def cameraFrames(s: FirmwareState): (FirmwareState, Vector[Array[Byte]]) = {
-    val regions = Scene.regions(s.settings.scene, s.pose, s.head._1, s.head._2)
-    val frame = s.frame + 1
-    val ts = Some(s.uptimeMillis)
-    val out = Vector.newBuilder[Array[Byte]]
-    if (s.debugEnabled("havimo.regions")) {
-      val records = HaViMo.encodeRegions(regions).toOption.get
-      out += encode(s,
-        MessageContents(s.settings.robotId,
-          havimoRegions = Some(HaViMoRegionFrame(frame, ts, Some(ByteString.copyFrom(records))))))
+    val view = Scene.regions(s.settings.scene, s.pose, s.head._1, s.head._2)
+    val withGrid = s.debugEnabled("havimo.grid") || s.debugEnabled("camera.image")
+    val (bus, read) = BusWork.cameraCycle(s.bus.advance(s.now).withVolts(s.battery).seeing(view), withGrid)
+    read match {
+      case None => (s.copy(bus = bus), Vector.empty)
+      case Some(captured) =>
+        val regions = HaViMo.decodeRegions(captured.records).getOrElse(Vector.empty)
+        val frame = s.frame + 1
+        val ts = Some(s.uptimeMillis)
+        val out = Vector.newBuilder[Array[Byte]]
+        if (s.debugEnabled("havimo.regions"))
+          out += encode(s,
+            MessageContents(s.settings.robotId,
+              havimoRegions = Some(HaViMoRegionFrame(frame, ts, Some(ByteString.copyFrom(captured.records))))))
+        captured.grid.foreach { grid =>
+          if (s.debugEnabled("havimo.grid"))
+            out += encode(s,
+              MessageContents(s.settings.robotId,
+                havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(grid)))))
+          if (s.debugEnabled("camera.image")) {
+            val shapes = regions.map(r =>
+              Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY),
+                label = Some(s"colour ${r.colour}")))
+            val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES),
+              Some(ByteString.copyFrom(grid.map(b => (b & 0x0f).toByte))), shapes)
+            out += encode(s,
+              MessageContents(s.settings.robotId,
+                debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
+          }
+        }
+        (s.copy(frame = frame, bus = bus), out.result())
     }
-    if (s.debugEnabled("havimo.grid"))
-      out += encode(s,
-        MessageContents(s.settings.robotId,
-          havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(Scene.grid(regions))))))
-    if (s.debugEnabled("camera.image")) {
-      val shapes = regions.map(r =>
-        Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY), label = Some(s"colour ${r.colour}")))
-      val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES),
-        Some(ByteString.copyFrom(Scene.grid(regions).map(b => (b & 0x0f).toByte))), shapes)
-      out += encode(s,
-        MessageContents(s.settings.robotId,
-          debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
-    }
-    (s.copy(frame = frame), out.result())
+  }
+
+  /** Whether the GameController packet the robot uses says the game runs (READY, SET, PLAYING): the bus bridge is
+    * closed then (docs/protocol.md 6.9).
+    */
+  def gameRunning(s: FirmwareState): Boolean =
+    s.game.exists(g =>
+      g.gameState == GameState.Ready || g.gameState == GameState.Set || g.gameState == GameState.Playing)
+
+  /** Runs one bridged request that arrived through the secure stream on the robot's bus at `now`: the firmware after it
+    * and the reply frame (signed when the robot signs), one per request (docs/protocol.md 6.9).
+    */
+  def busBridge(state: FirmwareState, request: BusBridge, now: Long): (FirmwareState, Array[Byte]) = {
+    val s = integrate(state, now)
+    val (bus, reply) = BusWork.bridge(s.bus.advance(now).withVolts(s.battery), request, gameRunning(s))
+    val counted = s.copy(bus = bus, stats = s.stats.copy(busBridgeRequests = s.stats.busBridgeRequests + 1))
+    val frame = BusBridgeFrame.encode(s.settings.robotId, reply, s.settings.headerForm)
+      .getOrElse(throw new IllegalStateException("a bus bridge reply always fits a frame"))
+    val (signedState, out) = signed(counted, Vector(Outgoing(frame, Destination.Gateway)))
+    (signedState, out.head.bytes)
   }
 }

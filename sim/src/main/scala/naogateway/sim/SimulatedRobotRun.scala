@@ -9,7 +9,7 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.link.UdpLink
-import naogateway.wire.{Datagram, MessageContents, RpcCall, WireLimits}
+import naogateway.wire.{BusBridgeFrame, Datagram, MessageContents, RpcCall, WireLimits}
 
 /** One simulated robot's actor while it runs: its sockets, its models and its states (see [[SimulatedRobot]]). */
 private[sim] final class SimulatedRobotRun(
@@ -367,14 +367,26 @@ private[sim] final class SimulatedRobotRun(
           val app = Vector.newBuilder[Outgoing]
           // Each delivered payload is one frame from the gateway; its replies go back through the stream.
           step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
-            logCalls(frame, at)
-            val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream,
-              math.max(at, next.firmware.now), viaStream = true)
-            next = next.copy(firmware = firmware)
-            app ++= out
+            val when = math.max(at, next.firmware.now)
+            BusBridgeFrame.decode(frame).map(_._2) match {
+              case Some(request) =>
+                // A bridged bus request (docs/protocol.md 6.9): one reply, back through the stream.
+                val (firmware, reply) = RobotFirmware.busBridge(next.firmware, request, when)
+                next = next.copy(firmware = firmware)
+                app += Outgoing(reply, Destination.ReplyTo(ThroughStream))
+              case None =>
+                logCalls(frame, at)
+                val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, when, viaStream = true)
+                next = next.copy(firmware = firmware)
+                app ++= out
+            }
           }
           (next, step.transmit.map(Out(_, gateway)), app.result())
         }
+      case _ if BusBridgeFrame.mayCarry(bytes) && BusBridgeFrame.decode(bytes).isDefined =>
+        // A bus bridge frame travels only in the secure stream (docs/protocol.md 6.9): a plain one is dropped, counted.
+        (robot.copy(stats = robot.stats.copy(busBridgeDropped = robot.stats.busBridgeDropped + 1)), Vector.empty,
+          Vector.empty)
       case _ =>
         logCalls(bytes, at)
         val (firmware, out) = RobotFirmware.receive(robot.firmware, bytes, from, at)

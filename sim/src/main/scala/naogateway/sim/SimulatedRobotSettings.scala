@@ -96,6 +96,8 @@ object SimulatedRobotSettings {
   * @param ignoredAtSendingSocket
   *   datagrams that arrived at the sending socket instead: the module's client connection passes nothing to the CM-530,
   *   so they are counted here and never acted on
+  * @param busBridgeDropped
+  *   bus bridge frames that came as plain datagrams instead of in the secure stream (docs/protocol.md 6.9)
   */
 final case class RobotStats(
     received: Long = 0,
@@ -104,7 +106,8 @@ final case class RobotStats(
     streamSegments: Long = 0,
     oversizeDropped: Long = 0,
     powerCycles: Long = 0,
-    ignoredAtSendingSocket: Long = 0
+    ignoredAtSendingSocket: Long = 0,
+    busBridgeDropped: Long = 0
 )
 
 /** One call as the simulated robot's firmware read it, at `atNanos` on the robot's clock (since its start). */
