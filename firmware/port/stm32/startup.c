@@ -18,6 +18,9 @@ void UART5_IRQHandler(void);
 void Default_Handler(void);
 void Default_Handler(void) { board_exit(70); }
 
+/** The Dynamixel bus's USART (port/cm530/bus_cm530.c); a board without one never enables its interrupt. */
+void USART1_IRQHandler(void) __attribute__((weak, alias("Default_Handler")));
+
 #define VECTORS (16 + 60)
 static void (*const vectors[VECTORS])(void);
 
@@ -46,6 +49,7 @@ __attribute__((section(".isr_vector"), used)) static void (*const vectors[VECTOR
     [11] = Default_Handler, /* SVCall */
     [14] = Default_Handler, /* PendSV */
     [15] = SysTick_Handler,
+    [16 + 37] = USART1_IRQHandler,
     [16 + 53] = UART5_IRQHandler,
 };
 
