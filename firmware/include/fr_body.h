@@ -86,7 +86,7 @@ typedef struct {
     uint32_t servo_timeout_ms;     /* a servo's status packet, 4 */
     bool havimo;                   /* a HaViMo2 on the bus */
     uint8_t havimo_id;             /* 100 */
-    uint8_t havimo_capture;        /* the capture instruction: 0x0E (datasheet) */
+    uint8_t havimo_capture;        /* the capture: 0x0E CAP_REGION (datasheet), or 0x03: a write of 0 to address 0 */
     uint32_t havimo_period_ms;     /* a capture at most this often, 100 */
     uint32_t havimo_wait_ms;       /* give up a capture that has not finished after this long, 200 */
     uint32_t havimo_ping_ms;       /* ping the busy camera this often, 5 */
@@ -98,6 +98,7 @@ typedef struct {
     int havimo_grid_option;
     bool bridge;                   /* serve busBridge requests (6.9) */
     uint32_t bridge_timeout_ms;    /* the reply timeout, 20 */
+    uint32_t bridge_quiet_ms;      /* the robot's own camera reads pause this long after a bridged request, 2000 */
 } fr_body_settings_t;
 
 /** Fills `s` with the defaults: 1 Mbps, no servos, telemetry 1000 ms, no camera, the bridge on. */

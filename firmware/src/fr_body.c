@@ -29,6 +29,8 @@ static bool bus_open;
 static fr_body_stats_t stats;
 static owner_t owner;
 static bool camera_turn;
+static uint32_t last_bridged;   /* uptime of the latest bridged request */
+static bool bridged;
 static uint8_t game_state; /* of the latest GameController packet the library used; 0 INITIAL before any */
 static void (*program_game)(const fr_game_t *game, void *ctx);
 
@@ -101,6 +103,7 @@ void fr_body_defaults(fr_body_settings_t *s) {
     s->havimo_grid_option = -1;
     s->bridge = true;
     s->bridge_timeout_ms = 20u;
+    s->bridge_quiet_ms = 2000u;
 }
 
 /* ---- the transaction ---------------------------------------------------------------------------------- */
@@ -217,6 +220,8 @@ static void camera_lost(void) {
 /** Whether the camera needs the bus now. */
 static bool camera_due(uint32_t now) {
     if (!cfg.havimo) return false;
+    /* a tool on the bridge (the calibration tool) has the camera to itself; a frame begun is finished */
+    if (cam.state == CAM_IDLE && bridged && now - last_bridged < cfg.bridge_quiet_ms) return false;
     if (cam.state == CAM_IDLE) {
         if ((int32_t)(now - cam.next_at) < 0) return false;
         cam.state = CAM_CAPTURE;
@@ -232,7 +237,10 @@ static void camera_begin(void) {
     uint8_t params[2];
     uint8_t id = cfg.havimo_id;
     switch (cam.state) {
-    case CAM_CAPTURE: begin(OWNER_CAMERA, id, cfg.havimo_capture, NULL, 0, 0, 0); break;
+    case CAM_CAPTURE:
+        params[0] = params[1] = 0; /* a write of 0 to address 0, when that is the capture */
+        begin(OWNER_CAMERA, id, cfg.havimo_capture, params, cfg.havimo_capture == FR_DXL_WRITE ? 2u : 0u, 0, 0);
+        break;
     case CAM_GRID_CAPTURE: begin(OWNER_CAMERA, id, FR_HAVIMO_CAP_GRID, NULL, 0, 0, 0); break;
     case CAM_WAIT:
     case CAM_GRID_WAIT: begin(OWNER_CAMERA, id, FR_DXL_PING, NULL, 0, 6, cfg.havimo_ping_ms); break;
@@ -359,6 +367,8 @@ static void after_hook(const fr_route_t *route) {
     if (!route->via_stream) { stats.bridge_plain++; return; }
     if (queue_count == FR_BODY_BRIDGE_QUEUE) { stats.bridge_overflow++; return; }
     stats.bridge_requests++;
+    bridged = true;
+    last_bridged = fr_uptime_ms();
     incoming.sequence = incoming_msg.sequence;
     incoming.route = *route;
     queue[(queue_head + queue_count++) % FR_BODY_BRIDGE_QUEUE] = incoming;
@@ -490,6 +500,7 @@ bool fr_body_init(const fr_body_settings_t *s) {
     memset(&answer, 0, sizeof answer);
     for (size_t k = 0; k < cfg.servo_count; k++) servos[k].id = cfg.servo_ids[k];
     queue_head = queue_count = 0;
+    bridged = false;
     owner = OWNER_NONE;
     camera_turn = false;
     game_state = 0;

@@ -354,7 +354,7 @@ static void scan_camera(void) {
     }
 }
 
-static void test_havimo(bool table_read) {
+static void test_havimo(bool table_read, uint8_t capture) {
     start_robot();
     int regions = fr_option_add("havimo.regions", FR_OPT_HAVIMO_REGIONS, NULL);
     int grid = fr_option_add("havimo.grid", FR_OPT_HAVIMO_GRID, NULL);
@@ -362,6 +362,7 @@ static void test_havimo(bool table_read) {
     b.havimo_regions_option = regions;
     b.havimo_grid_option = grid;
     b.havimo_table_read = table_read;
+    b.havimo_capture = capture;
     CHECK(fr_body_init(&b));
     /* switch both options on as the gateway does (protocol.md 9.10) */
     fr_state.stats.received = 0;
@@ -528,8 +529,13 @@ static void test_bridge(void) {
     CHECK(reply_count == 3 && replies[1].sequence == 8 && replies[2].sequence == 9);
     CHECK(replies[1].result == 0 && same_bytes(replies[1].reply, replies[1].reply_len, "FF FF 02 02 00 FB"));
     CHECK(replies[2].result == 0 && replies[2].reply_len == 8 && replies[2].reply[5] == 0x00 && replies[2].reply[6] == 0x03);
+    uint32_t frames = fr_body_stats()->havimo_frames;
     run_bridge(1000);
     CHECK(busmodel_servo(2)[36] == 0x00 && busmodel_servo(2)[37] == 0x03); /* it got there */
+    /* a tool on the bridge has the camera to itself: at most the frame in progress was finished */
+    CHECK(fr_body_stats()->havimo_frames <= frames + 1);
+    run_bridge(1500);
+    CHECK(fr_body_stats()->havimo_frames >= frames + 3); /* and the robot's own reads come back after the quiet time */
 
     /* a servo's ping while the camera and the telemetry keep the bus busy */
     bridge_request(10, "FF FF 0C 02 01 F0", true);
@@ -593,6 +599,15 @@ static void test_bridge(void) {
     wait_replies(11, 100);
     CHECK(reply_count == 11 && replies[10].result == 0);
 
+    /* three at once where two may wait: the third is dropped and counted (the gateway keeps one in flight) */
+    bridge_request(21, "FF FF 01 02 01 FB", true);
+    bridge_request(22, "FF FF 02 02 01 FA", true);
+    bridge_request(23, "FF FF 03 02 01 F9", true);
+    wait_replies(13, 100);
+    run_bridge(50);
+    CHECK(reply_count == 13 && replies[11].sequence == 21 && replies[12].sequence == 22 && replies[12].result == 0);
+    CHECK(fr_body_stats()->bridge_overflow == 1);
+
     CHECK(keepalives_on_time());
     CHECK(telemetry_count >= 1);
 
@@ -621,8 +636,8 @@ int main(void) {
     test_packets();
     test_master_faults();
     test_telemetry();
-    test_havimo(false);
-    test_havimo(true);
+    test_havimo(false, FR_HAVIMO_CAP_REGION);
+    test_havimo(true, FR_DXL_WRITE); /* one read of the region table; the capture as a write to address 0 */
     test_bridge();
     return DONE();
 }
