@@ -2,10 +2,12 @@
  * official DynamixelSDK reaches it through a pseudo-terminal (socat pty,link=/tmp/dxl,raw,echo=0
  * tcp:127.0.0.1:<port>), the posix robot through FR_POSIX_BUS=tcp:127.0.0.1:<port>, and qemu through
  * -serial tcp:127.0.0.1:<port>. One client at a time; the model keeps its state between clients.
- *   build/busmodel [port=7000] [bind=127.0.0.1] [run_ms=0]
- * It prints "busmodel: listening on <ip>:<port>" once it accepts connections. */
+ *   build/busmodel [port=7000] [bind=127.0.0.1] [run_ms=0] [log=1]
+ * It prints "busmodel: listening on <ip>:<port>" once it accepts connections; with log=1 also, once a second while
+ * a client sends, how many bytes came and went. */
 #define _POSIX_C_SOURCE 200809L
 #include <arpa/inet.h>
+#include <stdbool.h>
 #include <errno.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -31,10 +33,14 @@ int main(int argc, char **argv) {
     unsigned port = 7000;
     const char *bind_ip = "127.0.0.1";
     unsigned long run_ms = 0;
+    bool log = false;
+    unsigned long bytes_in = 0, bytes_out = 0;
+    uint32_t last_log = 0;
     for (int k = 1; k < argc; k++) {
         if (strncmp(argv[k], "port=", 5) == 0) port = (unsigned)strtoul(argv[k] + 5, NULL, 10);
         else if (strncmp(argv[k], "bind=", 5) == 0) bind_ip = argv[k] + 5;
         else if (strncmp(argv[k], "run_ms=", 7) == 0) run_ms = strtoul(argv[k] + 7, NULL, 10);
+        else if (strcmp(argv[k], "log=1") == 0) log = true;
         else { fprintf(stderr, "busmodel: unknown argument %s (port=, bind=, run_ms=)\n", argv[k]); return 2; }
     }
     signal(SIGPIPE, SIG_IGN);
@@ -57,6 +63,12 @@ int main(int argc, char **argv) {
     int cfd = -1;
     for (;;) {
         if (run_ms != 0 && now_ms() - began >= run_ms) return 0;
+        if (log && bytes_in > 0 && now_ms() - last_log >= 1000u) {
+            printf("busmodel: %lu bytes in, %lu bytes out\n", bytes_in, bytes_out);
+            fflush(stdout);
+            bytes_in = bytes_out = 0;
+            last_log = now_ms();
+        }
         struct pollfd p[1] = {{cfd >= 0 ? cfd : lfd, POLLIN, 0}};
         int r = poll(p, 1, 5);
         busmodel_step(now_ms());
@@ -74,6 +86,8 @@ int main(int argc, char **argv) {
             continue;
         }
         size_t m = busmodel_feed(in, (size_t)n, out, sizeof out, now_ms());
+        bytes_in += (unsigned long)n;
+        bytes_out += m;
         for (size_t done = 0; done < m;) {
             ssize_t w = send(cfd, out + done, m - done, MSG_NOSIGNAL);
             if (w <= 0) break;
