@@ -632,6 +632,67 @@ static void test_bridge(void) {
     CHECK(reply_count == 1 && replies[0].result == 4);
 }
 
+/** A pseudo-random number (xorshift32), for repeatable mutations. */
+static uint32_t rng = 12345;
+static uint32_t next_random(void) {
+    rng ^= rng << 13;
+    rng ^= rng >> 17;
+    rng ^= rng << 5;
+    return rng;
+}
+
+/** Random requests, some well-formed and most not, while the bus babbles now and then: never more replies than
+ *  requests, the counters add up, and the keep-alives stay on time. */
+static void test_bridge_fuzz(void) {
+    start_robot();
+    fr_body_settings_t b = body_settings(18, true);
+    b.bridge_timeout_ms = 3;
+    CHECK(fr_body_init(&b));
+    reply_count = 0;
+    size_t replies_seen = 0;
+    uint32_t sent_requests = 0;
+    char hexbuf[3 * 200 + 1];
+    for (int round = 0; round < 1500; round++) {
+        uint8_t p[200];
+        size_t n = next_random() % 160;
+        for (size_t k = 0; k < n; k++) p[k] = (uint8_t)next_random();
+        if (next_random() % 3 == 0 && n >= 6) { /* a well-formed packet to a random id */
+            uint8_t params[140];
+            size_t count = n - 6 < sizeof params ? n - 6 : sizeof params;
+            memcpy(params, p + 6, count);
+            n = fr_dxl_packet(p, (uint8_t)(next_random() % 20 == 0 ? 0xFE : next_random() % 110), (uint8_t)next_random(),
+                              params, count);
+        }
+        for (size_t k = 0; k < n; k++) snprintf(hexbuf + 3 * k, 4, "%02X ", p[k]);
+        hexbuf[3 * n] = '\0';
+        bus_stuck_low = next_random() % 10 == 0;
+        bridge_request((uint32_t)round, n ? hexbuf : "", true);
+        sent_requests++;
+        for (int k = 0; k < 8; k++) {
+            fake_now++;
+            fr_poll();
+            scan_replies();
+            scan_sent();
+            if (reply_count == 16) { replies_seen += 16; reply_count = 0; }
+        }
+    }
+    bus_stuck_low = false;
+    for (int k = 0; k < 100; k++) {
+        fake_now++;
+        fr_poll();
+        scan_replies();
+        scan_sent();
+        if (reply_count == 16) { replies_seen += 16; reply_count = 0; }
+    }
+    replies_seen += reply_count;
+    const fr_body_stats_t *st = fr_body_stats();
+    CHECK(replies_seen <= sent_requests);
+    CHECK(replies_seen == st->bridge_requests); /* every request taken was answered, once */
+    CHECK(st->bridge_requests + st->bridge_overflow == sent_requests);
+    CHECK(keepalives_on_time());
+    CHECK(st->bridge_malformed > 100);
+}
+
 int main(void) {
     test_packets();
     test_master_faults();
@@ -639,5 +700,6 @@ int main(void) {
     test_havimo(false, FR_HAVIMO_CAP_REGION);
     test_havimo(true, FR_DXL_WRITE); /* one read of the region table; the capture as a write to address 0 */
     test_bridge();
+    test_bridge_fuzz();
     return DONE();
 }
