@@ -279,6 +279,18 @@ static void camera_finish(void) {
     cam.next_at = cam.began + cfg.havimo_period_ms;
 }
 
+/** Whether a camera read brought `want` bytes; otherwise the failure is counted and the frame given up. */
+static bool camera_read_ok(fr_dxl_result_t r, size_t len, size_t want) {
+    count_failure(r);
+    if (r == FR_DXL_OK && len == 6 + want) return true;
+    if (r == FR_DXL_OK) { /* a bare error status where data was due */
+        stats.malformed++;
+        stats.bus_errors++;
+    }
+    camera_lost();
+    return false;
+}
+
 /** Moves the camera's cycle on after one of its transactions. */
 static void camera_done(fr_dxl_result_t r, uint32_t now) {
     size_t len;
@@ -305,8 +317,7 @@ static void camera_done(fr_dxl_result_t r, uint32_t now) {
         break;
     case CAM_REGIONS: {
         size_t want = cfg.havimo_table_read ? FR_HAVIMO_TABLE_SIZE : FR_HAVIMO_RECORD_SIZE;
-        count_failure(r);
-        if (r != FR_DXL_OK || len != 6 + want) { if (r == FR_DXL_OK) stats.malformed++, stats.bus_errors++; camera_lost(); break; }
+        if (!camera_read_ok(r, len, want)) break;
         memcpy(cam.table + (cfg.havimo_table_read ? 0u : (size_t)cam.k * FR_HAVIMO_RECORD_SIZE), p + 5, want);
         if (!cfg.havimo_table_read && ++cam.k < FR_HAVIMO_REGIONS_MAX) break;
         cam.next_count = 0;
@@ -322,8 +333,7 @@ static void camera_done(fr_dxl_result_t r, uint32_t now) {
     }
     case CAM_GRID_READ: {
         size_t chunk = cfg.havimo_grid_chunk;
-        count_failure(r);
-        if (r != FR_DXL_OK || len != 6 + chunk) { if (r == FR_DXL_OK) stats.malformed++, stats.bus_errors++; camera_lost(); break; }
+        if (!camera_read_ok(r, len, chunk)) break;
         memcpy(cam.cells + (size_t)cam.k * chunk, p + 5, chunk);
         if ((size_t)++cam.k * chunk < FR_HAVIMO_GRID_SIZE) break;
         camera_finish();

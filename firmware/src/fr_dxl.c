@@ -11,7 +11,7 @@
 #define FR_DXL_DRAIN_MAX 256
 
 /** Where the transaction is. */
-typedef enum { PHASE_IDLE, PHASE_SEND, PHASE_SENDING, PHASE_RECEIVE, PHASE_DONE } phase_t;
+typedef enum { PHASE_IDLE, PHASE_SEND, PHASE_SENDING, PHASE_RECEIVE } phase_t;
 
 static struct {
     phase_t phase;
@@ -59,7 +59,7 @@ size_t fr_dxl_reply_due(const uint8_t *p, size_t len) {
 }
 
 bool fr_dxl_start(const uint8_t *packet, size_t len, size_t due, uint32_t timeout_ms) {
-    if ((m.phase != PHASE_IDLE && m.phase != PHASE_DONE) || len == 0 || len > FR_DXL_TX_MAX) return false;
+    if (m.phase != PHASE_IDLE || len == 0 || len > FR_DXL_TX_MAX) return false;
     memcpy(m.tx, packet, len);
     m.tx_len = len;
     m.due = due > FR_DXL_RX_MAX ? FR_DXL_RX_MAX : due;
@@ -109,9 +109,6 @@ fr_dxl_result_t fr_dxl_poll(void) {
     uint32_t now = fr_port_millis();
     switch (m.phase) {
     case PHASE_IDLE: return FR_DXL_IDLE;
-    case PHASE_DONE:
-        m.phase = PHASE_IDLE;
-        return m.result;
     case PHASE_SEND:
         drain(); /* what the line carried before belongs to nobody */
         if (fr_port_bus_write(m.tx, m.tx_len) < 0) return FR_DXL_BUSY; /* the port is still busy: next poll */
