@@ -37,6 +37,9 @@ static size_t cut_next;
 static uint8_t corrupt_id, cut_id;
 static size_t babble_n;
 static uint8_t babble_byte;
+static busmodel_counters_t counters;
+
+const busmodel_counters_t *busmodel_counters(void) { return &counters; }
 
 /** The AX-12A factory table for `id`, centred. */
 static void servo_defaults(servo_t *s, uint8_t id) {
@@ -58,6 +61,7 @@ void busmodel_init(uint32_t now_ms) {
     cam.table[3] = BUSMODEL_HAVIMO_ID;
     cam.status_return = 2;
     in_len = 0;
+    memset(&counters, 0, sizeof counters);
     last_ms = now_ms;
     corrupt_next = false;
     cut_next = 0;
@@ -199,6 +203,7 @@ static size_t execute(const uint8_t *p, size_t len, bool ok, uint8_t *out, size_
     uint8_t id = p[2], inst = p[4];
     const uint8_t *prm = p + 5;
     size_t n = len - 6;
+    counters.packets++;
     if (id == 0xFE) {
         if (!ok) return 0;
         if (inst == 0x83 && n >= 2) { /* sync write: address, length, then id and data per servo */
@@ -225,12 +230,14 @@ static size_t execute(const uint8_t *p, size_t len, bool ok, uint8_t *out, size_
         case 0x01: return status(id, 0, NULL, 0, out, cap);
         case 0x0E:
         case 0x15:
+            counters.captures++;
             scene(now, inst == 0x15);
             cam.busy = true;
             cam.busy_until = now + BUSMODEL_CAPTURE_MS;
             return 0; /* no status packet for a capture */
         case 0x03:
             if (n >= 2 && prm[0] == 0) { /* a write to address 0 starts a capture too (public CM-5x0 examples) */
+                counters.captures++;
                 scene(now, false);
                 cam.busy = true;
                 cam.busy_until = now + BUSMODEL_CAPTURE_MS;
@@ -255,7 +262,11 @@ static size_t execute(const uint8_t *p, size_t len, bool ok, uint8_t *out, size_
     case 0x01: return status(id, 0, NULL, 0, out, cap);
     case 0x02:
         if (n != 2 || prm[1] == 0 || prm[0] + prm[1] > BUSMODEL_TABLE) err = ERR_RANGE;
-        else if (answers(level, inst)) return status(id, 0, s->t + prm[0], prm[1], out, cap);
+        else if (answers(level, inst)) {
+            int index = (int)(s - servos);
+            counters.servo_reads[index]++;
+            return status(id, 0, s->t + prm[0], prm[1], out, cap);
+        }
         else return 0;
         break;
     case 0x03: err = n >= 2 ? servo_write(s, prm[0], prm + 1, n - 1) : ERR_RANGE; break;

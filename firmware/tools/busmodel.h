@@ -39,4 +39,15 @@ void busmodel_cut_next(uint8_t id, size_t keep);
 /** Every answer is replaced by `n` bytes of garbage (a bus stuck low reads as 0x00 bytes); 0 ends it. */
 void busmodel_babble(size_t n, uint8_t byte);
 
+/** What the bus has served since busmodel_init: instruction packets, reads answered per servo id (1..18, index
+ *  id - 1), and camera captures. */
+typedef struct {
+    uint32_t packets;
+    uint32_t servo_reads[BUSMODEL_SERVOS];
+    uint32_t captures;
+} busmodel_counters_t;
+
+/** The counters. */
+const busmodel_counters_t *busmodel_counters(void);
+
 #endif

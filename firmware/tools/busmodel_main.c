@@ -64,7 +64,11 @@ int main(int argc, char **argv) {
     for (;;) {
         if (run_ms != 0 && now_ms() - began >= run_ms) return 0;
         if (log && bytes_in > 0 && now_ms() - last_log >= 1000u) {
-            printf("busmodel: %lu bytes in, %lu bytes out\n", bytes_in, bytes_out);
+            const busmodel_counters_t *c = busmodel_counters();
+            unsigned servos_read = 0;
+            for (int k = 0; k < BUSMODEL_SERVOS; k++) servos_read += c->servo_reads[k] > 0;
+            printf("busmodel: %lu bytes in, %lu bytes out; since start %lu packets, %u servos read, %lu captures\n",
+                   bytes_in, bytes_out, (unsigned long)c->packets, servos_read, (unsigned long)c->captures);
             fflush(stdout);
             bytes_in = bytes_out = 0;
             last_log = now_ms();
