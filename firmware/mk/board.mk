@@ -93,14 +93,14 @@ $(BUILD)/$(1)/$(2).bin: $(BUILD)/$(1)/$(2).elf
 	$(ARM_OBJCOPY) -O binary $$< $$@
 endef
 
-$(eval $(call arm_variant,cm530,port/cm530/board_cm530.c,-DFR_BOARD_NEEDS_KEY,ld/stm32f103re.ld))
-$(eval $(call arm_variant,cm530-w4,port/cm530/board_cm530.c,-DFR_STREAM_WINDOW=4 -DFR_BOARD_NEEDS_KEY,ld/stm32f103re.ld))
+$(eval $(call arm_variant,cm530,port/cm530/board_cm530.c port/cm530/bus_cm530.c,-DFR_BOARD_NEEDS_KEY,ld/stm32f103re.ld))
+$(eval $(call arm_variant,cm530-w4,port/cm530/board_cm530.c port/cm530/bus_cm530.c,-DFR_STREAM_WINDOW=4 -DFR_BOARD_NEEDS_KEY,ld/stm32f103re.ld))
 # The emulated board's clock is the host's: when a loaded host leaves qemu's CPU thread unscheduled in the middle of a
 # datagram, half a second passes between two of its bytes, which a real module at 460800 baud never does. The qemu
 # images wait longer for a datagram's announced bytes, so such a pause is not taken for a damaged header.
 QEMU_TIMING := -DGS1500M_PAYLOAD_MS=5000u
-$(eval $(call arm_variant,qemu,port/qemu/board_qemu.c,$(QEMU_TIMING),ld/qemu-netduino2.ld))
-$(eval $(call arm_variant,qemu-w4,port/qemu/board_qemu.c,-DFR_STREAM_WINDOW=4 $(QEMU_TIMING),ld/qemu-netduino2.ld))
+$(eval $(call arm_variant,qemu,port/qemu/board_qemu.c port/qemu/bus_qemu.c,$(QEMU_TIMING),ld/qemu-netduino2.ld))
+$(eval $(call arm_variant,qemu-w4,port/qemu/board_qemu.c port/qemu/bus_qemu.c,-DFR_STREAM_WINDOW=4 $(QEMU_TIMING),ld/qemu-netduino2.ld))
 $(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(FR_EXAMPLE_SRCS),$$($(v)_PORT))))
 $(foreach v,qemu qemu-w4,$(eval $(call arm_program,$(v),measure,port/qemu/measure.c,)))
 # The footprint stub (port/cm530/footprint.c): the library alone, every public function kept by a table generated

@@ -11,6 +11,7 @@
 #define FR_POLL_DATAGRAMS 4
 
 fr_state_t fr_state;
+fr_body_hooks_t fr_body_hooks;
 
 /* The one frame buffer of both directions (docs/firmware.md, "Memory"): a received datagram at its start (decoded in
  * place, its RPC parameters and option names copied out while decoding), an outgoing frame encoded at
@@ -131,7 +132,9 @@ static FR_NOINLINE void send_keepalive(void) {
         health.board.has_faultReset = board.fault_reset;
         health.board.faultReset = board.fault_reset;
     }
-    pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health, NULL, true};
+    /* servoTelemetry (7106) after robotHealth, once per telemetry period (protocol.md 6.8) */
+    pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health,
+                                 fr_body_hooks.keepalive ? fr_body_hooks.keepalive() : NULL, true};
     pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
     naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
     msg.extensions = &ext_status;
@@ -184,7 +187,8 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
         memset(&commands, 0, sizeof commands);
         fr_rpc_prepare(&request);
         fr_debug_prepare(&commands, pass == 1);
-        pb_extension_t ext_cmd = {&naogateway_proto_debuggingCommands, &commands, NULL, false};
+        pb_extension_t ext_cmd = {&naogateway_proto_debuggingCommands, &commands,
+                                  fr_body_hooks.prepare ? fr_body_hooks.prepare() : NULL, false};
         pb_extension_t ext_req = {&naogateway_proto_rpcRequest, &request, &ext_cmd, false};
         naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
         msg.extensions = &ext_req;
@@ -196,6 +200,7 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
         if (pass == 0 && ext_cmd.found) continue;
         if (ext_cmd.found) fr_debug_after(&commands, &route);
         if (ext_req.found) fr_rpc_dispatch(&route);
+        if (fr_body_hooks.after) fr_body_hooks.after(&route);
         return;
     }
 }
@@ -302,4 +307,5 @@ void fr_poll(void) {
         send_keepalive();
     }
     fr_stream_poll();
+    if (fr_body_hooks.poll) fr_body_hooks.poll();
 }

@@ -167,6 +167,17 @@ void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *pa
 void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, size_t ikm_len, const uint8_t *info,
                     size_t info_len, uint8_t *out, size_t out_len);
 
+/* body.c: the Dynamixel bus (include/fr_body.h). fr_body_init sets these; they stay NULL in a program without a
+ * bus, so fr_core.c calls no body code and such a program links none of it. */
+/** What the body adds to the library's loop, the keep-alive and incoming frames. */
+typedef struct {
+    void (*poll)(void);                  /* moves bus transactions on (fr_poll) */
+    pb_extension_t *(*keepalive)(void);  /* the servoTelemetry extension for this keep-alive, or NULL */
+    pb_extension_t *(*prepare)(void);    /* the busBridge extension to decode an incoming frame into */
+    void (*after)(const fr_route_t *route); /* the frame was decoded: acts on its busBridge, if any */
+} fr_body_hooks_t;
+extern fr_body_hooks_t fr_body_hooks;
+
 /* pb helpers (core.c) */
 /** Encode callback for a zero-terminated string in `*arg`. */
 bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg);

@@ -43,6 +43,9 @@ void board_stack_check(void) {
         if (*p != GUARD_WORD) reset_with_note(BOARD_RESET_STACK);
 }
 
+/** The Dynamixel bus's USART (port/cm530/bus_cm530.c); a board without one never enables its interrupt. */
+void USART1_IRQHandler(void) __attribute__((weak, alias("Default_Handler")));
+
 #define VECTORS (16 + 60)
 static void (*const vectors[VECTORS])(void);
 
@@ -80,7 +83,7 @@ __attribute__((section(".isr_vector"), used)) static void (*const vectors[VECTOR
     (void (*)(void))(uintptr_t)&_estack, Reset_Handler,
     D, D, D, D, D, D, D, D, D, D, D, D, D, SysTick_Handler,          /* NMI .. PendSV, SysTick */
     D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D,      /* IRQ 0 .. 19 */
-    D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D,      /* IRQ 20 .. 39 */
+    D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, D, USART1_IRQHandler, D, D, /* IRQ 20 .. 39, USART1 at 37 */
     D, D, D, D, D, D, D, D, D, D, D, D, D, UART5_IRQHandler, D, D,   /* IRQ 40 .. 55, UART5 at 53 */
     D, D, D, D,                                                      /* IRQ 56 .. 59 */
 };

@@ -1,0 +1,59 @@
+#!/usr/bin/env python3
+"""firmware/tools/qemu_bus_check.py: the qemu board (build/qemu/robot.elf, development) with the standalone busmodel
+on its first -serial (the netduino2's USART1) reads every servo and captures camera frames over it, for a few
+seconds of emulation. Prints "N passed, N failed".
+
+    qemu_bus_check.py <build/busmodel> <build/qemu/robot.elf>"""
+import re
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+passed = failed = 0
+
+
+def check(ok, what):
+    global passed, failed
+    if ok:
+        passed += 1
+    else:
+        failed += 1
+        print("FAIL", what)
+
+
+def main():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    model = subprocess.Popen([sys.argv[1], "port=%d" % port, "log=1", "run_ms=60000"], stdout=subprocess.PIPE, text=True)
+    check("listening" in model.stdout.readline(), "busmodel started")
+    epoch = tempfile.mkdtemp(prefix="qemu-bus-") + "/robot.epoch"
+    qemu = subprocess.Popen(["qemu-system-arm", "-M", "netduino2", "-display", "none", "-monitor", "none", "-nodefaults",
+                             "-serial", "tcp:127.0.0.1:%d,nodelay=on" % port, "-serial", "null", "-serial", "null",
+                             "-serial", "null", "-serial", "null", "-semihosting-config", "enable=on,target=native",
+                             "-kernel", sys.argv[2], "-append", "development epoch=%s" % epoch],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    best = (0, 0)
+    try:
+        end = time.time() + 30
+        while time.time() < end and (best[0] < 18 or best[1] < 3):
+            line = model.stdout.readline()  # once a second while qemu talks; EOF when the model ends (run_ms)
+            m = re.search(r"(\d+) servos read, (\d+) captures", line)
+            if m:
+                best = (int(m.group(1)), int(m.group(2)))
+    finally:
+        qemu.terminate()
+        model.terminate()
+        qemu.wait(timeout=10)
+        model.wait(timeout=10)
+    check(best[0] == 18, "every servo read: %d" % best[0])
+    check(best[1] >= 3, "camera frames captured: %d" % best[1])
+    print("%d passed, %d failed" % (passed, failed))
+    return 0 if failed == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
