@@ -36,7 +36,7 @@ STM32_SRCS := port/stm32/startup.c
 STM32_PORT_SRCS := port/stm32/fr_port_gs1500m.c
 ARM_PB_SRCS := $(FR_PB_SRCS) $(FR_GEN_SRCS)
 
-.PHONY: arm qemu footprint test-gs1500m test-qemu-board check-arm check-qemu check-robot-key FORCE
+.PHONY: arm qemu footprint footprint-body test-gs1500m test-qemu-board check-arm check-qemu check-robot-key FORCE
 
 # The robot key of the board images: ROBOT_KEY=<hex> (what `robotctl keys <id>` prints), or FR_DEVELOPMENT=1 for an
 # unsigned development image. Checked here (16 to 64 bytes of hex digit pairs, never both) and again by the
@@ -105,8 +105,11 @@ $(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(F
 $(foreach v,qemu qemu-w4,$(eval $(call arm_program,$(v),measure,port/qemu/measure.c,)))
 # The footprint stub (port/cm530/footprint.c): the library alone, every public function kept by a table generated
 # from the public headers (tools/footprint_keep.sh), so a function added to fr.h (or a new include/fr_*.h) is
-# measured without editing the stub.
-FOOTPRINT_HEADERS := $(filter-out include/fr_config.h include/fr_port.h,$(wildcard include/fr.h include/fr_*.h))
+# measured without editing the stub. The body (include/fr_body.h: the Dynamixel bus, the HaViMo2, telemetry and
+# the bus bridge) is optional: a program that never calls fr_body_init links none of it, so it is measured apart
+# (`make footprint-body`, docs/firmware.md "Footprint").
+FOOTPRINT_HEADERS := $(filter-out include/fr_config.h include/fr_port.h include/fr_port_bus.h include/fr_body.h,\
+                     $(wildcard include/fr.h include/fr_*.h))
 $(GEN)/footprint_keep.c: tools/footprint_keep.sh $(FOOTPRINT_HEADERS)
 	@mkdir -p $(dir $@)
 	sh tools/footprint_keep.sh $(FOOTPRINT_HEADERS) > $@.new && mv $@.new $@
@@ -131,6 +134,12 @@ test-qemu-board: $(BUILD)/qemu/boardcheck.elf | check-qemu
 footprint: ROBOT_KEY := $(if $(ROBOT_KEY)$(FR_DEVELOPMENT),$(ROBOT_KEY),000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f)
 footprint: arm qemu $(BUILD)/cm530/footprint.elf $(BUILD)/cm530-w4/footprint.elf | check-qemu
 	@python3 port/qemu/footprint.py "$(QEMU)" "$(ARM_SIZE)" "$(BUILD)"
+
+# The optional body's own flash (text + data) and static RAM (bss + data) on the CM-530, object by object.
+BODY_OBJS := obj/src/fr_body.o obj/src/fr_dxl.o obj/port/cm530/bus_cm530.o pb/build/gen/naogateway/proto/body.pb.o
+footprint-body: ROBOT_KEY := $(if $(ROBOT_KEY)$(FR_DEVELOPMENT),$(ROBOT_KEY),000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f)
+footprint-body: $(BUILD)/cm530/robot.elf
+	@$(ARM_SIZE) $(addprefix $(BUILD)/cm530/,$(BODY_OBJS))
 
 # The driver's tests alone, without nanopb (the Makefile's `make test` runs them with the library's).
 test-gs1500m: $(BUILD)/tests-gs1500m/test_gs1500m
