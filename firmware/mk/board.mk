@@ -110,7 +110,7 @@ $(foreach v,qemu qemu-w4,$(eval $(call arm_program,$(v),measure,port/qemu/measur
 # (`make footprint-body`, docs/firmware.md "Footprint").
 FOOTPRINT_HEADERS := $(filter-out include/fr_config.h include/fr_port.h include/fr_port_bus.h include/fr_body.h,\
                      $(wildcard include/fr.h include/fr_*.h))
-$(GEN)/footprint_keep.c: tools/footprint_keep.sh $(FOOTPRINT_HEADERS)
+$(GEN)/footprint_keep.c: tools/footprint_keep.sh mk/board.mk $(FOOTPRINT_HEADERS)
 	@mkdir -p $(dir $@)
 	sh tools/footprint_keep.sh $(FOOTPRINT_HEADERS) > $@.new && mv $@.new $@
 $(foreach v,cm530 cm530-w4,$(eval $(call arm_program,$(v),footprint,port/cm530/footprint.c,$$($(v)_PORT) $(BUILD)/$(v)/obj/$(GEN)/footprint_keep.o)))
