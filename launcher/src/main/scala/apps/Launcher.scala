@@ -323,13 +323,15 @@ object Launcher {
     }
   }
 
-  /** What the demo's app node takes over from the gateway node's config: where the cluster is, and the dispatcher's
-    * size.
+  /** What the demo's app node takes over from the gateway node's config: where the cluster is, the dispatcher's size,
+    * and what makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace, Artery's flush at shutdown).
     */
   def appNodeConfig(gatewayNode: Config): Config =
-    Seq("robotmiddleware.cluster", "akka.actor.default-dispatcher").foldLeft(ConfigFactory.empty()) { (c, path) =>
-      c.withValue(path, gatewayNode.getValue(path))
-    }
+    Seq("robotmiddleware.cluster", "akka.actor.default-dispatcher", "akka.coordinated-shutdown",
+      "akka.cluster.leader-actions-interval", "akka.remote.artery.advanced.shutdown-flush-timeout")
+      .foldLeft(ConfigFactory.empty()) { (c, path) =>
+        c.withValue(path, gatewayNode.getValue(path))
+      }
 
   private final case class BallFollowerNode(robot: scala.util.Try[robotmiddleware.RobotInterface])
 }

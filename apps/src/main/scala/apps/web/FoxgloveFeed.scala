@@ -3,6 +3,7 @@ package apps.web
 import java.nio.{ByteBuffer, ByteOrder}
 import java.util.Base64
 
+import scala.concurrent.ExecutionContext
 import scala.concurrent.duration._
 import scala.util.{Failure, Success, Try}
 
@@ -82,6 +83,9 @@ object FoxgloveFeed {
   // The gateway did not answer the budget question: the next tick asks again.
   private case object Unanswered extends Command
   private case object BudgetTick extends Command
+  // A connection's updates began or ended: with none, nothing is encoded or asked for.
+  private case object ClientJoined extends Command
+  private case object ClientLeft extends Command
 
   /** How often the budget decision is published (the recording's outbox writes it at most this often). */
   private val BudgetInterval: FiniteDuration = 1.second
@@ -104,25 +108,34 @@ object FoxgloveFeed {
         }
       Behaviors.withTimers[Command] { timers =>
         timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
-        running(queue, hub, Map.empty, Vector(Decisions), askTraffic)
+        running(queue, hub, Map.empty, Vector(Decisions), askTraffic, clients = 0)
       }
     }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed],
       robots: Map[Int, (Channel, Channel)],
-      channels: Vector[Channel], askTraffic: () => Unit): Behavior[Command] =
-    Behaviors.receiveMessage[Command] {
+      channels: Vector[Channel], askTraffic: () => Unit, clients: Int): Behavior[Command] =
+    Behaviors.receive[Command] { (context, command) =>
+      command match {
       case Connect(replyTo) =>
-        replyTo ! Feed(channels, hub)
+        val self = context.self
+        val updates = hub.watchTermination() { (_, done) =>
+          self ! ClientJoined
+          done.onComplete(_ => self ! ClientLeft)(ExecutionContext.parasitic)
+          NotUsed
+        }
+        replyTo ! Feed(channels, updates)
         Behaviors.same
+      case ClientJoined => running(queue, hub, robots, channels, askTraffic, clients + 1)
+      case ClientLeft   => running(queue, hub, robots, channels, askTraffic, math.max(0, clients - 1))
       case Event(event) =>
-        decided(queue, Decision.Published(event))
+        if (clients > 0) decided(queue, Decision.Published(event))
         Behaviors.same
       case Game(data) =>
-        decided(queue, Decision.Published(GameStateUpdated(data)))
+        if (clients > 0) decided(queue, Decision.Published(GameStateUpdated(data)))
         Behaviors.same
       case BudgetTick =>
-        askTraffic()
+        if (clients > 0) askTraffic()
         Behaviors.same
       case Unanswered =>
         Behaviors.same
@@ -141,14 +154,19 @@ object FoxgloveFeed {
             queue.offer(Advertised(Vector(status, health)))
             ((status, health), Vector(status, health))
           }(pair => (pair, Vector.empty))
-          val nanos = System.currentTimeMillis() * 1000000L
-          val report = snapshot.report
-          queue.offer(Published(status, nanos, report.status.toByteArray))
-          queue.offer(Published(health, nanos, report.health.toByteArray))
-          running(queue, hub, robots.updated(id, (status, health)), channels ++ more, askTraffic)
+          if (clients > 0) {
+            val nanos = System.currentTimeMillis() * 1000000L
+            val report = snapshot.report
+            queue.offer(Published(status, nanos, report.status.toByteArray))
+            queue.offer(Published(health, nanos, report.health.toByteArray))
+          }
+          if (more.isEmpty) Behaviors.same
+          else running(queue, hub, robots.updated(id, (status, health)), channels ++ more, askTraffic, clients)
         }
+      }
     }.receiveSignal { case (_, PostStop) =>
-      queue.complete()
+      // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to end.
+      Try(queue.complete())
       Behaviors.same
     }
 
