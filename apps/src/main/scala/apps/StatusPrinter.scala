@@ -109,8 +109,8 @@ object StatusPrinter {
     Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](
       SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
-  /** How often the printer asks the gateway: every `refresh` for a screen; for lines, which only print changes, at
-    * most once a second (each round asks the gateway six questions, and most of the robot actors with them).
+  /** How often the printer asks the gateway: every `refresh` for a screen; for lines, which only print changes, at most
+    * once a second (each round asks the gateway six questions, and most of the robot actors with them).
     */
   private[apps] def pace(refresh: FiniteDuration, output: Output): FiniteDuration = output match {
     case _: ScreenOutput => refresh

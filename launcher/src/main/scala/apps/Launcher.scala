@@ -327,8 +327,13 @@ object Launcher {
     * and what makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace, Artery's flush at shutdown).
     */
   def appNodeConfig(gatewayNode: Config): Config =
-    Seq("robotmiddleware.cluster", "akka.actor.default-dispatcher", "akka.coordinated-shutdown",
-      "akka.cluster.leader-actions-interval", "akka.remote.artery.advanced.shutdown-flush-timeout")
+    Seq(
+      "robotmiddleware.cluster",
+      "akka.actor.default-dispatcher",
+      "akka.coordinated-shutdown",
+      "akka.cluster.leader-actions-interval",
+      "akka.remote.artery.advanced.shutdown-flush-timeout"
+    )
       .foldLeft(ConfigFactory.empty()) { (c, path) =>
         c.withValue(path, gatewayNode.getValue(path))
       }

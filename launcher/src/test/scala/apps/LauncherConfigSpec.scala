@@ -26,8 +26,12 @@ class LauncherConfigSpec extends AnyWordSpec with Matchers {
       val gatewayNode = Launcher.nodeConfig(ConfigFactory.empty(), noApplication)
       val appNode = MiddlewareCluster.config(MiddlewareCluster.AppRole, Launcher.appNodeConfig(gatewayNode))
       // Akka's defaults (5 s, 10 s, 1 s, 1 s) would let the app node's leave outlast Ctrl-C's 2 s on its own.
-      Seq("akka.coordinated-shutdown.default-phase-timeout", "akka.coordinated-shutdown.phases.cluster-exiting.timeout",
-        "akka.cluster.leader-actions-interval", "akka.remote.artery.advanced.shutdown-flush-timeout").foreach { key =>
+      Seq(
+        "akka.coordinated-shutdown.default-phase-timeout",
+        "akka.coordinated-shutdown.phases.cluster-exiting.timeout",
+        "akka.cluster.leader-actions-interval",
+        "akka.remote.artery.advanced.shutdown-flush-timeout"
+      ).foreach { key =>
         withClue(key)(appNode.getDuration(key) shouldBe gatewayNode.getDuration(key))
         withClue(key)(appNode.getDuration(key).toMillis should be <= 1000L)
       }

@@ -108,17 +108,16 @@ object FoxgloveFeed {
         }
       Behaviors.withTimers[Command] { timers =>
         timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
-        running(queue, hub, Map.empty, Vector(Decisions), askTraffic, clients = 0)
+        running(queue, hub, Map.empty, Vector(Decisions), askTraffic, clients = 0)(context.self)
       }
     }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed],
       robots: Map[Int, (Channel, Channel)],
-      channels: Vector[Channel], askTraffic: () => Unit, clients: Int): Behavior[Command] =
-    Behaviors.receive[Command] { (context, command) =>
-      command match {
+      channels: Vector[Channel], askTraffic: () => Unit, clients: Int)(
+      implicit self: ActorRef[Command]): Behavior[Command] =
+    Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
-        val self = context.self
         val updates = hub.watchTermination() { (_, done) =>
           self ! ClientJoined
           done.onComplete(_ => self ! ClientLeft)(ExecutionContext.parasitic)
@@ -163,7 +162,6 @@ object FoxgloveFeed {
           if (more.isEmpty) Behaviors.same
           else running(queue, hub, robots.updated(id, (status, health)), channels ++ more, askTraffic, clients)
         }
-      }
     }.receiveSignal { case (_, PostStop) =>
       // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to end.
       Try(queue.complete())
