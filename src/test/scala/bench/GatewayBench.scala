@@ -62,6 +62,7 @@ import naogateway.wire.{MessageContents, RpcCall}
   */
 object GatewayBench extends Benchmark {
   val name = "gateway"
+  override val quietSensitive = true
 
   /** The parts to run (`rtt`, `ingest`, `heartbeat`, `fleet`); all when empty. */
   var parts: Set[String] = Set.empty
