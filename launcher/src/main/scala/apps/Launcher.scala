@@ -308,8 +308,12 @@ object Launcher {
             context.spawn(BallFollower(robot, robotId), "ball-follower")
             Behaviors.same
           case BallFollowerNode(Failure(e)) =>
-            context.log.error("Ball follower found no middleware", e)
-            Behaviors.stopped
+            // On a loaded machine the app node may join after RobotClient's search gave up: it searches again.
+            context.log.warn("Ball follower found no middleware yet ({}); searching again in {}", e.getMessage,
+              BallFollowerRetry)
+            context.pipeToSelf(akka.pattern.after(BallFollowerRetry)(
+                RobotClient(context.system, "ball-follower", priority = 1))(context.system))(BallFollowerNode.apply)
+            Behaviors.same
         }
       },
       MiddlewareCluster.AppRole,
@@ -339,4 +343,7 @@ object Launcher {
       }
 
   private final case class BallFollowerNode(robot: scala.util.Try[robotmiddleware.RobotInterface])
+
+  /** The pause before the ball follower searches for the middleware again. */
+  private val BallFollowerRetry: FiniteDuration = 5.seconds
 }
