@@ -63,6 +63,7 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   */
 object CallPathBench extends Benchmark {
   val name = "callpath"
+  override val quietSensitive = true
 
   /** Calls through the gateway before anything is measured: the JIT's, for the path every door shares (the actors, the
     * codecs, the port). With only the usual warm-up the gateway alone, measured first, came out 1.5-1.8 x slower than

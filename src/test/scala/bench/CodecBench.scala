@@ -13,6 +13,7 @@ import naogateway.wire.MessageContents
   */
 object CodecBench extends Benchmark {
   val name = "codec"
+  override val quietSensitive = true
 
   private val contents =
     MessageContents(robotId = 1, status = Some(Status(teamID = Some(1), activeAgent = Some("AgentTest"))))

@@ -34,6 +34,7 @@ import naogateway.{GameStateUpdated, GatewayAccess, GatewayEvent}
   */
 object WebBench extends Benchmark {
   val name = "web"
+  override val quietSensitive = true
 
   private val Window = 30.seconds
   private val Settle = 20.seconds

@@ -109,11 +109,22 @@ object StatusPrinter {
     Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](
       SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
+  /** How often the printer asks the gateway: every `refresh` for a screen; for lines, which only print changes, at most
+    * once a second (each round asks the gateway six questions, and most of the robot actors with them).
+    */
+  private[apps] def pace(refresh: FiniteDuration, output: Output): FiniteDuration = output match {
+    case _: ScreenOutput => refresh
+    case _               => refresh.max(LinesRefresh)
+  }
+
+  /** The shortest pace of line output. */
+  private[apps] val LinesRefresh: FiniteDuration = 1.second
+
   private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output,
       notes: () => Vector[String]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        timers.startTimerWithFixedDelay(Refresh, refresh)
+        timers.startTimerWithFixedDelay(Refresh, pace(refresh, output))
         def ask[T](question: Future[T])(answer: T => Command): Unit =
           context.pipeToSelf(question) {
             case Success(a) => answer(a)

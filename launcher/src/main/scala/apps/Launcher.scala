@@ -319,8 +319,12 @@ object Launcher {
             context.spawn(BallFollower(robot, robotId), "ball-follower")
             Behaviors.same
           case BallFollowerNode(Failure(e)) =>
-            context.log.error("Ball follower found no middleware", e)
-            Behaviors.stopped
+            // On a loaded machine the app node may join after RobotClient's search gave up: it searches again.
+            context.log.warn("Ball follower found no middleware yet ({}); searching again in {}", e.getMessage,
+              BallFollowerRetry)
+            context.pipeToSelf(akka.pattern.after(BallFollowerRetry)(
+                RobotClient(context.system, "ball-follower", priority = 1))(context.system))(BallFollowerNode.apply)
+            Behaviors.same
         }
       },
       MiddlewareCluster.AppRole,
@@ -334,13 +338,23 @@ object Launcher {
     }
   }
 
-  /** What the demo's app node takes over from the gateway node's config: where the cluster is, and the dispatcher's
-    * size.
+  /** What the demo's app node takes over from the gateway node's config: where the cluster is, the dispatcher's size,
+    * and what makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace, Artery's flush at shutdown).
     */
   def appNodeConfig(gatewayNode: Config): Config =
-    Seq("robotmiddleware.cluster", "akka.actor.default-dispatcher").foldLeft(ConfigFactory.empty()) { (c, path) =>
-      c.withValue(path, gatewayNode.getValue(path))
-    }
+    Seq(
+      "robotmiddleware.cluster",
+      "akka.actor.default-dispatcher",
+      "akka.coordinated-shutdown",
+      "akka.cluster.leader-actions-interval",
+      "akka.remote.artery.advanced.shutdown-flush-timeout"
+    )
+      .foldLeft(ConfigFactory.empty()) { (c, path) =>
+        c.withValue(path, gatewayNode.getValue(path))
+      }
 
   private final case class BallFollowerNode(robot: scala.util.Try[robotmiddleware.RobotInterface])
+
+  /** The pause before the ball follower searches for the middleware again. */
+  private val BallFollowerRetry: FiniteDuration = 5.seconds
 }

@@ -21,6 +21,24 @@ class LauncherConfigSpec extends AnyWordSpec with Matchers {
       appNode.getInt("akka.actor.default-dispatcher.fork-join-executor.parallelism-min") shouldBe 2
       appNode.getStringList("akka.cluster.seed-nodes").get(0) should endWith(":25620")
     }
+
+    "shut down as quickly as the gateway node: the same phase timeouts, leader pace and flush wait" in {
+      val gatewayNode = Launcher.nodeConfig(ConfigFactory.empty(), noApplication)
+      val appNode = MiddlewareCluster.config(MiddlewareCluster.AppRole, Launcher.appNodeConfig(gatewayNode))
+      // Akka's defaults (5 s, 10 s, 1 s, 1 s) would let the app node's leave outlast Ctrl-C's 2 s on its own.
+      Seq(
+        "akka.coordinated-shutdown.default-phase-timeout",
+        "akka.coordinated-shutdown.phases.cluster-exiting.timeout",
+        "akka.cluster.leader-actions-interval",
+        "akka.remote.artery.advanced.shutdown-flush-timeout"
+      ).foreach { key =>
+        withClue(key)(appNode.getDuration(key) shouldBe gatewayNode.getDuration(key))
+        withClue(key)(appNode.getDuration(key).toMillis should be <= 1000L)
+      }
+      // The phases in one order on both nodes: apps leave before the gateway node does.
+      appNode.getStringList("akka.coordinated-shutdown.phases.cluster-exiting.depends-on") shouldBe
+        gatewayNode.getStringList("akka.coordinated-shutdown.phases.cluster-exiting.depends-on")
+    }
   }
 
   "The gateway node's config" should {

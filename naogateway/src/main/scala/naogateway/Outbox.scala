@@ -64,7 +64,8 @@ object Outbox {
   /** Asks for the traffic figures. */
   private[naogateway] final case class GetStats(replyTo: ActorRef[TrafficStats]) extends Command
 
-  private case object Drain extends Command
+  /** Sends what the budget allows now (the outbox's own timer sends it; a spec with its own clock too). */
+  private[naogateway] case object Drain extends Command
   private case object DrainTimer
 
   /** Whether a datagram was taken; `tag` is the sender's mark from `Send`. */
@@ -91,13 +92,14 @@ object Outbox {
 
   /** An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs;
     * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
-    * second while sending) go to `recording`.
+    * second while sending) go to `recording`. `clock` (nanoseconds) is what every decision is taken against.
     */
   private[naogateway] def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean,
-      signer: Option[GatewaySigning] = None, recording: Recording = Recording.Off): Behavior[Command] =
+      signer: Option[GatewaySigning] = None, recording: Recording = Recording.Off,
+      clock: () => Long = () => System.nanoTime()): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        new Outbox(link, budget, competition, signer, timers, context.log, recording).behavior()
+        new Outbox(link, budget, competition, signer, timers, context.log, recording, clock).behavior()
       }
     }
 
@@ -112,7 +114,8 @@ private final class Outbox(
     signer: Option[GatewaySigning],
     timers: TimerScheduler[Outbox.Command],
     log: org.slf4j.Logger,
-    recording: Recording
+    recording: Recording,
+    clock: () => Long
 ) {
   import Outbox._
 
@@ -129,7 +132,7 @@ private final class Outbox(
   private var refused = 0L
   private var dropped = 0L
   private var lastWarning = Long.MinValue
-  private var lastBudgetRecord = System.nanoTime() - 2 * Second
+  private var lastBudgetRecord = clock() - 2 * Second
 
   /** The outcome of one datagram, and once a second the budget's state, for the recording. */
   private def record(now: Long, s: Send, outcome: String): Unit = if (recording.enabled) {
@@ -229,7 +232,7 @@ private final class Outbox(
 
   def behavior(): Behavior[Command] = Behaviors.receiveMessage {
     case s: Send =>
-      val now = System.nanoTime()
+      val now = clock()
       if (competition && gameIsRunning) {
         refused += 1
         record(now, s, "refused-by-rule")
@@ -273,11 +276,11 @@ private final class Outbox(
       }
       Behaviors.same
     case Drain =>
-      drain(System.nanoTime())
+      drain(clock())
       Behaviors.same
     case Withdraw(robotId, tags) =>
       if (recording.enabled) {
-        val now = System.nanoTime()
+        val now = clock()
         queues.foreach(_.foreach(q => if (q.robotId == robotId && tags(q.tag)) record(now, q, "withdrawn")))
       }
       queues = queues.map(_.filterNot(q => q.robotId == robotId && tags(q.tag)))
@@ -287,7 +290,7 @@ private final class Outbox(
       queues = queues.map(_.filterNot(_.robotId == robotId))
       Behaviors.same
     case Inbound(datagrams, bytes) =>
-      in.record(System.nanoTime(), bytes, datagrams)
+      in.record(clock(), bytes, datagrams)
       Behaviors.same
     case GameStateChanged(now) =>
       val nowRunning = CompetitionGate.closes(now)
@@ -303,7 +306,7 @@ private final class Outbox(
         val held = queues.map(_.size).sum
         if (held > 0) log.info("Discarding {} queued datagram(s) at game start", held)
         if (recording.enabled) {
-          val now = System.nanoTime()
+          val now = clock()
           queues.foreach(_.foreach(q => record(now, q, "refused-by-rule")))
         }
         queues.foreach(_.foreach(q => q.replyTo.foreach(_ ! RefusedByRule(q.tag, NoSendingWhileGameRuns))))
@@ -312,7 +315,7 @@ private final class Outbox(
       }
       Behaviors.same
     case GetStats(replyTo) =>
-      val now = System.nanoTime()
+      val now = clock()
       replyTo ! TrafficStats(
         out.inWindow(now),
         in.inWindow(now),

@@ -3,6 +3,7 @@ package apps.web
 import java.nio.{ByteBuffer, ByteOrder}
 import java.util.Base64
 
+import scala.concurrent.ExecutionContext
 import scala.concurrent.duration._
 import scala.util.{Failure, Success, Try}
 
@@ -86,6 +87,9 @@ object FoxgloveFeed {
   // The gateway did not answer the budget question: the next tick asks again.
   private case object Unanswered extends Command
   private case object BudgetTick extends Command
+  // A connection's updates began or ended: with none, nothing is encoded or asked for.
+  private case object ClientJoined extends Command
+  private case object ClientLeft extends Command
 
   /** How often the budget decision is published (the recording's outbox writes it at most this often). */
   private val BudgetInterval: FiniteDuration = 1.second
@@ -108,25 +112,33 @@ object FoxgloveFeed {
         }
       Behaviors.withTimers[Command] { timers =>
         timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
-        running(queue, hub, Map.empty, Vector(Decisions), askTraffic)
+        running(queue, hub, Map.empty, Vector(Decisions), askTraffic, clients = 0)(context.self)
       }
     }
 
   private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed],
       robots: Map[Int, RobotChannels],
-      channels: Vector[Channel], askTraffic: () => Unit): Behavior[Command] =
+      channels: Vector[Channel], askTraffic: () => Unit, clients: Int)(
+      implicit self: ActorRef[Command]): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case Connect(replyTo) =>
-        replyTo ! Feed(channels, hub)
+        val updates = hub.watchTermination() { (_, done) =>
+          self ! ClientJoined
+          done.onComplete(_ => self ! ClientLeft)(ExecutionContext.parasitic)
+          NotUsed
+        }
+        replyTo ! Feed(channels, updates)
         Behaviors.same
+      case ClientJoined => running(queue, hub, robots, channels, askTraffic, clients + 1)
+      case ClientLeft   => running(queue, hub, robots, channels, askTraffic, math.max(0, clients - 1))
       case Event(event) =>
-        decided(queue, Decision.Published(event))
+        if (clients > 0) decided(queue, Decision.Published(event))
         Behaviors.same
       case Game(data) =>
-        decided(queue, Decision.Published(GameStateUpdated(data)))
+        if (clients > 0) decided(queue, Decision.Published(GameStateUpdated(data)))
         Behaviors.same
       case BudgetTick =>
-        askTraffic()
+        if (clients > 0) askTraffic()
         Behaviors.same
       case Unanswered =>
         Behaviors.same
@@ -147,18 +159,23 @@ object FoxgloveFeed {
             queue.offer(Advertised(Vector(status, health, servos)))
             (RobotChannels(status, health, servos, None), Vector(status, health, servos))
           }(r => (r, Vector.empty))
-          val nanos = System.currentTimeMillis() * 1000000L
-          val report = snapshot.report
-          queue.offer(Published(robot.status, nanos, report.status.toByteArray))
-          queue.offer(Published(robot.health, nanos, report.health.toByteArray))
           // Each telemetry once, as the robot sent it: the snapshot keeps it over keep-alives without one.
           val servosAt = snapshot.servos.map(_.receivedAtNanos)
-          snapshot.servos.filter(_ => servosAt != robot.servosAt).foreach(t =>
-            queue.offer(Published(robot.servos, nanos, t.toProto.toByteArray)))
-          running(queue, hub, robots.updated(id, robot.copy(servosAt = servosAt)), channels ++ more, askTraffic)
+          if (clients > 0) {
+            val nanos = System.currentTimeMillis() * 1000000L
+            val report = snapshot.report
+            queue.offer(Published(robot.status, nanos, report.status.toByteArray))
+            queue.offer(Published(robot.health, nanos, report.health.toByteArray))
+            snapshot.servos.filter(_ => servosAt != robot.servosAt).foreach(t =>
+              queue.offer(Published(robot.servos, nanos, t.toProto.toByteArray)))
+          }
+          val seen = if (clients > 0) servosAt else robot.servosAt
+          if (more.isEmpty && seen == robot.servosAt) Behaviors.same
+          else running(queue, hub, robots.updated(id, robot.copy(servosAt = seen)), channels ++ more, askTraffic, clients)
         }
     }.receiveSignal { case (_, PostStop) =>
-      queue.complete()
+      // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to end.
+      Try(queue.complete())
       Behaviors.same
     }
 

@@ -1,10 +1,10 @@
 package apps.web
 
 import scala.concurrent.{ExecutionContext, Future}
-import scala.util.{Failure, Success}
+import scala.util.{Failure, Success, Try}
 
 import akka.NotUsed
-import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
+import akka.actor.typed.scaladsl.{ActorContext, Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop}
 import akka.stream.scaladsl.{BroadcastHub, Keep, Sink, Source}
 import akka.stream.{BoundedSourceQueue, Materializer}
@@ -79,12 +79,13 @@ object WebView {
         val (queue, hub) = Source.queue[String](4).toMat(BroadcastHub.sink[String](bufferSize = 16))(Keep.both).run()
         // One consumer that always reads, so the hub never holds pushes back for pages that join later.
         hub.runWith(Sink.ignore)
-        timers.startTimerWithFixedDelay(Tick, settings.pushInterval)
+        // Without a page the view only keeps its plots' history: it asks the gateway once a sample and renders nothing.
+        timers.startTimerWithFixedDelay(Tick, settings.sampleInterval)
         timers.startTimerWithFixedDelay(Sample, settings.sampleInterval)
         middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
         // The game comes as the GameController sends it, so a new state reaches the page at once, not at the next tick.
         middleware ! RobotMiddleware.WatchGame(context.messageAdapter((d: GameControlData) => Game(Some(d))))
-        new View(gateway, middleware, settings, context, queue, hub).running(State(
+        new View(gateway, middleware, settings, context, timers, queue, hub).running(State(
             WebModel(settings.historyPoints, settings.events,
               servoLimits = robotmiddleware.MiddlewareSettings(context.system).servoLimits),
             0L,
@@ -103,7 +104,8 @@ object WebView {
 
   private final class View(gateway: WebServer.GatewaySide, middleware: ActorRef[RobotMiddleware.Command],
       settings: WebSettings,
-      context: ActorContext[Command], queue: BoundedSourceQueue[String], hub: Source[String, NotUsed]) {
+      context: ActorContext[Command], timers: TimerScheduler[Command], queue: BoundedSourceQueue[String],
+      hub: Source[String, NotUsed]) {
     private val started = System.nanoTime()
     private def ask[T](question: Future[T])(answer: T => Command): Unit =
       context.pipeToSelf(question) {
@@ -149,7 +151,7 @@ object WebView {
       */
     private def soon(s: State, model: WebModel): State = {
       val next = s.copy(model = model)
-      if (model
+      if (s.pages > 0 && model
           .eventCount != s.model.eventCount && System.nanoTime() - s.pushedAtNanos >= settings.pushInterval.toNanos / 5)
         push(next)
       else next
@@ -165,7 +167,7 @@ object WebView {
         ask(gateway.view.stats())(Stats.apply)
         // The push follows the robots' answer, so a page sees what the gateway saw within about one interval; when the
         // answer is late (a robot actor slow to answer), the next tick pushes what there is.
-        running(if (s.answered) s.copy(answered = false) else push(s))
+        running(if (s.answered || s.pages == 0) s.copy(answered = false) else push(s))
       case Robots(robots) =>
         // While a page is open, each robot's frames are watched from the first time it is listed (the middleware ends
         // the watch when the camera watcher stops).
@@ -174,7 +176,8 @@ object WebView {
           fresh.foreach(id => middleware ! RobotMiddleware.WatchVision(id, camera, grid = true)))
         val signing = robots.map(r => r.robotId -> gateway.signing(r.robotId)).toMap
         val model = s.model.withRobots(robots).copy(signing = signing)
-        running(push(s.copy(model = model, watched = s.watched ++ fresh)).copy(answered = true))
+        val next = s.copy(model = model, watched = s.watched ++ fresh)
+        running((if (s.pages > 0) push(next) else next).copy(answered = true))
       case Links(l)          => running(s.copy(model = s.model.withLinks(l.links, t, System.currentTimeMillis())))
       case Traffic(stats)    => running(s.copy(model = s.model.withTraffic(stats, t, System.currentTimeMillis())))
       case Game(game)        => running(soon(s, s.model.withGame(game, t, System.currentTimeMillis())))
@@ -203,17 +206,24 @@ object WebView {
           self ! Vision(frame)
           Behaviors.same
         })))
+        // The first page: the gateway is asked every push-interval again, starting now.
+        if (s.pages == 0) {
+          timers.startTimerWithFixedDelay(Tick, settings.pushInterval)
+          self ! Tick
+        }
         running(s.copy(pages = s.pages + 1, camera = camera))
       case PageLeft if s.pages > 1 => running(s.copy(pages = s.pages - 1))
       case PageLeft                =>
         // The last page left: the watcher stops, the middleware ends its watches, and the robots' cameras go quiet.
         s.camera.foreach(context.stop)
+        timers.startTimerWithFixedDelay(Tick, settings.sampleInterval)
         running(s.copy(pages = 0, camera = None, watched = Set.empty))
       case GetFigures(replyTo) =>
         replyTo ! s.figures
         Behaviors.same
     }.receiveSignal { case (_, PostStop) =>
-      queue.complete()
+      // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to end.
+      Try(queue.complete())
       Behaviors.same
     }
   }

@@ -129,6 +129,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private var games = GameFiles(settings.gameQuiet.toNanos)
   private var nextAttempt = Long.MinValue
   private val batch = new java.util.ArrayList[Entry](1024)
+  // The writer's pause when it finds the queue empty (Recorder.nextPark).
+  private var park = Recorder.MinParkNanos
 
   private def writeLoop(): Unit = {
     try {
@@ -138,9 +140,11 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         val now = System.nanoTime()
         file.foreach(f => if (f.due(now)) rotate() else if (f.flushDue(now)) flush(f, now))
         if (settings.gameFiles && gameSteps(games.tick(now))) rotate()
+        park = Recorder.nextPark(park, batch.size)
         if (batch.isEmpty) {
           // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
-          if (running) LockSupport.parkNanos(2000000L)
+          // The pause grows while the queue stays empty, so an idle gateway's writer wakes a few times a second.
+          if (running) LockSupport.parkNanos(park)
         } else {
           var i = 0
           while (i < batch.size) { write(batch.get(i)); i += 1 }
@@ -376,4 +380,24 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
   private def addressText(a: InetSocketAddress): Array[Byte] =
     DecisionJson.address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
+}
+
+/** The writer's polling pace. */
+private[recording] object Recorder {
+
+  /** The shortest pause, while entries arrive in numbers. */
+  val MinParkNanos: Long = 2000000L
+
+  /** The longest pause, once the queue stays empty: the queue (65536 entries by default) holds what arrives meanwhile
+    * at over a million entries a second, more than the port can read.
+    */
+  val MaxParkNanos: Long = 50000000L
+
+  /** The pause after a drain that took `drained` entries: doubled when the queue was empty (up to [[MaxParkNanos]]),
+    * back to [[MinParkNanos]] when a drain took a quarter of a batch or more (traffic picked up), else kept.
+    */
+  def nextPark(park: Long, drained: Int): Long =
+    if (drained == 0) math.min(park * 2, MaxParkNanos)
+    else if (drained >= 256) MinParkNanos
+    else park
 }

@@ -44,35 +44,43 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
 
   "Outbox" must {
     "never let probes take more than budget.probe-share of the budget in any second, and not hold back commands" in {
+      // The outbox's own decisions, against a clock this test moves: no timing of the machine is in the figures.
+      val clock = new java.util.concurrent.atomic.AtomicLong(5000000000L)
       val written = new java.util.concurrent.ConcurrentLinkedQueue[(Long, Int, Byte)]()
       val recording: naogateway.link.DatagramWriter =
-        (bytes, _) => { written.add((System.nanoTime(), bytes.length, bytes(0))); true }
+        (bytes, _) => { written.add((clock.get, bytes.length, bytes(0))); true }
       val budget = BudgetSettings(20000, 0, 0.8, probeShare = 0.1)
-      val outbox = spawn(Outbox(recording, budget, competition = false))
+      val outbox = spawn(Outbox(recording, budget, competition = false, clock = () => clock.get))
+      val stats = createTestProbe[Outbox.TrafficStats]()
+      // Every message before it handled: the outbox answers in order.
+      def settled(): Unit = { outbox ! Outbox.GetStats(stats.ref); stats.receiveMessage(10.seconds); () }
       val probe = Array.fill[Byte](50)(1)
       val command = Array.fill[Byte](500)(2)
-      val start = System.nanoTime()
+      val start = clock.get
       // 300 probes from 30 robots at once (7.5 times the probes' share), then 20 commands.
       (1 to 300).foreach(i => outbox ! Outbox.Send(i % 30, robot, probe, Priority.Heartbeat))
       (1 to 20).foreach(i => outbox ! Outbox.Send(i % 30, robot, command, Priority.Command))
-      Thread.sleep(2600)
+      settled()
+      /* 2.6 s in steps of 10 ms, the outbox asked to drain at each (its own timer may drain in between: the same
+       * clock). */
+      (1 to 260).foreach { _ =>
+        clock.addAndGet(10000000L)
+        outbox ! Outbox.Drain
+        settled()
+      }
       import scala.jdk.CollectionConverters._
       val all = written.asScala.toVector
       val probes = all.filter(_._3 == 1)
       // The commands went out at once: the probes held back by their share do not stand in their way.
-      all.filter(_._3 == 2).map(_._1 - start).max should be < 500000000L
-      // The windows (0, 1 s], (1 s, 2 s], ... after `start` each hold at most 2000 bytes of probes, so by any instant t
-      /* at most 2000 bytes for every second begun. A datagram is stamped here after the outbox decided to send it,
-       * never */
-      // before, so a late stamp (a busy machine) can only make this bound looser, never break it; a sliding window over
-      // the stamps could, which is why the stamps are not read that way. Without the share all 300 would go at once.
+      all.filter(_._3 == 2).map(_._1 - start).max shouldBe 0L
+      all.count(_._3 == 2) shouldBe 20
+      // Any 1 s window holds at most 2000 bytes of probes (10 % of 20 000 B/s).
       probes.foreach { case (t, _, _) =>
-        val seconds = math.max(1L, (t - start + 999999999L) / 1000000000L)
-        probes.filter(_._1 <= t).map(_._2).sum.toLong should be <= 2000L * seconds
+        probes.filter { case (u, _, _) => u > t - 1000000000L && u <= t }.map(_._2).sum should be <= 2000
       }
-      // And the probes did use their share: about 40 a second.
-      probes.size should be >= 80
-      outbox ! Outbox.GetStats(createTestProbe[Outbox.TrafficStats]().ref)
+      // And the probes did use their share: 40 at once, then about 40 a second.
+      probes.size should be >= 100
+      probes.size should be <= 120
     }
     "stay within the budget when asked for far more, send safety first and commands before debug" in {
       val link = createTestProbe[UdpLink.Command]()

@@ -140,6 +140,18 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
       encoder.bytes.take(encoder.message(health)) shouldBe health.toByteArray
     }
 
+    "pause its writer longer while the queue stays empty, and briefly again once entries arrive in numbers" in {
+      import Recorder.{MaxParkNanos, MinParkNanos, nextPark}
+      val idle = Iterator.iterate(MinParkNanos)(nextPark(_, 0)).take(20).toVector
+      idle.sliding(2).foreach { case Vector(a, b) => b should be >= a; case _ => () }
+      idle.last shouldBe MaxParkNanos
+      nextPark(MaxParkNanos, 3) shouldBe MaxParkNanos // a trickle keeps the long pause
+      nextPark(MaxParkNanos, 1024) shouldBe MinParkNanos // a full batch: traffic picked up
+      /* The queue's default capacity holds what the fastest ingest measured (550 k/s) delivers during the longest
+       * pause. */
+      (550000L * MaxParkNanos / 1000000000L) should be < 65536L
+    }
+
     "record nothing when off" in {
       Recording(RecordingSettings.Off, "unused") shouldBe Recording.Off
       Recording.Off.enabled shouldBe false
