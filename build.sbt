@@ -279,7 +279,9 @@ lazy val root = (project in file("."))
     run / connectInput := true,
     run / outputStrategy := Some(StdoutOutput),
     Test / run / fork := true,
-    Test / run / javaOptions ++= Seq("-Xmx2g")
+    Test / run / javaOptions ++= Seq("-Xmx2g"),
+    // A clone's first app takes minutes (two sbt builds from scratch): ./sbt firstApp runs it, ./sbt test does not.
+    Test / testOptions += Tests.Filter(_ != "integration.FirstAppSpec")
   )
 
 // ./sbt dist: the installable package, one .tgz archive; its path is printed.
@@ -292,6 +294,10 @@ dist := {
 
 // ./sbt "robotctl status": the command-line client of a running gateway's control port.
 addCommandAlias("robotctl", "launcher/runMain apps.RobotCtl")
+
+// ./sbt firstApp: a newcomer's path in a clone of HEAD (integration.FirstAppSpec): publishLocal, the template copied to a
+// folder of its own, its app run against the demo; it must walk robot 2. Minutes long, so CI runs it apart (.ci/run).
+addCommandAlias("firstApp", "root/Test/runMain integration.FirstAppCheck")
 
 // ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table. It stages the package
 // first, because the soak (./sbt "bench soak [minutes]") runs the packaged gateway.

@@ -22,11 +22,13 @@ object HelloRobot {
     val gateway = s"${cluster.getString("gateway-host")}:${cluster.getInt("gateway-port")}"
     val noGateway = new IllegalStateException(s"no gateway at $gateway (ROBOTS_GATEWAY_HOST, ROBOTS_GATEWAY_PORT); " +
       "start the demo first (`./sbt run` in the naogateway clone), then this app again")
+    log.info(s"joining the gateway's cluster at $gateway")
     val joined = Future.firstCompletedOf(
       Seq(MiddlewareCluster.up(system), akka.pattern.after(20.seconds)(Future.failed(noGateway))(system)))
     val done = for {
       _ <- joined
       robot <- RobotClient(system, "hello-robot", priority = 1)
+      _ = log.info("registered with the middleware as hello-robot; acquiring robot 2")
       _ <- robot.acquire(2, ActuatorGroup.Walk, ActuatorGroup.Speech)
       _ = log.info("robot 2: walk and speech leases held; standing up")
       _ <- robot.posture(2, Posture.Stand)
