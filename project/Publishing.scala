@@ -11,9 +11,9 @@ object Publishing {
     * git) is [[FirstVersion]].
     */
   def version(describe: Option[GitDescribeOutput]): String = describe.filter(_.ref.isTag) match {
-    case None                              => FirstVersion
+    case None                             => FirstVersion
     case Some(out) if out.isCleanAfterTag => out.ref.dropPrefix
-    case Some(out)                         => nextSnapshot(out.ref.dropPrefix)
+    case Some(out)                        => nextSnapshot(out.ref.dropPrefix)
   }
 
   /** `1.2.0` → `1.2.1-SNAPSHOT`; a tag that is not three numbers gets `-SNAPSHOT` appended. */

@@ -13,10 +13,10 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 /** A newcomer's path through README.md ("Your first app") and docs/writing-apps.md, in a clone of this repository's
-  * HEAD: `./sbt publishLocal` (into an ivy home of its own), the template copied to a folder of its own, and its
-  * `./sbt run` against the demo, which must walk robot 2 (robotctl's watch sees it walking), end with the app's line,
-  * exit 0, and print no SLF4J warning and no dead letter; without a gateway the app says where it looked. Two sbt builds
-  * from scratch take minutes, so it is not part of `./sbt test`: `./sbt firstApp` runs it (.ci/run does).
+  * HEAD: `./sbt publishLocal` (into an ivy home of its own), the template copied to a folder of its own, and its `./sbt
+  * run` against the demo, which must walk robot 2 (robotctl's watch sees it walking), end with the app's line, exit 0,
+  * and print no SLF4J warning and no dead letter; without a gateway the app says where it looked. Two sbt builds from
+  * scratch take minutes, so it is not part of `./sbt test`: `./sbt firstApp` runs it (.ci/run does).
   */
 class FirstAppSpec extends AnyWordSpec with Matchers {
 
@@ -96,19 +96,31 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
         val named = "(?m)^val naogatewayVersion = \"([^\"]+)\"$".r
         val buildText = new String(Files.readAllBytes(build), StandardCharsets.UTF_8)
         named.findFirstMatchIn(buildText) shouldBe defined
-        Files.write(build, named.replaceAllIn(buildText, s"""val naogatewayVersion = "$version"""")
-          .getBytes(StandardCharsets.UTF_8))
+        Files.write(build,
+          named.replaceAllIn(buildText, s"""val naogatewayVersion = "$version"""")
+            .getBytes(StandardCharsets.UTF_8))
 
         // README: ./sbt run (the demo), here the launcher of this build on ports of its own.
         val clusterPort = freePort()
         val controlPort = freePort()
-        val gameControllerPort = { val s = new DatagramSocket(0); try s.getLocalPort finally s.close() }
+        val gameControllerPort = {
+          val s = new DatagramSocket(0);
+          try s.getLocalPort
+          finally s.close()
+        }
         val demo = start(
           Seq(s"${System.getProperty("java.home")}/bin/java", "-Xmx768m", "-cp", System.getProperty("java.class.path"),
-            "apps.Launcher"), repo,
-          Map("ROBOTS_GATEWAY_PORT" -> clusterPort.toString, "NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort",
-            "NAOGATEWAY_GAMECONTROLLER_PORT" -> gameControllerPort.toString, "NAOGATEWAY_ZEROMQ" -> "off",
-            "NAOGATEWAY_DATAGRAM_DOOR" -> "off", "NAOGATEWAY_WEB" -> "off", "NAOGATEWAY_LOG_FILE" -> demoLog.toString)
+            "apps.Launcher"),
+          repo,
+          Map(
+            "ROBOTS_GATEWAY_PORT" -> clusterPort.toString,
+            "NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort",
+            "NAOGATEWAY_GAMECONTROLLER_PORT" -> gameControllerPort.toString,
+            "NAOGATEWAY_ZEROMQ" -> "off",
+            "NAOGATEWAY_DATAGRAM_DOOR" -> "off",
+            "NAOGATEWAY_WEB" -> "off",
+            "NAOGATEWAY_LOG_FILE" -> demoLog.toString
+          )
         )
         val watched = new ConcurrentLinkedQueue[String]()
         try {
@@ -148,8 +160,9 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
         }
 
         // Without the demo the app says where it looked and what to start.
-        val (aloneOut, aloneExit) = start(Seq("./sbt", "run"), app, sbtEnv + ("ROBOTS_GATEWAY_PORT" ->
-          clusterPort.toString)).toEnd(10.minutes)
+        val (aloneOut, aloneExit) = start(Seq("./sbt", "run"), app,
+          sbtEnv + ("ROBOTS_GATEWAY_PORT" ->
+            clusterPort.toString)).toEnd(10.minutes)
         withClue(aloneOut.mkString("\n")) {
           aloneExit.isDefined shouldBe true
           aloneExit should not be Some(0)

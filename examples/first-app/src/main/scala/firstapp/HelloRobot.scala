@@ -9,8 +9,8 @@ import org.slf4j.LoggerFactory
 import robotmiddleware.RobotClient
 import robotmiddleware.cluster.MiddlewareCluster
 
-/** A first app: robot 2 of the demo stands up, greets, walks for two seconds and stops; the app then releases the
-  * robot and ends. Run it beside the demo (`./sbt run` in the naogateway clone).
+/** A first app: robot 2 of the demo stands up, greets, walks for two seconds and stops; the app then releases the robot
+  * and ends. Run it beside the demo (`./sbt run` in the naogateway clone).
   */
 object HelloRobot {
   private val log = LoggerFactory.getLogger("firstapp.HelloRobot")
