@@ -2,7 +2,11 @@ import Dependencies._
 
 ThisBuild / scalaVersion := V.scala
 ThisBuild / organization := "org.naogateway"
-ThisBuild / version := "0.1.0-SNAPSHOT"
+// The version from git tags (sbt-dynver): a clean checkout at tag v1.2.0 is 1.2.0; any other commit, or uncommitted
+// changes, is the next patch as a snapshot (1.2.1-SNAPSHOT), so a team's build names one version until the next release;
+// with no tag yet, 0.1.0-SNAPSHOT. `./sbt publishLocal` publishes the libraries an app needs under it (docs/writing-apps.md).
+ThisBuild / version := Publishing.version(dynverGitDescribeOutput.value)
+ThisBuild / versionScheme := Some("early-semver")
 
 lazy val strictScalac = Seq(
   scalacOptions ++= Seq(
@@ -32,6 +36,16 @@ lazy val testSettings = Seq(
 // The forked run's stdout is a pipe to sbt, so the launcher cannot see a terminal itself: sbt tells it
 // whether its own console is one (apps.StatusPrinter reads this).
 lazy val terminalEnv = run / envVars += "NAOGATEWAY_TERMINAL" -> (System.console() != null).toString
+
+// What `./sbt publishLocal` leaves out: an app needs proto, wire, api, access and robotmiddleware (the libraries behind
+// `robotmiddleware.RobotInterface`); the gateway, the simulator, the doors and the launcher run in the demo or the
+// package, never inside a team's app.
+lazy val notPublished = publish / skip := true
+
+// The team's first app (docs/writing-apps.md): a project of its own in examples/first-app, which a team copies and
+// builds against the published libraries. Its source is compiled here too, with the strict flags, so the docs' first
+// app always compiles against the code; `./sbt "apps/runMain firstapp.HelloRobot"` runs it with its own logging.
+lazy val firstApp = "examples/first-app"
 
 lazy val proto = (project in file("proto"))
   .settings(
@@ -86,6 +100,7 @@ lazy val zeromq = (project in file("zeromq"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-zeromq",
+    notPublished,
     libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j, jeromq) ++ testLibs
   )
 
@@ -97,6 +112,7 @@ lazy val port = (project in file("port"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-port",
+    notPublished,
     libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j) ++ testLibs
   )
 
@@ -105,6 +121,7 @@ lazy val naogateway = (project in file("naogateway"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
+    notPublished,
     libraryDependencies ++= Seq(akkaActorTyped, akkaStream, akkaStreamTyped, akkaSlf4j,
       jeromq) ++ testLibs ++ akkaTestLibs
   )
@@ -117,6 +134,7 @@ lazy val sim = (project in file("sim"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-sim",
+    notPublished,
     libraryDependencies ++= testLibs ++ akkaTestLibs
   )
 
@@ -129,7 +147,7 @@ lazy val integration = (project in file("integration"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-integration",
-    publish / skip := true,
+    notPublished,
     libraryDependencies ++= testLibs ++ akkaTestLibs
   )
 
@@ -168,6 +186,20 @@ lazy val apps = (project in file("apps"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
+    notPublished,
+    Compile / unmanagedSourceDirectories += (ThisBuild / baseDirectory).value / firstApp / "src" / "main" / "scala",
+    // `./sbt "apps/runMain …"` runs the app in a JVM of its own that lives until the app ends, with the first app's
+    // logging (Logback; Akka's own lines through SLF4J): its logback.xml and application.conf.
+    libraryDependencies += logback % Runtime,
+    run / fork := true,
+    run / connectInput := true,
+    run / outputStrategy := Some(StdoutOutput),
+    run / javaOptions ++= {
+      val resources = (ThisBuild / baseDirectory).value / firstApp / "src" / "main" / "resources"
+      Seq(s"-Dlogback.configurationFile=${resources / "logback.xml"}",
+        s"-Dconfig.file=${resources / "application.conf"}")
+    },
+    terminalEnv,
     // The boundary the compiler keeps: apps' main code compiles without the gateway's and the simulator's classes, so
     // an app that imports a gateway internal (naogateway.Gateway, an actor, the settings) does not build. What apps
     // may see is the api, the wire format, the middleware (with the access protocol it speaks), the ZeroMQ loop and the
@@ -193,6 +225,7 @@ lazy val launcher = (project in file("launcher"))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-launcher",
+    notPublished,
     // The launcher is the one module with a logging backend at compile scope (its logback.xml); the libraries log
     // through SLF4J only.
     libraryDependencies ++= Seq(logback) ++ testLibs ++ akkaTestLibs,
@@ -236,6 +269,7 @@ lazy val root = (project in file("."))
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-root",
+    notPublished,
     // The bench's web figures (bench.WebBench) drive the web view with these, as the apps tests do.
     libraryDependencies ++= Seq(akkaHttp, akkaHttpSprayJson, seleniumChrome,
       seleniumSupport) ++ testLibs ++ akkaTestLibs,
@@ -245,7 +279,9 @@ lazy val root = (project in file("."))
     run / connectInput := true,
     run / outputStrategy := Some(StdoutOutput),
     Test / run / fork := true,
-    Test / run / javaOptions ++= Seq("-Xmx2g")
+    Test / run / javaOptions ++= Seq("-Xmx2g"),
+    // A clone's first app takes minutes (two sbt builds from scratch): ./sbt firstApp runs it, ./sbt test does not.
+    Test / testOptions += Tests.Filter(_ != "integration.FirstAppSpec")
   )
 
 // ./sbt dist: the installable package, one .tgz archive; its path is printed.
@@ -258,6 +294,10 @@ dist := {
 
 // ./sbt "robotctl status": the command-line client of a running gateway's control port.
 addCommandAlias("robotctl", "launcher/runMain apps.RobotCtl")
+
+// ./sbt firstApp: a newcomer's path in a clone of HEAD (integration.FirstAppSpec): publishLocal, the template copied to a
+// folder of its own, its app run against the demo; it must walk robot 2. Minutes long, so CI runs it apart (.ci/run).
+addCommandAlias("firstApp", "root/Test/runMain integration.FirstAppCheck")
 
 // ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table. It stages the package
 // first, because the soak (./sbt "bench soak [minutes]") runs the packaged gateway.

@@ -138,7 +138,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         }
 
         // The first app of docs/writing-apps.md, against the demo as it runs (issue 21: it asked for robot 1's lease).
-        val (hello, helloExit) = runToEnd(launch(launched.clusterPort, "apps.examples.HelloRobot"), 90.seconds)
+        val (hello, helloExit) = runToEnd(launch(launched.clusterPort, "firstapp.HelloRobot"), 90.seconds)
         withClue(hello.mkString("\n")) {
           hello should contain("hello-robot: robot 2 stood up, greeted, walked and stopped")
           helloExit shouldBe Some(0)
