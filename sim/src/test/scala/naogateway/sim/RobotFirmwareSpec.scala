@@ -52,7 +52,7 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       first.robotHealth.flatMap(_.batteryVoltage) shouldBe Some(12.4f)
       first.robotHealth.flatMap(_.bootId) shouldBe Some(1)
     }
-    "add servo telemetry to one keep-alive a second, from the built-in model or the given source (protocol.md 6.8)" in {
+    "add servo telemetry to one keep-alive a second, from the robot's emulated bus or the given source (protocol.md 6.8)" in {
       def run(settings: FirmwareSettings, until: Int): Seq[(Int, MessageContents)] = {
         var s = RobotFirmware.boot(settings, 0)
         (0 to until by 10).flatMap { t =>
@@ -66,12 +66,12 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       val model = keepAlives.head._2.servoTelemetry.get.servos
       model.map(_.id) shouldBe (1 to 18)
       model.foreach { servo =>
-        servo.position.get should (be >= 362 and be <= 662) // the legs bent by 120 while sitting
-        servo.voltage shouldBe Some(122) // 12.4 V battery less the wiring's 0.2 V, in tenths
+        servo.position.get should (be >= 0 and be <= 1023)
+        servo.voltage shouldBe Some(124) // the bus reads the 12.4 V battery, in tenths
         servo.temperature.get should (be >= 35 and be <= 45)
         servo.silent shouldBe None
       }
-      // A source (an emulated bus) instead of the model, at its own period; and off.
+      // A source instead of the robot's bus, at its own period; and off.
       val bus = () => Seq(ServoState(1, Some(300), Some(-5), Some(119), Some(50)), ServoState(2, silent = Some(true)))
       val fromBus = run(settings.copy(servoSource = Some(bus), servoTelemetryInterval = 400.millis), 1000)
       fromBus.filter(_._2.servoTelemetry.isDefined).map(_._1) shouldBe Seq(0, 400, 800)
