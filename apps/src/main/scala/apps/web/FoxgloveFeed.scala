@@ -171,7 +171,8 @@ object FoxgloveFeed {
           }
           val seen = if (clients > 0) servosAt else robot.servosAt
           if (more.isEmpty && seen == robot.servosAt) Behaviors.same
-          else running(queue, hub, robots.updated(id, robot.copy(servosAt = seen)), channels ++ more, askTraffic, clients)
+          else
+            running(queue, hub, robots.updated(id, robot.copy(servosAt = seen)), channels ++ more, askTraffic, clients)
         }
     }.receiveSignal { case (_, PostStop) =>
       // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to end.

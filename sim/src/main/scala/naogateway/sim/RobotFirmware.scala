@@ -378,8 +378,8 @@ object RobotFirmware {
       development = s.settings.development
     ).contents(s.settings.robotId)
 
-  /** The servo telemetry of `s` (protocol.md 6.8): the configured source's servos, or those of the robot's emulated
-    * bus read at the firmware's time on the battery's voltage; at most 32, as the firmware reads.
+  /** The servo telemetry of `s` (protocol.md 6.8): the configured source's servos, or those of the robot's emulated bus
+    * read at the firmware's time on the battery's voltage; at most 32, as the firmware reads.
     */
   def servoTelemetry(s: FirmwareState): ServoTelemetry =
     ServoTelemetry(
