@@ -23,7 +23,8 @@ final case class MiddlewareSettings(
     guardRestart: RestartBackoff = RestartBackoff(200.millis, 5.seconds, 0.2),
     clientAskMargin: FiniteDuration = 5.seconds,
     clientFindRetry: FiniteDuration = 200.millis,
-    dispatcher: String = MiddlewareSettings.DefaultDispatcher
+    dispatcher: String = MiddlewareSettings.DefaultDispatcher,
+    limits: ArgumentLimits = ArgumentLimits.Default
 ) {
   require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
   require(walkRefresh > Duration.Zero && walkRefresh < 500.millis,
@@ -64,6 +65,7 @@ object MiddlewareSettings {
     RestartBackoff.fromConfig(c, "supervision.guard"),
     c.getDuration("client.ask-margin").toScala,
     c.getDuration("client.find-retry").toScala,
-    c.getString("dispatcher")
+    c.getString("dispatcher"),
+    ArgumentLimits(c.getDouble("walk-limits.speed"), c.getDouble("walk-limits.turn"))
   )
 }

@@ -8,7 +8,11 @@ import naogateway.proto._
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameControlData
 
-/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. */
+/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. The battery drains (faster while
+  * walking) and, while the robot sits below `sitChargeUpTo`, recharges at `sitChargePerSecond` up to it, as a team
+  * swaps a sitting robot's low battery: a demo robot held safe for a low battery recovers (docs/simulator.md).
+  * `fullBattery` is what a swapped battery reads (`robotctl battery <id> swap`).
+  */
 final case class FirmwareSettings(
     robotId: Int,
     teamId: Int = 1,
@@ -26,6 +30,9 @@ final case class FirmwareSettings(
     idleDrainPerSecond: Double = 0.0002,
     walkDrainPerSecond: Double = 0.004,
     postureChangeDrain: Double = 0.005,
+    sitChargePerSecond: Double = 0.005,
+    sitChargeUpTo: Double = 11.5,
+    fullBattery: Double = 12.6,
     maxSpeed: Double = 0.3,
     maxTurn: Double = 1.0,
     startPose: Pose = Pose(-1.0, 0.0, 0.0),

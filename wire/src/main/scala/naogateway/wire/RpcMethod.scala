@@ -6,9 +6,11 @@ package naogateway.wire
   *   whether it may run twice, so it may be called again when no answer came (protocol.md 7.1)
   * @param slot
   *   the actuator slot whose order it takes part in, if any
+  * @param read
+  *   whether it only reads the robot's state: it moves and says nothing, so it needs no lease (docs/zeromq.md 5)
   */
 sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean,
-    val slot: Option[ActuatorGroup])
+    val slot: Option[ActuatorGroup], val read: Boolean = false)
     extends Product with Serializable {
 
   /** `module.method`, as in logs, errors and the docs. */
@@ -54,16 +56,16 @@ object RpcMethod {
   case object Posture extends RpcMethod(MotionModule, "posture", idempotent = false, Some(ActuatorGroup.Walk))
 
   /** Read the posture. */
-  case object GetPosture extends RpcMethod(MotionModule, "getPosture", idempotent = true, None)
+  case object GetPosture extends RpcMethod(MotionModule, "getPosture", idempotent = true, None, read = true)
 
   /** Speak a text: not repeated, the robot would say it twice. */
   case object Say extends RpcMethod(SpeechModule, "say", idempotent = false, None)
 
   /** Read the battery voltage. */
-  case object Battery extends RpcMethod(SystemModule, "battery", idempotent = true, None)
+  case object Battery extends RpcMethod(SystemModule, "battery", idempotent = true, None, read = true)
 
   /** Read the uptime. */
-  case object Ping extends RpcMethod(SystemModule, "ping", idempotent = true, None)
+  case object Ping extends RpcMethod(SystemModule, "ping", idempotent = true, None, read = true)
 
   /** Restart the robot: never repeated. */
   case object Reset extends RpcMethod(SystemModule, "reset", idempotent = false, None)
@@ -81,6 +83,9 @@ object RpcMethod {
 
   /** The slot `call` takes part in, if any. */
   def slotOf(call: RpcCall): Option[ActuatorGroup] = of(call).flatMap(_.slot)
+
+  /** Whether `call` only reads the robot's state (a method the table knows as a read): it needs no lease. */
+  def isRead(call: RpcCall): Boolean = of(call).exists(_.read)
 
   /** Whether `call` may be called again when no answer came; a method the table does not know is not. */
   def idempotent(call: RpcCall): Boolean = of(call).exists(_.idempotent)
