@@ -281,13 +281,15 @@ object Launcher {
   /** `robotctl battery <id> swap`: a simulated robot of `fleet` gets a full battery at once, as a team swaps one; any
     * other robot is real, and refused.
     */
-  private[apps] def batterySwap(fleet: Option[naogateway.sim.FleetHandle], robotId: Int): scala.concurrent.Future[String] =
+  private[apps] def batterySwap(
+      fleet: Option[naogateway.sim.FleetHandle], robotId: Int): scala.concurrent.Future[String] =
     fleet.flatMap(_.robot(robotId)) match {
       case Some(robot) =>
         val full = naogateway.sim.FirmwareSettings(robotId).fullBattery
         robot ! naogateway.sim.SimulatedRobot.SetBattery(full)
-        scala.concurrent.Future.successful(f"robot $robotId: battery swapped for a full one ($full%.2f V); a hold for low battery ends " +
-          "once its keep-alives read it")
+        scala.concurrent.Future.successful(
+          f"robot $robotId: battery swapped for a full one ($full%.2f V); a hold for low battery ends " +
+            "once its keep-alives read it")
       case None => apps.control.ControlServer.GatewaySide.noSimulatedRobots(robotId)
     }
 

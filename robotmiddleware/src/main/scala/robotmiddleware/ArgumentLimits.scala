@@ -2,11 +2,11 @@ package robotmiddleware
 
 import naogateway.wire.{RpcMethod, RpcValue}
 
-/** The arguments the middleware passes on to a robot: an operation outside them is refused before it is sent, with
-  * `out of range: <name> <value>, allowed <range>` (docs/writing-apps.md, docs/zeromq.md 6), the same text at every
-  * door. The walk's speeds are the gait's (`robotmiddleware.walk-limits`, the simulated robot's by default), which a
-  * robot would clamp to silently (docs/protocol.md 7.2): refused here, so an absurd speed is an error, not a success.
-  * The head's are protocol.md's; the arms' are half a turn either way, beyond which no joint goes.
+/** The arguments the middleware passes on to a robot: an operation outside them is refused before it is sent, with `out
+  * of range: <name> <value>, allowed <range>` (docs/writing-apps.md, docs/zeromq.md 6), the same text at every door.
+  * The walk's speeds are the gait's (`robotmiddleware.walk-limits`, the simulated robot's by default), which a robot
+  * would clamp to silently (docs/protocol.md 7.2): refused here, so an absurd speed is an error, not a success. The
+  * head's are protocol.md's; the arms' are half a turn either way, beyond which no joint goes.
   *
   * @param speed
   *   the largest forward and sideways speed, m/s
@@ -22,15 +22,15 @@ final case class ArgumentLimits(speed: Double, turn: Double) {
     * way (one whose parameters are not numbers is left to the robot, which answers `bad parameters:`).
     */
   def check(operation: Operation): Option[String] = operation match {
-    case Operation.Walk(vx, vy, omega) => walk(vx, vy, omega)
-    case Operation.Head(pan, tilt)     => head(pan, tilt)
+    case Operation.Walk(vx, vy, omega)  => walk(vx, vy, omega)
+    case Operation.Head(pan, tilt)      => head(pan, tilt)
     case Operation.Arms(ls, le, rs, re) => arms(ls, le, rs, re)
     case Operation.RawCall(module, method, params) =>
       (RpcMethod.find(module, method), numbers(params)) match {
-        case (Some(RpcMethod.Walk), Some(Vector(vx, vy, omega)))     => walk(vx, vy, omega)
-        case (Some(RpcMethod.Head), Some(Vector(pan, tilt)))         => head(pan, tilt)
-        case (Some(RpcMethod.Arms), Some(Vector(ls, le, rs, re)))    => arms(ls, le, rs, re)
-        case _                                                       => None
+        case (Some(RpcMethod.Walk), Some(Vector(vx, vy, omega)))  => walk(vx, vy, omega)
+        case (Some(RpcMethod.Head), Some(Vector(pan, tilt)))      => head(pan, tilt)
+        case (Some(RpcMethod.Arms), Some(Vector(ls, le, rs, re))) => arms(ls, le, rs, re)
+        case _                                                    => None
       }
     case _ => None
   }

@@ -55,8 +55,8 @@ object Operation {
     def name: String = RpcMethod.Say.name
   }
 
-  /** Any call of the robot's RPC interface; motion and speech calls need the matching lease, reads (the method
-    * table's `read`: `motion.getPosture`, `system.battery`, `system.ping`) none.
+  /** Any call of the robot's RPC interface; motion and speech calls need the matching lease, reads (the method table's
+    * `read`: `motion.getPosture`, `system.battery`, `system.ping`) none.
     */
   final case class RawCall(module: String, method: String, params: Vector[RpcValue]) extends Operation {
     def group: Option[ActuatorGroup] = RpcMethod.find(module, method) match {

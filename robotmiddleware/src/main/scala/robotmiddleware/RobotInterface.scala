@@ -109,8 +109,8 @@ trait RobotInterface {
   /** What the middleware tells this app: preempted leases, safety stops. */
   def appEvents: Source[AppEvent, NotUsed]
 
-  /** Every robot's lease holders and safety hold, as the middleware's guards last reported them (robots no app has
-    * used yet are not listed). Answered on the gateway's node only: the message does not cross nodes.
+  /** Every robot's lease holders and safety hold, as the middleware's guards last reported them (robots no app has used
+    * yet are not listed). Answered on the gateway's node only: the message does not cross nodes.
     */
   def holds(): Future[Vector[RobotHolds]]
 

@@ -361,8 +361,9 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       refused(Operation.Head(0, 0.8)) shouldBe "out of range: tilt 0.8, allowed -0.6..0.5"
       refused(Operation.Arms(0, 0, 7, 0)) shouldBe "out of range: rightShoulder 7.0, allowed -3.142..3.142"
       // A raw call of the same method is read the same way (robotctl call, the doors' other calls).
-      refused(Operation.RawCall("motion", "walk", Vector(RpcValue.Number(100f), RpcValue.Number(0f),
-        RpcValue.Number(0f)))) shouldBe "out of range: vx 100.0, allowed -0.3..0.3"
+      refused(Operation.RawCall("motion", "walk",
+          Vector(RpcValue.Number(100f), RpcValue.Number(0f),
+            RpcValue.Number(0f)))) shouldBe "out of range: vx 100.0, allowed -0.3..0.3"
       refused(Operation.RawCall("motion", "head", Vector(RpcValue.Number(2.5f), RpcValue.Number(0f)))) shouldBe
         "out of range: pan 2.5, allowed -2.0..2.0"
       // Nothing of the above reached the robot: the next call it hears is the walk inside the limits.

@@ -11,8 +11,8 @@ import naogateway.wire.{Posture, RpcMethod, RpcValue}
   * lines and one final line, then closes. Lines end with `\n` and are UTF-8.
   *
   *   - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>` |
-  *     `battery <robotId> swap`;
-  *     words are separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
+  *     `battery <robotId> swap`; words are separated by one space, and a param is `n:<float>`, `f:true|false` or
+  *     `t:<text>`.
   *   - answer: `. <text>` for each line of output, then `ok <text>` or `error <text>`.
   *
   * Words escape `\` as `\\`, a space as `\s` and other control characters as `\uXXXX`; answer texts keep their spaces.

@@ -386,9 +386,13 @@ object ControlServer {
     if (held.isEmpty) Vector(Finding("safety", "no robot is held safe", problem = false))
     else
       held.map { case (id, reason) =>
-        Finding("safety", s"robot $id is held safe, motion refused: $reason", problem = true,
+        Finding(
+          "safety",
+          s"robot $id is held safe, motion refused: $reason",
+          problem = true,
           s"swap or charge robot $id's battery; the hold ends by itself once it reads full enough " +
-            s"(simulated: robotctl battery $id swap)")
+            s"(simulated: robotctl battery $id swap)"
+        )
       }
   }
 

@@ -9,7 +9,7 @@ import akka.actor.Cancellable
 import akka.actor.typed.Scheduler
 
 import naogateway.RobotFailure
-import naogateway.wire.{ActuatorGroup, Posture, RpcMethod, RpcValue}
+import naogateway.wire.{ActuatorGroup, RpcMethod, RpcValue}
 import robotmiddleware.RobotInterface
 
 /** The requests a door (the ZeroMQ endpoint, the datagram door) is working on: each routed request handed to the
@@ -148,7 +148,7 @@ private[apps] final class RequestDesk[A](
               // robot's own answer is (a read, no lease). Without one, the keep-alive's posture stands.
               robots.call(robotId, RpcMethod.GetPosture.module, RpcMethod.GetPosture.method).transform {
                 case Success(Some(RpcValue.Text(now))) => Success(RequestDesk.status(s.copy(posture =
-                      Some(Posture.reported(now)))))
+                        Some(naogateway.wire.Posture.reported(now)))))
                 case _ => Success(RequestDesk.status(s))
               }
             case Some(s) => Future.successful(RequestDesk.status(s))

@@ -134,16 +134,21 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       }
       val allWell = Vector(Finding("gateway", "running", problem = false))
       val swapped = new java.util.concurrent.ConcurrentLinkedQueue[Int]()
-      val gateway = ControlServer.GatewaySide(view, () => scala.concurrent.Future.successful(allWell),
+      val gateway = ControlServer.GatewaySide(
+        view,
+        () => scala.concurrent.Future.successful(allWell),
         id =>
           if (id == 3) { swapped.add(id); scala.concurrent.Future.successful("robot 3: battery swapped, 12.60 V") }
-          else ControlServer.GatewaySide.noSimulatedRobots(id))
+          else ControlServer.GatewaySide.noSimulatedRobots(id)
+      )
       val held = spawn(ControlServer.withInterface(new FleetStub(3), settings, Some(gateway)))
       val doctor = exchange("doctor", address(held).getPort)
-      doctor.init shouldBe Vector(". ok   gateway: running",
+      doctor.init shouldBe Vector(
+        ". ok   gateway: running",
         ". FAIL safety: robot 3 is held safe, motion refused: battery low: 10.70 V; it clears by itself; fix: swap or " +
           "charge robot 3's battery; the hold ends by itself once it reads full enough (simulated: robotctl battery 3 " +
-          "swap)")
+          "swap)"
+      )
       doctor.last shouldBe "error 1 problem(s), each with its fix above"
       exchange("battery 3 swap", address(held).getPort) shouldBe Vector("ok robot 3: battery swapped, 12.60 V")
       exchange("battery 2 swap", address(held).getPort) shouldBe Vector(

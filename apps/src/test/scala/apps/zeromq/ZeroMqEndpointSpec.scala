@@ -306,6 +306,7 @@ class ZeroMqEndpointSpec
       askOne(-1, "gateway", "robots").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.UInt(7),
               RpcValue.UInt(8)))))
       val s = dealer()
+      val leasesBefore = stub.seen.count(_.startsWith("acquire 7"))
       try {
         val (contents, reply) = ask(s, request(7, "gateway", "status"))
         reply.result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.Flag(true), RpcValue.Text("good")))))
@@ -315,7 +316,7 @@ class ZeroMqEndpointSpec
         contents.status.flatMap(_.activeRole) shouldBe Some("striker")
       } finally s.close()
       stub.seen should contain("call motion.getPosture 7")
-      stub.seen.filter(_.startsWith("acquire 7")) shouldBe empty
+      stub.seen.count(_.startsWith("acquire 7")) shouldBe leasesBefore
       askOne(8, "gateway", "status").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.Flag(false),
               RpcValue.Text("offline")))))
       error(askOne(99, "gateway", "status")) shouldBe "unknown robot: no robot 99 is known"
