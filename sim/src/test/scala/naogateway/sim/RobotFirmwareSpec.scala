@@ -117,10 +117,10 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
     }
     "recharge a low battery while sitting, up to sitChargeUpTo, not while standing (a team swapping a held robot's)" in {
       val low = RobotFirmware.boot(settings.copy(initialBattery = 10.7), 0)
-      val sat = RobotFirmware.advance(low, 60000 * ms)._1
+      val sat = RobotFirmware.advance(low, 70000 * ms)._1
       sat.posture shouldBe Posture.Sit
-      sat.battery shouldBe (10.7 + 60 * settings.sitChargePerSecond - 60 * settings.idleDrainPerSecond) +- 0.001
-      // Above the middleware's battery-ok (11.0 V) within a minute: the hold clears by itself.
+      sat.battery shouldBe (10.7 + 70 * settings.sitChargePerSecond - 70 * settings.idleDrainPerSecond) +- 0.001
+      // Above the middleware's battery-ok (11.0 V) in 70 s: the hold clears by itself.
       sat.battery should be > 11.0
       RobotFirmware.advance(sat, 3600000 * ms)._1.battery shouldBe settings.sitChargeUpTo +- 1e-9
       val standing = stand(0)
