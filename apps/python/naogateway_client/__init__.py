@@ -185,43 +185,46 @@ class _Calls:
         return self.call(-1, "gateway", "robots")
 
     def status(self, robot_id: int) -> Status:
-        """The robot's latest keep-alive as a dict (online: whether the robot is reachable)."""
-        online = self.call(robot_id, "gateway", "status")
-        snapshot = snapshot_of(self.last_reply)
+        """The robot's status as a dict: online and link as the gateway sees them now, posture as the robot answers it
+        now (so right after stop it says stand), battery, uptime and role from its latest keep-alive."""
+        online, link = self.call(robot_id, "gateway", "status")
+        snapshot = snapshot_of(self.last_reply, link)
         snapshot["online"] = online
         return snapshot
 
-    def acquire(self, robot_id: int, *groups: str) -> Value:
+    def acquire(self, robot_id: int, *groups: str) -> bool:
         """Takes the leases of these ACTUATOR_GROUPS on the robot, all of them or none."""
         return self.call(robot_id, "gateway", "acquire", *groups)
 
-    def release(self, robot_id: int, *groups: str) -> Value:
+    def release(self, robot_id: int, *groups: str) -> bool:
         """Gives the leases of these ACTUATOR_GROUPS back."""
         return self.call(robot_id, "gateway", "release", *groups)
 
     # RobotInterface calls; the endpoint takes the lease each needs on the clients' behalf.
-    def walk(self, robot_id: int, vx: float, vy: float, omega: float) -> Value:
-        """Walks with these velocities (m/s, m/s, rad/s) until stopped; the endpoint keeps the walk fresh."""
+    def walk(self, robot_id: int, vx: float, vy: float, omega: float) -> bool:
+        """Walks with these velocities (m/s, m/s, rad/s) until stopped; the endpoint keeps the walk fresh. Beyond the
+        gateway's walk limits (0.3 m/s, 1.0 rad/s by default) a GatewayError "robot error: out of range: vx 100.0,
+        allowed -0.3..0.3"."""
         return self.call(robot_id, "motion", "walk", float(vx), float(vy), float(omega))
 
-    def stop(self, robot_id: int) -> Value:
+    def stop(self, robot_id: int) -> bool:
         """Stops walking."""
         return self.call(robot_id, "motion", "stop")
 
-    def head(self, robot_id: int, pan: float, tilt: float) -> Value:
-        """Turns the head (radians)."""
+    def head(self, robot_id: int, pan: float, tilt: float) -> bool:
+        """Turns the head (radians; pan -2.0..2.0, tilt -0.6..0.5, else an "out of range:" GatewayError)."""
         return self.call(robot_id, "motion", "head", float(pan), float(tilt))
 
-    def arms(self, robot_id: int, left_shoulder: float, left_elbow: float, right_shoulder: float, right_elbow: float) -> Value:
+    def arms(self, robot_id: int, left_shoulder: float, left_elbow: float, right_shoulder: float, right_elbow: float) -> bool:
         """Sets the four arm joints (radians)."""
         values = [float(v) for v in (left_shoulder, left_elbow, right_shoulder, right_elbow)]
         return self.call(robot_id, "motion", "arms", *values)
 
-    def posture(self, robot_id: int, name: str) -> Value:
+    def posture(self, robot_id: int, name: str) -> str:
         """Goes to one of POSTURE_TARGETS; returns the posture reached once the motion has ended."""
         return self.call(robot_id, "motion", "posture", name)
 
-    def say(self, robot_id: int, text: str) -> Value:
+    def say(self, robot_id: int, text: str) -> bool:
         """Speaks the text."""
         return self.call(robot_id, "speech", "say", text)
 

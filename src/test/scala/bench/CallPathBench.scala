@@ -446,6 +446,8 @@ object CallPathBench extends Benchmark {
     def gameState: Source[GameControlData, NotUsed] = Source.never
     def robotEvents: Source[RobotEvent, NotUsed] = Source.never
     def appEvents: Source[robotmiddleware.AppEvent, NotUsed] = Source.never
+    def holds(): scala.concurrent.Future[Vector[robotmiddleware.RobotHolds]] =
+      scala.concurrent.Future.successful(Vector.empty)
     def close(): Unit = ()
   }
 }

@@ -71,12 +71,12 @@ class RobotRowSpec extends AnyWordSpec with Matchers {
     "show a robot's drift only once its bound has settled, as `settling` before" in {
       // Two seconds after a start: the drift is held at its limit, its bound twice that.
       val young = link.copy(clock = Some(ClockEstimate(1000L, 5000000L, 1.001, 3.0, 0.002, 10)))
-      control.ControlServer.statusLine(robot, Some(young)).split("\\s+").takeRight(3).toList shouldBe
-        List("±3.0", "ms", "settling")
+      control.ControlServer.statusLine(robot, Some(young)).split("\\s+").takeRight(4).toList shouldBe
+        List("±3.0", "ms", "settling", "-")
       val card = web.WebJson.robot(robot, Some(young), None).fields("clock").asJsObject.fields
       (card("driftSettled").toString, card("driftBoundPpm").toString) shouldBe (("false", "2000.0"))
       val settled = link.copy(clock = Some(ClockEstimate(1000L, 5000000L, 1.0 / (1.0 + 35e-6), 0.7, 40e-6, 300)))
-      control.ControlServer.statusLine(robot, Some(settled)) should endWith("+35 ppm")
+      control.ControlServer.statusLine(robot, Some(settled)) should endWith("+35 ppm   -")
       web.WebJson.robot(robot, Some(settled), None).fields("clock").asJsObject.fields("driftSettled").toString shouldBe
         "true"
     }

@@ -50,6 +50,7 @@ class TeleopSpec extends AnyWordSpec with Matchers {
     def gameState: Source[GameControlData, NotUsed] = Source.empty
     def robotEvents: Source[RobotEvent, NotUsed] = Source.empty
     def appEvents: Source[AppEvent, NotUsed] = Source.empty
+    def holds(): Future[Vector[robotmiddleware.RobotHolds]] = Future.successful(Vector.empty)
     def close(): Unit = ()
   }
 

@@ -232,7 +232,9 @@ object Launcher {
     val doctor = () =>
       Doctor.gather(gateway, config)(context.system).map(f => Doctor.findings(f) :+ Doctor.clusterFinding(config))(
         context.executionContext)
-    val control = apps.control.ControlServer.GatewaySide(view, doctor)
+    // The demo's robots, once started: `robotctl battery <id> swap` reaches them, and only them.
+    val fleet = new java.util.concurrent.atomic.AtomicReference(Option.empty[naogateway.sim.FleetHandle])
+    val control = apps.control.ControlServer.GatewaySide(view, doctor, batterySwap(fleet.get, _))
     apps.control.ControlServer.spawnIfEnabled(context, middleware, Some(control))
     // The web view (docs/web.md), when enabled: its address goes on the status view's first line.
     val webAddress = new java.util.concurrent.atomic.AtomicReference(Vector.empty[String])
@@ -271,8 +273,9 @@ object Launcher {
         if (launcher.ballFollowerRobot > 0) startBallFollower(context.system, launcher.ballFollowerRobot)
         startGameController(context, addresses)
         Behaviors.same
-      case FleetStarted(Success(fleet)) =>
-        context.log.info("Started {} simulated robots", fleet.robots.size)
+      case FleetStarted(Success(started)) =>
+        context.log.info("Started {} simulated robots", started.robots.size)
+        fleet.set(Some(started))
         Behaviors.same
       case FleetStarted(Failure(e)) =>
         context.log.error("Simulated robots did not start", e)
@@ -285,6 +288,21 @@ object Launcher {
         Behaviors.stopped
     }
   }
+
+  /** `robotctl battery <id> swap`: a simulated robot of `fleet` gets a full battery at once, as a team swaps one; any
+    * other robot is real, and refused.
+    */
+  private[apps] def batterySwap(
+      fleet: Option[naogateway.sim.FleetHandle], robotId: Int): scala.concurrent.Future[String] =
+    fleet.flatMap(_.robot(robotId)) match {
+      case Some(robot) =>
+        val full = naogateway.sim.FirmwareSettings(robotId).fullBattery
+        robot ! naogateway.sim.SimulatedRobot.SetBattery(full)
+        scala.concurrent.Future.successful(
+          f"robot $robotId: battery swapped for a full one ($full%.2f V); a hold for low battery ends " +
+            "once its keep-alives read it")
+      case None => apps.control.ControlServer.GatewaySide.noSimulatedRobots(robotId)
+    }
 
   /** The middleware with the settings of the node's config. */
   private def configuredMiddleware(gateway: ActorRef[GatewayAccess.Command]): Behavior[RobotMiddleware.Command] =

@@ -75,9 +75,12 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
       run.code shouldBe RobotCtl.ExitOk
       run.out.size shouldBe 1001
       run.out.head.split("\\s+").toList shouldBe List("id", "address", "state", "link", "battery", "posture", "role",
-        "rtt", "loss", "clock", "drift")
+        "rtt", "loss", "clock", "drift", "leases")
       run.out(1).split("\\s+").toList shouldBe List("1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit",
-        "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
+        "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm", "-")
+      // Which app holds which lease (FleetStub: robot 2's walk is teleop's), and a robot held safe (3).
+      run.out(2) should endWith(" walk=teleop")
+      run.out(3) should endWith(" - HELD SAFE")
     }
 
     "make a call with its parameters typed as on the command line, the port taken from the environment" in {

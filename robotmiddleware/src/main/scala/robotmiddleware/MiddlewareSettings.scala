@@ -24,7 +24,8 @@ final case class MiddlewareSettings(
     clientAskMargin: FiniteDuration = 5.seconds,
     clientFindRetry: FiniteDuration = 200.millis,
     dispatcher: String = MiddlewareSettings.DefaultDispatcher,
-    servoLimits: ServoLimits = ServoLimits()
+    servoLimits: ServoLimits = ServoLimits(),
+    limits: ArgumentLimits = ArgumentLimits.Default
 ) {
   require(lowBattery < batteryOk, "safety.low-battery must be below safety.battery-ok")
   require(walkRefresh > Duration.Zero && walkRefresh < 500.millis,
@@ -66,6 +67,7 @@ object MiddlewareSettings {
     c.getDuration("client.ask-margin").toScala,
     c.getDuration("client.find-retry").toScala,
     c.getString("dispatcher"),
-    ServoLimits(c.getInt("servos.hot"), c.getDouble("servos.low-voltage"))
+    ServoLimits(c.getInt("servos.hot"), c.getDouble("servos.low-voltage")),
+    ArgumentLimits(c.getDouble("walk-limits.speed"), c.getDouble("walk-limits.turn"))
   )
 }

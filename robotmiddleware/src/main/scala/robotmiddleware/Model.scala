@@ -55,9 +55,12 @@ object Operation {
     def name: String = RpcMethod.Say.name
   }
 
-  /** Any call of the robot's RPC interface; motion and speech calls need the matching lease. */
+  /** Any call of the robot's RPC interface; motion and speech calls need the matching lease, reads (the method table's
+    * `read`: `motion.getPosture`, `system.battery`, `system.ping`) none.
+    */
   final case class RawCall(module: String, method: String, params: Vector[RpcValue]) extends Operation {
     def group: Option[ActuatorGroup] = RpcMethod.find(module, method) match {
+      case Some(m) if m.read     => None
       case Some(RpcMethod.Head)  => Some(ActuatorGroup.Head)
       case Some(RpcMethod.Arms)  => Some(ActuatorGroup.Arms)
       case Some(RpcMethod.Reset) => Some(ActuatorGroup.Walk)
@@ -67,6 +70,18 @@ object Operation {
       case _                                     => None
     }
     def name: String = s"$module.$method"
+  }
+}
+
+/** Who holds a robot's leases (group to app name) and, while the middleware holds the robot safe, why and how the hold
+  * ends: what `robotctl status` and `robotctl doctor` show (`RobotInterface.holds`).
+  */
+final case class RobotHolds(robotId: Int, leases: Map[ActuatorGroup, String], safetyHold: Option[String]) {
+
+  /** The lease holders as people read them, in the docs' group order: `walk=teleop head=zeromq`, or `-`. */
+  def describeLeases: String = {
+    val held = ActuatorGroup.all.flatMap(g => leases.get(g).map(app => s"${g.name}=$app"))
+    if (held.isEmpty) "-" else held.mkString(" ")
   }
 }
 

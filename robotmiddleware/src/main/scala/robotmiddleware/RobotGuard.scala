@@ -100,8 +100,8 @@ private[robotmiddleware] object RobotGuard {
   private case object StatsKey
 
   /** A guard for `robotId`, whose robot actor is `robot` (narrowed to what the middleware may send it). */
-  def apply(robotId: Int, robot: ActorRef[RobotAccess.Command], settings: MiddlewareSettings, online: Boolean)
-      : Behavior[Command] =
+  def apply(robotId: Int, robot: ActorRef[RobotAccess.Command], settings: MiddlewareSettings, online: Boolean,
+      holds: ActorRef[RobotHolds]): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.pendingLimit) { stash =>
@@ -109,10 +109,19 @@ private[robotmiddleware] object RobotGuard {
           robot ! RobotAccess.GetSnapshot(context.messageAdapter(SnapshotReceived.apply))
           val childrenReady = context.messageAdapter(ChildrenReady.apply)
           robot ! RobotAccess.Open(childrenReady)
-          new Guard(robotId, robot, settings, context, timers, stash, childrenReady).connecting(online)
+          val guard = new Guard(robotId, robot, settings, context, timers, stash, childrenReady, holds)
+          // A restarted guard starts with no leases and no hold: the middleware's table says so at once.
+          guard.report()
+          guard.connecting(online)
         }
       }
     }
+
+  /** The reason of a battery hold, with how it ends: what `SafetyStop`, `SafetyHold` and `robotctl doctor` say. */
+  def batteryLow(volts: Double, readings: Int, settings: MiddlewareSettings): String =
+    f"battery low: $volts%.2f V or less for $readings keep-alives (below ${settings.lowBattery}%.2f V); it clears " +
+      f"by itself once $readings keep-alives in a row read above ${settings.batteryOk}%.2f V: swap or charge the " +
+      "battery (a simulated robot recharges while it sits; `robotctl battery <id> swap` swaps its battery at once)"
 
   /** The lease table: holder per group. */
   private type Leases = Map[ActuatorGroup, AppInfo]
@@ -124,9 +133,14 @@ private[robotmiddleware] object RobotGuard {
       context: ActorContext[Command],
       timers: TimerScheduler[Command],
       stash: StashBuffer[Command],
-      childrenReady: ActorRef[RobotAccess.Opened]
+      childrenReady: ActorRef[RobotAccess.Opened],
+      holds: ActorRef[RobotHolds]
   ) {
     private var leases: Leases = Map.empty
+
+    /** Tells the middleware the lease holders and the safety hold, after each change of either. */
+    def report(): Unit = holds ! RobotHolds(robotId, leases.map { case (g, app) => g -> app.name }, safety)
+
     private var walking: Option[(Operation.Walk, AppInfo)] = None
     private var safety: Option[String] = None
     private var online = false
@@ -242,12 +256,15 @@ private[robotmiddleware] object RobotGuard {
               }
               leases = leases.updated(group, app)
             }
+            // The table first: an app that asks for the holds once granted finds itself in them.
+            report()
             replyTo ! RobotMiddleware.LeaseResult(robotId, groups, Right(()))
         }
         Behaviors.same
       case Release(app, group) =>
         if (leases.get(group).exists(_.events == app)) {
           leases -= group
+          report()
           if (group == ActuatorGroup.Walk) stopWalking(c, "lease released")
         }
         Behaviors.same
@@ -256,6 +273,7 @@ private[robotmiddleware] object RobotGuard {
         if (held.nonEmpty) {
           context.log.info("Robot [{}]: app gone, releasing {}", robotId, held.map(_.name).mkString(","))
           leases --= held
+          report()
           if (held.exists(_ == ActuatorGroup.Walk)) stopWalking(c, "app gone")
         }
         Behaviors.same
@@ -379,11 +397,15 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
-    /** Why an app's operation may not run now (offline, lease, safety), the same for both doors. */
+    /** Why an app's operation may not run now (an argument out of range, offline, lease, safety), the same for both
+      * doors.
+      */
     private def refusal(app: AppInfo, operation: Operation): Option[RobotFailure] = {
       val group = operation.group
       val held = group.forall(g => leases.get(g).exists(_.events == app.events))
-      if (!online) Some(RobotFailure.RobotOffline(robotId))
+      val outOfRange = settings.limits.check(operation)
+      if (outOfRange.isDefined) Some(RobotFailure.RobotError(robotId, outOfRange.get))
+      else if (!online) Some(RobotFailure.RobotOffline(robotId))
       else if (!held) Some(RobotFailure.LeaseNotHeld(robotId, group.get, group.flatMap(leases.get).map(_.name)))
       else if (safety.isDefined && refusedWhenUnsafe(operation)) Some(RobotFailure.SafetyHold(robotId, safety.get))
       else None
@@ -408,16 +430,16 @@ private[robotmiddleware] object RobotGuard {
         readings = (readings :+ volts).takeRight(settings.batteryReadings)
         val sustained = readings.size == settings.batteryReadings
         if (safety.isEmpty && sustained && readings.forall(_ < settings.lowBattery)) {
-          val reason =
-            f"battery low: ${readings.max}%.2f V or less for ${readings.size} keep-alives (below " +
-              f"${settings.lowBattery}%.2f V)"
+          val reason = RobotGuard.batteryLow(readings.max, readings.size, settings)
           context.log.warn("Robot [{}]: {}; stopping and sitting down", robotId, reason)
           safety = Some(reason)
+          report()
           leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))
           stopWalking(c, reason, thenSit = true)
         } else if (safety.isDefined && sustained && readings.forall(_ > settings.batteryOk)) {
           context.log.info("Robot [{}]: battery back at {} V; motion allowed again", robotId, volts)
           safety = None
+          report()
           leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyCleared(robotId))
         }
       }

@@ -122,6 +122,11 @@ trait RobotInterface {
   /** What the middleware tells this app: preempted leases, safety stops. */
   def appEvents: Source[AppEvent, NotUsed]
 
+  /** Every robot's lease holders and safety hold, as the middleware's guards last reported them (robots no app has used
+    * yet are not listed). Answered on the gateway's node only: the message does not cross nodes.
+    */
+  def holds(): Future[Vector[RobotHolds]]
+
   /** Ends this app's session: its leases are released and its walking robots stopped. */
   def close(): Unit
 }
@@ -235,13 +240,14 @@ object RobotClient {
     def release(robotId: Int, groups: ActuatorGroup*): Unit =
       groups.foreach(g => middleware ! RobotMiddleware.Release(session, robotId, g))
 
-    // Bad velocities fail the future like any refusal, never the caller's thread.
+    // Velocities that are no numbers fail the future like any refusal, never the caller's thread; finite ones out of
+    // range are the guard's to refuse, which knows the limits.
     def walk(robotId: Int, vx: Double, vy: Double, omega: Double): Future[Done] =
-      scala.util.Try(Operation.Walk(vx, vy, omega)) match {
-        case scala.util.Success(walk) => done(execute(robotId, walk))
-        case scala.util.Failure(e) =>
+      Seq("vx" -> vx, "vy" -> vy, "omega" -> omega).find { case (_, v) => v.isNaN || v.isInfinite } match {
+        case None => done(execute(robotId, Operation.Walk(vx, vy, omega)))
+        case Some((name, v)) =>
           Future.failed(RobotFailure.RobotError(robotId,
-              s"out of range: ${e.getMessage.stripPrefix("requirement failed: ")}"))
+              s"${ArgumentLimits.Prefix}$name ${ArgumentLimits.show(v)}, allowed finite numbers"))
       }
     def stop(robotId: Int): Future[Done] = done(execute(robotId, Operation.Stop()))
     def head(robotId: Int, pan: Double, tilt: Double): Future[Done] = done(execute(robotId, Operation.Head(pan, tilt)))
@@ -281,6 +287,9 @@ object RobotClient {
       source[RobotEvent](64)(ref => middleware ! RobotMiddleware.WatchEvents(ref))
     def appEvents: Source[AppEvent, NotUsed] =
       source[AppEvent](64)(ref => session ! SessionMessage.SubscribeAppEvents(ref))
+
+    def holds(): Future[Vector[RobotHolds]] =
+      ask[Vector[RobotHolds]](0, "holds")(RobotMiddleware.getHolds(_))
 
     def close(): Unit = session ! SessionMessage.Close
   }

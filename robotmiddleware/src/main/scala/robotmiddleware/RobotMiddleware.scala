@@ -74,6 +74,13 @@ object RobotMiddleware {
   /** Streams robot events (online, offline, restarts, quality) to `subscriber`. */
   final case class WatchEvents(subscriber: ActorRef[RobotEvent]) extends Command
 
+  /** Answers with every guard's latest lease holders and safety hold. Local to the gateway's node (no cross-node
+    * serializer), so the message is private and made here.
+    */
+  def getHolds(replyTo: ActorRef[Vector[RobotHolds]]): Command = GetHolds(replyTo)
+
+  private final case class GetHolds(replyTo: ActorRef[Vector[RobotHolds]]) extends Command
+  private final case class HoldsChanged(holds: RobotHolds) extends Command
   private final case class GatewayEventReceived(event: GatewayEvent) extends Command
   private final case class RobotsListed(replyTo: ActorRef[RobotList], robots: Option[Vector[RobotSnapshot]])
       extends Command
@@ -139,13 +146,16 @@ object RobotMiddleware {
     private var statusWatchers = Map.empty[ActorRef[RobotSnapshot], Option[Int]]
     private var gameWatchers = Set.empty[ActorRef[GameControlData]]
     private var eventWatchers = Set.empty[ActorRef[RobotEvent]]
+    // What each guard last reported of its leases and safety hold: the guards' state, for robotctl's status and doctor.
+    private var holds = Map.empty[Int, RobotHolds]
+    private lazy val holdsAdapter = context.messageAdapter[RobotHolds](HoldsChanged.apply)
 
     private def guard(
         robotId: Int, robot: ActorRef[RobotAccess.Command], online: Boolean): ActorRef[RobotGuard.Command] =
       guards.getOrElse(
         robotId, {
           val g = context.spawn(
-            Behaviors.supervise(RobotGuard(robotId, robot, settings, online))
+            Behaviors.supervise(RobotGuard(robotId, robot, settings, online, holdsAdapter))
               .onFailure(settings.guardRestart.strategy),
             s"guard-$robotId",
             dispatcher(settings)
@@ -221,6 +231,12 @@ object RobotMiddleware {
           case _ => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
         }
         Behaviors.same
+      case GetHolds(replyTo) =>
+        replyTo ! holds.values.toVector.sortBy(_.robotId)
+        Behaviors.same
+      case HoldsChanged(h) =>
+        if (guards.contains(h.robotId)) holds = holds.updated(h.robotId, h)
+        Behaviors.same
       case ListRobots(replyTo) =>
         // A gateway that does not answer leaves the app's own ask to time out, which the facade reports as a Timeout.
         context.ask(gateway, GatewayAccess.GetRobots.apply) {
@@ -283,6 +299,7 @@ object RobotMiddleware {
                 // The gateway forgot a robot the network introduced: its guard goes too, so no map here outlives it.
                 guards.get(robotId).foreach(context.stop(_))
                 guards -= robotId
+                holds -= robotId
               case _ => guards.get(e.robotId).foreach(_ ! RobotGuard.RobotEventReceived(e))
             }
             if (!e.isInstanceOf[RobotStatusUpdated]) eventWatchers.foreach(_ ! e)

@@ -34,10 +34,12 @@ class MiddlewareSettingsSpec extends AnyWordSpec with Matchers with SettingsTabl
         clientAskMargin = 5.seconds,
         clientFindRetry = 200.millis,
         dispatcher = "akka.actor.default-dispatcher",
-        servoLimits = ServoLimits(hotCelsius = 65, lowVolts = 10.0)
+        servoLimits = ServoLimits(hotCelsius = 65, lowVolts = 10.0),
+        limits = ArgumentLimits(speed = 0.3, turn = 1.0)
       )
       // Code that builds the settings with the first seven figures (the specs) gets reference.conf's for the rest.
       MiddlewareSettings(10.8, 11.0, 200.millis, 2.seconds, 5.seconds, 1.second, 64) shouldBe s
+      settings("walk-limits.speed = 0.5").limits shouldBe ArgumentLimits(0.5, 1.0)
       settings("lookup-timeout = 500ms").lookupTimeout shouldBe 500.millis
       settings("client.ask-margin = 20s").clientAskMargin shouldBe 20.seconds
       settings("dispatcher = \"naogateway.dispatcher\"").dispatcher shouldBe "naogateway.dispatcher"

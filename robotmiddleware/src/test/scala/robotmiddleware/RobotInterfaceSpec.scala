@@ -170,8 +170,7 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
     "fail a walk with velocities that are no numbers in the future, without sending it" in {
       val (interface, middleware) = connected()
       val walked = interface.walk(4, Double.NaN, 0.0, Double.PositiveInfinity)
-      walked.failed.futureValue shouldBe RobotFailure.RobotError(4,
-        "out of range: walk velocities must be finite numbers")
+      walked.failed.futureValue shouldBe RobotFailure.RobotError(4, "out of range: vx NaN, allowed finite numbers")
       middleware.expectNoMessage(100.millis)
     }
   }

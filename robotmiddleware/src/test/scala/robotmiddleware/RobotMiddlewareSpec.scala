@@ -97,6 +97,13 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       result
     }
 
+    /** The middleware's lease holders and safety holds. */
+    def holds(): Vector[RobotHolds] = {
+      val answer = createTestProbe[Vector[RobotHolds]]()
+      middleware ! RobotMiddleware.getHolds(answer.ref)
+      answer.receiveMessage()
+    }
+
     def expectCall(name: String): RobotAccess.Call = {
       val call = response.fishForMessage(3.seconds) {
         case c: RobotAccess.Call if c.call.name == name => akka.actor.testkit.typed.FishingOutcome.Complete
@@ -302,6 +309,11 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       (1 to settings.batteryReadings).foreach(_ =>
         f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(10.5), online = true)))
       events.expectMessageType[AppEvent.SafetyStop].reason should include("battery low")
+      // The hold says how it ends, and robotctl's table shows it with the lease holders.
+      val held = f.holds().loneElement
+      held.leases shouldBe Map(ActuatorGroup.Walk -> "walker", ActuatorGroup.Head -> "walker")
+      held.safetyHold.get should include("it clears by itself once 5 keep-alives in a row read above 11.00 V")
+      held.safetyHold.get should include("robotctl battery <id> swap")
       f.expectCall("motion.stop").replyTo ! CallResult(1, "motion.stop", Right(None))
       f.expectCall("motion.posture").call.params shouldBe Vector(RpcValue.Text("sit"))
       f.execute(app, Operation.Walk(0.1, 0, 0)).receiveMessage().result.left.toOption.get shouldBe a[
@@ -313,8 +325,50 @@ class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike
       (1 to settings.batteryReadings).foreach(_ =>
         f.publish ! RobotStatusUpdated(RobotSnapshot(1, robotAddress, batteryVoltage = Some(11.5), online = true)))
       events.expectMessage(AppEvent.SafetyCleared(1))
+      f.holds().loneElement.safetyHold shouldBe None
       f.execute(app, Operation.Walk(0.1, 0, 0))
       f.expectCall("motion.walk")
+    }
+    "let any app read a robot whose walk another app holds: reads need no lease (the method table's reads)" in {
+      val f = new Fixture
+      val (holder, _) = f.app("referee", 9)
+      val (reader, _) = f.app("reader", 1)
+      f.acquire(holder, ActuatorGroup.Walk).result shouldBe Right(())
+      f.holds() shouldBe Vector(RobotHolds(1, Map(ActuatorGroup.Walk -> "referee"), None))
+      naogateway.wire.RpcMethod.all.filter(_.read).map(_.name) shouldBe
+        Vector("motion.getPosture", "system.battery", "system.ping")
+      naogateway.wire.RpcMethod.all.filter(_.read).foreach { m =>
+        val read = f.execute(reader, Operation.RawCall(m.module, m.method, Vector.empty))
+        f.expectCall(m.name).replyTo ! CallResult(1, m.name, Right(Some(RpcValue.Text("sit"))))
+        read.receiveMessage().result shouldBe Right(Some(RpcValue.Text("sit")))
+      }
+      // A call that is not a read still needs the lease, and names its holder.
+      f.execute(reader, Operation.RawCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0.1f))))
+        .receiveMessage().result shouldBe Left(RobotFailure.LeaseNotHeld(1, ActuatorGroup.Walk, Some("referee")))
+    }
+    "refuse an argument out of range before the robot hears it, naming the argument, its value and what is allowed" in {
+      val f = new Fixture
+      val (app, _) = f.app("walker", 1)
+      f.acquireAll(app, ActuatorGroup.Walk, ActuatorGroup.Head, ActuatorGroup.Arms).result shouldBe Right(())
+      def refused(operation: Operation): String =
+        f.execute(app, operation).receiveMessage().result.left.toOption.get match {
+          case RobotFailure.RobotError(1, text) => text
+          case other                            => fail(s"not refused as out of range: $other")
+        }
+      refused(Operation.Walk(100, 0, 0)) shouldBe "out of range: vx 100.0, allowed -0.3..0.3"
+      refused(Operation.Walk(0.1, -0.5, 0)) shouldBe "out of range: vy -0.5, allowed -0.3..0.3"
+      refused(Operation.Walk(0, 0, 3)) shouldBe "out of range: omega 3.0, allowed -1.0..1.0"
+      refused(Operation.Head(0, 0.8)) shouldBe "out of range: tilt 0.8, allowed -0.6..0.5"
+      refused(Operation.Arms(0, 0, 7, 0)) shouldBe "out of range: rightShoulder 7.0, allowed -3.142..3.142"
+      // A raw call of the same method is read the same way (robotctl call, the doors' other calls).
+      refused(Operation.RawCall("motion", "walk",
+          Vector(RpcValue.Number(100f), RpcValue.Number(0f),
+            RpcValue.Number(0f)))) shouldBe "out of range: vx 100.0, allowed -0.3..0.3"
+      refused(Operation.RawCall("motion", "head", Vector(RpcValue.Number(2.5f), RpcValue.Number(0f)))) shouldBe
+        "out of range: pan 2.5, allowed -2.0..2.0"
+      // Nothing of the above reached the robot: the next call it hears is the walk inside the limits.
+      f.execute(app, Operation.Walk(0.3, 0, -1.0))
+      f.response.receiveMessage().call.name shouldBe "motion.walk"
     }
     "refresh a walk only once the robot has confirmed it, so a walk the robot refuses is never sent again" in {
       val f = new Fixture

@@ -11,7 +11,8 @@ import naogateway.wire.{Posture, RpcMethod, RpcValue}
   * lines and one final line, then closes. Lines end with `\n` and are UTF-8.
   *
   *   - request: `status` | `doctor` | `call <robotId> <module> <method> [<param> ...]` | `watch <robotId> <seconds>` |
-  *     `servos <robotId>`; words are separated by one space, and a param is `n:<float>`, `f:true|false` or `t:<text>`.
+  *     `servos <robotId>` | `battery <robotId> swap`; words are separated by one space, and a param is `n:<float>`,
+  *     `f:true|false` or `t:<text>`.
   *   - answer: `. <text>` for each line of output, then `ok <text>` or `error <text>`.
   *
   * Words escape `\` as `\\`, a space as `\s` and other control characters as `\uXXXX`; answer texts keep their spaces.
@@ -52,6 +53,9 @@ object ControlProtocol {
       * robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories) itself.
       */
     final case class Doctor(configFile: Option[String] = None) extends Request
+
+    /** Swaps a simulated robot's battery for a full one (the demo's battery swap; refused for a real robot). */
+    final case class BatterySwap(robotId: Int) extends Request
   }
 
   /** One line of the server's answer. */
@@ -79,6 +83,7 @@ object ControlProtocol {
       |       robotctl [--control host:port] servos <robotId>            (the robot's servo table)
       |       robotctl [--control host:port] doctor [config-file]        (what is wrong, each with its fix;
       |                                                                   exit 0 when all is well)
+      |       robotctl [--control host:port] battery <robotId> swap      (a simulated robot's battery full again)
       |The gateway's control port is --control, else $NAOGATEWAY_CONTROL, else 127.0.0.1:11019.""".stripMargin
 
   /** Reads a command-line parameter: a number, a truth value or a text. */
@@ -94,6 +99,7 @@ object ControlProtocol {
     case "servos" :: id :: Nil                => robotId(id).map(Request.Servos(_))
     case "call" :: id :: module :: method :: params =>
       robotId(id).map(Request.Call(_, module, method, params.map(param).toVector))
+    case "battery" :: id :: "swap" :: Nil => robotId(id).map(Request.BatterySwap(_))
     case "watch" :: id :: rest if rest.sizeIs <= 1 =>
       for {
         robot <- robotId(id)
@@ -111,6 +117,7 @@ object ControlProtocol {
     case Request.Doctor(_)       => "doctor"
     case Request.Watch(id, secs) => s"watch $id $secs"
     case Request.Servos(id)      => s"servos $id"
+    case Request.BatterySwap(id) => s"battery $id swap"
     case Request.Call(id, module, method, params) =>
       (Vector("call", id.toString, escapeWord(module), escapeWord(method)) ++ params.map(renderParam)).mkString(" ")
   }
@@ -134,6 +141,8 @@ object ControlProtocol {
         case "doctor" :: Nil => Right(Request.Doctor(None))
         case "servos" :: id :: Nil =>
           robotId(id).left.map(_ => s"robot id '${printable(id)}' is not a number").map(Request.Servos(_))
+        case "battery" :: id :: "swap" :: Nil =>
+          robotId(id).left.map(_ => s"robot id '${printable(id)}' is not a number").map(Request.BatterySwap(_))
         case "watch" :: id :: seconds :: Nil =>
           for {
             robot <- robotId(id)

@@ -21,7 +21,7 @@ import akka.{Done, NotUsed}
 
 import apps.control.ControlProtocol.{Answer, Request}
 import naogateway.{GameSource, GatewayView, LinkStats, RobotSnapshot}
-import robotmiddleware.{Operation, RobotClient, RobotInterface, RobotMiddleware}
+import robotmiddleware.{Operation, RobotClient, RobotHolds, RobotInterface, RobotMiddleware}
 
 /** The control port: a loopback TCP server on the gateway node that answers robotctl's requests through the
   * `RobotInterface` (wire format in [[ControlProtocol]]). One request per connection; the answer streams line by line,
@@ -41,9 +41,23 @@ object ControlServer {
   private final case class BindFailed(reason: Throwable) extends Command
 
   /** What the control port reads beside the robots, handed in by the launcher: the gateway's read-only view (for the
-    * game lines of `status`) and the doctor's checks (for `doctor`), which only the launcher can make.
+    * game lines of `status`), the doctor's checks (for `doctor`), which only the launcher can make, and the demo's
+    * battery swap (`battery <id> swap`: the text to print, or a failure saying why not, e.g. for a real robot).
     */
-  final case class GatewaySide(view: GatewayView, doctor: () => Future[Vector[Finding]])
+  final case class GatewaySide(view: GatewayView, doctor: () => Future[Vector[Finding]],
+      batterySwap: Int => Future[String] = GatewaySide.noSimulatedRobots)
+
+  /** The launcher's side of the control port. */
+  object GatewaySide {
+
+    /** The swap of a gateway with no simulated robots: every robot is a real one. */
+    val noSimulatedRobots: Int => Future[String] = id => Future.failed(new IllegalArgumentException(notSimulated(id)))
+
+    /** Why robot `robotId`'s battery cannot be swapped from here. */
+    def notSimulated(robotId: Int): String =
+      s"robot $robotId is not a simulated robot: robotctl battery swaps only the demo's simulated robots' batteries; " +
+        "swap a real robot's battery by hand"
+  }
 
   /** The server for `middleware`'s robots: it registers as app `settings.appName` and ends that session when it stops.
     */
@@ -264,8 +278,12 @@ object ControlServer {
           // Every robot's link figures are asked for at once: they are pushed once per link-stats-interval, so the
           // status takes one interval in all rather than one per robot. Bounded by the robots the gateway knows.
           val stats = all.map(r => linkStats(robots, r.robotId, settings.linkStatsTimeout))
+          // The lease holders and holds as the middleware has them; none listed when it does not answer in time.
+          val holds = within(robots.holds(), settings.linkStatsTimeout).recover { case NonFatal(_) => Vector.empty }
           Source.single(Answer.Line(statusHeader))
-            .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) => s.map(st => Answer.Line(statusLine(r, st))) })
+            .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) =>
+              s.zip(holds).map { case (st, h) => Answer.Line(statusLine(r, st, h.find(_.robotId == r.robotId))) }
+            })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout, all)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
               source.toList.flatMap(s =>
@@ -286,7 +304,8 @@ object ControlServer {
           case None =>
             Source.single(Answer.Error("doctor needs the gateway's view, which this control port was not given"))
           case Some(g) =>
-            Source.future(g.doctor()).mapConcat { found =>
+            Source.future(g.doctor().zip(holdFindings(robots))).mapConcat { case (checks, holds) =>
+              val found = checks ++ holds
               val problems = found.count(_.problem)
               found.map(f => Answer.Line(f.line)) :+
                 (if (problems == 0) Answer.Ok("all is well")
@@ -300,6 +319,11 @@ object ControlServer {
             case None    => List(Answer.Error(RobotFailure.UnknownRobot(id).getMessage))
             case Some(r) => servoLines(r, limits, System.nanoTime()).map(Answer.Line(_)) :+ Answer.Ok("")
           }
+        }
+      case Request.BatterySwap(id) =>
+        gateway match {
+          case None    => Source.single(Answer.Error(GatewaySide.notSimulated(id)))
+          case Some(g) => Source.future(g.batterySwap(id)).map(Answer.Ok(_))
         }
       case Request.Watch(id, seconds) =>
         if (seconds.seconds > settings.maxWatch)
@@ -356,6 +380,30 @@ object ControlServer {
     robots.linkStats(robotId).takeWithin(timeout).runWith(Sink.headOption).recover { case NonFatal(_) => None }(
       ExecutionContext.parasitic)
 
+  /** One failed check per robot the middleware holds safe, with its reason (which says how the hold ends); one passed
+    * check when none is held. None when the middleware does not answer (the other checks still come).
+    */
+  private def holdFindings(robots: RobotInterface)(implicit system: ActorSystem[_]): Future[Vector[Finding]] =
+    within(robots.holds(), 3.seconds)
+      .map(all => holdFindings(all))(ExecutionContext.parasitic)
+      .recover { case NonFatal(_) => Vector.empty }(ExecutionContext.parasitic)
+
+  /** The doctor's lines for the middleware's holds. */
+  def holdFindings(holds: Vector[RobotHolds]): Vector[Finding] = {
+    val held = holds.collect { case RobotHolds(id, _, Some(reason)) => id -> reason }
+    if (held.isEmpty) Vector(Finding("safety", "no robot is held safe", problem = false))
+    else
+      held.map { case (id, reason) =>
+        Finding(
+          "safety",
+          s"robot $id is held safe, motion refused: $reason",
+          problem = true,
+          s"swap or charge robot $id's battery; the hold ends by itself once it reads full enough " +
+            s"(simulated: robotctl battery $id swap)"
+        )
+      }
+  }
+
   /** The text of a failure, as robotctl prints it. */
   def errorText(e: Throwable): String = e match {
     case f: RobotFailure => f.getMessage
@@ -365,14 +413,15 @@ object ControlServer {
   /** The column heads of [[statusLine]]. */
   val statusHeader: String =
     f"${"id"}%-4s ${"address"}%-22s ${"state"}%-8s ${"link"}%-9s ${"battery"}%-8s ${"posture"}%-8s ${"role"}%-9s " +
-      f"${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s drift"
+      f"${"rtt"}%-9s ${"loss"}%-6s ${"clock"}%-10s ${"drift"}%-9s leases"
 
   /** One line per robot: id, address, online (or `unsigned`, RobotRow.linkState), link quality, battery, posture, role,
     * round-trip time, loss, and the robot's clock against the gateway's (the error bound of its estimate, and its
-    * drift: `settling` until its bound is within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate);
-    * `development build` after a robot running one.
+    * drift: `settling` until its bound is within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate),
+    * which app holds which lease (`walk=teleop head=zeromq`, `-` for none) and `HELD SAFE` while the middleware holds
+    * the robot safe; `development build` after a robot running one.
     */
-  def statusLine(r: RobotSnapshot, stats: Option[LinkStats]): String = {
+  def statusLine(r: RobotSnapshot, stats: Option[LinkStats], holds: Option[RobotHolds] = None): String = {
     val row = apps.RobotRow.of(r, stats)
     val rtt = row.rttMillis.fold("-")(v => f"$v%.1f ms")
     val loss = row.loss.fold("-")(v => f"${v * 100}%.0f %%")
@@ -381,7 +430,9 @@ object ControlServer {
     f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${row.linkState}%-8s " +
       f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
       f"${row.posture.fold("-")(_.name)}%-8s " +
-      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift" +
+      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
+      holds.fold("-")(h => naogateway.Printable.text(h.describeLeases)) +
+      (if (holds.exists(_.safetyHold.isDefined)) " HELD SAFE" else "") +
       (if (row.report.development) " development build" else "")
   }
 

@@ -9,7 +9,7 @@ import akka.actor.Cancellable
 import akka.actor.typed.Scheduler
 
 import naogateway.RobotFailure
-import naogateway.wire.{ActuatorGroup, RpcValue}
+import naogateway.wire.{ActuatorGroup, RpcMethod, RpcValue}
 import robotmiddleware.RobotInterface
 
 /** The requests a door (the ZeroMQ endpoint, the datagram door) is working on: each routed request handed to the
@@ -143,7 +143,15 @@ private[apps] final class RequestDesk[A](
           robots.robots().map(all => Answer(Some(RpcValue.Items(all.map(s => RpcValue.UInt(s.robotId.toLong))))))
         case Route.Status(robotId) =>
           robots.robots().flatMap(_.find(_.robotId == robotId) match {
-            case Some(s) => Future.successful(Answer(Some(RpcValue.Flag(s.online)), Some(s)))
+            case Some(s) if s.online =>
+              // The keep-alive may be up to an interval old: a stop or posture just answered is not in it yet, the
+              // robot's own answer is (a read, no lease). Without one, the keep-alive's posture stands.
+              robots.call(robotId, RpcMethod.GetPosture.module, RpcMethod.GetPosture.method).transform {
+                case Success(Some(RpcValue.Text(now))) => Success(RequestDesk.status(s.copy(posture =
+                        Some(naogateway.wire.Posture.reported(now)))))
+                case _ => Success(RequestDesk.status(s))
+              }
+            case Some(s) => Future.successful(RequestDesk.status(s))
             case None    => Future.failed(RobotFailure.UnknownRobot(robotId))
           })
         case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
@@ -175,6 +183,10 @@ private[apps] final class RequestDesk[A](
 }
 
 private[apps] object RequestDesk {
+
+  /** The answer to `gateway.status`: `[online, link quality]`, and the snapshot the reply carries. */
+  def status(s: naogateway.RobotSnapshot): Answer =
+    Answer(Some(RpcValue.Items(Vector(RpcValue.Flag(s.online), RpcValue.Text(s.quality.name)))), Some(s))
 
   /** A request being worked on: where its reply goes, what it must echo, and its deadline's timer. */
   final case class Pending[A](from: A, robotId: Int, callId: Option[Long], name: String, deadline: Cancellable)

@@ -130,6 +130,12 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
       ControlProtocol.parse(Seq("status")) shouldBe Right(Request.Status)
       ControlProtocol.parse(Seq("watch", "3", "5", "6")) shouldBe Left(ControlProtocol.usage)
       ControlProtocol.parse(Seq("call", "2", "motion")) shouldBe Left(ControlProtocol.usage)
+      // The demo's battery swap travels as one line and reads back as it was.
+      ControlProtocol.parse(Seq("battery", "2", "swap")) shouldBe Right(Request.BatterySwap(2))
+      ControlProtocol.render(Request.BatterySwap(2)) shouldBe "battery 2 swap"
+      ControlProtocol.readRequest("battery 2 swap") shouldBe Right(Request.BatterySwap(2))
+      ControlProtocol.parse(Seq("battery", "2")) shouldBe Left(ControlProtocol.usage)
+      ControlProtocol.parse(Seq("battery", "x", "swap")) shouldBe Left("robot id 'x' is not a number")
     }
   }
 

@@ -62,8 +62,11 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       robots.map(_.drop(2).split("\\s+")(0).toInt) shouldBe (1 to 1000)
       robots.foreach(l => l.length should be < 200)
       robots.head.split("\\s+").toList shouldBe List(".", "1", "127.0.0.1:20001", "online", "good", "12.25", "V", "sit",
-        "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm")
+        "striker", "1.5", "ms", "25", "%", "±1.4", "ms", "+250", "ppm", "-")
       robots(9) should include("offline  offline")
+      // Each robot's lease holders, and a robot the middleware holds safe (FleetStub: 2's walk is teleop's, 3 is held).
+      robots(1) should endWith(" walk=teleop")
+      robots(2) should endWith(" - HELD SAFE")
     }
 
     "take the lease a motion call needs and give it back; calls that need none take none" in {
@@ -73,6 +76,11 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       fleet.history should contain inOrderElementsOf Vector("acquire 2 walk", "call 2 motion.walk", "release 2 walk",
         "call 3 system.ping")
       fleet.history should not contain "acquire 3 system"
+      // A read takes no lease, so it works while another app holds the robot (motion.getPosture is a read).
+      exchange("call 4 motion getPosture") shouldBe Vector(". robot 4: motion.getPosture -> Text(motion.getPosture())",
+        "ok")
+      fleet.history should contain("call 4 motion.getPosture")
+      fleet.history.filter(_.startsWith("acquire 4")) shouldBe empty
     }
 
     "answer a failing call, an unknown robot and a bad request with one error line" in {
@@ -111,6 +119,47 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
       // The slot is free again.
       eventually(exchange("status", smallPort).last shouldBe "ok")
       testKit.stop(small)
+    }
+
+    "name each robot held safe in doctor (a problem, with its fix), and swap only a simulated robot's battery" in {
+      val view = new naogateway.GatewayView {
+        private def none = scala.concurrent.Future.failed(new UnsupportedOperationException("not asked by doctor"))
+        def addresses() = none
+        def robots() = none
+        def links() = none
+        def stats() = none
+        def traffic() = none
+        def gameState() = none
+        def gameSource() = none
+      }
+      val allWell = Vector(Finding("gateway", "running", problem = false))
+      val swapped = new java.util.concurrent.ConcurrentLinkedQueue[Int]()
+      val gateway = ControlServer.GatewaySide(
+        view,
+        () => scala.concurrent.Future.successful(allWell),
+        id =>
+          if (id == 3) { swapped.add(id); scala.concurrent.Future.successful("robot 3: battery swapped, 12.60 V") }
+          else ControlServer.GatewaySide.noSimulatedRobots(id)
+      )
+      val held = spawn(ControlServer.withInterface(new FleetStub(3), settings, Some(gateway)))
+      val doctor = exchange("doctor", address(held).getPort)
+      doctor.init shouldBe Vector(
+        ". ok   gateway: running",
+        ". FAIL safety: robot 3 is held safe, motion refused: battery low: 10.70 V; it clears by itself; fix: swap or " +
+          "charge robot 3's battery; the hold ends by itself once it reads full enough (simulated: robotctl battery 3 " +
+          "swap)"
+      )
+      doctor.last shouldBe "error 1 problem(s), each with its fix above"
+      exchange("battery 3 swap", address(held).getPort) shouldBe Vector("ok robot 3: battery swapped, 12.60 V")
+      exchange("battery 2 swap", address(held).getPort) shouldBe Vector(
+        "error robot 2 is not a simulated robot: robotctl battery swaps only the demo's simulated robots' batteries; " +
+          "swap a real robot's battery by hand")
+      swapped.toArray.toVector shouldBe Vector(3)
+      val none = spawn(ControlServer.withInterface(new FleetStub(2), settings, Some(gateway)))
+      exchange("doctor", address(none).getPort) shouldBe Vector(". ok   gateway: running",
+        ". ok   safety: no robot is held safe", "ok all is well")
+      testKit.stop(held)
+      testKit.stop(none)
     }
 
     "end a status with the game, the gate (why it is closed), the message budget, warnings and the game's source" in {

@@ -81,5 +81,10 @@ final class FleetStub(robots: Int) extends RobotInterface {
   def gameState: Source[GameControlData, NotUsed] = Source.empty
   def robotEvents: Source[RobotEvent, NotUsed] = Source.empty
   def appEvents: Source[AppEvent, NotUsed] = Source.empty
+
+  /** Robot 2's walk is held by "teleop", robot 3 is held safe. */
+  def holds(): Future[Vector[RobotHolds]] =
+    Future.successful(Vector(RobotHolds(2, Map(ActuatorGroup.Walk -> "teleop"), None),
+        RobotHolds(3, Map.empty, Some("battery low: 10.70 V; it clears by itself"))).filter(_.robotId <= robots))
   def close(): Unit = { seen.add("close"); () }
 }

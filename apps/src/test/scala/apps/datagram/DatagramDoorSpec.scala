@@ -96,8 +96,12 @@ class DatagramDoorSpec
         offline.result.left.toOption.get should startWith("offline: ")
         val (_, malformed) = client.ask(request(7, "motion", "walk", Vector(RpcValue.Text("fast")), callId = 44))
         malformed.result.left.toOption.get should startWith("malformed request: motion.walk takes 3 number(s)")
+        // A read takes no lease: robot 9's walk is the referee's (the stub refuses its lease), its posture is anyone's.
+        val (_, read) = client.ask(request(9, "motion", "getPosture", callId = 45))
+        read.result shouldBe Right(Some(RpcValue.Text("9:motion.getPosture()")))
         stub.seen should contain("say hello 7")
-        stats(ref).accepted shouldBe 4
+        stub.seen.filter(_.startsWith("acquire 9")) shouldBe empty
+        stats(ref).accepted shouldBe 5
         stats(ref).dropped.values.sum shouldBe 0
       } finally client.close()
       testKit.stop(ref)

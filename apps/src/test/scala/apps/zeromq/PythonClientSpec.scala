@@ -178,6 +178,70 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
       } finally robot.stop()
     }
 
+    "read a robot another app holds, be refused an absurd walk in words, and see stop's posture and the link at once" in {
+      val python = PythonEnv.python()
+      val f = new naogateway.integration.GatewayFixture(testKit)
+      try {
+        f.robot(34)
+        f.robot(35)
+        var online = Set.empty[Int]
+        while (online != Set(34, 35))
+          online += f.awaitEvent(30.seconds) { case naogateway.RobotOnline(id, _) if id == 34 || id == 35 => id }
+        val middleware = spawn(RobotMiddleware(f.gateway, MiddlewareSettings(system)), "middleware-reads")
+        val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq-reads")
+        val probe = createTestProbe[ZeroMqEndpoint.Addresses]()
+        endpoint ! ZeroMqEndpoint.GetAddresses(probe.ref)
+        val addresses = probe.receiveMessage(10.seconds)
+        // Another app holds robot 34's walk lease, above the endpoint's priority.
+        val referee =
+          scala.concurrent.Await.result(robotmiddleware.RobotClient.connect(system, middleware, "referee", 99),
+            10.seconds)
+        scala.concurrent.Await.result(referee.acquire(34, naogateway.wire.ActuatorGroup.Walk), 10.seconds)
+        val code =
+          s"""from naogateway_client import GatewayClient, GatewayError
+             |c = GatewayClient("${addresses.requests}", "${addresses.publish}")
+             |print("read:", c.call(34, "motion", "getPosture"), c.call(34, "system", "battery") > 10)
+             |try:
+             |    c.walk(34, 0.1, 0.0, 0.0)
+             |except GatewayError as e:
+             |    print("held:", e.category)
+             |print("posture:", c.posture(35, "stand"))
+             |try:
+             |    c.walk(35, 100.0, 0.0, 0.0)
+             |except GatewayError as e:
+             |    print("absurd:", e.text)
+             |print("walk:", c.walk(35, 0.1, 0.0, 0.0))
+             |print("stop:", c.stop(35))
+             |s = c.status(35)
+             |print("status:", s["posture"], s["online"], s["link"] in ("good", "degraded"))
+             |c.close()
+             |""".stripMargin
+        val gen = new File(PythonEnv.root, "apps/target/python-gen")
+        val log = new File(PythonEnv.root, "apps/target/reads.log")
+        val (exit, output) = PythonEnv.run(
+          Seq(python.getPath, "-u", "-c", code),
+          90.seconds,
+          log,
+          Map("NAOGATEWAY_PY_GEN" -> gen.getPath, "PYTHONPATH" -> new File(PythonEnv.root, "apps/python").getPath,
+            "PYTHONDONTWRITEBYTECODE" -> "1")
+        )
+        withClue(output) {
+          exit shouldBe 0
+          output.linesIterator.toVector shouldBe Vector(
+            "read: sit True",
+            "held: lease",
+            "posture: stand",
+            "absurd: robot error: out of range: vx 100.0, allowed -0.3..0.3",
+            "walk: True",
+            "stop: True",
+            "status: stand True True"
+          )
+        }
+        referee.close()
+        testKit.stop(endpoint)
+      } finally f.stop()
+    }
+
     "send without waiting and call through both doors, in order, refused as a call is, the send's answer dropped" in {
       val python = PythonEnv.python()
       val f = new naogateway.integration.GatewayFixture(testKit)

@@ -73,7 +73,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   def appName: String = "stub"
 
   def robots(): Future[Vector[RobotSnapshot]] =
-    Future.successful(Vector(snapshot, snapshot.copy(robotId = 8, online = false)))
+    Future.successful(Vector(snapshot, snapshot.copy(robotId = 8, online = false, quality = LinkQuality.Offline)))
 
   def acquire(robotId: Int, groups: ActuatorGroup*): Future[Done] = {
     calls.add(s"acquire $robotId ${groups.map(_.name).mkString(",")}")
@@ -96,8 +96,13 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   def posture(robotId: Int, target: Posture.Target): Future[Posture] =
     answer(robotId, s"posture ${target.name}", target)
   def say(robotId: Int, text: String): Future[Done] = answer(robotId, s"say $text", Done)
+  // Robot 7 has just sat down: its getPosture says so before its keep-alive (the snapshot's `stand`) does.
   def call(robotId: Int, module: String, method: String, params: RpcValue*): Future[Option[RpcValue]] =
-    answer(robotId, s"call $module.$method", Some(RpcValue.Text(s"$robotId:$module.$method(${params.mkString(",")})")))
+    if (robotId == 7 && module == "motion" && method == "getPosture")
+      answer(robotId, s"call $module.$method", Some(RpcValue.Text("sit")))
+    else
+      answer(robotId, s"call $module.$method",
+        Some(RpcValue.Text(s"$robotId:$module.$method(${params.mkString(",")})")))
 
   def send(robotId: Int, operation: Operation): Future[Done] = {
     calls.add(s"send ${operation.name} $robotId")
@@ -123,6 +128,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
     Source.tick(0.millis, 50.millis, StubRobots.game).mapMaterializedValue(_ => NotUsed)
   def robotEvents: Source[RobotEvent, NotUsed] = Source.empty
   def appEvents: Source[AppEvent, NotUsed] = Source.empty
+  def holds(): Future[Vector[robotmiddleware.RobotHolds]] = Future.successful(Vector.empty)
   def close(): Unit = { calls.add("close"); () }
 
   /** The calls so far. */

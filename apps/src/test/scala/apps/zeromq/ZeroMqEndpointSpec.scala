@@ -306,14 +306,19 @@ class ZeroMqEndpointSpec
       askOne(-1, "gateway", "robots").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.UInt(7),
               RpcValue.UInt(8)))))
       val s = dealer()
+      val leasesBefore = stub.seen.count(_.startsWith("acquire 7"))
       try {
         val (contents, reply) = ask(s, request(7, "gateway", "status"))
-        reply.result shouldBe Right(Some(RpcValue.Flag(true)))
+        reply.result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.Flag(true), RpcValue.Text("good")))))
         contents.robotHealth.flatMap(_.batteryVoltage).get shouldBe 12.3f
-        contents.robotHealth.flatMap(_.posture) shouldBe Some("stand")
+        // The robot's own answer to getPosture (a read, no lease taken), not the older keep-alive's `stand`.
+        contents.robotHealth.flatMap(_.posture) shouldBe Some("sit")
         contents.status.flatMap(_.activeRole) shouldBe Some("striker")
       } finally s.close()
-      askOne(8, "gateway", "status").result shouldBe Right(Some(RpcValue.Flag(false)))
+      stub.seen should contain("call motion.getPosture 7")
+      stub.seen.count(_.startsWith("acquire 7")) shouldBe leasesBefore
+      askOne(8, "gateway", "status").result shouldBe Right(Some(RpcValue.Items(Vector(RpcValue.Flag(false),
+              RpcValue.Text("offline")))))
       error(askOne(99, "gateway", "status")) shouldBe "unknown robot: no robot 99 is known"
       stub.calls.clear()
       askOne(7, "gateway", "acquire", RpcValue.Text("head"), RpcValue.Text("arms")).result shouldBe Right(
@@ -331,6 +336,9 @@ class ZeroMqEndpointSpec
       walkError(99) shouldBe "unknown robot: no robot 99 is known"
       walkError(8) shouldBe "offline: robot 8 is offline"
       walkError(9) shouldBe "lease: lease 'walk' of robot 9 is not held by this app (held by referee)"
+      // Reads need no lease: robot 9, whose walk the referee holds, answers them all the same.
+      askOne(9, "motion", "getPosture").result shouldBe Right(Some(RpcValue.Text("9:motion.getPosture()")))
+      askOne(9, "system", "battery").result shouldBe Right(Some(RpcValue.Text("9:system.battery()")))
       walkError(10) should startWith("rule: competition rule: the base station must not send")
       walkError(11) should startWith("timeout: robot 11 did not answer")
       walkError(12) shouldBe "robot error: not standing: sit"

@@ -9,7 +9,11 @@ import naogateway.sim.bus.BioloidBus
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameControlData
 
-/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. `servoTelemetryInterval`: one
+/** Settings of one simulated CM-530 firmware; every figure can be changed per robot. The battery drains (faster while
+  * walking) and, while the robot sits below `sitChargeUpTo`, recharges at `sitChargePerSecond` up to it, as a team
+  * swaps a sitting robot's low battery: a demo robot held safe for a low battery recovers (docs/simulator.md).
+  * `fullBattery` is what a swapped battery reads (`robotctl battery <id> swap`).
+  * `servoTelemetryInterval`: one
   * keep-alive per interval carries servo telemetry (docs/protocol.md 6.8; zero turns it off); `servoSource` gives the
   * servos it reads (an emulated bus's `servos`), None the robot's emulated bus (`bus`).
   */
@@ -30,6 +34,9 @@ final case class FirmwareSettings(
     idleDrainPerSecond: Double = 0.0002,
     walkDrainPerSecond: Double = 0.004,
     postureChangeDrain: Double = 0.005,
+    sitChargePerSecond: Double = 0.005,
+    sitChargeUpTo: Double = 11.5,
+    fullBattery: Double = 12.6,
     maxSpeed: Double = 0.3,
     maxTurn: Double = 1.0,
     startPose: Pose = Pose(-1.0, 0.0, 0.0),

@@ -355,7 +355,15 @@ object RobotFirmware {
       val walkingFor = state.walk.fold(0.0)(w => math.max(0L, math.min(now, w.leaseUntil) - state.now).toDouble / 1e9)
       val pose = state.walk.fold(state.pose)(w => state.pose.moved(w.vx, w.vy, w.omega, walkingFor))
       val drain = state.settings.idleDrainPerSecond * seconds + state.settings.walkDrainPerSecond * walkingFor
-      state.copy(now = now, pose = pose, battery = math.max(0.0, state.battery - drain))
+      val drained = math.max(0.0, state.battery - drain)
+      // Sitting (not moving towards another posture) with a low battery, the robot charges up to `sitChargeUpTo`; a
+      // battery above that only drains.
+      val sitting = state.posture == Posture.Sit && state.change.isEmpty
+      val upTo = state.settings.sitChargeUpTo
+      val battery =
+        if (sitting && drained < upTo) math.min(upTo, drained + state.settings.sitChargePerSecond * seconds)
+        else drained
+      state.copy(now = now, pose = pose, battery = battery)
     }
 
   private def encode(s: FirmwareState, contents: MessageContents): Array[Byte] = encode(contents, s.settings.headerForm)

@@ -145,6 +145,17 @@ class RobotFirmwareSpec extends AnyWordSpec with Matchers with EitherValues {
       walking = RobotFirmware.advance(walking, standing.now + 10000 * ms)._1
       (standing.battery - walking.battery) should be > 5 * (standing.battery - idle.battery)
     }
+    "recharge a low battery while sitting, up to sitChargeUpTo, not while standing (a team swapping a held robot's)" in {
+      val low = RobotFirmware.boot(settings.copy(initialBattery = 10.7), 0)
+      val sat = RobotFirmware.advance(low, 70000 * ms)._1
+      sat.posture shouldBe Posture.Sit
+      sat.battery shouldBe (10.7 + 70 * settings.sitChargePerSecond - 70 * settings.idleDrainPerSecond) +- 0.001
+      // Above the middleware's battery-ok (11.0 V) in 70 s: the hold clears by itself.
+      sat.battery should be > 11.0
+      RobotFirmware.advance(sat, 3600000 * ms)._1.battery shouldBe settings.sitChargeUpTo +- 1e-9
+      val standing = stand(0)
+      RobotFirmware.advance(standing, standing.now + 10000 * ms)._1.battery should be < standing.battery
+    }
     "answer every optionPull with its whole list in one frame, to the sender, in the command's header form (protocol.md 8)" in {
       val fuRemote = new InetSocketAddress("127.0.0.9", 11012)
       val pull = MessageContents(0, debuggingCommands = Some(DebuggingCommands(optionPull = Some(true))))

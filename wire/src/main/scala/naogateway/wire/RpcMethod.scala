@@ -6,9 +6,13 @@ package naogateway.wire
   *   whether it may run twice, so it may be called again when no answer came (protocol.md 7.1)
   * @param slot
   *   the actuator slot whose order it takes part in, if any
+  * @param read
+  *   whether it only reads the robot's state: it moves and says nothing, so it needs no lease (docs/zeromq.md 5). No
+  *   default: a default argument lives in the companion object, and reading it would start that object's initialisation
+  *   from a case object's (see the constants below).
   */
 sealed abstract class RpcMethod(val module: String, val method: String, val idempotent: Boolean,
-    val slot: Option[ActuatorGroup])
+    val slot: Option[ActuatorGroup], val read: Boolean)
     extends Product with Serializable {
 
   /** `module.method`, as in logs, errors and the docs. */
@@ -39,34 +43,35 @@ object RpcMethod {
   final val SystemModule = "system"
 
   /** Walk with these velocities; the robot's 500 ms lease needs it refreshed. */
-  case object Walk extends RpcMethod(MotionModule, "walk", idempotent = true, Some(ActuatorGroup.Walk))
+  case object Walk extends RpcMethod(MotionModule, "walk", idempotent = true, Some(ActuatorGroup.Walk), read = false)
 
   /** End walking. */
-  case object Stop extends RpcMethod(MotionModule, "stop", idempotent = true, Some(ActuatorGroup.Walk))
+  case object Stop extends RpcMethod(MotionModule, "stop", idempotent = true, Some(ActuatorGroup.Walk), read = false)
 
   /** Turn the head. */
-  case object Head extends RpcMethod(MotionModule, "head", idempotent = true, Some(ActuatorGroup.Head))
+  case object Head extends RpcMethod(MotionModule, "head", idempotent = true, Some(ActuatorGroup.Head), read = false)
 
   /** Set the four arm joints. */
-  case object Arms extends RpcMethod(MotionModule, "arms", idempotent = true, Some(ActuatorGroup.Arms))
+  case object Arms extends RpcMethod(MotionModule, "arms", idempotent = true, Some(ActuatorGroup.Arms), read = false)
 
   /** Move to a posture; answers when the motion has ended, and a second one during a motion is refused (busy). */
-  case object Posture extends RpcMethod(MotionModule, "posture", idempotent = false, Some(ActuatorGroup.Walk))
+  case object Posture
+      extends RpcMethod(MotionModule, "posture", idempotent = false, Some(ActuatorGroup.Walk), read = false)
 
   /** Read the posture. */
-  case object GetPosture extends RpcMethod(MotionModule, "getPosture", idempotent = true, None)
+  case object GetPosture extends RpcMethod(MotionModule, "getPosture", idempotent = true, None, read = true)
 
   /** Speak a text: not repeated, the robot would say it twice. */
-  case object Say extends RpcMethod(SpeechModule, "say", idempotent = false, None)
+  case object Say extends RpcMethod(SpeechModule, "say", idempotent = false, None, read = false)
 
   /** Read the battery voltage. */
-  case object Battery extends RpcMethod(SystemModule, "battery", idempotent = true, None)
+  case object Battery extends RpcMethod(SystemModule, "battery", idempotent = true, None, read = true)
 
   /** Read the uptime. */
-  case object Ping extends RpcMethod(SystemModule, "ping", idempotent = true, None)
+  case object Ping extends RpcMethod(SystemModule, "ping", idempotent = true, None, read = true)
 
   /** Restart the robot: never repeated. */
-  case object Reset extends RpcMethod(SystemModule, "reset", idempotent = false, None)
+  case object Reset extends RpcMethod(SystemModule, "reset", idempotent = false, None, read = false)
 
   /** Every method, in the order of the docs' table. */
   val all: Vector[RpcMethod] = Vector(Walk, Stop, Head, Arms, Posture, GetPosture, Say, Battery, Ping, Reset)
@@ -81,6 +86,9 @@ object RpcMethod {
 
   /** The slot `call` takes part in, if any. */
   def slotOf(call: RpcCall): Option[ActuatorGroup] = of(call).flatMap(_.slot)
+
+  /** Whether `call` only reads the robot's state (a method the table knows as a read): it needs no lease. */
+  def isRead(call: RpcCall): Boolean = of(call).exists(_.read)
 
   /** Whether `call` may be called again when no answer came; a method the table does not know is not. */
   def idempotent(call: RpcCall): Boolean = of(call).exists(_.idempotent)
