@@ -12,8 +12,7 @@ import naogateway.wire.gamecontroller.GameControlData
 /** Settings of one simulated CM-530 firmware; every figure can be changed per robot. The battery drains (faster while
   * walking) and, while the robot sits below `sitChargeUpTo`, recharges at `sitChargePerSecond` up to it, as a team
   * swaps a sitting robot's low battery: a demo robot held safe for a low battery recovers (docs/simulator.md).
-  * `fullBattery` is what a swapped battery reads (`robotctl battery <id> swap`).
-  * `servoTelemetryInterval`: one
+  * `fullBattery` is what a swapped battery reads (`robotctl battery <id> swap`). `servoTelemetryInterval`: one
   * keep-alive per interval carries servo telemetry (docs/protocol.md 6.8; zero turns it off); `servoSource` gives the
   * servos it reads (an emulated bus's `servos`), None the robot's emulated bus (`bus`).
   */
