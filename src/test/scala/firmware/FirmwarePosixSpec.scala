@@ -42,8 +42,9 @@ object FirmwarePosixSpec {
   val PlainId = 61
   val StreamId = 62
   val LinkId = 64
+  val BusId = 65
   lazy val developmentAddresses: Map[Int, String] =
-    Seq(PlainId, StreamId, LinkId).map(id => id -> TestLoopback.address().getHostAddress).toMap
+    Seq(PlainId, StreamId, LinkId, BusId).map(id => id -> TestLoopback.address().getHostAddress).toMap
 
   private def developmentEntries: String =
     developmentAddresses.map { case (id, a) => "{ id = " + id + ", address = \"" + a + "\", signing = off }" }.mkString(
@@ -292,6 +293,32 @@ class FirmwarePosixSpec
         poll(10.seconds)(result(client.call(r.id, "motion", "getPosture")) == Right(
           Some(RpcValue.Text("sit")))) shouldBe true
       }
+    }
+
+    "serve its Dynamixel bus to the official DynamixelSDK through the gateway's bus bridge (protocol.md 6.9)" in {
+      apps.zeromq.PythonEnv.python()
+      apps.busbridge.SdkBus.socat()
+      // The robot reads the emulated bus (firmware/tools/busmodel.c) as its own; the gateway serves it on loopback.
+      val base = {
+        val free = new java.net.ServerSocket(0, 1, java.net.InetAddress.getLoopbackAddress)
+        try free.getLocalPort - BusId
+        finally free.close()
+      }
+      val bridge = spawn(naogateway.BusBridgeServer(rig.gateway,
+          naogateway.BusBridgeSettings(enabled = true, basePort = base), None))
+      val r = new CRobot(BusId, developmentAddresses(BusId), env = Map("FR_POSIX_BUS" -> "model"))
+      try {
+        r.awaitOnline()
+        eventually(timeout(20.seconds)) { new java.net.Socket("127.0.0.1", base + BusId).close() }
+        apps.busbridge.SdkBus.throughPty(base + BusId) { device =>
+          // Over the bridge a round trip crosses the link twice: the SDK's packet timeout is raised (README).
+          val (code, out) = apps.busbridge.SdkBus.run(device, Seq("--latency-ms", "250"))
+          withClue(s"SDK:\n$out\nrobot output:\n${r.output}\n") {
+            code shouldBe 0
+            (1 to 18).foreach(id => out should include(s""""$id": 12"""))
+          }
+        }
+      } finally testKit.stop(bridge)
     }
 
     "carry the stream both ways at 10 % loss with selective repeat: complete, in order, calls answered through it" in {

@@ -26,11 +26,15 @@ import naogateway.{BusBridgeServer, BusBridgeSettings, RobotOnline}
   * the secure stream to a simulated robot (docs/protocol.md 6.9). socat makes the pseudo-terminal the SDK opens, as the
   * README's "Calibrating a HaViMo2 over WiFi" does. Cancelled when python3, venv, pip or socat is missing.
   */
-class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
+/** The official DynamixelSDK's script (src/test/python/dynamixel/sdk_bus.py) behind socat's pseudo-terminal, as a team
+  * reaches a robot's bus (README, "Calibrating a HaViMo2 over WiFi"); shared by every spec that drives a bus with it.
+  */
+object SdkBus extends org.scalatest.Assertions with org.scalatest.matchers.should.Matchers {
 
   private lazy val script = new File(PythonEnv.root, "src/test/python/dynamixel/sdk_bus.py")
 
-  private def socat(): String =
+  /** socat's name, or the test is cancelled: the SDK test cannot run without it. */
+  def socat(): String =
     Try(new ProcessBuilder("socat", "-V").redirectErrorStream(true).start())
       .filter(p => p.waitFor(10, TimeUnit.SECONDS) && p.exitValue() == 0)
       .map(_ => "socat").getOrElse(cancel("socat is not installed (.ci/setup.d/socat.sh): the SDK test cannot run"))
@@ -38,7 +42,7 @@ class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
   /** socat's pseudo-terminal in front of 127.0.0.1:`port`, for the length of `body`. socat connects at once; when the
     * bridge refuses it (the one tool's place not yet free) it exits, and is started again.
     */
-  private def throughPty[T](port: Int)(body: File => T): T = {
+  def throughPty[T](port: Int)(body: File => T): T = {
     val dir = Files.createTempDirectory("dxl").toFile
     val link = new File(dir, "ttyDXL")
     def start() = new ProcessBuilder(socat(), s"pty,link=${link.getPath},raw,echo=0", s"tcp:127.0.0.1:$port")
@@ -62,13 +66,21 @@ class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
     }
   }
 
-  /** Runs the SDK script against `device`; its exit code and output. */
-  private def sdk(device: File, extra: String*): (Int, String) = {
+  /** Runs the SDK script against `device` for servos 1-18 (plus `extra` arguments); its exit code and output. */
+  def run(device: File, extra: Seq[String]): (Int, String) = {
     val python = PythonEnv.python()
     val log = File.createTempFile("sdk-bus", ".log")
-    PythonEnv.run(Seq(python.getPath, script.getPath, "--device", device.getPath, "--ids", "1-18", "--camera") ++ extra,
-      3.minutes, log)
+    PythonEnv.run(Seq(python.getPath, script.getPath, "--device", device.getPath, "--ids", "1-18") ++ extra, 3.minutes,
+      log)
   }
+}
+
+class DynamixelSdkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
+
+  import SdkBus.{socat, throughPty}
+
+  /** Runs the SDK script against `device`; its exit code and output. */
+  private def sdk(device: File, extra: String*): (Int, String) = SdkBus.run(device, Seq("--camera") ++ extra)
 
   "the official DynamixelSDK" should {
     "ping all 18 servos and the HaViMo2 of the emulated bus, read and write their control tables" in {

@@ -21,8 +21,17 @@ import naogateway.wire.RpcCall
 /** A gateway with recording on, a simulated robot and a few datagrams of the test's own, then the file it left. */
 class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
-  private def files(dir: Path): Vector[Path] =
-    Files.list(dir).iterator().asScala.filter(_.toString.endsWith(".mcap")).toVector.sortBy(_.getFileName.toString)
+  /** The recording's files in the order they were begun: by their counter `-<n>.mcap` (as a number: -10 after -9). */
+  private def files(dir: Path): Vector[Path] = {
+    val counter = """-(\d+)\.mcap$""".r.unanchored
+    Files.list(dir).iterator().asScala.filter(_.toString.endsWith(".mcap")).toVector.sortBy { p =>
+      val name = p.getFileName.toString
+      name match {
+        case counter(n) => (name.substring(0, name.lastIndexOf('-')), n.toInt)
+        case _          => (name, 0)
+      }
+    }
+  }
 
   "A recording gateway" must {
     "write every datagram byte for byte, the robot's Status decoded, and its decisions, into an MCAP file closed on stop" in {
