@@ -311,6 +311,8 @@ class FirmwarePosixSpec
       try {
         r.awaitOnline()
         eventually(timeout(20.seconds)) { new java.net.Socket("127.0.0.1", base + BusId).close() }
+        // The probe held the one tool's place; the bridge frees it when it sees the probe gone.
+        Thread.sleep(1000)
         apps.busbridge.SdkBus.throughPty(base + BusId) { device =>
           // Over the bridge a round trip crosses the link twice: the SDK's packet timeout is raised (README).
           val (code, out) = apps.busbridge.SdkBus.run(device, Seq("--latency-ms", "250"))
