@@ -31,7 +31,9 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
     val lines = new LinkedBlockingQueue[String]()
     private val reader = new Thread(() => {
       val in = new BufferedReader(new InputStreamReader(process.getInputStream, StandardCharsets.UTF_8))
-      Iterator.continually(in.readLine()).takeWhile(_ != null).foreach(lines.put)
+      // A destroyed process closes its stream under the reader: that is its end, not an error.
+      try Iterator.continually(in.readLine()).takeWhile(_ != null).foreach(lines.put)
+      catch { case _: java.io.IOException => () }
     })
     reader.setDaemon(true)
     reader.start()
