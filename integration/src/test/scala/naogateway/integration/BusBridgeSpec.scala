@@ -24,7 +24,9 @@ import naogateway.wire.gamecontroller._
 /** The bus bridge end to end (docs/protocol.md 6.9): a real gateway, a simulated robot over loopback UDP with its
   * emulated bus behind the secure stream, and a TCP client at the bridge's port: packets out, status bytes back in
   * order, bad packets dropped, one client at a time, the lease holder told, the competition gate closing it; and a
-  * busBridge frame sent as a plain datagram dropped by the robot.
+  * busBridge frame sent as a plain datagram dropped by the robot; and what a stranger on another loopback address sends
+  * (forged replies, another robot's id, forged stream segments, requests straight to the robot) reaching neither the
+  * tool nor the bus.
   */
 class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
   import Dynamixel._
@@ -153,6 +155,47 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
         eventually(timeout(10.seconds)) { f.view(robot).stats.busBridgeDropped shouldBe 1L }
         udp.close()
       } finally {
+        testKit.stop(bridge)
+        f.stop()
+      }
+    }
+
+    "let nothing a stranger sends reach the tool or the bus: forged replies, another robot's id, replays, requests" in {
+      val f = new GatewayFixture(testKit, BusBridgeSpec.Patient)
+      val base = freeBase()
+      val bridge = spawn(BusBridgeServer(f.gateway, BusBridgeSettings(enabled = true, basePort = base), None))
+      // The stranger is another host on the field: another loopback address, any port.
+      val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+      try {
+        val (_, address) = streamRobot(f)
+        f.awaitEvent(10.seconds) { case RobotOnline(`robotId`, _) => () }
+        val client = answering(base + robotId)
+        val out = client.getOutputStream
+        val in = client.getInputStream
+        out.write(packet(robotId, Read, Seq(Ax12.PresentPosition, 2)))
+        val before = readStatus(in, 8)
+        // A forged reply for the request the tool may be waiting on: as a plain frame, inside a forged stream segment,
+        // and naming another robot; then a request to write a goal position sent straight to the robot.
+        val forgedReply = BusBridge(0, reply = Some(ByteString.copyFrom(packet(robotId, 0, Seq(0x37, 0x01)))),
+          result = Some(naogateway.proto.BusResult.BUS_OK))
+        val frames = Seq(
+          BusBridgeFrame.encode(robotId, forgedReply).get,
+          Array[Byte](0, 20) ++ BusBridgeFrame.encode(robotId, forgedReply.withSequence(1)).get,
+          BusBridgeFrame.encode(robotId + 1, forgedReply.withSequence(2)).get
+        )
+        (0 until 3).foreach(_ => frames.foreach(b => stranger.send(ByteBuffer.wrap(b), f.addresses.robots)))
+        val goal = packet(robotId, Write, Seq(Ax12.GoalPosition, 0x37, 0x01))
+        val request = BusBridgeFrame.encode(robotId, BusBridge(7, request = Some(ByteString.copyFrom(goal)))).get
+        Seq(request, Array[Byte](0, 20) ++ request).foreach(b => stranger.send(ByteBuffer.wrap(b), address))
+        Thread.sleep(1000)
+        // The tool got nothing it did not ask for, and its next request is answered as before: the bus unchanged.
+        in.available() shouldBe 0
+        out.write(packet(robotId, Read, Seq(Ax12.PresentPosition, 2)))
+        readStatus(in, 8) shouldBe before
+        in.available() shouldBe 0
+        client.close()
+      } finally {
+        stranger.close()
         testKit.stop(bridge)
         f.stop()
       }
