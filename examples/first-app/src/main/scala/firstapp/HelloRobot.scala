@@ -42,7 +42,8 @@ object HelloRobot {
     }
     done.foreach(_ => println("hello-robot: robot 2 stood up, greeted, walked and stopped"))
     done.failed.foreach(e => println(s"hello-robot failed: ${e.getMessage}"))
-    // The app ends when it is done: its node leaves the cluster, then the JVM exits (1 if the app failed).
+    // The app ends when it is done: its node leaves the cluster, then the JVM exits (1 if the app failed). Only main's
+    // own thread waits here, outside every actor: nothing above blocks, the steps are futures on the system's threads.
     done.onComplete(_ => system.terminate())
     Await.ready(system.whenTerminated, Duration.Inf)
     if (done.value.exists(_.isFailure)) sys.exit(1)
