@@ -13,17 +13,11 @@ import sys
 import tempfile
 import time
 
-passed = failed = 0
+from checks import Checks
+
+CHECKS = Checks()
+check = CHECKS.check
 MAX_SEQ = 20
-
-
-def check(ok, what):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL", what)
 
 
 def varint(v):
@@ -141,8 +135,7 @@ def main():
     finally:
         robot.terminate()
         robot.wait(timeout=5)
-    print("%d passed, %d failed" % (passed, failed))
-    return 0 if failed == 0 else 1
+    return CHECKS.summary()
 
 
 if __name__ == "__main__":

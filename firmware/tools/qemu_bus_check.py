@@ -5,31 +5,21 @@ seconds of emulation. Prints "N passed, N failed".
 
     qemu_bus_check.py <build/busmodel> <build/qemu/robot.elf>"""
 import re
-import socket
 import subprocess
 import sys
 import tempfile
 import time
 
-passed = failed = 0
+from checks import Checks, free_port, start_busmodel
 
-
-def check(ok, what):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL", what)
+CHECKS = Checks()
+check = CHECKS.check
 
 
 def main():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    model = subprocess.Popen([sys.argv[1], "port=%d" % port, "log=1", "run_ms=60000"], stdout=subprocess.PIPE, text=True)
-    check("listening" in model.stdout.readline(), "busmodel started")
+    port = free_port()
+    model, line = start_busmodel(sys.argv[1], port, 60000, "log=1")
+    check("listening" in line, "busmodel started")
     epoch = tempfile.mkdtemp(prefix="qemu-bus-") + "/robot.epoch"
     qemu = subprocess.Popen(["qemu-system-arm", "-M", "netduino2", "-display", "none", "-monitor", "none", "-nodefaults",
                              "-serial", "tcp:127.0.0.1:%d,nodelay=on" % port, "-serial", "null", "-serial", "null",
@@ -51,8 +41,7 @@ def main():
         model.wait(timeout=10)
     check(best[0] == 18, "every servo read: %d" % best[0])
     check(best[1] >= 3, "camera frames captured: %d" % best[1])
-    print("%d passed, %d failed" % (passed, failed))
-    return 0 if failed == 0 else 1
+    return CHECKS.summary()
 
 
 if __name__ == "__main__":

@@ -8,7 +8,6 @@ reached through a socat pseudo-terminal, as a base-station tool reaches a robot'
 It pings servos 1-18 (model number 12, the AX-12A) and the HaViMo2 at 100, finds nobody at 30, writes a goal
 position to servo 2, reads it back and reads the servo arriving there, and prints "N passed, N failed"."""
 import os
-import socket
 import subprocess
 import sys
 import tempfile
@@ -16,24 +15,10 @@ import time
 
 from dynamixel_sdk import COMM_SUCCESS, PacketHandler, PortHandler
 
-passed = failed = 0
+from checks import Checks, free_port, start_busmodel
 
-
-def check(ok, what):
-    global passed, failed
-    if ok:
-        passed += 1
-    else:
-        failed += 1
-        print("FAIL", what)
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
+CHECKS = Checks()
+check = CHECKS.check
 
 
 def main():
@@ -44,9 +29,8 @@ def main():
             target = sys.argv[2]
         else:
             port = free_port()
-            model = subprocess.Popen([sys.argv[1], "port=%d" % port, "run_ms=120000"], stdout=subprocess.PIPE, text=True)
+            model, line = start_busmodel(sys.argv[1], port, 120000)
             procs.append(model)
-            line = model.stdout.readline()
             check("listening" in line, "busmodel did not start: %r" % line)
             target = "127.0.0.1:%d" % port
         link = os.path.join(tmp, "dxl")
@@ -89,8 +73,7 @@ def main():
                 p.wait(timeout=5)
             except subprocess.TimeoutExpired:
                 p.kill()
-    print("%d passed, %d failed" % (passed, failed))
-    return 0 if failed == 0 else 1
+    return CHECKS.summary()
 
 
 if __name__ == "__main__":
