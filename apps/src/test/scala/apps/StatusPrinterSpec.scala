@@ -27,7 +27,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     def close(): Unit = ()
   }
 
-  /** Sends the packet `file` to `to` until `seen` holds (at most 20 s, every 200 ms); fails if it never does. */
+  /** Sends the packet `file` to `to` until `seen` holds (at most 20 s, every 50 ms); fails if it never does. */
   private def sendUntil(to: InetSocketAddress, file: String)(seen: => Boolean): Unit = {
     val bytes = StatusViewSpec.vector(file)
     Using.resource(new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))) { socket =>
@@ -35,7 +35,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       var ok = seen
       while (!ok && deadline.hasTimeLeft()) {
         socket.send(new DatagramPacket(bytes, bytes.length, to))
-        Thread.sleep(200)
+        Thread.sleep(50)
         ok = seen
       }
       withClue(s"after sending $file: ")(assert(ok))
@@ -54,7 +54,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         bytes(5) = (n & 0xff).toByte
         socket.send(new DatagramPacket(bytes, bytes.length, to))
         n += 1
-        Thread.sleep(200)
+        Thread.sleep(50)
       }
       withClue(s"after sending $file: ")(assert(seen))
     }

@@ -18,7 +18,7 @@ import naogateway.{Gateway, GatewayAccess, GatewaySettings, LinkStats, Outbox, R
 
 /** `robotctl doctor`: what a team checks first when something does not work, each problem with its fix. The checks are
   * pure functions over facts gathered from the running gateway ([[gather]]) and the machine, so each can be provoked in
-  * a test; the control port answers `doctor` with their lines (docs/architecture.md, "The control port").
+  * a test; the control port answers `doctor` with their lines (docs/robotctl.md).
   */
 object Doctor {
 

@@ -9,7 +9,7 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.testkit.SettingsTables
 
-/** The keys that bound what the network can make the gateway do (docs/architecture.md 13.1, 15.1). */
+/** The keys that bound what the network can make the gateway do (docs/architecture.md 13.1, docs/configuration.md). */
 class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks with SettingsTables {
 
   private def settings(overrides: String = ""): GatewaySettings =

@@ -8,8 +8,8 @@ import org.scalatest.wordspec.AnyWordSpec
 import naogateway.RestartBackoff
 import naogateway.testkit.SettingsTables
 
-/** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key (architecture.md
-  * 15.2).
+/** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key
+  * (docs/configuration.md).
   */
 class MiddlewareSettingsSpec extends AnyWordSpec with Matchers with SettingsTables {
 

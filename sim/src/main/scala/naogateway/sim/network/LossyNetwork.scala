@@ -1,10 +1,10 @@
 package naogateway.sim.network
 
 import java.io.IOException
-import java.net.{InetAddress, InetSocketAddress, StandardProtocolFamily, StandardSocketOptions}
+import java.net.{InetAddress, InetSocketAddress}
 import java.nio.ByteBuffer
 import java.nio.channels.{DatagramChannel, SelectionKey, Selector}
-import java.util.concurrent.{CompletableFuture, ConcurrentLinkedQueue, ExecutionException, TimeUnit, TimeoutException}
+import java.util.concurrent.{ConcurrentLinkedQueue, ExecutionException, TimeUnit, TimeoutException}
 import java.util.concurrent.atomic.AtomicInteger
 
 import scala.collection.mutable
@@ -37,6 +37,7 @@ import org.slf4j.LoggerFactory
   */
 final class LossyNetwork private (val seed: Long, val name: String) {
   import LossyNetwork._
+  import Sockets.{localAddress, openChannel}
 
   private val selector = Selector.open()
   private val tasks = new ConcurrentLinkedQueue[Task[_]]()
@@ -196,27 +197,6 @@ final class LossyNetwork private (val seed: Long, val name: String) {
         throw e
     }
   }
-
-  private def openChannel(address: InetSocketAddress): DatagramChannel = {
-    val channel = DatagramChannel.open(StandardProtocolFamily.INET)
-    try {
-      channel.setOption[Integer](StandardSocketOptions.SO_RCVBUF, SocketBuffer)
-      channel.setOption[Integer](StandardSocketOptions.SO_SNDBUF, SocketBuffer)
-      channel.bind(address)
-      channel.configureBlocking(false)
-      channel
-    } catch {
-      case NonFatal(e) =>
-        channel.close()
-        throw e
-    }
-  }
-
-  private def localAddress(channel: DatagramChannel): InetSocketAddress =
-    channel.getLocalAddress match {
-      case address: InetSocketAddress => address
-      case other                      => throw new IOException(s"unexpected local address $other")
-    }
 
   private def run(): Unit =
     try {
@@ -396,7 +376,6 @@ object LossyNetwork {
   /** The port a robot receives on (docs/protocol.md section 2). */
   val RobotReceivePort: Int = 3838
   private val MaxDatagram = 65536
-  private val SocketBuffer: Integer = 1 << 20
   private val MaxReadsPerWakeup = 64
   private val CallTimeout = 5.seconds
 
@@ -407,75 +386,4 @@ object LossyNetwork {
     network
   }
 
-  private final class Task[A](body: () => A) {
-    val result = new CompletableFuture[A]()
-
-    def run(): Unit =
-      try result.complete(body())
-      catch { case NonFatal(e) => result.completeExceptionally(e) }
-
-    def abandon(reason: Throwable): Unit = result.completeExceptionally(reason)
-  }
-
-  private final class ProxyState(
-      val handle: Proxy,
-      clientChannel: DatagramChannel,
-      val upstreamChannel: DatagramChannel,
-      receiveChannel: DatagramChannel,
-      uplink: LinkState,
-      downlink: LinkState,
-      val fixedRobot: Option[InetSocketAddress],
-      val receivePort: Int
-  ) {
-    var open = true
-    var robot: Option[InetSocketAddress] = fixedRobot
-
-    def link(direction: Direction): LinkState = direction match {
-      case Direction.Uplink   => uplink
-      case Direction.Downlink => downlink
-    }
-
-    def receivingChannel(direction: Direction): DatagramChannel = direction match {
-      case Direction.Uplink   => clientChannel
-      case Direction.Downlink => receiveChannel
-    }
-
-    def sendingChannel(direction: Direction): DatagramChannel = direction match {
-      case Direction.Uplink   => upstreamChannel
-      case Direction.Downlink => clientChannel
-    }
-
-    def stats: ProxyStats = ProxyStats(uplink.stats, downlink.stats)
-
-    def close(): Unit = {
-      open = false
-      List(clientChannel, upstreamChannel, receiveChannel).foreach { channel =>
-        try channel.close()
-        catch { case e: IOException => log.warn("Proxy [{}] could not close a socket", Int.box(handle.id), e) }
-      }
-    }
-  }
-
-  private final case class Endpoint(state: ProxyState, direction: Direction)
-  private final case class AtSourcePort(state: ProxyState)
-
-  private final case class PendingCopy(
-      dueNanos: Long,
-      sequence: Long,
-      state: ProxyState,
-      direction: Direction,
-      bytes: Array[Byte],
-      to: InetSocketAddress
-  )
-
-  private object PendingCopy {
-    // PriorityQueue dequeues its largest element, hence the reversal. Deadlines from nanoTime are compared by their
-    // difference, as its values may be negative; the sequence keeps copies due at the same instant in arrival order.
-    val earliestFirst: Ordering[PendingCopy] = new Ordering[PendingCopy] {
-      def compare(a: PendingCopy, b: PendingCopy): Int = {
-        val byDue = java.lang.Long.signum(b.dueNanos - a.dueNanos)
-        if (byDue != 0) byDue else java.lang.Long.compare(b.sequence, a.sequence)
-      }
-    }
-  }
 }
