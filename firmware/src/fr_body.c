@@ -67,7 +67,6 @@ static struct {
 } answer;
 
 static naogateway_proto_ServoTelemetry telemetry_msg;
-static pb_extension_t telemetry_ext;
 
 const fr_body_stats_t *fr_body_stats(void) { return &stats; }
 
@@ -185,22 +184,20 @@ static bool encode_servos(pb_ostream_t *stream, const pb_field_t *field, void *c
     return true;
 }
 
-/** The servoTelemetry extension when this keep-alive is the one of its period, else NULL. */
-static pb_extension_t *keepalive_hook(void) {
-    if (!bus_open || cfg.telemetry_ms == 0 || cfg.servo_count == 0) return NULL;
+/** Writes the servoTelemetry extension (7106) when this keep-alive is the one of its period; false when it did not
+ *  fit. */
+static bool keepalive_hook(pb_ostream_t *out) {
+    if (!bus_open || cfg.telemetry_ms == 0 || cfg.servo_count == 0) return true;
     uint32_t now = fr_uptime_ms();
-    if ((int32_t)(now - next_telemetry) < 0) return NULL;
+    if ((int32_t)(now - next_telemetry) < 0) return true;
     next_telemetry += cfg.telemetry_ms;
     if ((int32_t)(now - next_telemetry) >= 0) next_telemetry = now + cfg.telemetry_ms;
     memset(&telemetry_msg, 0, sizeof telemetry_msg);
     telemetry_msg.servos.funcs.encode = encode_servos;
     telemetry_msg.has_busErrors = true;
     telemetry_msg.busErrors = stats.bus_errors;
-    telemetry_ext.type = &naogateway_proto_servoTelemetry;
-    telemetry_ext.dest = &telemetry_msg;
-    telemetry_ext.next = NULL;
-    telemetry_ext.found = true;
-    return &telemetry_ext;
+    return pb_encode_tag(out, PB_WT_STRING, naogateway_proto_servoTelemetry_tag) &&
+           pb_encode_submessage(out, naogateway_proto_ServoTelemetry_fields, &telemetry_msg);
 }
 
 /* ---- the HaViMo2 (docs/firmware.md "The HaViMo2 driver") ---------------------------------------------- */

@@ -27,14 +27,6 @@ bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *con
     return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, (const pb_byte_t *)s, strlen(s));
 }
 
-/** A string field from a zero-terminated string, or left out when NULL. */
-static pb_callback_t str(const char *s) {
-    pb_callback_t cb;
-    cb.funcs.encode = s ? fr_pb_write_string : NULL;
-    cb.arg = (void *)(uintptr_t)s;
-    return cb;
-}
-
 uint32_t fr_uptime_ms(void) { return fr_port_millis() - fr_state.boot_ms; }
 
 const fr_stats_t *fr_stats(void) { return &fr_state.stats; }
@@ -56,90 +48,172 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
     return true;
 }
 
-bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
-    if (!fr_state.started) return false; /* refused settings: the robot says nothing it cannot sign */
+/** Where an outgoing frame's payload is encoded, and how many bytes it may take (the signature's room apart);
+ *  NULL when nothing may be sent now (counted). */
+static uint8_t *payload_start(const fr_route_t *route, size_t *cap) {
+    if (!fr_state.started) return NULL; /* refused settings: the robot says nothing it cannot sign */
     if (!fr_port_frame_free()) { /* the port still sends the last frame from the buffer, or receives into it */
         fr_state.stats.send_failed++;
-        return false;
+        return NULL;
     }
-    uint8_t *payload = frame_buf + FR_HEADER_MAX;
     size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
-    size_t cap = FR_DATAGRAM_MAX - header;
-    if (route->via_stream && cap > FR_STREAM_PAYLOAD_MAX - header) cap = FR_STREAM_PAYLOAD_MAX - header;
-    bool signing = fr_state.signing;
-    pb_ostream_t out = pb_ostream_from_buffer(payload, signing ? cap - FR_SIGNATURE_FIELD_SIZE : cap);
-    msg->robotID = fr_state.settings.robot_id;
-    if (!pb_encode(&out, naogateway_proto_Message_fields, msg)) {
+    size_t room = FR_DATAGRAM_MAX - header;
+    if (route->via_stream && room > FR_STREAM_PAYLOAD_MAX - header) room = FR_STREAM_PAYLOAD_MAX - header;
+    *cap = fr_state.signing ? room - FR_SIGNATURE_FIELD_SIZE : room;
+    return frame_buf + FR_HEADER_MAX;
+}
+
+/** Signs, frames and sends the `len` payload bytes payload_start gave room for (`len` 0: the encoding failed). */
+static bool payload_send(const fr_route_t *route, size_t len) {
+    uint8_t *payload = frame_buf + FR_HEADER_MAX;
+    if (len > 0 && fr_state.signing) len = fr_sign_append(payload, len, len + FR_SIGNATURE_FIELD_SIZE);
+    if (len == 0) {
         fr_state.stats.send_failed++;
         return false;
     }
-    size_t len = out.bytes_written;
-    if (signing && (len = fr_sign_append(payload, len, cap)) == 0) {
-        fr_state.stats.send_failed++;
-        return false;
-    }
+    size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
     uint8_t *frame = fr_frame_header(payload, len, route->form);
     if (route->via_stream) return fr_stream_send(frame, len + header);
     return fr_send_raw(&route->to, frame, len + header);
 }
 
+bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
+    size_t cap;
+    uint8_t *payload = payload_start(route, &cap);
+    if (payload == NULL) return false;
+    pb_ostream_t out = pb_ostream_from_buffer(payload, cap);
+    msg->robotID = fr_state.settings.robot_id;
+    return payload_send(route, pb_encode(&out, naogateway_proto_Message_fields, msg) ? out.bytes_written : 0);
+}
+
 /* ---- the keep-alive ---------------------------------------------------------------------------------- */
+
+/* The keep-alive is written field by field here, not by nanopb: its walk over the Status and RobotHealth
+ * descriptors (each submessage twice, to size it first) was most of a keep-alive's instructions. The bytes are
+ * the ones nanopb writes: fields in field-number order, extensions in the order status, robotHealth,
+ * servoTelemetry, a field left out when its has_ flag or string would be unset. */
+
+/** A cursor over the payload; `p` NULL once a field did not fit. */
+typedef struct {
+    uint8_t *p, *end;
+} ka_writer_t;
+
+static void ka_byte(ka_writer_t *w, uint8_t b) {
+    if (w->p == NULL) return;
+    if (w->p == w->end) { w->p = NULL; return; }
+    *w->p++ = b;
+}
+
+/** A varint; an int32's negative value is its 64-bit sign extension, 10 bytes, as protobuf writes it. */
+static void ka_varint(ka_writer_t *w, uint64_t v) {
+    while (v >= 0x80u) {
+        ka_byte(w, (uint8_t)(v | 0x80u));
+        v >>= 7;
+    }
+    ka_byte(w, (uint8_t)v);
+}
+
+static void ka_uint(ka_writer_t *w, uint32_t field, uint32_t v) {
+    ka_varint(w, field << 3);
+    ka_varint(w, v);
+}
+
+static void ka_int(ka_writer_t *w, uint32_t field, int32_t v) {
+    ka_varint(w, field << 3);
+    ka_varint(w, (uint64_t)(int64_t)v);
+}
+
+static void ka_float(ka_writer_t *w, uint32_t field, float f) {
+    uint32_t bits;
+    memcpy(&bits, &f, 4);
+    ka_varint(w, field << 3 | 5u);
+    for (int k = 0; k < 4; k++) ka_byte(w, (uint8_t)(bits >> (8 * k)));
+}
+
+static void ka_string(ka_writer_t *w, uint32_t field, const char *s) {
+    if (s == NULL) return;
+    size_t n = strlen(s);
+    ka_varint(w, field << 3 | 2u);
+    ka_varint(w, n);
+    if (w->p == NULL || (size_t)(w->end - w->p) < n) { w->p = NULL; return; }
+    memcpy(w->p, s, n);
+    w->p += n;
+}
+
+/** Opens a submessage of `field`: its key and one byte for its length; returns where that byte is. */
+static uint8_t *ka_open(ka_writer_t *w, uint32_t field) {
+    ka_varint(w, field << 3 | 2u);
+    uint8_t *at = w->p;
+    ka_byte(w, 0);
+    return at;
+}
+
+/** Closes the submessage opened at `at`: its length, moved up a byte for a length of two (< 16384 bytes). */
+static void ka_close(ka_writer_t *w, uint8_t *at) {
+    if (w->p == NULL) return;
+    size_t n = (size_t)(w->p - at - 1);
+    if (n >= 0x80u) {
+        if (w->p == w->end) { w->p = NULL; return; }
+        memmove(at + 2, at + 1, n);
+        w->p++;
+        at[1] = (uint8_t)(n >> 7);
+        n = (n & 0x7Fu) | 0x80u;
+    }
+    at[0] = (uint8_t)n;
+}
 
 /** Sends one keep-alive: Status and RobotHealth in one frame (protocol.md 6.2, 9.13). */
 static FR_NOINLINE void send_keepalive(void) {
-    fr_health_t h;
-    memset(&h, 0, sizeof h);
-    h.posture = "sit";
+    fr_route_t route = fr_route_gateway();
+    ka_writer_t w;
+    size_t cap;
+    if ((w.p = payload_start(&route, &cap)) == NULL) return;
+    uint8_t *payload = w.p;
+    w.end = w.p + cap;
+    fr_health_t h = {0.0f, "sit", false, 0, 0, 0.0f, NULL};
     if (fr_state.settings.callbacks.health) fr_state.settings.callbacks.health(&h, fr_state.settings.callbacks.ctx);
     uint32_t up = fr_uptime_ms();
-    naogateway_proto_Status status = naogateway_proto_Status_init_zero;
-    status.has_timestamp = true;
-    status.timestamp = up;
-    status.has_teamID = true;
-    status.teamID = fr_state.settings.team_number;
-    status.has_timeOnline = true;
-    status.timeOnline = up / 1000u;
+    ka_int(&w, naogateway_proto_Message_robotID_tag, fr_state.settings.robot_id);
+
+    uint8_t *at = ka_open(&w, naogateway_proto_status_tag);
+    ka_uint(&w, naogateway_proto_Status_timestamp_tag, up);
+    ka_uint(&w, naogateway_proto_Status_teamID_tag, fr_state.settings.team_number);
+    ka_uint(&w, naogateway_proto_Status_timeOnline_tag, up / 1000u);
     if (h.has_position) {
-        status.has_robotPosition = true;
-        status.robotPosition.has_x = status.robotPosition.has_y = status.robotPosition.has_rotation = true;
-        status.robotPosition.x = h.x_mm;
-        status.robotPosition.y = h.y_mm;
-        status.robotPosition.rotation = h.rotation;
+        uint8_t *pos = ka_open(&w, naogateway_proto_Status_robotPosition_tag);
+        ka_int(&w, naogateway_proto_Position_x_tag, h.x_mm);
+        ka_int(&w, naogateway_proto_Position_y_tag, h.y_mm);
+        ka_float(&w, naogateway_proto_Position_rotation_tag, h.rotation);
+        ka_close(&w, pos);
     }
-    status.activeAgent = str(fr_state.settings.agent);
-    status.activeRole = str(fr_state.settings.role);
-    status.currentState = str(h.current_state ? h.current_state : h.posture);
-    naogateway_proto_RobotHealth health = naogateway_proto_RobotHealth_init_zero;
-    health.has_batteryVoltage = true;
-    health.batteryVoltage = h.battery_voltage;
-    health.posture = str(h.posture);
-    health.has_uptimeMs = true;
-    health.uptimeMs = up;
-    health.has_bootId = true;
-    health.bootId = fr_state.settings.boot_id;
-    if (fr_state.settings.development) {
-        health.has_development = true; /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
-        health.development = true;
-    }
-    fr_board_health_t board;
-    memset(&board, 0, sizeof board);
+    ka_string(&w, naogateway_proto_Status_activeAgent_tag, fr_state.settings.agent);
+    ka_string(&w, naogateway_proto_Status_activeRole_tag, fr_state.settings.role);
+    ka_string(&w, naogateway_proto_Status_currentState_tag, h.current_state ? h.current_state : h.posture);
+    ka_close(&w, at);
+
+    at = ka_open(&w, naogateway_proto_robotHealth_tag);
+    ka_float(&w, naogateway_proto_RobotHealth_batteryVoltage_tag, h.battery_voltage);
+    ka_string(&w, naogateway_proto_RobotHealth_posture_tag, h.posture);
+    ka_uint(&w, naogateway_proto_RobotHealth_uptimeMs_tag, up);
+    ka_uint(&w, naogateway_proto_RobotHealth_bootId_tag, fr_state.settings.boot_id);
+    /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
+    if (fr_state.settings.development) ka_uint(&w, naogateway_proto_RobotHealth_development_tag, 1);
+    fr_board_health_t board = {0, false, false};
     if (fr_port_board_health(&board)) {
-        health.has_board = true;
-        health.board.has_coreClockHz = true;
-        health.board.coreClockHz = board.core_clock_hz;
-        health.board.has_stackOverflowReset = board.stack_overflow_reset;
-        health.board.stackOverflowReset = board.stack_overflow_reset;
-        health.board.has_faultReset = board.fault_reset;
-        health.board.faultReset = board.fault_reset;
+        uint8_t *b = ka_open(&w, naogateway_proto_RobotHealth_board_tag);
+        ka_uint(&w, naogateway_proto_BoardHealth_coreClockHz_tag, board.core_clock_hz);
+        if (board.stack_overflow_reset) ka_uint(&w, naogateway_proto_BoardHealth_stackOverflowReset_tag, 1);
+        if (board.fault_reset) ka_uint(&w, naogateway_proto_BoardHealth_faultReset_tag, 1);
+        ka_close(&w, b);
     }
+    ka_close(&w, at);
+
     /* servoTelemetry (7106) after robotHealth, once per telemetry period (protocol.md 6.8) */
-    pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health,
-                                 fr_body_hooks.keepalive ? fr_body_hooks.keepalive() : NULL, true};
-    pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
-    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
-    msg.extensions = &ext_status;
-    fr_route_t route = fr_route_gateway();
-    (void)fr_send_message(&route, &msg);
+    if (w.p != NULL && fr_body_hooks.keepalive) {
+        pb_ostream_t out = pb_ostream_from_buffer(w.p, (size_t)(w.end - w.p));
+        w.p = fr_body_hooks.keepalive(&out) ? w.p + out.bytes_written : NULL;
+    }
+    (void)payload_send(&route, w.p ? (size_t)(w.p - payload) : 0u);
 }
 
 /* ---- incoming frames ---------------------------------------------------------------------------------- */

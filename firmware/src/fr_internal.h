@@ -172,7 +172,7 @@ void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, si
 /** What the body adds to the library's loop, the keep-alive and incoming frames. */
 typedef struct {
     void (*poll)(void);                  /* moves bus transactions on (fr_poll) */
-    pb_extension_t *(*keepalive)(void);  /* the servoTelemetry extension for this keep-alive, or NULL */
+    bool (*keepalive)(pb_ostream_t *out); /* writes the servoTelemetry extension when this keep-alive has it */
     pb_extension_t *(*prepare)(void);    /* the busBridge extension to decode an incoming frame into */
     void (*after)(const fr_route_t *route); /* the frame was decoded: acts on its busBridge, if any */
 } fr_body_hooks_t;
