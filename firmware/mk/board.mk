@@ -22,10 +22,10 @@ QEMU ?= qemu-system-arm
 ARM_ARCH := -mcpu=cortex-m3 -mthumb
 # -Os as the thesis's firmware was built for size; sections per function so the linker drops what is unused.
 ARM_OPT := -Os -ffunction-sections -fdata-sections -fno-common
-# Size or speed per file: nanopb's encoder (the keep-alive's path) is built for speed, where
-# its 1.1 KB more buy about 1,200 instructions per keep-alive (docs/firmware.md, "Footprint").
+# Size or speed per file: ARM_SPEED_SRCS are built with ARM_SPEED. None is now: the keep-alive, the one path with an
+# instruction goal, no longer runs nanopb (docs/firmware.md, "Footprint").
 ARM_SPEED := -O2 -ffunction-sections -fdata-sections -fno-common
-ARM_SPEED_SRCS := $(NANOPB_DIR)/pb_encode.c $(NANOPB_DIR)/pb_common.c
+ARM_SPEED_SRCS :=
 ARM_LDFLAGS := $(ARM_ARCH) -nostartfiles --specs=nano.specs -Wl,--gc-sections -Lld
 BOARD_INCLUDES := -Iport -Iport/stm32 -DFR_BOARD_IMAGE
 # Extra -D flags for the board images, e.g. BOARD_DEFS="-DBOARD_BASE_IP={10,0,0,5}" (the base station's address).
@@ -73,7 +73,7 @@ define arm_variant
 $(BUILD)/$(1)/obj/%.o: %.c $(FR_GEN_STAMP) $(BOARD_HEADERS) $(BOARD_KEY_HEADER) | check-arm
 	@mkdir -p $$(dir $$@)
 	$(ARM_CC) $(ARM_ARCH) $$(ARM_OPT) $(FR_CFLAGS) $(BOARD_INCLUDES) $(BOARD_DEFS) $(3) -c $$< -o $$@
-$(BUILD)/$(1)/pb/%.o: %.c $(FR_GEN_STAMP) | check-arm
+$(BUILD)/$(1)/pb/%.o: %.c $(FR_GEN_STAMP) mk/board.mk | check-arm
 	@mkdir -p $$(dir $$@)
 	$(ARM_CC) $(ARM_ARCH) $$(ARM_OPT) $(PB_CFLAGS) $(3) -c $$< -o $$@
 $(1)_BASE := $(patsubst %.c,$(BUILD)/$(1)/obj/%.o,$(FR_LIB_SRCS) $(STM32_SRCS) $(2)) \
