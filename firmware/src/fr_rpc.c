@@ -1,7 +1,6 @@
 /* firmware/src/fr_rpc.c: the RPC server (docs/protocol.md section 7): a table of handlers the program
  * registers, requests decoded field by field into one bounded call buffer, exactly one Response per Request
  * with its callId, the errors of 7.4, and calls answered later (motion.posture). */
-#include <math.h>
 #include <string.h>
 #include "fr_internal.h"
 #include "naogateway/proto/rpc.pb.h"
@@ -189,6 +188,19 @@ static const char *error2(const char *a, const char *b) {
     return error_text;
 }
 
+/** Whether two zero-terminated strings are equal (a loop, not libc's strcmp: 444 B of flash for a few names). */
+static bool same(const char *a, const char *b) {
+    while (*a != '\0' && *a == *b) a++, b++;
+    return *a == *b;
+}
+
+/** Whether `f` is neither infinite nor NaN, from its exponent bits (no soft-float comparison routines). */
+static bool finite(float f) {
+    uint32_t bits;
+    memcpy(&bits, &f, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
+
 void fr_rpc_dispatch(const fr_route_t *route) {
     fr_call_t *call = &in.call;
     call->module = in.module;
@@ -197,14 +209,14 @@ void fr_rpc_dispatch(const fr_route_t *route) {
     call->call_id = decoded->callId;
     const handler_t *h = NULL;
     for (size_t k = 0; k < handler_count && !in.names_truncated; k++)
-        if (strcmp(handlers[k].module, in.module) == 0 && strcmp(handlers[k].method, in.method) == 0) h = &handlers[k];
+        if (same(handlers[k].module, in.module) && same(handlers[k].method, in.method)) h = &handlers[k];
     if (h == NULL) {
         /* "unknown method: module.method", as 9.7 shows it */
         char name[2 * FR_RPC_NAME_MAX + 1];
         size_t n = strlen(in.module);
         memcpy(name, in.module, n);
         name[n] = '.';
-        strcpy(name + n + 1, in.method);
+        memcpy(name + n + 1, in.method, strlen(in.method) + 1);
         respond(route, call->has_call_id, call->call_id, NULL, error2("unknown method: ", name));
         return;
     }
@@ -265,7 +277,7 @@ static void add_number(char *out, size_t cap, size_t v) {
 bool fr_rpc_expect_floats(const fr_call_t *call, size_t count, char *error, size_t error_cap) {
     bool ok = call->count == count;
     for (size_t k = 0; ok && k < count; k++)
-        ok = call->params[k].kind == FR_VALUE_FLOAT && isfinite(call->params[k].u.f);
+        ok = call->params[k].kind == FR_VALUE_FLOAT && finite(call->params[k].u.f);
     if (!ok && error_cap > 0) {
         /* "bad parameters: expected 3 numbers, got 2 parameter(s)" (protocol.md 7.4) */
         error[0] = '\0';
