@@ -21,12 +21,6 @@ fr_body_hooks_t fr_body_hooks;
  * write. */
 static uint8_t frame_buf[FR_HEADER_MAX + FR_DATAGRAM_MAX];
 
-bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
-    const char *s = (const char *)*arg;
-    if (s == NULL) return true;
-    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, (const pb_byte_t *)s, strlen(s));
-}
-
 uint32_t fr_uptime_ms(void) { return fr_port_millis() - fr_state.boot_ms; }
 
 const fr_stats_t *fr_stats(void) { return &fr_state.stats; }
@@ -48,24 +42,24 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
     return true;
 }
 
-/** Where an outgoing frame's payload is encoded, and how many bytes it may take (the signature's room apart);
- *  NULL when nothing may be sent now (counted). */
-static uint8_t *payload_start(const fr_route_t *route, size_t *cap) {
-    if (!fr_state.started) return NULL; /* refused settings: the robot says nothing it cannot sign */
+bool fr_out_begin(fr_out_t *w, const fr_route_t *route) {
+    if (!fr_state.started) return false; /* refused settings: the robot says nothing it cannot sign */
     if (!fr_port_frame_free()) { /* the port still sends the last frame from the buffer, or receives into it */
         fr_state.stats.send_failed++;
-        return NULL;
+        return false;
     }
     size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
     size_t room = FR_DATAGRAM_MAX - header;
     if (route->via_stream && room > FR_STREAM_PAYLOAD_MAX - header) room = FR_STREAM_PAYLOAD_MAX - header;
-    *cap = fr_state.signing ? room - FR_SIGNATURE_FIELD_SIZE : room;
-    return frame_buf + FR_HEADER_MAX;
+    w->p = frame_buf + FR_HEADER_MAX;
+    w->end = w->p + (fr_state.signing ? room - FR_SIGNATURE_FIELD_SIZE : room);
+    fr_out_int(w, naogateway_proto_Message_robotID_tag, fr_state.settings.robot_id);
+    return true;
 }
 
-/** Signs, frames and sends the `len` payload bytes payload_start gave room for (`len` 0: the encoding failed). */
-static bool payload_send(const fr_route_t *route, size_t len) {
+bool fr_out_send(fr_out_t *w, const fr_route_t *route) {
     uint8_t *payload = frame_buf + FR_HEADER_MAX;
+    size_t len = w->p ? (size_t)(w->p - payload) : 0u;
     if (len > 0 && fr_state.signing) len = fr_sign_append(payload, len, len + FR_SIGNATURE_FIELD_SIZE);
     if (len == 0) {
         fr_state.stats.send_failed++;
@@ -78,148 +72,65 @@ static bool payload_send(const fr_route_t *route, size_t len) {
 }
 
 bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
-    size_t cap;
-    uint8_t *payload = payload_start(route, &cap);
-    if (payload == NULL) return false;
-    pb_ostream_t out = pb_ostream_from_buffer(payload, cap);
+    fr_out_t w;
+    if (!fr_out_begin(&w, route)) return false;
+    uint8_t *payload = frame_buf + FR_HEADER_MAX;
+    pb_ostream_t out = pb_ostream_from_buffer(payload, (size_t)(w.end - payload));
     msg->robotID = fr_state.settings.robot_id;
-    return payload_send(route, pb_encode(&out, naogateway_proto_Message_fields, msg) ? out.bytes_written : 0);
+    w.p = pb_encode(&out, naogateway_proto_Message_fields, msg) ? payload + out.bytes_written : NULL;
+    return fr_out_send(&w, route);
 }
 
 /* ---- the keep-alive ---------------------------------------------------------------------------------- */
 
-/* The keep-alive is written field by field here, not by nanopb: its walk over the Status and RobotHealth
- * descriptors (each submessage twice, to size it first) was most of a keep-alive's instructions. The bytes are
- * the ones nanopb writes: fields in field-number order, extensions in the order status, robotHealth,
- * servoTelemetry, a field left out when its has_ flag or string would be unset. */
-
-/** A cursor over the payload; `p` NULL once a field did not fit. */
-typedef struct {
-    uint8_t *p, *end;
-} ka_writer_t;
-
-static void ka_byte(ka_writer_t *w, uint8_t b) {
-    if (w->p == NULL) return;
-    if (w->p == w->end) { w->p = NULL; return; }
-    *w->p++ = b;
-}
-
-/** A varint; an int32's negative value is its 64-bit sign extension, 10 bytes, as protobuf writes it. */
-static void ka_varint(ka_writer_t *w, uint64_t v) {
-    while (v >= 0x80u) {
-        ka_byte(w, (uint8_t)(v | 0x80u));
-        v >>= 7;
-    }
-    ka_byte(w, (uint8_t)v);
-}
-
-static void ka_uint(ka_writer_t *w, uint32_t field, uint32_t v) {
-    ka_varint(w, field << 3);
-    ka_varint(w, v);
-}
-
-static void ka_int(ka_writer_t *w, uint32_t field, int32_t v) {
-    ka_varint(w, field << 3);
-    ka_varint(w, (uint64_t)(int64_t)v);
-}
-
-static void ka_float(ka_writer_t *w, uint32_t field, float f) {
-    uint32_t bits;
-    memcpy(&bits, &f, 4);
-    ka_varint(w, field << 3 | 5u);
-    for (int k = 0; k < 4; k++) ka_byte(w, (uint8_t)(bits >> (8 * k)));
-}
-
-static void ka_string(ka_writer_t *w, uint32_t field, const char *s) {
-    if (s == NULL) return;
-    size_t n = strlen(s);
-    ka_varint(w, field << 3 | 2u);
-    ka_varint(w, n);
-    if (w->p == NULL || (size_t)(w->end - w->p) < n) { w->p = NULL; return; }
-    memcpy(w->p, s, n);
-    w->p += n;
-}
-
-/** Opens a submessage of `field`: its key and one byte for its length; returns where that byte is. */
-static uint8_t *ka_open(ka_writer_t *w, uint32_t field) {
-    ka_varint(w, field << 3 | 2u);
-    uint8_t *at = w->p;
-    ka_byte(w, 0);
-    return at;
-}
-
-/** Closes the submessage opened at `at`: its length, moved up a byte for a length of two (< 16384 bytes). */
-static void ka_close(ka_writer_t *w, uint8_t *at) {
-    if (w->p == NULL) return;
-    size_t n = (size_t)(w->p - at - 1);
-    if (n >= 0x80u) {
-        if (w->p == w->end) { w->p = NULL; return; }
-        /* up a byte, carried forward in a loop the compiler does not turn into a call of libc's memmove (252 B) */
-        uint8_t carry = 0;
-        for (size_t k = 1; k <= n + 1; k++) {
-            uint8_t t = at[k];
-            at[k] = carry;
-            carry = t;
-        }
-        w->p++;
-        at[1] = (uint8_t)(n >> 7);
-        n = (n & 0x7Fu) | 0x80u;
-    }
-    at[0] = (uint8_t)n;
-}
-
 /** Sends one keep-alive: Status and RobotHealth in one frame (protocol.md 6.2, 9.13). */
 static FR_NOINLINE void send_keepalive(void) {
     fr_route_t route = fr_route_gateway();
-    ka_writer_t w;
-    size_t cap;
-    if ((w.p = payload_start(&route, &cap)) == NULL) return;
-    uint8_t *payload = w.p;
-    w.end = w.p + cap;
+    fr_out_t w;
+    if (!fr_out_begin(&w, &route)) return;
     fr_health_t h = {0.0f, "sit", false, 0, 0, 0.0f, NULL};
     if (fr_state.settings.callbacks.health) fr_state.settings.callbacks.health(&h, fr_state.settings.callbacks.ctx);
     uint32_t up = fr_uptime_ms();
-    ka_int(&w, naogateway_proto_Message_robotID_tag, fr_state.settings.robot_id);
 
-    uint8_t *at = ka_open(&w, naogateway_proto_status_tag);
-    ka_uint(&w, naogateway_proto_Status_timestamp_tag, up);
-    ka_uint(&w, naogateway_proto_Status_teamID_tag, fr_state.settings.team_number);
-    ka_uint(&w, naogateway_proto_Status_timeOnline_tag, up / 1000u);
+    uint8_t *at = fr_out_open(&w, naogateway_proto_status_tag);
+    fr_out_uint(&w, naogateway_proto_Status_timestamp_tag, up);
+    fr_out_uint(&w, naogateway_proto_Status_teamID_tag, fr_state.settings.team_number);
+    fr_out_uint(&w, naogateway_proto_Status_timeOnline_tag, up / 1000u);
     if (h.has_position) {
-        uint8_t *pos = ka_open(&w, naogateway_proto_Status_robotPosition_tag);
-        ka_int(&w, naogateway_proto_Position_x_tag, h.x_mm);
-        ka_int(&w, naogateway_proto_Position_y_tag, h.y_mm);
-        ka_float(&w, naogateway_proto_Position_rotation_tag, h.rotation);
-        ka_close(&w, pos);
+        uint8_t *pos = fr_out_open(&w, naogateway_proto_Status_robotPosition_tag);
+        fr_out_int(&w, naogateway_proto_Position_x_tag, h.x_mm);
+        fr_out_int(&w, naogateway_proto_Position_y_tag, h.y_mm);
+        fr_out_float(&w, naogateway_proto_Position_rotation_tag, h.rotation);
+        fr_out_close(&w, pos);
     }
-    ka_string(&w, naogateway_proto_Status_activeAgent_tag, fr_state.settings.agent);
-    ka_string(&w, naogateway_proto_Status_activeRole_tag, fr_state.settings.role);
-    ka_string(&w, naogateway_proto_Status_currentState_tag, h.current_state ? h.current_state : h.posture);
-    ka_close(&w, at);
+    fr_out_string(&w, naogateway_proto_Status_activeAgent_tag, fr_state.settings.agent);
+    fr_out_string(&w, naogateway_proto_Status_activeRole_tag, fr_state.settings.role);
+    fr_out_string(&w, naogateway_proto_Status_currentState_tag, h.current_state ? h.current_state : h.posture);
+    fr_out_close(&w, at);
 
-    at = ka_open(&w, naogateway_proto_robotHealth_tag);
-    ka_float(&w, naogateway_proto_RobotHealth_batteryVoltage_tag, h.battery_voltage);
-    ka_string(&w, naogateway_proto_RobotHealth_posture_tag, h.posture);
-    ka_uint(&w, naogateway_proto_RobotHealth_uptimeMs_tag, up);
-    ka_uint(&w, naogateway_proto_RobotHealth_bootId_tag, fr_state.settings.boot_id);
+    at = fr_out_open(&w, naogateway_proto_robotHealth_tag);
+    fr_out_float(&w, naogateway_proto_RobotHealth_batteryVoltage_tag, h.battery_voltage);
+    fr_out_string(&w, naogateway_proto_RobotHealth_posture_tag, h.posture);
+    fr_out_uint(&w, naogateway_proto_RobotHealth_uptimeMs_tag, up);
+    fr_out_uint(&w, naogateway_proto_RobotHealth_bootId_tag, fr_state.settings.boot_id);
     /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
-    if (fr_state.settings.development) ka_uint(&w, naogateway_proto_RobotHealth_development_tag, 1);
+    if (fr_state.settings.development) fr_out_uint(&w, naogateway_proto_RobotHealth_development_tag, 1);
     fr_board_health_t board = {0, false, false};
     if (fr_port_board_health(&board)) {
-        uint8_t *b = ka_open(&w, naogateway_proto_RobotHealth_board_tag);
-        ka_uint(&w, naogateway_proto_BoardHealth_coreClockHz_tag, board.core_clock_hz);
-        if (board.stack_overflow_reset) ka_uint(&w, naogateway_proto_BoardHealth_stackOverflowReset_tag, 1);
-        if (board.fault_reset) ka_uint(&w, naogateway_proto_BoardHealth_faultReset_tag, 1);
-        ka_close(&w, b);
+        uint8_t *b = fr_out_open(&w, naogateway_proto_RobotHealth_board_tag);
+        fr_out_uint(&w, naogateway_proto_BoardHealth_coreClockHz_tag, board.core_clock_hz);
+        if (board.stack_overflow_reset) fr_out_uint(&w, naogateway_proto_BoardHealth_stackOverflowReset_tag, 1);
+        if (board.fault_reset) fr_out_uint(&w, naogateway_proto_BoardHealth_faultReset_tag, 1);
+        fr_out_close(&w, b);
     }
-    ka_close(&w, at);
+    fr_out_close(&w, at);
 
     /* servoTelemetry (7106) after robotHealth, once per telemetry period (protocol.md 6.8) */
     if (w.p != NULL && fr_body_hooks.keepalive) {
         pb_ostream_t out = pb_ostream_from_buffer(w.p, (size_t)(w.end - w.p));
         w.p = fr_body_hooks.keepalive(&out) ? w.p + out.bytes_written : NULL;
     }
-    (void)payload_send(&route, w.p ? (size_t)(w.p - payload) : 0u);
+    (void)fr_out_send(&w, &route);
 }
 
 /* ---- incoming frames ---------------------------------------------------------------------------------- */

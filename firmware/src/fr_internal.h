@@ -178,8 +178,38 @@ typedef struct {
 } fr_body_hooks_t;
 extern fr_body_hooks_t fr_body_hooks;
 
-/* pb helpers (core.c) */
-/** Encode callback for a zero-terminated string in `*arg`. */
-bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg);
+/* out.c: the writer of outgoing frames (protobuf fields by hand, the bytes nanopb would write) */
+/** A cursor over an outgoing payload; `p` NULL once something did not fit (the frame is then not sent). */
+typedef struct {
+    uint8_t *p, *end;
+} fr_out_t;
+/** One raw byte. */
+void fr_out_byte(fr_out_t *w, uint8_t b);
+/** A varint; an int32's negative value goes in as its 64-bit sign extension (10 bytes), as protobuf writes it. */
+void fr_out_varint(fr_out_t *w, uint64_t v);
+/** Field `field` as a uint32, bool or enum of non-negative value (varint). */
+void fr_out_uint(fr_out_t *w, uint32_t field, uint32_t v);
+/** Field `field` as an int32 or enum (varint, negative values sign-extended). */
+void fr_out_int(fr_out_t *w, uint32_t field, int32_t v);
+/** Field `field` as a sint32 (zigzag varint). */
+void fr_out_sint(fr_out_t *w, uint32_t field, int32_t v);
+/** Field `field` as a float (fixed32, little-endian). */
+void fr_out_float(fr_out_t *w, uint32_t field, float f);
+/** Field `field` as bytes. */
+void fr_out_bytes(fr_out_t *w, uint32_t field, const uint8_t *data, size_t n);
+/** `n` bytes as they are (the body of a bytes field whose length was written). */
+void fr_out_raw(fr_out_t *w, const uint8_t *data, size_t n);
+/** Field `field` as a string; nothing when `s` is NULL. */
+void fr_out_string(fr_out_t *w, uint32_t field, const char *s);
+/** Opens submessage `field`: its key and two bytes for its length; returns where they are. */
+uint8_t *fr_out_open(fr_out_t *w, uint32_t field);
+/** Closes the submessage opened at `at`: its length (< 16384 bytes) as a minimal varint. */
+void fr_out_close(fr_out_t *w, uint8_t *at);
+/** Starts a frame on `route` in the frame buffer: false when nothing may be sent now (counted); else `w` is over
+ *  the payload (the signature's room apart) with Message.robotID written. */
+bool fr_out_begin(fr_out_t *w, const fr_route_t *route);
+/** Signs, frames and sends what `w` holds (a payload that did not fit is counted as send_failed). */
+bool fr_out_send(fr_out_t *w, const fr_route_t *route);
+
 
 #endif

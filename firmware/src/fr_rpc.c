@@ -140,43 +140,31 @@ void fr_rpc_prepare(void *request_struct) {
 
 /* ---- answering ----------------------------------------------------------------------------------------- */
 
-/** Encode callback for a binary return value. */
-static bool write_binary(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
-    const fr_value_t *v = (const fr_value_t *)*arg;
-    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, v->u.bin.data, v->u.bin.len);
-}
-
 /** Sends the one Response of a call: `result` or `error` (exactly one of them). */
 static void respond(const fr_route_t *route, bool has_call_id, uint32_t call_id, const fr_value_t *result,
                     const char *error) {
-    naogateway_proto_Response resp = naogateway_proto_Response_init_zero;
-    resp.has_callId = has_call_id;
-    resp.callId = call_id;
+    fr_out_t w;
+    if (!fr_out_begin(&w, route)) return;
+    uint8_t *ext = fr_out_open(&w, naogateway_proto_rpcResponse_tag);
     if (error != NULL) {
-        resp.error.funcs.encode = fr_pb_write_string;
-        resp.error.arg = (void *)(uintptr_t)error;
+        fr_out_string(&w, naogateway_proto_Response_error_tag, error);
     } else {
-        resp.has_returnval = true;
-        naogateway_proto_MixedValue *v = &resp.returnval;
+        uint8_t *v = fr_out_open(&w, naogateway_proto_Response_returnval_tag);
         switch (result ? result->kind : FR_VALUE_NONE) {
-        case FR_VALUE_STRING:
-            v->string.funcs.encode = fr_pb_write_string;
-            v->string.arg = (void *)(uintptr_t)result->u.s;
-            break;
-        case FR_VALUE_INT: v->has_int_value = true; v->int_value = result->u.i; break;
-        case FR_VALUE_FLOAT: v->has_float_value = true; v->float_value = result->u.f; break;
-        case FR_VALUE_BOOL: v->has_bool_value = true; v->bool_value = result->u.b; break;
+        case FR_VALUE_STRING: fr_out_string(&w, naogateway_proto_MixedValue_string_tag, result->u.s); break;
+        case FR_VALUE_INT: fr_out_uint(&w, naogateway_proto_MixedValue_int_value_tag, result->u.i); break;
+        case FR_VALUE_FLOAT: fr_out_float(&w, naogateway_proto_MixedValue_float_value_tag, result->u.f); break;
+        case FR_VALUE_BOOL: fr_out_uint(&w, naogateway_proto_MixedValue_bool_value_tag, result->u.b); break;
         case FR_VALUE_BINARY:
-            v->binary.funcs.encode = write_binary;
-            v->binary.arg = (void *)(uintptr_t)result;
+            fr_out_bytes(&w, naogateway_proto_MixedValue_binary_tag, result->u.bin.data, result->u.bin.len);
             break;
         default: break; /* an empty MixedValue: "no value" */
         }
+        fr_out_close(&w, v);
     }
-    pb_extension_t ext = {&naogateway_proto_rpcResponse, &resp, NULL, true};
-    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
-    msg.extensions = &ext;
-    (void)fr_send_message(route, &msg);
+    if (has_call_id) fr_out_uint(&w, naogateway_proto_Response_callId_tag, call_id);
+    fr_out_close(&w, ext);
+    (void)fr_out_send(&w, route);
 }
 
 /** Copies `a` then `b` into error_text. */
