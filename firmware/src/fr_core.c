@@ -135,10 +135,29 @@ static FR_NOINLINE void send_keepalive(void) {
 
 /* ---- incoming frames ---------------------------------------------------------------------------------- */
 
-/* Requests and debug commands are decoded into static structs: their callbacks fill the library's own
- * bounded buffers (rpc.c, debug.c). */
-static naogateway_proto_Request request;
-static naogateway_proto_DebuggingCommands commands;
+/** What one reading of a frame's Message found (protocol.md 6): its robotID and which extensions. */
+typedef struct {
+    bool robot_id, request, commands;
+} message_seen_t;
+
+/** One field of the Message envelope: robotID (required), rpcRequest, debuggingCommands and the body's extension;
+ *  any other is skipped (message.proto: every other field number is an extension the robot does not read). */
+static int message_field(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    message_seen_t *seen = (message_seen_t *)ctx;
+    uint64_t v;
+    switch (tag) {
+    case naogateway_proto_Message_robotID_tag: /* an int32: any varint fits once cast, as nanopb casts it */
+        seen->robot_id = true;
+        return wire == PB_WT_VARINT && pb_decode_varint(s, &v) ? 1 : -1;
+    case naogateway_proto_rpcRequest_tag:
+        seen->request = true;
+        return fr_rpc_read(s, wire) ? 1 : -1;
+    case naogateway_proto_debuggingCommands_tag:
+        seen->commands = true;
+        return fr_debug_read(s, wire) ? 1 : -1;
+    default: return fr_body_hooks.field ? fr_body_hooks.field(s, tag, wire, NULL) : 0;
+    }
+}
 
 void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream) {
     const uint8_t *payload;
@@ -174,23 +193,18 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
     /* Two passes when debug commands are present: the first only checks the whole frame (so a frame refused
      * half-way switches nothing), the second applies the names. */
     for (int pass = 0; pass < 2; pass++) {
-        memset(&request, 0, sizeof request);
-        memset(&commands, 0, sizeof commands);
-        fr_rpc_prepare(&request);
-        fr_debug_prepare(&commands, pass == 1);
-        pb_extension_t ext_cmd = {&naogateway_proto_debuggingCommands, &commands,
-                                  fr_body_hooks.prepare ? fr_body_hooks.prepare() : NULL, false};
-        pb_extension_t ext_req = {&naogateway_proto_rpcRequest, &request, &ext_cmd, false};
-        naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
-        msg.extensions = &ext_req;
+        fr_rpc_prepare();
+        fr_debug_prepare(pass == 1);
+        if (fr_body_hooks.prepare) fr_body_hooks.prepare();
+        message_seen_t seen = {false, false, false};
         pb_istream_t in = pb_istream_from_buffer(payload, payload_len);
-        if (!pb_decode(&in, naogateway_proto_Message_fields, &msg)) {
+        if (!fr_in_message(&in, message_field, &seen) || !seen.robot_id) {
             fr_state.stats.bad_protobuf++;
             return;
         }
-        if (pass == 0 && ext_cmd.found) continue;
-        if (ext_cmd.found) fr_debug_after(&commands, &route);
-        if (ext_req.found) fr_rpc_dispatch(&route);
+        if (pass == 0 && seen.commands) continue;
+        if (seen.commands) fr_debug_after(&route);
+        if (seen.request) fr_rpc_dispatch(&route);
         if (fr_body_hooks.after) fr_body_hooks.after(&route);
         return;
     }

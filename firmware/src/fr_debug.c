@@ -49,15 +49,14 @@ static bool matches(const char *pattern, size_t n, const char *name) {
 /** Markers in the callback's arg: what a name in this list does. */
 static const int mode_enable = 1, mode_disable = 0;
 
-/** One name of an optionEnable/optionDisable; `*arg` NULL in the checking pass (the name is only read). */
-static bool read_option_name(pb_istream_t *stream, const pb_field_t *field, void **arg) {
-    (void)field;
+/** One name of an optionEnable/optionDisable; `arg` NULL in the checking pass (the name is only read). */
+static bool read_option_name(pb_istream_t *stream, void *arg) {
     char name[FR_OPTION_NAME_MAX];
     size_t n = stream->bytes_left;
-    if (n >= sizeof name || *arg == NULL) return pb_read(stream, NULL, n); /* longer than any option: no match */
+    if (n >= sizeof name || arg == NULL) return pb_read(stream, NULL, n); /* longer than any option: no match */
     if (!pb_read(stream, (pb_byte_t *)name, n)) return false;
     name[n] = '\0';
-    bool on = *(const int *)*arg == mode_enable;
+    bool on = *(const int *)arg == mode_enable;
     for (int k = 0; k < option_count; k++) {
         if (matches(name, n, options[k].name) && options[k].enabled != on) {
             options[k].enabled = on;
@@ -68,14 +67,45 @@ static bool read_option_name(pb_istream_t *stream, const pb_field_t *field, void
     return true;
 }
 
-void fr_debug_prepare(void *commands_struct, bool apply) {
-    naogateway_proto_DebuggingCommands *c = (naogateway_proto_DebuggingCommands *)commands_struct;
-    c->optionEnable.options.funcs.decode = read_option_name;
-    c->optionEnable.options.arg = apply ? (void *)(uintptr_t)&mode_enable : NULL;
-    c->optionDisable.options.funcs.decode = read_option_name;
-    c->optionDisable.options.arg = apply ? (void *)(uintptr_t)&mode_disable : NULL;
+/** What a frame's DebuggingCommands asked for, and whether its names switch options (the second pass). */
+static struct {
+    bool apply;
+    bool pull, push, enable, disable; /* optionPull true, and which submessages were present */
+} commands;
+
+/** The field of a DebuggingOptionNames (its names) or a DebuggingOptionList (its options, read over). */
+static int names_field(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    if (tag != 1) return 0;
+    if (ctx == NULL) return fr_in_callback(s, wire, NULL, NULL) ? 1 : -1;
+    return fr_in_callback(s, wire, read_option_name, commands.apply ? ctx : NULL) ? 1 : -1;
+}
+
+/** One field of a DebuggingCommands (debugging.proto). */
+static int commands_field(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    (void)ctx;
+    switch (tag) {
+    case naogateway_proto_DebuggingCommands_optionPull_tag:
+        return wire == PB_WT_VARINT && pb_decode_bool(s, &commands.pull) ? 1 : -1;
+    case naogateway_proto_DebuggingCommands_optionPush_tag:
+        commands.push = true;
+        return fr_in_submessage(s, wire, names_field, NULL) ? 1 : -1;
+    case naogateway_proto_DebuggingCommands_optionEnable_tag:
+        commands.enable = true;
+        return fr_in_submessage(s, wire, names_field, (void *)(uintptr_t)&mode_enable) ? 1 : -1;
+    case naogateway_proto_DebuggingCommands_optionDisable_tag:
+        commands.disable = true;
+        return fr_in_submessage(s, wire, names_field, (void *)(uintptr_t)&mode_disable) ? 1 : -1;
+    default: return 0;
+    }
+}
+
+void fr_debug_prepare(bool apply) {
+    memset(&commands, 0, sizeof commands);
+    commands.apply = apply;
     changed = false;
 }
+
+bool fr_debug_read(pb_istream_t *s, pb_wire_type_t wire) { return fr_in_submessage(s, wire, commands_field, NULL); }
 
 /** Sends the whole option list (optionPush) on `route`. */
 static void push(const fr_route_t *route) {
@@ -97,15 +127,14 @@ static void push(const fr_route_t *route) {
 }
 
 /* Every pull is answered with the list; so is every enable or disable, changed or not (section 8, step 5). */
-void fr_debug_after(const void *commands_struct, const fr_route_t *route) {
-    const naogateway_proto_DebuggingCommands *c = (const naogateway_proto_DebuggingCommands *)commands_struct;
+void fr_debug_after(const fr_route_t *route) {
     for (int k = 0; k < option_count; k++) {
         if (!options[k].notify) continue;
         options[k].notify = false;
         if (fr_state.settings.callbacks.option)
             fr_state.settings.callbacks.option(k, options[k].enabled, fr_state.settings.callbacks.ctx);
     }
-    if ((c->has_optionPull && c->optionPull) || c->has_optionEnable || c->has_optionDisable) push(route);
+    if (commands.pull || commands.enable || commands.disable) push(route);
 }
 
 /* ---- debug data ---------------------------------------------------------------------------------------- */

@@ -88,22 +88,42 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len);
 /** Handles one frame's protobuf payload from `from` (plain datagram or stream payload). */
 void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream);
 
+/* in.c: reading incoming messages field by field (the same acceptance as nanopb's pb_decode) */
+/** Handles field `tag` of wire type `wire` of a message being read: 1 read, 0 not a field it knows (skipped by the
+ *  caller), -1 malformed. */
+typedef int (*fr_in_field_t)(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx);
+/** Reads a string, bytes or repeated field's value from `s` (a substream holding just that value). */
+typedef bool (*fr_in_reader_t)(pb_istream_t *s, void *arg);
+/** Reads the message in `s` to its end, field by field through `field`; false when malformed. */
+bool fr_in_message(pb_istream_t *s, fr_in_field_t field, void *ctx);
+/** A callback field's value as nanopb passes it: a length-delimited one's payload, a scalar's raw bytes; `reader`
+ *  NULL reads it over. */
+bool fr_in_callback(pb_istream_t *s, pb_wire_type_t wire, fr_in_reader_t reader, void *arg);
+/** A uint32 field (varint; refused when larger than 32 bits). */
+bool fr_in_uint32(pb_istream_t *s, pb_wire_type_t wire, uint32_t *out);
+/** A submessage field: its fields through `field`. */
+bool fr_in_submessage(pb_istream_t *s, pb_wire_type_t wire, fr_in_field_t field, void *ctx);
+
 /* rpc.c */
 /** Resets the handler table and the deferred calls (fr_init). */
 void fr_rpc_reset(void);
-/** Gives the decoder what it needs to read a Request into the library's call buffer. */
-void fr_rpc_prepare(void *request_struct);
+/** Empties the call buffer before a frame is read. */
+void fr_rpc_prepare(void);
+/** Reads one rpcRequest (its value of wire type `wire`) into the call buffer; false when malformed. */
+bool fr_rpc_read(pb_istream_t *s, pb_wire_type_t wire);
 /** Dispatches the request decoded into the call buffer and answers it on `route`. */
 void fr_rpc_dispatch(const fr_route_t *route);
 
 /* debug.c */
 /** Switches every option off and forgets the list (fr_init). */
 void fr_debug_reset(void);
-/** Gives the decoder callbacks for DebuggingCommands: with `apply` they switch options by name (the a.b.*
- *  rule), without they only read the names. */
-void fr_debug_prepare(void *commands_struct, bool apply);
-/** Acts on the decoded DebuggingCommands: answers a pull (or a change) with the option list on `route`. */
-void fr_debug_after(const void *commands_struct, const fr_route_t *route);
+/** Prepares reading a frame's DebuggingCommands: with `apply` their names switch options (the a.b.* rule),
+ *  without they are only read. */
+void fr_debug_prepare(bool apply);
+/** Reads one debuggingCommands (its value of wire type `wire`); false when malformed. */
+bool fr_debug_read(pb_istream_t *s, pb_wire_type_t wire);
+/** Acts on the DebuggingCommands read: answers a pull (or a change) with the option list on `route`. */
+void fr_debug_after(const fr_route_t *route);
 
 /* gamecontroller.c */
 /** Handles a datagram starting "RG" from `from`. */
@@ -173,7 +193,8 @@ void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, si
 typedef struct {
     void (*poll)(void);                  /* moves bus transactions on (fr_poll) */
     bool (*keepalive)(pb_ostream_t *out); /* writes the servoTelemetry extension when this keep-alive has it */
-    pb_extension_t *(*prepare)(void);    /* the busBridge extension to decode an incoming frame into */
+    void (*prepare)(void);               /* before an incoming frame is read */
+    fr_in_field_t field;                 /* reads the body's extension of an incoming frame (the fr_in_field_t rule) */
     void (*after)(const fr_route_t *route); /* the frame was decoded: acts on its busBridge, if any */
 } fr_body_hooks_t;
 extern fr_body_hooks_t fr_body_hooks;
