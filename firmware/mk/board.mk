@@ -136,10 +136,10 @@ footprint: arm qemu $(BUILD)/cm530/footprint.elf $(BUILD)/cm530-w4/footprint.elf
 	@python3 port/qemu/footprint.py "$(QEMU)" "$(ARM_SIZE)" "$(BUILD)"
 
 # The optional body's own flash (text + data) and static RAM (bss + data) on the CM-530, object by object; with it
-# nanopb's encoder, which the library no longer links (it writes its frames itself) but the body's telemetry and bus
-# bridge answers use.
+# nanopb's runtime, which the library no longer links (it writes and reads its frames itself) but the body's
+# telemetry and bus bridge use (whole objects: an upper bound of what the linker keeps of them).
 BODY_OBJS := obj/src/fr_body.o obj/src/fr_dxl.o obj/port/cm530/bus_cm530.o pb/build/gen/naogateway/proto/body.pb.o \
-             pb/$(NANOPB_DIR)/pb_encode.o
+             pb/$(NANOPB_DIR)/pb_encode.o pb/$(GEN)/pb_decode.o pb/$(NANOPB_DIR)/pb_common.o
 footprint-body: ROBOT_KEY := $(if $(ROBOT_KEY)$(FR_DEVELOPMENT),$(ROBOT_KEY),000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f)
 footprint-body: $(BUILD)/cm530/robot.elf
 	@$(ARM_SIZE) $(addprefix $(BUILD)/cm530/,$(BODY_OBJS))
