@@ -75,8 +75,9 @@ typedef struct {
 
 extern fr_state_t fr_state;
 
-/** Encodes `msg` (robotID and its extensions), frames it in the route's form, signs it when a key is set,
- *  and sends it (or offers it to the stream); false when it did not fit or could not be sent. */
+/** Encodes `msg` (robotID and its extensions) with nanopb, frames it in the route's form, signs it when a key is set,
+ *  and sends it (or offers it to the stream); false when it did not fit or could not be sent. For the body's
+ *  messages: the library writes its own with fr_out_* (a program without the body links no nanopb encoder). */
 bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg);
 
 /** The default route: the gateway's endpoint, the configured header form, a plain datagram. */
