@@ -22,10 +22,10 @@ QEMU ?= qemu-system-arm
 ARM_ARCH := -mcpu=cortex-m3 -mthumb
 # -Os as the thesis's firmware was built for size; sections per function so the linker drops what is unused.
 ARM_OPT := -Os -ffunction-sections -fdata-sections -fno-common
-# Size or speed per file: nanopb's encoder (the keep-alive's path) is built for speed, where
-# its 1.1 KB more buy about 1,200 instructions per keep-alive (docs/firmware.md, "Footprint").
+# Size or speed per file: ARM_SPEED_SRCS are built with ARM_SPEED. None is now: the keep-alive, the one path with an
+# instruction goal, no longer runs nanopb (docs/firmware.md, "Footprint").
 ARM_SPEED := -O2 -ffunction-sections -fdata-sections -fno-common
-ARM_SPEED_SRCS := $(NANOPB_DIR)/pb_encode.c $(NANOPB_DIR)/pb_common.c
+ARM_SPEED_SRCS :=
 ARM_LDFLAGS := $(ARM_ARCH) -nostartfiles --specs=nano.specs -Wl,--gc-sections -Lld
 BOARD_INCLUDES := -Iport -Iport/stm32 -DFR_BOARD_IMAGE
 # Extra -D flags for the board images, e.g. BOARD_DEFS="-DBOARD_BASE_IP={10,0,0,5}" (the base station's address).
@@ -73,7 +73,7 @@ define arm_variant
 $(BUILD)/$(1)/obj/%.o: %.c $(FR_GEN_STAMP) $(BOARD_HEADERS) $(BOARD_KEY_HEADER) | check-arm
 	@mkdir -p $$(dir $$@)
 	$(ARM_CC) $(ARM_ARCH) $$(ARM_OPT) $(FR_CFLAGS) $(BOARD_INCLUDES) $(BOARD_DEFS) $(3) -c $$< -o $$@
-$(BUILD)/$(1)/pb/%.o: %.c $(FR_GEN_STAMP) | check-arm
+$(BUILD)/$(1)/pb/%.o: %.c $(FR_GEN_STAMP) mk/board.mk | check-arm
 	@mkdir -p $$(dir $$@)
 	$(ARM_CC) $(ARM_ARCH) $$(ARM_OPT) $(PB_CFLAGS) $(3) -c $$< -o $$@
 $(1)_BASE := $(patsubst %.c,$(BUILD)/$(1)/obj/%.o,$(FR_LIB_SRCS) $(STM32_SRCS) $(2)) \
@@ -135,8 +135,11 @@ footprint: ROBOT_KEY := $(if $(ROBOT_KEY)$(FR_DEVELOPMENT),$(ROBOT_KEY),00010203
 footprint: arm qemu $(BUILD)/cm530/footprint.elf $(BUILD)/cm530-w4/footprint.elf | check-qemu
 	@python3 port/qemu/footprint.py "$(QEMU)" "$(ARM_SIZE)" "$(BUILD)"
 
-# The optional body's own flash (text + data) and static RAM (bss + data) on the CM-530, object by object.
-BODY_OBJS := obj/src/fr_body.o obj/src/fr_dxl.o obj/port/cm530/bus_cm530.o pb/build/gen/naogateway/proto/body.pb.o
+# The optional body's own flash (text + data) and static RAM (bss + data) on the CM-530, object by object; with it
+# nanopb's runtime, which the library no longer links (it writes and reads its frames itself) but the body's
+# telemetry and bus bridge use (whole objects: an upper bound of what the linker keeps of them).
+BODY_OBJS := obj/src/fr_body.o obj/src/fr_dxl.o obj/port/cm530/bus_cm530.o pb/build/gen/naogateway/proto/body.pb.o \
+             pb/$(NANOPB_DIR)/pb_encode.o pb/$(GEN)/pb_decode.o pb/$(NANOPB_DIR)/pb_common.o
 footprint-body: ROBOT_KEY := $(if $(ROBOT_KEY)$(FR_DEVELOPMENT),$(ROBOT_KEY),000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f)
 footprint-body: $(BUILD)/cm530/robot.elf
 	@$(ARM_SIZE) $(addprefix $(BUILD)/cm530/,$(BODY_OBJS))

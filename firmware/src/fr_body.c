@@ -56,7 +56,7 @@ static bridge_request_t queue[FR_BODY_BRIDGE_QUEUE];
 static size_t queue_head, queue_count;
 static bridge_request_t incoming;          /* the frame being decoded */
 static naogateway_proto_BusBridge incoming_msg;
-static pb_extension_t incoming_ext;
+static bool incoming_found;              /* the frame had a busBridge */
 static struct {
     bool pending;
     uint32_t sequence;
@@ -67,7 +67,6 @@ static struct {
 } answer;
 
 static naogateway_proto_ServoTelemetry telemetry_msg;
-static pb_extension_t telemetry_ext;
 
 const fr_body_stats_t *fr_body_stats(void) { return &stats; }
 
@@ -185,22 +184,20 @@ static bool encode_servos(pb_ostream_t *stream, const pb_field_t *field, void *c
     return true;
 }
 
-/** The servoTelemetry extension when this keep-alive is the one of its period, else NULL. */
-static pb_extension_t *keepalive_hook(void) {
-    if (!bus_open || cfg.telemetry_ms == 0 || cfg.servo_count == 0) return NULL;
+/** Writes the servoTelemetry extension (7106) when this keep-alive is the one of its period; false when it did not
+ *  fit. */
+static bool keepalive_hook(pb_ostream_t *out) {
+    if (!bus_open || cfg.telemetry_ms == 0 || cfg.servo_count == 0) return true;
     uint32_t now = fr_uptime_ms();
-    if ((int32_t)(now - next_telemetry) < 0) return NULL;
+    if ((int32_t)(now - next_telemetry) < 0) return true;
     next_telemetry += cfg.telemetry_ms;
     if ((int32_t)(now - next_telemetry) >= 0) next_telemetry = now + cfg.telemetry_ms;
     memset(&telemetry_msg, 0, sizeof telemetry_msg);
     telemetry_msg.servos.funcs.encode = encode_servos;
     telemetry_msg.has_busErrors = true;
     telemetry_msg.busErrors = stats.bus_errors;
-    telemetry_ext.type = &naogateway_proto_servoTelemetry;
-    telemetry_ext.dest = &telemetry_msg;
-    telemetry_ext.next = NULL;
-    telemetry_ext.found = true;
-    return &telemetry_ext;
+    return pb_encode_tag(out, PB_WT_STRING, naogateway_proto_servoTelemetry_tag) &&
+           pb_encode_submessage(out, naogateway_proto_ServoTelemetry_fields, &telemetry_msg);
 }
 
 /* ---- the HaViMo2 (docs/firmware.md "The HaViMo2 driver") ---------------------------------------------- */
@@ -358,22 +355,32 @@ static bool decode_request(pb_istream_t *stream, const pb_field_t *field, void *
     return pb_read(stream, incoming.request, n);
 }
 
-/** The busBridge extension an incoming frame is decoded into. */
-static pb_extension_t *prepare_hook(void) {
+/** Empties the busBridge an incoming frame is read into. */
+static void prepare_hook(void) {
     memset(&incoming, 0, sizeof incoming);
     incoming.bad = true; /* until a request field says otherwise */
     memset(&incoming_msg, 0, sizeof incoming_msg);
     incoming_msg.request.funcs.decode = decode_request;
-    incoming_ext.type = &naogateway_proto_busBridge;
-    incoming_ext.dest = &incoming_msg;
-    incoming_ext.next = NULL;
-    incoming_ext.found = false;
-    return &incoming_ext;
+    incoming_found = false;
+}
+
+/** Reads the busBridge extension (7107) of an incoming frame, by nanopb as an extension field is read: its value
+ *  a length-delimited BusBridge, merged into what an earlier one in the same frame left. */
+static int field_hook(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    (void)ctx;
+    if (tag != naogateway_proto_busBridge_tag) return 0;
+    incoming_found = true;
+    pb_istream_t sub;
+    if (wire != PB_WT_STRING || !pb_make_string_substream(s, &sub)) return -1;
+    return pb_decode_ex(&sub, naogateway_proto_BusBridge_fields, &incoming_msg, PB_DECODE_NOINIT) &&
+                   pb_close_string_substream(s, &sub)
+               ? 1
+               : -1;
 }
 
 /** Queues a decoded busBridge request; one that came as a plain datagram is dropped and counted. */
 static void after_hook(const fr_route_t *route) {
-    if (!incoming_ext.found) return;
+    if (!incoming_found) return;
     if (!route->via_stream) { stats.bridge_plain++; return; }
     if (queue_count == FR_BODY_BRIDGE_QUEUE) { stats.bridge_overflow++; return; }
     stats.bridge_requests++;
@@ -528,6 +535,7 @@ bool fr_body_init(const fr_body_settings_t *s) {
     fr_body_hooks.poll = poll_hook;
     fr_body_hooks.keepalive = keepalive_hook;
     fr_body_hooks.prepare = prepare_hook;
+    fr_body_hooks.field = field_hook;
     fr_body_hooks.after = after_hook;
     return bus_open;
 }

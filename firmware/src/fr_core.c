@@ -21,20 +21,6 @@ fr_body_hooks_t fr_body_hooks;
  * write. */
 static uint8_t frame_buf[FR_HEADER_MAX + FR_DATAGRAM_MAX];
 
-bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
-    const char *s = (const char *)*arg;
-    if (s == NULL) return true;
-    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, (const pb_byte_t *)s, strlen(s));
-}
-
-/** A string field from a zero-terminated string, or left out when NULL. */
-static pb_callback_t str(const char *s) {
-    pb_callback_t cb;
-    cb.funcs.encode = s ? fr_pb_write_string : NULL;
-    cb.arg = (void *)(uintptr_t)s;
-    return cb;
-}
-
 uint32_t fr_uptime_ms(void) { return fr_port_millis() - fr_state.boot_ms; }
 
 const fr_stats_t *fr_stats(void) { return &fr_state.stats; }
@@ -56,98 +42,122 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len) {
     return true;
 }
 
-bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
+bool fr_out_begin(fr_out_t *w, const fr_route_t *route) {
     if (!fr_state.started) return false; /* refused settings: the robot says nothing it cannot sign */
     if (!fr_port_frame_free()) { /* the port still sends the last frame from the buffer, or receives into it */
         fr_state.stats.send_failed++;
         return false;
     }
-    uint8_t *payload = frame_buf + FR_HEADER_MAX;
     size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
-    size_t cap = FR_DATAGRAM_MAX - header;
-    if (route->via_stream && cap > FR_STREAM_PAYLOAD_MAX - header) cap = FR_STREAM_PAYLOAD_MAX - header;
-    bool signing = fr_state.signing;
-    pb_ostream_t out = pb_ostream_from_buffer(payload, signing ? cap - FR_SIGNATURE_FIELD_SIZE : cap);
-    msg->robotID = fr_state.settings.robot_id;
-    if (!pb_encode(&out, naogateway_proto_Message_fields, msg)) {
+    size_t room = FR_DATAGRAM_MAX - header;
+    if (route->via_stream && room > FR_STREAM_PAYLOAD_MAX - header) room = FR_STREAM_PAYLOAD_MAX - header;
+    w->p = frame_buf + FR_HEADER_MAX;
+    w->end = w->p + (fr_state.signing ? room - FR_SIGNATURE_FIELD_SIZE : room);
+    fr_out_int(w, naogateway_proto_Message_robotID_tag, fr_state.settings.robot_id);
+    return true;
+}
+
+bool fr_out_send(fr_out_t *w, const fr_route_t *route) {
+    uint8_t *payload = frame_buf + FR_HEADER_MAX;
+    size_t len = w->p ? (size_t)(w->p - payload) : 0u;
+    if (len > 0 && fr_state.signing) len = fr_sign_append(payload, len, len + FR_SIGNATURE_FIELD_SIZE);
+    if (len == 0) {
         fr_state.stats.send_failed++;
         return false;
     }
-    size_t len = out.bytes_written;
-    if (signing && (len = fr_sign_append(payload, len, cap)) == 0) {
-        fr_state.stats.send_failed++;
-        return false;
-    }
+    size_t header = route->form == FR_FORM_LEGACY ? 12u : 8u;
     uint8_t *frame = fr_frame_header(payload, len, route->form);
     if (route->via_stream) return fr_stream_send(frame, len + header);
     return fr_send_raw(&route->to, frame, len + header);
+}
+
+bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg) {
+    fr_out_t w;
+    if (!fr_out_begin(&w, route)) return false;
+    uint8_t *payload = frame_buf + FR_HEADER_MAX;
+    pb_ostream_t out = pb_ostream_from_buffer(payload, (size_t)(w.end - payload));
+    msg->robotID = fr_state.settings.robot_id;
+    w.p = pb_encode(&out, naogateway_proto_Message_fields, msg) ? payload + out.bytes_written : NULL;
+    return fr_out_send(&w, route);
 }
 
 /* ---- the keep-alive ---------------------------------------------------------------------------------- */
 
 /** Sends one keep-alive: Status and RobotHealth in one frame (protocol.md 6.2, 9.13). */
 static FR_NOINLINE void send_keepalive(void) {
-    fr_health_t h;
-    memset(&h, 0, sizeof h);
-    h.posture = "sit";
+    fr_route_t route = fr_route_gateway();
+    fr_out_t w;
+    if (!fr_out_begin(&w, &route)) return;
+    fr_health_t h = {0.0f, "sit", false, 0, 0, 0.0f, NULL};
     if (fr_state.settings.callbacks.health) fr_state.settings.callbacks.health(&h, fr_state.settings.callbacks.ctx);
     uint32_t up = fr_uptime_ms();
-    naogateway_proto_Status status = naogateway_proto_Status_init_zero;
-    status.has_timestamp = true;
-    status.timestamp = up;
-    status.has_teamID = true;
-    status.teamID = fr_state.settings.team_number;
-    status.has_timeOnline = true;
-    status.timeOnline = up / 1000u;
+
+    uint8_t *at = fr_out_open(&w, naogateway_proto_status_tag);
+    fr_out_uint(&w, naogateway_proto_Status_timestamp_tag, up);
+    fr_out_uint(&w, naogateway_proto_Status_teamID_tag, fr_state.settings.team_number);
+    fr_out_uint(&w, naogateway_proto_Status_timeOnline_tag, up / 1000u);
     if (h.has_position) {
-        status.has_robotPosition = true;
-        status.robotPosition.has_x = status.robotPosition.has_y = status.robotPosition.has_rotation = true;
-        status.robotPosition.x = h.x_mm;
-        status.robotPosition.y = h.y_mm;
-        status.robotPosition.rotation = h.rotation;
+        uint8_t *pos = fr_out_open(&w, naogateway_proto_Status_robotPosition_tag);
+        fr_out_int(&w, naogateway_proto_Position_x_tag, h.x_mm);
+        fr_out_int(&w, naogateway_proto_Position_y_tag, h.y_mm);
+        fr_out_float(&w, naogateway_proto_Position_rotation_tag, h.rotation);
+        fr_out_close(&w, pos);
     }
-    status.activeAgent = str(fr_state.settings.agent);
-    status.activeRole = str(fr_state.settings.role);
-    status.currentState = str(h.current_state ? h.current_state : h.posture);
-    naogateway_proto_RobotHealth health = naogateway_proto_RobotHealth_init_zero;
-    health.has_batteryVoltage = true;
-    health.batteryVoltage = h.battery_voltage;
-    health.posture = str(h.posture);
-    health.has_uptimeMs = true;
-    health.uptimeMs = up;
-    health.has_bootId = true;
-    health.bootId = fr_state.settings.boot_id;
-    if (fr_state.settings.development) {
-        health.has_development = true; /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
-        health.development = true;
-    }
-    fr_board_health_t board;
-    memset(&board, 0, sizeof board);
+    fr_out_string(&w, naogateway_proto_Status_activeAgent_tag, fr_state.settings.agent);
+    fr_out_string(&w, naogateway_proto_Status_activeRole_tag, fr_state.settings.role);
+    fr_out_string(&w, naogateway_proto_Status_currentState_tag, h.current_state ? h.current_state : h.posture);
+    fr_out_close(&w, at);
+
+    at = fr_out_open(&w, naogateway_proto_robotHealth_tag);
+    fr_out_float(&w, naogateway_proto_RobotHealth_batteryVoltage_tag, h.battery_voltage);
+    fr_out_string(&w, naogateway_proto_RobotHealth_posture_tag, h.posture);
+    fr_out_uint(&w, naogateway_proto_RobotHealth_uptimeMs_tag, up);
+    fr_out_uint(&w, naogateway_proto_RobotHealth_bootId_tag, fr_state.settings.boot_id);
+    /* every keep-alive of an unsigned build says so (protocol.md 6.7) */
+    if (fr_state.settings.development) fr_out_uint(&w, naogateway_proto_RobotHealth_development_tag, 1);
+    fr_board_health_t board = {0, false, false};
     if (fr_port_board_health(&board)) {
-        health.has_board = true;
-        health.board.has_coreClockHz = true;
-        health.board.coreClockHz = board.core_clock_hz;
-        health.board.has_stackOverflowReset = board.stack_overflow_reset;
-        health.board.stackOverflowReset = board.stack_overflow_reset;
-        health.board.has_faultReset = board.fault_reset;
-        health.board.faultReset = board.fault_reset;
+        uint8_t *b = fr_out_open(&w, naogateway_proto_RobotHealth_board_tag);
+        fr_out_uint(&w, naogateway_proto_BoardHealth_coreClockHz_tag, board.core_clock_hz);
+        if (board.stack_overflow_reset) fr_out_uint(&w, naogateway_proto_BoardHealth_stackOverflowReset_tag, 1);
+        if (board.fault_reset) fr_out_uint(&w, naogateway_proto_BoardHealth_faultReset_tag, 1);
+        fr_out_close(&w, b);
     }
+    fr_out_close(&w, at);
+
     /* servoTelemetry (7106) after robotHealth, once per telemetry period (protocol.md 6.8) */
-    pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health,
-                                 fr_body_hooks.keepalive ? fr_body_hooks.keepalive() : NULL, true};
-    pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
-    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
-    msg.extensions = &ext_status;
-    fr_route_t route = fr_route_gateway();
-    (void)fr_send_message(&route, &msg);
+    if (w.p != NULL && fr_body_hooks.keepalive) {
+        pb_ostream_t out = pb_ostream_from_buffer(w.p, (size_t)(w.end - w.p));
+        w.p = fr_body_hooks.keepalive(&out) ? w.p + out.bytes_written : NULL;
+    }
+    (void)fr_out_send(&w, &route);
 }
 
 /* ---- incoming frames ---------------------------------------------------------------------------------- */
 
-/* Requests and debug commands are decoded into static structs: their callbacks fill the library's own
- * bounded buffers (rpc.c, debug.c). */
-static naogateway_proto_Request request;
-static naogateway_proto_DebuggingCommands commands;
+/** What one reading of a frame's Message found (protocol.md 6): its robotID and which extensions. */
+typedef struct {
+    bool robot_id, request, commands;
+} message_seen_t;
+
+/** One field of the Message envelope: robotID (required), rpcRequest, debuggingCommands and the body's extension;
+ *  any other is skipped (message.proto: every other field number is an extension the robot does not read). */
+static int message_field(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    message_seen_t *seen = (message_seen_t *)ctx;
+    uint64_t v;
+    switch (tag) {
+    case naogateway_proto_Message_robotID_tag: /* an int32: any varint fits once cast, as nanopb casts it */
+        seen->robot_id = true;
+        return wire == PB_WT_VARINT && pb_decode_varint(s, &v) ? 1 : -1;
+    case naogateway_proto_rpcRequest_tag:
+        seen->request = true;
+        return fr_rpc_read(s, wire) ? 1 : -1;
+    case naogateway_proto_debuggingCommands_tag:
+        seen->commands = true;
+        return fr_debug_read(s, wire) ? 1 : -1;
+    default: return fr_body_hooks.field ? fr_body_hooks.field(s, tag, wire, NULL) : 0;
+    }
+}
 
 void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream) {
     const uint8_t *payload;
@@ -183,23 +193,18 @@ void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len,
     /* Two passes when debug commands are present: the first only checks the whole frame (so a frame refused
      * half-way switches nothing), the second applies the names. */
     for (int pass = 0; pass < 2; pass++) {
-        memset(&request, 0, sizeof request);
-        memset(&commands, 0, sizeof commands);
-        fr_rpc_prepare(&request);
-        fr_debug_prepare(&commands, pass == 1);
-        pb_extension_t ext_cmd = {&naogateway_proto_debuggingCommands, &commands,
-                                  fr_body_hooks.prepare ? fr_body_hooks.prepare() : NULL, false};
-        pb_extension_t ext_req = {&naogateway_proto_rpcRequest, &request, &ext_cmd, false};
-        naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
-        msg.extensions = &ext_req;
+        fr_rpc_prepare();
+        fr_debug_prepare(pass == 1);
+        if (fr_body_hooks.prepare) fr_body_hooks.prepare();
+        message_seen_t seen = {false, false, false};
         pb_istream_t in = pb_istream_from_buffer(payload, payload_len);
-        if (!pb_decode(&in, naogateway_proto_Message_fields, &msg)) {
+        if (!fr_in_message(&in, message_field, &seen) || !seen.robot_id) {
             fr_state.stats.bad_protobuf++;
             return;
         }
-        if (pass == 0 && ext_cmd.found) continue;
-        if (ext_cmd.found) fr_debug_after(&commands, &route);
-        if (ext_req.found) fr_rpc_dispatch(&route);
+        if (pass == 0 && seen.commands) continue;
+        if (seen.commands) fr_debug_after(&route);
+        if (seen.request) fr_rpc_dispatch(&route);
         if (fr_body_hooks.after) fr_body_hooks.after(&route);
         return;
     }

@@ -75,8 +75,9 @@ typedef struct {
 
 extern fr_state_t fr_state;
 
-/** Encodes `msg` (robotID and its extensions), frames it in the route's form, signs it when a key is set,
- *  and sends it (or offers it to the stream); false when it did not fit or could not be sent. */
+/** Encodes `msg` (robotID and its extensions) with nanopb, frames it in the route's form, signs it when a key is set,
+ *  and sends it (or offers it to the stream); false when it did not fit or could not be sent. For the body's
+ *  messages: the library writes its own with fr_out_* (a program without the body links no nanopb encoder). */
 bool fr_send_message(const fr_route_t *route, naogateway_proto_Message *msg);
 
 /** The default route: the gateway's endpoint, the configured header form, a plain datagram. */
@@ -88,22 +89,42 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len);
 /** Handles one frame's protobuf payload from `from` (plain datagram or stream payload). */
 void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream);
 
+/* in.c: reading incoming messages field by field (the same acceptance as nanopb's pb_decode) */
+/** Handles field `tag` of wire type `wire` of a message being read: 1 read, 0 not a field it knows (skipped by the
+ *  caller), -1 malformed. */
+typedef int (*fr_in_field_t)(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx);
+/** Reads a string, bytes or repeated field's value from `s` (a substream holding just that value). */
+typedef bool (*fr_in_reader_t)(pb_istream_t *s, void *arg);
+/** Reads the message in `s` to its end, field by field through `field`; false when malformed. */
+bool fr_in_message(pb_istream_t *s, fr_in_field_t field, void *ctx);
+/** A callback field's value as nanopb passes it: a length-delimited one's payload, a scalar's raw bytes; `reader`
+ *  NULL reads it over. */
+bool fr_in_callback(pb_istream_t *s, pb_wire_type_t wire, fr_in_reader_t reader, void *arg);
+/** A uint32 field (varint; refused when larger than 32 bits). */
+bool fr_in_uint32(pb_istream_t *s, pb_wire_type_t wire, uint32_t *out);
+/** A submessage field: its fields through `field`. */
+bool fr_in_submessage(pb_istream_t *s, pb_wire_type_t wire, fr_in_field_t field, void *ctx);
+
 /* rpc.c */
 /** Resets the handler table and the deferred calls (fr_init). */
 void fr_rpc_reset(void);
-/** Gives the decoder what it needs to read a Request into the library's call buffer. */
-void fr_rpc_prepare(void *request_struct);
+/** Empties the call buffer before a frame is read. */
+void fr_rpc_prepare(void);
+/** Reads one rpcRequest (its value of wire type `wire`) into the call buffer; false when malformed. */
+bool fr_rpc_read(pb_istream_t *s, pb_wire_type_t wire);
 /** Dispatches the request decoded into the call buffer and answers it on `route`. */
 void fr_rpc_dispatch(const fr_route_t *route);
 
 /* debug.c */
 /** Switches every option off and forgets the list (fr_init). */
 void fr_debug_reset(void);
-/** Gives the decoder callbacks for DebuggingCommands: with `apply` they switch options by name (the a.b.*
- *  rule), without they only read the names. */
-void fr_debug_prepare(void *commands_struct, bool apply);
-/** Acts on the decoded DebuggingCommands: answers a pull (or a change) with the option list on `route`. */
-void fr_debug_after(const void *commands_struct, const fr_route_t *route);
+/** Prepares reading a frame's DebuggingCommands: with `apply` their names switch options (the a.b.* rule),
+ *  without they are only read. */
+void fr_debug_prepare(bool apply);
+/** Reads one debuggingCommands (its value of wire type `wire`); false when malformed. */
+bool fr_debug_read(pb_istream_t *s, pb_wire_type_t wire);
+/** Acts on the DebuggingCommands read: answers a pull (or a change) with the option list on `route`. */
+void fr_debug_after(const fr_route_t *route);
 
 /* gamecontroller.c */
 /** Handles a datagram starting "RG" from `from`. */
@@ -172,14 +193,45 @@ void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, si
 /** What the body adds to the library's loop, the keep-alive and incoming frames. */
 typedef struct {
     void (*poll)(void);                  /* moves bus transactions on (fr_poll) */
-    pb_extension_t *(*keepalive)(void);  /* the servoTelemetry extension for this keep-alive, or NULL */
-    pb_extension_t *(*prepare)(void);    /* the busBridge extension to decode an incoming frame into */
+    bool (*keepalive)(pb_ostream_t *out); /* writes the servoTelemetry extension when this keep-alive has it */
+    void (*prepare)(void);               /* before an incoming frame is read */
+    fr_in_field_t field;                 /* reads the body's extension of an incoming frame (the fr_in_field_t rule) */
     void (*after)(const fr_route_t *route); /* the frame was decoded: acts on its busBridge, if any */
 } fr_body_hooks_t;
 extern fr_body_hooks_t fr_body_hooks;
 
-/* pb helpers (core.c) */
-/** Encode callback for a zero-terminated string in `*arg`. */
-bool fr_pb_write_string(pb_ostream_t *stream, const pb_field_t *field, void *const *arg);
+/* out.c: the writer of outgoing frames (protobuf fields by hand, the bytes nanopb would write) */
+/** A cursor over an outgoing payload; `p` NULL once something did not fit (the frame is then not sent). */
+typedef struct {
+    uint8_t *p, *end;
+} fr_out_t;
+/** One raw byte. */
+void fr_out_byte(fr_out_t *w, uint8_t b);
+/** A varint; an int32's negative value goes in as its 64-bit sign extension (10 bytes), as protobuf writes it. */
+void fr_out_varint(fr_out_t *w, uint64_t v);
+/** Field `field` as a uint32, bool or enum of non-negative value (varint). */
+void fr_out_uint(fr_out_t *w, uint32_t field, uint32_t v);
+/** Field `field` as an int32 or enum (varint, negative values sign-extended). */
+void fr_out_int(fr_out_t *w, uint32_t field, int32_t v);
+/** Field `field` as a sint32 (zigzag varint). */
+void fr_out_sint(fr_out_t *w, uint32_t field, int32_t v);
+/** Field `field` as a float (fixed32, little-endian). */
+void fr_out_float(fr_out_t *w, uint32_t field, float f);
+/** Field `field` as bytes. */
+void fr_out_bytes(fr_out_t *w, uint32_t field, const uint8_t *data, size_t n);
+/** `n` bytes as they are (the body of a bytes field whose length was written). */
+void fr_out_raw(fr_out_t *w, const uint8_t *data, size_t n);
+/** Field `field` as a string; nothing when `s` is NULL. */
+void fr_out_string(fr_out_t *w, uint32_t field, const char *s);
+/** Opens submessage `field`: its key and two bytes for its length; returns where they are. */
+uint8_t *fr_out_open(fr_out_t *w, uint32_t field);
+/** Closes the submessage opened at `at`: its length (< 16384 bytes) as a minimal varint. */
+void fr_out_close(fr_out_t *w, uint8_t *at);
+/** Starts a frame on `route` in the frame buffer: false when nothing may be sent now (counted); else `w` is over
+ *  the payload (the signature's room apart) with Message.robotID written. */
+bool fr_out_begin(fr_out_t *w, const fr_route_t *route);
+/** Signs, frames and sends what `w` holds (a payload that did not fit is counted as send_failed). */
+bool fr_out_send(fr_out_t *w, const fr_route_t *route);
+
 
 #endif

@@ -20,6 +20,7 @@ static bool skip_group(pb_istream_t *stream, uint32_t tag, int depth) {
     }
 }
 
-/** Called by the build's pb_decode.c for an unknown start-group key of field `tag`. */
+/** Called for an unknown start-group key of field `tag`: by the library's reader (fr_in.c) and by the build's
+ *  pb_decode.c (the body's messages). */
 bool fr_pb_skip_group(pb_istream_t *stream, uint32_t tag);
 bool fr_pb_skip_group(pb_istream_t *stream, uint32_t tag) { return skip_group(stream, tag, 1); }

@@ -1,7 +1,6 @@
 /* firmware/src/fr_rpc.c: the RPC server (docs/protocol.md section 7): a table of handlers the program
  * registers, requests decoded field by field into one bounded call buffer, exactly one Response per Request
  * with its callId, the errors of 7.4, and calls answered later (motion.posture). */
-#include <math.h>
 #include <string.h>
 #include "fr_internal.h"
 #include "naogateway/proto/rpc.pb.h"
@@ -36,10 +35,11 @@ static struct {
     size_t pool_used;
     bool pool_overflow;
     fr_value_t *current; /* the parameter whose MixedValue is being decoded, NULL past FR_RPC_PARAMS_MAX */
+    bool has_call_id;
+    uint32_t call_id;
 } in;
 
 static char error_text[FR_RPC_ERROR_MAX];
-static const naogateway_proto_Request *decoded; /* the struct the decoder fills: callId */
 
 void fr_rpc_reset(void) {
     memset(handlers, 0, sizeof handlers);
@@ -59,10 +59,9 @@ bool fr_rpc_register(const char *module, const char *method, fr_rpc_handler_t ha
 
 /* ---- decoding ------------------------------------------------------------------------------------------ */
 
-/** Reads a string field into the char array in `*arg` (FR_RPC_NAME_MAX), cutting it and noting so when long. */
-static bool read_name(pb_istream_t *stream, const pb_field_t *field, void **arg) {
-    (void)field;
-    char *dst = (char *)*arg;
+/** Reads a name into the char array `arg` (FR_RPC_NAME_MAX), cutting it and noting so when long. */
+static bool read_name(pb_istream_t *stream, void *arg) {
+    char *dst = (char *)arg;
     size_t n = stream->bytes_left, keep = n < FR_RPC_NAME_MAX - 1 ? n : FR_RPC_NAME_MAX - 1;
     if (!pb_read(stream, (pb_byte_t *)dst, keep)) return false;
     dst[keep] = '\0';
@@ -73,11 +72,11 @@ static bool read_name(pb_istream_t *stream, const pb_field_t *field, void **arg)
     return true;
 }
 
-/** Copies a string or bytes parameter into the pool (zero-terminated) and points the current parameter at it. */
-static bool read_blob(pb_istream_t *stream, const pb_field_t *field, void **arg) {
-    bool is_string = *arg != NULL;
+/** Copies a string (`arg` non-NULL) or bytes parameter into the pool (zero-terminated) and points the current
+ *  parameter at it. */
+static bool read_blob(pb_istream_t *stream, void *arg) {
+    bool is_string = arg != NULL;
     size_t n = stream->bytes_left;
-    (void)field;
     if (in.current == NULL || in.pool_used + n + 1 > sizeof in.pool) {
         if (in.current != NULL) in.pool_overflow = true;
         return pb_read(stream, NULL, n);
@@ -98,86 +97,118 @@ static bool read_blob(pb_istream_t *stream, const pb_field_t *field, void **arg)
 }
 
 /** A nested array parameter: its elements are read over and not kept; no method of 7.2 takes one. */
-static bool read_array(pb_istream_t *stream, const pb_field_t *field, void **arg) {
-    (void)field;
+static bool read_array(pb_istream_t *stream, void *arg) {
     (void)arg;
     if (in.current != NULL && in.current->kind == FR_VALUE_NONE) in.current->kind = FR_VALUE_ARRAY;
     return pb_read(stream, NULL, stream->bytes_left);
 }
 
+/** The scalar fields of one MixedValue, the last of each kept (as nanopb's struct keeps them). */
+typedef struct {
+    bool has_int, has_float, has_bool;
+    uint32_t int_value;
+    float float_value;
+    bool bool_value;
+} mixed_t;
+
+/** One field of a MixedValue (rpc.proto). */
+static int mixed_field(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    mixed_t *v = (mixed_t *)ctx;
+    switch (tag) {
+    case naogateway_proto_MixedValue_string_tag: return fr_in_callback(s, wire, read_blob, (void *)1) ? 1 : -1;
+    case naogateway_proto_MixedValue_int_value_tag:
+        v->has_int = true;
+        return fr_in_uint32(s, wire, &v->int_value) ? 1 : -1;
+    case naogateway_proto_MixedValue_float_value_tag: {
+        v->has_float = true;
+        uint32_t bits;
+        if (wire != PB_WT_32BIT || !pb_decode_fixed32(s, &bits)) return -1;
+        memcpy(&v->float_value, &bits, sizeof bits);
+        return 1;
+    }
+    case naogateway_proto_MixedValue_binary_tag: return fr_in_callback(s, wire, read_blob, NULL) ? 1 : -1;
+    case naogateway_proto_MixedValue_bool_value_tag:
+        v->has_bool = true;
+        return wire == PB_WT_VARINT && pb_decode_bool(s, &v->bool_value) ? 1 : -1;
+    case naogateway_proto_MixedValue_array_tag: return fr_in_callback(s, wire, read_array, NULL) ? 1 : -1;
+    default: return 0;
+    }
+}
+
 /** One MixedValue of Request.params. */
-static bool read_param(pb_istream_t *stream, const pb_field_t *field, void **arg) {
-    (void)field;
+static bool read_param(pb_istream_t *stream, void *arg) {
     (void)arg;
     size_t index = in.call.count++;
     in.current = index < FR_RPC_PARAMS_MAX ? &in.call.params[index] : NULL;
-    naogateway_proto_MixedValue v;
+    mixed_t v;
     memset(&v, 0, sizeof v);
-    v.string.funcs.decode = read_blob;
-    v.string.arg = (void *)1;
-    v.binary.funcs.decode = read_blob;
-    v.binary.arg = NULL;
-    v.array.funcs.decode = read_array;
-    if (!pb_decode(stream, naogateway_proto_MixedValue_fields, &v)) return false;
+    if (!fr_in_message(stream, mixed_field, &v)) return false;
     if (in.current != NULL && in.current->kind == FR_VALUE_NONE) {
-        if (v.has_float_value) { in.current->kind = FR_VALUE_FLOAT; in.current->u.f = v.float_value; }
-        else if (v.has_int_value) { in.current->kind = FR_VALUE_INT; in.current->u.i = v.int_value; }
-        else if (v.has_bool_value) { in.current->kind = FR_VALUE_BOOL; in.current->u.b = v.bool_value; }
+        if (v.has_float) { in.current->kind = FR_VALUE_FLOAT; in.current->u.f = v.float_value; }
+        else if (v.has_int) { in.current->kind = FR_VALUE_INT; in.current->u.i = v.int_value; }
+        else if (v.has_bool) { in.current->kind = FR_VALUE_BOOL; in.current->u.b = v.bool_value; }
     }
     in.current = NULL;
     return true;
 }
 
-void fr_rpc_prepare(void *request_struct) {
-    naogateway_proto_Request *r = (naogateway_proto_Request *)request_struct;
-    memset(&in, 0, sizeof in);
-    decoded = r;
-    r->module.funcs.decode = read_name;
-    r->module.arg = in.module;
-    r->method.funcs.decode = read_name;
-    r->method.arg = in.method;
-    r->params.funcs.decode = read_param;
+/** Which of a Request's required fields one occurrence had. */
+typedef struct {
+    bool module, method;
+} request_seen_t;
+
+/** One field of a Request (rpc.proto). */
+static int request_field(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx) {
+    request_seen_t *seen = (request_seen_t *)ctx;
+    switch (tag) {
+    case naogateway_proto_Request_module_tag:
+        seen->module = true;
+        return fr_in_callback(s, wire, read_name, in.module) ? 1 : -1;
+    case naogateway_proto_Request_method_tag:
+        seen->method = true;
+        return fr_in_callback(s, wire, read_name, in.method) ? 1 : -1;
+    case naogateway_proto_Request_params_tag: return fr_in_callback(s, wire, read_param, NULL) ? 1 : -1;
+    case naogateway_proto_Request_callId_tag:
+        in.has_call_id = true;
+        return fr_in_uint32(s, wire, &in.call_id) ? 1 : -1;
+    default: return 0;
+    }
+}
+
+void fr_rpc_prepare(void) { memset(&in, 0, sizeof in); }
+
+bool fr_rpc_read(pb_istream_t *s, pb_wire_type_t wire) {
+    request_seen_t seen = {false, false};
+    return fr_in_submessage(s, wire, request_field, &seen) && seen.module && seen.method;
 }
 
 /* ---- answering ----------------------------------------------------------------------------------------- */
 
-/** Encode callback for a binary return value. */
-static bool write_binary(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
-    const fr_value_t *v = (const fr_value_t *)*arg;
-    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, v->u.bin.data, v->u.bin.len);
-}
-
 /** Sends the one Response of a call: `result` or `error` (exactly one of them). */
 static void respond(const fr_route_t *route, bool has_call_id, uint32_t call_id, const fr_value_t *result,
                     const char *error) {
-    naogateway_proto_Response resp = naogateway_proto_Response_init_zero;
-    resp.has_callId = has_call_id;
-    resp.callId = call_id;
+    fr_out_t w;
+    if (!fr_out_begin(&w, route)) return;
+    uint8_t *ext = fr_out_open(&w, naogateway_proto_rpcResponse_tag);
     if (error != NULL) {
-        resp.error.funcs.encode = fr_pb_write_string;
-        resp.error.arg = (void *)(uintptr_t)error;
+        fr_out_string(&w, naogateway_proto_Response_error_tag, error);
     } else {
-        resp.has_returnval = true;
-        naogateway_proto_MixedValue *v = &resp.returnval;
+        uint8_t *v = fr_out_open(&w, naogateway_proto_Response_returnval_tag);
         switch (result ? result->kind : FR_VALUE_NONE) {
-        case FR_VALUE_STRING:
-            v->string.funcs.encode = fr_pb_write_string;
-            v->string.arg = (void *)(uintptr_t)result->u.s;
-            break;
-        case FR_VALUE_INT: v->has_int_value = true; v->int_value = result->u.i; break;
-        case FR_VALUE_FLOAT: v->has_float_value = true; v->float_value = result->u.f; break;
-        case FR_VALUE_BOOL: v->has_bool_value = true; v->bool_value = result->u.b; break;
+        case FR_VALUE_STRING: fr_out_string(&w, naogateway_proto_MixedValue_string_tag, result->u.s); break;
+        case FR_VALUE_INT: fr_out_uint(&w, naogateway_proto_MixedValue_int_value_tag, result->u.i); break;
+        case FR_VALUE_FLOAT: fr_out_float(&w, naogateway_proto_MixedValue_float_value_tag, result->u.f); break;
+        case FR_VALUE_BOOL: fr_out_uint(&w, naogateway_proto_MixedValue_bool_value_tag, result->u.b); break;
         case FR_VALUE_BINARY:
-            v->binary.funcs.encode = write_binary;
-            v->binary.arg = (void *)(uintptr_t)result;
+            fr_out_bytes(&w, naogateway_proto_MixedValue_binary_tag, result->u.bin.data, result->u.bin.len);
             break;
         default: break; /* an empty MixedValue: "no value" */
         }
+        fr_out_close(&w, v);
     }
-    pb_extension_t ext = {&naogateway_proto_rpcResponse, &resp, NULL, true};
-    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
-    msg.extensions = &ext;
-    (void)fr_send_message(route, &msg);
+    if (has_call_id) fr_out_uint(&w, naogateway_proto_Response_callId_tag, call_id);
+    fr_out_close(&w, ext);
+    (void)fr_out_send(&w, route);
 }
 
 /** Copies `a` then `b` into error_text. */
@@ -189,22 +220,35 @@ static const char *error2(const char *a, const char *b) {
     return error_text;
 }
 
+/** Whether two zero-terminated strings are equal (a loop, not libc's strcmp: 444 B of flash for a few names). */
+static bool same(const char *a, const char *b) {
+    while (*a != '\0' && *a == *b) a++, b++;
+    return *a == *b;
+}
+
+/** Whether `f` is neither infinite nor NaN, from its exponent bits (no soft-float comparison routines). */
+static bool finite(float f) {
+    uint32_t bits;
+    memcpy(&bits, &f, sizeof bits);
+    return (bits & 0x7F800000u) != 0x7F800000u;
+}
+
 void fr_rpc_dispatch(const fr_route_t *route) {
     fr_call_t *call = &in.call;
     call->module = in.module;
     call->method = in.method;
-    call->has_call_id = decoded->has_callId;
-    call->call_id = decoded->callId;
+    call->has_call_id = in.has_call_id;
+    call->call_id = in.call_id;
     const handler_t *h = NULL;
     for (size_t k = 0; k < handler_count && !in.names_truncated; k++)
-        if (strcmp(handlers[k].module, in.module) == 0 && strcmp(handlers[k].method, in.method) == 0) h = &handlers[k];
+        if (same(handlers[k].module, in.module) && same(handlers[k].method, in.method)) h = &handlers[k];
     if (h == NULL) {
         /* "unknown method: module.method", as 9.7 shows it */
         char name[2 * FR_RPC_NAME_MAX + 1];
         size_t n = strlen(in.module);
         memcpy(name, in.module, n);
         name[n] = '.';
-        strcpy(name + n + 1, in.method);
+        memcpy(name + n + 1, in.method, strlen(in.method) + 1);
         respond(route, call->has_call_id, call->call_id, NULL, error2("unknown method: ", name));
         return;
     }
@@ -265,7 +309,7 @@ static void add_number(char *out, size_t cap, size_t v) {
 bool fr_rpc_expect_floats(const fr_call_t *call, size_t count, char *error, size_t error_cap) {
     bool ok = call->count == count;
     for (size_t k = 0; ok && k < count; k++)
-        ok = call->params[k].kind == FR_VALUE_FLOAT && isfinite(call->params[k].u.f);
+        ok = call->params[k].kind == FR_VALUE_FLOAT && finite(call->params[k].u.f);
     if (!ok && error_cap > 0) {
         /* "bad parameters: expected 3 numbers, got 2 parameter(s)" (protocol.md 7.4) */
         error[0] = '\0';

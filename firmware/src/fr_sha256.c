@@ -23,38 +23,25 @@ static const uint32_t k256[64] = {
 #define CH(e, f, g) ((g) ^ ((e) & ((f) ^ (g))))
 #define MAJ(a, b, c) (((a) & (b)) | ((c) & ((a) | (b))))
 
-/** Word i of the message schedule, rolled in a 16-word window so the stack stays small. */
-#define SCHEDULE(w, i)                                                                                          \
-    ((i) < 16 ? (w)[(i) & 15]                                                                                   \
-              : ((w)[(i) & 15] += (ROR((w)[((i) - 15) & 15], 7) ^ ROR((w)[((i) - 15) & 15], 18) ^              \
-                                   ((w)[((i) - 15) & 15] >> 3)) +                                               \
-                                  (w)[((i) - 7) & 15] +                                                         \
-                                  (ROR((w)[((i) - 2) & 15], 17) ^ ROR((w)[((i) - 2) & 15], 19) ^               \
-                                   ((w)[((i) - 2) & 15] >> 10))))
-
-/** One round; the eight working variables rotate by renaming (the caller passes them shifted), not by copying. */
-#define ROUND(a, b, c, d, e, f, g, h, i)                                                                        \
-    do {                                                                                                        \
-        uint32_t t1 = (h) + S1(e) + CH(e, f, g) + k256[i] + SCHEDULE(w, i);                                    \
-        (d) += t1;                                                                                              \
-        (h) = t1 + S0(a) + MAJ(a, b, c);                                                                        \
-    } while (0)
-
-/** One 64-byte block into the state: eight rounds per turn of the loop, so no round moves the eight variables. */
+/** One 64-byte block into the state: one round per turn of the loop, the schedule rolled in a 16-word window, so
+ *  the code and the stack stay small (a signed frame hashes three blocks; docs/firmware.md, "Footprint"). */
 static void compress(uint32_t h[8], const uint8_t block[64]) {
     uint32_t w[16], a = h[0], b = h[1], c = h[2], d = h[3], e = h[4], f = h[5], g = h[6], hh = h[7];
-    for (int i = 0; i < 16; i++)
-        w[i] = (uint32_t)block[4 * i] << 24 | (uint32_t)block[4 * i + 1] << 16 | (uint32_t)block[4 * i + 2] << 8 |
-               (uint32_t)block[4 * i + 3];
-    for (int i = 0; i < 64; i += 8) {
-        ROUND(a, b, c, d, e, f, g, hh, i);
-        ROUND(hh, a, b, c, d, e, f, g, i + 1);
-        ROUND(g, hh, a, b, c, d, e, f, i + 2);
-        ROUND(f, g, hh, a, b, c, d, e, i + 3);
-        ROUND(e, f, g, hh, a, b, c, d, i + 4);
-        ROUND(d, e, f, g, hh, a, b, c, i + 5);
-        ROUND(c, d, e, f, g, hh, a, b, i + 6);
-        ROUND(b, c, d, e, f, g, hh, a, i + 7);
+    for (int i = 0; i < 64; i++) {
+        uint32_t wi;
+        if (i < 16) {
+            const uint8_t *p = block + 4 * i;
+            wi = (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | (uint32_t)p[3];
+        } else {
+            uint32_t w15 = w[(i - 15) & 15], w2 = w[(i - 2) & 15];
+            wi = w[i & 15] + (ROR(w15, 7) ^ ROR(w15, 18) ^ (w15 >> 3)) + w[(i - 7) & 15] +
+                 (ROR(w2, 17) ^ ROR(w2, 19) ^ (w2 >> 10));
+        }
+        w[i & 15] = wi;
+        uint32_t t1 = hh + S1(e) + CH(e, f, g) + k256[i] + wi;
+        uint32_t t2 = S0(a) + MAJ(a, b, c);
+        hh = g; g = f; f = e; e = d + t1;
+        d = c; c = b; b = a; a = t1 + t2;
     }
     h[0] += a; h[1] += b; h[2] += c; h[3] += d; h[4] += e; h[5] += f; h[6] += g; h[7] += hh;
 }

@@ -286,7 +286,7 @@ static void on_line(gs1500m_t *gs, const char *line, uint32_t now) {
         else if (gs->state == GS1500M_READY && gs->opening >= 0) gs->peers[gs->opening].cid = (int8_t)cid;
         return;
     }
-    bool ok = strcmp(line, "OK") == 0;
+    bool ok = line[0] == 'O' && line[1] == 'K' && line[2] == '\0';
     bool error = starts_with(line, "ERROR");
     if (!ok && !error) return; /* echoes, banners, notices this driver has no use for */
     switch (gs->state) {

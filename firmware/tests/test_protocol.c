@@ -5,6 +5,7 @@
 #include "fake_port.h"
 #include "fr.h"
 #include "../src/fr_internal.h"
+#include "naogateway/proto/message.pb.h"
 
 static const fr_endpoint_t gateway = {{192, 168, 1, 10}, 11011};
 
@@ -142,6 +143,116 @@ static void test_keepalive(void) {
     hex("32 07 08 80 A0 C2 1E 10 01", board);
     CHECK(fake_sent_count == 1 && fake_sent[0].len == 0x4E + 12 + 9 &&
           memcmp(fake_sent[0].data + fake_sent[0].len - 9, board, 9) == 0);
+    fake_board_present = false;
+}
+
+/* The keep-alive is written by hand (fr_core.c); nanopb's encoding of the same Status and RobotHealth is the
+ * reference, over the cases that change its bytes: a position with negative coordinates, strings left out, long
+ * strings (two-byte lengths), the development flag, each board field. */
+static fr_health_t variant;
+static void variant_health(fr_health_t *h, void *ctx) {
+    (void)ctx;
+    *h = variant;
+}
+
+static bool write_str(pb_ostream_t *stream, const pb_field_t *field, void *const *arg) {
+    const char *str = (const char *)*arg;
+    return pb_encode_tag_for_field(stream, field) && pb_encode_string(stream, (const pb_byte_t *)str, strlen(str));
+}
+
+static pb_callback_t str_field(const char *str) {
+    pb_callback_t cb;
+    cb.funcs.encode = str ? write_str : NULL;
+    cb.arg = (void *)(uintptr_t)str;
+    return cb;
+}
+
+/** The keep-alive's payload as nanopb encodes it from the same state. */
+static size_t nanopb_keepalive(const fr_settings_t *s, const fr_health_t *h, uint32_t up, uint8_t *out, size_t cap) {
+    naogateway_proto_Status status = naogateway_proto_Status_init_zero;
+    status.has_timestamp = status.has_teamID = status.has_timeOnline = true;
+    status.timestamp = up;
+    status.teamID = s->team_number;
+    status.timeOnline = up / 1000u;
+    if (h->has_position) {
+        status.has_robotPosition = true;
+        status.robotPosition.has_x = status.robotPosition.has_y = status.robotPosition.has_rotation = true;
+        status.robotPosition.x = h->x_mm;
+        status.robotPosition.y = h->y_mm;
+        status.robotPosition.rotation = h->rotation;
+    }
+    status.activeAgent = str_field(s->agent);
+    status.activeRole = str_field(s->role);
+    status.currentState = str_field(h->current_state ? h->current_state : h->posture);
+    naogateway_proto_RobotHealth health = naogateway_proto_RobotHealth_init_zero;
+    health.has_batteryVoltage = health.has_uptimeMs = health.has_bootId = true;
+    health.batteryVoltage = h->battery_voltage;
+    health.posture = str_field(h->posture);
+    health.uptimeMs = up;
+    health.bootId = s->boot_id;
+    health.has_development = health.development = s->development;
+    if (fake_board_present) {
+        health.has_board = health.board.has_coreClockHz = true;
+        health.board.coreClockHz = fake_board.core_clock_hz;
+        health.board.has_stackOverflowReset = health.board.stackOverflowReset = fake_board.stack_overflow_reset;
+        health.board.has_faultReset = health.board.faultReset = fake_board.fault_reset;
+    }
+    pb_extension_t ext_health = {&naogateway_proto_robotHealth, &health, NULL, true};
+    pb_extension_t ext_status = {&naogateway_proto_status, &status, &ext_health, true};
+    naogateway_proto_Message msg = naogateway_proto_Message_init_zero;
+    msg.robotID = s->robot_id;
+    msg.extensions = &ext_status;
+    pb_ostream_t o = pb_ostream_from_buffer(out, cap);
+    return pb_encode(&o, naogateway_proto_Message_fields, &msg) ? o.bytes_written : 0;
+}
+
+static void test_keepalive_as_nanopb(void) {
+    static char long_agent[301], long_state[131];
+    memset(long_agent, 'a', sizeof long_agent - 1);
+    memset(long_state, 's', sizeof long_state - 1);
+    struct {
+        fr_health_t h;
+        const char *agent, *role;
+        int32_t robot_id;
+        bool development, board, overflow, fault;
+    } cases[] = {
+        {{12.5f, "sit", false, 0, 0, 0.0f, NULL}, "SimAgent", "striker", 1, true, false, false, false},
+        {{-1.0f, "walking", true, -1000, 123456, -3.25f, "kick"}, "A", "", 7, false, true, true, false},
+        {{0.0f, NULL, true, -2147483647 - 1, 2147483647, 1.0f, NULL}, NULL, NULL, 200, false, true, false, true},
+        {{7.75f, "stand", false, 0, 0, 0.0f, long_state}, long_agent, "keeper", 3, true, true, true, true},
+        {{7.75f, "fallen", true, -1, -1, 0.5f, NULL}, long_agent, long_state, 2147483647, false, false, false, false},
+    };
+    static const uint8_t key[16] = {1};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        fr_settings_t s = settings();
+        s.callbacks.health = variant_health;
+        s.agent = cases[k].agent;
+        s.role = cases[k].role;
+        s.robot_id = cases[k].robot_id;
+        s.team_number = 3 + (uint32_t)k * 100u;
+        s.boot_id = 0x12345u * (uint32_t)k;
+        s.development = cases[k].development;
+        if (!s.development) {
+            s.signing_key = key;
+            s.signing_key_len = sizeof key;
+        }
+        variant = cases[k].h;
+        fake_board_present = cases[k].board;
+        fake_board.core_clock_hz = 72000000u - (uint32_t)k;
+        fake_board.stack_overflow_reset = cases[k].overflow;
+        fake_board.fault_reset = cases[k].fault;
+        fake_now = 1000;
+        CHECK(fr_init(&s) == FR_INIT_OK);
+        fake_clear_sent();
+        fake_now = 1000 + 987654u * (uint32_t)k;
+        fr_poll();
+        uint8_t expected[1400];
+        size_t n = nanopb_keepalive(&s, &variant, 987654u * (uint32_t)k, expected, sizeof expected);
+        /* a signed keep-alive carries its signature (23 bytes) after the same fields */
+        size_t sig = s.development ? 0 : FR_SIGNATURE_FIELD_SIZE;
+        CHECK(n > 0 && fake_sent_count == 1 && fake_sent[0].len == 12 + n + sig &&
+              memcmp(fake_sent[0].data + 12, expected, n) == 0);
+    }
     fake_board_present = false;
 }
 
@@ -512,6 +623,7 @@ static void test_link_policy(void) {
 int main(void) {
     test_frame_headers();
     test_keepalive();
+    test_keepalive_as_nanopb();
     test_rpc();
     test_options();
     test_frame_buffer_rule();

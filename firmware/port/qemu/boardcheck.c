@@ -14,6 +14,7 @@ void Reset_Handler(void);
 void Default_Handler(void);
 void SysTick_Handler(void);
 void UART5_IRQHandler(void);
+void USART1_IRQHandler(void);
 
 #define NVIC_ISPR(n) REG32(0xE000E200u + 4u * (n))
 #define STAGE_MAGIC 0xB0A4D000u
@@ -59,7 +60,8 @@ int main(int argc, char **argv) {
     }
     switch (stage & 0xFFu) {
     case 0: {
-        /* every vector: a Thumb handler; all but reset, SysTick and UART5 the default one */
+        /* every vector: a Thumb handler; all but reset, SysTick, UART5 and USART1 (the qemu board's bus) the default
+         * one */
         void (*const *table)(void) = (void (*const *)(void))(uintptr_t)SCB_VTOR;
         int defaults = 0, bad = 0;
         for (int i = 2; i < 16 + 60; i++) {
@@ -67,8 +69,9 @@ int main(int argc, char **argv) {
             if (h == 0u || (h & 1u) == 0u) bad++;
             if (table[i] == Default_Handler) defaults++;
         }
-        check(bad == 0 && defaults == 16 + 60 - 4);
-        check(table[1] == Reset_Handler && table[15] == SysTick_Handler && table[16 + 53] == UART5_IRQHandler);
+        check(bad == 0 && defaults == 16 + 60 - 5);
+        check(table[1] == Reset_Handler && table[15] == SysTick_Handler && table[16 + 53] == UART5_IRQHandler &&
+              table[16 + 37] == USART1_IRQHandler);
         check(board_reset_note() == BOARD_RESET_NONE);
         /* the guard between the static data and the stack, intact */
         check((uintptr_t)_sguard >= (uintptr_t)&_ebss && (uintptr_t)_eguard <= (uintptr_t)_sstack && _eguard - _sguard == 8);
