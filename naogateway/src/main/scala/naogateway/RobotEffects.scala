@@ -9,8 +9,9 @@ import naogateway.link.ZeroMqRobotLink
 import naogateway.wire.MessageContents
 
 /** What a robot actor does around `RobotState`'s transitions: hands what the robot sent to its owners, puts option
-  * commands and probes into the robot's sender, and publishes events. Its methods take a state and return the next one;
-  * it keeps nothing itself. `startPulling` and `stopPulling` run the actor's option-pull timer.
+  * commands and option pulls into the robot's sender, and publishes events (the heartbeat probes through the sender
+  * itself). Its methods take a state and return the next one; it keeps nothing itself. `startPulling` and `stopPulling`
+  * run the actor's option-pull timer.
   */
 private[naogateway] final class RobotEffects(
     robotId: Int,
