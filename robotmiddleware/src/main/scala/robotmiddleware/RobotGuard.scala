@@ -88,7 +88,6 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
-
   /** The guard's shell: carries out `GuardState`'s transitions (the calls, the timers, the apps' events) and keeps
     * nothing itself.
     */
