@@ -50,33 +50,33 @@ class RobotRowSpec extends AnyWordSpec with Matchers {
       RobotRow.of(robot.copy(online = false, quality = LinkQuality.Offline), None).linkState shouldBe "offline"
       // Online, a robot that signs is online whatever a stranger sent meanwhile.
       RobotRow.of(robot.copy(signing = SigningState.Signed), None).linkState shouldBe "online"
-      control.ControlServer.statusLine(unsigned, None).split("\\s+").toList.slice(2, 4) shouldBe
+      control.ControlText.statusLine(unsigned, None).split("\\s+").toList.slice(2, 4) shouldBe
         List("unsigned", "-")
       StatusView.robotLine(unsigned, None) should include("unsigned")
-      control.ControlServer.statusLine(robot.copy(development = true), None) should endWith("development build")
-      control.ControlServer.statusLine(robot, None) should not include "development"
+      control.ControlText.statusLine(robot.copy(development = true), None) should endWith("development build")
+      control.ControlText.statusLine(robot, None) should not include "development"
     }
 
     "be what the launcher's line, robotctl's line and the web card show alike" in {
       val row = RobotRow.of(robot, Some(link))
       val shown = Seq("127.0.0.1:40000", "degraded", "12.40 V", "sit", "keeper", "0.4 ms", "25 %")
       shown.foreach(StatusView.robotLine(robot, Some(link)) should include(_))
-      shown.foreach(control.ControlServer.statusLine(robot, Some(link)) should include(_))
+      shown.foreach(control.ControlText.statusLine(robot, Some(link)) should include(_))
       val card = web.WebJson.robot(robot, Some(link), None).fields
       (card("address").toString, card("battery").toString, card("posture").toString) shouldBe
         ((s"\"${row.address.get}\"", "12.4", "\"sit\""))
-      control.ControlServer.statusLine(robot, Some(link)) should include("±0.7 ms")
+      control.ControlText.statusLine(robot, Some(link)) should include("±0.7 ms")
     }
 
     "show a robot's drift only once its bound has settled, as `settling` before" in {
       // Two seconds after a start: the drift is held at its limit, its bound twice that.
       val young = link.copy(clock = Some(ClockEstimate(1000L, 5000000L, 1.001, 3.0, 0.002, 10)))
-      control.ControlServer.statusLine(robot, Some(young)).split("\\s+").takeRight(4).toList shouldBe
+      control.ControlText.statusLine(robot, Some(young)).split("\\s+").takeRight(4).toList shouldBe
         List("±3.0", "ms", "settling", "-")
       val card = web.WebJson.robot(robot, Some(young), None).fields("clock").asJsObject.fields
       (card("driftSettled").toString, card("driftBoundPpm").toString) shouldBe (("false", "2000.0"))
       val settled = link.copy(clock = Some(ClockEstimate(1000L, 5000000L, 1.0 / (1.0 + 35e-6), 0.7, 40e-6, 300)))
-      control.ControlServer.statusLine(robot, Some(settled)) should endWith("+35 ppm   -")
+      control.ControlText.statusLine(robot, Some(settled)) should endWith("+35 ppm   -")
       web.WebJson.robot(robot, Some(settled), None).fields("clock").asJsObject.fields("driftSettled").toString shouldBe
         "true"
     }

@@ -5,9 +5,12 @@ import scala.collection.immutable.Queue
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
+import naogateway.RobotFrames.Outbound
 import naogateway.wire.RpcCall
 
-/** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. */
+/** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. Its
+  * probes go straight to the robot's sender (as the stream's segments do); its verdicts and figures to the robot actor.
+  */
 private[naogateway] object HeartBeatActor {
 
   /** What the heartbeat accepts. */
@@ -44,9 +47,6 @@ private[naogateway] object HeartBeatActor {
 
   /** A probe's round trip, for the link statistics. */
   final case class ProbeRoundTrip(nanos: Long) extends Report
-
-  /** Send this probe to the robot. */
-  final case class SendProbe(call: RpcCall) extends Report
 
   /** The call that no robot serves: the robot's error reply proves it is there. */
   val ProbeModule: String = "heartbeat"
@@ -85,11 +85,14 @@ private[naogateway] object HeartBeatActor {
   private case object QualityKey
   private case object BackoffKey
 
-  /** A heartbeat reporting to `report`; `online` says whether the robot has just been heard. */
-  def apply(settings: HeartbeatSettings, report: ActorRef[Report], online: Boolean): Behavior[Command] =
+  /** A heartbeat reporting to `report` and probing through the robot's `sender`; `online` says whether the robot has
+    * just been heard.
+    */
+  def apply(settings: HeartbeatSettings, report: ActorRef[Report], sender: ActorRef[NoResponseActor.Command],
+      online: Boolean): Behavior[Command] =
     Behaviors.setup { _ =>
       Behaviors.withTimers { timers =>
-        val h = new HeartBeat(settings, report, timers)
+        val h = new HeartBeat(settings, report, sender, timers)
         timers.startTimerWithFixedDelay(QualityKey, QualityTick, settings.keepAliveInterval)
         if (online) {
           val running = h.online(Quality.initial)
@@ -102,7 +105,7 @@ private[naogateway] object HeartBeatActor {
   // Every step arms its timers before it reports: whoever reacts to a report (a test that then moves manual time,
   // say) finds the timers running already, so no timer starts late by the time that reaction took.
   private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report],
-      timers: TimerScheduler[Command]) {
+      sender: ActorRef[NoResponseActor.Command], timers: TimerScheduler[Command]) {
     // A random start per incarnation, as the response actor's: a late answer to a probe of an earlier incarnation
     // must not pass for an answer to this one's (protocol.md 7.1, a call id is never sent twice).
     private var nextProbeId = CallId.randomStart()
@@ -140,7 +143,13 @@ private[naogateway] object HeartBeatActor {
       nextProbeId = CallId.count(probeId)
       probeSentAt = System.nanoTime()
       timers.startSingleTimer(ProbeKey, ProbeTimeout, settings.probeTimeout)
-      report ! SendProbe(RpcCall(ProbeModule, ProbeMethod, Vector.empty, Some(probeId)))
+      // It takes room in the robot's buffer until answered, or until its timeout has passed.
+      sender ! NoResponseActor.Submit(
+        Outbound.CallOut(RpcCall(ProbeModule, ProbeMethod, Vector.empty, Some(probeId))),
+        Priority.Heartbeat,
+        Some(probeId),
+        NoResponseActor.Awaits.Reply(Some(settings.probeTimeout))
+      )
     }
 
     private def isAwaited(id: Long): Boolean = id == probeId

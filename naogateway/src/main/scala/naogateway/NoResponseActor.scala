@@ -108,15 +108,15 @@ object NoResponseActor {
 
   private type Order = CommandOrder[Item]
 
-  /** The sender of robot `robotId`; `robot` owns the route and counts what leaves. */
-  private[naogateway] def apply(
-      robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild]): Behavior[Command] =
+  /** The sender of robot `robotId`; `robot` owns the route; what leaves is counted in `sent` as it goes. */
+  private[naogateway] def apply(robotId: Int, settings: CallSettings, robot: ActorRef[RobotActor.FromChild],
+      sent: SentFigures = new SentFigures): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         Behaviors.withStash(settings.stashCapacity) { stash =>
           // The route is the robot actor's: asked for on every (re)start, pushed on every change.
           robot ! RobotActor.RouteWanted(context.self)
-          new Sender(robotId, settings, robot, context, timers, stash).awaitingRoute
+          new Sender(robotId, settings, sent, context, timers, stash).awaitingRoute
         }
       }
     }
@@ -124,7 +124,7 @@ object NoResponseActor {
   private final class Sender(
       robotId: Int,
       settings: CallSettings,
-      robot: ActorRef[RobotActor.FromChild],
+      sent: SentFigures,
       context: ActorContext[Command],
       timers: TimerScheduler[Command],
       stash: StashBuffer[Command]
@@ -231,7 +231,7 @@ object NoResponseActor {
     private def transmit(item: Item, route: Route): Boolean =
       RobotFrames.encode(robotId, item.out, route) match {
         case Right(bytes) =>
-          robot ! RobotActor.FrameSent(bytes.length)
+          sent.sent(bytes.length)
           route.outbox ! RobotFrames.send(robotId, item.out, bytes, route, item.priority, item.outcome, item.tag)
           true
         case Left(reason) =>

@@ -9,7 +9,6 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerSch
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.RobotEffects.{Children, Connected, Family}
-import naogateway.RobotFrames.Outbound
 import naogateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
@@ -80,9 +79,6 @@ object RobotActor {
   /** The sender (re)started and asks for the robot's route; every later change is pushed to it. */
   private[naogateway] final case class RouteWanted(replyTo: ActorRef[NoResponseActor.Command]) extends FromChild
 
-  /** The sender handed the outbox a frame of `bytes` for this robot: counted here. */
-  private[naogateway] final case class FrameSent(bytes: Int) extends FromChild
-
   /** A debug option command (the vision actor's): noted here, so a robot restart can re-enable it, then sent. */
   private[naogateway] final case class OptionCommand(commands: DebuggingCommands) extends FromChild
 
@@ -152,16 +148,20 @@ object RobotActor {
     )
     // How every child is restarted (naogateway.supervision.robot-children).
     private val restarts = settings.supervision.robotChildren.strategy
+    // What the sender sends, counted by it as it goes; read here for the link figures.
+    private val sent = new SentFigures
     private def child[T](behavior: Behavior[T], name: String): ActorRef[T] =
       context.spawn(Behaviors.supervise(behavior).onFailure(restarts), name, Gateway.RobotDispatcher)
 
     def start(at: InetSocketAddress, heard: Boolean): Behavior[Command] = {
+      // The sender first: the heartbeat's probes, the link's polls and the stream's segments go to it directly.
+      val sender = child(NoResponseActor(robotId, settings.calls, context.self, sent), "no-response")
       val zeroMq = transport match {
         case RobotTransport.ZeroMq(endpoint) =>
           val loop = ZeroMqRobotLink.SharedLoop(context.system).loop
           Some(context.spawn(
               Behaviors.supervise(ZeroMqRobotLink(robotId, endpoint, settings.zeromq,
-                  context.messageAdapter(ZeroMqLinkEvent.apply), loop)).onFailure(restarts),
+                  context.messageAdapter(ZeroMqLinkEvent.apply), sender, loop)).onFailure(restarts),
               "zeromq-link"
             ))
         case RobotTransport.Datagrams => None
@@ -170,14 +170,13 @@ object RobotActor {
         case v: HeartBeatActor.Verdict => Verdict(v)
         case r                         => HeartbeatReport(r)
       }
-      val heartbeat = child(HeartBeatActor(heartbeatSettings, reports, online = false), "heartbeat")
-      val sender = child(NoResponseActor(robotId, settings.calls, context.self), "no-response")
+      val heartbeat = child(HeartBeatActor(heartbeatSettings, reports, sender, online = false), "heartbeat")
       val response = child(ResponseActor(robotId, settings.calls, context.self, sender, online = false), "response")
       if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
       forgetAfter(settings.discovery.forgetUnreachedAfter, "not online")
       val kept = (heartbeatSettings.qualityWindow / heartbeatSettings.keepAliveInterval).toInt + 2
       val subscribers = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
-      unreached(Family(heartbeat, sender, response, response, zeroMq),
+      unreached(Family(heartbeat, sender, response, zeroMq),
         RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept, signs))
     }
 
@@ -191,7 +190,7 @@ object RobotActor {
       case Verdict(HeartBeatActor.CameOnline) =>
         val vision = child(VisionActor(robotId, context.self), "vision")
         val stream = child(StreamActor(robotId, settings.stream, f.sender), "stream")
-        stash.unstashAll(online(f, Children(vision, vision, stream), s))
+        stash.unstashAll(online(f, Children(vision, stream), s))
       case Verdict(HeartBeatActor.WentOffline(_)) => Behaviors.same // never online: nothing to report
       case Forget(reason)                         => forget(s, reason)
     }
@@ -199,7 +198,7 @@ object RobotActor {
     private def running(f: Family, c: Children, s: RobotState, isOnline: Boolean): Behavior[Command] = receiveMessage {
       case m: Common => running(f, c, common(m, f, Some(c), s, isOnline), isOnline)
       case r: Reach =>
-        r.answer(Connected(robotId, f.calls, f.sender, c.vision, c.registrations, c.stream))
+        r.answer(Connected(robotId, f.calls, f.sender, c.camera, c.stream))
         if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow
         Behaviors.same
       case Verdict(HeartBeatActor.CameOnline) => if (isOnline) Behaviors.same else online(f, c, s)
@@ -243,7 +242,7 @@ object RobotActor {
           f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
           next
         case Asked(RobotAccess.GetSnapshot(replyTo))  => replyTo ! s.view(isOnline); s
-        case Asked(RobotAccess.GetLinkStats(replyTo)) => replyTo ! effects.linkStats(s); s
+        case Asked(RobotAccess.GetLinkStats(replyTo)) => replyTo ! effects.linkStats(s, sent); s
         case Subscribers(now) =>
           val (next, held) = s.subscribersChanged(now)
           held.foreach(e => now.foreach(_ ! e))
@@ -253,7 +252,6 @@ object RobotActor {
           s
         case RoundTrip(nanos)            => s.roundTrip(nanos)
         case Retransmitted               => s.retransmitted
-        case FrameSent(bytes)            => s.frameSent(bytes)
         case ReachabilityWanted(replyTo) => replyTo ! isOnline; s
         case RouteWanted(replyTo)        => replyTo ! NoResponseActor.RouteChanged(route(s, f), f.response); s
         case OptionCommand(commands)     => effects.optionCommand(commands, f, s)
@@ -271,13 +269,7 @@ object RobotActor {
         case ZeroMqLinkEvent(ZeroMqRobotLink.MessageReceived(contents, size)) =>
           effects.frame(contents, f, c, s.frameReceived(size, HeaderForm.Legacy)._1, isOnline)
         case ZeroMqLinkEvent(ZeroMqRobotLink.MessageRejected(reason)) => effects.count(s, Rejection.BadProtobuf, reason)
-        case ZeroMqLinkEvent(ZeroMqRobotLink.PollDue(calls, outcome)) =>
-          val hold = NoResponseActor.Awaits.Reply(Some(settings.zeromq.statusTimeout))
-          calls.foreach(c =>
-            f.sender ! NoResponseActor.Submit(Outbound.CallOut(c), Priority.Heartbeat, c.callId, hold, Some(outcome)))
-          s
-        case ZeroMqLinkEvent(ZeroMqRobotLink.PollAnswered(id)) => f.sender ! NoResponseActor.Finished(id); s
-        case HeartbeatReport(report)                           => effects.heartbeat(report, f, s)
+        case HeartbeatReport(report)                                  => effects.heartbeat(report, s)
       }
 
     /** Where the robot is reached now: this actor owns the address and header form, the sender follows them. */

@@ -9,8 +9,9 @@ import naogateway.link.ZeroMqRobotLink
 import naogateway.wire.MessageContents
 
 /** What a robot actor does around `RobotState`'s transitions: hands what the robot sent to its owners, puts option
-  * commands and probes into the robot's sender, and publishes events. Its methods take a state and return the next one;
-  * it keeps nothing itself. `startPulling` and `stopPulling` run the actor's option-pull timer.
+  * commands and option pulls into the robot's sender, and publishes events (the heartbeat probes through the sender
+  * itself). Its methods take a state and return the next one; it keeps nothing itself. `startPulling` and `stopPulling`
+  * run the actor's option-pull timer.
   */
 private[naogateway] final class RobotEffects(
     robotId: Int,
@@ -109,12 +110,8 @@ private[naogateway] final class RobotEffects(
   private def submitOptions(f: Family, commands: DebuggingCommands): Unit =
     f.sender ! NoResponseActor.Submit(Outbound.DebugOut(commands), Priority.Debug, None, NoResponseActor.Awaits.Nothing)
 
-  /** What the heartbeat reports besides its verdicts: a probe to send, a round trip, the link quality. */
-  def heartbeat(report: HeartBeatActor.Report, f: Family, s: RobotState): RobotState = report match {
-    case HeartBeatActor.SendProbe(call) =>
-      f.sender ! NoResponseActor.Submit(Outbound.CallOut(call), Priority.Heartbeat, call.callId,
-        NoResponseActor.Awaits.Reply(Some(heartbeatSettings.probeTimeout)))
-      s
+  /** What the heartbeat reports besides its verdicts: a round trip, the link quality. */
+  def heartbeat(report: HeartBeatActor.Report, s: RobotState): RobotState = report match {
     case HeartBeatActor.ProbeRoundTrip(nanos) => s.roundTrip(nanos)
     case HeartBeatActor.QualityChanged(quality) =>
       log.info("Robot [{}] link quality {}", robotId, quality.name)
@@ -122,8 +119,8 @@ private[naogateway] final class RobotEffects(
     case _: HeartBeatActor.Verdict => s // the robot actor's states decide on those
   }
 
-  /** The link figures now. */
-  def linkStats(s: RobotState): LinkStats = s.linkStats(System.nanoTime(), window, interval)
+  /** The link figures now, with what the sender counted as it sent. */
+  def linkStats(s: RobotState, out: SentFigures): LinkStats = s.linkStats(System.nanoTime(), window, interval, out)
 
   /** A refused datagram of `kind`: counted, and warned of at 1, 10, 100, ... per kind. */
   def count(s: RobotState, kind: Rejection, detail: => String, warn: Boolean = true): RobotState = {
@@ -142,26 +139,48 @@ private[naogateway] final class RobotEffects(
   }
 }
 
-/** The robot actor's children, as its effects reach them. */
+/** The robot actor's children, as its effects reach them: each one held once, an actor spawned for two protocols (its
+  * own and the middleware's, wrapped as they arrive) seen through both by its two views.
+  */
 private[naogateway] object RobotEffects {
 
-  /** The children that live as long as the robot actor (the vision and stream actors come with the first contact). */
+  /** The children that live as long as the robot actor (the vision and stream actors come with the first contact);
+    * `responder` is the response actor.
+    */
   final case class Family(
       heartbeat: ActorRef[HeartBeatActor.Command],
       sender: ActorRef[NoResponseActor.Command],
-      response: ActorRef[ResponseActor.Command],
-      calls: ActorRef[RobotAccess.Call],
+      responder: ActorRef[Any],
       zeroMq: Option[ActorRef[ZeroMqRobotLink.Command]]
-  )
+  ) {
+
+    /** The response actor as the robot's actors reach it. */
+    def response: ActorRef[ResponseActor.Command] = responder
+
+    /** The response actor as callers reach it. */
+    def calls: ActorRef[RobotAccess.Call] = responder
+  }
 
   /** The robot's children as the gateway's own specs reach them (`RobotActor.Connect`); `response` and `registrations`
     * as in [[RobotAccess.Opened]].
     */
   final case class Connected(robotId: Int, response: ActorRef[RobotAccess.Call],
-      noResponse: ActorRef[NoResponseActor.Command], vision: ActorRef[VisionActor.Command],
-      registrations: ActorRef[RobotAccess.RegisterVision], stream: ActorRef[StreamActor.Command])
+      noResponse: ActorRef[NoResponseActor.Command], camera: ActorRef[Any], stream: ActorRef[StreamActor.Command]) {
 
-  /** The children spawned at first contact. */
-  final case class Children(vision: ActorRef[VisionActor.Command], registrations: ActorRef[RobotAccess.RegisterVision],
-      stream: ActorRef[StreamActor.Command])
+    /** The vision actor as the robot actor reaches it. */
+    def vision: ActorRef[VisionActor.Command] = camera
+
+    /** The vision actor as subscribers reach it. */
+    def registrations: ActorRef[RobotAccess.RegisterVision] = camera
+  }
+
+  /** The children spawned at first contact; `camera` is the vision actor. */
+  final case class Children(camera: ActorRef[Any], stream: ActorRef[StreamActor.Command]) {
+
+    /** The vision actor as the robot actor reaches it. */
+    def vision: ActorRef[VisionActor.Command] = camera
+
+    /** The vision actor as subscribers reach it. */
+    def registrations: ActorRef[RobotAccess.RegisterVision] = camera
+  }
 }

@@ -9,15 +9,14 @@ import akka.actor.typed.ActorRef
 import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, ServoTelemetry, Status}
 import naogateway.wire.HeaderForm
 
-/** The link figures of one robot. `keepAliveTimes` holds the keep-alives' arrival times, oldest first, never more than
+/** The link figures of one robot as its robot actor counts them (what leaves is counted by its sender,
+  * [[SentFigures]]). `keepAliveTimes` holds the keep-alives' arrival times, oldest first, never more than
   * `keepAliveTimesKept`: with more than a window's worth the loss estimate is 0 anyway, so a flooding robot costs what
   * a punctual one costs.
   */
 private[naogateway] final case class LinkFigures(
     datagramsIn: Long = 0L,
-    datagramsOut: Long = 0L,
     bytesIn: Long = 0L,
-    bytesOut: Long = 0L,
     retransmissions: Long = 0L,
     rejected: Map[Rejection, Long] = Map.empty,
     rttNanos: Option[Double] = None,
@@ -95,10 +94,6 @@ private[naogateway] final case class RobotState(
   /** A secure-stream segment of `size` bytes arrived. */
   def segmentReceived(size: Int): RobotState =
     copy(link = link.copy(datagramsIn = link.datagramsIn + 1, bytesIn = link.bytesIn + size))
-
-  /** A frame of `bytes` left for the robot. */
-  def frameSent(bytes: Int): RobotState =
-    copy(link = link.copy(datagramsOut = link.datagramsOut + 1, bytesOut = link.bytesOut + bytes))
 
   /** A datagram of this robot was refused for `kind`; with how many of that kind so far. */
   def refused(kind: Rejection): (RobotState, Long) = {
@@ -181,14 +176,14 @@ private[naogateway] final case class RobotState(
   def view(online: Boolean): RobotSnapshot =
     snapshot.copy(online = online, quality = if (online) snapshot.quality else LinkQuality.Offline)
 
-  /** The link figures as `LinkStats` at `now`. */
-  def linkStats(now: Long, window: Long, interval: Long): LinkStats =
+  /** The link figures as `LinkStats` at `now`, with what the sender counted as it sent (`out`). */
+  def linkStats(now: Long, window: Long, interval: Long, out: SentFigures): LinkStats =
     LinkStats(
       robotId,
       link.datagramsIn,
-      link.datagramsOut,
+      out.datagrams,
       link.bytesIn,
-      link.bytesOut,
+      out.bytes,
       link.rttNanos.map(_ / 1e6),
       link.lossEstimate(now, window, interval),
       link.retransmissions,

@@ -41,11 +41,15 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       changed1 shouldBe false
       val (s2, changed2) = s1.frameReceived(70, HeaderForm.Compact)
       changed2 shouldBe true
-      val s3 = s2.segmentReceived(30).frameSent(40).frameSent(2)
+      val s3 = s2.segmentReceived(30)
       s3.link.datagramsIn shouldBe 3
       s3.link.bytesIn shouldBe 160
-      s3.link.datagramsOut shouldBe 2
-      s3.link.bytesOut shouldBe 42
+      // What leaves is counted by the sender as it sends, and shown with the rest.
+      val out = new SentFigures
+      out.sent(40)
+      out.sent(2)
+      val stats = s3.linkStats(0L, window, second / 5, out)
+      (stats.datagramsIn, stats.bytesIn, stats.datagramsOut, stats.bytesOut) shouldBe ((3L, 160L, 2L, 42L))
     }
 
     "count refusals per kind" in {
@@ -53,7 +57,7 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       val (s2, n2) = s1.refused(Rejection.BadProtobuf)
       val (s3, n3) = s2.refused(Rejection.UnknownCallId)
       (n1, n2, n3) shouldBe ((1L, 2L, 1L))
-      s3.linkStats(0L, window, second / 5).rejected shouldBe Map(Rejection.BadProtobuf.name -> 2L,
+      s3.linkStats(0L, window, second / 5, new SentFigures).rejected shouldBe Map(Rejection.BadProtobuf.name -> 2L,
         Rejection.UnknownCallId.name -> 1L)
     }
 

@@ -2,7 +2,7 @@ package robotmiddleware
 
 import naogateway.wire.ActuatorGroup
 
-import naogateway.wire.{Posture => WirePosture, RpcMethod, RpcValue}
+import naogateway.wire.{Posture => WirePosture, RpcCall, RpcMethod, RpcValue}
 
 /** Something an app asks a robot to do. */
 sealed trait Operation extends Product with Serializable {
@@ -71,6 +71,68 @@ object Operation {
     }
     def name: String = s"$module.$method"
   }
+
+  /** The robot call `operation` becomes, the method's name and parameters from the `RpcMethod` table. */
+  def toCall(operation: Operation): RpcCall = operation match {
+    case Walk(vx, vy, omega)             => RpcMethod.Walk.call(number(vx), number(vy), number(omega))
+    case Stop()                          => RpcMethod.Stop.call()
+    case Head(pan, tilt)                 => RpcMethod.Head.call(number(pan), number(tilt))
+    case Arms(ls, le, rs, re)            => RpcMethod.Arms.call(number(ls), number(le), number(rs), number(re))
+    case Posture(target)                 => RpcMethod.Posture.call(RpcValue.Text(target.name))
+    case Say(text)                       => RpcMethod.Say.call(RpcValue.Text(text))
+    case RawCall(module, method, params) => RpcCall(module, method, params)
+  }
+
+  /** The operation a robot call asks for, keyed by the `RpcMethod` table (`toCall`'s inverse): a known method's typed
+    * operation, any other call a `RawCall`; or why its parameters cannot be right.
+    */
+  def fromCall(call: RpcCall): Either[String, Operation] = {
+    def checked(operation: => Operation): Either[String, Operation] =
+      try Right(operation)
+      catch {
+        case e: IllegalArgumentException => Left(String.valueOf(e.getMessage).stripPrefix("requirement failed: "))
+      }
+    RpcMethod.of(call) match {
+      case Some(RpcMethod.Walk) => numbers(call, "vx", "vy", "omega").flatMap(v => checked(Walk(v(0), v(1), v(2))))
+      case Some(RpcMethod.Stop) =>
+        if (call.params.isEmpty) Right(Stop())
+        else Left(s"${call.name} takes no parameters, got ${describe(call.params)}")
+      case Some(RpcMethod.Head) => numbers(call, "pan", "tilt").flatMap(v => checked(Head(v(0), v(1))))
+      case Some(RpcMethod.Arms) =>
+        numbers(call, "leftShoulder", "leftElbow", "rightShoulder", "rightElbow")
+          .flatMap(v => checked(Arms(v(0), v(1), v(2), v(3))))
+      case Some(RpcMethod.Posture) =>
+        call.params match {
+          case Vector(RpcValue.Text(name)) => WirePosture.target(name).flatMap(target => checked(Posture(target)))
+          case other =>
+            Left(s"${call.name} takes one text (${WirePosture.targets.map(_.name).mkString(", ")}), got " +
+              describe(other))
+        }
+      case Some(RpcMethod.Say) =>
+        call.params match {
+          case Vector(RpcValue.Text(text)) => checked(Say(text))
+          case other                       => Left(s"${call.name} takes one text, got ${describe(other)}")
+        }
+      case _ => checked(RawCall(call.module, call.method, call.params))
+    }
+  }
+
+  private def number(v: Double): RpcValue = RpcValue.Number(v.toFloat)
+
+  private def numbers(call: RpcCall, names: String*): Either[String, Vector[Double]] = {
+    val values = call.params.collect {
+      case RpcValue.Number(f) => f.toDouble
+      case RpcValue.UInt(i)   => i.toDouble
+    }
+    if (call.params.length != names.length || values.length != names.length)
+      Left(s"${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got ${describe(call.params)}")
+    else if (values.exists(v => v.isNaN || v.isInfinite)) Left(s"${call.name}: numbers must be finite")
+    else Right(values)
+  }
+
+  /** Parameters as an error text names them: their kinds, or none. */
+  def describe(params: Vector[RpcValue]): String =
+    if (params.isEmpty) "none" else params.map(_.productPrefix.toLowerCase).mkString("(", ", ", ")")
 }
 
 /** Who holds a robot's leases (group to app name) and, while the middleware holds the robot safe, why and how the hold

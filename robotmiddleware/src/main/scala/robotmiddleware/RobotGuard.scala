@@ -11,20 +11,7 @@ import akka.util.Timeout
 
 import naogateway._
 import naogateway.wire.{Posture, RpcCall, RpcMethod, RpcValue}
-
-/** How apps are told of a call that a newer one replaced or a restart interrupted: as an overload to retry, the one
-  * error type, in words for apps. Applied by the guard to the answers it relays and by `RobotInterface` to those the
-  * robot's command owner sends an app directly.
-  */
-private[robotmiddleware] object AppFailure {
-
-  /** `error` as an app sees it. */
-  def apply(robotId: Int, error: RobotFailure): RobotFailure = error match {
-    case RobotFailure.Superseded(_, call)  => RobotFailure.Overloaded(robotId, s"$call replaced by a newer one")
-    case RobotFailure.Interrupted(_, call) => RobotFailure.Overloaded(robotId, s"$call interrupted, try again")
-    case other                             => other
-  }
-}
+import robotmiddleware.GuardState.{BatteryChange, SafetyStep}
 
 /** An app as the middleware knows it: its event ref (its identity), name and priority. */
 final case class AppInfo(events: ActorRef[AppEvent], name: String, priority: Int)
@@ -79,23 +66,6 @@ private[robotmiddleware] object RobotGuard {
   private final case class SafetyStepDone(step: SafetyStep, result: CallResult) extends Command
   private final case class ChildGone(child: ActorRef[Nothing]) extends Command
 
-  /** The guard's own calls that keep a robot safe; each one's answer comes back with its own step. */
-  private sealed abstract class SafetyStep(val describe: String) extends Product with Serializable
-  private object SafetyStep {
-
-    /** The stop of a safety hold, followed by a sit once the robot has stopped. */
-    case object StopThenSit extends SafetyStep("stop")
-
-    /** A stop that ends a walk (lease released or taken, app gone, a motion failed). */
-    case object StopOnly extends SafetyStep("stop only")
-
-    /** The stop a robot gets when it comes back online. */
-    case object StopAfterReconnect extends SafetyStep("stop after reconnect")
-
-    /** The sit of a safety hold. */
-    case object Sit extends SafetyStep("sit")
-  }
-
   private case object WalkKey
   private case object StatsKey
 
@@ -111,21 +81,16 @@ private[robotmiddleware] object RobotGuard {
           robot ! RobotAccess.Open(childrenReady)
           val guard = new Guard(robotId, robot, settings, context, timers, stash, childrenReady, holds)
           // A restarted guard starts with no leases and no hold: the middleware's table says so at once.
-          guard.report()
-          guard.connecting(online)
+          val initial = GuardState(online = online)
+          guard.report(initial)
+          guard.connecting(initial)
         }
       }
     }
 
-  /** The reason of a battery hold, with how it ends: what `SafetyStop`, `SafetyHold` and `robotctl doctor` say. */
-  def batteryLow(volts: Double, readings: Int, settings: MiddlewareSettings): String =
-    f"battery low: $volts%.2f V or less for $readings keep-alives (below ${settings.lowBattery}%.2f V); it clears " +
-      f"by itself once $readings keep-alives in a row read above ${settings.batteryOk}%.2f V: swap or charge the " +
-      "battery (a simulated robot recharges while it sits; `robotctl battery <id> swap` swaps its battery at once)"
-
-  /** The lease table: holder per group. */
-  private type Leases = Map[ActuatorGroup, AppInfo]
-
+  /** The guard's shell: carries out `GuardState`'s transitions (the calls, the timers, the apps' events) and keeps
+    * nothing itself.
+    */
   private final class Guard(
       robotId: Int,
       robot: ActorRef[RobotAccess.Command],
@@ -136,257 +101,213 @@ private[robotmiddleware] object RobotGuard {
       childrenReady: ActorRef[RobotAccess.Opened],
       holds: ActorRef[RobotHolds]
   ) {
-    private var leases: Leases = Map.empty
 
     /** Tells the middleware the lease holders and the safety hold, after each change of either. */
-    def report(): Unit = holds ! RobotHolds(robotId, leases.map { case (g, app) => g -> app.name }, safety)
+    def report(s: GuardState): Unit = holds ! s.holds(robotId)
 
-    private var walking: Option[(Operation.Walk, AppInfo)] = None
-    private var safety: Option[String] = None
-    private var online = false
-    // A robot that came back while the guard was still connecting gets its reconnect stop once the guard is ready.
-    private var reconnectedWhileConnecting = false
-    private var statsWatchers = Set.empty[ActorRef[LinkStats]]
-    // Apps' camera streams: registered again with the new children after the robot actor restarted, whose
-    // registrations died with it.
-    private var visionWatchers = Map.empty[ActorRef[VisionFrame], Boolean]
-
-    def connecting(initiallyOnline: Boolean): Behavior[Command] = {
-      online = initiallyOnline
-      Behaviors.receiveMessage {
-        case ChildrenReady(children) =>
-          // The refs die with the robot actor's restart (or a child's stop): then the guard connects again.
-          Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref =>
-            context.watchWith(ref, ChildGone(ref)))
-          visionWatchers.foreach { case (subscriber, grid) =>
-            children.vision ! RobotAccess.RegisterVision(subscriber, grid)
-          }
-          if (reconnectedWhileConnecting) stopAfterReconnect(children)
-          stash.unstashAll(ready(children))
-        case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
-        case e: Execute if !online =>
-          reply(e.replyTo, e.operation, Left(RobotFailure.RobotOffline(robotId)))
-          Behaviors.same
-        case s: Send if !online =>
-          s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name, Left(RobotFailure.RobotOffline(robotId)))
-          Behaviors.same
-        case SnapshotReceived(snapshot) =>
-          online = snapshot.online
-          Behaviors.same
-        case RobotEventReceived(event) =>
-          val wasOnline = online
-          common(event)
-          event match {
-            // Only a robot the guard saw offline has come back; an online event older than its snapshot has not.
-            case RobotOnline(_, _) => if (!wasOnline) reconnectedWhileConnecting = true
-            // Offline again before the guard is ready: the next RobotOnline, in ready, brings the stop.
-            case RobotOffline(_, _) => reconnectedWhileConnecting = false
-            case _                  => ()
-          }
-          Behaviors.same
-        case other =>
-          if (stash.isFull) other match {
-            case e: Execute =>
-              reply(e.replyTo, e.operation,
-                Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
-            case s: Send =>
-              s.replyTo ! RobotMiddleware.SendResult(robotId, s.operation.name,
-                Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
-            case a: Acquire =>
-              a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.groups, Left(RobotFailure.Overloaded(robotId, "busy")))
-            case _ => ()
-          }
-          else stash.stash(other)
-          Behaviors.same
-      }
-    }
-
-    /** Events that change the guard's view in any state. */
-    private def common(event: RobotEvent): Unit = event match {
-      case RobotOnline(_, _) => online = true
-      case RobotOffline(_, _) =>
-        online = false
-        // The robot's own walk lease stops it; the middleware forgets the walk so it is not resumed by surprise.
-        if (walking.isDefined) {
-          timers.cancel(WalkKey)
-          walking = None
+    def connecting(s: GuardState): Behavior[Command] = Behaviors.receiveMessage {
+      case ChildrenReady(children) =>
+        // The refs die with the robot actor's restart (or a child's stop): then the guard connects again.
+        Seq[ActorRef[Nothing]](children.response, children.vision).foreach(ref =>
+          context.watchWith(ref, ChildGone(ref)))
+        // Apps' camera streams: registered again with the new children, whose registrations died with the old ones.
+        s.visionWatchers.foreach { case (subscriber, grid) =>
+          children.vision ! RobotAccess.RegisterVision(subscriber, grid)
         }
-      case _ => ()
+        val next = if (s.reconnectedWhileConnecting) stopAfterReconnect(children, s) else s
+        stash.unstashAll(ready(children, next))
+      case ChildGone(_) => Behaviors.same // a ref of the children the guard is replacing already
+      case e: Execute if !s.online =>
+        reply(e.replyTo, e.operation, Left(RobotFailure.RobotOffline(robotId)))
+        Behaviors.same
+      case m: Send if !s.online =>
+        m.replyTo ! RobotMiddleware.SendResult(robotId, m.operation.name, Left(RobotFailure.RobotOffline(robotId)))
+        Behaviors.same
+      case SnapshotReceived(snapshot) => connecting(s.snapshotReceived(snapshot.online))
+      case RobotEventReceived(event)  =>
+        // Offline again before the guard is ready: the next RobotOnline, in ready, brings the stop.
+        connecting(walkTimer(s, s.eventWhileConnecting(event)))
+      case other =>
+        if (stash.isFull) other match {
+          case e: Execute =>
+            reply(e.replyTo, e.operation,
+              Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
+          case m: Send =>
+            m.replyTo ! RobotMiddleware.SendResult(robotId, m.operation.name,
+              Left(RobotFailure.Overloaded(robotId, "too many operations wait for the robot")))
+          case a: Acquire =>
+            a.replyTo ! RobotMiddleware.LeaseResult(robotId, a.groups, Left(RobotFailure.Overloaded(robotId, "busy")))
+          case _ => ()
+        }
+        else stash.stash(other)
+        Behaviors.same
     }
 
-    private def ready(c: RobotAccess.Opened): Behavior[Command] = Behaviors.receiveMessage {
-      case SnapshotReceived(snapshot) =>
-        // Any event that reached the guard before this answer is older than it, and later ones follow it.
-        online = snapshot.online
-        Behaviors.same
+    /** The walk's refresh timer follows the state: a walk forgotten stops being refreshed. */
+    private def walkTimer(before: GuardState, after: GuardState): GuardState = {
+      if (before.walking.isDefined && after.walking.isEmpty) timers.cancel(WalkKey)
+      after
+    }
+
+    private def ready(c: RobotAccess.Opened, s: GuardState): Behavior[Command] = Behaviors.receiveMessage {
+      // Any event that reached the guard before this answer is older than it, and later ones follow it.
+      case SnapshotReceived(snapshot) => ready(c, s.snapshotReceived(snapshot.online))
       case Execute(app, operation, replyTo) =>
-        refusal(app, operation) match {
-          case Some(refused) => reply(replyTo, operation, Left(refused))
-          case None          => run(c, app, operation, replyTo, once = false)
+        s.refusal(robotId, app, operation, settings.limits) match {
+          case Some(refused) =>
+            reply(replyTo, operation, Left(refused))
+            Behaviors.same
+          case None => ready(c, run(c, s, app, operation, replyTo, once = false))
         }
-        Behaviors.same
       case Send(app, operation, replyTo) =>
         // Accepted means handed to the command owner below, in this order: the app's next call cannot overtake it.
-        refusal(app, operation) match {
-          case Some(refused) => replyTo ! RobotMiddleware.SendResult(robotId, operation.name, Left(refused))
+        s.refusal(robotId, app, operation, settings.limits) match {
+          case Some(refused) =>
+            replyTo ! RobotMiddleware.SendResult(robotId, operation.name, Left(refused))
+            Behaviors.same
           case None =>
-            run(c, app, operation, context.system.ignoreRef, once = true)
+            val next = run(c, s, app, operation, context.system.ignoreRef, once = true)
             replyTo ! RobotMiddleware.SendResult(robotId, operation.name, Right(()))
+            ready(c, next)
         }
-        Behaviors.same
       case Acquire(app, groups, replyTo) =>
         // Checked for every group before any is taken: a set with one group held at equal or higher priority takes
-        // nothing, so no app is preempted (and no robot stopped) for a set that is refused. The first conflict in
-        // the docs' group order is named, so the answer does not depend on a Set's iteration order.
-        val conflict = ActuatorGroup.all.filter(groups).flatMap { group =>
-          leases.get(group).filter(holder => holder.events != app.events && holder.priority >= app.priority).map(
-            group -> _)
-        }.headOption
-        conflict match {
-          case Some((group, holder)) =>
+        // nothing, so no app is preempted (and no robot stopped) for a set that is refused.
+        s.acquire(app, groups) match {
+          case Left((group, holder)) =>
             replyTo ! RobotMiddleware.LeaseResult(robotId, groups,
               Left(RobotFailure.LeaseNotHeld(robotId, group, Some(holder.name))))
-          case None =>
-            ActuatorGroup.all.filter(groups).foreach { group =>
-              leases.get(group).filter(_.events != app.events).foreach { holder =>
-                context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name,
-                  holder.name, app.name)
-                holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
-                if (group == ActuatorGroup.Walk) stopWalking(c, s"lease taken by ${app.name}")
-              }
-              leases = leases.updated(group, app)
+            Behaviors.same
+          case Right((granted, preempted)) =>
+            val next = preempted.foldLeft(granted) { case (st, (group, holder)) =>
+              context.log.info("Robot [{}]: lease {} moves from {} to {} (higher priority)", robotId, group.name,
+                holder.name, app.name)
+              holder.events ! AppEvent.LeasePreempted(robotId, group, app.name)
+              if (group == ActuatorGroup.Walk) stopWalking(c, st, s"lease taken by ${app.name}") else st
             }
             // The table first: an app that asks for the holds once granted finds itself in them.
-            report()
+            report(next)
             replyTo ! RobotMiddleware.LeaseResult(robotId, groups, Right(()))
+            ready(c, next)
         }
-        Behaviors.same
       case Release(app, group) =>
-        if (leases.get(group).exists(_.events == app)) {
-          leases -= group
-          report()
-          if (group == ActuatorGroup.Walk) stopWalking(c, "lease released")
+        s.release(app, group) match {
+          case None => Behaviors.same
+          case Some(released) =>
+            report(released)
+            ready(c, if (group == ActuatorGroup.Walk) stopWalking(c, released, "lease released") else released)
         }
-        Behaviors.same
       case AppGone(app) =>
-        val held = leases.collect { case (g, holder) if holder.events == app => g }
-        if (held.nonEmpty) {
+        val (next, held) = s.appGone(app)
+        if (held.isEmpty) Behaviors.same
+        else {
           context.log.info("Robot [{}]: app gone, releasing {}", robotId, held.map(_.name).mkString(","))
-          leases --= held
-          report()
-          if (held.exists(_ == ActuatorGroup.Walk)) stopWalking(c, "app gone")
+          report(next)
+          ready(c, if (held(ActuatorGroup.Walk)) stopWalking(c, next, "app gone") else next)
         }
-        Behaviors.same
       case OperationDone(replyTo, operation, result, superseded) =>
         reply(replyTo, operation, result)
         // A motion that ended in an error must not leave the robot in an undefined motion: stop it.
         // A superseded one is not undefined: the newer call of its slot decides the motion.
-        if (result.isLeft && !superseded && operation.isInstanceOf[Operation.Posture] && online)
-          stopWalking(c, s"${operation.name} failed")
-        operation match {
-          case w: Operation.Walk if walking.exists(_._1 == w) =>
-            // Refreshing starts only once the robot has confirmed the walk: a refused walk is never sent again.
-            if (result.isRight) timers.startTimerWithFixedDelay(WalkKey, WalkRefresh, settings.walkRefresh)
-            else {
-              timers.cancel(WalkKey)
-              walking = None
+        val stopped =
+          if (result.isLeft && !superseded && operation.isInstanceOf[Operation.Posture] && s.online)
+            stopWalking(c, s, s"${operation.name} failed")
+          else s
+        val next = operation match {
+          case w: Operation.Walk =>
+            stopped.walkAnswered(w, result.isRight) match {
+              // Refreshing starts only once the robot has confirmed the walk: a refused walk is never sent again.
+              case Some((st, true)) =>
+                timers.startTimerWithFixedDelay(WalkKey, WalkRefresh, settings.walkRefresh)
+                st
+              case Some((st, false)) =>
+                timers.cancel(WalkKey)
+                st
+              case None => stopped
             }
-          case _ => ()
+          case _ => stopped
         }
-        Behaviors.same
+        ready(c, next)
       case WalkRefresh =>
         // Through the robot's one command owner, once (no retries): a later stop supersedes it wherever it is.
-        walking.foreach { case (w, _) =>
-          c.response ! RobotAccess.Call(walkCall(w), context.system.ignoreRef, idempotent = Some(false))
+        s.walking.foreach { case (w, _) =>
+          c.response ! RobotAccess.Call(Operation.toCall(w), context.system.ignoreRef, idempotent = Some(false))
         }
         Behaviors.same
       case RobotEventReceived(event) =>
-        val wasOnline = online
-        common(event)
-        event match {
-          case RobotStatusUpdated(snapshot) => checkBattery(c, snapshot)
-          // A stop only when the robot really was offline: a stale online event must not supersede an app's motion.
-          case RobotOnline(_, _) => if (!wasOnline) stopAfterReconnect(c)
-          case _                 => ()
-        }
-        Behaviors.same
+        val (seen, cameBack) = s.eventWhileReady(event)
+        val next = walkTimer(s, seen)
+        ready(
+          c,
+          event match {
+            case RobotStatusUpdated(snapshot) => snapshot.batteryVoltage.fold(next)(checkBattery(c, next, _))
+            // A stop only when the robot really was offline: a stale online event must not supersede an app's motion.
+            case RobotOnline(_, _) if cameBack => stopAfterReconnect(c, next)
+            case _                             => next
+          }
+        )
       case SafetyStepDone(step, result) =>
-        val wantsSit = step == SafetyStep.StopThenSit || (isStop(step) && sitAfterStop)
-        if (isStop(step)) { stopInFlight = false; sitAfterStop = false }
-        result.result match {
+        val (done, sit) = s.safetyStepDone(step)
+        val next = result.result match {
           // A newer stop or sit replaced this stop: the robot stops all the same, and the hold still wants it sitting.
-          case Right(_) | Left(_: RobotFailure.Superseded) if wantsSit && safety.isDefined =>
-            safetyCall(c, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)),
+          case Right(_) | Left(_: RobotFailure.Superseded) if sit =>
+            safetyCall(c, done, SafetyStep.Sit, RpcMethod.Posture.call(RpcValue.Text(Posture.Sit.name)),
               settings.postureTimeout)
-          case Left(_: RobotFailure.Superseded) => () // a newer call of the slot took over: nothing failed
+          case Left(_: RobotFailure.Superseded) => done // a newer call of the slot took over: nothing failed
           case Left(error) =>
             context.log.warn("Robot [{}]: safety step {} failed: {}", robotId, step.describe, error.describe)
-          case Right(_) => ()
+            done
+          case Right(_) => done
         }
-        Behaviors.same
+        ready(c, next)
       case WatchVision(subscriber, grid) =>
-        if (!visionWatchers.contains(subscriber)) context.watchWith(subscriber, VisionWatcherGone(subscriber))
-        visionWatchers = visionWatchers.updated(subscriber, grid)
+        val (next, fresh) = s.visionWatched(subscriber, grid)
+        if (fresh) context.watchWith(subscriber, VisionWatcherGone(subscriber))
         c.vision ! RobotAccess.RegisterVision(subscriber, grid)
-        Behaviors.same
-      case VisionWatcherGone(subscriber) =>
-        visionWatchers -= subscriber
-        Behaviors.same
+        ready(c, next)
+      case VisionWatcherGone(subscriber) => ready(c, s.visionGone(subscriber))
       case WatchLinkStats(subscriber) =>
         context.watchWith(subscriber, StatsWatcherGone(subscriber))
-        statsWatchers += subscriber
         if (!timers.isTimerActive(StatsKey))
           timers.startTimerWithFixedDelay(StatsKey, StatsTick, settings.linkStatsInterval)
         // The first figures at once, not one interval later: robotctl status waits for them.
         robot ! RobotAccess.GetLinkStats(statsAdapter)
-        Behaviors.same
+        ready(c, s.statsWatched(subscriber))
       case StatsWatcherGone(subscriber) =>
-        statsWatchers -= subscriber
-        if (statsWatchers.isEmpty) timers.cancel(StatsKey)
-        Behaviors.same
+        val next = s.statsGone(subscriber)
+        if (next.statsWatchers.isEmpty) timers.cancel(StatsKey)
+        ready(c, next)
       case StatsTick =>
         robot ! RobotAccess.GetLinkStats(statsAdapter)
         Behaviors.same
       case StatsReceived(stats) =>
-        statsWatchers.foreach(_ ! stats)
+        s.statsWatchers.foreach(_ ! stats)
         Behaviors.same
       case ChildrenReady(_) => Behaviors.same
       case ChildGone(child) if child == c.response || child == c.vision =>
         context.log.info("Robot [{}]: its children were restarted; connecting again", robotId)
         // Nothing refreshes the walk meanwhile, so the robot stops by itself within its lease: forget the walk.
         timers.cancel(WalkKey)
-        walking = None
         robot ! RobotAccess.Open(childrenReady)
-        connecting(online)
+        connecting(s.walkEnded)
       case ChildGone(_) => Behaviors.same
     }
 
     /** Back from a lost link: puts the robot in a defined state before anyone moves it again. */
-    private def stopAfterReconnect(c: RobotAccess.Opened): Unit = {
-      reconnectedWhileConnecting = false
-      safetyCall(c, SafetyStep.StopAfterReconnect, RpcMethod.Stop.call(), settings.callTimeout)
-    }
+    private def stopAfterReconnect(c: RobotAccess.Opened, s: GuardState): GuardState =
+      safetyCall(c, s.reconnectStopped, SafetyStep.StopAfterReconnect, RpcMethod.Stop.call(), settings.callTimeout)
 
     private lazy val statsAdapter = context.messageAdapter[LinkStats](StatsReceived.apply)
 
+    /** `step`, sent now unless the state holds it back (one safety stop in flight at a time). */
+    private def safetyCall(c: RobotAccess.Opened, s: GuardState, step: SafetyStep, rpc: RpcCall,
+        timeout: FiniteDuration): GuardState = {
+      val (next, now) = s.safetyStep(step)
+      if (now) askSafety(c, step, rpc, timeout)
+      next
+    }
+
     /** One ask per step, not a message adapter: Akka keeps one adapter per message class, so labels would mix. */
-    // One safety stop in flight at a time (the response actor resends it with new call ids when it is lost): events
-    // anyone can provoke (a robot coming back, a battery reading) cannot be turned into a flood of stops. A hold that
-    // wants the robot sitting while a stop is in flight sits once that stop is answered.
-    private var stopInFlight = false
-    private var sitAfterStop = false
-
-    private def isStop(step: SafetyStep): Boolean =
-      step == SafetyStep.StopThenSit || step == SafetyStep.StopOnly || step == SafetyStep.StopAfterReconnect
-
-    private def safetyCall(c: RobotAccess.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit =
-      if (isStop(step) && stopInFlight) {
-        if (step == SafetyStep.StopThenSit) sitAfterStop = true
-      } else {
-        if (isStop(step)) stopInFlight = true
-        askSafety(c, step, rpc, timeout)
-      }
-
     private def askSafety(c: RobotAccess.Opened, step: SafetyStep, rpc: RpcCall, timeout: FiniteDuration): Unit = {
       implicit val askTimeout: Timeout = timeout + settings.askMargin
       context.ask(c.response,
@@ -397,64 +318,28 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
-    /** Why an app's operation may not run now (an argument out of range, offline, lease, safety), the same for both
-      * doors.
-      */
-    private def refusal(app: AppInfo, operation: Operation): Option[RobotFailure] = {
-      val group = operation.group
-      val held = group.forall(g => leases.get(g).exists(_.events == app.events))
-      val outOfRange = settings.limits.check(operation)
-      if (outOfRange.isDefined) Some(RobotFailure.RobotError(robotId, outOfRange.get))
-      else if (!online) Some(RobotFailure.RobotOffline(robotId))
-      else if (!held) Some(RobotFailure.LeaseNotHeld(robotId, group.get, group.flatMap(leases.get).map(_.name)))
-      else if (safety.isDefined && refusedWhenUnsafe(operation)) Some(RobotFailure.SafetyHold(robotId, safety.get))
-      else None
-    }
-
-    private def refusedWhenUnsafe(operation: Operation): Boolean = operation match {
-      case _: Operation.Walk | _: Operation.Arms => true
-      case Operation.Posture(p)                  => p != Posture.Sit
-      case r: Operation.RawCall =>
-        (r.group.contains(ActuatorGroup.Walk) && !RpcMethod.find(r.module, r.method).contains(RpcMethod.Stop) &&
-          !(RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture) && r.params == Vector(
-            RpcValue.Text(Posture.Sit.name)))) ||
-        r.group.contains(ActuatorGroup.Arms)
-      case _ => false
-    }
-
-    // The latest battery readings, at most `batteryReadings` of them: the hold acts on a sustained reading only.
-    private var readings = Vector.empty[Double]
-
-    private def checkBattery(c: RobotAccess.Opened, snapshot: RobotSnapshot): Unit =
-      snapshot.batteryVoltage.foreach { volts =>
-        readings = (readings :+ volts).takeRight(settings.batteryReadings)
-        val sustained = readings.size == settings.batteryReadings
-        if (safety.isEmpty && sustained && readings.forall(_ < settings.lowBattery)) {
-          val reason = RobotGuard.batteryLow(readings.max, readings.size, settings)
+    /** A battery reading: a hold that starts stops and sits the robot, and both ends are told to the holders. */
+    private def checkBattery(c: RobotAccess.Opened, s: GuardState, volts: Double): GuardState =
+      s.batteryRead(volts, settings) match {
+        case (next, Some(BatteryChange.HoldStarted(reason))) =>
           context.log.warn("Robot [{}]: {}; stopping and sitting down", robotId, reason)
-          safety = Some(reason)
-          report()
-          leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))
-          stopWalking(c, reason, thenSit = true)
-        } else if (safety.isDefined && sustained && readings.forall(_ > settings.batteryOk)) {
+          report(next)
+          next.leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyStop(robotId, reason))
+          stopWalking(c, next, reason, thenSit = true)
+        case (next, Some(BatteryChange.HoldCleared)) =>
           context.log.info("Robot [{}]: battery back at {} V; motion allowed again", robotId, volts)
-          safety = None
-          report()
-          leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyCleared(robotId))
-        }
+          report(next)
+          next.leases.values.toSet.foreach((holder: AppInfo) => holder.events ! AppEvent.SafetyCleared(robotId))
+          next
+        case (next, None) => next
       }
 
-    private def stopWalking(c: RobotAccess.Opened, why: String, thenSit: Boolean = false): Unit = {
-      if (walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
+    private def stopWalking(c: RobotAccess.Opened, s: GuardState, why: String, thenSit: Boolean = false): GuardState = {
+      if (s.walking.isDefined || thenSit) context.log.info("Robot [{}]: stop ({})", robotId, why)
       timers.cancel(WalkKey)
-      walking = None
-      safetyCall(c, if (thenSit) SafetyStep.StopThenSit else SafetyStep.StopOnly, RpcMethod.Stop.call(),
+      safetyCall(c, s.walkEnded, if (thenSit) SafetyStep.StopThenSit else SafetyStep.StopOnly, RpcMethod.Stop.call(),
         settings.callTimeout)
     }
-
-    private def walkCall(w: Operation.Walk): RpcCall =
-      RpcMethod.Walk.call(RpcValue.Number(w.vx.toFloat), RpcValue.Number(w.vy.toFloat),
-        RpcValue.Number(w.omega.toFloat))
 
     private def reply(replyTo: ActorRef[CallResult], operation: Operation,
         result: Either[RobotFailure, Option[RpcValue]]): Unit =
@@ -464,9 +349,10 @@ private[robotmiddleware] object RobotGuard {
     // comes back here, so the guard's own bookkeeping (walk refresh, stop after a failed posture) is the same for both
     // doors. Every other operation leaves nothing to keep: the robot's command owner answers its caller directly,
     // which spares each call the hop back through this actor (and the thread it may wake).
-    private def call(c: RobotAccess.Opened, rpc: RpcCall, operation: Operation, replyTo: ActorRef[CallResult],
-        once: Boolean, priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
+    private def call(c: RobotAccess.Opened, operation: Operation, replyTo: ActorRef[CallResult], once: Boolean,
+        priority: Priority = Priority.Command, timeout: FiniteDuration = settings.callTimeout): Unit = {
       val idempotent = if (once) Some(false) else None
+      val rpc = Operation.toCall(operation)
       operation match {
         case _: Operation.Walk | _: Operation.Posture =>
           implicit val askTimeout: Timeout = timeout + settings.askMargin
@@ -482,34 +368,30 @@ private[robotmiddleware] object RobotGuard {
       }
     }
 
-    private def run(c: RobotAccess.Opened, app: AppInfo, operation: Operation,
-        replyTo: ActorRef[CallResult], once: Boolean): Unit = operation match {
+    private def run(c: RobotAccess.Opened, s: GuardState, app: AppInfo, operation: Operation,
+        replyTo: ActorRef[CallResult], once: Boolean): GuardState = operation match {
       case w: Operation.Walk =>
         // The first walk is confirmed by the robot; afterwards the middleware keeps it fresh inside the robot's lease.
         // Until then nothing is refreshed: neither this walk, unconfirmed, nor the one it replaces.
-        walking = Some(w -> app)
         timers.cancel(WalkKey)
-        call(c, walkCall(w), operation, replyTo, once)
+        call(c, operation, replyTo, once)
+        s.walkStarted(w, app)
       case Operation.Stop() =>
         timers.cancel(WalkKey)
-        walking = None
-        call(c, RpcMethod.Stop.call(), operation, replyTo, once, Priority.Safety)
-      case Operation.Head(pan, tilt) =>
-        val rpc = RpcMethod.Head.call(RpcValue.Number(pan.toFloat), RpcValue.Number(tilt.toFloat))
-        call(c, rpc, operation, replyTo, once)
-      case Operation.Arms(ls, le, rs, re) =>
-        val rpc = RpcMethod.Arms.call(Vector(ls, le, rs, re).map(v => RpcValue.Number(v.toFloat)): _*)
-        call(c, rpc, operation, replyTo, once)
-      case Operation.Posture(p) =>
+        call(c, operation, replyTo, once, Priority.Safety)
+        s.walkEnded
+      case _: Operation.Posture =>
         timers.cancel(WalkKey)
-        walking = None
-        val rpc = RpcMethod.Posture.call(RpcValue.Text(p.name))
-        call(c, rpc, operation, replyTo, once, timeout = settings.postureTimeout)
-      case Operation.Say(text) => call(c, RpcMethod.Say.call(RpcValue.Text(text)), operation, replyTo, once)
+        call(c, operation, replyTo, once, timeout = settings.postureTimeout)
+        s.walkEnded
       case r: Operation.RawCall =>
         val timeout = if (RpcMethod.find(r.module, r.method).contains(RpcMethod.Posture)) settings.postureTimeout
         else settings.callTimeout
-        call(c, RpcCall(r.module, r.method, r.params), operation, replyTo, once, timeout = timeout)
+        call(c, operation, replyTo, once, timeout = timeout)
+        s
+      case _ =>
+        call(c, operation, replyTo, once)
+        s
     }
   }
 }

@@ -12,7 +12,7 @@ import com.google.protobuf.{ByteString, CodedInputStream, WireFormat}
 
 import naogateway.proto.HaViMoRegionFrame
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
-import naogateway.wire.{HaViMo, MessageContents, Posture, RpcCall, RpcReply, RpcValue}
+import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.{RobotSnapshot, VisionFrame}
 import robotmiddleware.Operation
 
@@ -116,23 +116,9 @@ object EndpointProtocol {
   private def is(tag: Int, field: Int, wireType: Int): Boolean =
     WireFormat.getTagFieldNumber(tag) == field && WireFormat.getTagWireType(tag) == wireType
 
-  private def numbers(call: RpcCall, names: String*): Either[String, Vector[Double]] = {
-    val values = call.params.collect {
-      case RpcValue.Number(f) => f.toDouble
-      case RpcValue.UInt(i)   => i.toDouble
-    }
-    if (call.params.length != names.length || values.length != names.length)
-      Left(
-        s"$Malformed${call.name} takes ${names.length} number(s) (${names.mkString(", ")}), got " +
-          s"${describe(call.params)}")
-    else if (values.exists(v => v.isNaN || v.isInfinite)) Left(s"$Malformed${call.name}: numbers must be finite")
-    else Right(values)
-  }
-
   private def texts(call: RpcCall): Vector[String] = call.params.collect { case RpcValue.Text(t) => t }
 
-  private def describe(params: Vector[RpcValue]): String =
-    if (params.isEmpty) "none" else params.map(_.productPrefix.toLowerCase).mkString("(", ", ", ")")
+  private def describe(params: Vector[RpcValue]): String = Operation.describe(params)
 
   private def groups(call: RpcCall)(route: Vector[ActuatorGroup] => Route): Either[String, Route] = {
     val names = texts(call)
@@ -152,9 +138,6 @@ object EndpointProtocol {
     def noParams(route: => Either[String, Route]): Either[String, Route] =
       if (call.params.isEmpty) route
       else Left(s"$Malformed${call.name} takes no parameters, got ${describe(call.params)}")
-    def execute(operation: => Operation): Either[String, Route] =
-      try Right(Route.Execute(robotId, operation))
-      catch { case e: IllegalArgumentException => Left(Malformed + e.getMessage.stripPrefix("requirement failed: ")) }
     (call.module, call.method) match {
       case (GatewayModule, "robots")  => noParams(Right(Route.Robots))
       case (GatewayModule, "status")  => noParams(Right(Route.Status(robotId)))
@@ -174,28 +157,8 @@ object EndpointProtocol {
               s"got ${describe(call.params)}")
         }
       case (GatewayModule, _) => Left(RpcReply.unknownMethod(call.module, call.method))
-      case ("motion", "walk") =>
-        numbers(call, "vx", "vy", "omega").flatMap(v => execute(Operation.Walk(v(0), v(1), v(2))))
-      case ("motion", "stop") => noParams(execute(Operation.Stop()))
-      case ("motion", "head") => numbers(call, "pan", "tilt").flatMap(v => execute(Operation.Head(v(0), v(1))))
-      case ("motion", "arms") =>
-        numbers(call, "leftShoulder", "leftElbow", "rightShoulder", "rightElbow")
-          .flatMap(v => execute(Operation.Arms(v(0), v(1), v(2), v(3))))
-      case ("motion", "posture") =>
-        call.params match {
-          case Vector(RpcValue.Text(name)) =>
-            Posture.target(name).left.map(Malformed + _).flatMap(target => execute(Operation.Posture(target)))
-          case other =>
-            Left(
-              s"${Malformed}motion.posture takes one text (${Posture.targets.map(_.name).mkString(", ")}), got " +
-                s"${describe(other)}")
-        }
-      case ("speech", "say") =>
-        call.params match {
-          case Vector(RpcValue.Text(text)) => execute(Operation.Say(text))
-          case other                       => Left(s"${Malformed}speech.say takes one text, got ${describe(other)}")
-        }
-      case (module, method) => execute(Operation.RawCall(module, method, call.params))
+      // A robot call: the operation the method table names (RawCall for any other), as the guard turns it back.
+      case _ => Operation.fromCall(call).left.map(Malformed + _).map(Route.Execute(robotId, _))
     }
   }
 

@@ -156,14 +156,14 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
             at - 250000000L
           ))
       )
-      val lines = ControlServer.servoLines(robot, robotmiddleware.ServoLimits(65, 10.0), at)
+      val lines = ControlText.servoLines(robot, robotmiddleware.ServoLimits(65, 10.0), at)
       lines.head shouldBe "robot 2: 3 servos, read 250 ms ago, 4 bus errors since power-up"
       lines(2) should (startWith("1 ") and include("512 (+0°)") and include("-40") and include("12.1 V") and
         include("41 °C"))
       lines(2) should not include "HOT"
       lines(3) should (include("614 (+30°)") and include("HOT, LOW VOLTAGE, error 0x20"))
       lines(4) shouldBe "3    silent"
-      ControlServer.servoLines(robot.copy(servos = None), robotmiddleware.ServoLimits(), at) shouldBe List(
+      ControlText.servoLines(robot.copy(servos = None), robotmiddleware.ServoLimits(), at) shouldBe List(
         "robot 2: no servo telemetry yet")
       ControlProtocol.parse(Seq("servos", "2")) shouldBe Right(Request.Servos(2))
     }

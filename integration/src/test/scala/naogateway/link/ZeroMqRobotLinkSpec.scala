@@ -184,13 +184,19 @@ class ZeroMqRobotLinkSpec extends ScalaTestWithActorTestKit(ZeroMqRobotLinkSpec.
         deaf.bind(new InetSocketAddress("127.0.0.1", 0))
         val settings = GatewaySettings(system).zeromq
         val owner = createTestProbe[ZeroMqRobotLink.Event]()
+        val sender = createTestProbe[NoResponseActor.Command]()
         val outcomes = createTestProbe[Outbox.Outcome]()
         val link = spawn(ZeroMqRobotLink(21, s"tcp://127.0.0.1:${deaf.getLocalPort}", settings, owner.ref,
-            ZeroMqRobotLink.SharedLoop(system).loop))
-        // The gate and the in-flight cap are the sender's and the outbox's: the link only says a poll is due.
-        val due = owner.expectMessageType[ZeroMqRobotLink.PollDue](settings.statusInterval * 3)
-        due.calls.map(c => c.module -> c.method) shouldBe ZeroMqRobotLink.StatusCalls
-        due.calls.flatMap(_.callId).map(CallId.ownerOf) shouldBe Vector.fill(3)(Some(CallId.Owner.StatusPoll))
+            sender.ref, ZeroMqRobotLink.SharedLoop(system).loop))
+        // The gate and the in-flight cap are the sender's and the outbox's: the link submits its polls to the sender.
+        val due = Vector.fill(3)(sender.expectMessageType[NoResponseActor.Submit](settings.statusInterval * 3)).map {
+          case NoResponseActor.Submit(RobotFrames.Outbound.CallOut(call), Priority.Heartbeat, key, _, Some(_), None) =>
+            key shouldBe call.callId
+            call
+          case other => fail(s"not a status poll: $other")
+        }
+        due.map(c => c.module -> c.method) shouldBe ZeroMqRobotLink.StatusCalls
+        due.flatMap(_.callId).map(CallId.ownerOf) shouldBe Vector.fill(3)(Some(CallId.Owner.StatusPoll))
         // Nobody listens on the port: with immediate queueing the request is dropped, not kept for later.
         link ! ZeroMqRobotLink.Send(Array[Byte](8, 1), Some(outcomes.ref), 6L)
         outcomes.expectMessageType[Outbox.Dropped].tag shouldBe 6L

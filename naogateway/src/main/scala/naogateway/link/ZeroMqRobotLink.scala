@@ -21,12 +21,13 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
-import naogateway.{CallId, Outbox, ZeroMqLinkSettings}
+import naogateway.RobotFrames.Outbound
+import naogateway.{CallId, NoResponseActor, Outbox, Priority, ZeroMqLinkSettings}
 
 /** The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several may
   * wait in the robot's queue, answered in order), replies come back as decoded messages. Such a robot cannot push
-  * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive. It sends
-  * nothing of its own: its polls go out through the robot's sender and the outbox like every other request.
+  * keep-alives, so the link polls its status and hands each complete answer on as the robot's keep-alive. Its polls go
+  * out through the robot's sender (whose ref it holds, as the stream does) and the outbox like every other request.
   */
 object ZeroMqRobotLink {
 
@@ -53,24 +54,19 @@ object ZeroMqRobotLink {
   /** Something arrived that is not a `Message`. */
   final case class MessageRejected(reason: String) extends Event
 
-  /** A status poll is due: send `calls` (their call ids set) through the robot's sender, which counts them against the
-    * robot's in-flight cap; `outcome` learns whether each went out, so a refused poll is given up at once.
-    */
-  final case class PollDue(calls: Vector[RpcCall], outcome: ActorRef[Outbox.Outcome]) extends Event
-
-  /** The poll call `callId` was answered: it no longer takes room in the robot's buffer. */
-  final case class PollAnswered(callId: Long) extends Event
-
   /** The calls of one status poll, answered by every robot of the RPC contract (docs/protocol.md 7.2). */
   val StatusCalls: Vector[(String, String)] =
     Vector("system" -> "ping", "system" -> "battery", "motion" -> "getPosture")
 
-  /** A link to robot `robotId` at `endpoint`, reporting to `owner`; the socket lives on `loop`. */
+  /** A link to robot `robotId` at `endpoint`, reporting to `owner` and polling through the robot's `sender`; the socket
+    * lives on `loop`.
+    */
   def apply(
       robotId: Int,
       endpoint: String,
       settings: ZeroMqLinkSettings,
       owner: ActorRef[Event],
+      sender: ActorRef[NoResponseActor.Command],
       loop: ZeroMqLoop
   ): Behavior[Command] =
     Behaviors.setup { context =>
@@ -135,7 +131,12 @@ object ZeroMqRobotLink {
                   val calls = ids.zip(StatusCalls).map { case (id, (module, method)) =>
                     RpcCall(module, method, Vector.empty, Some(id))
                   }
-                  owner ! PollDue(calls, pollOutcomes)
+                  // The sender counts them against the robot's in-flight cap; each one's outcome comes back here, so a
+                  // refused poll is given up at once.
+                  val hold = NoResponseActor.Awaits.Reply(Some(settings.statusTimeout))
+                  calls.foreach(c =>
+                    sender ! NoResponseActor.Submit(Outbound.CallOut(c), Priority.Heartbeat, c.callId, hold,
+                      Some(pollOutcomes)))
                   running(Some(Poll(now, ids.zip(StatusCalls.map(_._2)).toMap, Map.empty, 0)), CallId.count(ids.last))
                 }
               case Received(bytes) =>
@@ -154,7 +155,8 @@ object ZeroMqRobotLink {
                         owner ! MessageReceived(contents, bytes.length)
                         Behaviors.same
                       case Some((reply, id)) =>
-                        owner ! PollAnswered(id)
+                        // It no longer takes room in the robot's buffer.
+                        sender ! NoResponseActor.Finished(id)
                         poll.filter(_.waiting.contains(id)) match {
                           case None => Behaviors.same // an answer to a poll given up already
                           case Some(p) =>

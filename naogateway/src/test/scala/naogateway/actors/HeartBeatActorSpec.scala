@@ -25,23 +25,27 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
   }
 
   /** A heartbeat whose keep-alives are acknowledged to the returned probe. */
-  private def acknowledging(reports: TestProbe[Report], online: Boolean): (ActorRef[Command], TestProbe[Command]) = {
+  private def acknowledging(reports: TestProbe[Any], online: Boolean): (ActorRef[Command], TestProbe[Command]) = {
     val handled = createTestProbe[Command]()
     val heartbeat =
-      spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, online)))
+      spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, reports.ref,
+            online)))
     heartbeat -> handled
   }
 
-  private def probeId(r: Report): Long = r match {
-    case SendProbe(call) => call.callId.get
-    case other           => fail(s"expected a probe, got $other")
+  /** One probe, submitted straight to the robot's sender (here the same probe as the reports, to keep their order). */
+  private def probeId(r: Any): Long = r match {
+    case NoResponseActor.Submit(RobotFrames.Outbound.CallOut(call), Priority.Heartbeat, key, _, None, None) =>
+      key shouldBe call.callId
+      call.callId.get
+    case other => fail(s"expected a probe, got $other")
   }
 
   "HeartBeatActor" must {
     "start its probe ids at a random point in every incarnation" in {
       val firsts = (1 to 2).map { _ =>
-        val reports = createTestProbe[Report]()
-        val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = false))
+        val reports = createTestProbe[Any]()
+        val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false))
         heartbeat ! ProbeNow
         val id = probeId(reports.receiveMessage())
         CallId.ownerOf(id) shouldBe Some(CallId.Owner.Heartbeat)
@@ -52,8 +56,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       firsts.distinct.size shouldBe 2
     }
     "probe a quiet robot three times and then report it offline" in {
-      val reports = createTestProbe[Report]()
-      spawn(HeartBeatActor(settings, reports.ref, online = true))
+      val reports = createTestProbe[Any]()
+      spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true))
       reports.expectMessage(CameOnline)
       manualTime.timePasses(399.millis)
       reports.expectNoMessage(Duration.Zero)
@@ -73,7 +77,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       reports.expectNoMessage(Duration.Zero)
     }
     "stay online while keep-alives arrive, and recover when a probe is answered" in {
-      val reports = createTestProbe[Report]()
+      val reports = createTestProbe[Any]()
       val (heartbeat, handled) = acknowledging(reports, online = true)
       reports.expectMessage(CameOnline)
       // Time moves only once the keep-alive has re-armed the quiet check; the silence is measured from there.
@@ -91,8 +95,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       reports.expectNoMessage(Duration.Zero)
     }
     "come back online on the next keep-alive, and probe on demand when offline" in {
-      val reports = createTestProbe[Report]()
-      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = false))
+      val reports = createTestProbe[Any]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false))
       probeId(reports.receiveMessage())
       manualTime.timePasses(150.millis)
       probeId(reports.receiveMessage())
@@ -108,8 +112,9 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       reports.expectMessage(CameOnline)
     }
     "back off rounds for a robot that never answers, however often it is wanted, and start again after an answer" in {
-      val reports = createTestProbe[Report]()
-      val heartbeat = spawn(HeartBeatActor(settings.copy(probeBackoffMax = 2.seconds), reports.ref, online = false))
+      val reports = createTestProbe[Any]()
+      val heartbeat =
+        spawn(HeartBeatActor(settings.copy(probeBackoffMax = 2.seconds), reports.ref, reports.ref, online = false))
       // One round: three probes 150 ms apart, then the last one's timeout.
       def silentRound(): Unit = {
         probeId(reports.receiveMessage())
@@ -143,8 +148,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       probeId(reports.receiveMessage())
     }
     "ignore answers to probes it did not send" in {
-      val reports = createTestProbe[Report]()
-      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, online = true))
+      val reports = createTestProbe[Any]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true))
       reports.expectMessage(CameOnline)
       manualTime.timePasses(400.millis)
       val id = probeId(reports.receiveMessage())
@@ -153,8 +158,9 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       probeId(reports.receiveMessage())
     }
     "report a degraded link with hysteresis instead of flapping" in {
-      val reports = createTestProbe[Report]()
-      val heartbeat = spawn(HeartBeatActor(settings.copy(quietAfter = 1.second), reports.ref, online = true))
+      val reports = createTestProbe[Any]()
+      val heartbeat =
+        spawn(HeartBeatActor(settings.copy(quietAfter = 1.second), reports.ref, reports.ref, online = true))
       reports.expectMessage(CameOnline)
       // Every keep-alive for a full window: good, nothing reported.
       (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }

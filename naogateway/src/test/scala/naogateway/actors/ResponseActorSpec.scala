@@ -14,9 +14,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
   private val settings = CallSettings(2.seconds, idempotentRetries = 2, stashCapacity = 2)
 
   /** The next attempt the robot's sender handed the outbox; the robot actor only counts it. */
-  private def transmitted(
-      robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command]): (Long, RpcCall, Outbox.Send) = {
-    robot.expectMessageType[RobotActor.FrameSent]
+  private def transmitted(outbox: TestProbe[Outbox.Command]): (Long, RpcCall, Outbox.Send) = {
     val (call, send) = sent(outbox)
     send.tag shouldBe call.callId.get
     (call.callId.get, call, send)
@@ -30,8 +28,8 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("system", "battery", Vector.empty), caller.ref)
       responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      val (first, _, _) = transmitted(robot, outbox)
-      val (second, _, _) = transmitted(robot, outbox)
+      val (first, _, _) = transmitted(outbox)
+      val (second, _, _) = transmitted(outbox)
       CallId.ownerOf(first) shouldBe Some(CallId.Owner.Response)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.UInt(99))), Some(second)))
       caller.expectMessage(CallResult(3, "system.ping", Right(Some(RpcValue.UInt(99)))))
@@ -48,13 +46,13 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("motion", "stop", Vector.empty), caller.ref)
-      val (first, _, _) = transmitted(robot, outbox)
+      val (first, _, _) = transmitted(outbox)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (second, c2, _) = transmitted(robot, outbox)
+      val (second, c2, _) = transmitted(outbox)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (third, _, _) = transmitted(robot, outbox)
+      val (third, _, _) = transmitted(outbox)
       // A robot answers every request once: a repeated call id would earn two answers to one request.
       Set(first, second, third) should have size 3
       Seq(second, third).foreach(id => CallId.ownerOf(id) shouldBe Some(CallId.Owner.Response))
@@ -70,10 +68,10 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("motion", "getPosture", Vector.empty), caller.ref)
-      val (first, _, _) = transmitted(robot, outbox)
+      val (first, _, _) = transmitted(outbox)
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (second, _, _) = transmitted(robot, outbox)
+      val (second, _, _) = transmitted(outbox)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.Text("sit"))), Some(first)))
       caller.expectMessage(CallResult(3, "motion.getPosture", Right(Some(RpcValue.Text("sit")))))
       // The second attempt's answer finds the call settled; no sample from a call sent twice (Karn's rule).
@@ -88,7 +86,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("speech", "say", Vector(RpcValue.Text("hi"))), caller.ref)
-      transmitted(robot, outbox)
+      transmitted(outbox)
       manualTime.timePasses(2.seconds)
       caller.expectMessageType[CallResult].result.left.toOption.get shouldBe a[RobotFailure.Timeout]
       outbox.expectNoMessage(Duration.Zero)
@@ -99,7 +97,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      transmitted(robot, outbox)
+      transmitted(outbox)
       responder ! ResponseActor.Reachability(false)
       caller.expectMessage(CallResult(3, "system.ping", Left(RobotFailure.RobotOffline(3))))
       responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
@@ -113,14 +111,14 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       (1 to 7).foreach(i =>
         responder ! RobotAccess.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
-      val ids = (1 to 4).map(_ => transmitted(robot, outbox)._1)
+      val ids = (1 to 4).map(_ => transmitted(outbox)._1)
       caller.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(3,
           "4 calls in flight and 2 waiting"))
       outbox.expectNoMessage(Duration.Zero)
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(ids.head)))
       caller.expectMessageType[CallResult].result shouldBe Right(None)
       robot.expectMessageType[RobotActor.RoundTrip]
-      transmitted(robot, outbox)._2 shouldBe RpcCall("speech", "say", Vector(RpcValue.Text("5")), Some(ids.last + 1))
+      transmitted(outbox)._2 shouldBe RpcCall("speech", "say", Vector(RpcValue.Text("5")), Some(ids.last + 1))
     }
     "start a waiting call's deadline only when it leaves, so its attempts are not spent waiting for room" in {
       val robot = createTestProbe[RobotActor.FromChild]()
@@ -129,7 +127,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       (1 to 4).foreach(i =>
         responder ! RobotAccess.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
-      val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
+      val busy = (1 to 4).map(_ => transmitted(outbox)._1)
       responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
       outbox.expectNoMessage(100.millis)
       // Longer than one attempt of the ping: it has not left, so it is neither resent nor timed out.
@@ -138,13 +136,13 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(busy.head)))
       caller.expectMessageType[CallResult].call shouldBe "speech.say"
       robot.expectMessageType[RobotActor.RoundTrip]
-      val (ping, _, _) = transmitted(robot, outbox)
+      val (ping, _, _) = transmitted(outbox)
       // Now its three attempts of 667 ms each run: the first resend comes one attempt after it left.
       manualTime.timePasses(600.millis)
       outbox.expectNoMessage(Duration.Zero)
       manualTime.timePasses(100.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      transmitted(robot, outbox)._2.name shouldBe "system.ping"
+      transmitted(outbox)._2.name shouldBe "system.ping"
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(Some(RpcValue.UInt(1))), Some(ping)))
       caller.expectMessage(CallResult(3, "system.ping", Right(Some(RpcValue.UInt(1)))))
     }
@@ -154,7 +152,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), caller.ref)
-      val (id, _, t) = transmitted(robot, outbox)
+      val (id, _, t) = transmitted(outbox)
       t.replyTo.get ! Outbox.RefusedByRule(id, Outbox.NoSendingWhileGameRuns)
       caller.expectMessage(CallResult(3, "system.ping", Left(RobotFailure.RuleGate(Outbox.NoSendingWhileGameRuns))))
     }
@@ -164,17 +162,17 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val caller = createTestProbe[CallResult]()
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       responder ! RobotAccess.Call(RpcCall("motion", "walk", Vector.fill(3)(RpcValue.Number(0.2f))), caller.ref)
-      val (walk, _, _) = transmitted(robot, outbox)
+      val (walk, _, _) = transmitted(outbox)
       responder ! RobotAccess.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
       caller.expectMessage(CallResult(3, "motion.walk", Left(RobotFailure.Superseded(3, "motion.walk"))))
       // The withdrawal reaches the outbox before the stop: a walk held behind the budget cannot follow the stop.
       outbox.expectMessage(Outbox.Withdraw(3, Set(walk)))
-      val (stop, call, send) = transmitted(robot, outbox)
+      val (stop, call, send) = transmitted(outbox)
       call.name shouldBe "motion.stop"
       send.priority shouldBe Priority.Safety
       manualTime.timePasses(667.millis)
       robot.expectMessage(RobotActor.Retransmitted)
-      val (_, again, _) = transmitted(robot, outbox)
+      val (_, again, _) = transmitted(outbox)
       again.name shouldBe "motion.stop"
       // Only the stop is retried, never the superseded walk; a late answer to the walk changes nothing.
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(walk)))
@@ -190,13 +188,13 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       val (responder, _) = callActors(testKit, 3, settings, robot, outbox)
       (1 to 4).foreach(i =>
         responder ! RobotAccess.Call(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), caller.ref))
-      val busy = (1 to 4).map(_ => transmitted(robot, outbox)._1)
+      val busy = (1 to 4).map(_ => transmitted(outbox)._1)
       def head(pan: Float) = RpcCall("motion", "head", Vector(RpcValue.Number(pan), RpcValue.Number(0f)))
       responder ! RobotAccess.Call(head(0.1f), caller.ref)
       responder ! RobotAccess.Call(head(0.2f), caller.ref)
       caller.expectMessage(CallResult(3, "motion.head", Left(RobotFailure.Superseded(3, "motion.head"))))
       responder ! RobotAccess.Call(RpcCall("motion", "stop", Vector.empty), caller.ref, Priority.Safety)
-      val (stop, stopCall, _) = transmitted(robot, outbox)
+      val (stop, stopCall, _) = transmitted(outbox)
       stopCall.name shouldBe "motion.stop"
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(stop)))
       caller.expectMessageType[CallResult].call shouldBe "motion.stop"
@@ -206,7 +204,7 @@ class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wit
       responder ! ResponseActor.ReplyReceived(RpcReply(Right(None), Some(busy.head)))
       caller.expectMessageType[CallResult].call shouldBe "speech.say"
       robot.expectMessageType[RobotActor.RoundTrip]
-      transmitted(robot, outbox)._2.params shouldBe Vector(RpcValue.Number(0.2f), RpcValue.Number(0f))
+      transmitted(outbox)._2.params shouldBe Vector(RpcValue.Number(0.2f), RpcValue.Number(0f))
     }
   }
 }

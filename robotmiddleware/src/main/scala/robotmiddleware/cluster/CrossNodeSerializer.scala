@@ -5,7 +5,6 @@ import naogateway.RobotFailure
 import naogateway.wire.ActuatorGroup
 
 import java.io.NotSerializableException
-import java.net.{InetAddress, InetSocketAddress}
 
 import akka.actor.ExtendedActorSystem
 import akka.actor.typed.scaladsl.adapter._
@@ -16,7 +15,7 @@ import scalapb.GeneratedMessage
 
 import naogateway._
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
-import naogateway.wire.{HaViMoGrid, HaViMoRegion, Posture, RpcValue}
+import naogateway.wire.{HaViMoGrid, RpcValue}
 import robotmiddleware._
 import robotmiddleware.cluster.{proto => pb}
 
@@ -29,6 +28,7 @@ import robotmiddleware.cluster.{proto => pb}
   */
 final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerWithStringManifest {
   import CrossNodeSerializer.{Manifest => M}
+  import CrossNodeProtos._
 
   // Akka reserves 0-40 for itself; every node must use the same number, so it never changes.
   override def identifier: Int = 5301
@@ -232,13 +232,6 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
   private def unknown(o: AnyRef): IllegalArgumentException =
     new IllegalArgumentException(s"CrossNodeSerializer cannot serialize [${o.getClass.getName}]; see docs/cluster.md")
 
-  private def corrupt(manifest: String, detail: String): NotSerializableException =
-    new NotSerializableException(s"CrossNodeSerializer: corrupt [$manifest]: $detail")
-
-  // A node of another build may name a group this one does not have: refuse the message rather than guess.
-  private def group(manifest: String, name: String): ActuatorGroup =
-    ActuatorGroup.parse(name).fold(e => throw corrupt(manifest, e), identity)
-
   // In the docs' order, so the same set always gives the same bytes.
   private def groupNames(groups: Set[ActuatorGroup]): Seq[String] = ActuatorGroup.all.filter(groups).map(_.name)
 
@@ -250,170 +243,6 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
 
   private def gameData(bytes: Array[Byte]): GameControlData =
     GameControllerCodec.decodeControl(bytes).fold(e => throw corrupt(M.GameControlData, e.describe), identity)
-
-  private def toProto(o: Operation): pb.Operation = {
-    import pb.Operation.Kind
-    pb.Operation(o match {
-      case robotmiddleware.Operation.Walk(vx, vy, omega)  => Kind.Walk(pb.Operation.Walk(vx, vy, omega))
-      case robotmiddleware.Operation.Stop()               => Kind.Stop(pb.Operation.Stop())
-      case robotmiddleware.Operation.Head(pan, tilt)      => Kind.Head(pb.Operation.Head(pan, tilt))
-      case robotmiddleware.Operation.Arms(ls, le, rs, re) => Kind.Arms(pb.Operation.Arms(ls, le, rs, re))
-      case robotmiddleware.Operation.Posture(posture)     => Kind.Posture(pb.Operation.Posture(posture.name))
-      case robotmiddleware.Operation.Say(text)            => Kind.Say(pb.Operation.Say(text))
-      case robotmiddleware.Operation.RawCall(module, method, params) =>
-        Kind.RawCall(pb.Operation.RawCall(module, method, params.map(_.toProto)))
-    })
-  }
-
-  private def fromProto(o: pb.Operation): Operation = {
-    import pb.Operation.Kind
-    o.kind match {
-      case Kind.Walk(w) => robotmiddleware.Operation.Walk(w.vx, w.vy, w.omega)
-      case Kind.Stop(_) => robotmiddleware.Operation.Stop()
-      case Kind.Head(h) => robotmiddleware.Operation.Head(h.pan, h.tilt)
-      case Kind.Arms(a) => robotmiddleware.Operation.Arms(a.leftShoulder, a.leftElbow, a.rightShoulder, a.rightElbow)
-      case Kind.Posture(p) =>
-        robotmiddleware.Operation.Posture(Posture.target(p.posture).fold(e => throw corrupt(M.Operation, e), identity))
-      case Kind.Say(s) => robotmiddleware.Operation.Say(s.text)
-      case Kind.RawCall(r) =>
-        val params = r.params.iterator.map(naogateway.wire.RpcValue.fromProto).toVector
-        robotmiddleware.Operation.RawCall(r.module, r.method, params)
-      case Kind.Empty => throw corrupt(M.Operation, "no operation")
-    }
-  }
-
-  private def toProto(f: RobotFailure): pb.RobotFailure = {
-    import pb.RobotFailure.Kind
-    import naogateway.{RobotFailure => F}
-    pb.RobotFailure(f match {
-      case F.RobotOffline(robotId) => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
-      case F.UnknownRobot(robotId) => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
-      case F.LeaseNotHeld(robotId, group, holder) =>
-        Kind.LeaseNotHeld(pb.RobotFailure.LeaseNotHeld(robotId, group.name, holder))
-      case F.RuleGate(rule)                      => Kind.RuleGate(pb.RobotFailure.RuleGate(rule))
-      case F.Timeout(robotId, operation, millis) => Kind.Timeout(pb.RobotFailure.Timeout(robotId, operation, millis))
-      case F.RobotError(robotId, error)          => Kind.RobotError(pb.RobotFailure.RobotError(robotId, error))
-      case F.SafetyHold(robotId, reason)         => Kind.SafetyHold(pb.RobotFailure.SafetyHold(robotId, reason))
-      case F.Overloaded(robotId, detail)         => Kind.Overloaded(pb.RobotFailure.Overloaded(robotId, detail))
-      case F.Superseded(robotId, call)           => Kind.Superseded(pb.RobotFailure.Superseded(robotId, call))
-      case F.Interrupted(robotId, call)          => Kind.Interrupted(pb.RobotFailure.Interrupted(robotId, call))
-    })
-  }
-
-  private def fromProto(f: pb.RobotFailure): RobotFailure = {
-    import pb.RobotFailure.Kind
-    import naogateway.{RobotFailure => F}
-    f.kind match {
-      case Kind.RobotOffline(m) => F.RobotOffline(m.robotId)
-      case Kind.UnknownRobot(m) => F.UnknownRobot(m.robotId)
-      case Kind.LeaseNotHeld(m) => F.LeaseNotHeld(m.robotId, group(M.RobotFailure, m.group), m.holder)
-      case Kind.RuleGate(m)     => F.RuleGate(m.rule)
-      case Kind.Timeout(m)      => F.Timeout(m.robotId, m.operation, m.millis)
-      case Kind.RobotError(m)   => F.RobotError(m.robotId, m.error)
-      case Kind.SafetyHold(m)   => F.SafetyHold(m.robotId, m.reason)
-      case Kind.Overloaded(m)   => F.Overloaded(m.robotId, m.detail)
-      case Kind.Superseded(m)   => F.Superseded(m.robotId, m.call)
-      case Kind.Interrupted(m)  => F.Interrupted(m.robotId, m.call)
-      case Kind.Empty           => throw corrupt(M.RobotFailure, "no failure")
-    }
-  }
-
-  private def toProto(a: InetSocketAddress): pb.SocketAddress =
-    pb.SocketAddress(Option(a.getAddress).map(ip => ByteString.copyFrom(ip.getAddress)), a.getHostString, a.getPort)
-
-  // getByAddress with the host string never asks a name server, and InetSocketAddress equality holds.
-  private def fromProto(a: pb.SocketAddress): InetSocketAddress = a.ip match {
-    case Some(ip) => new InetSocketAddress(InetAddress.getByAddress(a.host, ip.toByteArray), a.port)
-    case None     => InetSocketAddress.createUnresolved(a.host, a.port)
-  }
-
-  private def toProto(s: SigningState): pb.SigningState = s match {
-    case SigningState.Off      => pb.SigningState.SIGNING_OFF
-    case SigningState.Awaited  => pb.SigningState.SIGNING_AWAITED
-    case SigningState.Signed   => pb.SigningState.SIGNING_SIGNED
-    case SigningState.Unsigned => pb.SigningState.SIGNING_UNSIGNED
-  }
-
-  private def fromProto(s: pb.SigningState): SigningState = s match {
-    case pb.SigningState.SIGNING_OFF      => SigningState.Off
-    case pb.SigningState.SIGNING_AWAITED  => SigningState.Awaited
-    case pb.SigningState.SIGNING_SIGNED   => SigningState.Signed
-    case pb.SigningState.SIGNING_UNSIGNED => SigningState.Unsigned
-    case pb.SigningState.Unrecognized(v)  => throw corrupt("SigningState", s"unknown value $v")
-  }
-
-  private def toProto(q: LinkQuality): pb.LinkQuality = q match {
-    case LinkQuality.Good     => pb.LinkQuality.GOOD
-    case LinkQuality.Degraded => pb.LinkQuality.DEGRADED
-    case LinkQuality.Offline  => pb.LinkQuality.OFFLINE
-  }
-
-  private def fromProto(q: pb.LinkQuality): LinkQuality = q match {
-    case pb.LinkQuality.GOOD            => LinkQuality.Good
-    case pb.LinkQuality.DEGRADED        => LinkQuality.Degraded
-    case pb.LinkQuality.OFFLINE         => LinkQuality.Offline
-    case pb.LinkQuality.Unrecognized(v) => throw corrupt("LinkQuality", s"unknown value $v")
-  }
-
-  private def toProto(s: RobotSnapshot): pb.RobotSnapshot =
-    pb.RobotSnapshot(
-      robotId = s.robotId,
-      address = toProto(s.address),
-      teamId = s.teamId,
-      role = s.role,
-      agent = s.agent,
-      posture = s.posture.map(_.name),
-      batteryVoltage = s.batteryVoltage,
-      uptimeMillis = s.uptimeMillis,
-      bootId = s.bootId,
-      position = s.position.map { case (x, y, heading) => pb.Position(x, y, heading) },
-      online = s.online,
-      quality = toProto(s.quality),
-      receivedAtNanos = s.receivedAtNanos,
-      development = Option.when(s.development)(true),
-      signing = Some(toProto(s.signing)),
-      servos = s.servos.map(t =>
-        pb.ServoReadings(
-          t.servos.map(r =>
-            pb.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, Option.when(r.error != 0)(r.error),
-              Option.when(r.silent)(true))),
-          t.busErrors,
-          t.receivedAtNanos
-        ))
-    )
-
-  private def fromProto(s: pb.RobotSnapshot): RobotSnapshot =
-    naogateway.RobotSnapshot(
-      robotId = s.robotId,
-      address = fromProto(s.address),
-      teamId = s.teamId,
-      role = s.role,
-      agent = s.agent,
-      posture = s.posture.map(Posture.reported),
-      batteryVoltage = s.batteryVoltage,
-      uptimeMillis = s.uptimeMillis,
-      bootId = s.bootId,
-      position = s.position.map(p => (p.x, p.y, p.heading)),
-      online = s.online,
-      quality = fromProto(s.quality),
-      receivedAtNanos = s.receivedAtNanos,
-      development = s.development.contains(true),
-      signing = s.signing.fold[SigningState](SigningState.Off)(fromProto),
-      servos = s.servos.map(t =>
-        naogateway.ServoReadings(
-          t.servos.iterator.take(naogateway.ServoReadings.MaxServos).map(r =>
-            naogateway.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, r.error.getOrElse(0),
-              r.silent.contains(true))).toVector,
-          t.busErrors,
-          t.receivedAtNanos
-        ))
-    )
-
-  private def toProto(r: HaViMoRegion): pb.HaViMoRegion =
-    pb.HaViMoRegion(r.index, r.colour, r.pixels, r.sumX, r.sumY, r.maxX, r.minX, r.maxY, r.minY)
-
-  private def fromProto(r: pb.HaViMoRegion): HaViMoRegion =
-    HaViMoRegion(r.index, r.colour, r.pixels, r.sumX, r.sumY, r.maxX, r.minX, r.maxY, r.minY)
 }
 
 /** The manifests of `CrossNodeSerializer`: short, stable names that stay valid when classes move. */
