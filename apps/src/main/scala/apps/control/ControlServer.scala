@@ -272,6 +272,8 @@ object ControlServer {
   private def body(robots: RobotInterface, settings: ControlSettings, request: Request,
       gateway: Option[GatewaySide])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     implicit val ec: ExecutionContext = system.executionContext
+    // Which servos the status lines mark (robotmiddleware.servos); read when a line needs it.
+    lazy val servoLimits = robotmiddleware.MiddlewareSettings(system).servoLimits
     request match {
       case Request.Status =>
         Source.future(robots.robots()).flatMapConcat { all =>
@@ -282,7 +284,7 @@ object ControlServer {
           val holds = within(robots.holds(), settings.linkStatsTimeout).recover { case NonFatal(_) => Vector.empty }
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) =>
-              s.zip(holds).map { case (st, h) => Answer.Line(statusLine(r, st, h.find(_.robotId == r.robotId))) }
+              s.zip(holds).map { case (st, h) => Answer.Line(statusLine(r, st, h.find(_.robotId == r.robotId), servoLimits)) }
             })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout, all)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
@@ -333,7 +335,7 @@ object ControlServer {
             if (!all.exists(_.robotId == id)) Source.failed(RobotFailure.UnknownRobot(id))
             else
               Source.single(Answer.Line(statusHeader))
-                .concat(robots.status(id).takeWithin(seconds.seconds).map(s => Answer.Line(statusLine(s, None))))
+                .concat(robots.status(id).takeWithin(seconds.seconds).map(s => Answer.Line(statusLine(s, None, limits = servoLimits))))
                 .concat(Source.single(Answer.Ok(s"watched robot $id for $seconds s")))
           }
     }
@@ -419,9 +421,11 @@ object ControlServer {
     * round-trip time, loss, and the robot's clock against the gateway's (the error bound of its estimate, and its
     * drift: `settling` until its bound is within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate),
     * which app holds which lease (`walk=teleop head=zeromq`, `-` for none) and `HELD SAFE` while the middleware holds
-    * the robot safe; `development build` after a robot running one.
+    * the robot safe; `development build` after a robot running one; its hot or low-voltage servos by `limits`
+    * (`SERVOS hot 3 low-voltage 2`, [[apps.RobotRow.servoMark]]).
     */
-  def statusLine(r: RobotSnapshot, stats: Option[LinkStats], holds: Option[RobotHolds] = None): String = {
+  def statusLine(r: RobotSnapshot, stats: Option[LinkStats], holds: Option[RobotHolds] = None,
+      limits: robotmiddleware.ServoLimits = robotmiddleware.ServoLimits()): String = {
     val row = apps.RobotRow.of(r, stats)
     val rtt = row.rttMillis.fold("-")(v => f"$v%.1f ms")
     val loss = row.loss.fold("-")(v => f"${v * 100}%.0f %%")
@@ -433,7 +437,8 @@ object ControlServer {
       f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
       holds.fold("-")(h => naogateway.Printable.text(h.describeLeases)) +
       (if (holds.exists(_.safetyHold.isDefined)) " HELD SAFE" else "") +
-      (if (row.report.development) " development build" else "")
+      (if (row.report.development) " development build" else "") +
+      apps.RobotRow.servoMark(r, limits).fold("")(" " + _)
   }
 
   /** A robot's servo table (docs/protocol.md 6.8) at `now` (the gateway's `System.nanoTime`): a line saying how old it
