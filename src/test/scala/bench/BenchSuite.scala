@@ -69,8 +69,21 @@ object BenchSuite {
 
   /** Every benchmark, in the order they run. */
   val benchmarks: Vector[Benchmark] =
-    Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, CallPathBench, ForgeryBench, RobotCtlBench,
-      IdleCpuBench, FloodBench, WebBench, BusBench, FirmwareBench)
+    Vector(
+      CodecBench,
+      StreamBench,
+      SimBench,
+      TimeSyncBench,
+      GatewayBench,
+      CallPathBench,
+      ForgeryBench,
+      RobotCtlBench,
+      IdleCpuBench,
+      FloodBench,
+      WebBench,
+      BusBench,
+      FirmwareBench
+    )
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the
     * gateway's.

@@ -112,8 +112,8 @@ object BusBench extends Benchmark {
     } finally testKit.shutdownTestKit()
   }
 
-  /** Bus time of one telemetry period: per servo one read of 8 bytes from address 36 and its status packet on the
-    * wire at 1 Mbps (10 bits a byte), plus the servo's return delay (2 µs per unit of address 5); milliseconds.
+  /** Bus time of one telemetry period: per servo one read of 8 bytes from address 36 and its status packet on the wire
+    * at 1 Mbps (10 bits a byte), plus the servo's return delay (2 µs per unit of address 5); milliseconds.
     */
   def telemetryBusMillis(bus: BioloidBus): Double =
     BioloidBus.ServoIds.map { id =>

@@ -167,8 +167,9 @@ object StatusView {
       model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(
         gateLine(model.traffic),
         trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
-      model.robots.map(r => robotLine(r, model.links.get(r.robotId), model.game, model.servoLimits)) ++ model.gameSource.toVector.flatMap(
-        monitorLines) ++
+      model.robots.map(r => robotLine(r, model.links.get(r.robotId), model.game, model.servoLimits)) ++ model.gameSource
+        .toVector.flatMap(
+          monitorLines) ++
       Vector("", "Ctrl-C stops everything.")
   }
 

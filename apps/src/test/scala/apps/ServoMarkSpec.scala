@@ -16,9 +16,12 @@ class ServoMarkSpec extends AnyWordSpec with Matchers {
   private def servos(readings: ServoReading*) = Some(ServoReadings(readings.toVector, Some(0L), 0L))
   private val calm = servos(ServoReading(1, Some(512), Some(0), Some(12.0), Some(40)),
     ServoReading(2, Some(512), Some(0), Some(12.0), Some(41)), ServoReading(3, silent = true))
-  private val troubled = servos(ServoReading(1, Some(512), Some(0), Some(12.0), Some(70)),
-    ServoReading(2, Some(512), Some(0), Some(9.5), Some(41)), ServoReading(3, silent = true),
-    ServoReading(7, Some(512), Some(0), Some(9.9), Some(66)))
+  private val troubled = servos(
+    ServoReading(1, Some(512), Some(0), Some(12.0), Some(70)),
+    ServoReading(2, Some(512), Some(0), Some(9.5), Some(41)),
+    ServoReading(3, silent = true),
+    ServoReading(7, Some(512), Some(0), Some(9.9), Some(66))
+  )
   private val robot = RobotSnapshot(2, new InetSocketAddress("127.0.0.1", 3838), online = true,
     quality = LinkQuality.Good, servos = calm)
 

@@ -314,9 +314,9 @@ object Launcher {
     Behaviors.setup(context => RobotMiddleware(gateway, MiddlewareSettings(context.system)))
 
   /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the
-    * gateway's GameController port `gameController` (on loopback when the gateway listens on every address) and to
-    * each simulated robot at `robots`, as a real GameController's broadcast reaches the gateway and the robots alike:
-    * the robots learn the game state, and close their bus bridge while the game runs (docs/protocol.md 6.9).
+    * gateway's GameController port `gameController` (on loopback when the gateway listens on every address) and to each
+    * simulated robot at `robots`, as a real GameController's broadcast reaches the gateway and the robots alike: the
+    * robots learn the game state, and close their bus bridge while the game runs (docs/protocol.md 6.9).
     */
   private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command],
       gameController: Option[InetSocketAddress], robots: Vector[InetSocketAddress]): Unit = {

@@ -20,9 +20,9 @@ import naogateway.proto.BusBridge
 import naogateway.wire.{BusBridgeFrame, Dynamixel}
 
 /** The gateway's bus bridge (docs/protocol.md 6.9): one TCP listener on loopback per online robot, at `base-port` +
-  * robot id, while the competition gate's reading says the game does not run (in competition mode or not). It follows the robots' comings and goings (the gateway's events) and
-  * the gate (the outbox's figures, asked every [[BusBridgeServer.GatePoll]]); a robot going offline or the gate closing
-  * closes its listener and its client.
+  * robot id, while the competition gate's reading says the game does not run (in competition mode or not). It follows
+  * the robots' comings and goings (the gateway's events) and the gate (the outbox's figures, asked every
+  * [[BusBridgeServer.GatePoll]]); a robot going offline or the gate closing closes its listener and its client.
   */
 object BusBridgeServer {
 

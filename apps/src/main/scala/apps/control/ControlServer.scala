@@ -284,7 +284,9 @@ object ControlServer {
           val holds = within(robots.holds(), settings.linkStatsTimeout).recover { case NonFatal(_) => Vector.empty }
           Source.single(Answer.Line(statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) =>
-              s.zip(holds).map { case (st, h) => Answer.Line(statusLine(r, st, h.find(_.robotId == r.robotId), servoLimits)) }
+              s.zip(holds).map { case (st, h) =>
+                Answer.Line(statusLine(r, st, h.find(_.robotId == r.robotId), servoLimits))
+              }
             })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout, all)).mapConcat(_.map(Answer.Line(_))))
             .concat(Source.future(gameSource(gateway, settings.linkStatsTimeout)).mapConcat { source =>
@@ -335,7 +337,9 @@ object ControlServer {
             if (!all.exists(_.robotId == id)) Source.failed(RobotFailure.UnknownRobot(id))
             else
               Source.single(Answer.Line(statusHeader))
-                .concat(robots.status(id).takeWithin(seconds.seconds).map(s => Answer.Line(statusLine(s, None, limits = servoLimits))))
+                .concat(
+                  robots.status(id).takeWithin(seconds.seconds).map(s =>
+                    Answer.Line(statusLine(s, None, limits = servoLimits))))
                 .concat(Source.single(Answer.Ok(s"watched robot $id for $seconds s")))
           }
     }
@@ -421,8 +425,8 @@ object ControlServer {
     * round-trip time, loss, and the robot's clock against the gateway's (the error bound of its estimate, and its
     * drift: `settling` until its bound is within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate),
     * which app holds which lease (`walk=teleop head=zeromq`, `-` for none) and `HELD SAFE` while the middleware holds
-    * the robot safe; `development build` after a robot running one; its hot or low-voltage servos by `limits`
-    * (`SERVOS hot 3 low-voltage 2`, [[apps.RobotRow.servoMark]]).
+    * the robot safe; `development build` after a robot running one; its hot or low-voltage servos by `limits` (`SERVOS
+    * hot 3 low-voltage 2`, [[apps.RobotRow.servoMark]]).
     */
   def statusLine(r: RobotSnapshot, stats: Option[LinkStats], holds: Option[RobotHolds] = None,
       limits: robotmiddleware.ServoLimits = robotmiddleware.ServoLimits()): String = {

@@ -65,9 +65,12 @@ class HaViMoPathSpec
         case t: TextMessage.Strict => synchronized { pushes :+= t.text.parseJson.asJsObject }
         case other                 => other.asInstanceOf[TextMessage].textStream.runWith(Sink.ignore)
       }
-      Http().singleWebSocketRequest(WebSocketRequest(demo.ws()),
-        Flow.fromSinkAndSourceMat(sink, Source.maybe[Message].mapMaterializedValue(p =>
-          closer.future.foreach(p.success)(system.executionContext)))(Keep.left))
+      Http().singleWebSocketRequest(
+        WebSocketRequest(demo.ws()),
+        Flow.fromSinkAndSourceMat(sink,
+          Source.maybe[Message].mapMaterializedValue(p =>
+            closer.future.foreach(p.success)(system.executionContext)))(Keep.left)
+      )
       def frames = pushes.flatMap(_.fields.get("vision")).flatMap(_.asJsObject.fields.get("1")).map(_.asJsObject)
       try
         eventually(timeout(60.seconds), interval(200.millis)) {

@@ -9,8 +9,8 @@ import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.{LinkQuality, RobotSnapshot, ServoReading, ServoReadings}
 import robotmiddleware.ServoLimits
 
-/** `gateway.servos` (docs/zeromq.md 4): routed as a read of the gateway's own, answered with the ids of the hot and
-  * the low-voltage servos by the middleware's limits, the telemetry itself in the reply's `servoTelemetry`.
+/** `gateway.servos` (docs/zeromq.md 4): routed as a read of the gateway's own, answered with the ids of the hot and the
+  * low-voltage servos by the middleware's limits, the telemetry itself in the reply's `servoTelemetry`.
   */
 class ServosRequestSpec extends AnyWordSpec with Matchers {
 
@@ -38,7 +38,7 @@ class ServosRequestSpec extends AnyWordSpec with Matchers {
     "answer the hot and the low-voltage servos' ids, and carry the telemetry as it travelled" in {
       val answer = RequestDesk.servos(robot, ServoLimits())
       answer.value shouldBe Some(RpcValue.Items(Vector(RpcValue.Items(Vector(RpcValue.UInt(3))),
-        RpcValue.Items(Vector(RpcValue.UInt(2))))))
+            RpcValue.Items(Vector(RpcValue.UInt(2))))))
       val reply = MessageContents.parse(EndpointProtocol.reply(2, Some(9L), Right(answer))).toOption.get
       reply.servoTelemetry shouldBe Some(readings.toProto)
       reply.rpcResponse.map(RpcReply.fromProto).flatMap(_.callId) shouldBe Some(9L)

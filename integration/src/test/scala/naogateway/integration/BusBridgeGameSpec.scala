@@ -68,9 +68,16 @@ class BusBridgeGameSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
         val before = answering(base + robotId, 30.seconds).getOrElse(fail("the bridge never answered before the game"))
         before.setSoTimeout(20000)
         // The game: INITIAL for 1 s, then READY, SET and PLAYING, then FINISHED for long, to the gateway and the robot.
-        val gc = spawn(SimulatedGameController(SimulatedGameControllerSettings(f.addresses.gameController.get,
-            initial = 1.second, ready = 2.seconds, set = 1.second, playing = 3.seconds, finished = 60.seconds,
-            interval = 100.millis, robots = Vector(robotAddress))))
+        val gc = spawn(SimulatedGameController(SimulatedGameControllerSettings(
+              f.addresses.gameController.get,
+              initial = 1.second,
+              ready = 2.seconds,
+              set = 1.second,
+              playing = 3.seconds,
+              finished = 60.seconds,
+              interval = 100.millis,
+              robots = Vector(robotAddress)
+            )))
         try {
           // READY: the gateway closes the bridge's client.
           val read = Try(before.getInputStream.read()).fold({ case _: SocketTimeoutException => 0; case _ => -1 },

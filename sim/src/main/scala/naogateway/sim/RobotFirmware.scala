@@ -326,7 +326,8 @@ object RobotFirmware {
       state.copy(now = now, pose = pose, battery = battery)
     }
 
-  private[sim] def encode(s: FirmwareState, contents: MessageContents): Array[Byte] = encode(contents, s.settings.headerForm)
+  private[sim] def encode(s: FirmwareState, contents: MessageContents): Array[Byte] =
+    encode(contents, s.settings.headerForm)
 
   // The firmware only builds messages it knows fit into 1400 bytes; one that does not is a bug in the simulator.
   private def encode(contents: MessageContents, form: HeaderForm): Array[Byte] =

@@ -22,7 +22,8 @@ class FirmwareBodySpec extends AnyWordSpec with Matchers with EitherValues {
   private val gateway = new InetSocketAddress("127.0.0.1", 11011)
   private val settings = FirmwareSettings(robotId = 2)
 
-  private def call(state: FirmwareState, method: String, params: Vector[RpcValue], id: Long, at: Long): FirmwareState = {
+  private def call(
+      state: FirmwareState, method: String, params: Vector[RpcValue], id: Long, at: Long): FirmwareState = {
     val request = MessageContents(0, rpcRequest = Some(RpcCall("motion", method, params, Some(id)).toProto))
     RobotFirmware.receive(state, MessageContents.encodeFrame(request).value, gateway, at)._1
   }
@@ -95,8 +96,9 @@ class FirmwareBodySpec extends AnyWordSpec with Matchers with EitherValues {
 
     "leave a goal written over the bus bridge alone until the posture changes" in {
       val s0 = RobotFirmware.boot(settings, 0)
-      val write = BusBridge(1, request = Some(ByteString.copyFrom(Dynamixel.packet(3, Dynamixel.Write,
-          Seq(Ax12.GoalPosition, 0x00, 0x02)))))
+      val write = BusBridge(1,
+        request = Some(ByteString.copyFrom(Dynamixel.packet(3, Dynamixel.Write,
+              Seq(Ax12.GoalPosition, 0x00, 0x02)))))
       val (written, _) = RobotFirmware.busBridge(s0, write, 5 * ms)
       val later = RobotFirmware.advance(written, 2000 * ms)._1
       later.bus.tables.find(_.id == 3).get.goal shouldBe 0x200
@@ -121,7 +123,9 @@ class FirmwareBodySpec extends AnyWordSpec with Matchers with EitherValues {
       val set = gc.initial + gc.ready + gc.set / 2
       val playing = gc.initial + gc.ready + gc.set + gc.playing / 2
       val finished = gc.initial + gc.ready + gc.set + gc.playing + gc.finished / 2
-      Seq(initial, ready, set, playing, finished).zipWithIndex.map { case (e, i) => heard(s0, e, (i + 1) * ms) } shouldBe
+      Seq(initial, ready, set, playing, finished).zipWithIndex.map { case (e, i) =>
+        heard(s0, e, (i + 1) * ms)
+      } shouldBe
         Seq(BusResult.BUS_OK, BusResult.BUS_GATE_CLOSED, BusResult.BUS_GATE_CLOSED, BusResult.BUS_GATE_CLOSED,
           BusResult.BUS_OK)
     }

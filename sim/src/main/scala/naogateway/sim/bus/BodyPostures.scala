@@ -2,10 +2,10 @@ package naogateway.sim.bus
 
 import naogateway.wire.{Dynamixel, Posture}
 
-/** The goal positions of the Bioloid-class humanoid's 18 AX-12A for each posture the simulated robot takes, and the
-  * one sync write that sends them (docs/simulator.md 3.2). The figures are a plausible humanoid's, not a
-  * measured robot's: they exist so that telemetry and a tool on the bus see the legs and arms move when the robot
-  * stands, sits, walks or stops. Pure.
+/** The goal positions of the Bioloid-class humanoid's 18 AX-12A for each posture the simulated robot takes, and the one
+  * sync write that sends them (docs/simulator.md 3.2). The figures are a plausible humanoid's, not a measured robot's:
+  * they exist so that telemetry and a tool on the bus see the legs and arms move when the robot stands, sits, walks or
+  * stops. Pure.
   */
 object BodyPostures {
 
@@ -67,8 +67,8 @@ object BodyPostures {
       case _               => None
     }
 
-  /** The sync write (address 30, goal position and moving speed per servo) that moves every servo of `bus` to `pose`
-    * in about `withinNanos`: each servo's speed set so that all arrive together.
+  /** The sync write (address 30, goal position and moving speed per servo) that moves every servo of `bus` to `pose` in
+    * about `withinNanos`: each servo's speed set so that all arrive together.
     */
   def syncWrite(bus: BioloidBus, pose: Pose, withinNanos: Long): Array[Byte] = {
     val seconds = math.max(0.05, withinNanos / 1e9)
@@ -84,7 +84,8 @@ object BodyPostures {
   }
 
   /** The bus after the sync write that moves it to `pose` within `withinNanos`. */
-  def move(bus: BioloidBus, pose: Pose, withinNanos: Long): BioloidBus = bus.transact(syncWrite(bus, pose, withinNanos))._1
+  def move(bus: BioloidBus, pose: Pose, withinNanos: Long): BioloidBus =
+    bus.transact(syncWrite(bus, pose, withinNanos))._1
 
   /** `bus` with every servo at rest in `pose`, its torque off: how a robot powers up where it was left. */
   def resting(bus: BioloidBus, pose: Pose): BioloidBus =
