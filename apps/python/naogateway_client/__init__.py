@@ -35,7 +35,10 @@ Value = Union[bool, int, float, str, bytes, List[Any], None]
 
 Status = Dict[str, Any]
 """A robot's status as a dict: robot, battery, posture, uptime_ms, role, link (and online, from `status`)."""
-_PROTO_FILES = ["message.proto", "rpc.proto", "havimo.proto", "debugging.proto"]
+Servo = Dict[str, Any]
+"""One servo of a robot's latest servo telemetry as a dict: id, position, degrees, load, voltage, temperature, error,
+silent, hot, low_voltage (docs/protocol.md 6.8)."""
+_PROTO_FILES = ["message.proto", "rpc.proto", "havimo.proto", "debugging.proto", "body.proto"]
 
 # The gateway's names, as the endpoint takes and reports them (docs/zeromq.md); apps.zeromq.PythonNamesSpec checks
 # them against the gateway's own types.
@@ -52,6 +55,7 @@ ACTUATOR_GROUPS = ("walk", "head", "arms", "speech")
 message_pb2: Optional[ModuleType] = None
 rpc_pb2: Optional[ModuleType] = None
 havimo_pb2: Optional[ModuleType] = None
+body_pb2: Optional[ModuleType] = None
 
 
 def load_protos(out_dir: Optional[str] = None, proto_dir: str = _PROTO_DIR) -> None:
@@ -59,12 +63,13 @@ def load_protos(out_dir: Optional[str] = None, proto_dir: str = _PROTO_DIR) -> N
 
     out_dir defaults to $NAOGATEWAY_PY_GEN, else a fresh temporary folder.
     """
-    global message_pb2, rpc_pb2, havimo_pb2
+    global message_pb2, rpc_pb2, havimo_pb2, body_pb2
     out_dir = out_dir or os.environ.get("NAOGATEWAY_PY_GEN") or tempfile.mkdtemp(prefix="naogateway-pb2-")
     if out_dir not in sys.path:
         sys.path.insert(0, out_dir)
     try:
         importlib.import_module("naogateway.proto.rpc_pb2")
+        importlib.import_module("naogateway.proto.body_pb2")
     except ImportError:
         from grpc_tools import protoc  # only needed to generate
 
@@ -77,6 +82,7 @@ def load_protos(out_dir: Optional[str] = None, proto_dir: str = _PROTO_DIR) -> N
     message_pb2 = importlib.import_module("naogateway.proto.message_pb2")
     rpc_pb2 = importlib.import_module("naogateway.proto.rpc_pb2")
     havimo_pb2 = importlib.import_module("naogateway.proto.havimo_pb2")
+    body_pb2 = importlib.import_module("naogateway.proto.body_pb2")
 
 
 class GatewayError(Exception):
@@ -192,6 +198,29 @@ class _Calls:
         snapshot["online"] = online
         return snapshot
 
+    def servos(self, robot_id: int) -> List[Servo]:
+        """The robot's latest servo telemetry, one dict per servo in the robot's order (empty before the first one),
+        each marked hot or low_voltage by the middleware's limits (robotmiddleware.servos)."""
+        hot, low = self.call(robot_id, "gateway", "servos")
+        telemetry = self.last_reply.Extensions[body_pb2.servoTelemetry]
+        out: List[Servo] = []
+        for s in telemetry.servos:
+            silent = s.HasField("silent") and s.silent
+            position = s.position if s.HasField("position") and not silent else None
+            out.append({
+                "id": s.id,
+                "position": position,
+                "degrees": None if position is None else (position - 512) * 300.0 / 1023,
+                "load": s.load if s.HasField("load") and not silent else None,
+                "voltage": s.voltage / 10.0 if s.HasField("voltage") and not silent else None,
+                "temperature": s.temperature if s.HasField("temperature") and not silent else None,
+                "error": s.error if s.HasField("error") else 0,
+                "silent": silent,
+                "hot": s.id in hot,
+                "low_voltage": s.id in low,
+            })
+        return out
+
     def acquire(self, robot_id: int, *groups: str) -> bool:
         """Takes the leases of these ACTUATOR_GROUPS on the robot, all of them or none."""
         return self.call(robot_id, "gateway", "acquire", *groups)
@@ -229,7 +258,7 @@ class _Calls:
         return self.call(robot_id, "speech", "say", text)
 
 
-_IDEMPOTENT = frozenset([("gateway", "robots"), ("gateway", "status")])
+_IDEMPOTENT = frozenset([("gateway", "robots"), ("gateway", "status"), ("gateway", "servos")])
 """The requests that change nothing: the only ones DatagramGatewayClient sends again when no reply came."""
 
 
@@ -297,9 +326,9 @@ class DatagramGatewayClient(_Calls):
     """Calls the endpoint's methods and robot calls through the datagram door: one UDP datagram each way.
 
     address is "host:port" or (host, port) of apps.datagram-door. A request without a reply within `timeout` seconds
-    raises a timeout GatewayError. Only robots() and status() (which change nothing) are sent again, up to `retries`
-    more times, `retry_interval` seconds apart, within the same `timeout`; a call, a send or a lease is never sent twice,
-    so a timeout does not say whether the robot got it.
+    raises a timeout GatewayError. Only robots(), status() and servos() (which change nothing) are sent again, up to
+    `retries` more times, `retry_interval` seconds apart, within the same `timeout`; a call, a send or a lease is never
+    sent twice, so a timeout does not say whether the robot got it.
     """
 
     def __init__(self, address: Union[str, tuple] = "127.0.0.1:5557", timeout: float = 10.0, retries: int = 2,

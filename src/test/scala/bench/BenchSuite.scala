@@ -40,7 +40,8 @@ object BenchRatios {
     "callpath_python_over_mavsdk_p50" -> ("callpath_python_p50_us", "callpath_mavsdk_p50_us"),
     "callpath_python_datagram_over_mavsdk_p50" -> ("callpath_python_datagram_p50_us", "callpath_mavsdk_p50_us"),
     "callpath_zeromq_floor_over_mavsdk_p50" -> ("callpath_zeromq_floor_p50_us", "callpath_mavsdk_p50_us"),
-    "callpath_python_over_mavsdk_grpc_p50" -> ("callpath_python_p50_us", "callpath_mavsdk_grpc_p50_us")
+    "callpath_python_over_mavsdk_grpc_p50" -> ("callpath_python_p50_us", "callpath_mavsdk_grpc_p50_us"),
+    "bus_bridge_over_direct_p50" -> ("bus_bridge_ping_p50_us", "bus_direct_ping_p50_us")
   )
 
   /** The ratios of [[floors]] that no benchmark computes, from `results` (where both figures are there). */
@@ -68,8 +69,21 @@ object BenchSuite {
 
   /** Every benchmark, in the order they run. */
   val benchmarks: Vector[Benchmark] =
-    Vector(CodecBench, StreamBench, SimBench, TimeSyncBench, GatewayBench, CallPathBench, ForgeryBench, RobotCtlBench,
-      IdleCpuBench, FloodBench, WebBench, FirmwareBench)
+    Vector(
+      CodecBench,
+      StreamBench,
+      SimBench,
+      TimeSyncBench,
+      GatewayBench,
+      CallPathBench,
+      ForgeryBench,
+      RobotCtlBench,
+      IdleCpuBench,
+      FloodBench,
+      WebBench,
+      BusBench,
+      FirmwareBench
+    )
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the
     * gateway's.

@@ -2,6 +2,7 @@ package apps
 
 import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
 import naogateway.wire.{Posture, RobotReport}
+import robotmiddleware.ServoLimits
 
 /** What every status view shows of one robot (the launcher's status lines, robotctl's `status`, the web view's cards):
   * the one mapping from a robot's snapshot and link figures to shown values, so the views cannot disagree. The robot's
@@ -38,6 +39,17 @@ final case class RobotRow(
 object RobotRow {
 
   private def finite(d: Double): Boolean = !d.isNaN && !d.isInfinite
+
+  /** The compact mark of robot `r`'s servos worth a warning by `limits` (`robotmiddleware.servos`), as the status views
+    * append it: `SERVOS hot 3,7 low-voltage 2`; None while none is (or before the first servo telemetry).
+    */
+  def servoMark(r: RobotSnapshot, limits: ServoLimits): Option[String] = {
+    val readings = r.servos.fold(Vector.empty[naogateway.ServoReading])(_.servos)
+    def ids(name: String, marked: naogateway.ServoReading => Boolean) =
+      Some(readings.filter(marked).map(_.id)).filter(_.nonEmpty).map(i => s"$name ${i.mkString(",")}")
+    val parts = Vector(ids("hot", limits.hot), ids("low-voltage", limits.lowVoltage)).flatten
+    Option.when(parts.nonEmpty)(("SERVOS" +: parts).mkString(" "))
+  }
 
   /** The row of robot `r` with its link figures `link`; the clock estimate is the link figures', else the snapshot's.
     */

@@ -10,6 +10,7 @@ import com.typesafe.config.Config
 
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.{GameSource, GatewayStats, GatewayView, Printable, RobotLinks, RobotSnapshot, TrafficStats}
+import robotmiddleware.ServoLimits
 
 /** Prints the launcher's status: a redrawn screen on a terminal, one line per change otherwise. */
 object StatusPrinter {
@@ -79,10 +80,10 @@ object StatusPrinter {
   /** The printer of the `apps.launcher` block `c`, writing where its `view` says; `notes` are lines shown above the
     * status (the web view's address once it listens), printed once each in line mode.
     */
-  def fromConfig(
-      gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty): Behavior[Command] = {
+  def fromConfig(gateway: GatewayView, c: Config, notes: () => Vector[String] = () => Vector.empty,
+      servoLimits: ServoLimits = ServoLimits()): Behavior[Command] = {
     val s = settings(c)
-    apply(gateway, s.refresh, output(s.view), notes)
+    apply(gateway, s.refresh, output(s.view), notes, servoLimits)
   }
 
   /** Whether stdout is a terminal: `System.console()` in a JVM started on one, or what sbt says through
@@ -101,12 +102,13 @@ object StatusPrinter {
     if (screen) TerminalScreen.open() else LineOutput(line => println(line))
   }
 
-  /** A printer polling the gateway's read-only view every `refresh` and writing to `output`. It restarts (after a
-    * back-off, so a failure repeating every refresh cannot flood the log) on any failure.
+  /** A printer polling the gateway's read-only view every `refresh` and writing to `output`, marking servos by
+    * `servoLimits`. It restarts (after a back-off, so a failure repeating every refresh cannot flood the log) on any
+    * failure.
     */
   def apply(gateway: GatewayView, refresh: FiniteDuration, output: Output,
-      notes: () => Vector[String] = () => Vector.empty): Behavior[Command] =
-    Behaviors.supervise(printer(gateway, refresh, output, notes)).onFailure[Exception](
+      notes: () => Vector[String] = () => Vector.empty, servoLimits: ServoLimits = ServoLimits()): Behavior[Command] =
+    Behaviors.supervise(printer(gateway, refresh, output, notes, servoLimits)).onFailure[Exception](
       SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
   /** How often the printer asks the gateway: every `refresh` for a screen; for lines, which only print changes, at most
@@ -120,8 +122,8 @@ object StatusPrinter {
   /** The shortest pace of line output. */
   private[apps] val LinesRefresh: FiniteDuration = 1.second
 
-  private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output,
-      notes: () => Vector[String]): Behavior[Command] =
+  private def printer(gateway: GatewayView, refresh: FiniteDuration, output: Output, notes: () => Vector[String],
+      servoLimits: ServoLimits): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
         timers.startTimerWithFixedDelay(Refresh, pace(refresh, output))
@@ -169,7 +171,8 @@ object StatusPrinter {
             Behaviors.same
           }
 
-        running(StatusModel.empty, StatusModel.empty)
+        val empty = StatusModel.empty.copy(servoLimits = servoLimits)
+        running(empty, empty)
       }
     }
 }

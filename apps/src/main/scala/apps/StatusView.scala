@@ -1,6 +1,7 @@
 package apps
 
 import naogateway.{GameSource, GatewayStats, LinkStats, Printable, RobotSnapshot, SigningState, TrafficStats}
+import robotmiddleware.ServoLimits
 import naogateway.wire.gamecontroller.{
   ControlData2014,
   GameControlData,
@@ -14,14 +15,17 @@ import naogateway.wire.gamecontroller.{
   SetPlay
 }
 
-/** What the launcher shows: robots, their links, the team's traffic with the competition gate, and the game. */
+/** What the launcher shows: robots, their links, the team's traffic with the competition gate, and the game;
+  * `servoLimits` says which servos are marked (`robotmiddleware.servos`).
+  */
 final case class StatusModel(
     robots: Vector[RobotSnapshot],
     links: Map[Int, LinkStats],
     traffic: Option[TrafficStats],
     game: Option[GameControlData],
     gameSource: Option[GameSource] = None,
-    gateway: Option[GatewayStats] = None
+    gateway: Option[GatewayStats] = None,
+    servoLimits: ServoLimits = ServoLimits()
 )
 
 /** Constructors of status models. */
@@ -53,16 +57,19 @@ object StatusView {
     } yield p
 
   /** One line describing a robot (its [[RobotRow]]), as both the screen and the plain lines use it, with its penalty
-    * when the GameController has taken it off the game.
+    * when the GameController has taken it off the game and its hot or low-voltage servos by `limits`
+    * ([[RobotRow.servoMark]]).
     */
-  def robotLine(r: RobotSnapshot, link: Option[LinkStats], game: Option[GameControlData] = None): String = {
+  def robotLine(r: RobotSnapshot, link: Option[LinkStats], game: Option[GameControlData] = None,
+      limits: ServoLimits = ServoLimits()): String = {
     val row = RobotRow.of(r, link)
     f"robot ${row.robotId}%-3d ${row.linkState}%-7s ${opt(row.quality)(_.name)}%-8s " +
       f"battery ${opt(row.battery)(v => f"$v%.2f V")}%-8s posture ${opt(row.posture)(_.name)}%-8s " +
       f"role ${opt(row.report.role)(Printable.text)}%-9s rtt ${opt(row.rttMillis)(v => f"$v%.1f ms")}%-9s " +
       f"loss ${opt(row.loss)(v => f"${v * 100}%.0f %%")}%-5s " + row.address.getOrElse("-") +
       (if (row.report.development) " development build" else "") +
-      penalty(r, game).fold("")(p => s" PENALISED: ${p.describe}")
+      penalty(r, game).fold("")(p => s" PENALISED: ${p.describe}") +
+      RobotRow.servoMark(r, limits).fold("")(" " + _)
   }
 
   /** The game state as the GameController's display names it: PLAYING, READY, ... */
@@ -160,8 +167,9 @@ object StatusView {
       model.gameSource.map(_.describe).toVector ++ model.gameSource.toVector.flatMap(sourceLines) ++ Vector(
         gateLine(model.traffic),
         trafficLine(model.traffic)) ++ recordingLine(model.gateway).toVector ++ Vector("") ++
-      model.robots.map(r => robotLine(r, model.links.get(r.robotId), model.game)) ++ model.gameSource.toVector.flatMap(
-        monitorLines) ++
+      model.robots.map(r => robotLine(r, model.links.get(r.robotId), model.game, model.servoLimits)) ++ model.gameSource
+        .toVector.flatMap(
+          monitorLines) ++
       Vector("", "Ctrl-C stops everything.")
   }
 
@@ -177,17 +185,19 @@ object StatusView {
     shown.map(l => if (l.length > cols) l.take(cols) else l)
   }
 
-  /** Plain lines for what changed between two models: a robot's online state, posture or `unsigned` state, the game
-    * state (not every packet), and the competition gate.
+  /** Plain lines for what changed between two models: a robot's online state, posture, `unsigned` state or servo mark,
+    * the game state (not every packet), and the competition gate.
     */
   def changes(before: StatusModel, after: StatusModel): Vector[String] = {
     val old = before.robots.map(r => r.robotId -> r).toMap
     // A penalty is news when it starts, ends or changes kind, not each second its clock counts down.
     def penaltyName(r: RobotSnapshot, m: StatusModel) = penalty(r, m.game).map(_.name)
     val robots = after.robots.flatMap { r =>
-      val line = Some(robotLine(r, after.links.get(r.robotId), after.game))
+      val line = Some(robotLine(r, after.links.get(r.robotId), after.game, after.servoLimits))
+      def mark(s: RobotSnapshot, m: StatusModel) = RobotRow.servoMark(s, m.servoLimits)
       old.get(r.robotId) match {
         case Some(o) if penaltyName(o, before) != penaltyName(r, after) => line
+        case Some(o) if mark(o, before) != mark(r, after)               => line
         case Some(o) if o.signing != r.signing && !r.online             => line
         case Some(o) if o.online == r.online && o.posture == r.posture  => None
         case Some(o) if o.online == r.online && !r.online               => None

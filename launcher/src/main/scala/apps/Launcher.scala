@@ -194,7 +194,10 @@ object Launcher {
   /** What the root of the gateway node accepts. */
   sealed trait Command
   private final case class Addresses(addresses: Gateway.Addresses) extends Command
-  private final case class FleetStarted(result: scala.util.Try[naogateway.sim.FleetHandle]) extends Command
+  // The simulated robots, and the gateway's GameController port the demo's GameController sends to beside them.
+  private final case class FleetStarted(
+      result: scala.util.Try[naogateway.sim.FleetHandle], gameController: Option[InetSocketAddress])
+      extends Command
   private final case class PartStopped(part: String) extends Command
 
   /** The gateway node's root: gateway (on its sockets, or replaying), middleware, simulated robots, status view, app
@@ -244,7 +247,8 @@ object Launcher {
     apps.web.WebServer.spawnIfEnabled(context, web, middleware, realRobots,
       bound =>
         webAddress.set(bound.map(a => apps.web.WebServer.describe(a, apps.web.WebSettings(context.system))).toVector))
-    context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get), "status")
+    context.spawn(StatusPrinter.fromConfig(view, config.getConfig("apps.launcher"), () => webAddress.get,
+        MiddlewareSettings(context.system).servoLimits), "status")
     gateway ! GatewayAccess.GetAddresses(context.messageAdapter(Addresses.apply))
 
     Behaviors.receiveMessage {
@@ -268,16 +272,17 @@ object Launcher {
                   if (busBridge.enabled) signed.withStream(gatewaySettings.stream) else signed
                 }
               )
-            ))(FleetStarted.apply)
+            ))(FleetStarted(_, addresses.gameController))
         }
         if (launcher.ballFollowerRobot > 0) startBallFollower(context.system, launcher.ballFollowerRobot)
-        startGameController(context, addresses)
         Behaviors.same
-      case FleetStarted(Success(started)) =>
+      case FleetStarted(Success(started), gameController) =>
         context.log.info("Started {} simulated robots", started.robots.size)
         fleet.set(Some(started))
+        // The GameController starts with the robots: its rounds reach them as a broadcast would (docs/protocol.md 6.9).
+        startGameController(context, gameController, started.robots.map(_._2))
         Behaviors.same
-      case FleetStarted(Failure(e)) =>
+      case FleetStarted(Failure(e), _) =>
         context.log.error("Simulated robots did not start", e)
         Behaviors.same
       case PartStopped(_) if CoordinatedShutdown(context.system).shutdownReason().isDefined =>
@@ -309,13 +314,15 @@ object Launcher {
     Behaviors.setup(context => RobotMiddleware(gateway, MiddlewareSettings(context.system)))
 
   /** The demo's simulated GameController (`apps.launcher.game-controller`, only with simulated robots), sending to the
-    * gateway's GameController port, on loopback when the gateway listens on every address.
+    * gateway's GameController port `gameController` (on loopback when the gateway listens on every address) and to each
+    * simulated robot at `robots`, as a real GameController's broadcast reaches the gateway and the robots alike: the
+    * robots learn the game state, and close their bus bridge while the game runs (docs/protocol.md 6.9).
     */
   private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command],
-      addresses: Gateway.Addresses): Unit = {
+      gameController: Option[InetSocketAddress], robots: Vector[InetSocketAddress]): Unit = {
     val c = context.system.settings.config.getConfig("apps.launcher")
     // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
-    for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
+    for (gc <- gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {
       val target =
         if (gc.getAddress.isAnyLocalAddress) naogateway.sim.SimulatedGameController.loopback(gc.getPort) else gc
       val number = c.getInt("game-controller-version")
@@ -323,7 +330,7 @@ object Launcher {
         throw new IllegalArgumentException(
           s"apps.launcher.game-controller-version $number: the simulation plays 20, 19, 12, 8 or 7"))
       context.spawn(naogateway.sim.SimulatedGameController(naogateway.sim.SimulatedGameControllerSettings(target,
-            version = version)), "game-controller")
+            version = version, robots = robots)), "game-controller")
     }
   }
 

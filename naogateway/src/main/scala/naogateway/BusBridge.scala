@@ -20,9 +20,9 @@ import naogateway.proto.BusBridge
 import naogateway.wire.{BusBridgeFrame, Dynamixel}
 
 /** The gateway's bus bridge (docs/protocol.md 6.9): one TCP listener on loopback per online robot, at `base-port` +
-  * robot id, while the competition gate is open. It follows the robots' comings and goings (the gateway's events) and
-  * the gate (the outbox's figures, asked every [[BusBridgeServer.GatePoll]]); a robot going offline or the gate closing
-  * closes its listener and its client.
+  * robot id, while the competition gate's reading says the game does not run (in competition mode or not). It follows
+  * the robots' comings and goings (the gateway's events) and the gate (the outbox's figures, asked every
+  * [[BusBridgeServer.GatePoll]]); a robot going offline or the gate closing closes its listener and its client.
   */
 object BusBridgeServer {
 
@@ -79,12 +79,15 @@ object BusBridgeServer {
             gateway ! GatewayAccess.GetTraffic(gate)
             Behaviors.same
           case Gate(traffic) =>
-            if (traffic.gateOpen != open)
+            // The gate's reading, whether or not competition mode holds back the rest of the traffic: a tool on the bus
+            // moves the robot, which no team may do from the base station while the game runs (docs/protocol.md 6.9).
+            val nowOpen = !traffic.gameRunning
+            if (nowOpen != open)
               context.log.info("Bus bridge {}",
-                if (traffic.gateOpen) "open again"
+                if (nowOpen) "open again"
                 else
                   s"closed: ${traffic.gateReason.getOrElse(CompetitionGate.NoSendingWhileGameRuns)}")
-            sync(online, traffic.gateOpen); running(online, traffic.gateOpen)
+            sync(online, nowOpen); running(online, nowOpen)
         }
         // Closed until the outbox first says the gate is open.
         running(Set.empty, open = false)

@@ -272,6 +272,8 @@ object ControlServer {
   private def body(robots: RobotInterface, settings: ControlSettings, request: Request,
       gateway: Option[GatewaySide])(implicit system: ActorSystem[_]): Source[Answer, NotUsed] = {
     implicit val ec: ExecutionContext = system.executionContext
+    // Which servos the status lines mark (robotmiddleware.servos); read when a line needs it.
+    lazy val servoLimits = robotmiddleware.MiddlewareSettings(system).servoLimits
     request match {
       case Request.Status =>
         Source.future(robots.robots()).flatMapConcat { all =>
@@ -283,7 +285,7 @@ object ControlServer {
           Source.single(Answer.Line(ControlText.statusHeader))
             .concat(Source(all.zip(stats)).mapAsync(1) { case (r, s) =>
               s.zip(holds).map { case (st, h) =>
-                Answer.Line(ControlText.statusLine(r, st, h.find(_.robotId == r.robotId)))
+                Answer.Line(ControlText.statusLine(r, st, h.find(_.robotId == r.robotId), servoLimits))
               }
             })
             .concat(Source.future(gameLines(gateway, settings.linkStatsTimeout, all)).mapConcat(_.map(Answer.Line(_))))
@@ -336,7 +338,8 @@ object ControlServer {
             else
               Source.single(Answer.Line(ControlText.statusHeader))
                 .concat(
-                  robots.status(id).takeWithin(seconds.seconds).map(s => Answer.Line(ControlText.statusLine(s, None))))
+                  robots.status(id).takeWithin(seconds.seconds).map(s =>
+                    Answer.Line(ControlText.statusLine(s, None, limits = servoLimits))))
                 .concat(Source.single(Answer.Ok(s"watched robot $id for $seconds s")))
           }
     }

@@ -41,9 +41,11 @@ object ControlText {
     * round-trip time, loss, and the robot's clock against the gateway's (the error bound of its estimate, and its
     * drift: `settling` until its bound is within `ClockEstimate.SettledDriftPpm`; `-` until there is an estimate),
     * which app holds which lease (`walk=teleop head=zeromq`, `-` for none) and `HELD SAFE` while the middleware holds
-    * the robot safe; `development build` after a robot running one.
+    * the robot safe; `development build` after a robot running one; its hot or low-voltage servos by `limits` (`SERVOS
+    * hot 3 low-voltage 2`, [[apps.RobotRow.servoMark]]).
     */
-  def statusLine(r: RobotSnapshot, stats: Option[LinkStats], holds: Option[RobotHolds] = None): String = {
+  def statusLine(r: RobotSnapshot, stats: Option[LinkStats], holds: Option[RobotHolds] = None,
+      limits: robotmiddleware.ServoLimits = robotmiddleware.ServoLimits()): String = {
     val row = apps.RobotRow.of(r, stats)
     val rtt = row.rttMillis.fold("-")(v => f"$v%.1f ms")
     val loss = row.loss.fold("-")(v => f"${v * 100}%.0f %%")
@@ -55,7 +57,8 @@ object ControlText {
       f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
       holds.fold("-")(h => naogateway.Printable.text(h.describeLeases)) +
       (if (holds.exists(_.safetyHold.isDefined)) " HELD SAFE" else "") +
-      (if (row.report.development) " development build" else "")
+      (if (row.report.development) " development build" else "") +
+      apps.RobotRow.servoMark(r, limits).fold("")(" " + _)
   }
 
   /** A robot's servo table (docs/protocol.md 6.8) at `now` (the gateway's `System.nanoTime`): a line saying how old it

@@ -174,7 +174,8 @@ object DatagramDoor {
       operation => lock.synchronized(operation()),
       (to, reply) => send(to, reply),
       context.executionContext,
-      context.system.scheduler
+      context.system.scheduler,
+      robotmiddleware.MiddlewareSettings(context.system).servoLimits
     )
 
     /** Completes when the socket has closed. */

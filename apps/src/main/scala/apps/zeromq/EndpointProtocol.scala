@@ -13,7 +13,7 @@ import com.google.protobuf.{ByteString, CodedInputStream, WireFormat}
 import naogateway.proto.HaViMoRegionFrame
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
 import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
-import naogateway.{RobotSnapshot, VisionFrame}
+import naogateway.{RobotSnapshot, ServoReadings, VisionFrame}
 import robotmiddleware.Operation
 
 /** A request as the endpoint read it: the addressed robot and the call, with the client's `callId`. */
@@ -34,6 +34,9 @@ object Route {
   /** `gateway.status`: the robot's latest keep-alive. */
   final case class Status(robotId: Int) extends Route
 
+  /** `gateway.servos`: the robot's latest servo telemetry, hot and low-voltage servos marked. */
+  final case class Servos(robotId: Int) extends Route
+
   /** `gateway.acquire`: take leases for the ZeroMQ clients. */
   final case class Acquire(robotId: Int, groups: Vector[ActuatorGroup]) extends Route
 
@@ -49,8 +52,11 @@ object Route {
   final case class Send(robotId: Int, operation: Operation) extends Route
 }
 
-/** A successful answer: the return value, and for `gateway.status` the snapshot sent along. */
-final case class Answer(value: Option[RpcValue], snapshot: Option[RobotSnapshot] = None)
+/** A successful answer: the return value, for `gateway.status` the snapshot sent along, for `gateway.servos` the servo
+  * telemetry.
+  */
+final case class Answer(value: Option[RpcValue], snapshot: Option[RobotSnapshot] = None,
+    servos: Option[ServoReadings] = None)
 
 /** The endpoint's wire format, pure: reading requests, routing them, writing replies and publications. */
 object EndpointProtocol {
@@ -141,6 +147,7 @@ object EndpointProtocol {
     (call.module, call.method) match {
       case (GatewayModule, "robots")  => noParams(Right(Route.Robots))
       case (GatewayModule, "status")  => noParams(Right(Route.Status(robotId)))
+      case (GatewayModule, "servos")  => noParams(Right(Route.Servos(robotId)))
       case (GatewayModule, "acquire") => groups(call)(Route.Acquire(robotId, _))
       case (GatewayModule, "release") => groups(call)(Route.Release(robotId, _))
       case (GatewayModule, "send")    =>
@@ -177,7 +184,8 @@ object EndpointProtocol {
     case e                           => s"endpoint error: ${e.getClass.getSimpleName}: ${e.getMessage}"
   }
 
-  /** The reply to a request: a `Message` for `robotId` with the `rpcResponse` (and the snapshot for `gateway.status`).
+  /** The reply to a request: a `Message` for `robotId` with the `rpcResponse` (and the snapshot for `gateway.status`,
+    * the servo telemetry for `gateway.servos`).
     */
   def reply(robotId: Int, callId: Option[Long], result: Either[String, Answer]): Array[Byte] = {
     val snapshot = result.toOption.flatMap(_.snapshot)
@@ -185,6 +193,7 @@ object EndpointProtocol {
       robotId,
       status = snapshot.map(_.report.status),
       robotHealth = snapshot.map(_.report.health),
+      servoTelemetry = result.toOption.flatMap(_.servos).map(_.toProto),
       rpcResponse = Some(RpcReply(result.map(_.value), callId).toProto)
     ).toProtobuf
   }

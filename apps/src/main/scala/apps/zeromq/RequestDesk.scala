@@ -31,7 +31,8 @@ private[apps] final class RequestDesk[A](
     owner: (() => Unit) => Unit,
     write: (A, Array[Byte]) => Unit,
     dispatcher: ExecutionContext,
-    scheduler: Scheduler
+    scheduler: Scheduler,
+    servoLimits: robotmiddleware.ServoLimits
 ) {
   import RequestDesk.Pending
 
@@ -154,6 +155,11 @@ private[apps] final class RequestDesk[A](
             case Some(s) => Future.successful(RequestDesk.status(s))
             case None    => Future.failed(RobotFailure.UnknownRobot(robotId))
           })
+        case Route.Servos(robotId) =>
+          robots.robots().flatMap(_.find(_.robotId == robotId) match {
+            case Some(s) => Future.successful(RequestDesk.servos(s, servoLimits))
+            case None    => Future.failed(RobotFailure.UnknownRobot(robotId))
+          })
         case Route.Acquire(robotId, groups) => robots.acquire(robotId, groups: _*).map(_ => done)
         case Route.Release(robotId, groups) =>
           inOrder(robotId, None) { () =>
@@ -187,6 +193,16 @@ private[apps] object RequestDesk {
   /** The answer to `gateway.status`: `[online, link quality]`, and the snapshot the reply carries. */
   def status(s: naogateway.RobotSnapshot): Answer =
     Answer(Some(RpcValue.Items(Vector(RpcValue.Flag(s.online), RpcValue.Text(s.quality.name)))), Some(s))
+
+  /** The answer to `gateway.servos`: `[hot ids, low-voltage ids]` by `limits`, and the telemetry the reply carries
+    * (none before the robot's first).
+    */
+  def servos(s: naogateway.RobotSnapshot, limits: robotmiddleware.ServoLimits): Answer = {
+    val readings = s.servos.fold(Vector.empty[naogateway.ServoReading])(_.servos)
+    def ids(marked: naogateway.ServoReading => Boolean) =
+      RpcValue.Items(readings.filter(marked).map(r => RpcValue.UInt(r.id.toLong)))
+    Answer(Some(RpcValue.Items(Vector(ids(limits.hot), ids(limits.lowVoltage)))), servos = s.servos)
+  }
 
   /** A request being worked on: where its reply goes, what it must echo, and its deadline's timer. */
   final case class Pending[A](from: A, robotId: Int, callId: Option[Long], name: String, deadline: Cancellable)

@@ -263,7 +263,8 @@ object ZeroMqEndpoint {
         operation => { loop.submit(_ => operation()); () },
         (envelope, body) => io.send(io.router, envelope :+ body),
         Endpoint.this.ec,
-        system.scheduler
+        system.scheduler,
+        robotmiddleware.MiddlewareSettings(system).servoLimits
       )
 
       /** One request read from the router. */

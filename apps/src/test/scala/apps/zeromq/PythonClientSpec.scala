@@ -214,6 +214,9 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
              |print("stop:", c.stop(35))
              |s = c.status(35)
              |print("status:", s["posture"], s["online"], s["link"] in ("good", "degraded"))
+             |sv = c.servos(35)
+             |print("servos:", [x["id"] for x in sv] == list(range(1, 19)), all(11 < x["voltage"] < 13 for x in sv),
+             |      any(x["hot"] or x["low_voltage"] for x in sv))
              |c.close()
              |""".stripMargin
         val gen = new File(PythonEnv.root, "apps/target/python-gen")
@@ -234,7 +237,8 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
             "absurd: robot error: out of range: vx 100.0, allowed -0.3..0.3",
             "walk: True",
             "stop: True",
-            "status: stand True True"
+            "status: stand True True",
+            "servos: True True False"
           )
         }
         referee.close()

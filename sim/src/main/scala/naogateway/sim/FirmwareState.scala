@@ -5,7 +5,7 @@ import java.net.InetSocketAddress
 import scala.concurrent.duration._
 
 import naogateway.proto._
-import naogateway.sim.bus.BioloidBus
+import naogateway.sim.bus.{BioloidBus, BodyPostures}
 import naogateway.wire._
 import naogateway.wire.gamecontroller.GameControlData
 
@@ -99,7 +99,8 @@ private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseU
 /** The whole state of a simulated CM-530 firmware; immutable, advanced by the functions of `RobotFirmware`. `bootId`
   * doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and resets.
   * `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh at every
-  * boot, as RAM does. `bus` is the robot's emulated Dynamixel bus (servos and HaViMo2), powered up at every boot.
+  * boot, as RAM does. `bus` is the robot's emulated Dynamixel bus (servos and HaViMo2), powered up at every boot;
+  * `bodyPose` the pose whose goals its servos were last sent (FirmwareBody).
   */
 final case class FirmwareState(
     settings: FirmwareSettings,
@@ -124,7 +125,8 @@ final case class FirmwareState(
     framesSigned: Long = 0L,
     gatewayWindow: ReplayWindow = ReplayWindow.empty,
     nextServoTelemetryAt: Long = Long.MinValue,
-    bus: BioloidBus = BioloidBus(0L)
+    bus: BioloidBus = BioloidBus(0L),
+    bodyPose: Option[BodyPostures.Pose] = None
 ) {
 
   /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */

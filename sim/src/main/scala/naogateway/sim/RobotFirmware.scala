@@ -4,20 +4,10 @@ import java.net.InetSocketAddress
 
 import scala.concurrent.duration._
 
-import com.google.protobuf.ByteString
-
 import naogateway.proto._
-import naogateway.sim.bus.{BioloidBus, BusWork}
+import naogateway.sim.bus.{BioloidBus, BodyPostures, BusWork}
 import naogateway.wire._
-import naogateway.wire.gamecontroller.{
-  GameControlData,
-  GameControlVersion,
-  GameControllerCodec,
-  GameState,
-  ReturnData,
-  ReturnMessage,
-  ReturnStatus
-}
+import naogateway.wire.gamecontroller.GameControllerCodec
 
 /** The simulated CM-530 firmware as pure functions of state, input and time (nanoseconds). */
 object RobotFirmware {
@@ -39,7 +29,7 @@ object RobotFirmware {
     ("havimo.grid", DebuggingOptionType.HAVIMO_GRID, "HaViMo2 grid")
   )
 
-  private val CameraOptions = Set("havimo.regions", "havimo.grid", "camera.image")
+  private[sim] val CameraOptions = Set("havimo.regions", "havimo.grid", "camera.image")
 
   /** Whether debug option `name` is one of the camera's, which send on the camera's own clock. */
   private[sim] def isCameraOption(name: String): Boolean = CameraOptions(name)
@@ -66,7 +56,11 @@ object RobotFirmware {
       said = Vector.empty,
       game = None,
       stats = FirmwareStats(),
-      bus = BioloidBus(now, Scene.regions(settings.scene, settings.startPose, 0.0, 0.0), settings.initialBattery)
+      // The body powers up resting where it sat down, its torque off.
+      bus = BodyPostures.resting(
+        BioloidBus(now, Scene.regions(settings.scene, settings.startPose, 0.0, 0.0), settings.initialBattery),
+        BodyPostures.Pose.Sit),
+      bodyPose = Some(BodyPostures.Pose.Sit)
     )
 
   /** The firmware after a restart: same settings and battery, fresh session, debug options off. */
@@ -104,15 +98,16 @@ object RobotFirmware {
           else nextSlot(s.nextServoTelemetryAt, period, now))
     }
     if (s.debugEnabled.exists(o => !CameraOptions(o)) && s.nextDebugAt <= now) {
-      debugData(s).foreach(d =>
+      FirmwareDebug.debugData(s).foreach(d =>
         out += Outgoing(encode(s, MessageContents(s.settings.robotId, debugData = Some(d))), Destination.Gateway))
       s = s.copy(nextDebugAt = nextSlot(s.nextDebugAt, s.settings.debugInterval, now))
     }
     if (s.debugEnabled.exists(CameraOptions) && s.nextCameraAt <= now) {
-      val (next, frames) = cameraFrames(s)
+      val (next, frames) = FirmwareDebug.cameraFrames(s)
       frames.foreach(f => out += Outgoing(f, Destination.Gateway))
       s = next.copy(nextCameraAt = nextSlot(s.nextCameraAt, s.settings.cameraInterval, now))
     }
+    s = FirmwareBody.posed(s)
     val sent = out.result()
     (s.copy(stats = s.stats.copy(datagramsOut = s.stats.datagramsOut + sent.length)), sent)
   }
@@ -137,12 +132,13 @@ object RobotFirmware {
         }
       case Datagram.GameControllerControl(b) =>
         GameControllerCodec.decodeControl(b) match {
-          case Right(data) => onGameController(s, data, from)
+          case Right(data) => FirmwareGame.onGameController(s, data, from)
           case Left(_)     => (rejected(s), Vector.empty)
         }
       case _ => (rejected(s), Vector.empty)
     }
-    val counted = next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length))
+    val counted = FirmwareBody.posed(
+      next.copy(stats = next.stats.copy(datagramsOut = next.stats.datagramsOut + replies.length)))
     // The reply to `system.reset` leaves before the restart: it is the old session's last frame, signed as such.
     if (counted.bootId == s.bootId) signed(counted, due ++ replies)
     else (counted, signed(s, due ++ replies)._2)
@@ -196,42 +192,6 @@ object RobotFirmware {
       val (s, out) = onCall(afterDebug._1, RpcCall.fromProto(request),
         PendingReply(request.callId.map(_ & 0xffffffffL), replyTo, form))
       (s, afterDebug._2 ++ out)
-    }
-  }
-
-  private def onGameController(
-      s: FirmwareState, data: GameControlData, from: InetSocketAddress): (FirmwareState, Vector[Outgoing]) = {
-    val counted =
-      s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))
-    // A robot answers the GameController it heard, as robots of that version do: the 2014 one (version 8; its
-    // version-7 copy of the round needs no second answer) with RGrt version 2 to port 3838; the Humanoid League's
-    // (version 12) with RGrt version 2 to 3939; the Humanoid Soccer League's (versions 20 and 19) with its status
-    // message, RGrt version 4, to 3939.
-    if (data.teamByNumber(s.settings.teamId).isEmpty) (counted, Vector.empty)
-    else {
-      def alive =
-        GameControllerCodec.encodeReturn(ReturnData(s.settings.teamId, s.settings.playerNumber, ReturnMessage.Alive))
-          .toOption
-      val answer = data.version match {
-        case GameControlVersion.V8 =>
-          alive.map(_ -> 3838)
-        case GameControlVersion.V12 =>
-          alive.map(_ -> GameControllerCodec.ReturnPort)
-        case GameControlVersion.V20 | GameControlVersion.V19 =>
-          val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
-          val status = ReturnStatus(
-            s.settings.playerNumber,
-            s.settings.teamId,
-            fallen = false,
-            ((s.pose.x * 1000).toFloat, (s.pose.y * 1000).toFloat, s.pose.theta.toFloat),
-            ballAge = 0f,
-            ((ahead * 1000).toFloat, (left * 1000).toFloat)
-          )
-          GameControllerCodec.encodeStatus(status).toOption.map(_ -> GameControllerCodec.ReturnPort)
-        case GameControlVersion.V7 => None
-      }
-      val to = (port: Int) => Destination.ReplyTo(new InetSocketAddress(from.getAddress, port))
-      (counted, answer.map { case (b, port) => Outgoing(b, to(port)) }.toVector)
     }
   }
 
@@ -366,7 +326,8 @@ object RobotFirmware {
       state.copy(now = now, pose = pose, battery = battery)
     }
 
-  private def encode(s: FirmwareState, contents: MessageContents): Array[Byte] = encode(contents, s.settings.headerForm)
+  private[sim] def encode(s: FirmwareState, contents: MessageContents): Array[Byte] =
+    encode(contents, s.settings.headerForm)
 
   // The firmware only builds messages it knows fit into 1400 bytes; one that does not is a bug in the simulator.
   private def encode(contents: MessageContents, form: HeaderForm): Array[Byte] =
@@ -397,95 +358,10 @@ object RobotFirmware {
         .toVector,
       busErrors = Some(0))
 
-  private def debugData(s: FirmwareState): Vector[DebugData] = {
-    val ts = Some(s.uptimeMillis)
-    val (ahead, left) = s.pose.relative(s.settings.scene.ballX, s.settings.scene.ballY)
-    s.debugEnabled.toVector.sorted.collect {
-      case o @ "status.text" => DebugData(o, ts,
-          DebugData.Data.Text(DebugText(s"posture ${s.posture.name}, battery ${"%.2f".format(s.battery)} V")))
-      case o @ "status.table" =>
-        DebugData(
-          o,
-          ts,
-          DebugData.Data.Table(DebugTable(Seq(
-                DebugTable.Row("battery", "%.2f".format(s.battery)),
-                DebugTable.Row("posture", s.posture.name),
-                DebugTable.Row("uptime", s"${s.uptimeMillis} ms"))))
-        )
-      case o @ "motion.plot" =>
-        val w = s.walk.getOrElse(Walk(0, 0, 0, 0))
-        DebugData(
-          o,
-          ts,
-          DebugData.Data.Plot(DebugPlot(Seq(
-                DebugPlot.Sample("vx", w.vx.toFloat), DebugPlot.Sample("vy", w.vy.toFloat),
-                DebugPlot.Sample("omega", w.omega.toFloat))))
-        )
-      case o @ "world.field" =>
-        DebugData(
-          o,
-          ts,
-          DebugData.Data.FieldDrawing(DebugFieldDrawing(Seq(
-                Shape(Shape.Kind.CIRCLE, (s.pose.x * 1000).toInt, (s.pose.y * 1000).toInt, radius = Some(150),
-                  label = Some("robot")),
-                Shape(Shape.Kind.CIRCLE, (s.settings.scene.ballX * 1000).toInt, (s.settings.scene.ballY * 1000).toInt,
-                  radius = Some(50), label = Some("ball"))
-              )))
-        )
-      case o @ "world.relative" =>
-        DebugData(
-          o,
-          ts,
-          DebugData.Data.RelativePosition(DebugRelativePosition(Seq(
-                DebugRelativePosition.RelativeObject("ball", (math.hypot(ahead, left) * 1000).toInt,
-                  math.atan2(left, ahead).toFloat))))
-        )
-    }
-  }
-
-  // The camera is read over the bus (docs/protocol.md 6.9): the frame holds the capture started a cycle earlier, and
-  // no frame goes out while the camera is still busy with it.
-  private def cameraFrames(s: FirmwareState): (FirmwareState, Vector[Array[Byte]]) = {
-    val view = Scene.regions(s.settings.scene, s.pose, s.head._1, s.head._2)
-    val withGrid = s.debugEnabled("havimo.grid") || s.debugEnabled("camera.image")
-    val (bus, read) = BusWork.cameraCycle(s.bus.advance(s.now).withVolts(s.battery).seeing(view), withGrid)
-    read match {
-      case None => (s.copy(bus = bus), Vector.empty)
-      case Some(captured) =>
-        val regions = HaViMo.decodeRegions(captured.records).getOrElse(Vector.empty)
-        val frame = s.frame + 1
-        val ts = Some(s.uptimeMillis)
-        val out = Vector.newBuilder[Array[Byte]]
-        if (s.debugEnabled("havimo.regions"))
-          out += encode(s,
-            MessageContents(s.settings.robotId,
-              havimoRegions = Some(HaViMoRegionFrame(frame, ts, Some(ByteString.copyFrom(captured.records))))))
-        captured.grid.foreach { grid =>
-          if (s.debugEnabled("havimo.grid"))
-            out += encode(s,
-              MessageContents(s.settings.robotId,
-                havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(grid)))))
-          if (s.debugEnabled("camera.image")) {
-            val shapes = regions.map(r =>
-              Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY),
-                label = Some(s"colour ${r.colour}")))
-            val image = DebugImage(32, 24, Some(DebugImage.Format.COLOUR_CLASSES),
-              Some(ByteString.copyFrom(grid.map(b => (b & 0x0f).toByte))), shapes)
-            out += encode(s,
-              MessageContents(s.settings.robotId,
-                debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
-          }
-        }
-        (s.copy(frame = frame, bus = bus), out.result())
-    }
-  }
-
   /** Whether the GameController packet the robot uses says the game runs (READY, SET, PLAYING): the bus bridge is
     * closed then (docs/protocol.md 6.9).
     */
-  def gameRunning(s: FirmwareState): Boolean =
-    s.game.exists(g =>
-      g.gameState == GameState.Ready || g.gameState == GameState.Set || g.gameState == GameState.Playing)
+  def gameRunning(s: FirmwareState): Boolean = FirmwareGame.gameRunning(s)
 
   /** Runs one bridged request that arrived through the secure stream on the robot's bus at `now`: the firmware after it
     * and the reply frame (signed when the robot signs), one per request (docs/protocol.md 6.9).

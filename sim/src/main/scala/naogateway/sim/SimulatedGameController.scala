@@ -38,6 +38,10 @@ import naogateway.wire.gamecontroller._
   *   packet each round) or 7 (its version-7 packets alone)
   * @param messageBudget
   *   the version-20 and -19 `messageBudget` of both teams; the simulation hears no team message, so it stays
+  * @param robots
+  *   where the simulated robots receive (3838 on each robot's address): a real GameController broadcasts each round to
+  *   the field, so the robots hear it as the gateway does (docs/protocol.md 6.9: a robot closes its bus bridge while
+  *   the game runs); each gets the same packets as `target`
   */
 final case class SimulatedGameControllerSettings(
     target: InetSocketAddress,
@@ -55,7 +59,8 @@ final case class SimulatedGameControllerSettings(
     setPlayAfter: FiniteDuration = 20.seconds,
     stoppedFor: FiniteDuration = 3.seconds,
     setPlayFor: FiniteDuration = 5.seconds,
-    messageBudget: Int = 12000
+    messageBudget: Int = 12000,
+    robots: Vector[InetSocketAddress] = Vector.empty
 ) {
   require(Seq(team0, team1, playersPerTeam).forall(n => n >= 0 && n <= 255), "team numbers and players must fit a byte")
   require(Seq(initial, ready, set, finished).forall(_ >= Duration.Zero), "phase durations must not be negative")
@@ -311,7 +316,7 @@ object SimulatedGameController {
       GameControllerCodec.encodeControl(c).fold(e => throw new IllegalStateException(e.describe), identity))
   }
 
-  /** A controller sending to `settings.target` from a socket of its own, until it is stopped. */
+  /** A controller sending to `settings.target` and `settings.robots` from a socket of its own, until it is stopped. */
   def apply(settings: SimulatedGameControllerSettings): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
@@ -319,7 +324,8 @@ object SimulatedGameController {
         context.spawn(UdpLink(settings.bindAddress, fromSocket), "udp")
         Behaviors.receiveMessage {
           case FromSocket(UdpLink.Bound(link, local)) =>
-            context.log.info("Simulated GameController on {} sends to {}", local, settings.target)
+            context.log.info("Simulated GameController on {} sends to {} and {} robot(s)", local, settings.target,
+              settings.robots.size.toString)
             timers.startTimerAtFixedRate(RoundKey, Round, settings.interval)
             new Running(settings, context, link, System.nanoTime()).sending(packetNumber = 1, shown = None)
           case FromSocket(UdpLink.BindFailed(address, reason)) =>
@@ -340,7 +346,9 @@ object SimulatedGameController {
     // The first round goes out at once; later ones on the timer.
     def sending(packetNumber: Int, shown: Option[(GameState, Boolean, SetPlay)]): Behavior[Command] = {
       val moment = momentAt(settings, System.nanoTime() - origin)
-      packets(settings, moment, packetNumber).foreach(link ! UdpLink.Send(_, settings.target))
+      // As one broadcast reaches every host on the field: the same packets to the gateway and to each robot.
+      for (p <- packets(settings, moment, packetNumber); to <- settings.target +: settings.robots)
+        link ! UdpLink.Send(p, to)
       val now = (moment.gameState, moment.stopped, moment.setPlay)
       if (!shown.contains(now))
         context.log.info(

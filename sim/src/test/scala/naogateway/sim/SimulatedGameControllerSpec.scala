@@ -124,6 +124,22 @@ class SimulatedGameControllerSpec extends ScalaTestWithActorTestKit with AnyWord
         all(decoded.map(_.gameState)) shouldBe GameState.Initial
       } finally gateway.close()
     }
+
+    "send each round to every robot as well, as a broadcast reaches the field (docs/protocol.md 6.9)" in {
+      val gateway = new TestGateway
+      val robots = Vector.fill(2)(new TestGateway)
+      try {
+        val s = SimulatedGameControllerSettings(gateway.address, interval = 50.millis, robots = robots.map(_.address))
+        val controller = spawn(SimulatedGameController(s))
+        def three(at: TestGateway) =
+          Iterator.continually(at.receive(5.seconds)).take(3).flatten.map(_.bytes.toVector).toVector
+        val atGateway = three(gateway)
+        val atRobots = robots.map(three)
+        testKit.stop(controller)
+        atGateway should have size 3
+        atRobots.foreach(_ shouldBe atGateway)
+      } finally (gateway +: robots).foreach(_.close())
+    }
   }
 
   "The simulated GameController of versions 20, 19 and 12" should {
