@@ -7,7 +7,7 @@
 #   make qemu       netduino2 images (port/qemu): build/qemu/{robot,echo,measure}.elf, and build/qemu-w4/; their
 #                   robot takes `key=`, `team_key=` or `development` as an argument (or ROBOT_KEY / FR_DEVELOPMENT)
 #   make footprint  flash and static RAM of the library on the CM-530 (the stub build/cm530/footprint.elf, which
-#                   keeps every public function) and, apart, of the example robot; the largest stack of each entry
+#                   keeps every public function) and, apart, of the test robot; the largest stack of each entry
 #                   point (stack painting) and instructions per keep-alive and per request (qemu -icount); prints
 #                   a table and writes build/footprint.json
 #   make test-gs1500m   the GS1500M driver's unit tests alone (also part of `make test`)
@@ -40,8 +40,8 @@ ARM_PB_SRCS := $(FR_PB_SRCS) $(FR_GEN_SRCS)
 
 # The robot key of the board images: ROBOT_KEY=<hex> (what `robotctl keys <id>` prints), or FR_DEVELOPMENT=1 for an
 # unsigned development image. Checked here (16 to 64 bytes of hex digit pairs, never both) and again by the
-# compiler (examples/robot.c: the key's length; the CM-530 image needs one of the two). The messages never show
-# the key. build/gen/robot_key.h carries it to examples/robot.c and is rewritten only when it changes.
+# compiler (testrobot/robot.c: the key's length; the CM-530 image needs one of the two). The messages never show
+# the key. build/gen/robot_key.h carries it to testrobot/robot.c and is rewritten only when it changes.
 ROBOT_KEY ?=
 FR_DEVELOPMENT ?=
 BOARD_KEY_HEADER := $(GEN)/robot_key.h
@@ -101,7 +101,7 @@ $(eval $(call arm_variant,cm530-w4,port/cm530/board_cm530.c port/cm530/bus_cm530
 QEMU_TIMING := -DGS1500M_PAYLOAD_MS=5000u
 $(eval $(call arm_variant,qemu,port/qemu/board_qemu.c port/qemu/bus_qemu.c,$(QEMU_TIMING),ld/qemu-netduino2.ld))
 $(eval $(call arm_variant,qemu-w4,port/qemu/board_qemu.c port/qemu/bus_qemu.c,-DFR_STREAM_WINDOW=4 $(QEMU_TIMING),ld/qemu-netduino2.ld))
-$(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(FR_EXAMPLE_SRCS),$$($(v)_PORT))))
+$(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(FR_ROBOT_SRCS),$$($(v)_PORT))))
 $(foreach v,qemu qemu-w4,$(eval $(call arm_program,$(v),measure,port/qemu/measure.c,)))
 # The footprint stub (port/cm530/footprint.c): the library alone, every public function kept by a table generated
 # from the public headers (tools/footprint_keep.sh), so a function added to fr.h (or a new include/fr_*.h) is

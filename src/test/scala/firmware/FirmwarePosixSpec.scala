@@ -61,7 +61,7 @@ object FirmwarePosixSpec {
        |""".stripMargin
 }
 
-/** The C library's posix robot (firmware/examples/robot.c over host UDP sockets, built with `make native WINDOW=4`)
+/** The C library's posix robot (firmware/testrobot/robot.c over host UDP sockets, built with `make native WINDOW=4`)
   * against a real gateway and middleware on loopback, each robot at its own 127.x address receiving on 3838, as the
   * Python conformance robot is driven in DocRobotConformanceSpec. Cancelled with the reason when make, a C compiler or
   * nanopb is missing (bash firmware/setup.sh installs them).

@@ -30,13 +30,13 @@ object FirmwareQemuSpec {
       |}
       |""".stripMargin
 
-  /** Where the board's firmware believes the base station is (the example robot's default gateway). */
+  /** Where the board's firmware believes the base station is (the test robot's default gateway). */
   val BaseStation: Remote = Remote("192.168.1.10", 11011)
 }
 
 /** The qemu image of the board (port/qemu on the netduino2 machine, whose UART5 is the CM-530's) through
   * [[Gs1500mBridge]], the GS1500M on the host: first the AT start-up and the datagram path with the `echo` program,
-  * which uses the port alone; then the example robot (firmware/examples/robot.c) against a real gateway and middleware,
+  * which uses the port alone; then the test robot (firmware/testrobot/robot.c) against a real gateway and middleware,
   * the bridge routing the firmware's base station (192.168.1.10:11011) to the gateway's loopback port. Cancelled with
   * the reason when the ARM toolchain or qemu is missing (bash firmware/setup.sh installs them).
   */
@@ -152,7 +152,7 @@ class FirmwareQemuSpec
     }
   }
 
-  // ---- the example robot against a real gateway ----------------------------------------------------------------
+  // ---- the test robot against a real gateway -------------------------------------------------------------------
 
   override def afterAll(): Unit = {
     rig.close()
@@ -163,7 +163,7 @@ class FirmwareQemuSpec
   private def gatewayAddress: InetSocketAddress = rig.gatewayAddress
   private def client: RobotInterface = rig.client
 
-  /** The example robot in qemu, its module on the bridge, and what the gateway published about it. */
+  /** The test robot in qemu, its module on the bridge, and what the gateway published about it. */
   private final class BoardRobot(val id: Int) {
     val address = TestLoopback.address()
     // Taken here: the bridge's thread must not be the one to start the gateway (the rig's lazy values lock it).
@@ -225,7 +225,7 @@ class FirmwareQemuSpec
     result(client.say(id, "hello from the gateway")).isRight shouldBe true
   }
 
-  "The example robot on the qemu board" must {
+  "The test robot on the qemu board" must {
     "come online through the GS1500M bridge and send a keep-alive every 200 ms" in {
       val r = robot
       val before = r.snapshots.size
@@ -256,7 +256,7 @@ class FirmwareQemuSpec
 
     "receive the thesis's 100 payloads of 1 kB through the secure stream complete and in order: first-byte sum 4950" in {
       val (endpoint, received) = stream
-      // The overflow experiment's payloads (thesis 6.1): byte 0 of payload i is i, the rest random. The example robot
+      // The overflow experiment's payloads (thesis 6.1): byte 0 of payload i is i, the rest random. The test robot
       // sends each stream payload it receives back through its own stream, so what returns is what it received.
       val payloads = OverflowExperiment.datagrams(OverflowExperiment.Config()).map(_.payload.toArray)
         .map(p => { if (p(0) == 0 && p(1) == 0x2a) p(1) = 0x2b; p }) // never an FU-Remote frame's 00 2A
@@ -281,7 +281,7 @@ class FirmwareQemuSpec
     }
   }
 
-  // ---- the example robot signing, with a gateway played by the spec ---------------------------------------------
+  // ---- the test robot signing, with a gateway played by the spec ------------------------------------------------
 
   /** A signing robot image in qemu behind its own bridge; the spec's sockets stand for the base station (and a second
     * gateway the robot knows as 192.168.1.20:11011) and sign with the test-side signer (Fusig2).
@@ -352,7 +352,7 @@ class FirmwareQemuSpec
   private def sendTo(from: DatagramSocket, b: SignedBoard, frame: Array[Byte]): Unit =
     from.send(new DatagramPacket(frame, frame.length, b.robotAt))
 
-  "The example robot on the qemu board, signing" must {
+  "The test robot on the qemu board, signing" must {
     "answer only its gateway's signed frames, and keep its boot epoch in a host file across a restart" in {
       val base = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
       val stranger = new DatagramSocket(new InetSocketAddress(TestLoopback.address(0), 0))
