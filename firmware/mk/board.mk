@@ -4,7 +4,7 @@
 #                   build/cm530-w4/ with the stream's window at 4; they link against 496 KB / 64 KB. The robot key
 #                   (`robotctl keys <id>`, 16 to 64 bytes in hex) is built in; FR_DEVELOPMENT=1 instead builds an
 #                   unsigned development image. One of the two is required: a field image always signs
-#   make qemu       netduino2 images (port/qemu): build/qemu/{robot,echo,measure}.elf, and build/qemu-w4/; their
+#   make qemu       netduino2 images (port/qemu): build/qemu/{robot,echo,measure,hello_robot}.elf, and build/qemu-w4/; their
 #                   robot takes `key=`, `team_key=` or `development` as an argument (or ROBOT_KEY / FR_DEVELOPMENT)
 #   make footprint  flash and static RAM of the library on the CM-530 (the stub build/cm530/footprint.elf, which
 #                   keeps every public function) and, apart, of the test robot; the largest stack of each entry
@@ -115,11 +115,13 @@ $(GEN)/footprint_keep.c: tools/footprint_keep.sh mk/board.mk $(FOOTPRINT_HEADERS
 	sh tools/footprint_keep.sh $(FOOTPRINT_HEADERS) > $@.new && mv $@.new $@
 $(foreach v,cm530 cm530-w4,$(eval $(call arm_program,$(v),footprint,port/cm530/footprint.c,$$($(v)_PORT) $(BUILD)/$(v)/obj/$(GEN)/footprint_keep.o)))
 $(eval $(call arm_program,qemu,echo,port/qemu/echo.c,$$(qemu_PORT)))
+# The example a team starts from, built for the board too so it compiles under the board's flags.
+$(eval $(call arm_program,qemu,hello_robot,$(FR_EXAMPLE_SRCS),$$(qemu_PORT)))
 $(eval $(call arm_program,qemu,boardcheck,port/qemu/boardcheck.c,$$(qemu_PORT)))
 
 arm: check-robot-key $(BUILD)/cm530/robot.elf $(BUILD)/cm530/robot.hex $(BUILD)/cm530/robot.bin $(BUILD)/cm530-w4/robot.elf
 qemu: $(BUILD)/qemu/robot.elf $(BUILD)/qemu/echo.elf $(BUILD)/qemu/measure.elf $(BUILD)/qemu-w4/robot.elf \
-      $(BUILD)/qemu-w4/measure.elf $(BUILD)/qemu/boardcheck.elf
+      $(BUILD)/qemu-w4/measure.elf $(BUILD)/qemu/boardcheck.elf $(BUILD)/qemu/hello_robot.elf
 
 # The board's start-up on the emulated Cortex-M3 (port/qemu/boardcheck.c): vectors, interrupts a bootloader left
 # on, the stack's guard and the reset it causes. Prints "boardcheck: N passed, N failed".
