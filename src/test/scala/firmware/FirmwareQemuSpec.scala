@@ -21,9 +21,9 @@ import naogateway.wire.{MessageContents, Posture, RpcValue}
 import naogateway.{RobotSnapshot, StreamActor}
 import robotmiddleware.RobotInterface
 
-/** The gateway's configuration for the board: its defaults (stream window 1, as the image is built), but a robot is given
-  * up only after 2 s of silence, not 0.85 s: on a loaded host qemu's CPU thread can go unscheduled that long, and a
-  * robot taken offline closes its bus bridge under the SDK.
+/** The gateway's configuration for the board: its defaults (stream window 1, as the image is built), but a robot is
+  * given up only after 2 s of silence, not 0.85 s: on a loaded host qemu's CPU thread can go unscheduled that long, and
+  * a robot taken offline closes its bus bridge under the SDK.
   */
 object FirmwareQemuSpec {
   val config: String =
@@ -297,8 +297,11 @@ class FirmwareQemuSpec
     val port = freePort()
     val log = File.createTempFile("busmodel", ".log")
     rig.onClose { log.delete(); () }
-    rig.owned(new ProcessBuilder(new File(FirmwareBuild.dir, "build/busmodel").getPath, s"port=$port", "run_ms=300000",
-        "log=1").redirectErrorStream(true).redirectOutput(log).start(), 5.seconds)
+    rig.owned(
+      new ProcessBuilder(new File(FirmwareBuild.dir, "build/busmodel").getPath, s"port=$port", "run_ms=300000",
+        "log=1").redirectErrorStream(true).redirectOutput(log).start(),
+      5.seconds
+    )
     val listening = poll(10.seconds)(QemuBoard.output(log).contains("listening"))
     withClue(QemuBoard.output(log)) { listening shouldBe true }
     port -> log
