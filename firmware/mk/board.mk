@@ -4,10 +4,10 @@
 #                   build/cm530-w4/ with the stream's window at 4; they link against 496 KB / 64 KB. The robot key
 #                   (`robotctl keys <id>`, 16 to 64 bytes in hex) is built in; FR_DEVELOPMENT=1 instead builds an
 #                   unsigned development image. One of the two is required: a field image always signs
-#   make qemu       netduino2 images (port/qemu): build/qemu/{robot,echo,measure}.elf, and build/qemu-w4/; their
+#   make qemu       netduino2 images (port/qemu): build/qemu/{robot,echo,measure,hello_robot}.elf, and build/qemu-w4/; their
 #                   robot takes `key=`, `team_key=` or `development` as an argument (or ROBOT_KEY / FR_DEVELOPMENT)
 #   make footprint  flash and static RAM of the library on the CM-530 (the stub build/cm530/footprint.elf, which
-#                   keeps every public function) and, apart, of the example robot; the largest stack of each entry
+#                   keeps every public function) and, apart, of the test robot; the largest stack of each entry
 #                   point (stack painting) and instructions per keep-alive and per request (qemu -icount); prints
 #                   a table and writes build/footprint.json
 #   make test-gs1500m   the GS1500M driver's unit tests alone (also part of `make test`)
@@ -40,8 +40,8 @@ ARM_PB_SRCS := $(FR_PB_SRCS) $(FR_GEN_SRCS)
 
 # The robot key of the board images: ROBOT_KEY=<hex> (what `robotctl keys <id>` prints), or FR_DEVELOPMENT=1 for an
 # unsigned development image. Checked here (16 to 64 bytes of hex digit pairs, never both) and again by the
-# compiler (examples/robot.c: the key's length; the CM-530 image needs one of the two). The messages never show
-# the key. build/gen/robot_key.h carries it to examples/robot.c and is rewritten only when it changes.
+# compiler (testrobot/robot.c: the key's length; the CM-530 image needs one of the two). The messages never show
+# the key. build/gen/robot_key.h carries it to testrobot/robot.c and is rewritten only when it changes.
 ROBOT_KEY ?=
 FR_DEVELOPMENT ?=
 BOARD_KEY_HEADER := $(GEN)/robot_key.h
@@ -101,7 +101,7 @@ $(eval $(call arm_variant,cm530-w4,port/cm530/board_cm530.c port/cm530/bus_cm530
 QEMU_TIMING := -DGS1500M_PAYLOAD_MS=5000u
 $(eval $(call arm_variant,qemu,port/qemu/board_qemu.c port/qemu/bus_qemu.c,$(QEMU_TIMING),ld/qemu-netduino2.ld))
 $(eval $(call arm_variant,qemu-w4,port/qemu/board_qemu.c port/qemu/bus_qemu.c,-DFR_STREAM_WINDOW=4 $(QEMU_TIMING),ld/qemu-netduino2.ld))
-$(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(FR_EXAMPLE_SRCS),$$($(v)_PORT))))
+$(foreach v,cm530 cm530-w4 qemu qemu-w4,$(eval $(call arm_program,$(v),robot,$(FR_ROBOT_SRCS),$$($(v)_PORT))))
 $(foreach v,qemu qemu-w4,$(eval $(call arm_program,$(v),measure,port/qemu/measure.c,)))
 # The footprint stub (port/cm530/footprint.c): the library alone, every public function kept by a table generated
 # from the public headers (tools/footprint_keep.sh), so a function added to fr.h (or a new include/fr_*.h) is
@@ -115,11 +115,13 @@ $(GEN)/footprint_keep.c: tools/footprint_keep.sh mk/board.mk $(FOOTPRINT_HEADERS
 	sh tools/footprint_keep.sh $(FOOTPRINT_HEADERS) > $@.new && mv $@.new $@
 $(foreach v,cm530 cm530-w4,$(eval $(call arm_program,$(v),footprint,port/cm530/footprint.c,$$($(v)_PORT) $(BUILD)/$(v)/obj/$(GEN)/footprint_keep.o)))
 $(eval $(call arm_program,qemu,echo,port/qemu/echo.c,$$(qemu_PORT)))
+# The example a team starts from, built for the board too so it compiles under the board's flags.
+$(eval $(call arm_program,qemu,hello_robot,$(FR_EXAMPLE_SRCS),$$(qemu_PORT)))
 $(eval $(call arm_program,qemu,boardcheck,port/qemu/boardcheck.c,$$(qemu_PORT)))
 
 arm: check-robot-key $(BUILD)/cm530/robot.elf $(BUILD)/cm530/robot.hex $(BUILD)/cm530/robot.bin $(BUILD)/cm530-w4/robot.elf
 qemu: $(BUILD)/qemu/robot.elf $(BUILD)/qemu/echo.elf $(BUILD)/qemu/measure.elf $(BUILD)/qemu-w4/robot.elf \
-      $(BUILD)/qemu-w4/measure.elf $(BUILD)/qemu/boardcheck.elf
+      $(BUILD)/qemu-w4/measure.elf $(BUILD)/qemu/boardcheck.elf $(BUILD)/qemu/hello_robot.elf
 
 # The board's start-up on the emulated Cortex-M3 (port/qemu/boardcheck.c): vectors, interrupts a bootloader left
 # on, the stack's guard and the reset it causes. Prints "boardcheck: N passed, N failed".

@@ -1,4 +1,7 @@
-/* firmware/src/fr_internal.h: what the library's modules share; not part of the public API. */
+/* firmware/src/fr_internal.h: what the library's modules share; not part of the public API. Each section names the
+ * file that defines it: fr_frame.c, fr_core.c, fr_rpc.c, fr_debug.c, fr_gc.c, fr_stream.c, fr_sign.c, fr_sha256.c and
+ * fr_body.c. The other files of src/ share nothing through it: fr_dxl.c is declared in include/fr_body.h, gs1500m.c in
+ * include/gs1500m.h, and fr_pb_groups.c is called only by the build's copy of nanopb's pb_decode.c. */
 #ifndef FR_INTERNAL_H
 #define FR_INTERNAL_H
 #include <stdbool.h>
@@ -10,6 +13,7 @@
 #include "fr.h"
 #include "naogateway/proto/message.pb.h"
 
+/* shared by several files */
 /** Bytes of the legacy header, the larger of the two forms (protocol.md 4.1). */
 #define FR_HEADER_MAX 12
 /** Bytes the signature field adds to a Message (protocol.md 6.7): key 3, length 1, timestamp 9, mac 10. */
@@ -22,6 +26,7 @@ typedef struct {
     bool via_stream;
 } fr_route_t;
 
+/* fr_frame.c */
 /** Why a datagram starting 00 2A was refused (protocol.md 4.4), or FR_FRAME_OK. */
 typedef enum {
     FR_FRAME_OK = 0,
@@ -41,6 +46,7 @@ fr_frame_error_t fr_frame_parse(const uint8_t *data, size_t len, const uint8_t *
  *  frame starts (payload - 12 or payload - 8). `payload` must have FR_HEADER_MAX bytes before it. */
 uint8_t *fr_frame_header(uint8_t *payload, size_t payload_len, fr_form_t form);
 
+/* shared by several files */
 /** Keeps a function out of its callers, so its locals are on the stack only while it runs (send_keepalive's Status
  *  and RobotHealth would otherwise sit in every fr_poll frame, also on the request path). */
 #if defined(__GNUC__)
@@ -55,6 +61,7 @@ typedef struct {
     uint32_t inner[8], outer[8];
 } fr_hmac_key_t;
 
+/* fr_core.c */
 /** The library's state shared between its modules; one instance, static. */
 typedef struct {
     fr_settings_t settings;
@@ -89,7 +96,7 @@ bool fr_send_raw(const fr_endpoint_t *to, const uint8_t *data, size_t len);
 /** Handles one frame's protobuf payload from `from` (plain datagram or stream payload). */
 void fr_handle_frame(const fr_endpoint_t *from, const uint8_t *data, size_t len, bool via_stream);
 
-/* in.c: reading incoming messages field by field (the same acceptance as nanopb's pb_decode) */
+/* fr_in.c: reading incoming messages field by field (the same acceptance as nanopb's pb_decode) */
 /** Handles field `tag` of wire type `wire` of a message being read: 1 read, 0 not a field it knows (skipped by the
  *  caller), -1 malformed. */
 typedef int (*fr_in_field_t)(pb_istream_t *s, uint32_t tag, pb_wire_type_t wire, void *ctx);
@@ -105,7 +112,7 @@ bool fr_in_uint32(pb_istream_t *s, pb_wire_type_t wire, uint32_t *out);
 /** A submessage field: its fields through `field`. */
 bool fr_in_submessage(pb_istream_t *s, pb_wire_type_t wire, fr_in_field_t field, void *ctx);
 
-/* rpc.c */
+/* fr_rpc.c */
 /** Resets the handler table and the deferred calls (fr_init). */
 void fr_rpc_reset(void);
 /** Empties the call buffer before a frame is read. */
@@ -115,7 +122,7 @@ bool fr_rpc_read(pb_istream_t *s, pb_wire_type_t wire);
 /** Dispatches the request decoded into the call buffer and answers it on `route`. */
 void fr_rpc_dispatch(const fr_route_t *route);
 
-/* debug.c */
+/* fr_debug.c */
 /** Switches every option off and forgets the list (fr_init). */
 void fr_debug_reset(void);
 /** Prepares reading a frame's DebuggingCommands: with `apply` their names switch options (the a.b.* rule),
@@ -126,7 +133,7 @@ bool fr_debug_read(pb_istream_t *s, pb_wire_type_t wire);
 /** Acts on the DebuggingCommands read: answers a pull (or a change) with the option list on `route`. */
 void fr_debug_after(const fr_route_t *route);
 
-/* gamecontroller.c */
+/* fr_gc.c */
 /** Handles a datagram starting "RG" from `from`. */
 void fr_gc_receive(const fr_endpoint_t *from, const uint8_t *data, size_t len);
 /** Forgets the GameController last heard (fr_init). */
@@ -134,7 +141,7 @@ void fr_gc_reset(void);
 /** Parses a control packet of any supported version for `team`/`player` into `out`; false when not used. */
 bool fr_gc_parse(const uint8_t *data, size_t len, uint32_t team, uint8_t player, fr_game_t *out);
 
-/* stream.c */
+/* fr_stream.c */
 /** Back to the initial state of protocol.md 11.3 (fr_init). */
 void fr_stream_reset(void);
 /** Handles a datagram whose first two bytes are below 42 (a segment) from the gateway. */
@@ -142,7 +149,7 @@ void fr_stream_receive(const uint8_t *data, size_t len);
 /** Retransmissions, idle ACKs and queued sends that are due. */
 void fr_stream_poll(void);
 
-/* sign.c */
+/* fr_sign.c */
 /** Appends the signature field over payload[0 .. len) with the next robot timestamp; the new length, or 0 when
  *  it does not fit in `cap` or the boot's counters are used up. */
 size_t fr_sign_append(uint8_t *payload, size_t len, size_t cap);
@@ -162,7 +169,7 @@ void fr_sign_mac(const uint8_t *key, size_t key_len, uint8_t direction, int32_t 
 void fr_sign_mac_with(const fr_hmac_key_t *key, uint8_t direction, int32_t robot_id, uint32_t epoch, uint64_t timestamp,
                       const uint8_t *bytes, size_t len, uint8_t mac[8]);
 
-/* sha256.c */
+/* fr_sha256.c */
 /** SHA-256 state of one running hash. */
 typedef struct {
     uint32_t h[8];
@@ -188,7 +195,7 @@ void fr_hmac_sha256(const uint8_t *key, size_t key_len, const uint8_t *const *pa
 void fr_hkdf_sha256(const uint8_t *salt, size_t salt_len, const uint8_t *ikm, size_t ikm_len, const uint8_t *info,
                     size_t info_len, uint8_t *out, size_t out_len);
 
-/* body.c: the Dynamixel bus (include/fr_body.h). fr_body_init sets these; they stay NULL in a program without a
+/* fr_body.c: the Dynamixel bus (include/fr_body.h). fr_body_init sets these; they stay NULL in a program without a
  * bus, so fr_core.c calls no body code and such a program links none of it. */
 /** What the body adds to the library's loop, the keep-alive and incoming frames. */
 typedef struct {
@@ -200,7 +207,7 @@ typedef struct {
 } fr_body_hooks_t;
 extern fr_body_hooks_t fr_body_hooks;
 
-/* out.c: the writer of outgoing frames (protobuf fields by hand, the bytes nanopb would write) */
+/* fr_out.c: the writer of outgoing frames (protobuf fields by hand, the bytes nanopb would write) */
 /** A cursor over an outgoing payload; `p` NULL once something did not fit (the frame is then not sent). */
 typedef struct {
     uint8_t *p, *end;

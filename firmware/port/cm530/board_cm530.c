@@ -11,7 +11,7 @@
 #include "stm32.h"
 
 #ifndef BOARD_BASE_IP
-/** The base station the module's first UDP client points at (the example robot's default gateway). */
+/** The base station the module's first UDP client points at (the test robot's default gateway). */
 #define BOARD_BASE_IP {192, 168, 1, 10}
 #endif
 

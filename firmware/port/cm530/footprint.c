@@ -2,7 +2,7 @@
  * program that does nothing but start the library and poll it, and that keeps every public function of the
  * library's headers in the image (the table build/gen/footprint_keep.c, generated from the headers by
  * tools/footprint_keep.sh), so the linker's --gc-sections drops nothing a program could use. Linked with the CM-530
- * port like the example robot, it measures the library alone: the example program's own code (and the soft-float
+ * port like the test robot, it measures the library alone: the test robot's own code (and the soft-float
  * and 64-bit division routines its number formatting pulls in) is not counted. */
 #include <stddef.h>
 

@@ -13,7 +13,7 @@
 #define BOARD_CORE_HZ 120000000u
 #endif
 #ifndef BOARD_BASE_IP
-/** The base station the module's first UDP client points at (the example robot's default gateway). */
+/** The base station the module's first UDP client points at (the test robot's default gateway). */
 #define BOARD_BASE_IP {192, 168, 1, 10}
 #endif
 #ifndef BOARD_BOOT_MS

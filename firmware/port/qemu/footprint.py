@@ -2,7 +2,7 @@
 """firmware/port/qemu/footprint.py: the footprint of `make footprint` (docs/firmware.md, "Footprint").
 
 The library's flash and static RAM on the CM-530, from the footprint stub (port/cm530/footprint.c: every public
-function kept, nothing else; the stub's own bytes are reported apart), and the example robot's image apart, each
+function kept, nothing else; the stub's own bytes are reported apart), and the test robot's image apart, each
 split by part from the linker's map; and the figures of the measurement program (port/qemu/measure.c) run in qemu
 with -icount: the largest stack of each entry point and its instructions. Prints a table and writes
 build/footprint.json (the bench suite reads its flat `figures`).
@@ -33,7 +33,7 @@ def part_of(path):
         return "stub"
     if "/obj/port/" in path:
         return "board port"
-    if "/obj/examples/" in path or "/obj/port/qemu/measure.o" in path:
+    if "/obj/testrobot/" in path or "/obj/port/qemu/measure.o" in path:
         return "program"
     return "libc, libgcc"
 
@@ -175,7 +175,7 @@ def main():
         for p in sorted(set(b["flash_parts"]) | set(b["ram_parts"])):
             print("  %-28s %10d %10d" % (p, b["flash_parts"].get(p, 0), b["ram_parts"].get(p, 0)))
         print("  %-28s %10d %10d" % ("(the stub itself, not counted)", b["stub_flash"], b["stub_ram"]))
-    print("\nThe example robot's image (examples/robot.c), apart")
+    print("\nThe test robot's image (testrobot/robot.c), apart")
     print("%-24s %10s %14s %16s" % ("build", "flash (B)", "static RAM (B)", "program's part"))
     for name, b in result["examples"].items():
         print("%-24s %10d %14d %8d / %5d" % (name, b["flash"], b["static_ram"], b["flash_parts"].get("program", 0),

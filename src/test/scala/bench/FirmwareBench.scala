@@ -18,7 +18,7 @@ import firmware.FirmwareBuild
   *   - `firmware_library_flash_bytes_w1` / `_w4`, `firmware_library_static_ram_bytes_w1` / `_w4`: the library (library,
   *     GS1500M driver, nanopb, descriptors, libc, board port) measured with a stub program that keeps every public
   *     `fr.h` function, stream window 1 (stop-and-wait) and 4 (selective repeat);
-  *   - `firmware_example_flash_bytes_w1` / `_w4`, `firmware_example_static_ram_bytes_w1` / `_w4`: the example robot's
+  *   - `firmware_example_flash_bytes_w1` / `_w4`, `firmware_example_static_ram_bytes_w1` / `_w4`: the test robot's
   *     image, apart; static RAM is `.data` + `.bss` + `.noinit` + the stack guard, the stack apart;
   *   - `firmware_stack_<entry>_bytes`: the deepest stack of each entry point, by painting it (W = 1);
   *   - `firmware_<entry>_instructions`: instructions of each entry point under `-icount` (deterministic): a keep-alive

@@ -43,8 +43,9 @@ object FirmwarePosixSpec {
   val StreamId = 62
   val LinkId = 64
   val BusId = 65
+  val ExampleId = 66
   lazy val developmentAddresses: Map[Int, String] =
-    Seq(PlainId, StreamId, LinkId, BusId).map(id => id -> TestLoopback.address().getHostAddress).toMap
+    Seq(PlainId, StreamId, LinkId, BusId, ExampleId).map(id => id -> TestLoopback.address().getHostAddress).toMap
 
   private def developmentEntries: String =
     developmentAddresses.map { case (id, a) => "{ id = " + id + ", address = \"" + a + "\", signing = off }" }.mkString(
@@ -61,7 +62,7 @@ object FirmwarePosixSpec {
        |""".stripMargin
 }
 
-/** The C library's posix robot (firmware/examples/robot.c over host UDP sockets, built with `make native WINDOW=4`)
+/** The C library's posix robot (firmware/testrobot/robot.c over host UDP sockets, built with `make native WINDOW=4`)
   * against a real gateway and middleware on loopback, each robot at its own 127.x address receiving on 3838, as the
   * Python conformance robot is driven in DocRobotConformanceSpec. Cancelled with the reason when make, a C compiler or
   * nanopb is missing (bash firmware/setup.sh installs them).
@@ -184,6 +185,29 @@ class FirmwarePosixSpec
       result(client.call(id, "motion", "getPosture")) shouldBe Right(Some(RpcValue.Text("walking")))
       result(client.stop(id)).isRight shouldBe true
       result(client.call(id, "motion", "getPosture")) shouldBe Right(Some(RpcValue.Text("stand")))
+    }
+
+    "run as the example a team starts from (examples/hello_robot.c): online, keep-alives, motion.head answered" in {
+      FirmwareBuild.make(this, Seq("example"), Map("WINDOW" -> "4"))
+      val log = new File(FirmwareBuild.dir, s"build/spec/robot-$ExampleId.log")
+      log.getParentFile.mkdirs()
+      val b = new ProcessBuilder(new File(FirmwareBuild.dir, "build/posix-w4/hello_robot").getPath, s"id=$ExampleId",
+        s"gateway=127.0.0.1:$gatewayPort", "development", "run_ms=60000").redirectErrorStream(true).redirectOutput(log)
+      b.environment().put("FR_POSIX_BIND", s"${developmentAddresses(ExampleId)}:${TestLoopback.RobotReceivePort}")
+      rig.owned(b.start(), grace = 5.seconds)
+      def output = Try(new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)).getOrElse("")
+      val snapshots = new ConcurrentLinkedQueue[RobotSnapshot]()
+      client.status(ExampleId).runWith(Sink.foreach(snapshots.add))
+      withClue(s"the example's output:\n$output\n") {
+        rig.awaitOnline(ExampleId, 20.seconds) shouldBe true
+        rig.acquireAll(ExampleId, 10.seconds)
+        // Its keep-alives carry what its health callback fills in.
+        poll(5.seconds)(snapshots.asScala.exists(s =>
+            s.posture.contains(Posture.Stand) && s.batteryVoltage.exists(v => math.abs(v - 12.4) < 0.01))) shouldBe true
+        result(client.head(ExampleId, 0.5, 0.2)).isRight shouldBe true
+        // Its one command: everything else is unknown to it.
+        robotError(result(client.walk(ExampleId, 0.1, 0, 0))) shouldBe "unknown method: motion.walk"
+      }
     }
 
     "offer its debug options and send HaViMo2 region and grid frames while enabled" in {

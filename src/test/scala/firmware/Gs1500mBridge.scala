@@ -321,20 +321,23 @@ object Gs1500mBridge {
   private final case class Disassociate(rejoinAfter: FiniteDuration) extends Request
 }
 
-/** qemu's `netduino2` as the robot's board: the image's UART5 on the bridge's serial port, its semihosting output in a
-  * log file, its arguments through `-append`.
+/** qemu's `netduino2` as the robot's board: the image's UART5 on the bridge's serial port, its USART1 (the Dynamixel
+  * bus, port/qemu/bus_qemu.c) on a bus model's TCP port when there is one, its semihosting output in a log file, its
+  * arguments through `-append`.
   */
 object QemuBoard {
 
   /** The qemu binary. */
   val Binary = "qemu-system-arm"
 
-  /** Starts `elf`; `serialPort` is the bridge's (None: the UART goes nowhere); `icountShift` makes instruction counting
-    * deterministic (`-icount shift=N,sleep=off`).
+  /** Starts `elf`; `serialPort` is the bridge's (None: the UART goes nowhere); `busPort` is the bus model's (the
+    * standalone busmodel, firmware/tools/busmodel_main.c; None: no bus, the body stays off); `icountShift` makes
+    * instruction counting deterministic (`-icount shift=N,sleep=off`).
     */
   def start(elf: File, log: File, arguments: Seq[String] = Nil, serialPort: Option[Int] = None,
-      icountShift: Option[Int] = None): Process = {
+      icountShift: Option[Int] = None, busPort: Option[Int] = None): Process = {
     val uart5 = serialPort.fold("null")(p => s"tcp:127.0.0.1:$p,nodelay=on")
+    val usart1 = busPort.fold("null")(p => s"tcp:127.0.0.1:$p,nodelay=on")
     val command = Seq(
       Binary,
       "-M",
@@ -345,7 +348,7 @@ object QemuBoard {
       "none",
       "-nodefaults",
       "-serial",
-      "null",
+      usart1,
       "-serial",
       "null",
       "-serial",

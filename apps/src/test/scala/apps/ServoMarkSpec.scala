@@ -41,9 +41,9 @@ class ServoMarkSpec extends AnyWordSpec with Matchers {
       StatusView.robotLine(hot, None) should endWith(" SERVOS hot 1,7 low-voltage 2,7")
       StatusView.render(StatusModel(Vector(hot), Map.empty, None, None)).exists(_.endsWith("low-voltage 2,7")) shouldBe
         true
-      control.ControlServer.statusLine(robot, None) should not include "SERVOS"
-      control.ControlServer.statusLine(hot, None) should endWith(" SERVOS hot 1,7 low-voltage 2,7")
-      control.ControlServer.statusLine(hot, None, limits = ServoLimits(hotCelsius = 80, lowVolts = 5.0)) should
+      control.ControlText.statusLine(robot, None) should not include "SERVOS"
+      control.ControlText.statusLine(hot, None) should endWith(" SERVOS hot 1,7 low-voltage 2,7")
+      control.ControlText.statusLine(hot, None, limits = ServoLimits(hotCelsius = 80, lowVolts = 5.0)) should
         not include "SERVOS"
     }
 

@@ -4,8 +4,8 @@ import java.nio.charset.StandardCharsets
 
 import naogateway.wire.{Posture, RpcMethod, RpcValue}
 
-/** The control port's wire format (docs/robotctl.md), shared by the gateway's [[ControlServer]]
-  * and the `robotctl` client. Pure code with no Akka in it, so the client loads none.
+/** The control port's wire format (docs/robotctl.md), shared by the gateway's [[ControlServer]] and the `robotctl`
+  * client. Pure code with no Akka in it, so the client loads none.
   *
   * A connection carries one exchange: the client sends one request line, the server answers with any number of output
   * lines and one final line, then closes. Lines end with `\n` and are UTF-8.

@@ -1,4 +1,5 @@
-/* firmware/examples/robot.c: the example robot program. It uses only the public API (fr.h) and the port
+/* firmware/testrobot/robot.c: the test robot: the program the specs, the benches and the board images run (a team
+ * starts from examples/hello_robot.c instead). It uses only the public API (fr.h, fr_body.h) and the port
  * (fr_port.h), so the same file runs on the posix port (tests, teams without hardware) and on the boards.
  * It serves the ten methods of docs/protocol.md 7.2 with a small model of the robot's body, offers the debug
  * option catalogue of protocol.md section 8 and a synthetic camera, answers the GameController and echoes
