@@ -1,4 +1,4 @@
-package integration
+package endtoend
 
 import naogateway.wire.ActuatorGroup
 
@@ -20,7 +20,9 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import apps.BallFollower
 import naogateway.testkit.TestLoopback
-import naogateway._
+import naogateway.access.GatewayAccess
+import naogateway.api.{GatewayAddresses, RobotFailure, RobotSnapshot}
+import naogateway.gateway.{Gateway, GatewaySettings}
 import naogateway.sim._
 import naogateway.sim.network.LossyNetwork
 import naogateway.wire.Posture
@@ -61,7 +63,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
   private val middleware =
     gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
   private val robotPort: InetSocketAddress = {
-    val probe = gatewayNode.createTestProbe[Gateway.Addresses]()
+    val probe = gatewayNode.createTestProbe[GatewayAddresses]()
     gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots
   }
@@ -143,7 +145,7 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       def robotctl(args: String*): (Int, Vector[String], Vector[String]) = {
         val out = Vector.newBuilder[String]
         val err = Vector.newBuilder[String]
-        val code = apps.RobotCtl.run("--control" +: address +: args, _ => None, out += _, err += _)
+        val code = naogateway.launcher.RobotCtl.run("--control" +: address +: args, _ => None, out += _, err += _)
         (code, out.result(), err.result())
       }
       val (code, status, errors) = robotctl("status")

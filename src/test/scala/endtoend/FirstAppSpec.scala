@@ -1,4 +1,4 @@
-package integration
+package endtoend
 
 import java.io.{BufferedReader, InputStreamReader}
 import java.net.{DatagramSocket, ServerSocket}
@@ -112,7 +112,7 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
         }
         val demo = start(
           Seq(s"${System.getProperty("java.home")}/bin/java", "-Xmx768m", "-cp", System.getProperty("java.class.path"),
-            "apps.Launcher"),
+            "naogateway.launcher.Launcher"),
           repo,
           Map(
             "ROBOTS_GATEWAY_PORT" -> clusterPort.toString,
@@ -135,7 +135,8 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
 
           // robotctl watch 2: robot 2's status lines while the app runs (reads need no lease).
           val watcher = new Thread(() => {
-            apps.RobotCtl.run(Seq("watch", "2", "3600"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
+            naogateway.launcher.RobotCtl.run(Seq("watch", "2", "3600"),
+              Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
               watched.add(_), _ => ())
             ()
           })

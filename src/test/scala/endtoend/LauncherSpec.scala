@@ -1,4 +1,4 @@
-package integration
+package endtoend
 
 import java.io.{BufferedReader, InputStreamReader}
 import java.net.ServerSocket
@@ -39,7 +39,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     finally s.close()
   }
 
-  private def launch(clusterPort: Int = freePort(), main: String = "apps.Launcher"): Launched = {
+  private def launch(clusterPort: Int = freePort(), main: String = "naogateway.launcher.Launcher"): Launched = {
     val javaBin = s"${System.getProperty("java.home")}/bin/java"
     val command = Seq(javaBin, "-Xmx768m", "-cp", System.getProperty("java.class.path"), main)
     // A process started in the background of a non-interactive shell inherits SIGINT as ignored, and the JVM then
@@ -121,16 +121,18 @@ class LauncherSpec extends AnyWordSpec with Matchers {
         // robotctl reaches the running launcher through its control port.
         val out = Vector.newBuilder[String]
         val err = Vector.newBuilder[String]
-        val code = apps.RobotCtl.run(Seq("status"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
-          out += _, err += _)
+        val code =
+          naogateway.launcher.RobotCtl.run(Seq("status"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
+            out += _, err += _)
         withClue(err.result().mkString("\n")) { code shouldBe 0 }
         out.result().count(_.matches("[123] .* online .*")) shouldBe 3
 
         // robotctl doctor against the demo: the simulated GameController heard, three robots online, nothing wrong.
         val doctor = Vector.newBuilder[String]
         val doctorErr = Vector.newBuilder[String]
-        val doctorCode = apps.RobotCtl.run(Seq("doctor"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
-          doctor += _, doctorErr += _)
+        val doctorCode =
+          naogateway.launcher.RobotCtl.run(Seq("doctor"), Map("NAOGATEWAY_CONTROL" -> s"127.0.0.1:$controlPort").get,
+            doctor += _, doctorErr += _)
         withClue((doctor.result() ++ doctorErr.result()).mkString("\n")) {
           doctor.result().exists(_.startsWith("ok   GameController: heard, version ")) shouldBe true
           doctor.result() should contain("ok   robots: 3 of 3 known robot(s) online, 0 configured")
@@ -148,7 +150,7 @@ class LauncherSpec extends AnyWordSpec with Matchers {
          * trace. */
         val (second, secondExit) = runToEnd(launch(launched.clusterPort), 60.seconds)
         withClue(second.mkString("\n")) {
-          secondExit shouldBe Some(apps.Launcher.ExitPortInUse)
+          secondExit shouldBe Some(naogateway.launcher.Launcher.ExitPortInUse)
           second should contain(
             s"naogateway: port ${launched.clusterPort} (TCP on 127.0.0.1, the cluster port of the gateway node, where " +
               "apps join) is in use by another program; stop that program or move the port with robotmiddleware.cluster.gateway-port " +

@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
+import naogateway.api.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
 import naogateway.wire.{Posture, RobotReport}
 
 /** What every status view shows of one robot (the launcher's status lines, robotctl's `status`, the web view's cards):

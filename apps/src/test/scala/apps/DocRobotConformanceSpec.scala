@@ -1,6 +1,6 @@
-package apps.conformance
+package apps
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import java.io.File
 import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress, SocketTimeoutException}
@@ -21,9 +21,8 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
-import apps.testkit.{RobotCalls, RobotRig}
 import naogateway.testkit.TestLoopback
-import naogateway.{LinkStats, RobotOffline, RobotSnapshot, StreamActor}
+import naogateway.api.{LinkStats, RobotOffline, RobotSnapshot}
 import robotmiddleware.RobotInterface
 
 /** One check's outcome, from the robot's report or from this harness: `section` of docs/protocol.md, `check`, result.

@@ -1,4 +1,4 @@
-package apps.busbridge
+package apps
 
 import java.io.File
 import java.net.{InetSocketAddress, ServerSocket}
@@ -17,7 +17,8 @@ import naogateway.integration.GatewayFixture
 import naogateway.sim.bus.{BioloidBus, BusTcpServer}
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback
-import naogateway.{BusBridgeServer, BusBridgeSettings, RobotOnline}
+import naogateway.api.RobotOnline
+import naogateway.gateway.{BusBridgeServer, BusBridgeSettings}
 
 /** The official ROBOTIS DynamixelSDK (`dynamixel-sdk` from PyPI, protocol 1.0, unmodified; pinned in
   * apps/python/requirements.txt) against what we wrote: first the emulated bus straight on a TCP port, which validates

@@ -1,4 +1,4 @@
-package apps.recording
+package apps
 
 import java.net.InetSocketAddress
 import java.nio.ByteBuffer
@@ -13,7 +13,9 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import apps.zeromq.PythonEnv
-import naogateway._
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameStateUpdated, GatewayAddresses, GatewayEvent, RobotOnline}
+import naogateway.gateway.{Gateway, GatewaySettings}
 import naogateway.sim.{Fleet, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
 import naogateway.testkit.TestLoopback
 
@@ -40,7 +42,7 @@ class RecordingPythonSpec extends ScalaTestWithActorTestKit(RecordingPythonSpec.
     "be read by the official mcap Python reader: datagrams byte for byte, Status through its schema, the decisions" in {
       PythonEnv.python() // cancels here when Python is missing, before anything is started
       val gateway = spawn(Gateway(GatewaySettings(system)), "gateway")
-      val addresses = createTestProbe[Gateway.Addresses]()
+      val addresses = createTestProbe[GatewayAddresses]()
       gateway ! GatewayAccess.GetAddresses(addresses.ref)
       val bound = addresses.receiveMessage(10.seconds)
       val events = createTestProbe[GatewayEvent]()

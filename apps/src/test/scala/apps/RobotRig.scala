@@ -1,4 +1,4 @@
-package apps.testkit
+package apps
 
 import java.net.{DatagramSocket, InetSocketAddress}
 import java.util.concurrent.{ConcurrentLinkedQueue, TimeUnit}
@@ -12,8 +12,11 @@ import akka.actor.testkit.typed.scaladsl.{ActorTestKit, TestProbe}
 import akka.actor.typed.ActorRef
 
 import naogateway.wire.ActuatorGroup
-import naogateway.testkit.{GatewayInternals, TestStream}
-import naogateway.{Gateway, GatewayAccess, GatewaySettings, RobotFailure, StreamActor}
+import naogateway.integration.{GatewayInternals, TestStream}
+import naogateway.access.GatewayAccess
+import naogateway.api.{GatewayAddresses, RobotFailure}
+import naogateway.gateway.{Gateway, GatewaySettings}
+import naogateway.gateway.robot.StreamActor
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
 /** A gateway and a middleware as the test kit's configuration sets them, one client of the middleware, and the steps
@@ -61,7 +64,7 @@ final class RobotRig(kit: ActorTestKit, clientName: String, connectWithin: Finit
 
   /** Where the gateway receives the robots' datagrams. */
   lazy val gatewayAddress: InetSocketAddress = {
-    val probe = kit.createTestProbe[Gateway.Addresses]()
+    val probe = kit.createTestProbe[GatewayAddresses]()
     gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds).robots
   }

@@ -1,6 +1,6 @@
 package apps.control
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import java.net.InetSocketAddress
 import java.nio.charset.StandardCharsets
@@ -20,7 +20,7 @@ import akka.util.ByteString
 import akka.{Done, NotUsed}
 
 import apps.control.ControlProtocol.{Answer, Request}
-import naogateway.{GameSource, GatewayView, LinkStats, RobotSnapshot}
+import naogateway.api.{GameSource, GatewayView, LinkStats, RobotSnapshot}
 import robotmiddleware.{Operation, RobotClient, RobotHolds, RobotInterface, RobotMiddleware}
 
 /** The control port: a loopback TCP server on the gateway node that answers robotctl's requests through the
@@ -430,8 +430,8 @@ object ControlServer {
     f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${row.linkState}%-8s " +
       f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
       f"${row.posture.fold("-")(_.name)}%-8s " +
-      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
-      holds.fold("-")(h => naogateway.Printable.text(h.describeLeases)) +
+      f"${row.report.role.fold("-")(naogateway.api.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
+      holds.fold("-")(h => naogateway.api.Printable.text(h.describeLeases)) +
       (if (holds.exists(_.safetyHold.isDefined)) " HELD SAFE" else "") +
       (if (row.report.development) " development build" else "")
   }

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import java.net.InetSocketAddress
 
@@ -18,6 +18,19 @@ import com.google.protobuf.{ByteString => ProtoBytes}
 
 import naogateway.proto.BusBridge
 import naogateway.wire.{BusBridgeFrame, Dynamixel}
+import naogateway.access.GatewayAccess
+import naogateway.api.{
+  BusBridgeClient,
+  GatewayEvent,
+  RobotForgotten,
+  RobotOffline,
+  RobotOnline,
+  RobotSnapshot,
+  TrafficStats
+}
+import naogateway.gateway.robot.{RobotActor, RobotEffects, StreamActor}
+import naogateway.transport.RateLimitedLog
+import naogateway.gateway.gamecontroller.CompetitionGate
 
 /** The gateway's bus bridge (docs/protocol.md 6.9): one TCP listener on loopback per online robot, at `base-port` +
   * robot id, while the competition gate is open. It follows the robots' comings and goings (the gateway's events) and

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import java.net.InetSocketAddress
 
@@ -6,6 +6,8 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
 import scala.concurrent.duration.FiniteDuration
 import scala.reflect.ClassTag
+
+import naogateway.access.RobotAccess
 
 /** One question to every robot actor (`GetRobots`, `GetLinkStats`): asks each, and answers once all did or `timeout`
   * (`snapshot-timeout`) passed. A robot actor that did not answer in time (restarting) is listed by `missing`.

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import java.net.{InetAddress, InetSocketAddress}
 import java.util.concurrent.atomic.AtomicReference
@@ -6,10 +6,25 @@ import java.util.concurrent.atomic.AtomicReference
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop}
 
-import naogateway.link.{Backlog, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
+import naogateway.gateway.link.{Backlog, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
-import naogateway.recording.{Decision, Recording, RobotClockEstimates}
+import naogateway.api.recording.Decision
+import naogateway.gateway.recording.{Recording, RobotClockEstimates}
 import naogateway.wire._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  GameReading,
+  GatewayAddresses,
+  GatewayEvent,
+  GatewayStats,
+  LinkStats,
+  RobotLinks,
+  RobotSnapshot,
+  RobotStatusUpdated
+}
+import naogateway.gateway.gamecontroller.GameControllerWatch
+import naogateway.gateway.link.PortReader
+import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef, RobotTransport, RobotWiring}
 
 /** The robot side of the middleware: the robots' UDP port, the robot registry, the GameController and the relay. */
 object Gateway {
@@ -27,9 +42,6 @@ object Gateway {
   private[naogateway] final case class GetRobot(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotActor.Command]]])
       extends Command
 
-  /** The link figures of every robot ([[naogateway.RobotLinks]], api). */
-  type RobotLinks = naogateway.RobotLinks; val RobotLinks: naogateway.RobotLinks.type = naogateway.RobotLinks
-
   private[naogateway] final case class GameControllerEvent(event: UdpLink.Event) extends Command
   private final case class TeamMessageEvent(event: UdpLink.Event) extends Command
   private[naogateway] final case class MonitorStatusEvent(event: UdpLink.Event) extends Command
@@ -37,16 +49,6 @@ object Gateway {
   private final case class SubscriberGone(subscriber: ActorRef[GatewayEvent]) extends Command
   private final case class RobotStopped(robotId: Int, actor: ActorRef[RobotActor.Command]) extends Command
   private final case class RobotWantsSubscribers(request: RobotActor.SubscribersWanted) extends Command
-
-  /** Where the game state comes from ([[naogateway.GameSource]], api). */
-  type GameSource = naogateway.GameSource; val GameSource: naogateway.GameSource.type = naogateway.GameSource
-
-  /** Where the gateway listens ([[naogateway.GatewayAddresses]], api). */
-  type Addresses = naogateway.GatewayAddresses;
-  val Addresses: naogateway.GatewayAddresses.type = naogateway.GatewayAddresses
-
-  /** The gateway's own figures ([[naogateway.GatewayStats]], api). */
-  type GatewayStats = naogateway.GatewayStats; val GatewayStats: naogateway.GatewayStats.type = naogateway.GatewayStats
 
   /** Where the robot actors, their children and the outbox run (`naogateway.dispatcher`). */
   val RobotDispatcher: DispatcherSelector = DispatcherSelector.fromConfig("naogateway.dispatcher")
@@ -141,7 +143,7 @@ object Gateway {
           "game-controller-link"
         )
         logic.bindingGameController
-      } else stash.unstashAll(logic.running(Addresses(port.localAddress, None)))
+      } else stash.unstashAll(logic.running(GatewayAddresses(port.localAddress, None)))
     }
   }
 
@@ -214,10 +216,10 @@ object Gateway {
         context.log.info("Gateway listening for the GameController on {}", gcLocal)
         gameControllerAddress = Some(gcLocal)
         settings.monitor.foreach(watch.startMonitor(gcLink, _))
-        stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
+        stash.unstashAll(running(GatewayAddresses(port.localAddress, Some(gcLocal))))
       case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
         context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
-        stash.unstashAll(running(Addresses(port.localAddress, None)))
+        stash.unstashAll(running(GatewayAddresses(port.localAddress, None)))
       case u: Unrouted =>
         // Robots speak before the GameController socket is bound; discovery must not wait for it.
         handleUnrouted(u)
@@ -326,7 +328,7 @@ object Gateway {
       }
     }
 
-    def running(addresses: Addresses): Behavior[Command] =
+    def running(addresses: GatewayAddresses): Behavior[Command] =
       Behaviors.receiveMessage[Command] {
         case u: Unrouted =>
           handleUnrouted(u)
@@ -393,7 +395,7 @@ object Gateway {
       }.receiveSignal { case (_, PostStop) => closePort() }
 
     /** A message of the public protocol: the middleware's and the operator tools'. */
-    private def accessRequest(request: GatewayAccess.Command, addresses: Addresses): Unit = request match {
+    private def accessRequest(request: GatewayAccess.Command, addresses: GatewayAddresses): Unit = request match {
       case GatewayAccess.Subscribe(subscriber) =>
         context.watchWith(subscriber, SubscriberGone(subscriber))
         subscribers += subscriber

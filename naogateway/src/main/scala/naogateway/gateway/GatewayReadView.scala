@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import scala.concurrent.Future
 import scala.concurrent.duration.FiniteDuration
@@ -8,6 +8,8 @@ import akka.actor.typed.{ActorRef, ActorSystem}
 import akka.util.Timeout
 
 import naogateway.wire.gamecontroller.GameControlData
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameSource, GatewayAddresses, GatewayStats, GatewayView, RobotLinks, RobotSnapshot, TrafficStats}
 
 /** The gateway's side of [[GatewayView]] (api): each question asked of the gateway actor's read-only queries. */
 object GatewayReadView {

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import java.net.InetSocketAddress
 
@@ -9,9 +9,12 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
-import naogateway.recording.RecordingSettings
+import naogateway.gateway.recording.RecordingSettings
 import naogateway.wire.SigningKey
 import naogateway.wire.stream.StreamSettings
+import naogateway.access.RestartBackoff
+import naogateway.gateway.gamecontroller.{MonitorRole, MonitorSettings, TeamMessageSettings}
+import naogateway.gateway.robot.ClockSyncSettings
 
 /** A robot known from configuration: its id, where it receives (its IP, which identifies it, at its receive port), and
   * whether its frames must be signed.

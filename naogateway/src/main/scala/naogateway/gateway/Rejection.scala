@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import naogateway.wire.{Datagram, FrameError, SignatureError}
 

@@ -1,9 +1,11 @@
-package naogateway
+package naogateway.gateway
 
 import java.net.{InetAddress, InetSocketAddress}
 import java.util.concurrent.atomic.AtomicReference
 
 import org.slf4j.{Logger, LoggerFactory}
+
+import naogateway.transport.RateLimitedLog
 
 /** Rejected datagrams counted by kind (the closed set [[Rejection]]) and, when the sender is known, by its IP address:
   * the one ledger of rejections, immutable, so an actor keeps it as state and tests read it without actors. Both maps
@@ -61,7 +63,7 @@ private[naogateway] object RejectionLedger {
     * names the kind only; the sender and its values go to the debug log, so nothing a sender chooses can make the log
     * grow faster.
     */
-  private[naogateway] final class Shared(log: Logger = LoggerFactory.getLogger("naogateway.Gateway")) {
+  private[naogateway] final class Shared(log: Logger = LoggerFactory.getLogger("naogateway.gateway.Gateway")) {
     private val ledger = new AtomicReference(RejectionLedger())
 
     /** Counts `times` rejections of `kind` from `from`; warns when due; `detail` is built for the debug log only. */

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import java.time.Instant
 import java.util.concurrent.ConcurrentHashMap

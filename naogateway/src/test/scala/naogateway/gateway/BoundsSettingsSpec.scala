@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import scala.concurrent.duration._
 
@@ -8,6 +8,7 @@ import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.testkit.SettingsTables
+import naogateway.access.RestartBackoff
 
 /** The keys that bound what the network can make the gateway do (docs/architecture.md 13.1, 15.1). */
 class BoundsSettingsSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks with SettingsTables {

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import scala.concurrent.duration._
 

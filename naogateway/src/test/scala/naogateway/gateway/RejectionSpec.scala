@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import java.net.InetAddress
 

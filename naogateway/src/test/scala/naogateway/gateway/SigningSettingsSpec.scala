@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway
 
 import com.typesafe.config.ConfigFactory
 import org.scalatest.matchers.should.Matchers

@@ -1,7 +1,5 @@
 package robotmiddleware.cluster
 
-import naogateway.RobotFailure
-
 import naogateway.wire.ActuatorGroup
 
 import java.io.NotSerializableException
@@ -14,7 +12,22 @@ import akka.serialization.SerializerWithStringManifest
 import com.google.protobuf.ByteString
 import scalapb.GeneratedMessage
 
-import naogateway._
+import naogateway.api.{
+  CallResult,
+  GameStateUpdated,
+  LinkQuality,
+  LinkQualityChanged,
+  LinkStats,
+  RobotFailure,
+  RobotForgotten,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  SigningState,
+  VisionFrame
+}
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
 import naogateway.wire.{HaViMoGrid, HaViMoRegion, Posture, RpcValue}
 import robotmiddleware._
@@ -196,7 +209,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.RobotSnapshot => fromProto(pb.RobotSnapshot.parseFrom(bytes))
     case M.LinkStats =>
       val m = pb.LinkStats.parseFrom(bytes)
-      naogateway.LinkStats(m.robotId, m.datagramsIn, m.datagramsOut, m.bytesIn, m.bytesOut, m.rttMillis, m.lossEstimate,
+      naogateway.api.LinkStats(m.robotId, m.datagramsIn, m.datagramsOut, m.bytesIn, m.bytesOut, m.rttMillis,
+        m.lossEstimate,
         m.retransmissions, m.rejected)
     case M.VisionRegions =>
       val m = pb.VisionRegions.parseFrom(bytes)
@@ -206,21 +220,21 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       VisionFrame.Grid(m.robotId, m.frame, m.timestampMs, HaViMoGrid(m.cells.toByteArray.toVector))
     case M.RobotOnline =>
       val m = pb.RobotOnline.parseFrom(bytes)
-      naogateway.RobotOnline(m.robotId, fromProto(m.address))
+      naogateway.api.RobotOnline(m.robotId, fromProto(m.address))
     case M.RobotOffline =>
       val m = pb.RobotOffline.parseFrom(bytes)
-      naogateway.RobotOffline(m.robotId, m.reason)
+      naogateway.api.RobotOffline(m.robotId, m.reason)
     case M.LinkQualityChanged =>
       val m = pb.LinkQualityChanged.parseFrom(bytes)
-      naogateway.LinkQualityChanged(m.robotId, fromProto(m.quality))
-    case M.RobotStatusUpdated => naogateway.RobotStatusUpdated(fromProto(pb.RobotSnapshot.parseFrom(bytes)))
+      naogateway.api.LinkQualityChanged(m.robotId, fromProto(m.quality))
+    case M.RobotStatusUpdated => naogateway.api.RobotStatusUpdated(fromProto(pb.RobotSnapshot.parseFrom(bytes)))
     case M.RobotRestarted =>
       val m = pb.RobotRestarted.parseFrom(bytes)
-      naogateway.RobotRestarted(m.robotId, m.bootId, m.resynced.toVector)
+      naogateway.api.RobotRestarted(m.robotId, m.bootId, m.resynced.toVector)
     case M.RobotForgotten =>
       val m = pb.RobotForgotten.parseFrom(bytes)
-      naogateway.RobotForgotten(m.robotId, m.reason)
-    case M.GameStateUpdated => naogateway.GameStateUpdated(gameData(bytes))
+      naogateway.api.RobotForgotten(m.robotId, m.reason)
+    case M.GameStateUpdated => naogateway.api.GameStateUpdated(gameData(bytes))
     case M.GameControlData  => gameData(bytes)
     case M.RpcValue         => naogateway.wire.RpcValue.fromProto(naogateway.proto.MixedValue.parseFrom(bytes))
     case other =>
@@ -284,7 +298,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
 
   private def toProto(f: RobotFailure): pb.RobotFailure = {
     import pb.RobotFailure.Kind
-    import naogateway.{RobotFailure => F}
+    import naogateway.api.{RobotFailure => F}
     pb.RobotFailure(f match {
       case F.RobotOffline(robotId) => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
       case F.UnknownRobot(robotId) => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
@@ -302,7 +316,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
 
   private def fromProto(f: pb.RobotFailure): RobotFailure = {
     import pb.RobotFailure.Kind
-    import naogateway.{RobotFailure => F}
+    import naogateway.api.{RobotFailure => F}
     f.kind match {
       case Kind.RobotOffline(m) => F.RobotOffline(m.robotId)
       case Kind.UnknownRobot(m) => F.UnknownRobot(m.robotId)
@@ -383,7 +397,7 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     )
 
   private def fromProto(s: pb.RobotSnapshot): RobotSnapshot =
-    naogateway.RobotSnapshot(
+    naogateway.api.RobotSnapshot(
       robotId = s.robotId,
       address = fromProto(s.address),
       teamId = s.teamId,
@@ -400,9 +414,9 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       development = s.development.contains(true),
       signing = s.signing.fold[SigningState](SigningState.Off)(fromProto),
       servos = s.servos.map(t =>
-        naogateway.ServoReadings(
-          t.servos.iterator.take(naogateway.ServoReadings.MaxServos).map(r =>
-            naogateway.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, r.error.getOrElse(0),
+        naogateway.api.ServoReadings(
+          t.servos.iterator.take(naogateway.api.ServoReadings.MaxServos).map(r =>
+            naogateway.api.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, r.error.getOrElse(0),
               r.silent.contains(true))).toVector,
           t.busErrors,
           t.receivedAtNanos

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.InetSocketAddress
 import java.nio.file.{Files, Path}
@@ -12,18 +12,18 @@ import akka.actor.typed.{ActorRef, ActorSystem}
 import akka.util.Timeout
 import com.typesafe.config.Config
 
-import naogateway.recording.Retention
+import naogateway.gateway.recording.Retention
 import naogateway.wire.gamecontroller.{GameControlData, GameControlVersion}
-import naogateway.{Gateway, GatewayAccess, GatewaySettings, LinkStats, Outbox, Rejection, RobotSnapshot}
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameSource, GatewayStats, LinkStats, RobotLinks, RobotSnapshot, TrafficStats}
+import naogateway.gateway.{GatewaySettings, Rejection}
+import apps.control.Finding
 
 /** `robotctl doctor`: what a team checks first when something does not work, each problem with its fix. The checks are
   * pure functions over facts gathered from the running gateway ([[gather]]) and the machine, so each can be provoked in
   * a test; the control port answers `doctor` with their lines (docs/architecture.md, "The control port").
   */
 object Doctor {
-
-  /** One check's result ([[apps.control.Finding]], which the control port sends). */
-  type Finding = apps.control.Finding; val Finding: apps.control.Finding.type = apps.control.Finding
 
   private def ok(check: String, text: String) = Finding(check, text, problem = false)
   private def fail(check: String, text: String, fix: String) = Finding(check, text, problem = true, fix)
@@ -32,7 +32,7 @@ object Doctor {
     * refused by kind, and whether the competition gate applies. Read through [[gameSnapshot]], the one place that asks
     * the gateway, so more GameController facts (versions, the fail-safe gate, the team message budget) join here.
     */
-  final case class GameSnapshot(latest: Option[GameControlData], source: Gateway.GameSource, refused: Map[String, Long],
+  final case class GameSnapshot(latest: Option[GameControlData], source: GameSource, refused: Map[String, Long],
       competition: Boolean,
       gateReason: Option[String] = None)
 
@@ -44,8 +44,8 @@ object Doctor {
       settings: GatewaySettings,
       robots: Vector[RobotSnapshot],
       links: Vector[LinkStats],
-      stats: Gateway.GatewayStats,
-      traffic: Option[Outbox.TrafficStats],
+      stats: GatewayStats,
+      traffic: Option[TrafficStats],
       game: GameSnapshot,
       unknownKeys: Vector[String],
       disk: Option[Disk],
@@ -205,8 +205,8 @@ object Doctor {
   def signingFindings(facts: Facts): Vector[Finding] = {
     val settings = facts.settings
     val competition = settings.competition
-    val signing = settings.robots.filter(_.signing == naogateway.RobotSigning.Required).map(_.robotId)
-    val off = settings.robots.filter(_.signing == naogateway.RobotSigning.Off).map(_.robotId)
+    val signing = settings.robots.filter(_.signing == naogateway.gateway.RobotSigning.Required).map(_.robotId)
+    val off = settings.robots.filter(_.signing == naogateway.gateway.RobotSigning.Off).map(_.robotId)
     val summary =
       if (settings.signingKey.isEmpty)
         if (competition)
@@ -265,7 +265,7 @@ object Doctor {
     }
 
   /** The team's traffic against the budget. */
-  def budgetFindings(traffic: Option[Outbox.TrafficStats]): Vector[Finding] = traffic.toVector.map { t =>
+  def budgetFindings(traffic: Option[TrafficStats]): Vector[Finding] = traffic.toVector.map { t =>
     val share = t.outBytesLastSecond.toDouble / t.budgetBytesPerSecond
     if (t.dropped > 0 || share >= BudgetWarnShare)
       fail(
@@ -279,7 +279,7 @@ object Doctor {
   }
 
   /** The recording directory: writable, with room, and the recorder not failing. */
-  def recordingFindings(r: naogateway.recording.RecordingStats, disk: Option[Disk]): Vector[Finding] =
+  def recordingFindings(r: naogateway.api.recording.RecordingStats, disk: Option[Disk]): Vector[Finding] =
     disk.toVector.flatMap { d =>
       val place =
         if (!d.writable) Vector(fail("recording", s"${d.directory} is not writable",
@@ -341,8 +341,8 @@ object Doctor {
     implicit val ec: ExecutionContext = system.executionContext
     for {
       latest <- gateway.ask[Option[GameControlData]](GatewayAccess.GetGameState(_))
-      source <- gateway.ask[Gateway.GameSource](GatewayAccess.GetGameSource(_))
-      stats <- gateway.ask[Gateway.GatewayStats](GatewayAccess.GetStats(_))
+      source <- gateway.ask[GameSource](GatewayAccess.GetGameSource(_))
+      stats <- gateway.ask[GatewayStats](GatewayAccess.GetStats(_))
     } yield GameSnapshot(latest, source, stats.rejected, competition)
   }
 
@@ -370,10 +370,10 @@ object Doctor {
     val settings = GatewaySettings.fromConfig(config.getConfig("naogateway"))
     for {
       robots <- gateway.ask[Vector[RobotSnapshot]](GatewayAccess.GetRobots(_))
-      links <- gateway.ask[Gateway.RobotLinks](GatewayAccess.GetLinkStats(_))
-      stats <- gateway.ask[Gateway.GatewayStats](GatewayAccess.GetStats(_))
+      links <- gateway.ask[RobotLinks](GatewayAccess.GetLinkStats(_))
+      stats <- gateway.ask[GatewayStats](GatewayAccess.GetStats(_))
       traffic <-
-        gateway.ask[Outbox.TrafficStats](GatewayAccess.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) =>
+        gateway.ask[TrafficStats](GatewayAccess.GetTraffic(_)).map(Some(_)).recover { case NonFatal(_) =>
           None
         }
       game <- gameSnapshot(gateway, settings.competition).map(_.copy(gateReason = traffic.flatMap(_.gateReason)))

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.io.File
 import java.net.InetSocketAddress
@@ -14,11 +14,14 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, ActorSystem, Behavior}
 import com.typesafe.config.{Config, ConfigFactory}
 
-import naogateway._
-import naogateway.link.Replay
+import naogateway.access.GatewayAccess
+import naogateway.gateway.{Gateway, GatewayReadView, GatewaySettings}
+import naogateway.gateway.link.Replay
 import naogateway.sim.{Fleet, FleetSettings}
 import robotmiddleware.cluster.MiddlewareCluster
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotMiddleware}
+import apps.{BallFollower, Doors, StatusPrinter}
+import naogateway.api.GatewayAddresses
 
 /** `./sbt run`: gateway, middleware, simulated robots and the ball follower, with a live status view. */
 object Launcher {
@@ -193,7 +196,7 @@ object Launcher {
 
   /** What the root of the gateway node accepts. */
   sealed trait Command
-  private final case class Addresses(addresses: Gateway.Addresses) extends Command
+  private final case class Addresses(addresses: GatewayAddresses) extends Command
   private final case class FleetStarted(result: scala.util.Try[naogateway.sim.FleetHandle]) extends Command
   private final case class PartStopped(part: String) extends Command
 
@@ -223,10 +226,10 @@ object Launcher {
     apps.datagram.DatagramDoor.spawnIfEnabled(context, middleware, realRobots)
     /* The bus bridge (docs/protocol.md 6.9), when enabled: an app at the middleware holds the leases while a tool is
      * on. */
-    val busBridge = naogateway.BusBridgeSettings.fromConfig(config.getConfig("naogateway"))
+    val busBridge = naogateway.gateway.BusBridgeSettings.fromConfig(config.getConfig("naogateway"))
     if (busBridge.enabled) {
       val leases = context.spawn(robotmiddleware.BusBridgeLeases(middleware), "bus-bridge-leases")
-      context.spawn(naogateway.BusBridgeServer(gateway, busBridge, Some(leases)), "bus-bridge")
+      context.spawn(naogateway.gateway.BusBridgeServer(gateway, busBridge, Some(leases)), "bus-bridge")
     }
     val view = GatewayReadView(gateway, ViewTimeout)(context.system)
     val doctor = () =>
@@ -292,7 +295,7 @@ object Launcher {
   /** `robotctl battery <id> swap`: a simulated robot of `fleet` gets a full battery at once, as a team swaps one; any
     * other robot is real, and refused.
     */
-  private[apps] def batterySwap(
+  private[launcher] def batterySwap(
       fleet: Option[naogateway.sim.FleetHandle], robotId: Int): scala.concurrent.Future[String] =
     fleet.flatMap(_.robot(robotId)) match {
       case Some(robot) =>
@@ -312,7 +315,7 @@ object Launcher {
     * gateway's GameController port, on loopback when the gateway listens on every address.
     */
   private def startGameController(context: akka.actor.typed.scaladsl.ActorContext[Command],
-      addresses: Gateway.Addresses): Unit = {
+      addresses: GatewayAddresses): Unit = {
     val c = context.system.settings.config.getConfig("apps.launcher")
     // Only beside simulated robots: against real robots a simulated game would open and close the competition gate.
     for (gc <- addresses.gameController if c.getBoolean("game-controller") && c.getInt("simulated-robots") > 0) {

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.{BindException, DatagramSocket, InetAddress, InetSocketAddress, ServerSocket}
 
@@ -8,10 +8,11 @@ import scala.util.{Try, Using}
 
 import com.typesafe.config.{Config, ConfigException, ConfigFactory, ConfigValueType}
 
-import naogateway.GatewaySettings
-import naogateway.recording.RecordingSettings
+import naogateway.gateway.GatewaySettings
+import naogateway.gateway.recording.RecordingSettings
 import naogateway.sim.FleetSettings
 import robotmiddleware.MiddlewareSettings
+import apps.{DoorSwitch, Doors, StatusPrinter}
 
 /** What the launcher checks before it starts anything, and `robotctl doctor` checks of a config: the settings are
   * valid, the ports they name are free, the demo's robot addresses exist, no key is a typo. Each problem is one line

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.io.{BufferedInputStream, ByteArrayOutputStream, IOException, InputStream}
 import java.net.{ConnectException, InetSocketAddress, Socket, SocketTimeoutException, UnknownHostException}
@@ -8,7 +8,7 @@ import scala.util.control.NonFatal
 
 import apps.control.ControlProtocol
 import apps.control.ControlProtocol.Answer
-import naogateway.Printable
+import naogateway.api.Printable
 import naogateway.wire.RpcValue
 
 /** `bin/robotctl` (or `./sbt "robotctl status"`): a command-line client of a running gateway's control port
@@ -150,7 +150,7 @@ object RobotCtl {
     */
   def offlineDoctor(where: String, configFile: Option[String], out: String => Unit, err: String => Unit,
       probe: Preflight.PortUse => Preflight.Probe = Preflight.probe): Int = {
-    import Doctor.Finding
+    import apps.control.Finding
     val gateway = Finding(
       "gateway",
       s"no gateway answers at $where",
@@ -169,10 +169,10 @@ object RobotCtl {
           if (ports.isEmpty) Vector(Finding("ports", "every port the gateway binds is free", problem = false))
           else
             ports.map(p => Finding("ports", p.split("; ").head, problem = true, p.split("; ").drop(1).mkString("; ")))
-        val settings = naogateway.GatewaySettings.fromConfig(c.getConfig("naogateway"))
+        val settings = naogateway.gateway.GatewaySettings.fromConfig(c.getConfig("naogateway"))
         val disk =
           Option.when(settings.recording.enabled)(Doctor.disk(settings.recording.directory)).toVector.flatMap { d =>
-            Doctor.recordingFindings(naogateway.recording.Recording.Off.stats, Some(d))
+            Doctor.recordingFindings(naogateway.gateway.recording.Recording.Off.stats, Some(d))
           }
         val config = Finding("config",
           configFile.fold("the demo's defaults (no file given)")(f => s"$f reads without error"), problem = false)

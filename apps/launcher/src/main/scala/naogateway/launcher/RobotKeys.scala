@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import scala.util.control.NonFatal
 

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.{DatagramSocket, InetSocketAddress, ServerSocket}
 import java.nio.file.{Files, Paths}
@@ -7,10 +7,11 @@ import com.typesafe.config.ConfigFactory
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import apps.Doctor.{Disk, Facts, GameSnapshot}
+import naogateway.launcher.Doctor.{Disk, Facts, GameSnapshot}
 import naogateway.sim.{SimulatedGameController, SimulatedGameControllerSettings}
 import naogateway.wire.gamecontroller.GameControlVersion
-import naogateway._
+import naogateway.api.{ClockEstimate, GameSource, GatewayStats, LinkStats, RobotSnapshot, TrafficStats}
+import naogateway.gateway.{GatewaySettings, Rejection}
 
 /** `robotctl doctor`: each check finds the problem it names, provoked here, and stays quiet when all is well. */
 class DoctorSpec extends AnyWordSpec with Matchers {
@@ -35,10 +36,10 @@ class DoctorSpec extends AnyWordSpec with Matchers {
   private val packet = SimulatedGameController.controlData(gcSettings, GameControlVersion.V8,
     SimulatedGameController.momentAt(gcSettings, 0L), 1)
   private val heardGame = GameSnapshot(Some(packet),
-    Gateway.GameSource("10.0.0.0/24", Some(new InetSocketAddress("10.0.0.5", 3838)), 0), Map.empty, competition = true)
+    GameSource("10.0.0.0/24", Some(new InetSocketAddress("10.0.0.5", 3838)), 0), Map.empty, competition = true)
   private val traffic =
-    Outbox.TrafficStats(2000, 3000, 125000, Map.empty, 100, 100, 0, 0, gameRunning = false, competition = true)
-  private val stats = Gateway.GatewayStats(100, 0, 10, Map.empty, 2)
+    TrafficStats(2000, 3000, 125000, Map.empty, 100, 100, 0, 0, gameRunning = false, competition = true)
+  private val stats = GatewayStats(100, 0, 10, Map.empty, 2)
   private val wellDisk = Disk(Paths.get("recordings"), writable = true, 100L * 1024 * 1024 * 1024)
 
   private val allWell =

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import com.typesafe.config.{ConfigFactory, ConfigResolveOptions}
 import org.scalatest.matchers.should.Matchers

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.InetAddress
 import java.nio.file.{Files, Paths}
@@ -27,7 +27,7 @@ class LauncherDoorsSpec extends AnyWordSpec with Matchers {
 
   /** The example config for real robots, as the package ships it. */
   private lazy val robotsExample: String = {
-    val candidates = Seq(Paths.get("launcher/src/universal/conf/robots.example.conf"),
+    val candidates = Seq(Paths.get("apps/launcher/src/universal/conf/robots.example.conf"),
       Paths.get("src/universal/conf/robots.example.conf"))
     new String(Files.readAllBytes(candidates.find(Files.exists(_)).get), "UTF-8")
   }

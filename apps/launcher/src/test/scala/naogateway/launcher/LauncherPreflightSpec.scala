@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.{DatagramSocket, InetAddress, InetSocketAddress, ServerSocket}
 
@@ -127,7 +127,7 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
 
     "pass the README's real-robot config and conf/robots.example.conf as they are: no key missing, none unknown" in {
       def find(relative: String): java.nio.file.Path =
-        Seq(java.nio.file.Paths.get("..", relative), java.nio.file.Paths.get(relative)).find(
+        Seq(java.nio.file.Paths.get("../..", relative), java.nio.file.Paths.get(relative)).find(
           java.nio.file.Files.exists(_))
           .getOrElse(fail(s"$relative not found"))
       val readme =
@@ -137,7 +137,7 @@ class LauncherPreflightSpec extends AnyWordSpec with Matchers {
       // Without a signing key in the environment: the README's robots must not need one.
       check(block) shouldBe ((Vector.empty, None))
       val example =
-        new String(java.nio.file.Files.readAllBytes(find("launcher/src/universal/conf/robots.example.conf")),
+        new String(java.nio.file.Files.readAllBytes(find("apps/launcher/src/universal/conf/robots.example.conf")),
           java.nio.charset.StandardCharsets.UTF_8)
       check(example) shouldBe ((Vector.empty, None))
     }

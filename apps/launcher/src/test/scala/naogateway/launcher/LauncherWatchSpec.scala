@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.InetSocketAddress
 import java.nio.channels.DatagramChannel
@@ -60,7 +60,7 @@ class LauncherWatchSpec extends AnyWordSpec with Matchers {
 
     "say the middleware stopped, and stop, when the middleware fails" in {
       val robots = new InetSocketAddress(TestLoopback.address(0), 0)
-      val failing = (_: ActorRef[naogateway.GatewayAccess.Command]) =>
+      val failing = (_: ActorRef[naogateway.access.GatewayAccess.Command]) =>
         Behaviors.setup[RobotMiddleware.Command](_ => throw new IllegalStateException("the middleware's test failure"))
       run(robots)(stopped => Launcher.Root(stopped = stopped, makeMiddleware = failing)) shouldBe ((Some("middleware"),
         true))

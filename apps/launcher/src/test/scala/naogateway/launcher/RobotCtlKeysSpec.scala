@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.nio.file.Files
 

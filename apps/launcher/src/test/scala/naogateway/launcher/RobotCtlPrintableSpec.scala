@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.{InetAddress, ServerSocket}
 import java.nio.charset.StandardCharsets
@@ -13,7 +13,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import apps.control.ControlProtocol
 import apps.control.ControlProtocol.Answer
-import naogateway.Printable
+import naogateway.api.Printable
 
 /** A robot's role carrying a terminal escape sequence, as a stranger posing as the robot would send it, reaches
   * robotctl's output and the launcher's log with its control characters replaced.
@@ -65,7 +65,7 @@ class RobotCtlPrintableSpec extends AnyWordSpec with Matchers {
       line shouldBe s"robot 1 reports role ${Printable.text(hostileRole)}"
       // The launcher's logback.xml writes messages through it.
       val xml = scala.io.Source.fromResource("logback.xml").mkString
-      xml should include("converterClass=\"apps.PrintableMessage\"")
+      xml should include("converterClass=\"naogateway.launcher.PrintableMessage\"")
       xml should include("%safemsg")
       xml should not include "%msg"
     }

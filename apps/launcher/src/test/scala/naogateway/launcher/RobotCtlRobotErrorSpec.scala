@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.InetSocketAddress
 
@@ -10,7 +10,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import apps.control.{ControlServer, ControlSettings}
 import apps.zeromq.PythonClientSpec
-import naogateway.{Gateway, GatewaySettings, ZeroMqRobot}
+import naogateway.gateway.{Gateway, GatewaySettings, ZeroMqRobot}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** robotctl against a real gateway and the simulated firmware: every error a robot answers (protocol.md §7.4) ends the

@@ -1,4 +1,4 @@
-package apps
+package naogateway.launcher
 
 import java.net.{InetSocketAddress, ServerSocket}
 import java.util.concurrent.TimeUnit
@@ -123,7 +123,8 @@ class RobotCtlSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) with 
     "start no actor system and load no Akka, Typesafe config or Logback classes" in {
       val java = s"${System.getProperty("java.home")}/bin/java"
       val process =
-        new ProcessBuilder(Seq(java, "-verbose:class", "-cp", System.getProperty("java.class.path"), "apps.RobotCtl",
+        new ProcessBuilder(Seq(java, "-verbose:class", "-cp", System.getProperty("java.class.path"),
+            "naogateway.launcher.RobotCtl",
             "--control", control, "call", "1", "system", "ping").asJava).redirectErrorStream(true).start()
       val output = scala.io.Source.fromInputStream(process.getInputStream).getLines().toVector
       process.waitFor(60, TimeUnit.SECONDS) shouldBe true

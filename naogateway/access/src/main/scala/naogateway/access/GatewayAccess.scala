@@ -1,8 +1,17 @@
-package naogateway
+package naogateway.access
 
 import akka.actor.typed.ActorRef
 
 import naogateway.wire.gamecontroller.GameControlData
+import naogateway.api.{
+  GameSource,
+  GatewayAddresses,
+  GatewayEvent,
+  GatewayStats,
+  RobotLinks,
+  RobotSnapshot,
+  TrafficStats
+}
 
 /** What may be sent to the gateway from outside it: the middleware may send all of it, operator tools (the status view,
   * the control port, the doctor) the read-only [[GatewayAccess.Query]] part. Nothing here feeds the gateway frames or

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.access
 
 import scala.concurrent.duration._
 import scala.jdk.DurationConverters._

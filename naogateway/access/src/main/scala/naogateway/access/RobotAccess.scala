@@ -1,10 +1,11 @@
-package naogateway
+package naogateway.access
 
 import scala.concurrent.duration.FiniteDuration
 
 import akka.actor.typed.ActorRef
 
 import naogateway.wire.RpcCall
+import naogateway.api.{CallResult, LinkStats, Priority, RobotSnapshot, VisionFrame}
 
 /** One robot as the middleware may use it (from [[GatewayAccess.GetRobotAccess]]): questions and [[RobotAccess.Open]]
   * to its robot actor; once open, calls to its response actor and camera registrations to its vision actor. Nothing

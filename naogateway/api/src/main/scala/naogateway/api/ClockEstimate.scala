@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 /** What the gateway knows of one robot's clock: when (on the gateway's clock) the robot's clock read `robotMillis`, how
   * fast it runs, and how far off that may be.

@@ -1,9 +1,8 @@
-package naogateway
+package naogateway.api
 
 import java.net.InetSocketAddress
 
-import naogateway.link.ReplayProgress
-import naogateway.recording.RecordingStats
+import naogateway.api.recording.RecordingStats
 
 /** Where the game state comes from, for the status view and robotctl (the answer to `GatewayAccess.GetGameSource`).
   *

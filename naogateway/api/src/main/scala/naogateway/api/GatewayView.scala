@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 import scala.concurrent.Future
 

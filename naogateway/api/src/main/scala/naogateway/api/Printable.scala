@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 /** Strings from the network (a robot's role, agent or error text, a peer's header) made safe to show on a terminal, in
   * a log line or on a page: every control character (C0 including newline and tab, DEL, C1 including the 8-bit CSI) is

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 /** The sending classes of the traffic budget; a lower rank goes first, and Safety is never held back. */
 sealed abstract class Priority(val rank: Int, val name: String) extends Product with Serializable

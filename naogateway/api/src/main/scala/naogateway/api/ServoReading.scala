@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 /** One servo as the robot's latest servo telemetry found it (docs/protocol.md 6.8), in units: position raw (0–1023) and
   * in degrees from centre, load raw (−1023..1023, negative clockwise), voltage in volts, temperature in °C. A `silent`

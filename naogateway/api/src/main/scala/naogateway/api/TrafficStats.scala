@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 /** The team's traffic: bytes in the last second each way, the budget, queues and counters, and the competition gate.
   *

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 import java.nio.file.Files
 
@@ -30,7 +30,7 @@ class ApiBoundarySpec extends AnyWordSpec with Matchers {
     "compile when it uses what apps may see" in {
       compileErrors(
         """package probe
-          |import naogateway.{RobotFailure, RobotSnapshot, TrafficStats}
+          |import naogateway.api.{RobotFailure, RobotSnapshot, TrafficStats}
           |import naogateway.wire.Posture
           |object Probe {
           |  def describe(s: RobotSnapshot, t: TrafficStats, f: RobotFailure, p: Posture): String = s"${s.robotId} ${t.teamLoad} ${f.describe} $p"
@@ -41,7 +41,7 @@ class ApiBoundarySpec extends AnyWordSpec with Matchers {
     "fail when it imports a gateway internal" in {
       val errors = compileErrors(
         """package probe
-          |import naogateway.Gateway
+          |import naogateway.gateway.Gateway
           |object Probe { val g: Gateway.type = Gateway }
           |""".stripMargin)
       errors should not be empty

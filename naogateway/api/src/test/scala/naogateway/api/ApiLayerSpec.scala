@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.api
 
 import java.io.File
 
@@ -24,24 +24,29 @@ class ApiLayerSpec extends AnyWordSpec with Matchers {
     }
 
     "not hold the gateway's actors" in {
-      Seq("naogateway.Gateway$", "naogateway.RobotActor$", "naogateway.Outbox$", "naogateway.SessionRule",
-        "naogateway.KeepAliveStep")
+      Seq(
+        "naogateway.gateway.Gateway$",
+        "naogateway.gateway.robot.RobotActor$",
+        "naogateway.gateway.robot.Outbox$",
+        "naogateway.gateway.robot.SessionRule",
+        "naogateway.gateway.robot.KeepAliveStep"
+      )
         .filter(loadable) shouldBe empty
     }
 
     "hold what apps see, in the gateway's packages, and the wire types it is built on" in {
       Seq(
-        "naogateway.RobotSnapshot",
-        "naogateway.RobotFailure",
-        "naogateway.GatewayEvent",
-        "naogateway.VisionFrame",
-        "naogateway.LinkStats",
-        "naogateway.ClockEstimate",
-        "naogateway.TrafficStats",
-        "naogateway.GatewayStats",
-        "naogateway.GameSource",
-        "naogateway.recording.RecordingStats",
-        "naogateway.link.ReplayProgress",
+        "naogateway.api.RobotSnapshot",
+        "naogateway.api.RobotFailure",
+        "naogateway.api.GatewayEvent",
+        "naogateway.api.VisionFrame",
+        "naogateway.api.LinkStats",
+        "naogateway.api.ClockEstimate",
+        "naogateway.api.TrafficStats",
+        "naogateway.api.GatewayStats",
+        "naogateway.api.GameSource",
+        "naogateway.api.recording.RecordingStats",
+        "naogateway.api.ReplayProgress",
         "naogateway.wire.Posture",
         "naogateway.wire.ActuatorGroup",
         "naogateway.wire.RpcValue"

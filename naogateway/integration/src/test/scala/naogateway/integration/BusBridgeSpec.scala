@@ -13,7 +13,8 @@ import akka.actor.typed.ActorRef
 import com.google.protobuf.ByteString
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.api.{BusBridgeClient, RobotOnline}
+import naogateway.gateway.{BusBridgeServer, BusBridgeSettings}
 import naogateway.proto.BusBridge
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.sim.bus.Ax12

@@ -5,7 +5,8 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.RobotAccess
+import naogateway.api.{LinkStats, RobotRestarted, RobotStatusUpdated}
 import naogateway.sim.{RobotClock, SimulatedRobot}
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.testkit.TestLoopback

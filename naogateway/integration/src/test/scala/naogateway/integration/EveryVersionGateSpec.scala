@@ -9,7 +9,10 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{CallResult, GameSource, GameStateUpdated, RobotFailure, RobotOnline}
+import naogateway.gateway.Rejection
+import naogateway.gateway.robot.{Outbox, RobotEffects}
 import naogateway.wire.{RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
 
@@ -163,7 +166,7 @@ class EveryVersionGateSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
             f.traffic().gateReason shouldBe Some(
               "the game is running (Playing, read from the shared header of unknown version 21)")
           }
-          val source = createTestProbe[Gateway.GameSource]()
+          val source = createTestProbe[GameSource]()
           f.gateway ! GatewayAccess.GetGameSource(source.ref)
           source.receiveMessage().warnings.exists(_.startsWith("GameController version 21 (170 bytes) is not known"))
             .shouldBe(true)

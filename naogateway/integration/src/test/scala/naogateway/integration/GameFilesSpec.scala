@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.integration
 
 import java.nio.file.{Files, Path}
 
@@ -8,8 +8,10 @@ import scala.jdk.CollectionConverters._
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.GameStateUpdated
+import naogateway.api.GameStateUpdated
 import naogateway.wire.gamecontroller._
+import naogateway.api.recording.Decision
+import naogateway.gateway.recording.{GameFiles, McapReader, Recording, RecordingSettings}
 
 /** One recording file per half of a game: the pure plan, and a recorder following it. */
 class GameFilesSpec extends AnyWordSpec with Matchers {

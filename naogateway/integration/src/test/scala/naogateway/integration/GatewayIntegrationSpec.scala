@@ -12,9 +12,27 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GameSource,
+  GameStateUpdated,
+  GatewayEvent,
+  LinkQuality,
+  LinkStats,
+  RobotFailure,
+  RobotLinks,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted,
+  RobotSnapshot,
+  TrafficStats,
+  VisionFrame
+}
+import naogateway.gateway.{Rejection, RejectionLedger}
+import naogateway.gateway.robot.{NoResponseActor, Outbox, RobotEffects}
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZeroMqSimulatedRobot}
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{GameControllerCodecSupport, TestLoopback}
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.wire.{MessageContents, RpcCall, RpcValue}
 import naogateway.wire.gamecontroller._
@@ -76,7 +94,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         val gc = DatagramChannel.open().bind(new InetSocketAddress("127.0.0.1", 0))
         try {
           (1 to 5).foreach(_ => sendGameState(stranger, f, GameState.Playing))
-          val source = createTestProbe[Gateway.GameSource]()
+          val source = createTestProbe[GameSource]()
           source.awaitAssert({
               f.gateway ! GatewayAccess.GetGameSource(source.ref)
               source.receiveMessage().untrusted shouldBe 5L
@@ -84,7 +102,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           val game = createTestProbe[Option[GameControlData]]()
           f.gateway ! GatewayAccess.GetGameState(game.ref)
           game.receiveMessage() shouldBe None
-          val traffic = createTestProbe[Outbox.TrafficStats]()
+          val traffic = createTestProbe[TrafficStats]()
           f.gateway ! GatewayAccess.GetTraffic(traffic.ref)
           // Competition mode starts closed, and a stranger's packets neither close nor open it.
           val closed = traffic.receiveMessage()
@@ -179,7 +197,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
         Vector((1, true, LinkQuality.Good), (2, true, LinkQuality.Good), (3, true, LinkQuality.Good))
       // The read-only view: the same robots' link figures, through a ref that can ask but not send.
       val view: ActorRef[GatewayAccess.Query] = f.gateway
-      val links = createTestProbe[Gateway.RobotLinks]()
+      val links = createTestProbe[RobotLinks]()
       view ! GatewayAccess.GetLinkStats(links.ref)
       val figures = links.receiveMessage().links
       figures.map(_.robotId) shouldBe Vector(1, 2, 3)

@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.integration
 
 import java.net.InetSocketAddress
 import java.nio.ByteBuffer
@@ -12,11 +12,12 @@ import scala.jdk.CollectionConverters._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.integration.GatewayFixture
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, RobotOnline, RobotStatusUpdated}
 import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort, Status}
 import naogateway.testkit.TestLoopback
 import naogateway.wire.RpcCall
+import naogateway.gateway.recording.{Mcap, McapReader, Recording}
 
 /** A gateway with recording on, a simulated robot and a few datagrams of the test's own, then the file it left. */
 class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {

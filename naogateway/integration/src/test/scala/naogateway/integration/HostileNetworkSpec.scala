@@ -11,7 +11,19 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GameSource,
+  GameStateUpdated,
+  GatewayEvent,
+  RobotFailure,
+  RobotForgotten,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted
+}
+import naogateway.gateway.{Rejection, RejectionLedger}
 import naogateway.sim.SimulatedRobot
 import naogateway.testkit.TestLoopback
 import naogateway.wire.RpcCall
@@ -81,7 +93,7 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         // The trusted GameController's INITIAL, which opened the gate, and nothing since.
         game.receiveMessage().map(_.gameState) shouldBe Some(naogateway.wire.gamecontroller.GameState.Initial)
         seen.collect { case e: GameStateUpdated => e } shouldBe empty
-        val source = createTestProbe[Gateway.GameSource]()
+        val source = createTestProbe[GameSource]()
         f.gateway ! GatewayAccess.GetGameSource(source.ref)
         source.receiveMessage().untrusted shouldBe flood.gameControllerPackets.toLong
         f.traffic().gateOpen shouldBe true

@@ -21,7 +21,7 @@ class InboundTrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       try {
         val before = f.traffic()
         // 64 + 64 + 3: two whole batches and a remainder that only the port's quiet time can flush.
-        val datagrams = 2 * naogateway.PortReader.InboundBatch + 3
+        val datagrams = 2 * naogateway.gateway.link.PortReader.InboundBatch + 3
         (1 to datagrams).foreach { _ =>
           sender.send(ByteBuffer.wrap(Array[Byte](1, 2, 3, 4, 5)), f.addresses.robots) // refused, but read and counted
         }

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.integration
 
 import java.net.InetSocketAddress
 
@@ -6,6 +6,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.gamecontroller._
+import naogateway.gateway.gamecontroller.{GameControllerSources, MessageBudget, TeamMessageSettings}
 
 /** The team's message budget against sequences counted by hand with the GameController's rules (README "Message
   * Counting", its team_message and add_extra_time actions), and the check for a second GameController.

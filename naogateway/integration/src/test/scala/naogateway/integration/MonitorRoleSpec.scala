@@ -10,7 +10,9 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import com.typesafe.config.ConfigFactory
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameSource, GameStateUpdated}
+import naogateway.gateway.GatewaySettings
 import naogateway.wire.gamecontroller._
 
 /** The monitor role against a stand-in version-19 GameController on loopback: the gateway's `RGTr` requests, kept
@@ -35,8 +37,8 @@ class MonitorRoleSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
     finally c.close()
   }
 
-  private def source(f: GatewayFixture): Gateway.GameSource = {
-    val probe = createTestProbe[Gateway.GameSource]()
+  private def source(f: GatewayFixture): GameSource = {
+    val probe = createTestProbe[GameSource]()
     f.gateway ! GatewayAccess.GetGameSource(probe.ref)
     probe.receiveMessage(10.seconds)
   }

@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.integration
 
 import java.nio.file.Files
 
@@ -7,9 +7,10 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit, TestProbe}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.integration.GatewayFixture
-import naogateway.link.Replay
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameStateUpdated, GatewayEvent, GatewayStats, RobotOffline, RobotOnline, RobotRestarted}
+import naogateway.gateway.{Gateway, GatewaySettings}
+import naogateway.gateway.link.Replay
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{SimulatedGameController, SimulatedGameControllerSettings, SimulatedRobot}
 import naogateway.testkit.TestLoopback
@@ -80,7 +81,7 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
       val replaying = spawn(Gateway(settings, Some(Replay.of(dir, speed = 1.0))))
       val events = createTestProbe[GatewayEvent]()
       replaying ! GatewayAccess.Subscribe(events.ref)
-      val stats = createTestProbe[Gateway.GatewayStats]()
+      val stats = createTestProbe[GatewayStats]()
       val replayed = Vector.newBuilder[GatewayEvent]
       var finished = false
       val deadline = 40.seconds.fromNow

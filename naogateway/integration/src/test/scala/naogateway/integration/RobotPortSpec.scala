@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.integration
 
 import java.net.{InetAddress, InetSocketAddress}
 import java.nio.ByteBuffer
@@ -9,6 +9,8 @@ import scala.jdk.CollectionConverters._
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.gateway.link.{Backlog, RobotPort}
 
 /** The robot port on loopback: its reader thread, its non-blocking writes, and a clean close. */
 class RobotPortSpec extends AnyWordSpec with Matchers {

@@ -10,9 +10,11 @@ import scala.util.Random
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{CallResult, GatewayEvent, LinkStats, RobotEvent, RobotSnapshot, RobotStatusUpdated, SigningState}
+import naogateway.gateway.robot.RobotEffects
 import naogateway.sim.network.ForgedFrames
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{RelayCapture, TestLoopback}
 import naogateway.wire._
 
 /** A gateway that requires signed frames of one robot (docs/protocol.md 6.7), with a simulated robot that signs, and an

@@ -9,7 +9,9 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameSource, GameStateUpdated}
+import naogateway.gateway.Rejection
 import naogateway.wire.gamecontroller._
 
 /** The message budget and the check for a second GameController in a real gateway, on loopback. */
@@ -24,8 +26,8 @@ class TeamMessageBudgetSpec extends ScalaTestWithActorTestKit with AnyWordSpecLi
       e => fail(e.describe), identity)
   }
 
-  private def source(f: GatewayFixture): Gateway.GameSource = {
-    val probe = createTestProbe[Gateway.GameSource]()
+  private def source(f: GatewayFixture): GameSource = {
+    val probe = createTestProbe[GameSource]()
     f.gateway ! GatewayAccess.GetGameSource(probe.ref)
     probe.receiveMessage(10.seconds)
   }

@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.integration
 
 import java.net.{InetSocketAddress, Socket}
 
@@ -11,10 +11,22 @@ import com.typesafe.config.ConfigFactory
 import org.scalatest.wordspec.AnyWordSpecLike
 import org.zeromq.{SocketType, ZContext}
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GatewayEvent,
+  RobotFailure,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted,
+  RobotStatusUpdated
+}
+import naogateway.gateway.{Gateway, GatewaySettings}
+import naogateway.gateway.robot.{CallId, Outbox, RobotEffects}
 import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
 import naogateway.wire.{MessageContents, Posture, RpcCall, RpcReply, RpcValue}
-import naogateway.testkit.GatewayInternals
+import naogateway.gateway.link.ZeroMqRobotLink
+import naogateway.transport.ZeroMqLoop
 
 object ZeroMqRobotLinkSpec {
 

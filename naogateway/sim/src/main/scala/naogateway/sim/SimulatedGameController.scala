@@ -8,7 +8,7 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.link.UdpLink
+import naogateway.gateway.link.UdpLink
 import naogateway.wire.gamecontroller._
 
 /** Settings of a [[SimulatedGameController]].

@@ -8,7 +8,7 @@ import akka.Done
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.link.UdpLink
+import naogateway.gateway.link.UdpLink
 
 /** One simulated CM-530 robot on real UDP sockets: [[RobotFirmware]] in real time, behind the GS1500M and CM-530 models
   * ([[FaithfulLink]]) or straight on the sockets.

@@ -8,7 +8,7 @@ import akka.Done
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.link.UdpLink
+import naogateway.gateway.link.UdpLink
 import naogateway.wire.{BusBridgeFrame, Datagram, MessageContents, RpcCall, WireLimits}
 
 /** One simulated robot's actor while it runs: its sockets, its models and its states (see [[SimulatedRobot]]). */

@@ -1,4 +1,4 @@
-package naogateway.wire.stream
+package naogateway.sim
 
 import scala.concurrent.duration._
 
@@ -7,8 +7,9 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
+import naogateway.wire.stream.StreamSettings
 
-import StreamTestKit._
+import naogateway.wire.stream.StreamTestKit._
 
 /** Deadlines, expiry and skip notices over a partitioned or lossy channel. */
 class DeadlineSpec extends AnyWordSpec with Matchers {

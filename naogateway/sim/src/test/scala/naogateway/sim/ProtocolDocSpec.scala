@@ -1,4 +1,4 @@
-package naogateway.wire
+package naogateway.sim
 
 import java.nio.charset.StandardCharsets.{US_ASCII, UTF_8}
 import java.nio.file.{Files, Path, Paths}
@@ -20,6 +20,22 @@ import naogateway.wire.gamecontroller.{
   Hsl20Penalty,
   PlayerPenalty,
   ReturnStatus
+}
+import naogateway.wire.{
+  FrameHeader,
+  FrameSigning,
+  FumanoidsFrame,
+  HaViMo,
+  HaViMoRegion,
+  HeaderForm,
+  MessageContents,
+  ReplayWindow,
+  SignDirection,
+  SignatureError,
+  SignedBody,
+  SignedLink,
+  SigningKey,
+  WireLimits
 }
 
 /** Keeps docs/protocol.md true. Every `<!-- example: tag -->` / `<!-- datagrams: tag -->` hex block and every `<!--
@@ -395,10 +411,13 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
         val opening = "(\\d) [A-Z]+".r.findAllMatchIn(row(3)).map(_.group(1).toInt).toSet
         closing shouldBe Set(1, 2, 3)
         (closing ++ opening) shouldBe GameState.known.map(_.code).toSet
-        closing.foreach(c => naogateway.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe true)
-        opening.foreach(c => naogateway.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe false)
+        closing.foreach(c =>
+          naogateway.gateway.gamecontroller.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe true)
+        opening.foreach(c =>
+          naogateway.gateway.gamecontroller.CompetitionGate.gameRunning(GameState.fromCode(c)) shouldBe false)
       }
-      naogateway.CompetitionGate.closes(naogateway.GameReading.Unreadable("any")) shouldBe true
+      naogateway.gateway.gamecontroller.CompetitionGate.closes(
+        naogateway.api.GameReading.Unreadable("any")) shouldBe true
       rows.last(3) should include("never by itself")
       // The rule's wait to open is the reference configuration's, and longer than the GameController's interval.
       val openAfter = com.typesafe.config.ConfigFactory.load().getDuration("naogateway.game-controller.gate-open-after")
@@ -419,12 +438,12 @@ class ProtocolDocSpec extends AnyWordSpec with Matchers {
     }
     "give the message budget rules the gateway counts with" in {
       val rules = table("gc-budget").rows.map(r => r(0) -> r(1)).toMap
-      val defaults = naogateway.TeamMessageSettings()
+      val defaults = naogateway.gateway.gamecontroller.TeamMessageSettings()
       rules("budget per team per game") should startWith(s"${defaults.perGame} messages")
       rules("per minute of additional time") should startWith(s"${defaults.perExtraMinute} more")
       rules("at the start of extra time") should startWith(s"${defaults.perExtraTime} more")
       rules("largest message") shouldBe s"${defaults.maxBytes} bytes"
-      naogateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway"))
+      naogateway.gateway.GatewaySettings.fromConfig(com.typesafe.config.ConfigFactory.load().getConfig("naogateway"))
         .teamMessages shouldBe defaults
     }
   }
@@ -751,7 +770,7 @@ object ProtocolDocSpec {
   object ProtocolDoc {
 
     /** Forked tests run in the module folder (sim/), an sbt shell in the checkout. */
-    val Candidates: Seq[Path] = Seq(Paths.get("../docs/protocol.md"), Paths.get("docs/protocol.md"))
+    val Candidates: Seq[Path] = Seq(Paths.get("../../docs/protocol.md"), Paths.get("docs/protocol.md"))
 
     private val Marker = """^<!--\s*(example|datagrams|table):\s*([a-z0-9-]+)\s*-->\s*$""".r
 

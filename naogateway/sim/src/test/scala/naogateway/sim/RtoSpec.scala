@@ -1,4 +1,4 @@
-package naogateway.wire.stream
+package naogateway.sim
 
 import scala.concurrent.duration._
 
@@ -7,8 +7,9 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
+import naogateway.wire.stream.{RtoEstimator, SecureStream, StreamSettings}
 
-import StreamTestKit._
+import naogateway.wire.stream.StreamTestKit._
 
 /** The adaptive retransmission timeout: RFC 6298, bounds and Karn's rule. */
 class RtoSpec extends AnyWordSpec with Matchers {

@@ -1,4 +1,4 @@
-package naogateway.wire.stream
+package naogateway.sim
 
 import scala.collection.mutable
 import scala.concurrent.duration._
@@ -10,9 +10,10 @@ import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
 import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
+import naogateway.wire.stream.{SecureStream, StreamSettings}
 
 import SecureStream._
-import StreamTestKit._
+import naogateway.wire.stream.StreamTestKit._
 
 /** Properties over arbitrary datagrams and over random seeded channels. */
 class SecureStreamPropertySpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {

@@ -1,4 +1,4 @@
-package naogateway.wire.stream
+package naogateway.sim
 
 import java.nio.ByteBuffer
 import java.nio.charset.StandardCharsets
@@ -10,6 +10,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.sim.StreamPairSimulation
 import naogateway.sim.StreamPairSimulation._
+import naogateway.wire.stream.StreamSettings
 
 /** The thesis's acceptance tests (docs/protocol.md §11), over the seeded lossy channel. */
 class ThesisAcceptanceSpec extends AnyWordSpec with Matchers {

@@ -1,6 +1,7 @@
-package naogateway
+package naogateway.gateway.gamecontroller
 
 import naogateway.wire.gamecontroller.{GameControlVersion, GameState}
+import naogateway.api.GameReading
 
 /** The competition rule (docs/protocol.md §10.7) as pure functions, shared by the outbox and the GameController watch:
   * the base station must not send to robots while the game runs, which every version says with the same three states.

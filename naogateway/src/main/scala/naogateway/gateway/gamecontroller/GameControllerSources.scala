@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.gamecontroller
 
 import java.net.InetSocketAddress
 

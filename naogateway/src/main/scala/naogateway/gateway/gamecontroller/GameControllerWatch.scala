@@ -1,11 +1,11 @@
-package naogateway
+package naogateway.gateway.gamecontroller
 
 import java.net.InetSocketAddress
 
 import akka.actor.typed.ActorRef
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 
-import naogateway.link.UdpLink
+import naogateway.gateway.link.UdpLink
 import naogateway.wire.Datagram
 import naogateway.wire.gamecontroller.{
   GameControlData,
@@ -14,6 +14,8 @@ import naogateway.wire.gamecontroller.{
   GameControllerError,
   SharedHeader
 }
+import naogateway.api.{ForwardedStatus, GameReading, GameSource, GameStateUpdated, GatewayEvent}
+import naogateway.gateway.{Gateway, GatewaySettings, Rejection, RejectionLedger}
 
 /** The gateway's GameController side, run inside the gateway actor (its state is the gateway's, touched only from its
   * messages): which packets count and from whom, the game state they give, the gates they set, the team's message
@@ -58,8 +60,8 @@ private[naogateway] final class GameControllerWatch(
   def reading: GameReading = latch.reading
 
   /** Where game state comes from, as `GetGameSource` answers. */
-  def source(now: Long): Gateway.GameSource =
-    Gateway.GameSource(
+  def source(now: Long): GameSource =
+    GameSource(
       settings.gameControllerTrusted.describe,
       gameFrom,
       untrusted,

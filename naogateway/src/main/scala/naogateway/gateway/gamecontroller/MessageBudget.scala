@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.gamecontroller
 
 import naogateway.wire.gamecontroller.{GameControlData, GamePhase, GameState, HslGameData}
 

@@ -1,8 +1,11 @@
-package naogateway
+package naogateway.gateway.gamecontroller
 
 import java.net.InetSocketAddress
 
 import scala.concurrent.duration._
+
+import naogateway.api.ForwardedStatus
+import naogateway.gateway.StaticRobot
 
 /** The monitor role at a version-19 GameController (`naogateway.game-controller.monitor`, docs/protocol.md 10.9):
   * opt-in, for a field whose rules allow it. The gateway asks for the true game state with `RGTr` and keeps asking

@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.gateway.link
 
 import java.util.concurrent.atomic.AtomicInteger
 

@@ -1,13 +1,15 @@
-package naogateway
+package naogateway.gateway.link
 
 import java.net.InetSocketAddress
 import java.util.concurrent.atomic.AtomicReference
 
 import akka.actor.typed.ActorRef
 
-import naogateway.link.{Backlog, DatagramWriter, RobotLink, RobotPort, UdpLink}
+import naogateway.transport.DatagramWriter
 import naogateway.proto.RecordedPort
-import naogateway.recording.Recording
+import naogateway.gateway.recording.Recording
+import naogateway.gateway.{Gateway, GatewaySettings, Rejection, RejectionLedger, Routing, SignatureCheck}
+import naogateway.gateway.robot.{Outbox, RobotActor}
 
 /** The robot port's reader side of the gateway: runs where the port is read (the robot dispatcher's port loop, or a
   * reader thread), routes each datagram with the table the gateway last published, and hands the robot actors (or the

@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.gateway.link
 
 import java.io.{BufferedInputStream, IOException}
 import java.net.{InetAddress, InetSocketAddress}
@@ -13,7 +13,8 @@ import scala.util.control.NonFatal
 import org.slf4j.LoggerFactory
 
 import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort}
-import naogateway.recording.{Mcap, McapReader, Recording}
+import naogateway.gateway.recording.{Mcap, McapReader, Recording}
+import naogateway.api.ReplayProgress
 
 /** A recording to play back instead of the sockets: its files, in order, at `speed` times the recorded pace.
   *
@@ -39,9 +40,6 @@ object Replay {
     files.foreach(f => require(Files.isRegularFile(f), s"recording $f does not exist"))
     Replay(files, speed)
   }
-
-  /** What a replay did so far ([[ReplayProgress]], api). */
-  type Progress = ReplayProgress; val Progress: ReplayProgress.type = ReplayProgress
 }
 
 /** The gateway's robot link played back from a recording: the datagrams the gateway received on its robot port and on
@@ -68,7 +66,7 @@ final class ReplayLink(replay: Replay, threadName: String) extends RobotLink {
   }
 
   /** The figures so far. */
-  def progress: Replay.Progress = Replay.Progress(fed.get, discarded.get, done)
+  def progress: ReplayProgress = ReplayProgress(fed.get, discarded.get, done)
 
   def start(handler: RobotPort.Handler): Unit = synchronized {
     require(thread.isEmpty, "the replay runs already")

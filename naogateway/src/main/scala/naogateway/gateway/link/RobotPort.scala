@@ -1,9 +1,11 @@
-package naogateway.link
+package naogateway.gateway.link
 
 import java.net.InetSocketAddress
 import java.util.concurrent.Executor
 
 import scala.annotation.unused
+
+import naogateway.transport.{DatagramPort, DatagramWriter}
 
 /** Where the gateway's robot datagrams come from and go to: the robot port's socket ([[RobotPort]]), or a recording
   * played back ([[ReplayLink]]). Whatever it is, it hands every datagram to one [[RobotPort.Handler]] on one thread.

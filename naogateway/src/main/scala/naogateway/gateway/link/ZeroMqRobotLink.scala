@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.gateway.link
 
 import scala.concurrent.Future
 import scala.jdk.DurationConverters._
@@ -21,7 +21,9 @@ import org.zeromq.{SocketType, ZMQ, ZMsg}
 
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
-import naogateway.{CallId, Outbox, ZeroMqLinkSettings}
+import naogateway.gateway.ZeroMqLinkSettings
+import naogateway.gateway.robot.{CallId, Outbox}
+import naogateway.transport.ZeroMqLoop
 
 /** The link to a robot that serves the RPC over a ZeroMQ REP socket: requests go out on a DEALER socket (so several may
   * wait in the robot's queue, answered in order), replies come back as decoded messages. Such a robot cannot push

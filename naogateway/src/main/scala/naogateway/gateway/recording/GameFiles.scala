@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import naogateway.wire.gamecontroller.{GameControlData, GameState}
 

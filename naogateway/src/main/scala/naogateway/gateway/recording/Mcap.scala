@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.io.IOException
 import java.nio.charset.StandardCharsets

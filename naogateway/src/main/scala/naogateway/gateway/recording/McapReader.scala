@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.io.{EOFException, InputStream}
 import java.util.zip.CRC32

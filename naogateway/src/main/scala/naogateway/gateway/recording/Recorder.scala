@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.io.{BufferedOutputStream, IOException}
 import java.net.InetSocketAddress
@@ -15,9 +15,10 @@ import scala.util.control.NonFatal
 import com.google.protobuf.CodedOutputStream
 import org.slf4j.LoggerFactory
 
-import naogateway._
+import naogateway.transport.RateLimitedLog
 import naogateway.proto.{RecordedDirection, RecordedPort}
 import naogateway.wire.{MessageContents, RpcReply}
+import naogateway.api.recording.{Decision, DecisionJson, RecordingStats}
 
 /** Protobuf bytes of the messages the writer thread writes, in one array reused from message to message (grown when
   * needed): the same bytes as the generated code's `toByteArray`, without an array, a `ByteString` and strings each.
@@ -212,7 +213,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private def write(e: Entry): Unit = {
     // A half begins with the packet that begins it in its file; it ends with the packet that ends it still in it.
     val endAfter = e match {
-      case DecisionEntry(at, Decision.Published(naogateway.GameStateUpdated(data))) if settings.gameFiles =>
+      case DecisionEntry(at, Decision.Published(naogateway.api.GameStateUpdated(data))) if settings.gameFiles =>
         val steps = games.packet(data, at)
         if (gameSteps(steps) && steps._2.exists(_.isInstanceOf[GameFiles.Begin])) { rotate(); false }
         else steps._2.nonEmpty

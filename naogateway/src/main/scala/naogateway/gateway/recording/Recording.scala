@@ -1,12 +1,13 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.net.InetSocketAddress
 
-import naogateway._
+import naogateway.api.ClockEstimate
 import naogateway.proto.RecordedPort
+import naogateway.api.recording.{Decision, RecordingSchema, RecordingStats}
 
 /** Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
-  * as [[naogateway.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
+  * as [[naogateway.api.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
   */
 trait RobotTimeBase {
 

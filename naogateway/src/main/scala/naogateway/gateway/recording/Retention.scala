@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.io.IOException
 import java.nio.file.{Files, Path}
@@ -12,6 +12,8 @@ import scala.util.control.NonFatal
 
 import com.typesafe.config.Config
 import org.slf4j.LoggerFactory
+
+import naogateway.api.recording.RetentionStatus
 
 /** `naogateway.recording.retention`: how much the recording directory may hold and for how long. Without a limit a base
   * station that records every game runs out of disk during a competition week.

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 /** Call ids (`uint32`, protocol.md 6.6; docs/architecture.md 5): the two top bits name the owner of the call, the lower
   * 30 bits count up per owner and wrap, so a reply reaches its owner by its id alone.

@@ -1,6 +1,8 @@
-package naogateway
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
+
+import naogateway.api.ClockEstimate
 
 /** Settings of the clock estimate: how much robot time the window of keep-alives covers. */
 final case class ClockSyncSettings(window: FiniteDuration = ClockSync.DefaultWindow) {

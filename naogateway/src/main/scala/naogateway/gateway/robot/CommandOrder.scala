@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import naogateway.wire.ActuatorGroup
 

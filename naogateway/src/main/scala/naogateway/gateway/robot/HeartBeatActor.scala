@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import scala.collection.immutable.Queue
 
@@ -6,6 +6,8 @@ import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.wire.RpcCall
+import naogateway.api.LinkQuality
+import naogateway.gateway.HeartbeatSettings
 
 /** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. */
 private[naogateway] object HeartBeatActor {

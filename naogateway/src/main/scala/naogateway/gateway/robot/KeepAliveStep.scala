@@ -1,4 +1,6 @@
-package naogateway
+package naogateway.gateway.robot
+
+import naogateway.api.RobotSnapshot
 
 /** What one keep-alive did: the robot's new snapshot, whether it completed a new session, and the restart rule now. */
 final case class KeepAliveStep(snapshot: RobotSnapshot, restarted: Boolean, sessions: SessionRule)

@@ -1,12 +1,15 @@
-package naogateway
+package naogateway.gateway.robot
 
 import scala.concurrent.duration.FiniteDuration
 
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart, Signal}
 
-import naogateway.RobotFrames.{Outbound, Route}
+import naogateway.gateway.robot.RobotFrames.{Outbound, Route}
 import naogateway.wire.{RpcCall, RpcMethod}
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, Priority, RobotFailure}
+import naogateway.gateway.CallSettings
 
 /** The one actor that sends to its robot. Everything for robot N passes here: the callers' calls (submitted by
   * `ResponseActor`, which correlates their answers), the heartbeat's probes, option commands, secure-stream segments

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -8,10 +8,17 @@ import scala.concurrent.duration._
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.link.{DatagramWriter, ZeroMqRobotLink}
-import naogateway.recording.{Decision, Recording}
+import naogateway.gateway.link.ZeroMqRobotLink
+import naogateway.transport.DatagramWriter
+import naogateway.api.recording.Decision
+import naogateway.gateway.recording.Recording
 import naogateway.wire.{FrameSigning, WireLimits}
 import naogateway.wire.gamecontroller.GameState
+import naogateway.api.{GameReading, Priority, TrafficStats}
+import naogateway.gateway.{BudgetSettings, GatewaySigning}
+import naogateway.gateway.gamecontroller.CompetitionGate
+import naogateway.transport.RateLimitedLog
+import naogateway.gateway.SignRefusal
 
 /** The last gate before the air, for both transports: the competition rule (applied here alone), the team's traffic
   * budget and the priority classes. Every robot's sender (`NoResponseActor`) sends through it.
@@ -84,9 +91,6 @@ object Outbox {
 
   /** The rule that closes the gate, in words for errors and logs. */
   val NoSendingWhileGameRuns: String = CompetitionGate.NoSendingWhileGameRuns
-
-  /** The team's traffic figures ([[naogateway.TrafficStats]], api). */
-  type TrafficStats = naogateway.TrafficStats; val TrafficStats: naogateway.TrafficStats.type = naogateway.TrafficStats
 
   private val Second = 1000000000L
 

@@ -1,4 +1,6 @@
-package naogateway
+package naogateway.gateway.robot
+
+import naogateway.api.RobotFailure
 
 /** What an outbox outcome means for the call it carried: the gateway's side of `RobotFailure` (api). */
 private[naogateway] object OutcomeFailure {

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
@@ -6,6 +6,9 @@ import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart}
 
 import naogateway.wire.{RpcCall, RpcMethod, RpcReply, RpcValue}
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, Priority, RobotFailure}
+import naogateway.gateway.CallSettings
 
 /** Request-reply for one robot: correlation ids (from [[CallId]]), per-call deadlines, retries of idempotent calls, and
   * exactly one answer per caller. It sends nothing itself: every attempt is submitted to the robot's one sender

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -8,11 +8,14 @@ import akka.actor.typed.scaladsl.Behaviors.receiveMessage
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.RobotEffects.{Children, Connected, Family}
-import naogateway.RobotFrames.Outbound
-import naogateway.link.ZeroMqRobotLink
+import naogateway.gateway.robot.RobotEffects.{Children, Connected, Family}
+import naogateway.gateway.robot.RobotFrames.Outbound
+import naogateway.gateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
+import naogateway.access.RobotAccess
+import naogateway.api.{GatewayEvent, Priority, RobotForgotten, RobotOffline, RobotOnline, VisionFrame}
+import naogateway.gateway.{Gateway, GatewaySettings, Rejection, RobotSigning}
 
 /** The supervisor of one robot: carries out `RobotState`'s transitions (its address, liveness, subscribers, options and
   * link figures), hands what the robot sends to its owners, and re-syncs the robot after restarts. It sends nothing

@@ -1,12 +1,16 @@
-package naogateway
+package naogateway.gateway.robot
 
 import akka.actor.typed.ActorRef
 
-import naogateway.RobotEffects.{Children, Family}
-import naogateway.RobotFrames.{Arrival, Outbound}
+import naogateway.gateway.robot.RobotEffects.{Children, Family}
+import naogateway.gateway.robot.RobotFrames.{Arrival, Outbound}
 import naogateway.proto.{DebuggingCommands, DebuggingOption, DebuggingOptionNames, RobotHealth, ServoTelemetry, Status}
-import naogateway.link.ZeroMqRobotLink
+import naogateway.gateway.link.ZeroMqRobotLink
 import naogateway.wire.MessageContents
+import naogateway.access.RobotAccess
+import naogateway.api.{GatewayEvent, LinkQualityChanged, LinkStats, Priority, RobotRestarted, RobotStatusUpdated}
+import naogateway.gateway.{GatewaySettings, HeartbeatSettings, Rejection}
+import naogateway.transport.RateLimitedLog
 
 /** What a robot actor does around `RobotState`'s transitions: hands what the robot sent to its owners, puts option
   * commands and probes into the robot's sender, and publishes events. Its methods take a state and return the next one;

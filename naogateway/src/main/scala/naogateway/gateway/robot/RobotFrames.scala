@@ -1,12 +1,14 @@
-package naogateway
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
 import akka.actor.typed.ActorRef
 
-import naogateway.link.ZeroMqRobotLink
+import naogateway.gateway.link.ZeroMqRobotLink
 import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, ServoTelemetry, Status}
 import naogateway.wire.{FrameError, HaViMo, HeaderForm, MessageContents, RpcCall, RpcReply, WireLimits}
+import naogateway.api.{Priority, VisionFrame}
+import naogateway.gateway.Rejection
 
 /** What goes to a robot and the bytes it becomes (the one place that builds a robot's outbound frames), and what a
   * frame from it carries. Pure: encoding reads the route and changes nothing (the option bookkeeping is `RobotState`'s,

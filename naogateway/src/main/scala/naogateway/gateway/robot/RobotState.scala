@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -8,6 +8,8 @@ import akka.actor.typed.ActorRef
 
 import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, ServoTelemetry, Status}
 import naogateway.wire.HeaderForm
+import naogateway.api.{GatewayEvent, LinkQuality, LinkStats, RobotSnapshot, SigningState, VisionFrame}
+import naogateway.gateway.Rejection
 
 /** The link figures of one robot. `keepAliveTimes` holds the keep-alives' arrival times, oldest first, never more than
   * `keepAliveTimesKept`: with more than a window's worth the loss estimate is 0 anyway, so a flooding robot costs what

@@ -1,8 +1,10 @@
-package naogateway
+package naogateway.gateway.robot
 
 import akka.actor.typed.ActorRef
 
-import naogateway.link.Backlog
+import naogateway.gateway.link.Backlog
+import naogateway.access.RobotAccess
+import naogateway.api.GatewayEvent
 
 /** How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start (a
   * restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the gateway

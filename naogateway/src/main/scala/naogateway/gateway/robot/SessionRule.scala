@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 /** What one keep-alive says about the robot's session: its `bootId` and uptime (either may be missing) and when the
   * gateway received it, in milliseconds of the gateway's monotonic clock.

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
@@ -6,6 +6,7 @@ import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.wire.stream.{SecureStream, StreamStats, StreamSettings}
+import naogateway.api.Priority
 
 /** The gateway's end of one robot's secure stream (docs/protocol.md §11): reliable, ordered payloads over the lossy
   * link.

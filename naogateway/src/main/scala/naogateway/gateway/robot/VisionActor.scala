@@ -1,9 +1,11 @@
-package naogateway
+package naogateway.gateway.robot
 
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
+import naogateway.access.RobotAccess
+import naogateway.api.VisionFrame
 
 /** HaViMo2 frames of one robot, fanned out newest-only to any number of stream subscribers. */
 object VisionActor {

@@ -1,9 +1,10 @@
-package naogateway
+package naogateway.gateway.gamecontroller
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.gamecontroller.{GameControlVersion, GameState}
+import naogateway.api.GameReading
 
 /** The competition rule (docs/protocol.md 10.7) without actors: which readings close the gate, and the latch that
   * closes it fast and opens it slowly.

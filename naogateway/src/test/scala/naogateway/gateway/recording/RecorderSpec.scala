@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.net.InetSocketAddress
 import java.nio.file.{Files, Path}
@@ -22,6 +22,7 @@ import naogateway.proto.{
   Status
 }
 import naogateway.wire.gamecontroller.GameState
+import naogateway.api.recording.Decision
 
 class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
@@ -56,9 +57,9 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
     "write what waits when closed, then ignore further entries" in {
       val dir = Files.createTempDirectory("recorder-spec")
       val recording = Recording(settings(dir), "recorder-spec-close")
-      recording.decision(Decision.Gate(open = false, naogateway.GameReading.Known(GameState.Playing)))
+      recording.decision(Decision.Gate(open = false, naogateway.api.GameReading.Known(GameState.Playing)))
       recording.close()
-      recording.decision(Decision.Gate(open = true, naogateway.GameReading.Known(GameState.Finished)))
+      recording.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Finished)))
       recording.stats.messages shouldBe 1L
       val contents = McapReader.read(Files.readAllBytes(files(dir).head))
       new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
@@ -92,7 +93,7 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
       val file = Files.createTempFile("recorder-spec", ".not-a-directory")
       val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed")
       (1 to 10).foreach(_ =>
-        recording.decision(Decision.Gate(open = true, naogateway.GameReading.Known(GameState.Initial))))
+        recording.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Initial))))
       recording.close()
       recording.stats.failed shouldBe 10L
       recording.stats.files shouldBe 0L

@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.gateway.recording
 
 import java.nio.file.{Files, Path, Paths}
 import java.nio.file.attribute.FileTime
@@ -8,6 +8,8 @@ import scala.concurrent.duration._
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.api.recording.Decision
 
 /** Recording retention: the rule over a listing, and the sweep of a real directory. */
 class RetentionSpec extends AnyWordSpec with Matchers {
@@ -100,7 +102,7 @@ class RetentionSpec extends AnyWordSpec with Matchers {
       val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown)
       try {
         recorder.decision(Decision.Gate(open = true,
-            naogateway.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
+            naogateway.api.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
         val deadline = 10.seconds.fromNow
         while (!recorder.stats.retention.exists(_.deletedFiles > 0) && deadline.hasTimeLeft()) Thread.sleep(20)
         Files.exists(stale) shouldBe false

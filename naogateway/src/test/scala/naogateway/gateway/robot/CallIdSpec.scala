@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec

@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
@@ -7,8 +7,10 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, TypedActorContext}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.actors.RobotStandIn.callActors
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, RobotFailure}
+import naogateway.gateway.CallSettings
+import naogateway.gateway.robot.RobotStandIn.callActors
 import naogateway.wire.{RpcCall, RpcValue}
 
 /** A child that really crashes, under the supervision the robot actor gives it, still answers its callers. */

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
@@ -6,6 +6,8 @@ import org.scalacheck.Gen
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
+
+import naogateway.api.ClockEstimate
 
 /** The clock estimate against generated robot clocks of known offset and drift, with random non-negative delays. */
 class ClockSyncSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {

@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
@@ -6,9 +6,11 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWit
 import akka.actor.typed.scaladsl.Behaviors
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.actors.RobotStandIn.callActors
-import naogateway.link.UdpLink
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, Priority}
+import naogateway.gateway.{BudgetSettings, CallSettings}
+import naogateway.gateway.robot.RobotStandIn.callActors
+import naogateway.gateway.link.UdpLink
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall, RpcValue}
 
 /** A walk never leaves after a later stop: not as a retry, not held by the outbox's budget. */
@@ -30,7 +32,7 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
   }
 
   /** A writer that hands every datagram to `link` as the send it is, and always takes it. */
-  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter =
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.transport.DatagramWriter =
     (bytes, to) => {
       link ! UdpLink.Send(bytes, to)
       true

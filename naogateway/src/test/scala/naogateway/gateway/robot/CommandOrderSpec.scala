@@ -1,11 +1,11 @@
-package naogateway
+package naogateway.gateway.robot
 
 import org.scalacheck.Gen
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway.CommandOrder.{Entry, Refused, Step, Superseded, Transmit}
+import naogateway.gateway.robot.CommandOrder.{Entry, Refused, Step, Superseded, Transmit}
 import naogateway.wire.ActuatorGroup
 
 /** The command order's rules, over random scripts of calls and answers. */

@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
@@ -7,8 +7,9 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior, BehaviorInterceptor, TypedActorContext}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.HeartBeatActor._
+import naogateway.api.LinkQuality
+import naogateway.gateway.HeartbeatSettings
+import naogateway.gateway.robot.HeartBeatActor._
 
 class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
   private val manualTime = ManualTime()

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -7,6 +7,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.proto.{Position, RobotHealth, Status}
 import naogateway.wire.Posture
+import naogateway.api.{LinkQuality, RobotSnapshot}
 
 /** docs/protocol.md §6.2: what a keep-alive does to the published snapshot, and the restart rule. */
 class KeepAliveSnapshotSpec extends AnyWordSpec with Matchers {

@@ -1,14 +1,16 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.RobotFrames.Outbound
-import naogateway.actors.RobotStandIn.{callActors, sent}
-import naogateway.link.{DatagramWriter, ZeroMqRobotLink}
+import naogateway.api.{CallResult, Priority, RobotFailure}
+import naogateway.gateway.{BudgetSettings, CallSettings}
+import naogateway.gateway.robot.RobotFrames.Outbound
+import naogateway.gateway.robot.RobotStandIn.{callActors, sent}
+import naogateway.gateway.link.ZeroMqRobotLink
+import naogateway.transport.DatagramWriter
 import naogateway.proto.{DebuggingCommands, DebuggingOptionNames}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
 import naogateway.wire.gamecontroller.GameState

@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import java.net.{InetAddress, InetSocketAddress}
 
@@ -7,7 +7,8 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit, TestProbe}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.api.{GatewayEvent, RobotOnline}
+import naogateway.gateway.GatewaySettings
 import naogateway.proto.{
   DebuggingCommands,
   DebuggingOption,

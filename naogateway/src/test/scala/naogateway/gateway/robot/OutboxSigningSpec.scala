@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -7,8 +7,9 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.link.UdpLink
+import naogateway.api.Priority
+import naogateway.gateway.{BudgetSettings, GatewaySigning}
+import naogateway.gateway.link.UdpLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
 
@@ -17,7 +18,7 @@ class OutboxSigningSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike w
   private val teamKey =
     SigningKey.fromHex("000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f").toOption.get
 
-  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter =
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.transport.DatagramWriter =
     (bytes, to) => {
       link ! UdpLink.Send(bytes, to)
       true

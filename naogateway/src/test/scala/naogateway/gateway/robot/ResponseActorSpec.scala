@@ -1,12 +1,14 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit, TestProbe}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.actors.RobotStandIn.{callActors, sent}
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, Priority, RobotFailure}
+import naogateway.gateway.CallSettings
+import naogateway.gateway.robot.RobotStandIn.{callActors, sent}
 import naogateway.wire.{RpcCall, RpcReply, RpcValue}
 
 class ResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {

@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import java.net.{InetAddress, InetSocketAddress}
 
@@ -9,8 +9,10 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{Behavior, BehaviorInterceptor, SupervisorStrategy, TypedActorContext}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
-import naogateway.link.Backlog
+import naogateway.access.RobotAccess
+import naogateway.api.{GatewayEvent, LinkQuality, RobotOnline, RobotSnapshot, RobotStatusUpdated}
+import naogateway.gateway.GatewaySettings
+import naogateway.gateway.link.Backlog
 import naogateway.proto.Status
 import naogateway.wire.{HeaderForm, MessageContents}
 

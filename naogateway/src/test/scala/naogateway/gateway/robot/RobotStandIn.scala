@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -7,7 +7,7 @@ import akka.actor.testkit.typed.scaladsl.{ActorTestKit, TestProbe}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall}
-import naogateway.{CallSettings, NoResponseActor, Outbox, ResponseActor, RobotActor, RobotFrames}
+import naogateway.gateway.CallSettings
 
 /** What a test probe standing in for the robot actor answers to the call actors it serves. */
 object RobotStandIn {

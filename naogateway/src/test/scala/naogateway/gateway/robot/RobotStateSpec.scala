@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -6,7 +6,7 @@ import akka.actor.testkit.typed.scaladsl.TestInbox
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.RobotFrames.{Arrival, Outbound, Route}
+import naogateway.gateway.robot.RobotFrames.{Arrival, Outbound, Route}
 import naogateway.proto.{
   DebuggingCommands,
   DebuggingOption,
@@ -18,6 +18,18 @@ import naogateway.proto.{
   Status
 }
 import naogateway.wire.{HeaderForm, MessageContents, RpcCall, WireLimits}
+import naogateway.api.{
+  GatewayEvent,
+  LinkQuality,
+  Priority,
+  RobotOffline,
+  RobotOnline,
+  ServoReading,
+  ServoReadings,
+  SigningState,
+  VisionFrame
+}
+import naogateway.gateway.Rejection
 
 /** The robot actor's state and frames, without actors: each named transition, and the pure encoding. */
 class RobotStateSpec extends AnyWordSpec with Matchers {
@@ -223,7 +235,7 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
   "A robot's frames" should {
     val outbox = TestInbox[Outbox.Command]().ref
     val datagrams = Route.Datagrams(outbox, address, HeaderForm.Legacy, signs = true)
-    val zeroMq = Route.ZeroMq(outbox, address, TestInbox[naogateway.link.ZeroMqRobotLink.Command]().ref)
+    val zeroMq = Route.ZeroMq(outbox, address, TestInbox[naogateway.gateway.link.ZeroMqRobotLink.Command]().ref)
     val call = Outbound.CallOut(RpcCall("system", "ping", Vector.empty, Some(5L)))
 
     "encode a call as an FU-Remote frame over datagrams and as a bare message over ZeroMQ" in {

@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.gateway.robot
 
 import org.scalacheck.Gen
 import org.scalatest.matchers.should.Matchers

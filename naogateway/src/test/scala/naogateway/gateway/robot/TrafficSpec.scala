@@ -1,4 +1,4 @@
-package naogateway.actors
+package naogateway.gateway.robot
 
 import java.net.InetSocketAddress
 
@@ -9,8 +9,9 @@ import org.scalacheck.Gen
 import org.scalatest.wordspec.AnyWordSpecLike
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway._
-import naogateway.link.UdpLink
+import naogateway.api.{Priority, TrafficStats}
+import naogateway.gateway.BudgetSettings
+import naogateway.gateway.link.UdpLink
 import naogateway.wire.gamecontroller.GameState
 
 class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing
@@ -36,7 +37,7 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
   }
 
   /** A writer that hands every datagram to `link` as the send it is, and always takes it. */
-  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.link.DatagramWriter =
+  private def writer(link: akka.actor.typed.ActorRef[UdpLink.Command]): naogateway.transport.DatagramWriter =
     (bytes, to) => {
       link ! UdpLink.Send(bytes, to)
       true
@@ -47,11 +48,11 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
       // The outbox's own decisions, against a clock this test moves: no timing of the machine is in the figures.
       val clock = new java.util.concurrent.atomic.AtomicLong(5000000000L)
       val written = new java.util.concurrent.ConcurrentLinkedQueue[(Long, Int, Byte)]()
-      val recording: naogateway.link.DatagramWriter =
+      val recording: naogateway.transport.DatagramWriter =
         (bytes, _) => { written.add((clock.get, bytes.length, bytes(0))); true }
       val budget = BudgetSettings(20000, 0, 0.8, probeShare = 0.1)
       val outbox = spawn(Outbox(recording, budget, competition = false, clock = () => clock.get))
-      val stats = createTestProbe[Outbox.TrafficStats]()
+      val stats = createTestProbe[TrafficStats]()
       // Every message before it handled: the outbox answers in order.
       def settled(): Unit = { outbox ! Outbox.GetStats(stats.ref); stats.receiveMessage(10.seconds); () }
       val probe = Array.fill[Byte](50)(1)
@@ -129,9 +130,9 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
     "count a datagram the socket did not take (kernel buffer full) as dropped, and keep sending" in {
       val taken = new java.util.concurrent.atomic.AtomicBoolean(false)
       val sent = new java.util.concurrent.atomic.AtomicInteger
-      val full: naogateway.link.DatagramWriter = (_, _) => { sent.incrementAndGet(); taken.get }
+      val full: naogateway.transport.DatagramWriter = (_, _) => { sent.incrementAndGet(); taken.get }
       val outbox = spawn(Outbox(full, BudgetSettings(125000, 0, 0.8), competition = false))
-      val stats = createTestProbe[Outbox.TrafficStats]()
+      val stats = createTestProbe[TrafficStats]()
       outbox ! Outbox.Send(1, robot, Array[Byte](1), Priority.Command)
       outbox ! Outbox.GetStats(stats.ref)
       stats.receiveMessage().dropped shouldBe 1
@@ -147,7 +148,8 @@ class TrafficSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Lo
 class RateLimitedLogSpec extends org.scalatest.wordspec.AnyWordSpec with org.scalatest.matchers.should.Matchers {
   "RateLimitedLog" should {
     "log the 1st, 10th, 100th ... occurrence and nothing in between" in {
-      (1L to 100000L).filter(naogateway.RateLimitedLog.due) shouldBe Seq(1L, 10L, 100L, 1000L, 10000L, 100000L)
+      (1L to 100000L).filter(naogateway.transport.RateLimitedLog.due) shouldBe Seq(1L, 10L, 100L, 1000L, 10000L,
+        100000L)
     }
   }
 }

@@ -1,4 +1,4 @@
-package naogateway.integration
+package naogateway.testkit
 
 import scala.collection.immutable.ArraySeq
 

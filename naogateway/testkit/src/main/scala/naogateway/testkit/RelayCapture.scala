@@ -1,4 +1,4 @@
-package naogateway.integration
+package naogateway.testkit
 
 import java.nio.ByteBuffer
 import java.nio.channels.DatagramChannel

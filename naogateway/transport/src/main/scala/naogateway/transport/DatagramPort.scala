@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.transport
 
 import java.io.IOException
 import java.net.{InetSocketAddress, StandardSocketOptions}
@@ -10,8 +10,6 @@ import java.util.concurrent.locks.LockSupport
 import scala.util.control.NonFatal
 
 import org.slf4j.LoggerFactory
-
-import naogateway.RateLimitedLog
 
 /** Writes one datagram without blocking; false when it was not sent (kernel buffer full, port closed, send failed). */
 trait DatagramWriter {
@@ -29,7 +27,7 @@ trait DatagramWriter {
   * inside an actor, and each datagram goes to a [[DatagramPort.Handler]] on that same thread. Writes need no thread of
   * their own: a non-blocking send either takes the datagram or returns 0 at once.
   */
-final class DatagramPort private (private[link] val channel: DatagramChannel, threadName: String)
+final class DatagramPort private (private[naogateway] val channel: DatagramChannel, threadName: String)
     extends DatagramWriter
     with PortLoop.Source {
   import DatagramPort._
@@ -160,7 +158,7 @@ final class DatagramPort private (private[link] val channel: DatagramChannel, th
   /** Reads at most `max` datagrams (on the one thread that reads the port), then tells the handler it caught up if the
     * channel is empty.
     */
-  private[link] def drain(buffer: ByteBuffer, max: Int): Unit = {
+  private[naogateway] def drain(buffer: ByteBuffer, max: Int): Unit = {
     var left = max
     while (left > 0 && open) {
       buffer.clear()

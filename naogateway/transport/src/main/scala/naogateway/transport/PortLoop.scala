@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.transport
 
 import java.io.IOException
 import java.nio.ByteBuffer
@@ -26,8 +26,6 @@ import akka.dispatch.{
 import com.typesafe.config.Config
 import org.slf4j.LoggerFactory
 
-import naogateway.RateLimitedLog
-
 /** One thread that runs an Akka dispatcher's tasks and reads the datagram ports attached to it (the gateway's robot
   * port, the apps' datagram door).
   *
@@ -40,7 +38,7 @@ import naogateway.RateLimitedLog
   * shut an idle one down; the selector and the attached ports belong to this object, so each executor's thread takes
   * them over from the one before. One executor's thread at a time owns the selector (`ownership`).
   */
-final class PortLoop private[link] (threadFactory: ThreadFactory, settings: PortLoop.Settings)
+final class PortLoop private[naogateway] (threadFactory: ThreadFactory, settings: PortLoop.Settings)
     extends ExecutorServiceFactory {
   import PortLoop._
 
@@ -70,7 +68,7 @@ final class PortLoop private[link] (threadFactory: ThreadFactory, settings: Port
   }
 
   /** Reads `source`'s channel on this loop from now on; on the loop's own thread only ([[PortLoop.current]]). */
-  private[link] def attach(source: Source): Attachment = {
+  private[naogateway] def attach(source: Source): Attachment = {
     require(ownership.isHeldByCurrentThread, "a port is attached on its loop's own thread")
     val attachment = new Attachment(source)
     attachment.key = source.channel.register(selector, SelectionKey.OP_READ, attachment)
@@ -307,15 +305,15 @@ object PortLoop {
   }
 
   /** What the loop reads: a non-blocking channel, and how to hand on what is in it. */
-  private[link] trait Source {
+  private[naogateway] trait Source {
 
     /** The channel the loop waits on. */
-    private[link] def channel: SelectableChannel
+    private[naogateway] def channel: SelectableChannel
 
     /** Reads at most `max` datagrams with `buffer`, handing each on; tells its handler it caught up once the channel is
       * empty. Throws ClosedChannelException once the channel is closed.
       */
-    private[link] def drain(buffer: ByteBuffer, max: Int): Unit
+    private[naogateway] def drain(buffer: ByteBuffer, max: Int): Unit
   }
 
   private val loopThread = new ThreadLocal[PortLoop]
@@ -329,7 +327,7 @@ object PortLoop {
   private val log = LoggerFactory.getLogger(classOf[PortLoop])
 }
 
-/** Makes Akka run a dispatcher on a [[PortLoop]]: `executor = "naogateway.link.PortLoopConfigurator"` in the
+/** Makes Akka run a dispatcher on a [[PortLoop]]: `executor = "naogateway.transport.PortLoopConfigurator"` in the
   * dispatcher's block, with a `port-loop` block of [[PortLoop.Settings]].
   */
 final class PortLoopConfigurator(config: Config, prerequisites: DispatcherPrerequisites)

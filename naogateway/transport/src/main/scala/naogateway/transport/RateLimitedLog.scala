@@ -1,4 +1,4 @@
-package naogateway
+package naogateway.transport
 
 /** When a counted event deserves a log line: at the 1st, 10th, 100th, ... occurrence, so floods cannot flood the log.
   */

@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.transport
 
 import java.nio.ByteBuffer
 import java.nio.channels.Pipe

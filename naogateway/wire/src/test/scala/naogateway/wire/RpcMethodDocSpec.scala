@@ -12,7 +12,7 @@ import org.scalatest.wordspec.AnyWordSpec
 class RpcMethodDocSpec extends AnyWordSpec with Matchers {
 
   // Forked tests run in the module folder (naogateway/), an sbt shell in the checkout.
-  private val doc: Vector[String] = Seq(Paths.get("../docs/protocol.md"), Paths.get("docs/protocol.md"))
+  private val doc: Vector[String] = Seq(Paths.get("../../docs/protocol.md"), Paths.get("docs/protocol.md"))
     .find(Files.isRegularFile(_))
     .map((p: Path) => Files.readAllLines(p, UTF_8).asScala.toVector)
     .getOrElse(fail("docs/protocol.md not found"))

@@ -1,8 +1,8 @@
-package naogateway.recording
+package naogateway.api.recording
 
 import java.net.InetSocketAddress
 
-import naogateway._
+import naogateway.api.{GameStateUpdated, LinkQualityChanged, RobotOffline, RobotOnline, RobotRestarted}
 import naogateway.wire.{MessageContents, RpcCall, RpcReply}
 
 /** The decisions as JSON objects, one per message; field names are the code's names: the recording's
@@ -76,11 +76,11 @@ object DecisionJson {
         )
       case Decision.Gate(open, reading) =>
         val state = reading match {
-          case naogateway.GameReading.Known(s, _)               => s.toString
-          case naogateway.GameReading.HeaderOnly(s, version, _) => s"$s (shared header of version $version)"
-          case naogateway.GameReading.Unreadable(reason)        => s"unreadable: $reason"
-          case naogateway.GameReading.Opening(s, leftMillis, _) => s"$s (opening in $leftMillis ms)"
-          case naogateway.GameReading.NotHeard                  => "not heard"
+          case naogateway.api.GameReading.Known(s, _)               => s.toString
+          case naogateway.api.GameReading.HeaderOnly(s, version, _) => s"$s (shared header of version $version)"
+          case naogateway.api.GameReading.Unreadable(reason)        => s"unreadable: $reason"
+          case naogateway.api.GameReading.Opening(s, leftMillis, _) => s"$s (opening in $leftMillis ms)"
+          case naogateway.api.GameReading.NotHeard                  => "not heard"
         }
         obj("decision" -> quote(if (open) "gate-open" else "gate-closed"), t, "state" -> quote(state))
       case Decision.Budget(out, in, limit, queued) =>

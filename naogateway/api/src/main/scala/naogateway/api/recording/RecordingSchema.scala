@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.api.recording
 
 import scala.collection.mutable
 

@@ -1,4 +1,4 @@
-package naogateway.recording
+package naogateway.api.recording
 
 /** What the last sweep of the recording directory found and did, for the status view and `robotctl doctor`. */
 final case class RetentionStatus(files: Int, bytes: Long, deletedFiles: Long, deletedBytes: Long, limits: String,

@@ -2,7 +2,7 @@ package naogateway.sim.network
 
 import scala.util.Random
 
-import naogateway.{GatewayEvent, RobotOffline, RobotOnline, RobotRestarted, RobotSnapshot, RobotStatusUpdated}
+import naogateway.api.{GatewayEvent, RobotOffline, RobotOnline, RobotRestarted, RobotSnapshot, RobotStatusUpdated}
 import naogateway.wire._
 
 /** Frames an outsider on the field's WiFi can make without the team key, as pure functions: a made-up keep-alive, one

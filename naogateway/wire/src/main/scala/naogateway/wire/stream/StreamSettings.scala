@@ -67,7 +67,7 @@ final case class StreamSettings(
   private[stream] val initialRtoNanos: Long = initialRto.toNanos
   private[stream] val minRtoNanos: Long = minRto.toNanos
   private[stream] val maxRtoNanos: Long = maxRto.toNanos
-  private[stream] val idleAckNanos: Long = idleAckInterval.toNanos
+  private[naogateway] val idleAckNanos: Long = idleAckInterval.toNanos
 }
 
 /** Defaults and the two standard shapes of the stream. */

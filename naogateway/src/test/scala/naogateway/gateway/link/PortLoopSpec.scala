@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.gateway.link
 
 import java.net.InetSocketAddress
 import java.nio.ByteBuffer
@@ -21,6 +21,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.testkit.TestLoopback
+import naogateway.transport.PortLoop
 
 /** The port loop alone, on loopback sockets: its tasks, its ports, and both together. */
 class PortLoopSpec extends AnyWordSpec with Matchers {

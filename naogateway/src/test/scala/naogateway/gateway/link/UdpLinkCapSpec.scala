@@ -1,4 +1,4 @@
-package naogateway.link
+package naogateway.gateway.link
 
 import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress}
 
@@ -7,8 +7,9 @@ import scala.concurrent.duration._
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway.RateLimitedLog
+import naogateway.transport.RateLimitedLog
 import naogateway.testkit.TestLoopback
+import naogateway.gateway.link.UdpLink
 
 /** The cap a UDP link puts on what it hands its owner: a flood on a port anyone can send to cannot grow a mailbox. */
 class UdpLinkCapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {

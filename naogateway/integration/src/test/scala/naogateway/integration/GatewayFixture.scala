@@ -8,9 +8,12 @@ import akka.actor.testkit.typed.scaladsl.{ActorTestKit, TestProbe}
 import akka.actor.typed.ActorRef
 import com.typesafe.config.ConfigFactory
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{GatewayAddresses, GatewayEvent, GatewayStats, TrafficStats}
+import naogateway.gateway.{Gateway, GatewaySettings}
+import naogateway.gateway.robot.{NoResponseActor, RobotActor, RobotEffects, StreamActor, VisionActor}
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
-import naogateway.testkit.{GatewayInternals, TestLoopback}
+import naogateway.testkit.TestLoopback
 
 /** A gateway on loopback ports chosen by the system, and simulated robots pointed at it; public API only. Call `stop()`
   * at the end of each test: a fixture left running (robots streaming to their gateway) loads the next.
@@ -28,8 +31,8 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
 
   val settings: GatewaySettings = GatewaySettings.fromConfig(config)
   val gateway: ActorRef[GatewayAccess.Command] = testKit.spawn(Gateway(settings))
-  val addresses: Gateway.Addresses = {
-    val probe = testKit.createTestProbe[Gateway.Addresses]()
+  val addresses: GatewayAddresses = {
+    val probe = testKit.createTestProbe[GatewayAddresses]()
     gateway ! GatewayAccess.GetAddresses(probe.ref)
     probe.receiveMessage(10.seconds)
   }
@@ -102,15 +105,15 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     probe.receiveMessage(10.seconds)
   }
 
-  def stats(): Gateway.GatewayStats = {
-    val probe = testKit.createTestProbe[Gateway.GatewayStats]()
+  def stats(): GatewayStats = {
+    val probe = testKit.createTestProbe[GatewayStats]()
     gateway ! GatewayAccess.GetStats(probe.ref)
     probe.receiveMessage()
   }
 
   /** The outbox's traffic figures, asked through the gateway. */
-  def traffic(): Outbox.TrafficStats = {
-    val probe = testKit.createTestProbe[Outbox.TrafficStats]()
+  def traffic(): TrafficStats = {
+    val probe = testKit.createTestProbe[TrafficStats]()
     gateway ! GatewayAccess.GetTraffic(probe.ref)
     probe.receiveMessage(10.seconds)
   }

@@ -1,4 +1,4 @@
-package naogateway.testkit
+package naogateway.integration
 
 import scala.concurrent.Await
 import scala.concurrent.duration._
@@ -8,9 +8,11 @@ import akka.actor.typed.{ActorRef, ActorSystem}
 import akka.util.Timeout
 
 import naogateway.wire.stream.StreamStats
-import naogateway.{Gateway, GatewayAccess, RobotActor, RobotEffects, StreamActor}
+import naogateway.access.GatewayAccess
+import naogateway.gateway.Gateway
+import naogateway.gateway.robot.{RobotActor, RobotEffects, StreamActor}
 
-/** What the gateway's own specs reach past its public protocol ([[naogateway.GatewayAccess]]): the gateway's own
+/** What the gateway's own specs reach past its public protocol ([[naogateway.access.GatewayAccess]]): the gateway's own
   * protocol on the ref its spawner holds, a robot actor and its children; and, for specs and benches outside the
   * gateway's package, a robot's secure stream, whose messages are the gateway's own.
   */

@@ -14,9 +14,10 @@ import ch.qos.logback.core.AppenderBase
 import org.slf4j.LoggerFactory
 
 import naogateway.proto.{RobotHealth, Status}
-import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller.{GameControllerCodec, GameState}
 import naogateway.wire.{HeaderForm, MessageContents}
+import naogateway.testkit.GameControllerCodecSupport
+import naogateway.testkit.TestLoopback
 
 /** What a stranger on the field's WiFi can send a gateway, written from docs/protocol.md: random bytes, mutated frames,
   * keep-alives with invented robot ids or forged contents, and GameController packets. Shared by the hostile-network
@@ -31,7 +32,9 @@ object HostileTraffic {
     val (_, at1) = f.robot(1)
     f.robot(2)
     var online = Set.empty[Int]
-    while (online.size < 2) online += f.awaitEvent(10.seconds) { case naogateway.RobotOnline(id @ (1 | 2), _) => id }
+    while (online.size < 2) online += f.awaitEvent(10.seconds) { case naogateway.api.RobotOnline(id @ (1 | 2), _) =>
+      id
+    }
     at1
   }
 
