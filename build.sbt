@@ -106,10 +106,9 @@ lazy val transport = (project in file("naogateway/transport"))
     notPublished,
     libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j, jeromq) ++ testLibs
   )
-  .dependsOn(testkit % Test)
 
 // The test kit (naogateway.testkit): fixtures the specs of several modules share (free loopback ports, settings
-// tables, hostile datagrams, captured relays, GameController packets) and the tests' logging (logback-test.xml). Its
+// tables, captured relays, GameController packets) and the tests' logging (logback-test.xml). Its
 // code is test code, used only at test scope (`testkit % Test`) and never published; it sees the wire format only,
 // so every module's tests may use it, the gateway's and the simulator's too.
 lazy val testkit = (project in file("naogateway/testkit"))
@@ -163,7 +162,7 @@ lazy val integration = (project in file("naogateway/integration"))
 // real gateway, at test scope). MiddlewareLayerSpec compiles a probe that names a gateway internal against the main
 // classpath and expects scalac to refuse it.
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(api, access, naogateway % Test, wire % "test->test", sim % "test->test", integration % "test->test",
+  .dependsOn(api, access, naogateway % Test, wire % "test->test", sim % Test, integration % "test->test",
     testkit % Test)
   .settings(strictScalac, testSettings)
   .settings(
@@ -229,7 +228,7 @@ lazy val apps = (project in file("apps"))
 // read-only view, and is the package (./sbt dist): bin/naogateway, bin/robotctl (whose offline doctor reads the
 // launcher's config) and bin/teleop, with the Python client.
 lazy val launcher = (project in file("apps/launcher"))
-  .dependsOn(apps % "compile->compile;test->test", sim, integration % "test->test")
+  .dependsOn(apps % "compile->compile;test->test", sim, testkit % Test)
   .enablePlugins(JavaAppPackaging)
   .settings(strictScalac, testSettings)
   .settings(

