@@ -61,7 +61,7 @@ lazy val proto = (project in file("proto"))
 
 // The robots' wire format (frames, messages, RPC, HaViMo, the secure stream, GameController packets): pure
 // code over the protobuf classes. No Akka on its classpath, so none can creep in (wire.NoAkkaSpec checks).
-lazy val wire = (project in file("wire"))
+lazy val wire = (project in file("naogateway/wire"))
   .dependsOn(proto)
   .settings(strictScalac, testSettings)
   .settings(
@@ -70,10 +70,10 @@ lazy val wire = (project in file("wire"))
   )
 
 // What apps may see of the gateway: snapshots, events, failures, vision frames, link, traffic and gateway figures, the
-// recording's figures; plain data over the wire types (postures, groups, values), in the gateway's packages so no
-// import changes. No Akka on its classpath (naogateway.ApiLayerSpec checks; ApiBoundarySpec shows scalac refusing a
-// probe that imports naogateway.Gateway), so no actor internal can creep in.
-lazy val api = (project in file("api"))
+// recording's figures (naogateway.api, naogateway.api.recording); plain data over the wire types (postures, groups,
+// values). No Akka on its classpath (naogateway.api.ApiLayerSpec checks; ApiBoundarySpec shows scalac refusing a
+// probe that imports naogateway.gateway.Gateway), so no actor internal can creep in.
+lazy val api = (project in file("naogateway/api"))
   .dependsOn(wire)
   .settings(strictScalac, testSettings)
   .settings(
@@ -86,7 +86,7 @@ lazy val api = (project in file("api"))
 // RobotAccess), and the restart back-off it reads from its settings; on the api and akka-actor-typed only. The
 // middleware depends on this, not on the gateway; the gateway implements it, wrapping each message into its actors'
 // private commands as it arrives (no extra actor). MiddlewareLayerSpec shows scalac refusing a gateway internal there.
-lazy val access = (project in file("access"))
+lazy val access = (project in file("naogateway/access"))
   .dependsOn(api)
   .settings(strictScalac, testSettings)
   .settings(
@@ -94,30 +94,37 @@ lazy val access = (project in file("access"))
     libraryDependencies ++= Seq(akkaActorTyped) ++ testLibs
   )
 
-// The ZeroMQ socket loop (one thread owning its sockets, woken through a pipe): the gateway's ZeroMQ robot link and
-// the apps' ZeroMQ endpoint both run on it, so it is a module of its own that apps may see without the gateway.
-lazy val zeromq = (project in file("zeromq"))
+// The two socket loops (naogateway.transport): the ZeroMQ loop (one thread owning its sockets, woken through a pipe) and
+// the datagram port with the loop that reads it (one thread that runs an Akka dispatcher's tasks and waits in the
+// selector of the ports attached to it), with the rate-limited log they share. The gateway's robot links and the apps'
+// ZeroMQ endpoint and datagram door all run on them, so they are a module of their own that apps may see without the
+// gateway. No api, no wire: sockets and threads only.
+lazy val transport = (project in file("naogateway/transport"))
   .settings(strictScalac, testSettings)
   .settings(
-    name := "naogateway-zeromq",
+    name := "naogateway-transport",
     notPublished,
     libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j, jeromq) ++ testLibs
   )
 
-// The datagram port and the loop that reads it (one thread that runs an Akka dispatcher's tasks and waits in the
-// selector of the ports attached to it): the gateway's robot port and the apps' datagram door both use it, so it is a
-// module of its own that apps may see without the gateway.
-lazy val port = (project in file("port"))
-  .dependsOn(api)
+// The test kit (naogateway.testkit): fixtures the specs of several modules share (free loopback ports, settings
+// tables, captured relays, GameController packets) and the tests' logging (logback-test.xml). Its
+// code is test code, used only at test scope (`testkit % Test`) and never published; it sees the wire format only,
+// so every module's tests may use it, the gateway's and the simulator's too.
+lazy val testkit = (project in file("naogateway/testkit"))
+  .dependsOn(wire)
   .settings(strictScalac, testSettings)
   .settings(
-    name := "naogateway-port",
+    name := "naogateway-testkit",
     notPublished,
-    libraryDependencies ++= Seq(akkaActorTyped, akkaSlf4j) ++ testLibs
+    // Its code is test code: the test libraries at compile scope (akka-actor brings the config library).
+    libraryDependencies ++= Seq(logback, akkaActorTyped, "org.scalatest" %% "scalatest" % V.scalatest)
   )
 
+// The gateway (naogateway.gateway): the robots' actors in .robot, the GameController's watch and gate in
+// .gamecontroller, the robot links in .link, the recorder in .recording.
 lazy val naogateway = (project in file("naogateway"))
-  .dependsOn(proto, wire, api, access, zeromq, port)
+  .dependsOn(proto, wire, api, access, transport, testkit % Test)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway",
@@ -128,9 +135,9 @@ lazy val naogateway = (project in file("naogateway"))
 
 // The simulator: simulated robots and their firmware, the GS1500M model, the lossy network, the fleet and the
 // simulated GameController. The demo runs it, so it is a jar of its own beside the gateway's, not inside it.
-// Its tests are the simulator's own; they take the gateway's test resources (logback-test.xml) through test->test.
-lazy val sim = (project in file("sim"))
-  .dependsOn(naogateway % "compile->compile;test->test", wire % "compile->compile;test->test")
+// Its tests are the simulator's own; they take wire's GameController vectors and stream test kit through test->test.
+lazy val sim = (project in file("naogateway/sim"))
+  .dependsOn(naogateway, wire % "compile->compile;test->test", testkit % Test)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-sim",
@@ -139,11 +146,11 @@ lazy val sim = (project in file("sim"))
   )
 
 // The gateway's integration specs: the gateway driven end to end by simulated robots over loopback (sbt allows no
-// cycle from naogateway's tests into sim). Test sources only, nothing to publish; its fixtures (GatewayFixture,
-// HostileTraffic, RelayCapture) serve the middleware's and the apps' specs and the bench too.
-lazy val integration = (project in file("integration"))
-  .dependsOn(naogateway % "compile->compile;test->test", sim % "compile->compile;test->test",
-    wire % "compile->compile;test->test")
+// cycle from naogateway's tests into sim). Test sources only, nothing to publish; its two fixtures that start a gateway
+// (GatewayFixture, GatewayInternals) serve the middleware's and the apps' specs and the bench too, through test->test:
+// they need the gateway and the simulator, which the test kit below them cannot see.
+lazy val integration = (project in file("naogateway/integration"))
+  .dependsOn(naogateway, sim % "compile->compile;test->test", wire % "compile->compile;test->test", testkit % Test)
   .settings(strictScalac, testSettings)
   .settings(
     name := "naogateway-integration",
@@ -155,8 +162,8 @@ lazy val integration = (project in file("integration"))
 // real gateway, at test scope). MiddlewareLayerSpec compiles a probe that names a gateway internal against the main
 // classpath and expects scalac to refuse it.
 lazy val robotmiddleware = (project in file("robotmiddleware"))
-  .dependsOn(api, access, naogateway % "test->test", wire % "test->test", sim % "test->test",
-    integration % "test->test")
+  .dependsOn(api, access, naogateway % Test, wire % "test->test", sim % Test, integration % "test->test",
+    testkit % Test)
   .settings(strictScalac, testSettings)
   .settings(
     name := "robotmiddleware",
@@ -181,8 +188,8 @@ lazy val robotmiddleware = (project in file("robotmiddleware"))
 // The apps: the status and web views, the control port, the ZeroMQ endpoint, the ball follower, teleop. They see the
 // middleware and the api; the launcher hands them what they read of the gateway.
 lazy val apps = (project in file("apps"))
-  .dependsOn(api, zeromq, port, robotmiddleware % "compile->compile;test->test", sim % "test->test",
-    integration % "test->test")
+  .dependsOn(api, transport, robotmiddleware % "compile->compile;test->test", sim % "test->test",
+    integration % "test->test", testkit % Test)
   .settings(strictScalac, testSettings)
   .settings(
     name := "apps",
@@ -201,9 +208,10 @@ lazy val apps = (project in file("apps"))
     },
     terminalEnv,
     // The boundary the compiler keeps: apps' main code compiles without the gateway's and the simulator's classes, so
-    // an app that imports a gateway internal (naogateway.Gateway, an actor, the settings) does not build. What apps
-    // may see is the api, the wire format, the middleware (with the access protocol it speaks), the ZeroMQ loop and the
-    // datagram port with its loop;
+    /* an app that imports a gateway internal (naogateway.gateway.Gateway, an actor, the settings) does not build. What
+     * apps */
+    // may see is the api, the wire format, the middleware (with the access protocol it speaks) and the socket loops of
+    // the transport;
     // the launcher hands them the rest. Since the middleware no longer brings the gateway, this drop is a second guard.
     Compile / dependencyClasspath := {
       val internals = Set((naogateway / Compile / classDirectory).value, (sim / Compile / classDirectory).value)
@@ -219,8 +227,8 @@ lazy val apps = (project in file("apps"))
 // (Launcher), checks the machine before it starts (Preflight) and while it runs (Doctor), hands the apps the gateway's
 // read-only view, and is the package (./sbt dist): bin/naogateway, bin/robotctl (whose offline doctor reads the
 // launcher's config) and bin/teleop, with the Python client.
-lazy val launcher = (project in file("launcher"))
-  .dependsOn(apps % "compile->compile;test->test", sim, integration % "test->test")
+lazy val launcher = (project in file("apps/launcher"))
+  .dependsOn(apps % "compile->compile;test->test", sim, testkit % Test)
   .enablePlugins(JavaAppPackaging)
   .settings(strictScalac, testSettings)
   .settings(
@@ -229,9 +237,9 @@ lazy val launcher = (project in file("launcher"))
     // The launcher is the one module with a logging backend at compile scope (its logback.xml); the libraries log
     // through SLF4J only.
     libraryDependencies ++= Seq(logback) ++ testLibs ++ akkaTestLibs,
-    Compile / mainClass := Some("apps.Launcher"),
+    Compile / mainClass := Some("naogateway.launcher.Launcher"),
     // The package (./sbt dist): bin/naogateway for the launcher, and one script for each of these entry points.
-    Compile / discoveredMainClasses := Seq("apps.RobotCtl", "apps.Teleop"),
+    Compile / discoveredMainClasses := Seq("naogateway.launcher.RobotCtl", "apps.Teleop"),
     executableScriptName := "naogateway",
     Universal / packageName := s"naogateway-${version.value}",
     Universal / mappings := (Universal / mappings).value.map {
@@ -256,7 +264,7 @@ lazy val launcher = (project in file("launcher"))
     // Recordings likewise, unless the operator names a directory.
     bashScriptExtraDefines += """[ -n "$NAOGATEWAY_RECORDING_DIR" ] || export NAOGATEWAY_RECORDING_DIR="${app_home}/../recordings"""",
     // robotctl is a short-lived socket client: the quick compiler tier and the serial collector start it faster.
-    bashScriptExtraDefines += """case " $* " in *" -main apps.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; esac""",
+    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; esac""",
     terminalEnv,
     run / fork := true,
     run / connectInput := true,
@@ -264,7 +272,8 @@ lazy val launcher = (project in file("launcher"))
   )
 
 lazy val root = (project in file("."))
-  .aggregate(proto, wire, api, access, zeromq, port, naogateway, sim, integration, robotmiddleware, apps, launcher)
+  .aggregate(proto, wire, api, access, transport, testkit, naogateway, sim, integration, robotmiddleware, apps,
+    launcher)
   .dependsOn(launcher % "compile->compile;test->test")
   .settings(strictScalac, testSettings)
   .settings(
@@ -281,7 +290,7 @@ lazy val root = (project in file("."))
     Test / run / fork := true,
     Test / run / javaOptions ++= Seq("-Xmx2g"),
     // A clone's first app takes minutes (two sbt builds from scratch): ./sbt firstApp runs it, ./sbt test does not.
-    Test / testOptions += Tests.Filter(_ != "integration.FirstAppSpec")
+    Test / testOptions += Tests.Filter(_ != "endtoend.FirstAppSpec")
   )
 
 // ./sbt dist: the installable package, one .tgz archive; its path is printed.
@@ -293,11 +302,11 @@ dist := {
 }
 
 // ./sbt "robotctl status": the command-line client of a running gateway's control port.
-addCommandAlias("robotctl", "launcher/runMain apps.RobotCtl")
+addCommandAlias("robotctl", "launcher/runMain naogateway.launcher.RobotCtl")
 
-// ./sbt firstApp: a newcomer's path in a clone of HEAD (integration.FirstAppSpec): publishLocal, the template copied to a
+// ./sbt firstApp: a newcomer's path in a clone of HEAD (endtoend.FirstAppSpec): publishLocal, the template copied to a
 // folder of its own, its app run against the demo; it must walk robot 2. Minutes long, so CI runs it apart (.ci/run).
-addCommandAlias("firstApp", "root/Test/runMain integration.FirstAppCheck")
+addCommandAlias("firstApp", "root/Test/runMain endtoend.FirstAppCheck")
 
 // ./sbt bench: the benchmark suite; writes target/bench/results.json and prints a table. It stages the package
 // first, because the soak (./sbt "bench soak [minutes]") runs the packaged gateway.

@@ -20,8 +20,9 @@ import com.typesafe.config.{Config, ConfigFactory}
 
 import apps.datagram.{DatagramDoor, DatagramDoorSettings}
 import apps.zeromq.{PythonEnv, ZeroMqEndpoint, ZeroMqSettings}
-import naogateway._
-import naogateway.testkit.TestLoopback
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{CallResult, GatewayAddresses, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.gateway.{Gateway, GatewaySettings}
 import naogateway.wire.{MessageContents, RpcCall}
 import robotmiddleware.cluster.MiddlewareCluster
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
@@ -332,7 +333,7 @@ object CallPathBench extends Benchmark {
     val clusterPort: Int = cluster.selfMember.address.port.get
     private implicit val scheduler: Scheduler = system.scheduler
     private implicit val timeout: Timeout = Timeout(30.seconds)
-    val addresses: Gateway.Addresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
+    val addresses: GatewayAddresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
     val middleware: ActorRef[RobotMiddleware.Command] =
       system.systemActorOf(RobotMiddleware(system, MiddlewareSettings(system)), "middleware",
         RobotMiddleware.dispatcher(MiddlewareSettings(system)))

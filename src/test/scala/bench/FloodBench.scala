@@ -5,7 +5,8 @@ import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.ActorTestKit
 
-import naogateway._
+import naogateway.access.RobotAccess
+import naogateway.api.CallResult
 import naogateway.integration.{GatewayFixture, HostileTraffic}
 import naogateway.wire.RpcCall
 

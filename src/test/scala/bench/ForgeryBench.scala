@@ -17,8 +17,10 @@ import akka.actor.typed.{ActorRef, ActorSystem, Scheduler}
 import akka.util.Timeout
 import com.typesafe.config.ConfigFactory
 
-import naogateway._
-import naogateway.integration.RelayCapture
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{CallResult, GatewayEvent, RobotEvent, RobotSnapshot}
+import naogateway.gateway.{Gateway, GatewaySettings}
+import naogateway.testkit.RelayCapture
 import naogateway.sim.network.ForgedFrames
 import naogateway.sim.{FirmwareSettings, RobotView, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback

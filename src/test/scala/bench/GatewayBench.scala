@@ -24,7 +24,18 @@ import com.typesafe.config.{Config, ConfigFactory}
 import org.slf4j.LoggerFactory
 
 import naogateway.testkit.TestLoopback
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GatewayAddresses,
+  GatewayEvent,
+  GatewayStats,
+  LinkQualityChanged,
+  RobotOffline,
+  RobotOnline,
+  RobotStatusUpdated
+}
+import naogateway.gateway.{Gateway, GatewaySettings}
 import naogateway.proto.Status
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings}
@@ -680,7 +691,7 @@ object GatewayBench extends Benchmark {
       ActorSystem(Gateway(GatewaySettings.fromConfig(config.getConfig("naogateway"))), systemName, config)
     private implicit val scheduler: Scheduler = system.scheduler
     private implicit val timeout: Timeout = Timeout(30.seconds)
-    val addresses: Gateway.Addresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
+    val addresses: GatewayAddresses = Await.result(system.ask(GatewayAccess.GetAddresses(_)), 30.seconds)
 
     def subscribe(subscriber: ActorRef[GatewayEvent]): Unit = system ! GatewayAccess.Subscribe(subscriber)
 
@@ -691,7 +702,7 @@ object GatewayBench extends Benchmark {
       Await.result(robot.ask[RobotAccess.Opened](RobotAccess.Open(_)), 30.seconds)
     }
 
-    def stats(): Gateway.GatewayStats = Await.result(system.ask(GatewayAccess.GetStats(_)), 30.seconds)
+    def stats(): GatewayStats = Await.result(system.ask(GatewayAccess.GetStats(_)), 30.seconds)
 
     def stop(): Unit = {
       system.terminate()

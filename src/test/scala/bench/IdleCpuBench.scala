@@ -70,7 +70,7 @@ object IdleCpuBench extends Benchmark {
         val javaBin = s"${System.getProperty("java.home")}/bin/java"
         val logging =
           Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
-        Seq(javaBin) ++ logging ++ Seq("-cp", System.getProperty("java.class.path"), "apps.Launcher")
+        Seq(javaBin) ++ logging ++ Seq("-cp", System.getProperty("java.class.path"), "naogateway.launcher.Launcher")
       }
     progress(s"demo: ${command.head}")
     val builder = new ProcessBuilder(command.asJava)

@@ -11,7 +11,7 @@ import scala.jdk.OptionConverters._
 object Packaged {
 
   /** The package as `launcher/stage` leaves it (the `bench` alias stages it first). */
-  val stage: Path = Paths.get("launcher", "target", "universal", "stage").toAbsolutePath
+  val stage: Path = Paths.get("apps", "launcher", "target", "universal", "stage").toAbsolutePath
 
   /** One of the package's start scripts, e.g. `naogateway` or `robotctl`. */
   def bin(script: String): Path = stage.resolve("bin").resolve(script)

@@ -15,16 +15,18 @@ import akka.actor.typed.{ActorRef, ActorSystem, Scheduler}
 import akka.util.Timeout
 import com.typesafe.config.ConfigFactory
 
-import apps.RobotCtl
+import naogateway.launcher.RobotCtl
 import apps.control.{ControlServer, ControlSettings, FleetStub}
 import naogateway.testkit.TestLoopback
 import naogateway.sim.{Fleet, FleetSettings}
-import naogateway.{Gateway, GatewayAccess, GatewaySettings}
+import naogateway.access.GatewayAccess
+import naogateway.gateway.{Gateway, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
+import naogateway.api.GatewayAddresses
 
-/** `robotctl status` as an operator runs it: a fresh JVM (`java -cp <this classpath> apps.RobotCtl status`) against a
-  * gateway, middleware and control port in this JVM, over loopback. Wall time from process start to exit, median of
-  * [[Runs]] runs after one warm-up run:
+/** `robotctl status` as an operator runs it: a fresh JVM (`java -cp <this classpath> naogateway.launcher.RobotCtl
+  * status`) against a gateway, middleware and control port in this JVM, over loopback. Wall time from process start to
+  * exit, median of [[Runs]] runs after one warm-up run:
   *
   *   - `robotctl_status_wall_ms`: three simulated robots (the demo's fleet), default JVM options.
   *   - `robotctl_status_wall_ms_c1`: the same with `-XX:TieredStopAtLevel=1 -XX:+UseSerialGC`, options that suit a
@@ -57,7 +59,7 @@ object RobotCtlBench extends Benchmark {
       val demo = addressOf(system.systemActorOf(ControlServer(middleware, settings), "control"))
       val thousand =
         addressOf(system.systemActorOf(ControlServer.withInterface(new FleetStub(1000), settings), "control-1000"))
-      val robots = Await.result(gateway.ask[Gateway.Addresses](GatewayAccess.GetAddresses(_)), 30.seconds).robots
+      val robots = Await.result(gateway.ask[GatewayAddresses](GatewayAccess.GetAddresses(_)), 30.seconds).robots
       Await.result(
         Fleet.start(system,
           FleetSettings(new InetSocketAddress("127.0.0.1", robots.getPort), Vector(1, 2, 3),
@@ -98,10 +100,13 @@ object RobotCtlBench extends Benchmark {
     }
   }
 
-  /** The median wall time of `java <jvmOptions> -cp <classpath> apps.RobotCtl <args>`, in ms, after a warm-up run. */
+  /** The median wall time of `java <jvmOptions> -cp <classpath> naogateway.launcher.RobotCtl <args>`, in ms, after a
+    * warm-up run.
+    */
   private def wallMillis(jvmOptions: Seq[String], args: Seq[String], expectExit: Int): Double = {
     val java = s"${System.getProperty("java.home")}/bin/java"
-    val command = (java +: jvmOptions) ++ Seq("-cp", System.getProperty("java.class.path"), "apps.RobotCtl") ++ args
+    val command =
+      (java +: jvmOptions) ++ Seq("-cp", System.getProperty("java.class.path"), "naogateway.launcher.RobotCtl") ++ args
     def once(): Double = {
       val start = System.nanoTime()
       val process = new ProcessBuilder(command.asJava)

@@ -3,15 +3,16 @@ package bench
 import scala.collection.immutable.ListMap
 import scala.concurrent.duration._
 
-import naogateway.{ClockEstimate, ClockSync}
+import naogateway.api.ClockEstimate
+import naogateway.gateway.robot.ClockSync
 import naogateway.sim.RobotClock
 import naogateway.sim.network.{Decision, Direction, Impairment, ImpairmentModel}
 
-/** The gateway's estimate of robots' clocks from keep-alives alone (`naogateway.ClockSync`), against simulated robot
-  * clocks of known offset and drift ([[RobotClock]]), their keep-alives passing the lossy network's impairment model
-  * (20 % loss, 0-20 ms jitter, the `LossyNetwork`'s own decision function) in simulated time: [[Robots]] robots, each
-  * with a random drift within ±200 ppm and offset, keep-alives every 200 ms for [[Minutes]] minutes, the robot's send
-  * slot itself 0-2 ms late (its main loop).
+/** The gateway's estimate of robots' clocks from keep-alives alone (`naogateway.gateway.robot.ClockSync`), against
+  * simulated robot clocks of known offset and drift ([[RobotClock]]), their keep-alives passing the lossy network's
+  * impairment model (20 % loss, 0-20 ms jitter, the `LossyNetwork`'s own decision function) in simulated time:
+  * [[Robots]] robots, each with a random drift within ±200 ppm and offset, keep-alives every 200 ms for [[Minutes]]
+  * minutes, the robot's send slot itself 0-2 ms late (its main loop).
   *
   *   - `timesync_error_ms_p95`: the 95th percentile of |estimate − truth| over every estimate after each robot's first
   *     30 s (the moment the robot's clock read the newest keep-alive's timestamp, on the gateway's clock).

@@ -18,7 +18,8 @@ import com.typesafe.config.ConfigFactory
 import spray.json._
 
 import apps.web.{Browser, FoxgloveFeed, WebDemo, WebSettings}
-import naogateway.{GameStateUpdated, GatewayAccess, GatewayEvent}
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameStateUpdated, GatewayEvent}
 
 /** What the web view costs (docs/web.md, "What it costs"): the demo of [[WebDemo]] (three simulated robots with the
   * faithful link, the simulated GameController, gateway and middleware) in one JVM, first without the web view's

@@ -19,12 +19,14 @@ import akka.stream.scaladsl.{Keep, Sink}
 import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import apps.testkit.RobotRig
-import naogateway.testkit.{TestLoopback, TestStream}
+import apps.RobotRig
+import naogateway.integration.TestStream
+import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller.GameControllerVectors
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
-import naogateway.{RobotSnapshot, StreamActor, VisionFrame}
+import naogateway.api.{RobotSnapshot, VisionFrame}
+import naogateway.gateway.robot.StreamActor
 import robotmiddleware.RobotInterface
 
 /** The gateway's configuration for the C robots: stream window 4 (the robots are built with WINDOW=4), one robot that
@@ -73,7 +75,7 @@ class FirmwarePosixSpec
     with LogCapturing
     with BeforeAndAfterAll {
   import FirmwarePosixSpec._
-  import apps.testkit.RobotCalls._
+  import apps.RobotCalls._
 
   override def afterAll(): Unit = {
     rig.close()
@@ -322,24 +324,24 @@ class FirmwarePosixSpec
 
     "serve its Dynamixel bus to the official DynamixelSDK through the gateway's bus bridge (protocol.md 6.9)" in {
       apps.zeromq.PythonEnv.python()
-      apps.busbridge.SdkBus.socat()
+      apps.SdkBus.socat()
       // The robot reads the emulated bus (firmware/tools/busmodel.c) as its own; the gateway serves it on loopback.
       val base = {
         val free = new java.net.ServerSocket(0, 1, java.net.InetAddress.getLoopbackAddress)
         try free.getLocalPort - BusId
         finally free.close()
       }
-      val bridge = spawn(naogateway.BusBridgeServer(rig.gateway,
-          naogateway.BusBridgeSettings(enabled = true, basePort = base), None))
+      val bridge = spawn(naogateway.gateway.BusBridgeServer(rig.gateway,
+          naogateway.gateway.BusBridgeSettings(enabled = true, basePort = base), None))
       val r = new CRobot(BusId, developmentAddresses(BusId), env = Map("FR_POSIX_BUS" -> "model"))
       try {
         r.awaitOnline()
         eventually(timeout(20.seconds)) { new java.net.Socket("127.0.0.1", base + BusId).close() }
         // The probe held the one tool's place; the bridge frees it when it sees the probe gone.
         Thread.sleep(1000)
-        apps.busbridge.SdkBus.throughPty(base + BusId) { device =>
+        apps.SdkBus.throughPty(base + BusId) { device =>
           // Over the bridge a round trip crosses the link twice: the SDK's packet timeout is raised (README).
-          val (code, out) = apps.busbridge.SdkBus.run(device, Seq("--latency-ms", "250"))
+          val (code, out) = apps.SdkBus.run(device, Seq("--latency-ms", "250"))
           withClue(s"SDK:\n$out\nrobot output:\n${r.output}\n") {
             code shouldBe 0
             (1 to 18).foreach(id => out should include(s""""$id": 12"""))

@@ -14,11 +14,11 @@ import akka.stream.scaladsl.Sink
 import org.scalatest.BeforeAndAfterAll
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import apps.testkit.RobotRig
+import apps.RobotRig
 import naogateway.sim.gs1500m.{OverflowExperiment, Remote}
 import naogateway.testkit.TestLoopback
 import naogateway.wire.{MessageContents, Posture, RpcValue}
-import naogateway.{RobotSnapshot, StreamActor}
+import naogateway.api.RobotSnapshot
 import robotmiddleware.RobotInterface
 
 /** The gateway's configuration for the board: its defaults (stream window 1, as the image is built), but a robot is
@@ -50,7 +50,7 @@ class FirmwareQemuSpec
     with LogCapturing
     with BeforeAndAfterAll {
   import FirmwareQemuSpec._
-  import apps.testkit.RobotCalls._
+  import apps.RobotCalls._
 
   private def image(name: String): File = {
     FirmwareBuild.make(this, Seq(s"build/qemu/$name.elf"), missing = () => FirmwareBuild.missingForArm())

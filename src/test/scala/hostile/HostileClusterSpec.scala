@@ -21,8 +21,8 @@ import org.scalatest.concurrent.ScalaFutures
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.GatewayEvent
-import naogateway.RobotAccess
+import naogateway.api.GatewayEvent
+import naogateway.access.RobotAccess
 import robotmiddleware.cluster.MiddlewareClusterSpec.{appOverrides, fakeGateway, fakeRobot, gatewayOverrides}
 import robotmiddleware.cluster.{MiddlewareCluster, TeamKeys}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotMiddleware}

@@ -10,7 +10,9 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.GatewayAccess
+import naogateway.api.{GameSource, GameStateUpdated}
+import naogateway.gateway.Rejection
 import naogateway.integration.GatewayFixture
 import naogateway.testkit.TestLoopback
 import naogateway.wire.gamecontroller._

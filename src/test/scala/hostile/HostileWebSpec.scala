@@ -18,10 +18,11 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import apps.control.{ControlServer, ControlSettings}
 import apps.web.{Browser, WebDemo, WebSettings}
-import naogateway.VisionActor.{GridOption, RegionsOption}
+import naogateway.gateway.robot.VisionActor.{GridOption, RegionsOption}
 import naogateway.proto.{RobotHealth, Status}
 import naogateway.wire.{HeaderForm, MessageContents}
-import naogateway.{Gateway, GatewayAccess, Printable, RobotSnapshot}
+import naogateway.access.GatewayAccess
+import naogateway.api.{GatewayAddresses, Printable, RobotSnapshot}
 
 /** The web view against what a stranger can do from the operator's own browser: a page of another origin (another
   * loopback port) cannot open `/ws` (checked in headless Chromium), no WebSocket opens with a foreign `Origin`, and
@@ -158,7 +159,7 @@ class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
         ),
         HeaderForm.Legacy
       ).toOption.get
-      val robotPort = Await.result(guarded.gateway.ask[Gateway.Addresses](GatewayAccess.GetAddresses(_))(
+      val robotPort = Await.result(guarded.gateway.ask[GatewayAddresses](GatewayAccess.GetAddresses(_))(
           Timeout(10.seconds), system.scheduler), 10.seconds).robots.getPort
       // The stranger, on a loopback address of its own, keeps sending the robot's keep-alive.
       val stranger = new java.net.DatagramSocket(new java.net.InetSocketAddress("127.0.0.250", 0))
@@ -217,8 +218,8 @@ class HostileWebSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyW
         forge()
         val out = Vector.newBuilder[String]
         val err = Vector.newBuilder[String]
-        apps.RobotCtl.run(Seq("--control", s"127.0.0.1:$controlPort", "status"), _ => None, out += _,
-          err += _) shouldBe apps.RobotCtl.ExitOk
+        naogateway.launcher.RobotCtl.run(Seq("--control", s"127.0.0.1:$controlPort", "status"), _ => None, out += _,
+          err += _) shouldBe naogateway.launcher.RobotCtl.ExitOk
         val printed = out.result()
         printed.exists(l => l.startsWith("42") && l.contains(shown)) shouldBe true
         (printed ++ err.result()).exists(_.exists(Printable.control)) shouldBe false

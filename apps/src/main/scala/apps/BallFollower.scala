@@ -9,7 +9,7 @@ import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
 import akka.stream.scaladsl.Sink
 
-import naogateway.VisionFrame
+import naogateway.api.VisionFrame
 import naogateway.wire.Posture
 import robotmiddleware.{AppEvent, RobotInterface}
 

@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
+import naogateway.api.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
 import naogateway.wire.{Posture, RobotReport}
 import robotmiddleware.ServoLimits
 

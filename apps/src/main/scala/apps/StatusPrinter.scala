@@ -9,7 +9,7 @@ import akka.actor.typed.{Behavior, PostStop, SupervisorStrategy}
 import com.typesafe.config.Config
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{GameSource, GatewayStats, GatewayView, Printable, RobotLinks, RobotSnapshot, TrafficStats}
+import naogateway.api.{GameSource, GatewayStats, GatewayView, Printable, RobotLinks, RobotSnapshot, TrafficStats}
 import robotmiddleware.ServoLimits
 
 /** Prints the launcher's status: a redrawn screen on a terminal, one line per change otherwise. */

@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.{GameSource, GatewayStats, LinkStats, Printable, RobotSnapshot, SigningState, TrafficStats}
+import naogateway.api.{GameSource, GatewayStats, LinkStats, Printable, RobotSnapshot, SigningState, TrafficStats}
 import robotmiddleware.ServoLimits
 import naogateway.wire.gamecontroller.{
   ControlData2014,

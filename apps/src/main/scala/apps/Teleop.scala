@@ -78,7 +78,7 @@ object Teleop {
         case scala.util.Success(_) => out.println(s"robot $robotId: $what")
         // The failure may carry the robot's own error text: shown with its control characters replaced.
         case scala.util.Failure(e) =>
-          out.println(s"robot $robotId: $what failed: ${naogateway.Printable.text(e.getMessage)}")
+          out.println(s"robot $robotId: $what failed: ${naogateway.api.Printable.text(e.getMessage)}")
       }
 
     report("leases taken", robot.acquire(robotId, ActuatorGroup.Walk, ActuatorGroup.Head))

@@ -7,7 +7,7 @@ import org.scalatest.wordspec.AnyWordSpec
 import spray.json._
 
 import apps.web.WebJson
-import naogateway.{LinkQuality, Printable, RobotSnapshot}
+import naogateway.api.{LinkQuality, Printable, RobotSnapshot}
 
 /** A robot whose role and agent carry terminal escape sequences (a stranger's forged keep-alive): the status lines and
   * the page show them with every control character replaced.
@@ -37,10 +37,10 @@ class PrintableViewsSpec extends AnyWordSpec with Matchers {
   "Printable text" should {
     "replace every C0, DEL and C1 character (ESC and the 8-bit CSI included) and keep the rest" in {
       val role = "keeper\u001b]0;owned\u0007\u001b[2J\u009b31m\r\nDEL\u007f tab\t"
-      val shown = naogateway.Printable.text(role)
-      shown.exists(naogateway.Printable.control) shouldBe false
+      val shown = naogateway.api.Printable.text(role)
+      shown.exists(naogateway.api.Printable.control) shouldBe false
       shown shouldBe "keeper\\u001b]0;owned\\u0007\\u001b[2J\\u009b31m\\u000d\\u000aDEL\\u007f tab\\u0009"
-      naogateway.Printable.text("Läufer ⚽ 1") shouldBe "Läufer ⚽ 1"
+      naogateway.api.Printable.text("Läufer ⚽ 1") shouldBe "Läufer ⚽ 1"
     }
   }
 }

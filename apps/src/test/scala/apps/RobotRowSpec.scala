@@ -6,7 +6,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.Posture
-import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
+import naogateway.api.{ClockEstimate, LinkQuality, LinkStats, RobotSnapshot, SigningState}
 
 class RobotRowSpec extends AnyWordSpec with Matchers {
 

@@ -74,7 +74,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       val fixture = new GatewayFixture(testKit, competition)
       try {
         val lines = new ConcurrentLinkedQueue[String]()
-        val view = naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system)
+        val view = naogateway.gateway.GatewayReadView(fixture.gateway, 3.seconds)(system)
         spawn(StatusPrinter(view, 100.millis, StatusPrinter.LineOutput(l => lines.add(l))))
         fixture.robot(1)
         def printed = lines.asScala.toVector
@@ -104,7 +104,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       val fixture = new GatewayFixture(testKit, competition)
       try {
         val screen = new RecordingScreen
-        spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
+        spawn(StatusPrinter(naogateway.gateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
         fixture.robot(1)
         def frame = screen.frame.get
         /* "loss" shows a figure only once the gateway's read-only view answered GetLinkStats with the robot's link
@@ -137,7 +137,7 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
             if (draws.incrementAndGet() == 1) throw new IllegalStateException("the terminal went away")
           def close(): Unit = ()
         }
-        spawn(StatusPrinter(naogateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
+        spawn(StatusPrinter(naogateway.gateway.GatewayReadView(fixture.gateway, 3.seconds)(system), 100.millis, screen))
         awaitTrue("drawn after the restart")(draws.get >= 3)
       } finally fixture.stop()
     }

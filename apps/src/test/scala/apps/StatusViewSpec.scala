@@ -16,7 +16,7 @@ import naogateway.wire.gamecontroller.{
   SecondaryGameState
 }
 import naogateway.wire.Posture
-import naogateway.{LinkQuality, LinkStats, Outbox, RobotSnapshot, SigningState}
+import naogateway.api.{LinkQuality, LinkStats, RobotSnapshot, SigningState, TrafficStats}
 
 class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
   import StatusViewSpec._
@@ -27,7 +27,7 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       online = true, quality = LinkQuality.Good)
   private val link = LinkStats(1, 10, 10, 300, 300, Some(0.4), 0.0, 0, Map.empty)
   private val traffic =
-    Outbox.TrafficStats(1500, 500, 125000, Map.empty, 10, 10, 0, 0, gameRunning = false, competition = false)
+    TrafficStats(1500, 500, 125000, Map.empty, 10, 10, 0, 0, gameRunning = false, competition = false)
 
   private def game(file: String): GameControlData =
     GameControllerCodec.decodeControl(vector(file)).fold(e => fail(s"$file does not decode: ${e.describe}"), identity)
@@ -58,23 +58,23 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       StatusView.changes(StatusModel.empty, first.copy(robots = Vector(unsigned))).head should include("unsigned")
     }
     "show the recording's figures or the replay's progress on the screen, and nothing when neither runs" in {
-      val plain = naogateway.Gateway.GatewayStats(10, 0, 0, Map.empty, 1)
+      val plain = naogateway.api.GatewayStats(10, 0, 0, Map.empty, 1)
       StatusView.recordingLine(None) shouldBe None
       StatusView.recordingLine(Some(plain)) shouldBe None
-      val recording = plain.copy(recording = naogateway.recording.RecordingStats(enabled = true, 2, 1234, 5, 0,
+      val recording = plain.copy(recording = naogateway.api.recording.RecordingStats(enabled = true, 2, 1234, 5, 0,
         Some("/var/naogateway/recordings/naogateway-20260101-120000-2.mcap")))
       StatusView.recordingLine(Some(recording)) shouldBe
         Some("recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
-      val replay = plain.copy(replay = Some(naogateway.link.Replay.Progress(300, 7, finished = true)))
+      val replay = plain.copy(replay = Some(naogateway.api.ReplayProgress(300, 7, finished = true)))
       StatusView.recordingLine(Some(replay)) shouldBe Some("replay: 300 datagrams fed, 7 outbound discarded, finished")
       StatusView.render(StatusModel.empty.copy(gateway = Some(recording))) should contain(
         "recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
     }
     "show what the recording directory keeps and what retention deleted" in {
       val kept =
-        naogateway.recording.RetentionStatus(12, 96L * 1024 * 1024, 3, 30L * 1024 * 1024, "20.0 GiB, 14 days", None)
-      val stats = naogateway.Gateway.GatewayStats(10, 0, 0, Map.empty, 1).copy(recording =
-        naogateway.recording.RecordingStats(enabled = true, 2, 1234, 0, 0,
+        naogateway.api.recording.RetentionStatus(12, 96L * 1024 * 1024, 3, 30L * 1024 * 1024, "20.0 GiB, 14 days", None)
+      val stats = naogateway.api.GatewayStats(10, 0, 0, Map.empty, 1).copy(recording =
+        naogateway.api.recording.RecordingStats(enabled = true, 2, 1234, 0, 0,
           Some("recordings/naogateway-20260101-120000-2.mcap"), Some(kept)))
       StatusView.recordingLine(Some(stats)) shouldBe Some("recording: 1234 messages in 2 file(s), 0 dropped, now " +
         "naogateway-20260101-120000-2.mcap; kept 12 file(s), 96.0 MiB (limits 20.0 GiB, 14 days); 3 deleted so far")
@@ -194,7 +194,7 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       lines(1) should not include "PENALISED"
     }
     "show the message budget and the warnings on the screen, and print a warning line when one first appears" in {
-      val quiet = naogateway.Gateway.GameSource("127.0.0.1/32", None, 0,
+      val quiet = naogateway.api.GameSource("127.0.0.1/32", None, 0,
         Some("team messages (team 12, UDP 10012): 12000 of 12000 left"))
       val twoGcs = quiet.copy(warnings = Vector(
         "2 GameControllers on this field: game state from 127.0.0.1:3838 only; 127.0.0.2:3838 (untrusted, ignored)"))
@@ -209,14 +209,14 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
     "show, in the monitor role, the true state's age and each forwarded robot status beside the robot lines" in {
       val status =
         naogateway.wire.gamecontroller.ReturnStatus(3, 12, fallen = true, (1000f, -500f, 1.5f), 2f, (250f, -100f))
-      val source = naogateway.Gateway.GameSource(
+      val source = naogateway.api.GameSource(
         "127.0.0.1/32",
         None,
         0,
         trueStateAgeMillis = Some(400),
         forwarded = Vector(
-          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.23"), status, 0L),
-          naogateway.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.24"),
+          naogateway.api.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.23"), status, 0L),
+          naogateway.api.ForwardedStatus(java.net.InetAddress.getByName("10.0.0.24"),
             status.copy(player = 4, fallen = false, ballAge = -1f), 0L)
         )
       )
@@ -278,7 +278,7 @@ object StatusViewSpec {
     loss <- genDouble
   } yield LinkStats(robotId, 0, 0, 0, 0, rtt, loss, 0, Map.empty)
 
-  private val genTraffic: Gen[Outbox.TrafficStats] = for {
+  private val genTraffic: Gen[TrafficStats] = for {
     out <- Arbitrary.arbitrary[Long]
     in <- Arbitrary.arbitrary[Long]
     budget <- Gen.oneOf(Gen.const(0), Arbitrary.arbitrary[Int])
@@ -287,7 +287,7 @@ object StatusViewSpec {
     running <- Arbitrary.arbitrary[Boolean]
     competition <- Arbitrary.arbitrary[Boolean]
     reason <- Gen.option(Gen.alphaStr)
-  } yield Outbox.TrafficStats(out, in, budget, Map.empty, 0, 0, refused, dropped, running, competition, reason)
+  } yield TrafficStats(out, in, budget, Map.empty, 0, 0, refused, dropped, running, competition, reason)
 
   /** A real packet with arbitrary values in the fields the view shows. */
   private val gen2014: Gen[GameControlData] = for {

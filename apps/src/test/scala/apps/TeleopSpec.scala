@@ -1,6 +1,6 @@
 package apps
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import naogateway.wire.ActuatorGroup
 
@@ -13,7 +13,7 @@ import akka.{Done, NotUsed}
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.api.{LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.wire.Posture

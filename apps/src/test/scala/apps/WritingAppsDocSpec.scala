@@ -11,7 +11,7 @@ import scala.tools.nsc.{Global, Settings}
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.{RobotFailure, RobotSnapshot, VisionFrame}
+import naogateway.api.{RobotFailure, RobotSnapshot, VisionFrame}
 import naogateway.wire.HaViMoRegion
 
 /** docs/writing-apps.md is the API a team reads: its first app is the template's, as compiled; its tables name the

@@ -3,7 +3,7 @@ package robotmiddleware
 import akka.actor.typed.scaladsl.Behaviors
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.BusBridgeClient
+import naogateway.api.BusBridgeClient
 import naogateway.wire.ActuatorGroup
 
 /** The gateway's bus bridge as an app at the middleware (docs/protocol.md 6.9): while a tool is connected to a robot's

@@ -6,7 +6,7 @@ import scala.jdk.DurationConverters._
 import akka.actor.typed.ActorSystem
 import com.typesafe.config.Config
 
-import naogateway.RestartBackoff
+import naogateway.access.RestartBackoff
 
 /** Settings of the middleware (`robotmiddleware { ... }`). */
 final case class MiddlewareSettings(

@@ -9,7 +9,19 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerSch
 import akka.actor.typed.{ActorRef, Behavior}
 import akka.util.Timeout
 
-import naogateway._
+import naogateway.access.RobotAccess
+import naogateway.api.{
+  CallResult,
+  LinkStats,
+  Priority,
+  RobotEvent,
+  RobotFailure,
+  RobotOffline,
+  RobotOnline,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  VisionFrame
+}
 import naogateway.wire.{Posture, RpcCall, RpcMethod, RpcValue}
 import robotmiddleware.GuardState.{BatteryChange, SafetyStep}
 

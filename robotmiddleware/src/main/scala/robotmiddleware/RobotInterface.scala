@@ -1,6 +1,6 @@
 package robotmiddleware
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import naogateway.wire.ActuatorGroup
 
@@ -17,7 +17,7 @@ import akka.stream.typed.scaladsl.ActorSource
 import akka.util.Timeout
 import akka.{Done, NotUsed}
 
-import naogateway.{CallResult, LinkStats, RobotEvent, RobotSnapshot, ServoReadings, VisionFrame}
+import naogateway.api.{CallResult, LinkStats, RobotEvent, RobotSnapshot, ServoReadings, VisionFrame}
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.{GameControlData, PlayerPenalty}
 

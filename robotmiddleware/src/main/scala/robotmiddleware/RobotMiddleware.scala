@@ -6,7 +6,19 @@ import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector}
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GameStateUpdated,
+  GatewayEvent,
+  LinkStats,
+  RobotEvent,
+  RobotFailure,
+  RobotForgotten,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  VisionFrame
+}
 import naogateway.wire.gamecontroller.GameControlData
 
 /** The one middleware per gateway: apps register here, and every decision about a robot is taken by its guard. */

@@ -1,6 +1,6 @@
 package robotmiddleware
 
-import naogateway.ServoReading
+import naogateway.api.ServoReading
 
 /** When a servo of the robot's telemetry is worth a warning (settings `robotmiddleware.servos`): `hot` at or above
   * `hotCelsius`, `lowVoltage` below `lowVolts`. Silent servos are neither: nothing of them is known.

@@ -8,7 +8,7 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.api.{RobotFailure, RobotOnline}
 import naogateway.integration.GatewayFixture
 import naogateway.sim.{ReceivedCall, SimulatedRobot}
 import naogateway.wire.{ActuatorGroup, RpcValue}

@@ -44,11 +44,12 @@ class MiddlewareLayerSpec extends AnyWordSpec with Matchers {
 
   "The middleware's main classpath" should {
     "hold the api and the access protocol but none of the gateway's or the simulator's classes" in {
-      mainClasspath.exists(holds(_, "naogateway/RobotSnapshot.class")) shouldBe true
-      mainClasspath.exists(holds(_, "naogateway/GatewayAccess$.class")) shouldBe true
+      mainClasspath.exists(holds(_, "naogateway/api/RobotSnapshot.class")) shouldBe true
+      mainClasspath.exists(holds(_, "naogateway/access/GatewayAccess$.class")) shouldBe true
       mainClasspath.exists(holds(_, "robotmiddleware/RobotMiddleware$.class")) shouldBe true
       mainClasspath.filter(e =>
-        Seq("naogateway/Gateway$.class", "naogateway/RobotActor$.class", "naogateway/sim/Fleet$.class").exists(
+        Seq("naogateway/gateway/Gateway$.class", "naogateway/gateway/robot/RobotActor$.class",
+          "naogateway/sim/Fleet$.class").exists(
           holds(e, _))) shouldBe empty
     }
   }
@@ -58,7 +59,8 @@ class MiddlewareLayerSpec extends AnyWordSpec with Matchers {
       compileErrors(
         """package probe
           |import akka.actor.typed.ActorRef
-          |import naogateway.{CallResult, GatewayAccess, RobotAccess, RobotSnapshot}
+          |import naogateway.access.{GatewayAccess, RobotAccess}
+          |import naogateway.api.{CallResult, RobotSnapshot}
           |import naogateway.wire.RpcCall
           |object Probe {
           |  def ask(g: ActorRef[GatewayAccess.Command], r: ActorRef[Option[ActorRef[RobotAccess.Command]]]): Unit =
@@ -72,17 +74,18 @@ class MiddlewareLayerSpec extends AnyWordSpec with Matchers {
 
     "be refused when it names a gateway internal" in {
       val probes = Seq(
-        "Gateway" -> "object Probe { val g = naogateway.Gateway }",
-        "RobotActor" -> "object Probe { def c(r: akka.actor.typed.ActorRef[naogateway.RobotActor.Command]) = r }",
-        "ResponseActor" -> "import naogateway.ResponseActor\nobject Probe { val r = ResponseActor }",
-        "NoResponseActor" -> "object Probe { val s = naogateway.NoResponseActor }",
+        "Gateway" -> "object Probe { val g = naogateway.gateway.Gateway }",
+        "RobotActor" -> "object Probe { def c(r: akka.actor.typed.ActorRef[naogateway.gateway.robot.RobotActor.Command]) = r }",
+        "ResponseActor" -> "import naogateway.gateway.robot.ResponseActor\nobject Probe { val r = ResponseActor }",
+        "NoResponseActor" -> "object Probe { val s = naogateway.gateway.robot.NoResponseActor }",
         "GatewaySettings" ->
-          "object Probe { def s(system: akka.actor.typed.ActorSystem[_]) = naogateway.GatewaySettings(system) }"
+          "object Probe { def s(system: akka.actor.typed.ActorSystem[_]) = naogateway.gateway.GatewaySettings(system) }"
       )
       probes.foreach { case (name, text) =>
         val errors = compileErrors(s"package probe\n$text\n")
         withClue(text)(errors should not be empty)
-        errors.mkString("\n") should include(name)
+        // The gateway's package is not on that classpath at all, or the name is not in the package scalac sees.
+        errors.mkString("\n") should (include(name) or include("object gateway is not a member of package naogateway"))
       }
     }
   }

@@ -5,7 +5,7 @@ import scala.concurrent.duration._
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.RestartBackoff
+import naogateway.access.RestartBackoff
 import naogateway.testkit.SettingsTables
 
 /** The middleware's keys: their defaults in reference.conf, and a bad value's error naming the key

@@ -4,7 +4,7 @@ import akka.actor.typed.ActorRef
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
 
 /** What the middleware's package can send the gateway and a robot, checked by the compiler (ScalaTest's compile-time
   * assertions typecheck each snippet here, outside package naogateway): the narrowed refs take exactly the middleware's

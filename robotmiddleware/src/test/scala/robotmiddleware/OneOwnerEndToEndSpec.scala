@@ -11,7 +11,8 @@ import akka.actor.typed.ActorRef
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.testkit.TestLoopback
-import naogateway._
+import naogateway.access.RobotAccess
+import naogateway.api.{CallResult, RobotOnline, VisionFrame}
 import naogateway.integration.GatewayFixture
 import naogateway.sim.network.{Impairment, LossyNetwork}
 import naogateway.sim.{ReceivedCall, SimulatedRobot}

@@ -7,7 +7,7 @@ import akka.actor.testkit.typed.scaladsl.{ActorTestKit, LogCapturing, ScalaTestW
 import org.scalatest.time.{Seconds, Span}
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 import naogateway.wire.ActuatorGroup
 
 /** The facade fails every future with a `RobotFailure` (docs/writing-apps.md, Failures), and never throws. */
@@ -45,7 +45,7 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       PlayerPenalty(Hsl20Penalty.MotionInStop, 13).describe shouldBe "motion in stop, 13 s left"
     }
     "stream a robot's servo telemetry from its snapshots: each new one once, none while it has none" in {
-      import naogateway.{RobotSnapshot, ServoReading, ServoReadings}
+      import naogateway.api.{RobotSnapshot, ServoReading, ServoReadings}
       val (interface, middleware) = connected()
       val seen = createTestProbe[ServoReadings]()
       interface.servos(2).runWith(akka.stream.scaladsl.Sink.foreach(seen.ref ! _))(akka.stream.Materializer(system))
@@ -117,15 +117,15 @@ class RobotInterfaceSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
       val (interface, middleware) = connected()
       val head = interface.head(4, 0.1, 0.0)
       middleware.expectMessageType[RobotMiddleware.Execute].replyTo !
-        naogateway.CallResult(4, "motion.head", Left(RobotFailure.Superseded(4, "motion.head")))
+        naogateway.api.CallResult(4, "motion.head", Left(RobotFailure.Superseded(4, "motion.head")))
       head.failed.futureValue shouldBe RobotFailure.Overloaded(4, "motion.head replaced by a newer one")
       val ping = interface.call(4, "system", "ping")
       middleware.expectMessageType[RobotMiddleware.Execute].replyTo !
-        naogateway.CallResult(4, "system.ping", Left(RobotFailure.Interrupted(4, "system.ping")))
+        naogateway.api.CallResult(4, "system.ping", Left(RobotFailure.Interrupted(4, "system.ping")))
       ping.failed.futureValue shouldBe RobotFailure.Overloaded(4, "system.ping interrupted, try again")
       val said = interface.say(4, "hi")
       middleware.expectMessageType[RobotMiddleware.Execute].replyTo !
-        naogateway.CallResult(4, "speech.say", Left(RobotFailure.RobotError(4, "muted")))
+        naogateway.api.CallResult(4, "speech.say", Left(RobotFailure.RobotError(4, "muted")))
       said.failed.futureValue shouldBe RobotFailure.RobotError(4, "muted")
     }
 

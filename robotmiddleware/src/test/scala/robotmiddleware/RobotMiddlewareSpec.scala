@@ -12,7 +12,20 @@ import akka.actor.typed.{ActorRef, Behavior}
 import org.scalatest.LoneElement
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GatewayEvent,
+  LinkQuality,
+  LinkStats,
+  Priority,
+  RobotEvent,
+  RobotFailure,
+  RobotOffline,
+  RobotOnline,
+  RobotSnapshot,
+  RobotStatusUpdated
+}
 import naogateway.wire.{Posture, RpcCall, RpcValue}
 
 class RobotMiddlewareSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing with LoneElement {

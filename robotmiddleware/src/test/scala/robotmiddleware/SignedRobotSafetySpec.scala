@@ -11,7 +11,7 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import akka.stream.scaladsl.Sink
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway._
+import naogateway.api.{RobotOnline, RobotSnapshot}
 import naogateway.integration.GatewayFixture
 import naogateway.sim.network.ForgedFrames
 import naogateway.sim.{ReceivedCall, SimulatedRobot}

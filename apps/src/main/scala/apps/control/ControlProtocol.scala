@@ -49,8 +49,9 @@ object ControlProtocol {
     /** A robot's servo table: its latest servo telemetry (docs/protocol.md 6.8), one line per servo. */
     final case class Servos(robotId: Int) extends Request
 
-    /** The gateway's and the machine's checks, each problem with its fix ([[apps.Doctor]]). `configFile` stays with
-      * robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories) itself.
+    /** The gateway's and the machine's checks, each problem with its fix ([[naogateway.launcher.Doctor]]). `configFile`
+      * stays with robotctl: when no gateway answers, robotctl checks that file's config (ports, keys, directories)
+      * itself.
       */
     final case class Doctor(configFile: Option[String] = None) extends Request
 
@@ -261,7 +262,7 @@ object ControlProtocol {
 
   /** Undoes [[escapeWord]] and [[escapeText]]; a message when the text has a broken escape or a raw control character.
     * What it gives back is what was sent, control characters included (a robot's role may hold an escape sequence):
-    * whatever shows it on a terminal passes it through [[naogateway.Printable.text]] first, as robotctl does.
+    * whatever shows it on a terminal passes it through [[naogateway.api.Printable.text]] first, as robotctl does.
     */
   def unescape(s: String): Either[String, String] = {
     val b = new java.lang.StringBuilder(s.length)

@@ -1,6 +1,6 @@
 package apps.control
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import java.net.InetSocketAddress
 import java.nio.charset.StandardCharsets
@@ -20,7 +20,7 @@ import akka.util.ByteString
 import akka.{Done, NotUsed}
 
 import apps.control.ControlProtocol.{Answer, Request}
-import naogateway.{GameSource, GatewayView, LinkStats, RobotSnapshot}
+import naogateway.api.{GameSource, GatewayView, LinkStats, RobotSnapshot}
 import robotmiddleware.{Operation, RobotClient, RobotInterface, RobotMiddleware}
 
 /** The control port: a loopback TCP server on the gateway node that answers robotctl's requests through the

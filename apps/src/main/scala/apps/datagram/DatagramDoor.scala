@@ -11,8 +11,8 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector, PostStop}
 
 import apps.zeromq.{EndpointProtocol, EndpointRequest, Registering, RequestDesk}
-import naogateway.RateLimitedLog
-import naogateway.link.DatagramPort
+import naogateway.transport.RateLimitedLog
+import naogateway.transport.DatagramPort
 import robotmiddleware.{RobotInterface, RobotMiddleware}
 
 /** The RobotInterface for programs on the same machine at the lowest latency: each request one UDP datagram, the same

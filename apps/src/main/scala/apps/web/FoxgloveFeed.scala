@@ -17,8 +17,8 @@ import akka.util.ByteString
 import spray.json._
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, TrafficStats}
-import naogateway.recording.{Decision, DecisionJson, RecordingSchema}
+import naogateway.api.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, TrafficStats}
+import naogateway.api.recording.{Decision, DecisionJson, RecordingSchema}
 import robotmiddleware.RobotMiddleware
 
 /** The live feed in the Foxglove WebSocket protocol (subprotocol `foxglove.sdk.v1` of the Foxglove SDK, or

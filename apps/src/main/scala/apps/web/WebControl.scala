@@ -99,7 +99,7 @@ object WebControl {
   private def answer(ok: Boolean, message: String): String =
     // A failure's message may carry a robot's error text: no control character reaches the page.
     JsObject("op" -> JsString("result"), "ok" -> JsBoolean(ok),
-      "message" -> JsString(naogateway.Printable.text(message))).compactPrint
+      "message" -> JsString(naogateway.api.Printable.text(message))).compactPrint
 
   private def refusing(reason: String): Behavior[Command] = Behaviors.receiveMessage {
     case Request(_, replyTo) =>

@@ -6,7 +6,7 @@ import spray.json._
 
 import naogateway.wire.HaViMoRegion
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{
+import naogateway.api.{
   GameSource,
   GatewayEvent,
   GatewayStats,
@@ -174,7 +174,7 @@ object WebJson {
   private def num(d: Double): JsValue = if (d.isNaN || d.isInfinite) JsNull else JsNumber(d)
   private def opt[A](a: Option[A])(f: A => JsValue): JsValue = a.fold[JsValue](JsNull)(f)
   // A string a robot or a peer wrote, with its control characters replaced before it reaches the page.
-  private def text(s: String): JsValue = JsString(naogateway.Printable.text(s))
+  private def text(s: String): JsValue = JsString(naogateway.api.Printable.text(s))
 
   /** One robot's card (its [[apps.RobotRow]]): what it reports, its link and clock, signing and refusals by kind, the
     * GameController's penalty when `game` has taken it off the game (the status screen's rule, StatusView.penalty), and

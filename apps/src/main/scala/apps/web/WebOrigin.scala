@@ -62,7 +62,7 @@ object WebOrigin {
       tokenSet: Boolean): Verdict = origin match {
     case None => Allowed
     case Some(text) =>
-      val shown = naogateway.Printable.text(text.take(200))
+      val shown = naogateway.api.Printable.text(text.take(200))
       parse(text) match {
         case None                           => Refused(s"origin '$shown' is not one")
         case Some(o) if allowed.contains(o) => Allowed

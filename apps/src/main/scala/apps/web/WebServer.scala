@@ -23,7 +23,8 @@ import akka.stream.{BufferOverflowException, Materializer, OverflowStrategy}
 import akka.util.Timeout
 import org.slf4j.LoggerFactory
 
-import naogateway.{GatewayView, RateLimitedLog}
+import naogateway.api.GatewayView
+import naogateway.transport.RateLimitedLog
 import robotmiddleware.RobotMiddleware
 
 /** The web view's HTTP server (docs/web.md): the page and its assets from the jar, and the WebSocket `/ws` that carries

@@ -10,7 +10,7 @@ import akka.stream.scaladsl.{BroadcastHub, Keep, Sink, Source}
 import akka.stream.{BoundedSourceQueue, Materializer}
 
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{GameSource, GatewayStats, RobotEvent, RobotLinks, RobotSnapshot, TrafficStats, VisionFrame}
+import naogateway.api.{GameSource, GatewayStats, RobotEvent, RobotLinks, RobotSnapshot, TrafficStats, VisionFrame}
 import robotmiddleware.RobotMiddleware
 
 /** The one owner of what the web view shows ([[WebModel]]). It asks the gateway's read-only view as the status view

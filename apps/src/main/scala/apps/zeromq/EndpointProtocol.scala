@@ -1,6 +1,6 @@
 package apps.zeromq
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import naogateway.wire.ActuatorGroup
 
@@ -13,7 +13,7 @@ import com.google.protobuf.{ByteString, CodedInputStream, WireFormat}
 import naogateway.proto.HaViMoRegionFrame
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
 import naogateway.wire.{HaViMo, MessageContents, RpcCall, RpcReply, RpcValue}
-import naogateway.{RobotSnapshot, ServoReadings, VisionFrame}
+import naogateway.api.{RobotSnapshot, ServoReadings, VisionFrame}
 import robotmiddleware.Operation
 
 /** A request as the endpoint read it: the addressed robot and the call, with the client's `callId`. */

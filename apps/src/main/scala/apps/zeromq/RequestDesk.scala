@@ -8,7 +8,7 @@ import scala.util.{Failure, Success, Try}
 import akka.actor.Cancellable
 import akka.actor.typed.Scheduler
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 import naogateway.wire.{ActuatorGroup, RpcMethod, RpcValue}
 import robotmiddleware.RobotInterface
 
@@ -191,7 +191,7 @@ private[apps] final class RequestDesk[A](
 private[apps] object RequestDesk {
 
   /** The answer to `gateway.status`: `[online, link quality]`, and the snapshot the reply carries. */
-  def status(s: naogateway.RobotSnapshot): Answer =
+  def status(s: naogateway.api.RobotSnapshot): Answer =
     Answer(Some(RpcValue.Items(Vector(RpcValue.Flag(s.online), RpcValue.Text(s.quality.name)))), Some(s))
 
   /** The answer to `gateway.servos`: `[hot ids, low-voltage ids]` by `limits`, and the telemetry the reply carries

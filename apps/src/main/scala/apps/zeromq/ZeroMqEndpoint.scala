@@ -16,9 +16,9 @@ import akka.stream.typed.scaladsl.ActorSink
 import akka.stream.{KillSwitches, SharedKillSwitch, UniqueKillSwitch}
 import org.zeromq.{SocketType, ZMQ, ZMsg}
 
-import naogateway.link.ZeroMqLoop
+import naogateway.transport.ZeroMqLoop
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{RobotSnapshot, VisionFrame}
+import naogateway.api.{RobotSnapshot, VisionFrame}
 import robotmiddleware.{RobotInterface, RobotMiddleware}
 
 /** The RobotInterface for programs in any language: requests on a ZeroMQ ROUTER socket, robot data on an XPUB socket

@@ -142,15 +142,15 @@ class ControlProtocolSpec extends AnyWordSpec with Matchers with ScalaCheckPrope
   "A servo table" should {
     "show each servo's figures, silent, hot, low-voltage and error marks, and say when there is none" in {
       val at = 5000000000L
-      val robot = naogateway.RobotSnapshot(
+      val robot = naogateway.api.RobotSnapshot(
         2,
         new java.net.InetSocketAddress("127.0.0.1", 3838),
         online = true,
-        servos = Some(naogateway.ServoReadings(
+        servos = Some(naogateway.api.ServoReadings(
             Vector(
-              naogateway.ServoReading(1, Some(512), Some(-40), Some(12.1), Some(41)),
-              naogateway.ServoReading(2, Some(614), Some(300), Some(9.8), Some(66), error = 32),
-              naogateway.ServoReading(3, silent = true)
+              naogateway.api.ServoReading(1, Some(512), Some(-40), Some(12.1), Some(41)),
+              naogateway.api.ServoReading(2, Some(614), Some(300), Some(9.8), Some(66), error = 32),
+              naogateway.api.ServoReading(3, silent = true)
             ),
             Some(4L),
             at - 250000000L

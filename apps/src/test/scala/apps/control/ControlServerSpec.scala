@@ -122,7 +122,7 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
     }
 
     "name each robot held safe in doctor (a problem, with its fix), and swap only a simulated robot's battery" in {
-      val view = new naogateway.GatewayView {
+      val view = new naogateway.api.GatewayView {
         private def none = scala.concurrent.Future.failed(new UnsupportedOperationException("not asked by doctor"))
         def addresses() = none
         def robots() = none
@@ -165,16 +165,17 @@ class ControlServerSpec extends ScalaTestWithActorTestKit(ConfigFactory.load()) 
     "end a status with the game, the gate (why it is closed), the message budget, warnings and the game's source" in {
       val reason =
         "the trusted GameController's packet cannot be read: RGme packet of unknown version: bytes from offset 4 are 14 00 00 00"
-      val view = new naogateway.GatewayView {
+      val view = new naogateway.api.GatewayView {
         private def none = scala.concurrent.Future.failed(new UnsupportedOperationException("not asked by status"))
         def addresses() = none
         def robots() = none
         def links() = none
         def stats() = none
-        def traffic() = scala.concurrent.Future.successful(naogateway.TrafficStats(0, 0, 125000, Map.empty, 0, 0, 0, 0,
-            gameRunning = true, competition = true, gateReason = Some(reason)))
+        def traffic() =
+          scala.concurrent.Future.successful(naogateway.api.TrafficStats(0, 0, 125000, Map.empty, 0, 0, 0, 0,
+              gameRunning = true, competition = true, gateReason = Some(reason)))
         def gameState() = scala.concurrent.Future.successful(None)
-        def gameSource() = scala.concurrent.Future.successful(naogateway.GameSource(
+        def gameSource() = scala.concurrent.Future.successful(naogateway.api.GameSource(
             "10.0.0.5/32",
             None,
             0,

@@ -1,6 +1,6 @@
 package apps.control
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import naogateway.wire.ActuatorGroup
 
@@ -15,7 +15,7 @@ import akka.{Done, NotUsed}
 
 import naogateway.wire.{Posture, RpcValue}
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.{ClockEstimate, LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.api.{ClockEstimate, LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
 
 /** A `RobotInterface` of `robots` robots (ids 1 to `robots`) that answer at once, for the control port's tests: robot

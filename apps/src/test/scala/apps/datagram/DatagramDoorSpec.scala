@@ -23,7 +23,7 @@ class DatagramDoorSpec
           |# A port loop of the spec's own: the door's socket read on the thread that runs this dispatcher's actors.
           |door-loop {
           |  type = Dispatcher
-          |  executor = "naogateway.link.PortLoopConfigurator"
+          |  executor = "naogateway.transport.PortLoopConfigurator"
           |  port-loop { datagrams-per-pass = 256, tasks-per-pass = 64 }
           |  throughput = 64
           |}

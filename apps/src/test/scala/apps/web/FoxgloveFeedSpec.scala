@@ -247,7 +247,7 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
       val Path = """/robot/(\d+)/(status|health)(?:\.(\w+))?""".r
       paths.foreach {
         case Path(_, topic, field) =>
-          val schema = descriptor(naogateway.recording.Recording.descriptorSet,
+          val schema = descriptor(naogateway.gateway.recording.Recording.descriptorSet,
             if (topic == "status") "naogateway.proto.Status" else "naogateway.proto.RobotHealth")
           if (field != null) withClue(field)(schema.findFieldByName(field) should not be null)
         case "/gateway/decisions" => () // JSON without a schema: a raw-messages panel shows it whole

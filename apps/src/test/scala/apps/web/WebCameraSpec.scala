@@ -14,8 +14,9 @@ import akka.util.Timeout
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 
-import naogateway.{GatewayAccess, RobotSnapshot}
-import naogateway.VisionActor.{GridOption, RegionsOption}
+import naogateway.access.GatewayAccess
+import naogateway.api.RobotSnapshot
+import naogateway.gateway.robot.VisionActor.{GridOption, RegionsOption}
 
 /** The web view asks the robots' cameras for HaViMo2 frames only while a page is connected: checked at the simulated
   * robots' own option state (what they send over the WiFi), with no page, one page, two, one, and none again.

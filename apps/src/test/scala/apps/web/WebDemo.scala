@@ -13,8 +13,10 @@ import com.typesafe.config.{Config, ConfigFactory}
 
 import naogateway.sim.{Fleet, FleetHandle, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
 import naogateway.testkit.TestLoopback
-import naogateway.{Gateway, GatewayAccess, GatewayReadView, GatewaySettings}
+import naogateway.access.GatewayAccess
+import naogateway.gateway.{Gateway, GatewayReadView, GatewaySettings}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
+import naogateway.api.GatewayAddresses
 
 /** The demo as the web view's tests and bench see it: a gateway on loopback, its middleware, three simulated robots on
   * addresses of their own, a simulated GameController with short phases, and the web view on a free port.
@@ -28,7 +30,7 @@ final class WebDemo(system: ActorSystem[_], settings: WebSettings, robots: Int =
     system.systemActorOf(Gateway(GatewaySettings(system)), s"$name-gateway")
   val middleware: ActorRef[RobotMiddleware.Command] =
     system.systemActorOf(RobotMiddleware(gateway, MiddlewareSettings(system)), s"$name-middleware")
-  private val addresses = Await.result(gateway.ask[Gateway.Addresses](GatewayAccess.GetAddresses(_)), 10.seconds)
+  private val addresses = Await.result(gateway.ask[GatewayAddresses](GatewayAccess.GetAddresses(_)), 10.seconds)
   val fleet: FleetHandle = Await.result(Fleet.start(system,
       FleetSettings(addresses.robots, (1 to robots).toVector,
         firstAddress = TestLoopback.block(robots))), 60.seconds)

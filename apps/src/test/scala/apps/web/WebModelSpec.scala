@@ -7,16 +7,16 @@ import org.scalatest.wordspec.AnyWordSpec
 import spray.json._
 
 import naogateway.wire.HaViMoRegion
-import naogateway.{
-  Gateway,
+import naogateway.api.{
+  GatewayStats,
   LinkQuality,
   LinkStats,
-  Outbox,
   RobotOffline,
   RobotOnline,
   RobotSnapshot,
   ServoReading,
-  ServoReadings
+  ServoReadings,
+  TrafficStats
 }
 import robotmiddleware.ServoLimits
 
@@ -30,7 +30,7 @@ class WebModelSpec extends AnyWordSpec with Matchers {
   private def link(id: Int, rejected: Map[String, Long] = Map.empty, rtt: Option[Double] = Some(1.5)) =
     LinkStats(id, 10, 10, 100, 100, rtt, 0.25, 0, rejected)
   private def traffic(competition: Boolean, running: Boolean) =
-    Outbox.TrafficStats(1000, 2000, 10000, Map.empty, 1, 1, 0, 0, running, competition)
+    TrafficStats(1000, 2000, 10000, Map.empty, 1, 1, 0, 0, running, competition)
   private val blank = WebModel(historyPoints = 5, maxEvents = 3)
 
   "The web view's model" should {
@@ -55,7 +55,7 @@ class WebModelSpec extends AnyWordSpec with Matchers {
         traffic(competition = true, running = true), 3, 3)
       m2.events.head.kind shouldBe "gate"
       m2.events.head.text should include("CLOSED")
-      val stats = Gateway.GatewayStats(0, 0, 0, Map("unknown-robot" -> 1), 1)
+      val stats = GatewayStats(0, 0, 0, Map("unknown-robot" -> 1), 1)
       val m3 = m2.withGatewayStats(stats, 4, 4).withGatewayStats(stats.copy(rejected = Map("unknown-robot" -> 4)), 5, 5)
       m3.events.head.text shouldBe "gateway: 3 refused (unknown-robot, 4 in all)"
     }

@@ -65,7 +65,7 @@ class WebOriginSpec extends AnyWordSpec with Matchers {
     "name the refused origin with its control characters replaced" in {
       val WebOrigin.Refused(reason) = verdict(Some("http://evil.example\u001b[2J"))
       reason should include("\\u001b[2J")
-      reason.exists(naogateway.Printable.control) shouldBe false
+      reason.exists(naogateway.api.Printable.control) shouldBe false
     }
   }
 }

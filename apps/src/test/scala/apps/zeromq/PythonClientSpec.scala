@@ -17,7 +17,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import org.zeromq.{ZMQ, ZMQException}
 
 import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
-import naogateway.{Gateway, GatewaySettings, ZeroMqRobot}
+import naogateway.gateway.{Gateway, GatewaySettings, ZeroMqRobot}
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** A Python virtual environment under target/ with the client's pinned packages, made once and reused. */
@@ -186,7 +186,7 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
         f.robot(35)
         var online = Set.empty[Int]
         while (online != Set(34, 35))
-          online += f.awaitEvent(30.seconds) { case naogateway.RobotOnline(id, _) if id == 34 || id == 35 => id }
+          online += f.awaitEvent(30.seconds) { case naogateway.api.RobotOnline(id, _) if id == 34 || id == 35 => id }
         val middleware = spawn(RobotMiddleware(f.gateway, MiddlewareSettings(system)), "middleware-reads")
         val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq-reads")
         val probe = createTestProbe[ZeroMqEndpoint.Addresses]()
@@ -251,7 +251,7 @@ class PythonClientSpec extends ScalaTestWithActorTestKit(PythonClientSpec.config
       val f = new naogateway.integration.GatewayFixture(testKit)
       try {
         val (robot, _) = f.robot(33)
-        f.awaitEvent(30.seconds) { case naogateway.RobotOnline(33, _) => () }
+        f.awaitEvent(30.seconds) { case naogateway.api.RobotOnline(33, _) => () }
         val middleware = spawn(RobotMiddleware(f.gateway, MiddlewareSettings(system)), "middleware-doors")
         val endpoint = spawn(ZeroMqEndpoint(middleware, ZeroMqSettings(system)), "zeromq-doors")
         val probe = createTestProbe[ZeroMqEndpoint.Addresses]()

@@ -1,6 +1,6 @@
 package apps.zeromq
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 import naogateway.wire.ActuatorGroup
 
@@ -18,7 +18,7 @@ import akka.{Done, NotUsed}
 
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
 import naogateway.wire.{HaViMoRegion, Posture, RpcValue}
-import naogateway.{LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
+import naogateway.api.{LinkQuality, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import robotmiddleware._
 
 /** A `RobotInterface` whose robots answer from a script: robot 7 works; the others fail in one way each, so the
@@ -53,7 +53,7 @@ final class StubRobots(system: ActorSystem[_]) extends RobotInterface {
   private def failure(robotId: Int, operation: String): Option[Throwable] = robotId match {
     case 99 => Some(RobotFailure.UnknownRobot(99))
     case 8  => Some(RobotFailure.RobotOffline(8))
-    case 10 => Some(RobotFailure.RuleGate(naogateway.Outbox.NoSendingWhileGameRuns))
+    case 10 => Some(RobotFailure.RuleGate(naogateway.gateway.robot.Outbox.NoSendingWhileGameRuns))
     case 11 => Some(RobotFailure.Timeout(11, s"motion.$operation", 2000))
     case 12 => Some(RobotFailure.RobotError(12, "not standing: sit"))
     case 13 => Some(RobotFailure.SafetyHold(13, "battery low: 10.70 V (below 10.80 V)"))

@@ -1,7 +1,5 @@
 package robotmiddleware.cluster
 
-import naogateway.RobotFailure
-
 import naogateway.wire.ActuatorGroup
 
 import java.io.NotSerializableException
@@ -13,7 +11,22 @@ import akka.serialization.SerializerWithStringManifest
 import com.google.protobuf.ByteString
 import scalapb.GeneratedMessage
 
-import naogateway._
+import naogateway.api.{
+  CallResult,
+  GameStateUpdated,
+  LinkQuality,
+  LinkQualityChanged,
+  LinkStats,
+  RobotFailure,
+  RobotForgotten,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  SigningState,
+  VisionFrame
+}
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}
 import naogateway.wire.{HaViMoGrid, RpcValue}
 import robotmiddleware._
@@ -196,7 +209,8 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
     case M.RobotSnapshot => fromProto(pb.RobotSnapshot.parseFrom(bytes))
     case M.LinkStats =>
       val m = pb.LinkStats.parseFrom(bytes)
-      naogateway.LinkStats(m.robotId, m.datagramsIn, m.datagramsOut, m.bytesIn, m.bytesOut, m.rttMillis, m.lossEstimate,
+      naogateway.api.LinkStats(m.robotId, m.datagramsIn, m.datagramsOut, m.bytesIn, m.bytesOut, m.rttMillis,
+        m.lossEstimate,
         m.retransmissions, m.rejected)
     case M.VisionRegions =>
       val m = pb.VisionRegions.parseFrom(bytes)
@@ -206,21 +220,21 @@ final class CrossNodeSerializer(system: ExtendedActorSystem) extends SerializerW
       VisionFrame.Grid(m.robotId, m.frame, m.timestampMs, HaViMoGrid(m.cells.toByteArray.toVector))
     case M.RobotOnline =>
       val m = pb.RobotOnline.parseFrom(bytes)
-      naogateway.RobotOnline(m.robotId, fromProto(m.address))
+      naogateway.api.RobotOnline(m.robotId, fromProto(m.address))
     case M.RobotOffline =>
       val m = pb.RobotOffline.parseFrom(bytes)
-      naogateway.RobotOffline(m.robotId, m.reason)
+      naogateway.api.RobotOffline(m.robotId, m.reason)
     case M.LinkQualityChanged =>
       val m = pb.LinkQualityChanged.parseFrom(bytes)
-      naogateway.LinkQualityChanged(m.robotId, fromProto(m.quality))
-    case M.RobotStatusUpdated => naogateway.RobotStatusUpdated(fromProto(pb.RobotSnapshot.parseFrom(bytes)))
+      naogateway.api.LinkQualityChanged(m.robotId, fromProto(m.quality))
+    case M.RobotStatusUpdated => naogateway.api.RobotStatusUpdated(fromProto(pb.RobotSnapshot.parseFrom(bytes)))
     case M.RobotRestarted =>
       val m = pb.RobotRestarted.parseFrom(bytes)
-      naogateway.RobotRestarted(m.robotId, m.bootId, m.resynced.toVector)
+      naogateway.api.RobotRestarted(m.robotId, m.bootId, m.resynced.toVector)
     case M.RobotForgotten =>
       val m = pb.RobotForgotten.parseFrom(bytes)
-      naogateway.RobotForgotten(m.robotId, m.reason)
-    case M.GameStateUpdated => naogateway.GameStateUpdated(gameData(bytes))
+      naogateway.api.RobotForgotten(m.robotId, m.reason)
+    case M.GameStateUpdated => naogateway.api.GameStateUpdated(gameData(bytes))
     case M.GameControlData  => gameData(bytes)
     case M.RpcValue         => naogateway.wire.RpcValue.fromProto(naogateway.proto.MixedValue.parseFrom(bytes))
     case other =>

@@ -17,7 +17,25 @@ import org.scalacheck.rng.Seed
 import org.scalatest.wordspec.AnyWordSpecLike
 import org.scalatestplus.scalacheck.ScalaCheckPropertyChecks
 
-import naogateway._
+import naogateway.api.{
+  CallResult,
+  GameStateUpdated,
+  GatewayEvent,
+  LinkQuality,
+  LinkQualityChanged,
+  LinkStats,
+  RobotFailure,
+  RobotForgotten,
+  RobotOffline,
+  RobotOnline,
+  RobotRestarted,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  ServoReading,
+  ServoReadings,
+  SigningState,
+  VisionFrame
+}
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerGenerators}
 import naogateway.wire.{HaViMoGrid, HaViMoRegion, Posture, RpcValue}
 import robotmiddleware._

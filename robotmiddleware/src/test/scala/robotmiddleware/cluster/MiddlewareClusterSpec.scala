@@ -22,7 +22,21 @@ import org.scalatest.concurrent.ScalaFutures
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway._
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{
+  CallResult,
+  GameStateUpdated,
+  GatewayEvent,
+  LinkQuality,
+  LinkQualityChanged,
+  LinkStats,
+  RobotEvent,
+  RobotFailure,
+  RobotOnline,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  VisionFrame
+}
 import naogateway.wire.RpcValue
 import naogateway.wire.gamecontroller.GameControlData
 import robotmiddleware._

@@ -1,0 +1,108 @@
+package naogateway.gateway.link
+
+import java.net.InetSocketAddress
+import java.util.concurrent.atomic.AtomicReference
+
+import akka.actor.typed.ActorRef
+
+import naogateway.transport.DatagramWriter
+import naogateway.proto.RecordedPort
+import naogateway.gateway.recording.Recording
+import naogateway.gateway.{Gateway, GatewaySettings, Rejection, RejectionLedger, Routing, SignatureCheck}
+import naogateway.gateway.robot.{Outbox, RobotActor}
+
+/** The robot port's reader side of the gateway: runs where the port is read (the robot dispatcher's port loop, or a
+  * reader thread), routes each datagram with the table the gateway last published, and hands the robot actors (or the
+  * gateway) their messages directly.
+  */
+private[naogateway] final class PortReader(
+    settings: GatewaySettings,
+    port: RobotLink,
+    gateway: ActorRef[Gateway.Command],
+    gatewayBacklog: Backlog,
+    outbox: ActorRef[Outbox.Command],
+    rejections: RejectionLedger.Shared,
+    recording: Recording,
+    val routes: AtomicReference[Routing.Table[PortReader.Inlet]]
+) extends RobotPort.Handler {
+  import PortReader._
+
+  // Written by the one thread that reads the port; read by the gateway for its figures.
+  @volatile var datagramsIn, relayed = 0L
+  // What the outbox has not been told yet: told in one message per InboundBatch datagrams or when the port is quiet.
+  private var inboundDatagrams, inboundBytes = 0
+  private val relayLink = recorded(port, recording, RecordedPort.FU_REMOTE_RELAY, port.localAddress, routes)
+
+  def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
+    datagramsIn += 1
+    val table = routes.get
+    if (recording.enabled) {
+      val robotId = table.byAddress.get(from.getAddress).fold(-1)(_.robotId)
+      recording.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
+    }
+    settings.relay.foreach { relay =>
+      if (relayLink.send(bytes, relay)) relayed += 1
+    }
+    inboundDatagrams += 1
+    inboundBytes += bytes.length
+    if (inboundDatagrams >= InboundBatch) caughtUp()
+    Routing.decide(table, bytes, from) match {
+      case Routing.ToRobot(route, header, contents, size) =>
+        // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
+        route.target.signatures.map(_.check(bytes, header)) match {
+          case Some(Left(kind)) =>
+            rejections.count(kind, from)
+            if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
+          case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+        }
+      case Routing.SegmentToRobot(route, segment) =>
+        deliver(route, RobotActor.SegmentReceived(segment), from)
+      case unrouted: Routing.ToGateway =>
+        if (gatewayBacklog.tryAdd()) gateway ! Gateway.Unrouted(unrouted)
+        else rejections.count(Rejection.GatewayBusy, from)
+      case Routing.Rejected(kind, detail, route) =>
+        rejections.count(kind, from, detail)
+        route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(kind))
+    }
+  }
+
+  private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
+    if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)
+
+  def caughtUp(): Unit =
+    if (inboundDatagrams > 0) {
+      outbox ! Outbox.Inbound(inboundDatagrams, inboundBytes)
+      inboundDatagrams = 0
+      inboundBytes = 0
+    }
+
+  def gameControllerReceived(bytes: Array[Byte], from: InetSocketAddress): Unit =
+    gateway ! Gateway.GameControllerEvent(UdpLink.Received(bytes, from))
+}
+
+/** What the reader routes to, and the recording of what the gateway's links send. */
+private[naogateway] object PortReader {
+
+  /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
+  val InboundBatch: Int = 64
+
+  /** A datagram robot as the port's reader reaches it: its actor, the backlog of what the reader handed it, and for a
+    * robot that must sign, the check every frame passes before it is handed on.
+    */
+  final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
+
+  /** `link`, with every datagram it takes recorded as sent from `local` on `port` (`link` itself when not recording).
+    */
+  def recorded(link: DatagramWriter, recording: Recording, port: RecordedPort, local: InetSocketAddress,
+      routes: AtomicReference[Routing.Table[Inlet]]): DatagramWriter =
+    if (!recording.enabled) link
+    else
+      new DatagramWriter {
+        def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = {
+          val sent = link.send(bytes, to)
+          if (sent) recording.datagram(port, received = false, local, to, bytes,
+            routes.get.byAddress.get(to.getAddress).fold(-1)(_.robotId))
+          sent
+        }
+      }
+}

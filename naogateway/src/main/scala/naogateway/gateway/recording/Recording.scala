@@ -1,0 +1,91 @@
+package naogateway.gateway.recording
+
+import java.net.InetSocketAddress
+
+import naogateway.api.ClockEstimate
+import naogateway.proto.RecordedPort
+import naogateway.api.recording.{Decision, RecordingSchema, RecordingStats}
+
+/** Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
+  * as [[naogateway.api.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
+  */
+trait RobotTimeBase {
+
+  /** The gateway time of robot `robotId`'s clock reading `robotMillis`, once the robot's clock is estimated. */
+  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long]
+}
+
+/** Robot time bases. */
+object RobotTimeBase {
+
+  /** No robot's clock is known: a `Status` message is published at the time the gateway received it. */
+  val Unknown: RobotTimeBase = (_: Int, _: Long) => None
+}
+
+/** The robots' clock estimates as the robot actors last published them (`RobotSnapshot.clock`), read by the recorder's
+  * thread: one entry per robot actor, replaced at every keep-alive, removed while a robot has no estimate.
+  */
+final class RobotClockEstimates extends RobotTimeBase {
+  private val estimates = new java.util.concurrent.ConcurrentHashMap[Int, ClockEstimate]()
+
+  /** Robot `robotId`'s estimate now. */
+  def update(robotId: Int, estimate: Option[ClockEstimate]): Unit = estimate match {
+    case Some(e) => estimates.put(robotId, e)
+    case None    => estimates.remove(robotId)
+  }
+
+  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long] =
+    Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
+}
+
+/** Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
+  * reader and the outbox call it on their hot paths.
+  */
+trait Recording {
+
+  /** Whether anything is recorded. */
+  def enabled: Boolean
+
+  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none).
+    */
+  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
+      bytes: Array[Byte],
+      robotId: Int): Unit
+
+  /** A decision of the gateway. */
+  def decision(decision: Decision): Unit
+
+  /** The figures so far. */
+  def stats: RecordingStats
+
+  /** Writes what waits, closes the file and stops the writer; later entries are ignored. */
+  def close(): Unit
+}
+
+/** Recording on and off. */
+object Recording {
+
+  /** Records nothing. */
+  val Off: Recording = new Recording {
+    def enabled: Boolean = false
+    def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
+        bytes: Array[Byte],
+        robotId: Int): Unit = ()
+    def decision(decision: Decision): Unit = ()
+    def stats: RecordingStats = RecordingStats.Off
+    def close(): Unit = ()
+  }
+
+  /** A recorder writing to `settings.directory` on a thread named `threadName`, or [[Off]] when not enabled. */
+  def apply(settings: RecordingSettings, threadName: String, clock: RobotTimeBase = RobotTimeBase.Unknown): Recording =
+    if (settings.enabled) new Recorder(settings, threadName, clock) else Off
+
+  /** Topics of a recording (docs/recording.md): [[RecordingSchema.Topics]] (api), which the live feed names too. */
+  val Topics: RecordingSchema.Topics.type = RecordingSchema.Topics
+
+  /** Robots per file that get decoded channels of their own ([[RecordingSchema.MaxRobotChannels]], api). */
+  val MaxRobotChannels: Int = RecordingSchema.MaxRobotChannels
+
+  /** The schema data of every channel ([[RecordingSchema.descriptorSet]], api). */
+  def descriptorSet: Array[Byte] = RecordingSchema.descriptorSet
+}

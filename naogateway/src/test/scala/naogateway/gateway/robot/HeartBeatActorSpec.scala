@@ -1,0 +1,183 @@
+package naogateway.gateway.robot
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{LogCapturing, ManualTime, ScalaTestWithActorTestKit, TestProbe}
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, Behavior, BehaviorInterceptor, TypedActorContext}
+import org.scalatest.wordspec.AnyWordSpecLike
+
+import naogateway.api.LinkQuality
+import naogateway.gateway.HeartbeatSettings
+import naogateway.gateway.robot.HeartBeatActor._
+
+class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
+  private val manualTime = ManualTime()
+  private val settings = HeartbeatSettings(200.millis, 400.millis, 150.millis, 3, 2.seconds, 0.8, 0.9)
+
+  /** Tells `handled` of each keep-alive once the heartbeat has handled it, timers included. */
+  private final class AckKeepAlives(handled: ActorRef[Command]) extends BehaviorInterceptor[Command, Command] {
+    def aroundReceive(ctx: TypedActorContext[Command], msg: Command, target: BehaviorInterceptor.ReceiveTarget[Command])
+        : Behavior[Command] = {
+      val next = target(ctx, msg)
+      if (msg == KeepAliveSeen) handled ! msg
+      next
+    }
+  }
+
+  /** A heartbeat whose keep-alives are acknowledged to the returned probe. */
+  private def acknowledging(reports: TestProbe[Any], online: Boolean): (ActorRef[Command], TestProbe[Command]) = {
+    val handled = createTestProbe[Command]()
+    val heartbeat =
+      spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, reports.ref,
+            online)))
+    heartbeat -> handled
+  }
+
+  /** One probe, submitted straight to the robot's sender (here the same probe as the reports, to keep their order). */
+  private def probeId(r: Any): Long = r match {
+    case NoResponseActor.Submit(RobotFrames.Outbound.CallOut(call), Priority.Heartbeat, key, _, None, None) =>
+      key shouldBe call.callId
+      call.callId.get
+    case other => fail(s"expected a probe, got $other")
+  }
+
+  "HeartBeatActor" must {
+    "start its probe ids at a random point in every incarnation" in {
+      val firsts = (1 to 2).map { _ =>
+        val reports = createTestProbe[Any]()
+        val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false))
+        heartbeat ! ProbeNow
+        val id = probeId(reports.receiveMessage())
+        CallId.ownerOf(id) shouldBe Some(CallId.Owner.Heartbeat)
+        testKit.stop(heartbeat)
+        CallId.count(id)
+      }
+      // Equal only with a chance of 1 in 2^30; a counter starting at 0 would give 1 both times.
+      firsts.distinct.size shouldBe 2
+    }
+    "probe a quiet robot three times and then report it offline" in {
+      val reports = createTestProbe[Any]()
+      spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      manualTime.timePasses(399.millis)
+      reports.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(1.milli)
+      val first = probeId(reports.receiveMessage())
+      CallId.ownerOf(first) shouldBe Some(CallId.Owner.Heartbeat)
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(149.millis)
+      reports.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(1.milli)
+      reports.receiveMessage() shouldBe a[WentOffline]
+      // Offline: no more probes until someone asks or the robot speaks.
+      manualTime.timePasses(2.seconds)
+      reports.expectNoMessage(Duration.Zero)
+    }
+    "stay online while keep-alives arrive, and recover when a probe is answered" in {
+      val reports = createTestProbe[Any]()
+      val (heartbeat, handled) = acknowledging(reports, online = true)
+      reports.expectMessage(CameOnline)
+      // Time moves only once the keep-alive has re-armed the quiet check; the silence is measured from there.
+      (1 to 10).foreach { _ =>
+        manualTime.timePasses(200.millis)
+        heartbeat ! KeepAliveSeen
+        handled.expectMessage(KeepAliveSeen)
+      }
+      reports.expectNoMessage(Duration.Zero)
+      manualTime.timePasses(400.millis)
+      val id = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(id)
+      reports.receiveMessage() shouldBe a[ProbeRoundTrip]
+      manualTime.timePasses(399.millis)
+      reports.expectNoMessage(Duration.Zero)
+    }
+    "come back online on the next keep-alive, and probe on demand when offline" in {
+      val reports = createTestProbe[Any]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false))
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+      manualTime.timePasses(150.millis)
+      manualTime.timePasses(1.second)
+      reports.expectNoMessage(Duration.Zero)
+      heartbeat ! ProbeNow
+      val id = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(id)
+      reports.receiveMessage() shouldBe a[ProbeRoundTrip]
+      reports.expectMessage(CameOnline)
+    }
+    "back off rounds for a robot that never answers, however often it is wanted, and start again after an answer" in {
+      val reports = createTestProbe[Any]()
+      val heartbeat =
+        spawn(HeartBeatActor(settings.copy(probeBackoffMax = 2.seconds), reports.ref, reports.ref, online = false))
+      // One round: three probes 150 ms apart, then the last one's timeout.
+      def silentRound(): Unit = {
+        probeId(reports.receiveMessage())
+        manualTime.timePasses(150.millis)
+        probeId(reports.receiveMessage())
+        manualTime.timePasses(150.millis)
+        probeId(reports.receiveMessage())
+        manualTime.timePasses(150.millis)
+      }
+      def wantedAfter(backoff: FiniteDuration): Unit = {
+        (1 to 5).foreach(_ => heartbeat ! ProbeNow)
+        manualTime.timePasses(backoff - 1.milli)
+        reports.expectNoMessage(50.millis)
+        manualTime.timePasses(1.milli)
+      }
+      silentRound()
+      // Wanted again and again: each round waits for the back-off, doubling from one round (450 ms) to the maximum.
+      Seq(450.millis, 900.millis, 1800.millis, 2.seconds, 2.seconds).foreach { backoff =>
+        wantedAfter(backoff)
+        silentRound()
+      }
+      // An answer ends the back-off; the next silence starts it again from one round.
+      wantedAfter(2.seconds)
+      heartbeat ! ProbeAnswered(probeId(reports.receiveMessage()))
+      reports.receiveMessage() shouldBe a[ProbeRoundTrip]
+      reports.expectMessage(CameOnline)
+      manualTime.timePasses(400.millis)
+      silentRound()
+      reports.receiveMessage() shouldBe a[WentOffline]
+      wantedAfter(450.millis)
+      probeId(reports.receiveMessage())
+    }
+    "ignore answers to probes it did not send" in {
+      val reports = createTestProbe[Any]()
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      manualTime.timePasses(400.millis)
+      val id = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(id + 1)
+      manualTime.timePasses(150.millis)
+      probeId(reports.receiveMessage())
+    }
+    "report a degraded link with hysteresis instead of flapping" in {
+      val reports = createTestProbe[Any]()
+      val heartbeat =
+        spawn(HeartBeatActor(settings.copy(quietAfter = 1.second), reports.ref, reports.ref, online = true))
+      reports.expectMessage(CameOnline)
+      // Every keep-alive for a full window: good, nothing reported.
+      (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectNoMessage(Duration.Zero)
+      // Every second keep-alive lost: 50 % over the window -> degraded once.
+      (1 to 20).foreach { i => if (i % 2 == 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectMessage(QualityChanged(LinkQuality.Degraded))
+      reports.expectNoMessage(Duration.Zero)
+      // 85 % is above the degraded threshold but not above the good one: still degraded.
+      (1 to 20).foreach { i => if (i % 7 != 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectNoMessage(Duration.Zero)
+      // Back to good only after a whole window (10 ticks here) above 90 %: not after 10 ticks, but before 25.
+      (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectNoMessage(Duration.Zero)
+      (1 to 15).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      reports.expectMessage(QualityChanged(LinkQuality.Good))
+    }
+  }
+}

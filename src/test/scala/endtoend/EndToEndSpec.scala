@@ -1,0 +1,256 @@
+package endtoend
+
+import naogateway.wire.ActuatorGroup
+
+import java.net.InetSocketAddress
+
+import scala.concurrent.duration._
+
+import akka.actor.testkit.typed.scaladsl.{ActorTestKit, LogCapturing}
+import akka.actor.typed.scaladsl.AskPattern._
+import akka.actor.typed.scaladsl.Behaviors
+import akka.actor.typed.{ActorRef, ActorSystem}
+import akka.cluster.typed.{Cluster, Join}
+import akka.stream.scaladsl.Sink
+import com.typesafe.config.{Config, ConfigFactory}
+import org.scalatest.BeforeAndAfterAll
+import org.scalatest.concurrent.{Eventually, ScalaFutures}
+import org.scalatest.matchers.should.Matchers
+import org.scalatest.wordspec.AnyWordSpec
+
+import apps.BallFollower
+import naogateway.testkit.TestLoopback
+import naogateway.access.GatewayAccess
+import naogateway.api.{GatewayAddresses, RobotFailure, RobotSnapshot}
+import naogateway.gateway.{Gateway, GatewaySettings}
+import naogateway.sim._
+import naogateway.sim.network.LossyNetwork
+import naogateway.wire.Posture
+import robotmiddleware._
+import robotmiddleware.cluster.MiddlewareCluster
+
+/** The whole stack as users meet it: a gateway node (gateway, middleware, simulated robots on loopback UDP) and apps in
+  * actor systems of their own that reach it only through the cluster and `RobotInterface`.
+  */
+class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Eventually with BeforeAndAfterAll
+    with LogCapturing {
+
+  implicit override val patienceConfig: PatienceConfig = PatienceConfig(30.seconds, 100.millis)
+
+  // Heartbeats may pause 10 s: a JVM stalled on a loaded machine must not make a node unreachable mid-test.
+  private val common: Config = ConfigFactory.parseString("""
+      |akka.cluster.jmx.multi-mbeans-in-same-jvm = on
+      |akka.cluster.split-brain-resolver.stable-after = 1s
+      |akka.cluster.failure-detector.acceptable-heartbeat-pause = 10s
+      |naogateway.link.bind-address = "127.0.0.1"
+      |naogateway.link.robot-port = 0
+      |naogateway.game-controller.enabled = off
+      |""".stripMargin)
+
+  private val gatewayNode = ActorTestKit(
+    MiddlewareCluster.start(
+      Behaviors.empty,
+      MiddlewareCluster.GatewayRole,
+      ConfigFactory.parseString("robotmiddleware.cluster.gateway-port = 0\nakka.cluster.seed-nodes = []").withFallback(
+        common)
+    )
+  )
+  private val cluster = Cluster(gatewayNode.system)
+  cluster.manager ! Join(cluster.selfMember.address)
+  private val gatewayPort = cluster.selfMember.address.port.get
+
+  private val gateway = gatewayNode.spawn(Gateway(GatewaySettings(gatewayNode.system)), "gateway")
+  private val middleware =
+    gatewayNode.spawn(RobotMiddleware(gateway, MiddlewareSettings(gatewayNode.system)), "middleware")
+  private val robotPort: InetSocketAddress = {
+    val probe = gatewayNode.createTestProbe[GatewayAddresses]()
+    gateway ! GatewayAccess.GetAddresses(probe.ref)
+    probe.receiveMessage(10.seconds).robots
+  }
+  private var appNodes = List.empty[ActorSystem[_]]
+
+  override def afterAll(): Unit = {
+    appNodes.foreach(_.terminate())
+    gatewayNode.shutdownTestKit()
+  }
+
+  private def appNode(): ActorSystem[Nothing] = {
+    val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole,
+      ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort").withFallback(common))
+    appNodes ::= node
+    node
+  }
+
+  private def connect(node: ActorSystem[_], name: String, priority: Int): RobotInterface =
+    RobotClient.find(node, 30.seconds).flatMap(RobotClient.connect(node, _, name, priority))(node.executionContext).futureValue
+
+  private def spawnRobot(id: Int, to: InetSocketAddress = robotPort,
+      firmware: FirmwareSettings => FirmwareSettings = identity): ActorRef[SimulatedRobot.Command] = {
+    val probe = gatewayNode.createTestProbe[SimulatedRobot.StartResult]()
+    gatewayNode.spawn(
+      SimulatedRobot(
+        SimulatedRobotSettings(firmware(FirmwareSettings(id)), to,
+          bindAddress = new InetSocketAddress(TestLoopback.address(), 0), faithfulLink = false),
+        Some(probe.ref)
+      ),
+      s"robot-$id"
+    )
+    probe.receiveMessage(10.seconds) match {
+      case SimulatedRobot.Started(_, ref, _) => ref
+      case other                             => fail(s"robot $id did not start: $other")
+    }
+  }
+
+  private def view(robot: ActorRef[SimulatedRobot.Command]): RobotView = {
+    val probe = gatewayNode.createTestProbe[RobotView]()
+    robot ! SimulatedRobot.GetState(probe.ref)
+    probe.receiveMessage()
+  }
+
+  private def online(id: Int): Unit = eventually {
+    val probe = gatewayNode.createTestProbe[Vector[RobotSnapshot]]()
+    gateway ! GatewayAccess.GetRobots(probe.ref)
+    probe.receiveMessage().exists(r => r.robotId == id && r.online) shouldBe true
+  }
+
+  "An app in its own actor system" must {
+    "command a simulated robot through the middleware and read its status stream" in {
+      val sim = spawnRobot(11)
+      online(11)
+      val node = appNode()
+      val app = connect(node, "walker", 1)
+      implicit val system: ActorSystem[_] = node
+      app.acquire(11, ActuatorGroup.Walk).futureValue
+      app.posture(11, Posture.Stand).futureValue shouldBe Posture.Stand
+      app.walk(11, 0.2, 0.0, 0.0).futureValue
+      val walking = app.status(11).filter(_.posture.contains(Posture.Walking)).runWith(Sink.head)
+      walking.futureValue.robotId shouldBe 11
+      // The middleware keeps the walk alive past the robot's 500 ms lease: the robot walks on for well over the 0.1 m
+      /* one lease carries it at 0.2 m/s. The distance adds up across a late refresh, which a look at the posture would
+       * not. */
+      val start = view(sim).pose
+      eventually(math.hypot(view(sim).pose.x - start.x, view(sim).pose.y - start.y) should be > 0.3)
+      app.stop(11).futureValue
+      eventually(view(sim).posture shouldBe Posture.Stand)
+    }
+
+    "serve robotctl through the gateway node's control port: one status line per robot, and calls" in {
+      spawnRobot(17)
+      online(17)
+      val control = gatewayNode.spawn(apps.control.ControlServer(middleware,
+          apps.control.ControlSettings(gatewayNode.system).copy(host = "127.0.0.1", port = 0)), "control")
+      val probe = gatewayNode.createTestProbe[InetSocketAddress]()
+      control ! apps.control.ControlServer.GetAddress(probe.ref)
+      val address = s"127.0.0.1:${probe.receiveMessage(10.seconds).getPort}"
+      def robotctl(args: String*): (Int, Vector[String], Vector[String]) = {
+        val out = Vector.newBuilder[String]
+        val err = Vector.newBuilder[String]
+        val code = naogateway.launcher.RobotCtl.run("--control" +: address +: args, _ => None, out += _, err += _)
+        (code, out.result(), err.result())
+      }
+      val (code, status, errors) = robotctl("status")
+      withClue(errors) { code shouldBe 0 }
+      val line = status.find(_.startsWith("17 ")).getOrElse(fail(status.mkString("\n")))
+      // The robot at its own loopback address and receive port (docs/protocol.md section 2).
+      Seq(":3838 ", "online", "good", "V", "sit", "striker", "%").foreach(line should include(_))
+      robotctl("call", "17", "motion", "getPosture") shouldBe ((0, Vector("robot 17: motion.getPosture -> Text(sit)"),
+        Vector.empty))
+      robotctl("call", "4711", "motion", "getPosture") shouldBe ((1, Vector.empty,
+        Vector("robotctl: no robot 4711 is known")))
+      gatewayNode.stop(control)
+    }
+
+    "stop its robot and free its lease when the app's system dies, so another app gets it" in {
+      val sim = spawnRobot(12)
+      online(12)
+      val doomed = appNode()
+      val first = connect(doomed, "doomed", 1)
+      first.acquire(12, ActuatorGroup.Walk).futureValue
+      first.posture(12, Posture.Stand).futureValue
+      first.walk(12, 0.2, 0.0, 0.0).futureValue
+      val second = connect(appNode(), "patient", 1)
+      second.acquire(12, ActuatorGroup.Walk).failed.futureValue shouldBe a[RobotFailure.LeaseNotHeld]
+      doomed.terminate()
+      doomed.whenTerminated.futureValue
+      eventually(view(sim).posture shouldBe Posture.Stand)
+      eventually(second.acquire(12, ActuatorGroup.Walk).futureValue)
+    }
+
+    "see its robot stopped and sat down when the battery runs low, and motion refused" in {
+      val sim = spawnRobot(13)
+      online(13)
+      val node = appNode()
+      val app = connect(node, "walker", 1)
+      implicit val system: ActorSystem[_] = node
+      val safetyStop = app.appEvents.collect { case e: AppEvent.SafetyStop => e }.runWith(Sink.head)
+      app.acquire(13, ActuatorGroup.Walk).futureValue
+      app.posture(13, Posture.Stand).futureValue
+      app.walk(13, 0.1, 0.0, 0.0).futureValue
+      sim ! SimulatedRobot.SetBattery(10.4)
+      eventually(view(sim).posture shouldBe Posture.Sit)
+      app.walk(13, 0.1, 0.0, 0.0).failed.futureValue shouldBe a[RobotFailure.SafetyHold]
+      app.posture(13, Posture.Stand).failed.futureValue shouldBe a[RobotFailure.SafetyHold]
+      safetyStop.futureValue.robotId shouldBe 13
+      app.close()
+    }
+
+    "get fast robot-offline failures when the link is lost, while the robot stops its interrupted walk itself" in {
+      val network = LossyNetwork.start(seed = 4)
+      try {
+        val proxy = network.addProxy(robotPort, TestLoopback.address())
+        val sim = spawnRobot(14, to = proxy.clientSide)
+        online(14)
+        val app = connect(appNode(), "walker", 1)
+        app.acquire(14, ActuatorGroup.Walk).futureValue
+        app.posture(14, Posture.Stand).futureValue
+        app.walk(14, 0.2, 0.0, 0.0).futureValue
+        network.partition(proxy, on = true)
+        eventually {
+          val begin = System.nanoTime()
+          app.call(14, "system", "ping").failed.futureValue shouldBe RobotFailure.RobotOffline(14)
+          (System.nanoTime() - begin).nanos should be < 1.second
+        }
+        eventually(view(sim).posture shouldBe Posture.Stand)
+        network.partition(proxy, on = false)
+        online(14)
+        app.call(14, "system", "ping").futureValue.isDefined shouldBe true
+      } finally network.stop()
+    }
+
+    "lose a lease to a higher-priority app and be told so" in {
+      spawnRobot(15)
+      online(15)
+      val node = appNode()
+      val low = connect(node, "follower", 1)
+      val high = connect(appNode(), "referee", 9)
+      implicit val system: ActorSystem[_] = node
+      val lowEvents = low.appEvents.takeWithin(20.seconds).runWith(Sink.head)
+      low.acquire(15, ActuatorGroup.Walk).futureValue
+      high.acquire(15, ActuatorGroup.Walk).futureValue
+      lowEvents.futureValue shouldBe AppEvent.LeasePreempted(15, ActuatorGroup.Walk, "referee")
+      low.stop(15).failed.futureValue shouldBe RobotFailure.LeaseNotHeld(15, ActuatorGroup.Walk, Some("referee"))
+      high.stop(15).futureValue
+    }
+  }
+
+  "The ball follower" must {
+    "reach the simulated ball within a bounded time" in {
+      val sim = spawnRobot(16, firmware = _.copy(startPose = Pose(-1.0, 0.0, 0.0), scene = Scene(0.5, 0.3)))
+      online(16)
+      val node = appNode()
+      val robotInterface = connect(node, "ball-follower", 1)
+      // The follower lives in the app's own actor system, next to its RobotInterface.
+      val follower = node.systemActorOf(BallFollower(robotInterface, 16), "follower-16")
+      val deadline = 60.seconds.fromNow
+      var reached = false
+      while (!reached && deadline.hasTimeLeft()) {
+        reached =
+          follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue.reached
+        if (!reached) Thread.sleep(250)
+      }
+      reached shouldBe true
+      val v = view(sim)
+      math.hypot(v.pose.x - 0.5, v.pose.y - 0.3) should be < 0.5
+    }
+  }
+}
