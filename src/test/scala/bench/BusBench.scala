@@ -14,7 +14,8 @@ import naogateway.sim.bus.{Ax12, BioloidBus, BusTcpServer}
 import naogateway.sim.{FirmwareSettings, RobotFirmware, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback
 import naogateway.wire.{Dynamixel, MessageContents}
-import naogateway.{BusBridgeServer, BusBridgeSettings, RobotOnline}
+import naogateway.gateway.{BusBridgeServer, BusBridgeSettings}
+import naogateway.api.RobotOnline
 
 /** The robot's body (docs/protocol.md 6.8 and 6.9), measured in one run:
   *

@@ -318,12 +318,12 @@ class FirmwareQemuSpec
     "serve its bus to the official DynamixelSDK through the gateway's bus bridge and socat (protocol.md 6.9)" in {
       val began = System.nanoTime()
       apps.zeromq.PythonEnv.python() // cancels, saying why, without python3, venv or the dynamixel-sdk package
-      apps.busbridge.SdkBus.socat() // cancels without socat
+      apps.SdkBus.socat() // cancels without socat
       val (busPort, busLog) = busModel()
       val id = 72
       val base = freePort() - id
-      val bridge = spawn(naogateway.BusBridgeServer(rig.gateway,
-          naogateway.BusBridgeSettings(enabled = true, basePort = base), None))
+      val bridge = spawn(naogateway.gateway.BusBridgeServer(rig.gateway,
+          naogateway.gateway.BusBridgeSettings(enabled = true, basePort = base), None))
       try {
         val r = new BoardRobot(id, Some(busPort))
         r.awaitOnline()
@@ -332,12 +332,12 @@ class FirmwareQemuSpec
           eventually(timeout(20.seconds)) { new java.net.Socket("127.0.0.1", base + id).close() }
           // The probe held the one tool's place; the bridge frees it when it sees the probe gone.
           Thread.sleep(1000)
-          apps.busbridge.SdkBus.throughPty(base + id) { device =>
+          apps.SdkBus.throughPty(base + id) { device =>
             // A round trip crosses the link twice, the module's serial line and the emulated board: the SDK's packet
             // timeout is raised (README), here to 2 s. On a loaded host one round trip took over the 0.5 s the posix
             // robot gets, and the SDK, which matches a status packet to its request by id alone, took the late one
             // as the answer to its next request.
-            val (code, out) = apps.busbridge.SdkBus.run(device, Seq("--camera", "--latency-ms", "1000"))
+            val (code, out) = apps.SdkBus.run(device, Seq("--camera", "--latency-ms", "1000"))
             withClue(s"SDK:\n$out\nbus model:\n${QemuBoard.output(busLog).takeRight(2000)}\n") {
               code shouldBe 0
               (1 to 18).foreach(servo => out should include(s""""$servo": 12"""))

@@ -44,8 +44,8 @@ object RobotRow {
     * append it: `SERVOS hot 3,7 low-voltage 2`; None while none is (or before the first servo telemetry).
     */
   def servoMark(r: RobotSnapshot, limits: ServoLimits): Option[String] = {
-    val readings = r.servos.fold(Vector.empty[naogateway.ServoReading])(_.servos)
-    def ids(name: String, marked: naogateway.ServoReading => Boolean) =
+    val readings = r.servos.fold(Vector.empty[naogateway.api.ServoReading])(_.servos)
+    def ids(name: String, marked: naogateway.api.ServoReading => Boolean) =
       Some(readings.filter(marked).map(_.id)).filter(_.nonEmpty).map(i => s"$name ${i.mkString(",")}")
     val parts = Vector(ids("hot", limits.hot), ids("low-voltage", limits.lowVoltage)).flatten
     Option.when(parts.nonEmpty)(("SERVOS" +: parts).mkString(" "))

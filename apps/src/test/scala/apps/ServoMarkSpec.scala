@@ -5,7 +5,7 @@ import java.net.InetSocketAddress
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
-import naogateway.{LinkQuality, RobotSnapshot, ServoReading, ServoReadings}
+import naogateway.api.{LinkQuality, RobotSnapshot, ServoReading, ServoReadings}
 import robotmiddleware.ServoLimits
 
 /** The terminal views mark a robot's hot and low-voltage servos (`robotmiddleware.servos`): the launcher's status

@@ -1,6 +1,6 @@
 package robotmiddleware
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
 /** How apps are told of a call that a newer one replaced or a restart interrupted: as an overload to retry, the one
   * error type, in words for apps. Applied by the guard to the answers it relays and by `RobotInterface` to those the

@@ -3,7 +3,7 @@ package robotmiddleware
 import akka.actor.typed.ActorRef
 
 import naogateway.wire.{ActuatorGroup, Posture, RpcMethod, RpcValue}
-import naogateway.{LinkStats, RobotEvent, RobotFailure, RobotOffline, RobotOnline, VisionFrame}
+import naogateway.api.{LinkStats, RobotEvent, RobotFailure, RobotOffline, RobotOnline, VisionFrame}
 
 /** Everything a robot's guard knows, as one immutable value: the lease holders, the walk it keeps alive, the safety
   * hold and the battery readings behind it, whether the robot is online, the one safety stop in flight, and the apps'

@@ -16,7 +16,6 @@ import naogateway.api.{
   Priority,
   RobotEvent,
   RobotFailure,
-  RobotOffline,
   RobotOnline,
   RobotSnapshot,
   RobotStatusUpdated,

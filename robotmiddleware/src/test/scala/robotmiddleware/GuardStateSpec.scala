@@ -9,7 +9,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.{ActuatorGroup, Posture, RpcCall, RpcValue}
-import naogateway.{RobotFailure, RobotOffline, RobotOnline, RobotRestarted, VisionFrame}
+import naogateway.api.{RobotFailure, RobotOffline, RobotOnline, RobotRestarted, VisionFrame}
 import robotmiddleware.GuardState.{BatteryChange, SafetyStep}
 
 /** The guard's state without actors: each named transition, and `Operation` to and from the robot's calls. */
@@ -152,7 +152,7 @@ class GuardStateSpec extends AnyWordSpec with Matchers {
       again shouldBe false
       s2.visionWatchers shouldBe Map(camera -> true)
       s2.visionGone(camera).visionWatchers shouldBe empty
-      val stats = TestInbox[naogateway.LinkStats]().ref
+      val stats = TestInbox[naogateway.api.LinkStats]().ref
       onlineState.statsWatched(stats).statsGone(stats).statsWatchers shouldBe empty
     }
   }

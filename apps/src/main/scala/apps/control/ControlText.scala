@@ -1,8 +1,8 @@
 package apps.control
 
-import naogateway.RobotFailure
+import naogateway.api.RobotFailure
 
-import naogateway.{LinkStats, RobotSnapshot}
+import naogateway.api.{LinkStats, RobotSnapshot}
 import robotmiddleware.RobotHolds
 
 /** What robotctl prints, from what the control port reads: the status table's lines, a robot's servo table, the
@@ -54,8 +54,8 @@ object ControlText {
     f"${row.robotId}%-4d ${row.address.getOrElse("-")}%-22s ${row.linkState}%-8s " +
       f"${row.quality.fold("-")(_.name)}%-9s ${row.battery.fold("-")(v => f"$v%.2f V")}%-8s " +
       f"${row.posture.fold("-")(_.name)}%-8s " +
-      f"${row.report.role.fold("-")(naogateway.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
-      holds.fold("-")(h => naogateway.Printable.text(h.describeLeases)) +
+      f"${row.report.role.fold("-")(naogateway.api.Printable.text)}%-9s $rtt%-9s $loss%-6s $clock%-10s $drift%-9s " +
+      holds.fold("-")(h => naogateway.api.Printable.text(h.describeLeases)) +
       (if (holds.exists(_.safetyHold.isDefined)) " HELD SAFE" else "") +
       (if (row.report.development) " development build" else "") +
       apps.RobotRow.servoMark(r, limits).fold("")(" " + _)

@@ -197,9 +197,9 @@ private[apps] object RequestDesk {
   /** The answer to `gateway.servos`: `[hot ids, low-voltage ids]` by `limits`, and the telemetry the reply carries
     * (none before the robot's first).
     */
-  def servos(s: naogateway.RobotSnapshot, limits: robotmiddleware.ServoLimits): Answer = {
-    val readings = s.servos.fold(Vector.empty[naogateway.ServoReading])(_.servos)
-    def ids(marked: naogateway.ServoReading => Boolean) =
+  def servos(s: naogateway.api.RobotSnapshot, limits: robotmiddleware.ServoLimits): Answer = {
+    val readings = s.servos.fold(Vector.empty[naogateway.api.ServoReading])(_.servos)
+    def ids(marked: naogateway.api.ServoReading => Boolean) =
       RpcValue.Items(readings.filter(marked).map(r => RpcValue.UInt(r.id.toLong)))
     Answer(Some(RpcValue.Items(Vector(ids(limits.hot), ids(limits.lowVoltage)))), servos = s.servos)
   }

@@ -17,7 +17,7 @@ import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
 import spray.json._
 
-import naogateway.recording.{McapReader, Recording}
+import naogateway.gateway.recording.{McapReader, Recording}
 import naogateway.sim.bus.{BioloidBus, BusWork}
 import naogateway.sim.{Pose, Scene}
 import naogateway.wire.{HaViMo, HaViMoRegion, MessageContents}

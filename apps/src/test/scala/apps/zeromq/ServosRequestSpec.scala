@@ -6,7 +6,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.wire.{MessageContents, RpcCall, RpcReply, RpcValue}
-import naogateway.{LinkQuality, RobotSnapshot, ServoReading, ServoReadings}
+import naogateway.api.{LinkQuality, RobotSnapshot, ServoReading, ServoReadings}
 import robotmiddleware.ServoLimits
 
 /** `gateway.servos` (docs/zeromq.md 4): routed as a read of the gateway's own, answered with the ids of the hot and the

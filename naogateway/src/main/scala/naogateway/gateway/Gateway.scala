@@ -10,21 +10,14 @@ import naogateway.gateway.link.{Backlog, Replay, ReplayLink, RobotLink, RobotPor
 import naogateway.proto.RecordedPort
 import naogateway.api.recording.Decision
 import naogateway.gateway.recording.{Recording, RobotClockEstimates}
-import naogateway.wire._
-import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.access.GatewayAccess
 import naogateway.api.{
-  GameReading,
   GatewayAddresses,
   GatewayEvent,
-  GatewayStats,
-  LinkStats,
-  RobotLinks,
-  RobotSnapshot,
   RobotStatusUpdated
 }
-import naogateway.gateway.gamecontroller.GameControllerWatch
 import naogateway.gateway.link.PortReader
-import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef, RobotTransport, RobotWiring}
+import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef}
 
 /** The robot side of the middleware: the robots' UDP port, the robot registry, the GameController and the relay. */
 object Gateway {

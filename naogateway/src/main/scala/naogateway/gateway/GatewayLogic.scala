@@ -6,9 +6,13 @@ import java.util.concurrent.atomic.AtomicReference
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer}
 import akka.actor.typed.{ActorRef, Behavior, PostStop}
 
-import naogateway.link.{Backlog, ReplayLink, RobotLink, UdpLink}
+import naogateway.access.{GatewayAccess, RobotAccess}
+import naogateway.api.{GameReading, GatewayAddresses, GatewayEvent, GatewayStats, LinkStats, RobotLinks, RobotSnapshot}
+import naogateway.gateway.gamecontroller.GameControllerWatch
+import naogateway.gateway.link.{Backlog, PortReader, ReplayLink, RobotLink, UdpLink}
+import naogateway.gateway.recording.{Recording, RobotClockEstimates}
+import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef, RobotTransport, RobotWiring}
 import naogateway.proto.RecordedPort
-import naogateway.recording.{Recording, RobotClockEstimates}
 import naogateway.wire._
 
 /** The gateway's logic behind its protocol (`Gateway`): the robot registry (configured, ZeroMQ and discovered robots,
@@ -70,10 +74,10 @@ private[naogateway] final class GatewayLogic(
       context.log.info("Gateway listening for the GameController on {}", gcLocal)
       gameControllerAddress = Some(gcLocal)
       settings.monitor.foreach(watch.startMonitor(gcLink, _))
-      stash.unstashAll(running(Addresses(port.localAddress, Some(gcLocal))))
+      stash.unstashAll(running(GatewayAddresses(port.localAddress, Some(gcLocal))))
     case GameControllerEvent(UdpLink.BindFailed(address, reason)) =>
       context.log.error("GameController listener cannot bind {}: {}; game state will be unknown", address, reason)
-      stash.unstashAll(running(Addresses(port.localAddress, None)))
+      stash.unstashAll(running(GatewayAddresses(port.localAddress, None)))
     case u: Unrouted =>
       // Robots speak before the GameController socket is bound; discovery must not wait for it.
       handleUnrouted(u)
@@ -182,7 +186,7 @@ private[naogateway] final class GatewayLogic(
     }
   }
 
-  def running(addresses: Addresses): Behavior[Command] =
+  def running(addresses: GatewayAddresses): Behavior[Command] =
     Behaviors.receiveMessage[Command] {
       case u: Unrouted =>
         handleUnrouted(u)
@@ -249,7 +253,7 @@ private[naogateway] final class GatewayLogic(
     }.receiveSignal { case (_, PostStop) => closePort() }
 
   /** A message of the public protocol: the middleware's and the operator tools'. */
-  private def accessRequest(request: GatewayAccess.Command, addresses: Addresses): Unit = request match {
+  private def accessRequest(request: GatewayAccess.Command, addresses: GatewayAddresses): Unit = request match {
     case GatewayAccess.Subscribe(subscriber) =>
       context.watchWith(subscriber, SubscriberGone(subscriber))
       subscribers += subscriber

@@ -5,7 +5,7 @@ import java.net.{InetAddress, InetSocketAddress}
 
 import com.google.protobuf.ByteString
 
-import naogateway._
+import naogateway.api._
 import naogateway.wire.{ActuatorGroup, HaViMoRegion, Posture}
 import robotmiddleware.Operation
 import robotmiddleware.cluster.{proto => pb}
@@ -59,7 +59,7 @@ private[cluster] object CrossNodeProtos {
 
   def toProto(f: RobotFailure): pb.RobotFailure = {
     import pb.RobotFailure.Kind
-    import naogateway.{RobotFailure => F}
+    import naogateway.api.{RobotFailure => F}
     pb.RobotFailure(f match {
       case F.RobotOffline(robotId) => Kind.RobotOffline(pb.RobotFailure.RobotOffline(robotId))
       case F.UnknownRobot(robotId) => Kind.UnknownRobot(pb.RobotFailure.UnknownRobot(robotId))
@@ -77,7 +77,7 @@ private[cluster] object CrossNodeProtos {
 
   def fromProto(f: pb.RobotFailure): RobotFailure = {
     import pb.RobotFailure.Kind
-    import naogateway.{RobotFailure => F}
+    import naogateway.api.{RobotFailure => F}
     f.kind match {
       case Kind.RobotOffline(m) => F.RobotOffline(m.robotId)
       case Kind.UnknownRobot(m) => F.UnknownRobot(m.robotId)
@@ -158,7 +158,7 @@ private[cluster] object CrossNodeProtos {
     )
 
   def fromProto(s: pb.RobotSnapshot): RobotSnapshot =
-    naogateway.RobotSnapshot(
+    naogateway.api.RobotSnapshot(
       robotId = s.robotId,
       address = fromProto(s.address),
       teamId = s.teamId,
@@ -175,9 +175,9 @@ private[cluster] object CrossNodeProtos {
       development = s.development.contains(true),
       signing = s.signing.fold[SigningState](SigningState.Off)(fromProto),
       servos = s.servos.map(t =>
-        naogateway.ServoReadings(
-          t.servos.iterator.take(naogateway.ServoReadings.MaxServos).map(r =>
-            naogateway.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, r.error.getOrElse(0),
+        naogateway.api.ServoReadings(
+          t.servos.iterator.take(naogateway.api.ServoReadings.MaxServos).map(r =>
+            naogateway.api.ServoReading(r.id, r.position, r.load, r.voltage, r.temperature, r.error.getOrElse(0),
               r.silent.contains(true))).toVector,
           t.busErrors,
           t.receivedAtNanos

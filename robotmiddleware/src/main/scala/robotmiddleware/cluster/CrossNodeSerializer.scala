@@ -14,7 +14,6 @@ import scalapb.GeneratedMessage
 import naogateway.api.{
   CallResult,
   GameStateUpdated,
-  LinkQuality,
   LinkQualityChanged,
   LinkStats,
   RobotFailure,
@@ -24,7 +23,6 @@ import naogateway.api.{
   RobotRestarted,
   RobotSnapshot,
   RobotStatusUpdated,
-  SigningState,
   VisionFrame
 }
 import naogateway.wire.gamecontroller.{GameControlData, GameControllerCodec}

@@ -12,6 +12,9 @@ import naogateway._
 import naogateway.sim._
 import naogateway.testkit.TestLoopback
 import naogateway.wire.Dynamixel
+import naogateway.gateway.BusBridgeServer
+import naogateway.gateway.BusBridgeSettings
+import naogateway.api.RobotOnline
 
 /** The bus bridge during the demo's game (docs/protocol.md 6.9, README "Calibrating a HaViMo2 over WiFi"): competition
   * mode off, as in the demo, and the simulated GameController sending each round to the gateway and to the robot, as

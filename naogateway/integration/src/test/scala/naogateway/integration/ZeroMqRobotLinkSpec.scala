@@ -27,6 +27,9 @@ import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
 import naogateway.wire.{MessageContents, Posture, RpcCall, RpcReply, RpcValue}
 import naogateway.gateway.link.ZeroMqRobotLink
 import naogateway.transport.ZeroMqLoop
+import naogateway.gateway.robot.NoResponseActor
+import naogateway.api.Priority
+import naogateway.gateway.robot.RobotFrames
 
 object ZeroMqRobotLinkSpec {
 

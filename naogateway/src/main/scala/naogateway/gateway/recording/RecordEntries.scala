@@ -4,6 +4,7 @@ import java.net.InetSocketAddress
 
 import com.google.protobuf.CodedOutputStream
 
+import naogateway.api.recording.Decision
 import naogateway.proto.{RecordedDirection, RecordedPort}
 
 /** Protobuf bytes of the messages the writer thread writes, in one array reused from message to message (grown when

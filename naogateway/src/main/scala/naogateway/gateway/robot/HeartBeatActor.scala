@@ -5,9 +5,9 @@ import scala.collection.immutable.Queue
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
-import naogateway.RobotFrames.Outbound
+import naogateway.gateway.robot.RobotFrames.Outbound
 import naogateway.wire.RpcCall
-import naogateway.api.LinkQuality
+import naogateway.api.{LinkQuality, Priority}
 import naogateway.gateway.HeartbeatSettings
 
 /** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. Its

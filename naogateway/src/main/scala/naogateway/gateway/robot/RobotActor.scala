@@ -13,7 +13,7 @@ import naogateway.gateway.link.ZeroMqRobotLink
 import naogateway.proto.DebuggingCommands
 import naogateway.wire._
 import naogateway.access.RobotAccess
-import naogateway.api.{GatewayEvent, Priority, RobotForgotten, RobotOffline, RobotOnline, VisionFrame}
+import naogateway.api.{GatewayEvent, RobotForgotten, RobotOffline, RobotOnline, VisionFrame}
 import naogateway.gateway.{Gateway, GatewaySettings, Rejection, RobotSigning}
 
 /** The supervisor of one robot: carries out `RobotState`'s transitions (its address, liveness, subscribers, options and

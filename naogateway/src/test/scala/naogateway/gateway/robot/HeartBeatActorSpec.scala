@@ -10,6 +10,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 import naogateway.api.LinkQuality
 import naogateway.gateway.HeartbeatSettings
 import naogateway.gateway.robot.HeartBeatActor._
+import naogateway.api.Priority
 
 class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) with AnyWordSpecLike with LogCapturing {
   private val manualTime = ManualTime()
