@@ -11,11 +11,7 @@ import naogateway.proto.RecordedPort
 import naogateway.api.recording.Decision
 import naogateway.gateway.recording.{Recording, RobotClockEstimates}
 import naogateway.access.GatewayAccess
-import naogateway.api.{
-  GatewayAddresses,
-  GatewayEvent,
-  RobotStatusUpdated
-}
+import naogateway.api.{GatewayAddresses, GatewayEvent, RobotStatusUpdated}
 import naogateway.gateway.link.PortReader
 import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef}
 
