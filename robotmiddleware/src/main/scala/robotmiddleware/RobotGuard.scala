@@ -1,7 +1,5 @@
 package robotmiddleware
 
-import naogateway.wire.ActuatorGroup
-
 import scala.concurrent.duration._
 import scala.util.{Failure, Success}
 
@@ -10,18 +8,9 @@ import akka.actor.typed.{ActorRef, Behavior}
 import akka.util.Timeout
 
 import naogateway.access.RobotAccess
-import naogateway.api.{
-  CallResult,
-  LinkStats,
-  Priority,
-  RobotEvent,
-  RobotFailure,
-  RobotOnline,
-  RobotSnapshot,
-  RobotStatusUpdated,
-  VisionFrame
-}
-import naogateway.wire.{Posture, RpcCall, RpcMethod, RpcValue}
+import naogateway.api.{CallResult, LinkStats, Priority, RobotEvent, RobotFailure, RobotOnline}
+import naogateway.api.{RobotSnapshot, RobotStatusUpdated, VisionFrame}
+import naogateway.wire.{ActuatorGroup, Posture, RpcCall, RpcMethod, RpcValue}
 import robotmiddleware.GuardState.{BatteryChange, SafetyStep}
 
 /** An app as the middleware knows it: its event ref (its identity), name and priority. */

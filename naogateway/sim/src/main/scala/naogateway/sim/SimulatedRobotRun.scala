@@ -9,7 +9,7 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.gateway.link.UdpLink
-import naogateway.wire.{BusBridgeFrame, Datagram, MessageContents, RpcCall, WireLimits}
+import naogateway.wire.{MessageContents, RpcCall, WireLimits}
 
 /** One simulated robot's actor while it runs: its sockets, its models and its states (see [[SimulatedRobot]]). */
 private[sim] final class SimulatedRobotRun(
@@ -310,7 +310,7 @@ private[sim] final class SimulatedRobotRun(
         if (reset) robot = robot.copy(stats = robot.stats.copy(droppedWhileOff = robot.stats.droppedWhileOff + 1))
         else {
           val at = math.max(d.at, robot.firmware.now)
-          handle(robot, d.bytes, d.from.getOrElse(gateway), at) match {
+          RobotDatagrams.handle(robot, d.bytes, d.from.getOrElse(gateway), at, gateway, logCalls) match {
             case (next, transmit, frames) =>
               robot = next
               segments ++= transmit
@@ -329,7 +329,7 @@ private[sim] final class SimulatedRobotRun(
           segments ++= step.transmit.map(Out(_, gateway))
         }
       }
-      val (routed, replies) = route(robot, app.result(), t)
+      val (routed, replies) = RobotDatagrams.route(robot, app.result(), t, gateway)
       robot = routed
       val plain = segments.result() ++ replies
       deliveries = Vector.empty
@@ -353,61 +353,6 @@ private[sim] final class SimulatedRobotRun(
     }
     robot = robot.copy(stats = send(robot.stats, out.result()))
     (robot, reset)
-  }
-
-  /** One datagram the firmware has read: a stream segment goes to the stream, anything else to the firmware. */
-  private def handle(
-      robot: Robot, bytes: Array[Byte], from: InetSocketAddress, at: Long): (Robot, Vector[Out], Vector[Outgoing]) =
-    Datagram.classify(bytes) match {
-      case Datagram.StreamSegment(segment) =>
-        val counted = robot.copy(stats = robot.stats.copy(streamSegments = robot.stats.streamSegments + 1))
-        counted.stream.fold((counted, Vector.empty[Out], Vector.empty[Outgoing])) { stream =>
-          val step = stream.receive(segment, at)
-          var next = counted.copy(stream = Some(step.stream))
-          val app = Vector.newBuilder[Outgoing]
-          // Each delivered payload is one frame from the gateway; its replies go back through the stream.
-          step.deliver.filter(Datagram.isFuRemoteFrame).foreach { frame =>
-            val when = math.max(at, next.firmware.now)
-            BusBridgeFrame.decode(frame).map(_._2) match {
-              case Some(request) =>
-                // A bridged bus request (docs/protocol.md 6.9): one reply, back through the stream.
-                val (firmware, reply) = RobotFirmware.busBridge(next.firmware, request, when)
-                next = next.copy(firmware = firmware)
-                app += Outgoing(reply, Destination.ReplyTo(ThroughStream))
-              case None =>
-                logCalls(frame, at)
-                val (firmware, out) = RobotFirmware.receive(next.firmware, frame, ThroughStream, when, viaStream = true)
-                next = next.copy(firmware = firmware)
-                app ++= out
-            }
-          }
-          (next, step.transmit.map(Out(_, gateway)), app.result())
-        }
-      case _ if BusBridgeFrame.mayCarry(bytes) && BusBridgeFrame.decode(bytes).isDefined =>
-        // A bus bridge frame travels only in the secure stream (docs/protocol.md 6.9): a plain one is dropped, counted.
-        (robot.copy(stats = robot.stats.copy(busBridgeDropped = robot.stats.busBridgeDropped + 1)), Vector.empty,
-          Vector.empty)
-      case _ =>
-        logCalls(bytes, at)
-        val (firmware, out) = RobotFirmware.receive(robot.firmware, bytes, from, at)
-        (robot.copy(firmware = firmware), Vector.empty, out)
-    }
-
-  /** Where the firmware's datagrams go: replies to stream requests into the stream, everything else on the air. */
-  private def route(robot: Robot, outgoing: Vector[Outgoing], t: Long): (Robot, Vector[Out]) = {
-    var next = robot
-    val plain = Vector.newBuilder[Out]
-    outgoing.foreach {
-      case Outgoing(bytes, Destination.Gateway) => plain += Out(bytes, gateway)
-      case Outgoing(bytes, Destination.ReplyTo(ThroughStream)) =>
-        next.stream.foreach { s =>
-          val step = s.send(bytes, t)
-          next = next.copy(stream = Some(step.stream))
-          plain ++= step.transmit.map(Out(_, gateway))
-        }
-      case Outgoing(bytes, Destination.ReplyTo(to)) => plain += Out(bytes, to)
-    }
-    (next, plain.result())
   }
 
   /** Puts datagrams on the socket; nothing larger than the module's 1400 bytes ever leaves a robot. */
