@@ -1,5 +1,5 @@
 /* firmware/tests/test_gamecontroller.c: GameController packets (docs/protocol.md section 10): the real packets
- * of wire/src/test/resources/vectors/gamecontroller, versions 12 and 19 built field by field from
+ * of naogateway/wire/src/test/resources/vectors/gamecontroller, versions 12 and 19 built field by field from
  * their official layouts, the gateway's version-20 vectors, the version preference and the return packets. */
 #include <stdio.h>
 #include <string.h>

@@ -325,7 +325,7 @@ private[naogateway] final class GatewayLogic(
               // Anyone can invent robot ids: what they create is bounded, the rest is counted (and logged rarely).
               reject(Rejection.RobotCapReached, from, s"robot id $robotId")
             else {
-              /* The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port. */
+              // The robot receives at its IP on the receive port (docs/protocol.md section 2), not at this source port.
               val at = new InetSocketAddress(ip, settings.robotReceivePort)
               context.log.info("Discovered robot [{}] at {} (sending from {})", robotId, at, from)
               deliver(spawnRobot(robotId, at, discovered = true))
