@@ -24,7 +24,7 @@ object ResponseActor {
     */
   private[naogateway] sealed trait Command
 
-  /** A caller's call (the middleware's, or the sender's `Send`). */
+  /** A caller's call. */
   private[naogateway] final case class Called(call: RobotAccess.Call) extends Command
 
   /** A reply with one of this actor's call ids arrived. */
