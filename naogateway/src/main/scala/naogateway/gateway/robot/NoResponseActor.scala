@@ -37,11 +37,16 @@ object NoResponseActor {
   /** Sends the call `key` (in flight) again as `out`, a new request marked `tag` (its new call id). */
   private[naogateway] final case class Resend(key: Long, out: Outbound, tag: Long) extends Command
 
-  /** `key` was answered or given up: it no longer takes room in the robot's buffer. */
-  private[naogateway] final case class Finished(key: Long) extends Command
+  /** `keys` were answered or given up: none of them takes room in the robot's buffer or is to leave any more. Only the
+    * submitter of each says so (it alone knows when its request has ended); keys given together leave together, before
+    * a waiting one takes the room they free.
+    */
+  private[naogateway] final case class Finished(keys: Set[Long]) extends Command
 
-  /** `keys` were all given up at once (their caller went offline or restarted): none of them is to leave now. */
-  private[naogateway] final case class Abandoned(keys: Set[Long]) extends Command
+  /** One request ended. */
+  private[naogateway] object Finished {
+    def apply(key: Long): Finished = Finished(Set(key))
+  }
 
   /** Where the robot is reached now. */
   private[naogateway] final case class RouteChanged(route: Route) extends Command
@@ -166,11 +171,7 @@ object NoResponseActor {
                 running(order.updated(key, again), route, nextKey)
               case None => Behaviors.same // given up meanwhile: its caller has its answer
             }
-          case Finished(key) =>
-            timers.cancel(key)
-            val (next, steps) = order.complete(key)
-            running(perform(next, steps, route, None), route, nextKey)
-          case Abandoned(keys) =>
+          case Finished(keys) =>
             keys.foreach(timers.cancel)
             val (next, steps) = order.completeAll(keys)
             running(perform(next, steps, route, None), route, nextKey)

@@ -108,7 +108,7 @@ object ResponseActor {
         answer(p, Left(error(p.call.name)))
       }
       // All at once: a waiting call answered here must not take the room another one frees.
-      if (calls.nonEmpty) sender ! NoResponseActor.Abandoned(calls.keySet)
+      if (calls.nonEmpty) sender ! NoResponseActor.Finished(calls.keySet)
     }
 
     private def keyOf(calls: Calls, id: Long): Option[Long] = calls.collectFirst { case (k, p) if p.ids(id) => k }
