@@ -128,6 +128,7 @@ object NoResponseActor {
       timers: TimerScheduler[Command],
       stash: StashBuffer[Command]
   ) {
+
     /** Before the robot actor has told the route: everything waits (bounded). */
     def awaitingRoute: Behavior[Command] = Behaviors
       .receiveMessage[Command] {
@@ -237,7 +238,7 @@ object NoResponseActor {
         }
         stash.foreach {
           case s: Submit => s.key.foreach(k => s.notices.foreach(_ ! Notice.Interrupted(k)))
-          case _ => ()
+          case _         => ()
         }
         Behaviors.same
     }

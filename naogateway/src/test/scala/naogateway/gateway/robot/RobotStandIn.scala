@@ -26,7 +26,8 @@ object RobotStandIn {
   /** Answers the start-up questions of a sender and its response actor, in whichever order they come: the response
     * actor's reachability, and the sender's route to `outbox`.
     */
-  def started(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command], online: Boolean = true): Unit = {
+  def started(
+      robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command], online: Boolean = true): Unit = {
     var left = 2
     robot.fishForMessage(robot.remainingOrDefault) {
       case RobotActor.ReachabilityWanted(r) =>
