@@ -52,7 +52,7 @@ class NarrowedAccessSpec extends AnyWordSpec with Matchers {
       assertTypeError("Outbox.RobotGone(1)")
       assertTypeError("HeartBeatActor.ProbeNow")
       assertTypeError("StreamActor.Send(Array.emptyByteArray)")
-      assertTypeError("NoResponseActor.Send(null)")
+      assertTypeError("naogateway.gateway.robot.RobotTestHooks.crashSender(null)")
       // The public protocol's wrappers are the gateway's own too: the middleware sends the access messages themselves.
       assertTypeError("Gateway.AccessRequest(GatewayAccess.GetRobots(null))")
       assertTypeError("RobotActor.Asked(RobotAccess.GetSnapshot(null))")

@@ -11,7 +11,7 @@ import com.typesafe.config.ConfigFactory
 import naogateway.access.{GatewayAccess, RobotAccess}
 import naogateway.api.{GatewayAddresses, GatewayEvent, GatewayStats, TrafficStats}
 import naogateway.gateway.{Gateway, GatewaySettings}
-import naogateway.gateway.robot.{NoResponseActor, RobotActor, RobotEffects, StreamActor, VisionActor}
+import naogateway.gateway.robot.{RobotActor, RobotEffects, RobotTestHooks}
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback
 
@@ -80,16 +80,14 @@ final class GatewayFixture(testKit: ActorTestKit, overrides: String = "") {
     GatewayInternals.connect(gateway, robotId)(testKit.system)
       .getOrElse(throw new NoSuchElementException(s"robot $robotId unknown"))
 
-  /** Makes robot `robotId`'s vision actor fail as a bug would (a null registration list), for restart specs outside the
-    * package: the message that does it is the robot actor's alone.
-    */
-  def crashVision(robotId: Int): Unit = connect(robotId).vision ! VisionActor.Subscribers(null)
+  /** Makes robot `robotId`'s vision actor fail as a bug would, for restart specs outside the package. */
+  def crashVision(robotId: Int): Unit = RobotTestHooks.crashVision(connect(robotId))
 
-  /** Makes robot `robotId`'s stream actor fail as a bug would (a null reply ref). */
-  def crashStream(robotId: Int): Unit = connect(robotId).stream ! StreamActor.GetStats(null)
+  /** Makes robot `robotId`'s stream actor fail as a bug would. */
+  def crashStream(robotId: Int): Unit = RobotTestHooks.crashStream(connect(robotId))
 
-  /** Makes robot `robotId`'s sender hand a null call to the response actor, which fails on it once. */
-  def crashSender(robotId: Int): Unit = connect(robotId).noResponse ! NoResponseActor.Send(null)
+  /** Makes robot `robotId`'s sender fail as a bug would, on its next transmission. */
+  def crashSender(robotId: Int): Unit = RobotTestHooks.crashSender(connect(robotId))
 
   /** Robot `robotId` as the middleware reaches it (its public protocol). */
   def robotAccess(robotId: Int): ActorRef[RobotAccess.Command] = {

@@ -30,7 +30,7 @@ import naogateway.api.{
   VisionFrame
 }
 import naogateway.gateway.{Rejection, RejectionLedger}
-import naogateway.gateway.robot.{NoResponseActor, Outbox, RobotEffects}
+import naogateway.gateway.robot.{Outbox, RobotEffects, RobotTestHooks}
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, ZeroMqSimulatedRobot}
 import naogateway.testkit.{GameControllerCodecSupport, TestLoopback}
 import naogateway.sim.network.{Impairment, LossyNetwork}
@@ -260,7 +260,7 @@ class GatewayIntegrationSpec extends ScalaTestWithActorTestKit with AnyWordSpecL
           // In-order speech: only texts that arrived are recorded, and they arrive in the order sent.
           val said = createTestProbe[CallResult]()
           (1 to 10).foreach(i =>
-            connected.noResponse ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))),
+            RobotTestHooks.sendOnce(connected.response, RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))),
               Some(said.ref)))
           said.receiveMessages(10, 60.seconds)
           val texts = f.view(robot).said.map(_.toInt)

@@ -11,7 +11,8 @@ import naogateway.api.{LinkQuality, Priority}
 import naogateway.gateway.HeartbeatSettings
 
 /** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. Its
-  * probes go straight to the robot's sender (as the stream's segments do); its verdicts and figures to the robot actor.
+  * probes go straight to the robot's sender (as the stream's segments do), which it tells when each was answered; its
+  * verdicts and figures go to the robot actor.
   */
 private[naogateway] object HeartBeatActor {
 
@@ -135,7 +136,7 @@ private[naogateway] object HeartBeatActor {
       case QuietCheck             => probe(chance = 1, wasOnline = true, q)
       case ProbeNow | BackoffOver => Behaviors.same
       case ProbeAnswered(id) =>
-        if (isAwaited(id)) reportRoundTrip()
+        if (answered(id)) reportRoundTrip()
         Behaviors.same
       case ProbeTimeout => Behaviors.same
     }
@@ -154,7 +155,13 @@ private[naogateway] object HeartBeatActor {
       )
     }
 
-    private def isAwaited(id: Long): Boolean = id == probeId
+    /** A reply to probe `id` arrived: its room in the robot's buffer is free (a probe's room is this actor's to free,
+      * whether it still waits for that probe or not); true when it is the probe it waits for.
+      */
+    private def answered(id: Long): Boolean = {
+      sender ! NoResponseActor.Finished(id)
+      id == probeId
+    }
 
     private def reportRoundTrip(): Unit = {
       report ! ProbeRoundTrip(System.nanoTime() - probeSentAt)
@@ -179,7 +186,7 @@ private[naogateway] object HeartBeatActor {
     private def probing(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = Behaviors.receiveMessage {
       case KeepAliveSeen => backOnline(wasOnline, q.seen, probeAnswered = false)
       case ProbeAnswered(id) =>
-        if (isAwaited(id)) backOnline(wasOnline, q, probeAnswered = true) else Behaviors.same
+        if (answered(id)) backOnline(wasOnline, q, probeAnswered = true) else Behaviors.same
       case ProbeTimeout =>
         if (chance < settings.chances) probe(chance + 1, wasOnline, q)
         else {
@@ -214,7 +221,7 @@ private[naogateway] object HeartBeatActor {
           probe(chance = 1, wasOnline = false, q)
         } else Behaviors.same
       case ProbeAnswered(id) =>
-        if (isAwaited(id)) backOnline(wasOnline = false, q, probeAnswered = true) else Behaviors.same
+        if (answered(id)) backOnline(wasOnline = false, q, probeAnswered = true) else Behaviors.same
       case QualityTick | QuietCheck | ProbeTimeout => Behaviors.same
     }
   }

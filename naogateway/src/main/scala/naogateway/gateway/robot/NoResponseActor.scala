@@ -6,9 +6,8 @@ import akka.actor.typed.scaladsl.{ActorContext, Behaviors, StashBuffer, TimerSch
 import akka.actor.typed.{ActorRef, Behavior, PostStop, PreRestart, Signal}
 
 import naogateway.gateway.robot.RobotFrames.{Outbound, Route}
-import naogateway.wire.{RpcCall, RpcMethod}
-import naogateway.access.RobotAccess
-import naogateway.api.{CallResult, Priority, RobotFailure}
+import naogateway.wire.RpcMethod
+import naogateway.api.Priority
 import naogateway.gateway.CallSettings
 
 /** The one actor that sends to its robot. Everything for robot N passes here: the callers' calls (submitted by
@@ -21,12 +20,6 @@ object NoResponseActor {
 
   /** What the sender accepts. */
   sealed trait Command
-
-  /** Sends `call` in order, its reply dropped; `replyTo`, when given, learns how it ended (the robot's answer, an error
-    * or a drop). Sent once, never retried.
-    */
-  private[naogateway] final case class Send(call: RpcCall, replyTo: Option[ActorRef[CallResult]] = None,
-      priority: Priority = Priority.Command) extends Command
 
   /** Sends `out` in order. `key` names it while it takes room (a call's first call id; the sender picks one when
     * `None`); `awaits` says whether it takes room until answered; `outcome` learns the outbox's word on each
@@ -44,15 +37,19 @@ object NoResponseActor {
   /** Sends the call `key` (in flight) again as `out`, a new request marked `tag` (its new call id). */
   private[naogateway] final case class Resend(key: Long, out: Outbound, tag: Long) extends Command
 
-  /** `key` was answered or given up: it no longer takes room in the robot's buffer. */
-  private[naogateway] final case class Finished(key: Long) extends Command
+  /** `keys` were answered or given up: none of them takes room in the robot's buffer or is to leave any more. Only the
+    * submitter of each says so (it alone knows when its request has ended); keys given together leave together, before
+    * a waiting one takes the room they free.
+    */
+  private[naogateway] final case class Finished(keys: Set[Long]) extends Command
 
-  /** `keys` were all given up at once (their caller went offline or restarted): none of them is to leave now. */
-  private[naogateway] final case class Abandoned(keys: Set[Long]) extends Command
+  /** One request ended. */
+  private[naogateway] object Finished {
+    def apply(key: Long): Finished = Finished(Set(key))
+  }
 
-  /** Where the robot is reached now, and the response actor that correlates this robot's calls. */
-  private[naogateway] final case class RouteChanged(route: Route, responder: ActorRef[ResponseActor.Command])
-      extends Command
+  /** Where the robot is reached now. */
+  private[naogateway] final case class RouteChanged(route: Route) extends Command
 
   private final case class HoldOver(key: Long) extends Command
 
@@ -119,7 +116,7 @@ object NoResponseActor {
         Behaviors.withStash(settings.stashCapacity) { stash =>
           // The route is the robot actor's: asked for on every (re)start, pushed on every change.
           robot ! RobotActor.RouteWanted(context.self)
-          new Sender(robotId, settings, sent, context, timers, stash).awaitingRoute
+          new Sender(robotId, settings, sent, timers, stash).awaitingRoute
         }
       }
     }
@@ -128,22 +125,16 @@ object NoResponseActor {
       robotId: Int,
       settings: CallSettings,
       sent: SentFigures,
-      context: ActorContext[Command],
       timers: TimerScheduler[Command],
       stash: StashBuffer[Command]
   ) {
-    private val dropReplies = context.system.ignoreRef[CallResult]
 
     /** Before the robot actor has told the route: everything waits (bounded). */
     def awaitingRoute: Behavior[Command] = Behaviors
       .receiveMessage[Command] {
-        case RouteChanged(route, responder) =>
+        case RouteChanged(route) =>
           val order = CommandOrder.empty[Item](MaxInFlight, settings.stashCapacity)
-          stash.unstashAll(running(order, route, responder, Long.MinValue))
-        case s: Send if stash.isFull =>
-          val why = RobotFailure.Overloaded(robotId, s"${stash.size} wait for the robot's address")
-          s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(why)))
-          Behaviors.same
+          stash.unstashAll(running(order, route, Long.MinValue))
         case s: Submit if stash.isFull =>
           val item = Item(s.out, s.priority, s.awaits, s.outcome, s.notices, 0L, Set.empty)
           refuse(s.key.getOrElse(0L), item, "the sender has no route yet")
@@ -155,15 +146,9 @@ object NoResponseActor {
       .receiveSignal(signals(None))
 
     /** Sending: `nextKey` numbers the entries that come without a key of their own (below every call id). */
-    private def running(
-        order: Order, route: Route, responder: ActorRef[ResponseActor.Command], nextKey: Long): Behavior[Command] =
+    private def running(order: Order, route: Route, nextKey: Long): Behavior[Command] =
       Behaviors
         .receiveMessage[Command] {
-          case Send(call, replyTo, priority) =>
-            // Correlated like any call (its id, its deadline, one answer), then submitted back here in turn.
-            responder ! ResponseActor.Called(
-              RobotAccess.Call(call, replyTo.getOrElse(dropReplies), priority, idempotent = Some(false)))
-            Behaviors.same
           case Submit(out, priority, key, awaits, outcome, notices) =>
             val k = key.getOrElse(nextKey)
             val item = Item(out, priority, awaits, outcome, notices, k, Set(k))
@@ -177,28 +162,24 @@ object NoResponseActor {
             val (next, steps) = order.submit(entry)
             val after = perform(next, steps, route, Some(k))
             if (after.waiting.exists(_.key == k)) notices.foreach(_ ! Notice.Queued(k))
-            running(after, route, responder, if (key.isEmpty) nextKey + 1 else nextKey)
+            running(after, route, if (key.isEmpty) nextKey + 1 else nextKey)
           case Resend(key, out, tag) =>
             order.find(key) match {
               case Some(e) =>
                 val again = e.payload.copy(out = out, tag = tag, tags = e.payload.tags + tag)
                 // A waiting call only changes what it will carry; one in flight leaves again now.
                 if (order.inFlightCall(key).isDefined) transmit(again, route)
-                running(order.updated(key, again), route, responder, nextKey)
+                running(order.updated(key, again), route, nextKey)
               case None => Behaviors.same // given up meanwhile: its caller has its answer
             }
-          case Finished(key) =>
-            timers.cancel(key)
-            val (next, steps) = order.complete(key)
-            running(perform(next, steps, route, None), route, responder, nextKey)
-          case Abandoned(keys) =>
+          case Finished(keys) =>
             keys.foreach(timers.cancel)
             val (next, steps) = order.completeAll(keys)
-            running(perform(next, steps, route, None), route, responder, nextKey)
+            running(perform(next, steps, route, None), route, nextKey)
           case HoldOver(key) =>
             val (next, steps) = order.complete(key)
-            running(perform(next, steps, route, None), route, responder, nextKey)
-          case RouteChanged(newRoute, newResponder) => running(order, newRoute, newResponder, nextKey)
+            running(perform(next, steps, route, None), route, nextKey)
+          case RouteChanged(newRoute) => running(order, newRoute, nextKey)
         }
         .receiveSignal(signals(Some(order)))
 
@@ -257,10 +238,7 @@ object NoResponseActor {
         }
         stash.foreach {
           case s: Submit => s.key.foreach(k => s.notices.foreach(_ ! Notice.Interrupted(k)))
-          case s: Send =>
-            val why = RobotFailure.Interrupted(robotId, s.call.name)
-            s.replyTo.foreach(_ ! CallResult(robotId, s.call.name, Left(why)))
-          case _ => ()
+          case _         => ()
         }
         Behaviors.same
     }

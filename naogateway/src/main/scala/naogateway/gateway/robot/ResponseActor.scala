@@ -24,7 +24,7 @@ object ResponseActor {
     */
   private[naogateway] sealed trait Command
 
-  /** A caller's call (the middleware's, or the sender's `Send`). */
+  /** A caller's call. */
   private[naogateway] final case class Called(call: RobotAccess.Call) extends Command
 
   /** A reply with one of this actor's call ids arrived. */
@@ -108,7 +108,7 @@ object ResponseActor {
         answer(p, Left(error(p.call.name)))
       }
       // All at once: a waiting call answered here must not take the room another one frees.
-      if (calls.nonEmpty) sender ! NoResponseActor.Abandoned(calls.keySet)
+      if (calls.nonEmpty) sender ! NoResponseActor.Finished(calls.keySet)
     }
 
     private def keyOf(calls: Calls, id: Long): Option[Long] = calls.collectFirst { case (k, p) if p.ids(id) => k }

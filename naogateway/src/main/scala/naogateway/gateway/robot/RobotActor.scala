@@ -229,7 +229,7 @@ object RobotActor {
           wiring.backlog.done()
           // Only a verified frame of a robot that must sign gets here (the port's reader checks it first).
           val (next, formChanged) = (if (signs) s.signatureAccepted else s).frameReceived(size, form)
-          if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
+          if (formChanged) f.sender ! NoResponseActor.RouteChanged(route(next, f))
           effects.frame(contents, f, c, next, isOnline)
         case SegmentReceived(bytes) =>
           wiring.backlog.done()
@@ -242,7 +242,7 @@ object RobotActor {
         case Rebound(to) =>
           context.log.info("Robot [{}] re-bound from {} to {}", robotId, s.address, to)
           val next = s.rebound(to)
-          f.sender ! NoResponseActor.RouteChanged(route(next, f), f.response)
+          f.sender ! NoResponseActor.RouteChanged(route(next, f))
           next
         case Asked(RobotAccess.GetSnapshot(replyTo))  => replyTo ! s.view(isOnline); s
         case Asked(RobotAccess.GetLinkStats(replyTo)) => replyTo ! effects.linkStats(s, sent); s
@@ -256,7 +256,7 @@ object RobotActor {
         case RoundTrip(nanos)            => s.roundTrip(nanos)
         case Retransmitted               => s.retransmitted
         case ReachabilityWanted(replyTo) => replyTo ! isOnline; s
-        case RouteWanted(replyTo)        => replyTo ! NoResponseActor.RouteChanged(route(s, f), f.response); s
+        case RouteWanted(replyTo)        => replyTo ! NoResponseActor.RouteChanged(route(s, f)); s
         case OptionCommand(commands)     => effects.optionCommand(commands, f, s)
         case VisionSubscribe(subscriber, grid) =>
           val (next, fresh) = s.visionSubscribed(subscriber, grid)

@@ -39,7 +39,6 @@ private[naogateway] final class RobotEffects(
         st
       case (st, Arrival.Reply(CallId.Owner.Heartbeat, _, id)) =>
         f.heartbeat ! HeartBeatActor.ProbeAnswered(id)
-        f.sender ! NoResponseActor.Finished(id)
         st
       case (st, Arrival.Reply(owner, _, id)) => count(st, Rejection.UnknownCallId, s"call id $id of $owner")
       case (st, Arrival.Vision(frame)) =>

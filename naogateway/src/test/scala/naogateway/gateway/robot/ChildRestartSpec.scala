@@ -88,17 +88,18 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       val outbox = createTestProbe[Outbox.Command]()
       val caller = createTestProbe[CallResult]()
       val crash = new CrashOn[NoResponseActor.Command]({
-        case NoResponseActor.Send(call, _, _) => call.params == Vector(RpcValue.Text("boom"))
-        case _                                => false
+        case NoResponseActor.Submit(RobotFrames.Outbound.CallOut(call), _, _, _, _, _) =>
+          call.params == Vector(RpcValue.Text("boom"))
+        case _ => false
       })
-      val (responder, actor) = callActors(testKit, 2, settings, robot, outbox,
+      val (responder, _) = callActors(testKit, 2, settings, robot, outbox,
         wrapSender = b => Behaviors.supervise(Behaviors.intercept(() => crash)(b)).onFailure(restart))
       (1 to 3).foreach(i =>
-        actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
+        RobotTestHooks.sendOnce(responder, RpcCall("speech", "say", Vector(RpcValue.Text(s"$i"))), Some(caller.ref)))
       outbox.receiveMessages(3)
       crash.arm()
       LoggingTestKit.error[IllegalStateException].withMessageContains("injected failure").expect {
-        actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("boom"))))
+        RobotTestHooks.sendOnce(responder, RpcCall("speech", "say", Vector(RpcValue.Text("boom"))))
       }
       caller.receiveMessages(3).foreach(_.result.left.toOption.get shouldBe a[RobotFailure.Interrupted])
       caller.expectNoMessage(200.millis)
@@ -106,9 +107,8 @@ class ChildRestartSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wi
       robot.fishForMessage(3.seconds) {
         case _: RobotActor.RouteWanted => akka.actor.testkit.typed.FishingOutcome.Complete
         case _                         => akka.actor.testkit.typed.FishingOutcome.ContinueAndIgnore
-      }.last.asInstanceOf[RobotActor.RouteWanted].replyTo ! NoResponseActor.RouteChanged(RobotStandIn.route(outbox.ref),
-        responder)
-      actor ! NoResponseActor.Send(RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
+      }.last.asInstanceOf[RobotActor.RouteWanted].replyTo ! NoResponseActor.RouteChanged(RobotStandIn.route(outbox.ref))
+      RobotTestHooks.sendOnce(responder, RpcCall("speech", "say", Vector(RpcValue.Text("again"))))
       RobotStandIn.sent(outbox)._1.params shouldBe Vector(RpcValue.Text("again"))
     }
   }

@@ -66,7 +66,7 @@ class CommandOrderProofSpec extends ScalaTestWithActorTestKit(ManualTime.config)
       val sender = spawn(NoResponseActor(3, settings, robot))
       val responder = spawn(ResponseActor(3, settings, robot, sender, online = true))
       sender ! NoResponseActor.RouteChanged(RobotFrames.Route.Datagrams(outbox, RobotStandIn.RobotAddress,
-          HeaderForm.Legacy), responder)
+          HeaderForm.Legacy))
       responder ! RobotAccess.Call(walk, caller.ref)
       responder ! RobotAccess.Call(stop, caller.ref, Priority.Safety)
       def name(m: UdpLink.Command): String = m match {

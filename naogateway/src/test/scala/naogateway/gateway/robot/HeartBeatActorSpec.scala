@@ -92,6 +92,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       manualTime.timePasses(400.millis)
       val id = probeId(reports.receiveMessage())
       heartbeat ! ProbeAnswered(id)
+      reports.expectMessage(NoResponseActor.Finished(id))
       reports.receiveMessage() shouldBe a[ProbeRoundTrip]
       manualTime.timePasses(399.millis)
       reports.expectNoMessage(Duration.Zero)
@@ -110,6 +111,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       heartbeat ! ProbeNow
       val id = probeId(reports.receiveMessage())
       heartbeat ! ProbeAnswered(id)
+      reports.expectMessage(NoResponseActor.Finished(id))
       reports.receiveMessage() shouldBe a[ProbeRoundTrip]
       reports.expectMessage(CameOnline)
     }
@@ -140,7 +142,10 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       }
       // An answer ends the back-off; the next silence starts it again from one round.
       wantedAfter(2.seconds)
-      heartbeat ! ProbeAnswered(probeId(reports.receiveMessage()))
+      val answered = probeId(reports.receiveMessage())
+      heartbeat ! ProbeAnswered(answered)
+      // The heartbeat frees its probe's room in the robot's buffer itself.
+      reports.expectMessage(NoResponseActor.Finished(answered))
       reports.receiveMessage() shouldBe a[ProbeRoundTrip]
       reports.expectMessage(CameOnline)
       manualTime.timePasses(400.millis)
@@ -156,6 +161,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       manualTime.timePasses(400.millis)
       val id = probeId(reports.receiveMessage())
       heartbeat ! ProbeAnswered(id + 1)
+      // Not the probe it waits for, but a probe's answer all the same: its room is free.
+      reports.expectMessage(NoResponseActor.Finished(id + 1))
       manualTime.timePasses(150.millis)
       probeId(reports.receiveMessage())
     }

@@ -41,11 +41,11 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
 
   "NoResponseActor" must {
     "send in order, its reply dropped unless replyTo is given, and never again after a timeout" in {
-      val (_, outbox, responder, sender) = fixture()
+      val (_, outbox, responder, _) = fixture()
       val replies = createTestProbe[CallResult]()
-      sender ! NoResponseActor.Send(say("a"))
-      sender ! NoResponseActor.Send(say("b"), Some(replies.ref))
-      sender ! NoResponseActor.Send(RpcCall("system", "ping", Vector.empty), Some(replies.ref))
+      RobotTestHooks.sendOnce(responder, say("a"))
+      RobotTestHooks.sendOnce(responder, say("b"), Some(replies.ref))
+      RobotTestHooks.sendOnce(responder, RpcCall("system", "ping", Vector.empty), Some(replies.ref))
       val (callA, aSend) = sent(outbox)
       val (callB, bSend) = sent(outbox)
       sent(outbox)._1.name shouldBe "system.ping"
@@ -59,15 +59,15 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       outbox.expectNoMessage(Duration.Zero)
     }
     "let a newer command of a slot replace a waiting one (latest wins, a stop replaces a walk) and tell the replaced caller" in {
-      val (_, outbox, responder, sender) = fixture()
+      val (_, outbox, responder, _) = fixture()
       val replies = createTestProbe[CallResult]()
-      (1 to 4).foreach(i => sender ! NoResponseActor.Send(say(s"$i")))
+      (1 to 4).foreach(i => RobotTestHooks.sendOnce(responder, say(s"$i")))
       val busy = (1 to 4).map(_ => outbox.expectMessageType[Outbox.Send])
-      sender ! NoResponseActor.Send(walk(0.1f), Some(replies.ref))
-      sender ! NoResponseActor.Send(head(0.1f), Some(replies.ref))
-      sender ! NoResponseActor.Send(walk(0.2f), Some(replies.ref))
-      sender ! NoResponseActor.Send(head(0.3f), Some(replies.ref))
-      sender ! NoResponseActor.Send(stop, Some(replies.ref), Priority.Safety)
+      RobotTestHooks.sendOnce(responder, walk(0.1f), Some(replies.ref))
+      RobotTestHooks.sendOnce(responder, head(0.1f), Some(replies.ref))
+      RobotTestHooks.sendOnce(responder, walk(0.2f), Some(replies.ref))
+      RobotTestHooks.sendOnce(responder, head(0.3f), Some(replies.ref))
+      RobotTestHooks.sendOnce(responder, stop, Some(replies.ref), Priority.Safety)
       replies.receiveMessages(3).map(_.result) shouldBe Seq(
         Left(RobotFailure.Superseded(4, "motion.walk")), Left(RobotFailure.Superseded(4, "motion.head")),
         Left(RobotFailure.Superseded(4, "motion.walk")))
@@ -82,7 +82,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       sent(outbox)._1.params shouldBe head(0.3f).params
     }
     "count the heartbeat's probes, option commands and the robot's polls against the one in-flight cap" in {
-      val (_, outbox, _, sender) = fixture()
+      val (_, outbox, responder, sender) = fixture()
       val replies = createTestProbe[CallResult]()
       val probes = (1L to 4L).map(i => CallId(CallId.Owner.Heartbeat, i))
       probes.foreach(id =>
@@ -90,8 +90,9 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
           NoResponseActor.Awaits.Reply(Some(500.millis))))
       (1 to 4).foreach(_ => sent(outbox)._1.name shouldBe "heartbeat.probe")
       // The buffer is full of probes: a caller's command and an option switch wait.
-      sender ! NoResponseActor.Send(say("later"), Some(replies.ref))
-      // (A send is given its call id by the response actor on the way: let it reach the line before the switch.)
+      RobotTestHooks.sendOnce(responder, say("later"), Some(replies.ref))
+      // (The call reaches the sender through the response actor, which gives it its call id: let it reach the line
+      // before the switch.)
       outbox.expectNoMessage(100.millis)
       val enable = DebuggingCommands(optionEnable = Some(DebuggingOptionNames(Seq("status"))))
       sender ! NoResponseActor.Submit(Outbound.DebugOut(enable), Priority.Debug, None, NoResponseActor.Awaits.Nothing)
@@ -104,13 +105,13 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       manualTime.timePasses(500.millis)
       val option = outbox.expectMessageType[Outbox.Send]
       MessageContents.decodeFrame(option.bytes).toOption.flatMap(_._2.debuggingCommands) shouldBe Some(enable)
-      (1 to 3).foreach(i => sender ! NoResponseActor.Send(say(s"$i")))
+      (1 to 3).foreach(i => RobotTestHooks.sendOnce(responder, say(s"$i")))
       (1 to 3).foreach(_ => outbox.expectMessageType[Outbox.Send])
     }
     "refuse what the waiting line cannot take with an error instead of dropping it silently" in {
-      val (_, outbox, _, sender) = fixture()
+      val (_, outbox, responder, _) = fixture()
       val replies = createTestProbe[CallResult]()
-      (1 to 8).foreach(i => sender ! NoResponseActor.Send(say(s"$i"), Some(replies.ref)))
+      (1 to 8).foreach(i => RobotTestHooks.sendOnce(responder, say(s"$i"), Some(replies.ref)))
       (1 to 4).foreach(_ => outbox.expectMessageType[Outbox.Send])
       replies.expectMessageType[CallResult].result shouldBe Left(RobotFailure.Overloaded(4,
           "4 calls in flight and 3 waiting"))
@@ -118,7 +119,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
     "answer each waiting command exactly once when stopped" in {
       val (_, outbox, responder, sender) = fixture()
       val replies = createTestProbe[CallResult]()
-      (1 to 5).foreach(i => sender ! NoResponseActor.Send(say(s"$i"), Some(replies.ref)))
+      (1 to 5).foreach(i => RobotTestHooks.sendOnce(responder, say(s"$i"), Some(replies.ref)))
       (1 to 4).foreach(_ => outbox.expectMessageType[Outbox.Send])
       testKit.stop(responder)
       testKit.stop(sender)
@@ -133,8 +134,7 @@ class NoResponseActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) w
       val outcomes = createTestProbe[Outbox.Outcome]()
       val sender = spawn(NoResponseActor(21, settings, robot.ref))
       robot.expectMessageType[RobotActor.RouteWanted]
-      sender ! NoResponseActor.RouteChanged(RobotFrames.Route.ZeroMq(outbox, RobotStandIn.RobotAddress, link.ref),
-        createTestProbe[ResponseActor.Command]().ref)
+      sender ! NoResponseActor.RouteChanged(RobotFrames.Route.ZeroMq(outbox, RobotStandIn.RobotAddress, link.ref))
       val poll = RpcCall("system", "ping", Vector.empty, Some(CallId(CallId.Owner.StatusPoll, 1)))
       def submit(): Unit = sender ! NoResponseActor.Submit(Outbound.CallOut(poll), Priority.Heartbeat, poll.callId,
         NoResponseActor.Awaits.Reply(Some(1.second)), Some(outcomes.ref))

@@ -24,11 +24,10 @@ object RobotStandIn {
     robot.expectMessageType[RobotActor.ReachabilityWanted].replyTo ! online
 
   /** Answers the start-up questions of a sender and its response actor, in whichever order they come: the response
-    * actor's reachability, and the sender's route to `outbox` with `responder` as its response actor.
+    * actor's reachability, and the sender's route to `outbox`.
     */
-  def started(robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command],
-      responder: ActorRef[ResponseActor.Command],
-      online: Boolean = true): Unit = {
+  def started(
+      robot: TestProbe[RobotActor.FromChild], outbox: TestProbe[Outbox.Command], online: Boolean = true): Unit = {
     var left = 2
     robot.fishForMessage(robot.remainingOrDefault) {
       case RobotActor.ReachabilityWanted(r) =>
@@ -36,7 +35,7 @@ object RobotStandIn {
         left -= 1
         if (left == 0) FishingOutcome.Complete else FishingOutcome.Continue
       case RobotActor.RouteWanted(r) =>
-        r ! NoResponseActor.RouteChanged(route(outbox.ref), responder)
+        r ! NoResponseActor.RouteChanged(route(outbox.ref))
         left -= 1
         if (left == 0) FishingOutcome.Complete else FishingOutcome.Continue
       case other => FishingOutcome.Fail(s"unexpected $other")
@@ -53,7 +52,7 @@ object RobotStandIn {
       wrapResponder: Behavior[Any] => Behavior[Any] = identity): (ActorRef[Any], ActorRef[NoResponseActor.Command]) = {
     val sender = kit.spawn(wrapSender(NoResponseActor(robotId, settings, robot.ref)))
     val responder = kit.spawn(wrapResponder(ResponseActor(robotId, settings, robot.ref, sender, online = true)))
-    started(robot, outbox, responder, online)
+    started(robot, outbox, online)
     (responder, sender)
   }
 
