@@ -136,7 +136,7 @@ class FirmwareQemuSpec
       val log = File.createTempFile("qemu-echo", ".log")
       val qemu = QemuBoard.start(elf, log, serialPort = Some(bridge.serialPort))
       try {
-        // Whichever hello comes first (under load the bridge may not have been listening for the first): the link is up.
+        // Any hello first (under load the bridge may miss the first): the link is up.
         withClue(QemuBoard.output(log)) { receive(base, 10.seconds).map(_._1.startsWith("hello")) shouldBe Some(true) }
         bridge.disassociate(rejoinAfter = 700.millis)
         // The firmware sees the loss, probes the silent module, opens its connections anew and sends again.
