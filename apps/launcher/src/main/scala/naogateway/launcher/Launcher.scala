@@ -1,7 +1,7 @@
 package naogateway.launcher
 
 import java.io.File
-import java.net.InetSocketAddress
+import java.net.{InetAddress, InetSocketAddress}
 import java.nio.file.Paths
 
 import scala.concurrent.duration._
@@ -271,7 +271,9 @@ object Launcher {
                 faithfulLink = launcher.simulatedRobots <= 20,
                 // With the bus bridge on, the robots take part in the secure stream that carries it.
                 customize = s => {
-                  val signed = s.copy(firmware = s.firmware.copy(signingKey = teamKey))
+                  // The demo's GameController is the simulated one on this host: a robot heeds no other's packets.
+                  val signed = s.copy(firmware = s.firmware.copy(signingKey = teamKey,
+                    gameControllerSource = Some(InetAddress.getLoopbackAddress)))
                   if (busBridge.enabled) signed.withStream(gatewaySettings.stream) else signed
                 }
               )

@@ -19,6 +19,13 @@ private[sim] object FirmwareGame {
 
   /** The firmware after control packet `data` from `from`, and its answer to the GameController, if it sends one. */
   def onGameController(
+      s: FirmwareState, data: GameControlData, from: InetSocketAddress): (FirmwareState, Vector[Outgoing]) =
+    if (s.settings.gameControllerSource.exists(_ != from.getAddress))
+      // Another host's control packet changes nothing: not the game state, the bus gate or an answer (counted).
+      (s.copy(stats = s.stats.copy(gameControllerIgnored = s.stats.gameControllerIgnored + 1)), Vector.empty)
+    else heard(s, data, from)
+
+  private def heard(
       s: FirmwareState, data: GameControlData, from: InetSocketAddress): (FirmwareState, Vector[Outgoing]) = {
     val counted =
       s.copy(game = Some(data), stats = s.stats.copy(gameControllerPackets = s.stats.gameControllerPackets + 1))

@@ -1,6 +1,6 @@
 package naogateway.sim
 
-import java.net.InetSocketAddress
+import java.net.{InetAddress, InetSocketAddress}
 
 import scala.concurrent.duration._
 
@@ -14,7 +14,9 @@ import naogateway.wire.gamecontroller.GameControlData
   * swaps a sitting robot's low battery: a demo robot held safe for a low battery recovers (docs/simulator.md).
   * `fullBattery` is what a swapped battery reads (`robotctl battery <id> swap`). `servoTelemetryInterval`: one
   * keep-alive per interval carries servo telemetry (docs/protocol.md 6.8; zero turns it off); `servoSource` gives the
-  * servos it reads (an emulated bus's `servos`), None the robot's emulated bus (`bus`).
+  * servos it reads (an emulated bus's `servos`), None the robot's emulated bus (`bus`). `gameControllerSource`: the
+  * only address whose control packets count, as the C library's `gc_source` (on a shared WiFi anyone can send `RGme`);
+  * None: any, as a `gc_source` of 0.0.0.0.
   */
 final case class FirmwareSettings(
     robotId: Int,
@@ -45,7 +47,8 @@ final case class FirmwareSettings(
     signingKey: Option[SigningKey] = None,
     development: Boolean = false,
     servoTelemetryInterval: FiniteDuration = 1000.millis,
-    servoSource: Option[() => Seq[ServoState]] = None
+    servoSource: Option[() => Seq[ServoState]] = None,
+    gameControllerSource: Option[InetAddress] = None
 ) {
   require(robotId >= 0, s"robotId must not be negative, got $robotId")
 
@@ -82,6 +85,7 @@ final case class FirmwareStats(
     datagramsOut: Long = 0,
     rpcCalls: Long = 0,
     gameControllerPackets: Long = 0,
+    gameControllerIgnored: Long = 0,
     rejected: Long = 0,
     refusedSignatures: Map[String, Long] = Map.empty,
     busBridgeRequests: Long = 0

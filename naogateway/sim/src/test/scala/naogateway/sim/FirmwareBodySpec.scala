@@ -129,5 +129,33 @@ class FirmwareBodySpec extends AnyWordSpec with Matchers with EitherValues {
         Seq(BusResult.BUS_OK, BusResult.BUS_GATE_CLOSED, BusResult.BUS_GATE_CLOSED, BusResult.BUS_GATE_CLOSED,
           BusResult.BUS_OK)
     }
+
+    "let a stranger's control packets change nothing: neither close the bridge before play nor open it during play" in {
+      val gc = SimulatedGameControllerSettings(gateway)
+      def packetAt(elapsed: FiniteDuration) =
+        SimulatedGameController.packets(gc, SimulatedGameController.momentAt(gc, elapsed.toNanos), 1).head
+      val ping = BusBridge(1, request = Some(ByteString.copyFrom(Dynamixel.packet(1, Dynamixel.Ping, Nil))))
+      def result(s: FirmwareState, at: Long): BusResult =
+        BusBridgeFrame.decode(RobotFirmware.busBridge(s, ping, at)._2).get._2.result.get
+      val ours = new InetSocketAddress("127.0.0.1", 3838)
+      val stranger = new InetSocketAddress("127.0.0.99", 3838)
+      val s0 = RobotFirmware.boot(settings.copy(gameControllerSource = Some(ours.getAddress)), 0)
+      val playing = gc.initial + gc.ready + gc.set + gc.playing / 2
+      // Before the game: a stranger's PLAYING packets, three of them, neither close the bridge nor get an answer.
+      val (strangerPlays, answers) = (1 to 3).foldLeft((s0, Vector.empty[Outgoing])) { case ((s, out), i) =>
+        val (next, o) = RobotFirmware.receive(s, packetAt(playing), stranger, i * ms)
+        (next, out ++ o.filter(_.to != Destination.Gateway))
+      }
+      answers shouldBe empty
+      strangerPlays.game shouldBe None
+      strangerPlays.stats.gameControllerIgnored shouldBe 3
+      result(strangerPlays, 10 * ms) shouldBe BusResult.BUS_OK
+      // During play, by the team's GameController: a stranger's INITIAL does not open the bridge again.
+      val playingNow = RobotFirmware.receive(s0, packetAt(playing), ours, 20 * ms)._1
+      result(playingNow, 21 * ms) shouldBe BusResult.BUS_GATE_CLOSED
+      val strangerInitial = RobotFirmware.receive(playingNow, packetAt(gc.initial / 2), stranger, 22 * ms)._1
+      strangerInitial.game shouldBe playingNow.game
+      result(strangerInitial, 23 * ms) shouldBe BusResult.BUS_GATE_CLOSED
+    }
   }
 }

@@ -12,7 +12,9 @@ import naogateway.wire.MessageContents
   */
 object RelayCapture {
 
-  /** The frames of robot `robotId` the relay passes to `recorder` within `window` (polling; the window bounds it). */
+  /** The frames of robot `robotId` the relay passes to `recorder` within `window` (polling; the window bounds it). It
+    * blocks its caller for `window`: a spec's own thread, never an actor's (the test kit is for specs only).
+    */
   def frames(recorder: DatagramChannel, robotId: Int, window: FiniteDuration): Vector[Array[Byte]] = {
     recorder.configureBlocking(false)
     val buffer = ByteBuffer.allocate(2048)
