@@ -26,6 +26,17 @@ lazy val strictScalac = Seq(
   Compile / packageDoc / publishArtifact := false
 )
 
+// Each module's specs run one after another in a JVM of its own (Test / fork, parallelExecution off). sbt's own
+// default lets one such JVM run at a time in the whole build; most specs wait on sockets, timers and other processes
+// rather than compute (the integration specs' JVM used about 0.2 of a core), so two modules' JVMs run side by side, and
+// the task limit is raised by two so that compiling the next modules goes on beside them. Shared resources across the
+// JVMs: loopback addresses (naogateway.testkit.TestLoopback), the Python venv (apps.zeromq.PythonEnv, file-locked).
+Global / concurrentRestrictions := Seq(
+  Tags.limitAll(java.lang.Runtime.getRuntime.availableProcessors + 2),
+  Tags.limit(Tags.ForkedTestGroup, 2),
+  Tags.exclusiveGroup(Tags.Clean)
+)
+
 lazy val testSettings = Seq(
   Test / fork := true,
   Test / javaOptions ++= Seq("-Xmx2g"),

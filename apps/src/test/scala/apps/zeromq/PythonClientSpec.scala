@@ -47,12 +47,23 @@ object PythonEnv extends Assertions {
   lazy val requirements: File = new File(root, "apps/python/requirements.txt")
 
   /** A venv at `venv` with `requirements` installed (made once, reused while they stay the same), or why there is none:
-    * python3 missing, no venv module, or pip unable to install (no network, no registry). `env` is given to pip.
+    * python3 missing, no venv module, or pip unable to install (no network, no registry). `env` is given to pip. The
+    * test JVMs of two modules may ask at once (apps' and the root's firmware specs): a lock file beside the venv lets
+    * one make it while the other waits.
     */
   def environment(venv: File = venv, requirements: File = requirements, env: Map[String, String] = Map.empty)
       : Either[String, File] =
     synchronized {
       venv.getParentFile.mkdirs()
+      val lock = java.nio.channels.FileChannel.open(new File(venv.getParentFile, s"${venv.getName}.lock").toPath,
+        java.nio.file.StandardOpenOption.CREATE, java.nio.file.StandardOpenOption.WRITE)
+      try {
+        lock.lock()
+        made(venv, requirements, env)
+      } finally lock.close()
+    }
+
+  private def made(venv: File, requirements: File, env: Map[String, String]): Either[String, File] = {
       val log = new File(venv.getParentFile, s"${venv.getName}-setup.log")
       val python = new File(venv, "bin/python")
       val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
@@ -80,7 +91,7 @@ object PythonEnv extends Assertions {
           }
         }
       }
-    }
+  }
 
   /** The venv's python; cancels the test, saying why, when python3, venv or pip cannot provide it. */
   def python(): File = environment().fold(why => cancel(s"$why: the Python test cannot run"), identity)

@@ -36,15 +36,16 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
       states.foldLeft(Vector.empty[GameState])((acc, s) => if (acc.lastOption.contains(s)) acc else acc :+ s))
   }
 
-  /** Everything `probe` got within `during`. */
-  private def collect(probe: TestProbe[GatewayEvent], during: FiniteDuration): Vector[GatewayEvent] = {
+  /** Everything `probe` got within `during`, or until what it got so far satisfies `enough`. */
+  private def collect(probe: TestProbe[GatewayEvent], during: FiniteDuration)(
+      enough: Vector[GatewayEvent] => Boolean = _ => false): Vector[GatewayEvent] = {
     val deadline = during.fromNow
-    val got = Vector.newBuilder[GatewayEvent]
-    while (deadline.hasTimeLeft()) {
-      try got += probe.receiveMessage(deadline.timeLeft.max(1.milli))
+    var got = Vector.empty[GatewayEvent]
+    while (deadline.hasTimeLeft() && !enough(got)) {
+      try got :+= probe.receiveMessage(deadline.timeLeft.max(1.milli))
       catch { case _: AssertionError => () } // nothing more within the time
     }
-    got.result()
+    got
   }
 
   "A replayed recording" must {
@@ -61,9 +62,13 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
           val gc = spawn(SimulatedGameController(SimulatedGameControllerSettings(f.addresses.gameController.get,
                 initial = 500.millis, ready = 700.millis, set = 500.millis, playing = 2.seconds, finished = 700.millis,
                 interval = 100.millis)))
-          val first = collect(f.events, 2.seconds)
+          val first = collect(f.events, 2.seconds)()
           two ! SimulatedRobot.PowerCycle(1500.millis)
-          val rest = collect(f.events, 7.seconds)
+          // The run is over once the game finished and robot 2 came back: the recording need not be longer.
+          val rest = collect(f.events, 7.seconds) { got =>
+            val s = story(first ++ got)
+            s.game.contains(GameState.Finished) && s.robots.get(2).exists(_.contains("restarted"))
+          }
           testKit.stop(gc)
           first ++ rest
         } finally {
@@ -86,7 +91,7 @@ class ReplaySpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with Log
       var finished = false
       val deadline = 40.seconds.fromNow
       while (!finished && deadline.hasTimeLeft()) {
-        replayed ++= collect(events, 500.millis)
+        replayed ++= collect(events, 500.millis)()
         replaying ! GatewayAccess.GetStats(stats.ref)
         val s = stats.receiveMessage(5.seconds)
         finished = s.replay.exists(_.finished)
