@@ -82,7 +82,8 @@ object BenchSuite {
       FloodBench,
       WebBench,
       BusBench,
-      FirmwareBench
+      FirmwareBench,
+      FollowerBench
     )
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the

@@ -64,33 +64,33 @@ object PythonEnv extends Assertions {
     }
 
   private def made(venv: File, requirements: File, env: Map[String, String]): Either[String, File] = {
-      val log = new File(venv.getParentFile, s"${venv.getName}-setup.log")
-      val python = new File(venv, "bin/python")
-      val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
-      val stamp = new File(venv, "requirements.installed")
-      val current = Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption
-      if (!Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption.exists(_._1 == 0))
-        Left("python3 is not available")
-      else if (python.isFile && current.contains(wanted)) Right(python)
+    val log = new File(venv.getParentFile, s"${venv.getName}-setup.log")
+    val python = new File(venv, "bin/python")
+    val wanted = new String(Files.readAllBytes(requirements.toPath), StandardCharsets.UTF_8)
+    val stamp = new File(venv, "requirements.installed")
+    val current = Try(new String(Files.readAllBytes(stamp.toPath), StandardCharsets.UTF_8)).toOption
+    if (!Try(run(Seq("python3", "--version"), 30.seconds, log)).toOption.exists(_._1 == 0))
+      Left("python3 is not available")
+    else if (python.isFile && current.contains(wanted)) Right(python)
+    else {
+      deleteTree(venv.toPath)
+      val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
+      if (venvCode != 0) Left(s"python3 -m venv failed (is the venv module installed?):\n${venvOut.takeRight(2000)}")
       else {
-        deleteTree(venv.toPath)
-        val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
-        if (venvCode != 0) Left(s"python3 -m venv failed (is the venv module installed?):\n${venvOut.takeRight(2000)}")
-        else {
-          val (pipCode, pipOut) =
-            run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r",
-                requirements.getPath), 8.minutes, log, env)
-          if (pipCode != 0) {
-            // A half-made venv is not reused: the next run tries again.
-            deleteTree(venv.toPath)
-            Left(
-              s"pip could not install ${root.toPath.relativize(requirements.toPath)} (no network or no package registry?):\n${pipOut.takeRight(2000)}")
-          } else {
-            Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
-            Right(python)
-          }
+        val (pipCode, pipOut) =
+          run(Seq(python.getPath, "-m", "pip", "install", "--disable-pip-version-check", "-q", "-r",
+              requirements.getPath), 8.minutes, log, env)
+        if (pipCode != 0) {
+          // A half-made venv is not reused: the next run tries again.
+          deleteTree(venv.toPath)
+          Left(
+            s"pip could not install ${root.toPath.relativize(requirements.toPath)} (no network or no package registry?):\n${pipOut.takeRight(2000)}")
+        } else {
+          Files.write(stamp.toPath, wanted.getBytes(StandardCharsets.UTF_8))
+          Right(python)
         }
       }
+    }
   }
 
   /** The venv's python; cancels the test, saying why, when python3, venv or pip cannot provide it. */
