@@ -29,9 +29,14 @@ class BothDoorsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
   private def said(robot: ActorRef[SimulatedRobot.Command]): Vector[String] =
     received(robot).map(_.call).filter(_.name == "speech.say").flatMap(_.params.collect { case RpcValue.Text(t) => t })
 
+  /** The doors' order, not the robot's liveness, is under test: a JVM stalled on a loaded machine (two modules' test
+    * JVMs run at once) must not take the robot offline mid-test, so it is given 2 s of silence before the probes.
+    */
+  private def fixture() = new GatewayFixture(testKit, "heartbeat { quiet-after = 2s, probe-timeout = 500ms }")
+
   "RobotInterface's two doors" must {
     "keep a send's place among the app's calls, drop its answer, and refuse it without the lease" in {
-      val f = new GatewayFixture(testKit)
+      val f = fixture()
       try {
         val (robot, _) = f.robot(31)
         f.awaitEvent(Patience) { case RobotOnline(31, _) => () }
@@ -63,7 +68,7 @@ class BothDoorsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
     }
 
     "take a typed operation through the send door, with the guard's checks (a walk needs its lease)" in {
-      val f = new GatewayFixture(testKit)
+      val f = fixture()
       try {
         val (robot, _) = f.robot(32)
         f.awaitEvent(Patience) { case RobotOnline(32, _) => () }
