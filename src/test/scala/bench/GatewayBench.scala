@@ -400,11 +400,12 @@ object GatewayBench extends Benchmark {
         val gatewayCpu = new ThreadCpu(s"${gw.system.name}-")
         val handledAtStart = sim.sink.statusUpdates.get
         var handledAtSample = handledAtStart
-        val (rate, counted) = windowRate(start, () => {
-          gatewayCpu.sample()
-          handledAtSample = sim.sink.statusUpdates.get
-          handledAtSample
-        })
+        val (rate, counted) = windowRate(start,
+          () => {
+            gatewayCpu.sample()
+            handledAtSample = sim.sink.statusUpdates.get
+            handledAtSample
+          })
         val window = System.nanoTime() - start
         thread.join()
         progress(

@@ -35,8 +35,8 @@ private[naogateway] final case class LinkFigures(
 }
 
 /** Arrival times in nanoseconds, oldest first, in one array that is never written after it is made (an immutable
-  * value). Why not a Vector: a keep-alive appended to a full Vector of boxed times copied two arrays and boxed the time,
-  * a tenth of the port loop's time under an ingest blast (profiled); here it copies one array of primitives.
+  * value). Why not a Vector: a keep-alive appended to a full Vector of boxed times copied two arrays and boxed the
+  * time, a tenth of the port loop's time under an ingest blast (profiled); here it copies one array of primitives.
   */
 private[naogateway] final class ArrivalTimes private (private val times: Array[Long]) {
 

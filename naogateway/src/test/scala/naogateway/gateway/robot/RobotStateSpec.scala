@@ -294,12 +294,14 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
 
     "hand on a frame that carries a keep-alive only as that keep-alive, and a frame of nothing known as nothing" in {
       val health = RobotHealth(uptimeMs = Some(5))
-      RobotFrames.arrivals(7, MessageContents(7, status = Some(Status(teamID = Some(1))), robotHealth = Some(health))) shouldBe
+      RobotFrames.arrivals(7,
+        MessageContents(7, status = Some(Status(teamID = Some(1))), robotHealth = Some(health))) shouldBe
         Vector(Arrival.KeepAlive(Status(teamID = Some(1)), Some(health)))
       RobotFrames.arrivals(7, MessageContents(7)) shouldBe empty
       RobotFrames.arrivals(7, MessageContents(7, robotHealth = Some(health))) shouldBe empty
       // The keep-alive first, then what else the frame carries.
-      val pushed = RobotFrames.arrivals(7, MessageContents(7, status = Some(Status()),
+      val pushed = RobotFrames.arrivals(7,
+        MessageContents(7, status = Some(Status()),
           debuggingCommands = Some(DebuggingCommands(optionPush = Some(DebuggingOptionList(Vector.empty))))))
       pushed.map(_.getClass.getSimpleName) shouldBe Vector("KeepAlive", "OptionsPushed")
     }
