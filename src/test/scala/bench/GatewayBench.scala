@@ -398,11 +398,21 @@ object GatewayBench extends Benchmark {
         val thread = blaster.blast(blastSeconds)
         val sentAtStart = blaster.sent.get
         val gatewayCpu = new ThreadCpu(s"${gw.system.name}-")
-        val (rate, counted) = windowRate(start, () => { gatewayCpu.sample(); sim.sink.statusUpdates.get })
+        val handledAtStart = sim.sink.statusUpdates.get
+        var handledAtSample = handledAtStart
+        val (rate, counted) = windowRate(start,
+          () => {
+            gatewayCpu.sample()
+            handledAtSample = sim.sink.statusUpdates.get
+            handledAtSample
+          })
         val window = System.nanoTime() - start
         thread.join()
         progress(
           s"ingest: CPU of the gateway's threads over the blast in % of one core: ${gatewayCpu.breakdown(window)}")
+        // What load does not move: the bytes the threads allocated for each keep-alive handled.
+        progress(s"$tag: bytes allocated per keep-alive handled, by kind of thread: " +
+          gatewayCpu.allocatedPer(handledAtSample - handledAtStart))
         val sentRate = (blaster.sent.get - sentAtStart) / blastSeconds
         val after = gw.stats()
         val waited = (System.nanoTime() - start) / 1e9 - blastSeconds
@@ -642,13 +652,36 @@ object GatewayBench extends Benchmark {
     private val base = mutable.LongMap.empty[Long]
     private val last = mutable.LongMap.empty[Long]
     private val names = mutable.LongMap.empty[String]
+    // Bytes allocated by each thread, at the first scan and at the latest (HotSpot's ThreadMXBean; empty without it).
+    private val allocBase = mutable.LongMap.empty[Long]
+    private val allocLast = mutable.LongMap.empty[Long]
     scan().foreach { case (id, t) => base(id) = t; last(id) = t }
+    allocBase ++= allocLast
+
+    private def allocated(id: Long): Unit = mx match {
+      case hs: com.sun.management.ThreadMXBean =>
+        val b = hs.getThreadAllocatedBytes(id)
+        if (b >= 0) allocLast(id) = b
+      case _ => ()
+    }
+
+    /** Bytes allocated per `n` (e.g. keep-alives handled) since the start, per kind of thread, busiest first. */
+    def allocatedPer(n: Long): String =
+      allocLast.iterator
+        .map { case (id, b) => names(id) -> (b - allocBase.getOrElse(id, 0L)) }
+        .toVector
+        .groupMapReduce(_._1)(_._2)(_ + _)
+        .toVector
+        .sortBy(-_._2)
+        .map { case (kind, bytes) => f"$kind ${bytes.toDouble / math.max(1L, n)}%.0f" }
+        .mkString(", ")
 
     private def scan(): Iterator[(Long, Long)] = {
       val ids = mx.getAllThreadIds
       mx.getThreadInfo(ids).iterator.filter(i => i != null && i.getThreadName.startsWith(prefix)).flatMap { i =>
         val t = mx.getThreadCpuTime(i.getThreadId)
         names(i.getThreadId) = i.getThreadName.stripPrefix(prefix).replaceAll("-[0-9]+$", "")
+        allocated(i.getThreadId)
         if (t >= 0) Some(i.getThreadId -> t) else None
       }
     }

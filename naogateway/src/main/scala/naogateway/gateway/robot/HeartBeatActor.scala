@@ -128,17 +128,25 @@ private[naogateway] object HeartBeatActor {
       onlineLoop(quality)
     }
 
-    private def onlineLoop(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
-      case KeepAliveSeen =>
-        armQuietCheck()
-        onlineLoop(q.seen)
-      case QualityTick            => onlineLoop(q.tick(settings, report))
-      case QuietCheck             => probe(chance = 1, wasOnline = true, q)
-      case ProbeNow | BackoffOver => Behaviors.same
-      case ProbeAnswered(id) =>
-        if (answered(id)) reportRoundTrip()
-        Behaviors.same
-      case ProbeTimeout => Behaviors.same
+    // The quality counted so far is held in a local `q` and the loop answers `Behaviors.same`: a new behaviour for
+    // each keep-alive would re-wrap the actor's interceptors (its timers, its supervision) every time.
+    private def onlineLoop(q0: Quality): Behavior[Command] = {
+      var q = q0
+      Behaviors.receiveMessage {
+        case KeepAliveSeen =>
+          armQuietCheck()
+          q = q.seen
+          Behaviors.same
+        case QualityTick =>
+          q = q.tick(settings, report)
+          Behaviors.same
+        case QuietCheck             => probe(chance = 1, wasOnline = true, q)
+        case ProbeNow | BackoffOver => Behaviors.same
+        case ProbeAnswered(id) =>
+          if (answered(id)) reportRoundTrip()
+          Behaviors.same
+        case ProbeTimeout => Behaviors.same
+      }
     }
 
     private def sendProbe(): Unit = {

@@ -40,7 +40,15 @@ private[naogateway] object RobotFrames {
   }
 
   /** What `contents` from robot `robotId` carries, in the order the robot actor hands it on. */
-  def arrivals(robotId: Int, contents: MessageContents): Vector[Arrival] = {
+  def arrivals(robotId: Int, contents: MessageContents): Vector[Arrival] =
+    // A frame that carries only a keep-alive (nearly every frame a robot sends) costs no collections of empty parts.
+    if (contents.debuggingCommands.isEmpty && contents.rpcResponse.isEmpty && contents.havimoRegions.isEmpty &&
+      contents.havimoGrid.isEmpty)
+      contents.status.fold(Vector.empty[Arrival])(s =>
+        Vector(Arrival.KeepAlive(s, contents.robotHealth, contents.servoTelemetry)))
+    else allArrivals(robotId, contents)
+
+  private def allArrivals(robotId: Int, contents: MessageContents): Vector[Arrival] = {
     val keepAlive = contents.status.map(Arrival.KeepAlive(_, contents.robotHealth, contents.servoTelemetry)).toVector
     val pushed = contents.debuggingCommands.flatMap(_.optionPush).map(l => Arrival.OptionsPushed(l.options)).toVector
     val replies = contents.rpcResponse.toVector.flatMap { response =>

@@ -22,15 +22,78 @@ private[naogateway] final case class LinkFigures(
     retransmissions: Long = 0L,
     rejected: Map[Rejection, Long] = Map.empty,
     rttNanos: Option[Double] = None,
-    keepAliveTimes: Vector[Long] = Vector.empty
+    keepAliveTimes: ArrivalTimes = ArrivalTimes.empty
 ) {
 
   /** The share of keep-alives missed over `window` (or since the first one, when the robot is younger) at `now`. */
   def lossEstimate(now: Long, window: Long, interval: Long): Double = {
-    val recent = keepAliveTimes.filter(_ >= now - window)
-    val observed = recent.headOption.fold(window)(first => math.min(window, now - first + interval))
-    if (datagramsIn == 0) 1.0 else math.max(0.0, 1.0 - recent.size / (observed.toDouble / interval))
+    val first = keepAliveTimes.firstFrom(now - window)
+    val recent = keepAliveTimes.countFrom(now - window)
+    val observed = if (recent == 0) window else math.min(window, now - first + interval)
+    if (datagramsIn == 0) 1.0 else math.max(0.0, 1.0 - recent / (observed.toDouble / interval))
   }
+}
+
+/** Arrival times in nanoseconds, oldest first, in one array that is never written after it is made (an immutable
+  * value). Why not a Vector: a keep-alive appended to a full Vector of boxed times copied two arrays and boxed the
+  * time, a tenth of the port loop's time under an ingest blast (profiled); here it copies one array of primitives.
+  */
+private[naogateway] final class ArrivalTimes private (private val times: Array[Long]) {
+
+  /** How many times are held. */
+  def size: Int = times.length
+
+  /** The times, oldest first. */
+  def toVector: Vector[Long] = times.toVector
+
+  /** These times with `now` appended: at most `kept` of them (the oldest go first), none older than `window` before
+    * `now`.
+    */
+  def appended(now: Long, window: Long, kept: Int): ArrivalTimes = {
+    val oldest = now - window
+    var from = math.max(0, times.length + 1 - kept)
+    while (from < times.length && times(from) < oldest) from += 1
+    val next = new Array[Long](times.length - from + 1)
+    System.arraycopy(times, from, next, 0, times.length - from)
+    next(next.length - 1) = now
+    new ArrivalTimes(next)
+  }
+
+  /** How many times are at or after `t`. */
+  def countFrom(t: Long): Int = times.length - indexFrom(t)
+
+  /** The first time at or after `t`; meaningful only when [[countFrom]] is positive. */
+  def firstFrom(t: Long): Long = {
+    val i = indexFrom(t)
+    if (i < times.length) times(i) else Long.MaxValue
+  }
+
+  // The times are in arrival order, so those at or after `t` are a suffix.
+  private def indexFrom(t: Long): Int = {
+    var i = 0
+    while (i < times.length && times(i) < t) i += 1
+    i
+  }
+
+  override def equals(other: Any): Boolean = other match {
+    case o: ArrivalTimes => java.util.Arrays.equals(times, o.times)
+    case _               => false
+  }
+
+  override def hashCode: Int = java.util.Arrays.hashCode(times)
+
+  override def toString: String = times.mkString("ArrivalTimes(", ", ", ")")
+
+}
+
+/** Arrival times. */
+private[naogateway] object ArrivalTimes {
+
+  /** No time yet. */
+  val empty: ArrivalTimes = new ArrivalTimes(Array.emptyLongArray)
+
+  /** `times`, oldest first. */
+  def apply(times: Long*): ArrivalTimes = new ArrivalTimes(times.toArray)
 }
 
 /** The robot's debug options (protocol.md 8): what the gateway switched on, and this session's list once pushed. */
@@ -129,7 +192,8 @@ private[naogateway] final case class RobotState(
     */
   def wentOffline: RobotState = {
     val s = signatureUnconfirmed
-    if (s.snapshot.servos.isEmpty) s else s.copy(snapshot = s.snapshot.copy(servos = None))
+    if (s.snapshot.servos.isEmpty && !s.snapshot.online) s
+    else s.copy(snapshot = s.snapshot.copy(servos = None, online = false))
   }
 
   /** A clean round-trip sample, smoothed as TCP smooths its RTT. */
@@ -144,10 +208,7 @@ private[naogateway] final case class RobotState(
     */
   def keepAliveSeen(status: Status, health: Option[RobotHealth], now: Long, window: Long, newSessionKeepAlives: Int,
       servos: Option[ServoTelemetry] = None): (RobotState, KeepAliveOutcome) = {
-    // A Vector, not a Queue: its size is not a walk of a list on every keep-alive (a tenth of the port loop's time
-    // under an ingest blast, profiled).
-    val times = (if (link.keepAliveTimes.size >= keepAliveTimesKept) link.keepAliveTimes.tail else link.keepAliveTimes)
-      .appended(now).dropWhile(_ < now - window)
+    val times = link.keepAliveTimes.appended(now, window, keepAliveTimesKept)
     val step = KeepAliveStep.keepAlive(snapshot, sessions, status, health, now, newSessionKeepAlives, servos)
     val restartedSync = if (step.restarted) clockSync.restart else clockSync
     // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.
@@ -172,11 +233,16 @@ private[naogateway] final case class RobotState(
   def qualityChanged(quality: LinkQuality): RobotState = copy(snapshot = snapshot.copy(quality = quality))
 
   /** The robot came online: its quality starts good (HeartBeatActor's rule). */
-  def wentOnline: RobotState = qualityChanged(LinkQuality.Good)
+  def wentOnline: RobotState = copy(snapshot = snapshot.copy(online = true, quality = LinkQuality.Good))
 
   /** The snapshot as it leaves the actor: `online` from the behaviour, the quality offline while offline. */
-  def view(online: Boolean): RobotSnapshot =
-    snapshot.copy(online = online, quality = if (online) snapshot.quality else LinkQuality.Offline)
+  def view(online: Boolean): RobotSnapshot = {
+    val quality = if (online) snapshot.quality else LinkQuality.Offline
+    // The snapshot itself when it says so already (`wentOnline` and `wentOffline` keep its `online`): no copy for each
+    // keep-alive's event.
+    if (snapshot.online == online && snapshot.quality == quality) snapshot
+    else snapshot.copy(online = online, quality = quality)
+  }
 
   /** The link figures as `LinkStats` at `now`, with what the sender counted as it sent (`out`). */
   def linkStats(now: Long, window: Long, interval: Long, out: SentFigures): LinkStats =

@@ -10,6 +10,7 @@ import naogateway.gateway.robot.RobotFrames.{Arrival, Outbound, Route}
 import naogateway.proto.{
   DebuggingCommands,
   DebuggingOption,
+  DebuggingOptionList,
   DebuggingOptionNames,
   Response,
   RobotHealth,
@@ -172,6 +173,37 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       halved.link.lossEstimate(5 * second, window, second / 5) shouldBe 0.5 +- 0.1
     }
 
+    "keep the latest keep-alive times: at most the bound, none older than the window, the newest last" in {
+      def kept(times: Seq[Long], now: Long, bound: Int) = ArrivalTimes(times: _*).appended(now, 100L, bound).toVector
+      kept(Nil, 10L, 3) shouldBe Vector(10L)
+      kept(Seq(10L, 20L), 30L, 3) shouldBe Vector(10L, 20L, 30L)
+      kept(Seq(10L, 20L, 30L), 40L, 3) shouldBe Vector(20L, 30L, 40L)
+      kept(Seq(10L, 20L, 30L), 40L, 1) shouldBe Vector(40L)
+      // Older than the window: dropped, however many there are; the new time is always kept.
+      kept(Seq(10L, 20L, 130L), 140L, 4) shouldBe Vector(130L, 140L)
+      kept(Seq(10L, 20L), 500L, 4) shouldBe Vector(500L)
+      kept(Seq(40L, 50L), 140L, 4) shouldBe Vector(40L, 50L, 140L)
+      val times = ArrivalTimes(10L, 20L, 30L)
+      (times.countFrom(0L), times.countFrom(20L), times.countFrom(21L), times.countFrom(31L)) shouldBe ((3, 2, 1, 0))
+      (times.firstFrom(0L), times.firstFrom(21L)) shouldBe ((10L, 30L))
+      times shouldBe ArrivalTimes(10L, 20L, 30L)
+      ArrivalTimes.empty.size shouldBe 0
+    }
+
+    "show the snapshot as it leaves the actor, the same value when nothing in it changes" in {
+      val s = fresh()
+      val offline = s.view(online = false)
+      offline.online shouldBe false
+      offline.quality shouldBe LinkQuality.Offline
+      offline should be theSameInstanceAs s.snapshot
+      val on = s.wentOnline
+      val shown = on.view(online = true)
+      (shown.online, shown.quality) shouldBe ((true, LinkQuality.Good))
+      val again = on.copy(snapshot = shown).view(online = true)
+      again should be theSameInstanceAs shown
+      on.copy(snapshot = shown).view(online = false).quality shouldBe LinkQuality.Offline
+    }
+
     "smooth round trips, count retransmissions, follow a rebound and show itself offline with an offline quality" in {
       val s =
         fresh().roundTrip(8000000L).roundTrip(16000000L).retransmitted.rebound(new InetSocketAddress("127.0.0.8", 3838))
@@ -258,6 +290,20 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       RobotFrames.send(7, call, Array[Byte](1), datagrams, Priority.Command, None, 1L).signed shouldBe true
       val viaLink = RobotFrames.send(7, call, Array[Byte](1), zeroMq, Priority.Command, None, 1L)
       (viaLink.signed, viaLink.via) shouldBe ((false, Some(zeroMq.link)))
+    }
+
+    "hand on a frame that carries a keep-alive only as that keep-alive, and a frame of nothing known as nothing" in {
+      val health = RobotHealth(uptimeMs = Some(5))
+      RobotFrames.arrivals(7,
+        MessageContents(7, status = Some(Status(teamID = Some(1))), robotHealth = Some(health))) shouldBe
+        Vector(Arrival.KeepAlive(Status(teamID = Some(1)), Some(health)))
+      RobotFrames.arrivals(7, MessageContents(7)) shouldBe empty
+      RobotFrames.arrivals(7, MessageContents(7, robotHealth = Some(health))) shouldBe empty
+      // The keep-alive first, then what else the frame carries.
+      val pushed = RobotFrames.arrivals(7,
+        MessageContents(7, status = Some(Status()),
+          debuggingCommands = Some(DebuggingCommands(optionPush = Some(DebuggingOptionList(Vector.empty))))))
+      pushed.map(_.getClass.getSimpleName) shouldBe Vector("KeepAlive", "OptionsPushed")
     }
 
     "sort what a frame carries, a reply to nobody's call id refused" in {
