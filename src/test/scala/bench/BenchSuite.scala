@@ -93,6 +93,7 @@ object BenchSuite {
   def main(args: Array[String]): Unit = {
     args.flatMap(_.toDoubleOption).headOption.foreach(m => Soak.minutes = m)
     args.collect { case s"gateway:$parts" => GatewayBench.parts = parts.split(',').toSet }
+    args.collect { case s"callpath:$parts" => CallPathBench.parts = parts.split(',').toSet }
     val names = args.filter(_.toDoubleOption.isEmpty).map(_.takeWhile(_ != ':'))
     val selected = if (names.isEmpty) benchmarks else (benchmarks ++ onRequest).filter(b => names.contains(b.name))
     val cores = Runtime.getRuntime.availableProcessors

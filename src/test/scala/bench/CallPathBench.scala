@@ -9,6 +9,7 @@ import java.nio.file.Files
 import scala.collection.immutable.ListMap
 import scala.concurrent.Await
 import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
 import scala.util.{Failure, Success, Try}
 
 import akka.actor.typed.scaladsl.AskPattern._
@@ -64,7 +65,12 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   */
 object CallPathBench extends Benchmark {
   val name = "callpath"
-  override val quietSensitive = true
+
+  /** The parts to run: `quick` takes only the raw floor, the gateway alone and `RobotInterface` (once, with the
+    * wake-ups per call); everything when empty.
+    */
+  var parts: Set[String] = Set.empty
+  override def quietSensitive: Boolean = parts.isEmpty
 
   /** Calls through the gateway before anything is measured: the JIT's, for the path every door shares (the actors, the
     * codecs, the port). With only the usual warm-up the gateway alone, measured first, came out 1.5-1.8 x slower than
@@ -88,7 +94,70 @@ object CallPathBench extends Benchmark {
   private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3",
     "protobuf==7.36.2", "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
 
-  def run(): ListMap[String, Double] = GatewayBench.quietLogging {
+  def run(): ListMap[String, Double] = if (parts("quick")) quick() else full()
+
+  /** `op`'s samples, with the wake-ups of this JVM's threads per call while it ran (`calls` calls in all), and the CPU
+    * time per call of the threads named `cpuOf` (the port loop's).
+    */
+  private def woken(what: String, calls: Int, cpuOf: String = "naogateway.dispatcher")(
+      op: => Array[Long]): Array[Long] = {
+    val threads = java.lang.management.ManagementFactory.getThreadMXBean
+    def cpu() = Thread.getAllStackTraces.keySet.asScala.toVector.filter(_.getName.contains(cpuOf))
+      .map(t => t.getId -> threads.getThreadCpuTime(t.getId)).toMap
+    val before = ThreadWakeups.snapshot()
+    val cpuBefore = cpu()
+    val samples = op
+    val cpuAfter = cpu()
+    val (all, busiest) = ThreadWakeups.perCall(before, ThreadWakeups.snapshot(), calls)
+    val loopCpu = cpuAfter.map { case (id, t) => t - cpuBefore.getOrElse(id, 0L) }.sum.toDouble / calls / 1e3
+    progress(f"$what: $all%.2f wake-ups per call in this JVM; " +
+      busiest.map { case (t, n) => f"$t $n%.2f" }.mkString(", ") + f"; port loop CPU $loopCpu%.1f us per call")
+    samples
+  }
+
+  /** The raw floor, then the gateway alone and `RobotInterface` with the port loop's answer spin off and on (a gateway
+    * node each), each with its wake-ups per call: the spin's gain as ratios of one run.
+    */
+  private def quick(): ListMap[String, Double] = GatewayBench.quietLogging {
+    progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
+    val total = GatewayBench.RttWarmup + GatewayBench.RttSamples
+    val raw = woken("raw udp", total)(GatewayBench.rawRoundTrips())
+    report("raw udp", raw)
+    def p50(s: Array[Long]) = GatewayBench.percentile(s, 0.50) / 1e3
+    def p99(s: Array[Long]) = GatewayBench.percentile(s, 0.99) / 1e3
+    val figures = Seq("off" -> Some("0us"), "on" -> None).flatMap { case (label, spin) =>
+      val gateway = new GatewayNode(answerSpin = spin)
+      try {
+        val robot = new PlainRobot(gateway.addresses.robots, 15.minutes)
+        try {
+          gateway.awaitOnline(1)
+          gateway.pings(JitWarmup)
+          val alone = woken(s"gateway alone, spin $label", total)(gateway.pings())
+          report(s"gateway alone, spin $label", alone)
+          val local = Await.result(RobotClient.connect(gateway.system, gateway.middleware, "bench-local"), 30.seconds)
+          val interface = woken(s"RobotInterface, spin $label", total)(appCalls(local))
+          report(s"RobotInterface, spin $label", interface)
+          local.close()
+          gateway.spinCounts().foreach { case (n, hits) =>
+            progress(f"answer spins: $n, ended by an arrival: $hits (${hits * 100.0 / math.max(1L, n)}%.0f %%)")
+          }
+          val suffix = if (spin.isEmpty) "" else s"_spin_$label"
+          Seq(
+            s"callpath_gateway${suffix}_p50_us" -> p50(alone),
+            s"callpath_gateway${suffix}_p99_us" -> p99(alone),
+            s"callpath_interface${suffix}_p50_us" -> p50(interface),
+            s"callpath_interface${suffix}_p99_us" -> p99(interface),
+            s"callpath_gateway${suffix}_over_raw_udp_p50" -> p50(alone) / p50(raw),
+            s"callpath_interface${suffix}_over_gateway_p50" -> p50(interface) / p50(alone)
+          )
+        } finally robot.close()
+      } finally gateway.stop()
+    }
+    progress(s"done, load average ${GatewayBench.loadAverage()}")
+    ListMap("callpath_raw_udp_p50_us" -> p50(raw), "callpath_raw_udp_p99_us" -> p99(raw)) ++ figures
+  }
+
+  private def full(): ListMap[String, Double] = GatewayBench.quietLogging {
     progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
     val raw = GatewayBench.rawRoundTrips()
     report("raw udp", raw)
@@ -309,9 +378,10 @@ object CallPathBench extends Benchmark {
   private val TeamKeyHex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f"
 
   /** A gateway node; `signing`: with the team key, so robot 1 must sign and everything to it is signed. */
-  private final class GatewayNode(signing: Boolean = false) {
+  private final class GatewayNode(signing: Boolean = false, answerSpin: Option[String] = None) {
     private val overrides: Config = ConfigFactory.parseString(
       (if (signing) s"""naogateway.signing.key = "$TeamKeyHex"\n""" else "") +
+        answerSpin.fold("")(s => s"naogateway.dispatcher.port-loop.answer-spin = $s\n") +
         """naogateway.link.bind-address = "127.0.0.1"
         |naogateway.link.robot-port = 0
         |naogateway.game-controller.enabled = off
@@ -350,6 +420,16 @@ object CallPathBench extends Benchmark {
         if (deadline.isOverdue()) throw new IllegalStateException(s"robot $robotId did not come online")
         Thread.sleep(50)
       }
+    }
+
+    /** The port loop's answer spins and hits so far ([[naogateway.transport.PortLoop.spinCounts]]), asked on its
+      * thread.
+      */
+    def spinCounts(): Option[(Long, Long)] = {
+      val loop = system.dispatchers.lookup(akka.actor.typed.DispatcherSelector.fromConfig("naogateway.dispatcher"))
+      val answer = scala.concurrent.Promise[Option[(Long, Long)]]()
+      loop.execute(() => answer.success(naogateway.transport.PortLoop.current.map(_.spinCounts)))
+      Await.result(answer.future, 10.seconds)
     }
 
     /** The gateway alone: `system.ping` asked of the robot's command owner. */
