@@ -94,7 +94,82 @@ object CallPathBench extends Benchmark {
   private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3",
     "protobuf==7.36.2", "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
 
-  def run(): ListMap[String, Double] = if (parts("quick")) quick() else full()
+  def run(): ListMap[String, Double] =
+    if (parts("quick")) quick() else if (parts("demo")) demoSpin() else full()
+
+  /** The demo (the launcher's main on this classpath, as `IdleCpuBench` falls back to) with the answer spin off, then
+    * on: its port loop's threads' CPU and wake-ups a second over [[DemoWindow]] after [[DemoSettle]], and the process's
+    * CPU. The ball follower steers robot 1 the whole time, so requests leave and the spin runs: what it costs a demo.
+    */
+  private def demoSpin(): ListMap[String, Double] = {
+    val figures = Seq("off" -> "0us", "on" -> "50us").flatMap { case (label, spin) =>
+      val (process, loop, wakes) = demoLoop(spin)
+      progress(f"demo, spin $label: process $process%.1f %%, port loop $loop%.2f %% of a core, " +
+        f"port loop wake-ups $wakes%.0f a second")
+      Seq(
+        s"callpath_demo_spin_${label}_cpu_pct" -> process,
+        s"callpath_demo_spin_${label}_loop_cpu_pct" -> loop,
+        s"callpath_demo_spin_${label}_loop_wakeups_s" -> wakes
+      )
+    }
+    ListMap(figures: _*)
+  }
+
+  private val DemoSettle = 30.seconds
+  private val DemoWindow = 30.seconds
+
+  private def demoLoop(spin: String): (Double, Double, Double) = {
+    import scala.jdk.CollectionConverters._
+    import Packaged.{freeTcpPort, freeUdpPort}
+    val log = java.nio.file.Paths.get("target", "bench", s"demo-spin-$spin.log").toAbsolutePath
+    Files.createDirectories(log.getParent)
+    Files.deleteIfExists(log)
+    val logging =
+      Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
+    val command = Seq(s"${System.getProperty("java.home")}/bin/java") ++ logging ++
+      Seq(s"-Dnaogateway.dispatcher.port-loop.answer-spin=$spin", "-cp", System.getProperty("java.class.path"),
+        "naogateway.launcher.Launcher")
+    val output = log.resolveSibling(s"demo-spin-$spin.out").toFile
+    val builder = new ProcessBuilder(command.asJava).redirectErrorStream(true)
+      .redirectOutput(ProcessBuilder.Redirect.to(output))
+    val env = builder.environment()
+    env.put("ROBOTS_GATEWAY_PORT", freeTcpPort().toString)
+    env.put("NAOGATEWAY_GAMECONTROLLER_PORT", freeUdpPort().toString)
+    env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_LOG_FILE", log.toString)
+    env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
+    val process = builder.start()
+    try {
+      def online = Try(Files.readAllLines(log).asScala.count(_.contains("online at"))).getOrElse(0)
+      val deadline = 120.seconds.fromNow
+      while (online < 3 && process.isAlive && deadline.hasTimeLeft()) Thread.sleep(500)
+      if (!process.isAlive) progress(s"the demo ended with ${process.exitValue()} (see $output)")
+      Thread.sleep(DemoSettle.toMillis)
+      val pid = process.pid()
+      // "<system>-naogateway.dispatcher-<n>" cut to 15 characters (the ZeroMQ link's dispatcher's too: both printed).
+      def loopThreads(m: Map[Long, ThreadWakeups.Counts]) = m.filter(_._2.name.contains("-naog"))
+      val (c0, b0, t0) = (Packaged.cpuNanos(pid), ThreadWakeups.snapshot(pid.toString), System.nanoTime())
+      Thread.sleep(DemoWindow.toMillis)
+      val (c1, b1, t1) = (Packaged.cpuNanos(pid), ThreadWakeups.snapshot(pid.toString), System.nanoTime())
+      val seconds = (t1 - t0) / 1e9
+      val processPct = (for (a <- c0; b <- c1) yield (b - a) / 1e7 / seconds).getOrElse(Double.NaN)
+      val before = loopThreads(b0)
+      val after = loopThreads(b1)
+      progress(s"demo, answer-spin $spin: " + after.toVector.sortBy(_._1).map { case (tid, a) =>
+        val b = before.get(tid)
+        f"${a.name}#$tid ${(a.cpuTicks - b.fold(0L)(_.cpuTicks)) / seconds}%.2f %% CPU, " +
+          f"${(a.voluntary - b.fold(0L)(_.voluntary)) / seconds}%.0f wake-ups/s"
+      }.mkString("; "))
+      // Clock ticks are hundredths of a second on Linux.
+      val loopPct = after.map { case (tid, a) => a.cpuTicks - before.get(tid).fold(0L)(_.cpuTicks) }.sum / seconds
+      val wakes = after.map { case (tid, a) => a.voluntary - before.get(tid).fold(0L)(_.voluntary) }.sum / seconds
+      (processPct, loopPct, wakes)
+    } finally {
+      process.destroy()
+      if (!process.waitFor(20, java.util.concurrent.TimeUnit.SECONDS)) process.destroyForcibly()
+    }
+  }
 
   /** `op`'s samples, with the wake-ups of this JVM's threads per call while it ran (`calls` calls in all), and the CPU
     * time per call of the threads named `cpuOf` (the port loop's).
@@ -102,16 +177,21 @@ object CallPathBench extends Benchmark {
   private def woken(what: String, calls: Int, cpuOf: String = "naogateway.dispatcher")(
       op: => Array[Long]): Array[Long] = {
     val threads = java.lang.management.ManagementFactory.getThreadMXBean
-    def cpu() = Thread.getAllStackTraces.keySet.asScala.toVector.filter(_.getName.contains(cpuOf))
+    def cpu(named: String) = Thread.getAllStackTraces.keySet.asScala.toVector.filter(_.getName.contains(named))
       .map(t => t.getId -> threads.getThreadCpuTime(t.getId)).toMap
     val before = ThreadWakeups.snapshot()
-    val cpuBefore = cpu()
+    val cpuBefore = cpu(cpuOf)
+    val robotBefore = cpu("plain-robot-answers")
     val samples = op
-    val cpuAfter = cpu()
+    val cpuAfter = cpu(cpuOf)
+    val robotAfter = cpu("plain-robot-answers")
     val (all, busiest) = ThreadWakeups.perCall(before, ThreadWakeups.snapshot(), calls)
-    val loopCpu = cpuAfter.map { case (id, t) => t - cpuBefore.getOrElse(id, 0L) }.sum.toDouble / calls / 1e3
+    def perCall(after: Map[Long, Long], before: Map[Long, Long]) =
+      after.map { case (id, t) => t - before.getOrElse(id, 0L) }.sum.toDouble / calls / 1e3
     progress(f"$what: $all%.2f wake-ups per call in this JVM; " +
-      busiest.map { case (t, n) => f"$t $n%.2f" }.mkString(", ") + f"; port loop CPU $loopCpu%.1f us per call")
+      busiest.map { case (t, n) => f"$t $n%.2f" }.mkString(", ") +
+      f"; CPU per call: port loop ${perCall(cpuAfter, cpuBefore)}%.1f us, the robot's answering thread " +
+      f"${perCall(robotAfter, robotBefore)}%.1f us")
     samples
   }
 

@@ -13,13 +13,13 @@ import scala.util.Try
 private[bench] object ThreadWakeups {
 
   /** One thread's counters: its name as the kernel knows it (15 characters at most), its voluntary and involuntary
-    * switches.
+    * switches, its CPU time (user + system) in clock ticks.
     */
-  final case class Counts(name: String, voluntary: Long, involuntary: Long)
+  final case class Counts(name: String, voluntary: Long, involuntary: Long, cpuTicks: Long)
 
-  /** Every thread of this JVM now, by thread id. */
-  def snapshot(): Map[Long, Counts] = {
-    val tasks = Paths.get("/proc/self/task")
+  /** Every thread of process `pid` (this JVM's by default) now, by thread id. */
+  def snapshot(pid: String = "self"): Map[Long, Counts] = {
+    val tasks = Paths.get(s"/proc/$pid/task")
     if (!Files.isDirectory(tasks)) Map.empty
     else {
       val dirs = Files.list(tasks)
@@ -31,8 +31,12 @@ private[bench] object ThreadWakeups {
   private def read(dir: Path): Option[(Long, Counts)] = Try {
     val lines = new String(Files.readAllBytes(dir.resolve("status")), StandardCharsets.US_ASCII).linesIterator
     val fields = lines.map(_.split(":\\s*", 2)).collect { case Array(k, v) => k -> v.trim }.toMap
+    // stat: the name in parentheses, then fields 3 on; utime and stime are fields 14 and 15.
+    val stat = new String(Files.readAllBytes(dir.resolve("stat")), StandardCharsets.US_ASCII)
+    val rest = stat.substring(stat.lastIndexOf(')') + 2).split(' ')
     dir.getFileName.toString.toLong ->
-      Counts(fields("Name"), fields("voluntary_ctxt_switches").toLong, fields("nonvoluntary_ctxt_switches").toLong)
+      Counts(fields("Name"), fields("voluntary_ctxt_switches").toLong, fields("nonvoluntary_ctxt_switches").toLong,
+        rest(11).toLong + rest(12).toLong)
   }.toOption
 
   /** Voluntary switches per call between `before` and `after` over `calls` calls: all threads together, and the threads
