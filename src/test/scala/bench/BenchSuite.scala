@@ -86,7 +86,7 @@ object BenchSuite {
     )
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the
-    * gateway's.
+    * gateway's; `callpath:quick` and `callpath:demo` the port loop's parts of the call path's (`CallPathBench.parts`).
     */
   val onRequest: Vector[Benchmark] = Vector(Soak)
 

@@ -239,9 +239,8 @@ final class PortLoop private[naogateway] (threadFactory: ThreadFactory, settings
         else {
           // An interrupted thread's select returns at once, and its next read would close the channel.
           Thread.interrupted()
-          /* An answer due within microseconds is looked for before the thread blocks: the wake-up from select would
-           * cost */
-          // more than the wait. Only after a request left (never when idle), and bounded.
+          // An answer due within microseconds is looked for before the thread blocks: the wake-up from select would
+          // cost more than the wait. Only after a request left (never when idle), and bounded.
           if (answerSpin.pending && taking && tasks.isEmpty && detaches.isEmpty && !shut) spinForAnswer()
           selecting = true
           val mustNotWait = !detaches.isEmpty || !selector.selectedKeys().isEmpty ||
@@ -366,25 +365,28 @@ object PortLoop {
     * for every time. Used by the loop's owning thread only.
     */
   private[naogateway] final class AnswerSpin(spinNanos: Long) {
+    private var waiting = false
     private var until = 0L
     private var misses = 0
     private var skips = 0L
 
     /** Whether an answer is due: the loop spins before it blocks. */
-    def pending: Boolean = until != 0L
+    def pending: Boolean = waiting
 
     /** A request left at `now`. */
     def due(now: Long): Unit =
       if (spinNanos > 0) {
         if (skips > 0) skips -= 1
-        else until = now + spinNanos
+        else {
+          waiting = true
+          until = now + spinNanos
+        }
       }
 
     /** The spin's deadline (System.nanoTime), the due answer taken. */
     def take(): Long = {
-      val u = until
-      until = 0L
-      u
+      waiting = false
+      until
     }
 
     /** The spin ended: `hit` when something arrived before its deadline. */
