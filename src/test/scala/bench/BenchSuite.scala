@@ -87,13 +87,14 @@ object BenchSuite {
     )
 
   /** Run only when named: `./sbt "bench soak [minutes]"`. `./sbt "bench gateway:rtt,ingest"` runs those parts of the
-    * gateway's.
+    * gateway's; `callpath:quick` and `callpath:demo` the port loop's parts of the call path's (`CallPathBench.parts`).
     */
   val onRequest: Vector[Benchmark] = Vector(Soak)
 
   def main(args: Array[String]): Unit = {
     args.flatMap(_.toDoubleOption).headOption.foreach(m => Soak.minutes = m)
     args.collect { case s"gateway:$parts" => GatewayBench.parts = parts.split(',').toSet }
+    args.collect { case s"callpath:$parts" => CallPathBench.parts = parts.split(',').toSet }
     val names = args.filter(_.toDoubleOption.isEmpty).map(_.takeWhile(_ != ':'))
     val selected = if (names.isEmpty) benchmarks else (benchmarks ++ onRequest).filter(b => names.contains(b.name))
     val cores = Runtime.getRuntime.availableProcessors

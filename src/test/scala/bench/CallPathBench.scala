@@ -9,6 +9,7 @@ import java.nio.file.Files
 import scala.collection.immutable.ListMap
 import scala.concurrent.Await
 import scala.concurrent.duration._
+import scala.jdk.CollectionConverters._
 import scala.util.{Failure, Success, Try}
 
 import akka.actor.typed.scaladsl.AskPattern._
@@ -64,7 +65,12 @@ import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMi
   */
 object CallPathBench extends Benchmark {
   val name = "callpath"
-  override val quietSensitive = true
+
+  /** The parts to run: `quick` takes only the raw floor, the gateway alone and `RobotInterface` (once, with the
+    * wake-ups per call); everything when empty.
+    */
+  var parts: Set[String] = Set.empty
+  override def quietSensitive: Boolean = parts.isEmpty
 
   /** Calls through the gateway before anything is measured: the JIT's, for the path every door shares (the actors, the
     * codecs, the port). With only the usual warm-up the gateway alone, measured first, came out 1.5-1.8 x slower than
@@ -88,7 +94,151 @@ object CallPathBench extends Benchmark {
   private val GrpcPeerRequirements = Seq("mavsdk-grpc==4.0.5", "pymavlink==2.4.50", "grpcio==1.85.3",
     "protobuf==7.36.2", "fastcrc==0.5.0", "lxml==6.1.3", "typing_extensions==4.16.0")
 
-  def run(): ListMap[String, Double] = GatewayBench.quietLogging {
+  def run(): ListMap[String, Double] =
+    if (parts("quick")) quick() else if (parts("demo")) demoSpin() else full()
+
+  /** The demo (the launcher's main on this classpath, as `IdleCpuBench` falls back to) with the answer spin off, then
+    * on: its port loop's threads' CPU and wake-ups a second over [[DemoWindow]] after [[DemoSettle]], and the process's
+    * CPU. The ball follower steers robot 1 the whole time, so requests leave and the spin runs: what it costs a demo.
+    */
+  private def demoSpin(): ListMap[String, Double] = {
+    val figures = Seq("off" -> "0us", "on" -> "50us").flatMap { case (label, spin) =>
+      val (process, loop, wakes) = demoLoop(spin)
+      progress(f"demo, spin $label: process $process%.1f %%, port loop $loop%.2f %% of a core, " +
+        f"port loop wake-ups $wakes%.0f a second")
+      Seq(
+        s"callpath_demo_spin_${label}_cpu_pct" -> process,
+        s"callpath_demo_spin_${label}_loop_cpu_pct" -> loop,
+        s"callpath_demo_spin_${label}_loop_wakeups_s" -> wakes
+      )
+    }
+    ListMap(figures: _*)
+  }
+
+  private val DemoSettle = 30.seconds
+  private val DemoWindow = 30.seconds
+
+  private def demoLoop(spin: String): (Double, Double, Double) = {
+    import scala.jdk.CollectionConverters._
+    import Packaged.{freeTcpPort, freeUdpPort}
+    val log = java.nio.file.Paths.get("target", "bench", s"demo-spin-$spin.log").toAbsolutePath
+    Files.createDirectories(log.getParent)
+    Files.deleteIfExists(log)
+    val logging =
+      Option(getClass.getClassLoader.getResource("logback.xml")).map(u => s"-Dlogback.configurationFile=$u")
+    val command = Seq(s"${System.getProperty("java.home")}/bin/java") ++ logging ++
+      Seq(s"-Dnaogateway.dispatcher.port-loop.answer-spin=$spin", "-cp", System.getProperty("java.class.path"),
+        "naogateway.launcher.Launcher")
+    val output = log.resolveSibling(s"demo-spin-$spin.out").toFile
+    val builder = new ProcessBuilder(command.asJava).redirectErrorStream(true)
+      .redirectOutput(ProcessBuilder.Redirect.to(output))
+    val env = builder.environment()
+    env.put("ROBOTS_GATEWAY_PORT", freeTcpPort().toString)
+    env.put("NAOGATEWAY_GAMECONTROLLER_PORT", freeUdpPort().toString)
+    env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_LOG_FILE", log.toString)
+    env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
+    val process = builder.start()
+    try {
+      def online = Try(Files.readAllLines(log).asScala.count(_.contains("online at"))).getOrElse(0)
+      val deadline = 120.seconds.fromNow
+      while (online < 3 && process.isAlive && deadline.hasTimeLeft()) Thread.sleep(500)
+      if (!process.isAlive) progress(s"the demo ended with ${process.exitValue()} (see $output)")
+      Thread.sleep(DemoSettle.toMillis)
+      val pid = process.pid()
+      // "<system>-naogateway.dispatcher-<n>" cut to 15 characters (the ZeroMQ link's dispatcher's too: both printed).
+      def loopThreads(m: Map[Long, ThreadWakeups.Counts]) = m.filter(_._2.name.contains("-naog"))
+      val (c0, b0, t0) = (Packaged.cpuNanos(pid), ThreadWakeups.snapshot(pid.toString), System.nanoTime())
+      Thread.sleep(DemoWindow.toMillis)
+      val (c1, b1, t1) = (Packaged.cpuNanos(pid), ThreadWakeups.snapshot(pid.toString), System.nanoTime())
+      val seconds = (t1 - t0) / 1e9
+      val processPct = (for (a <- c0; b <- c1) yield (b - a) / 1e7 / seconds).getOrElse(Double.NaN)
+      val before = loopThreads(b0)
+      val after = loopThreads(b1)
+      progress(s"demo, answer-spin $spin: " + after.toVector.sortBy(_._1).map { case (tid, a) =>
+        val b = before.get(tid)
+        f"${a.name}#$tid ${(a.cpuTicks - b.fold(0L)(_.cpuTicks)) / seconds}%.2f %% CPU, " +
+          f"${(a.voluntary - b.fold(0L)(_.voluntary)) / seconds}%.0f wake-ups/s"
+      }.mkString("; "))
+      // Clock ticks are hundredths of a second on Linux.
+      val loopPct = after.map { case (tid, a) => a.cpuTicks - before.get(tid).fold(0L)(_.cpuTicks) }.sum / seconds
+      val wakes = after.map { case (tid, a) => a.voluntary - before.get(tid).fold(0L)(_.voluntary) }.sum / seconds
+      (processPct, loopPct, wakes)
+    } finally {
+      process.destroy()
+      if (!process.waitFor(20, java.util.concurrent.TimeUnit.SECONDS)) process.destroyForcibly()
+    }
+  }
+
+  /** `op`'s samples, with the wake-ups of this JVM's threads per call while it ran (`calls` calls in all), and the CPU
+    * time per call of the threads named `cpuOf` (the port loop's).
+    */
+  private def woken(what: String, calls: Int, cpuOf: String = "naogateway.dispatcher")(
+      op: => Array[Long]): Array[Long] = {
+    val threads = java.lang.management.ManagementFactory.getThreadMXBean
+    def cpu(named: String) = Thread.getAllStackTraces.keySet.asScala.toVector.filter(_.getName.contains(named))
+      .map(t => t.getId -> threads.getThreadCpuTime(t.getId)).toMap
+    val before = ThreadWakeups.snapshot()
+    val cpuBefore = cpu(cpuOf)
+    val robotBefore = cpu("plain-robot-answers")
+    val samples = op
+    val cpuAfter = cpu(cpuOf)
+    val robotAfter = cpu("plain-robot-answers")
+    val (all, busiest) = ThreadWakeups.perCall(before, ThreadWakeups.snapshot(), calls)
+    def perCall(after: Map[Long, Long], before: Map[Long, Long]) =
+      after.map { case (id, t) => t - before.getOrElse(id, 0L) }.sum.toDouble / calls / 1e3
+    progress(f"$what: $all%.2f wake-ups per call in this JVM; " +
+      busiest.map { case (t, n) => f"$t $n%.2f" }.mkString(", ") +
+      f"; CPU per call: port loop ${perCall(cpuAfter, cpuBefore)}%.1f us, the robot's answering thread " +
+      f"${perCall(robotAfter, robotBefore)}%.1f us")
+    samples
+  }
+
+  /** The raw floor, then the gateway alone and `RobotInterface` with the port loop's answer spin off and on (a gateway
+    * node each), each with its wake-ups per call: the spin's gain as ratios of one run.
+    */
+  private def quick(): ListMap[String, Double] = GatewayBench.quietLogging {
+    progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
+    val total = GatewayBench.RttWarmup + GatewayBench.RttSamples
+    val raw = woken("raw udp", total)(GatewayBench.rawRoundTrips())
+    report("raw udp", raw)
+    def p50(s: Array[Long]) = GatewayBench.percentile(s, 0.50) / 1e3
+    def p99(s: Array[Long]) = GatewayBench.percentile(s, 0.99) / 1e3
+    val figures = Seq("off" -> Some("0us"), "on" -> None).flatMap { case (label, spin) =>
+      val gateway = new GatewayNode(answerSpin = spin)
+      try {
+        val robot = new PlainRobot(gateway.addresses.robots, 15.minutes)
+        try {
+          gateway.awaitOnline(1)
+          gateway.pings(JitWarmup)
+          val alone = woken(s"gateway alone, spin $label", total)(gateway.pings())
+          report(s"gateway alone, spin $label", alone)
+          val local = Await.result(RobotClient.connect(gateway.system, gateway.middleware, "bench-local"), 30.seconds)
+          appCalls(local, JitWarmup - GatewayBench.RttWarmup)
+          val interface = woken(s"RobotInterface, spin $label", total)(appCalls(local))
+          report(s"RobotInterface, spin $label", interface)
+          local.close()
+          gateway.spinCounts().foreach { case (n, hits) =>
+            progress(f"answer spins: $n, ended by an arrival: $hits (${hits * 100.0 / math.max(1L, n)}%.0f %%)")
+          }
+          val suffix = if (spin.isEmpty) "" else s"_spin_$label"
+          Seq(
+            s"callpath_gateway${suffix}_p50_us" -> p50(alone),
+            s"callpath_gateway${suffix}_p99_us" -> p99(alone),
+            s"callpath_interface${suffix}_p50_us" -> p50(interface),
+            s"callpath_interface${suffix}_p99_us" -> p99(interface),
+            s"callpath_gateway${suffix}_over_raw_udp_p50" -> p50(alone) / p50(raw),
+            s"callpath_interface${suffix}_over_gateway_p50" -> p50(interface) / p50(alone)
+          )
+        } finally robot.close()
+      } finally gateway.stop()
+    }
+    progress(s"done, load average ${GatewayBench.loadAverage()}")
+    ListMap("callpath_raw_udp_p50_us" -> p50(raw), "callpath_raw_udp_p99_us" -> p99(raw)) ++ figures
+  }
+
+  private def full(): ListMap[String, Double] = GatewayBench.quietLogging {
     progress(s"${Runtime.getRuntime.availableProcessors} cores, load average ${GatewayBench.loadAverage()}")
     val raw = GatewayBench.rawRoundTrips()
     report("raw udp", raw)
@@ -102,7 +252,8 @@ object CallPathBench extends Benchmark {
         val alone = gateway.pings()
         report("gateway alone", alone)
         val local = Await.result(RobotClient.connect(gateway.system, gateway.middleware, "bench-local"), 30.seconds)
-        val interface = appCalls(local)
+        progress(s"warming up: $JitWarmup calls through RobotInterface")
+        val interface = appCalls(local, JitWarmup)
         report("RobotInterface, same JVM", interface)
         local.close()
         val cluster = otherNode(gateway.clusterPort)(appCalls)
@@ -201,13 +352,18 @@ object CallPathBench extends Benchmark {
       f"max ${samples.max / 1e3}%.0f us over ${samples.length}")
 
   /** `system.ping` through an app's `RobotInterface`, paced. */
-  private def appCalls(app: RobotInterface): Array[Long] = {
+  private def appCalls(app: RobotInterface): Array[Long] = appCalls(app, GatewayBench.RttWarmup)
+
+  /** The same after `warmup` calls: the interface's own code (middleware, guard, futures) gets the JIT's warm-up the
+    * gateway alone gets ([[JitWarmup]]), so their ratio compares two steady states.
+    */
+  private def appCalls(app: RobotInterface, warmup: Int): Array[Long] = {
     def once(): Long = {
       val start = System.nanoTime()
       Await.result(app.call(1, "system", "ping"), 10.seconds)
       System.nanoTime() - start
     }
-    GatewayBench.paced(GatewayBench.RttWarmup)(() => once())
+    GatewayBench.paced(warmup)(() => once())
     GatewayBench.paced(GatewayBench.RttSamples)(() => once())
   }
 
@@ -309,9 +465,10 @@ object CallPathBench extends Benchmark {
   private val TeamKeyHex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f"
 
   /** A gateway node; `signing`: with the team key, so robot 1 must sign and everything to it is signed. */
-  private final class GatewayNode(signing: Boolean = false) {
+  private final class GatewayNode(signing: Boolean = false, answerSpin: Option[String] = None) {
     private val overrides: Config = ConfigFactory.parseString(
       (if (signing) s"""naogateway.signing.key = "$TeamKeyHex"\n""" else "") +
+        answerSpin.fold("")(s => s"naogateway.dispatcher.port-loop.answer-spin = $s\n") +
         """naogateway.link.bind-address = "127.0.0.1"
         |naogateway.link.robot-port = 0
         |naogateway.game-controller.enabled = off
@@ -350,6 +507,16 @@ object CallPathBench extends Benchmark {
         if (deadline.isOverdue()) throw new IllegalStateException(s"robot $robotId did not come online")
         Thread.sleep(50)
       }
+    }
+
+    /** The port loop's answer spins and hits so far ([[naogateway.transport.PortLoop.spinCounts]]), asked on its
+      * thread.
+      */
+    def spinCounts(): Option[(Long, Long)] = {
+      val loop = system.dispatchers.lookup(akka.actor.typed.DispatcherSelector.fromConfig("naogateway.dispatcher"))
+      val answer = scala.concurrent.Promise[Option[(Long, Long)]]()
+      loop.execute(() => answer.success(naogateway.transport.PortLoop.current.map(_.spinCounts)))
+      Await.result(answer.future, 10.seconds)
     }
 
     /** The gateway alone: `system.ping` asked of the robot's command owner. */

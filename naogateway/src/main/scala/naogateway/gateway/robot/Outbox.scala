@@ -9,7 +9,7 @@ import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
 
 import naogateway.gateway.link.ZeroMqRobotLink
-import naogateway.transport.DatagramWriter
+import naogateway.transport.{DatagramWriter, PortLoop}
 import naogateway.api.recording.Decision
 import naogateway.gateway.recording.Recording
 import naogateway.wire.{FrameSigning, WireLimits}
@@ -193,7 +193,8 @@ private final class Outbox(
             dropped += 1
             if (RateLimitedLog.due(dropped))
               log.warn("Outbox dropped {} datagram(s) so far: the socket did not take one to {}", dropped, s.to)
-          case Right(_) => ()
+          // A robot answers every request at once: the port loop looks for the answer before it blocks.
+          case Right(_) => PortLoop.answerDue()
         }
     }
     warnIfLoaded(now)

@@ -34,8 +34,8 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
     def newThread(r: Runnable): Thread = new Thread(r, s"$prefix-${n.incrementAndGet()}")
   }
 
-  private def loop(prefix: String, datagrams: Int = 256, tasks: Int = 64): PortLoop =
-    new PortLoop(new Named(prefix), PortLoop.Settings(datagrams, tasks))
+  private def loop(prefix: String, datagrams: Int = 256, tasks: Int = 64, answerSpinNanos: Long = 0L): PortLoop =
+    new PortLoop(new Named(prefix), PortLoop.Settings(datagrams, tasks, answerSpinNanos))
 
   private def await(latch: CountDownLatch, what: String): Unit =
     if (!latch.await(Wait, TimeUnit.SECONDS)) fail(s"$what did not happen within $Wait s")
@@ -66,8 +66,8 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
     def nextDatagram(): (String, String) = Iterator.continually(next()).find(_._1 != "caught up").get
   }
 
-  private final class Fixture(prefix: String, datagrams: Int = 256, tasks: Int = 64) {
-    val factory: PortLoop = loop(prefix, datagrams, tasks)
+  private final class Fixture(prefix: String, datagrams: Int = 256, tasks: Int = 64, answerSpinNanos: Long = 0L) {
+    val factory: PortLoop = loop(prefix, datagrams, tasks, answerSpinNanos)
     val executor: ExecutorService = factory.createExecutorService
     val robotAddress = new InetSocketAddress(TestLoopback.address(0), 0)
     val port: RobotPort = RobotPort.open(robotAddress, 1 << 20, s"$prefix-own-reader")
@@ -89,8 +89,9 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
       }
   }
 
-  private def withFixture[A](prefix: String, datagrams: Int = 256, tasks: Int = 64)(test: Fixture => A): A = {
-    val f = new Fixture(prefix, datagrams, tasks)
+  private def withFixture[A](prefix: String, datagrams: Int = 256, tasks: Int = 64, answerSpinNanos: Long = 0L)(
+      test: Fixture => A): A = {
+    val f = new Fixture(prefix, datagrams, tasks, answerSpinNanos)
     try test(f)
     finally f.close()
   }
@@ -311,6 +312,68 @@ class PortLoopSpec extends AnyWordSpec with Matchers {
         on(executor)(port.onLoop) shouldBe false
         port.readerAlive shouldBe false
       } finally executor.shutdown()
+    }
+  }
+
+  "A port loop's answer spin" must {
+    "never spin while nothing asked for an answer, however often tasks wake the loop" in
+      withFixture("spin-idle", answerSpinNanos = 1000000L) { f =>
+        f.port.startOn(f.recorder, f.executor)
+        on(f.executor)(f.port.onLoop) shouldBe true
+        (1 to 50).foreach { i =>
+          if (i % 10 == 0) Thread.sleep(2) // idle between tasks: each one wakes the loop from select
+          on(f.executor)(i)
+          f.send(i)
+          f.recorder.nextDatagram()._1 shouldBe i.toString
+        }
+        f.factory.spinCounts shouldBe ((0L, 0L))
+      }
+    "look for the answer to a request that just left before blocking, and hand it on from the spin" in
+      withFixture("spin-answer", answerSpinNanos = 1000000L) { f =>
+        f.port.startOn(f.recorder, f.executor)
+        on(f.executor)(f.port.onLoop) shouldBe true
+        // The answer is in the port before the spin starts (a loopback send is queued when it returns): the spin finds
+        // it whatever the machine's load.
+        f.executor.execute { () =>
+          f.send(7)
+          PortLoop.answerDue()
+        }
+        f.recorder.nextDatagram() shouldBe ("7" -> "spin-answer-1")
+        f.factory.spinCounts shouldBe ((1L, 1L))
+      }
+    "count a spin that ran out as one, and take no due answer from another thread" in
+      withFixture("spin-miss", answerSpinNanos = 20000L) { f =>
+        f.port.startOn(f.recorder, f.executor)
+        on(f.executor)(f.port.onLoop) shouldBe true
+        PortLoop.answerDue() // not the loop's thread: nothing
+        f.executor.execute(() => PortLoop.answerDue())
+        eventually(f.factory.spinCounts._1 == 1L, "the spin")
+        f.factory.spinCounts shouldBe ((1L, 0L))
+      }
+    "after 1, 2, 3 ... spins in a row ran out wait in select for the next 1, 3, 7 ... due answers, after a hit for none" in {
+      val spin = new PortLoop.AnswerSpin(1000L)
+      def spins(dues: Int, hit: Boolean): Int = (1 to dues).count { i =>
+        spin.due(i.toLong)
+        val due = spin.pending
+        if (due) {
+          spin.take() shouldBe i + 1000L
+          spin.ended(hit)
+        }
+        due
+      }
+      spin.pending shouldBe false
+      spins(1, hit = false) shouldBe 1 // missed: the next one waits
+      spins(2, hit = false) shouldBe 1 // the second missed too: 3 wait
+      spins(4, hit = false) shouldBe 1
+      spins(8, hit = true) shouldBe 1 // 7 waited, then a hit
+      spins(5, hit = true) shouldBe 5 // spun for every one since
+      spins(1, hit = false) shouldBe 1
+      (1 to PortLoop.AnswerSpin.MaxBackoff).foreach(k => spins(1 << k, hit = false) shouldBe 1)
+      // The wait stays bounded: one spin in 1024 due answers, however many ran out.
+      (1 to 3).foreach(_ => spins(1 << PortLoop.AnswerSpin.MaxBackoff, hit = false) shouldBe 1)
+      val off = new PortLoop.AnswerSpin(0L)
+      off.due(1L)
+      off.pending shouldBe false
     }
   }
 

@@ -57,6 +57,16 @@ final class PortLoop private[naogateway] (threadFactory: ThreadFactory, settings
   private var selectFailures = 0L
   // One buffer for the loop's life, used by the owning thread only; each datagram is copied out at its own size.
   private lazy val buffer = ByteBuffer.allocateDirect(DatagramPort.MaxDatagramBytes)
+  // The answer spin ([[PortLoop.answerDue]]): by the owning thread only.
+  private val answerSpin = new AnswerSpin(settings.answerSpinNanos)
+  // Spins and the spins something ended, for the bench and the specs; written by the owner only.
+  @volatile private var spins = 0L
+  @volatile private var spinHits = 0L
+
+  /** How many times the loop polled for a due answer instead of waiting in select, and how many of those an answer (a
+    * datagram, or a task) ended before the spin ran out.
+    */
+  def spinCounts: (Long, Long) = (spins, spinHits)
 
   /** A new executor; its thread runs the loop once the previous executor's thread has let it go. */
   def createExecutorService: ExecutorService = {
@@ -229,8 +239,11 @@ final class PortLoop private[naogateway] (threadFactory: ThreadFactory, settings
         else {
           // An interrupted thread's select returns at once, and its next read would close the channel.
           Thread.interrupted()
+          // An answer due within microseconds is looked for before the thread blocks: the wake-up from select would
+          // cost more than the wait. Only after a request left (never when idle), and bounded.
+          if (answerSpin.pending && taking && tasks.isEmpty && detaches.isEmpty && !shut) spinForAnswer()
           selecting = true
-          val mustNotWait = !detaches.isEmpty ||
+          val mustNotWait = !detaches.isEmpty || !selector.selectedKeys().isEmpty ||
             (if (taking) shut || !tasks.isEmpty else latest ne this)
           try {
             if (mustNotWait) selector.selectNow() else selector.select()
@@ -248,6 +261,32 @@ final class PortLoop private[naogateway] (threadFactory: ThreadFactory, settings
           if (!selector.selectedKeys().isEmpty) readReady()
         }
       }
+    }
+
+    /** Polls the ports and the task queue until something arrives or the spin's time is up ([[AnswerSpin]]);
+      * `selecting` stays false, so a task from another thread costs no wake-up system call meanwhile.
+      */
+    private def spinForAnswer(): Unit = {
+      val until = answerSpin.take()
+      spins += 1
+      // Polled at least once, even when the tasks before it ran past the spin's time.
+      var arrived = false
+      var polling = true
+      try
+        while (polling) {
+          if (!tasks.isEmpty || !detaches.isEmpty || shut || (latest ne this)) arrived = true
+          else if (selector.selectNow() > 0 || !selector.selectedKeys().isEmpty) arrived = true
+          polling = !arrived && System.nanoTime() - until < 0
+          if (polling) Thread.onSpinWait()
+        }
+      catch {
+        case e: IOException =>
+          selectFailures += 1
+          if (RateLimitedLog.due(selectFailures))
+            log.warn("Port loop: select failed ({} so far): {}", selectFailures, e.toString)
+      }
+      if (arrived) spinHits += 1
+      answerSpin.ended(arrived)
     }
 
     private def runTasks(limit: Int): Unit = {
@@ -292,16 +331,76 @@ object PortLoop {
   /** Datagrams read from one port per pass, and tasks run per pass: neither a flood of datagrams nor a stream of tasks
     * starves the other.
     */
-  final case class Settings(datagramsPerPass: Int, tasksPerPass: Int) {
+  final case class Settings(datagramsPerPass: Int, tasksPerPass: Int, answerSpinNanos: Long = 0L) {
     require(datagramsPerPass >= 1 && tasksPerPass >= 1, "a pass reads at least one datagram and runs at least one task")
+    require(answerSpinNanos >= 0 && answerSpinNanos <= MaxAnswerSpinNanos, "the answer spin is 0 to 1 ms")
   }
 
   /** Reading the settings. */
   object Settings {
 
-    /** From a dispatcher's `port-loop` block (naogateway's reference.conf). */
+    /** From a dispatcher's `port-loop` block (naogateway's reference.conf); a block without `answer-spin` does not
+      * spin.
+      */
     def apply(config: Config): Settings =
-      Settings(config.getInt("datagrams-per-pass"), config.getInt("tasks-per-pass"))
+      Settings(config.getInt("datagrams-per-pass"), config.getInt("tasks-per-pass"),
+        if (config.hasPath("answer-spin")) config.getDuration("answer-spin").toNanos else 0L)
+  }
+
+  /** Tells the calling thread's loop, if it runs on one, that a datagram asking for an answer left just now (a request
+    * to a robot, which answers every request at once): the loop looks for the answer for up to `answer-spin` before it
+    * blocks. Nothing on any other thread.
+    */
+  def answerDue(): Unit = {
+    val loop = loopThread.get
+    if (loop != null) loop.answerSpin.due(System.nanoTime())
+  }
+
+  // The longest answer spin allowed.
+  private val MaxAnswerSpinNanos = 1000000L
+
+  /** When the loop spins for an answer: for `spinNanos` after a request left, unless recent spins ran out. A spin that
+    * runs out makes the next 1, 2, 4 … up to 1024 due answers wait in select (misses in a row double it), so a robot
+    * that answers slower than the spin (over WiFi) costs next to no spinning, and one that answers within it is spun
+    * for every time. Used by the loop's owning thread only.
+    */
+  private[naogateway] final class AnswerSpin(spinNanos: Long) {
+    private var waiting = false
+    private var until = 0L
+    private var misses = 0
+    private var skips = 0L
+
+    /** Whether an answer is due: the loop spins before it blocks. */
+    def pending: Boolean = waiting
+
+    /** A request left at `now`. */
+    def due(now: Long): Unit =
+      if (spinNanos > 0) {
+        if (skips > 0) skips -= 1
+        else {
+          waiting = true
+          until = now + spinNanos
+        }
+      }
+
+    /** The spin's deadline (System.nanoTime), the due answer taken. */
+    def take(): Long = {
+      waiting = false
+      until
+    }
+
+    /** The spin ended: `hit` when something arrived before its deadline. */
+    def ended(hit: Boolean): Unit =
+      if (hit) misses = 0
+      else {
+        misses = math.min(misses + 1, AnswerSpin.MaxBackoff)
+        skips = (1L << misses) - 1
+      }
+  }
+
+  private[naogateway] object AnswerSpin {
+    // Misses in a row the backoff counts: 2^10 - 1 due answers waited for in select before the next spin.
+    val MaxBackoff = 10
   }
 
   /** What the loop reads: a non-blocking channel, and how to hand on what is in it. */
