@@ -275,7 +275,11 @@ lazy val launcher = (project in file("apps/launcher"))
     // Recordings likewise, unless the operator names a directory.
     bashScriptExtraDefines += """[ -n "$NAOGATEWAY_RECORDING_DIR" ] || export NAOGATEWAY_RECORDING_DIR="${app_home}/../recordings"""",
     // robotctl is a short-lived socket client: the quick compiler tier and the serial collector start it faster.
-    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; esac""",
+    // The gateway and teleop run for hours: their hot paths reach the optimising compiler (C2) within seconds of load
+    // at any threshold, while code that runs a few times a second (an idle field's keep-alives, the demo's game) would
+    // keep it busy for minutes (docs/benchmarks.md, "Where the idle demo's CPU goes"); at ten times its default counts
+    // such code stays in the quick tier.
+    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; *) addJava "-XX:Tier4InvocationThreshold=50000"; addJava "-XX:Tier4MinInvocationThreshold=6000"; addJava "-XX:Tier4CompileThreshold=150000"; addJava "-XX:Tier4BackEdgeThreshold=400000";; esac""",
     terminalEnv,
     run / fork := true,
     run / connectInput := true,

@@ -30,7 +30,8 @@ import naogateway.sim.{Fleet, FleetSettings}
   *     the JIT calm down, then the process's CPU time (user + system, from the operating system) is taken over
   *     [[Window]]. The ball follower keeps robot 1's camera on and steers it the whole time, so this is the demo's
   *     steady state rather than a process with nothing to do. The log is read for the ball follower too: a demo whose
-  *     ball follower did not get its robot (a machine too loaded for its 10 s search) is a different, cheaper demo.
+  *     ball follower did not get its robot (a machine too loaded for its 10 s search) is a different, cheaper demo. The
+  *     progress shows the window per thread group ([[ThreadCpu]]): CPU and wake-ups a second.
   *   - `demo_stop_ms`: from the bench's TERM to the demo's exit, the JVM's shutdown hooks doing what they do on Ctrl-C
   *     (both nodes leave the cluster, the actor systems stop). Goal 2000 (launcher.conf).
   *   - `sim_idle_cpu_pct_per_robot`: [[SimRobots]] simulated robots with the faithful link (the demo's mode) in an
@@ -84,6 +85,8 @@ object IdleCpuBench extends Benchmark {
     env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
     env.put("NAOGATEWAY_LOG_FILE", log.toString)
     env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
+    env.put("NAOGATEWAY_DATAGRAM_DOOR_PORT", freeUdpPort().toString)
+    env.put("NAOGATEWAY_WEB_PORT", "0")
     val process = builder.start()
     var stopMs = Double.NaN
     val idle =
@@ -101,10 +104,12 @@ object IdleCpuBench extends Benchmark {
             progress(s"WARNING: the ball follower has no robot (see $log): this figure is not the demo's")
           def cpu(): Option[Long] = Packaged.cpuNanos(process.pid())
           val (c0, t0) = (cpu(), System.nanoTime())
-          Thread.sleep(Window.toMillis)
+          // The window itself, spent reading where the CPU goes and how often each thread group wakes.
+          val threads = ThreadCpu.window(process.pid(), Window)
           val (c1, t1) = (cpu(), System.nanoTime())
           val pct = (for (a <- c0; b <- c1) yield (b - a) * 100.0 / (t1 - t0)).getOrElse(Double.NaN)
-          progress(f"demo process: $pct%.1f %% of one core over ${(t1 - t0) / 1e9}%.0f s")
+          progress(f"demo process: $pct%.1f %% of one core over ${(t1 - t0) / 1e9}%.0f s, per thread group:")
+          ThreadCpu.lines(threads).foreach(l => progress(s"  $l"))
           // A TERM runs the JVM's shutdown hooks as Ctrl-C does: both nodes leave the cluster and stop (goal 2 s).
           val told = System.nanoTime()
           process.destroy()

@@ -33,11 +33,13 @@ class LauncherSpec extends AnyWordSpec with Matchers {
 
   // The launcher's control port, for robotctl; picked like the cluster port.
   private val controlPort = freePort()
-  private val gameControllerPort = {
+  private def freeUdpPort(): Int = {
     val s = new java.net.DatagramSocket(0);
     try s.getLocalPort
     finally s.close()
   }
+  private val gameControllerPort = freeUdpPort()
+  private val datagramDoorPort = freeUdpPort()
 
   private def launch(clusterPort: Int = freePort(), main: String = "naogateway.launcher.Launcher"): Launched = {
     val javaBin = s"${System.getProperty("java.home")}/bin/java"
@@ -59,6 +61,8 @@ class LauncherSpec extends AnyWordSpec with Matchers {
     builder.environment().put("NAOGATEWAY_GAMECONTROLLER_PORT", gameControllerPort.toString)
     // The demo's web view on a free port: the launcher prints where.
     builder.environment().put("NAOGATEWAY_WEB_PORT", "0")
+    // The datagram door on a port of its own: on 5557 another demo on this machine would hold it.
+    builder.environment().put("NAOGATEWAY_DATAGRAM_DOOR_PORT", datagramDoorPort.toString)
     new Launched(builder.start(), clusterPort)
   }
 

@@ -112,7 +112,7 @@ object StatusPrinter {
       SupervisorStrategy.restartWithBackoff(1.second, 30.seconds, 0.2))
 
   /** How often the printer asks the gateway: every `refresh` for a screen; for lines, which only print changes, at most
-    * once a second (each round asks the gateway six questions, and most of the robot actors with them).
+    * once a second (each round asks the gateway five or six questions, and the robot actors with two of them).
     */
   private[apps] def pace(refresh: FiniteDuration, output: Output): FiniteDuration = output match {
     case _: ScreenOutput => refresh
@@ -133,6 +133,9 @@ object StatusPrinter {
             case Failure(_) => Unanswered
           }
 
+        val onScreen = output.isInstanceOf[ScreenOutput]
+        // The questions of one round: robots, links, traffic, game state, game source, and the stats for a screen.
+        val questions = if (onScreen) 6 else 5
         var notesShown = Vector.empty[String]
         def show(shown: StatusModel, model: StatusModel): Unit = output match {
           // Robots' and peers' strings are in these lines: no control character reaches the terminal.
@@ -144,25 +147,35 @@ object StatusPrinter {
             StatusView.changes(shown, model).foreach(l => write(Printable.text(l)))
         }
 
-        def running(model: StatusModel, shown: StatusModel): Behavior[Command] =
+        /* A round asks the gateway its questions and shows the model once every answer of the round is in (a question
+         * that failed counts as answered), so a change shows as soon as the gateway has it, not a round later. A round
+         * still waiting when the next begins (a gateway slower than the pace) is shown then, as it stands. */
+        def running(model: StatusModel, shown: StatusModel, waiting: Int): Behavior[Command] = {
+          def answered(next: StatusModel): Behavior[Command] =
+            if (waiting > 1) running(next, shown, waiting - 1)
+            else {
+              if (waiting == 1) show(shown, next)
+              running(next, next, 0)
+            }
           Behaviors.receiveMessage[Command] {
             case Refresh =>
+              if (waiting > 0) show(shown, model)
               ask(gateway.robots())(Robots.apply)
               ask(gateway.links())(Links.apply)
               ask(gateway.traffic())(Traffic.apply)
               ask(gateway.gameState())(Game.apply)
               ask(gateway.gameSource())(Source.apply)
-              ask(gateway.stats())(Stats.apply)
-              show(shown, model)
-              running(model, model)
-            case Robots(robots) => running(model.copy(robots = robots), shown)
-            case Traffic(stats) => running(model.copy(traffic = Some(stats)), shown)
-            case Game(game)     => running(model.copy(game = game), shown)
-            case Source(source) => running(model.copy(gameSource = Some(source)), shown)
-            case Stats(stats)   => running(model.copy(gateway = Some(stats)), shown)
+              // The recording's figures are on the screen only; the lines never print them.
+              if (onScreen) ask(gateway.stats())(Stats.apply)
+              running(model, model, questions)
+            case Robots(robots) => answered(model.copy(robots = robots))
+            case Traffic(stats) => answered(model.copy(traffic = Some(stats)))
+            case Game(game)     => answered(model.copy(game = game))
+            case Source(source) => answered(model.copy(gameSource = Some(source)))
+            case Stats(stats)   => answered(model.copy(gateway = Some(stats)))
             // The link figures of robots the gateway no longer knows are dropped with them.
-            case Links(l)   => running(model.copy(links = l.links.map(s => s.robotId -> s).toMap), shown)
-            case Unanswered => Behaviors.same
+            case Links(l)   => answered(model.copy(links = l.links.map(s => s.robotId -> s).toMap))
+            case Unanswered => answered(model)
           }.receiveSignal { case (_, PostStop) =>
             output match {
               case screen: ScreenOutput => screen.close()
@@ -170,9 +183,10 @@ object StatusPrinter {
             }
             Behaviors.same
           }
+        }
 
         val empty = StatusModel.empty.copy(servoLimits = servoLimits)
-        running(empty, empty)
+        running(empty, empty, 0)
       }
     }
 }

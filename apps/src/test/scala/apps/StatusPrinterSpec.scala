@@ -8,7 +8,6 @@ import java.util.concurrent.atomic.{AtomicInteger, AtomicReference}
 
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
-import scala.util.Using
 
 import akka.actor.testkit.typed.scaladsl.ScalaTestWithActorTestKit
 import org.jline.terminal.Size
@@ -27,37 +26,34 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
     def close(): Unit = ()
   }
 
-  /** Sends the packet `file` to `to` until `seen` holds (at most 20 s, every 50 ms); fails if it never does. */
-  private def sendUntil(to: InetSocketAddress, file: String)(seen: => Boolean): Unit = {
-    val bytes = StatusViewSpec.vector(file)
-    Using.resource(new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))) { socket =>
+  /** The test's GameController: one socket, as a real GameController sends every packet from one address (a packet from
+    * a second socket would be a second GameController, whose packets the gateway ignores while the first one sends).
+    * Version-8 packets carry a packet number (byte 5) counting up from 1 across all of them: the competition gate opens
+    * only on a while of packets whose numbers follow one another (docs/protocol.md 10.7).
+    */
+  private final class TestGameController(to: InetSocketAddress) extends AutoCloseable {
+    private val socket = new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))
+    private var number = 0
+
+    /** Sends the packet `file` until `seen` holds (at most 20 s, every 50 ms); fails if it never does. */
+    def sendUntil(file: String)(seen: => Boolean): Unit = {
+      val bytes = StatusViewSpec.vector(file)
+      val numbered = file.startsWith("v8-")
       val deadline = 20.seconds.fromNow
       var ok = seen
       while (!ok && deadline.hasTimeLeft()) {
+        if (numbered) {
+          number += 1
+          bytes(5) = (number & 0xff).toByte
+        }
         socket.send(new DatagramPacket(bytes, bytes.length, to))
         Thread.sleep(50)
         ok = seen
       }
       withClue(s"after sending $file: ")(assert(ok))
     }
-  }
 
-  /** As [[sendUntil]], from one socket, with the version-8 packet number (byte 5) counting up from 1: the competition
-    * gate opens only on a while of packets whose numbers follow one another (docs/protocol.md 10.7).
-    */
-  private def sendNumberedUntil(to: InetSocketAddress, file: String)(seen: => Boolean): Unit = {
-    val bytes = StatusViewSpec.vector(file)
-    Using.resource(new DatagramSocket(new InetSocketAddress("127.0.0.1", 0))) { socket =>
-      val deadline = 20.seconds.fromNow
-      var n = 1
-      while (!seen && deadline.hasTimeLeft()) {
-        bytes(5) = (n & 0xff).toByte
-        socket.send(new DatagramPacket(bytes, bytes.length, to))
-        n += 1
-        Thread.sleep(50)
-      }
-      withClue(s"after sending $file: ")(assert(seen))
-    }
+    def close(): Unit = socket.close()
   }
 
   private val competition = "competition.enabled = on\ngame-controller.trusted-sources = [\"127.0.0.0/8\"]\n" +
@@ -79,18 +75,22 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         fixture.robot(1)
         def printed = lines.asScala.toVector
         awaitTrue("robot 1 online")(printed.exists(l => l.startsWith("robot 1") && l.contains("online")))
-        val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
-        sendUntil(gc, "v8-initial.bin")(printed.exists(_.startsWith("game: INITIAL")))
-        sendNumberedUntil(gc, "v8-initial.bin")(printed.contains("competition gate: open"))
-        sendUntil(gc, "v8-ready.bin")(
-          printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
-        awaitTrue("gate closed")(printed.exists(_.startsWith("competition gate: CLOSED")))
-        sendUntil(gc, "v8-set.bin")(printed.exists(_.startsWith("game: SET")))
-        sendUntil(gc, "v8-playing.bin")(
-          printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
-        sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 5)
-        sendUntil(gc, "v8-finished.bin")(printed.exists(_.startsWith("game: FINISHED, second half")))
-        sendNumberedUntil(gc, "v8-finished.bin")(printed.count(_ == "competition gate: open") == 2)
+        val gc = new TestGameController(fixture.addresses.gameController.getOrElse(fail("no GameController port")))
+        try {
+          gc.sendUntil("v8-initial.bin")(printed.exists(_.startsWith("game: INITIAL")))
+          gc.sendUntil("v8-initial.bin")(printed.contains("competition gate: open"))
+          gc.sendUntil("v8-ready.bin")(
+            printed.exists(_.startsWith("game: READY, first half, 600 s left, secondary 30 s")))
+          awaitTrue("gate closed")(printed.exists(_.startsWith("competition gate: CLOSED")))
+          gc.sendUntil("v8-set.bin")(printed.exists(_.startsWith("game: SET")))
+          gc.sendUntil("v8-playing.bin")(
+            printed.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
+          gc.sendUntil("v7-playing.bin")(fixture.stats().gameControllerPackets >= 5)
+          gc.sendUntil("v8-finished.bin")(printed.exists(_.startsWith("game: FINISHED, second half")))
+          gc.sendUntil("v8-finished.bin")(printed.count(_ == "competition gate: open") == 2)
+        } finally gc.close()
+        // One GameController, one socket: never taken for two.
+        printed.filter(_.contains("GameControllers on this field")) shouldBe empty
         // One line per change, not per packet: each packet above was sent at least once, some many times.
         printed.count(_.startsWith("game: PLAYING")) shouldBe 1
         printed.count(_.startsWith("competition gate: CLOSED: the game is running")) shouldBe 1
@@ -112,18 +112,21 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
         awaitTrue("robot 1 with link figures")(frame.exists(l =>
             l.startsWith("robot 1") && l.contains("online") &&
               l.matches(".*loss \\d+ %.*")))
-        val gc = fixture.addresses.gameController.getOrElse(fail("no GameController port"))
-        sendUntil(gc, "v8-playing.bin")(
-          frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
-        awaitTrue("gate closed")(frame.exists(_.startsWith("competition gate: CLOSED")))
-        awaitTrue("where game state comes from")(frame.exists(l =>
-            l.startsWith("game state from 127.0.0.1:") &&
-              l.contains("(trusted: 127.0.0.0/8)")))
-        frame.exists(
-          _.matches("team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
-        sendUntil(gc, "v7-playing.bin")(fixture.stats().gameControllerPackets >= 2)
-        sendUntil(gc, "v8-finished.bin")(frame.exists(_.startsWith("game: FINISHED")))
-        sendNumberedUntil(gc, "v8-finished.bin")(frame.contains("competition gate: open"))
+        val gc = new TestGameController(fixture.addresses.gameController.getOrElse(fail("no GameController port")))
+        try {
+          gc.sendUntil("v8-playing.bin")(
+            frame.contains("game: PLAYING, first half, 587 s left, score 2 : 1 (team 12 : team 7), version 8"))
+          awaitTrue("gate closed")(frame.exists(_.startsWith("competition gate: CLOSED")))
+          awaitTrue("where game state comes from")(frame.exists(l =>
+              l.startsWith("game state from 127.0.0.1:") &&
+                l.contains("(trusted: 127.0.0.0/8)")))
+          frame.exists(
+            _.matches(
+              "team traffic: out [0-9.]+ kB/s, in [0-9.]+ kB/s, \\d+ % of the 125.0 kB/s budget.*")) shouldBe true
+          gc.sendUntil("v7-playing.bin")(fixture.stats().gameControllerPackets >= 2)
+          gc.sendUntil("v8-finished.bin")(frame.exists(_.startsWith("game: FINISHED")))
+          gc.sendUntil("v8-finished.bin")(frame.contains("competition gate: open"))
+        } finally gc.close()
         frame.head shouldBe "naogateway - 1 robot(s), 1 online"
       } finally fixture.stop()
     }

@@ -225,6 +225,11 @@ object EndpointProtocol {
   def gameFrames(data: GameControlData): Option[Vector[Array[Byte]]] =
     GameControllerCodec.encodeControl(data).toOption.map(packet => Vector(utf8(GameTopic), packet))
 
+  /** Whether a subscription prefix takes a publication on `topic` (ZeroMQ's match: the topic starts with the prefix;
+    * the empty prefix takes every topic).
+    */
+  def subscribed(prefixes: Set[String], topic: String): Boolean = prefixes.exists(p => topic.startsWith(p))
+
   /** Whether a subscription prefix asks for robot `robotId`'s vision; only prefixes naming the vision topics count. */
   def wantsVision(prefixes: Set[String], robotId: Int): Boolean =
     prefixes.exists(p => p.startsWith("vision") && visionTopic(robotId).startsWith(p))

@@ -302,14 +302,18 @@ object ZeroMqEndpoint {
 
     private def running(addresses: Addresses): Behavior[Command] = Behaviors.receiveMessage[Command] {
       case StatusSeen(snapshot) =>
-        send(EndpointProtocol.statusFrames(snapshot), toRouter = false)
+        /* Nobody subscribed: nothing is encoded and the socket loop sleeps on (every robot's keep-alives would wake
+         * it). */
+        if (EndpointProtocol.subscribed(prefixes, EndpointProtocol.statusTopic(snapshot.robotId)))
+          send(EndpointProtocol.statusFrames(snapshot), toRouter = false)
         if (!knownRobots(snapshot.robotId)) {
           knownRobots += snapshot.robotId
           reconcileVision()
         }
         Behaviors.same
       case GameSeen(data) =>
-        EndpointProtocol.gameFrames(data).foreach(send(_, toRouter = false))
+        if (EndpointProtocol.subscribed(prefixes, EndpointProtocol.GameTopic))
+          EndpointProtocol.gameFrames(data).foreach(send(_, toRouter = false))
         Behaviors.same
       case VisionSeen(frame) =>
         EndpointProtocol.visionFrames(frame).foreach(send(_, toRouter = false))

@@ -147,6 +147,17 @@ class ZeroMqEndpointSpec
     }
   }
 
+  "EndpointProtocol's subscription match" must {
+    "take a topic as ZeroMQ does, by prefix, the empty prefix every topic, and nothing without a subscriber" in {
+      EndpointProtocol.subscribed(Set.empty, EndpointProtocol.statusTopic(3)) shouldBe false
+      EndpointProtocol.subscribed(Set(""), EndpointProtocol.GameTopic) shouldBe true
+      EndpointProtocol.subscribed(Set("status."), EndpointProtocol.statusTopic(3)) shouldBe true
+      EndpointProtocol.subscribed(Set("status.3"), EndpointProtocol.statusTopic(3)) shouldBe true
+      EndpointProtocol.subscribed(Set("status.4"), EndpointProtocol.statusTopic(3)) shouldBe false
+      EndpointProtocol.subscribed(Set("vision"), EndpointProtocol.GameTopic) shouldBe false
+    }
+  }
+
   "The ZeroMQ endpoint" must {
     "answer many concurrent clients, each exactly its own replies, in the framing each used" in {
       val perClient = 40
@@ -364,7 +375,7 @@ class ZeroMqEndpointSpec
       }
     }
 
-    "publish status and game always, and a robot's vision only while someone subscribes to it" in {
+    "publish status and game to their subscribers, and a robot's vision only while someone subscribes to it" in {
       val sub = zeroMq.createSocket(SocketType.SUB)
       sub.setLinger(0)
       readyClient(sub)

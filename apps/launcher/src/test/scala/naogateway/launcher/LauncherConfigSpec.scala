@@ -13,13 +13,23 @@ class LauncherConfigSpec extends AnyWordSpec with Matchers {
   private val noApplication = ConfigFactory.empty()
 
   "The demo's app node" should {
-    "join the cluster where the gateway node is, with the gateway node's dispatcher size, whatever the file says" in {
+    "join the cluster where the gateway node is, with the gateway node's dispatcher sizes, whatever the file says" in {
       val file = ConfigFactory.parseString("robotmiddleware.cluster.gateway-port = 25620")
       val gatewayNode = Launcher.nodeConfig(file, noApplication)
       val appNode = MiddlewareCluster.config(MiddlewareCluster.AppRole, Launcher.appNodeConfig(gatewayNode))
       appNode.getInt("robotmiddleware.cluster.gateway-port") shouldBe 25620
-      appNode.getInt("akka.actor.default-dispatcher.fork-join-executor.parallelism-min") shouldBe 2
+      // One thread for each of Akka's pools on both nodes, not Akka's 8, 4 and 2: fewer threads woken for nothing.
+      Seq("akka.actor.default-dispatcher", "akka.actor.internal-dispatcher", "akka.remote.default-remote-dispatcher")
+        .foreach { pool =>
+          withClue(pool)(appNode.getInt(s"$pool.fork-join-executor.parallelism-max") shouldBe 1)
+          withClue(pool)(gatewayNode.getInt(s"$pool.fork-join-executor.parallelism-max") shouldBe 1)
+        }
       appNode.getStringList("akka.cluster.seed-nodes").get(0) should endWith(":25620")
+      // Its scheduler wakes 20 times a second, not 100, and the cluster's tasks run on it rather than on one of their
+      // own (which Akka starts when the cluster's tick is the shorter).
+      appNode.getDuration("akka.scheduler.tick-duration").toMillis shouldBe 50L
+      appNode.getDuration("akka.cluster.scheduler.tick-duration") shouldBe appNode.getDuration(
+        "akka.scheduler.tick-duration")
     }
 
     "shut down as quickly as the gateway node: the same phase timeouts, leader pace and flush wait" in {
