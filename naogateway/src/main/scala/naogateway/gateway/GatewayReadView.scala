@@ -27,6 +27,6 @@ object GatewayReadView {
       def traffic(): Future[TrafficStats] = gateway.ask(GatewayAccess.GetTraffic(_))
       def gameState(): Future[Option[GameControlData]] = gateway.ask(GatewayAccess.GetGameState(_))
       def gameSource(): Future[GameSource] = gateway.ask(GatewayAccess.GetGameSource(_))
-      def tap(): Future[GatewayTap] = gateway.ask(GatewayAccess.GetTap(_))
+      override def tap(): Future[GatewayTap] = gateway.ask(GatewayAccess.GetTap(_))
     }
 }

@@ -34,7 +34,7 @@ trait GatewayView {
   def gameSource(): Future[GameSource]
 
   /** The gateway's tap, to read what crosses its ports (datagrams and decisions) as the recorder does; reading changes
-    * nothing the gateway does.
+    * nothing the gateway does. A view without one (a stand-in in a test) fails.
     */
-  def tap(): Future[GatewayTap]
+  def tap(): Future[GatewayTap] = Future.failed(new UnsupportedOperationException("this view has no tap"))
 }
