@@ -157,8 +157,12 @@ object StatusView {
         (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f =>
           s", now ${f.split('/').last}") +
         r.retention.fold("")(k => s"; ${k.describe}")
-    })
+    }).map(_ + behind(g))
   }
+
+  /** The tap's readers that fell behind (docs/architecture.md, the tap), e.g. "; foxglove-feed dropped 12". */
+  private def behind(g: GatewayStats): String =
+    g.tap.filter(_.dropped > 0).map(r => s"; ${r.reader} dropped ${r.dropped}").mkString
 
   /** The full screen for a terminal. */
   def render(model: StatusModel): Vector[String] = {
