@@ -1,8 +1,7 @@
 package naogateway.gateway.tap
 
 import java.net.InetSocketAddress
-import java.util.concurrent.ArrayBlockingQueue
-import java.util.concurrent.atomic.AtomicLong
+import java.util.concurrent.atomic.{AtomicLong, AtomicLongArray, AtomicReferenceArray}
 import java.util.concurrent.locks.LockSupport
 
 import org.slf4j.LoggerFactory
@@ -62,7 +61,7 @@ private[naogateway] object Tap {
 
   /** One reader's queue. Many threads offer; one thread (the reader's) drains and waits. */
   final class Reader private[Tap] (name: String, capacity: Int, tap: Tap) extends TapSubscription {
-    private val queue = new ArrayBlockingQueue[Tapped](capacity)
+    private val queue = new RingQueue[Tapped](capacity)
     private val delivered = new AtomicLong
     private val dropped = new AtomicLong
     // The reader's thread while it waits in [[await]]: an offer then wakes it; otherwise an offer costs no wake-up.
@@ -81,7 +80,13 @@ private[naogateway] object Tap {
       }
 
     def drainTo(into: java.util.Collection[_ >: Tapped], max: Int): Int = {
-      val n = queue.drainTo(into, max)
+      var n = 0
+      var next = if (max > 0) queue.poll() else null
+      while (next ne null) {
+        into.add(next)
+        n += 1
+        next = if (n < max) queue.poll() else null
+      }
       if (n > 0) delivered.addAndGet(n.toLong)
       n
     }
@@ -112,4 +117,62 @@ private[naogateway] object Tap {
       if (w ne null) LockSupport.unpark(w)
     }
   }
+}
+
+/** A bounded queue for many producers and one consumer without a lock (a ring of slots, each with a sequence number
+  * telling whose turn it is): an offer never waits for the consumer nor parks behind it, as a queue with a lock can; a
+  * full ring refuses. Holds `capacity` rounded up to a power of two.
+  */
+private[tap] final class RingQueue[A <: AnyRef](capacity: Int) {
+  require(capacity >= 1 && capacity <= (1 << 30), "a ring holds 1 to 2^30 entries")
+  private val ringSize = Integer.highestOneBit(math.max(1, capacity * 2 - 1))
+  private val mask = ringSize - 1L
+  private val slots = new AtomicReferenceArray[A](ringSize)
+  // Slot i holds the position a producer may fill next (i, i + size, ...) or, once filled, that position + 1.
+  private val turns = {
+    val t = new AtomicLongArray(ringSize)
+    (0 until ringSize).foreach(i => t.set(i, i.toLong))
+    t
+  }
+  private val tail = new AtomicLong
+  // Written by the consumer only; volatile so `size` can be read from any thread.
+  @volatile private var head = 0L
+
+  /** Adds `a` unless the ring is full; any thread. */
+  def offer(a: A): Boolean = {
+    var pos = tail.get
+    while (true) {
+      val i = (pos & mask).toInt
+      val gap = turns.get(i) - pos
+      if (gap == 0) {
+        if (tail.compareAndSet(pos, pos + 1)) {
+          slots.lazySet(i, a)
+          turns.set(i, pos + 1)
+          return true
+        } else pos = tail.get
+      } else if (gap < 0) return false // the slot still holds the entry of one lap before: full
+      else pos = tail.get
+    }
+    false
+  }
+
+  /** The oldest entry, or null when none is ready; the consumer's thread only. */
+  def poll(): A = {
+    val pos = head
+    val i = (pos & mask).toInt
+    if (turns.get(i) != pos + 1) null.asInstanceOf[A]
+    else {
+      val a = slots.get(i)
+      slots.lazySet(i, null.asInstanceOf[A])
+      turns.set(i, pos + ringSize)
+      head = pos + 1
+      a
+    }
+  }
+
+  /** Whether nothing is ready for the consumer. */
+  def isEmpty: Boolean = turns.get((head & mask).toInt) != head + 1
+
+  /** Entries offered and not yet taken (a moment's figure). */
+  def size: Int = math.max(0L, tail.get - head).toInt
 }

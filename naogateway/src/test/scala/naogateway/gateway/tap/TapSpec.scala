@@ -93,6 +93,34 @@ class TapSpec extends AnyWordSpec with Matchers {
       tap.readers shouldBe empty
     }
 
+    "keep each publisher's order and lose nothing that fits while several threads publish and the reader drains" in {
+      val tap = new Tap
+      val reader = tap.subscribe("reader", 1 << 16)
+      val perThread = 20000
+      val publishers = (0 until 3).map { t =>
+        new Thread(() =>
+          (0 until perThread).foreach(i =>
+            tap.datagram(RecordedPort.ROBOT_PORT, received = true, robot, port, Array(t.toByte), i)))
+      }
+      publishers.foreach(_.start())
+      val got = Vector.newBuilder[Tapped.Datagram]
+      var count = 0
+      val into = new java.util.ArrayList[Tapped]()
+      while (count < 3 * perThread && (publishers.exists(_.isAlive) || reader.pending > 0)) {
+        into.clear()
+        reader.drainTo(into, 1000)
+        into.asScala.foreach { case d: Tapped.Datagram => got += d; count += 1; case _ => () }
+      }
+      publishers.foreach(_.join())
+      into.clear()
+      reader.drainTo(into, Int.MaxValue)
+      into.asScala.foreach { case d: Tapped.Datagram => got += d; case _ => () }
+      val all = got.result()
+      reader.stats.dropped shouldBe 0L
+      all should have size (3L * perThread)
+      all.groupBy(_.bytes(0).toInt).values.foreach(ds => ds.map(_.robotId) shouldBe (0 until perThread))
+    }
+
     "wake a reader waiting for entries when one is published" in {
       val tap = new Tap
       val reader = tap.subscribe("waiting", 16)
