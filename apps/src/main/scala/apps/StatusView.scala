@@ -147,7 +147,9 @@ object StatusView {
       (if (t.dropped > 0) s", ${t.dropped} dropped" else "")
   }
 
-  /** The recording's figures (docs/recording.md), or the replay's; nothing when neither runs. */
+  /** The recording's figures (docs/recording.md), or the replay's, with the tap's readers that dropped entries; nothing
+    * when none of these has anything to say.
+    */
   def recordingLine(stats: Option[GatewayStats]): Option[String] = stats.flatMap { g =>
     g.replay.map { r =>
       s"replay: ${r.fed} datagrams fed, ${r.discarded} outbound discarded" + (if (r.finished) ", finished" else "")
@@ -157,8 +159,17 @@ object StatusView {
         (if (r.failed > 0) s", ${r.failed} failed" else "") + r.currentFile.fold("")(f =>
           s", now ${f.split('/').last}") +
         r.retention.fold("")(k => s"; ${k.describe}")
-    })
+    }) match {
+      case Some(line)             => Some(line + behind(g).fold("")("; " + _))
+      case None if g.tap.nonEmpty => behind(g).map("tap: " + _)
+      case None                   => None
+    }
   }
+
+  /** The tap's readers that fell behind (docs/architecture.md, the tap), e.g. "foxglove-feed dropped 12". */
+  private def behind(g: GatewayStats): Option[String] =
+    Option(g.tap.filter(_.dropped > 0).map(r => s"${r.reader} dropped ${r.dropped}")).filter(_.nonEmpty)
+      .map(_.mkString(", "))
 
   /** The full screen for a terminal. */
   def render(model: StatusModel): Vector[String] = {

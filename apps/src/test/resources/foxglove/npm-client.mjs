@@ -1,7 +1,8 @@
 // The feed read by clients we did not write (FoxgloveNpmClientSpec): the ws-protocol's own FoxgloveClient from the npm
 // registry, and a bare WebSocket offering both subprotocol names as the Foxglove SDK's viewers do.
 // Usage: node npm-client.mjs ws://127.0.0.1:PORT/foxglove
-// Prints one JSON line per finding: {"client":...}, {"sdk":...}; exits 0 when both are in, 1 on an error or after 30 s.
+// Prints one JSON line per finding: {"client":...}, {"datagram":...}, {"sdk":...}; exits 0 when all are in, 1 on an
+// error or after 30 s.
 import { createRequire } from "node:module";
 
 const require = createRequire(import.meta.url);
@@ -14,14 +15,15 @@ const FoxgloveClient = wsProtocol.FoxgloveClient ?? wsProtocol.default?.Foxglove
 const url = process.argv[2];
 const found = {};
 const done = () => {
-  if (found.client && found.sdk) process.exit(0);
+  if (found.client && found.datagram && found.sdk) process.exit(0);
 };
 setTimeout(() => {
   console.log(JSON.stringify({ timeout: Object.keys(found) }));
   process.exit(1);
 }, 30000).unref();
 
-// 1. FoxgloveClient subscribes to /robot/1/status and decodes a message with the schema the server advertised.
+// 1. FoxgloveClient subscribes to /robot/1/status and /gateway/datagrams and decodes a message of each with the schema
+// the server advertised.
 const client = new FoxgloveClient({ ws: new WebSocket(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]) });
 const channels = new Map();
 const subscriptions = new Map();
@@ -32,16 +34,27 @@ client.on("error", (e) => {
 client.on("advertise", (advertised) => {
   for (const c of advertised) {
     channels.set(c.id, c);
-    if (c.topic === "/robot/1/status" && subscriptions.size === 0) subscriptions.set(client.subscribe(c.id), c);
+    if (c.topic === "/robot/1/status" || c.topic === "/gateway/datagrams") subscriptions.set(client.subscribe(c.id), c);
   }
 });
 client.on("message", ({ subscriptionId, timestamp, data }) => {
   const channel = subscriptions.get(subscriptionId);
-  if (!channel || found.client) return;
+  if (!channel) return;
   const root = protobuf.Root.fromDescriptor(Buffer.from(channel.schema, "base64"));
   const type = root.lookupType(channel.schemaName);
   const bytes = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
-  const decoded = type.toObject(type.decode(bytes), { defaults: false, longs: String, enums: String });
+  const decoded = type.toObject(type.decode(bytes), { defaults: false, longs: String, enums: String, bytes: String });
+  if (channel.topic === "/gateway/datagrams") {
+    // A datagram robot 1 sent, as the recording holds it.
+    if (found.datagram || decoded.port !== "ROBOT_PORT" || decoded.direction !== "RECEIVED" || decoded.robotID !== 1)
+      return;
+    found.datagram = true;
+    console.log(JSON.stringify({ datagram: { schemaName: channel.schemaName, recorded: decoded } }));
+    if (found.client) client.close();
+    done();
+    return;
+  }
+  if (found.client) return;
   found.client = true;
   console.log(JSON.stringify({
     client: {
@@ -54,7 +67,7 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
       status: decoded,
     },
   }));
-  client.close();
+  if (found.datagram) client.close();
   done();
 });
 

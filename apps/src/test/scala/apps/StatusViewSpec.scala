@@ -69,6 +69,15 @@ class StatusViewSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyCh
       StatusView.recordingLine(Some(replay)) shouldBe Some("replay: 300 datagrams fed, 7 outbound discarded, finished")
       StatusView.render(StatusModel.empty.copy(gateway = Some(recording))) should contain(
         "recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap")
+      // The tap's readers: named only when one fell behind, beside the recording or alone.
+      val feed = naogateway.api.recording.TapReaderStats("foxglove-feed", 100, 12)
+      val keeping = naogateway.api.recording.TapReaderStats("recorder", 1234, 0)
+      StatusView.recordingLine(Some(plain.copy(tap = Vector(keeping)))) shouldBe None
+      StatusView.recordingLine(Some(plain.copy(tap = Vector(keeping, feed)))) shouldBe
+        Some("tap: foxglove-feed dropped 12")
+      StatusView.recordingLine(Some(recording.copy(tap = Vector(keeping, feed)))) shouldBe
+        Some("recording: 1234 messages in 2 file(s), 5 dropped, now naogateway-20260101-120000-2.mcap; " +
+          "foxglove-feed dropped 12")
     }
     "show what the recording directory keeps and what retention deleted" in {
       val kept =

@@ -1,6 +1,7 @@
 package apps.web
 
 import java.nio.{ByteBuffer, ByteOrder}
+import java.nio.charset.StandardCharsets
 import java.util.Base64
 
 import scala.concurrent.ExecutionContext
@@ -16,19 +17,30 @@ import akka.stream.{BoundedSourceQueue, Materializer, OverflowStrategy}
 import akka.util.ByteString
 import spray.json._
 
+import naogateway.proto.RecordedPort
+import naogateway.wire.{MessageContents, RpcReply}
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.api.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, TrafficStats}
-import naogateway.api.recording.{Decision, DecisionJson, RecordingSchema}
+import naogateway.api.recording.{
+  Decision,
+  DecisionJson,
+  GatewayTap,
+  RecordEncoder,
+  RecordingSchema,
+  TapSubscription,
+  Tapped
+}
 import robotmiddleware.RobotMiddleware
 
 /** The live feed in the Foxglove WebSocket protocol (subprotocol `foxglove.sdk.v1` of the Foxglove SDK, or
-  * `foxglove.websocket.v1` of the earlier ws-protocol; docs/web.md): the recording's robot channels
+  * `foxglove.websocket.v1` of the earlier ws-protocol; docs/web.md): every channel of the recording with its schema.
   * `/robot/<id>/status`, `/robot/<id>/health` and `/robot/<id>/servos` (each new servo telemetry, docs/protocol.md 6.8)
-  * with the recording's protobuf schemas, and its `/gateway/decisions` channel (JSON, as recorded) with the decisions
-  * published live (robot events and game states from the middleware, the budget once a second from the gateway's
-  * read-only view), so a viewer connected to the running gateway shows what it shows for a recording. Each keep-alive
-  * is published as the gateway read it ([[naogateway.wire.RobotReport]], the one mapping between the messages and a
-  * robot's report).
+  * come from the middleware's robot snapshots; `/gateway/datagrams` and `/robot/<id>/message` from the gateway's tap,
+  * as the recorder reads them; `/gateway/decisions` (JSON, as recorded) carries robot events and game states from the
+  * middleware, the budget once a second from the gateway's read-only view, and the outbox's sends, the gate and the
+  * robots' replies from the tap. A viewer connected to the running gateway shows what it shows for a recording. Each
+  * keep-alive is published as the gateway read it ([[naogateway.wire.RobotReport]], the one mapping between the
+  * messages and a robot's report).
   */
 object FoxgloveFeed {
 
@@ -55,10 +67,15 @@ object FoxgloveFeed {
   final case class Channel(id: Int, topic: String, schemaName: String, encoding: String = "protobuf")
 
   /** A robot's channels, and when the servo telemetry last published was received (`RobotSnapshot.servos`). */
-  private final case class RobotChannels(status: Channel, health: Channel, servos: Channel, servosAt: Option[Long])
+  private final case class RobotChannels(status: Channel, health: Channel, servos: Channel, message: Channel,
+      servosAt: Option[Long])
 
   /** The gateway's decisions as the recording writes them (JSON without a schema). */
   private[web] val Decisions: Channel = Channel(1, RecordingSchema.Topics.Decisions, "", "json")
+
+  /** Every datagram that crossed the gateway's ports, as the recording writes it. */
+  private[web] val Datagrams: Channel =
+    Channel(2, RecordingSchema.Topics.Datagrams, "naogateway.proto.RecordedDatagram")
 
   /** What the feed's hub hands its connections: channels appearing, and messages on them. */
   sealed trait Update
@@ -84,107 +101,219 @@ object FoxgloveFeed {
   private final case class Event(event: RobotEvent) extends Command
   private final case class Game(data: GameControlData) extends Command
   private final case class Traffic(stats: TrafficStats) extends Command
-  // The gateway did not answer the budget question: the next tick asks again.
+  // The gateway did not answer a question: the next tick asks again.
   private case object Unanswered extends Command
   private case object BudgetTick extends Command
   // A connection's updates began or ended: with none, nothing is encoded or asked for.
   private case object ClientJoined extends Command
   private case object ClientLeft extends Command
+  // The gateway's tap, to read while clients are connected; and the tick that reads it.
+  private final case class TapAnswered(tap: GatewayTap) extends Command
+  private case object TapTick extends Command
 
   /** How often the budget decision is published (the recording's outbox writes it at most this often). */
   private val BudgetInterval: FiniteDuration = 1.second
 
+  /** How often the tap's entries are taken while clients are connected. */
+  private val TapInterval: FiniteDuration = 50.millis
+
+  /** The feed's queue at the gateway's tap; what does not fit is dropped and counted there (`GatewayStats.tap`). */
+  private[web] val TapCapacity: Int = 4096
+
+  /** Tap entries published per tick at most (about 1300 a second): a burst reaches no client's buffer whole (16 times
+    * `client-buffer`, which would close the connection); the rest waits at the tap, and what no longer fits is dropped
+    * there and counted.
+    */
+  private[web] val TapEntriesPerTick: Int = 64
+
+  /** The feed's name among the tap's readers. */
+  val TapReader: String = "foxglove-feed"
+
+  /** What the hub knows: each robot's channels, every channel advertised, the clients, and the tap while it reads it.
+    */
+  private final case class State(robots: Map[Int, RobotChannels], channels: Vector[Channel], clients: Int,
+      tap: Option[TapSubscription], askingTap: Boolean)
+
   /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the
-    * budget.
+    * budget, and reading the gateway's tap (datagrams, robot messages, the outbox's and the gate's decisions) while any
+    * client is connected.
     */
   def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: GatewayView): Behavior[Command] =
     Behaviors.setup { context =>
       implicit val mat: Materializer = Materializer(context)
-      val (queue, hub) = Source.queue[Update](256).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
+      val (queue, hub) = Source.queue[Update](1024).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
       hub.runWith(Sink.ignore)
       middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
       middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
       middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
-      val askTraffic: () => Unit = () =>
-        context.pipeToSelf(gateway.traffic()) {
-          case Success(t) => Traffic(t)
-          case Failure(_) => Unanswered
-        }
+      val self = context.self
+      // The hub's scratch, used on its own turn only: the entries taken from the tap at a tick, and their encoder.
+      val taken = new java.util.ArrayList[Tapped](TapEntriesPerTick)
+      val encoder = new RecordEncoder
+
       Behaviors.withTimers[Command] { timers =>
         timers.startTimerWithFixedDelay(BudgetTick, BudgetInterval)
-        running(queue, hub, Map.empty, Vector(Decisions), askTraffic, clients = 0)(context.self)
+
+        def askTap(state: State): State =
+          if (state.tap.isDefined || state.askingTap) state
+          else {
+            context.pipeToSelf(gateway.tap()) {
+              case Success(t) => TapAnswered(t)
+              case Failure(_) => Unanswered
+            }
+            state.copy(askingTap = true)
+          }
+
+        /** Robot `id`'s channels, made (and advertised) when first needed while there is room. */
+        def robotChannels(state: State, id: Int): (Option[RobotChannels], State) =
+          state.robots.get(id) match {
+            case some @ Some(_) => (some, state)
+            /* As in a recording, at most MaxRobotChannels robots get channels: a flood of robot ids cannot grow the
+             * list. */
+            case None if state.robots.size >= RecordingSchema.MaxRobotChannels => (None, state)
+            case None =>
+              val n = state.channels.size
+              val robot = RobotChannels(
+                Channel(n + 1, RecordingSchema.Topics.status(id), "naogateway.proto.Status"),
+                Channel(n + 2, RecordingSchema.Topics.health(id), "naogateway.proto.RobotHealth"),
+                Channel(n + 3, RecordingSchema.Topics.servos(id), "naogateway.proto.ServoTelemetry"),
+                Channel(n + 4, RecordingSchema.Topics.message(id), "naogateway.proto.Message"),
+                None
+              )
+              val more = Vector(robot.status, robot.health, robot.servos, robot.message)
+              queue.offer(Advertised(more))
+              (Some(robot), state.copy(robots = state.robots.updated(id, robot), channels = state.channels ++ more))
+          }
+
+        /** The entries waiting at the tap (at most a tick's worth), on the recording's channels. */
+        def readTap(state: State, tap: TapSubscription): State = {
+          taken.clear()
+          tap.drainTo(taken, TapEntriesPerTick)
+          // The gateway's wall clock of a System.nanoTime, as the recorder dates its messages.
+          val epochOffset = System.currentTimeMillis() * 1000000L - System.nanoTime()
+          var next = state
+          var i = 0
+          while (i < taken.size) {
+            taken.get(i) match {
+              case d: Tapped.Datagram =>
+                val nanos = epochOffset + d.nanoTime
+                val n = encoder.datagram(d, RecordEncoder.addressBytes(d.source),
+                  RecordEncoder.addressBytes(d.destination))
+                queue.offer(Published(Datagrams, nanos, java.util.Arrays.copyOf(encoder.bytes, n)))
+                if (d.port == RecordedPort.ROBOT_PORT && d.received) next = robotMessage(next, d.bytes, nanos)
+              case Tapped.Decided(at, decision) =>
+                decision match {
+                  // Published events and the budget come from the middleware and the gateway's figures, also while
+                  // the tap carries none of them (they reach the tap only while recording).
+                  case _: Decision.Published | _: Decision.Budget => ()
+                  case other                                      => decided(queue, other, epochOffset + at)
+                }
+            }
+            i += 1
+          }
+          taken.clear()
+          next
+        }
+
+        /** A robot's frame on its message channel when it holds more than a keep-alive, and a reply as a decision. */
+        def robotMessage(state: State, bytes: Array[Byte], nanos: Long): State =
+          MessageContents.decodeFrame(bytes) match {
+            case Right((_, c)) =>
+              val onChannel = RecordEncoder.onMessageChannel(c)
+              val (robot, next) = if (onChannel) robotChannels(state, c.robotId) else (None, state)
+              robot.foreach(r => queue.offer(Published(r.message, nanos, c.toProtobuf)))
+              c.rpcResponse.foreach { r =>
+                queue.offer(Published(Decisions, nanos,
+                    DecisionJson.reply(c.robotId, RpcReply.fromProto(r), nanos).getBytes(StandardCharsets.UTF_8)))
+              }
+              next
+            case Left(_) => state // on /gateway/datagrams only; the gateway counted the refusal
+          }
+
+        def running(state: State): Behavior[Command] =
+          Behaviors.receiveMessage[Command] {
+            case Connect(replyTo) =>
+              val updates = hub.watchTermination() { (_, done) =>
+                self ! ClientJoined
+                done.onComplete(_ => self ! ClientLeft)(ExecutionContext.parasitic)
+                NotUsed
+              }
+              replyTo ! Feed(state.channels, updates)
+              Behaviors.same
+            case ClientJoined => running(askTap(state.copy(clients = state.clients + 1)))
+            case ClientLeft =>
+              val clients = math.max(0, state.clients - 1)
+              if (clients > 0) running(state.copy(clients = clients))
+              else {
+                // No client: off the tap, so the gateway builds nothing for the feed.
+                state.tap.foreach(_.close())
+                timers.cancel(TapTick)
+                running(state.copy(clients = 0, tap = None))
+              }
+            case TapAnswered(tap) =>
+              if (state.clients == 0) running(state.copy(askingTap = false))
+              else {
+                timers.startTimerWithFixedDelay(TapTick, TapInterval)
+                running(state.copy(tap = Some(tap.subscribe(TapReader, TapCapacity)), askingTap = false))
+              }
+            case TapTick =>
+              state.tap.fold(Behaviors.same[Command])(t => running(readTap(state, t)))
+            case Event(event) =>
+              if (state.clients > 0) decided(queue, Decision.Published(event), nowNanos())
+              Behaviors.same
+            case Game(data) =>
+              if (state.clients > 0) decided(queue, Decision.Published(GameStateUpdated(data)), nowNanos())
+              Behaviors.same
+            case BudgetTick =>
+              if (state.clients > 0) {
+                context.pipeToSelf(gateway.traffic()) {
+                  case Success(t) => Traffic(t)
+                  case Failure(_) => Unanswered
+                }
+                // A tap the gateway did not hand over: asked again.
+                running(askTap(state))
+              } else Behaviors.same
+            case Unanswered =>
+              if (state.askingTap && state.tap.isEmpty) running(state.copy(askingTap = false)) else Behaviors.same
+            case Traffic(t) =>
+              decided(queue,
+                Decision.Budget(t.outBytesLastSecond, t.inBytesLastSecond, t.budgetBytesPerSecond, t.queued),
+                nowNanos())
+              Behaviors.same
+            case Status(snapshot) =>
+              val (known, next) = robotChannels(state, snapshot.robotId)
+              known.fold(Behaviors.same[Command]) { robot =>
+                // Each telemetry once, as the robot sent it: the snapshot keeps it over keep-alives without one.
+                val servosAt = snapshot.servos.map(_.receivedAtNanos)
+                if (next.clients > 0) {
+                  val nanos = nowNanos()
+                  val report = snapshot.report
+                  queue.offer(Published(robot.status, nanos, report.status.toByteArray))
+                  queue.offer(Published(robot.health, nanos, report.health.toByteArray))
+                  snapshot.servos.filter(_ => servosAt != robot.servosAt).foreach(t =>
+                    queue.offer(Published(robot.servos, nanos, t.toProto.toByteArray)))
+                }
+                val seen = if (next.clients > 0) servosAt else robot.servosAt
+                if ((next eq state) && seen == robot.servosAt) Behaviors.same
+                else running(next.copy(robots = next.robots.updated(snapshot.robotId, robot.copy(servosAt = seen))))
+              }
+          }.receiveSignal { case (_, PostStop) =>
+            state.tap.foreach(_.close())
+            // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to
+            // end.
+            Try(queue.complete())
+            Behaviors.same
+          }
+
+        running(State(Map.empty, Vector(Decisions, Datagrams), clients = 0, tap = None, askingTap = false))
       }
     }
 
-  private def running(queue: BoundedSourceQueue[Update], hub: Source[Update, NotUsed],
-      robots: Map[Int, RobotChannels],
-      channels: Vector[Channel], askTraffic: () => Unit, clients: Int)(
-      implicit self: ActorRef[Command]): Behavior[Command] =
-    Behaviors.receiveMessage[Command] {
-      case Connect(replyTo) =>
-        val updates = hub.watchTermination() { (_, done) =>
-          self ! ClientJoined
-          done.onComplete(_ => self ! ClientLeft)(ExecutionContext.parasitic)
-          NotUsed
-        }
-        replyTo ! Feed(channels, updates)
-        Behaviors.same
-      case ClientJoined => running(queue, hub, robots, channels, askTraffic, clients + 1)
-      case ClientLeft   => running(queue, hub, robots, channels, askTraffic, math.max(0, clients - 1))
-      case Event(event) =>
-        if (clients > 0) decided(queue, Decision.Published(event))
-        Behaviors.same
-      case Game(data) =>
-        if (clients > 0) decided(queue, Decision.Published(GameStateUpdated(data)))
-        Behaviors.same
-      case BudgetTick =>
-        if (clients > 0) askTraffic()
-        Behaviors.same
-      case Unanswered =>
-        Behaviors.same
-      case Traffic(t) =>
-        decided(queue, Decision.Budget(t.outBytesLastSecond, t.inBytesLastSecond, t.budgetBytesPerSecond, t.queued))
-        Behaviors.same
-      case Status(snapshot) =>
-        val id = snapshot.robotId
-        val known = robots.get(id)
-        // As in a recording, at most MaxRobotChannels robots get channels: a flood of robot ids cannot grow the list.
-        if (known.isEmpty && robots.size >= RecordingSchema.MaxRobotChannels) Behaviors.same
-        else {
-          val (robot, more) = known.fold {
-            val status = Channel(channels.size + 1, RecordingSchema.Topics.status(id), "naogateway.proto.Status")
-            val health = Channel(channels.size + 2, RecordingSchema.Topics.health(id), "naogateway.proto.RobotHealth")
-            val servos =
-              Channel(channels.size + 3, RecordingSchema.Topics.servos(id), "naogateway.proto.ServoTelemetry")
-            queue.offer(Advertised(Vector(status, health, servos)))
-            (RobotChannels(status, health, servos, None), Vector(status, health, servos))
-          }(r => (r, Vector.empty))
-          // Each telemetry once, as the robot sent it: the snapshot keeps it over keep-alives without one.
-          val servosAt = snapshot.servos.map(_.receivedAtNanos)
-          if (clients > 0) {
-            val nanos = System.currentTimeMillis() * 1000000L
-            val report = snapshot.report
-            queue.offer(Published(robot.status, nanos, report.status.toByteArray))
-            queue.offer(Published(robot.health, nanos, report.health.toByteArray))
-            snapshot.servos.filter(_ => servosAt != robot.servosAt).foreach(t =>
-              queue.offer(Published(robot.servos, nanos, t.toProto.toByteArray)))
-          }
-          val seen = if (clients > 0) servosAt else robot.servosAt
-          if (more.isEmpty && seen == robot.servosAt) Behaviors.same
-          else
-            running(queue, hub, robots.updated(id, robot.copy(servosAt = seen)), channels ++ more, askTraffic, clients)
-        }
-    }.receiveSignal { case (_, PostStop) =>
-      // In a shutdown the actor system's materializer may have ended the stream first: then there is nothing to end.
-      Try(queue.complete())
-      Behaviors.same
-    }
+  private def nowNanos(): Long = System.currentTimeMillis() * 1000000L
 
-  /** `decision` on the decisions channel, now, in the recording's JSON. */
-  private def decided(queue: BoundedSourceQueue[Update], decision: Decision): Unit = {
-    val nanos = System.currentTimeMillis() * 1000000L
-    queue.offer(Published(Decisions, nanos,
-        DecisionJson.of(decision, nanos).getBytes(java.nio.charset.StandardCharsets.UTF_8)))
+  /** `decision` on the decisions channel at `nanos`, in the recording's JSON. */
+  private def decided(queue: BoundedSourceQueue[Update], decision: Decision, nanos: Long): Unit = {
+    queue.offer(Published(Decisions, nanos, DecisionJson.of(decision, nanos).getBytes(StandardCharsets.UTF_8)))
     ()
   }
 

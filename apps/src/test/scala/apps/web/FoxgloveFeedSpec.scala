@@ -39,11 +39,15 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
       protocol: Option[String] = Some(FoxgloveFeed.Subprotocol)) {
     @volatile var texts = Vector.empty[JsObject]
     @volatile var binaries = Vector.empty[ByteString]
-    private val sink = Sink.foreach[Message] {
+    // A long text (an advertisement of many channels, each with the descriptor set) may come in parts: made whole.
+    private val sink = Flow[Message].mapAsync(1) {
+      case t: TextMessage   => t.toStrict(10.seconds)
+      case b: BinaryMessage => b.toStrict(10.seconds)
+    }.toMat(Sink.foreach[Message] {
       case t: TextMessage.Strict   => synchronized { texts :+= t.text.parseJson.asJsObject }
       case b: BinaryMessage.Strict => synchronized { binaries :+= b.data }
-      case other                   => other.asInstanceOf[TextMessage].textStream.runWith(Sink.ignore)
-    }
+      case _                       => ()
+    })(Keep.right)
     private val (out, outSource) = Source.queue[Message](16).preMaterialize()
     val (upgrade, done) = Http().singleWebSocketRequest(WebSocketRequest(uri, subprotocol = protocol),
       Flow.fromSinkAndSourceMat(sink, outSource)(Keep.left))
@@ -170,6 +174,81 @@ class FoxgloveFeedSpec extends ScalaTestWithActorTestKit(WebDemo.config) with An
         budget.fields("queued").asJsObject.fields.keySet should not be empty
       } finally client.close()
     }
+
+    "carry /gateway/datagrams and /robot/<id>/message with the recording's schemas, and the send and reply decisions, " +
+      "from the gateway's tap while a client is connected" in {
+        val client = new Client()
+        try {
+          eventually(timeout(30.seconds), interval(100.millis)) {
+            client.channels.map(_.fields("topic")) should contain allOf (JsString("/gateway/datagrams"),
+              JsString("/gateway/decisions"), JsString("/robot/1/message"))
+          }
+          def channel(topic: String) = client.channels.find(_.fields("topic") == JsString(topic)).get
+          val datagrams = channel("/gateway/datagrams")
+          datagrams.fields("encoding") shouldBe JsString("protobuf")
+          datagrams.fields("schemaName") shouldBe JsString("naogateway.proto.RecordedDatagram")
+          val message = channel("/robot/1/message")
+          message.fields("schemaName") shouldBe JsString("naogateway.proto.Message")
+          val subscriptions = Map(21 -> datagrams, 22 -> channel("/gateway/decisions"), 23 -> message)
+          client.send(subscriptions.map { case (id, c) => s"""{"id":$id,"channelId":${c.fields("id")}}""" }
+              .mkString("""{"op":"subscribe","subscriptions":[""", ",", "]}"))
+          // The gateway's tap is read by the feed now: the readers' figures name it.
+          eventually(timeout(10.seconds), interval(100.millis)) {
+            Await.result(demo.side.view.stats(), 10.seconds).tap.map(_.reader) should contain(FoxgloveFeed.TapReader)
+          }
+          // A call to robot 1: the outbox sends it, the robot answers it.
+          val app = createTestProbe[robotmiddleware.AppEvent]()
+          val registered = createTestProbe[robotmiddleware.RobotMiddleware.AppRegistered]()
+          demo.middleware ! robotmiddleware.RobotMiddleware.RegisterApp("feed-spec", 1, app.ref, registered.ref)
+          registered.receiveMessage(10.seconds)
+          val lease = createTestProbe[robotmiddleware.RobotMiddleware.LeaseResult]()
+          demo.middleware ! robotmiddleware.RobotMiddleware.Acquire(app.ref, 1,
+            naogateway.wire.ActuatorGroup.Speech: naogateway.wire.ActuatorGroup,
+            lease.ref)
+          lease.receiveMessage(10.seconds).result.isRight shouldBe true
+          val result = createTestProbe[naogateway.api.CallResult]()
+          demo.middleware ! robotmiddleware.RobotMiddleware.Execute(app.ref, 1,
+            robotmiddleware.Operation.Say("feed"), result.ref)
+          val answered = result.receiveMessage(20.seconds)
+          withClue(answered)(answered.result.isRight shouldBe true)
+          def on(sub: Int): Vector[(Long, Array[Byte])] = client.binaries.flatMap { b =>
+            val frame = b.toByteBuffer.order(ByteOrder.LITTLE_ENDIAN)
+            frame.get()
+            if (frame.getInt() != sub) None
+            else {
+              val nanos = frame.getLong()
+              val payload = new Array[Byte](frame.remaining())
+              frame.get(payload)
+              Some(nanos -> payload)
+            }
+          }
+          val schema = Base64.getDecoder.decode(datagrams.fields("schema").asInstanceOf[JsString].value)
+          eventually(timeout(20.seconds), interval(100.millis)) {
+            val recorded = on(21).map(m =>
+              DynamicMessage.parseFrom(descriptor(schema, "naogateway.proto.RecordedDatagram"),
+                m._2))
+            def field(m: DynamicMessage, name: String) = m.getField(m.getDescriptorForType.findFieldByName(name))
+            val kinds = recorded.map(m => (field(m, "port").toString, field(m, "direction").toString))
+            kinds should contain allOf (("ROBOT_PORT", "RECEIVED"), ("ROBOT_PORT", "SENT"),
+              ("GAME_CONTROLLER", "RECEIVED"))
+            recorded.filter(m => field(m, "port").toString == "ROBOT_PORT").map(m => field(m, "robotID")) should
+              contain(Int.box(1))
+            val decisions = on(22).map(m => new String(m._2, "UTF-8").parseJson.asJsObject)
+            val send = decisions.filter(_.fields("decision") == JsString("send"))
+            send.map(_.fields("robotId")) should contain(JsNumber(1))
+            decisions.map(_.fields("decision")) should contain(JsString("reply"))
+            val replies = on(23).map(m =>
+              DynamicMessage.parseFrom(descriptor(schema, "naogateway.proto.Message"),
+                m._2))
+            // The robot's answer: a Message with the rpcResponse extension (7111, rpc.proto), whole.
+            replies.exists(_.getUnknownFields.hasField(7111)) shouldBe true
+          }
+        } finally client.close()
+        // With the client gone the feed leaves the tap.
+        eventually(timeout(10.seconds), interval(100.millis)) {
+          Await.result(demo.side.view.stats(), 10.seconds).tap.map(_.reader) should not contain FoxgloveFeed.TapReader
+        }
+      }
 
     "answer a subscription to a channel that does not exist and bad requests with an error status, and keep serving" in {
       val client = new Client()

@@ -15,10 +15,11 @@ import apps.zeromq.PythonEnv
 
 /** The client of the Foxglove WebSocket protocol we did not write: `@foxglove/ws-protocol`'s FoxgloveClient from the
   * npm registry under Node (pinned, installed at test time under apps/target/), which subscribes to `/robot/1/status`
-  * and decodes it with the advertised schema (protobufjs); and a bare WebSocket (`ws`) offering `foxglove.sdk.v1`
-  * first, as the Foxglove SDK's viewers do, whose handshake and first message are checked against the SDK's description
-  * of them (its handshake answers with `foxglove.sdk.v1`; its ServerInfo has a name, capabilities from its list, and
-  * optional supportedEncodings, metadata and sessionId). Cancelled where Node, npm or the registry are missing.
+  * and `/gateway/datagrams` and decodes them with the advertised schema (protobufjs); and a bare WebSocket (`ws`)
+  * offering `foxglove.sdk.v1` first, as the Foxglove SDK's viewers do, whose handshake and first message are checked
+  * against the SDK's description of them (its handshake answers with `foxglove.sdk.v1`; its ServerInfo has a name,
+  * capabilities from its list, and optional supportedEncodings, metadata and sessionId). Cancelled where Node, npm or
+  * the registry are missing.
   */
 class FoxgloveNpmClientSpec extends ScalaTestWithActorTestKit(WebDemo.config) with AnyWordSpecLike with LogCapturing {
 
@@ -69,7 +70,8 @@ class FoxgloveNpmClientSpec extends ScalaTestWithActorTestKit(WebDemo.config) wi
   }
 
   "The Foxglove feed" should {
-    "serve the npm registry's FoxgloveClient /robot/1/status decodable with the advertised schema, and answer a client " +
+    "serve the npm registry's FoxgloveClient /robot/1/status and /gateway/datagrams decodable with the advertised " +
+      "schema, and answer a client " +
       "offering foxglove.sdk.v1 with that name and the SDK's server info" in {
         val dir = install().fold(why => cancel(s"$why: the npm client test cannot run"), identity)
         val url = s"ws://127.0.0.1:${demo.address.getPort}/foxglove"
@@ -89,6 +91,14 @@ class FoxgloveNpmClientSpec extends ScalaTestWithActorTestKit(WebDemo.config) wi
           status.keySet should contain("currentState")
           val nanos = client("timestamp").asInstanceOf[JsString].value.toLong
           math.abs(nanos / 1000000L - System.currentTimeMillis()) should be < 60000L
+
+          // The gateway's tap as the recording holds it: a keep-alive robot 1 sent, byte for byte.
+          val datagram = lines.flatMap(_.fields.get("datagram")).head.asJsObject.fields
+          datagram("schemaName") shouldBe JsString("naogateway.proto.RecordedDatagram")
+          val recorded = datagram("recorded").asJsObject.fields
+          recorded("source").asInstanceOf[JsString].value should startWith("127.")
+          val payload = java.util.Base64.getDecoder.decode(recorded("payload").asInstanceOf[JsString].value)
+          naogateway.wire.MessageContents.decodeFrame(payload).map(_._2.robotId) shouldBe Right(1)
 
           val sdk = lines.flatMap(_.fields.get("sdk")).head.asJsObject.fields
           sdk("protocol") shouldBe JsString(FoxgloveFeed.SdkSubprotocol)

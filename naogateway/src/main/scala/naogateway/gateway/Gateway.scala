@@ -6,10 +6,11 @@ import java.util.concurrent.atomic.AtomicReference
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector}
 
-import naogateway.gateway.link.{Backlog, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
+import naogateway.gateway.link.{Backlog, Relay, Replay, ReplayLink, RobotLink, RobotPort, UdpLink}
 import naogateway.proto.RecordedPort
 import naogateway.api.recording.Decision
 import naogateway.gateway.recording.{Recording, RobotClockEstimates}
+import naogateway.gateway.tap.Tap
 import naogateway.access.GatewayAccess
 import naogateway.api.{GatewayAddresses, GatewayEvent, RobotStatusUpdated}
 import naogateway.gateway.link.PortReader
@@ -82,22 +83,27 @@ object Gateway {
           p
       }
       val clocks = new RobotClockEstimates
+      val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
+      // What crosses the ports, for every reader: the recorder, the live feed, the FU-Remote relay.
+      val tap = new Tap
       val recording =
         if (replay.isDefined) Recording.Off
-        else Recording(settings.recording, s"${context.system.name}-recorder", clocks)
-      val routes = new AtomicReference[Routing.Table[PortReader.Inlet]](Routing.Table.empty)
+        else Recording(settings.recording, s"${context.system.name}-recorder", tap, clocks)
+      val relay = settings.relay.filter(_ => replay.isEmpty).map(to =>
+        new Relay(PortReader.tapped(port, tap, RecordedPort.FU_REMOTE_RELAY, port.localAddress, routes), to, tap,
+          Relay.Capacity, s"${context.system.name}-relay"))
       // One for the gateway's life: the robots' replay windows and epochs, and timestamps that keep growing across
       // restarts of the outbox and the robot actors.
       val signer = settings.signingKey.map(new GatewaySigning(_))
       val outbox = context.spawn(
-        Behaviors.supervise(Outbox(PortReader.recorded(port, recording, RecordedPort.ROBOT_PORT, port.localAddress,
-              routes), settings.budget,
-            settings.competition, signer, recording))
+        Behaviors.supervise(Outbox(PortReader.tapped(port, tap, RecordedPort.ROBOT_PORT, port.localAddress, routes),
+            settings.budget, settings.competition, signer, tap))
           .onFailure(settings.supervision.outbox.strategy),
         "outbox",
         RobotDispatcher
       )
-      val logic = new GatewayLogic(settings, context, stash, port, outbox, recording, routes, clocks, signer)
+      val logic =
+        new GatewayLogic(settings, context, stash, port, outbox, tap, recording, relay, routes, clocks, signer)
       logic.start()
       if (settings.gameControllerEnabled && settings.teamMessages.enabled && replay.isEmpty) {
         // Akka keeps one message adapter per message class, and the GameController link's events are of the same
@@ -137,16 +143,16 @@ object Gateway {
     }
   }
 
-  /** Hands the gateway's events to the recording; a keep-alive (on the recording's status channels already) only brings
-    * the robot's clock estimate, with which the recorder dates the robot's Status.
+  /** While recording: hands the gateway's events to the tap as decisions; a keep-alive (on the recording's status
+    * channels already) only brings the robot's clock estimate, with which the recorder dates the robot's Status.
     */
-  private[naogateway] def recordingEvents(recording: Recording, clocks: RobotClockEstimates): Behavior[GatewayEvent] =
+  private[naogateway] def recordingEvents(tap: Tap, clocks: RobotClockEstimates): Behavior[GatewayEvent] =
     Behaviors.receiveMessage {
       case RobotStatusUpdated(snapshot) =>
         clocks.update(snapshot.robotId, snapshot.clock)
         Behaviors.same
       case event =>
-        recording.decision(Decision.Published(event))
+        tap.decision(Decision.Published(event))
         Behaviors.same
     }
 

@@ -9,8 +9,9 @@ import akka.actor.typed.{ActorRef, Behavior, PostStop}
 import naogateway.access.{GatewayAccess, RobotAccess}
 import naogateway.api.{GameReading, GatewayAddresses, GatewayEvent, GatewayStats, LinkStats, RobotLinks, RobotSnapshot}
 import naogateway.gateway.gamecontroller.GameControllerWatch
-import naogateway.gateway.link.{Backlog, PortReader, ReplayLink, RobotLink, UdpLink}
+import naogateway.gateway.link.{Backlog, PortReader, Relay, ReplayLink, RobotLink, UdpLink}
 import naogateway.gateway.recording.{Recording, RobotClockEstimates}
+import naogateway.gateway.tap.Tap
 import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef, RobotTransport, RobotWiring}
 import naogateway.proto.RecordedPort
 import naogateway.wire._
@@ -25,7 +26,9 @@ private[naogateway] final class GatewayLogic(
     stash: StashBuffer[Gateway.Command],
     port: RobotLink,
     outbox: ActorRef[Outbox.Command],
+    tap: Tap,
     recording: Recording,
+    relay: Option[Relay],
     routes: AtomicReference[Routing.Table[PortReader.Inlet]],
     clocks: RobotClockEstimates,
     signing: Option[GatewaySigning]
@@ -36,7 +39,7 @@ private[naogateway] final class GatewayLogic(
   private val rejections = new RejectionLedger.Shared
   private val gatewayBacklog = new Backlog(settings.gatewayBacklog)
   private val reader =
-    new PortReader(settings, port, context.self, gatewayBacklog, outbox, rejections, recording, routes)
+    new PortReader(port, context.self, gatewayBacklog, outbox, rejections, tap, routes)
   private var gameControllerAddress: Option[InetSocketAddress] = None
   private var byId = Map.empty[Int, Entry]
   // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
@@ -45,7 +48,7 @@ private[naogateway] final class GatewayLogic(
     /* On the robot actors' own thread: every keep-alive's status event comes here, and a hand-over to another thread
      * per */
     // keep-alive would cost more than the update itself.
-    if (recording.enabled) Set(context.spawn(recordingEvents(recording, clocks), "recording-events", RobotDispatcher))
+    if (recording.enabled) Set(context.spawn(recordingEvents(tap, clocks), "recording-events", RobotDispatcher))
     else Set.empty
   private val watch = new GameControllerWatch(settings, context, rejections, gate, publish)
 
@@ -89,7 +92,8 @@ private[naogateway] final class GatewayLogic(
 
   private def closePort(): Behavior[Command] = {
     port.close()
-    // After the port: nothing more is handed to the recording, and what waits is written before the file closes.
+    // After the port: nothing more is published, and what waits is written before the file closes.
+    relay.foreach(_.close())
     recording.close()
     Behaviors.same
   }
@@ -162,8 +166,8 @@ private[naogateway] final class GatewayLogic(
 
   /** Records a GameController packet (every one, before any check); true, so it can guard the first case. */
   private def recordGameController(bytes: Array[Byte], from: InetSocketAddress): Boolean = {
-    if (recording.enabled)
-      recording.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, gameControllerAddress.orNull, bytes,
+    if (tap.listening)
+      tap.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, gameControllerAddress.orNull, bytes,
         byAddress.get(from.getAddress).getOrElse(-1))
     true
   }
@@ -282,14 +286,17 @@ private[naogateway] final class GatewayLogic(
       val ledger = rejections.current
       replyTo ! GatewayStats(
         reader.datagramsIn,
-        reader.relayed,
+        relay.fold(0L)(_.relayed),
         watch.packetsCounted,
         ledger.byKind,
         byId.size,
         ledger.sources,
         recording.stats,
-        port match { case r: ReplayLink => Some(r.progress); case _ => None }
+        port match { case r: ReplayLink => Some(r.progress); case _ => None },
+        tap.readers
       )
+    case GatewayAccess.GetTap(replyTo) =>
+      replyTo ! tap
     case GatewayAccess.GetTraffic(replyTo) =>
       outbox ! Outbox.GetStats(replyTo)
     case GatewayAccess.GetGameState(replyTo) =>

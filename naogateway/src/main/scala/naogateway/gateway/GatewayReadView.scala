@@ -9,6 +9,7 @@ import akka.util.Timeout
 
 import naogateway.wire.gamecontroller.GameControlData
 import naogateway.access.GatewayAccess
+import naogateway.api.recording.GatewayTap
 import naogateway.api.{GameSource, GatewayAddresses, GatewayStats, GatewayView, RobotLinks, RobotSnapshot, TrafficStats}
 
 /** The gateway's side of [[GatewayView]] (api): each question asked of the gateway actor's read-only queries. */
@@ -26,5 +27,6 @@ object GatewayReadView {
       def traffic(): Future[TrafficStats] = gateway.ask(GatewayAccess.GetTraffic(_))
       def gameState(): Future[Option[GameControlData]] = gateway.ask(GatewayAccess.GetGameState(_))
       def gameSource(): Future[GameSource] = gateway.ask(GatewayAccess.GetGameSource(_))
+      override def tap(): Future[GatewayTap] = gateway.ask(GatewayAccess.GetTap(_))
     }
 }

@@ -3,6 +3,7 @@ package naogateway.access
 import akka.actor.typed.ActorRef
 
 import naogateway.wire.gamecontroller.GameControlData
+import naogateway.api.recording.GatewayTap
 import naogateway.api.{
   GameSource,
   GatewayAddresses,
@@ -56,6 +57,11 @@ object GatewayAccess {
 
   /** Answers with where game state comes from: the trusted sources, the last sender and the packets ignored. */
   final case class GetGameSource(replyTo: ActorRef[GameSource]) extends Query
+
+  /** Answers with the gateway's tap, to subscribe to what crosses its ports (the live feed). Changes nothing;
+    * JVM-local: the tap is an object of this process, never sent over the wire.
+    */
+  final case class GetTap(replyTo: ActorRef[GatewayTap]) extends Query
 
   /** Answers with the robot `robotId` as the middleware may use it ([[RobotAccess]]), if the robot is known. */
   final case class GetRobotAccess(robotId: Int, replyTo: ActorRef[Option[ActorRef[RobotAccess.Command]]])

@@ -2,7 +2,7 @@ package naogateway.api
 
 import java.net.InetSocketAddress
 
-import naogateway.api.recording.RecordingStats
+import naogateway.api.recording.{RecordingStats, TapReaderStats}
 
 /** Where the game state comes from, for the status view and robotctl (the answer to `GatewayAccess.GetGameSource`).
   *
@@ -39,9 +39,10 @@ final case class GatewayAddresses(robots: InetSocketAddress, gameController: Opt
 final case class RobotLinks(links: Vector[LinkStats])
 
 /** The gateway's own figures: datagrams seen, relayed, refused by kind (a closed set, `Rejection`) and by source
-  * address (at most `RejectionLedger.SourceAddresses` of them, the rest under "other addresses").
+  * address (at most `RejectionLedger.SourceAddresses` of them, the rest under "other addresses"), and each reader of
+  * its tap (the recorder, the live feed, the relay) with what it lost.
   */
 final case class GatewayStats(datagramsIn: Long, relayed: Long, gameControllerPackets: Long,
     rejected: Map[String, Long], robots: Int,
     rejectedBySource: Map[String, Long] = Map.empty, recording: RecordingStats = RecordingStats.Off,
-    replay: Option[ReplayProgress] = None)
+    replay: Option[ReplayProgress] = None, tap: Vector[TapReaderStats] = Vector.empty)

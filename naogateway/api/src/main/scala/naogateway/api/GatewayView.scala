@@ -2,6 +2,7 @@ package naogateway.api
 
 import scala.concurrent.Future
 
+import naogateway.api.recording.GatewayTap
 import naogateway.wire.gamecontroller.GameControlData
 
 /** What apps may read of a running gateway (the status view, the web view, the control port): questions that change
@@ -31,4 +32,9 @@ trait GatewayView {
 
   /** Where game state comes from: the trusted sources, the last sender and the packets ignored. */
   def gameSource(): Future[GameSource]
+
+  /** The gateway's tap, to read what crosses its ports (datagrams and decisions) as the recorder does; reading changes
+    * nothing the gateway does. A view without one (a stand-in in a test) fails.
+    */
+  def tap(): Future[GatewayTap] = Future.failed(new UnsupportedOperationException("this view has no tap"))
 }

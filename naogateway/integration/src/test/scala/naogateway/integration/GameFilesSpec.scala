@@ -69,11 +69,12 @@ class GameFilesSpec extends AnyWordSpec with Matchers {
   "A recorder with game files" should {
     "write each half into a file of its own, named by teams and half, the game's packets in it" in {
       val dir = Files.createTempDirectory("game-files-spec")
+      val tap = new naogateway.gateway.tap.Tap
       val recording =
         Recording(RecordingSettings(enabled = true, dir, 64L * 1024 * 1024, 10.minutes, 65536, gameFiles = true,
-            gameQuiet = 5.seconds), "game-files-spec")
+            gameQuiet = 5.seconds), "game-files-spec", tap)
       def publish(d: GameControlData): Unit = {
-        recording.decision(Decision.Published(GameStateUpdated(d))); Thread.sleep(20)
+        tap.decision(Decision.Published(GameStateUpdated(d))); Thread.sleep(20)
       }
       publish(at(GameState.Initial))
       Seq(GameState.Ready, GameState.Set, GameState.Playing, GameState.Finished).foreach(st => publish(at(st)))

@@ -7,8 +7,8 @@ import akka.actor.typed.ActorRef
 
 import naogateway.transport.DatagramWriter
 import naogateway.proto.RecordedPort
-import naogateway.gateway.recording.Recording
-import naogateway.gateway.{Gateway, GatewaySettings, Rejection, RejectionLedger, Routing, SignatureCheck}
+import naogateway.gateway.tap.Tap
+import naogateway.gateway.{Gateway, Rejection, RejectionLedger, Routing, SignatureCheck}
 import naogateway.gateway.robot.{Outbox, RobotActor}
 
 /** The robot port's reader side of the gateway: runs where the port is read (the robot dispatcher's port loop, or a
@@ -16,32 +16,28 @@ import naogateway.gateway.robot.{Outbox, RobotActor}
   * gateway) their messages directly.
   */
 private[naogateway] final class PortReader(
-    settings: GatewaySettings,
     port: RobotLink,
     gateway: ActorRef[Gateway.Command],
     gatewayBacklog: Backlog,
     outbox: ActorRef[Outbox.Command],
     rejections: RejectionLedger.Shared,
-    recording: Recording,
+    tap: Tap,
     val routes: AtomicReference[Routing.Table[PortReader.Inlet]]
 ) extends RobotPort.Handler {
   import PortReader._
 
   // Written by the one thread that reads the port; read by the gateway for its figures.
-  @volatile var datagramsIn, relayed = 0L
+  @volatile var datagramsIn = 0L
   // What the outbox has not been told yet: told in one message per InboundBatch datagrams or when the port is quiet.
   private var inboundDatagrams, inboundBytes = 0
-  private val relayLink = recorded(port, recording, RecordedPort.FU_REMOTE_RELAY, port.localAddress, routes)
 
   def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     datagramsIn += 1
     val table = routes.get
-    if (recording.enabled) {
+    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread.
+    if (tap.listening) {
       val robotId = table.byAddress.get(from.getAddress).fold(-1)(_.robotId)
-      recording.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
-    }
-    settings.relay.foreach { relay =>
-      if (relayLink.send(bytes, relay)) relayed += 1
+      tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
     }
     inboundDatagrams += 1
     inboundBytes += bytes.length
@@ -80,7 +76,7 @@ private[naogateway] final class PortReader(
     gateway ! Gateway.GameControllerEvent(UdpLink.Received(bytes, from))
 }
 
-/** What the reader routes to, and the recording of what the gateway's links send. */
+/** What the reader routes to, and the tap's view of what the gateway's links send. */
 private[naogateway] object PortReader {
 
   /** Received datagrams the port's reader counts before it tells the outbox (one message, not one per datagram). */
@@ -91,18 +87,17 @@ private[naogateway] object PortReader {
     */
   final case class Inlet(actor: ActorRef[RobotActor.Command], backlog: Backlog, signatures: Option[SignatureCheck])
 
-  /** `link`, with every datagram it takes recorded as sent from `local` on `port` (`link` itself when not recording).
+  /** `link`, with every datagram it takes published on `tap` as sent from `local` on `port` (while anyone listens).
     */
-  def recorded(link: DatagramWriter, recording: Recording, port: RecordedPort, local: InetSocketAddress,
+  def tapped(link: DatagramWriter, tap: Tap, port: RecordedPort, local: InetSocketAddress,
       routes: AtomicReference[Routing.Table[Inlet]]): DatagramWriter =
-    if (!recording.enabled) link
-    else
-      new DatagramWriter {
-        def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = {
-          val sent = link.send(bytes, to)
-          if (sent) recording.datagram(port, received = false, local, to, bytes,
+    new DatagramWriter {
+      def send(bytes: Array[Byte], to: InetSocketAddress): Boolean = {
+        val sent = link.send(bytes, to)
+        if (sent && tap.listening)
+          tap.datagram(port, received = false, local, to, bytes,
             routes.get.byAddress.get(to.getAddress).fold(-1)(_.robotId))
-          sent
-        }
+        sent
       }
+    }
 }

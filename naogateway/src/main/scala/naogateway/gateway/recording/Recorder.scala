@@ -5,7 +5,6 @@ import java.net.InetSocketAddress
 import java.nio.file.{Files, Path, StandardOpenOption}
 import java.time.{Instant, ZoneOffset}
 import java.time.format.DateTimeFormatter
-import java.util.concurrent.ArrayBlockingQueue
 import java.util.concurrent.atomic.AtomicLong
 import java.util.concurrent.locks.LockSupport
 
@@ -14,22 +13,23 @@ import scala.util.control.NonFatal
 
 import org.slf4j.LoggerFactory
 
-import naogateway.transport.RateLimitedLog
 import naogateway.proto.RecordedPort
 import naogateway.wire.{MessageContents, RpcReply}
-import naogateway.api.recording.{Decision, DecisionJson, RecordingStats}
+import naogateway.api.recording.{Decision, DecisionJson, RecordEncoder, RecordingStats, Tapped}
+import naogateway.gateway.tap.Tap
 
-/** The recorder: a bounded queue that the gateway's threads only offer to, and one writer thread of its own that drains
-  * it into MCAP files (decoding robot messages on the way, off the hot paths), rotating them by size and age. A full
-  * queue drops the entry and counts it ([[RecordingStats.dropped]]). A file that cannot be written is closed; entries
-  * are dropped (counted as failed) until a new file can be opened, tried every 5 s.
+/** The recorder: a reader of the gateway's tap (a bounded queue that the gateway's threads only offer to), and one
+  * writer thread of its own that drains it into MCAP files (decoding robot messages on the way, off the hot paths),
+  * rotating them by size and age. A full queue drops the entry and counts it ([[RecordingStats.dropped]]). A file that
+  * cannot be written is closed; entries are dropped (counted as failed) until a new file can be opened, tried every 5
+  * s.
   */
-final class Recorder(settings: RecordingSettings, threadName: String, clock: RobotTimeBase) extends Recording {
+final class Recorder(settings: RecordingSettings, threadName: String, clock: RobotTimeBase, tap: Tap)
+    extends Recording {
   import Recording._
 
   private val log = LoggerFactory.getLogger(classOf[Recorder])
-  private val queue = new ArrayBlockingQueue[Entry](settings.queueCapacity)
-  private val droppedCount = new AtomicLong
+  private val queue = tap.subscribe("recorder", settings.queueCapacity)
   private val failedCount = new AtomicLong
   private val messageCount = new AtomicLong
   private val fileCount = new AtomicLong
@@ -44,22 +44,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
 
   def enabled: Boolean = true
 
-  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
-      bytes: Array[Byte],
-      robotId: Int): Unit =
-    offer(DatagramEntry(System.nanoTime(), port, received, source, destination, bytes, robotId))
-
-  def decision(decision: Decision): Unit = offer(DecisionEntry(System.nanoTime(), decision))
-
-  private def offer(e: Entry): Unit =
-    if (running && !queue.offer(e)) {
-      val n = droppedCount.incrementAndGet()
-      if (RateLimitedLog.due(n))
-        log.warn("Recording dropped {} entries so far: the writer is behind (queue of {})", n, settings.queueCapacity)
-    }
-
   def stats: RecordingStats =
-    RecordingStats(enabled = true, fileCount.get, messageCount.get, droppedCount.get, failedCount.get, current,
+    RecordingStats(enabled = true, fileCount.get, messageCount.get, queue.stats.dropped, failedCount.get, current,
       Some(retention.status))
 
   def close(): Unit = {
@@ -76,13 +62,16 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   // One file per half of a game (GameFiles), when recording.game-files is on.
   private var games = GameFiles(settings.gameQuiet.toNanos)
   private var nextAttempt = Long.MinValue
-  private val batch = new java.util.ArrayList[Entry](1024)
+  private val batch = new java.util.ArrayList[Tapped](1024)
   // The writer's pause when it finds the queue empty (Recorder.nextPark).
   private var park = Recorder.MinParkNanos
 
   private def writeLoop(): Unit = {
     try {
-      while (running || !queue.isEmpty) {
+      var closing = false
+      while (!closing || queue.pending > 0) {
+        // Asked to stop: off the tap first (nothing more comes), then what waits is written.
+        if (!running && !closing) { queue.close(); closing = true }
         batch.clear()
         queue.drainTo(batch, 1024)
         val now = System.nanoTime()
@@ -92,7 +81,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         if (batch.isEmpty) {
           // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
           // The pause grows while the queue stays empty, so an idle gateway's writer wakes a few times a second.
-          if (running) LockSupport.parkNanos(park)
+          if (!closing) LockSupport.parkNanos(park)
         } else {
           var i = 0
           while (i < batch.size) { write(batch.get(i)); i += 1 }
@@ -100,7 +89,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         }
       }
     } catch { case NonFatal(e) => log.error("Recording stopped: the writer failed", e) }
-    finally finish()
+    finally { queue.close(); finish() }
   }
 
   // Messages written since the last batch ended: told to the figures once per batch, not once per message.
@@ -157,10 +146,10 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     next._2.nonEmpty
   }
 
-  private def write(e: Entry): Unit = {
+  private def write(e: Tapped): Unit = {
     // A half begins with the packet that begins it in its file; it ends with the packet that ends it still in it.
     val endAfter = e match {
-      case DecisionEntry(at, Decision.Published(naogateway.api.GameStateUpdated(data))) if settings.gameFiles =>
+      case Tapped.Decided(at, Decision.Published(naogateway.api.GameStateUpdated(data))) if settings.gameFiles =>
         val steps = games.packet(data, at)
         if (gameSteps(steps) && steps._2.exists(_.isInstanceOf[GameFiles.Begin])) { rotate(); false }
         else steps._2.nonEmpty
@@ -170,7 +159,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     if (endAfter) rotate()
   }
 
-  private def writeEntry(e: Entry): Unit = {
+  private def writeEntry(e: Tapped): Unit = {
     if (file.isEmpty && System.nanoTime() >= nextAttempt) open()
     file match {
       case Some(f) =>
@@ -222,7 +211,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
     // Per robot id: its status, health, message and servos channels, made when first needed; at most MaxRobotChannels
     // robots.
     private val robots = mutable.LongMap.empty[Array[Int]]
-    private val encoder = new Encoder
+    private val encoder = new RecordEncoder
 
     def due(now: Long): Boolean = now - openedAt >= settings.rotateInterval.toNanos
 
@@ -249,21 +238,21 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
       }
     }
 
-    def write(e: Entry): Unit = {
+    def write(e: Tapped): Unit = {
       val time = epochNanos(e.nanoTime)
       e match {
-        case d: DatagramEntry =>
+        case d: Tapped.Datagram =>
           val n = encoder.datagram(d, addressBytes(d.source), addressBytes(d.destination))
           writer.write(datagrams, time, time, encoder.bytes, 0, n)
           if (d.port == RecordedPort.ROBOT_PORT && d.received) decoded(d, time)
-        case DecisionEntry(_, decision) =>
+        case Tapped.Decided(_, decision) =>
           writer.write(decisions, time, time,
             DecisionJson.of(decision, time).getBytes(java.nio.charset.StandardCharsets.UTF_8))
       }
     }
 
     /** A robot's frame on its decoded channels, and a reply as a decision of its own. */
-    private def decoded(d: DatagramEntry, time: Long): Unit =
+    private def decoded(d: Tapped.Datagram, time: Long): Unit =
       MessageContents.decodeFrame(d.bytes) match {
         case Right((_, c)) =>
           val ids = robotChannels(c.robotId)
@@ -277,10 +266,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
             c.robotHealth.foreach(h => writer.write(ids(1), time, time, encoder.bytes, 0, encoder.message(h)))
             c.servoTelemetry.foreach(t => writer.write(ids(3), time, time, encoder.bytes, 0, encoder.message(t)))
             // Anything beyond a keep-alive's status, health and servo telemetry goes on the message channel, whole.
-            if (c.debuggingCommands.isDefined || c.debugData.isDefined || c.havimoRegions.isDefined ||
-              c.havimoGrid.isDefined || c.rpcRequest.isDefined || c.rpcResponse.isDefined ||
-              c.unknownExtensions.nonEmpty)
-              writer.write(ids(2), time, time, c.toProtobuf)
+            if (RecordEncoder.onMessageChannel(c)) writer.write(ids(2), time, time, c.toProtobuf)
           }
           c.rpcResponse.foreach { r =>
             writer.write(decisions, time, time,
@@ -298,10 +284,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private val ipv4Addresses = mutable.LongMap.empty[Array[Byte]]
   private val otherAddresses = new java.util.HashMap[InetSocketAddress, Array[Byte]]()
   private val MaxAddresses = 4096
-  private val NoAddress = new Array[Byte](0)
-
   private def addressBytes(a: InetSocketAddress): Array[Byte] =
-    if (a == null) NoAddress
+    if (a == null) RecordEncoder.addressBytes(a)
     else
       a.getAddress match {
         case ip: java.net.Inet4Address =>
@@ -326,8 +310,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           }
       }
 
-  private def addressText(a: InetSocketAddress): Array[Byte] =
-    DecisionJson.address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
+  private def addressText(a: InetSocketAddress): Array[Byte] = RecordEncoder.addressBytes(a)
 }
 
 /** The writer's polling pace. */

@@ -1,10 +1,8 @@
 package naogateway.gateway.recording
 
-import java.net.InetSocketAddress
-
 import naogateway.api.ClockEstimate
-import naogateway.proto.RecordedPort
-import naogateway.api.recording.{Decision, RecordingSchema, RecordingStats}
+import naogateway.api.recording.{RecordingSchema, RecordingStats}
+import naogateway.gateway.tap.Tap
 
 /** Puts a robot's own clock (a `Status.timestamp`, milliseconds) on the gateway's clock (its JVM's `System.nanoTime`,
   * as [[naogateway.api.ClockEstimate]] does); the recorder turns that into Unix time for a message's publish time.
@@ -38,22 +36,13 @@ final class RobotClockEstimates extends RobotTimeBase {
     Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
 }
 
-/** Where the gateway hands what it records. Every method is thread-safe, returns at once and never blocks: the port's
-  * reader and the outbox call it on their hot paths.
+/** The recorder as the gateway holds it: it reads the gateway's tap ([[naogateway.gateway.tap.Tap]]) on a thread of its
+  * own; the gateway only asks for its figures and closes it.
   */
 trait Recording {
 
   /** Whether anything is recorded. */
   def enabled: Boolean
-
-  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none).
-    */
-  def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
-      bytes: Array[Byte],
-      robotId: Int): Unit
-
-  /** A decision of the gateway. */
-  def decision(decision: Decision): Unit
 
   /** The figures so far. */
   def stats: RecordingStats
@@ -68,17 +57,16 @@ object Recording {
   /** Records nothing. */
   val Off: Recording = new Recording {
     def enabled: Boolean = false
-    def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
-        bytes: Array[Byte],
-        robotId: Int): Unit = ()
-    def decision(decision: Decision): Unit = ()
     def stats: RecordingStats = RecordingStats.Off
     def close(): Unit = ()
   }
 
-  /** A recorder writing to `settings.directory` on a thread named `threadName`, or [[Off]] when not enabled. */
-  def apply(settings: RecordingSettings, threadName: String, clock: RobotTimeBase = RobotTimeBase.Unknown): Recording =
-    if (settings.enabled) new Recorder(settings, threadName, clock) else Off
+  /** A recorder of what `tap` publishes, writing to `settings.directory` on a thread named `threadName`, or [[Off]]
+    * when not enabled (then it does not subscribe).
+    */
+  def apply(settings: RecordingSettings, threadName: String, tap: Tap,
+      clock: RobotTimeBase = RobotTimeBase.Unknown): Recording =
+    if (settings.enabled) new Recorder(settings, threadName, clock, tap) else Off
 
   /** Topics of a recording (docs/recording.md): [[RecordingSchema.Topics]] (api), which the live feed names too. */
   val Topics: RecordingSchema.Topics.type = RecordingSchema.Topics

@@ -11,7 +11,7 @@ import akka.actor.typed.{ActorRef, Behavior}
 import naogateway.gateway.link.ZeroMqRobotLink
 import naogateway.transport.{DatagramWriter, PortLoop}
 import naogateway.api.recording.Decision
-import naogateway.gateway.recording.Recording
+import naogateway.gateway.tap.Tap
 import naogateway.wire.{FrameSigning, WireLimits}
 import naogateway.wire.gamecontroller.GameState
 import naogateway.api.{GameReading, Priority, TrafficStats}
@@ -96,14 +96,15 @@ object Outbox {
 
   /** An outbox writing to `link` (non-blocking) under `budget`, closing in competition mode while the game runs;
     * `signer` signs the frames sent as `signed`; its decisions (each datagram's outcome, the gate, the budget once a
-    * second while sending) go to `recording`. `clock` (nanoseconds) is what every decision is taken against.
+    * second while sending) go to `tap` while anyone reads it. `clock` (nanoseconds) is what every decision is taken
+    * against.
     */
   private[naogateway] def apply(link: DatagramWriter, budget: BudgetSettings, competition: Boolean,
-      signer: Option[GatewaySigning] = None, recording: Recording = Recording.Off,
+      signer: Option[GatewaySigning] = None, tap: Tap = new Tap,
       clock: () => Long = () => System.nanoTime()): Behavior[Command] =
     Behaviors.setup { context =>
       Behaviors.withTimers { timers =>
-        new Outbox(link, budget, competition, signer, timers, context.log, recording, clock).behavior()
+        new Outbox(link, budget, competition, signer, timers, context.log, tap, clock).behavior()
       }
     }
 
@@ -118,7 +119,7 @@ private final class Outbox(
     signer: Option[GatewaySigning],
     timers: TimerScheduler[Outbox.Command],
     log: org.slf4j.Logger,
-    recording: Recording,
+    tap: Tap,
     clock: () => Long
 ) {
   import Outbox._
@@ -138,12 +139,12 @@ private final class Outbox(
   private var lastWarning = Long.MinValue
   private var lastBudgetRecord = clock() - 2 * Second
 
-  /** The outcome of one datagram, and once a second the budget's state, for the recording. */
-  private def record(now: Long, s: Send, outcome: String): Unit = if (recording.enabled) {
-    recording.decision(Decision.Outgoing(s.robotId, s.priority, outcome, s.bytes))
+  /** The outcome of one datagram, and once a second the budget's state, for the tap's readers. */
+  private def record(now: Long, s: Send, outcome: String): Unit = if (tap.listening) {
+    tap.decision(Decision.Outgoing(s.robotId, s.priority, outcome, s.bytes))
     if (now - lastBudgetRecord >= Second) {
       lastBudgetRecord = now
-      recording.decision(Decision.Budget(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
+      tap.decision(Decision.Budget(out.inWindow(now), in.inWindow(now), budget.teamBytesPerSecond,
           Priority.all.map(p => p.name -> queues(p.rank).size).toMap))
     }
   }
@@ -284,7 +285,7 @@ private final class Outbox(
       drain(clock())
       Behaviors.same
     case Withdraw(robotId, tags) =>
-      if (recording.enabled) {
+      if (tap.listening) {
         val now = clock()
         queues.foreach(_.foreach(q => if (q.robotId == robotId && tags(q.tag)) record(now, q, "withdrawn")))
       }
@@ -302,7 +303,7 @@ private final class Outbox(
       if (competition && nowRunning != gameIsRunning) {
         log.info("Competition gate {}: {}", if (nowRunning) "closed" else "open again",
           CompetitionGate.why(now).getOrElse(s"game state $now"))
-        if (recording.enabled) recording.decision(Decision.Gate(open = !nowRunning, now))
+        if (tap.listening) tap.decision(Decision.Gate(open = !nowRunning, now))
       }
       reading = now
       gameIsRunning = nowRunning
@@ -310,7 +311,7 @@ private final class Outbox(
         // Nothing queued before kick-off may leak out during the game.
         val held = queues.map(_.size).sum
         if (held > 0) log.info("Discarding {} queued datagram(s) at game start", held)
-        if (recording.enabled) {
+        if (tap.listening) {
           val now = clock()
           queues.foreach(_.foreach(q => record(now, q, "refused-by-rule")))
         }

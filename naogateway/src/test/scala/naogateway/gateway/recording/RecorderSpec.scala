@@ -22,7 +22,8 @@ import naogateway.proto.{
   Status
 }
 import naogateway.wire.gamecontroller.GameState
-import naogateway.api.recording.Decision
+import naogateway.api.recording.{Decision, RecordEncoder, Tapped}
+import naogateway.gateway.tap.Tap
 
 class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
@@ -39,10 +40,11 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
   "A recorder" must {
     "account for every entry handed to it, written or dropped, when its queue overflows" in {
       val dir = Files.createTempDirectory("recorder-spec")
-      val recording = Recording(settings(dir, queue = 16), "recorder-spec-overflow")
+      val tap = new Tap
+      val recording = Recording(settings(dir, queue = 16), "recorder-spec-overflow", tap)
       val offered = 20000
       (1 to offered).foreach(i =>
-        recording.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
+        tap.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
       recording.close()
       val stats = recording.stats
       stats.dropped should be > 0L
@@ -56,10 +58,11 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
 
     "write what waits when closed, then ignore further entries" in {
       val dir = Files.createTempDirectory("recorder-spec")
-      val recording = Recording(settings(dir), "recorder-spec-close")
-      recording.decision(Decision.Gate(open = false, naogateway.api.GameReading.Known(GameState.Playing)))
+      val tap = new Tap
+      val recording = Recording(settings(dir), "recorder-spec-close", tap)
+      tap.decision(Decision.Gate(open = false, naogateway.api.GameReading.Known(GameState.Playing)))
       recording.close()
-      recording.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Finished)))
+      tap.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Finished)))
       recording.stats.messages shouldBe 1L
       val contents = McapReader.read(Files.readAllBytes(files(dir).head))
       new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
@@ -67,14 +70,15 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
 
     "put a keep-alive's servo telemetry on /robot/<id>/servos, not on the message channel" in {
       val dir = Files.createTempDirectory("recorder-spec")
-      val recording = Recording(settings(dir), "recorder-spec-servos")
+      val tap = new Tap
+      val recording = Recording(settings(dir), "recorder-spec-servos", tap)
       val telemetry = ServoTelemetry(Vector(ServoState(1, Some(512), Some(-40), Some(121), Some(41)),
           ServoState(2, silent = Some(true))), busErrors = Some(1))
       val keepAlive = naogateway.wire.MessageContents(2, status = Some(Status(teamID = Some(1))),
         robotHealth = Some(RobotHealth(uptimeMs = Some(1000))), servoTelemetry = Some(telemetry))
       val plain = keepAlive.copy(servoTelemetry = None)
       Seq(keepAlive, plain).foreach { c =>
-        recording.datagram(RecordedPort.ROBOT_PORT, received = true, from, to,
+        tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, to,
           naogateway.wire.MessageContents.encodeFrame(c).toOption.get, 2)
       }
       recording.close()
@@ -91,9 +95,10 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
 
     "count entries it cannot write when the directory cannot be made, without failing" in {
       val file = Files.createTempFile("recorder-spec", ".not-a-directory")
-      val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed")
+      val tap = new Tap
+      val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed", tap)
       (1 to 10).foreach(_ =>
-        recording.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Initial))))
+        tap.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Initial))))
       recording.close()
       recording.stats.failed shouldBe 10L
       recording.stats.files shouldBe 0L
@@ -101,9 +106,10 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
 
     "begin a new file when the current one is older than rotate-interval, each file complete" in {
       val dir = Files.createTempDirectory("recorder-spec")
-      val recording = Recording(settings(dir).copy(rotateInterval = 1.second), "recorder-spec-age")
+      val tap = new Tap
+      val recording = Recording(settings(dir).copy(rotateInterval = 1.second), "recorder-spec-age", tap)
       (1 to 6).foreach { i =>
-        recording.decision(Decision.Budget(i.toLong, 0L, 125000, Map.empty))
+        tap.decision(Decision.Budget(i.toLong, 0L, 125000, Map.empty))
         Thread.sleep(500)
       }
       recording.close()
@@ -113,7 +119,7 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
     }
 
     "encode a datagram byte for byte as the generated RecordedDatagram does, reusing its buffer" in {
-      val encoder = new Encoder
+      val encoder = new RecordEncoder
       val entries = for {
         port <- Gen.oneOf(RecordedPort.ROBOT_PORT, RecordedPort.GAME_CONTROLLER, RecordedPort.FU_REMOTE_RELAY)
         received <- Gen.oneOf(true, false)
@@ -122,7 +128,7 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
         size <- Gen.oneOf(0, 1, 127, 128, 2000, 70000)
         payload <- Gen.listOfN(size, Gen.choose(Byte.MinValue, Byte.MaxValue)).map(_.toArray)
         robotId <- Gen.oneOf(-1, 0, 1, 127, 128, 300, Int.MaxValue)
-      } yield (DatagramEntry(0L, port, received, null, null, payload, robotId), source, destination)
+      } yield (Tapped.Datagram(0L, port, received, null, null, payload, robotId), source, destination)
       forAll(entries) { case (d, source, destination) =>
         val expected = RecordedDatagram(
           d.port,
@@ -154,7 +160,7 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
     }
 
     "record nothing when off" in {
-      Recording(RecordingSettings.Off, "unused") shouldBe Recording.Off
+      Recording(RecordingSettings.Off, "unused", new Tap) shouldBe Recording.Off
       Recording.Off.enabled shouldBe false
     }
   }

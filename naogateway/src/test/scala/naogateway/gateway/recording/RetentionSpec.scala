@@ -99,9 +99,10 @@ class RetentionSpec extends AnyWordSpec with Matchers {
       Files.write(stale, new Array[Byte](1024))
       Files.setLastModifiedTime(stale, FileTime.from(Instant.now().minusSeconds(30L * 86400)))
       val settings = RecordingSettings(enabled = true, dir, 64 * 1024, 1.minute, 1024, RetentionSettings(0, 14.days))
-      val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown)
+      val tap = new naogateway.gateway.tap.Tap
+      val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown, tap)
       try {
-        recorder.decision(Decision.Gate(open = true,
+        tap.decision(Decision.Gate(open = true,
             naogateway.api.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
         val deadline = 10.seconds.fromNow
         while (!recorder.stats.retention.exists(_.deletedFiles > 0) && deadline.hasTimeLeft()) Thread.sleep(20)

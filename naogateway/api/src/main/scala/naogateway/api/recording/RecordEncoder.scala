@@ -1,16 +1,17 @@
-package naogateway.gateway.recording
+package naogateway.api.recording
 
 import java.net.InetSocketAddress
 
 import com.google.protobuf.CodedOutputStream
 
-import naogateway.api.recording.Decision
-import naogateway.proto.{RecordedDirection, RecordedPort}
+import naogateway.proto.RecordedDirection
+import naogateway.wire.MessageContents
 
-/** Protobuf bytes of the messages the writer thread writes, in one array reused from message to message (grown when
+/** Protobuf bytes of the messages of a recording's channels, in one array reused from message to message (grown when
   * needed): the same bytes as the generated code's `toByteArray`, without an array, a `ByteString` and strings each.
+  * The recorder's writer thread and the live feed each hold one; one thread uses it at a time.
   */
-private[recording] final class Encoder {
+final class RecordEncoder {
   private var buffer = new Array[Byte](1024)
 
   /** The bytes of the last message encoded, from index 0. */
@@ -21,10 +22,10 @@ private[recording] final class Encoder {
     CodedOutputStream.newInstance(buffer, 0, size)
   }
 
-  /** `d` as a `RecordedDatagram` with `source` and `destination` (their address text in UTF-8), fields by number, the
-    * optional robot id only when known; answers the length.
+  /** `d` as a `RecordedDatagram` with `source` and `destination` (their address text in UTF-8,
+    * [[RecordEncoder.addressBytes]]), fields by number, the optional robot id only when known; answers the length.
     */
-  def datagram(d: DatagramEntry, source: Array[Byte], destination: Array[Byte]): Int = {
+  def datagram(d: Tapped.Datagram, source: Array[Byte], destination: Array[Byte]): Int = {
     val direction = if (d.received) RecordedDirection.RECEIVED.value else RecordedDirection.SENT.value
     val size = CodedOutputStream.computeEnumSize(1, d.port.value) + CodedOutputStream.computeEnumSize(2, direction) +
       CodedOutputStream.computeByteArraySize(3, source) + CodedOutputStream.computeByteArraySize(4, destination) +
@@ -52,9 +53,19 @@ private[recording] final class Encoder {
   }
 }
 
-/** One queued entry; `nanoTime` is `System.nanoTime` when it was handed over. */
-private[recording] sealed trait Entry { def nanoTime: Long }
-private[recording] final case class DatagramEntry(nanoTime: Long, port: RecordedPort, received: Boolean,
-    source: InetSocketAddress,
-    destination: InetSocketAddress, bytes: Array[Byte], robotId: Int) extends Entry
-private[recording] final case class DecisionEntry(nanoTime: Long, decision: Decision) extends Entry
+/** What goes on which channel: shared by the recorder and the live feed, so both carry the same. */
+object RecordEncoder {
+
+  private val NoAddress = new Array[Byte](0)
+
+  /** An address as a `RecordedDatagram` holds it: its text ([[DecisionJson.address]]) in UTF-8; none when null. */
+  def addressBytes(a: InetSocketAddress): Array[Byte] =
+    if (a == null) NoAddress else DecisionJson.address(a).getBytes(java.nio.charset.StandardCharsets.UTF_8)
+
+  /** Whether a robot's message goes on its `/robot/<id>/message` channel, whole: anything beyond a keep-alive's status,
+    * health and servo telemetry (which have channels of their own).
+    */
+  def onMessageChannel(c: MessageContents): Boolean =
+    c.debuggingCommands.isDefined || c.debugData.isDefined || c.havimoRegions.isDefined || c.havimoGrid.isDefined ||
+      c.rpcRequest.isDefined || c.rpcResponse.isDefined || c.unknownExtensions.nonEmpty
+}
