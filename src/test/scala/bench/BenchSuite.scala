@@ -169,22 +169,25 @@ object BenchSuite {
 
   /** Operations per second of `op`, after a warm-up, over about `seconds` of wall time. */
   def opsPerSecond(seconds: Double, warmupSeconds: Double = 1.0)(op: () => Int): Double = {
-    var sink = 0
-    def loop(limitNanos: Long): (Long, Long) = {
-      val start = System.nanoTime()
-      var n = 0L
-      var now = start
-      while (now - start < limitNanos) {
-        var i = 0
-        while (i < 1000) { sink += op(); i += 1 }
-        n += 1000
-        now = System.nanoTime()
-      }
-      (n, now - start)
-    }
-    loop((warmupSeconds * 1e9).toLong)
-    val (n, nanos) = loop((seconds * 1e9).toLong)
-    if (sink == 42) println("") // keeps the results alive so the JIT cannot drop the work
+    batches(op, (warmupSeconds * 1e9).toLong)
+    val (n, nanos) = batches(op, (seconds * 1e9).toLong)
     n * 1e9 / nanos
   }
+
+  /** Runs `op` in batches of 1000 for about `limitNanos`: the operations run and the nanoseconds they took. */
+  private[bench] def batches(op: () => Int, limitNanos: Long): (Long, Long) = {
+    var sink = 0
+    val start = System.nanoTime()
+    var n = 0L
+    var now = start
+    while (now - start < limitNanos) {
+      var i = 0
+      while (i < 1000) { sink += op(); i += 1 }
+      n += 1000
+      now = System.nanoTime()
+    }
+    results = sink // keeps the results alive so the JIT cannot drop the work
+    (n, now - start)
+  }
+  @volatile private[bench] var results = 0
 }

@@ -2,7 +2,6 @@ package bench
 
 import java.io.File
 import java.net.InetSocketAddress
-import java.nio.channels.DatagramChannel
 import java.nio.charset.StandardCharsets
 import java.nio.file.Files
 
@@ -21,10 +20,10 @@ import com.typesafe.config.{Config, ConfigFactory}
 
 import apps.datagram.{DatagramDoor, DatagramDoorSettings}
 import apps.zeromq.{PythonEnv, ZeroMqEndpoint, ZeroMqSettings}
+import naogateway.wire.RpcCall
 import naogateway.access.{GatewayAccess, RobotAccess}
 import naogateway.api.{CallResult, GatewayAddresses, LinkStats, RobotEvent, RobotSnapshot, VisionFrame}
 import naogateway.gateway.{Gateway, GatewaySettings}
-import naogateway.wire.{MessageContents, RpcCall}
 import robotmiddleware.cluster.MiddlewareCluster
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotInterface, RobotMiddleware}
 
@@ -120,7 +119,7 @@ object CallPathBench extends Benchmark {
 
   private def demoLoop(spin: String): (Double, Double, Double) = {
     import scala.jdk.CollectionConverters._
-    import Packaged.{freeTcpPort, freeUdpPort}
+    import Packaged.ownPorts
     val log = java.nio.file.Paths.get("target", "bench", s"demo-spin-$spin.log").toAbsolutePath
     Files.createDirectories(log.getParent)
     Files.deleteIfExists(log)
@@ -132,13 +131,7 @@ object CallPathBench extends Benchmark {
     val output = log.resolveSibling(s"demo-spin-$spin.out").toFile
     val builder = new ProcessBuilder(command.asJava).redirectErrorStream(true)
       .redirectOutput(ProcessBuilder.Redirect.to(output))
-    val env = builder.environment()
-    env.put("ROBOTS_GATEWAY_PORT", freeTcpPort().toString)
-    env.put("NAOGATEWAY_GAMECONTROLLER_PORT", freeUdpPort().toString)
-    env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
-    env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
-    env.put("NAOGATEWAY_LOG_FILE", log.toString)
-    env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
+    ownPorts(builder.environment(), log)
     val process = builder.start()
     try {
       def online = Try(Files.readAllLines(log).asScala.count(_.contains("online at"))).getOrElse(0)

@@ -79,21 +79,8 @@ object CodecBench extends Benchmark {
     * warm-up of both), so that both figures are taken under the same load and their ratio can be judged.
     */
   private[bench] def alternating(rounds: Int, sliceSeconds: Double)(a: () => Int, b: () => Int): (Double, Double) = {
-    var sink = 0
     val slice = (sliceSeconds * 1e9).toLong
-    // Ops and nanoseconds of `op` run for about `limit` nanoseconds, in batches of 1000.
-    def run(op: () => Int, limit: Long): (Long, Long) = {
-      val start = System.nanoTime()
-      var n = 0L
-      var now = start
-      while (now - start < limit) {
-        var i = 0
-        while (i < 1000) { sink += op(); i += 1 }
-        n += 1000
-        now = System.nanoTime()
-      }
-      (n, now - start)
-    }
+    def run(op: () => Int, limit: Long): (Long, Long) = BenchSuite.batches(op, limit)
     run(a, 1000000000L)
     run(b, 1000000000L)
     var opsA, nanosA, opsB, nanosB = 0L
@@ -105,7 +92,6 @@ object CodecBench extends Benchmark {
       if (round % 2 == 0) { opsA += n1; nanosA += t1; opsB += n2; nanosB += t2 }
       else { opsA += n2; nanosA += t2; opsB += n1; nanosB += t1 }
     }
-    if (sink == 42) println("") // keeps the results alive so the JIT cannot drop the work
     (opsA * 1e9 / nanosA, opsB * 1e9 / nanosB)
   }
 

@@ -667,13 +667,18 @@ object GatewayBench extends Benchmark {
 
     /** Bytes allocated per `n` (e.g. keep-alives handled) since the start, per kind of thread, busiest first. */
     def allocatedPer(n: Long): String =
-      allocLast.iterator
-        .map { case (id, b) => names(id) -> (b - allocBase.getOrElse(id, 0L)) }
+      perKind(allocLast, allocBase)((kind, bytes) => f"$kind ${bytes.toDouble / math.max(1L, n)}%.0f")
+
+    // Each thread's growth since its base summed by kind of thread, busiest first, each shown by `show`.
+    private def perKind(now: collection.Map[Long, Long], base: collection.Map[Long, Long])(
+        show: (String, Long) => String): String =
+      now.iterator
+        .map { case (id, v) => names(id) -> (v - base.getOrElse(id, 0L)) }
         .toVector
         .groupMapReduce(_._1)(_._2)(_ + _)
         .toVector
         .sortBy(-_._2)
-        .map { case (kind, bytes) => f"$kind ${bytes.toDouble / math.max(1L, n)}%.0f" }
+        .map { case (kind, v) => show(kind, v) }
         .mkString(", ")
 
     private def scan(): Iterator[(Long, Long)] = {
@@ -693,14 +698,7 @@ object GatewayBench extends Benchmark {
 
     /** Percent of one core over `wallNanos` per kind of thread (dispatcher, scheduler, IO selector), busiest first. */
     def breakdown(wallNanos: Long): String =
-      last.iterator
-        .map { case (id, t) => names(id) -> (t - base.getOrElse(id, 0L)) }
-        .toVector
-        .groupMapReduce(_._1)(_._2)(_ + _)
-        .toVector
-        .sortBy(-_._2)
-        .map { case (kind, nanos) => f"$kind ${nanos * 100.0 / wallNanos}%.1f" }
-        .mkString(", ")
+      perKind(last, base)((kind, nanos) => f"$kind ${nanos * 100.0 / wallNanos}%.1f")
   }
 
   // ---------------------------------------------------------------------------------------------- nodes

@@ -64,7 +64,7 @@ object IdleCpuBench extends Benchmark {
     Files.deleteIfExists(log)
     // The package's launcher, as a user starts it (the bench alias stages the package first); without a staged
     // package, the launcher's main on this classpath with the launcher's own logging, not the tests' logback-test.xml.
-    import Packaged.{freeTcpPort, freeUdpPort}
+    import Packaged.ownPorts
     val command =
       if (Packaged.isStaged) Seq(Packaged.bin("naogateway").toString)
       else {
@@ -77,16 +77,7 @@ object IdleCpuBench extends Benchmark {
     val builder = new ProcessBuilder(command.asJava)
       .redirectErrorStream(true)
       .redirectOutput(ProcessBuilder.Redirect.DISCARD)
-    // Ports of their own, so a demo or test running beside the bench is neither disturbed nor counted.
-    val env = builder.environment()
-    env.put("ROBOTS_GATEWAY_PORT", freeTcpPort().toString)
-    env.put("NAOGATEWAY_GAMECONTROLLER_PORT", freeUdpPort().toString)
-    env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
-    env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
-    env.put("NAOGATEWAY_LOG_FILE", log.toString)
-    env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
-    env.put("NAOGATEWAY_DATAGRAM_DOOR_PORT", freeUdpPort().toString)
-    env.put("NAOGATEWAY_WEB_PORT", "0")
+    ownPorts(builder.environment(), log)
     val process = builder.start()
     var stopMs = Double.NaN
     val idle =

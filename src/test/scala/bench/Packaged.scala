@@ -20,6 +20,21 @@ object Packaged {
   def isStaged: Boolean = Files.isExecutable(bin("naogateway"))
 
   /** A TCP port on loopback that was free a moment ago. */
+  /** Gives a demo process started with `env` ports of its own and its log at `log`, so a demo or test running beside
+    * the bench is neither disturbed nor counted.
+    */
+  def ownPorts(env: java.util.Map[String, String], log: java.nio.file.Path): Unit = {
+    env.put("ROBOTS_GATEWAY_PORT", freeTcpPort().toString)
+    env.put("NAOGATEWAY_GAMECONTROLLER_PORT", freeUdpPort().toString)
+    env.put("NAOGATEWAY_ZEROMQ_BIND", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_ZEROMQ_PUBLISH", "tcp://127.0.0.1:*")
+    env.put("NAOGATEWAY_LOG_FILE", log.toString)
+    env.put("NAOGATEWAY_CONTROL", s"127.0.0.1:${freeTcpPort()}")
+    env.put("NAOGATEWAY_DATAGRAM_DOOR_PORT", freeUdpPort().toString)
+    env.put("NAOGATEWAY_WEB_PORT", "0")
+    ()
+  }
+
   def freeTcpPort(): Int = {
     val s = new ServerSocket(0, 1, InetAddress.getLoopbackAddress);
     try s.getLocalPort
