@@ -191,7 +191,13 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
     private def step(s: ModuleStep): Unit = {
       model = s.module
       moduleStats.set(model.stats)
-      s.events.foreach {
+      onAir(s.events)
+    }
+
+    // Every call into the model advances its clock, so any of them may complete a packet's transfer: each step's
+    // events go through here, or a packet the model counted on air never leaves.
+    private def onAir(events: Vector[ModuleEvent]): Unit =
+      events.foreach {
         case ModuleEvent.OnAir(cid, data, _) =>
           connections.get(cid).foreach { c =>
             c.destination.foreach { to =>
@@ -201,7 +207,6 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
           }
         case _ => ()
       }
-    }
 
     // The serial line towards the firmware: everything queued, once the line is free (the model drains it at
     // the line's rate and frees the buffer as it goes).
@@ -211,6 +216,7 @@ final class Gs1500mBridge(config: Gs1500mBridge.Config) extends AutoCloseable {
         val read = model.firmwareRead(t)
         model = read.module
         moduleStats.set(model.stats)
+        onAir(read.events)
         if (read.bytes.nonEmpty) {
           out.write(read.bytes.toArray)
           out.flush()
