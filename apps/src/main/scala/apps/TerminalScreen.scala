@@ -2,7 +2,6 @@ package apps
 
 import java.io.{ByteArrayInputStream, OutputStream}
 import java.nio.charset.StandardCharsets
-import java.util.{Timer, TimerTask}
 
 import scala.jdk.CollectionConverters._
 import scala.sys.process._
@@ -70,9 +69,14 @@ object TerminalScreen {
     } else over(System.out, sys.env.get("TERM"), fixedSize = None)
 
   /** A screen over `out` for a terminal of type `term` (xterm-256color when unknown), of `fixedSize`, or else of the
-    * controlling terminal's size, read again every two seconds (one `stty` process each time).
+    * controlling terminal's size (`readSize`), read once and again on each resize: the terminal signals WINCH to its
+    * foreground process group, which a JVM forked by sbt belongs to, so nothing is read while the size stands still.
     */
-  def over(out: OutputStream, term: Option[String], fixedSize: Option[Size]): TerminalScreen = {
+  def over(
+      out: OutputStream,
+      term: Option[String],
+      fixedSize: Option[Size],
+      readSize: () => Option[Size] = () => controllingTerminalSize()): TerminalScreen = {
     val terminalType = term.map(_.trim).filter(t => t.nonEmpty && t != "dumb").getOrElse("xterm-256color")
     // A terminal of that type writing straight to `out`: no pty of its own, no threads, nothing read from stdin.
     def build(tpe: String): Terminal =
@@ -81,15 +85,29 @@ object TerminalScreen {
      * understands. */
     val known = Try(InfoCmp.getInfoCmp(terminalType)).toOption.exists(_.nonEmpty)
     val terminal = build(if (known) terminalType else "xterm-256color")
-    val controlling = if (fixedSize.isEmpty) controllingTerminalSize() else None
+    val controlling = if (fixedSize.isEmpty) readSize() else None
     @volatile var size = fixedSize.orElse(controlling).getOrElse(DefaultSize)
     // Followed only where it could be read at all: without a controlling terminal the size stays as it is.
-    val timer = if (controlling.isDefined) {
-      val t = new Timer("status-screen-size", true)
-      t.schedule(new TimerTask { def run(): Unit = controllingTerminalSize().foreach(size = _) }, 2000L, 2000L)
-      Some(t)
-    } else None
-    new TerminalScreen(terminal, () => size, () => timer.foreach(_.cancel()))
+    val stop: () => Unit =
+      if (controlling.isDefined) Resized.follow(() => readSize().foreach(size = _)) else () => ()
+    new TerminalScreen(terminal, () => size, stop)
+  }
+
+  /** Who is told when this JVM receives WINCH: one handler for the process, installed on first use, and the screens
+    * that follow it (a screen closed stops following).
+    */
+  private[apps] object Resized {
+    private val followers = new java.util.concurrent.CopyOnWriteArrayList[() => Unit]()
+    private lazy val installed: Boolean = Try {
+      sun.misc.Signal.handle(new sun.misc.Signal("WINCH"), _ => followers.forEach(f => Try(f())))
+    }.isSuccess
+
+    /** Calls `reread` on every WINCH until the returned stop is called. */
+    def follow(reread: () => Unit): () => Unit = {
+      followers.add(reread)
+      if (!installed) followers.remove(reread)
+      () => { followers.remove(reread); () }
+    }
   }
 
   /** The size of the controlling terminal (`stty size` on /dev/tty), if there is one. */

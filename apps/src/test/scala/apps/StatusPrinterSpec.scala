@@ -180,5 +180,40 @@ class StatusPrinterSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike {
       second should not include "game"
       screen.close()
     }
+    "read the controlling terminal's size once, and again only when the terminal signals a resize (WINCH)" in {
+      val reads = new java.util.concurrent.atomic.AtomicInteger()
+      @volatile var current = new Size(100, 20)
+      val out = new ByteArrayOutputStream()
+      val screen = TerminalScreen.over(out, Some("xterm-256color"), fixedSize = None,
+        readSize = () => { reads.incrementAndGet(); Some(current) })
+      reads.get shouldBe 1
+      val frame = Vector("x" * 90)
+      screen.draw(frame)
+      out.toString(StandardCharsets.UTF_8) should include("x" * 90)
+      // Redraws ask nothing of the terminal.
+      (1 to 5).foreach(_ => screen.draw(frame))
+      reads.get shouldBe 1
+      current = new Size(40, 20)
+      val kill = new ProcessBuilder("kill", "-WINCH", ProcessHandle.current().pid().toString).start()
+      kill.waitFor() shouldBe 0
+      val deadline = 10.seconds.fromNow
+      while (reads.get < 2 && deadline.hasTimeLeft()) Thread.sleep(10)
+      reads.get shouldBe 2
+      out.reset()
+      screen.draw(frame)
+      // Fitted to the new width: the line no longer fits whole.
+      out.toString(StandardCharsets.UTF_8) should not include ("x" * 90)
+      screen.close()
+      // A closed screen follows no more resizes: the next WINCH reaches a second screen, not the first.
+      val others = new java.util.concurrent.atomic.AtomicInteger()
+      val second = TerminalScreen.over(new ByteArrayOutputStream(), Some("xterm-256color"), fixedSize = None,
+        readSize = () => { others.incrementAndGet(); Some(current) })
+      new ProcessBuilder("kill", "-WINCH", ProcessHandle.current().pid().toString).start().waitFor() shouldBe 0
+      val again = 10.seconds.fromNow
+      while (others.get < 2 && again.hasTimeLeft()) Thread.sleep(10)
+      others.get shouldBe 2
+      reads.get shouldBe 2
+      second.close()
+    }
   }
 }
