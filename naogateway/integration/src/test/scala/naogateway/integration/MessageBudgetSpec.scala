@@ -179,6 +179,18 @@ class MessageBudgetSpec extends AnyWordSpec with Matchers {
       use shouldBe false
       next.warnings(2 * s).head should include("10.0.0.6:3838 (untrusted, ignored)")
       next.warnings(7 * s) shouldBe empty
+      // Alone, the untrusted one gives no state, and the warning says so rather than naming a chosen one.
+      val alone = GameControllerSources().packet(b2, Some(7), trusted = false, s)._1
+      alone.warnings(2 * s) shouldBe
+        Vector(
+          "no game state: the GameController heard, 10.0.0.6:3838, is untrusted (naogateway.game-controller.trusted-sources)")
+      alone.packet(new InetSocketAddress("10.0.0.6", 41000), Some(8), trusted = false, 2 * s)._1.warnings(
+        3 * s) shouldBe Vector(
+        "no game state: the 2 GameControllers heard are untrusted: 10.0.0.6:3838, 10.0.0.6:41000 (naogateway.game-controller.trusted-sources)")
+      // The chosen one gone quiet while a trusted one sends: it takes over with its next packet, nothing to warn of.
+      val handover = GameControllerSources().packet(a, Some(1), trusted = true, 0L)._1
+        .packet(sameHost, Some(5), trusted = true, 4 * s)._1
+      handover.warnings(6 * s) shouldBe empty
       // Bounded: however many senders, at most MaxSenders are remembered.
       val many = (1 to 50).foldLeft(next)((acc, i) =>
         acc.packet(new InetSocketAddress("10.0.1.1", i), Some(i), trusted = false, i * s)._1)

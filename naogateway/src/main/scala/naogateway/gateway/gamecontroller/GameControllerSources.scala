@@ -41,19 +41,26 @@ private[naogateway] final case class GameControllerSources(
     heard.keys.filter(a => !chosen.contains(a) && live(a, nowNanos)).toVector.sortBy(a =>
       (a.getAddress.getHostAddress, a.getPort))
 
-  /** A warning while more than one GameController is heard: which one gives the game state, which are ignored. */
+  /** A warning while a GameController is heard whose state does not count: which one gives the game state and which are
+    * ignored, or that none gives it because none heard is trusted. A trusted one taking over from a chosen one gone
+    * quiet is no cause: its next packet makes it the chosen one.
+    */
   def warnings(nowNanos: Long): Vector[String] = {
     val rest = others(nowNanos)
-    if (rest.isEmpty) Vector.empty
-    else {
-      def name(a: InetSocketAddress) = s"${a.getAddress.getHostAddress}:${a.getPort}"
-      val from = chosen.filter(live(_, nowNanos)).fold("none of them")(c => name(c))
-      Vector(s"${rest.size + chosen.count(live(_, nowNanos))} GameControllers on this field: game state from $from " +
-        s"only; " +
-        rest.map { a =>
-          val why = if (heard(a).trusted) "trusted, ignored while the other sends" else "untrusted, ignored"
-          s"${name(a)} ($why)"
-        }.mkString(", "))
+    def name(a: InetSocketAddress) = s"${a.getAddress.getHostAddress}:${a.getPort}"
+    def listed = rest.map { a =>
+      val why = if (heard(a).trusted) "trusted, ignored while the other sends" else "untrusted, ignored"
+      s"${name(a)} ($why)"
+    }.mkString(", ")
+    chosen.filter(live(_, nowNanos)) match {
+      case _ if rest.isEmpty => Vector.empty
+      case Some(c) =>
+        Vector(s"${rest.size + 1} GameControllers on this field: game state from ${name(c)} only; $listed")
+      case None if rest.forall(a => !heard(a).trusted) =>
+        val untrusted = if (rest.size == 1) s"the GameController heard, ${name(rest.head)}, is untrusted"
+        else s"the ${rest.size} GameControllers heard are untrusted: ${rest.map(name).mkString(", ")}"
+        Vector(s"no game state: $untrusted (naogateway.game-controller.trusted-sources)")
+      case None => Vector.empty
     }
   }
 }
