@@ -72,7 +72,8 @@ object Doctor {
   def findings(facts: Facts): Vector[Finding] =
     gameControllerFindings(facts.game) ++ robotFindings(facts) ++ signingFindings(facts) ++ clockFindings(
       facts.robots) ++
-      budgetFindings(facts.traffic) ++ recordingFindings(facts.stats.recording, facts.disk) ++ relayFindings(
+      budgetFindings(facts.traffic) ++ recordingFindings(facts.stats.recording, facts.disk) ++ tapFindings(
+        facts.stats.tap) ++ relayFindings(
         facts) ++ configFindings(facts.unknownKeys)
 
   /** The GameController: heard, from a trusted source, in a version the gateway reads, with the gate following it. */
@@ -298,6 +299,21 @@ object Doctor {
             s"check the disk of ${d.directory} (full? removed?)"))
         else Vector.empty
       place ++ failing
+    }
+
+  /** The tap's readers (the recorder, the FU-Remote relay, the live feed): one that fell behind lost what did not fit
+    * its queue. The robots lose nothing by it (the gateway never waits for a reader), but the recording or FU-Remote
+    * then lacks datagrams, which a team finds out only afterwards.
+    */
+  def tapFindings(readers: Vector[naogateway.api.recording.TapReaderStats]): Vector[Finding] =
+    readers.filter(_.dropped > 0).map { r =>
+      val fix = r.reader match {
+        case "recorder" =>
+          "raise naogateway.recording.queue-capacity, record to a faster disk, or give the gateway's machine more room"
+        case "fu-remote-relay" => "give the gateway's machine more room (FU-Remote's own datagrams are not lost)"
+        case _                 => "close clients that cannot keep up, or give the gateway's machine more room"
+      }
+      fail("tap", s"${r.reader} fell behind and lost ${r.dropped} of ${r.delivered + r.dropped} entries", fix)
     }
 
   /** FU-Remote behind the relay: something must listen where the relay sends. */

@@ -54,6 +54,14 @@ class DoctorSpec extends AnyWordSpec with Matchers {
       Doctor.findings(allWell).map(_.line) should contain("ok   robots: 2 of 2 known robot(s) online, 2 configured")
     }
 
+    "find a tap reader that fell behind, and say nothing of one that kept up" in {
+      val tap = Vector(naogateway.api.recording.TapReaderStats("recorder", 9000, 1000),
+        naogateway.api.recording.TapReaderStats("foxglove-feed", 500, 0))
+      problems(allWell.copy(stats = stats.copy(tap = tap))) shouldBe Vector(
+        "FAIL tap: recorder fell behind and lost 1000 of 10000 entries; fix: raise naogateway.recording.queue-capacity, " +
+          "record to a faster disk, or give the gateway's machine more room")
+    }
+
     "find a GameController never heard, and a competition gate that cannot follow it" in {
       val p = problems(allWell.copy(game = heardGame.copy(latest = None)))
       p.exists(_.startsWith("FAIL GameController: no packet heard")) shouldBe true
