@@ -34,15 +34,14 @@ private[naogateway] final class PortReader(
   def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     datagramsIn += 1
     val table = routes.get
-    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread.
-    if (tap.listening) {
-      val robotId = table.byAddress.get(from.getAddress).fold(-1)(_.robotId)
-      tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
-    }
     inboundDatagrams += 1
     inboundBytes += bytes.length
     if (inboundDatagrams >= InboundBatch) caughtUp()
-    Routing.decide(table, bytes, from) match {
+    val decision = Routing.decide(table, bytes, from)
+    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread, with the frame as
+    // decoded here (published before anything acts on it, so it comes before the decisions it leads to).
+    if (tap.listening) tapped(table, decision, bytes, from)
+    decision match {
       case Routing.ToRobot(route, header, contents, size) =>
         // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
         route.target.signatures.map(_.check(bytes, header)) match {
@@ -60,6 +59,17 @@ private[naogateway] final class PortReader(
         rejections.count(kind, from, detail)
         route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(kind))
     }
+  }
+
+  private def tapped(table: Routing.Table[Inlet], decision: Routing.Decision[Inlet], bytes: Array[Byte],
+      from: InetSocketAddress): Unit = {
+    val (robotId, decoded) = decision match {
+      case Routing.ToRobot(route, _, contents, _) => (route.robotId, Some(contents))
+      case Routing.ToGateway(_, contents, _, _, _) =>
+        (table.byAddress.get(from.getAddress).fold(-1)(_.robotId), Some(contents))
+      case _ => (table.byAddress.get(from.getAddress).fold(-1)(_.robotId), None)
+    }
+    tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId, decoded)
   }
 
   private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
