@@ -44,11 +44,16 @@ private[naogateway] final class PortReader(
     decision match {
       case Routing.ToRobot(route, header, contents, size) =>
         // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
-        route.target.signatures.map(_.check(bytes, header)) match {
-          case Some(Left(kind)) =>
+        // (A match, not a map: a map's function would be built for every frame.)
+        val refused = route.target.signatures match {
+          case Some(check) => check.check(bytes, header).left.toOption
+          case None        => None
+        }
+        refused match {
+          case Some(kind) =>
             rejections.count(kind, from)
             if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
-          case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          case None => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
         }
       case Routing.SegmentToRobot(route, segment) =>
         deliver(route, RobotActor.SegmentReceived(segment), from)

@@ -32,8 +32,11 @@ private[naogateway] final class RobotEffects(
   /** One FU-Remote message from the robot, over datagrams or ZeroMQ (counted already): each thing to its owner. */
   def frame(contents: MessageContents, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState =
     // A keep-alive alone (nearly every frame) goes straight to its handling, with no arrivals built.
-    if (RobotFrames.keepAliveOnly(contents))
-      contents.status.fold(s)(keepAlive(_, contents.robotHealth, contents.servoTelemetry, f, c, s, isOnline))
+    // (A match, not a fold: a fold's function would be built for every frame.)
+    if (RobotFrames.keepAliveOnly(contents)) contents.status match {
+      case Some(status) => keepAlive(status, contents.robotHealth, contents.servoTelemetry, f, c, s, isOnline)
+      case None         => s
+    }
     else
       RobotFrames.arrivals(robotId, contents).foldLeft(s) {
         case (st, Arrival.KeepAlive(status, health, servos)) => keepAlive(status, health, servos, f, c, st, isOnline)

@@ -211,13 +211,31 @@ private[naogateway] final case class RobotState(
     val times = link.keepAliveTimes.appended(now, window, keepAliveTimesKept)
     val step = KeepAliveStep.keepAlive(snapshot, sessions, status, health, now, newSessionKeepAlives, servos)
     val restartedSync = if (step.restarted) clockSync.restart else clockSync
-    // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it.
-    val robotTime = status.timestamp.orElse(health.flatMap(_.uptimeMs).map(u => restartedSync.unwrap32(u.toLong)))
-    val sync = robotTime.fold(restartedSync)(restartedSync.add(_, now))
+    // Status.timestamp is the robot's clock (64 bits); RobotHealth.uptimeMs (32 bits) only stands in for it. Matches,
+    // not folds and maps: this runs for every keep-alive, and each function passed would be built for it.
+    val robotTime = status.timestamp match {
+      case None =>
+        health match {
+          case Some(h) =>
+            h.uptimeMs match {
+              case Some(uptime) => Some(restartedSync.unwrap32(uptime.toLong))
+              case None         => None
+            }
+          case None => None
+        }
+      case robotClock => robotClock
+    }
+    val sync = robotTime match {
+      case Some(t) => restartedSync.add(t, now)
+      case None    => restartedSync
+    }
     val clock = sync.estimate
+    val stamped = (robotTime, clock) match {
+      case (Some(t), Some(c)) => Some(c.toGatewayNanos(t))
+      case _                  => None
+    }
     val next = copy(
-      snapshot = step.snapshot.copy(clock = clock,
-        stampedAtNanos = for (t <- robotTime; c <- clock) yield c.toGatewayNanos(t)),
+      snapshot = step.snapshot.copy(clock = clock, stampedAtNanos = stamped),
       sessions = step.sessions,
       introducing = false,
       clockSync = sync,
