@@ -67,15 +67,19 @@ private[naogateway] final class PortReader(
   }
 
   private def tapped(table: Routing.Table[Inlet], decision: Routing.Decision[Inlet], bytes: Array[Byte],
-      from: InetSocketAddress): Unit = {
-    val (robotId, decoded) = decision match {
-      case Routing.ToRobot(route, _, contents, _) => (route.robotId, Some(contents))
-      case Routing.ToGateway(_, contents, _, _, _) =>
-        (table.byAddress.get(from.getAddress).fold(-1)(_.robotId), Some(contents))
-      case _ => (table.byAddress.get(from.getAddress).fold(-1)(_.robotId), None)
+      from: InetSocketAddress): Unit =
+    decision match {
+      case Routing.ToRobot(route, _, contents, _) =>
+        tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, route.robotId,
+          Some(contents))
+      case other =>
+        val decoded = other match {
+          case Routing.ToGateway(_, contents, _, _, _) => Some(contents)
+          case _                                       => None
+        }
+        tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes,
+          table.byAddress.get(from.getAddress).fold(-1)(_.robotId), decoded)
     }
-    tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId, decoded)
-  }
 
   private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
     if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)
