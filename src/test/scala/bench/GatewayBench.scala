@@ -85,8 +85,8 @@ object GatewayBench extends Benchmark {
   private val RttGapNanos = 1000000L
 
   private val IngestRobots = 256
-  // Unmeasured blast before each window: in a fresh JVM the first blast's path is still being compiled after 1 s
-  // (66 k/s in its window against 118 k/s for the same blast two gateways later, load 2.8).
+  // Unmeasured blast before each window. 3 s rather than 1 s: the first blast in a fresh JVM measured far below the
+  // later ones (66 k/s against 118 k/s for the same blast two gateways later, load 2.8); with 3 s it still does.
   private val IngestWarmupSeconds = 3.0
   private val IngestSeconds = 5.0
 
