@@ -73,8 +73,8 @@ private[naogateway] object HeartBeatActor {
     @volatile private var wanted = true
 
     /** A keep-alive arrived at `now` (on `clock`); true when the heartbeat is to be told with a message. The count is
-      * written before the wish is read, and the heartbeat writes its wish before it reads the count: a keep-alive is
-      * either seen in the count or told.
+      * written before the wish is read: a keep-alive counted after the heartbeat wished to be told is told, one counted
+      * just before is found in the count when the heartbeat's probe times out.
       */
     def seen(now: Long): Boolean = {
       lastNanos = now

@@ -98,7 +98,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     "stay online while keep-alives arrive, and recover when a probe is answered" in {
       val reports = createTestProbe[Any]()
       val robot = new Robot
-      val (heartbeat, _) = acknowledging(reports, online = true, robot)
+      // A quality window longer than the test: the link quality is not judged here (the last test judges it).
+      val (heartbeat, _) = acknowledging(reports, online = true, robot, settings.copy(qualityWindow = 10.seconds))
       reports.expectMessage(CameOnline)
       // Counted, not told: the heartbeat reads the count when its quiet check comes due.
       (1 to 10).foreach { _ =>
