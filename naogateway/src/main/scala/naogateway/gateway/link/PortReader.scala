@@ -34,22 +34,26 @@ private[naogateway] final class PortReader(
   def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     datagramsIn += 1
     val table = routes.get
-    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread.
-    if (tap.listening) {
-      val robotId = table.byAddress.get(from.getAddress).fold(-1)(_.robotId)
-      tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, robotId)
-    }
     inboundDatagrams += 1
     inboundBytes += bytes.length
     if (inboundDatagrams >= InboundBatch) caughtUp()
-    Routing.decide(table, bytes, from) match {
+    val decision = Routing.decide(table, bytes, from)
+    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread, with the frame as
+    // decoded here (published before anything acts on it, so it comes before the decisions it leads to).
+    if (tap.listening) tapped(table, decision, bytes, from)
+    decision match {
       case Routing.ToRobot(route, header, contents, size) =>
         // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
-        route.target.signatures.map(_.check(bytes, header)) match {
-          case Some(Left(kind)) =>
+        // (A match, not a map: a map's function would be built for every frame.)
+        val refused = route.target.signatures match {
+          case Some(check) => check.check(bytes, header).left.toOption
+          case None        => None
+        }
+        refused match {
+          case Some(kind) =>
             rejections.count(kind, from)
             if (route.target.backlog.tryAdd()) route.target.actor ! RobotActor.DatagramRejected(kind)
-          case _ => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
+          case None => deliver(route, RobotActor.FrameReceived(contents, header.form, size), from)
         }
       case Routing.SegmentToRobot(route, segment) =>
         deliver(route, RobotActor.SegmentReceived(segment), from)
@@ -61,6 +65,21 @@ private[naogateway] final class PortReader(
         route.foreach(r => if (r.target.backlog.tryAdd()) r.target.actor ! RobotActor.DatagramRejected(kind))
     }
   }
+
+  private def tapped(table: Routing.Table[Inlet], decision: Routing.Decision[Inlet], bytes: Array[Byte],
+      from: InetSocketAddress): Unit =
+    decision match {
+      case Routing.ToRobot(route, _, contents, _) =>
+        tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, route.robotId,
+          Some(contents))
+      case other =>
+        val decoded = other match {
+          case Routing.ToGateway(_, contents, _, _, _) => Some(contents)
+          case _                                       => None
+        }
+        tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes,
+          table.byAddress.get(from.getAddress).fold(-1)(_.robotId), decoded)
+    }
 
   private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
     if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)

@@ -62,8 +62,8 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   // One file per half of a game (GameFiles), when recording.game-files is on.
   private var games = GameFiles(settings.gameQuiet.toNanos)
   private var nextAttempt = Long.MinValue
-  private val batch = new java.util.ArrayList[Tapped](1024)
-  // The writer's pause when it finds the queue empty (Recorder.nextPark).
+  private val batch = new java.util.ArrayList[Tapped](Recorder.Batch)
+  // The writer's pause after a batch, to gather the next (Recorder.nextPark).
   private var park = Recorder.MinParkNanos
 
   private def writeLoop(): Unit = {
@@ -73,19 +73,22 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
         // Asked to stop: off the tap first (nothing more comes), then what waits is written.
         if (!running && !closing) { queue.close(); closing = true }
         batch.clear()
-        queue.drainTo(batch, 1024)
+        queue.drainTo(batch, Recorder.Batch)
         val now = System.nanoTime()
         file.foreach(f => if (f.due(now)) rotate() else if (f.flushDue(now)) flush(f, now))
         if (settings.gameFiles && gameSteps(games.tick(now))) rotate()
-        park = Recorder.nextPark(park, batch.size)
         if (batch.isEmpty) {
-          // Polling, not blocking on the queue: an offer then never has to wake this thread (a system call per entry).
-          // The pause grows while the queue stays empty, so an idle gateway's writer wakes a few times a second.
-          if (!closing) LockSupport.parkNanos(park)
+          // Nothing waits: the first entry offered wakes this thread (one wake-up, not one per entry), or the time
+          // passes after which a flush, a rotation or a game file's end may be due.
+          if (!closing) queue.await(Recorder.IdleWaitNanos)
         } else {
           var i = 0
           while (i < batch.size) { write(batch.get(i)); i += 1 }
           publishWritten()
+          // A pause to gather the next entries: longer while they trickle in, so a busy writer wakes a bounded number
+          // of times a second; none after a full batch (more wait already).
+          park = Recorder.nextPark(park, batch.size)
+          if (!closing && batch.size < Recorder.Batch) LockSupport.parkNanos(park)
         }
       }
     } catch { case NonFatal(e) => log.error("Recording stopped: the writer failed", e) }
@@ -251,10 +254,12 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
       }
     }
 
-    /** A robot's frame on its decoded channels, and a reply as a decision of its own. */
+    /** A robot's frame on its decoded channels, and a reply as a decision of its own: decoded by the port's reader
+      * already (or here, for an entry that comes without it).
+      */
     private def decoded(d: Tapped.Datagram, time: Long): Unit =
-      MessageContents.decodeFrame(d.bytes) match {
-        case Right((_, c)) =>
+      d.decoded.orElse(MessageContents.decodeFrame(d.bytes).toOption.map(_._2)) match {
+        case Some(c) =>
           val ids = robotChannels(c.robotId)
           if (ids ne null) {
             c.status.foreach { s =>
@@ -273,7 +278,7 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
               DecisionJson.reply(c.robotId, RpcReply.fromProto(r), time).getBytes(
                 java.nio.charset.StandardCharsets.UTF_8))
           }
-        case Left(_) => () // kept raw; the gateway counted the refusal
+        case None => () // kept raw; the gateway counted the refusal
       }
   }
 
@@ -313,22 +318,30 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private def addressText(a: InetSocketAddress): Array[Byte] = RecordEncoder.addressBytes(a)
 }
 
-/** The writer's polling pace. */
+/** The writer's pace. */
 private[recording] object Recorder {
 
-  /** The shortest pause, while entries arrive in numbers. */
+  /** The most entries taken from the queue at once. */
+  val Batch: Int = 1024
+
+  /** The shortest pause after a batch, while entries arrive in numbers. */
   val MinParkNanos: Long = 2000000L
 
-  /** The longest pause, once the queue stays empty: the queue (65536 entries by default) holds what arrives meanwhile
-    * at over a million entries a second, more than the port can read.
+  /** The longest pause after a batch, while entries trickle in: the writer then wakes at most 20 times a second. The
+    * queue (65536 entries by default) holds what arrives meanwhile at over a million entries a second, more than the
+    * port can read.
     */
   val MaxParkNanos: Long = 50000000L
 
-  /** The pause after a drain that took `drained` entries: doubled when the queue was empty (up to [[MaxParkNanos]]),
-    * back to [[MinParkNanos]] when a drain took a quarter of a batch or more (traffic picked up), else kept.
+  /** How long the writer waits on an empty queue when no entry comes: the flush (at least once a second), rotation and
+    * the end of a game's half are looked at when it wakes.
+    */
+  val IdleWaitNanos: Long = 1000000000L
+
+  /** The pause after a batch of `drained` entries: back to [[MinParkNanos]] for a quarter of a full batch or more
+    * (traffic picked up), else doubled up to [[MaxParkNanos]].
     */
   def nextPark(park: Long, drained: Int): Long =
-    if (drained == 0) math.min(park * 2, MaxParkNanos)
-    else if (drained >= 256) MinParkNanos
-    else park
+    if (drained >= Batch / 4) MinParkNanos
+    else math.min(park * 2, MaxParkNanos)
 }

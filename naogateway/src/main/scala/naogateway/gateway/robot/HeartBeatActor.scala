@@ -1,6 +1,9 @@
 package naogateway.gateway.robot
 
+import java.util.concurrent.TimeUnit
+
 import scala.collection.immutable.Queue
+import scala.concurrent.duration.FiniteDuration
 
 import akka.actor.typed.scaladsl.{Behaviors, TimerScheduler}
 import akka.actor.typed.{ActorRef, Behavior}
@@ -13,13 +16,18 @@ import naogateway.gateway.HeartbeatSettings
 /** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. Its
   * probes go straight to the robot's sender (as the stream's segments do), which it tells when each was answered; its
   * verdicts and figures go to the robot actor.
+  *
+  * The keep-alives reach it through [[KeepAlives]], a count and a time the robot actor writes and the heartbeat reads
+  * on its own timers, not as a message each: at full load a message and a re-armed timer per keep-alive were a large
+  * share of the port loop's work. Only while the heartbeat waits for the robot (probing or offline) does a keep-alive
+  * also send it [[KeepAliveSeen]], so that it comes back online at once.
   */
 private[naogateway] object HeartBeatActor {
 
   /** What the heartbeat accepts. */
   sealed trait Command
 
-  /** A keep-alive of the robot arrived. */
+  /** A keep-alive was counted in [[KeepAlives]] while the heartbeat asked to be told (it waits for the robot). */
   private[naogateway] case object KeepAliveSeen extends Command
 
   /** Any reply with one of this heartbeat's call ids arrived (the probe's error reply proves the robot is there). */
@@ -30,7 +38,7 @@ private[naogateway] object HeartBeatActor {
 
   private case object QuietCheck extends Command
   private case object ProbeTimeout extends Command
-  private case object QualityTick extends Command
+  private[robot] case object QualityTick extends Command
   private case object BackoffOver extends Command
 
   /** What the heartbeat tells its robot actor. */
@@ -55,13 +63,42 @@ private[naogateway] object HeartBeatActor {
   val ProbeModule: String = "heartbeat"
   val ProbeMethod: String = "probe"
 
-  /** Keep-alives per tick over the quality window, the quality last reported, and how long it has looked good. */
-  private final case class Quality(ticks: Queue[Int], current: Int, reported: LinkQuality, goodTicks: Int = 0) {
-    def seen: Quality = copy(current = current + 1)
+  /** The robot's keep-alives as its robot actor counts them (one writer) and its heartbeat reads them: how many so far,
+    * when the last one arrived (on `clock`, nanoseconds), and whether the heartbeat wants a [[KeepAliveSeen]] for each
+    * (it does while it waits for the robot). Shared by the two actors of one robot, outliving the heartbeat's restarts.
+    */
+  final class KeepAlives(val clock: () => Long = () => System.nanoTime()) {
+    @volatile private var seenCount = 0L
+    @volatile private var lastNanos = 0L
+    @volatile private var wanted = true
 
-    def tick(settings: HeartbeatSettings, report: ActorRef[Report]): Quality = {
+    /** A keep-alive arrived at `now` (on `clock`); true when the heartbeat is to be told with a message. The count is
+      * written before the wish is read: a keep-alive counted after the heartbeat wished to be told is told, one counted
+      * just before is found in the count when the heartbeat's probe times out.
+      */
+    def seen(now: Long): Boolean = {
+      lastNanos = now
+      seenCount = seenCount + 1
+      wanted
+    }
+
+    /** Keep-alives so far. */
+    def count: Long = seenCount
+
+    /** When the latest keep-alive arrived (on `clock`). */
+    def last: Long = lastNanos
+
+    /** Whether a keep-alive is to be told with a message; the heartbeat's alone to set. */
+    private[HeartBeatActor] def wantMessages(on: Boolean): Unit = wanted = on
+  }
+
+  /** Keep-alives per tick over the quality window, the quality last reported, and how long it has looked good. */
+  private final case class Quality(ticks: Queue[Int], counted: Long, reported: LinkQuality, goodTicks: Int = 0) {
+
+    /** One tick with the keep-alives counted since the last (`count` the count in [[KeepAlives]] now). */
+    def tick(settings: HeartbeatSettings, report: ActorRef[Report], count: Long): Quality = {
       val windowTicks = math.max(2, (settings.qualityWindow / settings.keepAliveInterval).toInt)
-      val shifted = ticks.enqueue(current)
+      val shifted = ticks.enqueue((count - counted).toInt)
       val trimmed = if (shifted.size > windowTicks) shifted.dequeue._2 else shifted
       val ratio = trimmed.sum.toDouble / windowTicks
       val good = if (ratio > settings.goodAbove) goodTicks + 1 else 0
@@ -73,14 +110,16 @@ private[naogateway] object HeartBeatActor {
         else if (reported == LinkQuality.Degraded && good >= windowTicks) LinkQuality.Good
         else reported
       if (next != reported) report ! QualityChanged(next)
-      Quality(trimmed, 0, next, good)
+      Quality(trimmed, count, next, good)
     }
 
     def online: Quality = if (reported == LinkQuality.Offline) copy(reported = LinkQuality.Good) else this
   }
 
   private object Quality {
-    val initial: Quality = Quality(Queue.empty, 0, LinkQuality.Offline)
+
+    /** Nothing judged yet; keep-alives counted from `count` on. */
+    def initial(count: Long): Quality = Quality(Queue.empty, count, LinkQuality.Offline)
   }
 
   private case object QuietKey
@@ -88,27 +127,29 @@ private[naogateway] object HeartBeatActor {
   private case object QualityKey
   private case object BackoffKey
 
-  /** A heartbeat reporting to `report` and probing through the robot's `sender`; `online` says whether the robot has
-    * just been heard.
+  /** A heartbeat reporting to `report` and probing through the robot's `sender`, reading the robot's `keepAlives`;
+    * `online` says whether the robot has just been heard.
     */
   def apply(settings: HeartbeatSettings, report: ActorRef[Report], sender: ActorRef[NoResponseActor.Command],
-      online: Boolean): Behavior[Command] =
+      online: Boolean, keepAlives: KeepAlives): Behavior[Command] =
     Behaviors.setup { _ =>
       Behaviors.withTimers { timers =>
-        val h = new HeartBeat(settings, report, sender, timers)
+        // Told of every keep-alive until it is online (and counts them from here on).
+        keepAlives.wantMessages(true)
+        val h = new HeartBeat(settings, report, sender, timers, keepAlives)
         timers.startTimerWithFixedDelay(QualityKey, QualityTick, settings.keepAliveInterval)
         if (online) {
-          val running = h.online(Quality.initial)
+          val running = h.online(Quality.initial(keepAlives.count))
           report ! CameOnline
           running
-        } else h.probe(chance = 1, wasOnline = false, Quality.initial)
+        } else h.probe(chance = 1, wasOnline = false, Quality.initial(keepAlives.count))
       }
     }
 
   // Every step arms its timers before it reports: whoever reacts to a report (a test that then moves manual time,
   // say) finds the timers running already, so no timer starts late by the time that reaction took.
   private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report],
-      sender: ActorRef[NoResponseActor.Command], timers: TimerScheduler[Command]) {
+      sender: ActorRef[NoResponseActor.Command], timers: TimerScheduler[Command], keepAlives: KeepAlives) {
     // A random start per incarnation, as the response actor's: a late answer to a probe of an earlier incarnation
     // must not pass for an answer to this one's (protocol.md 7.1, a call id is never sent twice).
     private var nextProbeId = CallId.randomStart()
@@ -120,27 +161,52 @@ private[naogateway] object HeartBeatActor {
     private var silentRounds = 0
     private var wanted = false
 
-    private def armQuietCheck(): Unit = timers.startSingleTimer(QuietKey, QuietCheck, settings.quietAfter)
+    private val quietNanos = settings.quietAfter.toNanos
+    // The keep-alive count when the quiet check was armed (online) or the wait for the robot began (probing, offline):
+    // read before the heartbeat asks to be told of keep-alives, so each later one is either counted beyond it or told.
+    private var countAtCheck = keepAlives.count
+
+    /** The quiet check, `quietAfter` after the latest keep-alive (or from now when none came since `countAtCheck`). */
+    private def armQuietCheck(): Unit = {
+      val count = keepAlives.count
+      val wait =
+        if (count == countAtCheck) quietNanos
+        else math.max(1000000L, keepAlives.last + quietNanos - keepAlives.clock())
+      countAtCheck = count
+      timers.startSingleTimer(QuietKey, QuietCheck, FiniteDuration(wait, TimeUnit.NANOSECONDS))
+    }
+
+    /** Whether a keep-alive was counted since the wait began: one that came as the wait began may not have been told.
+      */
+    private def heard: Boolean = keepAlives.count != countAtCheck
 
     def online(q: Quality): Behavior[Command] = {
+      keepAlives.wantMessages(false)
+      countAtCheck = keepAlives.count
       armQuietCheck()
       val quality = q.online
       onlineLoop(quality)
     }
 
     // The quality counted so far is held in a local `q` and the loop answers `Behaviors.same`: a new behaviour for
-    // each keep-alive would re-wrap the actor's interceptors (its timers, its supervision) every time.
+    // each tick would re-wrap the actor's interceptors (its timers, its supervision) every time.
     private def onlineLoop(q0: Quality): Behavior[Command] = {
       var q = q0
       Behaviors.receiveMessage {
-        case KeepAliveSeen =>
-          armQuietCheck()
-          q = q.seen
-          Behaviors.same
+        case KeepAliveSeen => Behaviors.same // told just before the wish was withdrawn: counted already
         case QualityTick =>
-          q = q.tick(settings, report)
+          q = q.tick(settings, report, keepAlives.count)
           Behaviors.same
-        case QuietCheck             => probe(chance = 1, wasOnline = true, q)
+        case QuietCheck =>
+          // Keep-alives since the check was armed: quiet only `quietAfter` after the latest of them.
+          if (keepAlives.count != countAtCheck) {
+            armQuietCheck()
+            Behaviors.same
+          } else {
+            // A keep-alive from now on is told (or seen in the count by the probe's timeout, if it came just now).
+            keepAlives.wantMessages(true)
+            probe(chance = 1, wasOnline = true, q)
+          }
         case ProbeNow | BackoffOver => Behaviors.same
         case ProbeAnswered(id) =>
           if (answered(id)) reportRoundTrip()
@@ -192,11 +258,13 @@ private[naogateway] object HeartBeatActor {
     }
 
     private def probing(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = Behaviors.receiveMessage {
-      case KeepAliveSeen => backOnline(wasOnline, q.seen, probeAnswered = false)
+      // Told only of a keep-alive counted after the wait began (the robot actor's first may even precede this actor).
+      case KeepAliveSeen => backOnline(wasOnline, q, probeAnswered = false)
       case ProbeAnswered(id) =>
         if (answered(id)) backOnline(wasOnline, q, probeAnswered = true) else Behaviors.same
       case ProbeTimeout =>
-        if (chance < settings.chances) probe(chance + 1, wasOnline, q)
+        if (heard) backOnline(wasOnline, q, probeAnswered = false)
+        else if (chance < settings.chances) probe(chance + 1, wasOnline, q)
         else {
           silentRounds += 1
           wanted = false
@@ -205,9 +273,9 @@ private[naogateway] object HeartBeatActor {
             report ! WentOffline(
               s"no keep-alive for ${settings.quietAfter.toMillis} ms and ${settings.chances} unanswered probes")
           }
-          offline(q.copy(reported = LinkQuality.Offline, ticks = Queue.empty, current = 0))
+          offline(q.copy(reported = LinkQuality.Offline, ticks = Queue.empty, counted = countAtCheck))
         }
-      case QualityTick                         => probing(chance, wasOnline, q.tick(settings, report))
+      case QualityTick                         => probing(chance, wasOnline, q.tick(settings, report, keepAlives.count))
       case QuietCheck | ProbeNow | BackoffOver => Behaviors.same
     }
 
@@ -217,7 +285,7 @@ private[naogateway] object HeartBeatActor {
     private def offline(q: Quality): Behavior[Command] = Behaviors.receiveMessage {
       case KeepAliveSeen =>
         timers.cancel(BackoffKey)
-        backOnline(wasOnline = false, q.seen, probeAnswered = false)
+        backOnline(wasOnline = false, q, probeAnswered = false)
       case ProbeNow =>
         if (timers.isTimerActive(BackoffKey)) {
           wanted = true

@@ -173,13 +173,15 @@ object RobotActor {
         case v: HeartBeatActor.Verdict => Verdict(v)
         case r                         => HeartbeatReport(r)
       }
-      val heartbeat = child(HeartBeatActor(heartbeatSettings, reports, sender, online = false), "heartbeat")
+      val keepAlives = new HeartBeatActor.KeepAlives
+      val heartbeat =
+        child(HeartBeatActor(heartbeatSettings, reports, sender, online = false, keepAlives), "heartbeat")
       val response = child(ResponseActor(robotId, settings.calls, context.self, sender, online = false), "response")
-      if (heard) heartbeat ! HeartBeatActor.KeepAliveSeen
+      if (heard && keepAlives.seen(System.nanoTime())) heartbeat ! HeartBeatActor.KeepAliveSeen
       forgetAfter(settings.discovery.forgetUnreachedAfter, "not online")
       val kept = (heartbeatSettings.qualityWindow / heartbeatSettings.keepAliveInterval).toInt + 2
       val subscribers = if (wiring.gateway.isDefined) None else Some(wiring.subscribers)
-      unreached(Family(heartbeat, sender, response, zeroMq),
+      unreached(Family(heartbeat, keepAlives, sender, response, zeroMq),
         RobotState.initial(robotId, at, ClockSync(settings.clockSync), subscribers, discovered, kept, signs))
     }
 

@@ -31,27 +31,36 @@ private[naogateway] final class RobotEffects(
 
   /** One FU-Remote message from the robot, over datagrams or ZeroMQ (counted already): each thing to its owner. */
   def frame(contents: MessageContents, f: Family, c: Option[Children], s: RobotState, isOnline: Boolean): RobotState =
-    RobotFrames.arrivals(robotId, contents).foldLeft(s) {
-      case (st, Arrival.KeepAlive(status, health, servos)) => keepAlive(status, health, servos, f, c, st, isOnline)
-      case (st, Arrival.OptionsPushed(list))               => optionsPushed(list, f, st)
-      case (st, Arrival.Reply(CallId.Owner.Response, reply, _)) =>
-        f.response ! ResponseActor.ReplyReceived(reply)
-        st
-      case (st, Arrival.Reply(CallId.Owner.Heartbeat, _, id)) =>
-        f.heartbeat ! HeartBeatActor.ProbeAnswered(id)
-        st
-      case (st, Arrival.Reply(owner, _, id)) => count(st, Rejection.UnknownCallId, s"call id $id of $owner")
-      case (st, Arrival.Vision(frame)) =>
-        c.foreach(_.vision ! VisionActor.FrameReceived(frame))
-        st
-      case (st, Arrival.Refused(kind, detail)) => count(st, kind, detail)
+    // A keep-alive alone (nearly every frame) goes straight to its handling, with no arrivals built.
+    // (A match, not a fold: a fold's function would be built for every frame.)
+    if (RobotFrames.keepAliveOnly(contents)) contents.status match {
+      case Some(status) => keepAlive(status, contents.robotHealth, contents.servoTelemetry, f, c, s, isOnline)
+      case None         => s
     }
+    else
+      RobotFrames.arrivals(robotId, contents).foldLeft(s) {
+        case (st, Arrival.KeepAlive(status, health, servos)) => keepAlive(status, health, servos, f, c, st, isOnline)
+        case (st, Arrival.OptionsPushed(list))               => optionsPushed(list, f, st)
+        case (st, Arrival.Reply(CallId.Owner.Response, reply, _)) =>
+          f.response ! ResponseActor.ReplyReceived(reply)
+          st
+        case (st, Arrival.Reply(CallId.Owner.Heartbeat, _, id)) =>
+          f.heartbeat ! HeartBeatActor.ProbeAnswered(id)
+          st
+        case (st, Arrival.Reply(owner, _, id)) => count(st, Rejection.UnknownCallId, s"call id $id of $owner")
+        case (st, Arrival.Vision(frame)) =>
+          c.foreach(_.vision ! VisionActor.FrameReceived(frame))
+          st
+        case (st, Arrival.Refused(kind, detail)) => count(st, kind, detail)
+      }
 
   /** A keep-alive: the heartbeat hears of it (unless it only introduced the robot), a new session is re-synced. */
   private def keepAlive(status: Status, health: Option[RobotHealth], servos: Option[ServoTelemetry], f: Family,
       c: Option[Children], s0: RobotState, isOnline: Boolean): RobotState = {
-    val (s, seen) = s0.keepAliveSeen(status, health, System.nanoTime(), window, settings.newSessionKeepAlives, servos)
-    if (seen.heard) f.heartbeat ! HeartBeatActor.KeepAliveSeen
+    val now = System.nanoTime()
+    val (s, seen) = s0.keepAliveSeen(status, health, now, window, settings.newSessionKeepAlives, servos)
+    // Counted for the heartbeat, which reads the count on its own timers; told only while it waits for the robot.
+    if (seen.heard && f.keepAlives.seen(now)) f.heartbeat ! HeartBeatActor.KeepAliveSeen
     val resynced = if (seen.restarted) resync(f, c, s, isOnline) else s
     publish(resynced, RobotStatusUpdated(resynced.view(isOnline)))
   }
@@ -148,10 +157,11 @@ private[naogateway] final class RobotEffects(
 private[naogateway] object RobotEffects {
 
   /** The children that live as long as the robot actor (the vision and stream actors come with the first contact);
-    * `responder` is the response actor.
+    * `responder` is the response actor, `keepAlives` what the robot actor counts for the heartbeat.
     */
   final case class Family(
       heartbeat: ActorRef[HeartBeatActor.Command],
+      keepAlives: HeartBeatActor.KeepAlives,
       sender: ActorRef[NoResponseActor.Command],
       responder: ActorRef[Any],
       zeroMq: Option[ActorRef[ZeroMqRobotLink.Command]]

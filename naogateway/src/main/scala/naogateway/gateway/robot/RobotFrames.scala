@@ -39,11 +39,15 @@ private[naogateway] object RobotFrames {
     final case class Refused(kind: Rejection, detail: String) extends Arrival
   }
 
+  /** Whether `contents` carries nothing but (at most) a keep-alive: nearly every frame a robot sends. */
+  def keepAliveOnly(contents: MessageContents): Boolean =
+    contents.debuggingCommands.isEmpty && contents.rpcResponse.isEmpty && contents.havimoRegions.isEmpty &&
+      contents.havimoGrid.isEmpty
+
   /** What `contents` from robot `robotId` carries, in the order the robot actor hands it on. */
   def arrivals(robotId: Int, contents: MessageContents): Vector[Arrival] =
     // A frame that carries only a keep-alive (nearly every frame a robot sends) costs no collections of empty parts.
-    if (contents.debuggingCommands.isEmpty && contents.rpcResponse.isEmpty && contents.havimoRegions.isEmpty &&
-      contents.havimoGrid.isEmpty)
+    if (keepAliveOnly(contents))
       contents.status.fold(Vector.empty[Arrival])(s =>
         Vector(Arrival.KeepAlive(s, contents.robotHealth, contents.servoTelemetry)))
     else allArrivals(robotId, contents)

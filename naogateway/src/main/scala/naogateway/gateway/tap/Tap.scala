@@ -1,13 +1,14 @@
 package naogateway.gateway.tap
 
 import java.net.InetSocketAddress
-import java.util.concurrent.atomic.{AtomicLong, AtomicLongArray, AtomicReferenceArray}
+import java.util.concurrent.atomic.{AtomicLong, AtomicLongArray, AtomicReference, AtomicReferenceArray}
 import java.util.concurrent.locks.LockSupport
 
 import org.slf4j.LoggerFactory
 
 import naogateway.api.recording.{Decision, GatewayTap, TapReaderStats, TapSubscription, Tapped}
 import naogateway.proto.RecordedPort
+import naogateway.wire.MessageContents
 import naogateway.transport.RateLimitedLog
 
 /** The gateway's one publisher of what crosses its ports: the port's reader, the outbox and the gateway publish here
@@ -22,14 +23,16 @@ private[naogateway] final class Tap extends GatewayTap {
   /** Whether any reader listens: publishers that build something only for the tap ask first. */
   def listening: Boolean = current.length != 0
 
-  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none).
-    * `bytes` is shared with the readers: the caller must not change it afterwards.
+  /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none);
+    * `decoded` the frame as the gateway decoded it, if it did. `bytes` is shared with the readers: the caller must not
+    * change it afterwards.
     */
   def datagram(port: RecordedPort, received: Boolean, source: InetSocketAddress, destination: InetSocketAddress,
-      bytes: Array[Byte], robotId: Int): Unit = {
+      bytes: Array[Byte], robotId: Int, decoded: Option[MessageContents] = None): Unit = {
     val readers = current
     if (readers.length != 0)
-      publish(readers, Tapped.Datagram(System.nanoTime(), port, received, source, destination, bytes, robotId))
+      publish(readers,
+        Tapped.Datagram(System.nanoTime(), port, received, source, destination, bytes, robotId, decoded))
   }
 
   /** A decision of the gateway. */
@@ -64,14 +67,15 @@ private[naogateway] object Tap {
     private val queue = new RingQueue[Tapped](capacity)
     private val delivered = new AtomicLong
     private val dropped = new AtomicLong
-    // The reader's thread while it waits in [[await]]: an offer then wakes it; otherwise an offer costs no wake-up.
-    @volatile private var waiter: Thread = null
+    // The reader's thread while it waits in [[await]]: the first offer then takes it and wakes it (the offers after it
+    // find none); while the reader is not waiting an offer costs one volatile read and no wake-up.
+    private val waiter = new AtomicReference[Thread]
     @volatile private var open = true
 
     private[tap] def offer(entry: Tapped): Unit =
       if (queue.offer(entry)) {
-        val w = waiter
-        if (w ne null) LockSupport.unpark(w)
+        val w = waiter.get
+        if ((w ne null) && waiter.compareAndSet(w, null)) LockSupport.unpark(w)
       } else {
         val n = dropped.incrementAndGet()
         if (RateLimitedLog.due(n))
@@ -101,10 +105,10 @@ private[naogateway] object Tap {
       * when entries wait.
       */
     def await(nanos: Long): Unit = {
-      waiter = Thread.currentThread()
+      waiter.set(Thread.currentThread())
       // After the waiter is set: an offer before this check is seen here, one after it unparks.
       if (queue.isEmpty && open) LockSupport.parkNanos(nanos)
-      waiter = null
+      waiter.set(null)
     }
 
     def stats: TapReaderStats = TapReaderStats(name, delivered.get, dropped.get)
@@ -113,7 +117,7 @@ private[naogateway] object Tap {
     def close(): Unit = {
       open = false
       tap.remove(this)
-      val w = waiter
+      val w = waiter.getAndSet(null)
       if (w ne null) LockSupport.unpark(w)
     }
   }

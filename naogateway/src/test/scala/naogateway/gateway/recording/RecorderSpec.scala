@@ -147,11 +147,11 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
       encoder.bytes.take(encoder.message(health)) shouldBe health.toByteArray
     }
 
-    "pause its writer longer while the queue stays empty, and briefly again once entries arrive in numbers" in {
+    "pause its writer longer while entries trickle in, and briefly again once they arrive in numbers" in {
       import Recorder.{MaxParkNanos, MinParkNanos, nextPark}
-      val idle = Iterator.iterate(MinParkNanos)(nextPark(_, 0)).take(20).toVector
-      idle.sliding(2).foreach { case Vector(a, b) => b should be >= a; case _ => () }
-      idle.last shouldBe MaxParkNanos
+      val trickle = Iterator.iterate(MinParkNanos)(nextPark(_, 3)).take(20).toVector
+      trickle.sliding(2).foreach { case Vector(a, b) => b should be >= a; case _ => () }
+      trickle.last shouldBe MaxParkNanos
       nextPark(MaxParkNanos, 3) shouldBe MaxParkNanos // a trickle keeps the long pause
       nextPark(MaxParkNanos, 1024) shouldBe MinParkNanos // a full batch: traffic picked up
       /* The queue's default capacity holds what the fastest ingest measured (550 k/s) delivers during the longest

@@ -16,22 +16,39 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
   private val manualTime = ManualTime()
   private val settings = HeartbeatSettings(200.millis, 400.millis, 150.millis, 3, 2.seconds, 0.8, 0.9)
 
-  /** Tells `handled` of each keep-alive once the heartbeat has handled it, timers included. */
-  private final class AckKeepAlives(handled: ActorRef[Command]) extends BehaviorInterceptor[Command, Command] {
+  /** Tells `handled` of each quality tick once the heartbeat has handled it (it reads the keep-alive count then). */
+  private final class AckTicks(handled: ActorRef[Command]) extends BehaviorInterceptor[Command, Command] {
     def aroundReceive(ctx: TypedActorContext[Command], msg: Command, target: BehaviorInterceptor.ReceiveTarget[Command])
         : Behavior[Command] = {
       val next = target(ctx, msg)
-      if (msg == KeepAliveSeen) handled ! msg
+      if (msg == QualityTick) handled ! msg
       next
     }
   }
 
-  /** A heartbeat whose keep-alives are acknowledged to the returned probe. */
-  private def acknowledging(reports: TestProbe[Any], online: Boolean): (ActorRef[Command], TestProbe[Command]) = {
+  /** The robot actor's side of the keep-alives, on a clock that follows the manual time as the test moves it. */
+  private final class Robot {
+    @volatile var now = 0L
+    val keepAlives = new KeepAlives(() => now)
+
+    /** Time passes for the heartbeat's timers, then for the keep-alives' clock: a check handled in between reads a
+      * clock behind its timers and re-arms later, never sooner, than it would on one clock.
+      */
+    def passes(d: FiniteDuration): Unit = {
+      manualTime.timePasses(d)
+      now += d.toNanos
+    }
+
+    /** A keep-alive now: counted, and told to `heartbeat` when it asks to be told (as the robot actor does). */
+    def keepAlive(heartbeat: ActorRef[Command]): Unit = if (keepAlives.seen(now)) heartbeat ! KeepAliveSeen
+  }
+
+  /** A heartbeat of `robot` whose quality ticks are acknowledged to the returned probe. */
+  private def acknowledging(reports: TestProbe[Any], online: Boolean, robot: Robot,
+      s: HeartbeatSettings = settings): (ActorRef[Command], TestProbe[Command]) = {
     val handled = createTestProbe[Command]()
-    val heartbeat =
-      spawn(Behaviors.intercept(() => new AckKeepAlives(handled.ref))(HeartBeatActor(settings, reports.ref, reports.ref,
-            online)))
+    val heartbeat = spawn(Behaviors.intercept(() => new AckTicks(handled.ref))(HeartBeatActor(s, reports.ref,
+          reports.ref, online, robot.keepAlives)))
     heartbeat -> handled
   }
 
@@ -47,7 +64,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     "start its probe ids at a random point in every incarnation" in {
       val firsts = (1 to 2).map { _ =>
         val reports = createTestProbe[Any]()
-        val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false))
+        val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false, new KeepAlives))
         heartbeat ! ProbeNow
         val id = probeId(reports.receiveMessage())
         CallId.ownerOf(id) shouldBe Some(CallId.Owner.Heartbeat)
@@ -59,7 +76,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     }
     "probe a quiet robot three times and then report it offline" in {
       val reports = createTestProbe[Any]()
-      spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true))
+      spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true, new KeepAlives))
       reports.expectMessage(CameOnline)
       manualTime.timePasses(399.millis)
       reports.expectNoMessage(Duration.Zero)
@@ -80,26 +97,53 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     }
     "stay online while keep-alives arrive, and recover when a probe is answered" in {
       val reports = createTestProbe[Any]()
-      val (heartbeat, handled) = acknowledging(reports, online = true)
+      val robot = new Robot
+      // A quality window longer than the test: the link quality is not judged here (the last test judges it).
+      val (heartbeat, _) = acknowledging(reports, online = true, robot, settings.copy(qualityWindow = 10.seconds))
       reports.expectMessage(CameOnline)
-      // Time moves only once the keep-alive has re-armed the quiet check; the silence is measured from there.
+      // Counted, not told: the heartbeat reads the count when its quiet check comes due.
       (1 to 10).foreach { _ =>
-        manualTime.timePasses(200.millis)
-        heartbeat ! KeepAliveSeen
-        handled.expectMessage(KeepAliveSeen)
+        robot.passes(200.millis)
+        robot.keepAlives.seen(robot.now) shouldBe false
       }
       reports.expectNoMessage(Duration.Zero)
-      manualTime.timePasses(400.millis)
-      val id = probeId(reports.receiveMessage())
+      /* Quiet from here: probed `quietAfter` after the last keep-alive (the check re-armed from it, handled in
+       * between). */
+      var quiet = 0.millis
+      var probe: Option[Any] = None
+      while (probe.isEmpty && quiet < 1.second) {
+        robot.passes(10.millis)
+        quiet += 10.millis
+        probe = scala.util.Try(reports.receiveMessage(50.millis)).toOption
+      }
+      quiet should (be >= 400.millis and be <= 450.millis)
+      val id = probeId(probe.get)
       heartbeat ! ProbeAnswered(id)
       reports.expectMessage(NoResponseActor.Finished(id))
       reports.receiveMessage() shouldBe a[ProbeRoundTrip]
-      manualTime.timePasses(399.millis)
+      robot.passes(399.millis)
       reports.expectNoMessage(Duration.Zero)
+    }
+    "come back online when a keep-alive arrives while probing, told as the robot actor tells it" in {
+      val reports = createTestProbe[Any]()
+      val robot = new Robot
+      val (heartbeat, _) = acknowledging(reports, online = true, robot)
+      reports.expectMessage(CameOnline)
+      robot.passes(400.millis)
+      probeId(reports.receiveMessage())
+      // Probing: a keep-alive is told, and the robot is back without being reported offline or online again.
+      robot.passes(50.millis)
+      robot.keepAlives.seen(robot.now) shouldBe true
+      heartbeat ! KeepAliveSeen
+      // Back online: the next quiet check is `quietAfter` away, not the probe's timeout.
+      robot.passes(300.millis)
+      reports.expectNoMessage(50.millis)
+      robot.keepAlives.seen(robot.now) shouldBe false
     }
     "come back online on the next keep-alive, and probe on demand when offline" in {
       val reports = createTestProbe[Any]()
-      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = false))
+      val robot = new Robot
+      val (heartbeat, _) = acknowledging(reports, online = false, robot)
       probeId(reports.receiveMessage())
       manualTime.timePasses(150.millis)
       probeId(reports.receiveMessage())
@@ -108,6 +152,18 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       manualTime.timePasses(150.millis)
       manualTime.timePasses(1.second)
       reports.expectNoMessage(Duration.Zero)
+      // Offline: a keep-alive is told, and brings the robot online.
+      robot.keepAlive(heartbeat)
+      reports.expectMessage(CameOnline)
+      robot.passes(400.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(150.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(150.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(150.millis)
+      reports.receiveMessage() shouldBe a[WentOffline]
+      robot.passes(1.second)
       heartbeat ! ProbeNow
       val id = probeId(reports.receiveMessage())
       heartbeat ! ProbeAnswered(id)
@@ -118,7 +174,8 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     "back off rounds for a robot that never answers, however often it is wanted, and start again after an answer" in {
       val reports = createTestProbe[Any]()
       val heartbeat =
-        spawn(HeartBeatActor(settings.copy(probeBackoffMax = 2.seconds), reports.ref, reports.ref, online = false))
+        spawn(HeartBeatActor(settings.copy(probeBackoffMax = 2.seconds), reports.ref, reports.ref, online = false,
+            new KeepAlives))
       // One round: three probes 150 ms apart, then the last one's timeout.
       def silentRound(): Unit = {
         probeId(reports.receiveMessage())
@@ -156,7 +213,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     }
     "ignore answers to probes it did not send" in {
       val reports = createTestProbe[Any]()
-      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true))
+      val heartbeat = spawn(HeartBeatActor(settings, reports.ref, reports.ref, online = true, new KeepAlives))
       reports.expectMessage(CameOnline)
       manualTime.timePasses(400.millis)
       val id = probeId(reports.receiveMessage())
@@ -168,23 +225,29 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     }
     "report a degraded link with hysteresis instead of flapping" in {
       val reports = createTestProbe[Any]()
-      val heartbeat =
-        spawn(HeartBeatActor(settings.copy(quietAfter = 1.second), reports.ref, reports.ref, online = true))
+      val robot = new Robot
+      val (_, ticks) = acknowledging(reports, online = true, robot, settings.copy(quietAfter = 1.second))
       reports.expectMessage(CameOnline)
+      // One tick: `seen` keep-alives counted, then the tick handled before the next is counted.
+      def tick(seen: Boolean): Unit = {
+        if (seen) robot.keepAlives.seen(robot.now)
+        robot.passes(200.millis)
+        ticks.expectMessage(QualityTick)
+      }
       // Every keep-alive for a full window: good, nothing reported.
-      (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      (1 to 10).foreach(_ => tick(seen = true))
       reports.expectNoMessage(Duration.Zero)
       // Every second keep-alive lost: 50 % over the window -> degraded once.
-      (1 to 20).foreach { i => if (i % 2 == 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      (1 to 20).foreach(i => tick(seen = i % 2 == 0))
       reports.expectMessage(QualityChanged(LinkQuality.Degraded))
       reports.expectNoMessage(Duration.Zero)
       // 85 % is above the degraded threshold but not above the good one: still degraded.
-      (1 to 20).foreach { i => if (i % 7 != 0) heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      (1 to 20).foreach(i => tick(seen = i % 7 != 0))
       reports.expectNoMessage(Duration.Zero)
       // Back to good only after a whole window (10 ticks here) above 90 %: not after 10 ticks, but before 25.
-      (1 to 10).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      (1 to 10).foreach(_ => tick(seen = true))
       reports.expectNoMessage(Duration.Zero)
-      (1 to 15).foreach { _ => heartbeat ! KeepAliveSeen; manualTime.timePasses(200.millis) }
+      (1 to 15).foreach(_ => tick(seen = true))
       reports.expectMessage(QualityChanged(LinkQuality.Good))
     }
   }

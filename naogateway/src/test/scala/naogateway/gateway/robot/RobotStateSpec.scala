@@ -188,6 +188,17 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       (times.firstFrom(0L), times.firstFrom(21L)) shouldBe ((10L, 30L))
       times shouldBe ArrivalTimes(10L, 20L, 30L)
       ArrivalTimes.empty.size shouldBe 0
+      // The latest value appends in place: two values made from the same one each keep their own times, and the one
+      // they came from is unchanged.
+      val base = ArrivalTimes(10L, 20L)
+      val (a, b) = (base.appended(30L, 100L, 4), base.appended(35L, 100L, 4))
+      (base.toVector, a.toVector, b.toVector) shouldBe ((Vector(10L, 20L), Vector(10L, 20L, 30L),
+        Vector(10L, 20L, 35L)))
+      a.appended(40L, 100L, 4).toVector shouldBe Vector(10L, 20L, 30L, 40L)
+      // Across the copies a full buffer needs: the latest `kept`, in order.
+      val many = (1L to 500L).foldLeft(ArrivalTimes.empty)((t, n) => t.appended(n, 1000L, 27))
+      many.toVector shouldBe (474L to 500L).toVector
+      many shouldBe ArrivalTimes(474L to 500L: _*)
     }
 
     "show the snapshot as it leaves the actor, the same value when nothing in it changes" in {

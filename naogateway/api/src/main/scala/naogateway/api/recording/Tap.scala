@@ -3,6 +3,7 @@ package naogateway.api.recording
 import java.net.InetSocketAddress
 
 import naogateway.proto.RecordedPort
+import naogateway.wire.MessageContents
 
 /** One thing that crossed the gateway's ports, as its tap publishes it: built once, shared by every reader, never
   * changed (a datagram's bytes are the port's own array: readers must not write to it).
@@ -17,9 +18,12 @@ sealed trait Tapped {
 object Tapped {
 
   /** A datagram that passed `port`, `received` or sent, byte for byte; `robotId` the robot at the far end (-1: none).
+    * `decoded`: the FU-Remote frame as the gateway decoded it when it received it, so that no reader decodes it again
+    * (None when it was not a frame the gateway could decode, or it was not decoded: sent datagrams).
     */
   final case class Datagram(nanoTime: Long, port: RecordedPort, received: Boolean, source: InetSocketAddress,
-      destination: InetSocketAddress, bytes: Array[Byte], robotId: Int) extends Tapped
+      destination: InetSocketAddress, bytes: Array[Byte], robotId: Int, decoded: Option[MessageContents] = None)
+      extends Tapped
 
   /** A decision of the gateway. */
   final case class Decided(nanoTime: Long, decision: Decision) extends Tapped
