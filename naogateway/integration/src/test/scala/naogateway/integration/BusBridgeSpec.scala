@@ -231,7 +231,11 @@ class BusBridgeSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with 
           Try(client.getInputStream.read()).fold({ case _: SocketTimeoutException => 0; case _ => -1 }, identity)
         closed shouldBe -1
         client.close()
-        Try(new Socket("127.0.0.1", base + robotId)).isFailure shouldBe true
+        // The listener's unbind follows the client's close (both asynchronous): soon nothing listens.
+        val deadline = 5.seconds.fromNow
+        def refused() = Try(new Socket("127.0.0.1", base + robotId)).fold(_ => true, s => { s.close(); false })
+        while (!refused() && deadline.hasTimeLeft()) Thread.sleep(50)
+        refused() shouldBe true
       } finally {
         gc.close()
         testKit.stop(bridge)
