@@ -61,11 +61,18 @@ final class DeadlineScheduler(config: Config, log: LoggingAdapter, threadFactory
 
   override def scheduleOnce(delay: FiniteDuration, runnable: Runnable)(implicit
       executor: ExecutionContext): Cancellable = {
-    val closing = runnable.isInstanceOf[Scheduler.TaskRunOnClose]
-    if (closing) runOnClose.add(runnable)
-    val once = new Once(runnable, executor, closing)
-    once.armed(arm(delay.toNanos, once))
-    once
+    if (delay.toNanos <= 0L) {
+      // Due now: to its executor from here, as Akka's scheduler does, without waking the timer's thread.
+      if (timer.isShutdown) throw new IllegalStateException("the scheduler is closed")
+      executor.execute(runnable)
+      HandedOver
+    } else {
+      val closing = runnable.isInstanceOf[Scheduler.TaskRunOnClose]
+      if (closing) runOnClose.add(runnable)
+      val once = new Once(runnable, executor, closing)
+      once.armed(arm(delay.toNanos, once))
+      once
+    }
   }
 
   @deprecated("use scheduleAtFixedRate or scheduleWithFixedDelay", "Akka 2.6.0")
@@ -86,6 +93,12 @@ final class DeadlineScheduler(config: Config, log: LoggingAdapter, threadFactory
       catch { case NonFatal(e) => log.error(e, "A task run at the scheduler's close failed") }
     }
     runOnClose.clear()
+  }
+
+  // A timer that was due at once: handed over, too late to cancel.
+  private val HandedOver: Cancellable = new Cancellable {
+    override def cancel(): Boolean = false
+    override def isCancelled: Boolean = false
   }
 
   // Schedules `fire` at the first tick at least `delayNanos` from now (at once for none); Akka's contract:

@@ -68,6 +68,14 @@ class DeadlineSchedulerSpec extends AnyWordSpec with Matchers with BeforeAndAfte
       timer.isCancelled shouldBe false
     }
 
+    "hand a timer due at once to its executor, too late to cancel" in {
+      val done = new CountDownLatch(1)
+      val timer = scheduler.scheduleOnce(0.millis)(done.countDown())
+      timer.cancel() shouldBe false
+      timer.isCancelled shouldBe false
+      await(done)
+    }
+
     "repeat a timer at its rate until it is cancelled" in {
       val runs = new java.util.concurrent.atomic.AtomicInteger()
       val three = new CountDownLatch(3)
