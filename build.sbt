@@ -278,8 +278,9 @@ lazy val launcher = (project in file("apps/launcher"))
     // The gateway and teleop run for hours: their hot paths reach the optimising compiler (C2) within seconds of load
     // at any threshold, while code that runs a few times a second (an idle field's keep-alives, the demo's game) would
     // keep it busy for minutes (docs/benchmarks.md, "Where the idle demo's CPU goes"); at ten times its default counts
-    // such code stays in the quick tier.
-    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; *) addJava "-XX:Tier4InvocationThreshold=50000"; addJava "-XX:Tier4MinInvocationThreshold=6000"; addJava "-XX:Tier4CompileThreshold=150000"; addJava "-XX:Tier4BackEdgeThreshold=400000";; esac""",
+    // such code stays in the quick tier. The JVM's sampler of its performance counters (what jstat reads) runs every
+    // second rather than every 50 ms: 20 wake-ups a second of an idle base station for figures nobody reads.
+    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:TieredStopAtLevel=1"; addJava "-XX:+UseSerialGC";; *) addJava "-XX:Tier4InvocationThreshold=50000"; addJava "-XX:Tier4MinInvocationThreshold=6000"; addJava "-XX:Tier4CompileThreshold=150000"; addJava "-XX:Tier4BackEdgeThreshold=400000"; addJava "-XX:PerfDataSamplingInterval=1000";; esac""",
     terminalEnv,
     run / fork := true,
     run / connectInput := true,

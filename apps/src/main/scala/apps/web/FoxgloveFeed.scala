@@ -20,7 +20,7 @@ import spray.json._
 import naogateway.proto.RecordedPort
 import naogateway.wire.{MessageContents, RpcReply}
 import naogateway.wire.gamecontroller.GameControlData
-import naogateway.api.{GameStateUpdated, GatewayView, RobotEvent, RobotSnapshot, TrafficStats}
+import naogateway.api.{GameStateUpdated, GatewayView, RobotEvent, RobotOnline, RobotSnapshot, TrafficStats}
 import naogateway.api.recording.{
   Decision,
   DecisionJson,
@@ -129,21 +129,22 @@ object FoxgloveFeed {
   /** The feed's name among the tap's readers. */
   val TapReader: String = "foxglove-feed"
 
-  /** What the hub knows: each robot's channels, every channel advertised, the clients, and the tap while it reads it.
+  /** What the hub knows: each robot's channels, every channel advertised, the clients, the tap while it reads it, and
+    * the status watcher (a child forwarding the middleware's snapshots, there while a client is connected).
     */
   private final case class State(robots: Map[Int, RobotChannels], channels: Vector[Channel], clients: Int,
-      tap: Option[TapSubscription], askingTap: Boolean)
+      tap: Option[TapSubscription], askingTap: Boolean, statusWatcher: Option[ActorRef[RobotSnapshot]])
 
-  /** The hub: one owner of the channel list, watching robots and the game at the middleware, asking `gateway` for the
-    * budget, and reading the gateway's tap (datagrams, robot messages, the outbox's and the gate's decisions) while any
-    * client is connected.
+  /** The hub: one owner of the channel list, watching robot events and the game at the middleware, and while any client
+    * is connected watching the robots' snapshots, asking `gateway` for the budget and reading the gateway's tap
+    * (datagrams, robot messages, the outbox's and the gate's decisions). Without a client a robot's channels are made
+    * when it comes online, so nothing wakes the feed for a keep-alive.
     */
   def apply(middleware: ActorRef[RobotMiddleware.Command], gateway: GatewayView): Behavior[Command] =
     Behaviors.setup { context =>
       implicit val mat: Materializer = Materializer(context)
       val (queue, hub) = Source.queue[Update](1024).toMat(BroadcastHub.sink[Update](bufferSize = 64))(Keep.both).run()
       hub.runWith(Sink.ignore)
-      middleware ! RobotMiddleware.WatchStatus(None, context.messageAdapter(Status.apply))
       middleware ! RobotMiddleware.WatchEvents(context.messageAdapter(Event.apply))
       middleware ! RobotMiddleware.WatchGame(context.messageAdapter(Game.apply))
       val self = context.self
@@ -240,15 +241,27 @@ object FoxgloveFeed {
               }
               replyTo ! Feed(state.channels, updates)
               Behaviors.same
-            case ClientJoined => running(askTap(state.copy(clients = state.clients + 1)))
+            case ClientJoined =>
+              // The first client: the robots' snapshots are watched (the current ones first) until the last leaves.
+              val watcher = state.statusWatcher.getOrElse {
+                val w = context.spawnAnonymous(Behaviors.receiveMessage[RobotSnapshot] { snapshot =>
+                  self ! Status(snapshot)
+                  Behaviors.same
+                })
+                middleware ! RobotMiddleware.WatchStatus(None, w)
+                w
+              }
+              running(askTap(state.copy(clients = state.clients + 1, statusWatcher = Some(watcher))))
             case ClientLeft =>
               val clients = math.max(0, state.clients - 1)
               if (clients > 0) running(state.copy(clients = clients))
               else {
-                // No client: off the tap, so the gateway builds nothing for the feed.
+                // No client: off the tap, so the gateway builds nothing for the feed, and off the snapshots (the
+                // middleware ends the watch of a watcher that stopped).
                 state.tap.foreach(_.close())
                 timers.cancel(TapTick)
-                running(state.copy(clients = 0, tap = None))
+                state.statusWatcher.foreach(context.stop)
+                running(state.copy(clients = 0, tap = None, statusWatcher = None))
               }
             case TapAnswered(tap) =>
               if (state.clients == 0) running(state.copy(askingTap = false))
@@ -260,7 +273,14 @@ object FoxgloveFeed {
               state.tap.fold(Behaviors.same[Command])(t => running(readTap(state, t)))
             case Event(event) =>
               if (state.clients > 0) decided(queue, Decision.Published(event), nowNanos())
-              Behaviors.same
+              event match {
+                // A robot online gets its channels, so the list is whole for the next client without watching
+                // keep-alives.
+                case RobotOnline(id, _) =>
+                  val (_, next) = robotChannels(state, id)
+                  if (next eq state) Behaviors.same else running(next)
+                case _ => Behaviors.same
+              }
             case Game(data) =>
               if (state.clients > 0) decided(queue, Decision.Published(GameStateUpdated(data)), nowNanos())
               Behaviors.same
@@ -305,7 +325,8 @@ object FoxgloveFeed {
             Behaviors.same
           }
 
-        running(State(Map.empty, Vector(Decisions, Datagrams), clients = 0, tap = None, askingTap = false))
+        running(State(Map.empty, Vector(Decisions, Datagrams), clients = 0, tap = None, askingTap = false,
+            statusWatcher = None))
       }
     }
 

@@ -50,7 +50,7 @@ object VisionActor {
         val on = to -- from
         val off = from -- to
         if (on.nonEmpty || off.nonEmpty) {
-          context.log.info("Robot [{}]: camera options on {} off {}", robotId, on.mkString(","), off.mkString(","))
+          context.log.debug("Robot [{}]: camera options on {} off {}", robotId, on.mkString(","), off.mkString(","))
           // One field per DebuggingCommands message (protocol.md 6.3): enabling and disabling are two messages.
           if (on.nonEmpty) send(DebuggingCommands(optionEnable = Some(DebuggingOptionNames(on.toSeq.sorted))))
           if (off.nonEmpty) send(DebuggingCommands(optionDisable = Some(DebuggingOptionNames(off.toSeq.sorted))))
