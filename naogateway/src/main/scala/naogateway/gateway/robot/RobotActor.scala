@@ -149,7 +149,7 @@ object RobotActor {
       settings,
       heartbeatSettings,
       datagrams,
-      wiring.clocks,
+      wiring.clocks.slot(robotId),
       context.log,
       timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval),
       timers.cancel(PullKey)

@@ -23,7 +23,7 @@ private[naogateway] final class RobotEffects(
     settings: GatewaySettings,
     heartbeatSettings: HeartbeatSettings,
     pullsOptions: Boolean,
-    clocks: RobotClockEstimates,
+    clock: RobotClockEstimates.Slot,
     log: org.slf4j.Logger,
     startPulling: => Unit,
     stopPulling: => Unit
@@ -65,7 +65,7 @@ private[naogateway] final class RobotEffects(
     if (seen.heard && f.keepAlives.seen(now)) f.heartbeat ! HeartBeatActor.KeepAliveSeen
     val resynced = if (seen.restarted) resync(f, c, s, isOnline) else s
     // The recorder dates the robot's Status with this estimate, read on its own thread: no event per keep-alive for it.
-    clocks.update(robotId, resynced.snapshot.clock)
+    clock.update(resynced.snapshot.clock)
     if (resynced.wantsStatus) publish(resynced, RobotStatusUpdated(resynced.view(isOnline))) else resynced
   }
 
