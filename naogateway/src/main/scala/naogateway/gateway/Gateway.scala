@@ -143,13 +143,13 @@ object Gateway {
     }
   }
 
-  /** While recording: hands the gateway's events to the tap as decisions; a keep-alive (on the recording's status
-    * channels already) only brings the robot's clock estimate, with which the recorder dates the robot's Status.
+  /** While recording: hands the gateway's events to the tap as decisions. The robot actors send it no keep-alive's
+    * status (on the recording's status channels already; the clock estimate with which the recorder dates the robot's
+    * Status is in [[RobotClockEstimates]]), but one held while they waited for their subscribers may come: ignored.
     */
-  private[naogateway] def recordingEvents(tap: Tap, clocks: RobotClockEstimates): Behavior[GatewayEvent] =
+  private[naogateway] def recordingEvents(tap: Tap): Behavior[GatewayEvent] =
     Behaviors.receiveMessage {
-      case RobotStatusUpdated(snapshot) =>
-        clocks.update(snapshot.robotId, snapshot.clock)
+      case _: RobotStatusUpdated =>
         Behaviors.same
       case event =>
         tap.decision(Decision.Published(event))

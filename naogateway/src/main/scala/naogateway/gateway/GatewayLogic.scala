@@ -44,12 +44,12 @@ private[naogateway] final class GatewayLogic(
   private var byId = Map.empty[Int, Entry]
   // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
   private var byAddress = Map.empty[InetAddress, Int]
-  private var subscribers: Set[ActorRef[GatewayEvent]] =
-    /* On the robot actors' own thread: every keep-alive's status event comes here, and a hand-over to another thread
-     * per */
-    // keep-alive would cost more than the update itself.
-    if (recording.enabled) Set(context.spawn(recordingEvents(tap, clocks), "recording-events", RobotDispatcher))
+  // The recorder's subscriber: every event but the keep-alives' status (the recorder reads the status off the tap, and
+  // the robot actors put the clock estimates in `clocks` themselves).
+  private val recorderEvents: Set[ActorRef[GatewayEvent]] =
+    if (recording.enabled) Set(context.spawn(recordingEvents(tap), "recording-events", RobotDispatcher))
     else Set.empty
+  private var subscribers: Set[ActorRef[GatewayEvent]] = recorderEvents
   private val watch = new GameControllerWatch(settings, context, rejections, gate, publish)
 
   /** Every packet, not only changes, reaches the one gate (the outbox's, for both transports): a restarted outbox
@@ -127,7 +127,8 @@ private[naogateway] final class GatewayLogic(
   }
 
   // The robot actor asks for the subscribers itself (RobotWantsSubscribers), on its first start and after restarts.
-  private def wiring(backlog: Backlog): RobotWiring = RobotWiring(Set.empty, Some(subscriptionRequests), backlog)
+  private def wiring(backlog: Backlog): RobotWiring =
+    RobotWiring(Set.empty, Some(subscriptionRequests), backlog, clocks)
 
   /** A ZeroMQ robot: known by id only; no datagram is ever routed to it by address. */
   private def spawnZeroMqRobot(robot: ZeroMqRobot): Unit = {
@@ -161,8 +162,11 @@ private[naogateway] final class GatewayLogic(
 
   private def publish(event: GatewayEvent): Unit = subscribers.foreach(_ ! event)
 
+  /** The subscribers as a robot actor publishes to them: the recorder gets no status. */
+  private def robotSubscribers: RobotActor.Subscribers = RobotActor.Subscribers(subscribers, recorderEvents)
+
   /** Every robot actor learns the new subscriber list: robot events go from them straight to the subscribers. */
-  private def subscribersChanged(): Unit = byId.values.foreach(_.actor.own ! RobotActor.Subscribers(subscribers))
+  private def subscribersChanged(): Unit = byId.values.foreach(_.actor.own ! robotSubscribers)
 
   /** Records a GameController packet (every one, before any check); true, so it can guard the first case. */
   private def recordGameController(bytes: Array[Byte], from: InetSocketAddress): Boolean = {
@@ -233,7 +237,7 @@ private[naogateway] final class GatewayLogic(
         Behaviors.same
       case GameControllerEvent(_) => Behaviors.same
       case RobotWantsSubscribers(RobotActor.SubscribersWanted(robot)) =>
-        robot ! RobotActor.Subscribers(subscribers)
+        robot ! robotSubscribers
         Behaviors.same
       case SubscriberGone(subscriber) =>
         subscribers -= subscriber

@@ -20,20 +20,37 @@ object RobotTimeBase {
   val Unknown: RobotTimeBase = (_: Int, _: Long) => None
 }
 
-/** The robots' clock estimates as the robot actors last published them (`RobotSnapshot.clock`), read by the recorder's
-  * thread: one entry per robot actor, replaced at every keep-alive, removed while a robot has no estimate.
+/** The robots' clock estimates (`RobotSnapshot.clock`) as the robot actors put them at every keep-alive, read by the
+  * recorder's thread: one slot per robot id, set by its actor (any incarnation of it), empty while the robot has no
+  * estimate. A slot holds an immutable [[naogateway.api.ClockEstimate]], so a keep-alive costs a volatile write and no
+  * message.
   */
 final class RobotClockEstimates extends RobotTimeBase {
-  private val estimates = new java.util.concurrent.ConcurrentHashMap[Int, ClockEstimate]()
+  private val estimates = new java.util.concurrent.ConcurrentHashMap[Int, RobotClockEstimates.Slot]()
 
-  /** Robot `robotId`'s estimate now. */
-  def update(robotId: Int, estimate: Option[ClockEstimate]): Unit = estimate match {
-    case Some(e) => estimates.put(robotId, e)
-    case None    => estimates.remove(robotId)
+  /** Robot `robotId`'s slot, the same one for every call. */
+  def slot(robotId: Int): RobotClockEstimates.Slot =
+    estimates.computeIfAbsent(robotId, _ => new RobotClockEstimates.Slot)
+
+  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long] = estimates.get(robotId) match {
+    case null => None
+    case slot =>
+      slot.get match {
+        case null     => None
+        case estimate => Some(estimate.toGatewayNanos(robotMillis))
+      }
   }
+}
 
-  def toGatewayNanos(robotId: Int, robotMillis: Long): Option[Long] =
-    Option(estimates.get(robotId)).map(_.toGatewayNanos(robotMillis))
+/** Robot clock estimates. */
+object RobotClockEstimates {
+
+  /** One robot's latest estimate (null while it has none): written by its robot actor, read by the recorder. */
+  final class Slot extends java.util.concurrent.atomic.AtomicReference[ClockEstimate] {
+
+    /** The robot's estimate now. */
+    def update(estimate: Option[ClockEstimate]): Unit = set(estimate.orNull)
+  }
 }
 
 /** The recorder as the gateway holds it: it reads the gateway's tap ([[naogateway.gateway.tap.Tap]]) on a thread of its

@@ -61,8 +61,12 @@ object RobotActor {
   /** The middleware's questions, answered alike in every state. */
   private[naogateway] final case class Asked(question: RobotAccess.Question) extends Common
 
-  /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway. */
-  private[naogateway] final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]]) extends Common
+  /** The gateway's event subscribers now: this robot's events go to them directly, not through the gateway; those in
+    * `statusless` (the recorder, which reads the status off the tap) get no `RobotStatusUpdated`.
+    */
+  private[naogateway] final case class Subscribers(subscribers: Set[ActorRef[GatewayEvent]],
+      statusless: Set[ActorRef[GatewayEvent]] = Set.empty)
+      extends Common
 
   /** A robot actor (re)started and asks the gateway for its current subscribers. */
   private[naogateway] final case class SubscribersWanted(robot: ActorRef[Subscribers])
@@ -145,6 +149,7 @@ object RobotActor {
       settings,
       heartbeatSettings,
       datagrams,
+      wiring.clocks.slot(robotId),
       context.log,
       timers.startTimerWithFixedDelay(PullKey, PullOptions, RobotOptions.PullInterval),
       timers.cancel(PullKey)
@@ -262,9 +267,9 @@ object RobotActor {
           next
         case Asked(RobotAccess.GetSnapshot(replyTo))  => replyTo ! s.view(isOnline); s
         case Asked(RobotAccess.GetLinkStats(replyTo)) => replyTo ! effects.linkStats(s, sent); s
-        case Subscribers(now) =>
-          val (next, held) = s.subscribersChanged(now)
-          held.foreach(e => now.foreach(_ ! e))
+        case Subscribers(now, statusless) =>
+          val (next, held) = s.subscribersChanged(now, statusless)
+          held.foreach(e => next.recipients(e).foreach(_ ! e))
           next
         case Wanted =>
           if (!isOnline) f.heartbeat ! HeartBeatActor.ProbeNow

@@ -10,6 +10,7 @@ import naogateway.wire.MessageContents
 import naogateway.access.RobotAccess
 import naogateway.api.{GatewayEvent, LinkQualityChanged, LinkStats, Priority, RobotRestarted, RobotStatusUpdated}
 import naogateway.gateway.{GatewaySettings, HeartbeatSettings, Rejection}
+import naogateway.gateway.recording.RobotClockEstimates
 import naogateway.transport.RateLimitedLog
 
 /** What a robot actor does around `RobotState`'s transitions: hands what the robot sent to its owners, puts option
@@ -22,6 +23,7 @@ private[naogateway] final class RobotEffects(
     settings: GatewaySettings,
     heartbeatSettings: HeartbeatSettings,
     pullsOptions: Boolean,
+    clock: RobotClockEstimates.Slot,
     log: org.slf4j.Logger,
     startPulling: => Unit,
     stopPulling: => Unit
@@ -62,7 +64,9 @@ private[naogateway] final class RobotEffects(
     // Counted for the heartbeat, which reads the count on its own timers; told only while it waits for the robot.
     if (seen.heard && f.keepAlives.seen(now)) f.heartbeat ! HeartBeatActor.KeepAliveSeen
     val resynced = if (seen.restarted) resync(f, c, s, isOnline) else s
-    publish(resynced, RobotStatusUpdated(resynced.view(isOnline)))
+    // The recorder dates the robot's Status with this estimate, read on its own thread: no event per keep-alive for it.
+    clock.update(resynced.snapshot.clock)
+    if (resynced.wantsStatus) publish(resynced, RobotStatusUpdated(resynced.view(isOnline))) else resynced
   }
 
   /** A fresh session on the robot: switch back on what was active, and tell subscribers. */

@@ -8,7 +8,15 @@ import akka.actor.typed.ActorRef
 
 import naogateway.proto.{DebuggingCommands, DebuggingOption, RobotHealth, ServoTelemetry, Status}
 import naogateway.wire.HeaderForm
-import naogateway.api.{GatewayEvent, LinkQuality, LinkStats, RobotSnapshot, SigningState, VisionFrame}
+import naogateway.api.{
+  GatewayEvent,
+  LinkQuality,
+  LinkStats,
+  RobotSnapshot,
+  RobotStatusUpdated,
+  SigningState,
+  VisionFrame
+}
 import naogateway.gateway.Rejection
 
 /** The link figures of one robot as its robot actor counts them (what leaves is counted by its sender,
@@ -174,6 +182,7 @@ private[naogateway] final case class RobotState(
     clockSync: ClockSync,
     options: RobotOptions,
     subscribers: Option[Set[ActorRef[GatewayEvent]]],
+    statusSubscribers: Set[ActorRef[GatewayEvent]],
     held: Vector[GatewayEvent],
     vision: Map[ActorRef[VisionFrame], Boolean],
     link: LinkFigures,
@@ -330,17 +339,31 @@ private[naogateway] final case class RobotState(
       (copy(options = options.copy(list = Some(list), pulling = false)), known, unknown)
     }
 
-  /** The gateway's subscribers now; the events held meanwhile go to them (returned, oldest first). */
-  def subscribersChanged(now: Set[ActorRef[GatewayEvent]]): (RobotState, Vector[GatewayEvent]) =
-    (copy(subscribers = Some(now), held = Vector.empty), held)
+  /** The gateway's subscribers now, of which `statusless` get no `RobotStatusUpdated` (the recorder: it reads the
+    * status off the tap); the events held meanwhile go to them (returned, oldest first, for [[recipients]]).
+    */
+  def subscribersChanged(now: Set[ActorRef[GatewayEvent]],
+      statusless: Set[ActorRef[GatewayEvent]] = Set.empty): (RobotState, Vector[GatewayEvent]) =
+    (copy(subscribers = Some(now), statusSubscribers = now -- statusless, held = Vector.empty), held)
+
+  /** Whether a `RobotStatusUpdated` would reach anyone (or be held while the subscribers are unknown): when not, the
+    * keep-alive builds none.
+    */
+  def wantsStatus: Boolean = subscribers.isEmpty || statusSubscribers.nonEmpty
+
+  /** The subscribers `event` goes to: a `RobotStatusUpdated` to those that want the status. */
+  def recipients(event: GatewayEvent): Set[ActorRef[GatewayEvent]] = event match {
+    case _: RobotStatusUpdated => statusSubscribers
+    case _                     => subscribers.getOrElse(Set.empty)
+  }
 
   /** `event` is published: to the subscribers returned, or held while they are unknown (at most
     * `RobotState.HeldEvents`: the gateway answers within one of its messages, but a silent gateway must cost no
     * memory).
     */
   def publish(event: GatewayEvent): (RobotState, Set[ActorRef[GatewayEvent]]) = subscribers match {
-    case Some(all) => (this, all)
-    case None      => (if (held.size < RobotState.HeldEvents) copy(held = held :+ event) else this, Set.empty)
+    case Some(_) => (this, recipients(event))
+    case None    => (if (held.size < RobotState.HeldEvents) copy(held = held :+ event) else this, Set.empty)
   }
 
   /** A camera stream subscribed (or changed whether it wants grid frames); true when it is new (to be watched). */
@@ -378,6 +401,7 @@ private[naogateway] object RobotState {
       clockSync,
       RobotOptions(),
       subscribers,
+      subscribers.getOrElse(Set.empty),
       Vector.empty,
       Map.empty,
       LinkFigures(),

@@ -3,16 +3,19 @@ package naogateway.gateway.robot
 import akka.actor.typed.ActorRef
 
 import naogateway.gateway.link.Backlog
+import naogateway.gateway.recording.RobotClockEstimates
 import naogateway.access.RobotAccess
 import naogateway.api.GatewayEvent
 
 /** How a robot actor is wired to its gateway. With a `gateway`, the actor asks it for the subscribers on every start (a
   * restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the gateway
   * pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams the robot
-  * port's reader has handed the actor, given back as each is handled.
+  * port's reader has handed the actor, given back as each is handled. `clocks` is where the actor puts the robot's
+  * clock estimate at every keep-alive, for the recorder.
   */
 private[naogateway] final case class RobotWiring(subscribers: Set[ActorRef[GatewayEvent]],
-    gateway: Option[ActorRef[RobotActor.SubscribersWanted]], backlog: Backlog)
+    gateway: Option[ActorRef[RobotActor.SubscribersWanted]], backlog: Backlog,
+    clocks: RobotClockEstimates = new RobotClockEstimates)
 
 /** Wirings without a gateway. */
 private[naogateway] object RobotWiring {

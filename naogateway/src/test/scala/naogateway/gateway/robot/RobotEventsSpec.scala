@@ -13,6 +13,7 @@ import naogateway.access.RobotAccess
 import naogateway.api.{GatewayEvent, LinkQuality, RobotOnline, RobotSnapshot, RobotStatusUpdated}
 import naogateway.gateway.GatewaySettings
 import naogateway.gateway.link.Backlog
+import naogateway.gateway.recording.RobotClockEstimates
 import naogateway.proto.Status
 import naogateway.wire.{HeaderForm, MessageContents}
 
@@ -55,6 +56,29 @@ class RobotEventsSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       robot ! keepAlive(2)
       second.expectMessageType[RobotStatusUpdated].snapshot.teamId shouldBe Some(2)
       first.expectNoMessage(100.millis)
+    }
+    "put the clock estimate in the wiring's clocks, sending no status to a statusless subscriber (the recorder)" in {
+      val outbox = createTestProbe[Outbox.Command]()
+      val gateway = createTestProbe[RobotActor.SubscribersWanted]()
+      val recorder = createTestProbe[GatewayEvent]()
+      val app = createTestProbe[GatewayEvent]()
+      val clocks = new RobotClockEstimates
+      val robot = spawn(RobotActor(4, address, settings, outbox.ref,
+          RobotWiring(Set.empty, Some(gateway.ref), new Backlog(64), clocks), heard = true))
+      gateway.receiveMessage().robot ! RobotActor.Subscribers(Set(recorder.ref, app.ref), Set(recorder.ref))
+      recorder.expectMessage(RobotOnline(4, address))
+      app.expectMessage(RobotOnline(4, address))
+      // Robot times 20 ms apart: enough keep-alives for an estimate (ClockSync.MinSamples).
+      val times = (1 to 2 * ClockSync.MinSamples).map(_ * 20L)
+      times.foreach { t =>
+        robot ! RobotActor.FrameReceived(MessageContents(4, status = Some(Status(timestamp = Some(t)))),
+          HeaderForm.Legacy, 30)
+      }
+      val last = times.map(_ => app.expectMessageType[RobotStatusUpdated].snapshot).last
+      val estimate = last.clock.getOrElse(fail("no clock estimate after the keep-alives"))
+      clocks.toGatewayNanos(4, 1000L) shouldBe Some(estimate.toGatewayNanos(1000L))
+      clocks.toGatewayNanos(5, 1000L) shouldBe None
+      recorder.expectNoMessage(100.millis)
     }
     "derive the snapshot's online from its own state, offline before the robot is reached" in {
       val outbox = createTestProbe[Outbox.Command]()

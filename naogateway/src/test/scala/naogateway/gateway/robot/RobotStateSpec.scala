@@ -25,6 +25,7 @@ import naogateway.api.{
   Priority,
   RobotOffline,
   RobotOnline,
+  RobotStatusUpdated,
   ServoReading,
   ServoReadings,
   SigningState,
@@ -267,6 +268,19 @@ class RobotStateSpec extends AnyWordSpec with Matchers {
       out.size shouldBe RobotState.HeldEvents
       known.held shouldBe empty
       known.publish(RobotOffline(7, "x"))._2 shouldBe Set(events.ref)
+    }
+
+    "send a keep-alive's status to the subscribers that want it, every other event to all of them" in {
+      val app = TestInbox[GatewayEvent]().ref
+      val recorder = TestInbox[GatewayEvent]().ref
+      val (both, _) = fresh(subscribers = None).subscribersChanged(Set(app, recorder), statusless = Set(recorder))
+      both.publish(RobotStatusUpdated(both.view(online = true)))._2 shouldBe Set(app)
+      both.publish(RobotOffline(7, "x"))._2 shouldBe Set(app, recorder)
+      both.wantsStatus shouldBe true
+      val (recorderOnly, _) = both.subscribersChanged(Set(recorder), statusless = Set(recorder))
+      recorderOnly.wantsStatus shouldBe false
+      recorderOnly.publish(RobotOffline(7, "x"))._2 shouldBe Set(recorder)
+      fresh(subscribers = None).wantsStatus shouldBe true
     }
 
     "keep the camera registrations, saying which one is new" in {
