@@ -107,24 +107,39 @@ object FoxgloveFeed {
   // A connection's updates began or ended: with none, nothing is encoded or asked for.
   private case object ClientJoined extends Command
   private case object ClientLeft extends Command
-  // The gateway's tap, to read while clients are connected; and the tick that reads it.
+  // The gateway's tap, to read while clients are connected; and the tick that reads it (a single timer each time, at
+  // the pace the last read calls for).
   private final case class TapAnswered(tap: GatewayTap) extends Command
   private case object TapTick extends Command
 
   /** How often the budget decision is published (the recording's outbox writes it at most this often). */
   private val BudgetInterval: FiniteDuration = 1.second
 
-  /** How often the tap's entries are taken while clients are connected. */
-  private val TapInterval: FiniteDuration = 50.millis
+  /** The tap's fastest pace while clients are connected: while ticks find it full the feed reads it this often. */
+  private[web] val TapIntervalMin: FiniteDuration = 50.millis
+
+  /** The tap's slowest pace: while ticks find little or nothing the feed reads it this often (the page's push pace), so
+    * a quiet gateway wakes the feed four times a second, not twenty.
+    */
+  private[web] val TapIntervalMax: FiniteDuration = 250.millis
 
   /** The feed's queue at the gateway's tap; what does not fit is dropped and counted there (`GatewayStats.tap`). */
   private[web] val TapCapacity: Int = 4096
 
-  /** Tap entries published per tick at most (about 1300 a second): a burst reaches no client's buffer whole (16 times
-    * `client-buffer`, which would close the connection); the rest waits at the tap, and what no longer fits is dropped
-    * there and counted.
+  /** Tap entries published per tick at most (about 1300 a second at the fastest pace): a burst reaches no client's
+    * buffer whole (16 times `client-buffer`, which would close the connection); the rest waits at the tap, and what no
+    * longer fits is dropped there and counted.
     */
   private[web] val TapEntriesPerTick: Int = 64
+
+  /** The pace after a tick that read `found` entries at pace `current`: the fastest after a full tick (entries wait),
+    * twice as slow (up to the slowest) after one that found less than half a tick's worth, else the same. Bounded both
+    * ways: it never spins, and a backlog is read at the fastest pace from the next tick on.
+    */
+  private[web] def nextTapInterval(current: FiniteDuration, found: Int): FiniteDuration =
+    if (found >= TapEntriesPerTick) TapIntervalMin
+    else if (found < TapEntriesPerTick / 2) (current * 2).min(TapIntervalMax)
+    else current
 
   /** The feed's name among the tap's readers. */
   val TapReader: String = "foxglove-feed"
@@ -133,7 +148,8 @@ object FoxgloveFeed {
     * the status watcher (a child forwarding the middleware's snapshots, there while a client is connected).
     */
   private final case class State(robots: Map[Int, RobotChannels], channels: Vector[Channel], clients: Int,
-      tap: Option[TapSubscription], askingTap: Boolean, statusWatcher: Option[ActorRef[RobotSnapshot]])
+      tap: Option[TapSubscription], askingTap: Boolean, statusWatcher: Option[ActorRef[RobotSnapshot]],
+      tapInterval: FiniteDuration)
 
   /** The hub: one owner of the channel list, watching robot events and the game at the middleware, and while any client
     * is connected watching the robots' snapshots, asking `gateway` for the budget and reading the gateway's tap
@@ -189,10 +205,12 @@ object FoxgloveFeed {
         /** The entries waiting at the tap (at most a tick's worth), on the recording's channels. */
         def readTap(state: State, tap: TapSubscription): State = {
           taken.clear()
-          tap.drainTo(taken, TapEntriesPerTick)
+          val found = tap.drainTo(taken, TapEntriesPerTick)
+          val pace = nextTapInterval(state.tapInterval, found)
+          timers.startSingleTimer(TapTick, pace)
           // The gateway's wall clock of a System.nanoTime, as the recorder dates its messages.
           val epochOffset = System.currentTimeMillis() * 1000000L - System.nanoTime()
-          var next = state
+          var next = state.copy(tapInterval = pace)
           var i = 0
           while (i < taken.size) {
             taken.get(i) match {
@@ -266,8 +284,10 @@ object FoxgloveFeed {
             case TapAnswered(tap) =>
               if (state.clients == 0) running(state.copy(askingTap = false))
               else {
-                timers.startTimerWithFixedDelay(TapTick, TapInterval)
-                running(state.copy(tap = Some(tap.subscribe(TapReader, TapCapacity)), askingTap = false))
+                // Each tick sets the next one at the pace what it found calls for (nextTapInterval).
+                timers.startSingleTimer(TapTick, TapIntervalMin)
+                running(state.copy(tap = Some(tap.subscribe(TapReader, TapCapacity)), askingTap = false,
+                    tapInterval = TapIntervalMin))
               }
             case TapTick =>
               state.tap.fold(Behaviors.same[Command])(t => running(readTap(state, t)))
@@ -326,7 +346,7 @@ object FoxgloveFeed {
           }
 
         running(State(Map.empty, Vector(Decisions, Datagrams), clients = 0, tap = None, askingTap = false,
-            statusWatcher = None))
+            statusWatcher = None, tapInterval = TapIntervalMin))
       }
     }
 

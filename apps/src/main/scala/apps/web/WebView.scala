@@ -15,9 +15,10 @@ import robotmiddleware.RobotMiddleware
 
 /** The one owner of what the web view shows ([[WebModel]]). It asks the gateway's read-only view as the status view
   * does, and subscribes at the middleware to robot events and, while at least one page is connected, to each robot's
-  * HaViMo2 frames (the camera costs the robots' WiFi budget: with no page open nobody asks for it); every
-  * `push-interval` it renders one JSON push that every connected page shares (a broadcast hub, so the cost does not
-  * grow with pages).
+  * HaViMo2 frames (the camera costs the robots' WiFi budget: with no page open nobody asks for it); it asks for the
+  * robots every `push-interval` while a page is open and for the gateway's other figures once a `sample-interval`;
+  * every `push-interval` it renders one JSON push that every connected page shares (a broadcast hub, so the cost does
+  * not grow with pages).
   */
 object WebView {
 
@@ -66,6 +67,7 @@ object WebView {
       gridsSent: Map[Int, Long],
       gridsAtNanos: Long,
       pushedAtNanos: Long,
+      figuresAskedAtNanos: Long,
       figures: Figures
   )
 
@@ -97,6 +99,7 @@ object WebView {
             Map.empty,
             0L,
             0L,
+            Long.MinValue / 2,
             Figures(0, 0, 0)
           ))
       }
@@ -161,13 +164,20 @@ object WebView {
     def running(s: State): Behavior[Command] = Behaviors.receiveMessage[Command] {
       case Tick =>
         ask(gateway.view.robots())(Robots.apply)
-        ask(gateway.view.links())(Links.apply)
-        ask(gateway.view.traffic())(Traffic.apply)
-        ask(gateway.view.gameSource())(GameSourceIs.apply)
-        ask(gateway.view.stats())(Stats.apply)
+        // The links, the traffic (per-second figures), the game source and the gateway's counters are asked once a
+        // sample, also while a page is open: asked at every push they would mostly answer what the last answer said.
+        val now = System.nanoTime()
+        val figuresDue = now - s.figuresAskedAtNanos >= settings.sampleInterval.toNanos * 9 / 10
+        if (figuresDue) {
+          ask(gateway.view.links())(Links.apply)
+          ask(gateway.view.traffic())(Traffic.apply)
+          ask(gateway.view.gameSource())(GameSourceIs.apply)
+          ask(gateway.view.stats())(Stats.apply)
+        }
+        val asked = if (figuresDue) s.copy(figuresAskedAtNanos = now) else s
         // The push follows the robots' answer, so a page sees what the gateway saw within about one interval; when the
         // answer is late (a robot actor slow to answer), the next tick pushes what there is.
-        running(if (s.answered || s.pages == 0) s.copy(answered = false) else push(s))
+        running(if (s.answered || s.pages == 0) asked.copy(answered = false) else push(asked))
       case Robots(robots) =>
         // While a page is open, each robot's frames are watched from the first time it is listed (the middleware ends
         // the watch when the camera watcher stops).

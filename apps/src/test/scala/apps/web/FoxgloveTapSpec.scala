@@ -102,6 +102,19 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       testKit.stop(feed)
     }
 
+    "read the tap slower while ticks find little, back at the fastest pace after a full tick, never outside the bounds" in {
+      import FoxgloveFeed.{nextTapInterval, TapEntriesPerTick, TapIntervalMax, TapIntervalMin}
+      // Nothing found: twice as slow each tick, up to the slowest pace and no further.
+      val quiet = Iterator.iterate(TapIntervalMin)(nextTapInterval(_, 0)).take(10).toVector
+      quiet.take(4) shouldBe Vector(TapIntervalMin, TapIntervalMin * 2, TapIntervalMin * 4, TapIntervalMax)
+      quiet.last shouldBe TapIntervalMax
+      // A full tick: entries wait at the tap, so the next tick comes at the fastest pace.
+      nextTapInterval(TapIntervalMax, TapEntriesPerTick) shouldBe TapIntervalMin
+      // Half a tick's worth or more: the pace holds.
+      nextTapInterval(TapIntervalMin * 2, TapEntriesPerTick / 2) shouldBe TapIntervalMin * 2
+      nextTapInterval(TapIntervalMin * 2, TapEntriesPerTick / 2 - 1) shouldBe TapIntervalMin * 4
+    }
+
     "give at most MaxRobotChannels robots message channels, however many robot ids the tap carries" in {
       val tap = new TestTap
       val feed = spawn(FoxgloveFeed(createTestProbe[RobotMiddleware.Command]().ref, new View(tap)))
