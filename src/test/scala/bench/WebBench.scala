@@ -21,8 +21,8 @@ import naogateway.access.GatewayAccess
 import naogateway.api.{GameStateUpdated, GatewayEvent}
 
 /** What the web view costs (docs/web.md, "What it costs"): the demo of [[WebDemo]] (three simulated robots with the
-  * faithful link, the simulated GameController, gateway and middleware) in one JVM with Akka's pools and scheduler as
-  * the package sets them (launcher.conf), first without the web view's clients, then with the page open in headless
+  * faithful link, the simulated GameController, gateway and middleware) in one JVM with Akka's pools sized as the
+  * package sizes them (launcher.conf), first without the web view's clients, then with the page open in headless
   * Chromium and a Foxglove-protocol client subscribed to every channel; the progress shows each window per thread group
   * ([[ThreadCpu]]):
   *
@@ -66,12 +66,10 @@ object WebBench extends Benchmark {
   }
 
   def run(): ListMap[String, Double] = {
-    // Akka's pools and scheduler as the package sets them (launcher.conf), so the figure is the installed base
-    // station's.
+    // Akka's pools as the package sizes them (launcher.conf), so the figure is the installed base station's.
     val launcher = naogateway.launcher.Launcher.defaults
     val pools = launcher.withOnlyPath("akka.actor.default-dispatcher")
-      .withFallback(launcher.withOnlyPath("akka.actor.internal-dispatcher"))
-      .withFallback(launcher.withOnlyPath("akka.scheduler")).resolve()
+      .withFallback(launcher.withOnlyPath("akka.actor.internal-dispatcher")).resolve()
     val config =
       ConfigFactory.parseString("apps.web { push-interval = 250ms, sample-interval = 1s }").withFallback(pools)
         .withFallback(WebDemo.config)

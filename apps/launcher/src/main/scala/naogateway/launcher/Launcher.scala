@@ -368,10 +368,9 @@ object Launcher {
     }
   }
 
-  /** What the demo's app node takes over from the gateway node's config: where the cluster is, the dispatchers' sizes
-    * and the scheduler's implementation ([[DeadlineScheduler]]: it wakes only at a tick with a timer due), and what
-    * makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace, Artery's flush at shutdown); and its own
-    * scheduler's tick ([[AppNodeScheduler]]).
+  /** What the demo's app node takes over from the gateway node's config: where the cluster is, the dispatchers' sizes,
+    * and what makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace, Artery's flush at shutdown); and
+    * its own scheduler's pace ([[AppNodeScheduler]]).
     */
   def appNodeConfig(gatewayNode: Config): Config =
     Seq(
@@ -379,7 +378,6 @@ object Launcher {
       "akka.actor.default-dispatcher",
       "akka.actor.internal-dispatcher",
       "akka.remote.default-remote-dispatcher",
-      "akka.scheduler.implementation",
       "akka.coordinated-shutdown",
       "akka.cluster.leader-actions-interval",
       "akka.remote.artery.advanced.shutdown-flush-timeout"
@@ -389,9 +387,9 @@ object Launcher {
       }
 
   /** The app node's scheduler ticks every 50 ms rather than Akka's 10 ms: its timers (the cluster's, second-long; the
-    * ball follower's retries; ask timeouts) need no finer grain, and timers due within one tick fire at one wake-up.
-    * The cluster's periodic tasks share it (a cluster tick shorter than the scheduler's would start a scheduler of its
-    * own).
+    * ball follower's retries; ask timeouts) need no finer grain, and each tick wakes its thread whether a timer is due
+    * or not. The cluster's periodic tasks share it (a cluster tick shorter than the default's would start a scheduler
+    * of its own).
     */
   private val AppNodeScheduler: Config =
     ConfigFactory.parseString("akka.scheduler.tick-duration = 50ms\nakka.cluster.scheduler.tick-duration = 50ms")
