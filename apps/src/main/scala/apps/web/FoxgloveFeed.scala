@@ -219,7 +219,7 @@ object FoxgloveFeed {
                 val n = encoder.datagram(d, RecordEncoder.addressBytes(d.source),
                   RecordEncoder.addressBytes(d.destination))
                 queue.offer(Published(Datagrams, nanos, java.util.Arrays.copyOf(encoder.bytes, n)))
-                if (d.port == RecordedPort.ROBOT_PORT && d.received) next = robotMessage(next, d.bytes, nanos)
+                if (d.port == RecordedPort.ROBOT_PORT && d.received) next = robotMessage(next, d.decoded, nanos)
               case Tapped.Decided(at, decision) =>
                 decision match {
                   // Published events and the budget come from the middleware and the gateway's figures, also while
@@ -234,10 +234,12 @@ object FoxgloveFeed {
           next
         }
 
-        /** A robot's frame on its message channel when it holds more than a keep-alive, and a reply as a decision. */
-        def robotMessage(state: State, bytes: Array[Byte], nanos: Long): State =
-          MessageContents.decodeFrame(bytes) match {
-            case Right((_, c)) =>
+        /** A robot's frame on its message channel when it holds more than a keep-alive, and a reply as a decision: only
+          * a frame the gateway accepted (the port's reader decoded it); a stranger's stays on /gateway/datagrams.
+          */
+        def robotMessage(state: State, decoded: Option[MessageContents], nanos: Long): State =
+          decoded match {
+            case Some(c) =>
               val onChannel = RecordEncoder.onMessageChannel(c)
               val (robot, next) = if (onChannel) robotChannels(state, c.robotId) else (None, state)
               robot.foreach(r => queue.offer(Published(r.message, nanos, c.toProtobuf)))
@@ -246,7 +248,7 @@ object FoxgloveFeed {
                     DecisionJson.reply(c.robotId, RpcReply.fromProto(r), nanos).getBytes(StandardCharsets.UTF_8)))
               }
               next
-            case Left(_) => state // on /gateway/datagrams only; the gateway counted the refusal
+            case None => state // on /gateway/datagrams only; the gateway counted the refusal
           }
 
         def running(state: State): Behavior[Command] =

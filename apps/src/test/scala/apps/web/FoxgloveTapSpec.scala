@@ -115,6 +115,34 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       nextTapInterval(TapIntervalMin * 2, TapEntriesPerTick / 2 - 1) shouldBe TapIntervalMin * 4
     }
 
+    "show a robot frame the gateway did not accept (a stranger's, in robot 3's name) on no robot channel" in {
+      val tap = new TestTap
+      val feed = spawn(FoxgloveFeed(createTestProbe[RobotMiddleware.Command]().ref, new View(tap)))
+      val connected = createTestProbe[FoxgloveFeed.Feed]()
+      feed ! FoxgloveFeed.Connect(connected.ref)
+      val got = new ConcurrentLinkedQueue[FoxgloveFeed.Update]()
+      val kill = connected.receiveMessage().updates.viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(got.add))
+        .run()
+      eventually(timeout(10.seconds))(tap.open.size shouldBe 1)
+      def frame(id: Int) = MessageContents(id, rpcResponse = Some(Response(callId = Some(id))))
+      def bytes(id: Int) = MessageContents.encodeFrame(frame(id)).toOption.get
+      // The stranger's: raw only, as the port's reader publishes a frame it did not accept.
+      tap.publish(Tapped.Datagram(System.nanoTime(), RecordedPort.ROBOT_PORT, received = true, robot, port, bytes(3),
+          3))
+      // Robot 4's own, accepted: on its channel, after the stranger's.
+      tap.publish(Tapped.Datagram(System.nanoTime(), RecordedPort.ROBOT_PORT, received = true, robot, port, bytes(4), 4,
+          decoded = Some(frame(4))))
+      def topics = got.asScala.toVector.collect { case FoxgloveFeed.Advertised(cs) => cs.map(_.topic) }.flatten
+      def replies = got.asScala.toVector.collect {
+        case FoxgloveFeed.Published(c, _, b) if c.topic == RecordingSchema.Topics.Decisions => new String(b, "UTF-8")
+      }
+      eventually(timeout(20.seconds))(topics should contain(RecordingSchema.Topics.message(4)))
+      topics should not contain RecordingSchema.Topics.message(3)
+      replies.count(_.contains("\"reply\"")) shouldBe 1
+      kill.shutdown()
+      testKit.stop(feed)
+    }
+
     "give at most MaxRobotChannels robots message channels, however many robot ids the tap carries" in {
       val tap = new TestTap
       val feed = spawn(FoxgloveFeed(createTestProbe[RobotMiddleware.Command]().ref, new View(tap)))
@@ -126,10 +154,10 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       eventually(timeout(10.seconds))(tap.open.size shouldBe 1)
       val ids = 1 to RecordingSchema.MaxRobotChannels + 20
       ids.foreach { id =>
-        val frame = MessageContents.encodeFrame(MessageContents(id, rpcResponse = Some(Response(callId = Some(id)))))
-          .toOption.get
+        val contents = MessageContents(id, rpcResponse = Some(Response(callId = Some(id))))
+        val frame = MessageContents.encodeFrame(contents).toOption.get
         tap.publish(Tapped.Datagram(System.nanoTime(), RecordedPort.ROBOT_PORT, received = true, robot, port, frame,
-            id))
+            id, decoded = Some(contents)))
       }
       def topics = got.asScala.toVector.collect { case FoxgloveFeed.Advertised(cs) => cs.map(_.topic) }.flatten
       def replies = got.asScala.toVector.collect {

@@ -115,6 +115,36 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
       contents.statistics.map(_.messageCount) shouldBe Some(contents.messages.size.toLong)
     }
 
+    "keep a stranger's frame in another robot's name raw: never on that robot's decoded channels" in {
+      val dir = Files.createTempDirectory("recording-spec-stranger")
+      val f = new GatewayFixture(testKit, s"""recording { enabled = on, directory = "${dir.toString}" }""")
+      // From another loopback address, in robot 7's name: a Status of another team, and a reply to no call.
+      val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+      val strangerAt = s"${stranger.socket().getLocalAddress.getHostAddress}:"
+      val forged = naogateway.wire.MessageContents.encodeFrame(naogateway.wire.MessageContents(7,
+          status = Some(Status(teamID = Some(99))))).toOption.get
+      try {
+        f.robot(7)
+        f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+        val before = f.stats().rejected.values.sum
+        (1 to 5).foreach(_ => stranger.send(ByteBuffer.wrap(forged), f.addresses.robots))
+        createTestProbe[Any]().awaitAssert(f.stats().rejected.values.sum should be >= before + 5, 5.seconds)
+        f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
+      } finally {
+        f.stop()
+        stranger.close()
+      }
+      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+      def on(topic: String): Vector[Mcap.Message] =
+        contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
+          contents.messages.filter(_.channelId == c.id))
+      // Kept byte for byte as what crossed the port ...
+      on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
+        .count(_.source.startsWith(strangerAt)) shouldBe 5
+      // ... but robot 7's channels hold its own keep-alives only.
+      on(Recording.Topics.status(7)).map(m => Status.parseFrom(m.data)).flatMap(_.teamID).distinct shouldBe Vector(1)
+    }
+
     "rotate its files by size and close each properly" in {
       val dir = Files.createTempDirectory("recording-rotate-spec")
       val f = new GatewayFixture(testKit,

@@ -38,17 +38,21 @@ private[naogateway] final class PortReader(
     inboundBytes += bytes.length
     if (inboundDatagrams >= InboundBatch) caughtUp()
     val decision = Routing.decide(table, bytes, from)
-    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread, with the frame as
-    // decoded here (published before anything acts on it, so it comes before the decisions it leads to).
-    if (tap.listening) tapped(table, decision, bytes, from)
-    decision match {
-      case Routing.ToRobot(route, header, contents, size) =>
-        // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
-        // (A match, not a map: a map's function would be built for every frame.)
-        val refused = route.target.signatures match {
+    // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
+    // (A match, not a map: a map's function would be built for every frame.)
+    val refused = decision match {
+      case Routing.ToRobot(route, header, _, _) =>
+        route.target.signatures match {
           case Some(check) => check.check(bytes, header).left.toOption
           case None        => None
         }
+      case _ => None
+    }
+    // The recorder, the live feed and the FU-Remote relay read it from the tap, off this thread, published before
+    // anything acts on it (so it comes before the decisions it leads to).
+    if (tap.listening) tapped(table, decision, refused.isEmpty, bytes, from)
+    decision match {
+      case Routing.ToRobot(route, header, contents, size) =>
         refused match {
           case Some(kind) =>
             rejections.count(kind, from)
@@ -66,19 +70,20 @@ private[naogateway] final class PortReader(
     }
   }
 
-  private def tapped(table: Routing.Table[Inlet], decision: Routing.Decision[Inlet], bytes: Array[Byte],
-      from: InetSocketAddress): Unit =
+  /** The datagram as the tap publishes it, with its frame decoded only where it is a known robot's own: from the
+    * robot's bound address and, for a robot that signs, past its signature check. Anything else (another address in a
+    * robot's name, a forged or replayed signature, a frame the gateway has yet to judge for discovery) reaches readers
+    * as raw bytes only, so no reader shows it on a robot's channels.
+    */
+  private def tapped(table: Routing.Table[Inlet], decision: Routing.Decision[Inlet], accepted: Boolean,
+      bytes: Array[Byte], from: InetSocketAddress): Unit =
     decision match {
       case Routing.ToRobot(route, _, contents, _) =>
         tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes, route.robotId,
-          Some(contents))
-      case other =>
-        val decoded = other match {
-          case Routing.ToGateway(_, contents, _, _, _) => Some(contents)
-          case _                                       => None
-        }
+          if (accepted) Some(contents) else None)
+      case _ =>
         tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, port.localAddress, bytes,
-          table.byAddress.get(from.getAddress).fold(-1)(_.robotId), decoded)
+          table.byAddress.get(from.getAddress).fold(-1)(_.robotId))
     }
 
   private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =

@@ -14,7 +14,7 @@ import scala.util.control.NonFatal
 import org.slf4j.LoggerFactory
 
 import naogateway.proto.RecordedPort
-import naogateway.wire.{MessageContents, RpcReply}
+import naogateway.wire.RpcReply
 import naogateway.api.recording.{Decision, DecisionJson, RecordEncoder, RecordingStats, Tapped}
 import naogateway.gateway.tap.Tap
 
@@ -254,11 +254,11 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
       }
     }
 
-    /** A robot's frame on its decoded channels, and a reply as a decision of its own: decoded by the port's reader
-      * already (or here, for an entry that comes without it).
+    /** A robot's frame on its decoded channels, and a reply as a decision of its own: only a frame the port's reader
+      * accepted and decoded (`Tapped.Datagram.decoded`); anything else is kept raw, on `/gateway/datagrams`.
       */
     private def decoded(d: Tapped.Datagram, time: Long): Unit =
-      d.decoded.orElse(MessageContents.decodeFrame(d.bytes).toOption.map(_._2)) match {
+      d.decoded match {
         case Some(c) =>
           val ids = robotChannels(c.robotId)
           if (ids ne null) {

@@ -79,7 +79,7 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
       val plain = keepAlive.copy(servoTelemetry = None)
       Seq(keepAlive, plain).foreach { c =>
         tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, to,
-          naogateway.wire.MessageContents.encodeFrame(c).toOption.get, 2)
+          naogateway.wire.MessageContents.encodeFrame(c).toOption.get, 2, decoded = Some(c))
       }
       recording.close()
       val contents = McapReader.read(Files.readAllBytes(files(dir).head))
