@@ -1,6 +1,8 @@
 package bench
 
+import java.io.File
 import java.lang.management.ManagementFactory
+import java.nio.file.Files
 
 import scala.collection.immutable.ListMap
 import scala.concurrent.Await
@@ -10,25 +12,22 @@ import scala.util.Try
 
 import akka.actor.typed.ActorSystem
 import akka.actor.typed.scaladsl.Behaviors
-import akka.http.scaladsl.Http
-import akka.http.scaladsl.model.ws.{BinaryMessage, Message, TextMessage, WebSocketRequest}
-import akka.stream.scaladsl.{Flow, Sink, Source}
 import com.typesafe.config.ConfigFactory
-import spray.json._
 
-import apps.web.{Browser, FoxgloveFeed, WebDemo, WebSettings}
+import apps.web.{Browser, WebDemo, WebSettings}
+import apps.zeromq.PythonEnv
 import naogateway.access.GatewayAccess
 import naogateway.api.{GameStateUpdated, GatewayEvent}
 
 /** What the web view costs (docs/web.md, "What it costs"): the demo of [[WebDemo]] (three simulated robots with the
   * faithful link, the simulated GameController, gateway and middleware) in one JVM with Akka's pools sized as the
   * package sizes them (launcher.conf), first without the web view's clients, then with the page open in headless
-  * Chromium and a Foxglove-protocol client subscribed to every channel; the progress shows each window per thread group
-  * ([[ThreadCpu]]):
+  * Chromium and a Foxglove-protocol viewer subscribed to every channel (src/test/python/bench/foxglove_reader.py, a
+  * process of its own); the progress shows each window per thread group ([[ThreadCpu]]):
   *
   *   - `web_idle_cpu_pct_without` / `web_idle_cpu_pct`: this JVM's CPU time (user + system) over [[Window]], in percent
-  *     of one core, without and with the clients (the Foxglove client runs in this JVM, so the second errs high;
-  *     Chromium's own CPU is not counted: it is the viewer's machine's);
+  *     of one core, without and with the clients (Chromium's and the viewer's own CPU is not counted: it is the viewer's
+  *     machine's; the viewer's is printed beside it);
   *   - `web_heap_growth_mb`: heap in use after a full collection, at the end of the window with clients against before
   *     they connected;
   *   - `web_change_latency_ms_p50` / `_max`: from the gateway publishing a new game state (a subscriber's clock) to the
@@ -74,7 +73,6 @@ object WebBench extends Benchmark {
       ConfigFactory.parseString("apps.web { push-interval = 250ms, sample-interval = 1s }").withFallback(pools)
         .withFallback(WebDemo.config)
     val system = ActorSystem[Nothing](Behaviors.empty, "web-bench", config)
-    implicit val s: ActorSystem[_] = system
     try {
       val demo = new WebDemo(system, WebSettings(system))
       progress(s"demo up, web view at ${demo.page()}; settling ${Settle.toSeconds} s")
@@ -98,47 +96,39 @@ object WebBench extends Benchmark {
       )
       demo.gateway ! GatewayAccess.Subscribe(events)
 
-      // A Foxglove client that subscribes to every channel it is advertised.
-      @volatile var foxgloveMessages = 0L
-      val (outQueue, outSource) = Source.queue[Message](64).preMaterialize()
-      // A large advertisement (every channel's schema) comes in parts: each text message is read whole.
-      def answer(text: String): Unit = {
-        val o = text.parseJson.asJsObject
-        if (o.fields.get("op").contains(JsString("advertise"))) {
-          val subs = o.fields("channels").asInstanceOf[JsArray].elements.map(_.asJsObject.fields("id"))
-            .map(id => JsObject("id" -> id, "channelId" -> id))
-          outQueue.offer(TextMessage(JsObject("op" -> JsString("subscribe"), "subscriptions" -> JsArray(subs))
-                .compactPrint))
-        }
-        ()
+      // A Foxglove viewer that subscribes to every channel it is advertised, in a process of its own as a real one is:
+      // its own reading of the messages is the viewer's machine's work, not the gateway's.
+      val viewerLog = new File(PythonEnv.root, "target/bench/foxglove-reader.log")
+      viewerLog.getParentFile.mkdirs()
+      val viewer = PythonEnv.environment().map { python =>
+        new ProcessBuilder(python.getPath, "-u", new File(PythonEnv.root, "src/test/python/bench/foxglove_reader.py")
+          .getPath, s"ws://127.0.0.1:${demo.address.getPort}/foxglove", (ClientSettle + Window + 30.seconds).toSeconds
+          .toString).redirectErrorStream(true).redirectOutput(viewerLog).start()
       }
-      val foxgloveIn = Sink.foreach[Message] {
-        case t: TextMessage.Strict   => answer(t.text)
-        case t: TextMessage          => t.textStream.runFold("")(_ + _).foreach(answer)(system.executionContext)
-        case _: BinaryMessage.Strict => foxgloveMessages += 1
-        case b: BinaryMessage =>
-          foxgloveMessages += 1
-          b.dataStream.runWith(Sink.ignore)
-      }
-      Http().singleWebSocketRequest(
-        WebSocketRequest(s"ws://127.0.0.1:${demo.address.getPort}/foxglove",
-          subprotocol = Some(FoxgloveFeed.Subprotocol)),
-        Flow.fromSinkAndSource(foxgloveIn, outSource)
-      )
+      // "count N": the viewer's messages so far, printed once a second.
+      def viewerCount(): Long =
+        Try(Files.readAllLines(viewerLog.toPath).asScala.reverseIterator.collectFirst {
+          case l if l.startsWith("count ") => l.split(' ')(1).toLong
+        }.getOrElse(0L)).getOrElse(0L)
+      def viewerCpu(): Option[Long] = viewer.toOption.flatMap(p => Packaged.cpuNanos(p.pid()))
 
-      val withClients = Browser.missing match {
+      val withClients = (Browser.missing.map(r => s"no browser ($r)") ++ viewer.left.toOption.map(r =>
+        s"no Foxglove viewer ($r)")).headOption match {
         case Some(reason) =>
-          progress(s"no browser ($reason): the page's figures are left out")
+          progress(s"$reason: the page's and the feed's figures are left out")
           ListMap("web_idle_cpu_pct_without" -> without)
         case None =>
           Browser.withChromium() { driver =>
             driver.get(demo.page())
             Thread.sleep(ClientSettle.toMillis)
+            val (messages0, viewer0, wall0) = (viewerCount(), viewerCpu(), System.nanoTime())
             val cpu = cpuPercent(Window)
+            val (messages1, viewer1, wall1) = (viewerCount(), viewerCpu(), System.nanoTime())
+            val viewerPct = (for (a <- viewer0; b <- viewer1) yield (b - a) * 100.0 / (wall1 - wall0)).getOrElse(Double.NaN)
             val heapAfter = heapAfterGc()
             progress(
-              f"with the page and a Foxglove client: $cpu%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f), heap ${(heapAfter - heapBefore) / 1e6}%+.1f MB, " +
-                s"$foxgloveMessages Foxglove messages")
+              f"with the page and a Foxglove viewer: $cpu%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f), heap ${(heapAfter - heapBefore) / 1e6}%+.1f MB, " +
+                f"${messages1 - messages0} Foxglove messages in the window (the viewer's own process: $viewerPct%.1f %% of a core, not counted)")
             val changes = driver.executeScript("return window.naogateway.changes").asInstanceOf[java.util.List[
               java.util.Map[String, AnyRef]]]
               .asScala.toVector.map(m => m.get("state").toString -> m.get("at").asInstanceOf[Number].longValue)
@@ -157,8 +147,7 @@ object WebBench extends Benchmark {
             )
           }
       }
-      // The connection may have ended first (the client closes one idle for a minute): then the queue is done already.
-      Try(outQueue.complete())
+      viewer.foreach(_.destroy())
       Try(demo.stop())
       withClients
     } finally {
