@@ -9,7 +9,7 @@ import akka.actor.typed.{ActorRef, Behavior, PostStop}
 import naogateway.access.{GatewayAccess, RobotAccess}
 import naogateway.api.{GameReading, GatewayAddresses, GatewayEvent, GatewayStats, LinkStats, RobotLinks, RobotSnapshot}
 import naogateway.gateway.gamecontroller.GameControllerWatch
-import naogateway.gateway.link.{Backlog, PortReader, Relay, ReplayLink, RobotLink, UdpLink}
+import naogateway.gateway.link.{Backlog, PortProgress, PortReader, Relay, ReplayLink, RobotLink, UdpLink}
 import naogateway.gateway.recording.{Recording, RobotClockEstimates}
 import naogateway.gateway.tap.Tap
 import naogateway.gateway.robot.{Outbox, RobotActor, RobotRef, RobotTransport, RobotWiring}
@@ -38,8 +38,10 @@ private[naogateway] final class GatewayLogic(
   private val subscriptionRequests = context.messageAdapter[RobotActor.SubscribersWanted](RobotWantsSubscribers.apply)
   private val rejections = new RejectionLedger.Shared
   private val gatewayBacklog = new Backlog(settings.gatewayBacklog)
+  // How far the reader has caught up with the robot port, for the heartbeats of the robots it carries.
+  private val portProgress = new PortProgress
   private val reader =
-    new PortReader(port, context.self, gatewayBacklog, outbox, rejections, tap, routes)
+    new PortReader(port, context.self, gatewayBacklog, outbox, rejections, tap, routes, portProgress)
   private var gameControllerAddress: Option[InetSocketAddress] = None
   private var byId = Map.empty[Int, Entry]
   // Keyed by IP alone: a robot's source port changes when its module reconnects, its IP does not.
@@ -111,8 +113,8 @@ private[naogateway] final class GatewayLogic(
   private def spawnRobot(robotId: Int, address: InetSocketAddress, discovered: Boolean): Entry = {
     val backlog = new Backlog(settings.robotBacklog)
     val actor = RobotRef(context.spawn(
-        Behaviors.supervise(RobotActor(robotId, address, settings, outbox, wiring(backlog), heard = false,
-            discovered = discovered))
+        Behaviors.supervise(RobotActor(robotId, address, settings, outbox,
+            wiring(backlog).copy(port = portProgress), heard = false, discovered = discovered))
           .onFailure(settings.supervision.robot.strategy),
         s"robot-$robotId",
         RobotDispatcher

@@ -30,7 +30,8 @@ final case class HeartbeatSettings(
     qualityWindow: FiniteDuration,
     degradedBelow: Double,
     goodAbove: Double,
-    probeBackoffMax: FiniteDuration = 30.seconds
+    probeBackoffMax: FiniteDuration = 30.seconds,
+    readerGrace: FiniteDuration = 1.second
 ) {
   require(keepAliveInterval > Duration.Zero, "heartbeat.keep-alive-interval must be positive")
   require(quietAfter >= keepAliveInterval, "heartbeat.quiet-after must be at least one keep-alive interval")
@@ -39,6 +40,7 @@ final case class HeartbeatSettings(
   require(qualityWindow >= keepAliveInterval * 2, "heartbeat.quality-window must cover at least two keep-alives")
   require(0 < degradedBelow && degradedBelow <= goodAbove && goodAbove <= 1,
     "need 0 < degraded-below <= good-above <= 1")
+  require(readerGrace >= Duration.Zero && readerGrace <= 10.seconds, "heartbeat.reader-grace must be 0 to 10 s")
   require(probeBackoffMax >= probeTimeout * chances.toLong,
     "heartbeat.probe-backoff-max must be at least chances x probe-timeout")
 
@@ -263,7 +265,8 @@ object GatewaySettings {
       duration(hb, "quality-window"),
       hb.getDouble("degraded-below"),
       hb.getDouble("good-above"),
-      duration(hb, "probe-backoff-max")
+      duration(hb, "probe-backoff-max"),
+      duration(hb, "reader-grace")
     )
     val zeroMqHeartbeat = zeroMq.getConfig("heartbeat")
     val teamKey = signingKey(c)

@@ -22,7 +22,8 @@ private[naogateway] final class PortReader(
     outbox: ActorRef[Outbox.Command],
     rejections: RejectionLedger.Shared,
     tap: Tap,
-    val routes: AtomicReference[Routing.Table[PortReader.Inlet]]
+    val routes: AtomicReference[Routing.Table[PortReader.Inlet]],
+    progress: PortProgress
 ) extends RobotPort.Handler {
   import PortReader._
 
@@ -36,7 +37,7 @@ private[naogateway] final class PortReader(
     val table = routes.get
     inboundDatagrams += 1
     inboundBytes += bytes.length
-    if (inboundDatagrams >= InboundBatch) caughtUp()
+    if (inboundDatagrams >= InboundBatch) flushInbound()
     val decision = Routing.decide(table, bytes, from)
     // A robot that must sign: nothing acts on its frame before the signature and the replay window pass.
     // (A match, not a map: a map's function would be built for every frame.)
@@ -89,7 +90,13 @@ private[naogateway] final class PortReader(
   private def deliver(route: Routing.Route[Inlet], message: RobotActor.Command, from: InetSocketAddress): Unit =
     if (route.target.backlog.tryAdd()) route.target.actor ! message else rejections.count(Rejection.RobotBusy, from)
 
-  def caughtUp(): Unit =
+  def caughtUp(): Unit = {
+    progress.caughtUp()
+    flushInbound()
+  }
+
+  // The outbox's figures of what came in, in batches.
+  private def flushInbound(): Unit =
     if (inboundDatagrams > 0) {
       outbox ! Outbox.Inbound(inboundDatagrams, inboundBytes)
       inboundDatagrams = 0

@@ -12,6 +12,7 @@ import naogateway.gateway.robot.RobotFrames.Outbound
 import naogateway.wire.RpcCall
 import naogateway.api.{LinkQuality, Priority}
 import naogateway.gateway.HeartbeatSettings
+import naogateway.gateway.link.PortProgress
 
 /** Liveness of one robot: passive from keep-alives, active probes when it goes quiet, three chances, then offline. Its
   * probes go straight to the robot's sender (as the stream's segments do), which it tells when each was answered; its
@@ -122,21 +123,28 @@ private[naogateway] object HeartBeatActor {
     def initial(count: Long): Quality = Quality(Queue.empty, count, LinkQuality.Offline)
   }
 
+  /** How often a probe's verdict looks again whether the port's reader has caught up. */
+  private val ReaderCheck: FiniteDuration = FiniteDuration(20, TimeUnit.MILLISECONDS)
+
+  // A probe whose timeout has not come yet.
+  private val NotYet = Long.MinValue
+
   private case object QuietKey
   private case object ProbeKey
   private case object QualityKey
   private case object BackoffKey
 
   /** A heartbeat reporting to `report` and probing through the robot's `sender`, reading the robot's `keepAlives`;
-    * `online` says whether the robot has just been heard.
+    * `online` says whether the robot has just been heard. `port` is how far the reader of the robot's port has caught
+    * up: a probe is not judged unanswered while its answer may still wait in the socket (at most `reader-grace`).
     */
   def apply(settings: HeartbeatSettings, report: ActorRef[Report], sender: ActorRef[NoResponseActor.Command],
-      online: Boolean, keepAlives: KeepAlives): Behavior[Command] =
+      online: Boolean, keepAlives: KeepAlives, port: PortProgress = PortProgress.Always): Behavior[Command] =
     Behaviors.setup { _ =>
       Behaviors.withTimers { timers =>
         // Told of every keep-alive until it is online (and counts them from here on).
         keepAlives.wantMessages(true)
-        val h = new HeartBeat(settings, report, sender, timers, keepAlives)
+        val h = new HeartBeat(settings, report, sender, timers, keepAlives, port)
         timers.startTimerWithFixedDelay(QualityKey, QualityTick, settings.keepAliveInterval)
         if (online) {
           val running = h.online(Quality.initial(keepAlives.count))
@@ -149,12 +157,17 @@ private[naogateway] object HeartBeatActor {
   // Every step arms its timers before it reports: whoever reacts to a report (a test that then moves manual time,
   // say) finds the timers running already, so no timer starts late by the time that reaction took.
   private final class HeartBeat(settings: HeartbeatSettings, report: ActorRef[Report],
-      sender: ActorRef[NoResponseActor.Command], timers: TimerScheduler[Command], keepAlives: KeepAlives) {
+      sender: ActorRef[NoResponseActor.Command], timers: TimerScheduler[Command], keepAlives: KeepAlives,
+      port: PortProgress) {
     // A random start per incarnation, as the response actor's: a late answer to a probe of an earlier incarnation
     // must not pass for an answer to this one's (protocol.md 7.1, a call id is never sent twice).
     private var nextProbeId = CallId.randomStart()
     private var probeSentAt = 0L
     private var probeId = -1L
+    /* When the current probe's timeout first came (NotYet before): from then on its verdict waits, within the grace,
+     * for */
+    // the port's reader to catch up with what the socket held at that moment.
+    private var probeTimedOutAt = NotYet
     // Rounds of probes in a row that ended without an answer to any probe (a keep-alive does not count: anyone can send
     // one). After each, a new round for someone who wants the robot waits for the back-off (BackoffKey running);
     // `wanted` remembers that someone asked meanwhile.
@@ -219,6 +232,7 @@ private[naogateway] object HeartBeatActor {
       probeId = CallId.next(CallId.Owner.Heartbeat, nextProbeId)
       nextProbeId = CallId.count(probeId)
       probeSentAt = System.nanoTime()
+      probeTimedOutAt = NotYet
       timers.startSingleTimer(ProbeKey, ProbeTimeout, settings.probeTimeout)
       // It takes room in the robot's buffer until answered, or until its timeout has passed.
       sender ! NoResponseActor.Submit(
@@ -244,6 +258,14 @@ private[naogateway] object HeartBeatActor {
       timers.cancel(BackoffKey)
     }
 
+    /** Whether the port's reader has not found its socket empty since this probe's timeout came, within the grace. */
+    private def readerBehind(): Boolean = {
+      // On the keep-alives' clock, as the port's progress is.
+      val now = keepAlives.clock()
+      if (probeTimedOutAt == NotYet) probeTimedOutAt = now
+      !port.caughtUpSince(probeTimedOutAt) && now - probeTimedOutAt < settings.readerGrace.toNanos
+    }
+
     def probe(chance: Int, wasOnline: Boolean, q: Quality): Behavior[Command] = {
       sendProbe()
       probing(chance, wasOnline, q)
@@ -264,7 +286,12 @@ private[naogateway] object HeartBeatActor {
         if (answered(id)) backOnline(wasOnline, q, probeAnswered = true) else Behaviors.same
       case ProbeTimeout =>
         if (heard) backOnline(wasOnline, q, probeAnswered = false)
-        else if (chance < settings.chances) probe(chance + 1, wasOnline, q)
+        else if (readerBehind()) {
+          // A burst fills the socket: the answer or a keep-alive may be waiting behind it. Judged once the reader
+          // found the socket empty, or when the grace is over.
+          timers.startSingleTimer(ProbeKey, ProbeTimeout, ReaderCheck)
+          Behaviors.same
+        } else if (chance < settings.chances) probe(chance + 1, wasOnline, q)
         else {
           silentRounds += 1
           wanted = false

@@ -180,7 +180,7 @@ object RobotActor {
       }
       val keepAlives = new HeartBeatActor.KeepAlives
       val heartbeat =
-        child(HeartBeatActor(heartbeatSettings, reports, sender, online = false, keepAlives), "heartbeat")
+        child(HeartBeatActor(heartbeatSettings, reports, sender, online = false, keepAlives, wiring.port), "heartbeat")
       val response = child(ResponseActor(robotId, settings.calls, context.self, sender, online = false), "response")
       if (heard && keepAlives.seen(System.nanoTime())) heartbeat ! HeartBeatActor.KeepAliveSeen
       forgetAfter(settings.discovery.forgetUnreachedAfter, "not online")

@@ -2,7 +2,7 @@ package naogateway.gateway.robot
 
 import akka.actor.typed.ActorRef
 
-import naogateway.gateway.link.Backlog
+import naogateway.gateway.link.{Backlog, PortProgress}
 import naogateway.gateway.recording.RobotClockEstimates
 import naogateway.access.RobotAccess
 import naogateway.api.GatewayEvent
@@ -11,11 +11,12 @@ import naogateway.api.GatewayEvent
   * restarted actor must not use the list it was spawned with) and holds its events until the answer comes; the gateway
   * pushes every later change itself. Without one, `subscribers` is the list. `backlog` counts the datagrams the robot
   * port's reader has handed the actor, given back as each is handled. `clocks` is where the actor puts the robot's
-  * clock estimate at every keep-alive, for the recorder.
+  * clock estimate at every keep-alive, for the recorder. `port` is how far the reader of the port that carries the
+  * robot's datagrams has caught up, so the heartbeat does not judge the robot by answers still waiting in the socket.
   */
 private[naogateway] final case class RobotWiring(subscribers: Set[ActorRef[GatewayEvent]],
     gateway: Option[ActorRef[RobotActor.SubscribersWanted]], backlog: Backlog,
-    clocks: RobotClockEstimates = new RobotClockEstimates)
+    clocks: RobotClockEstimates = new RobotClockEstimates, port: PortProgress = PortProgress.Always)
 
 /** Wirings without a gateway. */
 private[naogateway] object RobotWiring {

@@ -9,6 +9,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.api.LinkQuality
 import naogateway.gateway.HeartbeatSettings
+import naogateway.gateway.link.PortProgress
 import naogateway.gateway.robot.HeartBeatActor._
 import naogateway.api.Priority
 
@@ -210,6 +211,62 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       reports.receiveMessage() shouldBe a[WentOffline]
       wantedAfter(450.millis)
       probeId(reports.receiveMessage())
+    }
+    "wait for the port's reader to catch up before counting a probe unanswered, and come back on what it finds" in {
+      val reports = createTestProbe[Any]()
+      val robot = new Robot
+      // The reader last found the socket empty at 0 and is behind from then on: a burst fills the socket.
+      val port = new PortProgress(() => robot.now)
+      // A quality window longer than the test: the link quality is not judged here.
+      spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
+          robot.keepAlives, port))
+      reports.expectMessage(CameOnline)
+      robot.passes(400.millis)
+      probeId(reports.receiveMessage())
+      // The probe's timeout comes and goes, and half the grace with it: no second probe, no verdict.
+      (1 to 50).foreach(_ => robot.passes(10.millis))
+      reports.expectNoMessage(Duration.Zero)
+      // The reader works through the burst: a keep-alive was waiting in it, and the socket is empty now.
+      robot.keepAlives.seen(robot.now)
+      port.caughtUp()
+      (1 to 5).foreach(_ => robot.passes(10.millis))
+      // Online all along: nothing to report, and no probe until it is quiet again.
+      reports.expectNoMessage(Duration.Zero)
+    }
+    "count a probe unanswered once the reader has caught up, or the grace is over" in {
+      val reports = createTestProbe[Any]()
+      val robot = new Robot
+      val port = new PortProgress(() => robot.now)
+      // A quality window longer than the test: the link quality is not judged here.
+      spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
+          robot.keepAlives, port))
+      reports.expectMessage(CameOnline)
+      robot.passes(400.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(200.millis)
+      reports.expectNoMessage(Duration.Zero)
+      // Caught up with nothing from the robot in the socket: the next look counts the miss and probes again.
+      port.caughtUp()
+      (1 to 3).foreach(_ => robot.passes(10.millis))
+      probeId(reports.receiveMessage())
+      // Behind again for good: each of the two chances left waits out the grace (1 s), then the robot is offline.
+      robot.passes(10.millis)
+      port.caughtUp()
+      var waited = 0.millis
+      var offline = Option.empty[Any]
+      var probes = 0
+      while (offline.isEmpty && waited < 5.seconds) {
+        robot.passes(50.millis)
+        waited += 50.millis
+        scala.util.Try(reports.receiveMessage(20.millis)).toOption.foreach {
+          case w: WentOffline => offline = Some(w)
+          case p              => probeId(p); probes += 1
+        }
+      }
+      probes shouldBe 1
+      offline shouldBe defined
+      // Two timeouts (150 ms each) and two graces, not the 300 ms of two timeouts alone.
+      waited should be >= 2.seconds
     }
     "ignore answers to probes it did not send" in {
       val reports = createTestProbe[Any]()
