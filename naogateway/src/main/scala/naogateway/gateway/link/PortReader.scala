@@ -34,6 +34,7 @@ private[naogateway] final class PortReader(
 
   def received(bytes: Array[Byte], from: InetSocketAddress): Unit = {
     datagramsIn += 1
+    progress.reading()
     val table = routes.get
     inboundDatagrams += 1
     inboundBytes += bytes.length

@@ -217,6 +217,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       val robot = new Robot
       // The reader last found the socket empty at 0 and is behind from then on: a burst fills the socket.
       val port = new PortProgress(() => robot.now)
+      port.reading()
       // A quality window longer than the test: the link quality is not judged here.
       spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
           robot.keepAlives, port))
@@ -237,6 +238,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       val reports = createTestProbe[Any]()
       val robot = new Robot
       val port = new PortProgress(() => robot.now)
+      port.reading()
       // A quality window longer than the test: the link quality is not judged here.
       spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
           robot.keepAlives, port))
@@ -252,6 +254,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       // Behind again for good: each of the two chances left waits out the grace (1 s), then the robot is offline.
       robot.passes(10.millis)
       port.caughtUp()
+      port.reading()
       var waited = 0.millis
       var offline = Option.empty[Any]
       var probes = 0
@@ -267,6 +270,25 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       offline shouldBe defined
       // Two timeouts (150 ms each) and two graces, not the 300 ms of two timeouts alone.
       waited should be >= 2.seconds
+    }
+    "judge a probe at once while the port's reader has nothing left to read" in {
+      val reports = createTestProbe[Any]()
+      val robot = new Robot
+      // A quiet port: the reader read a datagram and then found the socket empty, long before the robot fell silent.
+      val port = new PortProgress(() => robot.now)
+      port.reading()
+      port.caughtUp()
+      spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
+          robot.keepAlives, port))
+      reports.expectMessage(CameOnline)
+      robot.passes(400.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(150.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(150.millis)
+      probeId(reports.receiveMessage())
+      robot.passes(150.millis)
+      reports.receiveMessage() shouldBe a[WentOffline]
     }
     "ignore answers to probes it did not send" in {
       val reports = createTestProbe[Any]()
