@@ -182,5 +182,25 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       progress.frames should be > 0L
       progress.lastDistance shouldBe defined
     }
+
+    "rest the camera at the ball and take a look now and then" in {
+      // The ball 0.6 m ahead: in sight at once, reached within a few steps.
+      val ball = Scene(0.6, 0.0)
+      val sim = spawnRobot(17, firmware = _.copy(startPose = Pose(0.0, 0.0, 0.0), scene = ball))
+      online(17)
+      val node = appNode()
+      val follower = node.systemActorOf(BallFollower(connect(node, "ball-follower-rest", 1), 17), "follower-17")
+      def progress(): BallFollower.Progress =
+        follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue
+      def camera(): Boolean = view(sim).debugEnabled.contains("havimo.regions")
+      eventually(timeout(60.seconds), interval(100.millis))(progress().reached shouldBe true)
+      // At the ball the camera goes off after a look's frames, comes on for the next look, and goes off again.
+      eventually(timeout(30.seconds), interval(20.millis))(camera() shouldBe false)
+      val atRest = progress().frames
+      eventually(timeout(30.seconds), interval(20.millis))(camera() shouldBe true)
+      eventually(timeout(30.seconds), interval(20.millis))(camera() shouldBe false)
+      progress().frames should be > atRest
+      progress().reached shouldBe true
+    }
   }
 }
