@@ -186,10 +186,10 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
     "rest the camera at the ball and take a look now and then" in {
       // The ball 0.6 m ahead: in sight at once, reached within a few steps.
       val ball = Scene(0.6, 0.0)
-      val sim = spawnRobot(17, firmware = _.copy(startPose = Pose(0.0, 0.0, 0.0), scene = ball))
-      online(17)
+      val sim = spawnRobot(18, firmware = _.copy(startPose = Pose(0.0, 0.0, 0.0), scene = ball))
+      online(18)
       val node = appNode()
-      val follower = node.systemActorOf(BallFollower(connect(node, "ball-follower-rest", 1), 17), "follower-17")
+      val follower = node.systemActorOf(BallFollower(connect(node, "ball-follower-rest", 1), 18), "follower-18")
       def progress(): BallFollower.Progress =
         follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue
       def camera(): Boolean = view(sim).debugEnabled.contains("havimo.regions")
