@@ -28,10 +28,11 @@ import naogateway.sim.{Fleet, FleetSettings}
   *     simulated robots with the faithful link, the ball follower in its own actor system, the simulated GameController
   *     and the status printer, output piped. Once the launcher's log shows the three robots online, [[DemoSettle]] lets
   *     the JIT calm down, then the process's CPU time (user + system, from the operating system) is taken over
-  *     [[Window]]. The ball follower keeps robot 1's camera on and steers it the whole time, so this is the demo's
-  *     steady state rather than a process with nothing to do. The log is read for the ball follower too: a demo whose
-  *     ball follower did not get its robot (a machine too loaded for its 10 s search) is a different, cheaper demo. The
-  *     progress shows the window per thread group ([[ThreadCpu]]): CPU and wake-ups a second.
+  *     [[Window]]. The ball follower has walked robot 1 to the ball by then and stands at it, its camera resting
+  *     between looks, so this is the demo's steady state rather than a process with nothing to do. The log is read for
+  *     the ball follower too: a demo whose ball follower did not get its robot (a machine too loaded for its 10 s
+  *     search) is a different, cheaper demo. The progress shows the window per thread group ([[ThreadCpu]]): CPU and
+  *     wake-ups a second.
   *   - `demo_stop_ms`: from the bench's TERM to the demo's exit, the JVM's shutdown hooks doing what they do on Ctrl-C
   *     (both nodes leave the cluster, the actor systems stop). Goal 2000 (launcher.conf).
   *   - `sim_idle_cpu_pct_per_robot`: [[SimRobots]] simulated robots with the faithful link (the demo's mode) in an

@@ -48,6 +48,9 @@ final class EndToEndNode {
   cluster.manager ! Join(cluster.selfMember.address)
   private val gatewayPort = cluster.selfMember.address.port.get
 
+  /** The gateway node's cluster address, for an app node to join. */
+  val gatewayAddress: akka.actor.Address = cluster.selfMember.address
+
   /** The gateway on the gateway node. */
   val gateway: ActorRef[GatewayAccess.Command] = gatewayNode.spawn(Gateway(GatewaySettings(gatewayNode.system)),
     "gateway")
@@ -70,10 +73,16 @@ final class EndToEndNode {
     gatewayNode.shutdownTestKit()
   }
 
-  /** A new app node that joins the gateway node's cluster. */
-  def appNode(): ActorSystem[Nothing] = {
-    val node = MiddlewareCluster.start[Nothing](Behaviors.empty, MiddlewareCluster.AppRole,
-      ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort").withFallback(common))
+  /** A new app node that joins the gateway node's cluster, at once or (`join` off) only when told to join
+    * [[gatewayAddress]].
+    */
+  def appNode(join: Boolean = true): ActorSystem[Nothing] = {
+    val seeds = if (join) "" else "akka.cluster.seed-nodes = []"
+    val node = MiddlewareCluster.start[Nothing](
+      Behaviors.empty,
+      MiddlewareCluster.AppRole,
+      ConfigFactory.parseString(s"robotmiddleware.cluster.gateway-port = $gatewayPort\n$seeds").withFallback(common)
+    )
     appNodes ::= node
     node
   }

@@ -8,7 +8,10 @@ import scala.concurrent.duration._
 
 import akka.actor.testkit.typed.scaladsl.LogCapturing
 import akka.actor.typed.scaladsl.AskPattern._
-import akka.actor.typed.ActorSystem
+import akka.actor.testkit.typed.scaladsl.TestProbe
+import akka.actor.typed.{ActorRefResolver, ActorSystem}
+import akka.cluster.typed.{Cluster, Join}
+import akka.stream.Materializer
 import akka.stream.scaladsl.Sink
 import org.scalatest.BeforeAndAfterAll
 import org.scalatest.concurrent.{Eventually, ScalaFutures}
@@ -17,7 +20,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import apps.BallFollower
 import naogateway.testkit.TestLoopback
-import naogateway.api.RobotFailure
+import naogateway.api.{RobotFailure, VisionFrame}
 import naogateway.sim._
 import naogateway.sim.network.LossyNetwork
 import naogateway.wire.Posture
@@ -145,6 +148,33 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
       } finally network.stop()
     }
 
+    "have its robot's camera off once its camera stream ends, though the stream began before its node was up" in {
+      val sim = spawnRobot(19)
+      online(19)
+      def camera(): Boolean = view(sim).debugEnabled.contains("havimo.regions")
+      // A node that joins only when told: its stream begins while the gateway node has not seen it Up, when Akka
+      // drops a death watch of an actor on it.
+      val node = appNode(join = false)
+      val resolver = ActorRefResolver(node)
+      val middlewareThere =
+        resolver.resolveActorRef[RobotMiddleware.Command](ActorRefResolver(gatewayNode.system).toSerializationFormat(
+            middleware))
+      val frames = TestProbe[VisionFrame]()(node)
+      middlewareThere ! RobotMiddleware.WatchVision(19, frames.ref, grid = false)
+      Cluster(node).manager ! Join(e2e.gatewayAddress)
+      frames.receiveMessage(30.seconds)
+      camera() shouldBe true
+      frames.stop()
+      eventually(camera() shouldBe false)
+      // A stream of an app whose actor system ends.
+      val app = connect(node, "watcher", 1)
+      app.vision(19).runWith(Sink.ignore)(Materializer(node))
+      eventually(camera() shouldBe true)
+      node.terminate()
+      node.whenTerminated.futureValue
+      eventually(camera() shouldBe false)
+    }
+
     "lose a lease to a higher-priority app and be told so" in {
       spawnRobot(15)
       online(15)
@@ -181,6 +211,26 @@ class EndToEndSpec extends AnyWordSpec with Matchers with ScalaFutures with Even
         follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue
       progress.frames should be > 0L
       progress.lastDistance shouldBe defined
+    }
+
+    "rest the camera at the ball and take a look now and then" in {
+      // The ball 0.6 m ahead: in sight at once, reached within a few steps.
+      val ball = Scene(0.6, 0.0)
+      val sim = spawnRobot(18, firmware = _.copy(startPose = Pose(0.0, 0.0, 0.0), scene = ball))
+      online(18)
+      val node = appNode()
+      val follower = node.systemActorOf(BallFollower(connect(node, "ball-follower-rest", 1), 18), "follower-18")
+      def progress(): BallFollower.Progress =
+        follower.ask(BallFollower.GetProgress.apply)(akka.util.Timeout(5.seconds), node.scheduler).futureValue
+      def camera(): Boolean = view(sim).debugEnabled.contains("havimo.regions")
+      eventually(timeout(60.seconds), interval(100.millis))(progress().reached shouldBe true)
+      // At the ball the camera goes off after a look's frames, comes on for the next look, and goes off again.
+      eventually(timeout(30.seconds), interval(20.millis))(camera() shouldBe false)
+      val atRest = progress().frames
+      eventually(timeout(30.seconds), interval(20.millis))(camera() shouldBe true)
+      eventually(timeout(30.seconds), interval(20.millis))(camera() shouldBe false)
+      progress().frames should be > atRest
+      progress().reached shouldBe true
     }
   }
 }

@@ -2,6 +2,8 @@ package robotmiddleware
 
 import naogateway.wire.ActuatorGroup
 
+import scala.concurrent.duration._
+
 import akka.actor.typed.receptionist.{Receptionist, ServiceKey}
 import akka.actor.typed.scaladsl.{ActorContext, Behaviors}
 import akka.actor.typed.{ActorRef, Behavior, DispatcherSelector}
@@ -101,6 +103,9 @@ object RobotMiddleware {
   private final case class AppTerminated(app: ActorRef[AppEvent]) extends Command
   private final case class WatcherGone(subscriber: ActorRef[Nothing]) extends Command
   private final case class NodeUnreachable(address: akka.actor.Address) extends Command
+  private final case class NodeUp(address: akka.actor.Address) extends Command
+  private final case class NodeRemoved(address: akka.actor.Address) extends Command
+  private final case class HeldExpired(address: akka.actor.Address) extends Command
   private final case class RobotFound(robotId: Int, robot: Option[ActorRef[RobotAccess.Command]], retry: Command)
       extends Command
   private final case class RobotReached(
@@ -139,19 +144,35 @@ object RobotMiddleware {
     Behaviors.setup { context =>
       context.system.receptionist ! Receptionist.Register(ServiceKey, context.self)
       gateway ! GatewayAccess.Subscribe(context.messageAdapter(GatewayEventReceived.apply))
-      // In a cluster, an app whose node becomes unreachable loses its robots at once, not only when the node is
-      // downed seconds later: a blind app must not keep a robot walking.
-      if (context.system.settings.config.getString("akka.actor.provider") == "cluster") {
-        val unreachable =
-          context.messageAdapter[akka.cluster.ClusterEvent.UnreachableMember](e => NodeUnreachable(e.member.address))
-        akka.cluster.typed.Cluster(context.system).subscriptions !
-          akka.cluster.typed.Subscribe(unreachable, classOf[akka.cluster.ClusterEvent.UnreachableMember])
+      val clustered = context.system.settings.config.getString("akka.actor.provider") == "cluster"
+      if (clustered) {
+        import akka.cluster.ClusterEvent.{MemberRemoved, MemberUp, MemberWeaklyUp, UnreachableMember}
+        val cluster = akka.cluster.typed.Cluster(context.system)
+        // An app whose node becomes unreachable loses its robots at once, not only when the node is downed seconds
+        // later: a blind app must not keep a robot walking.
+        val unreachable = context.messageAdapter[UnreachableMember](e => NodeUnreachable(e.member.address))
+        cluster.subscriptions ! akka.cluster.typed.Subscribe(unreachable, classOf[UnreachableMember])
+        // The nodes Akka's death watch knows: it drops the watch of an actor on a node this one has not yet seen Up
+        // (the cluster's remote watcher takes members from MemberUp and MemberWeaklyUp, and forgets them removed).
+        cluster.subscriptions ! akka.cluster.typed.Subscribe(
+          context.messageAdapter[MemberUp](e => NodeUp(e.member.address)), classOf[MemberUp])
+        cluster.subscriptions ! akka.cluster.typed.Subscribe(
+          context.messageAdapter[MemberWeaklyUp](e => NodeUp(e.member.address)), classOf[MemberWeaklyUp])
+        cluster.subscriptions ! akka.cluster.typed.Subscribe(
+          context.messageAdapter[MemberRemoved](e => NodeRemoved(e.member.address)), classOf[MemberRemoved])
       }
-      new Middleware(gateway, settings, context).running()
+      new Middleware(gateway, settings, context, clustered).running()
     }
 
-  private final class Middleware(
-      gateway: ActorRef[GatewayAccess.Command], settings: MiddlewareSettings, context: ActorContext[Command]) {
+  /** How many watch requests of one node that is not yet Up the middleware keeps until it is, and for how long. */
+  private val HeldPerNode = 64
+  private val HeldFor: FiniteDuration = 30.seconds
+
+  /** A node's watch requests waiting for it to come up, and how many more it sent than were kept. */
+  private final case class Held(requests: Vector[Command], dropped: Int)
+
+  private final class Middleware(gateway: ActorRef[GatewayAccess.Command], settings: MiddlewareSettings,
+      context: ActorContext[Command], clustered: Boolean) {
     private var apps = Map.empty[ActorRef[AppEvent], AppInfo]
     // No copy of any robot's state here: snapshots and online belong to the robot actors; this actor asks or forwards.
     private var guards = Map.empty[Int, ActorRef[RobotGuard.Command]]
@@ -177,6 +198,45 @@ object RobotMiddleware {
         }
       )
 
+    // Nodes Up (or weakly up) as this node's cluster sees them, and the watch requests of nodes not yet Up.
+    private var upNodes = Set.empty[akka.actor.Address]
+    private var held = Map.empty[akka.actor.Address, Held]
+    private val selfAddress = context.system.address
+
+    /** The ref a request asks the middleware (or a guard, or the robot actor behind it) to death-watch. */
+    private def watched(command: Command): Option[ActorRef[Nothing]] = command match {
+      case RegisterApp(_, _, events, _)  => Some(events)
+      case WatchStatus(_, subscriber)    => Some(subscriber)
+      case WatchVision(_, subscriber, _) => Some(subscriber)
+      case WatchLinkStats(_, subscriber) => Some(subscriber)
+      case WatchGame(subscriber)         => Some(subscriber)
+      case WatchEvents(subscriber)       => Some(subscriber)
+      case _                             => None
+    }
+
+    /** A request to watch a ref on a node that is not yet Up here waits until it is: Akka would drop the watch and
+      * never tell of the ref's end (an ended camera stream would keep the camera on, a closed session its leases). Its
+      * node's last requests beyond [[HeldPerNode]] are dropped, and all of them after [[HeldFor]] without the node Up.
+      */
+    private def heldBack(command: Command): Boolean =
+      watched(command).map(_.path.address).filterNot { address =>
+        !clustered || address.hasLocalScope || address == selfAddress || upNodes(address)
+      } match {
+        case None => false
+        case Some(address) =>
+          val waiting = held.getOrElse(address, {
+              context.scheduleOnce(HeldFor, context.self, HeldExpired(address))
+              Held(Vector.empty, 0)
+            })
+          if (waiting.dropped == 0 && waiting.requests.size == HeldPerNode)
+            context.log.warn("Node [{}] is not up yet and asks for more than {} watches: dropping more", address,
+              HeldPerNode)
+          held = held.updated(address,
+            if (waiting.requests.size < HeldPerNode) waiting.copy(requests = waiting.requests :+ command)
+            else waiting.copy(dropped = waiting.dropped + 1))
+          true
+      }
+
     private implicit val lookupTimeout: akka.util.Timeout = akka.util.Timeout(settings.lookupTimeout)
 
     /** Hands `command` to the robot's guard, first finding the robot at the gateway when there is no guard yet. */
@@ -193,31 +253,45 @@ object RobotMiddleware {
 
     private def unknownApp(app: ActorRef[AppEvent]): AppInfo = AppInfo(app, s"unregistered app ${app.path.name}", 0)
 
-    def running(): Behavior[Command] = Behaviors.receiveMessage {
+    def running(): Behavior[Command] = Behaviors.receiveMessage { command =>
+      if (!heldBack(command)) serve(command)
+      Behaviors.same
+    }
+
+    /** What `command` asks, now: its watched ref (if any) is on a node death watch knows. */
+    private def serve(command: Command): Unit = command match {
+      case NodeUp(address) =>
+        upNodes += address
+        held.get(address).foreach { waiting =>
+          held -= address
+          waiting.requests.foreach(serve)
+        }
+      case NodeRemoved(address) =>
+        upNodes -= address
+        held -= address
+      case HeldExpired(address) =>
+        held.get(address).foreach { waiting =>
+          context.log.warn("Node [{}] did not come up within {}: dropped its {} watch requests", address, HeldFor,
+            waiting.requests.size + waiting.dropped)
+        }
+        held -= address
       case RegisterApp(name, priority, events, replyTo) =>
         context.log.info("App [{}] registered with priority {}", name, priority)
         context.watchWith(events, AppTerminated(events))
         apps = apps.updated(events, AppInfo(events, name, priority))
         replyTo ! AppRegistered(name)
-        Behaviors.same
       case c @ Execute(app, robotId, operation, replyTo) =>
         withGuard(robotId, c)(_ ! RobotGuard.Execute(apps.getOrElse(app, unknownApp(app)), operation, replyTo))
-        Behaviors.same
       case c @ Send(app, robotId, operation, replyTo) =>
         withGuard(robotId, c)(_ ! RobotGuard.Send(apps.getOrElse(app, unknownApp(app)), operation, replyTo))
-        Behaviors.same
       case c @ Acquire(app, robotId, groups, replyTo) =>
         withGuard(robotId, c)(_ ! RobotGuard.Acquire(apps.getOrElse(app, unknownApp(app)), groups, replyTo))
-        Behaviors.same
       case Release(app, robotId, group) =>
         guards.get(robotId).foreach(_ ! RobotGuard.Release(app, group))
-        Behaviors.same
       case c @ WatchVision(robotId, subscriber, grid) =>
         withGuard(robotId, c)(_ ! RobotGuard.WatchVision(subscriber, grid))
-        Behaviors.same
       case c @ WatchLinkStats(robotId, subscriber) =>
         withGuard(robotId, c)(_ ! RobotGuard.WatchLinkStats(subscriber))
-        Behaviors.same
       case RobotFound(robotId, Some(robot), command) =>
         if (guards.contains(robotId)) context.self ! command
         else
@@ -227,11 +301,9 @@ object RobotMiddleware {
             case scala.util.Success(snapshot) => RobotReached(robotId, robot, snapshot.online, command)
             case scala.util.Failure(_)        => RobotReached(robotId, robot, online = false, command)
           }
-        Behaviors.same
       case RobotReached(robotId, robot, online, command) =>
         guard(robotId, robot, online)
         context.self ! command
-        Behaviors.same
       case RobotFound(robotId, None, command) =>
         command match {
           case Execute(_, _, operation, replyTo) =>
@@ -242,47 +314,37 @@ object RobotMiddleware {
             replyTo ! LeaseResult(robotId, groups, Left(RobotFailure.UnknownRobot(robotId)))
           case _ => context.log.info("Watch request for unknown robot [{}] ignored", robotId)
         }
-        Behaviors.same
       case GetHolds(replyTo) =>
         replyTo ! holds.values.toVector.sortBy(_.robotId)
-        Behaviors.same
       case HoldsChanged(h) =>
         if (guards.contains(h.robotId)) holds = holds.updated(h.robotId, h)
-        Behaviors.same
       case ListRobots(replyTo) =>
         // A gateway that does not answer leaves the app's own ask to time out, which the facade reports as a Timeout.
         context.ask(gateway, GatewayAccess.GetRobots.apply) {
           case scala.util.Success(robots) => RobotsListed(replyTo, Some(robots))
           case scala.util.Failure(_)      => RobotsListed(replyTo, None)
         }
-        Behaviors.same
       case RobotsListed(replyTo, robots) =>
         robots.foreach(replyTo ! RobotList(_))
-        Behaviors.same
       case WatchStatus(robotId, subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))
         statusWatchers = statusWatchers.updated(subscriber, robotId)
         // The current snapshots first, asked of the gateway; keep-alives follow as they arrive.
         context.ask(gateway, GatewayAccess.GetRobots.apply)(tried =>
           StatusKnown(subscriber, tried.getOrElse(Vector.empty)))
-        Behaviors.same
       case StatusKnown(subscriber, robots) =>
         statusWatchers.get(subscriber).foreach(filter =>
           robots.filter(s => filter.forall(_ == s.robotId)).foreach(subscriber ! _))
-        Behaviors.same
       case WatchGame(subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))
         gameWatchers += subscriber
-        Behaviors.same
       case WatchEvents(subscriber) =>
         context.watchWith(subscriber, WatcherGone(subscriber))
         eventWatchers += subscriber
-        Behaviors.same
       case WatcherGone(subscriber) =>
         statusWatchers = statusWatchers.filterNot(_._1 == subscriber)
         gameWatchers = gameWatchers.filterNot(_ == subscriber)
         eventWatchers = eventWatchers.filterNot(_ == subscriber)
-        Behaviors.same
       case NodeUnreachable(address) =>
         val gone = apps.keys.filter(_.path.address == address)
         gone.foreach { app =>
@@ -290,13 +352,11 @@ object RobotMiddleware {
           apps -= app
           guards.values.foreach(_ ! RobotGuard.AppGone(app))
         }
-        Behaviors.same
       case AppTerminated(app) =>
         context.log.info("App [{}] is gone: releasing its leases and stopping its robots",
           apps.get(app).map(_.name).getOrElse("?"))
         apps -= app
         guards.values.foreach(_ ! RobotGuard.AppGone(app))
-        Behaviors.same
       case GatewayEventReceived(event) =>
         event match {
           case e: RobotEvent =>
@@ -317,7 +377,6 @@ object RobotMiddleware {
             if (!e.isInstanceOf[RobotStatusUpdated]) eventWatchers.foreach(_ ! e)
           case GameStateUpdated(data) => gameWatchers.foreach(_ ! data)
         }
-        Behaviors.same
     }
   }
 }
