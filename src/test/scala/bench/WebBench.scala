@@ -26,8 +26,8 @@ import naogateway.api.{GameStateUpdated, GatewayEvent}
   * process of its own); the progress shows each window per thread group ([[ThreadCpu]]):
   *
   *   - `web_idle_cpu_pct_without` / `web_idle_cpu_pct`: this JVM's CPU time (user + system) over [[Window]], in percent
-  *     of one core, without and with the clients (Chromium's and the viewer's own CPU is not counted: it is the viewer's
-  *     machine's; the viewer's is printed beside it);
+  *     of one core, without and with the clients (Chromium's and the viewer's own CPU is not counted: it is the
+  *     viewer's machine's; the viewer's is printed beside it);
   *   - `web_heap_growth_mb`: heap in use after a full collection, at the end of the window with clients against before
   *     they connected;
   *   - `web_change_latency_ms_p50` / `_max`: from the gateway publishing a new game state (a subscriber's clock) to the
@@ -101,9 +101,15 @@ object WebBench extends Benchmark {
       val viewerLog = new File(PythonEnv.root, "target/bench/foxglove-reader.log")
       viewerLog.getParentFile.mkdirs()
       val viewer = PythonEnv.environment().map { python =>
-        new ProcessBuilder(python.getPath, "-u", new File(PythonEnv.root, "src/test/python/bench/foxglove_reader.py")
-          .getPath, s"ws://127.0.0.1:${demo.address.getPort}/foxglove", (ClientSettle + Window + 30.seconds).toSeconds
-          .toString).redirectErrorStream(true).redirectOutput(viewerLog).start()
+        new ProcessBuilder(
+          python.getPath,
+          "-u",
+          new File(PythonEnv.root, "src/test/python/bench/foxglove_reader.py")
+            .getPath,
+          s"ws://127.0.0.1:${demo.address.getPort}/foxglove",
+          (ClientSettle + Window + 30.seconds).toSeconds
+            .toString
+        ).redirectErrorStream(true).redirectOutput(viewerLog).start()
       }
       // "count N": the viewer's messages so far, printed once a second.
       def viewerCount(): Long =
@@ -124,7 +130,8 @@ object WebBench extends Benchmark {
             val (messages0, viewer0, wall0) = (viewerCount(), viewerCpu(), System.nanoTime())
             val cpu = cpuPercent(Window)
             val (messages1, viewer1, wall1) = (viewerCount(), viewerCpu(), System.nanoTime())
-            val viewerPct = (for (a <- viewer0; b <- viewer1) yield (b - a) * 100.0 / (wall1 - wall0)).getOrElse(Double.NaN)
+            val viewerPct =
+              (for (a <- viewer0; b <- viewer1) yield (b - a) * 100.0 / (wall1 - wall0)).getOrElse(Double.NaN)
             val heapAfter = heapAfterGc()
             progress(
               f"with the page and a Foxglove viewer: $cpu%.1f %% of a core (load average ${ManagementFactory.getOperatingSystemMXBean.getSystemLoadAverage}%.2f), heap ${(heapAfter - heapBefore) / 1e6}%+.1f MB, " +
