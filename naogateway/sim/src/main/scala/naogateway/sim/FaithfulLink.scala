@@ -3,7 +3,7 @@ package naogateway.sim
 import java.net.{Inet4Address, InetAddress, InetSocketAddress}
 
 import scala.collection.immutable.{ArraySeq, Queue}
-import scala.collection.mutable.Builder
+import scala.collection.mutable.ArrayBuffer
 
 import naogateway.sim.gs1500m.{
   Cm530Config,
@@ -47,12 +47,15 @@ final case class FaithfulLink(
 ) {
   import FaithfulLink._
 
-  /** The next moment [[advance]] has something to do, if any. */
-  def nextWakeUp: Option[Long] = {
-    val cpuAt = if (cpuHasWork) cpu.nextActionAt else Long.MaxValue
-    val airAt = module.nextOnAirAt.getOrElse(Long.MaxValue)
-    val doneAt = handling.headOption.fold(Long.MaxValue)(_.at)
-    val next = math.min(cpuAt, math.min(airAt, doneAt))
+  /** The next moment [[advance]] has something to show, if any: a frame goes on air or the application gets a datagram.
+    * The steps in between (the CM-530's polls, encodings and sends) need no wake-up of their own: `advance` runs them
+    * in time order whenever it is called, and nothing outside sees them happen.
+    */
+  def nextWakeUp: Option[Long] = if (quiet.visibleAt == Long.MaxValue) None else Some(quiet.visibleAt)
+
+  /** The next moment [[advance]] has anything to do, if any, a step nobody sees included. */
+  def nextStepAt: Option[Long] = {
+    val next = math.min(nextEventAt, handling.headOption.fold(Long.MaxValue)(_.at))
     if (next == Long.MaxValue) None else Some(next)
   }
 
@@ -77,24 +80,76 @@ final case class FaithfulLink(
 
   /** Lets the module and the CM-530 run up to `now`, in time order: what went on air, and what the application got. */
   def advance(now: Long): Step = {
+    // The steps the quiet run already took are the first steps of this run whenever `now` reaches them.
+    val from = if (now < nextEventAt) this else if (now >= quiet.through) quiet.link else this
+    from.advanceFrom(now)
+  }
+
+  // Runs every step up to `now` from this link, in time order.
+  private def advanceFrom(now: Long): Step = {
     var link = this
-    val transmitted = Vector.newBuilder[Transmission]
+    val transmitted = new ArrayBuffer[Transmission]
     var events = 0
-    var running = true
-    while (running && events < MaxEventsPerStep) {
+    while (events < MaxEventsPerStep && link.nextEventAt <= now) {
       events += 1
-      val cpuAt = if (link.cpuHasWork) link.cpu.nextActionAt else Long.MaxValue
-      val airAt = link.module.nextOnAirAt.getOrElse(Long.MaxValue)
-      if (airAt <= now && airAt < cpuAt) {
-        val step = link.module.advance(airAt)
-        link = link.copy(module = step.module).onModuleEvents(step.events, transmitted, sent = false).wake(airAt)
-      } else if (cpuAt <= now) {
-        val step = link.cpu.act(link.module)
-        link = link.copy(cpu = step.firmware, module = step.module).onCpuStep(step, transmitted)
-      } else running = false
+      link = link.stepOnce(transmitted)
     }
-    val (due, later) = link.handling.span(_.at <= now)
-    Step(link.copy(handling = later), transmitted.result(), due.toVector)
+    val h = link.handling
+    if (h.isEmpty || h.head.at > now) Step(link, transmitted.toVector, Vector.empty)
+    else {
+      val (due, later) = h.span(_.at <= now)
+      Step(link.copy(handling = later), transmitted.toVector, due.toVector)
+    }
+  }
+
+  // When the next step is due: the CM-530's next action while it has work, or the next packet going on air.
+  private def nextEventAt: Long = {
+    val cpuAt = if (cpuHasWork) cpu.nextActionAt else Long.MaxValue
+    math.min(cpuAt, module.nextOnAirAt.getOrElse(Long.MaxValue))
+  }
+
+  // The one next step; a packet on air first when it is strictly earlier than the CM-530's action.
+  private def stepOnce(transmitted: ArrayBuffer[Transmission]): FaithfulLink = {
+    val cpuAt = if (cpuHasWork) cpu.nextActionAt else Long.MaxValue
+    val airAt = module.nextOnAirAt.getOrElse(Long.MaxValue)
+    if (airAt < cpuAt) {
+      val step = module.advance(airAt)
+      copy(module = step.module).onModuleEvents(step.events, transmitted, sent = false).wake(airAt)
+    } else {
+      val step = cpu.act(module)
+      copy(cpu = step.firmware, module = step.module).onCpuStep(step, transmitted)
+    }
+  }
+
+  // The link run without inputs through every step before its next visible one (memoised: a pure function of this
+  // value). `through` is the time of the last step taken (Long.MinValue for none), `visibleAt` when the first step that
+  // puts a frame on air, or the first delivery, is due (Long.MaxValue for never).
+  private lazy val quiet: FaithfulLink.Quiet = {
+    var link = this
+    var through = Long.MinValue
+    var visibleAt = Long.MaxValue
+    var searching = true
+    var events = 0
+    val scratch = new ArrayBuffer[Transmission]
+    while (searching) {
+      val at = link.nextEventAt
+      val deliveryAt = link.handling.headOption.fold(Long.MaxValue)(_.at)
+      if (deliveryAt <= at || events >= MaxEventsPerStep) {
+        visibleAt = math.min(deliveryAt, at)
+        searching = false
+      } else {
+        events += 1
+        val next = link.stepOnce(scratch)
+        if (scratch.nonEmpty) {
+          visibleAt = at
+          searching = false
+        } else {
+          link = next
+          through = at
+        }
+      }
+    }
+    FaithfulLink.Quiet(link, through, visibleAt)
   }
 
   private def cpuHasWork: Boolean = cpu.outbox.nonEmpty || module.rxQueue.nonEmpty
@@ -110,7 +165,7 @@ final case class FaithfulLink(
       copy(cpu = cpu.copy(nextActionAt = tick, loopStartedAt = tick, sendsNext = false))
     }
 
-  private def onCpuStep(step: FirmwareStep, transmitted: Builder[Transmission, Vector[Transmission]]): FaithfulLink = {
+  private def onCpuStep(step: FirmwareStep, transmitted: ArrayBuffer[Transmission]): FaithfulLink = {
     var link = this
     var sent = false
     step.events.foreach {
@@ -132,7 +187,7 @@ final case class FaithfulLink(
   // last one on the line (packets already on the line go on air first, in order).
   private def onModuleEvents(
       events: Vector[ModuleEvent],
-      transmitted: Builder[Transmission, Vector[Transmission]],
+      transmitted: ArrayBuffer[Transmission],
       sent: Boolean
   ): FaithfulLink = {
     var onAir = onLine
@@ -165,6 +220,9 @@ object FaithfulLink {
 
   /** A datagram the module put on air at `at`. */
   final case class Transmission(bytes: Array[Byte], to: InetSocketAddress, at: Long)
+
+  // A link run quietly up to its next visible step: see `FaithfulLink.quiet`.
+  private final case class Quiet(link: FaithfulLink, through: Long, visibleAt: Long)
 
   /** The link after an input, what went on air and what the application got, both in time order. */
   final case class Step(link: FaithfulLink, transmitted: Vector[Transmission], delivered: Vector[Delivery])

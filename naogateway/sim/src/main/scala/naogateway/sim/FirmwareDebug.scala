@@ -68,7 +68,6 @@ private[sim] object FirmwareDebug {
     read match {
       case None => (s.copy(bus = bus), Vector.empty)
       case Some(captured) =>
-        val regions = HaViMo.decodeRegions(captured.records).getOrElse(Vector.empty)
         val frame = s.frame + 1
         val ts = Some(s.uptimeMillis)
         val out = Vector.newBuilder[Array[Byte]]
@@ -82,6 +81,7 @@ private[sim] object FirmwareDebug {
               MessageContents(s.settings.robotId,
                 havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(grid)))))
           if (s.debugEnabled("camera.image")) {
+            val regions = HaViMo.decodeRegions(captured.records).getOrElse(Vector.empty)
             val shapes = regions.map(r =>
               Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY),
                 label = Some(s"colour ${r.colour}")))

@@ -93,15 +93,22 @@ object Scene {
       clip(Box(x - rx, x + rx, y - ry, y + ry)).map(b => (BallColour, b, math.Pi / 4))
     }
     def goal(gx: Double, colour: Int) = {
-      val corners = for {
-        side <- Seq(-scene.goalWidth / 2, scene.goalWidth / 2)
-        height <- Seq(0.0, GoalHeight)
-        p <- project(pose, pan, tilt, gx, side, height)
-      } yield p
-      if (corners.length < 4) None
-      else
-        clip(Box(corners.map(_._1).min, corners.map(_._1).max, corners.map(_._2).min, corners.map(_._2).max))
-          .map(b => (colour, b, 0.2))
+      // The four corners (both posts, foot and top) must all be in front of the camera; their bounding box is the goal.
+      // Loops rather than collections: this runs for every camera frame. Smallest and largest as Seq.min/max take them.
+      var seen = 0
+      var minX, maxX, minY, maxY = 0.0
+      for (side <- Array(-scene.goalWidth / 2, scene.goalWidth / 2); height <- Array(0.0, GoalHeight))
+        project(pose, pan, tilt, gx, side, height).foreach { case (px, py, _) =>
+          if (seen == 0) { minX = px; maxX = px; minY = py; maxY = py }
+          else {
+            if (java.lang.Double.compare(minX, px) > 0) minX = px
+            if (java.lang.Double.compare(maxX, px) < 0) maxX = px
+            if (java.lang.Double.compare(minY, py) > 0) minY = py
+            if (java.lang.Double.compare(maxY, py) < 0) maxY = py
+          }
+          seen += 1
+        }
+      if (seen < 4) None else clip(Box(minX, maxX, minY, maxY)).map(b => (colour, b, 0.2))
     }
     val seen =
       Vector(ball, goal(scene.fieldLength / 2, YellowGoalColour), goal(-scene.fieldLength / 2, BlueGoalColour)).flatten
