@@ -29,6 +29,16 @@ final case class Scene(ballX: Double, ballY: Double, fieldLength: Double = 9.0, 
   def ballDistance(pose: Pose): Double = math.hypot(ballX - pose.x, ballY - pose.y)
 }
 
+/** The regions [[Scene.regions]] gives for a scene seen from a pose with the head at (pan, tilt): a robot that did not
+  * move, whose head did not turn and whose ball stayed put sees them again, without projecting anything.
+  */
+final case class CameraView(scene: Scene, pose: Pose, head: (Double, Double), regions: Vector[HaViMoRegion]) {
+
+  /** Whether this view is what `scene` looks like from `pose` with the head at `head`. */
+  def sees(scene: Scene, pose: Pose, head: (Double, Double)): Boolean =
+    scene == this.scene && pose == this.pose && head == this.head
+}
+
 /** Geometry of the HaViMo2 camera on the robot's head and what it reports for a scene. */
 object Scene {
   val BallColour: Int = 1
@@ -114,6 +124,11 @@ object Scene {
       Vector(ball, goal(scene.fieldLength / 2, YellowGoalColour), goal(-scene.fieldLength / 2, BlueGoalColour)).flatten
     seen.zipWithIndex.take(HaViMo.MaxRegions).map { case ((colour, box, fill), i) => region(i + 1, colour, box, fill) }
   }
+
+  /** The view of `scene` from `pose` with the head at `head`: `last` again when it is that view. */
+  def view(last: Option[CameraView], scene: Scene, pose: Pose, head: (Double, Double)): CameraView =
+    last.filter(_.sees(scene, pose, head)).getOrElse(CameraView(scene, pose, head,
+        regions(scene, pose, head._1, head._2)))
 
   /** The 32 × 24 grid for the same view: each cell holds the colour of the region covering it and its pixel count. */
   def grid(regions: Seq[HaViMoRegion]): Array[Byte] = {

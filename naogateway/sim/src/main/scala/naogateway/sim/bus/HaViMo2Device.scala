@@ -55,7 +55,8 @@ final case class HaViMo2Device(
   /** A capture of what the lens sees, started at `now`. */
   def capture(now: Long): HaViMo2Device =
     // A view like the last one's makes the same table: the buffers already made are kept.
-    copy(captured = if (captured.view == lens) captured else Capture(lens), busyUntil = now + captureNanos,
+    copy(captured = if ((captured.view eq lens) || captured.view == lens) captured else Capture(lens),
+      busyUntil = now + captureNanos,
       captures = captures + 1)
 }
 
