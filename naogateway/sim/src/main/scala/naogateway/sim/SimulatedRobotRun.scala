@@ -337,6 +337,7 @@ private[sim] final class SimulatedRobotRun(
       val plain = segments.result() ++ replies
       deliveries = Vector.empty
       robot.link match {
+        case Some(_) if plain.isEmpty => () // the link has just been caught up to `t`: nothing more is due
         case Some(link) =>
           val queued = plain.foldLeft(FaithfulLink.Step(link, Vector.empty, Vector.empty)) { (acc, o) =>
             val step = acc.link.send(o.bytes, o.to, t)
