@@ -36,21 +36,13 @@ final case class HaViMo2Device(
   /** Reads `length` bytes of the table from `address`, or the error bits of a read past its 256 addresses. */
   def read(address: Int, length: Int): Either[Int, Vector[Int]] =
     if (length < 1 || address + length > 256) Left(Dynamixel.RangeError)
-    else {
-      val regions = captured.regionBuffer
-      Right(Vector.tabulate(length) { i =>
-        val a = address + i
-        if (a < BufferAddress) 0 else regions(a - BufferAddress) & 0xff
-      })
-    }
+    else if (address >= 0) Right(captured.table.slice(address, address + length))
+    else Right(Vector.tabulate(length)(i => if (address + i < 0) 0 else captured.table(address + i)))
 
   /** READ_GRID: `length` cells from cell 16·`block`, or the error bits of a read past the 768 cells. */
   def readGrid(block: Int, length: Int): Either[Int, Vector[Int]] =
-    if (length < 1 || block < 0 || block * 16 + length > HaViMo.GridCells) Left(Dynamixel.RangeError)
-    else {
-      val grid = captured.grid
-      Right(Vector.tabulate(length)(i => grid(block * 16 + i) & 0xff))
-    }
+    if (length < 1 || block * 16 + length > HaViMo.GridCells) Left(Dynamixel.RangeError)
+    else Right(captured.cells.slice(block * 16, block * 16 + length))
 
   /** A capture of what the lens sees, started at `now`. */
   def capture(now: Long): HaViMo2Device =
@@ -100,5 +92,11 @@ object HaViMo2Device {
 
     /** The 768 grid cells. */
     lazy val grid: Array[Byte] = naogateway.sim.Scene.grid(view)
+
+    /** The table as reads find it: addresses 0-15 zero (model number 0 included), the region buffer from 16. */
+    lazy val table: Vector[Int] = Vector.fill(BufferAddress)(0) ++ regionBuffer.iterator.map(_ & 0xff)
+
+    /** The grid cells as READ_GRID finds them. */
+    lazy val cells: Vector[Int] = grid.iterator.map(_ & 0xff).toVector
   }
 }
