@@ -3,7 +3,7 @@ package naogateway.sim
 import java.net.{Inet4Address, InetAddress, InetSocketAddress}
 
 import scala.collection.immutable.{ArraySeq, Queue}
-import scala.collection.mutable.Builder
+import scala.collection.mutable.ArrayBuffer
 
 import naogateway.sim.gs1500m.{
   Cm530Config,
@@ -47,12 +47,18 @@ final case class FaithfulLink(
 ) {
   import FaithfulLink._
 
-  /** The next moment [[advance]] has something to do, if any. */
+  /** The next moment [[advance]] has something to show, if any: a frame goes on air or the application gets a datagram.
+    * The steps in between (the CM-530's polls, encodings and sends) need no wake-up of their own: `advance` runs them
+    * in time order whenever it is called, and nothing outside sees them happen.
+    */
   def nextWakeUp: Option[Long] = {
-    val cpuAt = if (cpuHasWork) cpu.nextActionAt else Long.MaxValue
-    val airAt = module.nextOnAirAt.getOrElse(Long.MaxValue)
-    val doneAt = handling.headOption.fold(Long.MaxValue)(_.at)
-    val next = math.min(cpuAt, math.min(airAt, doneAt))
+    val q = quiet
+    if (q.visibleAt == Long.MaxValue) None else Some(q.visibleAt)
+  }
+
+  /** The next moment [[advance]] has anything to do, if any, a step nobody sees included. */
+  def nextStepAt: Option[Long] = {
+    val next = math.min(nextEventAt, handling.headOption.fold(Long.MaxValue)(_.at))
     if (next == Long.MaxValue) None else Some(next)
   }
 
@@ -77,24 +83,96 @@ final case class FaithfulLink(
 
   /** Lets the module and the CM-530 run up to `now`, in time order: what went on air, and what the application got. */
   def advance(now: Long): Step = {
+    // The steps a quiet run already took are the first steps of this run whenever `now` reaches them; it is used only
+    // when [[nextWakeUp]] has made it, as a driver does before it waits.
+    val q = quietRun
+    if (q == null || now < q.through) advanceFrom(now, Vector.empty)
+    else if (now >= q.visibleAt && q.shown != null) q.shown.advanceFrom(now, q.shownTransmitted)
+    else q.link.advanceFrom(now, Vector.empty)
+  }
+
+  // Runs every step up to `now` from this link, in time order, after steps that put `already` on air.
+  private def advanceFrom(now: Long, already: Vector[Transmission]): Step = {
     var link = this
-    val transmitted = Vector.newBuilder[Transmission]
+    val transmitted = new ArrayBuffer[Transmission]
+    transmitted ++= already
     var events = 0
-    var running = true
-    while (running && events < MaxEventsPerStep) {
+    while (events < MaxEventsPerStep && link.nextEventAt <= now) {
       events += 1
-      val cpuAt = if (link.cpuHasWork) link.cpu.nextActionAt else Long.MaxValue
-      val airAt = link.module.nextOnAirAt.getOrElse(Long.MaxValue)
-      if (airAt <= now && airAt < cpuAt) {
-        val step = link.module.advance(airAt)
-        link = link.copy(module = step.module).onModuleEvents(step.events, transmitted, sent = false).wake(airAt)
-      } else if (cpuAt <= now) {
-        val step = link.cpu.act(link.module)
-        link = link.copy(cpu = step.firmware, module = step.module).onCpuStep(step, transmitted)
-      } else running = false
+      link = link.stepOnce(transmitted)
     }
-    val (due, later) = link.handling.span(_.at <= now)
-    Step(link.copy(handling = later), transmitted.result(), due.toVector)
+    val sent = if (transmitted.isEmpty) Vector.empty else transmitted.toVector
+    val h = link.handling
+    if (h.isEmpty || h.head.at > now) Step(link, sent, Vector.empty)
+    else {
+      val (due, later) = h.span(_.at <= now)
+      Step(link.copy(handling = later), sent, due.toVector)
+    }
+  }
+
+  // When the next step is due: the CM-530's next action while it has work, or the next packet going on air.
+  private def nextEventAt: Long = {
+    val cpuAt = if (cpuHasWork) cpu.nextActionAt else Long.MaxValue
+    math.min(cpuAt, onAirAt)
+  }
+
+  // When the next packet goes on air (Long.MaxValue: none on the line).
+  private def onAirAt: Long = if (module.tx.isEmpty) Long.MaxValue else module.tx.head.endsAt
+
+  // The one next step; a packet on air first when it is strictly earlier than the CM-530's action.
+  private def stepOnce(transmitted: ArrayBuffer[Transmission]): FaithfulLink = {
+    val cpuAt = if (cpuHasWork) cpu.nextActionAt else Long.MaxValue
+    val airAt = onAirAt
+    if (airAt < cpuAt) {
+      val step = module.advance(airAt)
+      copy(module = step.module).onModuleEvents(step.events, transmitted, sent = false).wake(airAt)
+    } else {
+      val step = cpu.act(module)
+      copy(cpu = step.firmware, module = step.module).onCpuStep(step, transmitted)
+    }
+  }
+
+  // The link run without inputs through every step before its next visible one: a pure function of this value, made
+  // once ([[nextWakeUp]] makes it, `advance` uses it when there). `through` is the time of the last step taken
+  // (Long.MinValue for none), `visibleAt` when the first step that puts a frame on air, or the first delivery, is due
+  // (Long.MaxValue for never); `shown` the link after that step when it put frames on air (`shownTransmitted`).
+  @volatile private var quietRun: FaithfulLink.Quiet = null
+
+  private def quiet: FaithfulLink.Quiet = {
+    if (quietRun == null) quietRun = runQuietly
+    quietRun
+  }
+
+  private def runQuietly: FaithfulLink.Quiet = {
+    var link = this
+    var through = Long.MinValue
+    var visibleAt = Long.MaxValue
+    var shown: FaithfulLink = null
+    var shownTransmitted = Vector.empty[Transmission]
+    var searching = true
+    var events = 0
+    val scratch = new ArrayBuffer[Transmission]
+    while (searching) {
+      val at = link.nextEventAt
+      val deliveryAt = link.handling.headOption.fold(Long.MaxValue)(_.at)
+      if (deliveryAt <= at || events >= MaxEventsPerStep) {
+        visibleAt = math.min(deliveryAt, at)
+        searching = false
+      } else {
+        events += 1
+        val next = link.stepOnce(scratch)
+        if (scratch.nonEmpty) {
+          visibleAt = at
+          shown = next
+          shownTransmitted = scratch.toVector
+          searching = false
+        } else {
+          link = next
+          through = at
+        }
+      }
+    }
+    FaithfulLink.Quiet(link, through, visibleAt, shown, shownTransmitted)
   }
 
   private def cpuHasWork: Boolean = cpu.outbox.nonEmpty || module.rxQueue.nonEmpty
@@ -110,7 +188,7 @@ final case class FaithfulLink(
       copy(cpu = cpu.copy(nextActionAt = tick, loopStartedAt = tick, sendsNext = false))
     }
 
-  private def onCpuStep(step: FirmwareStep, transmitted: Builder[Transmission, Vector[Transmission]]): FaithfulLink = {
+  private def onCpuStep(step: FirmwareStep, transmitted: ArrayBuffer[Transmission]): FaithfulLink = {
     var link = this
     var sent = false
     step.events.foreach {
@@ -132,21 +210,24 @@ final case class FaithfulLink(
   // last one on the line (packets already on the line go on air first, in order).
   private def onModuleEvents(
       events: Vector[ModuleEvent],
-      transmitted: Builder[Transmission, Vector[Transmission]],
+      transmitted: ArrayBuffer[Transmission],
       sent: Boolean
   ): FaithfulLink = {
-    var onAir = onLine
-    events.foreach {
-      case ModuleEvent.OnAir(_, data, at) =>
-        onAir.dequeueOption.foreach { case (to, rest) =>
-          transmitted += Transmission(data.toArray, to, at)
-          onAir = rest
-        }
-      case ModuleEvent.SendLost(_, _, _) | ModuleEvent.Refused(_, _) if sent && onAir.nonEmpty =>
-        onAir = onAir.init
-      case _ => ()
+    if (events.isEmpty) this
+    else {
+      var onAir = onLine
+      events.foreach {
+        case ModuleEvent.OnAir(_, data, at) =>
+          onAir.dequeueOption.foreach { case (to, rest) =>
+            transmitted += Transmission(data.toArray, to, at)
+            onAir = rest
+          }
+        case ModuleEvent.SendLost(_, _, _) | ModuleEvent.Refused(_, _) if sent && onAir.nonEmpty =>
+          onAir = onAir.init
+        case _ => ()
+      }
+      if (onAir eq onLine) this else copy(onLine = onAir)
     }
-    copy(onLine = onAir)
   }
 }
 
@@ -165,6 +246,15 @@ object FaithfulLink {
 
   /** A datagram the module put on air at `at`. */
   final case class Transmission(bytes: Array[Byte], to: InetSocketAddress, at: Long)
+
+  // A link run quietly up to its next visible step: see `FaithfulLink.quietRun`.
+  private final case class Quiet(
+      link: FaithfulLink,
+      through: Long,
+      visibleAt: Long,
+      shown: FaithfulLink,
+      shownTransmitted: Vector[Transmission]
+  )
 
   /** The link after an input, what went on air and what the application got, both in time order. */
   final case class Step(link: FaithfulLink, transmitted: Vector[Transmission], delivered: Vector[Delivery])

@@ -62,13 +62,12 @@ private[sim] object FirmwareDebug {
   // The camera is read over the bus (docs/protocol.md 6.9): the frame holds the capture started a cycle earlier, and
   // no frame goes out while the camera is still busy with it.
   def cameraFrames(s: FirmwareState): (FirmwareState, Vector[Array[Byte]]) = {
-    val view = Scene.regions(s.settings.scene, s.pose, s.head._1, s.head._2)
+    val view = Scene.view(s.cameraView, s.settings.scene, s.pose, s.head)
     val withGrid = s.debugEnabled("havimo.grid") || s.debugEnabled("camera.image")
-    val (bus, read) = BusWork.cameraCycle(s.bus.advance(s.now).withVolts(s.battery).seeing(view), withGrid)
+    val (bus, read) = BusWork.cameraCycle(s.bus.advance(s.now).withVolts(s.battery).seeing(view.regions), withGrid)
     read match {
-      case None => (s.copy(bus = bus), Vector.empty)
+      case None => (s.copy(bus = bus, cameraView = Some(view)), Vector.empty)
       case Some(captured) =>
-        val regions = HaViMo.decodeRegions(captured.records).getOrElse(Vector.empty)
         val frame = s.frame + 1
         val ts = Some(s.uptimeMillis)
         val out = Vector.newBuilder[Array[Byte]]
@@ -82,6 +81,7 @@ private[sim] object FirmwareDebug {
               MessageContents(s.settings.robotId,
                 havimoGrid = Some(HaViMoGridFrame(frame, ts, ByteString.copyFrom(grid)))))
           if (s.debugEnabled("camera.image")) {
+            val regions = HaViMo.decodeRegions(captured.records).getOrElse(Vector.empty)
             val shapes = regions.map(r =>
               Shape(Shape.Kind.RECTANGLE, r.minX, r.minY, Some(r.maxX), Some(r.maxY),
                 label = Some(s"colour ${r.colour}")))
@@ -92,7 +92,7 @@ private[sim] object FirmwareDebug {
                 debugData = Some(DebugData("camera.image", ts, DebugData.Data.Image(image)))))
           }
         }
-        (s.copy(frame = frame, bus = bus), out.result())
+        (s.copy(frame = frame, bus = bus, cameraView = Some(view)), out.result())
     }
   }
 }

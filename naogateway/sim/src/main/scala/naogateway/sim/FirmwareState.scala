@@ -104,7 +104,8 @@ private[sim] final case class Walk(vx: Double, vy: Double, omega: Double, leaseU
   * doubles as the boot counter of signed frames (kept in flash on a CM-530): it survives power cycles and resets.
   * `framesSigned` (the frame counter) and `gatewayWindow` (the last gateway timestamp accepted) start afresh at every
   * boot, as RAM does. `bus` is the robot's emulated Dynamixel bus (servos and HaViMo2), powered up at every boot;
-  * `bodyPose` the pose whose goals its servos were last sent (FirmwareBody).
+  * `bodyPose` the pose whose goals its servos were last sent (FirmwareBody); `cameraView` what the camera's lens was
+  * last given to see (FirmwareDebug).
   */
 final case class FirmwareState(
     settings: FirmwareSettings,
@@ -130,7 +131,8 @@ final case class FirmwareState(
     gatewayWindow: ReplayWindow = ReplayWindow.empty,
     nextServoTelemetryAt: Long = Long.MinValue,
     bus: BioloidBus = BioloidBus(0L),
-    bodyPose: Option[BodyPostures.Pose] = None
+    bodyPose: Option[BodyPostures.Pose] = None,
+    cameraView: Option[CameraView] = None
 ) {
 
   /** The robot's clock: milliseconds since the firmware booted, as its [[RobotClock]] reads them. */

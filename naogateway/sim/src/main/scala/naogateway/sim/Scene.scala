@@ -29,6 +29,16 @@ final case class Scene(ballX: Double, ballY: Double, fieldLength: Double = 9.0, 
   def ballDistance(pose: Pose): Double = math.hypot(ballX - pose.x, ballY - pose.y)
 }
 
+/** The regions [[Scene.regions]] gives for a scene seen from a pose with the head at (pan, tilt): a robot that did not
+  * move, whose head did not turn and whose ball stayed put sees them again, without projecting anything.
+  */
+final case class CameraView(scene: Scene, pose: Pose, head: (Double, Double), regions: Vector[HaViMoRegion]) {
+
+  /** Whether this view is what `scene` looks like from `pose` with the head at `head`. */
+  def sees(scene: Scene, pose: Pose, head: (Double, Double)): Boolean =
+    scene == this.scene && pose == this.pose && head == this.head
+}
+
 /** Geometry of the HaViMo2 camera on the robot's head and what it reports for a scene. */
 object Scene {
   val BallColour: Int = 1
@@ -93,20 +103,32 @@ object Scene {
       clip(Box(x - rx, x + rx, y - ry, y + ry)).map(b => (BallColour, b, math.Pi / 4))
     }
     def goal(gx: Double, colour: Int) = {
-      val corners = for {
-        side <- Seq(-scene.goalWidth / 2, scene.goalWidth / 2)
-        height <- Seq(0.0, GoalHeight)
-        p <- project(pose, pan, tilt, gx, side, height)
-      } yield p
-      if (corners.length < 4) None
-      else
-        clip(Box(corners.map(_._1).min, corners.map(_._1).max, corners.map(_._2).min, corners.map(_._2).max))
-          .map(b => (colour, b, 0.2))
+      // The four corners (both posts, foot and top) must all be in front of the camera; their bounding box is the goal.
+      // Loops rather than collections: this runs for every camera frame. Smallest and largest as Seq.min/max take them.
+      var seen = 0
+      var minX, maxX, minY, maxY = 0.0
+      for (side <- Array(-scene.goalWidth / 2, scene.goalWidth / 2); height <- Array(0.0, GoalHeight))
+        project(pose, pan, tilt, gx, side, height).foreach { case (px, py, _) =>
+          if (seen == 0) { minX = px; maxX = px; minY = py; maxY = py }
+          else {
+            if (java.lang.Double.compare(minX, px) > 0) minX = px
+            if (java.lang.Double.compare(maxX, px) < 0) maxX = px
+            if (java.lang.Double.compare(minY, py) > 0) minY = py
+            if (java.lang.Double.compare(maxY, py) < 0) maxY = py
+          }
+          seen += 1
+        }
+      if (seen < 4) None else clip(Box(minX, maxX, minY, maxY)).map(b => (colour, b, 0.2))
     }
     val seen =
       Vector(ball, goal(scene.fieldLength / 2, YellowGoalColour), goal(-scene.fieldLength / 2, BlueGoalColour)).flatten
     seen.zipWithIndex.take(HaViMo.MaxRegions).map { case ((colour, box, fill), i) => region(i + 1, colour, box, fill) }
   }
+
+  /** The view of `scene` from `pose` with the head at `head`: `last` again when it is that view. */
+  def view(last: Option[CameraView], scene: Scene, pose: Pose, head: (Double, Double)): CameraView =
+    last.filter(_.sees(scene, pose, head)).getOrElse(CameraView(scene, pose, head,
+        regions(scene, pose, head._1, head._2)))
 
   /** The 32 × 24 grid for the same view: each cell holds the colour of the region covering it and its pixel count. */
   def grid(regions: Seq[HaViMoRegion]): Array[Byte] = {

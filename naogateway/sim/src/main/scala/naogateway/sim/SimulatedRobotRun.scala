@@ -161,7 +161,8 @@ private[sim] final class SimulatedRobotRun(
     val pending = drained.link.exists(l => l.queued.nonEmpty || l.onLine.nonEmpty)
     if (!pending) goOffline(drained, settings.resetBootDelay, t)
     else {
-      drained.link.flatMap(_.nextWakeUp).foreach(at => timers.startSingleTimer(WakeUpKey, WakeUp, delay(at, t)))
+      // Every step counts here, not only those with something to show: a packet the module loses ends the flush too.
+      drained.link.flatMap(_.nextStepAt).foreach(at => timers.startSingleTimer(WakeUpKey, WakeUp, delay(at, t)))
       Behaviors.receiveMessage { message =>
         always(message).getOrElse(message match {
           case WakeUp => flushing(drained)
@@ -267,8 +268,10 @@ private[sim] final class SimulatedRobotRun(
 
   private def arm(robot: Robot, t: Long): Robot = {
     // A stream endpoint that keeps asking for the present would otherwise spin the robot on zero-delay timers.
-    val streamAt = robot.stream.flatMap(_.nextTimerAt).map(math.max(_, t + MinStreamTickNanos))
-    val next = (robot.firmware.nextWakeUp +: (robot.link.flatMap(_.nextWakeUp) ++ streamAt).toVector).min
+    val streamAt =
+      robot.stream.fold(Long.MaxValue)(_.nextTimerAt.fold(Long.MaxValue)(math.max(_, t + MinStreamTickNanos)))
+    val linkAt = robot.link.fold(Long.MaxValue)(_.nextWakeUp.getOrElse(Long.MaxValue))
+    val next = math.min(robot.firmware.nextWakeUp, math.min(linkAt, streamAt))
     if (next == robot.armedAt) robot
     else {
       timers.startSingleTimer(WakeUpKey, WakeUp, delay(next, t))
@@ -334,6 +337,7 @@ private[sim] final class SimulatedRobotRun(
       val plain = segments.result() ++ replies
       deliveries = Vector.empty
       robot.link match {
+        case Some(_) if plain.isEmpty => () // the link has just been caught up to `t`: nothing more is due
         case Some(link) =>
           val queued = plain.foldLeft(FaithfulLink.Step(link, Vector.empty, Vector.empty)) { (acc, o) =>
             val step = acc.link.send(o.bytes, o.to, t)

@@ -18,31 +18,43 @@ class FaithfulLinkSpec extends AnyWordSpec with Matchers with LoneElement {
     FaithfulLink(Gs1500mConfig(), Cm530Config(), timeScale, seed = 1L, now = 0L)
 
   // Like a driver with a perfect timer: wakes exactly at nextWakeUp, feeds the inputs at their times.
-  private def drive(start: FaithfulLink, inputs: Seq[Input], until: Long): Run = {
+  private def drive(start: FaithfulLink, inputs: Seq[Input], until: Long): Run =
+    driveBy(_.nextWakeUp)(start, inputs, until)
+
+  // The same with the wake-ups `wakeUp` asks for; the run counts what came out later than modelled.
+  private def driveBy(wakeUp: FaithfulLink => Option[Long])(
+      start: FaithfulLink, inputs: Seq[Input], until: Long): Run = {
     var link = start
     val tx = Vector.newBuilder[FaithfulLink.Transmission]
     val dl = Vector.newBuilder[FaithfulLink.Delivery]
-    def take(step: FaithfulLink.Step): Unit = {
+    var late = 0
+    val states = Vector.newBuilder[Any]
+    def take(step: FaithfulLink.Step, now: Long): Unit = {
       link = step.link
       tx ++= step.transmitted
       dl ++= step.delivered
+      late += step.transmitted.count(_.at < now) + step.delivered.count(_.at < now)
     }
     def wakeUntil(t: Long): Unit = {
       var guard = 0
-      while (link.nextWakeUp.exists(_ <= t) && guard < 100000) {
+      while (wakeUp(link).exists(_ <= t) && guard < 100000) {
         guard += 1
-        take(link.advance(link.nextWakeUp.get))
+        val at = wakeUp(link).get
+        take(link.advance(at), at)
       }
     }
     inputs.sortBy(_.at).foreach { input =>
       wakeUntil(input.at)
       input match {
-        case Arrive(at, bytes)   => take(link.arrive(bytes, peer, at))
-        case Send(at, bytes, to) => take(link.send(bytes, to, at))
+        case Arrive(at, bytes)   => take(link.arrive(bytes, peer, at), at)
+        case Send(at, bytes, to) => take(link.send(bytes, to, at), at)
       }
+      // The link as an input leaves it (deliveries as values: their bytes are arrays).
+      states += ((link.module, link.cpu, link.queued, link.onLine,
+        link.handling.map(d => (d.bytes.toVector, d.from, d.at))))
     }
     wakeUntil(until)
-    Run(link, tx.result(), dl.result())
+    Run(link, tx.result(), dl.result(), late, states.result())
   }
 
   private def payload(n: Int, first: Int): Array[Byte] =
@@ -101,6 +113,40 @@ class FaithfulLinkSpec extends AnyWordSpec with Matchers with LoneElement {
       calm.delivered.map(_.bytes.head.toInt) shouldBe (0 until 10).toVector
     }
 
+    "show the same frames and deliveries at the same times whether woken at every step or only when one shows" in {
+      val random = new scala.util.Random(5)
+      // Calm traffic and bursts that overflow the module's buffer, inbound and outbound.
+      val inputs = (0 until 400).map { i =>
+        val at = i * 15L * ms + (if (i % 50 < 10) 0L else random.nextInt(40).toLong * ms)
+        val bytes = payload(20 + random.nextInt(if (i % 50 < 10) 900 else 120), i)
+        if (random.nextBoolean()) Arrive(at, bytes)
+        else Send(at, bytes, new InetSocketAddress("127.0.0.1", 42000 + random.nextInt(3)))
+      }
+      val until = 30000 * ms
+      val everyStep = driveBy(_.nextStepAt)(fresh(), inputs, until)
+      val shown = driveBy(_.nextWakeUp)(fresh(), inputs, until)
+      // A timer that fires late, by up to 7 ms.
+      val late = driveBy(_.nextWakeUp.map(at => at + (at / 1000 % 8) * ms))(fresh(), inputs, until)
+      def seen(run: Run) =
+        (run.transmitted.map(t => (t.bytes.toVector, t.to, t.at)),
+          run.delivered.map(d => (d.bytes.toVector, d.from, d.at)))
+      everyStep.transmitted.size should be > 100
+      everyStep.delivered.size should be > 50
+      (everyStep.link.module.stats.lost + everyStep.link.module.stats.overwritten) should be > 0L
+      // Woken only when something shows, nothing shows late.
+      (everyStep.late, shown.late) shouldBe ((0, 0))
+      late.late should be > 0
+      seen(shown) shouldBe seen(everyStep)
+      seen(late) shouldBe seen(everyStep)
+      // Every input finds the link as if it had been woken at every step.
+      shown.states shouldBe everyStep.states
+      late.states shouldBe everyStep.states
+      def ended(run: Run) = run.link.advance(until + 1000 * ms).link
+      ended(shown) shouldBe ended(everyStep)
+      ended(late) shouldBe ended(everyStep)
+      everyStep.link.nextStepAt shouldBe None
+    }
+
     "scale every modelled duration with the time scale" in {
       val bytes = payload(500, 1)
       val real = drive(fresh(1.0), Seq(Arrive(0, bytes), Send(0, bytes, peer)), 1000 * ms)
@@ -119,6 +165,8 @@ object FaithfulLinkSpec {
   private final case class Run(
       link: FaithfulLink,
       transmitted: Vector[FaithfulLink.Transmission],
-      delivered: Vector[FaithfulLink.Delivery]
+      delivered: Vector[FaithfulLink.Delivery],
+      late: Int,
+      states: Vector[Any]
   )
 }

@@ -58,8 +58,17 @@ object Dynamixel {
     out(2) = id.toByte
     out(3) = length.toByte
     out(4) = code.toByte
-    params.zipWithIndex.foreach { case (p, i) => out(5 + i) = p.toByte }
-    out(out.length - 1) = checksum(id, length, code, params.map(_ & 0xff)).toByte
+    // One pass, no intermediate collections: the simulated bus frames every reply here.
+    var sum = id + length + code
+    var at = 5
+    val each = params.iterator
+    while (each.hasNext) {
+      val p = each.next()
+      out(at) = p.toByte
+      sum += p & 0xff
+      at += 1
+    }
+    out(at) = (~sum & 0xff).toByte
     out
   }
 
@@ -72,8 +81,17 @@ object Dynamixel {
       if (length < 2 || bytes.length != length + 4 || id == 0xff) None
       else {
         val code = bytes(4) & 0xff
-        val params = bytes.slice(5, bytes.length - 1).toVector.map(_ & 0xff)
-        if (checksum(id, length, code, params) != (bytes.last & 0xff)) None else Some((id, code, params))
+        val end = bytes.length - 1
+        var sum = id + length + code
+        var i = 5
+        while (i < end) { sum += bytes(i) & 0xff; i += 1 }
+        if ((~sum & 0xff) != (bytes(end) & 0xff)) None
+        else {
+          val params = Vector.newBuilder[Int]
+          i = 5
+          while (i < end) { params += bytes(i) & 0xff; i += 1 }
+          Some((id, code, params.result()))
+        }
       }
     }
 

@@ -28,7 +28,8 @@ final case class BioloidBus(now: Long, tables: Vector[Ax12], camera: HaViMo2Devi
   def withVolts(v: Double): BioloidBus = copy(volts = v)
 
   /** The camera seeing `view` from now on. */
-  def seeing(view: Vector[HaViMoRegion]): BioloidBus = copy(camera = camera.seeing(view))
+  def seeing(view: Vector[HaViMoRegion]): BioloidBus =
+    if (view eq camera.lens) this else copy(camera = camera.seeing(view))
 
   /** Every servo as a read of its present values finds it now (docs/protocol.md 6.8), in id order. */
   def servos: Seq[ServoState] = tables.sortBy(_.id).map(s => Ax12.state(s.readable(volts)))

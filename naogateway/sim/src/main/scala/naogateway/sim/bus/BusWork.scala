@@ -13,43 +13,49 @@ object BusWork {
   /** One camera frame read over the bus: the region records in use (6.5 layout) and, when asked for, the 768 cells. */
   final case class CameraFrame(records: Array[Byte], grid: Option[Array[Byte]])
 
-  private def read(bus: BioloidBus, id: Int, address: Int, length: Int): (BioloidBus, Option[Vector[Int]]) = {
-    val (next, reply) = bus.transact(Dynamixel.packet(id, Dynamixel.Read, Seq(address, length)))
-    (next, Dynamixel.status(reply).filter(s => s.error == 0 && s.params.length == length).map(_.params))
-  }
-
   private val GridReadBytes = 192
+
+  // The cycle's instruction packets never change: built once.
+  private val PingPacket = Dynamixel.packet(HaViMo2Device.Id, Dynamixel.Ping, Nil)
+  private val RegionReads = Vector.tabulate(HaViMo.MaxRegions)(i =>
+    Dynamixel.packet(HaViMo2Device.Id, Dynamixel.Read,
+      Seq(HaViMo2Device.BufferAddress * (i + 1), HaViMo.RegionRecordBytes)))
+  // READ_GRID in four reads of 192 cells (its address in 16-byte units).
+  private val GridReads = Vector.tabulate(4)(part =>
+    Dynamixel.packet(HaViMo2Device.Id, HaViMo2Device.ReadGrid, Seq(part * GridReadBytes / 16, GridReadBytes)))
+  private val CapRegionPacket = Dynamixel.packet(HaViMo2Device.Id, HaViMo2Device.CapRegion, Nil)
+
+  // The parameters of an error-free status of `length` parameters, else None.
+  private def params(reply: Array[Byte], length: Int): Option[Vector[Int]] =
+    Dynamixel.status(reply).filter(s => s.error == 0 && s.params.length == length).map(_.params)
 
   /** The camera's cycle, as the public CM-530 examples run it: a ping (no answer: the capture is still in progress, so
     * no frame), the 15 region slots read, the grid read (READ_GRID, 4 × 192 cells) when `withGrid`, and the next
     * capture started (CAP_REGION).
     */
   def cameraCycle(bus0: BioloidBus, withGrid: Boolean): (BioloidBus, Option[CameraFrame]) = {
-    val (pinged, pong) = bus0.transact(Dynamixel.packet(HaViMo2Device.Id, Dynamixel.Ping, Nil))
+    val (pinged, pong) = bus0.transact(PingPacket)
     if (Dynamixel.status(pong).isEmpty) (pinged, None)
     else {
       var bus = pinged
       val records = Array.newBuilder[Byte]
-      (1 to HaViMo.MaxRegions).foreach { slot =>
-        val (next, bytes) = read(bus, HaViMo2Device.Id, HaViMo2Device.BufferAddress * slot, HaViMo.RegionRecordBytes)
+      RegionReads.foreach { packet =>
+        val (next, reply) = bus.transact(packet)
         bus = next
-        bytes.filter(_.head != 0).foreach(b => records ++= b.map(_.toByte))
+        params(reply, HaViMo.RegionRecordBytes).filter(_.head != 0).foreach(_.foreach(b => records += b.toByte))
       }
       val grid = if (!withGrid) None
       else {
-        // READ_GRID in four reads of 192 cells (its address in 16-byte units).
         val cells = Array.newBuilder[Byte]
         var whole = true
-        (0 until 4).foreach { part =>
-          val (next, reply) = bus.transact(
-            Dynamixel.packet(HaViMo2Device.Id, HaViMo2Device.ReadGrid, Seq(part * GridReadBytes / 16, GridReadBytes)))
+        GridReads.foreach { packet =>
+          val (next, reply) = bus.transact(packet)
           bus = next
-          Dynamixel.status(reply).filter(s => s.error == 0 && s.params.length == GridReadBytes)
-            .fold[Unit] { whole = false }(s => cells ++= s.params.map(_.toByte))
+          params(reply, GridReadBytes).fold[Unit] { whole = false }(_.foreach(b => cells += b.toByte))
         }
         Some(cells.result()).filter(_ => whole)
       }
-      bus = bus.transact(Dynamixel.packet(HaViMo2Device.Id, HaViMo2Device.CapRegion, Nil))._1
+      bus = bus.transact(CapRegionPacket)._1
       (bus, Some(CameraFrame(records.result(), grid)))
     }
   }

@@ -9,10 +9,8 @@ import naogateway.wire.{Dynamixel, HaViMo, HaViMoRegion}
   * of docs/protocol.md 6.5, unused slots zero, and READ_GRID (0x16: address in 16-byte units, length) reads the 768
   * grid cells. Every capture here takes regions and grid. Pure, on the robot's clock (nanoseconds).
   *
-  * @param regions
-  *   the region buffer of the last finished capture (240 bytes)
-  * @param grid
-  *   the grid of the last finished capture (768 bytes)
+  * @param captured
+  *   what the last finished capture took: its region buffer (240 bytes) and grid (768 cells)
   * @param lens
   *   what the camera sees now: the next capture's regions
   * @param busyUntil
@@ -21,8 +19,7 @@ import naogateway.wire.{Dynamixel, HaViMo, HaViMoRegion}
   *   captures started since power-up
   */
 final case class HaViMo2Device(
-    regions: Vector[Byte],
-    grid: Vector[Byte],
+    captured: HaViMo2Device.Capture,
     lens: Vector[HaViMoRegion],
     busyUntil: Long,
     captures: Long,
@@ -39,24 +36,20 @@ final case class HaViMo2Device(
   /** Reads `length` bytes of the table from `address`, or the error bits of a read past its 256 addresses. */
   def read(address: Int, length: Int): Either[Int, Vector[Int]] =
     if (length < 1 || address + length > 256) Left(Dynamixel.RangeError)
-    else
-      Right((address until address + length).toVector.map(a =>
-          if (a < BufferAddress) 0 else regions(a - BufferAddress) & 0xff))
+    else if (address >= 0) Right(captured.table.slice(address, address + length))
+    else Right(Vector.tabulate(length)(i => if (address + i < 0) 0 else captured.table(address + i)))
 
   /** READ_GRID: `length` cells from cell 16·`block`, or the error bits of a read past the 768 cells. */
   def readGrid(block: Int, length: Int): Either[Int, Vector[Int]] =
     if (length < 1 || block * 16 + length > HaViMo.GridCells) Left(Dynamixel.RangeError)
-    else Right(grid.slice(block * 16, block * 16 + length).map(_ & 0xff))
+    else Right(captured.cells.slice(block * 16, block * 16 + length))
 
   /** A capture of what the lens sees, started at `now`. */
-  def capture(now: Long): HaViMo2Device = {
-    val records = HaViMo.encodeRegions(lens.take(HaViMo.MaxRegions).zipWithIndex.map { case (r, i) =>
-      r.copy(index = i + 1)
-    }).getOrElse(Array.emptyByteArray)
-    val buffer = records.toVector ++ Vector.fill(RegionBufferBytes - records.length)(0.toByte)
-    copy(regions = buffer, grid = naogateway.sim.Scene.grid(lens).toVector, busyUntil = now + captureNanos,
+  def capture(now: Long): HaViMo2Device =
+    // A view like the last one's makes the same table: the buffers already made are kept.
+    copy(captured = if ((captured.view eq lens) || captured.view == lens) captured else Capture(lens),
+      busyUntil = now + captureNanos,
       captures = captures + 1)
-  }
 }
 
 /** The camera's instructions, addresses and the emulation's figures. */
@@ -84,6 +77,26 @@ object HaViMo2Device {
 
   /** A camera that finished a capture of `view` at power-up. */
   def apply(view: Vector[HaViMoRegion], now: Long, captureNanos: Long = DefaultCaptureNanos): HaViMo2Device =
-    HaViMo2Device(Vector.fill(RegionBufferBytes)(0.toByte), Vector.fill(HaViMo.GridCells)(0.toByte), view, now, 0L,
-      captureNanos).capture(now).copy(busyUntil = now, captures = 0L)
+    HaViMo2Device(Capture(view), view, now, 0L, captureNanos)
+
+  /** One capture of `view`: the table's region buffer and the grid it makes, each made once, when first read. */
+  final case class Capture(view: Vector[HaViMoRegion]) {
+
+    /** The region buffer: the first 15 regions' records in slots 1-15 (indices renumbered), unused slots zero. */
+    lazy val regionBuffer: Array[Byte] = {
+      val records = HaViMo.encodeRegions(view.take(HaViMo.MaxRegions).zipWithIndex.map { case (r, i) =>
+        r.copy(index = i + 1)
+      }).getOrElse(Array.emptyByteArray)
+      java.util.Arrays.copyOf(records, RegionBufferBytes)
+    }
+
+    /** The 768 grid cells. */
+    lazy val grid: Array[Byte] = naogateway.sim.Scene.grid(view)
+
+    /** The table as reads find it: addresses 0-15 zero (model number 0 included), the region buffer from 16. */
+    lazy val table: Vector[Int] = Vector.fill(BufferAddress)(0) ++ regionBuffer.iterator.map(_ & 0xff)
+
+    /** The grid cells as READ_GRID finds them. */
+    lazy val cells: Vector[Int] = grid.iterator.map(_ & 0xff).toVector
+  }
 }

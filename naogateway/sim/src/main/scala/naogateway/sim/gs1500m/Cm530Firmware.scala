@@ -144,7 +144,8 @@ final case class Cm530Firmware(
 
   private def poll(module: Gs1500mModule): FirmwareStep = {
     val read = module.firmwareRead(nextActionAt)
-    val (nextDecoder, serialEvents) = decoder.feed(read.bytes)
+    val (nextDecoder, serialEvents) =
+      if (read.bytes.isEmpty) (decoder, Vector.empty[SerialEvent]) else decoder.feed(read.bytes)
     var busy = read.doneAt + ns(config.pollMillis)
     var s = stats.copy(polls = stats.polls + 1, bytesRead = stats.bytesRead + read.bytes.length)
     val events = Vector.newBuilder[FirmwareEvent]

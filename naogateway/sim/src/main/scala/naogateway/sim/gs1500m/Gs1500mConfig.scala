@@ -52,10 +52,28 @@ sealed trait RxEntry extends Product with Serializable {
 
   /** What the CM-530 reads for it. */
   def serialBytes: ArraySeq[Byte]
+
+  /** How many bytes the CM-530 reads for it. */
+  def serialLength: Int = serialBytes.length
+
+  /** Copies [[serialBytes]] into `out` from `at`; where the next entry's bytes go. */
+  def copySerialBytes(out: Array[Byte], at: Int): Int = {
+    RxEntry.copy(serialBytes, 0, out, at, serialLength)
+    at + serialLength
+  }
 }
 
 /** The kinds of queued entries. */
 object RxEntry {
+
+  // `n` bytes of `from` from `offset` into `out` at `at`, without boxing when `from` wraps a byte array.
+  private[gs1500m] def copy(from: ArraySeq[Byte], offset: Int, out: Array[Byte], at: Int, n: Int): Unit =
+    from match {
+      case bytes: ArraySeq.ofByte => System.arraycopy(bytes.unsafeArray, offset, out, at, n)
+      case other =>
+        var i = 0
+        while (i < n) { out(at + i) = other(offset + i); i += 1 }
+    }
 
   /** A received datagram; `overwritten` bytes of its beginning are gone, and with them its header. */
   final case class Frame(id: Long, datagram: AirDatagram, header: ArraySeq[Byte], arrivedAt: Long, overwritten: Int)
@@ -68,12 +86,31 @@ object RxEntry {
 
     def serialBytes: ArraySeq[Byte] =
       if (overwritten == 0) header ++ datagram.payload else datagram.payload.drop(overwritten)
+
+    override def serialLength: Int = if (overwritten == 0) header.length + remaining else remaining
+
+    // Without building the concatenation first: every received datagram is copied here.
+    override def copySerialBytes(out: Array[Byte], at: Int): Int =
+      if (overwritten == 0) {
+        RxEntry.copy(header, 0, out, at, header.length)
+        RxEntry.copy(datagram.payload, 0, out, at + header.length, remaining)
+        at + header.length + remaining
+      } else {
+        RxEntry.copy(datagram.payload, overwritten, out, at, remaining)
+        at + remaining
+      }
   }
 
   /** A two-byte reply about a sent packet; the module makes these, they take no data buffer. */
   final case class ReplyEntry(reply: SerialEvent.Reply) extends RxEntry {
     def bufferBytes: Int = 0
     def serialBytes: ArraySeq[Byte] = ArraySeq(Gs1500mSerial.Esc, reply.letter.toByte)
+    override def serialLength: Int = 2
+    override def copySerialBytes(out: Array[Byte], at: Int): Int = {
+      out(at) = Gs1500mSerial.Esc
+      out(at + 1) = reply.letter.toByte
+      at + 2
+    }
   }
 
   /** A text status line (with its CR LF); the module makes these, they take no data buffer. */

@@ -46,11 +46,19 @@ final case class Gs1500mModule(
   import ModuleEvent._
 
   /** Payload bytes queued for the CM-530 and not yet being read. */
-  def queuedBytes: Int = rxQueue.iterator.map(_.bufferBytes).sum
+  def queuedBytes: Int = {
+    var sum = 0
+    rxQueue.foreach(e => sum += e.bufferBytes)
+    sum
+  }
 
   /** Bytes of the buffer in use at `t` (at or after [[clock]]). */
-  def bufferedAt(t: Long): Int =
-    queuedBytes + drains.iterator.map(_.remainingAt(t)).sum + tx.iterator.filter(_.endsAt > t).map(_.data.length).sum
+  def bufferedAt(t: Long): Int = {
+    var sum = queuedBytes
+    drains.foreach(d => sum += d.remainingAt(t))
+    tx.foreach(e => if (e.endsAt > t) sum += e.data.length)
+    sum
+  }
 
   /** Bytes of the buffer in use now. */
   def buffered: Int = bufferedAt(clock)
@@ -64,20 +72,26 @@ final case class Gs1500mModule(
   /** Lets time pass to `now`: outgoing packets whose transfer is complete go on air (and are acknowledged). */
   def advance(now: Long): ModuleStep = {
     val t = math.max(now, clock)
-    val (done, pending) = tx.partition(_.endsAt <= t)
-    val replies: Vector[RxEntry] =
-      if (config.acknowledgeSends) done.map(_ => RxEntry.ReplyEntry(SerialEvent.Ack)) else Vector.empty
-    val next = copy(
-      clock = t,
-      tx = pending,
-      drains = drains.filter(_.endsAt > t),
-      rxQueue = rxQueue ++ replies,
-      stats = stats.copy(
-        onAir = stats.onAir + done.size,
-        bytesOnAir = stats.bytesOnAir + done.iterator.map(_.data.length.toLong).sum
+    if (!tx.exists(_.endsAt <= t)) {
+      // Nothing goes on air: only the clock moves on (and finished reads let go of their buffer space).
+      val left = if (drains.exists(_.endsAt <= t)) drains.filter(_.endsAt > t) else drains
+      ModuleStep(if (t == clock && (left eq drains)) this else copy(clock = t, drains = left), Vector.empty)
+    } else {
+      val (done, pending) = tx.partition(_.endsAt <= t)
+      val replies: Vector[RxEntry] =
+        if (config.acknowledgeSends) done.map(_ => RxEntry.ReplyEntry(SerialEvent.Ack)) else Vector.empty
+      val next = copy(
+        clock = t,
+        tx = pending,
+        drains = drains.filter(_.endsAt > t),
+        rxQueue = rxQueue ++ replies,
+        stats = stats.copy(
+          onAir = stats.onAir + done.size,
+          bytesOnAir = stats.bytesOnAir + done.iterator.map(_.data.length.toLong).sum
+        )
       )
-    )
-    ModuleStep(next, done.map(e => OnAir(e.cid, e.data, e.endsAt)))
+      ModuleStep(next, done.map(e => OnAir(e.cid, e.data, e.endsAt)))
+    }
   }
 
   /** A datagram reaches the module from the air at `now`. */
@@ -128,9 +142,11 @@ final case class Gs1500mModule(
   def firmwareRead(now: Long): ReadStep = {
     val ModuleStep(m, early) = advance(now)
     val t = m.clock
-    if (m.rxQueue.isEmpty) ReadStep(m, ArraySeq.empty[Byte], t, early)
+    if (m.rxQueue.isEmpty) ReadStep(m, Gs1500mModule.NoBytes, t, early)
     else {
-      val bytes = ArraySeq.unsafeWrapArray(m.rxQueue.iterator.flatMap(_.serialBytes).toArray)
+      val out = new Array[Byte](m.rxQueue.foldLeft(0)(_ + _.serialLength))
+      m.rxQueue.foldLeft(0)((at, e) => e.copySerialBytes(out, at))
+      val bytes = ArraySeq.unsafeWrapArray(out)
       val start = math.max(t, m.rxLineFreeAt)
       val end = start + config.lineNanos(bytes.length)
       val frames = m.rxQueue.collect { case f: RxEntry.Frame => f }
@@ -234,6 +250,9 @@ final case class Gs1500mModule(
 
 /** Where a module model starts. */
 object Gs1500mModule {
+
+  // An empty read, wrapping a byte array as every read does (ArraySeq.empty would wrap an Object array).
+  private val NoBytes: ArraySeq[Byte] = ArraySeq.unsafeWrapArray(Array.emptyByteArray)
 
   /** An empty module at time `start`, its overflow coin seeded with `seed`. */
   def apply(config: Gs1500mConfig = Gs1500mConfig(), seed: Long = 1L, start: Long = 0L): Gs1500mModule =

@@ -135,18 +135,41 @@ object Gs1500mSerial {
 
   /** `ESC 'Z' <cid> <len4>`: the 7 bytes in front of `length` bytes of bulk data. */
   def bulkHeader(cid: Int, length: Int): Either[SerialError, ArraySeq[Byte]] =
-    for {
-      c <- cidChar(cid)
-      _ <- checkLength(length)
-    } yield ascii(s"${Esc.toChar}$BulkLetter$c${len4(length)}")
+    if (cid < 0 || cid > MaxCid) Left(SerialError.BadCid(cid))
+    else if (length < 0 || length > MaxPayload) Left(SerialError.TooLong(length, MaxPayload))
+    else {
+      // Built by hand: every datagram the CM-530 sends passes here.
+      val out = new Array[Byte](BulkHeaderBytes)
+      out(0) = Esc
+      out(1) = BulkLetter.toByte
+      out(2) = Character.forDigit(cid, 16).toByte
+      putLen4(out, 3, length)
+      Right(ArraySeq.unsafeWrapArray(out))
+    }
 
   /** `ESC 'y' <cid> <ip> ' ' <port> TAB <len4>`: the header of a datagram a UDP server received from `remote`. */
   def udpServerHeader(cid: Int, remote: Remote, length: Int): Either[SerialError, ArraySeq[Byte]] =
-    for {
-      c <- cidChar(cid)
-      _ <- checkLength(length)
-      address <- addressField(remote)
-    } yield ascii(s"${Esc.toChar}$UdpServerLetter$c$address\t${len4(length)}")
+    if (cid < 0 || cid > MaxCid) Left(SerialError.BadCid(cid))
+    else if (length < 0 || length > MaxPayload) Left(SerialError.TooLong(length, MaxPayload))
+    else if (!isDottedIpv4(remote.ip) || remote.port < 0 || remote.port > 65535) Left(SerialError.BadRemote(remote))
+    else {
+      val ip = remote.ip
+      val port = Integer.toString(remote.port)
+      val out = new Array[Byte](3 + ip.length + 1 + port.length + 1 + 4)
+      out(0) = Esc
+      out(1) = UdpServerLetter.toByte
+      out(2) = Character.forDigit(cid, 16).toByte
+      var at = 3
+      var i = 0
+      while (i < ip.length) { out(at) = ip.charAt(i).toByte; at += 1; i += 1 }
+      out(at) = ' '.toByte
+      at += 1
+      i = 0
+      while (i < port.length) { out(at) = port.charAt(i).toByte; at += 1; i += 1 }
+      out(at) = '\t'.toByte
+      putLen4(out, at + 1, length)
+      Right(ArraySeq.unsafeWrapArray(out))
+    }
 
   /** A whole bulk frame: what the CM-530 sends, and what it receives on a direct connection. */
   def encodeBulk(cid: Int, data: ArraySeq[Byte]): Either[SerialError, ArraySeq[Byte]] =
@@ -196,21 +219,40 @@ object Gs1500mSerial {
     }
   }
 
-  private def addressField(remote: Remote): Either[SerialError, String] = {
-    val octets = remote.ip.split('.')
-    // Plain decimal 0..255 without leading zeros, as the module prints it.
-    def octet(o: String): Boolean =
-      o.nonEmpty && o.length <= 3 && o.forall(c => c >= '0' && c <= '9') && o.toInt <= 255 &&
-        (o == "0" || o.head != '0')
-    val dotted = octets.length == 4 && octets.forall(octet)
-    if (!dotted || remote.port < 0 || remote.port > 65535) Left(SerialError.BadRemote(remote))
-    else Right(s"${remote.ip} ${remote.port}")
+  // Four octets of plain decimal 0..255 without leading zeros, separated by dots, as the module prints an address.
+  private def isDottedIpv4(ip: String): Boolean = {
+    var octets = 0
+    var digits = 0
+    var value = 0
+    var leadingZero = false
+    var ok = true
+    var i = 0
+    while (ok && i <= ip.length) {
+      val c = if (i == ip.length) '.' else ip.charAt(i)
+      if (c == '.') {
+        ok = digits > 0
+        octets += 1
+        digits = 0
+        value = 0
+      } else if (c >= '0' && c <= '9') {
+        if (digits == 0) leadingZero = c == '0'
+        else ok = !leadingZero
+        digits += 1
+        value = value * 10 + (c - '0')
+        ok = ok && digits <= 3 && value <= 255
+      } else ok = false
+      i += 1
+    }
+    ok && octets == 4
   }
 
-  private def checkLength(length: Int): Either[SerialError, Unit] =
-    if (length < 0 || length > MaxPayload) Left(SerialError.TooLong(length, MaxPayload)) else Right(())
-
-  private def len4(length: Int): String = f"$length%04d"
+  // The length as exactly four ASCII digits (at most 1400, checked before).
+  private def putLen4(out: Array[Byte], at: Int, length: Int): Unit = {
+    out(at) = ('0' + length / 1000 % 10).toByte
+    out(at + 1) = ('0' + length / 100 % 10).toByte
+    out(at + 2) = ('0' + length / 10 % 10).toByte
+    out(at + 3) = ('0' + length % 10).toByte
+  }
 
   private def reply(letter: Char): ArraySeq[Byte] = ArraySeq(Esc, letter.toByte)
 
