@@ -136,9 +136,12 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
       def replies = got.asScala.toVector.collect {
         case FoxgloveFeed.Published(c, _, b) if c.topic == RecordingSchema.Topics.Decisions => new String(b, "UTF-8")
       }
-      eventually(timeout(20.seconds))(topics should contain(RecordingSchema.Topics.message(4)))
+      // Robot 4's channel is advertised before its message and reply decision reach the stream: wait for the reply.
+      eventually(timeout(20.seconds)) {
+        topics should contain(RecordingSchema.Topics.message(4))
+        replies.count(_.contains("\"reply\"")) shouldBe 1
+      }
       topics should not contain RecordingSchema.Topics.message(3)
-      replies.count(_.contains("\"reply\"")) shouldBe 1
       kill.shutdown()
       testKit.stop(feed)
     }
