@@ -9,7 +9,8 @@ import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
 
 import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKit}
-import akka.stream.KillSwitches
+import akka.actor.typed.ActorRef
+import akka.stream.{KillSwitches, UniqueKillSwitch}
 import akka.stream.scaladsl.{Keep, Sink}
 import org.scalatest.concurrent.Eventually
 import org.scalatest.wordspec.AnyWordSpecLike
@@ -62,6 +63,21 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
   private val robot = new InetSocketAddress("127.0.0.5", 3838)
   private val port = new InetSocketAddress("127.0.0.1", 11011)
 
+  /** A feed on a test tap with one connection whose updates are collected in `got`, once the feed reads the tap. */
+  private final case class Reading(tap: TestTap, feed: ActorRef[FoxgloveFeed.Command],
+      got: ConcurrentLinkedQueue[FoxgloveFeed.Update], kill: UniqueKillSwitch)
+
+  private def reading(): Reading = {
+    val tap = new TestTap
+    val feed = spawn(FoxgloveFeed(createTestProbe[RobotMiddleware.Command]().ref, new View(tap)))
+    val connected = createTestProbe[FoxgloveFeed.Feed]()
+    feed ! FoxgloveFeed.Connect(connected.ref)
+    val got = new ConcurrentLinkedQueue[FoxgloveFeed.Update]()
+    val kill = connected.receiveMessage().updates.viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(got.add))
+      .run()
+    eventually(timeout(10.seconds))(tap.open.size shouldBe 1)
+    Reading(tap, feed, got, kill)
+  }
   "The feed's reading of the gateway's tap" should {
     "subscribe only while a client is connected, and carry every decision and datagram of the tap" in {
       val tap = new TestTap
@@ -116,14 +132,7 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
     }
 
     "show a robot frame the gateway did not accept (a stranger's, in robot 3's name) on no robot channel" in {
-      val tap = new TestTap
-      val feed = spawn(FoxgloveFeed(createTestProbe[RobotMiddleware.Command]().ref, new View(tap)))
-      val connected = createTestProbe[FoxgloveFeed.Feed]()
-      feed ! FoxgloveFeed.Connect(connected.ref)
-      val got = new ConcurrentLinkedQueue[FoxgloveFeed.Update]()
-      val kill = connected.receiveMessage().updates.viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(got.add))
-        .run()
-      eventually(timeout(10.seconds))(tap.open.size shouldBe 1)
+      val Reading(tap, feed, got, kill) = reading()
       def frame(id: Int) = MessageContents(id, rpcResponse = Some(Response(callId = Some(id))))
       def bytes(id: Int) = MessageContents.encodeFrame(frame(id)).toOption.get
       // The stranger's: raw only, as the port's reader publishes a frame it did not accept.
@@ -147,14 +156,7 @@ class FoxgloveTapSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike wit
     }
 
     "give at most MaxRobotChannels robots message channels, however many robot ids the tap carries" in {
-      val tap = new TestTap
-      val feed = spawn(FoxgloveFeed(createTestProbe[RobotMiddleware.Command]().ref, new View(tap)))
-      val connected = createTestProbe[FoxgloveFeed.Feed]()
-      feed ! FoxgloveFeed.Connect(connected.ref)
-      val got = new ConcurrentLinkedQueue[FoxgloveFeed.Update]()
-      val kill = connected.receiveMessage().updates.viaMat(KillSwitches.single)(Keep.right).to(Sink.foreach(got.add))
-        .run()
-      eventually(timeout(10.seconds))(tap.open.size shouldBe 1)
+      val Reading(tap, feed, got, kill) = reading()
       val ids = 1 to RecordingSchema.MaxRobotChannels + 20
       ids.foreach { id =>
         val contents = MessageContents(id, rpcResponse = Some(Response(callId = Some(id))))

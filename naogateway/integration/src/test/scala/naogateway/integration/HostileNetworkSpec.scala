@@ -179,5 +179,37 @@ class HostileNetworkSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike 
         f.stop()
       }
     }
+    "take a silent robot offline on time though strangers keep its port busy with its own id, another's and noise" in {
+      val f = new GatewayFixture(testKit, "")
+      /* Another loopback block than the other tests': the stranger's datagrams reach the robot port, never as robot
+       * 9's. */
+      val strangers = new HostileTraffic.Sender(HostileTraffic.addresses(TestLoopback.block(6, 0), 3))
+      try {
+        val (robot, _) = f.robot(9)
+        f.awaitEvent(10.seconds) { case RobotOnline(9, _) => () }
+        robot ! SimulatedRobot.Stop(system.ignoreRef)
+        val stopped = System.nanoTime()
+        // Keep-alives in robot 9's name and another robot's, and random bytes, every 2 ms from three addresses: the
+        // reader reads datagrams all along, but none is robot 9's, so its heartbeat must still call it offline.
+        val noise = HostileTraffic.randomDatagrams(200, new scala.util.Random(9)).toVector
+        val forged = Vector(HostileTraffic.keepAlive(9, bootId = Some(1)), HostileTraffic.keepAlive(10))
+        var offline = false
+        var i = 0
+        while (!offline && System.nanoTime() - stopped < 15.seconds.toNanos) {
+          strangers.send(if (i % 3 == 2) noise(i % noise.size) else forged(i % 2), f.addresses.robots, i % 3)
+          i += 1
+          offline = scala.util.Try(f.events.receiveMessage(2.millis)).toOption.exists {
+            case RobotOffline(9, _) => true
+            case _                  => false
+          }
+        }
+        offline shouldBe true
+        // The usual detection (850 ms) plus, at most, each of the three probes' grace while the reader was behind.
+        (System.nanoTime() - stopped).nanos should be < 6.seconds
+      } finally {
+        strangers.close()
+        f.stop()
+      }
+    }
   }
 }

@@ -53,6 +53,15 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
     heartbeat -> handled
   }
 
+  /** An online heartbeat of `robot` reading `port` (its quality window longer than the tests that use it, so the link
+    * quality is not judged), once it has reported `CameOnline`.
+    */
+  private def onlineReading(reports: TestProbe[Any], robot: Robot, port: PortProgress): Unit = {
+    spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
+        robot.keepAlives, port))
+    reports.expectMessage(CameOnline)
+  }
+
   /** One probe, submitted straight to the robot's sender (here the same probe as the reports, to keep their order). */
   private def probeId(r: Any): Long = r match {
     case NoResponseActor.Submit(RobotFrames.Outbound.CallOut(call), Priority.Heartbeat, key, _, None, None) =>
@@ -218,10 +227,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       // The reader last found the socket empty at 0 and is behind from then on: a burst fills the socket.
       val port = new PortProgress(() => robot.now)
       port.reading()
-      // A quality window longer than the test: the link quality is not judged here.
-      spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
-          robot.keepAlives, port))
-      reports.expectMessage(CameOnline)
+      onlineReading(reports, robot, port)
       robot.passes(400.millis)
       probeId(reports.receiveMessage())
       // The probe's timeout comes and goes, and half the grace with it: no second probe, no verdict.
@@ -239,10 +245,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       val robot = new Robot
       val port = new PortProgress(() => robot.now)
       port.reading()
-      // A quality window longer than the test: the link quality is not judged here.
-      spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
-          robot.keepAlives, port))
-      reports.expectMessage(CameOnline)
+      onlineReading(reports, robot, port)
       robot.passes(400.millis)
       probeId(reports.receiveMessage())
       robot.passes(200.millis)
@@ -278,9 +281,7 @@ class HeartBeatActorSpec extends ScalaTestWithActorTestKit(ManualTime.config) wi
       val port = new PortProgress(() => robot.now)
       port.reading()
       port.caughtUp()
-      spawn(HeartBeatActor(settings.copy(qualityWindow = 10.seconds), reports.ref, reports.ref, online = true,
-          robot.keepAlives, port))
-      reports.expectMessage(CameOnline)
+      onlineReading(reports, robot, port)
       robot.passes(400.millis)
       probeId(reports.receiveMessage())
       robot.passes(150.millis)
