@@ -107,12 +107,14 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
 
   /** The errors scalac reports (typer only, nothing written) for `sources` against `classpath`. */
   private def compileErrors(classpath: Seq[String], sources: Seq[(String, String)]): Vector[String] = {
+    val out = Files.createTempDirectory("apps-probe")
     val settings = new Settings()
-    settings.processArgumentString(s"-Ystop-after:typer -d ${Files.createTempDirectory("apps-probe")}")
+    settings.processArgumentString(s"-Ystop-after:typer -d $out")
     settings.classpath.value = classpath.mkString(File.pathSeparator)
     val reporter = new StoreReporter(settings)
     val global = new Global(settings, reporter)
-    new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
+    try new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
+    finally Files.deleteIfExists(out) // typer writes nothing into it; left behind, every run would leave one more
     reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i =>
       s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
   }

@@ -368,9 +368,9 @@ object Launcher {
     }
   }
 
-  /** What the demo's app node takes over from the gateway node's config: where the cluster is, the dispatchers' sizes,
-    * and what makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace, Artery's flush at shutdown); and
-    * its own scheduler's pace ([[AppNodeScheduler]]).
+  /** What the demo's app node takes over from the gateway node's config: where the cluster is, the dispatchers' sizes
+    * and which of them runs Artery, and what makes a Ctrl-C quick (the shutdown's phase timeouts, the leader's pace,
+    * Artery's flush at shutdown); and its own scheduler's pace ([[AppNodeScheduler]]).
     */
   def appNodeConfig(gatewayNode: Config): Config =
     Seq(
@@ -378,6 +378,8 @@ object Launcher {
       "akka.actor.default-dispatcher",
       "akka.actor.internal-dispatcher",
       "akka.remote.default-remote-dispatcher",
+      "akka.remote.use-dispatcher",
+      "akka.remote.artery.advanced.use-dispatcher",
       "akka.coordinated-shutdown",
       "akka.cluster.leader-actions-interval",
       "akka.remote.artery.advanced.shutdown-flush-timeout"

@@ -30,6 +30,16 @@ class LauncherConfigSpec extends AnyWordSpec with Matchers {
       appNode.getDuration("akka.scheduler.tick-duration").toMillis shouldBe 50L
       appNode.getDuration("akka.cluster.scheduler.tick-duration") shouldBe appNode.getDuration(
         "akka.scheduler.tick-duration")
+      // The gateway node's wakes 50 times a second, still finer than the cluster's tick (33 ms), so the cluster's
+      // tasks share it there too.
+      gatewayNode.getDuration("akka.scheduler.tick-duration").toMillis shouldBe 20L
+      gatewayNode.getDuration("akka.scheduler.tick-duration") should be <= gatewayNode.getDuration(
+        "akka.cluster.scheduler.tick-duration")
+      // Artery's streams run on the internal dispatcher on both nodes: no message between two of Akka's pools.
+      Seq("akka.remote.use-dispatcher", "akka.remote.artery.advanced.use-dispatcher").foreach { key =>
+        withClue(key)(gatewayNode.getString(key) shouldBe "akka.actor.internal-dispatcher")
+        withClue(key)(appNode.getString(key) shouldBe "akka.actor.internal-dispatcher")
+      }
     }
 
     "shut down as quickly as the gateway node: the same phase timeouts, leader pace and flush wait" in {

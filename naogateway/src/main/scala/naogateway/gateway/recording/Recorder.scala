@@ -63,8 +63,9 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
   private var games = GameFiles(settings.gameQuiet.toNanos)
   private var nextAttempt = Long.MinValue
   private val batch = new java.util.ArrayList[Tapped](Recorder.Batch)
-  // The writer's pause after a batch, to gather the next (Recorder.nextPark).
+  // The writer's pause after a batch, to gather the next (Recorder.nextPark), and the entries waiting that end it.
   private var park = Recorder.MinParkNanos
+  private val gather = math.max(1, math.min(Recorder.Batch / 4, settings.queueCapacity / 4))
 
   private def writeLoop(): Unit = {
     try {
@@ -86,9 +87,10 @@ final class Recorder(settings: RecordingSettings, threadName: String, clock: Rob
           while (i < batch.size) { write(batch.get(i)); i += 1 }
           publishWritten()
           // A pause to gather the next entries: longer while they trickle in, so a busy writer wakes a bounded number
-          // of times a second; none after a full batch (more wait already).
+          // of times a second; ended early by a quarter batch waiting (a burst); none after a full batch (more wait
+          // already).
           park = Recorder.nextPark(park, batch.size)
-          if (!closing && batch.size < Recorder.Batch) LockSupport.parkNanos(park)
+          if (!closing && batch.size < Recorder.Batch) queue.await(park, gather)
         }
       }
     } catch { case NonFatal(e) => log.error("Recording stopped: the writer failed", e) }
@@ -327,11 +329,11 @@ private[recording] object Recorder {
   /** The shortest pause after a batch, while entries arrive in numbers. */
   val MinParkNanos: Long = 2000000L
 
-  /** The longest pause after a batch, while entries trickle in: the writer then wakes at most 20 times a second. The
-    * queue (65536 entries by default) holds what arrives meanwhile at over a million entries a second, more than the
-    * port can read.
+  /** The longest pause after a batch, while entries trickle in (an idle field's keep-alives): the writer then wakes 4
+    * times a second. A burst does not wait it out: a quarter batch waiting wakes the writer (`Tap.Reader.await`), so
+    * the queue (65536 entries by default) never fills while the writer sleeps.
     */
-  val MaxParkNanos: Long = 50000000L
+  val MaxParkNanos: Long = 250000000L
 
   /** How long the writer waits on an empty queue when no entry comes: the flush (at least once a second), rotation and
     * the end of a game's half are looked at when it wakes.

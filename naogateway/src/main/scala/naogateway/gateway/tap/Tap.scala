@@ -70,12 +70,15 @@ private[naogateway] object Tap {
     // The reader's thread while it waits in [[await]]: the first offer then takes it and wakes it (the offers after it
     // find none); while the reader is not waiting an offer costs one volatile read and no wake-up.
     private val waiter = new AtomicReference[Thread]
+    // While the reader waits: how many waiting entries wake it (1 on an empty queue; more while it gathers a batch, so
+    // a trickle wakes it once per pause, not once per entry, and a burst still wakes it long before the queue is full).
+    @volatile private var wakeAt = 1
     @volatile private var open = true
 
     private[tap] def offer(entry: Tapped): Unit =
       if (queue.offer(entry)) {
         val w = waiter.get
-        if ((w ne null) && waiter.compareAndSet(w, null)) LockSupport.unpark(w)
+        if ((w ne null) && queue.size >= wakeAt && waiter.compareAndSet(w, null)) LockSupport.unpark(w)
       } else {
         val n = dropped.incrementAndGet()
         if (RateLimitedLog.due(n))
@@ -101,13 +104,14 @@ private[naogateway] object Tap {
     /** Whether the reader still listens. */
     def isOpen: Boolean = open
 
-    /** Parks the calling thread (the reader's) until an entry is offered, [[close]] is called or `nanos` pass; at once
-      * when entries wait.
+    /** Parks the calling thread (the reader's) until `entries` (at least 1) wait, [[close]] is called or `nanos` pass;
+      * at once when they already wait.
       */
-    def await(nanos: Long): Unit = {
+    def await(nanos: Long, entries: Int = 1): Unit = {
+      wakeAt = math.max(1, entries)
       waiter.set(Thread.currentThread())
       // After the waiter is set: an offer before this check is seen here, one after it unparks.
-      if (queue.isEmpty && open) LockSupport.parkNanos(nanos)
+      if (queue.size < wakeAt && open) LockSupport.parkNanos(nanos)
       waiter.set(null)
     }
 

@@ -136,6 +136,26 @@ class TapSpec extends AnyWordSpec with Matchers {
       woke.get.size should be <= 1
       (woke.get ++ drain(reader)) should have size 1
     }
+
+    "wake a reader gathering a batch only once the entries it waits for are there" in {
+      // The recorder waits for a quarter batch after a batch it wrote: a trickle must not wake it per entry, and the
+      // entry that completes the count must, long before the queue fills (Recorder.MaxParkNanos).
+      val tap = new Tap
+      val reader = tap.subscribe("gathering", 16)
+      val woke = new java.util.concurrent.CountDownLatch(1)
+      val thread = new Thread(() => { reader.await(60.seconds.toNanos, 3); woke.countDown() })
+      thread.start()
+      val parked = System.nanoTime() + 10.seconds.toNanos
+      while (thread.getState != Thread.State.TIMED_WAITING && System.nanoTime() < parked) Thread.sleep(1)
+      thread.getState shouldBe Thread.State.TIMED_WAITING
+      received(tap, 1)
+      received(tap, 2)
+      woke.await(300, java.util.concurrent.TimeUnit.MILLISECONDS) shouldBe false // two of three: still waiting
+      received(tap, 3)
+      woke.await(60, java.util.concurrent.TimeUnit.SECONDS) shouldBe true
+      thread.join(60000)
+      drain(reader) should have size 3
+    }
   }
 
   "The FU-Remote relay" should {
