@@ -80,7 +80,8 @@ def main():
     port = gw.getsockname()[1]
     robot_addr = ("127.0.0.81", 3838)
     env = dict(os.environ, FR_POSIX_BIND="%s:%d" % robot_addr, FR_POSIX_BUS="model")
-    epoch = os.path.join(tempfile.mkdtemp(prefix="bridge-check-"), "robot.epoch")
+    tmp = tempfile.TemporaryDirectory(prefix="bridge-check-")  # removed at the end, or at exit should Popen fail
+    epoch = os.path.join(tmp.name, "robot.epoch")
     robot = subprocess.Popen([robot_bin, "id=4", "gateway=127.0.0.1:%d" % port, "development", "run_ms=20000",
                               "epoch=" + epoch], env=env, stderr=subprocess.DEVNULL)
     seq = 0  # the gateway's next data segment
@@ -135,6 +136,7 @@ def main():
     finally:
         robot.terminate()
         robot.wait(timeout=5)
+        tmp.cleanup()
     return CHECKS.summary()
 
 

@@ -20,7 +20,8 @@ def main():
     port = free_port()
     model, line = start_busmodel(sys.argv[1], port, 60000, "log=1")
     check("listening" in line, "busmodel started")
-    epoch = tempfile.mkdtemp(prefix="qemu-bus-") + "/robot.epoch"
+    tmp = tempfile.TemporaryDirectory(prefix="qemu-bus-")  # removed at the end, or at exit should Popen fail
+    epoch = tmp.name + "/robot.epoch"
     qemu = subprocess.Popen(["qemu-system-arm", "-M", "netduino2", "-display", "none", "-monitor", "none", "-nodefaults",
                              "-serial", "tcp:127.0.0.1:%d,nodelay=on" % port, "-serial", "null", "-serial", "null",
                              "-serial", "null", "-serial", "null", "-semihosting-config", "enable=on,target=native",
@@ -39,6 +40,7 @@ def main():
         model.terminate()
         qemu.wait(timeout=10)
         model.wait(timeout=10)
+        tmp.cleanup()
     check(best[0] == 18, "every servo read: %d" % best[0])
     check(best[1] >= 3, "camera frames captured: %d" % best[1])
     return CHECKS.summary()

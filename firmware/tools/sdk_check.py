@@ -23,7 +23,8 @@ check = CHECKS.check
 
 def main():
     procs = []
-    tmp = tempfile.mkdtemp(prefix="sdk-check-")
+    tmp_dir = tempfile.TemporaryDirectory(prefix="sdk-check-")
+    tmp = tmp_dir.name
     try:
         if sys.argv[1] == "--connect":
             target = sys.argv[2]
@@ -73,6 +74,7 @@ def main():
                 p.wait(timeout=5)
             except subprocess.TimeoutExpired:
                 p.kill()
+        tmp_dir.cleanup()
     return CHECKS.summary()
 
 

@@ -12,6 +12,8 @@ import scala.jdk.CollectionConverters._
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.TempFiles
+
 /** A newcomer's path through README.md ("Your first app") and docs/writing-apps.md, in a clone of this repository's
   * HEAD: `./sbt publishLocal` (into an ivy home of its own), the template copied to a folder of its own, and its `./sbt
   * run` against the demo, which must walk robot 2 (robotctl's watch sees it walking), end with the app's line, exit 0,
@@ -61,9 +63,6 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
     val r = f
     (r, (System.nanoTime() - t0).nanos)
   }
-
-  private def delete(p: Path): Unit =
-    if (Files.exists(p)) Files.walk(p).sorted(java.util.Comparator.reverseOrder[Path]()).forEach(f => Files.delete(f))
 
   "A team's first app, from a clone" should {
     "publish the libraries, build the template against them, walk robot 2 of the demo, and exit cleanly" in {
@@ -172,7 +171,7 @@ class FirstAppSpec extends AnyWordSpec with Matchers {
           aloneOut should contain(s"hello-robot failed: no gateway at 127.0.0.1:$clusterPort (ROBOTS_GATEWAY_HOST, " +
             "ROBOTS_GATEWAY_PORT); start the demo first (`./sbt run` in the naogateway clone), then this app again")
         }
-      } finally delete(work)
+      } finally TempFiles.deleteRecursively(work)
     }
   }
 }

@@ -21,7 +21,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import apps.RobotRig
 import naogateway.integration.TestStream
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{TempFiles, TestLoopback}
 import naogateway.wire.gamecontroller.GameControllerVectors
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
@@ -309,16 +309,18 @@ class FirmwarePosixSpec
     "tell the program when the module reports the network lost, which then stops and sits" in {
       val linkFile = Files.createTempFile("firmware-link", ".lost").toFile
       linkFile.delete()
-      val r = new CRobot(LinkId, developmentAddresses(LinkId), env = Map("FR_POSIX_LINK" -> linkFile.getPath))
-      r.awaitOnline()
-      result(client.posture(r.id, Posture.Stand)) shouldBe Right(Posture.Stand)
-      // The module reports the network lost for half a second (the posix port: the file exists), then back.
-      Files.write(linkFile.toPath, Array.emptyByteArray)
-      Thread.sleep(500)
-      linkFile.delete()
-      withClue(s"robot output:\n${r.output}\n") {
-        poll(10.seconds)(result(client.call(r.id, "motion", "getPosture")) == Right(
-          Some(RpcValue.Text("sit")))) shouldBe true
+      TempFiles.cleaningUp(linkFile.toPath) {
+        val r = new CRobot(LinkId, developmentAddresses(LinkId), env = Map("FR_POSIX_LINK" -> linkFile.getPath))
+        r.awaitOnline()
+        result(client.posture(r.id, Posture.Stand)) shouldBe Right(Posture.Stand)
+        // The module reports the network lost for half a second (the posix port: the file exists), then back.
+        Files.write(linkFile.toPath, Array.emptyByteArray)
+        Thread.sleep(500)
+        linkFile.delete()
+        withClue(s"robot output:\n${r.output}\n") {
+          poll(10.seconds)(result(client.call(r.id, "motion", "getPosture")) == Right(
+            Some(RpcValue.Text("sit")))) shouldBe true
+        }
       }
     }
 

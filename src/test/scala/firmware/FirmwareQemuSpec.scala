@@ -369,7 +369,7 @@ class FirmwareQemuSpec
         s"key=${Fusig2.hex(key)}", s"epoch=${epochFile.getPath}") ++ extra, Some(bridge.serialPort))
     def output: String = QemuBoard.output(log)
     def robotAt = new InetSocketAddress(address, TestLoopback.RobotReceivePort)
-    def stop(): Unit = { QemuBoard.stop(qemu); bridge.close() }
+    def stop(): Unit = { QemuBoard.stop(qemu); bridge.close(); log.delete(); () }
   }
 
   /** Reads and drops every datagram already queued at `on`. */

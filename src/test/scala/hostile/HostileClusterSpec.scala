@@ -23,6 +23,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.api.GatewayEvent
 import naogateway.access.RobotAccess
+import naogateway.testkit.TempFiles
 import robotmiddleware.cluster.MiddlewareClusterSpec.{appOverrides, fakeGateway, fakeRobot, gatewayOverrides}
 import robotmiddleware.cluster.{MiddlewareCluster, TeamKeys}
 import robotmiddleware.{MiddlewareSettings, RobotClient, RobotMiddleware}
@@ -128,7 +129,7 @@ class HostileClusterSpec
 
   override protected def afterAll(): Unit = {
     nodes.foreach(_.shutdownTestKit())
-    TeamKeys.delete(dir)
+    TempFiles.deleteRecursively(dir)
     super.afterAll()
   }
 

@@ -5,7 +5,7 @@ import naogateway.api.RobotFailure
 import java.io.File
 import java.net.{DatagramPacket, DatagramSocket, InetSocketAddress, SocketTimeoutException}
 import java.nio.charset.StandardCharsets
-import java.nio.file.{Files, Path}
+import java.nio.file.Files
 import java.util.concurrent.{ConcurrentLinkedQueue, TimeUnit}
 
 import scala.concurrent.duration._
@@ -21,7 +21,7 @@ import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.proto.Request
 import naogateway.wire.{MessageContents, Posture, RpcValue}
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{TempFiles, TestLoopback}
 import naogateway.api.{LinkStats, RobotOffline, RobotSnapshot}
 import robotmiddleware.RobotInterface
 
@@ -55,13 +55,10 @@ object ConformanceEnv {
   def python(): Either[String, File] = synchronized {
     apps.zeromq.PythonEnv.environment().map { python =>
       // Generated afresh each run, so the robot's classes always match proto/.
-      deleteTree(new File(target, "gen").toPath)
+      TempFiles.deleteRecursively(new File(target, "gen").toPath)
       python
     }
   }
-
-  def deleteTree(path: Path): Unit =
-    if (Files.exists(path)) Files.walk(path).iterator().asScala.toVector.reverse.foreach(p => Files.delete(p))
 
   private val Line = """\{"section": "([^"]*)", "check": "([^"]*)", "pass": (true|false), "detail": (.*)\}""".r
 
@@ -164,7 +161,7 @@ class DocRobotConformanceSpec
       gateway: InetSocketAddress,
       extra: Seq[String] = Nil) {
     val dir = new File(ConformanceEnv.target, mode.name)
-    ConformanceEnv.deleteTree(dir.toPath)
+    TempFiles.deleteRecursively(dir.toPath)
     dir.mkdirs()
     val report = new File(dir, "report.jsonl")
     val datagrams = new File(dir, "datagrams.jsonl")

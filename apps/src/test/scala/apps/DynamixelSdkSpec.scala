@@ -17,6 +17,7 @@ import naogateway.integration.GatewayFixture
 import naogateway.sim.bus.{BioloidBus, BusTcpServer}
 import naogateway.sim.{FirmwareSettings, SimulatedRobot, SimulatedRobotSettings}
 import naogateway.testkit.TestLoopback
+import naogateway.testkit.TempFiles.{withTempDir, withTempFile}
 import naogateway.api.RobotOnline
 import naogateway.gateway.{BusBridgeServer, BusBridgeSettings}
 
@@ -43,8 +44,8 @@ object SdkBus extends org.scalatest.Assertions with org.scalatest.matchers.shoul
   /** socat's pseudo-terminal in front of 127.0.0.1:`port`, for the length of `body`. socat connects at once; when the
     * bridge refuses it (the one tool's place not yet free) it exits, and is started again.
     */
-  def throughPty[T](port: Int)(body: File => T): T = {
-    val dir = Files.createTempDirectory("dxl").toFile
+  def throughPty[T](port: Int)(body: File => T): T = withTempDir("dxl") { dirPath =>
+    val dir = dirPath.toFile
     val link = new File(dir, "ttyDXL")
     def start() = new ProcessBuilder(socat(), s"pty,link=${link.getPath},raw,echo=0", s"tcp:127.0.0.1:$port")
       .redirectErrorStream(true).redirectOutput(new File(dir, "socat.log")).start()
@@ -70,9 +71,10 @@ object SdkBus extends org.scalatest.Assertions with org.scalatest.matchers.shoul
   /** Runs the SDK script against `device` for servos 1-18 (plus `extra` arguments); its exit code and output. */
   def run(device: File, extra: Seq[String]): (Int, String) = {
     val python = PythonEnv.python()
-    val log = File.createTempFile("sdk-bus", ".log")
-    PythonEnv.run(Seq(python.getPath, script.getPath, "--device", device.getPath, "--ids", "1-18") ++ extra, 3.minutes,
-      log)
+    withTempFile("sdk-bus", ".log") { log =>
+      PythonEnv.run(Seq(python.getPath, script.getPath, "--device", device.getPath, "--ids", "1-18") ++ extra,
+        3.minutes, log.toFile)
+    }
   }
 }
 

@@ -17,7 +17,7 @@ import naogateway.access.GatewayAccess
 import naogateway.api.{GameStateUpdated, GatewayAddresses, GatewayEvent, RobotOnline}
 import naogateway.gateway.{Gateway, GatewaySettings}
 import naogateway.sim.{Fleet, FleetSettings, SimulatedGameController, SimulatedGameControllerSettings}
-import naogateway.testkit.TestLoopback
+import naogateway.testkit.{TempFiles, TestLoopback}
 
 object RecordingPythonSpec {
   val directory: Path = Files.createTempDirectory("recording-python-spec")
@@ -37,6 +37,11 @@ object RecordingPythonSpec {
 class RecordingPythonSpec extends ScalaTestWithActorTestKit(RecordingPythonSpec.config) with AnyWordSpecLike
     with LogCapturing {
   import RecordingPythonSpec._
+
+  // After the kit's shutdown, which stops a gateway a failed test left running and so closes its file.
+  override def afterAll(): Unit =
+    try super.afterAll()
+    finally TempFiles.deleteRecursively(directory)
 
   "A gateway's recording" must {
     "be read by the official mcap Python reader: datagrams byte for byte, Status through its schema, the decisions" in {

@@ -13,6 +13,7 @@ import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.api.{RobotFailure, RobotSnapshot, VisionFrame}
 import naogateway.wire.HaViMoRegion
+import naogateway.testkit.TempFiles.withTempDir
 
 /** docs/writing-apps.md is the API a team reads: its first app is the template's, as compiled; its tables name the
   * fields and types the code has; its other complete examples compile against the libraries an app gets.
@@ -87,16 +88,19 @@ class WritingAppsDocSpec extends AnyWordSpec with Matchers {
       val blocks = "(?s)```scala\n(.*?)```".r.findAllMatchIn(doc).map(_.group(1)).toVector
       val examples = blocks.filter(b => b.contains("object ") && !b.contains("package firstapp"))
       examples should not be empty
-      val settings = new Settings()
-      settings.processArgumentString(s"-Ystop-after:refchecks -d ${Files.createTempDirectory("writing-apps")}")
-      settings.classpath.value = System.getProperty("java.class.path")
-      val reporter = new StoreReporter(settings)
-      val global = new Global(settings, reporter)
-      new global.Run().compileSources(examples.zipWithIndex.map { case (text, i) =>
-        new BatchSourceFile(s"example$i.scala", text)
-      }.toList)
-      reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i =>
-        s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}") shouldBe empty
+      val errors = withTempDir("writing-apps") { out =>
+        val settings = new Settings()
+        settings.processArgumentString(s"-Ystop-after:refchecks -d $out")
+        settings.classpath.value = System.getProperty("java.class.path")
+        val reporter = new StoreReporter(settings)
+        val global = new Global(settings, reporter)
+        new global.Run().compileSources(examples.zipWithIndex.map { case (text, i) =>
+          new BatchSourceFile(s"example$i.scala", text)
+        }.toList)
+        reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i =>
+          s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
+      }
+      errors shouldBe empty
     }
   }
 

@@ -12,6 +12,8 @@ import scala.util.Using
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.TempFiles.withTempDir
+
 /** The middleware's layer, as the compiler keeps it: its main code is compiled against the api and the gateway's access
   * protocol (`access`), never the gateway, so main code that names a gateway internal does not build. The build writes
   * that main classpath for this spec (this JVM's own holds the gateway, which the middleware's specs drive); scalac
@@ -25,9 +27,9 @@ class MiddlewareLayerSpec extends AnyWordSpec with Matchers {
     Using.resource(Source.fromResource("robotmiddleware-main-classpath.txt"))(_.getLines().filter(_.nonEmpty).toVector)
 
   /** The errors scalac reports (typer only, nothing written) for `source` against the middleware's main classpath. */
-  private def compileErrors(source: String): Vector[String] = {
+  private def compileErrors(source: String): Vector[String] = withTempDir("middleware-probe") { out =>
     val settings = new Settings()
-    settings.processArgumentString(s"-Ystop-after:typer -d ${Files.createTempDirectory("middleware-probe")}")
+    settings.processArgumentString(s"-Ystop-after:typer -d $out")
     settings.classpath.value = mainClasspath.mkString(File.pathSeparator)
     val reporter = new StoreReporter(settings)
     val global = new Global(settings, reporter)

@@ -20,6 +20,7 @@ import spray.json._
 import naogateway.gateway.recording.{McapReader, Recording}
 import naogateway.sim.bus.{BioloidBus, BusWork}
 import naogateway.sim.{Pose, Scene}
+import naogateway.testkit.TempFiles
 import naogateway.wire.{HaViMo, HaViMoRegion, MessageContents}
 
 /** The HaViMo2 driver's frames reach the page and the recording unchanged: a simulated robot reads its camera over its
@@ -38,7 +39,8 @@ class HaViMoPathSpec
 
   override def afterAll(): Unit = {
     if (!stopped) Try(demo.stop())
-    super.afterAll()
+    try super.afterAll()
+    finally TempFiles.deleteRecursively(HaViMoPathSpec.dir)
   }
 
   /** What robot 1's camera holds, read over a bus as the robot's firmware reads it: regions (6.5 records) and grid. */

@@ -3,7 +3,7 @@ package apps.zeromq
 import java.io.File
 import java.net.ServerSocket
 import java.nio.charset.StandardCharsets
-import java.nio.file.{Files, Path}
+import java.nio.file.Files
 import java.util.concurrent.TimeUnit
 
 import scala.concurrent.duration._
@@ -18,6 +18,7 @@ import org.zeromq.{ZMQ, ZMQException}
 
 import naogateway.sim.{FirmwareSettings, ZeroMqSimulatedRobot}
 import naogateway.gateway.{Gateway, GatewaySettings, ZeroMqRobot}
+import naogateway.testkit.TempFiles
 import robotmiddleware.{MiddlewareSettings, RobotMiddleware}
 
 /** A Python virtual environment under target/ with the client's pinned packages, made once and reused. */
@@ -73,7 +74,7 @@ object PythonEnv extends Assertions {
       Left("python3 is not available")
     else if (python.isFile && current.contains(wanted)) Right(python)
     else {
-      deleteTree(venv.toPath)
+      TempFiles.deleteRecursively(venv.toPath)
       val (venvCode, venvOut) = run(Seq("python3", "-m", "venv", venv.getPath), 2.minutes, log)
       if (venvCode != 0) Left(s"python3 -m venv failed (is the venv module installed?):\n${venvOut.takeRight(2000)}")
       else {
@@ -82,7 +83,7 @@ object PythonEnv extends Assertions {
               requirements.getPath), 8.minutes, log, env)
         if (pipCode != 0) {
           // A half-made venv is not reused: the next run tries again.
-          deleteTree(venv.toPath)
+          TempFiles.deleteRecursively(venv.toPath)
           Left(
             s"pip could not install ${root.toPath.relativize(requirements.toPath)} (no network or no package registry?):\n${pipOut.takeRight(2000)}")
         } else {
@@ -101,7 +102,7 @@ object PythonEnv extends Assertions {
     val py = python()
     val gen = new File(root, "apps/target/python-gen")
     // Generated afresh each run, so the classes always match proto/.
-    deleteTree(gen.toPath)
+    TempFiles.deleteRecursively(gen.toPath)
     run(
       py.getPath +: "-u" +: new File(root, s"apps/python/$name").getPath +: args,
       within,
@@ -110,10 +111,6 @@ object PythonEnv extends Assertions {
         "PYTHONDONTWRITEBYTECODE" -> "1")
     )
   }
-
-  /** Deletes `path` and everything below it. */
-  def deleteTree(path: Path): Unit =
-    if (Files.exists(path)) Files.walk(path).iterator().asScala.toVector.reverse.foreach(p => Files.delete(p))
 }
 
 object PythonClientSpec {

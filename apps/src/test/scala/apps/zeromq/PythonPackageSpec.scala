@@ -2,7 +2,7 @@ package apps.zeromq
 
 import java.io.File
 import java.nio.charset.StandardCharsets
-import java.nio.file.{Files, Path}
+import java.nio.file.Files
 import java.util.concurrent.TimeUnit
 
 import scala.concurrent.duration._
@@ -11,6 +11,8 @@ import scala.util.Try
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
+
+import naogateway.testkit.TempFiles.{withTempDir, withTempFile}
 
 /** The Python client as a package: pip installs it from the repository, and the Python tests' environment says why it
   * cannot be made.
@@ -21,16 +23,17 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
     Try(new ProcessBuilder("python3", "--version").start().waitFor() == 0).getOrElse(false)
 
   /** Runs `command` in `dir` with `env`; its exit code and output. */
-  private def run(command: Seq[String], dir: File, env: Map[String, String], within: FiniteDuration): (Int, String) = {
-    val log = File.createTempFile("python-package", ".log")
-    val builder = new ProcessBuilder(command.asJava).directory(dir).redirectErrorStream(true).redirectOutput(log)
-    env.foreach { case (k, v) => builder.environment().put(k, v) }
-    val process = builder.start()
-    if (!process.waitFor(within.toSeconds, TimeUnit.SECONDS)) {
-      process.destroyForcibly(); fail(s"${command.mkString(" ")} took over $within")
+  private def run(command: Seq[String], dir: File, env: Map[String, String], within: FiniteDuration): (Int, String) =
+    withTempFile("python-package", ".log") { log =>
+      val builder =
+        new ProcessBuilder(command.asJava).directory(dir).redirectErrorStream(true).redirectOutput(log.toFile)
+      env.foreach { case (k, v) => builder.environment().put(k, v) }
+      val process = builder.start()
+      if (!process.waitFor(within.toSeconds, TimeUnit.SECONDS)) {
+        process.destroyForcibly(); fail(s"${command.mkString(" ")} took over $within")
+      }
+      process.exitValue() -> new String(Files.readAllBytes(log), StandardCharsets.UTF_8)
     }
-    process.exitValue() -> new String(Files.readAllBytes(log.toPath), StandardCharsets.UTF_8)
-  }
 
   "The Python tests' environment" should {
     "give the reason, for the tests to cancel with, when pip cannot reach a package registry" in {
@@ -54,45 +57,46 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
   "The Python client" should {
     "install with pip from the repository, carrying its .proto files, and generate its classes from them" in {
       val python = PythonEnv.python()
-      val work: Path = Files.createTempDirectory("naogateway-client-install")
-      val site = work.resolve("site")
-      val (code, out) = run(
-        Seq(
-          python.getPath,
-          "-m",
-          "pip",
-          "install",
-          "--disable-pip-version-check",
-          "-q",
-          "--no-deps",
-          "--no-build-isolation",
-          "--target",
-          site.toString,
-          new File(PythonEnv.root, "apps/python").getPath
-        ),
-        PythonEnv.root,
-        Map.empty,
-        3.minutes
-      )
-      withClue(out) { code shouldBe 0 }
-      val protos = site.resolve("naogateway_client/proto/naogateway/proto")
-      Files.isRegularFile(protos.resolve("rpc.proto")) shouldBe true
-      Files.isSymbolicLink(site.resolve("naogateway_client/proto")) shouldBe false
-      // Imported from the installed copy, away from the checkout.
-      val check = "import naogateway_client, naogateway_recording; naogateway_client.load_protos(); " +
-        "print(naogateway_client.__file__); print(naogateway_client.rpc_pb2.DESCRIPTOR.package)"
-      val (importCode, printed) = run(
-        Seq(python.getPath, "-c", check),
-        work.toFile,
-        Map("PYTHONPATH" -> site.toString, "NAOGATEWAY_PY_GEN" -> work.resolve("gen").toString,
-          "PYTHONDONTWRITEBYTECODE" -> "1"),
-        2.minutes
-      )
-      withClue(printed) {
-        importCode shouldBe 0
-        val lines = printed.linesIterator.toVector
-        lines.head should startWith(site.toString)
-        lines should contain("naogateway.proto")
+      withTempDir("naogateway-client-install") { work =>
+        val site = work.resolve("site")
+        val (code, out) = run(
+          Seq(
+            python.getPath,
+            "-m",
+            "pip",
+            "install",
+            "--disable-pip-version-check",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            "--target",
+            site.toString,
+            new File(PythonEnv.root, "apps/python").getPath
+          ),
+          PythonEnv.root,
+          Map.empty,
+          3.minutes
+        )
+        withClue(out) { code shouldBe 0 }
+        val protos = site.resolve("naogateway_client/proto/naogateway/proto")
+        Files.isRegularFile(protos.resolve("rpc.proto")) shouldBe true
+        Files.isSymbolicLink(site.resolve("naogateway_client/proto")) shouldBe false
+        // Imported from the installed copy, away from the checkout.
+        val check = "import naogateway_client, naogateway_recording; naogateway_client.load_protos(); " +
+          "print(naogateway_client.__file__); print(naogateway_client.rpc_pb2.DESCRIPTOR.package)"
+        val (importCode, printed) = run(
+          Seq(python.getPath, "-c", check),
+          work.toFile,
+          Map("PYTHONPATH" -> site.toString, "NAOGATEWAY_PY_GEN" -> work.resolve("gen").toString,
+            "PYTHONDONTWRITEBYTECODE" -> "1"),
+          2.minutes
+        )
+        withClue(printed) {
+          importCode shouldBe 0
+          val lines = printed.linesIterator.toVector
+          lines.head should startWith(site.toString)
+          lines should contain("naogateway.proto")
+        }
       }
     }
   }

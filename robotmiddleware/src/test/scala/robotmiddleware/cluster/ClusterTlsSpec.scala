@@ -9,6 +9,7 @@ import org.scalatest.BeforeAndAfterAll
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.TempFiles
 import robotmiddleware.cluster.ClusterTls.{Transport, TeamStores}
 
 /** The cluster's transport decision: plain TCP only on loopback, TLS with the team's two files anywhere, and one line
@@ -159,7 +160,7 @@ class ClusterTlsSpec extends AnyWordSpec with Matchers with BeforeAndAfterAll {
     TeamKeys.stranger(tool, Files.createDirectories(dir.resolve("stranger")), team.certificate, "stranger-0001")
 
   override protected def afterAll(): Unit = {
-    TeamKeys.delete(dir)
+    TempFiles.deleteRecursively(dir)
     super.afterAll()
   }
 

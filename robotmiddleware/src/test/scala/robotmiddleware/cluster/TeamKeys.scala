@@ -147,12 +147,4 @@ object TeamKeys {
     finally in.close()
     store
   }
-
-  /** Deletes `dir` and everything in it. */
-  def delete(dir: Path): Unit =
-    if (Files.exists(dir)) {
-      val walk = Files.walk(dir)
-      try walk.iterator().asScala.toVector.reverse.foreach(Files.deleteIfExists)
-      finally walk.close()
-    }
 }

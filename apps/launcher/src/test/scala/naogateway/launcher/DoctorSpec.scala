@@ -12,6 +12,7 @@ import naogateway.sim.{SimulatedGameController, SimulatedGameControllerSettings}
 import naogateway.wire.gamecontroller.GameControlVersion
 import naogateway.api.{ClockEstimate, GameSource, GatewayStats, LinkStats, RobotSnapshot, TrafficStats}
 import naogateway.gateway.{GatewaySettings, Rejection}
+import naogateway.testkit.TempFiles.withTempDir
 
 /** `robotctl doctor`: each check finds the problem it names, provoked here, and stays quiet when all is well. */
 class DoctorSpec extends AnyWordSpec with Matchers {
@@ -225,10 +226,11 @@ class DoctorSpec extends AnyWordSpec with Matchers {
     }
 
     "look at a real directory: writable here, not writable below a file" in {
-      val dir = Files.createTempDirectory("doctor-spec")
-      Doctor.disk(dir.resolve("recordings")).writable shouldBe true
-      val file = Files.write(dir.resolve("a-file"), Array[Byte](1))
-      Doctor.disk(file.resolve("recordings")).writable shouldBe false
+      withTempDir("doctor-spec") { dir =>
+        Doctor.disk(dir.resolve("recordings")).writable shouldBe true
+        val file = Files.write(dir.resolve("a-file"), Array[Byte](1))
+        Doctor.disk(file.resolve("recordings")).writable shouldBe false
+      }
     }
 
     "find FU-Remote not listening where the relay sends, and see it when it listens" in {
@@ -252,49 +254,51 @@ class DoctorSpec extends AnyWordSpec with Matchers {
 
   "robotctl doctor without a running gateway" should {
     "say so first, then check the machine against the config file: keys, ports held by other programs, and exit 1" in {
-      val dir = Files.createTempDirectory("doctor-offline")
-      val held = new ServerSocket()
-      held.bind(new InetSocketAddress("127.0.0.1", 0))
-      val nothing = new ServerSocket(0)
-      val closedPort = nothing.getLocalPort
-      nothing.close()
-      try {
-        val file = Files.writeString(
-          dir.resolve("robots.conf"),
-          s"""apps.control.bind = "127.0.0.1:${held.getLocalPort}"
-             |apps.zeromq.enabled = off
-             |apps.datagram-door.enabled = off
-             |apps.launcher.simulated-robots = 0
-             |robotmiddleware.cluster.gateway-port = 0
-             |naogateway.game-controller.enabled = off
-             |naogateway.recording.directory = "${dir.resolve("rec")}"
-             |naogateway.competiton.enabled = on
-             |""".stripMargin
-        )
-        val out = Vector.newBuilder[String]
-        val err = Vector.newBuilder[String]
-        val code = RobotCtl.run(Seq("--control", s"127.0.0.1:$closedPort", "doctor", file.toString), _ => None,
-          out += _, err += _)
-        code shouldBe RobotCtl.ExitFailed
-        val lines = out.result()
-        lines.head shouldBe s"FAIL gateway: no gateway answers at 127.0.0.1:$closedPort; fix: start it (bin/naogateway $file), or give its control port with --control"
-        lines should contain(
-          "FAIL config: naogateway.competiton.enabled is not a setting and is ignored; fix: correct the typo (every key " +
-            "with its default is in the reference.conf files)")
-        lines should contain(
-          s"FAIL ports: port ${held.getLocalPort} (TCP on 127.0.0.1, the control port robotctl talks to) is in use by " +
-            "another program; fix: stop that program or move the port with apps.control.bind (NAOGATEWAY_CONTROL)")
-        lines.exists(_.startsWith(s"ok   recording: ${dir.resolve("rec")} writable")) shouldBe true
-        err.result() shouldBe Vector("robotctl: 3 problem(s), each with its fix above")
-      } finally held.close()
+      withTempDir("doctor-offline") { dir =>
+        val held = new ServerSocket()
+        held.bind(new InetSocketAddress("127.0.0.1", 0))
+        val nothing = new ServerSocket(0)
+        val closedPort = nothing.getLocalPort
+        nothing.close()
+        try {
+          val file = Files.writeString(
+            dir.resolve("robots.conf"),
+            s"""apps.control.bind = "127.0.0.1:${held.getLocalPort}"
+               |apps.zeromq.enabled = off
+               |apps.datagram-door.enabled = off
+               |apps.launcher.simulated-robots = 0
+               |robotmiddleware.cluster.gateway-port = 0
+               |naogateway.game-controller.enabled = off
+               |naogateway.recording.directory = "${dir.resolve("rec")}"
+               |naogateway.competiton.enabled = on
+               |""".stripMargin
+          )
+          val out = Vector.newBuilder[String]
+          val err = Vector.newBuilder[String]
+          val code = RobotCtl.run(Seq("--control", s"127.0.0.1:$closedPort", "doctor", file.toString), _ => None,
+            out += _, err += _)
+          code shouldBe RobotCtl.ExitFailed
+          val lines = out.result()
+          lines.head shouldBe s"FAIL gateway: no gateway answers at 127.0.0.1:$closedPort; fix: start it (bin/naogateway $file), or give its control port with --control"
+          lines should contain(
+            "FAIL config: naogateway.competiton.enabled is not a setting and is ignored; fix: correct the typo (every key " +
+              "with its default is in the reference.conf files)")
+          lines should contain(
+            s"FAIL ports: port ${held.getLocalPort} (TCP on 127.0.0.1, the control port robotctl talks to) is in use by " +
+              "another program; fix: stop that program or move the port with apps.control.bind (NAOGATEWAY_CONTROL)")
+          lines.exists(_.startsWith(s"ok   recording: ${dir.resolve("rec")} writable")) shouldBe true
+          err.result() shouldBe Vector("robotctl: 3 problem(s), each with its fix above")
+        } finally held.close()
+      }
     }
 
     "name the key of a config that does not read" in {
-      val dir = Files.createTempDirectory("doctor-offline-bad")
-      val file = Files.writeString(dir.resolve("robots.conf"), "naogateway.link.robot-port = 70000\n")
-      val out = Vector.newBuilder[String]
-      RobotCtl.offlineDoctor("127.0.0.1:1", Some(file.toString), out += _, _ => ()) shouldBe RobotCtl.ExitFailed
-      out.result() should contain("FAIL config: link.robot-port 70000 is not a UDP port; fix: correct the key named")
+      withTempDir("doctor-offline-bad") { dir =>
+        val file = Files.writeString(dir.resolve("robots.conf"), "naogateway.link.robot-port = 70000\n")
+        val out = Vector.newBuilder[String]
+        RobotCtl.offlineDoctor("127.0.0.1:1", Some(file.toString), out += _, _ => ()) shouldBe RobotCtl.ExitFailed
+        out.result() should contain("FAIL config: link.robot-port 70000 is not a UDP port; fix: correct the key named")
+      }
     }
   }
 }

@@ -6,6 +6,7 @@ import com.typesafe.config.{Config, ConfigFactory}
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.TempFiles
 import robotmiddleware.cluster.{MiddlewareCluster, TeamKeys}
 
 /** The launcher and its cluster: a gateway node off loopback without the team's files stops before it starts, with one
@@ -57,7 +58,7 @@ class LauncherClusterSpec extends AnyWordSpec with Matchers {
         appNode.getBoolean("akka.remote.artery.ssl.config-ssl-engine.require-mutual-authentication") shouldBe true
         Doctor.clusterFinding(gatewayNode).line shouldBe "ok   cluster: TLSv1.3 with mutual authentication: only " +
           s"nodes with a certificate of ${team.stores.trustStore} can join"
-      } finally TeamKeys.delete(dir)
+      } finally TempFiles.deleteRecursively(dir)
     }
   }
 
@@ -73,7 +74,7 @@ class LauncherClusterSpec extends AnyWordSpec with Matchers {
         out.result().exists(_.startsWith(
             "FAIL config: cluster: robotmiddleware.cluster.hostname (ROBOTS_HOSTNAME) is 10.1.2.3, off loopback")) shouldBe
           true
-      } finally TeamKeys.delete(dir)
+      } finally TempFiles.deleteRecursively(dir)
     }
   }
 }

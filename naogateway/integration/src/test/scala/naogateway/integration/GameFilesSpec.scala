@@ -12,6 +12,7 @@ import naogateway.api.GameStateUpdated
 import naogateway.wire.gamecontroller._
 import naogateway.api.recording.Decision
 import naogateway.gateway.recording.{GameFiles, McapReader, Recording, RecordingSettings}
+import naogateway.testkit.TempFiles.withTempDir
 
 /** One recording file per half of a game: the pure plan, and a recorder following it. */
 class GameFilesSpec extends AnyWordSpec with Matchers {
@@ -68,30 +69,31 @@ class GameFilesSpec extends AnyWordSpec with Matchers {
 
   "A recorder with game files" should {
     "write each half into a file of its own, named by teams and half, the game's packets in it" in {
-      val dir = Files.createTempDirectory("game-files-spec")
-      val tap = new naogateway.gateway.tap.Tap
-      val recording =
-        Recording(RecordingSettings(enabled = true, dir, 64L * 1024 * 1024, 10.minutes, 65536, gameFiles = true,
-            gameQuiet = 5.seconds), "game-files-spec", tap)
-      def publish(d: GameControlData): Unit = {
-        tap.decision(Decision.Published(GameStateUpdated(d))); Thread.sleep(20)
+      withTempDir("game-files-spec") { dir =>
+        val tap = new naogateway.gateway.tap.Tap
+        val recording =
+          Recording(RecordingSettings(enabled = true, dir, 64L * 1024 * 1024, 10.minutes, 65536, gameFiles = true,
+              gameQuiet = 5.seconds), "game-files-spec", tap)
+        def publish(d: GameControlData): Unit = {
+          tap.decision(Decision.Published(GameStateUpdated(d))); Thread.sleep(20)
+        }
+        publish(at(GameState.Initial))
+        Seq(GameState.Ready, GameState.Set, GameState.Playing, GameState.Finished).foreach(st => publish(at(st)))
+        publish(at(GameState.Initial, firstHalf = false))
+        Seq(GameState.Ready, GameState.Playing, GameState.Finished).foreach(st => publish(at(st, firstHalf = false)))
+        recording.close()
+        val names = Files.list(dir).iterator().asScala.map(_.getFileName.toString).toVector.sorted
+        names.map(_.replaceAll("^naogateway-\\d{8}-\\d{6}", "T"))
+          .sortBy(_.stripSuffix(".mcap").split('-').last.toInt) shouldBe
+          Vector("T-1.mcap", "T-team12-vs-team7-half1-2.mcap", "T-3.mcap", "T-team12-vs-team7-half2-4.mcap")
+        def states(name: String): Vector[String] = {
+          val path: Path = dir.resolve(names.find(_.contains(name)).get)
+          McapReader.read(Files.readAllBytes(path)).messages.map(m => new String(m.data, "UTF-8"))
+            .flatMap("\"state\":\"(\\w+)\"".r.findFirstMatchIn(_).map(_.group(1)))
+        }
+        states("half1") shouldBe Vector("Ready", "Set", "Playing", "Finished")
+        states("half2") shouldBe Vector("Ready", "Playing", "Finished")
       }
-      publish(at(GameState.Initial))
-      Seq(GameState.Ready, GameState.Set, GameState.Playing, GameState.Finished).foreach(st => publish(at(st)))
-      publish(at(GameState.Initial, firstHalf = false))
-      Seq(GameState.Ready, GameState.Playing, GameState.Finished).foreach(st => publish(at(st, firstHalf = false)))
-      recording.close()
-      val names = Files.list(dir).iterator().asScala.map(_.getFileName.toString).toVector.sorted
-      names.map(_.replaceAll("^naogateway-\\d{8}-\\d{6}", "T"))
-        .sortBy(_.stripSuffix(".mcap").split('-').last.toInt) shouldBe
-        Vector("T-1.mcap", "T-team12-vs-team7-half1-2.mcap", "T-3.mcap", "T-team12-vs-team7-half2-4.mcap")
-      def states(name: String): Vector[String] = {
-        val path: Path = dir.resolve(names.find(_.contains(name)).get)
-        McapReader.read(Files.readAllBytes(path)).messages.map(m => new String(m.data, "UTF-8"))
-          .flatMap("\"state\":\"(\\w+)\"".r.findFirstMatchIn(_).map(_.group(1)))
-      }
-      states("half1") shouldBe Vector("Ready", "Set", "Playing", "Finished")
-      states("half2") shouldBe Vector("Ready", "Playing", "Finished")
     }
   }
 }

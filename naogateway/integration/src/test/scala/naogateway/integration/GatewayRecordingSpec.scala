@@ -16,6 +16,7 @@ import naogateway.access.RobotAccess
 import naogateway.api.{CallResult, RobotOnline, RobotStatusUpdated}
 import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort, Status}
 import naogateway.testkit.TestLoopback
+import naogateway.testkit.TempFiles.withTempDir
 import naogateway.wire.RpcCall
 import naogateway.gateway.recording.{Mcap, McapReader, Recording}
 
@@ -36,140 +37,146 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
 
   "A recording gateway" must {
     "write every datagram byte for byte, the robot's Status decoded, and its decisions, into an MCAP file closed on stop" in {
-      val dir = Files.createTempDirectory("recording-spec")
-      val relayTarget = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
-      val relayAt = relayTarget.getLocalAddress.asInstanceOf[InetSocketAddress]
-      val f = new GatewayFixture(
-        testKit,
-        s"""recording { enabled = on, directory = "${dir.toString}" }
-           |fu-remote-relay { enabled = on, address = "${relayAt.getAddress.getHostAddress}", port = ${relayAt.getPort} }
-           |""".stripMargin
-      )
-      val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
-      val strangerAt = stranger.getLocalAddress.asInstanceOf[InetSocketAddress]
-      val odd = "not a frame at all \u0000\u00ff".getBytes(StandardCharsets.ISO_8859_1)
-      try {
-        f.robot(7)
-        f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
-        // Until the robot's clock is estimated, and one more keep-alive after it (dated by that estimate).
-        f.awaitEvent(20.seconds) {
-          case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 && snapshot.clock.isDefined => ()
+      withTempDir("recording-spec") { dir =>
+        val relayTarget = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+        val relayAt = relayTarget.getLocalAddress.asInstanceOf[InetSocketAddress]
+        val f = new GatewayFixture(
+          testKit,
+          s"""recording { enabled = on, directory = "${dir.toString}" }
+             |fu-remote-relay { enabled = on, address = "${relayAt.getAddress.getHostAddress}", port = ${relayAt
+              .getPort} }
+             |""".stripMargin
+        )
+        val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+        val strangerAt = stranger.getLocalAddress.asInstanceOf[InetSocketAddress]
+        val odd = "not a frame at all \u0000\u00ff".getBytes(StandardCharsets.ISO_8859_1)
+        try {
+          f.robot(7)
+          f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+          // Until the robot's clock is estimated, and one more keep-alive after it (dated by that estimate).
+          f.awaitEvent(20.seconds) {
+            case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 && snapshot.clock.isDefined => ()
+          }
+          f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
+          stranger.send(ByteBuffer.wrap(odd), f.addresses.robots)
+          val probe = createTestProbe[CallResult]()
+          f.connect(7).response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
+          probe.receiveMessage(10.seconds).result.isRight shouldBe true
+          // Until the stranger's datagram has passed the reader (its refusal is counted).
+          createTestProbe[Any]().awaitAssert(f.stats().rejected.values.sum should be >= 1L, 5.seconds)
+          f.stats().recording.enabled shouldBe true
+        } finally {
+          f.stop()
+          stranger.close()
+          relayTarget.close()
         }
-        f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
-        stranger.send(ByteBuffer.wrap(odd), f.addresses.robots)
-        val probe = createTestProbe[CallResult]()
-        f.connect(7).response ! RobotAccess.Call(RpcCall("system", "ping", Vector.empty), probe.ref)
-        probe.receiveMessage(10.seconds).result.isRight shouldBe true
-        // Until the stranger's datagram has passed the reader (its refusal is counted).
-        createTestProbe[Any]().awaitAssert(f.stats().rejected.values.sum should be >= 1L, 5.seconds)
-        f.stats().recording.enabled shouldBe true
-      } finally {
-        f.stop()
-        stranger.close()
-        relayTarget.close()
+
+        val recorded = files(dir)
+        recorded should have size 1
+        val contents = McapReader.read(Files.readAllBytes(recorded.head))
+        def channel(topic: String): Mcap.Channel =
+          contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no channel $topic"))
+        def on(topic: String): Vector[Mcap.Message] = contents.messages.filter(_.channelId == channel(topic).id)
+
+        val datagrams = on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
+        contents.schemas(channel(Recording.Topics.Datagrams).schemaId).name shouldBe "naogateway.proto.RecordedDatagram"
+        val fromStranger =
+          datagrams.filter(_.source == s"${strangerAt.getAddress.getHostAddress}:${strangerAt.getPort}")
+        fromStranger.map(_.payload.toByteArray.toVector) shouldBe Vector(odd.toVector)
+        fromStranger.head.port shouldBe RecordedPort.ROBOT_PORT
+        fromStranger.head.direction shouldBe RecordedDirection.RECEIVED
+        // Relayed to FU-Remote, the same bytes.
+        datagrams.filter(d => d.port == RecordedPort.FU_REMOTE_RELAY).map(
+          _.payload.toByteArray.toVector) should contain(
+          odd.toVector)
+        // The robot's keep-alives, and what the gateway sent it (the debug option pull, the ping).
+        datagrams.count(d => d.robotID.contains(7) && d.direction == RecordedDirection.RECEIVED) should be > 1
+        datagrams.count(d =>
+          d.robotID.contains(7) && d.direction == RecordedDirection.SENT && d.port == RecordedPort.ROBOT_PORT) should be >= 1
+
+        val statusMessages = on(Recording.Topics.status(7))
+        val statuses = statusMessages.map(m => Status.parseFrom(m.data))
+        // Once the robot's clock is estimated, a Status is published at its own time put on the gateway's clock: on
+        // loopback, shortly before the gateway received it.
+        val dated = statusMessages.filter(m => m.publishTime != m.logTime)
+        dated should not be empty
+        dated.foreach(m => math.abs(m.logTime - m.publishTime) should be < 1000000000L)
+        statuses should not be empty
+        statuses.flatMap(_.teamID).distinct shouldBe Vector(1)
+        contents.schemas(channel(Recording.Topics.status(7)).schemaId).name shouldBe "naogateway.proto.Status"
+
+        val decisions: Vector[String] =
+          on(Recording.Topics.Decisions).map(m => new String(m.data, StandardCharsets.UTF_8))
+        channel(Recording.Topics.Decisions).messageEncoding shouldBe "json"
+        decisions.exists(d => d.contains("\"decision\":\"robot-online\"") && d.contains("\"robotId\":7")) shouldBe true
+        decisions.exists(d =>
+          d.contains("\"decision\":\"send\"") && d.contains("\"call\":\"system.ping\"") &&
+            d.contains("\"outcome\":\"sent\"")) shouldBe true
+        withClue(decisions.mkString("\n")) {
+          decisions.exists(d => d.contains("\"decision\":\"reply\"") && d.contains("\"outcome\":\"ok\"")) shouldBe true
+        }
+        decisions.exists(_.contains("\"decision\":\"budget\"")) shouldBe true
+        contents.statistics.map(_.messageCount) shouldBe Some(contents.messages.size.toLong)
       }
-
-      val recorded = files(dir)
-      recorded should have size 1
-      val contents = McapReader.read(Files.readAllBytes(recorded.head))
-      def channel(topic: String): Mcap.Channel =
-        contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no channel $topic"))
-      def on(topic: String): Vector[Mcap.Message] = contents.messages.filter(_.channelId == channel(topic).id)
-
-      val datagrams = on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
-      contents.schemas(channel(Recording.Topics.Datagrams).schemaId).name shouldBe "naogateway.proto.RecordedDatagram"
-      val fromStranger = datagrams.filter(_.source == s"${strangerAt.getAddress.getHostAddress}:${strangerAt.getPort}")
-      fromStranger.map(_.payload.toByteArray.toVector) shouldBe Vector(odd.toVector)
-      fromStranger.head.port shouldBe RecordedPort.ROBOT_PORT
-      fromStranger.head.direction shouldBe RecordedDirection.RECEIVED
-      // Relayed to FU-Remote, the same bytes.
-      datagrams.filter(d => d.port == RecordedPort.FU_REMOTE_RELAY).map(_.payload.toByteArray.toVector) should contain(
-        odd.toVector)
-      // The robot's keep-alives, and what the gateway sent it (the debug option pull, the ping).
-      datagrams.count(d => d.robotID.contains(7) && d.direction == RecordedDirection.RECEIVED) should be > 1
-      datagrams.count(d =>
-        d.robotID.contains(7) && d.direction == RecordedDirection.SENT && d.port == RecordedPort.ROBOT_PORT) should be >= 1
-
-      val statusMessages = on(Recording.Topics.status(7))
-      val statuses = statusMessages.map(m => Status.parseFrom(m.data))
-      // Once the robot's clock is estimated, a Status is published at its own time put on the gateway's clock: on
-      // loopback, shortly before the gateway received it.
-      val dated = statusMessages.filter(m => m.publishTime != m.logTime)
-      dated should not be empty
-      dated.foreach(m => math.abs(m.logTime - m.publishTime) should be < 1000000000L)
-      statuses should not be empty
-      statuses.flatMap(_.teamID).distinct shouldBe Vector(1)
-      contents.schemas(channel(Recording.Topics.status(7)).schemaId).name shouldBe "naogateway.proto.Status"
-
-      val decisions: Vector[String] =
-        on(Recording.Topics.Decisions).map(m => new String(m.data, StandardCharsets.UTF_8))
-      channel(Recording.Topics.Decisions).messageEncoding shouldBe "json"
-      decisions.exists(d => d.contains("\"decision\":\"robot-online\"") && d.contains("\"robotId\":7")) shouldBe true
-      decisions.exists(d =>
-        d.contains("\"decision\":\"send\"") && d.contains("\"call\":\"system.ping\"") &&
-          d.contains("\"outcome\":\"sent\"")) shouldBe true
-      withClue(decisions.mkString("\n")) {
-        decisions.exists(d => d.contains("\"decision\":\"reply\"") && d.contains("\"outcome\":\"ok\"")) shouldBe true
-      }
-      decisions.exists(_.contains("\"decision\":\"budget\"")) shouldBe true
-      contents.statistics.map(_.messageCount) shouldBe Some(contents.messages.size.toLong)
     }
 
     "keep a stranger's frame in another robot's name raw: never on that robot's decoded channels" in {
-      val dir = Files.createTempDirectory("recording-spec-stranger")
-      val f = new GatewayFixture(testKit, s"""recording { enabled = on, directory = "${dir.toString}" }""")
-      // From another loopback address, in robot 7's name: a Status of another team, and a reply to no call.
-      val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
-      val strangerAt = s"${stranger.socket().getLocalAddress.getHostAddress}:"
-      val forged = naogateway.wire.MessageContents.encodeFrame(naogateway.wire.MessageContents(7,
-          status = Some(Status(teamID = Some(99))))).toOption.get
-      try {
-        f.robot(7)
-        f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
-        val before = f.stats().rejected.values.sum
-        (1 to 5).foreach(_ => stranger.send(ByteBuffer.wrap(forged), f.addresses.robots))
-        createTestProbe[Any]().awaitAssert(f.stats().rejected.values.sum should be >= before + 5, 5.seconds)
-        f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
-      } finally {
-        f.stop()
-        stranger.close()
+      withTempDir("recording-spec-stranger") { dir =>
+        val f = new GatewayFixture(testKit, s"""recording { enabled = on, directory = "${dir.toString}" }""")
+        // From another loopback address, in robot 7's name: a Status of another team, and a reply to no call.
+        val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+        val strangerAt = s"${stranger.socket().getLocalAddress.getHostAddress}:"
+        val forged = naogateway.wire.MessageContents.encodeFrame(naogateway.wire.MessageContents(7,
+            status = Some(Status(teamID = Some(99))))).toOption.get
+        try {
+          f.robot(7)
+          f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+          val before = f.stats().rejected.values.sum
+          (1 to 5).foreach(_ => stranger.send(ByteBuffer.wrap(forged), f.addresses.robots))
+          createTestProbe[Any]().awaitAssert(f.stats().rejected.values.sum should be >= before + 5, 5.seconds)
+          f.awaitEvent(5.seconds) { case RobotStatusUpdated(snapshot) if snapshot.robotId == 7 => () }
+        } finally {
+          f.stop()
+          stranger.close()
+        }
+        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+        def on(topic: String): Vector[Mcap.Message] =
+          contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
+            contents.messages.filter(_.channelId == c.id))
+        // Kept byte for byte as what crossed the port ...
+        on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
+          .count(_.source.startsWith(strangerAt)) shouldBe 5
+        // ... but robot 7's channels hold its own keep-alives only.
+        on(Recording.Topics.status(7)).map(m => Status.parseFrom(m.data)).flatMap(_.teamID).distinct shouldBe Vector(1)
       }
-      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
-      def on(topic: String): Vector[Mcap.Message] =
-        contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
-          contents.messages.filter(_.channelId == c.id))
-      // Kept byte for byte as what crossed the port ...
-      on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
-        .count(_.source.startsWith(strangerAt)) shouldBe 5
-      // ... but robot 7's channels hold its own keep-alives only.
-      on(Recording.Topics.status(7)).map(m => Status.parseFrom(m.data)).flatMap(_.teamID).distinct shouldBe Vector(1)
     }
 
     "rotate its files by size and close each properly" in {
-      val dir = Files.createTempDirectory("recording-rotate-spec")
-      val f = new GatewayFixture(testKit,
-        s"""recording { enabled = on, directory = "${dir.toString}", rotate-bytes = 64KiB }""")
-      val sender = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
-      try {
-        val payload = new Array[Byte](1000)
-        (1 to 300).foreach { i =>
-          payload(0) = i.toByte
-          sender.send(ByteBuffer.wrap(payload), f.addresses.robots)
-          if (i % 50 == 0) Thread.sleep(20)
+      withTempDir("recording-rotate-spec") { dir =>
+        val f = new GatewayFixture(testKit,
+          s"""recording { enabled = on, directory = "${dir.toString}", rotate-bytes = 64KiB }""")
+        val sender = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+        try {
+          val payload = new Array[Byte](1000)
+          (1 to 300).foreach { i =>
+            payload(0) = i.toByte
+            sender.send(ByteBuffer.wrap(payload), f.addresses.robots)
+            if (i % 50 == 0) Thread.sleep(20)
+          }
+          createTestProbe[Any]().awaitAssert(f.stats().datagramsIn shouldBe 300L, 10.seconds)
+        } finally {
+          f.stop()
+          sender.close()
         }
-        createTestProbe[Any]().awaitAssert(f.stats().datagramsIn shouldBe 300L, 10.seconds)
-      } finally {
-        f.stop()
-        sender.close()
+        val recorded = files(dir)
+        recorded.size should be >= 3
+        val all = recorded.flatMap { p =>
+          val c = McapReader.read(Files.readAllBytes(p))
+          val id = c.channels.values.find(_.topic == Recording.Topics.Datagrams).get.id
+          c.messages.filter(_.channelId == id).map(m => RecordedDatagram.parseFrom(m.data))
+        }
+        all.map(_.payload.byteAt(0) & 0xff) shouldBe (1 to 300).map(_ & 0xff).toVector
       }
-      val recorded = files(dir)
-      recorded.size should be >= 3
-      val all = recorded.flatMap { p =>
-        val c = McapReader.read(Files.readAllBytes(p))
-        val id = c.channels.values.find(_.topic == Recording.Topics.Datagrams).get.id
-        c.messages.filter(_.channelId == id).map(m => RecordedDatagram.parseFrom(m.data))
-      }
-      all.map(_.payload.byteAt(0) & 0xff) shouldBe (1 to 300).map(_ & 0xff).toVector
     }
   }
 }

@@ -24,6 +24,7 @@ import naogateway.proto.{
 import naogateway.wire.gamecontroller.GameState
 import naogateway.api.recording.{Decision, RecordEncoder, Tapped}
 import naogateway.gateway.tap.Tap
+import naogateway.testkit.TempFiles.{withTempDir, withTempFile}
 
 class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChecks {
 
@@ -39,83 +40,88 @@ class RecorderSpec extends AnyWordSpec with Matchers with ScalaCheckPropertyChec
 
   "A recorder" must {
     "account for every entry handed to it, written or dropped, when its queue overflows" in {
-      val dir = Files.createTempDirectory("recorder-spec")
-      val tap = new Tap
-      val recording = Recording(settings(dir, queue = 16), "recorder-spec-overflow", tap)
-      val offered = 20000
-      (1 to offered).foreach(i =>
-        tap.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
-      recording.close()
-      val stats = recording.stats
-      stats.dropped should be > 0L
-      stats.messages + stats.dropped shouldBe offered.toLong
-      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
-      val payloads = contents.messages.map(m => BigInt(RecordedDatagram.parseFrom(m.data).payload.toByteArray).toInt)
-      payloads.size.toLong shouldBe stats.messages
-      // What was written keeps its order.
-      payloads shouldBe payloads.sorted
+      withTempDir("recorder-spec") { dir =>
+        val tap = new Tap
+        val recording = Recording(settings(dir, queue = 16), "recorder-spec-overflow", tap)
+        val offered = 20000
+        (1 to offered).foreach(i =>
+          tap.datagram(RecordedPort.GAME_CONTROLLER, received = true, from, to, BigInt(i).toByteArray, -1))
+        recording.close()
+        val stats = recording.stats
+        stats.dropped should be > 0L
+        stats.messages + stats.dropped shouldBe offered.toLong
+        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+        val payloads = contents.messages.map(m => BigInt(RecordedDatagram.parseFrom(m.data).payload.toByteArray).toInt)
+        payloads.size.toLong shouldBe stats.messages
+        // What was written keeps its order.
+        payloads shouldBe payloads.sorted
+      }
     }
 
     "write what waits when closed, then ignore further entries" in {
-      val dir = Files.createTempDirectory("recorder-spec")
-      val tap = new Tap
-      val recording = Recording(settings(dir), "recorder-spec-close", tap)
-      tap.decision(Decision.Gate(open = false, naogateway.api.GameReading.Known(GameState.Playing)))
-      recording.close()
-      tap.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Finished)))
-      recording.stats.messages shouldBe 1L
-      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
-      new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
+      withTempDir("recorder-spec") { dir =>
+        val tap = new Tap
+        val recording = Recording(settings(dir), "recorder-spec-close", tap)
+        tap.decision(Decision.Gate(open = false, naogateway.api.GameReading.Known(GameState.Playing)))
+        recording.close()
+        tap.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Finished)))
+        recording.stats.messages shouldBe 1L
+        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+        new String(contents.messages.head.data, "UTF-8") should include("\"decision\":\"gate-closed\"")
+      }
     }
 
     "put a keep-alive's servo telemetry on /robot/<id>/servos, not on the message channel" in {
-      val dir = Files.createTempDirectory("recorder-spec")
-      val tap = new Tap
-      val recording = Recording(settings(dir), "recorder-spec-servos", tap)
-      val telemetry = ServoTelemetry(Vector(ServoState(1, Some(512), Some(-40), Some(121), Some(41)),
-          ServoState(2, silent = Some(true))), busErrors = Some(1))
-      val keepAlive = naogateway.wire.MessageContents(2, status = Some(Status(teamID = Some(1))),
-        robotHealth = Some(RobotHealth(uptimeMs = Some(1000))), servoTelemetry = Some(telemetry))
-      val plain = keepAlive.copy(servoTelemetry = None)
-      Seq(keepAlive, plain).foreach { c =>
-        tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, to,
-          naogateway.wire.MessageContents.encodeFrame(c).toOption.get, 2, decoded = Some(c))
+      withTempDir("recorder-spec") { dir =>
+        val tap = new Tap
+        val recording = Recording(settings(dir), "recorder-spec-servos", tap)
+        val telemetry = ServoTelemetry(Vector(ServoState(1, Some(512), Some(-40), Some(121), Some(41)),
+            ServoState(2, silent = Some(true))), busErrors = Some(1))
+        val keepAlive = naogateway.wire.MessageContents(2, status = Some(Status(teamID = Some(1))),
+          robotHealth = Some(RobotHealth(uptimeMs = Some(1000))), servoTelemetry = Some(telemetry))
+        val plain = keepAlive.copy(servoTelemetry = None)
+        Seq(keepAlive, plain).foreach { c =>
+          tap.datagram(RecordedPort.ROBOT_PORT, received = true, from, to,
+            naogateway.wire.MessageContents.encodeFrame(c).toOption.get, 2, decoded = Some(c))
+        }
+        recording.close()
+        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+        def channel(topic: String) = contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no $topic"))
+        def on(topic: String) = contents.messages.filter(_.channelId == channel(topic).id)
+        val servos = channel(Recording.Topics.servos(2))
+        servos.topic shouldBe "/robot/2/servos"
+        contents.schemas(servos.schemaId).name shouldBe "naogateway.proto.ServoTelemetry"
+        on("/robot/2/servos").map(m => ServoTelemetry.parseFrom(m.data)) shouldBe Vector(telemetry)
+        on("/robot/2/status") should have size 2
+        on("/robot/2/message") shouldBe empty
       }
-      recording.close()
-      val contents = McapReader.read(Files.readAllBytes(files(dir).head))
-      def channel(topic: String) = contents.channels.values.find(_.topic == topic).getOrElse(fail(s"no $topic"))
-      def on(topic: String) = contents.messages.filter(_.channelId == channel(topic).id)
-      val servos = channel(Recording.Topics.servos(2))
-      servos.topic shouldBe "/robot/2/servos"
-      contents.schemas(servos.schemaId).name shouldBe "naogateway.proto.ServoTelemetry"
-      on("/robot/2/servos").map(m => ServoTelemetry.parseFrom(m.data)) shouldBe Vector(telemetry)
-      on("/robot/2/status") should have size 2
-      on("/robot/2/message") shouldBe empty
     }
 
     "count entries it cannot write when the directory cannot be made, without failing" in {
-      val file = Files.createTempFile("recorder-spec", ".not-a-directory")
-      val tap = new Tap
-      val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed", tap)
-      (1 to 10).foreach(_ =>
-        tap.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Initial))))
-      recording.close()
-      recording.stats.failed shouldBe 10L
-      recording.stats.files shouldBe 0L
+      withTempFile("recorder-spec", ".not-a-directory") { file =>
+        val tap = new Tap
+        val recording = Recording(settings(file.resolve("sub")), "recorder-spec-failed", tap)
+        (1 to 10).foreach(_ =>
+          tap.decision(Decision.Gate(open = true, naogateway.api.GameReading.Known(GameState.Initial))))
+        recording.close()
+        recording.stats.failed shouldBe 10L
+        recording.stats.files shouldBe 0L
+      }
     }
 
     "begin a new file when the current one is older than rotate-interval, each file complete" in {
-      val dir = Files.createTempDirectory("recorder-spec")
-      val tap = new Tap
-      val recording = Recording(settings(dir).copy(rotateInterval = 1.second), "recorder-spec-age", tap)
-      (1 to 6).foreach { i =>
-        tap.decision(Decision.Budget(i.toLong, 0L, 125000, Map.empty))
-        Thread.sleep(500)
+      withTempDir("recorder-spec") { dir =>
+        val tap = new Tap
+        val recording = Recording(settings(dir).copy(rotateInterval = 1.second), "recorder-spec-age", tap)
+        (1 to 6).foreach { i =>
+          tap.decision(Decision.Budget(i.toLong, 0L, 125000, Map.empty))
+          Thread.sleep(500)
+        }
+        recording.close()
+        val recorded = files(dir)
+        recorded.size should be >= 2
+        recorded.map(p => McapReader.read(Files.readAllBytes(p)).messages.size).sum shouldBe 6
       }
-      recording.close()
-      val recorded = files(dir)
-      recorded.size should be >= 2
-      recorded.map(p => McapReader.read(Files.readAllBytes(p)).messages.size).sum shouldBe 6
     }
 
     "encode a datagram byte for byte as the generated RecordedDatagram does, reusing its buffer" in {

@@ -10,6 +10,7 @@ import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
 import naogateway.api.recording.Decision
+import naogateway.testkit.TempFiles.withTempDir
 
 /** Recording retention: the rule over a listing, and the sweep of a real directory. */
 class RetentionSpec extends AnyWordSpec with Matchers {
@@ -60,30 +61,31 @@ class RetentionSpec extends AnyWordSpec with Matchers {
 
   "The sweep" should {
     "delete old recordings in the directory, keep the current one and other files, and say so in its status" in {
-      val dir = Files.createTempDirectory("retention-spec")
-      def write(name: String, bytes: Int, hoursAgo: Long): Path = {
-        val p = dir.resolve(name)
-        Files.write(p, new Array[Byte](bytes))
-        Files.setLastModifiedTime(p, FileTime.from(Instant.now().minusSeconds(hoursAgo * 3600)))
-        p
+      withTempDir("retention-spec") { dir =>
+        def write(name: String, bytes: Int, hoursAgo: Long): Path = {
+          val p = dir.resolve(name)
+          Files.write(p, new Array[Byte](bytes))
+          Files.setLastModifiedTime(p, FileTime.from(Instant.now().minusSeconds(hoursAgo * 3600)))
+          p
+        }
+        val oldest = write("naogateway-1.mcap", 600 * 1024, 30)
+        val older = write("naogateway-2.mcap", 600 * 1024, 20)
+        val newer = write("naogateway-3.mcap", 600 * 1024, 10)
+        val current = write("naogateway-4.mcap", 100, 40)
+        val notes = write("notes.txt", 5 * 1024 * 1024, 50)
+        val keeper = new RetentionKeeper(dir, RetentionSettings(MiB, 25.hours))
+        val status = keeper.sweep(Set(current))
+        Files.exists(oldest) shouldBe false // older than 25 h
+        Files.exists(older) shouldBe false // the oldest left while over 1 MiB
+        Files.exists(newer) shouldBe true
+        Files.exists(current) shouldBe true // 40 h old, but being written
+        Files.exists(notes) shouldBe true // not a recording
+        status.files shouldBe 2
+        status.deletedFiles shouldBe 2
+        status.bytes shouldBe 600L * 1024 + 100
+        keeper.status shouldBe status
+        status.describe should startWith("kept 2 file(s), 600.1 KiB (limits 1.0 MiB, 25 h); 2 deleted so far")
       }
-      val oldest = write("naogateway-1.mcap", 600 * 1024, 30)
-      val older = write("naogateway-2.mcap", 600 * 1024, 20)
-      val newer = write("naogateway-3.mcap", 600 * 1024, 10)
-      val current = write("naogateway-4.mcap", 100, 40)
-      val notes = write("notes.txt", 5 * 1024 * 1024, 50)
-      val keeper = new RetentionKeeper(dir, RetentionSettings(MiB, 25.hours))
-      val status = keeper.sweep(Set(current))
-      Files.exists(oldest) shouldBe false // older than 25 h
-      Files.exists(older) shouldBe false // the oldest left while over 1 MiB
-      Files.exists(newer) shouldBe true
-      Files.exists(current) shouldBe true // 40 h old, but being written
-      Files.exists(notes) shouldBe true // not a recording
-      status.files shouldBe 2
-      status.deletedFiles shouldBe 2
-      status.bytes shouldBe 600L * 1024 + 100
-      keeper.status shouldBe status
-      status.describe should startWith("kept 2 file(s), 600.1 KiB (limits 1.0 MiB, 25 h); 2 deleted so far")
     }
 
     "find nothing in a directory that does not exist yet" in {
@@ -94,21 +96,22 @@ class RetentionSpec extends AnyWordSpec with Matchers {
 
   "The recorder" should {
     "apply retention to its directory when it begins a file" in {
-      val dir = Files.createTempDirectory("retention-recorder")
-      val stale = dir.resolve("naogateway-20200101-000000-1.mcap")
-      Files.write(stale, new Array[Byte](1024))
-      Files.setLastModifiedTime(stale, FileTime.from(Instant.now().minusSeconds(30L * 86400)))
-      val settings = RecordingSettings(enabled = true, dir, 64 * 1024, 1.minute, 1024, RetentionSettings(0, 14.days))
-      val tap = new naogateway.gateway.tap.Tap
-      val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown, tap)
-      try {
-        tap.decision(Decision.Gate(open = true,
-            naogateway.api.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
-        val deadline = 10.seconds.fromNow
-        while (!recorder.stats.retention.exists(_.deletedFiles > 0) && deadline.hasTimeLeft()) Thread.sleep(20)
-        Files.exists(stale) shouldBe false
-        recorder.stats.retention.map(_.deletedFiles) shouldBe Some(1L)
-      } finally recorder.close()
+      withTempDir("retention-recorder") { dir =>
+        val stale = dir.resolve("naogateway-20200101-000000-1.mcap")
+        Files.write(stale, new Array[Byte](1024))
+        Files.setLastModifiedTime(stale, FileTime.from(Instant.now().minusSeconds(30L * 86400)))
+        val settings = RecordingSettings(enabled = true, dir, 64 * 1024, 1.minute, 1024, RetentionSettings(0, 14.days))
+        val tap = new naogateway.gateway.tap.Tap
+        val recorder = new Recorder(settings, "retention-spec-recorder", RobotTimeBase.Unknown, tap)
+        try {
+          tap.decision(Decision.Gate(open = true,
+              naogateway.api.GameReading.Known(naogateway.wire.gamecontroller.GameState.Initial)))
+          val deadline = 10.seconds.fromNow
+          while (!recorder.stats.retention.exists(_.deletedFiles > 0) && deadline.hasTimeLeft()) Thread.sleep(20)
+          Files.exists(stale) shouldBe false
+          recorder.stats.retention.map(_.deletedFiles) shouldBe Some(1L)
+        } finally recorder.close()
+      }
     }
   }
 }
