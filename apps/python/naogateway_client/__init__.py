@@ -15,9 +15,11 @@ proto/src/main/protobuf) with grpcio-tools' protoc; see `load_protos`.
 
 from __future__ import annotations
 
+import atexit
 import importlib
 import itertools
 import os
+import shutil
 import socket
 import sys
 import tempfile
@@ -61,10 +63,14 @@ body_pb2: Optional[ModuleType] = None
 def load_protos(out_dir: Optional[str] = None, proto_dir: str = _PROTO_DIR) -> None:
     """Imports the generated protobuf modules, generating them into out_dir first when they are not importable.
 
-    out_dir defaults to $NAOGATEWAY_PY_GEN, else a fresh temporary folder.
+    out_dir defaults to $NAOGATEWAY_PY_GEN, else a fresh temporary folder, removed when the program exits.
     """
     global message_pb2, rpc_pb2, havimo_pb2, body_pb2
-    out_dir = out_dir or os.environ.get("NAOGATEWAY_PY_GEN") or tempfile.mkdtemp(prefix="naogateway-pb2-")
+    out_dir = out_dir or os.environ.get("NAOGATEWAY_PY_GEN")
+    if not out_dir:
+        out_dir = tempfile.mkdtemp(prefix="naogateway-pb2-")
+        # Each program without a folder of its own would otherwise leave one behind in the system's temporary folder.
+        atexit.register(shutil.rmtree, out_dir, ignore_errors=True)
     if out_dir not in sys.path:
         sys.path.insert(0, out_dir)
     try:

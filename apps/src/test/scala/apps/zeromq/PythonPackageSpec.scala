@@ -7,7 +7,7 @@ import java.util.concurrent.TimeUnit
 
 import scala.concurrent.duration._
 import scala.jdk.CollectionConverters._
-import scala.util.Try
+import scala.util.{Try, Using}
 
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
@@ -96,6 +96,20 @@ class PythonPackageSpec extends AnyWordSpec with Matchers {
           val lines = printed.linesIterator.toVector
           lines.head should startWith(site.toString)
           lines should contain("naogateway.proto")
+        }
+        // Without a folder named for them the classes go to a temporary one, gone when the program ends.
+        val tmp = Files.createDirectories(work.resolve("tmp"))
+        val (tmpCode, tmpPrinted) = run(
+          Seq(python.getPath, "-c", "import naogateway_client as c; c.load_protos(); print(c.rpc_pb2.__file__)"),
+          work.toFile,
+          Map("PYTHONPATH" -> site.toString, "TMPDIR" -> tmp.toString, "NAOGATEWAY_PY_GEN" -> "",
+            "PYTHONDONTWRITEBYTECODE" -> "1"),
+          2.minutes
+        )
+        withClue(tmpPrinted) {
+          tmpCode shouldBe 0
+          tmpPrinted.linesIterator.toVector.last should startWith(tmp.toString) // generated there, while it ran
+          Using.resource(Files.list(tmp))(_.iterator.asScala.toVector) shouldBe empty
         }
       }
     }
