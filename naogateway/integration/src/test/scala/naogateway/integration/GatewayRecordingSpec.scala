@@ -13,7 +13,7 @@ import akka.actor.testkit.typed.scaladsl.{LogCapturing, ScalaTestWithActorTestKi
 import org.scalatest.wordspec.AnyWordSpecLike
 
 import naogateway.access.RobotAccess
-import naogateway.api.{CallResult, RobotOnline, RobotStatusUpdated}
+import naogateway.api.{CallResult, RobotOffline, RobotOnline, RobotStatusUpdated}
 import naogateway.proto.{RecordedDatagram, RecordedDirection, RecordedPort, Status}
 import naogateway.testkit.TestLoopback
 import naogateway.testkit.TempFiles.withTempDir
@@ -148,6 +148,70 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
           .count(_.source.startsWith(strangerAt)) shouldBe 5
         // ... but robot 7's channels hold its own keep-alives only.
         on(Recording.Topics.status(7)).map(m => Status.parseFrom(m.data)).flatMap(_.teamID).distinct shouldBe Vector(1)
+      }
+    }
+
+    "let a stranger's burst wake its gathering writer and change nothing else: the robot, its channels, no entry lost" in {
+      // The writer pauses up to 250 ms after a trickle; a quarter of its queue waiting wakes it early (the tap's offer,
+      // on the port's read path, decides). What may a stranger on the field do with that? Random bytes, frames in
+      // another robot's name and a replay of this robot's own keep-alive, from another loopback address, about 8,000 a
+      // second into a queue of 512. (That the count wakes the writer is TapSpec's; this says what the stranger gets.)
+      withTempDir("recording-spec-burst") { dir =>
+        // As on a field: the team's robot listed, nothing discovered.
+        val ip = TestLoopback.address()
+        val f = new GatewayFixture(
+          testKit,
+          s"""recording { enabled = on, directory = "${dir.toString}", queue-capacity = 512 }
+             |robots = [{ id = 7, address = "${ip.getHostAddress}" }]
+             |discovery.enabled = off""".stripMargin
+        )
+        val stranger = DatagramChannel.open().bind(new InetSocketAddress(TestLoopback.address(0), 0))
+        val strangerAt = s"${stranger.socket().getLocalAddress.getHostAddress}:"
+        def frame(robotId: Int, team: Int) = naogateway.wire.MessageContents.encodeFrame(
+          naogateway.wire.MessageContents(robotId, status = Some(Status(teamID = Some(team))))).toOption.get
+        val random = new scala.util.Random(32)
+        val kinds: Vector[() => Array[Byte]] = Vector(
+          () => { val b = new Array[Byte](1 + random.nextInt(200)); random.nextBytes(b); b },
+          () => frame(8, 1), // another robot's id
+          () => frame(7, 99), // in this robot's name, another team
+          () => frame(7, 1) // a replay: what robot 7's keep-alive carries
+        )
+        val burst = 1600
+        try {
+          f.robot(7, at = ip)
+          f.awaitEvent(10.seconds) { case RobotOnline(7, _) => () }
+          // A trickle of keep-alives: the writer's pause grows to its longest.
+          (1 to 10).foreach(_ => f.awaitEvent(5.seconds) { case RobotStatusUpdated(s) if s.robotId == 7 => () })
+          val before = f.stats()
+          (0 until burst).foreach { i =>
+            stranger.send(ByteBuffer.wrap(kinds(i % kinds.size)()), f.addresses.robots)
+            if (i % 40 == 39) Thread.sleep(5) // about 8,000 a second: 512 entries in 64 ms
+          }
+          createTestProbe[Any]().awaitAssert(f.stats().datagramsIn should be >= before.datagramsIn + burst, 10.seconds)
+          // The robot goes on as before: online, its own team, no other robot made, nothing it sent lost.
+          (1 to 5).foreach { _ =>
+            f.awaitEvent(5.seconds) {
+              case e: RobotOffline                         => fail(s"the burst changed the robots: $e")
+              case e @ RobotOnline(id, _) if id != 7       => fail(s"the burst made a robot: $e")
+              case RobotStatusUpdated(s) if s.robotId == 7 => s.teamId shouldBe Some(1)
+            }
+          }
+          f.stats().robots shouldBe 1
+          f.stats().recording.dropped shouldBe 0L
+        } finally {
+          f.stop()
+          stranger.close()
+        }
+        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+        def on(topic: String): Vector[Mcap.Message] =
+          contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
+            contents.messages.filter(_.channelId == c.id))
+        // Every datagram of the burst is in the recording, raw; robot 7's channel holds its own team only, and no
+        // channel of robot 8 was made.
+        on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
+          .count(_.source.startsWith(strangerAt)) shouldBe burst
+        on(Recording.Topics.status(7)).map(m => Status.parseFrom(m.data)).flatMap(_.teamID).distinct shouldBe Vector(1)
+        on(Recording.Topics.status(8)) shouldBe empty
       }
     }
 
