@@ -274,15 +274,12 @@ lazy val launcher = (project in file("apps/launcher"))
     bashScriptExtraDefines += """addJava "-Dnaogateway.log.dir=${app_home}/../logs"""",
     // Recordings likewise, unless the operator names a directory.
     bashScriptExtraDefines += """[ -n "$NAOGATEWAY_RECORDING_DIR" ] || export NAOGATEWAY_RECORDING_DIR="${app_home}/../recordings"""",
-    // Every JVM of the package compiles with the quick tier only (C1, `-XX:TieredStopAtLevel=1`): robotctl because it
-    // is short-lived, the gateway and teleop because their load is a field's (a few robots' keep-alives and camera
-    /* frames, far below what even C1's code reads a second), and with the optimising tier the code that runs a few
-     * times */
-    // a second sits for minutes in C1's profiling tier, slower than C1's own code, while the compiler keeps working
-    /* (docs/benchmarks.md, "Where the idle demo's CPU goes"). robotctl also starts faster with the serial collector.
-     * The */
-    // JVM's sampler of its performance counters (what jstat reads) runs every second rather than every 50 ms: 20
-    // wake-ups a second of an idle base station for figures nobody reads.
+    // Every JVM of the package compiles with the quick tier only (C1): robotctl because it is short-lived, the
+    // gateway and teleop because a field's load (a few robots' keep-alives and camera frames) is far below what C1's
+    // code handles, while with the optimising tier the code that runs a few times a second sits for minutes in C1's
+    // slower profiling tier and the compiler keeps working (docs/benchmarks.md, "Where the idle demo's CPU goes").
+    // robotctl also starts faster with the serial collector. The JVM's sampler of its performance counters (what
+    // jstat reads) runs every second rather than every 50 ms: 20 wake-ups a second for figures nobody reads.
     bashScriptExtraDefines += """addJava "-XX:TieredStopAtLevel=1"""",
     bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:+UseSerialGC";; *) addJava "-XX:PerfDataSamplingInterval=1000";; esac""",
     terminalEnv,

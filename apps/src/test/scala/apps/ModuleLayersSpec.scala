@@ -14,6 +14,8 @@ import scala.util.Using
 import org.scalatest.matchers.should.Matchers
 import org.scalatest.wordspec.AnyWordSpec
 
+import naogateway.testkit.TempFiles.withTempDir
+
 /** The modules the build separates stay separate in what it produces: the gateway ships no simulator class, the data
   * apps see is a module of its own (api), the gateway's integration specs are not the simulator's tests, and every app
   * compiles without the gateway's and the simulator's classes (the build compiles apps so; scalac shows it here).
@@ -106,18 +108,17 @@ class ModuleLayersSpec extends AnyWordSpec with Matchers {
   }
 
   /** The errors scalac reports (typer only, nothing written) for `sources` against `classpath`. */
-  private def compileErrors(classpath: Seq[String], sources: Seq[(String, String)]): Vector[String] = {
-    val out = Files.createTempDirectory("apps-probe")
-    val settings = new Settings()
-    settings.processArgumentString(s"-Ystop-after:typer -d $out")
-    settings.classpath.value = classpath.mkString(File.pathSeparator)
-    val reporter = new StoreReporter(settings)
-    val global = new Global(settings, reporter)
-    try new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
-    finally Files.deleteIfExists(out) // typer writes nothing into it; left behind, every run would leave one more
-    reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i =>
-      s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
-  }
+  private def compileErrors(classpath: Seq[String], sources: Seq[(String, String)]): Vector[String] =
+    withTempDir("apps-probe") { out =>
+      val settings = new Settings()
+      settings.processArgumentString(s"-Ystop-after:typer -d $out")
+      settings.classpath.value = classpath.mkString(File.pathSeparator)
+      val reporter = new StoreReporter(settings)
+      val global = new Global(settings, reporter)
+      new global.Run().compileSources(sources.map { case (name, text) => new BatchSourceFile(name, text) }.toList)
+      reporter.infos.toVector.filter(_.severity == reporter.ERROR).map(i =>
+        s"${i.pos.source.file.name}:${i.pos.line}: ${i.msg}")
+    }
 
   /** Every apps main source file's text, found from the module's or the repository's directory. */
   private def appsSources: Seq[(String, String)] = {
