@@ -278,10 +278,13 @@ lazy val launcher = (project in file("apps/launcher"))
     // gateway and teleop because a field's load (a few robots' keep-alives and camera frames) is far below what C1's
     // code handles, while with the optimising tier the code that runs a few times a second sits for minutes in C1's
     // slower profiling tier and the compiler keeps working (docs/benchmarks.md, "Where the idle demo's CPU goes").
-    // robotctl also starts faster with the serial collector. The JVM's sampler of its performance counters (what
-    // jstat reads) runs every second rather than every 50 ms: 20 wake-ups a second for figures nobody reads.
+    // robotctl also starts faster with the serial collector. The gateway and teleop compile a method after a tenth of
+    // the JVM's default count of calls, since code that runs a few times a second (the game, the cluster's rounds, a
+    // view's question) would otherwise run interpreted for minutes, and C1 inlines methods up to 70 bytecodes (35 by
+    // default), which covers Scala's small forwarders and adapters. The JVM's sampler of its performance counters
+    // (what jstat reads) runs every second rather than every 50 ms: 20 wake-ups a second for figures nobody reads.
     bashScriptExtraDefines += """addJava "-XX:TieredStopAtLevel=1"""",
-    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:+UseSerialGC";; *) addJava "-XX:PerfDataSamplingInterval=1000";; esac""",
+    bashScriptExtraDefines += """case " $* " in *" -main naogateway.launcher.RobotCtl "*) addJava "-XX:+UseSerialGC";; *) addJava "-XX:CompileThresholdScaling=0.1"; addJava "-XX:C1MaxInlineSize=70"; addJava "-XX:PerfDataSamplingInterval=1000";; esac""",
     terminalEnv,
     run / fork := true,
     run / connectInput := true,
