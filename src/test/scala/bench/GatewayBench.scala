@@ -384,7 +384,7 @@ object GatewayBench extends Benchmark {
   /** Keep-alives the robot actors handled per second under the blast, with `gatewayConfig` over the defaults. */
   private def routedIngest(tag: String, frames: Array[Array[Byte]], gatewayConfig: Config): Double = {
     val blastSeconds = IngestWarmupSeconds + IngestSeconds + 0.5
-    withNodes(tag, gatewayConfig) { (gw, sim) =>
+    withNodes(tag, gatewayConfig, eventsOnPortLoop = true) { (gw, sim) =>
       val blaster = new Blaster(gw.addresses.robots, frames)
       try {
         blaster.introduce()
@@ -758,14 +758,19 @@ object GatewayBench extends Benchmark {
     }
   }
 
-  /** A gateway subscribed to the events sink of a robots' node; both stop afterwards. */
-  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty())(body: (GatewayNode,
-          SimNode) => T): T = {
+  /** A gateway subscribed to the events sink of a robots' node; both stop afterwards. With `eventsOnPortLoop` the
+    * sink's actor runs in the gateway's system on the port loop, where the package runs the middleware, the robot
+    * actors' subscriber (launcher.conf: `robotmiddleware.dispatcher`): an event is then a task on the same thread, not
+    * a message that wakes another system's pool.
+    */
+  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty(), eventsOnPortLoop: Boolean =
+        false)(body: (GatewayNode, SimNode) => T): T = {
     val sim = new SimNode(s"sim-$tag")
     try {
       val gw = new GatewayNode(s"gw-$tag", gatewayConfig)
       try {
-        gw.subscribe(sim.sinkRef)
+        if (!eventsOnPortLoop) gw.subscribe(sim.sinkRef)
+        else gw.subscribe(gw.system.systemActorOf(sim.sink.behavior, "gateway-events", Gateway.RobotDispatcher))
         body(gw, sim)
       } finally gw.stop()
     } finally sim.stop()
