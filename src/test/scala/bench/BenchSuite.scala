@@ -21,6 +21,11 @@ trait Benchmark {
     * keeps the run the machine was quieter for.
     */
   def quietSensitive: Boolean = false
+
+  /** Options of the JVM each of its runs gets (a load-sensitive group's runs have a JVM of their own), after the
+    * suite's own.
+    */
+  def jvmOptions: Seq[String] = Nil
 }
 
 /** Each ratio of the suite with the two figures it divides (the measured one, then its floor), and a judgement of the
@@ -112,12 +117,14 @@ object BenchSuite {
     args.collect { case s"callpath:$parts" => CallPathBench.parts = parts.split(',').toSet }
   }
 
-  /** One run of group `name` in a JVM of its own, with this JVM's options and class path; its figures. */
-  private def forked(name: String, args: Seq[String]): ListMap[String, Double] = {
+  /** One run of group `b` in a JVM of its own, with this JVM's options, the group's and this class path; its figures.
+    */
+  private def forked(b: Benchmark, args: Seq[String]): ListMap[String, Double] = {
+    val name = b.name
     val file = Files.createTempFile("bench-run-", ".json")
     try {
       val java = Paths.get(System.getProperty("java.home"), "bin", "java").toString
-      val options = ManagementFactory.getRuntimeMXBean.getInputArguments.asScala.toSeq
+      val options = ManagementFactory.getRuntimeMXBean.getInputArguments.asScala.toSeq ++ b.jvmOptions
       val command = (java +: options) ++ Seq("-cp", System.getProperty("java.class.path"), "bench.BenchSuite", One,
         name, file.toString) ++ args
       val exit = new ProcessBuilder(command: _*).inheritIO().start().waitFor()
@@ -139,7 +146,7 @@ object BenchSuite {
       val runs = (1 to (if (b.quietSensitive) 2 else 1)).map { i =>
         println(s"running ${b.name}${if (b.quietSensitive) s" (run $i of 2)" else ""} ... load average ${load(cores)}")
         val before = BenchRatios.load1()
-        val figures = if (b.quietSensitive) forked(b.name, args) else b.run()
+        val figures = if (b.quietSensitive) forked(b, args) else b.run()
         val during = (before + BenchRatios.load1()) / 2
         println(f"${b.name} run $i: load average $during%.2f over $cores cores" +
           (if (BenchRatios.tooLoaded(during, cores)) ": too loaded to judge the goals of a quiet machine" else ""))

@@ -763,7 +763,8 @@ object GatewayBench extends Benchmark {
     * actors' subscriber (launcher.conf: `robotmiddleware.dispatcher`): an event is then a task on the same thread, not
     * a message that wakes another system's pool.
     */
-  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty(), eventsOnPortLoop: Boolean =
+  private def withNodes[T](tag: String, gatewayConfig: Config = ConfigFactory.empty(),
+      eventsOnPortLoop: Boolean =
         false)(body: (GatewayNode, SimNode) => T): T = {
     val sim = new SimNode(s"sim-$tag")
     try {

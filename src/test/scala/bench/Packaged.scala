@@ -19,6 +19,19 @@ object Packaged {
   /** Whether the package is staged. */
   def isStaged: Boolean = Files.isExecutable(bin("naogateway"))
 
+  /** The JIT options `bin/naogateway` gives the gateway's JVM (build.sbt), for a figure of the gateway that runs in a
+    * JVM of the bench's own; [[checkJvmOptions]] holds them to the staged script.
+    */
+  val jvmOptions: Seq[String] =
+    Seq("-XX:TieredStopAtLevel=1", "-XX:CompileThresholdScaling=0.1", "-XX:C1MaxInlineSize=70")
+
+  /** Fails when the staged `bin/naogateway` no longer gives its JVM every one of [[jvmOptions]]. */
+  def checkJvmOptions(): Unit = if (isStaged) {
+    val script = new String(Files.readAllBytes(bin("naogateway")), java.nio.charset.StandardCharsets.UTF_8)
+    val missing = jvmOptions.filterNot(o => script.contains(s"addJava \"$o\""))
+    require(missing.isEmpty, s"bin/naogateway no longer passes ${missing.mkString(" ")}: update bench.Packaged")
+  }
+
   /** A TCP port on loopback that was free a moment ago. */
   /** Gives a demo process started with `env` ports of its own and its log at `log`, so a demo or test running beside
     * the bench is neither disturbed nor counted.
