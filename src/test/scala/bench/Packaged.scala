@@ -19,11 +19,12 @@ object Packaged {
   /** Whether the package is staged. */
   def isStaged: Boolean = Files.isExecutable(bin("naogateway"))
 
-  /** The JIT options `bin/naogateway` gives the gateway's JVM (build.sbt), for a figure of the gateway that runs in a
-    * JVM of the bench's own; [[checkJvmOptions]] holds them to the staged script.
+  /** The JVM options `bin/naogateway` gives the gateway (build.sbt: the JIT's, and the performance counters' sampling),
+    * for a figure of the gateway taken in a JVM of the bench's own; [[checkJvmOptions]] holds them to the staged
+    * script.
     */
-  val jvmOptions: Seq[String] =
-    Seq("-XX:TieredStopAtLevel=1", "-XX:CompileThresholdScaling=0.1", "-XX:C1MaxInlineSize=70")
+  val jvmOptions: Seq[String] = Seq("-XX:TieredStopAtLevel=1", "-XX:CompileThresholdScaling=0.1",
+    "-XX:C1MaxInlineSize=70", "-XX:PerfDataSamplingInterval=1000")
 
   /** Fails when the staged `bin/naogateway` no longer gives its JVM every one of [[jvmOptions]]. */
   def checkJvmOptions(): Unit = if (isStaged) {

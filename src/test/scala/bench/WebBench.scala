@@ -37,7 +37,7 @@ object WebBench extends Benchmark {
   val name = "web"
   override val quietSensitive = true
 
-  // The JIT the package gives the gateway (C1 only, and sooner), so the figure is the installed base station's.
+  // The JVM options the package gives the gateway (C1 only, and sooner), so the figure is the installed base station's.
   override def jvmOptions: Seq[String] = Packaged.jvmOptions
 
   private val Window = 30.seconds
@@ -69,10 +69,12 @@ object WebBench extends Benchmark {
 
   def run(): ListMap[String, Double] = {
     Packaged.checkJvmOptions()
-    // Akka's pools as the package sizes them (launcher.conf), so the figure is the installed base station's.
+    // Akka's pools as the package sizes them and its scheduler's tick (launcher.conf), so the figure is the installed
+    // base station's.
     val launcher = naogateway.launcher.Launcher.defaults
     val pools = launcher.withOnlyPath("akka.actor.default-dispatcher")
-      .withFallback(launcher.withOnlyPath("akka.actor.internal-dispatcher")).resolve()
+      .withFallback(launcher.withOnlyPath("akka.actor.internal-dispatcher"))
+      .withFallback(launcher.withOnlyPath("akka.scheduler.tick-duration")).resolve()
     val config =
       ConfigFactory.parseString("apps.web { push-interval = 250ms, sample-interval = 1s }").withFallback(pools)
         .withFallback(WebDemo.config)
