@@ -24,14 +24,7 @@ object CodecBench extends Benchmark {
     require(BaselineDecoder.decode(frame) == (1, 1, "AgentTest"), "the baseline must read the example")
     // The decode and its floor in alternating slices: on a shared machine the load moves within seconds, and two
     // figures taken one after the other measured 0.87 and 0.57 of each other in two runs.
-    val (decode, baseline) = alternating(DecodeRounds, SliceSeconds)(
-      () =>
-        MessageContents.decodeFrame(frame) match {
-          case Right((_, c)) => c.robotId
-          case Left(_)       => -1
-        },
-      () => BaselineDecoder.decode(frame)._1
-    )
+    val (decode, baseline) = decodeAndFloor()
     println(f"[codec] status decode ${decode / 1e6}%.2f M/s, its floor ${baseline / 1e6}%.2f M/s " +
       f"(ratio ${decode / baseline}%.3f; $DecodeRounds rounds of ${SliceSeconds * 1000}%.0f ms each, alternating)")
     // What load does not move: the bytes each decode allocates (the garbage a loaded machine collects more slowly).
@@ -61,14 +54,7 @@ object CodecBench extends Benchmark {
     }
     // The same decode once the reader has read keep-alives with telemetry too, as a gateway's does when its robots
     // send it: the optimising compiler's code then covers those branches (see docs/benchmarks.md, "Codec").
-    val (mixed, mixedBaseline) = alternating(DecodeRounds, SliceSeconds)(
-      () =>
-        MessageContents.decodeFrame(frame) match {
-          case Right((_, c)) => c.robotId
-          case Left(_)       => -1
-        },
-      () => BaselineDecoder.decode(frame)._1
-    )
+    val (mixed, mixedBaseline) = decodeAndFloor()
     println(f"[codec] status decode after telemetry ${mixed / 1e6}%.2f M/s, its floor ${mixedBaseline / 1e6}%.2f M/s " +
       f"(ratio ${mixed / mixedBaseline}%.3f)")
     ListMap(
@@ -81,6 +67,17 @@ object CodecBench extends Benchmark {
       "servo_telemetry_team_budget_share_per_robot" -> perSecond / teamBudget
     )
   }
+
+  /** The status decode of [[frame]] and its floor, operations per second, in alternating slices. */
+  private def decodeAndFloor(): (Double, Double) =
+    alternating(DecodeRounds, SliceSeconds)(
+      () =>
+        MessageContents.decodeFrame(frame) match {
+          case Right((_, c)) => c.robotId
+          case Left(_)       => -1
+        },
+      () => BaselineDecoder.decode(frame)._1
+    )
 
   /** Rounds of the decode and its floor, each round one slice of each. */
   private val DecodeRounds = 15

@@ -23,6 +23,14 @@ import naogateway.gateway.recording.{Mcap, McapReader, Recording}
 /** A gateway with recording on, a simulated robot and a few datagrams of the test's own, then the file it left. */
 class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLike with LogCapturing {
 
+  /** The messages of each topic in the first recording file of `dir`, none for a topic it has no channel of. */
+  private def recorded(dir: Path): String => Vector[Mcap.Message] = {
+    val contents = McapReader.read(Files.readAllBytes(files(dir).head))
+    topic =>
+      contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
+        contents.messages.filter(_.channelId == c.id))
+  }
+
   /** The recording's files in the order they were begun: by their counter `-<n>.mcap` (as a number: -10 after -9). */
   private def files(dir: Path): Vector[Path] = {
     val counter = """-(\d+)\.mcap$""".r.unanchored
@@ -139,10 +147,7 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
           f.stop()
           stranger.close()
         }
-        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
-        def on(topic: String): Vector[Mcap.Message] =
-          contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
-            contents.messages.filter(_.channelId == c.id))
+        val on = recorded(dir)
         // Kept byte for byte as what crossed the port ...
         on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
           .count(_.source.startsWith(strangerAt)) shouldBe 5
@@ -202,10 +207,7 @@ class GatewayRecordingSpec extends ScalaTestWithActorTestKit with AnyWordSpecLik
           f.stop()
           stranger.close()
         }
-        val contents = McapReader.read(Files.readAllBytes(files(dir).head))
-        def on(topic: String): Vector[Mcap.Message] =
-          contents.channels.values.find(_.topic == topic).toVector.flatMap(c =>
-            contents.messages.filter(_.channelId == c.id))
+        val on = recorded(dir)
         // Every datagram of the burst is in the recording, raw; robot 7's channel holds its own team only, and no
         // channel of robot 8 was made.
         on(Recording.Topics.Datagrams).map(m => RecordedDatagram.parseFrom(m.data))
